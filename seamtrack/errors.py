@@ -1,0 +1,61 @@
+"""User-facing errors: each names the field at fault and the fix.
+
+The CLI prints ``str(error)`` as one line and exits with code 2; library users
+catch :class:`SeamtrackError` (or a subclass) and read ``.field`` and ``.fix``.
+"""
+
+from __future__ import annotations
+
+
+class SeamtrackError(Exception):
+    """An error caused by the user's input, with the field at fault and a fix.
+
+    Parameters
+    ----------
+    message : str
+        What is wrong, in the user's terms.
+    field : str, optional
+        Dotted path of the offending field (``"sensor.frame_rate_hz"``) or a file name.
+    fix : str, optional
+        What to do about it.
+    """
+
+    def __init__(self, message: str, *, field: str | None = None, fix: str | None = None):
+        super().__init__(message)
+        self.message = message
+        self.field = field
+        self.fix = fix
+
+    def __str__(self) -> str:
+        text = f"{self.field}: {self.message}" if self.field else self.message
+        if self.fix:
+            text += f"; fix: {self.fix}"
+        return " ".join(text.split())
+
+
+class SceneError(SeamtrackError):
+    """A scene file (or an override) that cannot be used."""
+
+
+class SensorGeometryError(SeamtrackError):
+    """Sensor parameters that describe no physical triangulation sensor."""
+
+
+class SeamError(SeamtrackError):
+    """Seam points that cannot define a seam (NaN, too few, repeated)."""
+
+
+class ReachError(SeamtrackError):
+    """Something the robot has to reach lies outside its position limits."""
+
+
+class WorkpieceError(SeamtrackError):
+    """A CAD script, STEP file, selector or mesh that cannot be used."""
+
+
+class PluginError(SeamtrackError):
+    """A user tracker or extractor that cannot be imported or lacks the protocol."""
+
+
+class OutputError(SeamtrackError):
+    """An output location that cannot be written."""
