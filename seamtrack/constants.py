@@ -16,3 +16,7 @@ AT_REST_SPEED_MM_S = 1e-6
 
 #: Progress along the seam smaller than this is no progress (stall detection).
 PROGRESS_EPS_MM = 1e-3
+
+#: Barycentric slack (dimensionless) of the float64 inside test that refines Embree's hits: a
+#: point this far outside its triangle still belongs to it (rays through shared edges/vertices).
+BARYCENTRIC_TOL = 1e-9

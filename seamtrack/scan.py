@@ -3,19 +3,34 @@
 Seam mode (the paper's model, Sec. 2.4 and Fig. 4): the laser plane of the posed sensor crosses
 the seam polyline; the crossing inside the field of view and depth of field is the measurement,
 pixel-quantized and optionally noisy. No mesh, no ray casting.
+
+Mesh mode (:func:`scan_mesh`): a fan of rays from the laser emitter in the laser plane hits the
+part's mesh (Embree, refined in float64: :mod:`seamtrack.raycast`); each lit point is kept when
+it lies in the trapezoidal field of view and depth of field, is lit at an incidence the sensor
+can measure, and the camera sees it (a shadow ray from the point to the camera centre); the
+survivors are projected onto the chip and pixel-quantized (Eq. 1-3). Realism knobs
+(:class:`StripeNoise`) are off by default. Embree, numba and trimesh are imported on first use,
+so seam-mode scenes never load them.
 """
 
 from __future__ import annotations
 
+import functools
+import math
 from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from . import constants
 from .frames import invert
-from .profiles import Feature, laser_to_world
+from .profiles import Feature, Profile, Reason, laser_to_world
 from .seam import Seam
 from .sensor import LaserLineSensor
+
+if TYPE_CHECKING:
+    from .raycast import RayCaster
 
 FloatArray = NDArray[np.float64]
 
@@ -105,3 +120,259 @@ def sense_seam(
     point = np.array([float(y_m), float(z_m)])
     return Feature(point_laser=point, point_world=laser_to_world(T_world_sensor, point),
                    confidence=1.0, joint="seam")
+
+
+# =========================================================================== mesh mode
+@dataclass(frozen=True)
+class StripeNoise:
+    """Seeded realism knobs for mesh-mode profiles; every knob is off (0) by default.
+
+    Applied in this order to the points that survived the geometric clips: dropout, the
+    secondary reflection, range noise and speckle, outliers; then the pixel quantization.
+    Range noise, speckle and outliers act on the chip coordinate x_c (where the stripe's peak
+    is detected), so the triangulated point moves along the camera's line of sight like a real
+    sensor's does.
+
+    Attributes
+    ----------
+    range_sigma_mm : float
+        Gaussian peak-detection noise, as its range (z_L) standard deviation at the centre of
+        the depth of field. A constant sigma on the chip, it grows with range like the local
+        depth resolution: sigma(z) = range_sigma_mm * res(z) / res(z_center).
+    speckle_sigma_mm : float
+        Laser speckle: the same kind of range error, but correlated along the stripe.
+    speckle_correlation_rays : float
+        Correlation length of the speckle, in fan rays (Gaussian kernel's standard deviation;
+        with ``rays = pixels_v`` that is about one chip pixel per ray).
+    dropout_rate : float
+        Probability that a point is lost (``Reason.DROPOUT``) at normal incidence. The returned
+        light falls as cos(incidence) (a Lambertian surface) and fully developed speckle makes
+        the intensity exponential, so a fixed detection threshold loses a point with
+        probability p(theta) = 1 - (1 - dropout_rate) ** (1 / cos(theta)).
+    secondary_probability : float
+        The classic false stripe of grooves: the laser reflects specularly at the lit point,
+        lights a second point of the part, and when the camera sees that point the sensor
+        triangulates it as if it lay on the laser plane (the camera ray through it, cut by
+        x_L = 0). The ray's reported point is replaced by that false point with this
+        probability (the peak detector chose the reflection).
+    outlier_fraction : float
+        Fraction of valid points replaced by a spurious peak (spatter, ambient light): a uniform
+        random x_c on the chip at the same lateral column z_c.
+    """
+
+    range_sigma_mm: float = 0.0
+    speckle_sigma_mm: float = 0.0
+    speckle_correlation_rays: float = 8.0
+    dropout_rate: float = 0.0
+    secondary_probability: float = 0.0
+    outlier_fraction: float = 0.0
+
+    def __post_init__(self) -> None:
+        for key in ("range_sigma_mm", "speckle_sigma_mm"):
+            if not getattr(self, key) >= 0:
+                raise ValueError(f"StripeNoise.{key} must be >= 0")
+        if not self.speckle_correlation_rays > 0:
+            raise ValueError("StripeNoise.speckle_correlation_rays must be > 0")
+        for key in ("dropout_rate", "secondary_probability", "outlier_fraction"):
+            if not 0.0 <= getattr(self, key) <= 1.0:
+                raise ValueError(f"StripeNoise.{key} must lie in [0, 1]")
+
+    def __bool__(self) -> bool:
+        return any(getattr(self, k) > 0 for k in (
+            "range_sigma_mm", "speckle_sigma_mm", "dropout_rate", "secondary_probability",
+            "outlier_fraction"))  # fmt: skip
+
+
+@dataclass(frozen=True, eq=False)
+class FanRays:
+    """The laser fan of a sensor: unit directions in the laser frame, x_L = 0.
+
+    Attributes
+    ----------
+    directions : (n, 3) float
+        (0, sin phi, cos phi), evenly spaced in tan(phi) = y_L / z_L (like the chip's columns)
+        over the widest opening of the field-of-view trapezoid (its near end).
+    sensor_params : (10,) float
+        The sensor as the stripe kernels take it (see :mod:`seamtrack.raycast`).
+    """
+
+    directions: NDArray[np.float64]
+    sensor_params: NDArray[np.float64]
+
+
+@functools.lru_cache(maxsize=32)
+def laser_fan(sensor: LaserLineSensor, rays: int) -> FanRays:
+    """The fan of ``rays`` rays spanning the sensor's field of view (cached per sensor)."""
+    if rays < 1:
+        raise ValueError(f"a laser fan needs at least one ray, got {rays}")
+    near = sensor.range_near_mm
+    tan_max = float(sensor.half_width_mm(near)) / near
+    tan_phi = np.linspace(-tan_max, tan_max, rays) if rays > 1 else np.zeros(1)
+    norm = np.sqrt(1.0 + tan_phi**2)
+    directions = np.column_stack([np.zeros(rays), tan_phi / norm, 1.0 / norm])
+    directions.flags.writeable = False
+    params = np.array([
+        sensor.baseline_mm, sensor.focal_length_mm, math.sin(sensor.angle_rad),
+        math.cos(sensor.angle_rad), sensor.chip_h_mm, sensor.chip_v_mm, sensor.pixels_h,
+        sensor.pixels_v, 1.0 + constants.CHIP_EDGE_RTOL, math.cos(sensor.max_incidence_rad),
+    ], dtype=np.float64)  # fmt: skip
+    params.flags.writeable = False
+    return FanRays(directions=directions, sensor_params=params)
+
+
+def ray_caster(part: Any) -> RayCaster:
+    """The (cached) :class:`~seamtrack.raycast.RayCaster` of a part.
+
+    ``part`` is a prepared ``RayCaster``, a ``trimesh.Trimesh``, or anything with a ``.mesh``
+    (a :class:`~seamtrack.workpiece.Workpiece`).
+    """
+    from .raycast import RayCaster
+
+    if isinstance(part, RayCaster):
+        return part
+    mesh = getattr(part, "mesh", part)
+    if not (hasattr(mesh, "vertices") and hasattr(mesh, "faces")):
+        raise TypeError(f"cannot scan a {type(part).__name__}: give a trimesh.Trimesh, an "
+                        "object with a .mesh, or a seamtrack.raycast.RayCaster")  # fmt: skip
+    return RayCaster.for_mesh(mesh)
+
+
+@dataclass(frozen=True, eq=False)
+class StripeHits:
+    """Everything :func:`scan_mesh` knows about one stripe before the noise models.
+
+    Attributes
+    ----------
+    points_laser : (n, 2) float
+        (y_L, z_L): measured (quantized if the sensor quantizes and no noise is configured) where
+        ``reason == 0``; the true lit point where the point was clipped; NaN on a miss.
+    reason : (n,) uint8
+        :class:`~seamtrack.profiles.Reason` codes.
+    distance_mm : (n,) float
+        Emitter to lit point along each ray; NaN on a miss.
+    face : (n,) int64
+        Triangle lit by each ray; -1 on a miss.
+    cos_incidence : (n,) float
+        |cos| of the angle between the laser ray and the face normal.
+    directions_local : (n, 3) float
+        The rays in the caster's local frame (= world directions).
+    origin_local : (3,) float
+        The emitter in the caster's local frame.
+    """
+
+    points_laser: NDArray[np.float64]
+    reason: NDArray[np.uint8]
+    distance_mm: NDArray[np.float64]
+    face: NDArray[np.int64]
+    cos_incidence: NDArray[np.float64]
+    directions_local: NDArray[np.float64]
+    origin_local: NDArray[np.float64]
+
+
+def stripe_hits(
+    sensor: LaserLineSensor,
+    caster: RayCaster,
+    T_world_sensor: NDArray[np.float64],
+    rays: int,
+    *,
+    refine: bool = True,
+    quantize: bool | None = None,
+) -> StripeHits:
+    """The noiseless stripe: fan -> Embree -> float64 -> clips -> shadow rays -> pixels.
+
+    The clips are tested in order (a point gets the first reason that applies): MISS,
+    OUT_OF_RANGE (trapezoid and depth of field), INCIDENCE, OCCLUDED (the camera is behind the
+    lit face or a shadow ray to the camera centre meets the part). Shadow rays are cast only
+    for points that passed the cheaper clips.
+    """
+    from . import raycast
+
+    fan = laser_fan(sensor, rays)
+    T = np.asarray(T_world_sensor, dtype=np.float64)
+    rotation = np.ascontiguousarray(T[:3, :3])
+    origin = T[:3, 3] - caster.local_origin
+    directions = fan.directions @ rotation.T
+    prim, tfar = caster.cast_local(np.broadcast_to(origin.astype(np.float32), directions.shape),
+                                   directions.astype(np.float32))  # fmt: skip
+    n = len(directions)
+    points = np.empty((n, 2))
+    reason = np.empty(n, dtype=np.uint8)
+    t = np.empty(n)
+    face = np.empty(n, dtype=np.int64)
+    cos_incidence = np.empty(n)
+    shadow_o = np.empty((n, 3), dtype=np.float32)
+    shadow_d = np.empty((n, 3), dtype=np.float32)
+    shadow_far = np.empty(n, dtype=np.float32)
+    shadow_index = np.empty(n, dtype=np.int64)
+    k = raycast.fan_stripe_hits(
+        origin, rotation, fan.directions, directions, prim, tfar, caster.vertices_local,
+        caster.faces, caster.weld, caster.ring_ptr, caster.ring_faces, caster.face_normals,
+        bool(refine), constants.BARYCENTRIC_TOL, fan.sensor_params,
+        constants.SHADOW_RAY_OFFSET_MM, points, reason, t, face, cos_incidence, shadow_o,
+        shadow_d, shadow_far, shadow_index,
+    )  # fmt: skip
+    if k:
+        occluder = caster.scene.run(shadow_o[:k], shadow_d[:k], dists=shadow_far[:k],
+                                    query="OCCLUDED")  # fmt: skip
+    else:
+        occluder = np.empty(0, dtype=np.int32)
+    raycast.fan_stripe_finish(points, reason, occluder, shadow_index[:k], fan.sensor_params,
+                              bool(sensor.quantize if quantize is None else quantize))  # fmt: skip
+    return StripeHits(points_laser=points, reason=reason, distance_mm=t, face=face,
+                      cos_incidence=cos_incidence, directions_local=directions,
+                      origin_local=origin)  # fmt: skip
+
+
+def scan_mesh(
+    sensor: LaserLineSensor,
+    part: Any,
+    T_world_sensor: ArrayLike,
+    *,
+    rays: int | None = None,
+    refine: bool = True,
+    noise: StripeNoise | None = None,
+    rng: np.random.Generator | None = None,
+    t_s: float = float("nan"),
+) -> Profile:
+    """One stripe profile of a meshed part, as the posed sensor reports it.
+
+    Parameters
+    ----------
+    sensor : LaserLineSensor
+    part : trimesh.Trimesh, object with ``.mesh``, or RayCaster
+        The part, in the world frame. Its Embree scene is built once per mesh and cached.
+    T_world_sensor : (4, 4) float
+        Pose of the laser frame.
+    rays : int, optional
+        Rays in the fan (default ``sensor.pixels_v``, one per chip column).
+    refine : bool
+        Recompute every hit in float64 (default). False keeps Embree's float32 hits (error
+        ~1e-5 mm near the local origin, see docs/readme-raycast.md).
+    noise : StripeNoise, optional
+        Realism knobs; needs ``rng``.
+    rng : numpy.random.Generator, optional
+    t_s : float
+        Capture time stamped on the profile.
+
+    Returns
+    -------
+    Profile
+        One point per ray, in fan order (y_L increasing); ``reason`` says why each invalid point
+        was lost. Invalid points hold the true lit point (NaN on a miss).
+    """
+    if noise and rng is None:
+        raise ValueError("scan_mesh: noise needs a seeded numpy Generator (rng)")
+    caster = ray_caster(part)
+    T = np.asarray(T_world_sensor, dtype=np.float64)
+    if T.shape != (4, 4):
+        raise ValueError(f"T_world_sensor must be (4, 4), got {T.shape}")
+    n = sensor.pixels_v if rays is None else int(rays)
+    noisy = bool(noise)
+    hits = stripe_hits(sensor, caster, T, n, refine=refine, quantize=False if noisy else None)
+    points, reason = hits.points_laser, hits.reason
+    if noisy:
+        assert noise is not None and rng is not None
+        from .stripe_noise import apply_stripe_noise
+
+        points, reason = apply_stripe_noise(sensor, caster, T, hits, noise, rng)
+    return Profile(points, valid=reason == 0, reason=reason, T_world_sensor=T, t_s=t_s)

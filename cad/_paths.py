@@ -1,0 +1,352 @@
+"""Shared helpers of the joint scripts: seam paths, profile sweeping, tack welds.
+
+Every joint family is a cross-section drawn in a profile plane ``(u, v)`` and swept along the
+seam path. At a path point with unit tangent ``T`` the profile axes are ``v`` = world +Z made
+orthogonal to ``T`` ("up", the torch side) and ``u = v x T`` (for travel along +X, ``u`` is +Y).
+The sweep keeps that frame (fixed binormal +Z), so plates stay "flat" the way the paper's
+3-axis robot sees them. The seam vertex of each profile sits at ``(0, 0)``: the seam IS the
+path, so the seam edge of the solid reproduces the path within the sweep tolerance.
+
+Paths (``path=``): ``"straight"`` (+X from the origin), ``"arc"`` (circular, turning left in
+the XY plane), ``"paper"`` (Eq. 15-17: X = 0..L, Y = 10 cos(pi X/200), Z = 10 sin(pi X/200),
+interpolated through 1 mm samples with exact end tangents), ``"corner"`` (two straight legs in
+the XY plane with a sharp turn).
+
+The result of every ``build(**params)`` is a :class:`Joint`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import cadquery as cq
+from OCP.BRepBuilderAPI import BRepBuilderAPI_RightCorner
+from OCP.BRepOffsetAPI import BRepOffsetAPI_MakePipeShell
+from OCP.gp import gp_Dir
+
+PATHS = ("straight", "arc", "paper", "corner")
+
+#: Sweep approximation tolerance (mm): far below any mesh tolerance we offer.
+SWEEP_TOL_MM = 1e-7
+
+#: Spacing of the samples the paper curve is interpolated through (mm).
+PAPER_SAMPLE_MM = 1.0
+
+Profile = Sequence[tuple[float, float]]
+
+
+class ParamError(ValueError):
+    """A build parameter that makes no valid part; ``.param`` names it."""
+
+    def __init__(self, param: str, message: str):
+        super().__init__(f"{param}: {message}")
+        self.param = param
+
+
+@dataclass(frozen=True)
+class Joint:
+    """What every ``build(**params)`` returns.
+
+    Attributes
+    ----------
+    solid : cadquery.Shape
+        The part (a Solid, or a Compound of Solids when plates do not touch), tack welds
+        included; units mm.
+    seams : dict of str to list of cadquery.Edge
+        Named seam edge chains, edges in order along the seam. The first entry (always
+        ``"root"``) is the default seam; it lies on the path.
+    seam_solid : cadquery.Shape
+        The shape whose faces bound the seam edges: ``solid`` before tack welds were fused on
+        (tacks cover parts of the seam; the seam itself stays where the joint is).
+    params : dict
+        The parameters the part was built with.
+    """
+
+    solid: cq.Shape
+    seams: dict[str, list[cq.Edge]]
+    seam_solid: cq.Shape
+    params: dict[str, object] = field(default_factory=dict)
+
+    def summary(self) -> str:
+        """A short human-readable description (what ``python cad/x.py`` prints)."""
+        bb = self.solid.BoundingBox()
+        lines = [
+            f"valid solid: {self.solid.isValid()}, volume {self.solid.Volume():.3f} mm^3",
+            f"bounding box: x {bb.xmin:.2f}..{bb.xmax:.2f}, y {bb.ymin:.2f}..{bb.ymax:.2f}, "
+            f"z {bb.zmin:.2f}..{bb.zmax:.2f} mm",
+        ]
+        for name, edges in self.seams.items():
+            length = sum(e.Length() for e in edges)
+            lines.append(f"seam {name!r}: {len(edges)} edge(s), {length:.3f} mm")
+        return "\n".join(lines)
+
+
+def paper_xyz(x_mm: float) -> tuple[float, float, float]:
+    """A point of the paper's curve, Eq. 15-17."""
+    phase = math.pi * x_mm / 200.0
+    return (x_mm, 10.0 * math.cos(phase), 10.0 * math.sin(phase))
+
+
+def default_length(path: str, seam_length_mm: float | None) -> float:
+    """Seam length: given, or 400 mm (the paper's X range) for ``"paper"`` and 200 mm else."""
+    if seam_length_mm is None:
+        return 400.0 if path == "paper" else 200.0
+    return float(seam_length_mm)
+
+
+def path_wire(
+    path: str,
+    seam_length_mm: float | None = None,
+    arc_radius_mm: float = 100.0,
+    corner_angle_deg: float = 90.0,
+) -> cq.Wire:
+    """The seam path as a wire starting at the origin, heading +X.
+
+    For ``"paper"``, ``seam_length_mm`` is the X extent (the paper's 0..400 by default).
+    """
+    if path not in PATHS:
+        raise ParamError("path", f"unknown path {path!r}; choose one of {', '.join(PATHS)}")
+    length = default_length(path, seam_length_mm)
+    if not length > 0:
+        raise ParamError("seam_length_mm", f"must be > 0, got {length}")
+    if path == "straight":
+        return cq.Wire.assembleEdges([cq.Edge.makeLine(cq.Vector(0, 0, 0), cq.Vector(length, 0, 0))])
+    if path == "arc":
+        if not arc_radius_mm > 0:
+            raise ParamError("arc_radius_mm", f"must be > 0, got {arc_radius_mm}")
+        angle = length / arc_radius_mm
+        if angle >= 2 * math.pi:
+            raise ParamError("seam_length_mm", "an arc seam must be shorter than its full circle")
+        mid = cq.Vector(arc_radius_mm * math.sin(angle / 2), arc_radius_mm * (1 - math.cos(angle / 2)), 0)
+        end = cq.Vector(arc_radius_mm * math.sin(angle), arc_radius_mm * (1 - math.cos(angle)), 0)
+        return cq.Wire.assembleEdges([cq.Edge.makeThreePointArc(cq.Vector(0, 0, 0), mid, end)])
+    if path == "paper":
+        n = max(2, int(math.ceil(length / PAPER_SAMPLE_MM)))
+        xs = [length * i / n for i in range(n + 1)]
+        pts = [cq.Vector(*paper_xyz(x)) for x in xs]
+        k = math.pi / 200.0
+
+        def tangent(x: float) -> cq.Vector:
+            return cq.Vector(1.0, -10.0 * k * math.sin(k * x), 10.0 * k * math.cos(k * x))
+
+        edge = cq.Edge.makeSpline(pts, tangents=[tangent(0.0), tangent(length)], scale=False)
+        return cq.Wire.assembleEdges([edge])
+    # corner: two legs of half the length each, turning left by corner_angle_deg
+    if not 0 < corner_angle_deg < 180:
+        raise ParamError("corner_angle_deg", f"must be in (0, 180), got {corner_angle_deg}")
+    turn = math.radians(corner_angle_deg)
+    half = length / 2
+    p1 = cq.Vector(half, 0, 0)
+    p2 = p1 + cq.Vector(half * math.cos(turn), half * math.sin(turn), 0)
+    return cq.Wire.makePolygon([cq.Vector(0, 0, 0), p1, p2])
+
+
+def check_lateral_extent(
+    path: str,
+    profiles: Sequence[Profile],
+    seam_length_mm: float | None,
+    arc_radius_mm: float,
+    corner_angle_deg: float,
+) -> None:
+    """Refuse profiles that would fold over themselves on curved or cornered paths."""
+    left = max(u for profile in profiles for u, _ in profile)
+    right = max(-u for profile in profiles for u, _ in profile)
+    if path == "arc" and left >= arc_radius_mm:
+        raise ParamError(
+            "arc_radius_mm",
+            f"the part reaches {left:.1f} mm towards the arc centre; use a radius > {left:.1f}",
+        )
+    if path == "corner":
+        half = default_length(path, seam_length_mm) / 2
+        reach = max(left, right) * math.tan(math.radians(corner_angle_deg) / 2)
+        if reach >= half:
+            raise ParamError(
+                "seam_length_mm",
+                f"each corner leg ({half:.1f} mm) must exceed the mitre reach {reach:.1f} mm",
+            )
+
+
+def _start_frame(wire: cq.Wire) -> tuple[cq.Vector, cq.Vector, cq.Vector]:
+    """Origin, u axis and v axis of the profile plane at the start of the path."""
+    origin = wire.startPoint()
+    tangent = wire.tangentAt(0.0).normalized()
+    up = cq.Vector(0, 0, 1)
+    v_axis = (up - tangent * up.dot(tangent)).normalized()
+    u_axis = v_axis.cross(tangent).normalized()
+    return origin, u_axis, v_axis
+
+
+def sweep(
+    profiles: Sequence[Profile],
+    path: cq.Wire,
+    seam_uv: dict[str, tuple[float, float]],
+) -> tuple[cq.Shape, dict[str, list[cq.Edge]]]:
+    """Sweep closed profile polygons along the path; return the shape and its seam edges.
+
+    Parameters
+    ----------
+    profiles : list of (k, 2) sequences of (u, v) in mm
+        Closed polygons (last vertex not repeated); one solid each.
+    path : cadquery.Wire
+    seam_uv : dict of str to (u, v)
+        Profile vertices whose swept edges are seams.
+    """
+    origin, u_axis, v_axis = _start_frame(path)
+    solids: list[cq.Solid] = []
+    seams: dict[str, list[cq.Edge]] = {}
+    for profile in profiles:
+        pts = [origin + u_axis * u + v_axis * v for u, v in profile]
+        wire = cq.Wire.makePolygon(pts, close=True)
+        builder = BRepOffsetAPI_MakePipeShell(path.wrapped)
+        builder.SetMode(gp_Dir(0.0, 0.0, 1.0))
+        builder.SetTransitionMode(BRepBuilderAPI_RightCorner)
+        builder.SetTolerance(SWEEP_TOL_MM, SWEEP_TOL_MM, 1e-4)
+        builder.Add(wire.wrapped, False, False)
+        builder.Build()
+        if not builder.IsDone():
+            raise ParamError("path", "the profile could not be swept along the path")
+        builder.MakeSolid()
+        solid = cq.Solid(builder.Shape())
+        if solid.Volume() < 0:
+            solid = cq.Solid(solid.wrapped.Reversed())
+        solids.append(solid)
+        for name, (u, v) in seam_uv.items():
+            if not any(abs(pu - u) < 1e-12 and abs(pv - v) < 1e-12 for pu, pv in profile):
+                continue
+            target = origin + u_axis * u + v_axis * v
+            vertex = min(wire.Vertices(), key=lambda vx: (vx.Center() - target).Length)
+            seams[name] = _order_along(_generated_edges(builder, vertex), target)
+    missing = set(seam_uv) - set(seams)
+    if missing:
+        raise ValueError(f"seam vertices {sorted(missing)} are not profile vertices")
+    shape: cq.Shape = solids[0] if len(solids) == 1 else cq.Compound.makeCompound(solids)
+    return shape, seams
+
+
+def _generated_edges(builder: BRepOffsetAPI_MakePipeShell, vertex: cq.Vertex) -> list[cq.Edge]:
+    from OCP.TopAbs import TopAbs_EDGE
+
+    out: list[cq.Edge] = []
+    for shape in builder.Generated(vertex.wrapped):
+        if shape.ShapeType() == TopAbs_EDGE:
+            out.append(cq.Edge(shape))
+        else:
+            out.extend(cq.Shape.cast(shape).Edges())
+    return out
+
+
+def _order_along(edges: list[cq.Edge], start: cq.Vector) -> list[cq.Edge]:
+    """Chain edges starting from the one that touches ``start``."""
+    remaining = list(edges)
+    ordered: list[cq.Edge] = []
+    point = start
+    while remaining:
+        def gap(e: cq.Edge) -> float:
+            return min((e.startPoint() - point).Length, (e.endPoint() - point).Length)
+
+        nxt = min(remaining, key=gap)
+        remaining.remove(nxt)
+        ordered.append(nxt)
+        s, e = nxt.startPoint(), nxt.endPoint()
+        point = e if (s - point).Length <= (e - point).Length else s
+    return ordered
+
+
+def add_tacks(
+    shape: cq.Shape,
+    path: cq.Wire,
+    tacks: int,
+    tack_length_mm: float,
+    tack_height_mm: float,
+    anchor_uv: tuple[float, float] = (0.0, 0.0),
+) -> cq.Shape:
+    """Fuse ``tacks`` short cylinders (radius ``tack_height_mm``) onto the seam.
+
+    Tacks sit at arc lengths (i + 1/2) L / n along the path, centred on the profile point
+    ``anchor_uv``, with their axes along the local tangent.
+    """
+    if tacks < 0 or int(tacks) != tacks:
+        raise ParamError("tacks", f"must be a whole number >= 0, got {tacks}")
+    if tacks == 0:
+        return shape
+    if not tack_length_mm > 0:
+        raise ParamError("tack_length_mm", f"must be > 0, got {tack_length_mm}")
+    if not tack_height_mm > 0:
+        raise ParamError("tack_height_mm", f"must be > 0, got {tack_height_mm}")
+    length = path.Length()
+    if tacks * tack_length_mm >= length:
+        raise ParamError("tacks", f"{tacks} tacks of {tack_length_mm} mm do not fit on the seam")
+    bumps = []
+    up = cq.Vector(0, 0, 1)
+    for i in range(int(tacks)):
+        s = (i + 0.5) / tacks
+        centre = path.positionAt(s)
+        tangent = path.tangentAt(s).normalized()
+        v_axis = (up - tangent * up.dot(tangent)).normalized()
+        u_axis = v_axis.cross(tangent)
+        centre = centre + u_axis * anchor_uv[0] + v_axis * anchor_uv[1]
+        base = centre - tangent * (tack_length_mm / 2)
+        bumps.append(cq.Solid.makeCylinder(tack_height_mm, tack_length_mm, base, tangent))
+    fused = shape.fuse(*bumps).clean()
+    return fused
+
+
+def finish(
+    profiles: Sequence[Profile],
+    seam_uv: dict[str, tuple[float, float]],
+    params: dict[str, object],
+    *,
+    path: str,
+    seam_length_mm: float | None,
+    arc_radius_mm: float,
+    corner_angle_deg: float,
+    tacks: int,
+    tack_length_mm: float,
+    tack_height_mm: float,
+    tack_anchor_uv: tuple[float, float] = (0.0, 0.0),
+) -> Joint:
+    """Path, lateral checks, sweep, tacks, validity: the tail every family shares."""
+    wire = path_wire(path, seam_length_mm, arc_radius_mm, corner_angle_deg)
+    check_lateral_extent(path, profiles, seam_length_mm, arc_radius_mm, corner_angle_deg)
+    shape, seams = sweep(profiles, wire, seam_uv)
+    solid = add_tacks(shape, wire, tacks, tack_length_mm, tack_height_mm, tack_anchor_uv)
+    if not solid.isValid():
+        raise ParamError("path", "these parameters make an invalid solid")
+    return Joint(solid=solid, seams=seams, seam_solid=shape, params=dict(params))
+
+
+def require(condition: bool, param: str, message: str) -> None:
+    """Raise :class:`ParamError` for ``param`` unless ``condition``."""
+    if not condition:
+        raise ParamError(param, message)
+
+
+def run_script(build, argv: Sequence[str] | None = None) -> None:  # type: ignore[no-untyped-def]
+    """Command line of a joint script: ``python cad/x.py [key=value ...] [--step OUT.step]``."""
+    import sys
+
+    args = list(sys.argv[1:] if argv is None else argv)
+    out = None
+    if "--step" in args:
+        i = args.index("--step")
+        out = args[i + 1]
+        del args[i : i + 2]
+    params: dict[str, object] = {}
+    for arg in args:
+        key, _, text = arg.partition("=")
+        value: object
+        try:
+            value = int(text)
+        except ValueError:
+            try:
+                value = float(text)
+            except ValueError:
+                value = text
+        params[key] = value
+    joint = build(**params)
+    print(joint.summary())
+    if out:
+        cq.exporters.export(joint.solid, out)
+        print(f"wrote {out}")

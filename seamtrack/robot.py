@@ -1,0 +1,242 @@
+"""The 3-axis Cartesian robot of the paper (Sec. 2.3, Table 2) and its servo model.
+
+Each axis is driven independently. The joint vector q is the TCP (torch tip) position in the
+base frame {RB}, so ``T_base_tcp(q)`` is a pure translation; the torch keeps its orientation.
+
+Servo model, at the control period dt: the commanded move (a target, a path speed, an optional
+velocity feed-forward) becomes a desired velocity along the straight line to the target; each
+axis then limits that velocity to (i) its velocity limit, (ii) the speed from which it can still
+stop before its position limit, and finally its change to the acceleration limit times dt. The
+"can still stop" speed is the discrete-time one, ``a dt (sqrt(1/4 + 2 d / (a dt^2)) - 1/2)``:
+braking by a dt per tick from it covers exactly d, so no limit is ever crossed. A point-to-point
+move (``stop_at_target``) uses the same law towards its target and lands on it exactly.
+
+The hot loop runs on Python floats: for three axes that is several times faster than numpy.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from . import frames
+from .errors import ReachError, SceneError
+
+FloatArray = NDArray[np.float64]
+
+#: Table 2 of the paper: X, Y, Z in {RB}.
+PAPER_STROKE_MM = (800.0, 150.0, 150.0)
+PAPER_VELOCITY_MAX_MM_S = (20.0, 10.0, 10.0)
+PAPER_ACCELERATION_MAX_MM_S2 = (30.0, 15.0, 15.0)
+
+
+@dataclass(frozen=True)
+class MoveCommand:
+    """A move in the robot's base frame (the tracker's :class:`~seamtrack.trackers.Command`,
+    converted once when it changes).
+
+    Attributes
+    ----------
+    target : tuple of 3 float
+        Target TCP position, mm.
+    speed : float
+        Path speed towards it, mm/s (capped by the axis limits).
+    feed_forward : tuple of 3 float
+        Velocity added to the path velocity, mm/s.
+    stop_at_target : bool
+        Brake so as to arrive at rest (point-to-point) instead of passing through at speed.
+    """
+
+    target: tuple[float, float, float]
+    speed: float
+    feed_forward: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    stop_at_target: bool = False
+
+
+@dataclass
+class RobotState:
+    """Mutable axis state, advanced in place by :meth:`CartesianRobot.step`."""
+
+    q: list[float]
+    v: list[float]
+
+    @property
+    def q_array(self) -> FloatArray:
+        return np.array(self.q)
+
+    @property
+    def v_array(self) -> FloatArray:
+        return np.array(self.v)
+
+
+def _stop_speed(distance: float, accel: float, dt: float) -> float:
+    """Largest speed from which braking at ``accel`` per tick stops within ``distance``."""
+    if distance <= 0.0:
+        return 0.0
+    adt = accel * dt
+    return adt * (math.sqrt(0.25 + 2.0 * distance / (adt * dt)) - 0.5)
+
+
+@dataclass(frozen=True)
+class CartesianRobot:
+    """Three independent linear axes with position, velocity and acceleration limits.
+
+    Parameters
+    ----------
+    position_min_mm, position_max_mm : (3,) float
+        Axis travel in the base frame.
+    velocity_max_mm_s, acceleration_max_mm_s2 : (3,) float
+        Per-axis limits (Table 2).
+    control_period_s : float
+        Servo period dt.
+    T_world_base : (4, 4) float
+        Pose of the robot base in the world.
+    T_tcp_sensor : (4, 4) float
+        Pose of the sensor's laser frame relative to the torch tip.
+    """
+
+    position_min_mm: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    position_max_mm: tuple[float, float, float] = PAPER_STROKE_MM
+    velocity_max_mm_s: tuple[float, float, float] = PAPER_VELOCITY_MAX_MM_S
+    acceleration_max_mm_s2: tuple[float, float, float] = PAPER_ACCELERATION_MAX_MM_S2
+    control_period_s: float = 1e-3
+    T_world_base: FloatArray = field(default_factory=lambda: np.eye(4))
+    T_tcp_sensor: FloatArray = field(default_factory=lambda: np.eye(4))
+
+    def __post_init__(self) -> None:
+        for key in ("velocity_max_mm_s", "acceleration_max_mm_s2"):
+            values = tuple(float(v) for v in getattr(self, key))
+            if len(values) != 3 or not all(math.isfinite(v) and v > 0 for v in values):
+                raise SceneError(f"needs three positive limits, got {values}",
+                                 field=f"robot.{key}", fix="give [x, y, z] limits > 0")
+            object.__setattr__(self, key, values)
+        lo = tuple(float(v) for v in self.position_min_mm)
+        hi = tuple(float(v) for v in self.position_max_mm)
+        if len(lo) != 3 or len(hi) != 3 or not all(a < b for a, b in zip(lo, hi, strict=True)):
+            raise SceneError(f"position_min_mm {lo} must lie below position_max_mm {hi}",
+                             field="robot.position_max_mm", fix="give [x, y, z] with min < max")
+        object.__setattr__(self, "position_min_mm", lo)
+        object.__setattr__(self, "position_max_mm", hi)
+        if not (math.isfinite(self.control_period_s) and self.control_period_s > 0):
+            raise SceneError(f"must be > 0, got {self.control_period_s}",
+                             field="robot.control_period_s", fix="e.g. 0.001 (1 kHz)")
+        object.__setattr__(self, "T_world_base", np.asarray(self.T_world_base, dtype=float))
+        object.__setattr__(self, "T_tcp_sensor", np.asarray(self.T_tcp_sensor, dtype=float))
+
+    # ----------------------------------------------------------------- kinematics
+    @staticmethod
+    def T_base_tcp(q: ArrayLike) -> FloatArray:
+        """Pose of the torch tip in the base frame for joint positions q (a translation)."""
+        return frames.make(translation=q)
+
+    def T_world_tcp(self, q: ArrayLike) -> FloatArray:
+        return self.T_world_base @ self.T_base_tcp(q)
+
+    def T_world_sensor(self, q: ArrayLike) -> FloatArray:
+        """``T_world_base @ T_base_tcp(q) @ T_tcp_sensor``."""
+        return self.T_world_base @ self.T_base_tcp(q) @ self.T_tcp_sensor
+
+    def tcp_world(self, q: ArrayLike) -> FloatArray:
+        return frames.apply(self.T_world_base, np.asarray(q, dtype=float))
+
+    def q_from_world(self, tcp_world: ArrayLike) -> FloatArray:
+        """Joint positions that put the TCP at a world point."""
+        return frames.apply(frames.invert(self.T_world_base), np.asarray(tcp_world, dtype=float))
+
+    def reachable(self, tcp_world: ArrayLike) -> NDArray[np.bool_]:
+        """(n,) True where world points lie inside the axis travel."""
+        q = np.atleast_2d(self.q_from_world(tcp_world))
+        lo, hi = np.array(self.position_min_mm), np.array(self.position_max_mm)
+        return np.asarray(((q >= lo - 1e-9) & (q <= hi + 1e-9)).all(axis=1))
+
+    def require_reachable(self, tcp_world: ArrayLike, what: str, field: str) -> None:
+        """Raise :class:`ReachError` naming the first point outside the axis travel."""
+        points = np.atleast_2d(np.asarray(tcp_world, dtype=float))
+        ok = self.reachable(points)
+        if not ok.all():
+            i = int(np.flatnonzero(~ok)[0])
+            q = self.q_from_world(points[i])
+            raise ReachError(
+                f"{what} point {i} at world {np.round(points[i], 3).tolist()} mm needs axis "
+                f"positions {np.round(q, 3).tolist()} mm, outside the travel "
+                f"{list(self.position_min_mm)}..{list(self.position_max_mm)}",
+                field=field,
+                fix="move the part (seam.offset_mm) or the robot base (robot.base_origin_mm) so "
+                "the whole seam lies inside the robot's reach",
+            )
+
+    def command_in_base(
+        self,
+        target_world: ArrayLike,
+        speed_mm_s: float,
+        velocity_ff_world: ArrayLike | None = None,
+        stop_at_target: bool = False,
+    ) -> MoveCommand:
+        """Convert a world-frame move to the base frame."""
+        T_base_world = frames.invert(self.T_world_base)
+        q = frames.apply(T_base_world, np.asarray(target_world, dtype=float))
+        ff = (0.0, 0.0, 0.0)
+        if velocity_ff_world is not None:
+            ffv = frames.apply_vectors(T_base_world, np.asarray(velocity_ff_world, dtype=float))
+            ff = (float(ffv[0]), float(ffv[1]), float(ffv[2]))
+        return MoveCommand((float(q[0]), float(q[1]), float(q[2])), float(speed_mm_s), ff,
+                           bool(stop_at_target))
+
+    # ----------------------------------------------------------------- servo
+    def state_at(self, q: ArrayLike) -> RobotState:
+        """A state at rest at joint positions q (must be inside the travel)."""
+        qs = [float(x) for x in np.asarray(q, dtype=float)]
+        return RobotState(q=qs, v=[0.0, 0.0, 0.0])
+
+    def step(self, state: RobotState, command: MoveCommand | None) -> None:
+        """Advance ``state`` by one control period under ``command`` (None: brake to rest)."""
+        dt = self.control_period_s
+        q, v = state.q, state.v
+        vmax, amax = self.velocity_max_mm_s, self.acceleration_max_mm_s2
+        lo, hi = self.position_min_mm, self.position_max_mm
+        if command is None:
+            desired = [0.0, 0.0, 0.0]
+        else:
+            ex = command.target[0] - q[0]
+            ey = command.target[1] - q[1]
+            ez = command.target[2] - q[2]
+            dist = math.sqrt(ex * ex + ey * ey + ez * ez)
+            ff = command.feed_forward
+            if dist > 0.0:
+                ux, uy, uz = ex / dist, ey / dist, ez / dist
+                # Path speed limited by every axis' velocity limit along this direction.
+                speed = command.speed
+                a_path = math.inf
+                for u, vm, am in ((ux, vmax[0], amax[0]), (uy, vmax[1], amax[1]),
+                                  (uz, vmax[2], amax[2])):
+                    au = abs(u)
+                    if au > 1e-12:
+                        speed = min(speed, vm / au)
+                        a_path = min(a_path, am / au)
+                if command.stop_at_target:
+                    speed = min(speed, _stop_speed(dist, a_path, dt))
+                # Never step past the target in one tick.
+                speed = min(speed, dist / dt)
+                desired = [ff[0] + ux * speed, ff[1] + uy * speed, ff[2] + uz * speed]
+            else:
+                desired = [ff[0], ff[1], ff[2]]
+        for i in range(3):
+            vd = min(max(desired[i], -vmax[i]), vmax[i])
+            # Keep the ability to stop before the axis travel ends.
+            if vd > 0.0:
+                vd = min(vd, _stop_speed(hi[i] - q[i], amax[i], dt))
+            elif vd < 0.0:
+                vd = max(vd, -_stop_speed(q[i] - lo[i], amax[i], dt))
+            dv_max = amax[i] * dt
+            vi = v[i] + min(max(vd - v[i], -dv_max), dv_max)
+            qi = q[i] + vi * dt
+            # Rounding can leave a sub-nanometre overshoot: clamp, the physical end stop.
+            if qi > hi[i]:
+                qi, vi = hi[i], 0.0
+            elif qi < lo[i]:
+                qi, vi = lo[i], 0.0
+            q[i] = qi
+            v[i] = vi
