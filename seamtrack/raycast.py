@@ -93,10 +93,11 @@ def _intersect_face(
     det = d00 * d11 - d01 * d01
     if not det > 0.0:
         return t, False
-    v = (d11 * d20 - d01 * d21) / det
-    w = (d00 * d21 - d01 * d20) / det
-    inside = v >= -tol and w >= -tol and 1.0 - v - w >= -tol
-    return t, inside
+    # Barycentrics times det (> 0): no divisions on the hot path.
+    v = d11 * d20 - d01 * d21
+    w = d00 * d21 - d01 * d20
+    slack = -tol * det
+    return t, v >= slack and w >= slack and det - v - w >= slack
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -188,8 +189,8 @@ def refine_hits(
 # --------------------------------------------------------------------------- laser-fan kernels
 # The mesh-mode stripe (seamtrack.scan) runs through these two kernels so that a 1024-ray profile
 # costs little more than its Embree calls. The sensor enters as a parameter vector (indices below,
-# built by ``seamtrack.scan``); _chip and _pixel_center repeat LaserLineSensor.project,
-# in_field_of_view and measure operation for operation (tests pin them equal).
+# built by ``seamtrack.scan``); _chip and _pixel_center compute LaserLineSensor.project,
+# in_field_of_view and measure with fewer divisions (tests pin them equal to 1e-12).
 SP_B, SP_LAM, SP_SIN, SP_COS, SP_H, SP_V, SP_NH, SP_NV, SP_SLACK, SP_COS_MAX_INC = range(10)
 
 MISS, OCCLUDED, OUT_OF_RANGE, INCIDENCE = 1, 2, 3, 4  # = seamtrack.profiles.Reason
@@ -200,15 +201,13 @@ def _chip(y: float, z: float, sp: NDArray[np.float64]) -> tuple[float, float, bo
     """Laser-plane point to chip coordinates and the field-of-view test."""
     b, lam, s, c = sp[SP_B], sp[SP_LAM], sp[SP_SIN], sp[SP_COS]
     depth = z * c + b * s
-    x_c = lam * (b * c - z * s) / depth
-    z_c = lam * y / depth
-    inside = (
-        depth > 0
-        and abs(x_c) <= 0.5 * sp[SP_H] * sp[SP_SLACK]
-        and abs(z_c) <= 0.5 * sp[SP_V] * sp[SP_SLACK]
-        and np.isfinite(y)
-        and np.isfinite(z)
-    )
+    if not depth > 0:
+        return np.nan, np.nan, False
+    lam_over_depth = lam / depth
+    x_c = (b * c - z * s) * lam_over_depth
+    z_c = y * lam_over_depth
+    # A NaN or infinite input gives a NaN chip coordinate, which fails both comparisons.
+    inside = abs(x_c) <= 0.5 * sp[SP_H] * sp[SP_SLACK] and abs(z_c) <= 0.5 * sp[SP_V] * sp[SP_SLACK]
     return x_c, z_c, inside
 
 
@@ -217,12 +216,12 @@ def _pixel_center(x_c: float, z_c: float, sp: NDArray[np.float64]) -> tuple[floa
     """The laser-plane point the sensor reports for chip coordinates: snap, triangulate."""
     b, lam, s, c, H, V = sp[SP_B], sp[SP_LAM], sp[SP_SIN], sp[SP_COS], sp[SP_H], sp[SP_V]
     pitch_h, pitch_v = H / sp[SP_NH], V / sp[SP_NV]
-    ih = min(max(np.floor((x_c + 0.5 * H) / pitch_h), 0.0), sp[SP_NH] - 1)
-    iv = min(max(np.floor((z_c + 0.5 * V) / pitch_v), 0.0), sp[SP_NV] - 1)
+    ih = min(max(np.floor((x_c + 0.5 * H) * sp[SP_NH] / H), 0.0), sp[SP_NH] - 1)
+    iv = min(max(np.floor((z_c + 0.5 * V) * sp[SP_NV] / V), 0.0), sp[SP_NV] - 1)
     xq = (ih + 0.5) * pitch_h - 0.5 * H
     zq = (iv + 0.5) * pitch_v - 0.5 * V
-    den = xq * c + lam * s
-    return b * zq / den, b * (lam * c - xq * s) / den
+    b_over_den = b / (xq * c + lam * s)
+    return zq * b_over_den, (lam * c - xq * s) * b_over_den
 
 
 @numba.njit(cache=True, nogil=True)
@@ -248,6 +247,7 @@ def fan_stripe_hits(
     t_out: NDArray[np.float64],
     face_out: NDArray[np.int64],
     cos_incidence: NDArray[np.float64],
+    chip: NDArray[np.float64],
     shadow_origins: NDArray[np.float32],
     shadow_directions: NDArray[np.float32],
     shadow_far: NDArray[np.float32],
@@ -258,7 +258,8 @@ def fan_stripe_hits(
     ``origin`` (3,) is the emitter in the local frame, ``rotation`` (3, 3) the laser frame's
     axes, ``fan`` (n, 3) the unit ray directions in the laser frame and ``directions`` the same
     in the local frame. Fills the (n,) outputs (``points`` (n, 2) = (y_L, z_L), NaN on a miss;
-    ``reason`` 0 for the points still to test for occlusion) and the first k rows of the
+    ``reason`` 0 for the points still to test for occlusion; ``chip`` (n, 2) = (x_c, z_c))
+    and the first k rows of the
     shadow-ray arrays (origin offset towards the camera, unit direction, length, ray index);
     returns k.
     """
@@ -271,13 +272,15 @@ def fan_stripe_hits(
         if f < 0:
             points[i, 0] = np.nan
             points[i, 1] = np.nan
+            chip[i, 0] = np.nan
+            chip[i, 1] = np.nan
             reason[i] = MISS
             t_out[i] = np.nan
             face_out[i] = -1
             cos_incidence[i] = np.nan
             continue
         dx, dy, dz = directions[i, 0], directions[i, 1], directions[i, 2]
-        t = np.float64(tfar[i])
+        t = float(tfar[i])
         if refine:
             t, f, _ = _refine_one(origin[0], origin[1], origin[2], dx, dy, dz, f, t,
                                   vertices, faces, weld, ring_ptr, ring_faces, tol)  # fmt: skip
@@ -291,7 +294,9 @@ def fan_stripe_hits(
         nx, ny, nz = face_normals[f, 0], face_normals[f, 1], face_normals[f, 2]
         n_dot_d = nx * dx + ny * dy + nz * dz
         cos_incidence[i] = abs(n_dot_d)
-        _, _, inside = _chip(y, z, sp)
+        x_c, z_c, inside = _chip(y, z, sp)
+        chip[i, 0] = x_c
+        chip[i, 1] = z_c
         if not inside:
             reason[i] = OUT_OF_RANGE
             continue
@@ -301,7 +306,8 @@ def fan_stripe_hits(
         px, py, pz = origin[0] + t * dx, origin[1] + t * dy, origin[2] + t * dz
         vx, vy, vz = cx - px, cy - py, cz - pz
         length = np.sqrt(vx * vx + vy * vy + vz * vz)
-        vx, vy, vz = vx / length, vy / length, vz / length
+        inv_length = 1.0 / length
+        vx, vy, vz = vx * inv_length, vy * inv_length, vz * inv_length
         # The camera must be on the lit side of the face (thin sheets, back faces).
         if (nx * vx + ny * vy + nz * vz) * n_dot_d >= 0.0:
             reason[i] = OCCLUDED
@@ -323,6 +329,7 @@ def fan_stripe_hits(
 def fan_stripe_finish(
     points: NDArray[np.float64],
     reason: NDArray[np.uint8],
+    chip: NDArray[np.float64],
     occluder: NDArray[np.int32],
     shadow_index: NDArray[np.int64],
     sp: NDArray[np.float64],
@@ -336,8 +343,7 @@ def fan_stripe_finish(
         return
     for i in range(points.shape[0]):
         if reason[i] == 0:
-            x_c, z_c, _ = _chip(points[i, 0], points[i, 1], sp)
-            points[i, 0], points[i, 1] = _pixel_center(x_c, z_c, sp)
+            points[i, 0], points[i, 1] = _pixel_center(chip[i, 0], chip[i, 1], sp)
 
 
 # --------------------------------------------------------------------------- the caster
@@ -459,9 +465,7 @@ class RayCaster:
         )  # fmt: skip
         return t, face, refined
 
-    def first_hit(
-        self, origins: ArrayLike, directions: ArrayLike, *, refine: bool = True
-    ) -> Hits:
+    def first_hit(self, origins: ArrayLike, directions: ArrayLike, *, refine: bool = True) -> Hits:
         """First hit of each ray.
 
         Parameters

@@ -103,8 +103,9 @@ def sense_seam(
     y, z = crossings[:, 0], crossings[:, 1]
     inside = sensor.in_field_of_view(y, z)
     if not inside.any():
-        return Feature.failed("the seam crossing is outside the field of view / depth of field",
-                              joint="seam")
+        return Feature.failed(
+            "the seam crossing is outside the field of view / depth of field", joint="seam"
+        )
     candidates = np.flatnonzero(inside)
     best = candidates[np.argmin(np.abs(y[candidates]))]
     y_true, z_true = float(y[best]), float(z[best])
@@ -114,12 +115,17 @@ def sense_seam(
         y_true += rng.normal(0.0, noise.lateral_sigma_mm)
         z_true += rng.normal(0.0, noise.range_sigma_mm)
         if not sensor.in_field_of_view(y_true, z_true):
-            return Feature.failed("the noisy measurement fell outside the field of view",
-                                  joint="seam")
+            return Feature.failed(
+                "the noisy measurement fell outside the field of view", joint="seam"
+            )
     y_m, z_m = sensor.measure(y_true, z_true)
     point = np.array([float(y_m), float(z_m)])
-    return Feature(point_laser=point, point_world=laser_to_world(T_world_sensor, point),
-                   confidence=1.0, joint="seam")
+    return Feature(
+        point_laser=point,
+        point_world=laser_to_world(T_world_sensor, point),
+        confidence=1.0,
+        joint="seam",
+    )
 
 
 # =========================================================================== mesh mode
@@ -300,6 +306,7 @@ def stripe_hits(
     t = np.empty(n)
     face = np.empty(n, dtype=np.int64)
     cos_incidence = np.empty(n)
+    chip = np.empty((n, 2))
     shadow_o = np.empty((n, 3), dtype=np.float32)
     shadow_d = np.empty((n, 3), dtype=np.float32)
     shadow_far = np.empty(n, dtype=np.float32)
@@ -308,7 +315,7 @@ def stripe_hits(
         origin, rotation, fan.directions, directions, prim, tfar, caster.vertices_local,
         caster.faces, caster.weld, caster.ring_ptr, caster.ring_faces, caster.face_normals,
         bool(refine), constants.BARYCENTRIC_TOL, fan.sensor_params,
-        constants.SHADOW_RAY_OFFSET_MM, points, reason, t, face, cos_incidence, shadow_o,
+        constants.SHADOW_RAY_OFFSET_MM, points, reason, t, face, cos_incidence, chip, shadow_o,
         shadow_d, shadow_far, shadow_index,
     )  # fmt: skip
     if k:
@@ -316,7 +323,7 @@ def stripe_hits(
                                     query="OCCLUDED")  # fmt: skip
     else:
         occluder = np.empty(0, dtype=np.int32)
-    raycast.fan_stripe_finish(points, reason, occluder, shadow_index[:k], fan.sensor_params,
+    raycast.fan_stripe_finish(points, reason, chip, occluder, shadow_index[:k], fan.sensor_params,
                               bool(sensor.quantize if quantize is None else quantize))  # fmt: skip
     return StripeHits(points_laser=points, reason=reason, distance_mm=t, face=face,
                       cos_incidence=cos_incidence, directions_local=directions,
@@ -372,7 +379,128 @@ def scan_mesh(
     points, reason = hits.points_laser, hits.reason
     if noisy:
         assert noise is not None and rng is not None
-        from .stripe_noise import apply_stripe_noise
-
-        points, reason = apply_stripe_noise(sensor, caster, T, hits, noise, rng)
+        points, reason = _apply_stripe_noise(sensor, caster, T, hits, noise, rng)
     return Profile(points, valid=reason == 0, reason=reason, T_world_sensor=T, t_s=t_s)
+
+
+# --------------------------------------------------------------------------- realism knobs
+def _apply_stripe_noise(
+    sensor: LaserLineSensor,
+    caster: RayCaster,
+    T_world_sensor: NDArray[np.float64],
+    hits: StripeHits,
+    noise: StripeNoise,
+    rng: np.random.Generator,
+) -> tuple[NDArray[np.float64], NDArray[np.uint8]]:
+    """The knobs of :class:`StripeNoise` on unquantized stripe hits; returns (points, reason)."""
+    points = hits.points_laser.copy()
+    reason = hits.reason.copy()
+    n = len(reason)
+    if noise.dropout_rate > 0:
+        idx = np.flatnonzero(reason == Reason.VALID)
+        p_lost = dropout_probability(noise.dropout_rate, hits.cos_incidence[idx])
+        reason[idx[rng.random(len(idx)) < p_lost]] = Reason.DROPOUT
+    if noise.secondary_probability > 0:
+        false_points, seen = secondary_reflection_points(sensor, caster, T_world_sensor, hits)
+        take = seen & (rng.random(n) < noise.secondary_probability)
+        points[take] = false_points[take]
+        reason[take] = Reason.VALID
+    idx = np.flatnonzero(reason == Reason.VALID)
+    x_c, z_c = sensor.project(points[idx, 0], points[idx, 1])
+    # Range noise is white on the chip; its z_L size at the centre of the depth of field is
+    # the knob, so the chip sigma is that over dz/dx_c there.
+    to_chip = sensor.pixel_pitch_mm[0] / float(
+        sensor.local_depth_resolution_mm(sensor.range_center_mm)
+    )
+    if noise.range_sigma_mm > 0:
+        x_c = x_c + rng.normal(0.0, noise.range_sigma_mm * to_chip, len(idx))
+    if noise.speckle_sigma_mm > 0:
+        field = _correlated_normal(n, noise.speckle_correlation_rays, rng)
+        x_c = x_c + noise.speckle_sigma_mm * to_chip * field[idx]
+    if noise.outlier_fraction > 0:
+        spurious = rng.random(len(idx)) < noise.outlier_fraction
+        x_c = np.where(spurious, rng.uniform(-0.5, 0.5, len(idx)) * sensor.chip_h_mm, x_c)
+    y, z = sensor.triangulate(x_c, z_c)
+    inside = sensor.in_field_of_view(y, z)
+    y, z = sensor.measure(y, z)
+    points[idx, 0] = y
+    points[idx, 1] = z
+    reason[idx[~inside]] = Reason.OUT_OF_RANGE
+    return points, reason
+
+
+def dropout_probability(dropout_rate: float, cos_incidence: ArrayLike) -> NDArray[np.float64]:
+    """p(theta) = 1 - (1 - dropout_rate) ** (1 / cos(theta)), see :class:`StripeNoise`.
+
+    Parameters
+    ----------
+    dropout_rate : float
+        Loss probability at normal incidence.
+    cos_incidence : (n,) float
+
+    Returns
+    -------
+    (n,) float
+    """
+    cos_i = np.clip(np.asarray(cos_incidence, dtype=np.float64), 1e-12, 1.0)
+    return np.asarray(-np.expm1(np.log1p(-dropout_rate) / cos_i))
+
+
+def _correlated_normal(n: int, correlation: float, rng: np.random.Generator) -> FloatArray:
+    """(n,) unit-variance Gaussian noise, correlated with a Gaussian kernel of ``correlation``."""
+    half = max(1, math.ceil(3.0 * correlation))
+    kernel = np.exp(-0.5 * (np.arange(-half, half + 1) / correlation) ** 2)
+    kernel /= np.sqrt(np.sum(kernel**2))
+    white = rng.standard_normal(n + 2 * half)
+    return np.convolve(white, kernel, mode="valid")
+
+
+def secondary_reflection_points(
+    sensor: LaserLineSensor,
+    caster: RayCaster,
+    T_world_sensor: NDArray[np.float64],
+    hits: StripeHits,
+) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """Where the sensor would report each ray's specular secondary reflection.
+
+    The laser ray reflects specularly at its lit point P (r = d - 2 (d.n) n), lights the first
+    point Q of the part along r, and if the camera sees Q (Q's lit side faces the camera and the
+    line of sight is clear), Q images onto the chip where the laser-plane point
+    C + s (Q - C), s = b / (b - x_Q), would: the camera cannot tell them apart.
+
+    Returns
+    -------
+    points_laser : (n, 2) float
+        The false (y_L, z_L); NaN where there is none.
+    seen : (n,) bool
+        A false point exists and lies in the field of view.
+    """
+    n = len(hits.reason)
+    out = np.full((n, 2), np.nan)
+    seen = np.zeros(n, dtype=bool)
+    idx = np.flatnonzero(hits.face >= 0)
+    if len(idx) == 0:
+        return out, seen
+    d = hits.directions_local[idx]
+    lit_local = hits.origin_local + hits.distance_mm[idx, None] * d
+    normal = caster.face_normals[hits.face[idx]]
+    reflected = d - 2.0 * np.einsum("ij,ij->i", d, normal)[:, None] * normal
+    start = lit_local + caster.local_origin + constants.SHADOW_RAY_OFFSET_MM * reflected
+    second = caster.first_hit(start, reflected)
+    camera = T_world_sensor[:3, :3] @ sensor.camera_center_laser + T_world_sensor[:3, 3]
+    to_camera = camera - second.points
+    faces_camera = np.einsum("ij,ij->i", second.normals, to_camera) > 0
+    candidate = np.flatnonzero(second.hit & faces_camera)
+    visible = ~caster.line_of_sight_blocked(second.points[candidate], camera)
+    candidate = candidate[visible]
+    q = (second.points[candidate] - T_world_sensor[:3, 3]) @ T_world_sensor[:3, :3]
+    b = sensor.baseline_mm
+    with np.errstate(divide="ignore", invalid="ignore"):
+        scale = b / (b - q[:, 0])
+    y, z = scale * q[:, 1], scale * q[:, 2]
+    ok = (scale > 0) & sensor.in_field_of_view(y, z)
+    rows = idx[candidate[ok]]
+    out[rows, 0] = y[ok]
+    out[rows, 1] = z[ok]
+    seen[rows] = True
+    return out, seen
