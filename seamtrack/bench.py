@@ -1,0 +1,288 @@
+"""Benchmarks: what a stripe profile costs, and what our code adds to bare Embree.
+
+``bench_raycast`` times one laser profile (a fan of 1024 rays and the shadow rays of its lit
+points) on a ~100k-triangle V-groove plate and, when CadQuery is available, on the CAD V-groove,
+five ways on the same rays: :func:`seamtrack.scan.scan_mesh` (a ``Profile``) with float64
+refinement on and off, :func:`seamtrack.scan.stripe_hits` (the arrays, no ``Profile``), bare
+``embreex`` ``scene.run`` calls on pre-built float32 arrays, and trimesh's
+``mesh.ray.intersects_location`` + ``intersects_any``. One thread, best of ``repeats`` runs.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import platform
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from . import constants, frames
+
+RAYS = 1024
+
+
+def v_groove_plate_mesh(
+    *,
+    triangles: int = 100_000,
+    width_mm: float = 100.0,
+    length_mm: float = 100.0,
+    depth_mm: float = 10.0,
+    half_angle_rad: float = np.radians(30.0),
+    roughness_mm: float = 0.005,
+    seed: int = 0,
+) -> Any:
+    """A finely triangulated V-groove plate (a sheet), with Gaussian roughness on z.
+
+    The groove runs along x at y = 0, its root at z = -depth; the plate's top is z = 0.
+    Returns a ``trimesh.Trimesh`` of about ``triangles`` faces.
+    """
+    import trimesh
+
+    g = depth_mm * np.tan(half_angle_rad)
+    ys = np.array([-0.5 * width_mm, -g, 0.0, g, 0.5 * width_mm])
+    zs = np.array([0.0, 0.0, -depth_mm, 0.0, 0.0])
+    n_across = int(np.sqrt(triangles / 4.0))
+    n_along = max(2, triangles // (2 * n_across))
+    arc = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(ys), np.diff(zs)))])
+    s = np.union1d(np.linspace(0.0, arc[-1], n_across), arc)
+    yz = np.column_stack([np.interp(s, arc, ys), np.interp(s, arc, zs)])
+    x = np.linspace(-0.5 * length_mm, 0.5 * length_mm, n_along + 1)
+    grid_x, grid_k = np.meshgrid(x, np.arange(len(yz)), indexing="ij")
+    vertices = np.column_stack([grid_x.ravel(), yz[grid_k.ravel()]])
+    vertices[:, 2] += np.random.default_rng(seed).normal(0.0, roughness_mm, len(vertices))
+    idx = np.arange(len(vertices)).reshape(len(x), len(yz))
+    a, b = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel()
+    c, d = idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
+    faces = np.concatenate([np.column_stack([a, c, b]), np.column_stack([a, d, c])])
+    return trimesh.Trimesh(vertices, faces, process=False)
+
+
+def _best_rate(fn: Callable[[], object], calls: int, repeats: int) -> float:
+    """Profiles per second: best of ``repeats`` runs of ``calls`` calls."""
+    fn()
+    best = np.inf
+    for _ in range(repeats):
+        start = time.perf_counter()
+        for _ in range(calls):
+            fn()
+        best = min(best, (time.perf_counter() - start) / calls)
+    return 1.0 / best
+
+
+def _case(name: str, mesh: Any, T_world_sensor: np.ndarray, calls: int, repeats: int) -> dict:
+    """Time every method on one mesh and pose."""
+    import trimesh
+
+    from . import raycast
+    from .scan import laser_fan, ray_caster, scan_mesh, stripe_hits
+    from .sensor import preset
+
+    sensor = preset("paper")
+    build_start = time.perf_counter()
+    caster = raycast.RayCaster.from_mesh(mesh)
+    build_s = time.perf_counter() - build_start
+    caster = ray_caster(mesh)  # the cached one that scan_mesh uses
+    hits = stripe_hits(sensor, caster, T_world_sensor, RAYS)
+    # The very rays the pipeline casts, as float32 arrays, for the bare Embree calls.
+    fan_world = laser_fan(sensor, RAYS).directions @ T_world_sensor[:3, :3].T
+    origin_local = T_world_sensor[:3, 3] - caster.local_origin
+    fan_o32 = np.ascontiguousarray(np.broadcast_to(origin_local, fan_world.shape), np.float32)
+    fan_d32 = fan_world.astype(np.float32)
+    shadow = np.flatnonzero(np.isin(hits.reason, [0, 2]) & (hits.face >= 0))
+    camera = origin_local + sensor.baseline_mm * T_world_sensor[:3, 0]
+    lit = origin_local + hits.distance_mm[shadow, None] * fan_world[shadow]
+    to_camera = camera - lit
+    length = np.linalg.norm(to_camera, axis=1)
+    sh_d = to_camera / length[:, None]
+    sh_o32 = (lit + constants.SHADOW_RAY_OFFSET_MM * sh_d).astype(np.float32)
+    sh_d32 = sh_d.astype(np.float32)
+    sh_far32 = (length - constants.SHADOW_RAY_OFFSET_MM).astype(np.float32)
+    scene = caster.scene
+
+    def bare() -> None:
+        scene.run(fan_o32, fan_d32, output=1)
+        scene.run(sh_o32, sh_d32, dists=sh_far32.copy(), query="OCCLUDED")
+
+    fan_o64 = fan_o32.astype(np.float64) + caster.local_origin
+    sh_o64 = sh_o32.astype(np.float64) + caster.local_origin
+    intersector = mesh.ray
+
+    def via_trimesh() -> None:
+        intersector.intersects_location(fan_o64, fan_world, multiple_hits=False)
+        intersector.intersects_any(sh_o64, sh_d)
+
+    methods: dict[str, Callable[[], object]] = {
+        "scan_mesh (Profile), float64 refinement": lambda: scan_mesh(
+            sensor, mesh, T_world_sensor, rays=RAYS
+        ),
+        "scan_mesh (Profile), float32 only": lambda: scan_mesh(
+            sensor, mesh, T_world_sensor, rays=RAYS, refine=False
+        ),
+        "stripe_hits (arrays), float64 refinement": lambda: stripe_hits(
+            sensor, caster, T_world_sensor, RAYS
+        ),
+        "stripe_hits (arrays), float32 only": lambda: stripe_hits(
+            sensor, caster, T_world_sensor, RAYS, refine=False
+        ),
+        "bare embreex scene.run (same rays)": bare,
+        "trimesh mesh.ray (same rays)": via_trimesh,
+    }
+    rates = {key: 0.0 for key in methods}
+    for _ in range(repeats):  # interleaved, so that drift hits every method alike
+        for key, fn in methods.items():
+            rates[key] = max(rates[key], _best_rate(fn, calls, 1))
+    return {
+        "mesh": name,
+        "triangles": len(mesh.faces),
+        "scene_build_s": build_s,
+        "rays": RAYS,
+        "shadow_rays": len(shadow),
+        "valid_points": int((hits.reason == 0).sum()),
+        "trimesh_intersector": f"{type(intersector).__module__}.{type(intersector).__name__}",
+        "trimesh_has_embree": bool(trimesh.ray.has_embree),
+        "profiles_per_s": rates,
+    }
+
+
+def machine_info() -> dict[str, Any]:
+    """CPU model (from /proc/cpuinfo), core count, Python and library versions."""
+    import embreex
+    import numba
+    import trimesh
+
+    cpu = platform.processor() or "unknown"
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return {
+        "cpu": cpu,
+        "cores": os.cpu_count(),
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "embreex": getattr(embreex, "__version__", "?"),
+        "trimesh": trimesh.__version__,
+        "numba": numba.__version__,
+    }
+
+
+def bench_raycast(out_dir: str | Path, *, repeats: int = 30, quick: bool = False) -> dict:
+    """Profiles per second of the mesh-mode stripe; writes ``raycast.json`` and ``raycast.md``.
+
+    Parameters
+    ----------
+    out_dir : str or Path
+    repeats : int
+        Runs of 50 profiles per method (the best is kept), interleaved across methods, so
+        that other load on the machine shows as fewer fast runs, not as slower ones.
+    quick : bool
+        Fewer calls per run and a 20k-triangle plate (a smoke test, not a measurement).
+
+    Returns
+    -------
+    dict
+        ``machine``, ``cases`` (one per mesh: rates per method), ``skipped`` (why a mesh was
+        left out) and the ``ratios`` the targets are stated in.
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    calls = 10 if quick else 50
+    repeats = min(repeats, 3) if quick else repeats
+    triangles = 20_000 if quick else 100_000
+    T_plate = frames.make(frames.look_rotation([0.0, 0.0, -1.0], [1.0, 0.0, 0.0]), [0.0, 0.0, 91.0])
+    cases = [
+        _case(
+            f"V-groove plate, {triangles // 1000}k triangles, 5 um roughness",
+            v_groove_plate_mesh(triangles=triangles),
+            T_plate,
+            calls,
+            repeats,
+        )
+    ]
+    skipped: dict[str, str] = {}
+    try:
+        from .sensor import preset
+        from .workpiece import load_workpiece
+
+        part = load_workpiece("v_groove", tolerance_mm=0.01)
+        root = part.seam.interpolate(0.5 * part.seam.length_mm)
+        T_cad = frames.make(
+            frames.look_rotation([0.0, 0.0, -1.0], [1.0, 0.0, 0.0]),
+            root + np.array([0.0, 0.0, preset("paper").range_center_mm]),
+        )
+        cases.append(
+            _case(
+                "CAD v_groove (load_workpiece, tolerance 0.01 mm)", part.mesh, T_cad, calls, repeats
+            )
+        )
+    except Exception as error:  # CadQuery missing or the CAD module not ready: say so
+        skipped["CAD v_groove"] = f"{type(error).__name__}: {error}"
+    for case in cases:
+        r = case["profiles_per_s"]
+        case["ratios"] = {
+            "scan_mesh / bare embreex": r["scan_mesh (Profile), float64 refinement"]
+            / r["bare embreex scene.run (same rays)"],
+            "stripe_hits / bare embreex": r["stripe_hits (arrays), float64 refinement"]
+            / r["bare embreex scene.run (same rays)"],
+            "scan_mesh / trimesh": r["scan_mesh (Profile), float64 refinement"]
+            / r["trimesh mesh.ray (same rays)"],
+            "refinement cost (scan_mesh)": r["scan_mesh (Profile), float32 only"]
+            / r["scan_mesh (Profile), float64 refinement"]
+            - 1.0,
+            "refinement cost (stripe_hits)": r["stripe_hits (arrays), float32 only"]
+            / r["stripe_hits (arrays), float64 refinement"]
+            - 1.0,
+        }
+    result = {
+        "machine": machine_info(),
+        "rays": RAYS,
+        "repeats": repeats,
+        "calls": calls,
+        "quick": quick,
+        "cases": cases,
+        "skipped": skipped,
+    }
+    (out / "raycast.json").write_text(json.dumps(result, indent=2))
+    (out / "raycast.md").write_text(raycast_markdown(result))
+    return result
+
+
+def raycast_markdown(result: dict) -> str:
+    """The markdown table of a :func:`bench_raycast` result."""
+    m = result["machine"]
+    lines = [
+        f"Machine: {m['cpu']}, {m['cores']} cores; Python {m['python']}, numpy {m['numpy']}, "
+        f"embreex {m['embreex']}, trimesh {m['trimesh']}, numba {m['numba']}. One thread; "
+        f"{result['rays']} rays per profile plus one shadow ray per lit point in range; best "
+        f"of {result['repeats']} runs of {result['calls']} profiles.",
+        "",
+    ]
+    for case in result["cases"]:
+        lines += [
+            f"**{case['mesh']}** ({case['triangles']} triangles, {case['shadow_rays']} shadow "
+            f"rays, {case['valid_points']} valid points; scene built in "
+            f"{case['scene_build_s'] * 1e3:.0f} ms; trimesh intersector "
+            f"`{case['trimesh_intersector']}`, embree "
+            f"{'available' if case['trimesh_has_embree'] else 'NOT available'})",
+            "",
+            "| method | profiles/s | vs bare embreex |",
+            "|---|---:|---:|",
+        ]
+        bare = case["profiles_per_s"]["bare embreex scene.run (same rays)"]
+        for key, rate in case["profiles_per_s"].items():
+            lines.append(f"| {key} | {rate:,.0f} | {rate / bare:.2f}x |")
+        lines += ["", "| ratio | value |", "|---|---:|"]
+        for key, value in case["ratios"].items():
+            text = f"{value * 100:+.1f} %" if "cost" in key else f"{value:.2f}x"
+            lines.append(f"| {key} | {text} |")
+        lines.append("")
+    for key, why in result["skipped"].items():
+        lines.append(f"Skipped {key}: {why}")
+    return "\n".join(lines) + "\n"
