@@ -29,8 +29,16 @@ if TYPE_CHECKING:
 FloatArray = NDArray[np.float64]
 SenseFn = Callable[[FloatArray, float], Feature]
 
-_SPEC_KEYS = ("depth_of_field_mm", "fov_near_mm", "fov_far_mm", "angle_deg",
-              "depth_resolution_mm", "lateral_resolution_mm", "focal_length_mm", "standoff_mm")
+_SPEC_KEYS = (
+    "depth_of_field_mm",
+    "fov_near_mm",
+    "fov_far_mm",
+    "angle_deg",
+    "depth_resolution_mm",
+    "lateral_resolution_mm",
+    "focal_length_mm",
+    "standoff_mm",
+)
 
 
 @dataclass(frozen=True)
@@ -64,10 +72,15 @@ class Parts:
 
 def make_sensor(cfg: SensorConfig) -> LaserLineSensor:
     """The preset with the scene's data-sheet overrides and switches applied."""
-    overrides: dict[str, Any] = {k: getattr(cfg, k) for k in _SPEC_KEYS
-                                 if getattr(cfg, k) is not None}
-    return preset(cfg.preset, quantize=cfg.quantize,
-                  max_incidence_rad=math.radians(cfg.max_incidence_deg), **overrides)
+    overrides: dict[str, Any] = {
+        k: getattr(cfg, k) for k in _SPEC_KEYS if getattr(cfg, k) is not None
+    }
+    return preset(
+        cfg.preset,
+        quantize=cfg.quantize,
+        max_incidence_rad=math.radians(cfg.max_incidence_deg),
+        **overrides,
+    )
 
 
 def make_seam(scene: Scene) -> Seam:
@@ -125,8 +138,9 @@ def make_tracker(scene: Scene) -> Tracker:
     return tracker(c.name, **params)
 
 
-def _mesh_sense(scene: Scene, sensor: LaserLineSensor, rng: np.random.Generator
-                ) -> tuple[Seam, SenseFn]:
+def _mesh_sense(
+    scene: Scene, sensor: LaserLineSensor, rng: np.random.Generator
+) -> tuple[Seam, SenseFn]:
     from .features import extractor
     from .scan import scan_mesh
     from .workpiece import load_workpiece
@@ -136,9 +150,13 @@ def _mesh_sense(scene: Scene, sensor: LaserLineSensor, rng: np.random.Generator
     source = w.script if w.script is not None else w.step
     assert source is not None
     path = scene.resolve_path(source)
-    part = load_workpiece(str(path) if path.exists() else source, tolerance_mm=w.tolerance_mm,
-                          angular_tolerance_rad=math.radians(w.angular_tolerance_deg),
-                          seam=w.seam, **w.params)
+    part = load_workpiece(
+        str(path) if path.exists() else source,
+        tolerance_mm=w.tolerance_mm,
+        angular_tolerance_rad=math.radians(w.angular_tolerance_deg),
+        seam=w.seam,
+        **w.params,
+    )
     T_world_part = frames.from_xyz_rpy_deg(w.offset_mm, w.rotation_deg)
     mesh = part.mesh.copy()
     mesh.apply_transform(T_world_part)
@@ -148,8 +166,16 @@ def _mesh_sense(scene: Scene, sensor: LaserLineSensor, rng: np.random.Generator
     noise = _stripe_noise(s.stripe_noise)
 
     def sense(T_world_sensor: FloatArray, t_s: float) -> Feature:
-        profile = scan_mesh(sensor, mesh, T_world_sensor, rays=s.rays, refine=s.refine_float64,
-                            noise=noise, rng=rng, t_s=t_s)
+        profile = scan_mesh(
+            sensor,
+            mesh,
+            T_world_sensor,
+            rays=s.rays,
+            refine=s.refine_float64,
+            noise=noise,
+            rng=rng,
+            t_s=t_s,
+        )
         return find(profile)
 
     return seam, sense
@@ -161,10 +187,13 @@ def _stripe_noise(params: dict[str, Any]) -> Any:
     from . import scan
 
     try:
-        return scan.StripeNoise(**params)  # type: ignore[attr-defined]
+        return scan.StripeNoise(**params)
     except TypeError as exc:
-        raise SceneError(str(exc), field="sensor.stripe_noise",
-                         fix="see the README's list of stripe noise parameters") from None
+        raise SceneError(
+            str(exc),
+            field="sensor.stripe_noise",
+            fix="see the README's list of stripe noise parameters",
+        ) from None
 
 
 def build_parts(scene: Scene, rng: np.random.Generator | None = None) -> Parts:
@@ -176,8 +205,9 @@ def build_parts(scene: Scene, rng: np.random.Generator | None = None) -> Parts:
     if c.sensor.mode == "mesh":
         seam, sense = _mesh_sense(scene, sensor, rng)
     else:
-        seam = make_seam(scene) if c.seam.source != "workpiece" else _mesh_sense(
-            scene, sensor, rng)[0]
+        seam = (
+            make_seam(scene) if c.seam.source != "workpiece" else _mesh_sense(scene, sensor, rng)[0]
+        )
         noise = SeamNoise(c.sensor.noise_range_mm, c.sensor.noise_lateral_mm)
         sensed = seam
 
@@ -193,12 +223,17 @@ def build_parts(scene: Scene, rng: np.random.Generator | None = None) -> Parts:
         welding_speed_mm_s=v,
         frame_period_s=frame_period,
         latency_s=c.sensor.latency_s,
-        end_tolerance_mm=(c.simulation.end_tolerance_mm
-                          if c.simulation.end_tolerance_mm is not None
-                          else v * frame_period + 1.0),
+        end_tolerance_mm=(
+            c.simulation.end_tolerance_mm
+            if c.simulation.end_tolerance_mm is not None
+            else v * frame_period + 1.0
+        ),
         stall_time_s=c.simulation.stall_time_s,
-        time_limit_s=(c.simulation.time_limit_s if c.simulation.time_limit_s is not None
-                      else 3.0 * seam.length_mm / v + 60.0),
+        time_limit_s=(
+            c.simulation.time_limit_s
+            if c.simulation.time_limit_s is not None
+            else 3.0 * seam.length_mm / v + 60.0
+        ),
         wall_time_limit_s=c.simulation.wall_time_limit_s,
         seed=c.simulation.seed,
         trace_period_s=c.simulation.trace_period_s,

@@ -39,8 +39,9 @@ def print_table(rows: Sequence[tuple[str, Any]], title: str = "") -> None:
 
 def print_grid(header: Sequence[str], rows: Sequence[Sequence[Any]]) -> None:
     cells = [[_fmt(c) for c in row] for row in rows]
-    widths = [max(len(h), *(len(r[i]) for r in cells)) if cells else len(h)
-              for i, h in enumerate(header)]
+    widths = [
+        max(len(h), *(len(r[i]) for r in cells)) if cells else len(h) for i, h in enumerate(header)
+    ]
     print("  ".join(h.rjust(w) for h, w in zip(header, widths, strict=True)))
     for row in cells:
         print("  ".join(c.rjust(w) for c, w in zip(row, widths, strict=True)))
@@ -65,13 +66,16 @@ def cmd_run(args: argparse.Namespace) -> int:
     prepare_dir(out)  # fail before the run, not after it
     parts = scene.build()
     result = run(parts, progress=_progress_wanted(args))
-    write_run(result, out, scene.to_toml(), scene.config.simulation.trace_period_s,
-              plot=not args.no_plot)
+    write_run(
+        result, out, scene.to_toml(), scene.config.simulation.trace_period_s, plot=not args.no_plot
+    )
     if not args.quiet:
         rows = [(k, v) for k, v in result.summary.items()]
         print_table(rows, f"seamtrack run {scene.name}")
-        print(f"wrote {out}/summary.json, trace.csv, frames.csv, scene.toml"
-              + ("" if args.no_plot else ", error.png"))
+        print(
+            f"wrote {out}/summary.json, trace.csv, frames.csv, scene.toml"
+            + ("" if args.no_plot else ", error.png")
+        )
     return 0
 
 
@@ -87,12 +91,18 @@ def cmd_init(args: argparse.Namespace) -> int:
     name = args.template or "paper-verification"
     text, _ = scene_text(name) if name in scenes else (None, None)
     if text is None:
-        raise SceneError(f"no template {name!r}", field="TEMPLATE",
-                         fix=f"use one of {', '.join(scenes)} (seamtrack init --list)")
+        raise SceneError(
+            f"no template {name!r}",
+            field="TEMPLATE",
+            fix=f"use one of {', '.join(scenes)} (seamtrack init --list)",
+        )
     target = Path(args.output or f"{name}.toml")
     if target.exists() and not args.force:
-        raise OutputError(f"{str(target)!r} exists", field="-o",
-                          fix="choose another name or pass --force to overwrite")
+        raise OutputError(
+            f"{str(target)!r} exists",
+            field="-o",
+            fix="choose another name or pass --force to overwrite",
+        )
     if args.set:
         from .scene import load_scene
 
@@ -101,8 +111,11 @@ def cmd_init(args: argparse.Namespace) -> int:
     try:
         target.write_text(text)
     except OSError as exc:
-        raise OutputError(f"cannot write {str(target)!r}: {exc.strerror}", field="-o",
-                          fix="choose a writable path") from None
+        raise OutputError(
+            f"cannot write {str(target)!r}: {exc.strerror}",
+            field="-o",
+            fix="choose a writable path",
+        ) from None
     print(f"wrote {target} (edit it, then: seamtrack check {target})")
     return 0
 
@@ -164,20 +177,25 @@ def cmd_sensor(args: argparse.Namespace) -> int:
     known = set(PRESET_SPECS[args.preset]) if args.preset in PRESET_SPECS else set()
     for key in overrides:
         if key not in known | {"quantize", "focal_length_mm"}:
-            raise SceneError(f"unknown sensor spec {key!r}", field=f"--set {key}",
-                             fix=f"use one of {', '.join(sorted(known))}")
+            raise SceneError(
+                f"unknown sensor spec {key!r}",
+                field=f"--set {key}",
+                fix=f"use one of {', '.join(sorted(known))}",
+            )
     sensor = preset(args.preset, **overrides)
     specs, geometry = sensor.specs(), sensor.geometry()
     if args.json:
-        print(json.dumps({"preset": args.preset, "specs": specs, "geometry": geometry},
-                         indent=2))
+        print(json.dumps({"preset": args.preset, "specs": specs, "geometry": geometry}, indent=2))
         return 0
-    print_table(list(geometry.items()), f"sensor {args.preset!r}: geometry (b, lambda, theta_s, "
-                "H, V, N_H, N_V)")
+    print_table(
+        list(geometry.items()),
+        f"sensor {args.preset!r}: geometry (b, lambda, theta_s, H, V, N_H, N_V)",
+    )
     sheet = PRESET_SPECS.get(args.preset, {})
     print("\nspecs through Eq. 4-8 (and the data sheet they came from)")
-    print_grid(["spec", "Eq. 4-8", "data sheet"],
-               [(k, v, sheet.get(k, "")) for k, v in specs.items()])
+    print_grid(
+        ["spec", "Eq. 4-8", "data sheet"], [(k, v, sheet.get(k, "")) for k, v in specs.items()]
+    )
     return 0
 
 
@@ -193,9 +211,17 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     from .scene import parse_override
 
     overrides = dict(parse_override(o) for o in _overrides(args))
-    rows = run_sweep(args.scene, args.param, values, overrides=overrides, seeds=seeds,
-                     workers=args.workers, scheduler=args.scheduler, out_dir=args.out,
-                     progress=_progress_wanted(args))
+    rows = run_sweep(
+        args.scene,
+        args.param,
+        values,
+        overrides=overrides,
+        seeds=seeds,
+        workers=args.workers,
+        scheduler=args.scheduler,
+        out_dir=args.out,
+        progress=_progress_wanted(args),
+    )
     table = summarize(rows)
     print(markdown_table(table, args.param), end="")
     if args.out:
@@ -211,8 +237,15 @@ def cmd_compare(args: argparse.Namespace) -> int:
     from .scene import parse_override
 
     overrides = dict(parse_override(o) for o in _overrides(args))
-    rows = run_sweep(args.scene, "tracker.name", trackers, overrides=overrides,
-                     workers=args.workers, out_dir=args.out, progress=_progress_wanted(args))
+    rows = run_sweep(
+        args.scene,
+        "tracker.name",
+        trackers,
+        overrides=overrides,
+        workers=args.workers,
+        out_dir=args.out,
+        progress=_progress_wanted(args),
+    )
     table = summarize(rows)
     print(markdown_table(table, "tracker"), end="")
     if args.out:
@@ -224,20 +257,30 @@ def cmd_compare(args: argparse.Namespace) -> int:
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="seamtrack",
-        description="Simulate robotic weld seam tracking with a laser vision sensor.")
+        description="Simulate robotic weld seam tracking with a laser vision sensor.",
+    )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
-    def add(name: str, fn: Callable[[argparse.Namespace], int], help_: str
-            ) -> argparse.ArgumentParser:
+    def add(
+        name: str, fn: Callable[[argparse.Namespace], int], help_: str
+    ) -> argparse.ArgumentParser:
         p = sub.add_parser(name, help=help_, description=help_)
         p.set_defaults(fn=fn)
-        p.add_argument("--set", action="append", metavar="KEY=VALUE",
-                       help="override a scene key, e.g. --set tracker.radius_mm=0.5 (repeatable)")
+        p.add_argument(
+            "--set",
+            action="append",
+            metavar="KEY=VALUE",
+            help="override a scene key, e.g. --set tracker.radius_mm=0.5 (repeatable)",
+        )
         return p
 
     p = add("run", cmd_run, "run a scene and write summary.json, trace.csv, error.png")
-    p.add_argument("scene", nargs="?", default="paper-verification",
-                   help="built-in scene name or .toml file (default: paper-verification)")
+    p.add_argument(
+        "scene",
+        nargs="?",
+        default="paper-verification",
+        help="built-in scene name or .toml file (default: paper-verification)",
+    )
     p.add_argument("--out", help="output folder (default: runs/<scene name>)")
     p.add_argument("--no-plot", action="store_true", help="skip error.png")
     p.add_argument("-q", "--quiet", action="store_true")
@@ -260,8 +303,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("scene")
     p.add_argument("--param", required=True, help="dotted scene key, e.g. tracker.radius_mm")
     p.add_argument("--values", required=True, help="comma-separated values")
-    p.add_argument("--seeds", type=int, default=0, help="Monte Carlo: run each value with "
-                   "seeds 0..N-1 and report means with 95%% confidence intervals")
+    p.add_argument(
+        "--seeds",
+        type=int,
+        default=0,
+        help="Monte Carlo: run each value with "
+        "seeds 0..N-1 and report means with 95%% confidence intervals",
+    )
     p.add_argument("--workers", type=int, default=1, help="local processes (default 1)")
     p.add_argument("--scheduler", help="Dask scheduler address (tcp://host:port)")
     p.add_argument("--out", help="folder for results.jsonl (resumable), sweep.md/json/png")
@@ -269,8 +317,11 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = add("compare", cmd_compare, "compare trackers on one scene")
     p.add_argument("scene")
-    p.add_argument("--trackers", default="I,II,trajectory",
-                   help="comma-separated tracker names (I, II, trajectory, or module:Class)")
+    p.add_argument(
+        "--trackers",
+        default="I,II,trajectory",
+        help="comma-separated tracker names (I, II, trajectory, or module:Class)",
+    )
     p.add_argument("--workers", type=int, default=1)
     p.add_argument("--out")
     p.add_argument("-q", "--quiet", action="store_true")

@@ -22,9 +22,21 @@ from .errors import OutputError
 from .simulation import Result
 
 TRACE_COLUMNS = (
-    "t_s", "tcp_x_mm", "tcp_y_mm", "tcp_z_mm", "target_x_mm", "target_y_mm", "target_z_mm",
-    "error_mm", "error_lateral_mm", "error_vertical_mm", "seam_x_mm", "seam_y_mm", "seam_z_mm",
-    "arc_length_mm", "welding",
+    "t_s",
+    "tcp_x_mm",
+    "tcp_y_mm",
+    "tcp_z_mm",
+    "target_x_mm",
+    "target_y_mm",
+    "target_z_mm",
+    "error_mm",
+    "error_lateral_mm",
+    "error_vertical_mm",
+    "seam_x_mm",
+    "seam_y_mm",
+    "seam_z_mm",
+    "arc_length_mm",
+    "welding",
 )
 
 
@@ -36,8 +48,11 @@ def prepare_dir(path: str | Path, field: str = "--out") -> Path:
         with tempfile.NamedTemporaryFile(dir=out, prefix=".probe-"):
             pass
     except OSError as exc:
-        raise OutputError(f"cannot write to {str(out)!r}: {exc.strerror or exc}", field=field,
-                          fix="choose a folder you can write to") from None
+        raise OutputError(
+            f"cannot write to {str(out)!r}: {exc.strerror or exc}",
+            field=field,
+            fix="choose a folder you can write to",
+        ) from None
     return out
 
 
@@ -70,20 +85,33 @@ def json_safe(value: Any) -> Any:
 def write_trace_csv(result: Result, path: Path, period_s: float) -> None:
     tr = result.trace
     idx = tr.decimated(period_s)
-    table = np.column_stack([
-        tr.t_s[idx], tr.tcp_world[idx], tr.target_world[idx], tr.error_mm[idx],
-        tr.error_lateral_mm[idx], tr.error_vertical_mm[idx], tr.closest_world[idx],
-        tr.arc_length_mm[idx], tr.welding[idx].astype(float),
-    ])
-    np.savetxt(path, table, delimiter=",", header=",".join(TRACE_COLUMNS), comments="",
-               fmt="%.6f")
+    table = np.column_stack(
+        [
+            tr.t_s[idx],
+            tr.tcp_world[idx],
+            tr.target_world[idx],
+            tr.error_mm[idx],
+            tr.error_lateral_mm[idx],
+            tr.error_vertical_mm[idx],
+            tr.closest_world[idx],
+            tr.arc_length_mm[idx],
+            tr.welding[idx].astype(float),
+        ]
+    )
+    np.savetxt(path, table, delimiter=",", header=",".join(TRACE_COLUMNS), comments="", fmt="%.6f")
 
 
 def write_frames_csv(result: Result, path: Path) -> None:
     f = result.trace.frames
     table = np.column_stack([f["t_capture_s"], f["found"].astype(float), f["point_world"]])
-    np.savetxt(path, table, delimiter=",", header="t_capture_s,found,x_mm,y_mm,z_mm",
-               comments="", fmt="%.6f")
+    np.savetxt(
+        path,
+        table,
+        delimiter=",",
+        header="t_capture_s,found,x_mm,y_mm,z_mm",
+        comments="",
+        fmt="%.6f",
+    )
 
 
 def write_run(
@@ -96,8 +124,7 @@ def write_run(
 ) -> Path:
     """Write a run's outputs into ``out_dir`` (see the module docstring)."""
     with staged(out_dir) as stage:
-        (stage / "summary.json").write_text(json.dumps(json_safe(result.summary), indent=2)
-                                            + "\n")
+        (stage / "summary.json").write_text(json.dumps(json_safe(result.summary), indent=2) + "\n")
         write_trace_csv(result, stage / "trace.csv", trace_period_s)
         write_frames_csv(result, stage / "frames.csv")
         if scene_toml is not None:

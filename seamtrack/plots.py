@@ -47,15 +47,21 @@ def plot_run(result: Result, path: str | Path, title: str = "") -> Path:
     ax.set_ylabel("tracking error (mm)")
     ax.legend(loc="best", fontsize=8)
     summary = result.summary
-    ax.set_title(f"max {summary['max_error_mm']:.3f} mm, rms {summary['rms_error_mm']:.3f} mm "
-                 f"(welding portion)")
+    ax.set_title(
+        f"max {summary['max_error_mm']:.3f} mm, rms {summary['rms_error_mm']:.3f} mm "
+        f"(welding portion)"
+    )
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return Path(path)
 
 
-def plot_sweep(rows: Sequence[dict[str, Any]], param: str, path: str | Path,
-               keys: Sequence[str] = ("max_error_mm", "min_error_mm")) -> Path:
+def plot_sweep(
+    rows: Sequence[dict[str, Any]],
+    param: str,
+    path: str | Path,
+    keys: Sequence[str] = ("max_error_mm", "min_error_mm"),
+) -> Path:
     """Metrics against a swept parameter (log x when all values are positive)."""
     plt = _pyplot()
     x = np.array([float(r["value"]) for r in rows])

@@ -7,8 +7,8 @@ Servo model, at the control period dt: the commanded move (a target, a path spee
 velocity feed-forward) becomes a desired velocity along the straight line to the target; each
 axis then limits that velocity to (i) its velocity limit, (ii) the speed from which it can still
 stop before its position limit, and finally its change to the acceleration limit times dt. The
-"can still stop" speed is the discrete-time one, ``a dt (sqrt(1/4 + 2 d / (a dt^2)) - 1/2)``:
-braking by a dt per tick from it covers exactly d, so no limit is ever crossed. A point-to-point
+"can still stop" speed is the exact discrete-time one (:func:`_stop_speed`): braking by a dt per
+tick from it covers exactly d, so no limit is ever crossed. A point-to-point
 move (``stop_at_target``) uses the same law towards its target and lands on it exactly.
 
 The hot loop runs on Python floats: for three axes that is several times faster than numpy.
@@ -73,11 +73,21 @@ class RobotState:
 
 
 def _stop_speed(distance: float, accel: float, dt: float) -> float:
-    """Largest speed from which braking at ``accel`` per tick stops within ``distance``."""
+    """Largest speed from which braking by ``accel * dt`` per tick stops within ``distance``.
+
+    Braking from (m + f) a dt through (m - 1 + f) a dt, ..., f a dt to 0 covers
+    a dt^2 (m (m + 1) / 2 + (m + 1) f); with u = distance / (a dt^2), m is the largest whole
+    number with m (m + 1) / 2 <= u and f = (u - m (m + 1) / 2) / (m + 1) < 1. Exact at every
+    distance, so braking along it never needs more than the acceleration limit.
+    """
     if distance <= 0.0:
         return 0.0
-    adt = accel * dt
-    return adt * (math.sqrt(0.25 + 2.0 * distance / (adt * dt)) - 0.5)
+    u = distance / (accel * dt * dt)
+    m = math.floor((math.sqrt(1.0 + 8.0 * u) - 1.0) / 2.0)
+    if (m + 1) * (m + 2) / 2 <= u:  # rounding in the square root
+        m += 1
+    f = (u - m * (m + 1) / 2) / (m + 1)
+    return accel * dt * (m + f)
 
 
 @dataclass(frozen=True)
@@ -110,19 +120,28 @@ class CartesianRobot:
         for key in ("velocity_max_mm_s", "acceleration_max_mm_s2"):
             values = tuple(float(v) for v in getattr(self, key))
             if len(values) != 3 or not all(math.isfinite(v) and v > 0 for v in values):
-                raise SceneError(f"needs three positive limits, got {values}",
-                                 field=f"robot.{key}", fix="give [x, y, z] limits > 0")
+                raise SceneError(
+                    f"needs three positive limits, got {values}",
+                    field=f"robot.{key}",
+                    fix="give [x, y, z] limits > 0",
+                )
             object.__setattr__(self, key, values)
         lo = tuple(float(v) for v in self.position_min_mm)
         hi = tuple(float(v) for v in self.position_max_mm)
         if len(lo) != 3 or len(hi) != 3 or not all(a < b for a, b in zip(lo, hi, strict=True)):
-            raise SceneError(f"position_min_mm {lo} must lie below position_max_mm {hi}",
-                             field="robot.position_max_mm", fix="give [x, y, z] with min < max")
+            raise SceneError(
+                f"position_min_mm {lo} must lie below position_max_mm {hi}",
+                field="robot.position_max_mm",
+                fix="give [x, y, z] with min < max",
+            )
         object.__setattr__(self, "position_min_mm", lo)
         object.__setattr__(self, "position_max_mm", hi)
         if not (math.isfinite(self.control_period_s) and self.control_period_s > 0):
-            raise SceneError(f"must be > 0, got {self.control_period_s}",
-                             field="robot.control_period_s", fix="e.g. 0.001 (1 kHz)")
+            raise SceneError(
+                f"must be > 0, got {self.control_period_s}",
+                field="robot.control_period_s",
+                fix="e.g. 0.001 (1 kHz)",
+            )
         object.__setattr__(self, "T_world_base", np.asarray(self.T_world_base, dtype=float))
         object.__setattr__(self, "T_tcp_sensor", np.asarray(self.T_tcp_sensor, dtype=float))
 
@@ -182,8 +201,9 @@ class CartesianRobot:
         if velocity_ff_world is not None:
             ffv = frames.apply_vectors(T_base_world, np.asarray(velocity_ff_world, dtype=float))
             ff = (float(ffv[0]), float(ffv[1]), float(ffv[2]))
-        return MoveCommand((float(q[0]), float(q[1]), float(q[2])), float(speed_mm_s), ff,
-                           bool(stop_at_target))
+        return MoveCommand(
+            (float(q[0]), float(q[1]), float(q[2])), float(speed_mm_s), ff, bool(stop_at_target)
+        )
 
     # ----------------------------------------------------------------- servo
     def state_at(self, q: ArrayLike) -> RobotState:
@@ -210,8 +230,11 @@ class CartesianRobot:
                 # Path speed limited by every axis' velocity limit along this direction.
                 speed = command.speed
                 a_path = math.inf
-                for u, vm, am in ((ux, vmax[0], amax[0]), (uy, vmax[1], amax[1]),
-                                  (uz, vmax[2], amax[2])):
+                for u, vm, am in (
+                    (ux, vmax[0], amax[0]),
+                    (uy, vmax[1], amax[1]),
+                    (uz, vmax[2], amax[2]),
+                ):
                     au = abs(u)
                     if au > 1e-12:
                         speed = min(speed, vm / au)
@@ -233,10 +256,8 @@ class CartesianRobot:
             dv_max = amax[i] * dt
             vi = v[i] + min(max(vd - v[i], -dv_max), dv_max)
             qi = q[i] + vi * dt
-            # Rounding can leave a sub-nanometre overshoot: clamp, the physical end stop.
-            if qi > hi[i]:
-                qi, vi = hi[i], 0.0
-            elif qi < lo[i]:
-                qi, vi = lo[i], 0.0
+            # Rounding can leave a sub-nanometre overshoot: clamp the position to the end stop
+            # (the velocity is already the last braking step; zeroing it would be a jump).
+            qi = min(max(qi, lo[i]), hi[i])
             q[i] = qi
             v[i] = vi

@@ -138,16 +138,22 @@ def scene_text(name_or_path: str | Path) -> tuple[str, Path | None]:
     path = Path(name_or_path)
     if path.suffix == ".toml" or path.exists():
         if not path.is_file():
-            raise SceneError(f"scene file {str(path)!r} does not exist", field="SCENE",
-                             fix="give a .toml path, or a built-in name (seamtrack init --list)")
+            raise SceneError(
+                f"scene file {str(path)!r} does not exist",
+                field="SCENE",
+                fix="give a .toml path, or a built-in name (seamtrack init --list)",
+            )
         return path.read_text(), path.resolve().parent
     name = str(name_or_path)
     available = builtin_scenes()
     if name not in available:
         close = difflib.get_close_matches(name, list(available), n=1)
         hint = f"did you mean {close[0]!r}? " if close else ""
-        raise SceneError(f"no built-in scene {name!r}", field="SCENE",
-                         fix=f"{hint}built-in scenes: {', '.join(available)}")
+        raise SceneError(
+            f"no built-in scene {name!r}",
+            field="SCENE",
+            fix=f"{hint}built-in scenes: {', '.join(available)}",
+        )
     return resources.files("seamtrack.scenes").joinpath(f"{name}.toml").read_text(), None
 
 
@@ -157,8 +163,11 @@ def parse_override(text: str) -> tuple[str, Any]:
     key, sep, raw = text.partition("=")
     key = key.strip()
     if not sep or not key:
-        raise SceneError(f"override {text!r} is not KEY=VALUE", field="--set",
-                         fix="write e.g. --set tracker.radius_mm=0.5")
+        raise SceneError(
+            f"override {text!r} is not KEY=VALUE",
+            field="--set",
+            fix="write e.g. --set tracker.radius_mm=0.5",
+        )
     try:
         value = tomllib.loads(f"v = {raw.strip()}")["v"]
     except tomllib.TOMLDecodeError:
@@ -173,13 +182,16 @@ def _apply_overrides(data: dict[str, Any], overrides: dict[str, Any]) -> None:
         for part in parts[:-1]:
             child = node.setdefault(part, {})
             if not isinstance(child, dict):
-                raise SceneError(f"{part!r} is a value, not a table", field=dotted,
-                                 fix="override the whole value instead")
+                raise SceneError(
+                    f"{part!r} is a value, not a table",
+                    field=dotted,
+                    fix="override the whole value instead",
+                )
             node = child
         node[parts[-1]] = value
 
 
-def _fix_for(error: dict[str, Any], model: type[BaseModel]) -> str:
+def _fix_for(error: Any, model: type[BaseModel]) -> str:
     kind = error["type"]
     loc = [str(x) for x in error["loc"]]
     if kind == "extra_forbidden":
@@ -212,8 +224,10 @@ def _fields_at(model: type[BaseModel], loc: list[str]) -> list[str]:
             return []
         annotation = info.annotation
         args = [a for a in getattr(annotation, "__args__", ()) if isinstance(a, type)]
-        current = next((a for a in [annotation, *args]
-                        if isinstance(a, type) and issubclass(a, BaseModel)), None)
+        current = next(
+            (a for a in [annotation, *args] if isinstance(a, type) and issubclass(a, BaseModel)),
+            None,
+        )
         if current is None:
             return []
     return list(getattr(current, "model_fields", {}))
@@ -228,8 +242,9 @@ def validate(data: dict[str, Any], source: str = "scene") -> SceneConfig:
         for err in exc.errors():
             loc = ".".join(str(x) for x in err["loc"])
             got = err.get("input")
-            got_text = "" if err["type"] in {"missing"} or isinstance(got, dict) else (
-                f" (got {got!r})")
+            got_text = (
+                "" if err["type"] in {"missing"} or isinstance(got, dict) else (f" (got {got!r})")
+            )
             lines.append(f"{loc}: {err['msg']}{got_text}; fix: {_fix_for(err, SceneConfig)}")
         raise SceneErrorList(lines, source) from None
 
@@ -273,8 +288,10 @@ class Scene:
         return build_parts(self)
 
 
-def load_scene(name_or_path: str | Path = "paper-verification",
-               overrides: dict[str, Any] | list[str] | None = None) -> Scene:
+def load_scene(
+    name_or_path: str | Path = "paper-verification",
+    overrides: dict[str, Any] | list[str] | None = None,
+) -> Scene:
     """Read, override and validate a scene.
 
     Parameters
@@ -289,14 +306,18 @@ def load_scene(name_or_path: str | Path = "paper-verification",
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise SceneError(f"not valid TOML: {exc}", field=source,
-                         fix="check quotes, brackets and '=' on that line") from None
+        raise SceneError(
+            f"not valid TOML: {exc}",
+            field=source,
+            fix="check quotes, brackets and '=' on that line",
+        ) from None
     if isinstance(overrides, list):
         overrides = dict(parse_override(o) for o in overrides)
     _apply_overrides(data, dict(overrides or {}))
     config = validate(data, source)
-    scene = Scene(config=config, name=config.name or Path(str(name_or_path)).stem,
-                  base_dir=base_dir)
+    scene = Scene(
+        config=config, name=config.name or Path(str(name_or_path)).stem, base_dir=base_dir
+    )
     check_consistency(scene)
     return scene
 
@@ -305,35 +326,53 @@ def check_consistency(scene: Scene) -> None:
     """Cross-field checks that the schema alone cannot express."""
     c = scene.config
     if c.seam.source == "points" and not c.seam.points_mm:
-        raise SceneError("source is 'points' but seam.points_mm is empty", field="seam.points_mm",
-                         fix="give [[x, y, z], ...] with at least 2 points")
+        raise SceneError(
+            "source is 'points' but seam.points_mm is empty",
+            field="seam.points_mm",
+            fix="give [[x, y, z], ...] with at least 2 points",
+        )
     if c.seam.source == "csv" and not c.seam.file:
-        raise SceneError("source is 'csv' but no file is given", field="seam.file",
-                         fix='add file = "my_seam.csv"')
+        raise SceneError(
+            "source is 'csv' but no file is given",
+            field="seam.file",
+            fix='add file = "my_seam.csv"',
+        )
     if c.sensor.mode == "mesh" or c.seam.source == "workpiece":
         w = c.workpiece
         if w is None or (w.script is None and w.step is None):
-            raise SceneError("mesh mode needs a workpiece", field="workpiece.script",
-                             fix='add [workpiece] with script = "v_groove" (or step = "part.step")')
+            raise SceneError(
+                "mesh mode needs a workpiece",
+                field="workpiece.script",
+                fix='add [workpiece] with script = "v_groove" (or step = "part.step")',
+            )
         if w.script is not None and w.step is not None:
-            raise SceneError("give either script or step, not both", field="workpiece.step",
-                             fix="remove one of them")
+            raise SceneError(
+                "give either script or step, not both",
+                field="workpiece.step",
+                fix="remove one of them",
+            )
     if c.sensor.mode == "mesh" and c.seam.source != "workpiece":
-        raise SceneError("mesh mode scores against the workpiece's CAD seam",
-                         field="seam.source", fix='set seam.source = "workpiece"')
+        raise SceneError(
+            "mesh mode scores against the workpiece's CAD seam",
+            field="seam.source",
+            fix='set seam.source = "workpiece"',
+        )
     period = 1.0 / c.sensor.frame_rate_hz
     if c.robot.control_period_s > period:
         raise SceneError(
             f"control period {c.robot.control_period_s} s is longer than the sensor frame "
-            f"period {period} s", field="robot.control_period_s",
-            fix="use a control period at most the frame period (e.g. 0.001)")
+            f"period {period} s",
+            field="robot.control_period_s",
+            fix="use a control period at most the frame period (e.g. 0.001)",
+        )
     speed_limit = min(c.robot.velocity_max_mm_s)
     if c.simulation.welding_speed_mm_s > max(c.robot.velocity_max_mm_s) * math.sqrt(3):
         raise SceneError(
             f"welding speed {c.simulation.welding_speed_mm_s} mm/s exceeds what the axes can "
             f"reach (velocity limits {list(c.robot.velocity_max_mm_s)} mm/s)",
             field="simulation.welding_speed_mm_s",
-            fix=f"use a speed the axes allow, e.g. <= {speed_limit} mm/s")
+            fix=f"use a speed the axes allow, e.g. <= {speed_limit} mm/s",
+        )
     from .assemble import make_sensor
 
     make_sensor(c.sensor)  # impossible sensor geometry is an error here, before any run

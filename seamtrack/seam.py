@@ -101,7 +101,11 @@ class Seam:
     # ----------------------------------------------------------------- construction
     @classmethod
     def from_points(
-        cls, points: ArrayLike, normals: ArrayLike | None = None, name: str = "", field: str = "seam"
+        cls,
+        points: ArrayLike,
+        normals: ArrayLike | None = None,
+        name: str = "",
+        field: str = "seam",
     ) -> Seam:
         """Validate points (and optional normals) and build the seam.
 
@@ -214,8 +218,14 @@ class Seam:
     def to_csv(self, path: str | Path) -> None:
         """Write ``x_mm, y_mm, z_mm, nx, ny, nz`` with a header."""
         header = "x_mm,y_mm,z_mm,nx,ny,nz"
-        np.savetxt(path, np.hstack([self.points, self.normals]), delimiter=",", header=header,
-                   comments="", fmt="%.9f")
+        np.savetxt(
+            path,
+            np.hstack([self.points, self.normals]),
+            delimiter=",",
+            header=header,
+            comments="",
+            fmt="%.9f",
+        )
 
     # ----------------------------------------------------------------- geometry
     @property
@@ -241,8 +251,9 @@ class Seam:
         """The seam mapped by a rigid pose (points and normals)."""
         from .frames import apply, apply_vectors
 
-        return Seam.from_points(apply(T_a_b, self.points), apply_vectors(T_a_b, self.normals),
-                                name=self.name)
+        return Seam.from_points(
+            apply(T_a_b, self.points), apply_vectors(T_a_b, self.normals), name=self.name
+        )
 
     def interpolate(self, arc_length_mm: ArrayLike) -> FloatArray:
         """Points at arc lengths (linear between seam points; clipped to the seam's ends).
@@ -262,8 +273,9 @@ class Seam:
     def tangent_at(self, arc_length_mm: ArrayLike) -> FloatArray:
         """(m, 3) unit tangent of the segment that holds each arc length."""
         s = np.atleast_1d(np.asarray(arc_length_mm, dtype=np.float64))
-        seg = np.clip(np.searchsorted(self.arc_length_mm, s, side="right") - 1, 0,
-                      len(self.points) - 2)
+        seg = np.clip(
+            np.searchsorted(self.arc_length_mm, s, side="right") - 1, 0, len(self.points) - 2
+        )
         d = self.points[seg + 1] - self.points[seg]
         return d / np.linalg.norm(d, axis=1, keepdims=True)
 
@@ -339,9 +351,7 @@ def _vertex_tangents(points: FloatArray) -> FloatArray:
     return t / np.linalg.norm(t, axis=1, keepdims=True)
 
 
-def _point_segment(
-    q: FloatArray, a: FloatArray, d: FloatArray
-) -> tuple[FloatArray, FloatArray]:
+def _point_segment(q: FloatArray, a: FloatArray, d: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Distance and parameter t in [0, 1] from points q to segments a + t d (broadcasting)."""
     dd = np.sum(d * d, axis=-1)
     t = np.clip(np.sum((q - a) * d, axis=-1) / dd, 0.0, 1.0)

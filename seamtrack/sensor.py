@@ -69,12 +69,16 @@ class LaserLineSensor:
         for key in ("baseline_mm", "focal_length_mm", "chip_h_mm", "chip_v_mm"):
             value = getattr(self, key)
             if not (math.isfinite(value) and value > 0):
-                raise SensorGeometryError(f"must be a positive length, got {value}",
-                                          field=f"sensor.{key}", fix="give a length > 0 in mm")
+                raise SensorGeometryError(
+                    f"must be a positive length, got {value}",
+                    field=f"sensor.{key}",
+                    fix="give a length > 0 in mm",
+                )
         for key in ("pixels_h", "pixels_v"):
             if int(getattr(self, key)) < 1:
-                raise SensorGeometryError("needs at least one pixel", field=f"sensor.{key}",
-                                          fix="give a pixel count >= 1")
+                raise SensorGeometryError(
+                    "needs at least one pixel", field=f"sensor.{key}", fix="give a pixel count >= 1"
+                )
         if not 0.0 < self.angle_rad < math.pi / 2:
             raise SensorGeometryError(
                 f"laser angle {math.degrees(self.angle_rad):.6g} deg is outside (0, 90) deg",
@@ -92,8 +96,11 @@ class LaserLineSensor:
                 fix="use a smaller chip, a longer focal length or a larger laser angle",
             )
         if not 0.0 < self.max_incidence_rad <= math.pi / 2:
-            raise SensorGeometryError("must lie in (0, 90] deg", field="sensor.max_incidence_deg",
-                                      fix="give the largest incidence angle the sensor measures")
+            raise SensorGeometryError(
+                "must lie in (0, 90] deg",
+                field="sensor.max_incidence_deg",
+                fix="give the largest incidence angle the sensor measures",
+            )
 
     # ----------------------------------------------------------------- Eq. 4-8
     @property
@@ -166,8 +173,9 @@ class LaserLineSensor:
         """|dz_L/dx_c| times the pixel pitch: the depth step of one pixel at range z_L."""
         z = np.asarray(z_L, dtype=np.float64)
         depth_along_axis = z * self._c + self.baseline_mm * self._s
-        return self.pixel_pitch_mm[0] * depth_along_axis**2 / (
-            self.baseline_mm * self.focal_length_mm)
+        return (
+            self.pixel_pitch_mm[0] * depth_along_axis**2 / (self.baseline_mm * self.focal_length_mm)
+        )
 
     def local_lateral_resolution_mm(self, z_L: ArrayLike) -> FloatArray:
         """|dy_L/dz_c| times the pixel pitch: the lateral step of one pixel at range z_L."""
@@ -178,8 +186,12 @@ class LaserLineSensor:
     def half_width_mm(self, z_L: ArrayLike) -> FloatArray:
         """Half the lateral field of view at range z_L (the trapezoid's side at that range)."""
         z = np.asarray(z_L, dtype=np.float64)
-        return 0.5 * self.chip_v_mm * (z * self._c + self.baseline_mm * self._s) / (
-            self.focal_length_mm)
+        return (
+            0.5
+            * self.chip_v_mm
+            * (z * self._c + self.baseline_mm * self._s)
+            / (self.focal_length_mm)
+        )
 
     # ----------------------------------------------------------------- Eq. 1-3
     def triangulate(self, x_c: ArrayLike, z_c: ArrayLike) -> tuple[FloatArray, FloatArray]:
@@ -224,12 +236,15 @@ class LaserLineSensor:
     def pixel_centers(self, x_c: ArrayLike, z_c: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """Snap chip coordinates to the centre of the pixel they fall in (edges clamp inwards)."""
         pitch_h, pitch_v = self.pixel_pitch_mm
-        ih = np.clip(np.floor((np.asarray(x_c) + 0.5 * self.chip_h_mm) / pitch_h), 0,
-                     self.pixels_h - 1)
-        iv = np.clip(np.floor((np.asarray(z_c) + 0.5 * self.chip_v_mm) / pitch_v), 0,
-                     self.pixels_v - 1)
+        ih = np.clip(
+            np.floor((np.asarray(x_c) + 0.5 * self.chip_h_mm) / pitch_h), 0, self.pixels_h - 1
+        )
+        iv = np.clip(
+            np.floor((np.asarray(z_c) + 0.5 * self.chip_v_mm) / pitch_v), 0, self.pixels_v - 1
+        )
         return (ih + 0.5) * pitch_h - 0.5 * self.chip_h_mm, (iv + 0.5) * pitch_v - 0.5 * (
-            self.chip_v_mm)
+            self.chip_v_mm
+        )
 
     def measure(self, y_L: ArrayLike, z_L: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """What the sensor reports for true laser-plane points: the pixel-quantized point when
@@ -282,12 +297,17 @@ class LaserLineSensor:
         }
         for key, value in specs.items():
             if not (math.isfinite(value) and value > 0):
-                raise SensorGeometryError(f"must be > 0, got {value}", field=f"sensor.{key}",
-                                          fix="give a positive length in mm")
+                raise SensorGeometryError(
+                    f"must be > 0, got {value}",
+                    field=f"sensor.{key}",
+                    fix="give a positive length in mm",
+                )
         if not 0.0 < angle_deg < 90.0:
-            raise SensorGeometryError(f"{angle_deg} deg is outside (0, 90)",
-                                      field="sensor.angle_deg",
-                                      fix="give the laser/camera angle in degrees, e.g. 16.17")
+            raise SensorGeometryError(
+                f"{angle_deg} deg is outside (0, 90)",
+                field="sensor.angle_deg",
+                fix="give the laser/camera angle in degrees, e.g. 16.17",
+            )
         if not fov_far_mm > fov_near_mm:
             raise SensorGeometryError(
                 f"fov_far_mm = {fov_far_mm} must exceed fov_near_mm = {fov_near_mm}: a "
@@ -390,10 +410,13 @@ def preset(name: str, **overrides: Any) -> LaserLineSensor:
     (``quantize=False``).
     """
     if name not in PRESET_SPECS:
-        raise SensorGeometryError(f"unknown preset {name!r}", field="sensor.preset",
-                                  fix=f"use one of {', '.join(sorted(PRESET_SPECS))}")
+        raise SensorGeometryError(
+            f"unknown preset {name!r}",
+            field="sensor.preset",
+            fix=f"use one of {', '.join(sorted(PRESET_SPECS))}",
+        )
     specs = dict(PRESET_SPECS[name])
     spec_keys = {k: v for k, v in overrides.items() if k in specs}
     field_keys = {k: v for k, v in overrides.items() if k not in specs}
     specs.update(spec_keys)
-    return LaserLineSensor.from_specs(name=name, **specs, **field_keys)  # type: ignore[arg-type]
+    return LaserLineSensor.from_specs(name=name, **specs, **field_keys)

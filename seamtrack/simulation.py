@@ -31,10 +31,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from . import constants
-from .profiles import Feature
+from .assemble import LoopSettings, Parts
 from .robot import CartesianRobot, MoveCommand
 from .seam import Seam
-from .assemble import LoopSettings, Parts
 from .trackers import Command, Measurement, TrackerContext
 
 FloatArray = NDArray[np.float64]
@@ -159,7 +158,7 @@ def run(parts: Parts, progress: bool = False, seed: int | None = None) -> Result
     bar = _progress_bar(progress, cfg.time_limit_s, seam.length_mm)
 
     tick = 0
-    for tick in range(max_ticks + 1):  # noqa: B007 - tick is read after the loop
+    for tick in range(max_ticks + 1):
         t = tick * dt
         q = state.q
         tcp = R @ q + p0
@@ -180,7 +179,7 @@ def run(parts: Parts, progress: bool = False, seed: int | None = None) -> Result
         if cmd is not last_cmd:
             last_cmd = cmd
             move = None if cmd is None else _to_move(robot, cmd)
-            if move is not None and not robot.reachable(cmd.target_world).all():
+            if cmd is not None and not robot.reachable(cmd.target_world).all():
                 status = "limit_violation"
         tcp_log.extend(tcp)
         target_log.extend(cmd.target_world if cmd is not None else nan3)
@@ -195,8 +194,11 @@ def run(parts: Parts, progress: bool = False, seed: int | None = None) -> Result
             if s_now > s_best + constants.PROGRESS_EPS_MM:
                 s_best, t_progress = s_now, t
             if rest_since is not None and t - rest_since >= rest_window and not last_seen:
-                status = "completed" if s_best >= seam.length_mm - cfg.end_tolerance_mm else (
-                    "lost_seam")
+                status = (
+                    "completed"
+                    if s_best >= seam.length_mm - cfg.end_tolerance_mm
+                    else ("lost_seam")
+                )
                 break
             if t - t_progress >= cfg.stall_time_s:
                 status = "stalled"
@@ -217,8 +219,9 @@ def run(parts: Parts, progress: bool = False, seed: int | None = None) -> Result
 
 
 def _to_move(robot: CartesianRobot, cmd: Command) -> MoveCommand:
-    return robot.command_in_base(cmd.target_world, cmd.speed_mm_s, cmd.velocity_ff_world,
-                                 cmd.stop_at_target)
+    return robot.command_in_base(
+        cmd.target_world, cmd.speed_mm_s, cmd.velocity_ff_world, cmd.stop_at_target
+    )
 
 
 def _progress_bar(enabled: bool, total_s: float, length_mm: float) -> Any:
@@ -226,8 +229,13 @@ def _progress_bar(enabled: bool, total_s: float, length_mm: float) -> Any:
         return None
     from tqdm import tqdm
 
-    return tqdm(total=None, unit="sim s", desc=f"seam {length_mm:.0f} mm", leave=False,
-                bar_format="{desc}: {n:.1f} {unit} [{elapsed}, {rate_fmt}]")
+    return tqdm(
+        total=None,
+        unit="sim s",
+        desc=f"seam {length_mm:.0f} mm",
+        leave=False,
+        bar_format="{desc}: {n:.1f} {unit} [{elapsed}, {rate_fmt}]",
+    )
 
 
 def _trace(
@@ -248,8 +256,9 @@ def _trace(
     tangent = seam.points[seg + 1] - seam.points[seg]
     tangent /= np.linalg.norm(tangent, axis=1, keepdims=True)
     # Torch normal at the closest point, interpolated between the segment's end normals.
-    w = np.clip((closest.arc_length_mm - seam.arc_length_mm[seg])
-                / seam.segment_lengths_mm[seg], 0.0, 1.0)[:, None]
+    w = np.clip(
+        (closest.arc_length_mm - seam.arc_length_mm[seg]) / seam.segment_lengths_mm[seg], 0.0, 1.0
+    )[:, None]
     normal = (1 - w) * seam.normals[seg] + w * seam.normals[seg + 1]
     normal -= np.sum(normal * tangent, axis=1, keepdims=True) * tangent
     normal /= np.linalg.norm(normal, axis=1, keepdims=True)
@@ -265,9 +274,9 @@ def _trace(
         s_first = float(seam.closest(first_point).arc_length_mm[0])
         arc_on = np.flatnonzero(closest.arc_length_mm >= s_first - constants.PROGRESS_EPS_MM)
         if len(arc_on):
-            welding[arc_on[0]:] = True
+            welding[arc_on[0] :] = True
     return Trace(
-        t_s=np.arange(n) * dt,
+        t_s=np.arange(n, dtype=np.float64) * dt,
         tcp_world=tcp,
         target_world=target,
         closest_world=closest.points,
@@ -286,8 +295,13 @@ def _summary(
     weld = trace.welding
     err = trace.error_mm[weld]
     nan = float("nan")
-    stats = {"max_error_mm": nan, "min_error_mm": nan, "mean_error_mm": nan,
-             "rms_error_mm": nan, "p95_error_mm": nan}
+    stats = {
+        "max_error_mm": nan,
+        "min_error_mm": nan,
+        "mean_error_mm": nan,
+        "rms_error_mm": nan,
+        "p95_error_mm": nan,
+    }
     mean_speed = nan
     speed_kept = nan
     welded = 0.0
@@ -304,24 +318,28 @@ def _summary(
         s_end = float(np.max(s[i0:]))
         # A completed run ends with the torch waiting at the seam's end: not welding time. Any
         # other run's waiting is exactly what its mean speed must show.
-        i1 = (i0 + int(np.argmax(s[i0:] >= s_end - constants.PROGRESS_EPS_MM))
-              if status == "completed" else len(s) - 1)
+        i1 = (
+            i0 + int(np.argmax(s[i0:] >= s_end - constants.PROGRESS_EPS_MM))
+            if status == "completed"
+            else len(s) - 1
+        )
         welded = s_end - float(s[i0])
         if i1 > i0:
             duration = trace.t_s[i1] - trace.t_s[i0]
             mean_speed = welded / duration
             dt = trace.t_s[1] - trace.t_s[0]
-            speed = np.linalg.norm(np.diff(trace.tcp_world[i0:i1 + 1], axis=0), axis=1) / dt
-            speed_kept = float(np.mean(np.abs(speed - cfg.welding_speed_mm_s)
-                                       <= 0.1 * cfg.welding_speed_mm_s))
-    found = trace.frames.get("found", np.zeros(0, dtype=bool))
+            speed = np.linalg.norm(np.diff(trace.tcp_world[i0 : i1 + 1], axis=0), axis=1) / dt
+            speed_kept = float(
+                np.mean(np.abs(speed - cfg.welding_speed_mm_s) <= 0.1 * cfg.welding_speed_mm_s)
+            )
+    found = np.asarray(trace.frames.get("found", np.zeros(0)), dtype=bool)
     s_max = float(np.max(trace.arc_length_mm)) if len(trace.arc_length_mm) else 0.0
     return {
         "status": status,
         **stats,
         "sim_time_s": float(trace.t_s[-1]) if len(trace.t_s) else 0.0,
         "wall_time_s": wall_time_s,
-        "frames": int(len(found)),
+        "frames": len(found),
         "frames_without_seam": int(np.count_nonzero(~found)),
         "seam_length_mm": seam.length_mm,
         "welded_length_mm": welded,

@@ -25,8 +25,14 @@ from .output import json_safe, prepare_dir
 from .scene import load_scene, parse_override
 
 #: Columns of the sweep table, in order.
-TABLE_KEYS = ("status", "max_error_mm", "min_error_mm", "rms_error_mm", "mean_speed_mm_s",
-              "completed_fraction")
+TABLE_KEYS = (
+    "status",
+    "max_error_mm",
+    "min_error_mm",
+    "rms_error_mm",
+    "mean_speed_mm_s",
+    "completed_fraction",
+)
 
 
 @dataclass(frozen=True)
@@ -61,10 +67,18 @@ def run_case(scene: str, case: Case, overrides: dict[str, Any]) -> dict[str, Any
     except SeamtrackError as exc:
         return {"case": case.key, "value": case.value, "seed": case.seed, "error": str(exc)}
     except Exception as exc:  # a user tracker may raise anything; the sweep must go on
-        return {"case": case.key, "value": case.value, "seed": case.seed,
-                "error": f"{type(exc).__name__}: {exc}"}
-    return {"case": case.key, "value": case.value, "seed": case.seed,
-            "summary": json_safe(result.summary)}
+        return {
+            "case": case.key,
+            "value": case.value,
+            "seed": case.seed,
+            "error": f"{type(exc).__name__}: {exc}",
+        }
+    return {
+        "case": case.key,
+        "value": case.value,
+        "seed": case.seed,
+        "summary": json_safe(result.summary),
+    }
 
 
 def _done(results_path: Path) -> dict[str, dict[str, Any]]:
@@ -97,7 +111,8 @@ def run_sweep(
     """
     overrides = dict(overrides or {})
     load_scene(scene, {**overrides, param: values[0]})  # fail fast on a bad scene or key
-    cases = [Case(param, v, s) for v in values for s in (seeds or [None])]
+    seed_list: list[int | None] = list(seeds) if seeds else [None]
+    cases = [Case(param, v, s) for v in values for s in seed_list]
     results_path = None
     done: dict[str, dict[str, Any]] = {}
     if out_dir is not None:
@@ -121,8 +136,9 @@ def run_sweep(
     return [done[c.key] for c in cases]
 
 
-def _execute(scene: str, cases: list[Case], overrides: dict[str, Any], workers: int,
-             scheduler: str | None) -> Iterable[dict[str, Any]]:
+def _execute(
+    scene: str, cases: list[Case], overrides: dict[str, Any], workers: int, scheduler: str | None
+) -> Iterable[dict[str, Any]]:
     if scheduler is not None:
         yield from _execute_dask(scene, cases, overrides, scheduler)
     elif workers <= 1:
@@ -131,26 +147,31 @@ def _execute(scene: str, cases: list[Case], overrides: dict[str, Any], workers: 
     else:
         with ProcessPoolExecutor(max_workers=workers) as pool:
             pending: set[Future[dict[str, Any]]] = {
-                pool.submit(run_case, scene, case, overrides) for case in cases}
+                pool.submit(run_case, scene, case, overrides) for case in cases
+            }
             while pending:
                 finished, pending = wait(pending, return_when=FIRST_COMPLETED)
                 for future in finished:
                     yield future.result()
 
 
-def _execute_dask(scene: str, cases: list[Case], overrides: dict[str, Any],
-                  scheduler: str) -> Iterable[dict[str, Any]]:
+def _execute_dask(
+    scene: str, cases: list[Case], overrides: dict[str, Any], scheduler: str
+) -> Iterable[dict[str, Any]]:
     try:
         from dask.distributed import Client, as_completed
     except ImportError:
-        raise SeamtrackError("Dask is not installed", field="--scheduler",
-                             fix="pip install 'seamtrack[dask]'") from None
+        raise SeamtrackError(
+            "Dask is not installed", field="--scheduler", fix="pip install 'seamtrack[dask]'"
+        ) from None
     try:
         client = Client(scheduler, timeout="10s")
     except OSError as exc:
-        raise SeamtrackError(f"cannot reach the Dask scheduler {scheduler!r}: {exc}",
-                             field="--scheduler", fix="start it or give its tcp:// address"
-                             ) from None
+        raise SeamtrackError(
+            f"cannot reach the Dask scheduler {scheduler!r}: {exc}",
+            field="--scheduler",
+            fix="start it or give its tcp:// address",
+        ) from None
     try:
         futures = [client.submit(run_case, scene, case, overrides, pure=False) for case in cases]
         for future in as_completed(futures):
@@ -167,8 +188,11 @@ def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     table = []
     for key, group in by_value.items():
         ok = [g["summary"] for g in group if "summary" in g]
-        out: dict[str, Any] = {"value": json.loads(key), "runs": len(group),
-                               "failed": len(group) - len(ok)}
+        out: dict[str, Any] = {
+            "value": json.loads(key),
+            "runs": len(group),
+            "failed": len(group) - len(ok),
+        }
         if not ok:
             out["error"] = group[0].get("error", "")
             table.append(out)
@@ -176,12 +200,14 @@ def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
         statuses = sorted({s["status"] for s in ok})
         out["status"] = "/".join(statuses)
         for metric in TABLE_KEYS[1:]:
-            values = np.array([np.nan if s.get(metric) is None else s[metric] for s in ok],
-                              dtype=float)
+            values = np.array(
+                [np.nan if s.get(metric) is None else s[metric] for s in ok], dtype=float
+            )
             out[metric] = float(np.mean(values))
             if len(values) > 1:
-                out[metric + "_ci95"] = float(1.96 * np.std(values, ddof=1)
-                                              / math.sqrt(len(values)))
+                out[metric + "_ci95"] = float(
+                    1.96 * np.std(values, ddof=1) / math.sqrt(len(values))
+                )
         table.append(out)
     return table
 
@@ -205,8 +231,9 @@ def markdown_table(table: Sequence[dict[str, Any]], param: str) -> str:
     return "\n".join(lines) + "\n"
 
 
-def write_sweep(table: Sequence[dict[str, Any]], param: str, out_dir: str | Path,
-                plot: bool = True) -> None:
+def write_sweep(
+    table: Sequence[dict[str, Any]], param: str, out_dir: str | Path, plot: bool = True
+) -> None:
     """sweep.md, sweep.json and sweep.png beside results.jsonl."""
     out = prepare_dir(out_dir)
     (out / "sweep.md").write_text(markdown_table(table, param))

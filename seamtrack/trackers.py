@@ -165,16 +165,21 @@ class PointToPoint:
 
     name = "point-to-point"
 
-    def __init__(self, tolerance_mm: float | None = None, decelerate: bool = False,
-                 min_spacing_mm: float = 0.05):
+    def __init__(
+        self,
+        tolerance_mm: float | None = None,
+        decelerate: bool = False,
+        min_spacing_mm: float = 0.05,
+    ):
         self.tolerance_mm = tolerance_mm
         self.decelerate = decelerate
         self.min_spacing_mm = min_spacing_mm
 
     def reset(self, context: TrackerContext) -> None:
         self.speed = context.welding_speed_mm_s
-        self.tol = self.tolerance_mm if self.tolerance_mm is not None else (
-            context.sensor_resolution_mm)
+        self.tol = (
+            self.tolerance_mm if self.tolerance_mm is not None else (context.sensor_resolution_mm)
+        )
         self.rest_speed = 0.01 * self.speed
         self.queue = _PointQueue(self.min_spacing_mm)
         self._command: Command | None = None
@@ -189,8 +194,10 @@ class PointToPoint:
         points = self.queue.points
         while points:
             target = points[0]
-            converged = (np.linalg.norm(tcp_world - target) <= self.tol
-                         and np.linalg.norm(tcp_velocity_world) <= self.rest_speed)
+            converged = (
+                np.linalg.norm(tcp_world - target) <= self.tol
+                and np.linalg.norm(tcp_velocity_world) <= self.rest_speed
+            )
             if not converged:
                 break
             points.popleft()
@@ -222,8 +229,11 @@ class ConvergenceRadius:
 
     def __init__(self, radius_mm: float = 1.0, min_spacing_mm: float = 0.05):
         if not radius_mm > 0:
-            raise PluginError(f"radius must be > 0, got {radius_mm}", field="tracker.radius_mm",
-                              fix="give the radius of convergence in mm, e.g. 1.0")
+            raise PluginError(
+                f"radius must be > 0, got {radius_mm}",
+                field="tracker.radius_mm",
+                fix="give the radius of convergence in mm, e.g. 1.0",
+            )
         self.radius_mm = radius_mm
         self.min_spacing_mm = min_spacing_mm
 
@@ -264,8 +274,12 @@ def _builtin() -> dict[str, type]:
 
 
 #: Short names the CLI and the paper use.
-ALIASES = {"I": "point-to-point", "II": "convergence-radius", "1": "point-to-point",
-           "2": "convergence-radius"}
+ALIASES = {
+    "I": "point-to-point",
+    "II": "convergence-radius",
+    "1": "point-to-point",
+    "2": "convergence-radius",
+}
 
 _PROTOCOL_METHODS = ("reset", "update", "command")
 
@@ -282,31 +296,43 @@ def tracker_class(name: str) -> type:
         try:
             module = importlib.import_module(module_name)
         except Exception as exc:  # the user's module may fail in any way on import
-            raise PluginError(f"cannot import {module_name!r}: {exc}", field="tracker.name",
-                              fix="check the module is on PYTHONPATH (or installed) and imports"
-                              ) from None
+            raise PluginError(
+                f"cannot import {module_name!r}: {exc}",
+                field="tracker.name",
+                fix="check the module is on PYTHONPATH (or installed) and imports",
+            ) from None
         cls = getattr(module, attr, None)
         if cls is None:
-            raise PluginError(f"module {module_name!r} has no {attr!r}", field="tracker.name",
-                              fix="name the class as package.module:Class")
+            raise PluginError(
+                f"module {module_name!r} has no {attr!r}",
+                field="tracker.name",
+                fix="name the class as package.module:Class",
+            )
     else:
         found = [ep for ep in entry_points(group="seamtrack.trackers") if ep.name == name]
         if not found:
             known = ", ".join(sorted(builtin) + sorted(ALIASES))
-            raise PluginError(f"unknown tracker {name!r}", field="tracker.name",
-                              fix=f"use one of {known}, or package.module:Class")
+            raise PluginError(
+                f"unknown tracker {name!r}",
+                field="tracker.name",
+                fix=f"use one of {known}, or package.module:Class",
+            )
         try:
             cls = found[0].load()
         except Exception as exc:
-            raise PluginError(f"entry point {name!r} failed to load: {exc}",
-                              field="tracker.name", fix="repair or uninstall that plugin"
-                              ) from None
+            raise PluginError(
+                f"entry point {name!r} failed to load: {exc}",
+                field="tracker.name",
+                fix="repair or uninstall that plugin",
+            ) from None
     missing = [m for m in _PROTOCOL_METHODS if not callable(getattr(cls, m, None))]
     if missing:
-        raise PluginError(f"{name!r} lacks the tracker method(s) {', '.join(missing)}",
-                          field="tracker.name",
-                          fix="implement reset(context), update(measurement) and "
-                          "command(t_s, tcp_world, tcp_velocity_world)")
+        raise PluginError(
+            f"{name!r} lacks the tracker method(s) {', '.join(missing)}",
+            field="tracker.name",
+            fix="implement reset(context), update(measurement) and "
+            "command(t_s, tcp_world, tcp_velocity_world)",
+        )
     return cls
 
 
@@ -334,17 +360,22 @@ def tracker(name: str, **params: Any) -> Tracker:
         unknown = [k for k in params if k not in signature.parameters and not accepts_any]
         if unknown:
             allowed = ", ".join(k for k in signature.parameters if k != "self") or "none"
-            raise PluginError(f"{name!r} takes no parameter {unknown[0]!r}",
-                              field=f"tracker.{unknown[0]}",
-                              fix=f"parameters of this tracker: {allowed}")
+            raise PluginError(
+                f"{name!r} takes no parameter {unknown[0]!r}",
+                field=f"tracker.{unknown[0]}",
+                fix=f"parameters of this tracker: {allowed}",
+            )
     try:
         instance = cls(**params)
     except PluginError:
         raise
     except Exception as exc:
-        raise PluginError(f"{name!r} could not be created: {exc}", field="tracker.name",
-                          fix="check the tracker's parameters") from None
-    return instance  # type: ignore[no-any-return]
+        raise PluginError(
+            f"{name!r} could not be created: {exc}",
+            field="tracker.name",
+            fix="check the tracker's parameters",
+        ) from None
+    return instance
 
 
 def is_finite_point(point: FloatArray) -> bool:

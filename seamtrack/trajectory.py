@@ -116,8 +116,9 @@ class TrajectoryTracker:
         target, tangent = self._at(self._s_set)
         ff = tangent * self.speed if moving else np.zeros(3)
         error = float(np.linalg.norm(target - tcp_world))
-        return Command(target, self.gain_1_s * error, velocity_ff_world=ff,
-                       stop_at_target=not moving)
+        return Command(
+            target, self.gain_1_s * error, velocity_ff_world=ff, stop_at_target=not moving
+        )
 
     # ----------------------------------------------------------------- path
     def _at(self, s: float) -> tuple[FloatArray, FloatArray]:
