@@ -30,7 +30,6 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -341,7 +340,7 @@ def synthetic_profile(
     roll_deg: float = 0.0,
     lateral_offset_mm: float = 0.0,
     rays: int | None = None,
-    imperfections: Imperfections = Imperfections(),  # noqa: B008 (frozen, immutable)
+    imperfections: Imperfections = Imperfections(),
     **joint_params: float,
 ) -> tuple[Profile, GroundTruth]:
     """A stripe profile of a joint as the sensor would measure it, and its ground truth.

@@ -1,0 +1,834 @@
+"""Joint-feature extractors: find the seam point in a stripe profile.
+
+An extractor is any object with a ``name`` and ``__call__(profile) -> Feature``
+(:class:`FeatureExtractor`). It never raises on data: empty, all-invalid, NaN, constant or huge
+profiles give a falsy ``Feature.failed(reason)``. :func:`extractor` builds one by name: a
+built-in (:data:`BUILTIN`), a ``"package.module:Class"`` string, or an entry point in the
+group ``seamtrack.extractors`` (read lazily: a broken plugin never breaks ``import seamtrack``).
+
+The built-ins share one front end, :func:`segment_profile` (split-and-merge): drop isolated
+outliers against a 5-point running median, estimate the noise from second differences, cut the
+profile at jumps, split each run by Douglas-Peucker at a noise-scaled tolerance, merge
+neighbours that fit one line, and refit each piece by total least squares on its inliers. The
+family extractors then pick pieces by geometry (a V opening towards the sensor, two plates with
+a gap, a step between parallel sheets, a ridge) and intersect their lines; a line that ends at a
+gap ends half a ray spacing beyond its last point (the edge lies between two rays). The generic
+extractor needs no segmentation: sliding-window slopes, the sharpest turn, two local fits.
+
+Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groove).
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.metadata
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .errors import PluginError
+from .profiles import Feature, Profile
+
+FloatArray = NDArray[np.float64]
+ENTRY_POINT_GROUP = "seamtrack.extractors"
+#: Coordinates beyond this (mm) are not measurements: treated as invalid.
+_MAX_ABS_MM = 1e6
+
+
+@runtime_checkable
+class FeatureExtractor(Protocol):
+    """Finds the seam point in a profile. ``name`` labels results and benches."""
+
+    name: str
+
+    def __call__(self, profile: Profile) -> Feature: ...
+
+
+# ----------------------------------------------------------------- front end
+def _median5(z: FloatArray) -> FloatArray:
+    """Running median of 5 (edges: the nearest full window), by a min/max network."""
+    if len(z) < 5:
+        return np.full_like(z, np.median(z))
+    a, b, c, d, e = z[:-4], z[1:-3], z[2:-2], z[3:-1], z[4:]
+    f = np.maximum(np.minimum(a, b), np.minimum(c, d))
+    g = np.minimum(np.maximum(a, b), np.maximum(c, d))
+    med = np.maximum(np.minimum(e, f), np.minimum(np.maximum(e, f), g))
+    return np.concatenate([np.full(2, med[0]), med, np.full(2, med[-1])])
+
+
+@dataclass
+class Line:
+    """A straight piece of a profile (internal to the extractors; mutable while built).
+
+    ``index`` are the inliers' positions in the kept points (column order); ``direction``
+    points along increasing column; ``t`` are the inliers' coordinates along it.
+    """
+
+    index: NDArray[np.intp]
+    centroid: FloatArray
+    direction: FloatArray
+    t: FloatArray
+    rms: float
+
+    @property
+    def normal(self) -> FloatArray:
+        return np.array([-self.direction[1], self.direction[0]])
+
+    @property
+    def count(self) -> int:
+        return len(self.index)
+
+    @property
+    def extent(self) -> float:
+        return float(self.t[-1] - self.t[0]) if len(self.t) else 0.0
+
+    def point(self, t: float) -> FloatArray:
+        return self.centroid + t * self.direction
+
+    def step(self, at_end: bool) -> float:
+        """Mean spacing of the last (``at_end``) or first ten inliers along the line."""
+        k = min(10, len(self.t) - 1)
+        if k < 1:
+            return 0.0
+        t = self.t
+        return float(abs(t[-1] - t[-1 - k]) if at_end else abs(t[k] - t[0])) / k
+
+    def end(self, at_end: bool) -> FloatArray:
+        """The line's end half a spacing beyond its last (first) inlier."""
+        half = 0.5 * self.step(at_end)
+        return self.point(float(self.t[-1] + half if at_end else self.t[0] - half))
+
+
+def _fit(points: FloatArray, index: NDArray[np.intp]) -> Line:
+    """Total-least-squares line through ``points[index]`` (column order kept)."""
+    p = points[index]
+    c = p.mean(axis=0)
+    q = p - c
+    syy, szz, syz = float(q[:, 0] @ q[:, 0]), float(q[:, 1] @ q[:, 1]), float(q[:, 0] @ q[:, 1])
+    theta = 0.5 * math.atan2(2.0 * syz, syy - szz)
+    u = np.array([math.cos(theta), math.sin(theta)])
+    if u @ (p[-1] - p[0]) < 0:
+        u = -u
+    t = q @ u
+    r = q @ np.array([-u[1], u[0]])
+    return Line(index, c, u, t, float(np.sqrt(np.mean(r * r))))
+
+
+@dataclass
+class Segments:
+    """What :func:`segment_profile` found: kept points, noise and straight pieces."""
+
+    points: FloatArray  # (m, 2) kept points, column order
+    sigma: float  # noise estimate (mm)
+    tol: float  # split / inlier tolerance (mm)
+    spacing: float  # median distance between neighbouring points (mm)
+    lines: list[Line]
+
+
+def kept_points(profile: Profile) -> FloatArray:
+    """(m, 2) valid, finite, bounded points of a profile, in column order."""
+    pts = np.asarray(profile.points_laser, dtype=np.float64).reshape(-1, 2)
+    valid = np.asarray(profile.valid, dtype=bool).reshape(-1)
+    if valid.shape != (len(pts),):
+        return np.empty((0, 2))
+    a = np.abs(pts)
+    return pts[valid & (a[:, 0] < _MAX_ABS_MM) & (a[:, 1] < _MAX_ABS_MM)]  # NaN fails too
+
+
+def _median(x: FloatArray) -> float:
+    """Upper median, without ``np.median``'s overhead (0 for an empty array)."""
+    n = len(x)
+    return float(np.partition(x, n // 2)[n // 2]) if n else 0.0
+
+
+def _spacing(points: FloatArray) -> float:
+    """Typical distance between neighbouring columns (mm): the median lateral step, which
+    range noise does not inflate (the median absolute step when the profile is vertical)."""
+    d = np.abs(np.diff(points, axis=0))
+    lateral = _median(d[:, 0])
+    return lateral if lateral > 0 else _median(np.hypot(d[:, 0], d[:, 1]))
+
+
+def noise_sigma(points: FloatArray) -> float:
+    """Robust noise estimate (mm) in range z_L, where a triangulation sensor's noise lies:
+    1.4826 median |second difference of z_L| / sqrt(6). On lines sampled at even spacing the
+    second differences are noise only; corners and jumps are few."""
+    if len(points) < 3:
+        return 0.0
+    z = points[:, 1]
+    return 1.4826 / math.sqrt(6.0) * _median(np.abs(z[2:] - 2.0 * z[1:-1] + z[:-2]))
+
+
+def segment_profile(
+    profile: Profile,
+    *,
+    min_tol_mm: float = 0.03,
+    sigma_factor: float = 5.0,
+    min_points: int = 8,
+    max_lines: int = 64,
+) -> Segments | str:
+    """Split-and-merge a profile into straight pieces, or say why not (a ``str``).
+
+    Parameters
+    ----------
+    profile : Profile
+    min_tol_mm : float
+        Floor of the split tolerance (covers pixel quantization).
+    sigma_factor : float
+        Split tolerance = max(min_tol_mm, sigma_factor * estimated noise).
+    min_points : int
+        Pieces with fewer inliers are dropped.
+    max_lines : int
+        More pieces than this means there is no line structure: give up.
+    """
+    p = kept_points(profile)
+    if len(p) < 2 * min_points:
+        return f"too few valid points ({len(p)})"
+    # Isolated outliers first: they would split lines and bias the noise estimate.
+    sigma = noise_sigma(p)
+    spacing = _spacing(p)
+    if not spacing > 0:
+        return "the valid points do not spread out (constant profile)"
+    dev = np.abs(p[:, 1] - _median5(p[:, 1]))
+    p = p[dev <= max(6.0 * sigma, 4.0 * min_tol_mm, 4.0 * spacing)]
+    sigma = noise_sigma(p)
+    tol = max(min_tol_mm, sigma_factor * sigma)
+    gaps = np.hypot(*np.diff(p, axis=0).T)
+    cuts = np.flatnonzero(gaps > max(6.0 * spacing, 2.0 * tol, 0.1)) + 1
+    bounds = np.concatenate([[0], cuts, [len(p)]])
+    pieces: list[tuple[int, int]] = []
+    for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
+        if hi - lo >= min_points:
+            run = _split(p, int(lo), int(hi) - 1, tol, max_lines)
+            if run is None:
+                return "no straight pieces (too noisy or curved)"
+            pieces.extend(_refine(p, _merge(p, run, tol), sigma, min_tol_mm, min_points))
+        if len(pieces) > max_lines:
+            return "no straight pieces (too noisy or curved)"
+    lines = []
+    trim = max(3.0 * sigma, 0.5 * min_tol_mm)
+    for lo, hi in pieces:
+        idx = np.arange(lo, hi + 1)
+        line = _fit(p, idx)
+        resid = np.abs((p[idx] - line.centroid) @ line.normal)
+        idx = idx[resid <= trim]
+        if len(idx) >= min_points:
+            lines.append(_fit(p, idx))
+    if not lines:
+        return "no straight pieces with enough points"
+    return Segments(p, sigma, tol, spacing, lines)
+
+
+def _best_split(q: FloatArray, min_size: int) -> tuple[int, float, float]:
+    """Best split of ordered points into two lines: (b, cost of q[:b] + q[b:], cost of q).
+
+    Costs are total-least-squares sums of squared residuals, for every b at once from
+    prefix sums (O(n)).
+    """
+    k = len(q)
+    q = q - q.mean(axis=0)
+    cols = np.column_stack([np.ones(k), q[:, 0], q[:, 1], q[:, 0] ** 2, q[:, 1] ** 2,
+                            q[:, 0] * q[:, 1]])
+    pre = np.cumsum(cols, axis=0)
+    total = pre[-1]
+
+    def cost(s: FloatArray) -> FloatArray:
+        n = np.maximum(s[..., 0], 1.0)
+        cyy = s[..., 3] - s[..., 1] ** 2 / n
+        czz = s[..., 4] - s[..., 2] ** 2 / n
+        cyz = s[..., 5] - s[..., 1] * s[..., 2] / n
+        return np.maximum(0.5 * (cyy + czz) - np.hypot(0.5 * (cyy - czz), cyz), 0.0)
+
+    b = np.arange(min_size, k - min_size + 1)
+    if b.size == 0:
+        c = float(cost(total))
+        return k, c, c
+    left = pre[b - 1]
+    both = cost(left) + cost(total - left)
+    i = int(np.argmin(both))
+    return int(b[i]), float(both[i]), float(cost(total))
+
+
+def _refine(p: FloatArray, pieces: list[tuple[int, int]], sigma: float, min_tol_mm: float,
+            min_points: int, min_kink_deg: float = 5.0) -> list[tuple[int, int]]:
+    """Place each corner between neighbouring pieces at the best two-line split (DP's split
+    point strays under noise), and split a run's end pieces at a kink too small for DP's
+    tolerance (a root face seen at a slant) when that explains the points much better."""
+    out = [list(piece) for piece in pieces]
+    for a, b in zip(out[:-1], out[1:], strict=False):
+        lo, hi = a[0], b[1] + 1
+        if hi - lo >= 6:
+            cut = lo + _best_split(p[lo:hi], 3)[0]
+            a[1], b[0] = cut - 1, cut
+    significant = 30.0 * max(sigma, min_tol_mm / 5.0) ** 2
+    result: list[tuple[int, int]] = []
+    for i, (lo, hi) in enumerate(out):
+        cuts = []
+        if hi - lo + 1 >= 4 * min_points:
+            mid = (lo + hi) // 2
+            halves = ([(lo, mid + 1)] if i == 0 else []) + (
+                [(mid, hi + 1)] if i == len(out) - 1 else [])
+            for h_lo, h_hi in halves:
+                b, split, single = _best_split(p[h_lo:h_hi], min_points)
+                if single - split > significant:
+                    cut = h_lo + b
+                    kink = _angle(_fit(p, np.arange(lo, cut)), _fit(p, np.arange(cut, hi + 1)))
+                    if kink > math.radians(min_kink_deg):
+                        cuts.append(cut)
+        bounds = [lo, *sorted(cuts), hi + 1]
+        result += [(a, b - 1) for a, b in zip(bounds[:-1], bounds[1:], strict=True) if b > a]
+    return result
+
+
+def _chord_distance(p: FloatArray, a: int, b: int) -> FloatArray:
+    chord = p[b] - p[a]
+    norm = math.hypot(chord[0], chord[1])
+    q = p[a + 1 : b] - p[a]
+    if norm == 0.0:
+        return np.hypot(q[:, 0], q[:, 1])
+    return np.abs(q[:, 0] * chord[1] - q[:, 1] * chord[0]) / norm
+
+
+def _split(p: FloatArray, lo: int, hi: int, tol: float, limit: int) -> list[tuple[int, int]] | None:
+    """Douglas-Peucker: inclusive index ranges whose points lie within ``tol`` of the chord."""
+    out, stack = [], [(lo, hi)]
+    while stack:
+        a, b = stack.pop()
+        if b - a < 2:
+            out.append((a, b))
+            continue
+        d = _chord_distance(p, a, b)
+        k = int(np.argmax(d))
+        if d[k] > tol:
+            stack += [(a + 1 + k, b), (a, a + 1 + k)]
+        else:
+            out.append((a, b))
+        if len(out) + len(stack) > limit:
+            return None
+    return out
+
+
+def _merge(p: FloatArray, pieces: list[tuple[int, int]], tol: float) -> list[tuple[int, int]]:
+    """Join neighbouring pieces whose union still fits one line within ``tol``."""
+    merged = [pieces[0]]
+    for lo, hi in pieces[1:]:
+        a = merged[-1][0]
+        line = _fit(p, np.arange(a, hi + 1))
+        if np.max(np.abs((p[a : hi + 1] - line.centroid) @ line.normal)) <= tol:
+            merged[-1] = (a, hi)
+        else:
+            merged.append((lo, hi))
+    return merged
+
+
+def collinear_groups(seg: Segments, max_angle_deg: float = 10.0) -> list[Line]:
+    """Join pieces that lie on one line, across gaps and interruptions (refit on the union):
+    the ends of the less-supported piece lie within the tolerance of the other's line and
+    their directions agree within ``max_angle_deg``."""
+    lines = seg.lines
+    n = len(lines)
+    parent = list(range(n))
+    c = np.array([ln.centroid for ln in lines])
+    nrm = np.array([ln.normal for ln in lines])
+    ends = np.array([[ln.point(float(ln.t[0])), ln.point(float(ln.t[-1]))] for ln in lines])
+    # dist[i, j]: how far piece j's ends stray from line i
+    dist = np.abs(np.einsum("ik,ijek->ije", nrm, ends[None, :, :, :] - c[:, None, None, :]))
+    far = dist.max(axis=2)
+    counts = np.array([ln.count for ln in lines])
+    # Judge each pair against the better-supported line: a short piece's direction is poor.
+    u = np.array([ln.direction for ln in lines])
+    parallel = np.abs(u @ u.T) >= math.cos(math.radians(max_angle_deg))
+    same = (np.where(counts[:, None] >= counts[None, :], far, far.T) <= seg.tol) & parallel
+    for i in range(n):
+        for j in range(i + 1, n):
+            if same[i, j]:
+                ri, rj = i, j
+                while parent[ri] != ri:
+                    ri = parent[ri]
+                while parent[rj] != rj:
+                    rj = parent[rj]
+                parent[rj] = ri
+    roots: dict[int, list[int]] = {}
+    for i in range(n):
+        r = i
+        while parent[r] != r:
+            r = parent[r]
+        roots.setdefault(r, []).append(i)
+    out = []
+    for members in roots.values():
+        if len(members) == 1:
+            out.append(lines[members[0]])
+        else:
+            idx = np.sort(np.concatenate([lines[m].index for m in members]))
+            out.append(_fit(seg.points, idx))
+    return out
+
+
+def intersect(a: Line, b: Line) -> FloatArray | None:
+    """(2,) crossing of two lines, or None when (nearly) parallel."""
+    d = a.direction[0] * b.direction[1] - a.direction[1] * b.direction[0]
+    if abs(d) < 1e-9:
+        return None
+    w = b.centroid - a.centroid
+    s = (w[0] * b.direction[1] - w[1] * b.direction[0]) / d
+    return a.point(s)
+
+
+def _angle(a: Line, b: Line) -> float:
+    """Unsigned angle between two lines (rad, in [0, pi/2])."""
+    return math.acos(min(1.0, abs(float(a.direction @ b.direction))))
+
+
+def corner_or_end(line: Line, at_end: bool, others: list[Line], seg: Segments) -> FloatArray:
+    """Where ``line`` ends: its crossing with a neighbour that meets it there (a visible
+    corner, exact), else half a spacing beyond its last inlier (the edge lies between rays)."""
+    tip = line.point(float(line.t[-1] if at_end else line.t[0]))
+    reach = 3.0 * max(line.step(at_end), seg.spacing) + seg.tol
+    best, best_d = None, math.inf
+    for other in others:
+        if other is line or _angle(line, other) < math.radians(20):
+            continue
+        x = intersect(line, other)
+        if x is None:
+            continue
+        d = float(np.hypot(*(x - tip)))
+        near_other = min(float(np.hypot(*(other.point(float(other.t[k])) - x))) for k in (0, -1))
+        reach_other = 3.0 * max(other.step(True), other.step(False), seg.spacing) + seg.tol
+        if d <= reach and near_other <= reach_other and d < best_d:
+            best, best_d = x, d
+    return line.end(at_end) if best is None else best
+
+
+# ----------------------------------------------------------------- extractors
+@dataclass(frozen=True)
+class _Base:
+    """Shared parameters and the never-raise wrapper of the built-in extractors."""
+
+    name: str = "base"
+    min_tol_mm: float = 0.03
+    min_points: int = 8
+    min_arm_mm: float = 0.5
+
+    def __call__(self, profile: Profile) -> Feature:
+        try:
+            with np.errstate(all="ignore"):
+                seg = segment_profile(profile, min_tol_mm=self.min_tol_mm,
+                                      min_points=self.min_points)
+                if isinstance(seg, str):
+                    return Feature.failed(seg, joint=self.name)
+                return self._extract(profile, seg)
+        except (ValueError, IndexError, ZeroDivisionError, FloatingPointError,
+                np.linalg.LinAlgError, AttributeError, TypeError) as exc:  # never raise on data
+            return Feature.failed(f"{self.name}: unusable profile ({exc})", joint=self.name)
+
+    def _extract(self, profile: Profile, seg: Segments) -> Feature:
+        raise NotImplementedError
+
+    def _found(self, profile: Profile, point: FloatArray, **kw: Any) -> Feature:
+        return Feature.found(point, profile.T_world_sensor, joint=self.name, **kw)
+
+    def _arms(self, seg: Segments, opening_down: bool, min_deg: float, max_deg: float,
+              max_reach_mm: float) -> tuple[Line, Line, FloatArray, float] | str:
+        """The best pair of lines forming a V (opening towards the sensor, -z) or a ridge
+        (``opening_down``: the arms fall away from the sensor): (left, right, apex, score)."""
+        groups = [g for g in collinear_groups(seg)
+                  if g.count >= self.min_points and g.extent >= self.min_arm_mm]
+        sign = 1.0 if opening_down else -1.0
+        best: tuple[Line, Line, FloatArray, float] | None = None
+        for i, a in enumerate(groups):
+            for b in groups[i + 1 :]:
+                x = intersect(a, b)
+                if x is None:
+                    continue
+                arms = []
+                for g in (a, b):
+                    v = g.centroid - x
+                    v = v / max(float(np.hypot(*v)), 1e-300)
+                    near = float(np.min((seg.points[g.index] - x) @ v))
+                    arms.append((v, near, g))
+                (va, na, ga), (vb, nb, gb) = sorted(arms, key=lambda arm: float(arm[0][0]))
+                included = math.degrees(math.acos(float(np.clip(va @ vb, -1, 1))))
+                bis = va + vb
+                ok = (va[0] < 0 < vb[0] and sign * va[1] > 0 and sign * vb[1] > 0
+                      and min_deg <= included <= max_deg
+                      and sign * bis[1] > 0.7 * float(np.hypot(*bis))  # bisector within 45 deg
+                      and -seg.tol <= min(na, nb) and max(na, nb) <= max_reach_mm)
+                score = float(ga.count + gb.count)
+                if ok and (best is None or score > best[3]):
+                    best = (ga, gb, x, score)
+        return best if best is not None else "no pair of lines forms the joint"
+
+
+def _confidence(arms: list[Line], seg: Segments) -> float:
+    """Share of the kept points explained by the feature's lines, scaled by their fit."""
+    explained = sum(a.count for a in arms) / max(len(seg.points), 1)
+    fit = max(0.0, 1.0 - max(a.rms for a in arms) / seg.tol)
+    return float(np.clip(0.5 * explained + 0.5 * fit, 0.0, 1.0))
+
+
+@dataclass(frozen=True)
+class VGrooveExtractor(_Base):
+    """V-groove: two bevels opening towards the sensor. Seam: the root centre, midpoint of
+    the bevels' lower ends (their intersection when they meet). Edges: the top edges."""
+
+    name: str = "v-groove"
+    min_angle_deg: float = 20.0
+    max_angle_deg: float = 150.0
+    max_gap_mm: float = 6.0
+    min_gap_mm: float = 0.05
+
+    def _extract(self, profile: Profile, seg: Segments) -> Feature:
+        found = self._arms(seg, False, self.min_angle_deg, self.max_angle_deg,
+                           self.max_gap_mm)
+        if isinstance(found, str):
+            return Feature.failed(found, joint=self.name)
+        left, right, apex, _ = found
+        others = [g for g in seg.lines if g.count >= self.min_points] + [left, right]
+        # Column order runs left to right: the left bevel's root end is its last point.
+        root_l = corner_or_end(left, True, others, seg)
+        root_r = corner_or_end(right, False, others, seg)
+        gap = float(np.hypot(*(root_r - root_l)))
+        if gap <= max(self.min_gap_mm, 2.0 * seg.spacing + seg.tol):
+            seam, gap = apex, 0.0
+        else:
+            seam = 0.5 * (root_l + root_r)
+        edges = np.array([corner_or_end(left, False, others, seg),
+                          corner_or_end(right, True, others, seg)])
+        return self._found(profile, seam, confidence=_confidence([left, right], seg),
+                           edges_laser=edges, gap_mm=gap)
+
+
+@dataclass(frozen=True)
+class FilletExtractor(_Base):
+    """Fillet / T joint: two faces meeting in a corner that opens towards the sensor.
+    Seam: the faces' intersection (the corner line)."""
+
+    name: str = "fillet"
+    min_angle_deg: float = 45.0
+    max_angle_deg: float = 150.0
+    max_gap_mm: float = 2.0
+
+    def _extract(self, profile: Profile, seg: Segments) -> Feature:
+        found = self._arms(seg, False, self.min_angle_deg, self.max_angle_deg,
+                           self.max_gap_mm)
+        if isinstance(found, str):
+            return Feature.failed(found, joint=self.name)
+        left, right, apex, _ = found
+        return self._found(profile, apex, confidence=_confidence([left, right], seg))
+
+
+@dataclass(frozen=True)
+class OutsideCornerExtractor(_Base):
+    """Outside corner: two faces falling away from a ridge. Seam: their intersection."""
+
+    name: str = "outside-corner"
+    min_angle_deg: float = 45.0
+    max_angle_deg: float = 160.0
+    max_gap_mm: float = 2.0
+
+    def _extract(self, profile: Profile, seg: Segments) -> Feature:
+        found = self._arms(seg, True, self.min_angle_deg, self.max_angle_deg, self.max_gap_mm)
+        if isinstance(found, str):
+            return Feature.failed(found, joint=self.name)
+        left, right, apex, _ = found
+        return self._found(profile, apex, confidence=_confidence([left, right], seg))
+
+
+def _plates(seg: Segments, min_points: int, min_plate_mm: float, max_tilt_deg: float,
+            min_gap_mm: float) -> list[tuple[Line, bool]]:
+    """Pieces in column order, each flagged as a plate (within ``max_tilt_deg`` of the y axis
+    and ``min_plate_mm`` long). A plate-like piece that continues the previous one's line is
+    joined to it when what separates them is short (< ``min_gap_mm``: a dropout, a removed
+    outlier) or lies in front of the line (a false reflection, which hides the plate)."""
+    out: list[tuple[Line, bool]] = []
+    tilt = math.radians(max_tilt_deg)
+    for ln in seg.lines:
+        if ln.count < min_points:
+            continue
+        flat = abs(math.atan2(ln.direction[1], ln.direction[0])) <= tilt
+        joined = False
+        for last in range(len(out) - 1, -1, -1) if flat else ():
+            prev, prev_flat = out[last]
+            ends = np.array([ln.point(float(ln.t[0])), ln.point(float(ln.t[-1]))])
+            if not prev_flat or np.abs((ends - prev.centroid) @ prev.normal).max() > seg.tol:
+                continue
+            gap = float(np.hypot(*(ends[0] - prev.point(float(prev.t[-1])))))
+            between = seg.points[prev.index[-1] + 1 : ln.index[0]]
+            towards_sensor = -1.0 if float(prev.centroid @ prev.normal) > 0 else 1.0
+            height = towards_sensor * ((between - prev.centroid) @ prev.normal)
+            # In front only (no wall or gap bottom behind the line): a reflection, not a gap.
+            if gap < min_gap_mm or (int((height > seg.tol).sum()) >= min_points
+                                    and int((height < -seg.tol).sum()) < min_points):
+                idx = np.concatenate([prev.index, ln.index])
+                out[last:] = [(_fit(seg.points, idx), True)]
+                joined = True
+            break
+        if joined:
+            continue
+        out.append((ln, flat))
+    return [(ln, flat and ln.extent >= min_plate_mm) for ln, flat in out]
+
+
+def _plate_pairs(seg: Segments, min_points: int, min_plate_mm: float, max_tilt_deg: float,
+                 min_gap_mm: float, max_gap_mm: float) -> list[tuple[Line, Line]]:
+    """Consecutive near-parallel plates (left, right) whose facing ends are at most
+    ``max_gap_mm`` apart (whatever lies between: walls, nothing, a reflection)."""
+    plates = [ln for ln, plate in _plates(seg, min_points, min_plate_mm, max_tilt_deg,
+                                          min_gap_mm) if plate]
+    return [(a, b) for a, b in zip(plates[:-1], plates[1:], strict=True)
+            if _angle(a, b) <= math.radians(10)
+            and float(np.hypot(*(b.point(float(b.t[0])) - a.point(float(a.t[-1]))))) <= max_gap_mm]
+
+
+@dataclass(frozen=True)
+class SquareButtExtractor(_Base):
+    """Square butt: two plates side by side with a gap and/or a high-low step between them.
+    Seam: the midpoint of the two plate edges."""
+
+    name: str = "square-butt"
+    min_gap_mm: float = 0.3
+    max_gap_mm: float = 6.0
+    min_plate_mm: float = 1.0
+    max_tilt_deg: float = 40.0
+
+    def _extract(self, profile: Profile, seg: Segments) -> Feature:
+        pairs = _plate_pairs(seg, self.min_points, self.min_plate_mm, self.max_tilt_deg,
+                             self.min_gap_mm, self.max_gap_mm)
+        others = [ln for ln in seg.lines if ln.count >= self.min_points]
+        best, best_open = None, 0.0
+        for a, b in pairs:
+            ea, eb = corner_or_end(a, True, others, seg), corner_or_end(b, False, others, seg)
+            opening = float(np.hypot(*(eb - ea)))
+            if opening >= max(self.min_gap_mm, 3 * seg.tol) and opening > best_open:
+                best, best_open = (a, b, ea, eb), opening
+        if best is None:
+            return Feature.failed("no gap or step between two plates", joint=self.name)
+        a, b, ea, eb = best
+        gap = abs(float((eb - ea) @ a.direction))
+        return self._found(profile, 0.5 * (ea + eb), confidence=_confidence([a, b], seg),
+                           edges_laser=np.array([ea, eb]), gap_mm=gap)
+
+
+@dataclass(frozen=True)
+class LapExtractor(_Base):
+    """Lap: two parallel sheets with a step. Seam: the top sheet's edge projected normally
+    onto the lower sheet (the corner where the edge meets it). Edge: the top sheet's edge."""
+
+    name: str = "lap"
+    min_step_mm: float = 0.3
+    min_gap_mm: float = 1.0
+    max_gap_mm: float = 3.0
+    min_plate_mm: float = 2.0
+    max_tilt_deg: float = 40.0
+
+    def _extract(self, profile: Profile, seg: Segments) -> Feature:
+        pairs = _plate_pairs(seg, self.min_points, self.min_plate_mm, self.max_tilt_deg,
+                             self.min_gap_mm, self.max_gap_mm)
+        others = [ln for ln in seg.lines if ln.count >= self.min_points]
+        best, best_score = None, 0.0
+        for a, b in pairs:
+            step = float((b.centroid - a.centroid) @ a.normal)  # > 0: b is deeper
+            if abs(step) < max(self.min_step_mm, 3 * seg.tol):
+                continue
+            score = float(a.count + b.count)
+            if score > best_score:
+                best, best_score = (a, b, step), score
+        if best is None:
+            return Feature.failed("no step between two parallel sheets", joint=self.name)
+        a, b, step = best
+        top, lower, at_end = (a, b, True) if step > 0 else (b, a, False)
+        edge = corner_or_end(top, at_end, others, seg)
+        foot = edge - float((edge - lower.centroid) @ lower.normal) * lower.normal
+        # The ray over the top edge (from the emitter at the origin) lands on the lower sheet
+        # at `shadow`: beyond the foot (away from the top sheet) the corner is in shadow and
+        # the foot is the best estimate; otherwise the lower sheet is seen up to the corner.
+        away = lower.direction if at_end else -lower.direction
+        ray = Line(np.empty(0, np.intp), np.zeros(2), edge / max(float(np.hypot(*edge)), 1e-300),
+                   np.empty(0), 0.0)
+        shadow = intersect(ray, lower)
+        if shadow is not None and float((shadow - foot) @ away) > 0.0:
+            seam = foot
+        else:
+            seam = corner_or_end(lower, not at_end, others, seg)
+        return self._found(profile, seam, confidence=_confidence([a, b], seg),
+                           edges_laser=edge.reshape(1, 2))
+
+
+@dataclass(frozen=True)
+class GenericExtractor:
+    """Slope / curvature: the sharpest concave turn of the profile (sliding-window slopes),
+    refined by intersecting two local line fits; else the widest interior gap or step; else
+    the sharpest convex turn. No segmentation, no joint model: the fastest built-in."""
+
+    name: str = "generic"
+    window_mm: float = 1.0
+    min_turn_deg: float = 25.0
+    min_jump_mm: float = 0.3
+    min_points: int = 8
+
+    def __call__(self, profile: Profile) -> Feature:
+        try:
+            with np.errstate(all="ignore"):
+                return self._extract(profile)
+        except (ValueError, IndexError, ZeroDivisionError, FloatingPointError,
+                np.linalg.LinAlgError, AttributeError, TypeError) as exc:
+            return Feature.failed(f"generic: unusable profile ({exc})", joint=self.name)
+
+    def _extract(self, profile: Profile) -> Feature:
+        p = kept_points(profile)
+        m = len(p)
+        if m < 4 * self.min_points:
+            return Feature.failed(f"too few valid points ({m})", joint=self.name)
+        spacing = _spacing(p)
+        if not spacing > 0:
+            return Feature.failed("the valid points do not spread out", joint=self.name)
+        sigma = noise_sigma(p)
+        keep = np.abs(p[:, 1] - _median5(p[:, 1])) <= max(6 * sigma, 0.12, 4 * spacing)
+        p = p[keep]
+        m = len(p)
+        gaps = np.hypot(*np.diff(p, axis=0).T)
+        k = int(np.clip(round(max(self.window_mm, 20 * sigma) / spacing), 4, max(4, m // 4)))
+        if m < 2 * k + 2:
+            return Feature.failed("too few points for the slope window", joint=self.name)
+        jump_mm = max(6 * spacing, 8 * sigma, 0.1)
+        jump = gaps > jump_mm
+        # Window sums -> total-least-squares direction of each k-point window.
+        cs = np.vstack([np.zeros((1, 5)), np.cumsum(np.column_stack(
+            [p[:, 0], p[:, 1], p[:, 0] ** 2, p[:, 1] ** 2, p[:, 0] * p[:, 1]]), axis=0)])
+        sy, sz, syy, szz, syz = (cs[k:] - cs[:-k]).T
+        cyy, czz, cyz = syy - sy * sy / k, szz - sz * sz / k, syz - sy * sz / k
+        theta = 0.5 * np.arctan2(2 * cyz, cyy - czz)
+        chord = p[k - 1 :] - p[: m - k + 1]
+        flip = np.cos(theta) * chord[:, 0] + np.sin(theta) * chord[:, 1] < 0
+        theta = theta + np.pi * flip
+        cj = np.concatenate([[0], np.cumsum(jump)])
+        turn = (theta[k:] - theta[:-k] + np.pi) % (2 * np.pi) - np.pi  # corner at i + k
+        n_turn = len(turn)
+        ok = cj[2 * k - 1 : 2 * k - 1 + n_turn] == cj[:n_turn]  # no jump in [i, i + 2k)
+        turn = np.where(ok, turn, 0.0)
+        min_turn = math.radians(self.min_turn_deg)
+        i = int(np.argmin(turn))
+        if turn[i] <= -min_turn:
+            return self._corner(profile, p, i + k, k, -float(turn[i]))
+        interior = np.flatnonzero(gaps > max(self.min_jump_mm, jump_mm))
+        if interior.size:
+            j = int(interior[np.argmax(gaps[interior])])
+            a, b = p[j], p[j + 1]
+            dy, dz = abs(b[0] - a[0]), abs(b[1] - a[1])
+            if dz > 2 * dy:  # a step: the corner at the foot of the higher side
+                hi, lo = (a, b) if a[1] < b[1] else (b, a)
+                seam = np.array([hi[0], lo[1]])
+            else:
+                seam = 0.5 * (a + b)
+            return Feature.found(seam, profile.T_world_sensor, joint=self.name,
+                                 confidence=0.5, edges_laser=np.array([a, b]),
+                                 gap_mm=float(dy))
+        i = int(np.argmax(turn))
+        if turn[i] >= min_turn:
+            return self._corner(profile, p, i + k, k, float(turn[i]))
+        return Feature.failed("no turn, gap or step in the profile", joint=self.name)
+
+    def _corner(self, profile: Profile, p: FloatArray, c: int, k: int, turn: float) -> Feature:
+        guard = max(1, k // 2)
+        left = p[max(0, c - guard - 2 * k) : max(1, c - guard)]
+        right = p[c + guard : c + guard + 2 * k]
+        if len(left) < 3 or len(right) < 3:
+            return Feature.failed("the corner is too near the profile's end", joint=self.name)
+        la = _fit(left, np.arange(len(left)))
+        lb = _fit(right, np.arange(len(right)))
+        x = intersect(la, lb)
+        if x is None or float(np.hypot(*(x - p[c]))) > 2 * k * (la.step(True) + 1e-9) + 1.0:
+            x = p[c]
+        conf = float(np.clip(turn / math.radians(90), 0.0, 1.0))
+        return Feature.found(x, profile.T_world_sensor, joint=self.name, confidence=conf)
+
+
+# ----------------------------------------------------------------- registry
+BUILTIN: dict[str, Callable[..., FeatureExtractor]] = {
+    "v-groove": VGrooveExtractor,
+    "square-butt": SquareButtExtractor,
+    "fillet": FilletExtractor,
+    "lap": LapExtractor,
+    "outside-corner": OutsideCornerExtractor,
+    "generic": GenericExtractor,
+}
+
+
+def available_extractors() -> list[str]:
+    """Built-in names and the names of installed entry points (plugins are not imported)."""
+    try:
+        plugins = [ep.name for ep in importlib.metadata.entry_points(group=ENTRY_POINT_GROUP)]
+    except Exception:  # a broken distribution's metadata must not break listing
+        plugins = []
+    return sorted(BUILTIN) + sorted(set(plugins) - set(BUILTIN))
+
+
+def _load(name: str) -> Any:
+    fix_names = f"use one of {', '.join(available_extractors())} or 'package.module:Class'"
+    if ":" in name:
+        module_name, _, attr = name.partition(":")
+        try:
+            obj: Any = importlib.import_module(module_name)
+            for part in attr.split("."):
+                obj = getattr(obj, part)
+        except Exception as exc:  # any import-time error of user code
+            raise PluginError(f"cannot load extractor {name!r}: {exc}", field="extractor.name",
+                              fix="check that the module imports and defines the class "
+                                  "('package.module:Class')") from exc
+        return obj
+    try:
+        eps = [ep for ep in importlib.metadata.entry_points(group=ENTRY_POINT_GROUP)
+               if ep.name == name]
+    except Exception:
+        eps = []
+    if not eps:
+        raise PluginError(f"unknown extractor {name!r}", field="extractor.name", fix=fix_names)
+    try:
+        return eps[0].load()
+    except Exception as exc:
+        raise PluginError(f"the plugin extractor {name!r} fails to load: {exc}",
+                          field="extractor.name", fix="reinstall or fix the plugin package"
+                          ) from exc
+
+
+def extractor(name: str, **params: Any) -> FeatureExtractor:
+    """An extractor by name, built with ``params``.
+
+    Parameters
+    ----------
+    name : str
+        A built-in (``"v-groove"``, ``"square-butt"``, ``"fillet"``, ``"lap"``,
+        ``"outside-corner"``, ``"generic"``), ``"package.module:Class"``, or the name of an
+        entry point in the group ``seamtrack.extractors``. A class is called with
+        ``params``; an object that already is an extractor is used as is.
+
+    Raises
+    ------
+    PluginError
+        Unknown name, a plugin that fails to import or to build, or an object without
+        ``name`` and ``__call__`` (field ``extractor.name``; ``extractor.params`` for bad
+        parameters).
+    """
+    if not isinstance(name, str) or not name:
+        raise PluginError(f"extractor name must be a non-empty string, got {name!r}",
+                          field="extractor.name", fix="e.g. 'v-groove'")
+    target: Any = BUILTIN[name] if name in BUILTIN else _load(name)
+    if isinstance(target, type):
+        try:
+            target = target(**params)
+        except TypeError as exc:
+            raise PluginError(f"cannot build extractor {name!r}: {exc}",
+                              field="extractor.params",
+                              fix="pass only the parameters the extractor accepts") from exc
+    elif params:
+        raise PluginError(f"{name!r} is an instance, it takes no parameters",
+                          field="extractor.params", fix="drop the parameters")
+    if not (callable(target) and isinstance(getattr(target, "name", None), str)):
+        raise PluginError(f"{name!r} is not a feature extractor", field="extractor.name",
+                          fix="give the class a 'name' string and a __call__(profile) -> "
+                              "Feature")
+    return target  # type: ignore[no-any-return]
