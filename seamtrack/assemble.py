@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 
 from . import frames
 from .errors import SceneError
-from .profiles import Feature
+from .profiles import Feature, Profile
 from .robot import CartesianRobot
 from .scan import SeamNoise, sense_seam
 from .seam import Seam
@@ -28,6 +28,7 @@ if TYPE_CHECKING:
 
 FloatArray = NDArray[np.float64]
 SenseFn = Callable[[FloatArray, float], Feature]
+ScanFn = Callable[[FloatArray, float], "tuple[Profile, Feature]"]
 
 _SPEC_KEYS = (
     "depth_of_field_mm",
@@ -68,6 +69,7 @@ class Parts:
     settings: LoopSettings
     sensor_resolution_mm: float
     look_ahead_mm: float
+    scan: ScanFn | None = None  # mesh mode: the stripe profile and the feature found in it
 
 
 def make_sensor(cfg: SensorConfig) -> LaserLineSensor:
@@ -138,10 +140,13 @@ def make_tracker(scene: Scene) -> Tracker:
     return tracker(c.name, **params)
 
 
-def _mesh_sense(
+def _mesh_scan(
     scene: Scene, sensor: LaserLineSensor, rng: np.random.Generator
-) -> tuple[Seam, SenseFn]:
+) -> tuple[Seam, ScanFn]:
+    """The workpiece's CAD seam (world frame) and the per-frame scan: ray-cast stripe, then the
+    scene's feature extractor."""
     from .features import extractor
+    from .raycast import RayCaster
     from .scan import scan_mesh
     from .workpiece import load_workpiece
 
@@ -160,15 +165,16 @@ def _mesh_sense(
     T_world_part = frames.from_xyz_rpy_deg(w.offset_mm, w.rotation_deg)
     mesh = part.mesh.copy()
     mesh.apply_transform(T_world_part)
+    caster = RayCaster.from_mesh(mesh)
     seam = part.seam.transformed(T_world_part)
     find = extractor(scene.config.extractor.name, **scene.config.extractor.params)
     s = scene.config.sensor
     noise = _stripe_noise(s.stripe_noise)
 
-    def sense(T_world_sensor: FloatArray, t_s: float) -> Feature:
+    def scan(T_world_sensor: FloatArray, t_s: float) -> tuple[Profile, Feature]:
         profile = scan_mesh(
             sensor,
-            mesh,
+            caster,
             T_world_sensor,
             rays=s.rays,
             refine=s.refine_float64,
@@ -176,9 +182,9 @@ def _mesh_sense(
             rng=rng,
             t_s=t_s,
         )
-        return find(profile)
+        return profile, find(profile)
 
-    return seam, sense
+    return seam, scan
 
 
 def _stripe_noise(params: dict[str, Any]) -> Any:
@@ -202,11 +208,16 @@ def build_parts(scene: Scene, rng: np.random.Generator | None = None) -> Parts:
     rng = rng if rng is not None else np.random.default_rng(c.simulation.seed)
     sensor = make_sensor(c.sensor)
     robot = make_robot(scene, sensor)
+    scan: ScanFn | None = None
     if c.sensor.mode == "mesh":
-        seam, sense = _mesh_sense(scene, sensor, rng)
+        seam, scan = _mesh_scan(scene, sensor, rng)
+        mesh_scan = scan
+
+        def sense(T_world_sensor: FloatArray, t_s: float) -> Feature:
+            return mesh_scan(T_world_sensor, t_s)[1]
     else:
         seam = (
-            make_seam(scene) if c.seam.source != "workpiece" else _mesh_sense(scene, sensor, rng)[0]
+            make_seam(scene) if c.seam.source != "workpiece" else _mesh_scan(scene, sensor, rng)[0]
         )
         noise = SeamNoise(c.sensor.noise_range_mm, c.sensor.noise_lateral_mm)
         sensed = seam
@@ -247,4 +258,5 @@ def build_parts(scene: Scene, rng: np.random.Generator | None = None) -> Parts:
         settings=settings,
         sensor_resolution_mm=sensor.lateral_resolution_mm,
         look_ahead_mm=c.sensor.look_ahead_mm,
+        scan=scan,
     )

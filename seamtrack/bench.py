@@ -286,3 +286,57 @@ def raycast_markdown(result: dict) -> str:
     for key, why in result["skipped"].items():
         lines.append(f"Skipped {key}: {why}")
     return "\n".join(lines) + "\n"
+
+
+# --------------------------------------------------------------------------- dispatch
+def _bench_extractors(out: Path, quick: bool) -> Any:
+    from .extractors_bench import bench_extractors
+
+    return bench_extractors(out, quick=quick)
+
+
+def _bench_mesh(out: Path, quick: bool) -> Any:
+    from .workpiece import mesh_tradeoff
+
+    tolerances = (1.0, 0.1, 0.01) if quick else (1.0, 0.1, 0.01, 0.001)
+    rows = mesh_tradeoff(tolerances=tolerances)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "mesh.json").write_text(
+        json.dumps({"machine": machine_info(), "rows": rows}, indent=2, default=float)
+    )
+    keys = list(rows[0]) if rows else []
+    lines = ["| " + " | ".join(keys) + " |", "|" + "---|" * len(keys)]
+    lines += [
+        "| "
+        + " | ".join(f"{r[k]:.4g}" if isinstance(r[k], float) else str(r[k]) for k in keys)
+        + " |"
+        for r in rows
+    ]
+    (out / "mesh.md").write_text("\n".join(lines) + "\n")
+    return rows
+
+
+BENCHES: dict[str, Callable[[Path, bool], Any]] = {
+    "raycast": lambda out, quick: bench_raycast(out, quick=quick),
+    "extractors": _bench_extractors,
+    "mesh": _bench_mesh,
+}
+
+
+def run_benches(which: str, out_dir: Path, quick: bool = False) -> dict[str, Any]:
+    """Run one benchmark by name (or ``all``), each into ``out_dir/<name>/``."""
+    from .errors import SceneError
+
+    names = list(BENCHES) if which == "all" else [which]
+    unknown = [n for n in names if n not in BENCHES]
+    if unknown:
+        raise SceneError(
+            f"unknown benchmark {unknown[0]!r}",
+            field="bench",
+            fix=f"use one of {', '.join(BENCHES)} or all",
+        )
+    results = {}
+    for name in names:
+        print(f"bench {name} -> {out_dir / name}")
+        results[name] = BENCHES[name](out_dir / name, quick)
+    return results

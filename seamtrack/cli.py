@@ -253,6 +253,69 @@ def cmd_compare(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_scan(args: argparse.Namespace) -> int:
+    """One stripe profile at arc length S along the seam, with its seam point."""
+    import numpy as np
+
+    from .output import prepare_dir
+    from .scene import load_scene
+
+    scene = load_scene(args.scene, _overrides(args))
+    parts = scene.build()
+    seam = parts.seam
+    if not 0.0 <= args.at <= seam.length_mm:
+        raise SceneError(
+            f"{args.at} mm is not on the seam (0..{seam.length_mm:.3f} mm)",
+            field="--at",
+            fix="give an arc length along the seam in mm",
+        )
+    tcp = seam.interpolate([args.at])[0]
+    T_world_sensor = parts.robot.T_world_sensor(parts.robot.q_from_world(tcp))
+    out = Path(args.out) if args.out else Path(f"scan-{scene.name}-{args.at:g}mm.csv")
+    prepare_dir(out.parent if str(out.parent) else Path("."))
+    if scene.config.sensor.mode == "mesh":
+        from .profile_io import plot_profile_png, write_profile_csv
+
+        assert parts.scan is not None
+        profile, feature = parts.scan(T_world_sensor, 0.0)
+        write_profile_csv(profile, out)
+        plot_profile_png(profile, out.with_suffix(".png"), feature=feature)
+        valid = int(np.count_nonzero(profile.valid))
+        print(f"profile: {len(profile)} rays, {valid} valid points")
+    else:
+        feature = parts.sense(T_world_sensor, 0.0)
+        point = feature.point_world if feature else np.full(3, np.nan)
+        np.savetxt(
+            out,
+            np.concatenate([feature.point_laser if feature else [np.nan] * 2, point])[None],
+            delimiter=",",
+            comments="",
+            header="y_L_mm,z_L_mm,x_mm,y_mm,z_mm",
+            fmt="%.6f",
+        )
+    if feature:
+        true = seam.closest(feature.point_world)
+        print(
+            f"seam point: laser (y, z) = {np.round(feature.point_laser, 4).tolist()} mm, "
+            f"world {np.round(feature.point_world, 4).tolist()} mm, "
+            f"{true.distance_mm[0]:.4f} mm from the true seam"
+        )
+    else:
+        print(f"no seam point: {feature.reason}")
+    print(
+        f"wrote {out}"
+        + (f" and {out.with_suffix('.png')}" if scene.config.sensor.mode == "mesh" else "")
+    )
+    return 0
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    from .bench import run_benches
+
+    run_benches(args.which, Path(args.out), quick=args.quick)
+    return 0
+
+
 # --------------------------------------------------------------------------- parser
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
@@ -326,6 +389,26 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out")
     p.add_argument("-q", "--quiet", action="store_true")
 
+    p = add("scan", cmd_scan, "one stripe profile and its seam point at an arc length")
+    p.add_argument("scene")
+    p.add_argument(
+        "--at",
+        type=float,
+        default=0.0,
+        metavar="S_MM",
+        help="arc length along the seam, mm (default 0)",
+    )
+    p.add_argument("--out", help="CSV file (a PNG plot is written beside it in mesh mode)")
+
+    p = add("bench", cmd_bench, "benchmarks; results go to a JSON and a markdown table")
+    p.add_argument(
+        "which",
+        nargs="?",
+        default="all",
+        help="raycast, extractors, mesh, loop, tradeoff, sweep, or all",
+    )
+    p.add_argument("--out", default="bench-results", help="folder for the results")
+    p.add_argument("--quick", action="store_true", help="fewer repeats (a smoke run)")
     return parser
 
 

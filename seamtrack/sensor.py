@@ -366,6 +366,17 @@ class LaserLineSensor:
             "pixels_v": float(self.pixels_v),
         }
 
+    def scan(self, part: Any, T_world_sensor: ArrayLike, **kwargs: Any) -> Any:
+        """The stripe profile this sensor sees on a mesh at a pose (mesh mode).
+
+        A thin delegate to :func:`seamtrack.scan.scan_mesh` (imported here, on call, so that
+        the sensor model itself never needs ray casting); ``part`` is a workpiece, a
+        ``trimesh.Trimesh`` or a prepared ``RayCaster``.
+        """
+        from .scan import scan_mesh
+
+        return scan_mesh(self, part, T_world_sensor, **kwargs)
+
     def with_(self, **changes: Any) -> LaserLineSensor:
         """A copy with fields replaced (``dataclasses.replace``)."""
         return replace(self, **changes)

@@ -333,10 +333,16 @@ def _summary(
                 np.mean(np.abs(speed - cfg.welding_speed_mm_s) <= 0.1 * cfg.welding_speed_mm_s)
             )
     found = np.asarray(trace.frames.get("found", np.zeros(0)), dtype=bool)
+    # The error as a system that logs only at its sensor frames would see it.
+    frame_ticks = np.searchsorted(trace.t_s, trace.frames.get("t_capture_s", np.zeros(0)))
+    frame_ticks = frame_ticks[frame_ticks < len(weld)]
+    at_frames = trace.error_mm[frame_ticks[weld[frame_ticks]]]
     s_max = float(np.max(trace.arc_length_mm)) if len(trace.arc_length_mm) else 0.0
     return {
         "status": status,
         **stats,
+        "max_error_at_frames_mm": float(at_frames.max()) if at_frames.size else nan,
+        "min_error_at_frames_mm": float(at_frames.min()) if at_frames.size else nan,
         "sim_time_s": float(trace.t_s[-1]) if len(trace.t_s) else 0.0,
         "wall_time_s": wall_time_s,
         "frames": len(found),

@@ -50,8 +50,14 @@ class Case:
 
 
 def parse_values(text: str) -> list[Any]:
-    """``"6,5,1"`` -> ``[6, 5, 1]`` (each value read as TOML, else as a string)."""
-    return [parse_override(f"v={item.strip()}")[1] for item in text.split(",") if item.strip()]
+    """``"6,5,1"`` -> ``[6, 5, 1]``; ``"[0,1,1],[1,1,1]"`` -> two lists; values that are not
+    TOML (``"I,II,trajectory"``) are split on commas and kept as strings."""
+    import tomllib
+
+    try:
+        return list(tomllib.loads(f"v = [{text}]")["v"])
+    except tomllib.TOMLDecodeError:
+        return [parse_override(f"v={item.strip()}")[1] for item in text.split(",") if item.strip()]
 
 
 def run_case(scene: str, case: Case, overrides: dict[str, Any]) -> dict[str, Any]:
