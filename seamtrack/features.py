@@ -325,47 +325,30 @@ def _merge(p: FloatArray, pieces: list[tuple[int, int]], tol: float) -> list[tup
     return merged
 
 
-def collinear_groups(seg: Segments, max_angle_deg: float = 10.0) -> list[Line]:
-    """Join pieces that lie on one line, across gaps and interruptions (refit on the union):
-    the ends of the less-supported piece lie within the tolerance of the other's line and
-    their directions agree within ``max_angle_deg``."""
-    lines = seg.lines
-    n = len(lines)
-    parent = list(range(n))
-    c = np.array([ln.centroid for ln in lines])
-    nrm = np.array([ln.normal for ln in lines])
-    ends = np.array([[ln.point(float(ln.t[0])), ln.point(float(ln.t[-1]))] for ln in lines])
-    # dist[i, j]: how far piece j's ends stray from line i
-    dist = np.abs(np.einsum("ik,ijek->ije", nrm, ends[None, :, :, :] - c[:, None, None, :]))
-    far = dist.max(axis=2)
-    counts = np.array([ln.count for ln in lines])
-    # Judge each pair against the better-supported line: a short piece's direction is poor.
-    u = np.array([ln.direction for ln in lines])
-    parallel = np.abs(u @ u.T) >= math.cos(math.radians(max_angle_deg))
-    same = (np.where(counts[:, None] >= counts[None, :], far, far.T) <= seg.tol) & parallel
-    for i in range(n):
-        for j in range(i + 1, n):
-            if same[i, j]:
-                ri, rj = i, j
-                while parent[ri] != ri:
-                    ri = parent[ri]
-                while parent[rj] != rj:
-                    rj = parent[rj]
-                parent[rj] = ri
-    roots: dict[int, list[int]] = {}
-    for i in range(n):
-        r = i
-        while parent[r] != r:
-            r = parent[r]
-        roots.setdefault(r, []).append(i)
-    out = []
-    for members in roots.values():
-        if len(members) == 1:
-            out.append(lines[members[0]])
+def collinear_groups(seg: Segments, max_angle_deg: float = 30.0) -> list[Line]:
+    """Join pieces that lie on one line, across gaps and interruptions (refit on the union).
+
+    Pieces are taken from the best supported down; each joins the largest earlier group
+    whose line holds both its ends within the tolerance (directions within
+    ``max_angle_deg``), so a short piece at a corner cannot bridge two lines.
+    """
+    order = sorted(range(len(seg.lines)), key=lambda i: -seg.lines[i].count)
+    anchors: list[Line] = []
+    members: list[list[NDArray[np.intp]]] = []
+    cos_max = math.cos(math.radians(max_angle_deg))
+    for i in order:
+        ln = seg.lines[i]
+        ends = np.array([ln.point(float(ln.t[0])), ln.point(float(ln.t[-1]))])
+        for k, anchor in enumerate(anchors):
+            if (abs(float(anchor.direction @ ln.direction)) >= cos_max
+                    and np.abs((ends - anchor.centroid) @ anchor.normal).max() <= seg.tol):
+                members[k].append(ln.index)
+                break
         else:
-            idx = np.sort(np.concatenate([lines[m].index for m in members]))
-            out.append(_fit(seg.points, idx))
-    return out
+            anchors.append(ln)
+            members.append([ln.index])
+    return [a if len(m) == 1 else _fit(seg.points, np.sort(np.concatenate(m)))
+            for a, m in zip(anchors, members, strict=True)]
 
 
 def intersect(a: Line, b: Line) -> FloatArray | None:
@@ -539,20 +522,24 @@ class OutsideCornerExtractor(_Base):
 
 
 def _plates(seg: Segments, min_points: int, min_plate_mm: float, max_tilt_deg: float,
-            min_gap_mm: float) -> list[tuple[Line, bool]]:
-    """Pieces in column order, each flagged as a plate (within ``max_tilt_deg`` of the y axis
-    and ``min_plate_mm`` long). A plate-like piece that continues the previous one's line is
-    joined to it when what separates them is short (< ``min_gap_mm``: a dropout, a removed
-    outlier) or lies in front of the line (a false reflection, which hides the plate)."""
-    out: list[tuple[Line, bool]] = []
+            min_gap_mm: float, join_hidden: bool) -> list[tuple[Line, bool, bool]]:
+    """Pieces in column order as (line, is_plate, hidden_before).
+
+    A plate is within ``max_tilt_deg`` of the y axis and ``min_plate_mm`` long. A plate-like
+    piece that continues an earlier one's line is joined to it when what separates them is
+    short (< ``min_gap_mm``: a dropout, a removed outlier), or, with ``join_hidden``, when it
+    lies only in front of the line (a false reflection hiding the plate). Without
+    ``join_hidden`` such a piece starts a new plate flagged ``hidden_before``.
+    """
+    out: list[list[Any]] = []
     tilt = math.radians(max_tilt_deg)
     for ln in seg.lines:
         if ln.count < min_points:
             continue
         flat = abs(math.atan2(ln.direction[1], ln.direction[0])) <= tilt
-        joined = False
+        hidden = False
         for last in range(len(out) - 1, -1, -1) if flat else ():
-            prev, prev_flat = out[last]
+            prev, prev_flat, _ = out[last]
             ends = np.array([ln.point(float(ln.t[0])), ln.point(float(ln.t[-1]))])
             if not prev_flat or np.abs((ends - prev.centroid) @ prev.normal).max() > seg.tol:
                 continue
@@ -561,25 +548,27 @@ def _plates(seg: Segments, min_points: int, min_plate_mm: float, max_tilt_deg: f
             towards_sensor = -1.0 if float(prev.centroid @ prev.normal) > 0 else 1.0
             height = towards_sensor * ((between - prev.centroid) @ prev.normal)
             # In front only (no wall or gap bottom behind the line): a reflection, not a gap.
-            if gap < min_gap_mm or (int((height > seg.tol).sum()) >= min_points
-                                    and int((height < -seg.tol).sum()) < min_points):
+            hidden = (int((height > seg.tol).sum()) >= min_points
+                      and int((height < -seg.tol).sum()) < min_points)
+            if gap < min_gap_mm or (hidden and join_hidden):
                 idx = np.concatenate([prev.index, ln.index])
-                out[last:] = [(_fit(seg.points, idx), True)]
-                joined = True
+                out[last:] = [[_fit(seg.points, idx), True, out[last][2]]]
+                ln = None  # type: ignore[assignment]
             break
-        if joined:
-            continue
-        out.append((ln, flat))
-    return [(ln, flat and ln.extent >= min_plate_mm) for ln, flat in out]
+        if ln is not None:
+            out.append([ln, flat, hidden])
+    return [(ln, flat and ln.extent >= min_plate_mm, hid) for ln, flat, hid in out]
 
 
 def _plate_pairs(seg: Segments, min_points: int, min_plate_mm: float, max_tilt_deg: float,
-                 min_gap_mm: float, max_gap_mm: float) -> list[tuple[Line, Line]]:
-    """Consecutive near-parallel plates (left, right) whose facing ends are at most
-    ``max_gap_mm`` apart (whatever lies between: walls, nothing, a reflection)."""
-    plates = [ln for ln, plate in _plates(seg, min_points, min_plate_mm, max_tilt_deg,
-                                          min_gap_mm) if plate]
-    return [(a, b) for a, b in zip(plates[:-1], plates[1:], strict=True)
+                 min_gap_mm: float, max_gap_mm: float, join_hidden: bool
+                 ) -> list[tuple[Line, Line, bool]]:
+    """Consecutive near-parallel plates (left, right, hidden: a reflection lies between)
+    whose facing ends are at most ``max_gap_mm`` apart (walls or nothing may lie between)."""
+    plates = [(ln, hid) for ln, plate, hid in _plates(seg, min_points, min_plate_mm,
+                                                      max_tilt_deg, min_gap_mm, join_hidden)
+              if plate]
+    return [(a, b, hid) for (a, _), (b, hid) in zip(plates[:-1], plates[1:], strict=True)
             if _angle(a, b) <= math.radians(10)
             and float(np.hypot(*(b.point(float(b.t[0])) - a.point(float(a.t[-1]))))) <= max_gap_mm]
 
@@ -597,19 +586,22 @@ class SquareButtExtractor(_Base):
 
     def _extract(self, profile: Profile, seg: Segments) -> Feature:
         pairs = _plate_pairs(seg, self.min_points, self.min_plate_mm, self.max_tilt_deg,
-                             self.min_gap_mm, self.max_gap_mm)
+                             self.min_gap_mm, self.max_gap_mm, join_hidden=False)
         others = [ln for ln in seg.lines if ln.count >= self.min_points]
-        best, best_open = None, 0.0
-        for a, b in pairs:
+        best, best_key = None, (False, 0.0)
+        for a, b, hidden in pairs:
             ea, eb = corner_or_end(a, True, others, seg), corner_or_end(b, False, others, seg)
             opening = float(np.hypot(*(eb - ea)))
-            if opening >= max(self.min_gap_mm, 3 * seg.tol) and opening > best_open:
-                best, best_open = (a, b, ea, eb), opening
+            # An open gap beats one a reflection covers (which may only hide plate).
+            key = (not hidden, opening)
+            if opening >= max(self.min_gap_mm, 3 * seg.tol) and key > best_key:
+                best, best_key = (a, b, ea, eb), key
         if best is None:
             return Feature.failed("no gap or step between two plates", joint=self.name)
         a, b, ea, eb = best
         gap = abs(float((eb - ea) @ a.direction))
-        return self._found(profile, 0.5 * (ea + eb), confidence=_confidence([a, b], seg),
+        conf = _confidence([a, b], seg) * (1.0 if best_key[0] else 0.5)
+        return self._found(profile, 0.5 * (ea + eb), confidence=conf,
                            edges_laser=np.array([ea, eb]), gap_mm=gap)
 
 
@@ -627,10 +619,10 @@ class LapExtractor(_Base):
 
     def _extract(self, profile: Profile, seg: Segments) -> Feature:
         pairs = _plate_pairs(seg, self.min_points, self.min_plate_mm, self.max_tilt_deg,
-                             self.min_gap_mm, self.max_gap_mm)
+                             self.min_gap_mm, self.max_gap_mm, join_hidden=True)
         others = [ln for ln in seg.lines if ln.count >= self.min_points]
         best, best_score = None, 0.0
-        for a, b in pairs:
+        for a, b, _ in pairs:
             step = float((b.centroid - a.centroid) @ a.normal)  # > 0: b is deeper
             if abs(step) < max(self.min_step_mm, 3 * seg.tol):
                 continue

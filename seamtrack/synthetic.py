@@ -403,6 +403,7 @@ def synthetic_profile(
         crown = np.array([seam[0], min(toes[0, 1], toes[1, 1], seam[1]) - imp.bead_height_mm])
         segs = np.concatenate([segs, _arc(toes[0], crown, toes[1])])
 
+    segs = segs[np.hypot(*(segs[:, 1] - segs[:, 0]).T) > 0]  # e.g. a zero root face
     phi = ray_angles(sensor, n)
     dirs_laser = np.column_stack([np.zeros(n), np.sin(phi), np.cos(phi)])
     dirs = dirs_laser @ R.T  # (n, 3) in the joint frame
