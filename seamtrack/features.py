@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import importlib
 import importlib.metadata
+import itertools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -43,7 +44,8 @@ _MAX_ABS_MM = 1e6
 class FeatureExtractor(Protocol):
     """Finds the seam point in a profile. ``name`` labels results and benches."""
 
-    name: str
+    @property
+    def name(self) -> str: ...
 
     def __call__(self, profile: Profile) -> Feature: ...
 
@@ -201,7 +203,7 @@ def segment_profile(
     cuts = np.flatnonzero(gaps > max(6.0 * spacing, 2.0 * tol, 0.1)) + 1
     bounds = np.concatenate([[0], cuts, [len(p)]])
     pieces: list[tuple[int, int]] = []
-    for lo, hi in zip(bounds[:-1], bounds[1:], strict=True):
+    for lo, hi in itertools.pairwise(bounds):
         if hi - lo >= min_points:
             run = _split(p, int(lo), int(hi) - 1, tol, max_lines)
             if run is None:
@@ -231,8 +233,9 @@ def _best_split(q: FloatArray, min_size: int) -> tuple[int, float, float]:
     """
     k = len(q)
     q = q - q.mean(axis=0)
-    cols = np.column_stack([np.ones(k), q[:, 0], q[:, 1], q[:, 0] ** 2, q[:, 1] ** 2,
-                            q[:, 0] * q[:, 1]])
+    cols = np.column_stack(
+        [np.ones(k), q[:, 0], q[:, 1], q[:, 0] ** 2, q[:, 1] ** 2, q[:, 0] * q[:, 1]]
+    )
     pre = np.cumsum(cols, axis=0)
     total = pre[-1]
 
@@ -253,17 +256,23 @@ def _best_split(q: FloatArray, min_size: int) -> tuple[int, float, float]:
     return int(b[i]), float(both[i]), float(cost(total))
 
 
-def _refine(p: FloatArray, pieces: list[tuple[int, int]], sigma: float, min_tol_mm: float,
-            min_points: int, min_kink_deg: float = 5.0) -> list[tuple[int, int]]:
+def _refine(
+    p: FloatArray,
+    pieces: list[tuple[int, int]],
+    sigma: float,
+    min_tol_mm: float,
+    min_points: int,
+    min_kink_deg: float = 5.0,
+) -> list[tuple[int, int]]:
     """Place each corner between neighbouring pieces at the best two-line split (DP's split
     point strays under noise), and split a run's end pieces at a kink too small for DP's
     tolerance (a root face seen at a slant) when that explains the points much better."""
     out = [list(piece) for piece in pieces]
-    for a, b in zip(out[:-1], out[1:], strict=False):
-        lo, hi = a[0], b[1] + 1
+    for left, right in itertools.pairwise(out):
+        lo, hi = left[0], right[1] + 1
         if hi - lo >= 6:
             cut = lo + _best_split(p[lo:hi], 3)[0]
-            a[1], b[0] = cut - 1, cut
+            left[1], right[0] = cut - 1, cut
     significant = 30.0 * max(sigma, min_tol_mm / 5.0) ** 2
     result: list[tuple[int, int]] = []
     for i, (lo, hi) in enumerate(out):
@@ -271,7 +280,8 @@ def _refine(p: FloatArray, pieces: list[tuple[int, int]], sigma: float, min_tol_
         if hi - lo + 1 >= 4 * min_points:
             mid = (lo + hi) // 2
             halves = ([(lo, mid + 1)] if i == 0 else []) + (
-                [(mid, hi + 1)] if i == len(out) - 1 else [])
+                [(mid, hi + 1)] if i == len(out) - 1 else []
+            )
             for h_lo, h_hi in halves:
                 b, split, single = _best_split(p[h_lo:h_hi], min_points)
                 if single - split > significant:
@@ -280,7 +290,7 @@ def _refine(p: FloatArray, pieces: list[tuple[int, int]], sigma: float, min_tol_
                     if kink > math.radians(min_kink_deg):
                         cuts.append(cut)
         bounds = [lo, *sorted(cuts), hi + 1]
-        result += [(a, b - 1) for a, b in zip(bounds[:-1], bounds[1:], strict=True) if b > a]
+        result += [(a, b - 1) for a, b in itertools.pairwise(bounds) if b > a]
     return result
 
 
@@ -340,15 +350,19 @@ def collinear_groups(seg: Segments, max_angle_deg: float = 30.0) -> list[Line]:
         ln = seg.lines[i]
         ends = np.array([ln.point(float(ln.t[0])), ln.point(float(ln.t[-1]))])
         for k, anchor in enumerate(anchors):
-            if (abs(float(anchor.direction @ ln.direction)) >= cos_max
-                    and np.abs((ends - anchor.centroid) @ anchor.normal).max() <= seg.tol):
+            if (
+                abs(float(anchor.direction @ ln.direction)) >= cos_max
+                and np.abs((ends - anchor.centroid) @ anchor.normal).max() <= seg.tol
+            ):
                 members[k].append(ln.index)
                 break
         else:
             anchors.append(ln)
             members.append([ln.index])
-    return [a if len(m) == 1 else _fit(seg.points, np.sort(np.concatenate(m)))
-            for a, m in zip(anchors, members, strict=True)]
+    return [
+        a if len(m) == 1 else _fit(seg.points, np.sort(np.concatenate(m)))
+        for a, m in zip(anchors, members, strict=True)
+    ]
 
 
 def intersect(a: Line, b: Line) -> FloatArray | None:
@@ -399,13 +413,21 @@ class _Base:
     def __call__(self, profile: Profile) -> Feature:
         try:
             with np.errstate(all="ignore"):
-                seg = segment_profile(profile, min_tol_mm=self.min_tol_mm,
-                                      min_points=self.min_points)
+                seg = segment_profile(
+                    profile, min_tol_mm=self.min_tol_mm, min_points=self.min_points
+                )
                 if isinstance(seg, str):
                     return Feature.failed(seg, joint=self.name)
                 return self._extract(profile, seg)
-        except (ValueError, IndexError, ZeroDivisionError, FloatingPointError,
-                np.linalg.LinAlgError, AttributeError, TypeError) as exc:  # never raise on data
+        except (
+            ValueError,
+            IndexError,
+            ZeroDivisionError,
+            FloatingPointError,
+            np.linalg.LinAlgError,
+            AttributeError,
+            TypeError,
+        ) as exc:  # never raise on data
             return Feature.failed(f"{self.name}: unusable profile ({exc})", joint=self.name)
 
     def _extract(self, profile: Profile, seg: Segments) -> Feature:
@@ -414,12 +436,16 @@ class _Base:
     def _found(self, profile: Profile, point: FloatArray, **kw: Any) -> Feature:
         return Feature.found(point, profile.T_world_sensor, joint=self.name, **kw)
 
-    def _arms(self, seg: Segments, opening_down: bool, min_deg: float, max_deg: float,
-              max_reach_mm: float) -> tuple[Line, Line, FloatArray, float] | str:
+    def _arms(
+        self, seg: Segments, opening_down: bool, min_deg: float, max_deg: float, max_reach_mm: float
+    ) -> tuple[Line, Line, FloatArray, float] | str:
         """The best pair of lines forming a V (opening towards the sensor, -z) or a ridge
         (``opening_down``: the arms fall away from the sensor): (left, right, apex, score)."""
-        groups = [g for g in collinear_groups(seg)
-                  if g.count >= self.min_points and g.extent >= self.min_arm_mm]
+        groups = [
+            g
+            for g in collinear_groups(seg)
+            if g.count >= self.min_points and g.extent >= self.min_arm_mm
+        ]
         sign = 1.0 if opening_down else -1.0
         best: tuple[Line, Line, FloatArray, float] | None = None
         for i, a in enumerate(groups):
@@ -436,10 +462,15 @@ class _Base:
                 (va, na, ga), (vb, nb, gb) = sorted(arms, key=lambda arm: float(arm[0][0]))
                 included = math.degrees(math.acos(float(np.clip(va @ vb, -1, 1))))
                 bis = va + vb
-                ok = (va[0] < 0 < vb[0] and sign * va[1] > 0 and sign * vb[1] > 0
-                      and min_deg <= included <= max_deg
-                      and sign * bis[1] > 0.7 * float(np.hypot(*bis))  # bisector within 45 deg
-                      and -seg.tol <= min(na, nb) and max(na, nb) <= max_reach_mm)
+                ok = (
+                    va[0] < 0 < vb[0]
+                    and sign * va[1] > 0
+                    and sign * vb[1] > 0
+                    and min_deg <= included <= max_deg
+                    and sign * bis[1] > 0.7 * float(np.hypot(*bis))  # bisector within 45 deg
+                    and -seg.tol <= min(na, nb)
+                    and max(na, nb) <= max_reach_mm
+                )
                 score = float(ga.count + gb.count)
                 if ok and (best is None or score > best[3]):
                     best = (ga, gb, x, score)
@@ -465,8 +496,7 @@ class VGrooveExtractor(_Base):
     min_gap_mm: float = 0.05
 
     def _extract(self, profile: Profile, seg: Segments) -> Feature:
-        found = self._arms(seg, False, self.min_angle_deg, self.max_angle_deg,
-                           self.max_gap_mm)
+        found = self._arms(seg, False, self.min_angle_deg, self.max_angle_deg, self.max_gap_mm)
         if isinstance(found, str):
             return Feature.failed(found, joint=self.name)
         left, right, apex, _ = found
@@ -479,10 +509,12 @@ class VGrooveExtractor(_Base):
             seam, gap = apex, 0.0
         else:
             seam = 0.5 * (root_l + root_r)
-        edges = np.array([corner_or_end(left, False, others, seg),
-                          corner_or_end(right, True, others, seg)])
-        return self._found(profile, seam, confidence=_confidence([left, right], seg),
-                           edges_laser=edges, gap_mm=gap)
+        edges = np.array(
+            [corner_or_end(left, False, others, seg), corner_or_end(right, True, others, seg)]
+        )
+        return self._found(
+            profile, seam, confidence=_confidence([left, right], seg), edges_laser=edges, gap_mm=gap
+        )
 
 
 @dataclass(frozen=True)
@@ -496,8 +528,7 @@ class FilletExtractor(_Base):
     max_gap_mm: float = 2.0
 
     def _extract(self, profile: Profile, seg: Segments) -> Feature:
-        found = self._arms(seg, False, self.min_angle_deg, self.max_angle_deg,
-                           self.max_gap_mm)
+        found = self._arms(seg, False, self.min_angle_deg, self.max_angle_deg, self.max_gap_mm)
         if isinstance(found, str):
             return Feature.failed(found, joint=self.name)
         left, right, apex, _ = found
@@ -521,8 +552,14 @@ class OutsideCornerExtractor(_Base):
         return self._found(profile, apex, confidence=_confidence([left, right], seg))
 
 
-def _plates(seg: Segments, min_points: int, min_plate_mm: float, max_tilt_deg: float,
-            min_gap_mm: float, join_hidden: bool) -> list[tuple[Line, bool, bool]]:
+def _plates(
+    seg: Segments,
+    min_points: int,
+    min_plate_mm: float,
+    max_tilt_deg: float,
+    min_gap_mm: float,
+    join_hidden: bool,
+) -> list[tuple[Line, bool, bool]]:
     """Pieces in column order as (line, is_plate, hidden_before).
 
     A plate is within ``max_tilt_deg`` of the y axis and ``min_plate_mm`` long. A plate-like
@@ -548,8 +585,10 @@ def _plates(seg: Segments, min_points: int, min_plate_mm: float, max_tilt_deg: f
             towards_sensor = -1.0 if float(prev.centroid @ prev.normal) > 0 else 1.0
             height = towards_sensor * ((between - prev.centroid) @ prev.normal)
             # In front only (no wall or gap bottom behind the line): a reflection, not a gap.
-            hidden = (int((height > seg.tol).sum()) >= min_points
-                      and int((height < -seg.tol).sum()) < min_points)
+            hidden = (
+                int((height > seg.tol).sum()) >= min_points
+                and int((height < -seg.tol).sum()) < min_points
+            )
             if gap < min_gap_mm or (hidden and join_hidden):
                 idx = np.concatenate([prev.index, ln.index])
                 out[last:] = [[_fit(seg.points, idx), True, out[last][2]]]
@@ -560,17 +599,30 @@ def _plates(seg: Segments, min_points: int, min_plate_mm: float, max_tilt_deg: f
     return [(ln, flat and ln.extent >= min_plate_mm, hid) for ln, flat, hid in out]
 
 
-def _plate_pairs(seg: Segments, min_points: int, min_plate_mm: float, max_tilt_deg: float,
-                 min_gap_mm: float, max_gap_mm: float, join_hidden: bool
-                 ) -> list[tuple[Line, Line, bool]]:
+def _plate_pairs(
+    seg: Segments,
+    min_points: int,
+    min_plate_mm: float,
+    max_tilt_deg: float,
+    min_gap_mm: float,
+    max_gap_mm: float,
+    join_hidden: bool,
+) -> list[tuple[Line, Line, bool]]:
     """Consecutive near-parallel plates (left, right, hidden: a reflection lies between)
     whose facing ends are at most ``max_gap_mm`` apart (walls or nothing may lie between)."""
-    plates = [(ln, hid) for ln, plate, hid in _plates(seg, min_points, min_plate_mm,
-                                                      max_tilt_deg, min_gap_mm, join_hidden)
-              if plate]
-    return [(a, b, hid) for (a, _), (b, hid) in zip(plates[:-1], plates[1:], strict=True)
-            if _angle(a, b) <= math.radians(10)
-            and float(np.hypot(*(b.point(float(b.t[0])) - a.point(float(a.t[-1]))))) <= max_gap_mm]
+    plates = [
+        (ln, hid)
+        for ln, plate, hid in _plates(
+            seg, min_points, min_plate_mm, max_tilt_deg, min_gap_mm, join_hidden
+        )
+        if plate
+    ]
+    return [
+        (a, b, hid)
+        for (a, _), (b, hid) in itertools.pairwise(plates)
+        if _angle(a, b) <= math.radians(10)
+        and float(np.hypot(*(b.point(float(b.t[0])) - a.point(float(a.t[-1]))))) <= max_gap_mm
+    ]
 
 
 @dataclass(frozen=True)
@@ -585,8 +637,15 @@ class SquareButtExtractor(_Base):
     max_tilt_deg: float = 40.0
 
     def _extract(self, profile: Profile, seg: Segments) -> Feature:
-        pairs = _plate_pairs(seg, self.min_points, self.min_plate_mm, self.max_tilt_deg,
-                             self.min_gap_mm, self.max_gap_mm, join_hidden=False)
+        pairs = _plate_pairs(
+            seg,
+            self.min_points,
+            self.min_plate_mm,
+            self.max_tilt_deg,
+            self.min_gap_mm,
+            self.max_gap_mm,
+            join_hidden=False,
+        )
         others = [ln for ln in seg.lines if ln.count >= self.min_points]
         best, best_key = None, (False, 0.0)
         for a, b, hidden in pairs:
@@ -601,8 +660,9 @@ class SquareButtExtractor(_Base):
         a, b, ea, eb = best
         gap = abs(float((eb - ea) @ a.direction))
         conf = _confidence([a, b], seg) * (1.0 if best_key[0] else 0.5)
-        return self._found(profile, 0.5 * (ea + eb), confidence=conf,
-                           edges_laser=np.array([ea, eb]), gap_mm=gap)
+        return self._found(
+            profile, 0.5 * (ea + eb), confidence=conf, edges_laser=np.array([ea, eb]), gap_mm=gap
+        )
 
 
 @dataclass(frozen=True)
@@ -618,8 +678,15 @@ class LapExtractor(_Base):
     max_tilt_deg: float = 40.0
 
     def _extract(self, profile: Profile, seg: Segments) -> Feature:
-        pairs = _plate_pairs(seg, self.min_points, self.min_plate_mm, self.max_tilt_deg,
-                             self.min_gap_mm, self.max_gap_mm, join_hidden=True)
+        pairs = _plate_pairs(
+            seg,
+            self.min_points,
+            self.min_plate_mm,
+            self.max_tilt_deg,
+            self.min_gap_mm,
+            self.max_gap_mm,
+            join_hidden=True,
+        )
         others = [ln for ln in seg.lines if ln.count >= self.min_points]
         best, best_score = None, 0.0
         for a, b, _ in pairs:
@@ -639,15 +706,21 @@ class LapExtractor(_Base):
         # at `shadow`: beyond the foot (away from the top sheet) the corner is in shadow and
         # the foot is the best estimate; otherwise the lower sheet is seen up to the corner.
         away = lower.direction if at_end else -lower.direction
-        ray = Line(np.empty(0, np.intp), np.zeros(2), edge / max(float(np.hypot(*edge)), 1e-300),
-                   np.empty(0), 0.0)
+        ray = Line(
+            np.empty(0, np.intp),
+            np.zeros(2),
+            edge / max(float(np.hypot(*edge)), 1e-300),
+            np.empty(0),
+            0.0,
+        )
         shadow = intersect(ray, lower)
         if shadow is not None and float((shadow - foot) @ away) > 0.0:
             seam = foot
         else:
             seam = corner_or_end(lower, not at_end, others, seg)
-        return self._found(profile, seam, confidence=_confidence([a, b], seg),
-                           edges_laser=edge.reshape(1, 2))
+        return self._found(
+            profile, seam, confidence=_confidence([a, b], seg), edges_laser=edge.reshape(1, 2)
+        )
 
 
 @dataclass(frozen=True)
@@ -666,8 +739,15 @@ class GenericExtractor:
         try:
             with np.errstate(all="ignore"):
                 return self._extract(profile)
-        except (ValueError, IndexError, ZeroDivisionError, FloatingPointError,
-                np.linalg.LinAlgError, AttributeError, TypeError) as exc:
+        except (
+            ValueError,
+            IndexError,
+            ZeroDivisionError,
+            FloatingPointError,
+            np.linalg.LinAlgError,
+            AttributeError,
+            TypeError,
+        ) as exc:
             return Feature.failed(f"generic: unusable profile ({exc})", joint=self.name)
 
     def _extract(self, profile: Profile) -> Feature:
@@ -682,15 +762,22 @@ class GenericExtractor:
         keep = np.abs(p[:, 1] - _median5(p[:, 1])) <= max(6 * sigma, 0.12, 4 * spacing)
         p = p[keep]
         m = len(p)
-        gaps = np.hypot(*np.diff(p, axis=0).T)
-        k = int(np.clip(round(max(self.window_mm, 20 * sigma) / spacing), 4, max(4, m // 4)))
+        d = p[1:] - p[:-1]
+        gaps = np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1])
+        k = min(max(round(max(self.window_mm, 20 * sigma) / spacing), 4), max(4, m // 4))
         if m < 2 * k + 2:
             return Feature.failed("too few points for the slope window", joint=self.name)
         jump_mm = max(6 * spacing, 8 * sigma, 0.1)
         jump = gaps > jump_mm
-        # Window sums -> total-least-squares direction of each k-point window.
-        cs = np.vstack([np.zeros((1, 5)), np.cumsum(np.column_stack(
-            [p[:, 0], p[:, 1], p[:, 0] ** 2, p[:, 1] ** 2, p[:, 0] * p[:, 1]]), axis=0)])
+        # Window sums -> total-least-squares direction of each k-point window (coordinates
+        # centred first, so that the sums do not cancel).
+        q = p - p[m // 2]
+        cs = np.zeros((m + 1, 5))
+        np.cumsum(q[:, 0], out=cs[1:, 0])
+        np.cumsum(q[:, 1], out=cs[1:, 1])
+        np.cumsum(q[:, 0] * q[:, 0], out=cs[1:, 2])
+        np.cumsum(q[:, 1] * q[:, 1], out=cs[1:, 3])
+        np.cumsum(q[:, 0] * q[:, 1], out=cs[1:, 4])
         sy, sz, syy, szz, syz = (cs[k:] - cs[:-k]).T
         cyy, czz, cyz = syy - sy * sy / k, szz - sz * sz / k, syz - sy * sz / k
         theta = 0.5 * np.arctan2(2 * cyz, cyy - czz)
@@ -716,9 +803,14 @@ class GenericExtractor:
                 seam = np.array([hi[0], lo[1]])
             else:
                 seam = 0.5 * (a + b)
-            return Feature.found(seam, profile.T_world_sensor, joint=self.name,
-                                 confidence=0.5, edges_laser=np.array([a, b]),
-                                 gap_mm=float(dy))
+            return Feature.found(
+                seam,
+                profile.T_world_sensor,
+                joint=self.name,
+                confidence=0.5,
+                edges_laser=np.array([a, b]),
+                gap_mm=float(dy),
+            )
         i = int(np.argmax(turn))
         if turn[i] >= min_turn:
             return self._corner(profile, p, i + k, k, float(turn[i]))
@@ -768,13 +860,16 @@ def _load(name: str) -> Any:
             for part in attr.split("."):
                 obj = getattr(obj, part)
         except Exception as exc:  # any import-time error of user code
-            raise PluginError(f"cannot load extractor {name!r}: {exc}", field="extractor.name",
-                              fix="check that the module imports and defines the class "
-                                  "('package.module:Class')") from exc
+            raise PluginError(
+                f"cannot load extractor {name!r}: {exc}",
+                field="extractor.name",
+                fix="check that the module imports and defines the class ('package.module:Class')",
+            ) from exc
         return obj
     try:
-        eps = [ep for ep in importlib.metadata.entry_points(group=ENTRY_POINT_GROUP)
-               if ep.name == name]
+        eps = [
+            ep for ep in importlib.metadata.entry_points(group=ENTRY_POINT_GROUP) if ep.name == name
+        ]
     except Exception:
         eps = []
     if not eps:
@@ -782,9 +877,11 @@ def _load(name: str) -> Any:
     try:
         return eps[0].load()
     except Exception as exc:
-        raise PluginError(f"the plugin extractor {name!r} fails to load: {exc}",
-                          field="extractor.name", fix="reinstall or fix the plugin package"
-                          ) from exc
+        raise PluginError(
+            f"the plugin extractor {name!r} fails to load: {exc}",
+            field="extractor.name",
+            fix="reinstall or fix the plugin package",
+        ) from exc
 
 
 def extractor(name: str, **params: Any) -> FeatureExtractor:
@@ -806,21 +903,31 @@ def extractor(name: str, **params: Any) -> FeatureExtractor:
         parameters).
     """
     if not isinstance(name, str) or not name:
-        raise PluginError(f"extractor name must be a non-empty string, got {name!r}",
-                          field="extractor.name", fix="e.g. 'v-groove'")
+        raise PluginError(
+            f"extractor name must be a non-empty string, got {name!r}",
+            field="extractor.name",
+            fix="e.g. 'v-groove'",
+        )
     target: Any = BUILTIN[name] if name in BUILTIN else _load(name)
     if isinstance(target, type):
         try:
             target = target(**params)
         except TypeError as exc:
-            raise PluginError(f"cannot build extractor {name!r}: {exc}",
-                              field="extractor.params",
-                              fix="pass only the parameters the extractor accepts") from exc
+            raise PluginError(
+                f"cannot build extractor {name!r}: {exc}",
+                field="extractor.params",
+                fix="pass only the parameters the extractor accepts",
+            ) from exc
     elif params:
-        raise PluginError(f"{name!r} is an instance, it takes no parameters",
-                          field="extractor.params", fix="drop the parameters")
+        raise PluginError(
+            f"{name!r} is an instance, it takes no parameters",
+            field="extractor.params",
+            fix="drop the parameters",
+        )
     if not (callable(target) and isinstance(getattr(target, "name", None), str)):
-        raise PluginError(f"{name!r} is not a feature extractor", field="extractor.name",
-                          fix="give the class a 'name' string and a __call__(profile) -> "
-                              "Feature")
-    return target  # type: ignore[no-any-return]
+        raise PluginError(
+            f"{name!r} is not a feature extractor",
+            field="extractor.name",
+            fix="give the class a 'name' string and a __call__(profile) -> Feature",
+        )
+    return target

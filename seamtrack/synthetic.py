@@ -48,8 +48,13 @@ JOINTS = ("square-butt", "v-groove", "fillet", "lap", "outside-corner", "flat")
 
 _DEFAULTS: dict[str, dict[str, float]] = {
     "square-butt": {"gap_mm": 1.0, "misalignment_mm": 0.0, "thickness_mm": 8.0},
-    "v-groove": {"included_angle_deg": 60.0, "gap_mm": 1.0, "root_face_mm": 1.0,
-                 "thickness_mm": 8.0, "misalignment_mm": 0.0},
+    "v-groove": {
+        "included_angle_deg": 60.0,
+        "gap_mm": 1.0,
+        "root_face_mm": 1.0,
+        "thickness_mm": 8.0,
+        "misalignment_mm": 0.0,
+    },
     "fillet": {"web_angle_deg": 90.0},
     "lap": {"thickness_mm": 2.0, "gap_mm": 0.0},
     "outside-corner": {"corner_angle_deg": 90.0},
@@ -101,15 +106,29 @@ class Imperfections:
     bead_width_mm: float = 12.0
 
     def __bool__(self) -> bool:
-        return any((self.noise_mm > 0, self.outlier_fraction > 0, self.dropout_runs > 0,
-                    self.reflection_probability > 0, self.tack_probability > 0,
-                    self.bead_height_mm > 0))
+        return any(
+            (
+                self.noise_mm > 0,
+                self.outlier_fraction > 0,
+                self.dropout_runs > 0,
+                self.reflection_probability > 0,
+                self.tack_probability > 0,
+                self.bead_height_mm > 0,
+            )
+        )
 
     @property
     def random(self) -> bool:
         """True when a random draw is needed (then an rng is required)."""
-        return any((self.noise_mm > 0, self.outlier_fraction > 0, self.dropout_runs > 0,
-                    self.reflection_probability > 0, self.tack_probability > 0))
+        return any(
+            (
+                self.noise_mm > 0,
+                self.outlier_fraction > 0,
+                self.dropout_runs > 0,
+                self.reflection_probability > 0,
+                self.tack_probability > 0,
+            )
+        )
 
 
 @dataclass(frozen=True, eq=False)
@@ -191,8 +210,9 @@ def joint_section(joint: str, **params: float) -> tuple[FloatArray, FloatArray, 
         raise ValueError(f"unknown joint {joint!r}; use one of {', '.join(JOINTS)}")
     unknown = set(params) - set(_DEFAULTS[joint])
     if unknown:
-        raise ValueError(f"{joint} has no parameter(s) {sorted(unknown)}; "
-                         f"it takes {sorted(_DEFAULTS[joint])}")
+        raise ValueError(
+            f"{joint} has no parameter(s) {sorted(unknown)}; it takes {sorted(_DEFAULTS[joint])}"
+        )
     p = {**_DEFAULTS[joint], **params}
     L = _FAR_MM
     no_edges = np.empty((0, 2))
@@ -200,21 +220,29 @@ def joint_section(joint: str, **params: float) -> tuple[FloatArray, FloatArray, 
         return _polyline((-L, 0.0), (L, 0.0)), np.empty(0), no_edges, math.nan
     if joint == "square-butt":
         g, m, t = p["gap_mm"], p["misalignment_mm"], p["thickness_mm"]
-        segs = np.concatenate([_polyline((-L, 0.0), (-g / 2, 0.0), (-g / 2, t)),
-                               _polyline((g / 2, t + m), (g / 2, m), (L, m))])
+        segs = np.concatenate(
+            [
+                _polyline((-L, 0.0), (-g / 2, 0.0), (-g / 2, t)),
+                _polyline((g / 2, t + m), (g / 2, m), (L, m)),
+            ]
+        )
         edges = np.array([[-g / 2, 0.0], [g / 2, m]])
         return segs, np.array([0.0, m / 2]), edges, g
     if joint == "v-groove":
         g, r, t, m = p["gap_mm"], p["root_face_mm"], p["thickness_mm"], p["misalignment_mm"]
         half = math.radians(p["included_angle_deg"]) / 2
         if not (0 < half < math.pi / 2 and 0 <= r < t and g >= 0):
-            raise ValueError("v-groove needs 0 < included_angle_deg < 180 and 0 <= root_face "
-                             "< thickness and gap >= 0")
+            raise ValueError(
+                "v-groove needs 0 < included_angle_deg < 180 and 0 <= root_face "
+                "< thickness and gap >= 0"
+            )
         w2 = g / 2 + (t - r) * math.tan(half)
-        segs = np.concatenate([
-            _polyline((-L, 0.0), (-w2, 0.0), (-g / 2, t - r), (-g / 2, t)),
-            _polyline((g / 2, t + m), (g / 2, t - r + m), (w2, m), (L, m)),
-        ])
+        segs = np.concatenate(
+            [
+                _polyline((-L, 0.0), (-w2, 0.0), (-g / 2, t - r), (-g / 2, t)),
+                _polyline((g / 2, t + m), (g / 2, t - r + m), (w2, m), (L, m)),
+            ]
+        )
         edges = np.array([[-w2, 0.0], [w2, m]])
         return segs, np.array([0.0, t - r + m / 2]), edges, g
     if joint in ("fillet", "outside-corner"):
@@ -229,8 +257,9 @@ def joint_section(joint: str, **params: float) -> tuple[FloatArray, FloatArray, 
         return _polyline((-dy, dz), (0.0, 0.0), (dy, dz)), np.zeros(2), no_edges, math.nan
     # lap
     t, g = p["thickness_mm"], p["gap_mm"]
-    segs = np.concatenate([_polyline((-L, 0.0), (L, 0.0)),
-                           _polyline((L, -g), (0.0, -g), (0.0, -g - t), (L, -g - t))])
+    segs = np.concatenate(
+        [_polyline((-L, 0.0), (L, 0.0)), _polyline((L, -g), (0.0, -g), (0.0, -g - t), (L, -g - t))]
+    )
     return segs, np.zeros(2), np.array([[0.0, -g - t]]), g
 
 
@@ -299,8 +328,12 @@ def _occluded(hits: FloatArray, eye: FloatArray, segs: FloatArray) -> NDArray[np
 
 
 def _rotation(pitch_rad: float, roll_rad: float) -> FloatArray:
-    cp, sp, cr, sr = math.cos(pitch_rad), math.sin(pitch_rad), math.cos(roll_rad), math.sin(
-        roll_rad)
+    cp, sp, cr, sr = (
+        math.cos(pitch_rad),
+        math.sin(pitch_rad),
+        math.cos(roll_rad),
+        math.sin(roll_rad),
+    )
     Ry = np.array([[cp, 0.0, sp], [0.0, 1.0, 0.0], [-sp, 0.0, cp]])
     Rx = np.array([[1.0, 0.0, 0.0], [0.0, cr, -sr], [0.0, sr, cr]])
     return Rx @ Ry
@@ -375,8 +408,9 @@ def synthetic_profile(
     truth : GroundTruth
     """
     if imperfections.random and rng is None:
-        raise ValueError("synthetic_profile: these imperfections need a seeded numpy "
-                         "Generator (rng)")
+        raise ValueError(
+            "synthetic_profile: these imperfections need a seeded numpy Generator (rng)"
+        )
     segs, seam, edges, gap = joint_section(joint, **joint_params)
     params = MappingProxyType({**_DEFAULTS[joint], **joint_params})
     standoff = sensor.range_center_mm if standoff_mm is None else float(standoff_mm)
@@ -389,12 +423,14 @@ def synthetic_profile(
     T[:3, 3] = R @ np.array([0.0, -lateral_offset_mm, -standoff])
     imp = imperfections
 
-    tack = bool(imp.tack_probability > 0 and rng is not None
-                and rng.random() < imp.tack_probability)
+    tack = bool(
+        imp.tack_probability > 0 and rng is not None and rng.random() < imp.tack_probability
+    )
     if tack and seam.size:
         half = imp.tack_width_mm / 2
-        segs = np.concatenate([segs, _arc(seam - [half, 0.0], seam - [0.0, imp.tack_height_mm],
-                                          seam + [half, 0.0])])
+        segs = np.concatenate(
+            [segs, _arc(seam - [half, 0.0], seam - [0.0, imp.tack_height_mm], seam + [half, 0.0])]
+        )
     if imp.bead_height_mm > 0 and seam.size:
         down = np.array([[0.0, 1.0]])
         toes_y = seam[0] + np.array([-0.5, 0.5]) * imp.bead_width_mm
@@ -476,8 +512,9 @@ def _imperfect(
         pick = lit[rng.random(lit.size) < imp.outlier_fraction]
         z[pick] = rng.uniform(sensor.range_near_mm, sensor.range_far_mm, pick.size)
         y[pick] = z[pick] * tan_phi[pick]
-    reflection = bool(imp.reflection_probability > 0 and lit.size
-                      and rng.random() < imp.reflection_probability)
+    reflection = bool(
+        imp.reflection_probability > 0 and lit.size and rng.random() < imp.reflection_probability
+    )
     if reflection:
         length = max(3, round(imp.reflection_fraction * n))
         start = int(rng.integers(0, max(1, n - length)))
@@ -495,5 +532,5 @@ def _imperfect(
     for _ in range(imp.dropout_runs):
         length = int(rng.integers(1, imp.dropout_max_columns + 1))
         start = int(rng.integers(0, max(1, n - length + 1)))
-        reason[start:start + length] = Reason.DROPOUT
+        reason[start : start + length] = Reason.DROPOUT
     return y, z, reflection

@@ -39,8 +39,9 @@ def _lap_shear_bound(truth, step_mm):
 @pytest.mark.parametrize(("pitch_deg", "roll_deg"), TILTS)
 @pytest.mark.parametrize("joint", FAMILIES)
 def test_noise_free_seam_within_resolution(joint, pitch_deg, roll_deg):
-    profile, truth = synthetic_profile(joint, SENSOR, pitch_deg=pitch_deg, roll_deg=roll_deg,
-                                       lateral_offset_mm=0.37)
+    profile, truth = synthetic_profile(
+        joint, SENSOR, pitch_deg=pitch_deg, roll_deg=roll_deg, lateral_offset_mm=0.37
+    )
     feature = extractor(joint)(profile)
     assert feature, feature.reason
     error = float(np.hypot(*(feature.point_laser - truth.seam_laser)))
@@ -57,8 +58,9 @@ def test_noise_free_seam_within_resolution(joint, pitch_deg, roll_deg):
 
 @pytest.mark.parametrize(("pitch_deg", "roll_deg"), [(0.0, 0.0), (15.0, -15.0), (-15.0, 10.0)])
 def test_gapless_v_groove_apex_within_resolution(pitch_deg, roll_deg):
-    profile, truth = synthetic_profile("v-groove", SENSOR, pitch_deg=pitch_deg,
-                                       roll_deg=roll_deg, gap_mm=0.0, root_face_mm=0.0)
+    profile, truth = synthetic_profile(
+        "v-groove", SENSOR, pitch_deg=pitch_deg, roll_deg=roll_deg, gap_mm=0.0, root_face_mm=0.0
+    )
     feature = extractor("v-groove")(profile)
     assert float(np.hypot(*(feature.point_laser - truth.seam_laser))) <= RESOLUTION_MM
     assert feature.gap_mm == 0.0
@@ -70,9 +72,14 @@ def _campaign(joint, imperfections, n, seed):
     errors = []
     for _ in range(n):
         profile, truth = synthetic_profile(
-            joint, SENSOR, rng=rng, imperfections=imperfections,
-            pitch_deg=rng.uniform(-15, 15), roll_deg=rng.uniform(-15, 15),
-            lateral_offset_mm=rng.uniform(-3, 3))
+            joint,
+            SENSOR,
+            rng=rng,
+            imperfections=imperfections,
+            pitch_deg=rng.uniform(-15, 15),
+            roll_deg=rng.uniform(-15, 15),
+            lateral_offset_mm=rng.uniform(-3, 3),
+        )
         f = ex(profile)
         errors.append(float(np.hypot(*(f.point_laser - truth.seam_laser))) if f else math.inf)
     return np.array(errors)
@@ -104,17 +111,24 @@ def test_flat_plate_gives_no_seam_point(name):
     ex = extractor(name)
     found = 0
     for _ in range(100):
-        profile, _ = synthetic_profile("flat", SENSOR, rng=rng, rays=1024,
-                                       imperfections=Imperfections(noise_mm=0.05),
-                                       pitch_deg=rng.uniform(-15, 15),
-                                       roll_deg=rng.uniform(-15, 15))
+        profile, _ = synthetic_profile(
+            "flat",
+            SENSOR,
+            rng=rng,
+            rays=1024,
+            imperfections=Imperfections(noise_mm=0.05),
+            pitch_deg=rng.uniform(-15, 15),
+            roll_deg=rng.uniform(-15, 15),
+        )
         found += bool(ex(profile))
     assert found <= 1
 
 
 # ----------------------------------------------------------------- never raise
-_values = st.one_of(st.floats(allow_nan=True, allow_infinity=True, width=64),
-                    st.sampled_from([0.0, 1e300, -1e300, 91.0, 1e-300]))
+_values = st.one_of(
+    st.floats(allow_nan=True, allow_infinity=True, width=64),
+    st.sampled_from([0.0, 1e300, -1e300, 91.0, 1e-300]),
+)
 
 
 @st.composite
@@ -149,8 +163,10 @@ def test_extractors_never_raise(name, profile):
 
 
 @pytest.mark.parametrize("name", sorted(BUILTIN))
-@pytest.mark.parametrize("points", [np.empty((0, 2)), np.array([[0.0, 90.0]]),
-                                    np.full((50, 2), np.nan), np.full((500, 2), 90.0)])
+@pytest.mark.parametrize(
+    "points",
+    [np.empty((0, 2)), np.array([[0.0, 90.0]]), np.full((50, 2), np.nan), np.full((500, 2), 90.0)],
+)
 def test_degenerate_profiles_fail_with_a_reason(name, points):
     feature = extractor(name)(Profile(points))
     assert not feature and feature.reason
@@ -186,12 +202,15 @@ def test_registry_loads_a_user_class(user_module):
     assert ex(Profile(np.empty((0, 2)))).point_laser[0] == 1.5
 
 
-@pytest.mark.parametrize(("name", "field"), [
-    ("no-such-extractor", "extractor.name"),
-    ("mypkg_st_test:Missing", "extractor.name"),
-    ("no_such_pkg_xyz.mod:Cls", "extractor.name"),
-    ("mypkg_st_test:NotAnExtractor", "extractor.name"),
-])
+@pytest.mark.parametrize(
+    ("name", "field"),
+    [
+        ("no-such-extractor", "extractor.name"),
+        ("mypkg_st_test:Missing", "extractor.name"),
+        ("no_such_pkg_xyz.mod:Cls", "extractor.name"),
+        ("mypkg_st_test:NotAnExtractor", "extractor.name"),
+    ],
+)
 def test_registry_bad_names_raise_plugin_error(user_module, name, field):
     with pytest.raises(PluginError) as info:
         extractor(name)

@@ -25,9 +25,17 @@ def _world(profile):
 def test_v_groove_points_lie_on_the_analytic_planes(pitch_deg, roll_deg):
     # Top z = 0, bevels at half the included angle from the vertical, root faces at |y| = g/2.
     g, r, t, angle = 1.0, 1.0, 8.0, 60.0
-    profile, truth = synthetic_profile("v-groove", IDEAL, pitch_deg=pitch_deg,
-                                       roll_deg=roll_deg, lateral_offset_mm=0.7, gap_mm=g,
-                                       root_face_mm=r, thickness_mm=t, included_angle_deg=angle)
+    profile, truth = synthetic_profile(
+        "v-groove",
+        IDEAL,
+        pitch_deg=pitch_deg,
+        roll_deg=roll_deg,
+        lateral_offset_mm=0.7,
+        gap_mm=g,
+        root_face_mm=r,
+        thickness_mm=t,
+        included_angle_deg=angle,
+    )
     p = _world(profile)
     y, z = np.abs(p[:, 1]), p[:, 2]
     tan_half = math.tan(math.radians(angle / 2))
@@ -42,24 +50,28 @@ def test_v_groove_points_lie_on_the_analytic_planes(pitch_deg, roll_deg):
     assert seam_laser[0] == pytest.approx(0.0, abs=1e-9)
     assert seam_laser[1:3] == pytest.approx(truth.seam_laser, abs=1e-9)
     w2 = g / 2 + (t - r) * tan_half
-    edges_world = np.array([(truth.T_world_sensor @ np.r_[0.0, e, 1.0])[1:3]
-                            for e in truth.edges_laser])
+    edges_world = np.array(
+        [(truth.T_world_sensor @ np.r_[0.0, e, 1.0])[1:3] for e in truth.edges_laser]
+    )
     assert edges_world == pytest.approx(np.array([[-w2, 0.0], [w2, 0.0]]), abs=1e-9)
     assert truth.gap_mm == g
 
 
 @pytest.mark.parametrize(("pitch_deg", "roll_deg"), TILTS)
 def test_fillet_corner_is_where_both_faces_meet(pitch_deg, roll_deg):
-    profile, truth = synthetic_profile("fillet", IDEAL, pitch_deg=pitch_deg, roll_deg=roll_deg,
-                                       web_angle_deg=90.0)
+    profile, truth = synthetic_profile(
+        "fillet", IDEAL, pitch_deg=pitch_deg, roll_deg=roll_deg, web_angle_deg=90.0
+    )
     p = _world(profile)
     # Faces z = -|y| (rising towards the sensor at 45 deg).
     assert np.abs(p[:, 2] + np.abs(p[:, 1])) == pytest.approx(0.0, abs=1e-9)
     assert truth.seam_world[1:] == pytest.approx([0.0, 0.0], abs=1e-12)
     # Intersect the two face lines fitted in the laser plane: the corner is the seam point.
     pts = profile.valid_points
-    left, right = pts[pts[:, 0] < truth.seam_laser[0] - 0.5], pts[pts[:, 0] >
-                                                                   truth.seam_laser[0] + 0.5]
+    left, right = (
+        pts[pts[:, 0] < truth.seam_laser[0] - 0.5],
+        pts[pts[:, 0] > truth.seam_laser[0] + 0.5],
+    )
     (a1, b1), (a2, b2) = np.polyfit(*left.T, 1), np.polyfit(*right.T, 1)
     y = (b2 - b1) / (a1 - a2)
     assert [y, a1 * y + b1] == pytest.approx(truth.seam_laser, abs=1e-6)
@@ -74,8 +86,9 @@ def test_pitch_stretches_range_and_roll_turns_the_profile():
     # Pitch turns the sensor about the reference point, which stays at range z0; the section
     # stays level, and depths below the surface stretch by 1 / cos(pitch).
     assert pitched.valid_points[:, 1] == pytest.approx(z0, abs=1e-9)
-    _, groove = synthetic_profile("v-groove", IDEAL, pitch_deg=15.0, thickness_mm=8.0,
-                                  root_face_mm=1.0)
+    _, groove = synthetic_profile(
+        "v-groove", IDEAL, pitch_deg=15.0, thickness_mm=8.0, root_face_mm=1.0
+    )
     assert groove.seam_laser[1] - z0 == pytest.approx(7.0 / math.cos(math.radians(15)))
     # Roll: the plate line turns by the roll angle in the laser plane.
     slope = np.polyfit(*rolled.valid_points.T, 1)[0]
@@ -100,12 +113,20 @@ def test_square_butt_gap_lets_rays_through_and_walls_are_too_grazing():
 
 @pytest.mark.parametrize("joint", JOINTS)
 def test_imperfections_are_seeded_and_reproducible(joint):
-    imp = Imperfections(noise_mm=0.05, outlier_fraction=0.05, dropout_runs=3,
-                        reflection_probability=1.0, tack_probability=0.5, bead_height_mm=0.0)
-    a, ta = synthetic_profile(joint, SENSOR, rng=np.random.default_rng(7), rays=512,
-                              imperfections=imp)
-    b, tb = synthetic_profile(joint, SENSOR, rng=np.random.default_rng(7), rays=512,
-                              imperfections=imp)
+    imp = Imperfections(
+        noise_mm=0.05,
+        outlier_fraction=0.05,
+        dropout_runs=3,
+        reflection_probability=1.0,
+        tack_probability=0.5,
+        bead_height_mm=0.0,
+    )
+    a, ta = synthetic_profile(
+        joint, SENSOR, rng=np.random.default_rng(7), rays=512, imperfections=imp
+    )
+    b, _tb = synthetic_profile(
+        joint, SENSOR, rng=np.random.default_rng(7), rays=512, imperfections=imp
+    )
     assert np.array_equal(a.points_laser, b.points_laser, equal_nan=True)
     assert ta.reflection and (a.reason == Reason.DROPOUT).any()
 
@@ -118,16 +139,16 @@ def test_random_imperfections_need_a_generator():
 def test_bead_cap_hides_the_groove_and_keeps_the_ground_truth():
     clean, truth = synthetic_profile("v-groove", IDEAL)
     capped, truth_capped = synthetic_profile(
-        "v-groove", IDEAL, imperfections=Imperfections(bead_height_mm=1.5, bead_width_mm=12.0))
+        "v-groove", IDEAL, imperfections=Imperfections(bead_height_mm=1.5, bead_width_mm=12.0)
+    )
     assert truth_capped.seam_laser == pytest.approx(truth.seam_laser)
     # The crown stands 1.5 mm in front of the plate surface (range z0 - 1.5).
-    assert capped.valid_points[:, 1].min() == pytest.approx(IDEAL.range_center_mm - 1.5,
-                                                            abs=1e-3)
+    assert capped.valid_points[:, 1].min() == pytest.approx(IDEAL.range_center_mm - 1.5, abs=1e-3)
     assert capped.valid_points[:, 1].max() < clean.valid_points[:, 1].max() - 5.0
 
 
 def test_lap_seam_is_under_the_top_sheet_edge():
-    profile, truth = synthetic_profile("lap", IDEAL, thickness_mm=2.0, gap_mm=0.5)
+    _profile, truth = synthetic_profile("lap", IDEAL, thickness_mm=2.0, gap_mm=0.5)
     edge_world = truth.T_world_sensor @ np.r_[0.0, truth.edges_laser[0], 1.0]
     assert edge_world[1:3] == pytest.approx([0.0, -2.5])
     assert truth.seam_world[1:] == pytest.approx([0.0, 0.0])
