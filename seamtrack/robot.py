@@ -4,9 +4,10 @@ Each axis is driven independently. The joint vector q is the TCP (torch tip) pos
 base frame {RB}, so ``T_base_tcp(q)`` is a pure translation; the torch keeps its orientation.
 
 Servo model, at the control period dt: the commanded move (a target, a path speed, an optional
-velocity feed-forward) becomes a desired velocity along the straight line to the target; each
-axis then limits that velocity to (i) its velocity limit, (ii) the speed from which it can still
-stop before its position limit, and finally its change to the acceleration limit times dt. The
+velocity feed-forward) becomes a desired velocity along the straight line to the target, scaled
+down as a whole if any axis would exceed its velocity limit; each axis then limits its component
+to the speed from which it can still stop before its position limit, and finally its change
+to the acceleration limit times dt. The
 "can still stop" speed is the exact discrete-time one (:func:`_stop_speed`): braking by a dt per
 tick from it covers exactly d, so no limit is ever crossed. A point-to-point
 move (``stop_at_target``) uses the same law towards its target and lands on it exactly.
@@ -143,6 +144,7 @@ class CartesianRobot:
                 fix="e.g. 0.001 (1 kHz)",
             )
         object.__setattr__(self, "T_world_base", np.asarray(self.T_world_base, dtype=float))
+        object.__setattr__(self, "_T_base_world", frames.invert(self.T_world_base))
         object.__setattr__(self, "T_tcp_sensor", np.asarray(self.T_tcp_sensor, dtype=float))
 
     # ----------------------------------------------------------------- kinematics
@@ -163,7 +165,7 @@ class CartesianRobot:
 
     def q_from_world(self, tcp_world: ArrayLike) -> FloatArray:
         """Joint positions that put the TCP at a world point."""
-        return frames.apply(frames.invert(self.T_world_base), np.asarray(tcp_world, dtype=float))
+        return frames.apply(self._T_base_world, np.asarray(tcp_world, dtype=float))
 
     def reachable(self, tcp_world: ArrayLike) -> NDArray[np.bool_]:
         """(n,) True where world points lie inside the axis travel."""
@@ -195,7 +197,7 @@ class CartesianRobot:
         stop_at_target: bool = False,
     ) -> MoveCommand:
         """Convert a world-frame move to the base frame."""
-        T_base_world = frames.invert(self.T_world_base)
+        T_base_world: FloatArray = self._T_base_world
         q = frames.apply(T_base_world, np.asarray(target_world, dtype=float))
         ff = (0.0, 0.0, 0.0)
         if velocity_ff_world is not None:
@@ -206,6 +208,11 @@ class CartesianRobot:
         )
 
     # ----------------------------------------------------------------- servo
+    def within_travel(self, q: tuple[float, float, float]) -> bool:
+        """True when joint positions lie inside the axis travel (cheap: for the hot loop)."""
+        lo, hi = self.position_min_mm, self.position_max_mm
+        return all(lo[i] - 1e-9 <= q[i] <= hi[i] + 1e-9 for i in range(3))
+
     def state_at(self, q: ArrayLike) -> RobotState:
         """A state at rest at joint positions q (must be inside the travel)."""
         qs = [float(x) for x in np.asarray(q, dtype=float)]
@@ -246,8 +253,15 @@ class CartesianRobot:
                 desired = [ff[0] + ux * speed, ff[1] + uy * speed, ff[2] + uz * speed]
             else:
                 desired = [ff[0], ff[1], ff[2]]
+        # A velocity beyond an axis limit is scaled down as a whole, keeping its direction (as
+        # a Cartesian controller's speed override does); clipping one axis alone would bend
+        # the path.
+        scale = 1.0
         for i in range(3):
-            vd = min(max(desired[i], -vmax[i]), vmax[i])
+            if abs(desired[i]) > vmax[i]:
+                scale = min(scale, vmax[i] / abs(desired[i]))
+        for i in range(3):
+            vd = desired[i] * scale
             # Keep the ability to stop before the axis travel ends.
             if vd > 0.0:
                 vd = min(vd, _stop_speed(hi[i] - q[i], amax[i], dt))

@@ -231,12 +231,22 @@ class Seam:
     @property
     def segment_lengths_mm(self) -> FloatArray:
         """(n-1,) segment lengths."""
-        return np.linalg.norm(np.diff(self.points, axis=0), axis=1)
+        cached = self.__dict__.get("_segment_lengths")
+        if cached is None:
+            cached = np.linalg.norm(np.diff(self.points, axis=0), axis=1)
+            cached.flags.writeable = False
+            self.__dict__["_segment_lengths"] = cached
+        return cached
 
     @property
     def arc_length_mm(self) -> FloatArray:
         """(n,) arc length at each point, starting at 0."""
-        return np.concatenate([[0.0], np.cumsum(self.segment_lengths_mm)])
+        cached = self.__dict__.get("_arc_length")
+        if cached is None:
+            cached = np.concatenate([[0.0], np.cumsum(self.segment_lengths_mm)])
+            cached.flags.writeable = False
+            self.__dict__["_arc_length"] = cached
+        return cached
 
     @property
     def length_mm(self) -> float:
@@ -324,6 +334,26 @@ class Seam:
         if single:
             return Closest(points[0:1], s[0:1], best_dist[0:1], seg[0:1])
         return result
+
+    def closest_near(
+        self, point: ArrayLike, segment_hint: int, window: int = 8
+    ) -> tuple[float, int]:
+        """Arc length and segment of the closest seam point to one point, searching only the
+        segments within ``window`` of ``segment_hint`` (for a point that moves continuously,
+        like the torch). Falls back to :meth:`closest` when the best lies on the window's edge.
+        """
+        n_seg = len(self.points) - 1
+        lo = max(segment_hint - window, 0)
+        hi = min(segment_hint + window + 1, n_seg)
+        a = self.points[lo:hi]
+        d = self.points[lo + 1 : hi + 1] - a
+        dist, t = _point_segment(np.asarray(point, dtype=np.float64)[None, :], a, d)
+        j = int(np.argmin(dist))
+        if (j == 0 and lo > 0) or (j == hi - lo - 1 and hi < n_seg):
+            c = self.closest(point)
+            return float(c.arc_length_mm[0]), int(c.segment[0])
+        seg = lo + j
+        return float(self.arc_length_mm[seg] + t[j] * self.segment_lengths_mm[seg]), seg
 
     def distance(self, query_points: ArrayLike) -> FloatArray:
         """(m,) distance from each query point to the seam (see :meth:`closest`)."""

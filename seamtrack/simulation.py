@@ -154,6 +154,7 @@ def run(parts: Parts, progress: bool = False, seed: int | None = None) -> Result
     last_seen = False
     rest_since: float | None = None
     s_best, t_progress = -math.inf, 0.0
+    seg_hint = int(seam.closest(parts.tcp_start_world).segment[0])
     status = ""
     bar = _progress_bar(progress, cfg.time_limit_s, seam.length_mm)
 
@@ -179,7 +180,7 @@ def run(parts: Parts, progress: bool = False, seed: int | None = None) -> Result
         if cmd is not last_cmd:
             last_cmd = cmd
             move = None if cmd is None else _to_move(robot, cmd)
-            if cmd is not None and not robot.reachable(cmd.target_world).all():
+            if move is not None and not robot.within_travel(move.target):
                 status = "limit_violation"
         tcp_log.extend(tcp)
         target_log.extend(cmd.target_world if cmd is not None else nan3)
@@ -190,7 +191,7 @@ def run(parts: Parts, progress: bool = False, seed: int | None = None) -> Result
         if tick % check_every == 0:
             at_rest = math.sqrt(sum(v * v for v in state.v)) <= constants.AT_REST_SPEED_MM_S
             rest_since = (rest_since if rest_since is not None else t) if at_rest else None
-            s_now = float(seam.closest(tcp).arc_length_mm[0])
+            s_now, seg_hint = seam.closest_near(tcp, seg_hint)
             if s_now > s_best + constants.PROGRESS_EPS_MM:
                 s_best, t_progress = s_now, t
             if rest_since is not None and t - rest_since >= rest_window and not last_seen:
@@ -275,6 +276,10 @@ def _trace(
         arc_on = np.flatnonzero(closest.arc_length_mm >= s_first - constants.PROGRESS_EPS_MM)
         if len(arc_on):
             welding[arc_on[0] :] = True
+        # Past the seam's end the torch is off the joint: that is overrun, not welding.
+        at_end = np.flatnonzero(closest.arc_length_mm >= seam.length_mm - 1e-9)
+        if len(at_end):
+            welding[at_end[0] + 1 :] = False
     return Trace(
         t_s=np.arange(n, dtype=np.float64) * dt,
         tcp_world=tcp,
@@ -338,6 +343,8 @@ def _summary(
     frame_ticks = frame_ticks[frame_ticks < len(weld)]
     at_frames = trace.error_mm[frame_ticks[weld[frame_ticks]]]
     s_max = float(np.max(trace.arc_length_mm)) if len(trace.arc_length_mm) else 0.0
+    past_end = trace.arc_length_mm >= seam.length_mm - 1e-9
+    overrun = float(np.max(trace.error_mm[past_end])) if past_end.any() else 0.0
     return {
         "status": status,
         **stats,
@@ -350,6 +357,7 @@ def _summary(
         "seam_length_mm": seam.length_mm,
         "welded_length_mm": welded,
         "completed_fraction": min(1.0, s_max / seam.length_mm),
+        "overrun_mm": overrun,
         "mean_speed_mm_s": mean_speed,
         "speed_kept_fraction": speed_kept,
         "welding_speed_mm_s": cfg.welding_speed_mm_s,

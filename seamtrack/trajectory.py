@@ -73,6 +73,9 @@ class TrajectoryTracker:
     def reset(self, context: TrackerContext) -> None:
         self.speed = context.welding_speed_mm_s
         self.dt = context.control_period_s
+        # The set-point accelerates no faster than the weakest axis can follow.
+        self.accel = 0.9 * float(np.min(context.acceleration_max_world))
+        self._v_set = 0.0
         start = np.asarray(context.tcp_start_world, dtype=float)
         self._raw: list[FloatArray] = [start]
         self._path: list[FloatArray] = [start]
@@ -108,13 +111,20 @@ class TrajectoryTracker:
         self._tcp_now = tcp_world
         if not self._seen_seam:
             return None
-        s_end = self._s[-1] - (0.0 if self._lost else self.end_margin_mm)
-        s_limit = s_end + (self.bridge_mm if self._lost else 0.0)
-        s_next = min(self._s_set + self.speed * self.dt, s_limit)
-        moving = s_next > self._s_set
-        self._s_set = max(self._s_set, s_next)
+        # The set-point may run up to bridge_mm past the newest stored point: while the seam is
+        # in view the path grows ahead of it, and when it is lost this is the bridge. Braking
+        # room to that limit is what lets it keep speed with a short look-ahead.
+        s_limit = self._s[-1] - (0.0 if self._lost else self.end_margin_mm) + self.bridge_mm
+        # Set-point speed: ramp up at the acceleration limit, brake to stop at s_limit.
+        room = max(s_limit - self._s_set, 0.0)
+        self._v_set = min(
+            self._v_set + self.accel * self.dt, self.speed, math.sqrt(2.0 * self.accel * room)
+        )
+        step = min(self._v_set * self.dt, room)
+        moving = step > 0.0
+        self._s_set += step
         target, tangent = self._at(self._s_set)
-        ff = tangent * self.speed if moving else np.zeros(3)
+        ff = tangent * (step / self.dt)
         error = float(np.linalg.norm(target - tcp_world))
         return Command(
             target, self.gain_1_s * error, velocity_ff_world=ff, stop_at_target=not moving
@@ -134,22 +144,30 @@ class TrajectoryTracker:
         return a + (s - knots[i]) * direction, direction
 
     def _smooth_tail(self) -> None:
-        """Refit the stored points near the newest one with a moving least-squares line."""
+        """Refit the stored points whose window the newest point entered: a least-squares line
+        through the raw points within +-smoothing_mm (arc length), evaluated at the point."""
         h = self.smoothing_mm
         if h <= 0 or len(self._raw) < 3:
             return
-        s = np.asarray(self._s)
-        raw = np.asarray(self._raw)
-        lo = bisect.bisect_left(self._s, self._s[-1] - 2 * h)
-        for i in range(max(lo, 1), len(self._s)):
-            window = (s >= s[i] - h) & (s <= s[i] + h)
-            window[0] = False  # the start pose is not a seam point
-            if window.sum() < 3:
-                continue
-            ds = s[window] - s[i]
-            design = np.column_stack([np.ones_like(ds), ds])
-            coef, *_ = np.linalg.lstsq(design, raw[window], rcond=None)
-            self._path[i] = coef[0]
+        s_last = self._s[-1]
+        first = max(bisect.bisect_left(self._s, s_last - 2 * h), 1)  # index 0 is the start pose
+        s = np.asarray(self._s[first:])
+        raw = np.asarray(self._raw[first:])
+        targets = np.flatnonzero(s >= s_last - h)
+        ds = s[None, :] - s[targets, None]  # (m, n): offsets of the window points
+        w = (np.abs(ds) <= h).astype(float)
+        n = w.sum(axis=1)
+        sx = (w * ds).sum(axis=1)
+        sxx = (w * ds * ds).sum(axis=1)
+        sy = w @ raw
+        sxy = (w * ds) @ raw
+        det = n * sxx - sx * sx
+        ok = (n >= 3) & (det > 1e-12 * np.maximum(n * sxx, 1e-300))
+        # The fitted line's value at ds = 0 (its intercept).
+        fitted = (sxx[:, None] * sy - sx[:, None] * sxy) / np.where(ok, det, 1.0)[:, None]
+        for k, i in enumerate(targets):
+            if ok[k]:
+                self._path[first + i] = fitted[k]
 
     def _trim(self) -> None:
         """Drop stored points more than ``buffer_mm`` behind the set-point."""

@@ -105,3 +105,13 @@ def test_csv_with_nan_names_the_file(tmp_path) -> None:
     path.write_text("x_mm,y_mm,z_mm\n0,0,0\n1,nan,0\n2,0,0\n")
     with pytest.raises(SeamError, match="bad.csv"):
         Seam.from_csv(path)
+
+
+def test_closest_near_matches_the_global_search(paper_seam: Seam) -> None:
+    rng = np.random.default_rng(5)
+    s = np.sort(rng.uniform(0, paper_seam.length_mm, 300))
+    path = paper_seam.interpolate(s) + rng.normal(0, 0.5, (300, 3))
+    hint = 0
+    for p in path:
+        s_near, hint = paper_seam.closest_near(p, hint)
+        assert s_near == pytest.approx(float(paper_seam.closest(p).arc_length_mm[0]), abs=1e-9)
