@@ -116,6 +116,7 @@ class CartesianRobot:
     control_period_s: float = 1e-3
     T_world_base: FloatArray = field(default_factory=lambda: np.eye(4))
     T_tcp_sensor: FloatArray = field(default_factory=lambda: np.eye(4))
+    _T_base_world: FloatArray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         for key in ("velocity_max_mm_s", "acceleration_max_mm_s2"):
