@@ -1,0 +1,374 @@
+"""Split-and-merge line segmentation of stripe profiles: the front end of the extractors.
+
+:func:`segment_profile` drops isolated outliers against a 5-point running median, estimates the
+noise from second differences, cuts the profile at jumps, splits each run by Douglas-Peucker at a
+noise-scaled tolerance, merges neighbours that fit one line, and refits each piece by total
+least squares on its inliers. :func:`collinear_groups`, :func:`intersect` and
+:func:`corner_or_end` are the geometry the family extractors build on.
+
+Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groove).
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from .profiles import Profile
+
+FloatArray = NDArray[np.float64]
+#: Coordinates beyond this (mm) are not measurements: treated as invalid.
+_MAX_ABS_MM = 1e6
+
+
+def _median5(z: FloatArray) -> FloatArray:
+    """Running median of 5 (edges: the nearest full window), by a min/max network."""
+    if len(z) < 5:
+        return np.full_like(z, np.median(z))
+    a, b, c, d, e = z[:-4], z[1:-3], z[2:-2], z[3:-1], z[4:]
+    f = np.maximum(np.minimum(a, b), np.minimum(c, d))
+    g = np.minimum(np.maximum(a, b), np.maximum(c, d))
+    med = np.maximum(np.minimum(e, f), np.minimum(np.maximum(e, f), g))
+    return np.concatenate([np.full(2, med[0]), med, np.full(2, med[-1])])
+
+
+@dataclass
+class Line:
+    """A straight piece of a profile (internal to the extractors; mutable while built).
+
+    ``index`` are the inliers' positions in the kept points (column order); ``direction``
+    points along increasing column; ``t`` are the inliers' coordinates along it.
+    """
+
+    index: NDArray[np.intp]
+    centroid: FloatArray
+    direction: FloatArray
+    t: FloatArray
+    rms: float
+
+    @property
+    def normal(self) -> FloatArray:
+        return np.array([-self.direction[1], self.direction[0]])
+
+    @property
+    def count(self) -> int:
+        return len(self.index)
+
+    @property
+    def extent(self) -> float:
+        return float(self.t[-1] - self.t[0]) if len(self.t) else 0.0
+
+    def point(self, t: float) -> FloatArray:
+        return self.centroid + t * self.direction
+
+    def step(self, at_end: bool) -> float:
+        """Mean spacing of the last (``at_end``) or first ten inliers along the line."""
+        k = min(10, len(self.t) - 1)
+        if k < 1:
+            return 0.0
+        t = self.t
+        return float(abs(t[-1] - t[-1 - k]) if at_end else abs(t[k] - t[0])) / k
+
+    def end(self, at_end: bool) -> FloatArray:
+        """The line's end half a spacing beyond its last (first) inlier."""
+        half = 0.5 * self.step(at_end)
+        return self.point(float(self.t[-1] + half if at_end else self.t[0] - half))
+
+
+def _fit(points: FloatArray, index: NDArray[np.intp]) -> Line:
+    """Total-least-squares line through ``points[index]`` (column order kept)."""
+    p = points[index]
+    c = p.mean(axis=0)
+    q = p - c
+    syy, szz, syz = float(q[:, 0] @ q[:, 0]), float(q[:, 1] @ q[:, 1]), float(q[:, 0] @ q[:, 1])
+    theta = 0.5 * math.atan2(2.0 * syz, syy - szz)
+    u = np.array([math.cos(theta), math.sin(theta)])
+    if u @ (p[-1] - p[0]) < 0:
+        u = -u
+    t = q @ u
+    r = q @ np.array([-u[1], u[0]])
+    return Line(index, c, u, t, float(np.sqrt(np.mean(r * r))))
+
+
+@dataclass
+class Segments:
+    """What :func:`segment_profile` found: kept points, noise and straight pieces."""
+
+    points: FloatArray  # (m, 2) kept points, column order
+    sigma: float  # noise estimate (mm)
+    tol: float  # split / inlier tolerance (mm)
+    spacing: float  # median distance between neighbouring points (mm)
+    lines: list[Line]
+
+
+def kept_points(profile: Profile) -> FloatArray:
+    """(m, 2) valid, finite, bounded points of a profile, in column order."""
+    pts = np.asarray(profile.points_laser, dtype=np.float64).reshape(-1, 2)
+    valid = np.asarray(profile.valid, dtype=bool).reshape(-1)
+    if valid.shape != (len(pts),):
+        return np.empty((0, 2))
+    a = np.abs(pts)
+    return pts[valid & (a[:, 0] < _MAX_ABS_MM) & (a[:, 1] < _MAX_ABS_MM)]  # NaN fails too
+
+
+def _median(x: FloatArray) -> float:
+    """Upper median, without ``np.median``'s overhead (0 for an empty array)."""
+    n = len(x)
+    return float(np.partition(x, n // 2)[n // 2]) if n else 0.0
+
+
+def _spacing(points: FloatArray) -> float:
+    """Typical distance between neighbouring columns (mm): the median lateral step, which
+    range noise does not inflate (the median absolute step when the profile is vertical)."""
+    d = np.abs(np.diff(points, axis=0))
+    lateral = _median(d[:, 0])
+    return lateral if lateral > 0 else _median(np.hypot(d[:, 0], d[:, 1]))
+
+
+def noise_sigma(points: FloatArray) -> float:
+    """Robust noise estimate (mm) in range z_L, where a triangulation sensor's noise lies:
+    1.4826 median |second difference of z_L| / sqrt(6). On lines sampled at even spacing the
+    second differences are noise only; corners and jumps are few."""
+    if len(points) < 3:
+        return 0.0
+    z = points[:, 1]
+    return 1.4826 / math.sqrt(6.0) * _median(np.abs(z[2:] - 2.0 * z[1:-1] + z[:-2]))
+
+
+def segment_profile(
+    profile: Profile,
+    *,
+    min_tol_mm: float = 0.03,
+    sigma_factor: float = 5.0,
+    min_points: int = 8,
+    max_lines: int = 64,
+) -> Segments | str:
+    """Split-and-merge a profile into straight pieces, or say why not (a ``str``).
+
+    Parameters
+    ----------
+    profile : Profile
+    min_tol_mm : float
+        Floor of the split tolerance (covers pixel quantization).
+    sigma_factor : float
+        Split tolerance = max(min_tol_mm, sigma_factor * estimated noise).
+    min_points : int
+        Pieces with fewer inliers are dropped.
+    max_lines : int
+        More pieces than this means there is no line structure: give up.
+    """
+    p = kept_points(profile)
+    if len(p) < 2 * min_points:
+        return f"too few valid points ({len(p)})"
+    # Isolated outliers first: they would split lines and bias the noise estimate.
+    sigma = noise_sigma(p)
+    spacing = _spacing(p)
+    if not spacing > 0:
+        return "the valid points do not spread out (constant profile)"
+    dev = np.abs(p[:, 1] - _median5(p[:, 1]))
+    p = p[dev <= max(6.0 * sigma, 4.0 * min_tol_mm, 4.0 * spacing)]
+    sigma = noise_sigma(p)
+    tol = max(min_tol_mm, sigma_factor * sigma)
+    gaps = np.hypot(*np.diff(p, axis=0).T)
+    cuts = np.flatnonzero(gaps > max(6.0 * spacing, 2.0 * tol, 0.1)) + 1
+    bounds = np.concatenate([[0], cuts, [len(p)]])
+    pieces: list[tuple[int, int]] = []
+    for lo, hi in itertools.pairwise(bounds):
+        if hi - lo >= min_points:
+            run = _split(p, int(lo), int(hi) - 1, tol, max_lines)
+            if run is None:
+                return "no straight pieces (too noisy or curved)"
+            pieces.extend(_refine(p, _merge(p, run, tol), sigma, min_tol_mm, min_points))
+        if len(pieces) > max_lines:
+            return "no straight pieces (too noisy or curved)"
+    lines = []
+    trim = max(3.0 * sigma, 0.5 * min_tol_mm)
+    for lo, hi in pieces:
+        idx = np.arange(lo, hi + 1)
+        line = _fit(p, idx)
+        resid = np.abs((p[idx] - line.centroid) @ line.normal)
+        idx = idx[resid <= trim]
+        if len(idx) >= min_points:
+            lines.append(_fit(p, idx))
+    if not lines:
+        return "no straight pieces with enough points"
+    return Segments(p, sigma, tol, spacing, lines)
+
+
+def _best_split(q: FloatArray, min_size: int) -> tuple[int, float, float]:
+    """Best split of ordered points into two lines: (b, cost of q[:b] + q[b:], cost of q).
+
+    Costs are total-least-squares sums of squared residuals, for every b at once from
+    prefix sums (O(n)).
+    """
+    k = len(q)
+    q = q - q.mean(axis=0)
+    cols = np.column_stack(
+        [np.ones(k), q[:, 0], q[:, 1], q[:, 0] ** 2, q[:, 1] ** 2, q[:, 0] * q[:, 1]]
+    )
+    pre = np.cumsum(cols, axis=0)
+    total = pre[-1]
+
+    def cost(s: FloatArray) -> FloatArray:
+        n = np.maximum(s[..., 0], 1.0)
+        cyy = s[..., 3] - s[..., 1] ** 2 / n
+        czz = s[..., 4] - s[..., 2] ** 2 / n
+        cyz = s[..., 5] - s[..., 1] * s[..., 2] / n
+        return np.maximum(0.5 * (cyy + czz) - np.hypot(0.5 * (cyy - czz), cyz), 0.0)
+
+    b = np.arange(min_size, k - min_size + 1)
+    if b.size == 0:
+        c = float(cost(total))
+        return k, c, c
+    left = pre[b - 1]
+    both = cost(left) + cost(total - left)
+    i = int(np.argmin(both))
+    return int(b[i]), float(both[i]), float(cost(total))
+
+
+def _refine(
+    p: FloatArray,
+    pieces: list[tuple[int, int]],
+    sigma: float,
+    min_tol_mm: float,
+    min_points: int,
+    min_kink_deg: float = 5.0,
+) -> list[tuple[int, int]]:
+    """Place each corner between neighbouring pieces at the best two-line split (DP's split
+    point strays under noise), and split a run's end pieces at a kink too small for DP's
+    tolerance (a root face seen at a slant) when that explains the points much better."""
+    out = [list(piece) for piece in pieces]
+    for left, right in itertools.pairwise(out):
+        lo, hi = left[0], right[1] + 1
+        if hi - lo >= 6:
+            cut = lo + _best_split(p[lo:hi], 3)[0]
+            left[1], right[0] = cut - 1, cut
+    significant = 30.0 * max(sigma, min_tol_mm / 5.0) ** 2
+    result: list[tuple[int, int]] = []
+    for i, (lo, hi) in enumerate(out):
+        cuts = []
+        if hi - lo + 1 >= 4 * min_points:
+            mid = (lo + hi) // 2
+            halves = ([(lo, mid + 1)] if i == 0 else []) + (
+                [(mid, hi + 1)] if i == len(out) - 1 else []
+            )
+            for h_lo, h_hi in halves:
+                b, split, single = _best_split(p[h_lo:h_hi], min_points)
+                if single - split > significant:
+                    cut = h_lo + b
+                    kink = _angle(_fit(p, np.arange(lo, cut)), _fit(p, np.arange(cut, hi + 1)))
+                    if kink > math.radians(min_kink_deg):
+                        cuts.append(cut)
+        bounds = [lo, *sorted(cuts), hi + 1]
+        result += [(a, b - 1) for a, b in itertools.pairwise(bounds) if b > a]
+    return result
+
+
+def _chord_distance(p: FloatArray, a: int, b: int) -> FloatArray:
+    chord = p[b] - p[a]
+    norm = math.hypot(chord[0], chord[1])
+    q = p[a + 1 : b] - p[a]
+    if norm == 0.0:
+        return np.hypot(q[:, 0], q[:, 1])
+    return np.abs(q[:, 0] * chord[1] - q[:, 1] * chord[0]) / norm
+
+
+def _split(p: FloatArray, lo: int, hi: int, tol: float, limit: int) -> list[tuple[int, int]] | None:
+    """Douglas-Peucker: inclusive index ranges whose points lie within ``tol`` of the chord."""
+    out, stack = [], [(lo, hi)]
+    while stack:
+        a, b = stack.pop()
+        if b - a < 2:
+            out.append((a, b))
+            continue
+        d = _chord_distance(p, a, b)
+        k = int(np.argmax(d))
+        if d[k] > tol:
+            stack += [(a + 1 + k, b), (a, a + 1 + k)]
+        else:
+            out.append((a, b))
+        if len(out) + len(stack) > limit:
+            return None
+    return out
+
+
+def _merge(p: FloatArray, pieces: list[tuple[int, int]], tol: float) -> list[tuple[int, int]]:
+    """Join neighbouring pieces whose union still fits one line within ``tol``."""
+    merged = [pieces[0]]
+    for lo, hi in pieces[1:]:
+        a = merged[-1][0]
+        line = _fit(p, np.arange(a, hi + 1))
+        if np.max(np.abs((p[a : hi + 1] - line.centroid) @ line.normal)) <= tol:
+            merged[-1] = (a, hi)
+        else:
+            merged.append((lo, hi))
+    return merged
+
+
+def collinear_groups(seg: Segments, max_angle_deg: float = 30.0) -> list[Line]:
+    """Join pieces that lie on one line, across gaps and interruptions (refit on the union).
+
+    Pieces are taken from the best supported down; each joins the largest earlier group
+    whose line holds both its ends within the tolerance (directions within
+    ``max_angle_deg``), so a short piece at a corner cannot bridge two lines.
+    """
+    order = sorted(range(len(seg.lines)), key=lambda i: -seg.lines[i].count)
+    anchors: list[Line] = []
+    members: list[list[NDArray[np.intp]]] = []
+    cos_max = math.cos(math.radians(max_angle_deg))
+    for i in order:
+        ln = seg.lines[i]
+        ends = np.array([ln.point(float(ln.t[0])), ln.point(float(ln.t[-1]))])
+        for k, anchor in enumerate(anchors):
+            if (
+                abs(float(anchor.direction @ ln.direction)) >= cos_max
+                and np.abs((ends - anchor.centroid) @ anchor.normal).max() <= seg.tol
+            ):
+                members[k].append(ln.index)
+                break
+        else:
+            anchors.append(ln)
+            members.append([ln.index])
+    return [
+        a if len(m) == 1 else _fit(seg.points, np.sort(np.concatenate(m)))
+        for a, m in zip(anchors, members, strict=True)
+    ]
+
+
+def intersect(a: Line, b: Line) -> FloatArray | None:
+    """(2,) crossing of two lines, or None when (nearly) parallel."""
+    d = a.direction[0] * b.direction[1] - a.direction[1] * b.direction[0]
+    if abs(d) < 1e-9:
+        return None
+    w = b.centroid - a.centroid
+    s = (w[0] * b.direction[1] - w[1] * b.direction[0]) / d
+    return a.point(s)
+
+
+def _angle(a: Line, b: Line) -> float:
+    """Unsigned angle between two lines (rad, in [0, pi/2])."""
+    return math.acos(min(1.0, abs(float(a.direction @ b.direction))))
+
+
+def corner_or_end(line: Line, at_end: bool, others: list[Line], seg: Segments) -> FloatArray:
+    """Where ``line`` ends: its crossing with a neighbour that meets it there (a visible
+    corner, exact), else half a spacing beyond its last inlier (the edge lies between rays)."""
+    tip = line.point(float(line.t[-1] if at_end else line.t[0]))
+    reach = 3.0 * max(line.step(at_end), seg.spacing) + seg.tol
+    best, best_d = None, math.inf
+    for other in others:
+        if other is line or _angle(line, other) < math.radians(20):
+            continue
+        x = intersect(line, other)
+        if x is None:
+            continue
+        d = float(np.hypot(*(x - tip)))
+        near_other = min(float(np.hypot(*(other.point(float(other.t[k])) - x))) for k in (0, -1))
+        reach_other = 3.0 * max(other.step(True), other.step(False), seg.spacing) + seg.tol
+        if d <= reach and near_other <= reach_other and d < best_d:
+            best, best_d = x, d
+    return line.end(at_end) if best is None else best
