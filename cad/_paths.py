@@ -9,7 +9,7 @@ path, so the seam edge of the solid reproduces the path within the sweep toleran
 
 Paths (``path=``): ``"straight"`` (+X from the origin), ``"arc"`` (circular, turning left in
 the XY plane), ``"paper"`` (Eq. 15-17: X = 0..L, Y = 10 cos(pi X/200), Z = 10 sin(pi X/200),
-interpolated through 1 mm samples with exact end tangents), ``"corner"`` (two straight legs in
+interpolated through 2 mm samples with exact end tangents), ``"corner"`` (two straight legs in
 the XY plane with a sharp turn).
 
 The result of every ``build(**params)`` is a :class:`Joint`.
@@ -32,7 +32,7 @@ PATHS = ("straight", "arc", "paper", "corner")
 SWEEP_TOL_MM = 1e-7
 
 #: Spacing of the samples the paper curve is interpolated through (mm).
-PAPER_SAMPLE_MM = 1.0
+PAPER_SAMPLE_MM = 2.0
 
 Profile = Sequence[tuple[float, float]]
 
@@ -112,18 +112,22 @@ def path_wire(
     if not length > 0:
         raise ParamError("seam_length_mm", f"must be > 0, got {length}")
     if path == "straight":
-        return cq.Wire.assembleEdges([cq.Edge.makeLine(cq.Vector(0, 0, 0), cq.Vector(length, 0, 0))])
+        return cq.Wire.assembleEdges(
+            [cq.Edge.makeLine(cq.Vector(0, 0, 0), cq.Vector(length, 0, 0))]
+        )
     if path == "arc":
         if not arc_radius_mm > 0:
             raise ParamError("arc_radius_mm", f"must be > 0, got {arc_radius_mm}")
         angle = length / arc_radius_mm
         if angle >= 2 * math.pi:
             raise ParamError("seam_length_mm", "an arc seam must be shorter than its full circle")
-        mid = cq.Vector(arc_radius_mm * math.sin(angle / 2), arc_radius_mm * (1 - math.cos(angle / 2)), 0)
+        mid = cq.Vector(
+            arc_radius_mm * math.sin(angle / 2), arc_radius_mm * (1 - math.cos(angle / 2)), 0
+        )
         end = cq.Vector(arc_radius_mm * math.sin(angle), arc_radius_mm * (1 - math.cos(angle)), 0)
         return cq.Wire.assembleEdges([cq.Edge.makeThreePointArc(cq.Vector(0, 0, 0), mid, end)])
     if path == "paper":
-        n = max(2, int(math.ceil(length / PAPER_SAMPLE_MM)))
+        n = max(2, math.ceil(length / PAPER_SAMPLE_MM))
         xs = [length * i / n for i in range(n + 1)]
         pts = [cq.Vector(*paper_xyz(x)) for x in xs]
         k = math.pi / 200.0
@@ -166,6 +170,80 @@ def check_lateral_extent(
                 "seam_length_mm",
                 f"each corner leg ({half:.1f} mm) must exceed the mitre reach {reach:.1f} mm",
             )
+
+
+def _frame(tangent: Sequence[float]) -> tuple[list[float], list[float]]:
+    """Profile axes (u, v) for a path tangent: v = +Z made orthogonal to it, u = v x T."""
+    t = cq.Vector(*tangent).normalized()
+    v = (cq.Vector(0, 0, 1) - t * t.z).normalized()
+    u = v.cross(t).normalized()
+    return [u.x, u.y, u.z], [v.x, v.y, v.z]
+
+
+def _paper_rail(x_mm: float, u: float, v: float) -> tuple[float, float, float]:
+    """Point of the profile vertex (u, v) in the frame at X = x_mm on the paper curve."""
+    k = math.pi / 200.0
+    c = paper_xyz(x_mm)
+    u_axis, v_axis = _frame((1.0, -10.0 * k * math.sin(k * x_mm), 10.0 * k * math.cos(k * x_mm)))
+    return (
+        c[0] + u * u_axis[0] + v * v_axis[0],
+        c[1] + u * u_axis[1] + v * v_axis[1],
+        c[2] + u * u_axis[2] + v * v_axis[2],
+    )
+
+
+def sweep_paper(
+    profiles: Sequence[Profile],
+    length_mm: float,
+    seam_uv: dict[str, tuple[float, float]],
+) -> tuple[cq.Shape, dict[str, list[cq.Edge]]]:
+    """Profiles along the paper curve, built from the exact parametrization.
+
+    Every profile vertex traces a rail, computed exactly at X steps of ``PAPER_SAMPLE_MM`` and
+    interpolated by a cubic B-spline with exact end derivatives (all rails share the
+    parameter X, so the faces between neighbouring rails are exactly ruled, degree 3 x 1).
+    The seam rail (0, 0) is the paper curve itself, within ~1e-5 mm. Sweeping with
+    ``MakePipeShell`` instead gives degree-11 surfaces that mesh 10-100x slower.
+    """
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeSolid, BRepBuilderAPI_Sewing
+    from OCP.BRepFill import BRepFill
+    from OCP.TopoDS import TopoDS
+
+    n = max(4, math.ceil(length_mm / PAPER_SAMPLE_MM))
+    xs = [length_mm * i / n for i in range(n + 1)]
+    step = 1e-4
+
+    def rail(u: float, v: float) -> cq.Edge:
+        pts = [cq.Vector(*_paper_rail(x, u, v)) for x in xs]
+        ends = []
+        for x in (0.0, length_mm):
+            a, b = _paper_rail(x - step, u, v), _paper_rail(x + step, u, v)
+            ends.append(cq.Vector(*((q - p) / (2 * step) for p, q in zip(a, b, strict=True))))
+        return cq.Edge.makeSpline(pts, tangents=ends, parameters=xs, scale=False, tol=1e-9)
+
+    solids: list[cq.Solid] = []
+    rails: dict[tuple[float, float], cq.Edge] = {}
+    for profile in profiles:
+        edges = [rail(u, v) for u, v in profile]
+        rails.update({(u, v): e for (u, v), e in zip(profile, edges, strict=True)})
+        sewing = BRepBuilderAPI_Sewing(1e-6)
+        for a, b in zip(edges, edges[1:] + edges[:1], strict=True):
+            sewing.Add(BRepFill.Face_s(a.wrapped, b.wrapped))
+        for end in (0.0, 1.0):
+            corners = [e.positionAt(end) for e in edges]
+            sewing.Add(cq.Face.makeFromWires(cq.Wire.makePolygon(corners, close=True)).wrapped)
+        sewing.Perform()
+        maker = BRepBuilderAPI_MakeSolid(TopoDS.Shell_s(sewing.SewedShape()))
+        solid = cq.Solid(maker.Solid())
+        if solid.Volume() < 0:
+            solid = cq.Solid(solid.wrapped.Reversed())
+        solids.append(solid)
+    shape: cq.Shape = solids[0] if len(solids) == 1 else cq.Compound.makeCompound(solids)
+    seams: dict[str, list[cq.Edge]] = {}
+    for name, uv in seam_uv.items():
+        mid = rails[uv].positionAt(0.5)
+        seams[name] = [min(shape.Edges(), key=lambda e: (e.positionAt(0.5) - mid).Length)]
+    return shape, seams
 
 
 def _start_frame(wire: cq.Wire) -> tuple[cq.Vector, cq.Vector, cq.Vector]:
@@ -243,7 +321,8 @@ def _order_along(edges: list[cq.Edge], start: cq.Vector) -> list[cq.Edge]:
     ordered: list[cq.Edge] = []
     point = start
     while remaining:
-        def gap(e: cq.Edge) -> float:
+
+        def gap(e: cq.Edge, point: cq.Vector = point) -> float:
             return min((e.startPoint() - point).Length, (e.endPoint() - point).Length)
 
         nxt = min(remaining, key=gap)
@@ -310,7 +389,10 @@ def finish(
     """Path, lateral checks, sweep, tacks, validity: the tail every family shares."""
     wire = path_wire(path, seam_length_mm, arc_radius_mm, corner_angle_deg)
     check_lateral_extent(path, profiles, seam_length_mm, arc_radius_mm, corner_angle_deg)
-    shape, seams = sweep(profiles, wire, seam_uv)
+    if path == "paper":
+        shape, seams = sweep_paper(profiles, default_length(path, seam_length_mm), seam_uv)
+    else:
+        shape, seams = sweep(profiles, wire, seam_uv)
     solid = add_tacks(shape, wire, tacks, tack_length_mm, tack_height_mm, tack_anchor_uv)
     if not solid.isValid():
         raise ParamError("path", "these parameters make an invalid solid")

@@ -41,7 +41,13 @@ def build(
 ) -> _paths.Joint:
     """Build the lap joint; see the module docstring for the parameters' meaning."""
     params = dict(locals())
-    t1, t2, w, o, g = bottom_thickness_mm, top_thickness_mm, sheet_width_mm, overlap_mm, sheet_gap_mm
+    t1, t2, w, o, g = (
+        bottom_thickness_mm,
+        top_thickness_mm,
+        sheet_width_mm,
+        overlap_mm,
+        sheet_gap_mm,
+    )
     _paths.require(t1 > 0, "bottom_thickness_mm", f"must be > 0, got {t1}")
     _paths.require(t2 > 0, "top_thickness_mm", f"must be > 0, got {t2}")
     _paths.require(0 < o < w, "overlap_mm", f"must be in (0, sheet_width_mm), got {o}")

@@ -45,6 +45,7 @@ def build(
     _paths.require(w > t, "plate_width_mm", f"must exceed the plate thickness, got {w}")
     e = t - f  # depth of the V along each end face
     r2 = math.sqrt(0.5)
+
     # Right plate frame: along (r2, -r2) (down the roof), outward normal (r2, r2).
     def right(x: float, y: float) -> tuple[float, float]:
         return (r2 * (x + y), r2 * (y - x))

@@ -47,7 +47,9 @@ def build(
     t, w, g, f = plate_thickness_mm, plate_width_mm, root_gap_mm, root_face_mm
     _paths.require(t > 0, "plate_thickness_mm", f"must be > 0, got {t}")
     _paths.require(
-        0 < groove_angle_deg < 180, "groove_angle_deg", f"must be in (0, 180), got {groove_angle_deg}"
+        0 < groove_angle_deg < 180,
+        "groove_angle_deg",
+        f"must be in (0, 180), got {groove_angle_deg}",
     )
     _paths.require(0 <= f < t, "root_face_mm", f"must be in [0, plate_thickness_mm), got {f}")
     _paths.require(g >= 0, "root_gap_mm", f"must be >= 0, got {g}")

@@ -1,0 +1,328 @@
+"""OCCT kernels behind :mod:`seamtrack.workpiece`: seam edge chains and sampling, meshing with
+an absolute tolerance, and measuring the mesh's deviation from the exact surfaces.
+
+Imported lazily by the loader (never by a seam-mode scene): it needs CadQuery/OCP.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Sequence
+from typing import Any
+
+import cadquery as cq
+import numpy as np
+from numpy.typing import NDArray
+from OCP.BRep import BRep_Tool
+from OCP.BRepAdaptor import BRepAdaptor_Curve, BRepAdaptor_Surface
+from OCP.BRepGProp import BRepGProp_Face
+from OCP.BRepMesh import BRepMesh_IncrementalMesh
+from OCP.BRepTools import BRepTools
+from OCP.GCPnts import GCPnts_QuasiUniformDeflection, GCPnts_UniformAbscissa
+from OCP.GeomAbs import GeomAbs_Plane
+from OCP.gp import gp_Pnt, gp_Vec
+from OCP.TopAbs import TopAbs_EDGE, TopAbs_FACE, TopAbs_REVERSED
+from OCP.TopExp import TopExp
+from OCP.TopLoc import TopLoc_Location
+from OCP.TopoDS import TopoDS
+from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
+
+from seamtrack.errors import WorkpieceError
+
+FloatArray = NDArray[np.float64]
+
+#: Two seam edges are connected when their ends are closer than this (mm).
+CHAIN_TOL_MM = 1e-6
+#: Re-mesh with half the deflection at most this many times if the measured deviation is over.
+MAX_REMESH = 4
+
+
+def _seam_error(message: str, fix: str) -> WorkpieceError:
+    return WorkpieceError(message, field="workpiece.seam", fix=fix)
+
+
+# ----------------------------------------------------------------------------- seam edges
+def select_edges(shape: cq.Shape, selector: str, names: Sequence[str]) -> list[cq.Edge]:
+    """Edges of ``shape`` matching a CadQuery selector string."""
+    try:
+        found = cq.Workplane("XY").add(shape).edges(selector).vals()
+    except Exception as exc:
+        raise _seam_error(
+            f"seam {selector!r} is neither a seam name nor a valid selector: {exc}",
+            f"use a seam name ({', '.join(names) or 'none'}) or a CadQuery selector "
+            "such as '|X and <Z'",
+        ) from exc
+    edges = [e for e in found if isinstance(e, cq.Edge)]
+    if not edges:
+        raise _seam_error(
+            f"seam selector {selector!r} matches no edge",
+            "try the selector in CQ-editor, or give seam_near_mm points",
+        )
+    return edges
+
+
+def edges_near(shape: cq.Shape, points: FloatArray) -> list[cq.Edge]:
+    """The edge nearest to each point (duplicates dropped).
+
+    A point at a vertex is equally near several edges: then the edge whose interior (not an
+    end) is nearest wins; a point that still ties is refused.
+    """
+    edges = shape.Edges()
+    picked: list[cq.Edge] = []
+    for i, p in enumerate(points):
+        vertex = cq.Vertex.makeVertex(*p)
+        dist = np.array([e.distance(vertex) for e in edges])
+        tied = [edges[k] for k in np.flatnonzero(dist <= dist.min() + 1e-7)]
+        if len(tied) > 1:
+            at = cq.Vector(*p)
+            tied = [
+                e
+                for e in tied
+                if min((e.startPoint() - at).Length, (e.endPoint() - at).Length) > 1e-6
+            ]
+        if len(tied) != 1:
+            raise _seam_error(
+                f"seam_near_mm point {i} is equally near {max(len(tied), 2)} edges",
+                "place the points along the seam, away from its ends and corners",
+            )
+        if not any(tied[0].isSame(e) for e in picked):
+            picked.append(tied[0])
+    return picked
+
+
+def chain(edges: Sequence[cq.Edge], what: str) -> list[tuple[cq.Edge, bool]]:
+    """Order edges into one connected chain: (edge, forward) pairs.
+
+    The chain starts at its lexicographically smallest free end (x, then y, then z), so the
+    same edges give the same seam direction whatever their order or orientation.
+    """
+    ends = [(np.array(e.startPoint().toTuple()), np.array(e.endPoint().toTuple())) for e in edges]
+    flat = [p for pair in ends for p in pair]
+
+    def degree(p: FloatArray) -> int:
+        return sum(bool(np.linalg.norm(p - q) <= CHAIN_TOL_MM) for q in flat)
+
+    free = [p for p in flat if degree(p) == 1]
+    start = min(free or flat, key=lambda p: tuple(np.round(p, 6)))
+    remaining = list(range(len(edges)))
+    out: list[tuple[cq.Edge, bool]] = []
+    point = start
+    while remaining:
+        dist = [
+            (min(np.linalg.norm(ends[i][0] - point), np.linalg.norm(ends[i][1] - point)), i)
+            for i in remaining
+        ]
+        gap, i = min(dist)
+        if gap > CHAIN_TOL_MM:
+            raise _seam_error(
+                f"{what} gives {len(edges)} edges that do not form one connected seam",
+                "narrow the selector to one connected chain of edges, or use seam_near_mm",
+            )
+        remaining.remove(i)
+        forward = bool(np.linalg.norm(ends[i][0] - point) <= np.linalg.norm(ends[i][1] - point))
+        out.append((edges[i], forward))
+        point = ends[i][1] if forward else ends[i][0]
+    return out
+
+
+def sample_seam(
+    shape: cq.Shape, chained: list[tuple[cq.Edge, bool]], tolerance_mm: float, spacing_mm: float
+) -> tuple[FloatArray, FloatArray]:
+    """Seam points and both adjacent faces' outward unit normals.
+
+    Points are spaced at most ``spacing_mm`` apart and closer where the chord error would
+    exceed ``tolerance_mm``; they lie on the exact edge curves.
+
+    Returns
+    -------
+    points : (n, 3) float
+    face_normals : (n, 2, 3) float
+    """
+    ancestors = TopTools_IndexedDataMapOfShapeListOfShape()
+    TopExp.MapShapesAndAncestors_s(shape.wrapped, TopAbs_EDGE, TopAbs_FACE, ancestors)
+    points: list[FloatArray] = []
+    normals: list[FloatArray] = []
+    for n_edge, (edge, forward) in enumerate(chained):
+        if not ancestors.Contains(edge.wrapped):
+            raise _seam_error(
+                "a seam edge is not an edge of the part",
+                "return seam edges taken from the solid itself",
+            )
+        faces: list[Any] = []
+        for f in ancestors.FindFromKey(edge.wrapped):
+            if not any(f.IsSame(g) for g in faces):
+                faces.append(f)
+        if len(faces) != 2:
+            raise _seam_error(
+                f"a seam edge borders {len(faces)} face(s), not 2",
+                "pick an edge where two faces of the part meet",
+            )
+        curve = BRepAdaptor_Curve(edge.wrapped)
+        u0, u1 = curve.FirstParameter(), curve.LastParameter()
+        params = {u0, u1}
+        for sampler in (
+            GCPnts_QuasiUniformDeflection(curve, tolerance_mm, u0, u1),
+            GCPnts_UniformAbscissa(curve, spacing_mm, u0, u1),
+        ):
+            if sampler.IsDone():
+                params.update(sampler.Parameter(i) for i in range(1, sampler.NbPoints() + 1))
+        ts = np.array(sorted(params))
+        # Merged samplers may give near-duplicates: keep points at least 1e-4 spacing apart.
+        pts = np.array([curve.Value(t).Coord() for t in ts])
+        keep = np.ones(len(ts), dtype=bool)
+        last = pts[0]
+        for i in range(1, len(ts) - 1):
+            if (
+                np.linalg.norm(pts[i] - last) < 1e-4 * spacing_mm
+                or np.linalg.norm(pts[-1] - pts[i]) < 1e-4 * spacing_mm
+            ):
+                keep[i] = False
+            else:
+                last = pts[i]
+        ts, pts = ts[keep], pts[keep]
+        if not forward:
+            ts, pts = ts[::-1], pts[::-1]
+        face_n = np.empty((len(ts), 2, 3))
+        edge_d = TopoDS.Edge_s(edge.wrapped)
+        for k, f in enumerate(faces):
+            face = TopoDS.Face_s(f)
+            pcurve = BRep_Tool.CurveOnSurface_s(edge_d, face, 0.0, 0.0)
+            props = BRepGProp_Face(face)  # normal follows the face orientation: outward
+            pnt, vec = gp_Pnt(), gp_Vec()
+            for i, t in enumerate(ts):
+                uv = pcurve.Value(t)
+                props.Normal(uv.X(), uv.Y(), pnt, vec)
+                face_n[i, k] = vec.Coord()
+        face_n /= np.linalg.norm(face_n, axis=2, keepdims=True)
+        start = 1 if n_edge else 0  # the previous edge already gave the shared point
+        points.append(pts[start:])
+        normals.append(face_n[start:])
+    return np.vstack(points), np.vstack(normals)
+
+
+# ----------------------------------------------------------------------------- meshing
+def mesh(
+    shape: cq.Shape, tolerance_mm: float, angular_rad: float
+) -> tuple[FloatArray, NDArray[np.int64], float, float]:
+    """Mesh with an absolute chordal tolerance, measure, and re-mesh finer if it is exceeded.
+
+    Returns
+    -------
+    vertices : (n, 3) float
+        Per-face nodes (not yet welded across faces).
+    faces : (m, 3) int
+        Triangles, counter-clockwise seen from outside.
+    deviation_mm : float
+        Measured largest distance of the mesh from the exact surfaces.
+    meshing_time_s : float
+        Time spent in ``BRepMesh_IncrementalMesh`` (all passes).
+    """
+    deflection = tolerance_mm
+    spent = 0.0
+    for _ in range(MAX_REMESH + 1):
+        BRepTools.Clean_s(shape.wrapped)
+        t0 = time.perf_counter()
+        BRepMesh_IncrementalMesh(shape.wrapped, deflection, False, angular_rad, True)
+        spent += time.perf_counter() - t0
+        vertices, faces, deviation = triangulation(shape)
+        if deviation <= tolerance_mm:
+            break
+        deflection *= 0.5
+    return vertices, faces, deviation, spent
+
+
+def triangulation(shape: cq.Shape) -> tuple[FloatArray, NDArray[np.int64], float]:
+    """Every face's triangulation (orientation and location applied) and its measured deviation.
+
+    The deviation probes each triangle's centroid and edge midpoints (where a chord strays
+    furthest from a surface) and projects them onto the face's exact surface: exactly for
+    planes, by Newton iteration from the mesh's own UV coordinates otherwise.
+    """
+    all_v: list[FloatArray] = []
+    all_f: list[NDArray[np.int64]] = []
+    deviation = 0.0
+    offset = 0
+    for face in shape.Faces():
+        loc = TopLoc_Location()
+        tri = BRep_Tool.Triangulation_s(face.wrapped, loc)
+        if tri is None:
+            raise WorkpieceError(
+                "a face could not be meshed",
+                field="workpiece.tolerance_mm",
+                fix="try a larger tolerance, or repair the part",
+            )
+        trsf = loc.Transformation()
+        nodes = np.array(
+            [tri.Node(i).Transformed(trsf).Coord() for i in range(1, tri.NbNodes() + 1)]
+        )
+        tris = (
+            np.array(
+                [tri.Triangle(i).Get() for i in range(1, tri.NbTriangles() + 1)], dtype=np.int64
+            )
+            - 1
+        )
+        if face.wrapped.Orientation() == TopAbs_REVERSED:
+            tris = tris[:, ::-1]
+        probes = _probes(nodes[tris])
+        adaptor = BRepAdaptor_Surface(face.wrapped)
+        if adaptor.GetType() == GeomAbs_Plane:
+            plane = adaptor.Plane()
+            normal = np.array(plane.Axis().Direction().Coord())
+            dist = np.abs((probes - np.array(plane.Location().Coord())) @ normal)
+        else:
+            uv = np.array([tri.UVNode(i).Coord() for i in range(1, tri.NbNodes() + 1)])
+            deviation = _surface_distance(face, probes, _probes(uv[tris]), deviation)
+            dist = np.empty(0)
+        if len(dist):
+            deviation = max(deviation, float(dist.max()))
+        all_v.append(nodes)
+        all_f.append(tris + offset)
+        offset += len(nodes)
+    return np.vstack(all_v), np.vstack(all_f), deviation
+
+
+def _probes(corners: FloatArray) -> FloatArray:
+    """Centroids (m, d) then edge midpoints (3m, d) of triangles given as (m, 3, d) corners."""
+    mids = 0.5 * (corners + np.roll(corners, 1, axis=1))
+    return np.concatenate([corners.mean(axis=1), mids.reshape(-1, corners.shape[2])])
+
+
+def _surface_distance(
+    face: cq.Face, probes: FloatArray, guesses: FloatArray, floor: float
+) -> float:
+    """Largest distance of probe points to the face's exact (located) surface, or ``floor``.
+
+    Each probe's distance is first bounded above by its distance to S(uv) at its interpolated
+    UV; probes are then projected exactly (Newton on the surface) in decreasing order of that
+    bound until no remaining bound can beat the largest exact distance found.
+    """
+    adaptor = BRepAdaptor_Surface(face.wrapped)
+    surface_points = np.array([adaptor.Value(u, v).Coord() for u, v in guesses])
+    bound = np.linalg.norm(surface_points - probes, axis=1)
+    best = floor
+    for i in np.argsort(-bound):
+        if bound[i] <= best:
+            break
+        best = max(best, min(bound[i], _project(adaptor, probes[i], guesses[i])))
+    return best
+
+
+def _project(adaptor: BRepAdaptor_Surface, point: FloatArray, uv: FloatArray) -> float:
+    """Distance from a point to the surface, by Gauss-Newton from a nearby UV."""
+    u, v = float(uv[0]), float(uv[1])
+    target = gp_Pnt(*point)
+    p, du, dv = gp_Pnt(), gp_Vec(), gp_Vec()
+    for _ in range(20):
+        adaptor.D1(u, v, p, du, dv)
+        r = gp_Vec(p, target)
+        a, b, c = du.Dot(du), du.Dot(dv), dv.Dot(dv)
+        ru, rv = du.Dot(r), dv.Dot(r)
+        det = a * c - b * b
+        if det <= 0:
+            break
+        step_u, step_v = (c * ru - b * rv) / det, (a * rv - b * ru) / det
+        u, v = u + step_u, v + step_v
+        if abs(step_u) * math.sqrt(a) + abs(step_v) * math.sqrt(c) < 1e-12:
+            break
+    return float(adaptor.Value(u, v).Distance(target))
