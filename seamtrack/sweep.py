@@ -24,6 +24,9 @@ from .errors import SeamtrackError
 from .output import json_safe, prepare_dir
 from .scene import load_scene, parse_override
 
+#: How long to wait for a Dask scheduler to answer before refusing the sweep, s.
+DASK_CONNECT_TIMEOUT_S = 10.0
+
 #: Columns of the sweep table, in order.
 TABLE_KEYS = (
     "status",
@@ -88,13 +91,21 @@ def run_case(scene: str, case: Case, overrides: dict[str, Any]) -> dict[str, Any
 
 
 def _done(results_path: Path) -> dict[str, dict[str, Any]]:
+    """The cases already in ``results.jsonl``; a last line cut by a kill is dropped from the
+    file (that case runs again), so that new rows start on a line of their own."""
     done: dict[str, dict[str, Any]] = {}
-    if results_path.exists():
-        for line in results_path.read_text().splitlines():
-            try:
-                row = json.loads(line)
-            except json.JSONDecodeError:
-                continue  # a line cut by a kill: that case runs again
+    if not results_path.exists():
+        return done
+    text = results_path.read_text()
+    if text and not text.endswith("\n"):
+        text = text[: text.rfind("\n") + 1]
+        results_path.write_text(text)
+    for line in text.splitlines():
+        try:
+            row = json.loads(line)
+        except json.JSONDecodeError:
+            continue  # a damaged line: that case runs again
+        if isinstance(row, dict) and "case" in row:
             done[row["case"]] = row
     return done
 
@@ -171,7 +182,7 @@ def _execute_dask(
             "Dask is not installed", field="--scheduler", fix="pip install 'seamtrack[dask]'"
         ) from None
     try:
-        client = Client(scheduler, timeout="10s")
+        client = Client(scheduler, timeout=f"{DASK_CONNECT_TIMEOUT_S}s")
     except OSError as exc:
         raise SeamtrackError(
             f"cannot reach the Dask scheduler {scheduler!r}: {exc}",
