@@ -249,7 +249,7 @@ def draw_profile_2d(
         title += f", t = {profile.t_s:.4g} s"
     ax.set_title(title)
     ax.grid(True, lw=0.3)
-    ax.legend(loc="best", fontsize=8, markerscale=2)
+    ax.legend(loc="best", fontsize=8)
 
 
 def plot_profile_2d(

@@ -342,9 +342,7 @@ def stripe_polydata(
     """The stripe as points with an ``rgb`` colour per :class:`Reason` (misses drawn at the far
     end of their ray). Empty in seam mode (no profile)."""
     if profile is None or len(profile) == 0:
-        cloud = pv.PolyData(np.empty((0, 3)))
-        cloud.point_data["rgb"] = np.empty((0, 3), dtype=np.uint8)
-        return cloud
+        return pv.PolyData()
     from .scan import laser_fan
 
     assert profile.reason is not None
