@@ -288,6 +288,116 @@ def raycast_markdown(result: dict) -> str:
     return "\n".join(lines) + "\n"
 
 
+# --------------------------------------------------------------------------- sweep
+#: paper-corner shortened to a 20 mm leg and a 14 mm leg after its 45 deg turn: ~0.3 s a run.
+SWEEP_BENCH_OVERRIDES: dict[str, Any] = {
+    "seam.points_mm": [[0.0, 0.0, 0.0], [20.0, 0.0, 0.0], [30.0, 10.0, 0.0]]
+}
+
+
+def bench_sweep(out_dir: str | Path, quick: bool = False) -> dict:
+    """Wall time of a 200-case sweep on 1 and on 2 local worker processes.
+
+    The cases are ``paper-corner`` shortened (:data:`SWEEP_BENCH_OVERRIDES`) over 200 radii of
+    convergence (40 radii x 5 seeds would cost the same); both runs must give the same numbers.
+    Writes ``sweep.json`` and ``sweep.md``.
+
+    Parameters
+    ----------
+    out_dir : str or Path
+    quick : bool
+        20 cases instead of 200 (a smoke test, not a measurement).
+
+    Returns
+    -------
+    dict
+        ``machine``, ``cases``, ``case_time_s`` (mean single-run wall time), ``runs`` (one per
+        worker count: ``workers``, ``wall_time_s``, ``ratio_to_1_worker``, ``cpu_time_s`` of
+        all processes, and the 1-minute ``load_average_before``: other work on the machine
+        shows there) and ``target``.
+    """
+    from .sweep import run_sweep
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    count = 20 if quick else 200
+    radii = [round(float(r), 6) for r in np.geomspace(0.05, 6.0, count)]
+    runs = []
+    numbers: list[list[Any]] = []
+    case_times: list[float] = []
+    import resource
+
+    for workers in (1, 2):
+        load_before = os.getloadavg()[0]
+        cpu_start = time.process_time()
+        children_start = resource.getrusage(resource.RUSAGE_CHILDREN)
+        start = time.perf_counter()
+        rows = run_sweep(
+            "paper-corner",
+            "tracker.radius_mm",
+            radii,
+            overrides=SWEEP_BENCH_OVERRIDES,
+            workers=workers,
+        )
+        wall = time.perf_counter() - start
+        children = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpu = (
+            time.process_time()
+            - cpu_start
+            + (children.ru_utime - children_start.ru_utime)
+            + (children.ru_stime - children_start.ru_stime)
+        )
+        failed = [row for row in rows if "summary" not in row]
+        if failed:
+            raise RuntimeError(f"bench_sweep: case failed: {failed[0]}")
+        numbers.append([row["summary"]["max_error_mm"] for row in rows])
+        if workers == 1:
+            case_times = [row["summary"]["wall_time_s"] for row in rows]
+        runs.append(
+            {
+                "workers": workers,
+                "wall_time_s": wall,
+                "cases_per_s": count / wall,
+                "cpu_time_s": cpu,
+                "load_average_before": load_before,
+            }
+        )
+    for run in runs:
+        run["ratio_to_1_worker"] = run["wall_time_s"] / runs[0]["wall_time_s"]
+    m = machine_info()
+    result: dict[str, Any] = {
+        "machine": m,
+        "scene": "paper-corner",
+        "overrides": SWEEP_BENCH_OVERRIDES,
+        "param": "tracker.radius_mm",
+        "cases": count,
+        "quick": quick,
+        "case_time_s": float(np.mean(case_times)),
+        "same_numbers": numbers[0] == numbers[1],
+        "runs": runs,
+        "target": "2 workers <= 0.6 x the wall time of 1 worker",
+    }
+    (out / "sweep.json").write_text(json.dumps(result, indent=2))
+    lines = [
+        f"Machine: {m['cpu']}, {m['cores']} cores; Python {m['python']}, numpy {m['numpy']}. "
+        f"{count} cases of paper-corner shortened (20 mm + 14 mm), tracker.radius_mm "
+        f"0.05..6 mm; one case takes {result['case_time_s']:.3f} s on its own; "
+        f"identical numbers on 1 and 2 workers: {'yes' if result['same_numbers'] else 'NO'}.",
+        "",
+        "| workers | wall time (s) | cases/s | ratio to 1 worker | CPU time (s) | load before |",
+        "|---:|---:|---:|---:|---:|---:|",
+    ]
+    for run in runs:
+        lines.append(
+            f"| {run['workers']} | {run['wall_time_s']:.1f} | {run['cases_per_s']:.2f} | "
+            f"{run['ratio_to_1_worker']:.2f}x | {run['cpu_time_s']:.1f} | "
+            f"{run['load_average_before']:.1f} |"
+        )
+    lines += ["", f"Target: {result['target']}."]
+    (out / "sweep.md").write_text("\n".join(lines) + "\n")
+    return result
+
+
 # --------------------------------------------------------------------------- dispatch
 def _bench_extractors(out: Path, quick: bool) -> Any:
     from .extractors_bench import bench_extractors
@@ -320,6 +430,7 @@ BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "raycast": lambda out, quick: bench_raycast(out, quick=quick),
     "extractors": _bench_extractors,
     "mesh": _bench_mesh,
+    "sweep": lambda out, quick: bench_sweep(out, quick=quick),
 }
 
 
