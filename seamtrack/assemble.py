@@ -6,6 +6,7 @@ a CAD workpiece (CadQuery, on a cache miss), an Embree scene and a feature extra
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -16,7 +17,7 @@ from numpy.typing import NDArray
 
 from . import frames
 from .errors import SceneError
-from .profiles import Feature, Profile
+from .profiles import Feature, Profile, laser_to_world
 from .robot import CartesianRobot
 from .scan import SeamNoise, sense_seam
 from .seam import Seam
@@ -103,18 +104,19 @@ def make_seam(scene: Scene) -> Seam:
 def make_robot(scene: Scene, sensor: LaserLineSensor) -> CartesianRobot:
     """The Cartesian robot with the sensor mounted ahead of the torch.
 
-    The laser frame sits ``look_ahead_mm`` ahead of the torch tip along base +X and
-    ``range_mm`` (default: where the optical axis crosses the laser, b / tan theta_s) above it,
-    its laser pointing down (z_L = -Z) and its baseline along +X (x_L = +X), then turned by
-    ``sensor.mount_rotation_deg``.
+    The laser points down (z_L = -Z) with its baseline along +X (x_L = +X), turned by
+    ``sensor.mount_rotation_deg`` (x-y-z angles in the laser frame: a roll about x_L tilts the
+    laser sideways within its plane, as a fillet joint needs). The emitter sits on the laser
+    axis ``range_mm`` (default: where the optical axis crosses the laser, b / tan theta_s) from
+    the point ``look_ahead_mm`` ahead of the torch tip along base +X, so the central ray hits a
+    seam at the torch tip's height there whatever the tilt.
     """
     r, s = scene.config.robot, scene.config.sensor
-    height = s.range_mm if s.range_mm is not None else sensor.range_center_mm
-    R_mount = frames.look_rotation([0.0, 0.0, -1.0], [1.0, 0.0, 0.0])
-    T_tcp_sensor = frames.compose(
-        frames.make(R_mount, [s.look_ahead_mm, 0.0, height]),
-        frames.from_xyz_rpy_deg([0.0, 0.0, 0.0], s.mount_rotation_deg),
-    )
+    distance = s.range_mm if s.range_mm is not None else sensor.range_center_mm
+    R_down = frames.look_rotation([0.0, 0.0, -1.0], [1.0, 0.0, 0.0])
+    R = R_down @ frames.from_xyz_rpy_deg([0.0, 0.0, 0.0], s.mount_rotation_deg)[:3, :3]
+    emitter = np.array([s.look_ahead_mm, 0.0, 0.0]) - distance * R[:, 2]
+    T_tcp_sensor = frames.make(R, emitter)
     return CartesianRobot(
         position_min_mm=r.position_min_mm,
         position_max_mm=r.position_max_mm,
@@ -165,9 +167,15 @@ def _mesh_scan(
     T_world_part = frames.from_xyz_rpy_deg(w.offset_mm, w.rotation_deg)
     mesh = part.mesh.copy()
     mesh.apply_transform(T_world_part)
+    if w.obstacles:
+        import trimesh
+
+        boxes = [trimesh.creation.box(bounds=[b.min_mm, b.max_mm]) for b in w.obstacles]
+        mesh = trimesh.util.concatenate([mesh, *boxes])
     caster = RayCaster.from_mesh(mesh)
     seam = part.seam.transformed(T_world_part)
     find = extractor(scene.config.extractor.name, **scene.config.extractor.params)
+    offset = np.asarray(scene.config.extractor.offset_mm, dtype=float)
     s = scene.config.sensor
     noise = _stripe_noise(s.stripe_noise)
 
@@ -182,7 +190,15 @@ def _mesh_scan(
             rng=rng,
             t_s=t_s,
         )
-        return profile, find(profile)
+        feature = find(profile)
+        if feature and offset.any():
+            # The torch target relative to the feature (a TCP calibration): e.g. the root of a
+            # square butt joint, a plate thickness below the gap the stripe shows.
+            point = feature.point_laser + offset
+            feature = dataclasses.replace(
+                feature, point_laser=point, point_world=laser_to_world(T_world_sensor, point)
+            )
+        return profile, feature
 
     return seam, scan
 
@@ -211,6 +227,8 @@ def build_parts(scene: Scene, rng: np.random.Generator | None = None) -> Parts:
     scan: ScanFn | None = None
     if c.sensor.mode == "mesh":
         seam, scan = _mesh_scan(scene, sensor, rng)
+        if c.seam.source != "workpiece":
+            seam = make_seam(scene)  # a nominal seam to score against (e.g. a robot program)
         mesh_scan = scan
 
         def sense(T_world_sensor: FloatArray, t_s: float) -> Feature:

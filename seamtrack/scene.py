@@ -96,7 +96,15 @@ class TrackerConfig(_Section):
 
 class ExtractorConfig(_Section):
     name: str = "v-groove"
+    offset_mm: tuple[Finite, Finite] = (0.0, 0.0)
     params: dict[str, Any] = Field(default_factory=dict)
+
+
+class Box(_Section):
+    """An axis-aligned box in the world frame (a clamp, a fixture) that the laser can hit."""
+
+    min_mm: Vec3
+    max_mm: Vec3
 
 
 class WorkpieceConfig(_Section):
@@ -108,6 +116,7 @@ class WorkpieceConfig(_Section):
     params: dict[str, Any] = Field(default_factory=dict)
     offset_mm: Vec3 = (0.0, 0.0, 0.0)
     rotation_deg: Vec3 = (0.0, 0.0, 0.0)
+    obstacles: list[Box] = Field(default_factory=list)
 
 
 class SceneConfig(_Section):
@@ -351,12 +360,13 @@ def check_consistency(scene: Scene) -> None:
                 field="workpiece.step",
                 fix="remove one of them",
             )
-    if c.sensor.mode == "mesh" and c.seam.source != "workpiece":
-        raise SceneError(
-            "mesh mode scores against the workpiece's CAD seam",
-            field="seam.source",
-            fix='set seam.source = "workpiece"',
-        )
+    for i, box in enumerate(c.workpiece.obstacles if c.workpiece else []):
+        if not all(a < b for a, b in zip(box.min_mm, box.max_mm, strict=True)):
+            raise SceneError(
+                f"min_mm {list(box.min_mm)} must lie below max_mm {list(box.max_mm)}",
+                field=f"workpiece.obstacles.{i}.max_mm",
+                fix="give opposite corners of the box, smaller one first",
+            )
     period = 1.0 / c.sensor.frame_rate_hz
     if c.robot.control_period_s > period:
         raise SceneError(

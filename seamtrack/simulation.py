@@ -158,6 +158,7 @@ def run(parts: Parts, progress: bool = False, seed: int | None = None) -> Result
     status = ""
     bar = _progress_bar(progress, cfg.time_limit_s, seam.length_mm)
 
+    sense_time = 0.0
     tick = 0
     for tick in range(max_ticks + 1):
         t = tick * dt
@@ -167,7 +168,9 @@ def run(parts: Parts, progress: bool = False, seed: int | None = None) -> Result
         if t + 1e-9 >= next_capture:
             next_capture += cfg.frame_period_s
             T_ws = robot.T_world_sensor(q)
+            sense_start = time.perf_counter()
             feature = parts.sense(T_ws, t)
+            sense_time += time.perf_counter() - sense_start
             pending.append(Measurement(feature, t, t + cfg.latency_s, T_ws, tcp))
             frame_t.append(t)
             frame_found.append(1 if feature else 0)
@@ -216,6 +219,7 @@ def run(parts: Parts, progress: bool = False, seed: int | None = None) -> Result
 
     trace = _trace(seam, dt, tcp_log, target_log, frame_t, frame_found, frame_points)
     summary = _summary(trace, seam, status, cfg, time.perf_counter() - wall_start)
+    summary["sense_wall_time_s"] = sense_time
     return Result(summary=summary, trace=trace)
 
 

@@ -7,9 +7,11 @@ there. Each measurement is stored in world coordinates, computed with the sensor
 capture* (so a late-arriving frame is still placed right), and indexed by arc length along the
 stored path. The path is smoothed locally, and the torch is driven along it at the constant
 welding speed: the set-point moves along the path at that speed, its velocity is fed forward,
-and a proportional term corrects the remaining error. Frames without a seam point are bridged by
-extrapolating the stored path along its last direction for ``bridge_mm``; beyond that the
-set-point stops and the simulation reports the seam lost.
+and a proportional term corrects the remaining error. Optionally, a measured point that jumps
+more than ``max_jump_mm`` off the path's extrapolation (a tack weld, a reflection) is not stored. Frames
+without a usable seam point are bridged by extrapolating the stored path along the chord of its
+last ``direction_fit_mm`` for ``bridge_mm``; beyond that the set-point stops and the simulation
+reports the seam lost.
 """
 
 from __future__ import annotations
@@ -23,6 +25,32 @@ from numpy.typing import NDArray
 from .trackers import Command, Measurement, TrackerContext
 
 FloatArray = NDArray[np.float64]
+
+
+#: Residuals below this never mark a stored point as an outlier (the sensor's noise floor).
+_MIN_INLIER_MM = 0.05
+
+
+def _line_fit(
+    w: FloatArray, ds: FloatArray, raw: FloatArray
+) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]]:
+    """Weighted least-squares lines p = a + b ds, one per row of the (m, n) weights.
+
+    Returns the intercepts (m, 3), the slopes (m, 3) and which rows had a well-posed fit.
+    """
+    n = w.sum(axis=1)
+    sx = (w * ds).sum(axis=1)
+    sxx = (w * ds * ds).sum(axis=1)
+    sy = w @ raw
+    sxy = (w * ds) @ raw
+    det = n * sxx - sx * sx
+    ok = (n >= 3) & (det > 1e-12 * np.maximum(n * sxx, 1e-300))
+    safe = np.where(ok, det, 1.0)[:, None]
+    return (
+        (sxx[:, None] * sy - sx[:, None] * sxy) / safe,
+        (n[:, None] * sxy - sx[:, None] * sy) / safe,
+        ok,
+    )
 
 
 class TrajectoryTracker:
@@ -47,6 +75,14 @@ class TrajectoryTracker:
         sees the seam (room for smoothing to settle).
     use_capture_pose : bool
         Place each point with the sensor pose at capture (True) or, naively, at arrival.
+    max_jump_mm : float
+        A new point farther than this from the extrapolated stored path is held back (and the
+        frame bridged): bogus detections at the edge of a shadow, reflections, tack welds.
+    reacquire_mm : float
+        Held-back points that agree with each other (within ``max_jump_mm`` of their own line)
+        over this length are accepted: the seam really turned or stepped.
+    direction_fit_mm : float
+        Length of stored path whose chord gives the direction for extrapolation.
     """
 
     name = "trajectory"
@@ -60,6 +96,9 @@ class TrajectoryTracker:
         bridge_mm: float = 10.0,
         end_margin_mm: float = 0.0,
         use_capture_pose: bool = True,
+        max_jump_mm: float = 0.5,
+        reacquire_mm: float = 2.0,
+        direction_fit_mm: float = 5.0,
     ):
         self.buffer_mm = buffer_mm
         self.smoothing_mm = smoothing_mm
@@ -68,6 +107,9 @@ class TrajectoryTracker:
         self.bridge_mm = bridge_mm
         self.end_margin_mm = end_margin_mm
         self.use_capture_pose = use_capture_pose
+        self.max_jump_mm = max_jump_mm
+        self.reacquire_mm = reacquire_mm
+        self.direction_fit_mm = direction_fit_mm
 
     # ----------------------------------------------------------------- protocol
     def reset(self, context: TrackerContext) -> None:
@@ -83,6 +125,7 @@ class TrajectoryTracker:
         self._s_set = 0.0
         self._seen_seam = False
         self._lost = False
+        self._held: list[FloatArray] = []
         self._tcp_now = start
 
     def update(self, measurement: Measurement) -> None:
@@ -93,17 +136,52 @@ class TrajectoryTracker:
         if not self.use_capture_pose:
             # Naive: pretend the frame was taken where the robot is now.
             point = point + (self._tcp_now - measurement.tcp_world)
-        self._lost = False
         step = float(np.linalg.norm(point - self._path[-1]))
         if step < self.min_spacing_mm:
+            self._lost = False
             return
-        if not self._seen_seam:
-            self._seen_seam = True
+        if len(self._path) >= 3 and self._off_path(point) > self.max_jump_mm:
+            self._held.append(point)
+            if not self._reacquired():
+                self._lost = self._seen_seam  # bridge it, for now
+                return
+            held, self._held = self._held[:-1], []
+            for p in held:  # the seam moved: store what was held back, then this point
+                self._store(p)
+            step = float(np.linalg.norm(point - self._path[-1]))
+        else:
+            self._held = []
+        self._lost = False
+        self._seen_seam = True
+        self._store(point, step)
+
+    def _store(self, point: FloatArray, step: float | None = None) -> None:
+        if step is None:
+            step = float(np.linalg.norm(point - self._path[-1]))
+        if step < self.min_spacing_mm:
+            return
         self._raw.append(point)
         self._path.append(point)
         self._s.append(self._s[-1] + step)
         self._smooth_tail()
         self._trim()
+
+    def _reacquired(self) -> bool:
+        """True when the newest held-back points span ``reacquire_mm`` and lie on one line;
+        older held points (bogus ones before the seam's new course) are dropped."""
+        held = np.asarray(self._held)
+        reach = np.linalg.norm(held - held[-1], axis=1)
+        spanning = np.flatnonzero(reach >= self.reacquire_mm)
+        if len(spanning) == 0:
+            return False
+        self._held = self._held[int(spanning[-1]) :]
+        held = held[int(spanning[-1]) :]
+        if len(held) < 3:
+            return False
+        centred = held - held.mean(axis=0)
+        direction = np.linalg.svd(centred, full_matrices=False)[2][0]
+        off = centred - np.outer(centred @ direction, direction)
+        return bool(np.max(np.linalg.norm(off, axis=1)) <= self.max_jump_mm)
 
     def command(
         self, t_s: float, tcp_world: FloatArray, tcp_velocity_world: FloatArray
@@ -131,12 +209,42 @@ class TrajectoryTracker:
         )
 
     # ----------------------------------------------------------------- path
+    def _end_direction(self) -> FloatArray:
+        """Unit chord of the last ``direction_fit_mm`` of stored path (robust to the jitter of
+        the last few points, which the last segment alone is not)."""
+        knots = self._s
+        i = max(bisect.bisect_left(knots, knots[-1] - self.direction_fit_mm) - 1, 0)
+        if len(knots) > 2:
+            i = max(i, 1)  # the start pose is not a seam point
+        chord = self._path[-1] - self._path[i]
+        length = float(np.linalg.norm(chord))
+        return chord / length if length > 0 else np.zeros(3)
+
+    def _off_path(self, point: FloatArray) -> float:
+        """Distance of a point from the line fitted (total least squares) to the raw stored
+        points of the last ``direction_fit_mm``: a ramp of bogus points trips it on its second
+        point, because the line they are measured against does not follow them."""
+        knots = self._s
+        i = max(bisect.bisect_left(knots, knots[-1] - self.direction_fit_mm), 1)
+        window = np.asarray(self._raw[i:])
+        if len(window) < 3:
+            d = self._end_direction()
+            v = point - self._path[-1]
+            return float(np.linalg.norm(v - (v @ d) * d))
+        centre = window.mean(axis=0)
+        direction = np.linalg.svd(window - centre, full_matrices=False)[2][0]
+        v = point - centre
+        return float(np.linalg.norm(v - (v @ direction) * direction))
+
     def _at(self, s: float) -> tuple[FloatArray, FloatArray]:
         """Point and unit direction on the stored path at arc length s (extrapolated past
-        the end along the last segment)."""
+        the end along :meth:`_end_direction`)."""
         knots = self._s
         if len(knots) < 2:
             return self._path[0], np.zeros(3)
+        if s > knots[-1]:
+            d = self._end_direction()
+            return self._path[-1] + (s - knots[-1]) * d, d
         i = min(max(bisect.bisect_right(knots, s) - 1, 0), len(knots) - 2)
         a, b = self._path[i], self._path[i + 1]
         length = knots[i + 1] - knots[i]
@@ -144,8 +252,14 @@ class TrajectoryTracker:
         return a + (s - knots[i]) * direction, direction
 
     def _smooth_tail(self) -> None:
-        """Refit the stored points whose window the newest point entered: a least-squares line
-        through the raw points within +-smoothing_mm (arc length), evaluated at the point."""
+        """Refit the stored points whose window the newest point entered: a robust line through
+        the raw points within +-smoothing_mm (arc length), evaluated at the point.
+
+        A first least-squares fit gives residuals; points farther than three times the window's
+        median residual (at least ``_MIN_INLIER_MM``) are dropped and the line is refitted, so a
+        few bogus detections (an extractor fooled at the edge of a shadow) do not bend the path,
+        while a real turn, which the majority of the window follows, does.
+        """
         h = self.smoothing_mm
         if h <= 0 or len(self._raw) < 3:
             return
@@ -156,18 +270,18 @@ class TrajectoryTracker:
         targets = np.flatnonzero(s >= s_last - h)
         ds = s[None, :] - s[targets, None]  # (m, n): offsets of the window points
         w = (np.abs(ds) <= h).astype(float)
-        n = w.sum(axis=1)
-        sx = (w * ds).sum(axis=1)
-        sxx = (w * ds * ds).sum(axis=1)
-        sy = w @ raw
-        sxy = (w * ds) @ raw
-        det = n * sxx - sx * sx
-        ok = (n >= 3) & (det > 1e-12 * np.maximum(n * sxx, 1e-300))
-        # The fitted line's value at ds = 0 (its intercept).
-        fitted = (sxx[:, None] * sy - sx[:, None] * sxy) / np.where(ok, det, 1.0)[:, None]
+        a, b, ok = _line_fit(w, ds, raw)
+        residual = np.linalg.norm(
+            raw[None, :, :] - (a[:, None, :] + ds[..., None] * b[:, None, :]), axis=2
+        )
+        masked = np.where(w > 0, residual, np.nan)
+        with np.errstate(all="ignore"):
+            limit = np.maximum(3.0 * np.nanmedian(masked, axis=1), _MIN_INLIER_MM)
+        w = w * (residual <= limit[:, None])
+        a, _, ok = _line_fit(w, ds, raw)
         for k, i in enumerate(targets):
             if ok[k]:
-                self._path[first + i] = fitted[k]
+                self._path[first + i] = a[k]
 
     def _trim(self) -> None:
         """Drop stored points more than ``buffer_mm`` behind the set-point."""
