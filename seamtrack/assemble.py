@@ -171,7 +171,7 @@ def _mesh_scan(
         import trimesh
 
         boxes = [trimesh.creation.box(bounds=[b.min_mm, b.max_mm]) for b in w.obstacles]
-        mesh = trimesh.util.concatenate([mesh, *boxes])
+        mesh = trimesh.util.concatenate([mesh, *boxes])  # type: ignore[assignment]
     caster = RayCaster.from_mesh(mesh)
     seam = part.seam.transformed(T_world_part)
     find = extractor(scene.config.extractor.name, **scene.config.extractor.params)

@@ -7,11 +7,12 @@ there. Each measurement is stored in world coordinates, computed with the sensor
 capture* (so a late-arriving frame is still placed right), and indexed by arc length along the
 stored path. The path is smoothed locally, and the torch is driven along it at the constant
 welding speed: the set-point moves along the path at that speed, its velocity is fed forward,
-and a proportional term corrects the remaining error. Optionally, a measured point that jumps
-more than ``max_jump_mm`` off the path's extrapolation (a tack weld, a reflection) is not stored. Frames
-without a usable seam point are bridged by extrapolating the stored path along the chord of its
-last ``direction_fit_mm`` for ``bridge_mm``; beyond that the set-point stops and the simulation
-reports the seam lost.
+and a proportional term corrects the remaining error. A measured point that jumps more than
+``max_jump_mm`` off the line through the last stored points (a tack weld, a reflection, a bogus
+detection at a shadow's edge) is held back until points agreeing with it span
+``reacquire_mm``. Frames without a usable seam point are bridged by extrapolating the stored
+path along the chord of its last ``direction_fit_mm`` for ``bridge_mm``; beyond that the
+set-point stops and the simulation reports the seam lost.
 """
 
 from __future__ import annotations
