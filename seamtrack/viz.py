@@ -491,8 +491,9 @@ def _add_reason_legend(plotter: Any, profile: Profile) -> None:
             bcolor="white",
             border=True,
             face="rectangle",
-            loc="upper right",
-            size=(0.25, 0.05 * len(entries)),
+            loc="lower left",
+            size=(0.3, 0.04 * len(entries)),
+            background_opacity=0.8,
         )
 
 
