@@ -72,13 +72,13 @@ def apply(T_a_b: ArrayLike, points_b: ArrayLike) -> NDArray[np.float64]:
     """
     T = np.asarray(T_a_b, dtype=np.float64)
     p = np.asarray(points_b, dtype=np.float64)
-    return p @ T[:3, :3].T + T[:3, 3]
+    return p @ np.ascontiguousarray(T[:3, :3].T) + T[:3, 3]
 
 
 def apply_vectors(T_a_b: ArrayLike, vectors_b: ArrayLike) -> NDArray[np.float64]:
     """Rotate direction vectors ((n, 3) or (3,)) from frame b to frame a."""
     T = np.asarray(T_a_b, dtype=np.float64)
-    return np.asarray(vectors_b, dtype=np.float64) @ T[:3, :3].T
+    return np.asarray(vectors_b, dtype=np.float64) @ np.ascontiguousarray(T[:3, :3].T)
 
 
 def look_rotation(z_axis: Sequence[float], x_axis: Sequence[float]) -> NDArray[np.float64]:

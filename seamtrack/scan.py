@@ -64,7 +64,7 @@ def laser_plane_crossings(seam: Seam, T_world_sensor: ArrayLike) -> FloatArray:
         its end points.
     """
     T_sensor_world = invert(T_world_sensor)
-    p = seam.points @ T_sensor_world[:3, :3].T + T_sensor_world[:3, 3]
+    p = seam.points @ np.ascontiguousarray(T_sensor_world[:3, :3].T) + T_sensor_world[:3, 3]
     x = p[:, 0]
     x0, x1 = x[:-1], x[1:]
     # Half-open test: a vertex exactly on the plane belongs to the segment that starts there,

@@ -247,23 +247,26 @@ def validate(data: dict[str, Any], source: str = "scene") -> SceneConfig:
     try:
         return SceneConfig.model_validate(data)
     except ValidationError as exc:
-        lines = []
+        lines, fields, fixes = [], [], []
         for err in exc.errors():
             loc = ".".join(str(x) for x in err["loc"])
             got = err.get("input")
-            got_text = (
-                "" if err["type"] in {"missing"} or isinstance(got, dict) else (f" (got {got!r})")
-            )
-            lines.append(f"{loc}: {err['msg']}{got_text}; fix: {_fix_for(err, SceneConfig)}")
-        raise SceneErrorList(lines, source) from None
+            skip_got = err["type"] in {"missing"} or isinstance(got, dict)
+            got_text = "" if skip_got else f" (got {got!r})"
+            fix = _fix_for(err, SceneConfig)
+            lines.append(f"{loc}: {err['msg']}{got_text}; fix: {fix}")
+            fields.append(loc)
+            fixes.append(fix)
+        raise SceneErrorList(lines, source, fields, fixes) from None
 
 
 class SceneErrorList(SceneError):
     """Several bad fields at once; ``str()`` gives one line per field."""
 
-    def __init__(self, lines: list[str], source: str):
-        super().__init__(lines[0])
+    def __init__(self, lines: list[str], source: str, fields: list[str], fixes: list[str]):
+        super().__init__(lines[0], field=fields[0], fix=fixes[0])
         self.lines = [f"{source}: {line}" for line in lines]
+        self.fields = fields
 
     def __str__(self) -> str:
         return "\n".join(self.lines)
@@ -375,13 +378,15 @@ def check_consistency(scene: Scene) -> None:
             field="robot.control_period_s",
             fix="use a control period at most the frame period (e.g. 0.001)",
         )
-    speed_limit = min(c.robot.velocity_max_mm_s)
-    if c.simulation.welding_speed_mm_s > max(c.robot.velocity_max_mm_s) * math.sqrt(3):
+    # No path is faster than all three axes at their limits together.
+    speed_limit = math.hypot(*c.robot.velocity_max_mm_s)
+    if c.simulation.welding_speed_mm_s > speed_limit:
         raise SceneError(
             f"welding speed {c.simulation.welding_speed_mm_s} mm/s exceeds what the axes can "
             f"reach (velocity limits {list(c.robot.velocity_max_mm_s)} mm/s)",
             field="simulation.welding_speed_mm_s",
-            fix=f"use a speed the axes allow, e.g. <= {speed_limit} mm/s",
+            fix=f"use at most {speed_limit:.4g} mm/s (and at most the axis limit along a seam "
+            "that follows one axis)",
         )
     from .assemble import make_sensor
 

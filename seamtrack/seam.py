@@ -318,16 +318,29 @@ class Seam:
         best_dist = dist[rows, best]
         best_t = t[rows, best]
         if k < n_seg:
+            # Exactness: the nearest segment's midpoint is within best + half the longest
+            # segment. Queries that cannot prove it ask the tree again with more candidates.
             half_longest = 0.5 * float(np.max(self.segment_lengths_mm))
             unsure = np.flatnonzero(mid_dist[:, -1] <= best_dist + half_longest)
-            for chunk in np.array_split(unsure, max(1, len(unsure) * n_seg // 2_000_000 + 1)):
-                if len(chunk) == 0:
-                    continue
-                dist_all, t_all = _point_segment(q[chunk, None, :], a[None], d[None])
-                j = np.argmin(dist_all, axis=1)
-                seg[chunk] = j
-                best_dist[chunk] = dist_all[np.arange(len(chunk)), j]
-                best_t[chunk] = t_all[np.arange(len(chunk)), j]
+            kk = k
+            while len(unsure) and kk < n_seg:
+                kk = min(kk * 8, n_seg)
+                for chunk in np.array_split(unsure, max(1, len(unsure) * kk // 2_000_000 + 1)):
+                    if len(chunk) == 0:
+                        continue
+                    md, cd = tree.query(q[chunk], k=kk)
+                    md = np.asarray(md).reshape(len(chunk), kk)
+                    cd = np.asarray(cd).reshape(len(chunk), kk)
+                    dist_c, t_c = _point_segment(q[chunk, None, :], a[cd], d[cd])
+                    j = np.argmin(dist_c, axis=1)
+                    rows_c = np.arange(len(chunk))
+                    seg[chunk] = cd[rows_c, j]
+                    best_dist[chunk] = dist_c[rows_c, j]
+                    best_t[chunk] = t_c[rows_c, j]
+                    mid_dist[chunk, -1] = md[:, -1]
+                unsure = unsure[
+                    (mid_dist[unsure, -1] <= best_dist[unsure] + half_longest) & (kk < n_seg)
+                ]
         points = a[seg] + best_t[:, None] * d[seg]
         s = self.arc_length_mm[seg] + best_t * self.segment_lengths_mm[seg]
         result = Closest(points=points, arc_length_mm=s, distance_mm=best_dist, segment=seg)
@@ -336,24 +349,38 @@ class Seam:
         return result
 
     def closest_near(
-        self, point: ArrayLike, segment_hint: int, window: int = 8
-    ) -> tuple[float, int]:
-        """Arc length and segment of the closest seam point to one point, searching only the
-        segments within ``window`` of ``segment_hint`` (for a point that moves continuously,
-        like the torch). Falls back to :meth:`closest` when the best lies on the window's edge.
+        self, point: ArrayLike, arc_length_hint_mm: float, window_mm: float = 5.0
+    ) -> float:
+        """Arc length of the closest seam point to one point, searching only the stretch of
+        seam within ``window_mm`` (arc length) of ``arc_length_hint_mm``, widened while the
+        best lies on a cut end of that stretch.
+
+        For a point that moves continuously, like the torch: it follows the seam it is on
+        rather than jumping to another stretch that passes close by (a hairpin's other leg).
         """
+        knots = self.arc_length_mm
+        length = self.length_mm
         n_seg = len(self.points) - 1
-        lo = max(segment_hint - window, 0)
-        hi = min(segment_hint + window + 1, n_seg)
-        a = self.points[lo:hi]
-        d = self.points[lo + 1 : hi + 1] - a
-        dist, t = _point_segment(np.asarray(point, dtype=np.float64)[None, :], a, d)
-        j = int(np.argmin(dist))
-        if (j == 0 and lo > 0) or (j == hi - lo - 1 and hi < n_seg):
-            c = self.closest(point)
-            return float(c.arc_length_mm[0]), int(c.segment[0])
-        seg = lo + j
-        return float(self.arc_length_mm[seg] + t[j] * self.segment_lengths_mm[seg]), seg
+        p = np.asarray(point, dtype=np.float64)[None, :]
+        while True:
+            s0 = max(arc_length_hint_mm - window_mm, 0.0)
+            s1 = min(arc_length_hint_mm + window_mm, length)
+            i0 = min(max(int(np.searchsorted(knots, s0, side="right")) - 1, 0), n_seg - 1)
+            i1 = min(max(int(np.searchsorted(knots, s1, side="left")), i0 + 1), n_seg)
+            starts = self.points[i0:i1].copy()
+            ends = self.points[i0 + 1 : i1 + 1].copy()
+            s_start = knots[i0:i1].copy()
+            starts[0], ends[-1] = self.interpolate([s0, s1])
+            s_start[0] = s0
+            d = ends - starts
+            dist, t = _point_segment(p, starts, d)
+            j = int(np.argmin(dist))
+            s = float(s_start[j] + t[j] * np.linalg.norm(d[j]))
+            cut_low = s0 > 0.0 and s <= s0 + 1e-12
+            cut_high = s1 < length and s >= s1 - 1e-12
+            if not (cut_low or cut_high) or window_mm >= length:
+                return s
+            window_mm *= 2.0
 
     def distance(self, query_points: ArrayLike) -> FloatArray:
         """(m,) distance from each query point to the seam (see :meth:`closest`)."""
@@ -383,7 +410,7 @@ def _vertex_tangents(points: FloatArray) -> FloatArray:
 
 def _point_segment(q: FloatArray, a: FloatArray, d: FloatArray) -> tuple[FloatArray, FloatArray]:
     """Distance and parameter t in [0, 1] from points q to segments a + t d (broadcasting)."""
-    dd = np.sum(d * d, axis=-1)
+    dd = np.maximum(np.sum(d * d, axis=-1), 1e-300)  # a zero-length (cut) segment is a point
     t = np.clip(np.sum((q - a) * d, axis=-1) / dd, 0.0, 1.0)
     diff = q - (a + t[..., None] * d)
     return np.sqrt(np.sum(diff * diff, axis=-1)), t

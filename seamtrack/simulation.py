@@ -154,7 +154,9 @@ def run(parts: Parts, progress: bool = False, seed: int | None = None) -> Result
     last_seen = False
     rest_since: float | None = None
     s_best, t_progress = -math.inf, 0.0
-    seg_hint = int(seam.closest(parts.tcp_start_world).segment[0])
+    s_now = 0.0  # the torch starts at the seam's start: follow the seam from there
+    check_t = array("d")
+    check_s = array("d")
     status = ""
     bar = _progress_bar(progress, cfg.time_limit_s, seam.length_mm)
 
@@ -194,7 +196,9 @@ def run(parts: Parts, progress: bool = False, seed: int | None = None) -> Result
         if tick % check_every == 0:
             at_rest = math.sqrt(sum(v * v for v in state.v)) <= constants.AT_REST_SPEED_MM_S
             rest_since = (rest_since if rest_since is not None else t) if at_rest else None
-            s_now, seg_hint = seam.closest_near(tcp, seg_hint)
+            s_now = seam.closest_near(tcp, s_now)
+            check_t.append(t)
+            check_s.append(s_now)
             if s_now > s_best + constants.PROGRESS_EPS_MM:
                 s_best, t_progress = s_now, t
             if rest_since is not None and t - rest_since >= rest_window and not last_seen:
@@ -217,7 +221,9 @@ def run(parts: Parts, progress: bool = False, seed: int | None = None) -> Result
     if not status:
         status = "stalled"
 
-    trace = _trace(seam, dt, tcp_log, target_log, frame_t, frame_found, frame_points)
+    trace = _trace(
+        seam, dt, tcp_log, target_log, frame_t, frame_found, frame_points, (check_t, check_s)
+    )
     summary = _summary(trace, seam, status, cfg, time.perf_counter() - wall_start)
     summary["sense_wall_time_s"] = sense_time
     return Result(summary=summary, trace=trace)
@@ -251,11 +257,19 @@ def _trace(
     frame_t: array,
     frame_found: array,
     frame_points: array,
+    progress: tuple[array, array],
 ) -> Trace:
     tcp = np.frombuffer(tcp_log, dtype=np.float64).reshape(-1, 3).copy()
     target = np.frombuffer(target_log, dtype=np.float64).reshape(-1, 3).copy()
     n = len(tcp)
+    t_s = np.arange(n, dtype=np.float64) * dt
     closest = seam.closest(tcp)
+    # Progress along the seam, followed continuously during the run (so a stretch of seam
+    # that passes close by, like a hairpin's other leg, is not mistaken for progress); the
+    # error itself is the distance to the nearest point of the whole seam.
+    check_t = np.frombuffer(progress[0], dtype=np.float64)
+    check_s = np.frombuffer(progress[1], dtype=np.float64)
+    arc_length = np.interp(t_s, check_t, check_s) if len(check_t) else closest.arc_length_mm
     error_vec = tcp - closest.points
     seg = closest.segment
     tangent = seam.points[seg + 1] - seam.points[seg]
@@ -277,19 +291,19 @@ def _trace(
     if frames["found"].any():
         first_point = frames["point_world"][np.argmax(frames["found"])]
         s_first = float(seam.closest(first_point).arc_length_mm[0])
-        arc_on = np.flatnonzero(closest.arc_length_mm >= s_first - constants.PROGRESS_EPS_MM)
+        arc_on = np.flatnonzero(arc_length >= s_first - constants.PROGRESS_EPS_MM)
         if len(arc_on):
             welding[arc_on[0] :] = True
         # Past the seam's end the torch is off the joint: that is overrun, not welding.
-        at_end = np.flatnonzero(closest.arc_length_mm >= seam.length_mm - 1e-9)
+        at_end = np.flatnonzero(arc_length >= seam.length_mm - 1e-9)
         if len(at_end):
             welding[at_end[0] + 1 :] = False
     return Trace(
-        t_s=np.arange(n, dtype=np.float64) * dt,
+        t_s=t_s,
         tcp_world=tcp,
         target_world=target,
         closest_world=closest.points,
-        arc_length_mm=closest.arc_length_mm,
+        arc_length_mm=arc_length,
         error_mm=closest.distance_mm,
         error_lateral_mm=np.sum(error_vec * lateral, axis=1),
         error_vertical_mm=np.sum(error_vec * normal, axis=1),

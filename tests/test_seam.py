@@ -111,7 +111,16 @@ def test_closest_near_matches_the_global_search(paper_seam: Seam) -> None:
     rng = np.random.default_rng(5)
     s = np.sort(rng.uniform(0, paper_seam.length_mm, 300))
     path = paper_seam.interpolate(s) + rng.normal(0, 0.5, (300, 3))
-    hint = 0
+    s_near = 0.0
     for p in path:
-        s_near, hint = paper_seam.closest_near(p, hint)
+        s_near = paper_seam.closest_near(p, s_near)
         assert s_near == pytest.approx(float(paper_seam.closest(p).arc_length_mm[0]), abs=1e-9)
+
+
+def test_closest_near_follows_the_leg_it_is_on() -> None:
+    """A hairpin whose return leg passes 0.5 mm from the first: near the start, the closest
+    point overall is on the return leg, but the torch is on the first."""
+    seam = Seam.from_points([[0, 0, 0], [50, 0, 0], [0.0, 0.5, 0]])
+    assert float(seam.closest([0.0, 0.4, 0.0]).arc_length_mm[0]) > 90
+    assert seam.closest_near([0.0, 0.4, 0.0], 0.0) == pytest.approx(0.0)
+    assert seam.closest_near([30.0, 0.1, 0.0], 28.0) == pytest.approx(30.0)
