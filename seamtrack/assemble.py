@@ -71,6 +71,8 @@ class Parts:
     sensor_resolution_mm: float
     look_ahead_mm: float
     scan: ScanFn | None = None  # mesh mode: the stripe profile and the feature found in it
+    sensor: LaserLineSensor | None = None
+    mesh: Any = None  # mesh mode: the ray-cast scene (workpiece and obstacles, world frame)
 
 
 def make_sensor(cfg: SensorConfig) -> LaserLineSensor:
@@ -144,7 +146,7 @@ def make_tracker(scene: Scene) -> Tracker:
 
 def _mesh_scan(
     scene: Scene, sensor: LaserLineSensor, rng: np.random.Generator
-) -> tuple[Seam, ScanFn]:
+) -> tuple[Seam, ScanFn, Any]:
     """The workpiece's CAD seam (world frame) and the per-frame scan: ray-cast stripe, then the
     scene's feature extractor."""
     from .features import extractor
@@ -200,7 +202,7 @@ def _mesh_scan(
             )
         return profile, feature
 
-    return seam, scan
+    return seam, scan, mesh
 
 
 def _stripe_noise(params: dict[str, Any]) -> Any:
@@ -225,8 +227,9 @@ def build_parts(scene: Scene, rng: np.random.Generator | None = None) -> Parts:
     sensor = make_sensor(c.sensor)
     robot = make_robot(scene, sensor)
     scan: ScanFn | None = None
+    mesh: Any = None
     if c.sensor.mode == "mesh":
-        seam, scan = _mesh_scan(scene, sensor, rng)
+        seam, scan, mesh = _mesh_scan(scene, sensor, rng)
         if c.seam.source != "workpiece":
             seam = make_seam(scene)  # a nominal seam to score against (e.g. a robot program)
         mesh_scan = scan
@@ -277,4 +280,6 @@ def build_parts(scene: Scene, rng: np.random.Generator | None = None) -> Parts:
         sensor_resolution_mm=sensor.lateral_resolution_mm,
         look_ahead_mm=c.sensor.look_ahead_mm,
         scan=scan,
+        sensor=sensor,
+        mesh=mesh,
     )

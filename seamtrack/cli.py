@@ -70,12 +70,52 @@ def cmd_run(args: argparse.Namespace) -> int:
         result, out, scene.to_toml(), scene.config.simulation.trace_period_s, plot=not args.no_plot
     )
     if not args.quiet:
-        rows = [(k, v) for k, v in result.summary.items()]
-        print_table(rows, f"seamtrack run {scene.name}")
+        print_table(list(result.summary.items()), f"seamtrack run {scene.name}")
         print(
             f"wrote {out}/summary.json, trace.csv, frames.csv, scene.toml"
             + ("" if args.no_plot else ", error.png")
         )
+    if args.render:
+        from .viz_run import render_run
+
+        paths = render_run(scene, result, out, progress=_progress_wanted(args))
+        if not args.quiet:
+            print("wrote " + ", ".join(str(p) for p in paths))
+    return 0
+
+
+def cmd_view(args: argparse.Namespace) -> int:
+    from .viz_run import view_command
+
+    path = view_command(args.scene, args.at, args.out, overrides=_overrides(args))
+    print(f"wrote {path}")
+    return 0
+
+
+def cmd_extractors(args: argparse.Namespace) -> int:
+    if args.action == "list":
+        from .features import available_extractors
+
+        for name in available_extractors():
+            print(name)
+        return 0
+    from .extractors_bench import bench_extractors
+    from .output import prepare_dir
+
+    out = prepare_dir(args.out)
+    bench_extractors(out, quick=args.quick, progress=_progress_wanted(args))
+    print((out / "extractors.md").read_text(), end="")
+    print(f"wrote {out}/extractors.csv, extractors.md, extractors_error_vs_noise.png")
+    return 0
+
+
+def cmd_cache(args: argparse.Namespace) -> int:
+    from .workpiece import cache_dir, clear_cache
+
+    if args.action == "clear":
+        print(f"removed {clear_cache()} cache entries from {cache_dir()}")
+    else:
+        print(cache_dir())
     return 0
 
 
@@ -346,6 +386,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--out", help="output folder (default: runs/<scene name>)")
     p.add_argument("--no-plot", action="store_true", help="skip error.png")
+    p.add_argument(
+        "--render", action="store_true", help="also write scene.png and run.gif (3D views, PyVista)"
+    )
     p.add_argument("-q", "--quiet", action="store_true")
 
     p = add("init", cmd_init, "write a complete, commented scene file from a template")
@@ -399,6 +442,34 @@ def build_parser() -> argparse.ArgumentParser:
         help="arc length along the seam, mm (default 0)",
     )
     p.add_argument("--out", help="CSV file (a PNG plot is written beside it in mesh mode)")
+
+    p = add(
+        "view",
+        cmd_view,
+        "render a scene (part, seam, sensor, laser fan, field of view, stripe) to a PNG",
+    )
+    p.add_argument("scene")
+    p.add_argument(
+        "--at",
+        type=float,
+        default=None,
+        metavar="S_MM",
+        help="torch position along the seam, mm (default: mid-seam)",
+    )
+    p.add_argument("--out", help="PNG to write (default: <scene>-view.png)")
+
+    p = add(
+        "extractors",
+        cmd_extractors,
+        "feature extractors: list them, or score them on synthetic profiles (bench)",
+    )
+    p.add_argument("action", choices=["bench", "list"])
+    p.add_argument("--out", default="bench-results/extractors")
+    p.add_argument("--quick", action="store_true")
+    p.add_argument("-q", "--quiet", action="store_true")
+
+    p = add("cache", cmd_cache, "the workpiece mesh cache: where it is, or clear it")
+    p.add_argument("action", choices=["dir", "clear"], nargs="?", default="dir")
 
     p = add("bench", cmd_bench, "benchmarks; results go to a JSON and a markdown table")
     p.add_argument(

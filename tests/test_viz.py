@@ -30,7 +30,7 @@ from seamtrack.sensor import preset
 pv = pytest.importorskip("pyvista")
 trimesh = pytest.importorskip("trimesh")
 
-from seamtrack import viz  # noqa: E402  (after the skip: needs pyvista)
+from seamtrack import viz, viz_run  # noqa: E402  (after the skip: needs pyvista)
 
 CACHE = Path(__file__).parent / "image_cache"
 UPDATE_ENV = "SEAMTRACK_UPDATE_IMAGES"
@@ -155,7 +155,8 @@ def test_view_command_writes_png_without_display(tmp_path: Path) -> None:
     }
     out = tmp_path / "view.png"
     code = (
-        "import sys; from seamtrack.viz import view_command, has_display\n"
+        "from seamtrack.viz import has_display\n"
+        "from seamtrack.viz_run import view_command\n"
         "assert not has_display()\n"
         f"print(view_command('paper-corner', 50.0, {str(out)!r}, window_size=(320, 240)))\n"
     )
@@ -175,7 +176,7 @@ def test_view_command_writes_png_without_display(tmp_path: Path) -> None:
 
 def test_view_command_rejects_a_position_off_the_seam(tmp_path: Path) -> None:
     with pytest.raises(st.SeamtrackError, match="--at"):
-        viz.view_command("paper-corner", 1e4, tmp_path / "x.png")
+        viz_run.view_command("paper-corner", 1e4, tmp_path / "x.png")
 
 
 def test_render_run_writes_scene_png_and_animated_gif(tmp_path: Path) -> None:
@@ -183,7 +184,7 @@ def test_render_run_writes_scene_png_and_animated_gif(tmp_path: Path) -> None:
 
     scene = st.load_scene("paper-verification", {"seam.length_mm": 20.0})
     result = st.simulate(scene)
-    png, gif = viz.render_run(scene, result, tmp_path, frames=4)
+    png, gif = viz_run.render_run(scene, result, tmp_path, frames=4)
     assert png.name == "scene.png" and png.stat().st_size > 1000
     with Image.open(gif) as image:
         assert image.format == "GIF" and image.n_frames == 4
