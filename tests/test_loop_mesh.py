@@ -1,0 +1,144 @@
+"""Closing the loop on real geometry: CAD part -> mesh -> ray-cast stripe -> extractor ->
+tracker -> robot, scored against the CAD seam."""
+
+from __future__ import annotations
+
+import itertools
+
+import numpy as np
+import pytest
+
+import seamtrack as st
+from seamtrack.scan import sense_seam
+from seamtrack.scene import builtin_scenes, load_scene
+
+pytestmark = [pytest.mark.cad, pytest.mark.embree]
+
+MESH_SCENES = sorted(
+    name for name in builtin_scenes() if load_scene(name).config.sensor.mode == "mesh"
+)
+
+
+def test_there_is_a_mesh_scene_for_every_joint_family() -> None:
+    from seamtrack.workpiece import builtin_joints
+
+    scripts = {load_scene(name).config.workpiece.script for name in MESH_SCENES}  # type: ignore[union-attr]
+    assert set(builtin_joints()) <= scripts
+    paths = {load_scene(n).config.workpiece.params.get("path") for n in MESH_SCENES}  # type: ignore[union-attr]
+    assert {"paper", "corner"} <= paths
+
+
+# paper-v-groove and tacks-and-clamp have tests of their own below.
+@pytest.mark.parametrize(
+    "name", [n for n in MESH_SCENES if n not in ("paper-v-groove", "tacks-and-clamp")]
+)
+def test_every_mesh_scene_completes_with_the_trajectory_tracker(name: str) -> None:
+    s = st.simulate(load_scene(name)).summary
+    assert s["status"] == "completed", s
+    assert s["completed_fraction"] > 0.99
+    assert s["mean_speed_mm_s"] == pytest.approx(s["welding_speed_mm_s"], rel=0.05)
+    # Straight joints are tracked to the extractor's accuracy; the corner and the tacks are
+    # bounded by the cornering and the bridging.
+    assert s["max_error_mm"] <= (2.0 if name in ("v-groove-corner",) else 0.5)
+
+
+@pytest.fixture(scope="module")
+def paper_5() -> st.Result:
+    return st.simulate(load_scene("paper-v-groove"))
+
+
+def test_paper_curve_as_v_groove_at_5_mm_s_within_0_1_mm(paper_5: st.Result) -> None:
+    s = paper_5.summary
+    assert s["status"] == "completed"
+    assert s["max_error_mm"] <= 0.1
+    assert s["mean_speed_mm_s"] == pytest.approx(5.0, rel=0.01)
+
+
+def test_paper_curve_as_v_groove_at_20_mm_s_within_0_5_mm() -> None:
+    s = st.simulate(load_scene("paper-v-groove", {"simulation.welding_speed_mm_s": 20.0})).summary
+    assert s["status"] == "completed"
+    assert s["max_error_mm"] <= 0.5
+    assert s["mean_speed_mm_s"] == pytest.approx(20.0, rel=0.02)
+
+
+def test_mesh_mode_and_seam_mode_agree_on_the_papers_seam() -> None:
+    """At the same poses, the seam point the extractor finds in the ray-cast stripe and the
+    crossing of the laser plane with the CAD seam (the paper's seam mode) agree within the
+    sensor's resolution."""
+    parts = load_scene("paper-v-groove").build()
+    assert parts.scan is not None and parts.sensor is not None
+    arc = np.linspace(5.0, parts.seam.length_mm - 20.0, 60)
+    diffs = []
+    for tcp in parts.seam.interpolate(arc):
+        T = parts.robot.T_world_sensor(parts.robot.q_from_world(tcp))
+        _, mesh_point = parts.scan(T, 0.0)
+        seam_point = sense_seam(parts.seam, T, parts.sensor)
+        assert mesh_point and seam_point
+        diffs.append(np.linalg.norm(mesh_point.point_world - seam_point.point_world))
+    assert max(diffs) <= 2 * parts.sensor.lateral_resolution_mm
+
+
+def test_tacks_and_a_clamp_are_bridged() -> None:
+    result = st.simulate(load_scene("tacks-and-clamp"))
+    s = result.summary
+    assert s["status"] == "completed"
+    f = result.trace.frames
+    # Frames without a seam point in mid-seam (under the clamp's shadow, on tacks) were bridged.
+    mid = (f["t_capture_s"] > 1.0) & (f["t_capture_s"] < 0.8 * s["sim_time_s"])
+    assert np.count_nonzero(~f["found"][mid]) >= 50
+    assert s["max_error_mm"] <= 0.5
+
+
+def test_a_part_that_ends_early_stops_with_lost_seam_at_the_right_distance() -> None:
+    """The robot expects a 150 mm seam (the scored one); the part is 100 mm long. The torch
+    bridges past the part's end by tracker.params.bridge_mm and stops."""
+    scene = load_scene(
+        "lap",
+        {
+            "seam.source": "points",
+            "seam.points_mm": [[0.0, 0.0, 0.0], [150.0, 0.0, 0.0]],
+            "workpiece.params.seam_length_mm": 100.0,
+        },
+    )
+    result = st.simulate(scene)
+    s = result.summary
+    assert s["status"] == "lost_seam"
+    reached = float(result.trace.arc_length_mm.max())
+    bridge = scene.config.tracker.params["bridge_mm"]
+    assert 100.0 - 1.0 <= reached <= 100.0 + bridge + 1.0
+
+
+@pytest.fixture(scope="module")
+def latency_runs() -> dict[tuple[bool, float], dict]:
+    out = {}
+    for capture_pose in (True, False):
+        for latency in (0.0, 0.025, 0.05, 0.1):
+            scene = load_scene(
+                "paper-verification",
+                {
+                    "tracker.name": "trajectory",
+                    "sensor.frame_rate_hz": 100.0,
+                    "simulation.welding_speed_mm_s": 20.0,
+                    "sensor.latency_s": latency,
+                    "tracker.params.use_capture_pose": capture_pose,
+                    "seam.length_mm": 200.0,
+                },
+            )
+            out[capture_pose, latency] = st.simulate(scene).summary
+    return out
+
+
+def test_latency_is_compensated_with_the_capture_pose(latency_runs) -> None:
+    rms = [latency_runs[True, lat]["rms_error_mm"] for lat in (0.0, 0.025, 0.05, 0.1)]
+    assert all(latency_runs[True, lat]["status"] == "completed" for lat in (0.0, 0.1))
+    # Placed with the pose at capture, a late frame is still right: the error hardly moves.
+    assert max(rms) <= 1.2 * min(rms) + 0.002
+
+
+def test_latency_degrades_a_naive_tracker_gracefully_and_monotonically(latency_runs) -> None:
+    rms = [latency_runs[False, lat]["rms_error_mm"] for lat in (0.0, 0.025, 0.05, 0.1)]
+    assert all(b >= a for a, b in itertools.pairwise(rms))
+    assert rms[-1] > 3 * rms[0]
+    assert all(latency_runs[False, lat]["status"] == "completed" for lat in (0.0, 0.1))
+    # Graceful: bounded, not a loss of the seam.
+    assert latency_runs[False, 0.1]["max_error_mm"] < 1.0
