@@ -498,11 +498,18 @@ def bench_loop(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]:
     return result_dict
 
 
+def _bench_tradeoff(out: Path, quick: bool) -> Any:
+    from .bench_tradeoff import bench_tradeoff
+
+    return bench_tradeoff(out, quick=quick)
+
+
 BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "raycast": lambda out, quick: bench_raycast(out, quick=quick),
     "extractors": _bench_extractors,
     "mesh": _bench_mesh,
     "loop": lambda out, quick: bench_loop(out, quick=quick),
+    "tradeoff": _bench_tradeoff,
     "sweep": lambda out, quick: bench_sweep(out, quick=quick),
 }
 
