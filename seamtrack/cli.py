@@ -271,16 +271,24 @@ def cmd_sweep(args: argparse.Namespace) -> int:
 
 
 def cmd_compare(args: argparse.Namespace) -> int:
+    """Each tracker on the same scene: a sweep over the whole ``[tracker]`` table, so the
+    scene's own tracker keeps its parameters and the others run with their defaults."""
+    from .scene import load_scene, parse_override
     from .sweep import markdown_table, run_sweep, summarize, write_sweep
+    from .trackers import ALIASES
 
     trackers = [t.strip() for t in args.trackers.split(",") if t.strip()]
-    from .scene import parse_override
-
     overrides = dict(parse_override(o) for o in _overrides(args))
+    own = load_scene(args.scene, overrides).config.tracker
+    own_name = ALIASES.get(own.name, own.name)
+    values = [
+        own.model_dump(exclude_none=True) if ALIASES.get(name, name) == own_name else {"name": name}
+        for name in trackers
+    ]
     rows = run_sweep(
         args.scene,
-        "tracker.name",
-        trackers,
+        "tracker",
+        values,
         overrides=overrides,
         workers=args.workers,
         out_dir=args.out,
@@ -289,7 +297,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
     table = summarize(rows)
     print(markdown_table(table, "tracker"), end="")
     if args.out:
-        write_sweep(table, "tracker.name", args.out, plot=False)
+        write_sweep(table, "tracker", args.out, plot=False)
     return 0
 
 

@@ -229,12 +229,19 @@ def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
     return table
 
 
+def _label(value: Any) -> str:
+    """A table cell for a swept value (a replaced table shows its ``name``)."""
+    if isinstance(value, dict) and "name" in value:
+        return str(value["name"])
+    return json.dumps(value)
+
+
 def markdown_table(table: Sequence[dict[str, Any]], param: str) -> str:
     """The sweep table as markdown (error columns to 3-4 significant digits)."""
     header = [param, *TABLE_KEYS]
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     for row in table:
-        cells = [json.dumps(row["value"])]
+        cells = [_label(row["value"])]
         if "error" in row:
             cells += [f"error: {row['error']}"] + [""] * (len(TABLE_KEYS) - 1)
         else:

@@ -178,7 +178,9 @@ class TrajectoryTracker:
         self._held = self._held[int(spanning[-1]) :]
         held = held[int(spanning[-1]) :]
         if len(held) < 3:
-            return False
+            # Sparse frames (1 frame/s: points 5 mm apart): two points that span the length
+            # are the evidence there is.
+            return len(held) == 2
         centred = held - held.mean(axis=0)
         direction = np.linalg.svd(centred, full_matrices=False)[2][0]
         off = centred - np.outer(centred @ direction, direction)
