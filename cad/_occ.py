@@ -280,7 +280,7 @@ def triangulation(shape: cq.Shape) -> tuple[FloatArray, NDArray[np.int64], float
         all_v.append(nodes)
         all_f.append(tris + offset)
         offset += len(nodes)
-    return np.vstack(all_v), np.vstack(all_f), deviation
+    return np.vstack(all_v), np.vstack(all_f), float(deviation)
 
 
 def _probes(corners: FloatArray) -> FloatArray:

@@ -30,15 +30,17 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
-import trimesh
 from numpy.typing import ArrayLike, NDArray
 
 from . import __version__
 from .errors import WorkpieceError
 from .seam import Seam
+
+if TYPE_CHECKING:
+    import trimesh
 
 FloatArray = NDArray[np.float64]
 
@@ -285,7 +287,7 @@ def _run_script(path: Path, params: dict[str, Any]) -> tuple[Any, Any, dict[str,
         raise WorkpieceError(
             f"{path.name} build() failed: {exc}",
             field=where,
-            fix="change that parameter"
+            fix=f"change {param} (the script's docstring says what it means)"
             if param
             else "check the parameters against the script's docstring",
         ) from exc
@@ -438,6 +440,8 @@ def load_workpiece(
             field="workpiece.seam_spacing_mm",
             fix="give e.g. 1.0 (mm)",
         )
+    import trimesh  # here, not at import: seam-mode scenes never load it
+
     kind, path = _resolve(source)
     if kind == "step" and params:
         name = next(iter(params))
