@@ -4,7 +4,7 @@ Cases run in a local process pool (``workers``, default 1) or on a Dask cluster
 (``scheduler="tcp://host:port"``, needs the ``dask`` extra). Each finished case is appended to
 ``results.jsonl`` in the output folder as it finishes, so a killed sweep loses nothing: a rerun
 skips the cases already there. A case that fails is recorded with its error and the sweep goes
-on.
+on; a rerun tries the failed cases again.
 """
 
 from __future__ import annotations
@@ -91,8 +91,9 @@ def run_case(scene: str, case: Case, overrides: dict[str, Any]) -> dict[str, Any
 
 
 def _done(results_path: Path) -> dict[str, dict[str, Any]]:
-    """The cases already in ``results.jsonl``; a last line cut by a kill is dropped from the
-    file (that case runs again), so that new rows start on a line of their own."""
+    """The cases already finished in ``results.jsonl``; a last line cut by a kill is dropped
+    from the file (that case runs again), so that new rows start on a line of their own. A case
+    that failed is not finished: a rerun tries it again (its cause may have been fixed)."""
     done: dict[str, dict[str, Any]] = {}
     if not results_path.exists():
         return done
@@ -105,7 +106,7 @@ def _done(results_path: Path) -> dict[str, dict[str, Any]]:
             row = json.loads(line)
         except json.JSONDecodeError:
             continue  # a damaged line: that case runs again
-        if isinstance(row, dict) and "case" in row:
+        if isinstance(row, dict) and "case" in row and "summary" in row:
             done[row["case"]] = row
     return done
 
