@@ -8,9 +8,10 @@ The sweep keeps that frame (fixed binormal +Z), so plates stay "flat" the way th
 path, so the seam edge of the solid reproduces the path within the sweep tolerance.
 
 Paths (``path=``): ``"straight"`` (+X from the origin), ``"arc"`` (circular, turning left in
-the XY plane), ``"paper"`` (Eq. 15-17: X = 0..L, Y = 10 cos(pi X/200), Z = 10 sin(pi X/200),
-interpolated through 2 mm samples with exact end tangents), ``"corner"`` (two straight legs in
-the XY plane with a sharp turn).
+the XY plane), ``"corner"`` (two straight legs in the XY plane with a sharp, mitred turn), all
+swept with OCCT's ``MakePipeShell`` (exact planes, cylinders and cones); and ``"paper"`` (Eq.
+15-17: X = 0..L, Y = 10 cos(pi X/200), Z = 10 sin(pi X/200)), built from the exact
+parametrization by :func:`sweep_paper` (rails through 2 mm samples, ruled faces between them).
 
 The result of every ``build(**params)`` is a :class:`Joint`.
 """
