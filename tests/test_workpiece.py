@@ -188,6 +188,7 @@ def _timed_load_in_subprocess(script: Path, cache: Path, **params) -> dict:
     code = textwrap.dedent(
         f"""
         import json, sys, time
+        import trimesh  # both loads need it; the timing is about CAD work versus the cache
         from seamtrack.workpiece import load_workpiece
         t0 = time.perf_counter()
         part = load_workpiece({str(script)!r}, tolerance_mm=0.01, cache_dir={str(cache)!r},
