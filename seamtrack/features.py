@@ -437,11 +437,11 @@ class GenericExtractor:
         # centred first, so that the sums do not cancel).
         q = p - p[m // 2]
         cs = np.zeros((m + 1, 5))
-        np.cumsum(q[:, 0], out=cs[1:, 0])
-        np.cumsum(q[:, 1], out=cs[1:, 1])
-        np.cumsum(q[:, 0] * q[:, 0], out=cs[1:, 2])
-        np.cumsum(q[:, 1] * q[:, 1], out=cs[1:, 3])
-        np.cumsum(q[:, 0] * q[:, 1], out=cs[1:, 4])
+        terms = cs[1:]
+        terms[:, :2] = q
+        terms[:, 2:4] = q * q
+        terms[:, 4] = q[:, 0] * q[:, 1]
+        np.cumsum(terms, axis=0, out=terms)  # all five window sums in one pass
         sy, sz, syy, szz, syz = (cs[k:] - cs[:-k]).T
         cyy, czz, cyz = syy - sy * sy / k, szz - sz * sz / k, syz - sy * sz / k
         theta = 0.5 * np.arctan2(2 * cyz, cyy - czz)

@@ -82,7 +82,7 @@ class Line:
 def _fit(points: FloatArray, index: NDArray[np.intp]) -> Line:
     """Total-least-squares line through ``points[index]`` (column order kept)."""
     p = points[index]
-    c = p.mean(axis=0)
+    c = p.sum(axis=0) / len(p)  # (sum / n: np.mean's overhead is most of the cost here)
     q = p - c
     syy, szz, syz = float(q[:, 0] @ q[:, 0]), float(q[:, 1] @ q[:, 1]), float(q[:, 0] @ q[:, 1])
     theta = 0.5 * math.atan2(2.0 * syz, syy - szz)
@@ -91,7 +91,7 @@ def _fit(points: FloatArray, index: NDArray[np.intp]) -> Line:
         u = -u
     t = q @ u
     r = q @ np.array([-u[1], u[0]])
-    return Line(index, c, u, t, float(np.sqrt(np.mean(r * r))))
+    return Line(index, c, u, t, math.sqrt(float(r @ r) / len(r)))
 
 
 @dataclass
@@ -116,9 +116,14 @@ def kept_points(profile: Profile) -> FloatArray:
 
 
 def _median(x: FloatArray) -> float:
-    """Upper median, without ``np.median``'s overhead (0 for an empty array)."""
+    """Upper median, without ``np.median``'s overhead (0 for an empty array).
+
+    A full sort, not ``np.partition``: on quantized profiles most values repeat (second
+    differences are mostly 0 or one pixel step), and introselect then takes ~70 us for 1000
+    values where the sort takes 7 us.
+    """
     n = len(x)
-    return float(np.partition(x, n // 2)[n // 2]) if n else 0.0
+    return float(np.sort(x)[n // 2]) if n else 0.0
 
 
 def _spacing(points: FloatArray) -> float:
