@@ -84,6 +84,25 @@ class Profile:
                 self, "T_world_sensor", np.asarray(self.T_world_sensor, dtype=np.float64)
             )
 
+    @classmethod
+    def _trusted(
+        cls,
+        points_laser: FloatArray,
+        reason: NDArray[np.uint8],
+        T_world_sensor: FloatArray | None,
+        t_s: float,
+    ) -> Profile:
+        """A profile from arrays the caller guarantees: (n, 2) float64 points, uint8 reasons
+        with valid points exactly where the reason is VALID (and only finite ones there). The
+        ray caster builds one per sensor frame; this skips the checks of ``__init__``."""
+        profile = object.__new__(cls)
+        object.__setattr__(profile, "points_laser", points_laser)
+        object.__setattr__(profile, "valid", reason == _VALID)
+        object.__setattr__(profile, "reason", reason)
+        object.__setattr__(profile, "T_world_sensor", T_world_sensor)
+        object.__setattr__(profile, "t_s", t_s)
+        return profile
+
     def __len__(self) -> int:
         return len(self.points_laser)
 

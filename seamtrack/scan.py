@@ -380,7 +380,9 @@ def scan_mesh(
     if noisy:
         assert noise is not None and rng is not None
         points, reason = _apply_stripe_noise(sensor, caster, T, hits, noise, rng)
-    return Profile(points, valid=reason == 0, reason=reason, T_world_sensor=T, t_s=t_s)
+    # stripe_hits (and the noise models) leave valid points exactly where reason == VALID, and
+    # those finite: the checks of Profile() are not needed on this per-frame path.
+    return Profile._trusted(points, reason, T, t_s)
 
 
 # --------------------------------------------------------------------------- realism knobs
