@@ -37,13 +37,9 @@ from .lines import (
     Segments,
     _angle,
     _fit,
-    _median5,
-    _spacing,
     collinear_groups,
     corner_or_end,
     intersect,
-    kept_points,
-    noise_sigma,
     segment_profile,
 )
 from .profiles import Feature, Profile
@@ -415,44 +411,25 @@ class GenericExtractor:
             return Feature.failed(f"generic: unusable profile ({exc})", joint=self.name)
 
     def _extract(self, profile: Profile) -> Feature:
-        p = kept_points(profile)
-        m = len(p)
-        if m < 4 * self.min_points:
-            return Feature.failed(f"too few valid points ({m})", joint=self.name)
-        spacing = _spacing(p)
-        if not spacing > 0:
+        from .generic_kernel import front_end, window_turns
+
+        points = np.ascontiguousarray(profile.points_laser, dtype=np.float64).reshape(-1, 2)
+        valid = np.asarray(profile.valid, dtype=bool).reshape(-1)
+        if valid.shape != (len(points),):
+            return Feature.failed("valid does not match the points", joint=self.name)
+        code, p, spacing, sigma = front_end(points, valid, _MAX_ABS_MM, 4 * self.min_points)
+        if code == 1:
+            return Feature.failed(f"too few valid points ({len(p)})", joint=self.name)
+        if code == 2:
             return Feature.failed("the valid points do not spread out", joint=self.name)
-        sigma = noise_sigma(p)
-        keep = np.abs(p[:, 1] - _median5(p[:, 1])) <= max(6 * sigma, 0.12, 4 * spacing)
-        p = p[keep]
         m = len(p)
-        d = p[1:] - p[:-1]
-        gaps = np.sqrt(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1])
         k = min(max(round(max(self.window_mm, 20 * sigma) / spacing), 4), max(4, m // 4))
         if m < 2 * k + 2:
             return Feature.failed("too few points for the slope window", joint=self.name)
         jump_mm = max(6 * spacing, 8 * sigma, 0.1)
-        jump = gaps > jump_mm
-        # Window sums -> total-least-squares direction of each k-point window (coordinates
-        # centred first, so that the sums do not cancel).
-        q = p - p[m // 2]
-        cs = np.zeros((m + 1, 5))
-        terms = cs[1:]
-        terms[:, :2] = q
-        terms[:, 2:4] = q * q
-        terms[:, 4] = q[:, 0] * q[:, 1]
-        np.cumsum(terms, axis=0, out=terms)  # all five window sums in one pass
-        sy, sz, syy, szz, syz = (cs[k:] - cs[:-k]).T
-        cyy, czz, cyz = syy - sy * sy / k, szz - sz * sz / k, syz - sy * sz / k
-        theta = 0.5 * np.arctan2(2 * cyz, cyy - czz)
-        chord = p[k - 1 :] - p[: m - k + 1]
-        flip = np.cos(theta) * chord[:, 0] + np.sin(theta) * chord[:, 1] < 0
-        theta = theta + np.pi * flip
-        cj = np.concatenate([[0], np.cumsum(jump)])
-        turn = (theta[k:] - theta[:-k] + np.pi) % (2 * np.pi) - np.pi  # corner at i + k
-        n_turn = len(turn)
-        ok = cj[2 * k - 1 : 2 * k - 1 + n_turn] == cj[:n_turn]  # no jump in [i, i + 2k)
-        turn = np.where(ok, turn, 0.0)
+        # Total-least-squares direction of each k-point window (from window sums), and the
+        # turn between windows k apart where no jump lies between them.
+        gaps, turn = window_turns(p, k, jump_mm)
         min_turn = math.radians(self.min_turn_deg)
         i = int(np.argmin(turn))
         if turn[i] <= -min_turn:
