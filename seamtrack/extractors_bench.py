@@ -139,6 +139,7 @@ def bench_extractors(
         }
         for name, joint in jobs:
             ex = extractors[name]
+            ex(cache[joint][0][0])  # warm-up, untimed: a tracking loop runs in steady state
             errors, elapsed = [], 0.0
             for profile, truth in cache[joint]:
                 t0 = time.perf_counter()

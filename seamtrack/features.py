@@ -458,18 +458,15 @@ class GenericExtractor:
         return Feature.failed("no turn, gap or step in the profile", joint=self.name)
 
     def _corner(self, profile: Profile, p: FloatArray, c: int, k: int, turn: float) -> Feature:
-        guard = max(1, k // 2)
-        left = p[max(0, c - guard - 2 * k) : max(1, c - guard)]
-        right = p[c + guard : c + guard + 2 * k]
-        if len(left) < 3 or len(right) < 3:
+        from .generic_kernel import corner_point
+
+        code, y, z = corner_point(p, c, k)
+        if code:
             return Feature.failed("the corner is too near the profile's end", joint=self.name)
-        la = _fit(left, np.arange(len(left)))
-        lb = _fit(right, np.arange(len(right)))
-        x = intersect(la, lb)
-        if x is None or float(np.hypot(*(x - p[c]))) > 2 * k * (la.step(True) + 1e-9) + 1.0:
-            x = p[c]
         conf = float(np.clip(turn / math.radians(90), 0.0, 1.0))
-        return Feature.found(x, profile.T_world_sensor, joint=self.name, confidence=conf)
+        return Feature.found(
+            np.array([y, z]), profile.T_world_sensor, joint=self.name, confidence=conf
+        )
 
 
 # ----------------------------------------------------------------- registry
