@@ -400,9 +400,11 @@ def bench_sweep(out_dir: str | Path, quick: bool = False) -> dict:
 
 # --------------------------------------------------------------------------- dispatch
 def _bench_extractors(out: Path, quick: bool) -> Any:
+    import sys
+
     from .extractors_bench import bench_extractors
 
-    return bench_extractors(out, quick=quick)
+    return bench_extractors(out, quick=quick, progress=sys.stderr.isatty())
 
 
 def _bench_mesh(out: Path, quick: bool) -> Any:
