@@ -84,6 +84,12 @@ class TrajectoryTracker:
         over this length are accepted: the seam really turned or stepped.
     direction_fit_mm : float
         Length of stored path whose chord gives the direction for extrapolation.
+    corner_accel_fraction : float
+        Where the stored path turns, the set-point slows to sqrt(a / curvature), a being this
+        fraction of the set-point's acceleration limit, braking ahead of the turn in time; the
+        axes then turn the torch without cutting the corner. 0 switches it off.
+    curvature_window_mm : float
+        Arc length over which the turning of the stored path is measured.
     """
 
     name = "trajectory"
@@ -99,6 +105,8 @@ class TrajectoryTracker:
         use_capture_pose: bool = True,
         max_jump_mm: float = 0.5,
         reacquire_mm: float = 2.0,
+        corner_accel_fraction: float = 0.5,
+        curvature_window_mm: float = 1.0,
         direction_fit_mm: float = 5.0,
     ):
         self.buffer_mm = buffer_mm
@@ -110,6 +118,8 @@ class TrajectoryTracker:
         self.use_capture_pose = use_capture_pose
         self.max_jump_mm = max_jump_mm
         self.reacquire_mm = reacquire_mm
+        self.corner_accel_fraction = corner_accel_fraction
+        self.curvature_window_mm = curvature_window_mm
         self.direction_fit_mm = direction_fit_mm
 
     # ----------------------------------------------------------------- protocol
@@ -119,6 +129,8 @@ class TrajectoryTracker:
         # The set-point accelerates no faster than the weakest axis can follow.
         self.accel = 0.9 * float(np.min(context.acceleration_max_world))
         self._v_set = 0.0
+        self._env_s: list[float] = []  # arc lengths ahead of the set-point ...
+        self._env_v: list[float] = []  # ... and the speed allowed there (corners)
         start = np.asarray(context.tcp_start_world, dtype=float)
         self._raw: list[FloatArray] = [start]
         self._path: list[FloatArray] = [start]
@@ -166,6 +178,50 @@ class TrajectoryTracker:
         self._s.append(self._s[-1] + step)
         self._smooth_tail()
         self._trim()
+        self._corner_envelope()
+
+    def _corner_envelope(self) -> None:
+        """The speed the set-point may have at each stored point ahead: sqrt(a / curvature)
+        where the path turns, lowered so that braking at ``accel`` reaches every later limit
+        in time (a backward pass over the points ahead, once per stored point)."""
+        if self.corner_accel_fraction <= 0 or len(self._s) < 4:
+            return
+        w = self.curvature_window_mm
+        i0 = max(bisect.bisect_left(self._s, self._s_set - w), 1)
+        s = np.asarray(self._s[i0:])
+        if len(s) < 3:
+            self._env_s, self._env_v = [], []
+            return
+        p = np.asarray(self._path[i0:])
+        back = np.searchsorted(s, s - w)
+        fwd = np.minimum(np.searchsorted(s, s + w), len(s) - 1)
+        d1 = p - p[back]
+        d2 = p[fwd] - p
+        n1 = np.linalg.norm(d1, axis=1)
+        n2 = np.linalg.norm(d2, axis=1)
+        ok = (n1 > 0.5 * w) & (n2 > 0.5 * w)
+        cos = np.sum(d1 * d2, axis=1) / np.where(ok, n1 * n2, 1.0)
+        turn = np.where(ok, np.arccos(np.clip(cos, -1.0, 1.0)), 0.0)
+        curvature = turn / np.where(ok, 0.5 * (n1 + n2), 1.0)
+        a_lat = self.corner_accel_fraction * self.accel
+        v_allow = np.sqrt(a_lat / np.maximum(curvature, 1e-12))
+        v = v_allow.tolist()
+        for j in range(len(v) - 2, -1, -1):
+            v[j] = min(v[j], math.sqrt(v[j + 1] ** 2 + 2.0 * self.accel * (s[j + 1] - s[j])))
+        self._env_s, self._env_v = s.tolist(), v
+
+    def _corner_speed(self, s: float) -> float:
+        """The corner envelope at arc length s (no limit beyond the stored points)."""
+        knots = self._env_s
+        if not knots or s > knots[-1]:
+            return math.inf
+        i = bisect.bisect_right(knots, s) - 1
+        if i < 0:
+            return self._env_v[0]
+        if i >= len(knots) - 1:
+            return self._env_v[-1]
+        f = (s - knots[i]) / (knots[i + 1] - knots[i])
+        return self._env_v[i] + f * (self._env_v[i + 1] - self._env_v[i])
 
     def _reacquired(self) -> bool:
         """True when the newest held-back points span ``reacquire_mm`` and lie on one line;
@@ -198,9 +254,13 @@ class TrajectoryTracker:
         s_limit = self._s[-1] - (0.0 if self._lost else self.end_margin_mm) + self.bridge_mm
         # Set-point speed: ramp up at the acceleration limit, brake to stop at s_limit.
         room = max(s_limit - self._s_set, 0.0)
-        self._v_set = min(
-            self._v_set + self.accel * self.dt, self.speed, math.sqrt(2.0 * self.accel * room)
+        wanted = min(
+            self.speed, math.sqrt(2.0 * self.accel * room), self._corner_speed(self._s_set)
         )
+        # Speed up or brake at most at the acceleration limit: a limit that appears late (a
+        # corner just measured) is met as soon as braking allows, never by a jump in speed.
+        dv = self.accel * self.dt
+        self._v_set = min(max(wanted, self._v_set - dv), self._v_set + dv)
         step = min(self._v_set * self.dt, room)
         moving = step > 0.0
         self._s_set += step

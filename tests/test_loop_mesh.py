@@ -142,3 +142,21 @@ def test_latency_degrades_a_naive_tracker_gracefully_and_monotonically(latency_r
     assert all(latency_runs[False, lat]["status"] == "completed" for lat in (0.0, 0.1))
     # Graceful: bounded, not a loss of the seam.
     assert latency_runs[False, 0.1]["max_error_mm"] < 1.0
+
+
+def test_the_trajectory_tracker_slows_for_a_corner_and_cuts_it_less() -> None:
+    """A clean 45 deg corner (seam mode, 100 frames/s, 10 mm/s): the curvature envelope
+    brakes the set-point before the turn."""
+    base = {
+        "tracker.name": "trajectory",
+        "sensor.frame_rate_hz": 100.0,
+        "simulation.welding_speed_mm_s": 10.0,
+    }
+    slowed = st.simulate(load_scene("paper-corner", base)).summary
+    kept = st.simulate(
+        load_scene("paper-corner", {**base, "tracker.params": {"corner_accel_fraction": 0.0}})
+    ).summary
+    assert slowed["status"] == kept["status"] == "completed"
+    assert slowed["max_error_mm"] < 0.5 * kept["max_error_mm"]
+    assert slowed["mean_speed_mm_s"] < kept["mean_speed_mm_s"]
+    assert slowed["mean_speed_mm_s"] > 0.9 * 10.0
