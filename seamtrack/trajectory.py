@@ -187,6 +187,10 @@ class TrajectoryTracker:
         if self.corner_accel_fraction <= 0 or len(self._s) < 4:
             return
         w = self.curvature_window_mm
+        # The envelope reaches the look-ahead's length ahead; refreshing it each time the path
+        # has grown by half the curvature window keeps it current at a fraction of the cost.
+        if self._env_s and self._s[-1] - self._env_s[-1] < 0.5 * w:
+            return
         i0 = max(bisect.bisect_left(self._s, self._s_set - w), 1)
         s = np.asarray(self._s[i0:])
         if len(s) < 3:
@@ -205,10 +209,12 @@ class TrajectoryTracker:
         curvature = turn / np.where(ok, 0.5 * (n1 + n2), 1.0)
         a_lat = self.corner_accel_fraction * self.accel
         v_allow = np.sqrt(a_lat / np.maximum(curvature, 1e-12))
-        v = v_allow.tolist()
-        for j in range(len(v) - 2, -1, -1):
-            v[j] = min(v[j], math.sqrt(v[j + 1] ** 2 + 2.0 * self.accel * (s[j + 1] - s[j])))
-        self._env_s, self._env_v = s.tolist(), v
+        # Braking backwards from every later limit: v(s_j)^2 = min over i >= j of
+        # v_allow_i^2 + 2 a (s_i - s_j), a suffix minimum.
+        reach = np.minimum(v_allow, self.speed) ** 2 + 2.0 * self.accel * s
+        suffix = np.minimum.accumulate(reach[::-1])[::-1]
+        v = np.sqrt(np.maximum(suffix - 2.0 * self.accel * s, 0.0))
+        self._env_s, self._env_v = s.tolist(), v.tolist()
 
     def _corner_speed(self, s: float) -> float:
         """The corner envelope at arc length s (no limit beyond the stored points)."""
