@@ -106,7 +106,7 @@ class TrajectoryTracker:
         max_jump_mm: float = 0.5,
         reacquire_mm: float = 2.0,
         corner_accel_fraction: float = 0.5,
-        curvature_window_mm: float = 1.0,
+        curvature_window_mm: float = 3.0,
         direction_fit_mm: float = 5.0,
     ):
         self.buffer_mm = buffer_mm
@@ -187,16 +187,19 @@ class TrajectoryTracker:
         if self.corner_accel_fraction <= 0 or len(self._s) < 4:
             return
         w = self.curvature_window_mm
-        # The envelope reaches the look-ahead's length ahead; refreshing it each time the path
-        # has grown by half the curvature window keeps it current at a fraction of the cost.
-        if self._env_s and self._s[-1] - self._env_s[-1] < 0.5 * w:
+        # Only the settled path: the last two smoothing windows are still re-fitted as points
+        # arrive, and curvature read there would be transient. (That tail lies a look-ahead
+        # ahead of the torch, beyond any braking distance.) Refreshing each time the settled
+        # path has grown by half the curvature window keeps the envelope current cheaply.
+        settled = bisect.bisect_right(self._s, self._s[-1] - 2.0 * max(self.smoothing_mm, 0.0))
+        if self._env_s and self._s[settled - 1] - self._env_s[-1] < 0.5 * w:
             return
         i0 = max(bisect.bisect_left(self._s, self._s_set - w), 1)
-        s = np.asarray(self._s[i0:])
+        s = np.asarray(self._s[i0:settled])
         if len(s) < 3:
             self._env_s, self._env_v = [], []
             return
-        p = np.asarray(self._path[i0:])
+        p = np.asarray(self._path[i0:settled])
         back = np.searchsorted(s, s - w)
         fwd = np.minimum(np.searchsorted(s, s + w), len(s) - 1)
         d1 = p - p[back]

@@ -12,10 +12,9 @@ import os
 import time
 from pathlib import Path
 
+import nbclient  # dev dependencies: a missing one must fail the suite, not skip it
+import nbformat
 import pytest
-
-nbformat = pytest.importorskip("nbformat")
-nbclient = pytest.importorskip("nbclient")
 
 NOTEBOOKS = sorted((Path(__file__).parents[1] / "notebooks").glob("*.ipynb"))
 #: Per-cell limit; every notebook takes well under a minute here.
