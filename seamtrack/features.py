@@ -285,6 +285,16 @@ def _plate_pairs(
     ]
 
 
+def _plate_candidates(
+    ex: Any, seg: Segments, join_hidden: bool
+) -> tuple[list[tuple[Line, Line, bool]], list[Line]]:
+    """The plate pairs of a two-plate extractor (square butt, lap), with its own limits, and
+    the long pieces that may meet a plate's end."""
+    pairs = _plate_pairs(seg, ex.min_points, ex.min_plate_mm, ex.max_tilt_deg, ex.min_gap_mm,
+                         ex.max_gap_mm, join_hidden=join_hidden)  # fmt: skip
+    return pairs, [ln for ln in seg.lines if ln.count >= ex.min_points]
+
+
 @dataclass(frozen=True)
 class SquareButtExtractor(_Base):
     """Square butt: two plates side by side with a gap and/or a high-low step between them.
@@ -297,16 +307,7 @@ class SquareButtExtractor(_Base):
     max_tilt_deg: float = 40.0
 
     def _extract(self, profile: Profile, seg: Segments) -> Feature:
-        pairs = _plate_pairs(
-            seg,
-            self.min_points,
-            self.min_plate_mm,
-            self.max_tilt_deg,
-            self.min_gap_mm,
-            self.max_gap_mm,
-            join_hidden=False,
-        )
-        others = [ln for ln in seg.lines if ln.count >= self.min_points]
+        pairs, others = _plate_candidates(self, seg, join_hidden=False)
         best, best_key = None, (False, 0.0)
         for a, b, hidden in pairs:
             ea, eb = corner_or_end(a, True, others, seg), corner_or_end(b, False, others, seg)
@@ -338,16 +339,7 @@ class LapExtractor(_Base):
     max_tilt_deg: float = 40.0
 
     def _extract(self, profile: Profile, seg: Segments) -> Feature:
-        pairs = _plate_pairs(
-            seg,
-            self.min_points,
-            self.min_plate_mm,
-            self.max_tilt_deg,
-            self.min_gap_mm,
-            self.max_gap_mm,
-            join_hidden=True,
-        )
-        others = [ln for ln in seg.lines if ln.count >= self.min_points]
+        pairs, others = _plate_candidates(self, seg, join_hidden=True)
         best, best_score = None, 0.0
         for a, b, _ in pairs:
             step = float((b.centroid - a.centroid) @ a.normal)  # > 0: b is deeper

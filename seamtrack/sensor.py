@@ -14,7 +14,7 @@ local resolutions dz/dx_c and dy/dz_c at each range (the paper's R_D and R_L are
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -376,10 +376,6 @@ class LaserLineSensor:
         from .scan import scan_mesh
 
         return scan_mesh(self, part, T_world_sensor, **kwargs)
-
-    def with_(self, **changes: Any) -> LaserLineSensor:
-        """A copy with fields replaced (``dataclasses.replace``)."""
-        return replace(self, **changes)
 
 
 def _whole_pixels(count: float) -> int:

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import importlib
 import inspect
-import math
 from collections import deque
 from dataclasses import dataclass, field
 from importlib.metadata import entry_points
@@ -241,7 +240,6 @@ class ConvergenceRadius:
         self.speed = context.welding_speed_mm_s
         self.queue = _PointQueue(self.min_spacing_mm)
         self._command: Command | None = None
-        self._last_len = 0
 
     def update(self, measurement: Measurement) -> None:
         if measurement:
@@ -376,7 +374,3 @@ def tracker(name: str, **params: Any) -> Tracker:
             fix="check the tracker's parameters",
         ) from None
     return instance
-
-
-def is_finite_point(point: FloatArray) -> bool:
-    return point.shape == (3,) and all(math.isfinite(x) for x in point)

@@ -362,8 +362,3 @@ class TrajectoryTracker:
         cut = bisect.bisect_left(self._s, self._s_set - self.buffer_mm) - 1
         if cut > 0:
             del self._raw[:cut], self._path[:cut], self._s[:cut]
-
-    @property
-    def lost(self) -> bool:
-        """True while frames come without a seam point (the bridge is in use)."""
-        return self._lost and not math.isnan(self._s_set)
