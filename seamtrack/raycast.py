@@ -13,8 +13,11 @@ grazing a face at ~1e-7 rad), Embree's own hit is kept: refinement never makes a
 Vertices that coincide exactly are welded for that neighbour search (a CAD mesh duplicates
 vertices along every B-rep edge, which is where the creases are); Embree sees the mesh as given.
 
-embreex's ``tnear`` is fixed at 0, so occlusion (shadow) rays start a small offset
-(:data:`seamtrack.constants.SHADOW_RAY_OFFSET_MM`) from the surface point towards their target.
+Embree is called in packets of 8 rays from numba (:mod:`seamtrack.embree`, on the library inside
+the embreex wheel), 1.3x (first hits) to 2.7x (shadow rays) faster than embreex's one-ray-at-a-time
+``scene.run``, which remains the fallback (``backend="embreex"``). Occlusion (shadow) rays start a
+small offset (:data:`seamtrack.constants.SHADOW_RAY_OFFSET_MM`) from the surface point towards
+their target, as embreex's fixed ``tnear = 0`` requires; both backends cast the same rays.
 """
 
 from __future__ import annotations
@@ -28,7 +31,7 @@ import numpy as np
 from embreex import mesh_construction, rtcore_scene
 from numpy.typing import ArrayLike, NDArray
 
-from . import constants
+from . import constants, embree
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -248,9 +251,9 @@ def fan_stripe_hits(
     face_out: NDArray[np.int64],
     cos_incidence: NDArray[np.float64],
     chip: NDArray[np.float64],
-    shadow_origins: NDArray[np.float32],
-    shadow_directions: NDArray[np.float32],
-    shadow_far: NDArray[np.float32],
+    shadow_origins: NDArray[np.floating],
+    shadow_directions: NDArray[np.floating],
+    shadow_far: NDArray[np.floating],
     shadow_index: NDArray[np.int64],
 ) -> int:
     """Laser fan hits -> laser-plane points, clip reasons and the batch of shadow rays.
@@ -330,20 +333,65 @@ def fan_stripe_finish(
     points: NDArray[np.float64],
     reason: NDArray[np.uint8],
     chip: NDArray[np.float64],
-    occluder: NDArray[np.int32],
+    blocked: NDArray[np.bool_],
     shadow_index: NDArray[np.int64],
     sp: NDArray[np.float64],
     quantize: bool,
 ) -> None:
-    """Mark the occluded points (``occluder`` >= 0) and pixel-quantize the valid ones, in place."""
-    for j in range(occluder.shape[0]):
-        if occluder[j] >= 0:
+    """Mark the occluded points (``blocked`` shadow rays) and pixel-quantize the valid ones."""
+    for j in range(blocked.shape[0]):
+        if blocked[j]:
             reason[shadow_index[j]] = OCCLUDED
     if not quantize:
         return
     for i in range(points.shape[0]):
         if reason[i] == 0:
             points[i, 0], points[i, 1] = _pixel_center(chip[i, 0], chip[i, 1], sp)
+
+
+@numba.njit(cache=True, nogil=True)
+def fan_stripe_packets(
+    intersect8: Any, occluded8: Any, scene: int,
+    origin: NDArray[np.float64], rotation: NDArray[np.float64], fan: NDArray[np.float64],
+    vertices: NDArray[np.float64], faces: NDArray[np.int64], weld: NDArray[np.int64],
+    ring_ptr: NDArray[np.int64], ring_faces: NDArray[np.int64],
+    face_normals: NDArray[np.float64], refine: bool, tol: float, sp: NDArray[np.float64],
+    offset: float, quantize: bool,
+) -> tuple[NDArray[np.float64], NDArray[np.uint8], NDArray[np.float64], NDArray[np.int64],
+           NDArray[np.float64], NDArray[np.float64]]:  # fmt: skip
+    """The whole noiseless stripe in one call on the packet backend (:mod:`seamtrack.embree`).
+
+    The fan turned into the local frame, first hits, :func:`fan_stripe_hits`, shadow rays,
+    :func:`fan_stripe_finish`. Returns (points, reason, t, face, cos_incidence, directions).
+    """
+    n = fan.shape[0]
+    directions = np.empty((n, 3))
+    for i in range(n):
+        for a in range(3):
+            directions[i, a] = (rotation[a, 0] * fan[i, 0] + rotation[a, 1] * fan[i, 1]
+                                + rotation[a, 2] * fan[i, 2])  # fmt: skip
+    origins = origin.reshape((1, 3))
+    prim = np.empty(n, dtype=np.int32)
+    tfar = np.empty(n, dtype=np.float32)
+    embree.intersect(intersect8, scene, origins, directions, prim, tfar)
+    points = np.empty((n, 2))
+    reason = np.empty(n, dtype=np.uint8)
+    t = np.empty(n)
+    face = np.empty(n, dtype=np.int64)
+    cos_incidence = np.empty(n)
+    chip = np.empty((n, 2))
+    shadow_o = np.empty((n, 3))
+    shadow_d = np.empty((n, 3))
+    shadow_far = np.empty(n)
+    shadow_index = np.empty(n, dtype=np.int64)
+    k = fan_stripe_hits(origin, rotation, fan, directions, prim, tfar, vertices, faces, weld,
+                        ring_ptr, ring_faces, face_normals, refine, tol, sp, offset, points,
+                        reason, t, face, cos_incidence, chip, shadow_o, shadow_d, shadow_far,
+                        shadow_index)  # fmt: skip
+    blocked = np.empty(k, dtype=np.bool_)
+    embree.occluded(occluded8, scene, shadow_o[:k], shadow_d[:k], shadow_far[:k], 0.0, blocked)
+    fan_stripe_finish(points, reason, chip, blocked, shadow_index[:k], sp, quantize)
+    return points, reason, t, face, cos_incidence, directions
 
 
 # --------------------------------------------------------------------------- the caster
@@ -359,6 +407,10 @@ class RayCaster:
     local_origin : (3,) float, optional
         Origin of the float32 frame; default the bounding-box centre. ``np.zeros(3)`` gives the
         naive world-frame float32 scene (useful only to measure what the shift buys).
+    backend : {"auto", "packets", "embreex"}
+        How Embree is called: ray packets from numba (:mod:`seamtrack.embree`, the default when
+        the embreex wheel's Embree 4 library is found) or embreex's ``scene.run``. Both give
+        the same hits up to Embree's float32 ties at shared edges, which refinement resolves.
 
     Notes
     -----
@@ -367,7 +419,12 @@ class RayCaster:
     """
 
     def __init__(
-        self, vertices: ArrayLike, faces: ArrayLike, *, local_origin: ArrayLike | None = None
+        self,
+        vertices: ArrayLike,
+        faces: ArrayLike,
+        *,
+        local_origin: ArrayLike | None = None,
+        backend: str = "auto",
     ) -> None:
         v = np.asarray(vertices, dtype=np.float64)
         f = np.asarray(faces, dtype=np.int64)
@@ -386,11 +443,22 @@ class RayCaster:
         self.local_origin: FloatArray = origin
         self.vertices_local: FloatArray = np.ascontiguousarray(v - origin)
         self.faces: NDArray[np.int64] = np.ascontiguousarray(f)
-        self.scene = rtcore_scene.EmbreeScene()
-        # The TriangleMesh object must outlive the scene's use of its buffers: keep it.
-        self._embree_mesh = mesh_construction.TriangleMesh(
-            self.scene, self.vertices_local.astype(np.float32), f.astype(np.int32)
-        )
+        lib = embree.library() if backend in ("auto", "packets") else None
+        if backend not in ("auto", "packets", "embreex"):
+            raise ValueError(f"backend must be 'auto', 'packets' or 'embreex', got {backend!r}")
+        if backend == "packets" and lib is None:
+            raise RuntimeError("no Embree 4 library found in the embreex wheel")
+        self.backend: str = "packets" if lib is not None else "embreex"
+        self._packets: embree.Scene | None = None
+        self.scene: Any = None  # embreex's EmbreeScene, on the fallback backend
+        if lib is not None:
+            self._packets = embree.Scene(lib, self.vertices_local, self.faces)
+        else:
+            self.scene = rtcore_scene.EmbreeScene()
+            # The TriangleMesh object must outlive the scene's use of its buffers: keep it.
+            self._embree_mesh = mesh_construction.TriangleMesh(
+                self.scene, self.vertices_local.astype(np.float32), f.astype(np.int32)
+            )
         self.weld, self.ring_ptr, self.ring_faces = _vertex_rings(v, f)
         unit = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
         norm = np.linalg.norm(unit, axis=1, keepdims=True)
@@ -399,9 +467,11 @@ class RayCaster:
 
     # ------------------------------------------------------------------ construction
     @classmethod
-    def from_mesh(cls, mesh: Any, *, local_origin: ArrayLike | None = None) -> RayCaster:
+    def from_mesh(
+        cls, mesh: Any, *, local_origin: ArrayLike | None = None, backend: str = "auto"
+    ) -> RayCaster:
         """A caster of a ``trimesh.Trimesh`` (or anything with ``vertices`` and ``faces``)."""
-        return cls(mesh.vertices, mesh.faces, local_origin=local_origin)
+        return cls(mesh.vertices, mesh.faces, local_origin=local_origin, backend=backend)
 
     @classmethod
     def for_mesh(cls, mesh: Any) -> RayCaster:
@@ -425,20 +495,32 @@ class RayCaster:
         return len(self.faces)
 
     # ------------------------------------------------------------------ queries
-    def to_local(self, points_world: ArrayLike) -> tuple[FloatArray, NDArray[np.float32]]:
-        """(n, 3) world points to the local frame: float64 and the float32 copy Embree takes."""
-        local = np.asarray(points_world, dtype=np.float64) - self.local_origin
-        return local, np.ascontiguousarray(local, dtype=np.float32)
-
     def cast_local(
-        self, origins32: NDArray[np.float32], directions32: NDArray[np.float32]
+        self, origins: NDArray[Any], directions: NDArray[Any]
     ) -> tuple[NDArray[np.int32], NDArray[np.float32]]:
         """Bare Embree first hits in the local frame: (primID (n,), tfar (n,)); -1 is a miss.
 
-        ``origins32`` may be a single row broadcast to (n, 3) (``np.broadcast_to``).
+        ``origins`` is (1, 3) (shared by all rays) or (n, 3), ``directions`` (n, 3); Embree
+        sees both rounded to float32.
         """
-        out = self.scene.run(origins32, directions32, output=1)
+        if self._packets is not None:
+            return self._packets.intersect(origins, directions)
+        d32 = np.ascontiguousarray(directions, dtype=np.float32)
+        o32 = np.ascontiguousarray(np.broadcast_to(origins, d32.shape), dtype=np.float32)
+        out = self.scene.run(o32, d32, output=1)
         return out["primID"], out["tfar"]
+
+    def occluded_local(
+        self, origins: NDArray[Any], directions: NDArray[Any], far: NDArray[Any]
+    ) -> BoolArray:
+        """Bare Embree occlusion in the local frame: True where ray i meets the mesh in
+        (0, far[i]]; arguments as :meth:`cast_local`, ``far`` (n,)."""
+        if self._packets is not None:
+            return self._packets.occluded(origins, directions, far)
+        d32 = np.ascontiguousarray(directions, dtype=np.float32)
+        o32 = np.ascontiguousarray(np.broadcast_to(origins, d32.shape), dtype=np.float32)
+        far32 = np.array(far, dtype=np.float32)  # a copy: embreex writes into it
+        return np.asarray(self.scene.run(o32, d32, dists=far32, query="OCCLUDED") >= 0)
 
     def refine_local(
         self,
@@ -484,11 +566,10 @@ class RayCaster:
         """
         d = np.asarray(directions, dtype=np.float64).reshape(-1, 3)
         d = d / np.linalg.norm(d, axis=1, keepdims=True)
-        o_local, o32 = self.to_local(np.asarray(origins, dtype=np.float64).reshape(-1, 3))
+        o_local = np.asarray(origins, dtype=np.float64).reshape(-1, 3) - self.local_origin
         if len(o_local) not in (1, len(d)):
             raise ValueError(f"{len(o_local)} origins for {len(d)} directions")
-        o32_rays = np.broadcast_to(o32, d.shape) if len(o32) == 1 else o32
-        prim, tfar = self.cast_local(o32_rays, d.astype(np.float32))
+        prim, tfar = self.cast_local(o_local, d)
         t, face, refined = self.refine_local(o_local, d, prim, tfar, refine=refine)
         hit = face >= 0
         points = o_local + t[:, None] * d + self.local_origin
@@ -510,11 +591,11 @@ class RayCaster:
         """
         d = np.asarray(directions, dtype=np.float64).reshape(-1, 3)
         d = d / np.linalg.norm(d, axis=1, keepdims=True)
-        _, o32 = self.to_local(np.asarray(origins, dtype=np.float64).reshape(-1, 3))
-        o32 = np.ascontiguousarray(np.broadcast_to(o32, d.shape))
-        far = np.ascontiguousarray(np.broadcast_to(distances_mm, len(d)), dtype=np.float32)
-        return np.asarray(self.scene.run(o32, d.astype(np.float32), dists=far.copy(),
-                                         query="OCCLUDED") >= 0)  # fmt: skip
+        o_local = np.asarray(origins, dtype=np.float64).reshape(-1, 3) - self.local_origin
+        if len(o_local) not in (1, len(d)):
+            raise ValueError(f"{len(o_local)} origins for {len(d)} directions")
+        far = np.ascontiguousarray(np.broadcast_to(distances_mm, len(d)), dtype=np.float64)
+        return self.occluded_local(o_local, d, far)
 
     def line_of_sight_blocked(
         self,

@@ -297,9 +297,20 @@ def stripe_hits(
     T = np.asarray(T_world_sensor, dtype=np.float64)
     rotation = np.ascontiguousarray(T[:3, :3])
     origin = T[:3, 3] - caster.local_origin
+    do_quantize = bool(sensor.quantize if quantize is None else quantize)
+    packets = caster._packets
+    if packets is not None:  # one numba call does it all
+        points, reason, t, face, cos_incidence, directions = raycast.fan_stripe_packets(
+            packets.lib.intersect8, packets.lib.occluded8, packets.handle, origin, rotation,
+            fan.directions, caster.vertices_local, caster.faces, caster.weld, caster.ring_ptr,
+            caster.ring_faces, caster.face_normals, bool(refine), constants.BARYCENTRIC_TOL,
+            fan.sensor_params, constants.SHADOW_RAY_OFFSET_MM, do_quantize,
+        )  # fmt: skip
+        return StripeHits(points_laser=points, reason=reason, distance_mm=t, face=face,
+                          cos_incidence=cos_incidence, directions_local=directions,
+                          origin_local=origin)  # fmt: skip
     directions = fan.directions @ rotation.T
-    prim, tfar = caster.cast_local(np.broadcast_to(origin.astype(np.float32), directions.shape),
-                                   directions.astype(np.float32))  # fmt: skip
+    prim, tfar = caster.cast_local(origin[None], directions)
     n = len(directions)
     points = np.empty((n, 2))
     reason = np.empty(n, dtype=np.uint8)
@@ -318,13 +329,9 @@ def stripe_hits(
         constants.SHADOW_RAY_OFFSET_MM, points, reason, t, face, cos_incidence, chip, shadow_o,
         shadow_d, shadow_far, shadow_index,
     )  # fmt: skip
-    if k:
-        occluder = caster.scene.run(shadow_o[:k], shadow_d[:k], dists=shadow_far[:k],
-                                    query="OCCLUDED")  # fmt: skip
-    else:
-        occluder = np.empty(0, dtype=np.int32)
-    raycast.fan_stripe_finish(points, reason, chip, occluder, shadow_index[:k], fan.sensor_params,
-                              bool(sensor.quantize if quantize is None else quantize))  # fmt: skip
+    blocked = caster.occluded_local(shadow_o[:k], shadow_d[:k], shadow_far[:k])
+    raycast.fan_stripe_finish(points, reason, chip, blocked, shadow_index[:k], fan.sensor_params,
+                              do_quantize)  # fmt: skip
     return StripeHits(points_laser=points, reason=reason, distance_mm=t, face=face,
                       cos_incidence=cos_incidence, directions_local=directions,
                       origin_local=origin)  # fmt: skip
