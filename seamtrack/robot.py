@@ -118,6 +118,7 @@ class CartesianRobot:
     T_tcp_sensor: FloatArray = field(default_factory=lambda: np.eye(4))
     _T_base_world: FloatArray = field(init=False, repr=False, compare=False)
     _unrotated: bool = field(init=False, repr=False, compare=False)
+    _base_shift: tuple[float, float, float] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         for key in ("velocity_max_mm_s", "acceleration_max_mm_s2"):
@@ -150,6 +151,8 @@ class CartesianRobot:
         object.__setattr__(
             self, "_unrotated", bool(np.allclose(self.T_world_base[:3, :3], np.eye(3), atol=0.0))
         )
+        shift = self._T_base_world[:3, 3]
+        object.__setattr__(self, "_base_shift", (float(shift[0]), float(shift[1]), float(shift[2])))
         object.__setattr__(self, "T_tcp_sensor", np.asarray(self.T_tcp_sensor, dtype=float))
 
     # ----------------------------------------------------------------- kinematics
@@ -204,11 +207,11 @@ class CartesianRobot:
         """Convert a world-frame move to the base frame (on plain floats when the base is not
         rotated: this runs whenever a tracker issues a new command, often every tick)."""
         if self._unrotated:
-            tx, ty, tz = (float(c) for c in self._T_base_world[:3, 3])
-            px, py, pz = (float(c) for c in np.asarray(target_world).reshape(3))
+            tx, ty, tz = self._base_shift
+            px, py, pz = np.asarray(target_world, dtype=float).reshape(3).tolist()
             ff0 = (0.0, 0.0, 0.0)
             if velocity_ff_world is not None:
-                fx, fy, fz = (float(c) for c in np.asarray(velocity_ff_world).reshape(3))
+                fx, fy, fz = np.asarray(velocity_ff_world, dtype=float).reshape(3).tolist()
                 ff0 = (fx, fy, fz)
             return MoveCommand(
                 (px + tx, py + ty, pz + tz), float(speed_mm_s), ff0, bool(stop_at_target)

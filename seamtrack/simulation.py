@@ -162,11 +162,16 @@ def run(parts: Parts, progress: bool = False, seed: int | None = None) -> Result
 
     sense_time = 0.0
     tick = 0
+    unrotated = bool(np.array_equal(R, np.eye(3)))
     for tick in range(max_ticks + 1):
         t = tick * dt
         q = state.q
-        tcp = R @ q + p0
-        vel = R @ state.v
+        if unrotated:  # the usual robot: spare the matrix products on this hot path
+            tcp = np.array(q) + p0
+            vel = np.array(state.v)
+        else:
+            tcp = R @ q + p0
+            vel = R @ state.v
         if t + 1e-9 >= next_capture:
             next_capture += cfg.frame_period_s
             T_ws = robot.T_world_sensor(q)
