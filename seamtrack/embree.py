@@ -12,8 +12,9 @@ not Embree 4 (the ABI below); :class:`seamtrack.raycast.RayCaster` then falls ba
 
 Embree 4 ABI used here (``rtcore_ray.h``; every field 4 bytes, packets are structs of arrays):
 ``RTCRay8`` = org_x, org_y, org_z, tnear, dir_x, dir_y, dir_z, time, tfar, mask, id, flags (12 x 8);
-``RTCHit8`` = Ng_x, Ng_y, Ng_z, u, v, primID, geomID, instID[1] (+ instPrimID[1] when built with
-instance arrays) (9 x 8 at most); ``RTCRayHit8`` is the two, aligned to 32 bytes. A query with
+``RTCHit8`` = Ng_x, Ng_y, Ng_z, u, v, primID, geomID, instID[L] (+ instPrimID[L] when built with
+instance arrays; L = RTC_MAX_INSTANCE_LEVEL_COUNT, 1 in the wheel); ``RTCRayHit8`` is the two,
+aligned to 32 bytes. Only the fields up to geomID are read, and room is left for L up to 8. A query with
 ``args = NULL`` uses the default arguments (a full traversal, no filters).
 """
 
@@ -36,7 +37,7 @@ _INVALID = 0xFFFFFFFF
 _ORG, _TNEAR, _DIR, _TIME, _TFAR, _MASK, _ID, _FLAGS = 0, 3, 4, 7, 8, 9, 10, 11
 _HIT = 12  # RTCHit8 follows the ray
 _PRIM, _GEOM, _INST = _HIT + 5, _HIT + 6, _HIT + 7
-_WORDS = (_HIT + 9) * W  # ray + the largest hit, in words
+_WORDS = (_HIT + 7 + 2 * 8) * W  # ray + hit with up to 8 instance levels, in words
 _ALIGN = 64  # bytes (32 is required)
 
 _VERTEX_BUFFER, _INDEX_BUFFER = 1, 0  # RTCBufferType
