@@ -14,8 +14,8 @@ Embree 4 ABI used here (``rtcore_ray.h``; every field 4 bytes, packets are struc
 ``RTCRay8`` = org_x, org_y, org_z, tnear, dir_x, dir_y, dir_z, time, tfar, mask, id, flags (12 x 8);
 ``RTCHit8`` = Ng_x, Ng_y, Ng_z, u, v, primID, geomID, instID[L] (+ instPrimID[L] when built with
 instance arrays; L = RTC_MAX_INSTANCE_LEVEL_COUNT, 1 in the wheel); ``RTCRayHit8`` is the two,
-aligned to 32 bytes. Only the fields up to geomID are read, and room is left for L up to 8. A query with
-``args = NULL`` uses the default arguments (a full traversal, no filters).
+aligned to 32 bytes. Only the fields up to geomID are read, and room is left for L up to 8.
+A query with ``args = NULL`` uses the default arguments (a full traversal, no filters).
 """
 
 from __future__ import annotations
@@ -199,11 +199,12 @@ def _load_ray(
 
 
 @numba.njit(cache=True, nogil=True)
-def intersect(
-    intersect8: Any, scene: int, origins: NDArray[Any], directions: NDArray[Any],
-    prim: NDArray[np.int32], tfar: NDArray[np.float32],
+def _trace(
+    query8: Any, scene: int, origins: NDArray[Any], directions: NDArray[Any], tnear: float,
+    far: NDArray[Any], prim: NDArray[np.int32], tfar: NDArray[np.float32],
 ) -> None:  # fmt: skip
-    """First hit of each ray, W rays per ``rtcIntersect8`` call; primID -1 on a miss."""
+    """Rays i over [tnear, far[i]] (``far`` (n,) or (1,)), W per ``query8`` call; fills primID
+    (-1: no hit) and tfar (the hit distance; -inf after an occlusion query that met the mesh)."""
     f, u, valid, packet, mask = _packet_buffer()
     n = directions.shape[0]
     for start in range(0, n, W):
@@ -211,8 +212,10 @@ def intersect(
         for j in range(W):
             valid[j] = -1 if j < lanes else 0
             if j < lanes:
-                _load_ray(f, u, j, origins, directions, start + j, 0.0, np.inf)
-        intersect8(mask, scene, packet, 0)
+                i = start + j
+                length = far[i] if far.shape[0] > 1 else far[0]
+                _load_ray(f, u, j, origins, directions, i, tnear, length)
+        query8(mask, scene, packet, 0)
         for j in range(lanes):
             hit = u[_GEOM * W + j] != _INVALID
             prim[start + j] = np.int32(u[_PRIM * W + j]) if hit else -1
@@ -220,19 +223,23 @@ def intersect(
 
 
 @numba.njit(cache=True, nogil=True)
+def intersect(
+    intersect8: Any, scene: int, origins: NDArray[Any], directions: NDArray[Any],
+    prim: NDArray[np.int32], tfar: NDArray[np.float32],
+) -> None:  # fmt: skip
+    """First hit of each ray (``rtcIntersect8``): primID (-1 on a miss) and distance."""
+    _trace(intersect8, scene, origins, directions, 0.0, np.full(1, np.inf), prim, tfar)
+
+
+@numba.njit(cache=True, nogil=True)
 def occluded(
     occluded8: Any, scene: int, origins: NDArray[Any], directions: NDArray[Any],
     far: NDArray[Any], tnear: float, blocked: NDArray[np.bool_],
 ) -> None:  # fmt: skip
-    """``blocked[i]``: ray i meets the mesh within [tnear, far[i]] (Embree sets tfar to -inf)."""
-    f, u, valid, packet, mask = _packet_buffer()
+    """``blocked[i]``: ray i meets the mesh within [tnear, far[i]] (``rtcOccluded8``)."""
     n = directions.shape[0]
-    for start in range(0, n, W):
-        lanes = min(W, n - start)
-        for j in range(W):
-            valid[j] = -1 if j < lanes else 0
-            if j < lanes:
-                _load_ray(f, u, j, origins, directions, start + j, tnear, far[start + j])
-        occluded8(mask, scene, packet, 0)
-        for j in range(lanes):
-            blocked[start + j] = f[_TFAR * W + j] == -np.inf
+    prim = np.empty(n, dtype=np.int32)
+    tfar = np.empty(n, dtype=np.float32)
+    _trace(occluded8, scene, origins, directions, tnear, far, prim, tfar)
+    for i in range(n):
+        blocked[i] = tfar[i] == -np.inf

@@ -245,27 +245,31 @@ def fan_stripe_hits(
     tol: float,
     sp: NDArray[np.float64],
     offset: float,
-    points: NDArray[np.float64],
-    reason: NDArray[np.uint8],
-    t_out: NDArray[np.float64],
-    face_out: NDArray[np.int64],
-    cos_incidence: NDArray[np.float64],
-    chip: NDArray[np.float64],
-    shadow_origins: NDArray[np.floating],
-    shadow_directions: NDArray[np.floating],
-    shadow_far: NDArray[np.floating],
-    shadow_index: NDArray[np.int64],
-) -> int:
+) -> tuple[
+    NDArray[np.float64], NDArray[np.uint8], NDArray[np.float64], NDArray[np.int64],
+    NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64],
+    NDArray[np.float64], NDArray[np.int64],
+]:  # fmt: skip
     """Laser fan hits -> laser-plane points, clip reasons and the batch of shadow rays.
 
     ``origin`` (3,) is the emitter in the local frame, ``rotation`` (3, 3) the laser frame's
     axes, ``fan`` (n, 3) the unit ray directions in the laser frame and ``directions`` the same
-    in the local frame. Fills the (n,) outputs (``points`` (n, 2) = (y_L, z_L), NaN on a miss;
-    ``reason`` 0 for the points still to test for occlusion; ``chip`` (n, 2) = (x_c, z_c))
-    and the first k rows of the
-    shadow-ray arrays (origin offset towards the camera, unit direction, length, ray index);
-    returns k.
+    in the local frame. Returns ``points`` (n, 2) = (y_L, z_L) (NaN on a miss), ``reason``
+    (0 for the points still to test for occlusion), ``t``, ``face``, ``cos_incidence``,
+    ``chip`` (n, 2) = (x_c, z_c), and the k shadow rays: origins offset towards the camera,
+    unit directions, lengths, ray indices (k,).
     """
+    n = directions.shape[0]
+    points = np.empty((n, 2))
+    reason = np.empty(n, dtype=np.uint8)
+    t_out = np.empty(n)
+    face_out = np.empty(n, dtype=np.int64)
+    cos_incidence = np.empty(n)
+    chip = np.empty((n, 2))
+    shadow_origins = np.empty((n, 3))
+    shadow_directions = np.empty((n, 3))
+    shadow_far = np.empty(n)
+    shadow_index = np.empty(n, dtype=np.int64)
     cx = origin[0] + sp[SP_B] * rotation[0, 0]
     cy = origin[1] + sp[SP_B] * rotation[1, 0]
     cz = origin[2] + sp[SP_B] * rotation[2, 0]
@@ -325,7 +329,8 @@ def fan_stripe_hits(
         shadow_far[k] = max(length - offset, 0.0)
         shadow_index[k] = i
         k += 1
-    return k
+    return (points, reason, t_out, face_out, cos_incidence, chip, shadow_origins[:k],
+            shadow_directions[:k], shadow_far[:k], shadow_index[:k])  # fmt: skip
 
 
 @numba.njit(cache=True, nogil=True)
@@ -374,23 +379,13 @@ def fan_stripe_packets(
     prim = np.empty(n, dtype=np.int32)
     tfar = np.empty(n, dtype=np.float32)
     embree.intersect(intersect8, scene, origins, directions, prim, tfar)
-    points = np.empty((n, 2))
-    reason = np.empty(n, dtype=np.uint8)
-    t = np.empty(n)
-    face = np.empty(n, dtype=np.int64)
-    cos_incidence = np.empty(n)
-    chip = np.empty((n, 2))
-    shadow_o = np.empty((n, 3))
-    shadow_d = np.empty((n, 3))
-    shadow_far = np.empty(n)
-    shadow_index = np.empty(n, dtype=np.int64)
-    k = fan_stripe_hits(origin, rotation, fan, directions, prim, tfar, vertices, faces, weld,
-                        ring_ptr, ring_faces, face_normals, refine, tol, sp, offset, points,
-                        reason, t, face, cos_incidence, chip, shadow_o, shadow_d, shadow_far,
-                        shadow_index)  # fmt: skip
-    blocked = np.empty(k, dtype=np.bool_)
-    embree.occluded(occluded8, scene, shadow_o[:k], shadow_d[:k], shadow_far[:k], 0.0, blocked)
-    fan_stripe_finish(points, reason, chip, blocked, shadow_index[:k], sp, quantize)
+    points, reason, t, face, cos_incidence, chip, shadow_o, shadow_d, shadow_far, shadow_index = (
+        fan_stripe_hits(origin, rotation, fan, directions, prim, tfar, vertices, faces, weld,
+                        ring_ptr, ring_faces, face_normals, refine, tol, sp, offset)
+    )  # fmt: skip
+    blocked = np.empty(shadow_index.shape[0], dtype=np.bool_)
+    embree.occluded(occluded8, scene, shadow_o, shadow_d, shadow_far, 0.0, blocked)
+    fan_stripe_finish(points, reason, chip, blocked, shadow_index, sp, quantize)
     return points, reason, t, face, cos_incidence, directions
 
 

@@ -311,26 +311,16 @@ def stripe_hits(
                           origin_local=origin)  # fmt: skip
     directions = fan.directions @ rotation.T
     prim, tfar = caster.cast_local(origin[None], directions)
-    n = len(directions)
-    points = np.empty((n, 2))
-    reason = np.empty(n, dtype=np.uint8)
-    t = np.empty(n)
-    face = np.empty(n, dtype=np.int64)
-    cos_incidence = np.empty(n)
-    chip = np.empty((n, 2))
-    shadow_o = np.empty((n, 3), dtype=np.float32)
-    shadow_d = np.empty((n, 3), dtype=np.float32)
-    shadow_far = np.empty(n, dtype=np.float32)
-    shadow_index = np.empty(n, dtype=np.int64)
-    k = raycast.fan_stripe_hits(
-        origin, rotation, fan.directions, directions, prim, tfar, caster.vertices_local,
-        caster.faces, caster.weld, caster.ring_ptr, caster.ring_faces, caster.face_normals,
-        bool(refine), constants.BARYCENTRIC_TOL, fan.sensor_params,
-        constants.SHADOW_RAY_OFFSET_MM, points, reason, t, face, cos_incidence, chip, shadow_o,
-        shadow_d, shadow_far, shadow_index,
+    points, reason, t, face, cos_incidence, chip, shadow_o, shadow_d, shadow_far, shadow_index = (
+        raycast.fan_stripe_hits(
+            origin, rotation, fan.directions, directions, prim, tfar, caster.vertices_local,
+            caster.faces, caster.weld, caster.ring_ptr, caster.ring_faces, caster.face_normals,
+            bool(refine), constants.BARYCENTRIC_TOL, fan.sensor_params,
+            constants.SHADOW_RAY_OFFSET_MM,
+        )
     )  # fmt: skip
-    blocked = caster.occluded_local(shadow_o[:k], shadow_d[:k], shadow_far[:k])
-    raycast.fan_stripe_finish(points, reason, chip, blocked, shadow_index[:k], fan.sensor_params,
+    blocked = caster.occluded_local(shadow_o, shadow_d, shadow_far)
+    raycast.fan_stripe_finish(points, reason, chip, blocked, shadow_index, fan.sensor_params,
                               do_quantize)  # fmt: skip
     return StripeHits(points_laser=points, reason=reason, distance_mm=t, face=face,
                       cos_incidence=cos_incidence, directions_local=directions,
