@@ -2,10 +2,11 @@
 
 ``bench_raycast`` times one laser profile (a fan of 1024 rays and the shadow rays of its lit
 points) on a ~100k-triangle V-groove plate and, when CadQuery is available, on the CAD V-groove,
-five ways on the same rays: :func:`seamtrack.scan.scan_mesh` (a ``Profile``) with float64
-refinement on and off, :func:`seamtrack.scan.stripe_hits` (the arrays, no ``Profile``), bare
-``embreex`` ``scene.run`` calls on pre-built float32 arrays, and trimesh's
-``mesh.ray.intersects_location`` + ``intersects_any``. One thread, best of ``repeats`` runs.
+on the same rays: :func:`seamtrack.scan.scan_mesh` (a ``Profile``) with float64 refinement on
+and off, :func:`seamtrack.scan.stripe_hits` (the arrays, no ``Profile``) on the default backend
+(Embree packets, :mod:`seamtrack.embree`) and on the embreex fallback, bare ``embreex``
+``scene.run`` calls on pre-built float32 arrays, and trimesh's ``mesh.ray`` methods
+(``intersects_location``, then ``intersects_any``). One thread, best of ``repeats`` runs.
 """
 
 from __future__ import annotations
