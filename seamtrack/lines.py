@@ -314,33 +314,49 @@ def _merge(p: FloatArray, pieces: list[tuple[int, int]], tol: float) -> list[tup
     return merged
 
 
-def collinear_groups(seg: Segments, max_angle_deg: float = 30.0) -> list[Line]:
-    """Join pieces that lie on one line, across gaps and interruptions (refit on the union).
+def collinear_members(
+    seg: Segments, lines: list[Line], max_angle_deg: float = 30.0
+) -> list[list[int]]:
+    """Positions in ``lines`` grouped by the straight line they lie on, largest group first.
 
     Pieces are taken from the best supported down; each joins the largest earlier group
-    whose line holds both its ends within the tolerance (directions within
-    ``max_angle_deg``), so a short piece at a corner cannot bridge two lines.
+    whose anchor (its best supported piece) holds both the piece's ends within the
+    tolerance (directions within ``max_angle_deg``), so a short piece at a corner cannot
+    bridge two lines, and a short stub cut off a plate by an interruption joins the plate.
     """
-    order = sorted(range(len(seg.lines)), key=lambda i: -seg.lines[i].count)
-    anchors: list[Line] = []
-    members: list[list[NDArray[np.intp]]] = []
+    order = sorted(range(len(lines)), key=lambda i: -lines[i].count)
+    # (centroid, direction, normal) of each group's anchor, as floats: these are a handful
+    # of tests on scalars, where numpy's per-call overhead would dominate.
+    anchors: list[tuple[float, float, float, float]] = []
+    members: list[list[int]] = []
     cos_max = math.cos(math.radians(max_angle_deg))
+    tol = seg.tol
     for i in order:
-        ln = seg.lines[i]
-        ends = np.array([ln.point(float(ln.t[0])), ln.point(float(ln.t[-1]))])
-        for k, anchor in enumerate(anchors):
-            if (
-                abs(float(anchor.direction @ ln.direction)) >= cos_max
-                and np.abs((ends - anchor.centroid) @ anchor.normal).max() <= seg.tol
+        ln = lines[i]
+        cy, cz = float(ln.centroid[0]), float(ln.centroid[1])
+        dy, dz = float(ln.direction[0]), float(ln.direction[1])
+        t0, t1 = float(ln.t[0]), float(ln.t[-1])
+        ends = ((cy + t0 * dy, cz + t0 * dz), (cy + t1 * dy, cz + t1 * dz))
+        for k, (ay, az, ady, adz) in enumerate(anchors):
+            if abs(ady * dy + adz * dz) >= cos_max and all(
+                abs((ey - ay) * -adz + (ez - az) * ady) <= tol for ey, ez in ends
             ):
-                members[k].append(ln.index)
+                members[k].append(i)
                 break
         else:
-            anchors.append(ln)
-            members.append([ln.index])
+            anchors.append((cy, cz, dy, dz))
+            members.append([i])
+    return members
+
+
+def collinear_groups(seg: Segments, max_angle_deg: float = 30.0) -> list[Line]:
+    """Join pieces that lie on one line, across gaps and interruptions (refit on the union);
+    see :func:`collinear_members`."""
     return [
-        a if len(m) == 1 else _fit(seg.points, np.sort(np.concatenate(m)))
-        for a, m in zip(anchors, members, strict=True)
+        seg.lines[m[0]]
+        if len(m) == 1
+        else _fit(seg.points, np.sort(np.concatenate([seg.lines[i].index for i in m])))
+        for m in collinear_members(seg, seg.lines, max_angle_deg)
     ]
 
 
