@@ -520,8 +520,9 @@ def _imperfect(
         start = int(rng.integers(0, max(1, n - length)))
         cols = np.arange(start, min(n, start + length))
         anchor = lit[np.argmin(np.abs(lit - start))]
-        y0 = y[anchor]
-        z0 = z[anchor] + rng.choice([-1.0, 1.0]) * rng.uniform(1.0, 4.0)
+        # Off the true surface (not off a noisy point or an outlier that replaced it).
+        y0 = y_L[anchor]
+        z0 = z_L[anchor] + rng.choice([-1.0, 1.0]) * rng.uniform(1.0, 4.0)
         slope = math.tan(rng.uniform(-math.pi / 4, math.pi / 4))
         with np.errstate(divide="ignore", invalid="ignore"):
             t = (z0 - slope * y0) / (np.cos(phi[cols]) - slope * np.sin(phi[cols]))

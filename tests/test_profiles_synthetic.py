@@ -131,6 +131,30 @@ def test_imperfections_are_seeded_and_reproducible(joint):
     assert ta.reflection and (a.reason == Reason.DROPOUT).any()
 
 
+def test_a_false_reflection_lies_1_to_4_mm_off_the_surface_even_among_outliers():
+    """The reflection is anchored on the true surface, never on an outlier next to it."""
+    ideal = dataclasses.replace(SENSOR, quantize=False)
+    clean, _ = synthetic_profile("flat", ideal, rays=512)
+    span = 0.0
+    for seed in range(40):
+        args = dict(rng=np.random.default_rng(seed), rays=512)
+        lit = Imperfections(outlier_fraction=0.5)
+        base, _ = synthetic_profile("flat", ideal, imperfections=lit, **args)
+        args["rng"] = np.random.default_rng(seed)  # the same outliers, then the reflection
+        with_reflection = dataclasses.replace(lit, reflection_probability=1.0)
+        shown, truth = synthetic_profile("flat", ideal, imperfections=with_reflection, **args)
+        same = (shown.points_laser == base.points_laser) | np.isnan(base.points_laser)
+        cols = np.flatnonzero(~same.all(axis=1) & shown.valid & clean.valid)
+        assert truth.reflection and cols.size >= 3
+        # A flat plate at z_L = z0: the reflection line sits 1-4 mm off it at its anchor and
+        # tilts by at most 45 deg over its own width.
+        width = np.ptp(shown.points_laser[cols, 0])
+        off = np.abs(shown.points_laser[cols, 1] - clean.points_laser[cols, 1])
+        assert off.max() <= 4.0 + width + 1e-9 and off.min() >= 1.0 - width - 1e-9
+        span = max(span, width)
+    assert span < 1.5  # the bound above is tight enough to mean something
+
+
 def test_random_imperfections_need_a_generator():
     with pytest.raises(ValueError, match="Generator"):
         synthetic_profile("flat", SENSOR, imperfections=Imperfections(noise_mm=0.1))
