@@ -41,9 +41,11 @@ from .lines import (
     Segments,
     _angle,
     _fit,
+    _median,
     collinear_groups,
     collinear_members,
     corner_or_end,
+    corner_with,
     intersect,
     segment_profile,
 )
@@ -101,16 +103,27 @@ class _Base:
     def _found(self, profile: Profile, point: FloatArray, **kw: Any) -> Feature:
         return Feature.found(point, profile.T_world_sensor, joint=self.name, **kw)
 
-    def _arms(
-        self, seg: Segments, opening_down: bool, min_deg: float, max_deg: float, max_reach_mm: float
-    ) -> tuple[Line, Line, FloatArray, float] | str:
-        """The best pair of lines forming a V (opening towards the sensor, -z) or a ridge
-        (``opening_down``: the arms fall away from the sensor): (left, right, apex, score)."""
-        groups = [
+    def _groups(self, seg: Segments) -> list[Line]:
+        """Collinear groups supported enough to be an arm or a plate."""
+        return [
             g
             for g in collinear_groups(seg)
             if g.count >= self.min_points and g.extent >= self.min_arm_mm
         ]
+
+    def _arms(
+        self,
+        seg: Segments,
+        opening_down: bool,
+        min_deg: float,
+        max_deg: float,
+        max_reach_mm: float,
+        groups: list[Line] | None = None,
+    ) -> tuple[Line, Line, FloatArray, float] | str:
+        """The best pair of lines forming a V (opening towards the sensor, -z) or a ridge
+        (``opening_down``: the arms fall away from the sensor): (left, right, apex, score)."""
+        if groups is None:
+            groups = self._groups(seg)
         sign = 1.0 if opening_down else -1.0
         best: tuple[Line, Line, FloatArray, float] | None = None
         for i, a in enumerate(groups):
@@ -149,10 +162,100 @@ def _confidence(arms: list[Line], seg: Segments) -> float:
     return float(np.clip(0.5 * explained + 0.5 * fit, 0.0, 1.0))
 
 
+def _covered_end(
+    seg: Segments, line: Line, at_end: bool, other: Line, plate: Line | None
+) -> tuple[float, float] | None:
+    """Where along ``line`` (a bevel) its root end may lie when a stray line covers the
+    columns beyond its last seen point (``at_end``: its last inlier, else its first), or
+    None when the end is seen.
+
+    The end is covered when the first piece beyond it lies in the next columns (at most
+    two columns lost, at most two points off the line in between), is no wall (steep on
+    ``plate``: a root face) and no part of ``other`` (the other bevel), and does not run
+    on into ``other`` without a jump: a false reflection, in front of or behind the
+    surface, which hides where the bevel really ends. Lost columns (the gap, a shadow)
+    hide nothing. Returns (t0, t1), coordinates along the line, from the end outwards:
+    from the last point seen to where the ray of the stray piece's last point crosses the
+    line; or, when at least three points beyond the piece lie on the line again (the bevel
+    shows beyond the reflection), from there to the last of them (which may already lie on
+    a root face that leaves the line at a small angle). Ends are half a spacing out.
+    """
+    pts = seg.points
+    s = 1 if at_end else -1
+    i = int(line.index[-1] if at_end else line.index[0])
+    beyond = [ln for ln in seg.lines if (int(ln.index[0]) > i if at_end else int(ln.index[-1]) < i)]
+    if not beyond:
+        return None
+    piece = beyond[0] if at_end else beyond[-1]
+    near = int(piece.index[0] if at_end else piece.index[-1])
+    far = int(piece.index[-1] if at_end else piece.index[0])
+    k = int(np.searchsorted(other.index, near))
+    if k < len(other.index) and int(other.index[k]) == near:
+        return None  # the other bevel (no gap) or a piece of it
+    own = line.index[-11:] if at_end else line.index[:11]
+    dphi = _median(np.abs(np.diff(_ray_angle(pts[own]))))
+    phi_i, phi_near, phi_far = _ray_angle(pts[[i, near, far]])
+    between = pts[min(i, near) + 1 : max(i, near)]
+    lost = abs(float(phi_near - phi_i)) / dphi - len(between) - 1 if dphi > 0 else math.inf
+    if lost > 2.5 or int((np.abs(_towards_sensor(line, between)) > 2.0 * seg.tol).sum()) > 2:
+        return None  # lost columns (the gap, a shadow) or another surface first
+    flat = plate.direction if plate is not None else np.array([1.0, 0.0])
+    if abs(float(piece.direction @ flat)) <= math.cos(math.radians(_WALL_DEG)):
+        return None  # a wall: a root face
+    nxt = far + s
+    if 0 <= nxt < len(pts):
+        held = max(6.0 * seg.spacing, 4.0 * seg.sigma, 0.1)
+        on_other = abs(float((pts[nxt] - other.centroid) @ other.normal)) <= 2.0 * seg.tol
+        if (
+            on_other
+            and abs(float(_ray_angle(pts[nxt : nxt + 1])[0] - phi_far)) <= 3.5 * dphi
+            and float(np.hypot(*(pts[nxt] - pts[far]))) <= held
+        ):
+            return None  # runs on into the other bevel: part of the part
+    half = s * 0.5 * max(line.step(at_end), seg.spacing)
+    t_far = float(_ray_t(line, pts[far].reshape(1, 2))[0]) + half
+    # Beyond the stray piece the bevel may show again.
+    ahead = pts[far + s :: s][:400] if s > 0 or far > 0 else pts[:0]
+    on = np.abs(_towards_sensor(line, ahead)) <= seg.tol
+    again = int(np.argmin(on)) if not on.all() else len(on)
+    if again >= 3:
+        return t_far, float((ahead[again - 1] - line.centroid) @ line.direction) + half
+    return float(line.t[-1] if at_end else line.t[0]) + half, t_far
+
+
+def _ray_angle(q: FloatArray) -> FloatArray:
+    """Angles of the emitter's rays (from the origin) through points ``q`` (rad)."""
+    return np.arctan2(q[:, 0], q[:, 1])
+
+
+def _group_of(piece: Line | None, groups: list[Line]) -> Line | None:
+    """The group (collinear pieces joined) that holds ``piece``, else the piece itself."""
+    if piece is None:
+        return None
+    first = int(piece.index[0])
+    for g in groups:
+        k = int(np.searchsorted(g.index, first))
+        if k < len(g.index) and int(g.index[k]) == first:
+            return g
+    return piece
+
+
+def _plate_depth(plate: Line, q: FloatArray) -> float:
+    """Depth of ``q`` behind ``plate``'s line (away from the sensor, at the origin)."""
+    n = plate.normal if float(plate.centroid @ plate.normal) > 0 else -plate.normal
+    return float((q - plate.centroid) @ n)
+
+
 @dataclass(frozen=True)
 class VGrooveExtractor(_Base):
     """V-groove: two bevels opening towards the sensor. Seam: the root centre, midpoint of
-    the bevels' lower ends (their intersection when they meet). Edges: the top edges."""
+    the bevels' lower ends (their intersection when they meet). Edges: the top edges.
+
+    Where a stray line (a false reflection) covers a bevel's root end, the end is hidden:
+    it is put at the depth of the other root end below the plates (both root corners lie
+    at one depth under their plate: thickness minus root face), within the covered
+    stretch (confidence halved).
+    """
 
     name: str = "v-groove"
     min_angle_deg: float = 20.0
@@ -161,7 +264,10 @@ class VGrooveExtractor(_Base):
     min_gap_mm: float = 0.05
 
     def _extract(self, profile: Profile, seg: Segments) -> Feature:
-        found = self._arms(seg, False, self.min_angle_deg, self.max_angle_deg, self.max_gap_mm)
+        groups = self._groups(seg)
+        found = self._arms(
+            seg, False, self.min_angle_deg, self.max_angle_deg, self.max_gap_mm, groups
+        )
         if isinstance(found, str):
             return Feature.failed(found, joint=self.name)
         left, right, apex, _ = found
@@ -169,17 +275,54 @@ class VGrooveExtractor(_Base):
         # Column order runs left to right: the left bevel's root end is its last point.
         root_l = corner_or_end(left, True, others, seg)
         root_r = corner_or_end(right, False, others, seg)
+        top_l, plate_l = corner_with(left, False, others, seg)
+        top_r, plate_r = corner_with(right, True, others, seg)
+        # The plates: the pieces met at the top edges, as whole lines (their groups).
+        plate_l, plate_r = _group_of(plate_l, groups), _group_of(plate_r, groups)
+        sure = True
+        ref_l, ref_r = plate_l or plate_r, plate_r or plate_l
+        cover_l = _covered_end(seg, left, True, right, ref_l)
+        cover_r = _covered_end(seg, right, False, left, ref_r)
+        if cover_l is not None or cover_r is not None:
+            # A covered end is at least where the bevel is last seen; the shallower root end
+            # goes down to the other's depth, within the stretch where it may lie.
+            if cover_l is not None:
+                root_l = left.point(cover_l[0])
+            if cover_r is not None:
+                root_r = right.point(cover_r[0])
+            if ref_l is not None and ref_r is not None:
+                d_l, d_r = _plate_depth(ref_l, root_l), _plate_depth(ref_r, root_r)
+                if cover_l is not None and d_l < d_r:
+                    root_l, sure = _at_depth(left, ref_l, d_r, cover_l), False
+                elif cover_r is not None and d_r < d_l:
+                    root_r, sure = _at_depth(right, ref_r, d_l, cover_r), False
+            else:  # no plate to measure depth on: the middle of the stretch
+                for line, cover in ((left, cover_l), (right, cover_r)):
+                    if cover is not None:
+                        mid = line.point(0.5 * (cover[0] + cover[1]))
+                        root_l, root_r = (mid, root_r) if line is left else (root_l, mid)
+                        sure = False
         gap = float(np.hypot(*(root_r - root_l)))
         if gap <= max(self.min_gap_mm, 2.0 * seg.spacing + seg.tol):
             seam, gap = apex, 0.0
         else:
             seam = 0.5 * (root_l + root_r)
-        edges = np.array(
-            [corner_or_end(left, False, others, seg), corner_or_end(right, True, others, seg)]
-        )
+        conf = _confidence([left, right], seg) * (1.0 if sure else 0.5)
         return self._found(
-            profile, seam, confidence=_confidence([left, right], seg), edges_laser=edges, gap_mm=gap
+            profile, seam, confidence=conf, edges_laser=np.array([top_l, top_r]), gap_mm=gap
         )
+
+
+def _at_depth(line: Line, plate: Line, depth: float, stretch: tuple[float, float]) -> FloatArray:
+    """The point of ``line`` at ``depth`` behind ``plate``, kept within ``stretch`` (two
+    coordinates along the line)."""
+    n = plate.normal if float(plate.centroid @ plate.normal) > 0 else -plate.normal
+    rate = float(line.direction @ n)
+    lo, hi = min(stretch), max(stretch)
+    if abs(rate) < 1e-6:
+        return line.point(stretch[0])
+    t = float((depth - _plate_depth(plate, line.centroid)) / rate)
+    return line.point(float(np.clip(t, lo, hi)))
 
 
 @dataclass(frozen=True)

@@ -375,21 +375,49 @@ def _angle(a: Line, b: Line) -> float:
     return math.acos(min(1.0, abs(float(a.direction @ b.direction))))
 
 
+def corner_with(
+    line: Line, at_end: bool, others: list[Line], seg: Segments
+) -> tuple[FloatArray, Line | None]:
+    """Where ``line`` ends and the neighbour it meets there: its crossing with a line of
+    ``others`` that meets it at that end (a visible corner, exact), else half a spacing
+    beyond its last inlier (the edge lies between rays) and None."""
+    # Scalars, not numpy: a handful of tests per neighbour, where numpy's per-call overhead
+    # would dominate (the extractors call this four times per profile).
+    cy, cz = float(line.centroid[0]), float(line.centroid[1])
+    dy, dz = float(line.direction[0]), float(line.direction[1])
+    t_tip = float(line.t[-1] if at_end else line.t[0])
+    tip_y, tip_z = cy + t_tip * dy, cz + t_tip * dz
+    reach = 3.0 * max(line.step(at_end), seg.spacing) + seg.tol
+    cos_min = math.cos(math.radians(20))
+    best, best_d, best_line = None, math.inf, None
+    for other in others:
+        if other is line:
+            continue
+        ody, odz = float(other.direction[0]), float(other.direction[1])
+        if abs(dy * ody + dz * odz) > cos_min:
+            continue  # within 20 deg: no corner
+        det = dy * odz - dz * ody
+        if abs(det) < 1e-9:
+            continue
+        ocy, ocz = float(other.centroid[0]), float(other.centroid[1])
+        s = ((ocy - cy) * odz - (ocz - cz) * ody) / det
+        xy, xz = cy + s * dy, cz + s * dz
+        d = math.hypot(xy - tip_y, xz - tip_z)
+        if d > reach or d >= best_d:
+            continue
+        near_other = min(
+            math.hypot(ocy + t * ody - xy, ocz + t * odz - xz)
+            for t in (float(other.t[0]), float(other.t[-1]))
+        )
+        reach_other = 3.0 * max(other.step(True), other.step(False), seg.spacing) + seg.tol
+        if near_other <= reach_other:
+            best, best_d, best_line = (xy, xz), d, other
+    if best is None:
+        return line.end(at_end), None
+    return np.array(best), best_line
+
+
 def corner_or_end(line: Line, at_end: bool, others: list[Line], seg: Segments) -> FloatArray:
     """Where ``line`` ends: its crossing with a neighbour that meets it there (a visible
     corner, exact), else half a spacing beyond its last inlier (the edge lies between rays)."""
-    tip = line.point(float(line.t[-1] if at_end else line.t[0]))
-    reach = 3.0 * max(line.step(at_end), seg.spacing) + seg.tol
-    best, best_d = None, math.inf
-    for other in others:
-        if other is line or _angle(line, other) < math.radians(20):
-            continue
-        x = intersect(line, other)
-        if x is None:
-            continue
-        d = float(np.hypot(*(x - tip)))
-        near_other = min(float(np.hypot(*(other.point(float(other.t[k])) - x))) for k in (0, -1))
-        reach_other = 3.0 * max(other.step(True), other.step(False), seg.spacing) + seg.tol
-        if d <= reach and near_other <= reach_other and d < best_d:
-            best, best_d = x, d
-    return line.end(at_end) if best is None else best
+    return corner_with(line, at_end, others, seg)[0]
