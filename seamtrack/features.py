@@ -16,8 +16,10 @@ gap ends half a ray spacing beyond its last point (the edge lies between two ray
 extractors (square butt, lap) gather pieces on one line into a plate however short they are, and
 read what lies between two plates: a stray line cut off both (a false reflection) hides the
 columns it covers, it opens no gap, and where it covers a plate's edge the edge is estimated
-under it. The generic extractor needs no segmentation: sliding-window slopes, the sharpest
-turn, two local fits.
+under it. The v-groove extractor reads what lies just beyond each bevel's lower end: a stray
+line there (a false reflection over the root) hides the root corner, which is then put where
+the bevel reaches the other corner's depth below the plates. The generic extractor needs no
+segmentation: sliding-window slopes, the sharpest turn, two local fits.
 
 Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groove).
 """
