@@ -256,7 +256,9 @@ class VGrooveExtractor(_Base):
     Where a stray line (a false reflection) covers a bevel's root end, the end is hidden:
     it is put at the depth of the other root end below the plates (both root corners lie
     at one depth under their plate: thickness minus root face), within the covered
-    stretch (confidence halved).
+    stretch (confidence halved). Confidence is halved too when a surface that is no wall
+    joins the two root ends: there is no gap between them (a false V where the laser plane
+    crosses a mitred corner, a tack weld over the root).
     """
 
     name: str = "v-groove"
@@ -309,10 +311,41 @@ class VGrooveExtractor(_Base):
             seam, gap = apex, 0.0
         else:
             seam = 0.5 * (root_l + root_r)
+            # A surface joining both root ends (no wall) means no gap lies between them: a
+            # false V where the laser plane crosses a mitred corner, a tack over the root.
+            if _bridged(seg, left, right, root_l, root_r, ref_l, self.min_points):
+                sure = False
         conf = _confidence([left, right], seg) * (1.0 if sure else 0.5)
         return self._found(
             profile, seam, confidence=conf, edges_laser=np.array([top_l, top_r]), gap_mm=gap
         )
+
+
+def _bridged(
+    seg: Segments,
+    left: Line,
+    right: Line,
+    root_l: FloatArray,
+    root_r: FloatArray,
+    plate: Line | None,
+    min_points: int,
+) -> bool:
+    """Whether a piece between the bevels that is no wall (steep on ``plate``) runs from one
+    root end to the other: the "gap" between them is a surface."""
+    lo, hi = int(left.index[-1]), int(right.index[0])
+    flat = plate.direction if plate is not None else np.array([1.0, 0.0])
+    for ln in seg.lines:
+        if ln.count < min_points or int(ln.index[0]) <= lo or int(ln.index[-1]) >= hi:
+            continue
+        if abs(float(ln.direction @ flat)) <= math.cos(math.radians(_WALL_DEG)):
+            continue
+        reach = 3.0 * max(seg.spacing, ln.step(True), ln.step(False)) + seg.tol
+        if (
+            float(np.hypot(*(ln.end(False) - root_l))) <= reach
+            and float(np.hypot(*(ln.end(True) - root_r))) <= reach
+        ):
+            return True
+    return False
 
 
 def _at_depth(line: Line, plate: Line, depth: float, stretch: tuple[float, float]) -> FloatArray:
