@@ -119,6 +119,7 @@ class CartesianRobot:
     _T_base_world: FloatArray = field(init=False, repr=False, compare=False)
     _unrotated: bool = field(init=False, repr=False, compare=False)
     _base_shift: tuple[float, float, float] = field(init=False, repr=False, compare=False)
+    _free_travel: tuple[float, float, float] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         for key in ("velocity_max_mm_s", "acceleration_max_mm_s2"):
@@ -153,6 +154,14 @@ class CartesianRobot:
         )
         shift = self._T_base_world[:3, 3]
         object.__setattr__(self, "_base_shift", (float(shift[0]), float(shift[1]), float(shift[2])))
+        # Braking from v (discrete, :func:`_stop_speed`) covers at most v^2/2a + v dt/2 + a dt^2/8:
+        # farther than this from an end stop, the end stop cannot limit any allowed speed.
+        dt = self.control_period_s
+        free = tuple(
+            1.000001 * (v * v / (2.0 * a) + 0.5 * v * dt + 0.125 * a * dt * dt)
+            for v, a in zip(self.velocity_max_mm_s, self.acceleration_max_mm_s2, strict=True)
+        )
+        object.__setattr__(self, "_free_travel", free)
         object.__setattr__(self, "T_tcp_sensor", np.asarray(self.T_tcp_sensor, dtype=float))
 
     # ----------------------------------------------------------------- kinematics
@@ -279,12 +288,13 @@ class CartesianRobot:
         for i in range(3):
             if abs(desired[i]) > vmax[i]:
                 scale = min(scale, vmax[i] / abs(desired[i]))
+        free = self._free_travel
         for i in range(3):
             vd = desired[i] * scale
-            # Keep the ability to stop before the axis travel ends.
-            if vd > 0.0:
+            # Keep the ability to stop before the axis travel ends (near an end stop only).
+            if vd > 0.0 and hi[i] - q[i] < free[i]:
                 vd = min(vd, _stop_speed(hi[i] - q[i], amax[i], dt))
-            elif vd < 0.0:
+            elif vd < 0.0 and q[i] - lo[i] < free[i]:
                 vd = max(vd, -_stop_speed(q[i] - lo[i], amax[i], dt))
             dv_max = amax[i] * dt
             vi = v[i] + min(max(vd - v[i], -dv_max), dv_max)

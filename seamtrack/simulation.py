@@ -163,14 +163,17 @@ def run(parts: Parts, progress: bool = False, seed: int | None = None) -> Result
     sense_time = 0.0
     tick = 0
     unrotated = bool(np.array_equal(R, np.eye(3)))
+    p0x, p0y, p0z = p0.tolist()
     for tick in range(max_ticks + 1):
         t = tick * dt
         q = state.q
         if unrotated:  # the usual robot: spare the matrix products on this hot path
-            tcp = np.array(q) + p0
+            tcp_list = [q[0] + p0x, q[1] + p0y, q[2] + p0z]
+            tcp = np.array(tcp_list)
             vel = np.array(state.v)
         else:
             tcp = R @ q + p0
+            tcp_list = tcp.tolist()
             vel = R @ state.v
         if t + 1e-9 >= next_capture:
             next_capture += cfg.frame_period_s
@@ -192,8 +195,8 @@ def run(parts: Parts, progress: bool = False, seed: int | None = None) -> Result
             move = None if cmd is None else _to_move(robot, cmd)
             if move is not None and not robot.within_travel(move.target):
                 status = "limit_violation"
-        tcp_log.extend(tcp)
-        target_log.extend(cmd.target_world if cmd is not None else nan3)
+        tcp_log.extend(tcp_list)
+        target_log.extend(nan3 if cmd is None else np.asarray(cmd.target_world).tolist())
         if status:
             break
         robot.step(state, move)

@@ -275,7 +275,7 @@ class TrajectoryTracker:
         self._s_set += step
         target, tangent = self._at(self._s_set)
         ff = tangent * (step / self.dt)
-        error = math.dist(target, tcp_world)
+        error = math.dist(target.tolist(), tcp_world.tolist())
         return Command(
             target, self.gain_1_s * error, velocity_ff_world=ff, stop_at_target=not moving
         )

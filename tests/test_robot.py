@@ -131,3 +131,21 @@ def test_sensor_pose_chain() -> None:
     assert np.allclose(T[:3, 3], [10, 0, 90])
     assert np.allclose(robot.q_from_world([0, 0, 0]), [100, 75, 75])
     assert math.isclose(robot.tcp_world([100, 75, 75])[0], 0.0)
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    v=hs.floats(0.1, 1000.0),
+    a=hs.floats(0.1, 10000.0),
+    dt=hs.floats(1e-4, 0.1),
+)
+def test_end_stops_cannot_limit_a_robot_farther_than_its_free_travel(
+    v: float, a: float, dt: float
+) -> None:
+    """The servo skips the end-stop braking test beyond _free_travel: exact there."""
+    from seamtrack.robot import _stop_speed
+
+    robot = CartesianRobot(
+        velocity_max_mm_s=(v, v, v), acceleration_max_mm_s2=(a, a, a), control_period_s=dt
+    )
+    assert _stop_speed(robot._free_travel[0], a, dt) >= v
