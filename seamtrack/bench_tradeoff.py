@@ -125,20 +125,39 @@ def pareto(rows: list[dict[str, Any]], margin: dict[str, float] | None = None) -
     return flags
 
 
-def bench_tradeoff(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]:
-    """Run the trade and write ``tradeoff.json``, ``tradeoff.md`` and ``tradeoff.png``."""
+def _best_of(
+    overrides: dict[str, Any], seam_length_mm: float, repeats: int
+) -> tuple[dict[str, Any], Any, float]:
+    """:func:`_run` ``repeats`` times; the runs are deterministic, so keep the fastest wall time
+    (other load on the machine only ever slows a run down)."""
+    summary, trace, meshing = _run(overrides, seam_length_mm)
+    for _ in range(repeats - 1):
+        again, _, _ = _run(overrides, seam_length_mm)
+        assert again["max_error_mm"] == summary["max_error_mm"], "a run is not deterministic"
+        if again["wall_time_s"] < summary["wall_time_s"]:
+            summary = {**summary, "wall_time_s": again["wall_time_s"],
+                       "sense_wall_time_s": again["sense_wall_time_s"]}  # fmt: skip
+    return summary, trace, meshing
+
+
+def bench_tradeoff(out_dir: str | Path, *, quick: bool = False, repeats: int = 3) -> dict[str, Any]:
+    """Run the trade and write ``tradeoff.json``, ``tradeoff.md`` and ``tradeoff.png``.
+
+    Every setting runs ``repeats`` times (once when ``quick``) and keeps its fastest wall time.
+    """
     from .bench import machine_info
 
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     seam_length = 30.0 if quick else SEAM_LENGTH_MM
-    ref_summary, ref_trace, ref_meshing = _run(REFERENCE, seam_length)
+    repeats = 1 if quick else max(1, repeats)
+    ref_summary, ref_trace, ref_meshing = _best_of(REFERENCE, seam_length, repeats)
     rows = []
     for label, overrides in [*cases(quick), ("reference", REFERENCE)]:
         if label == "reference":
             summary, trace, meshing = ref_summary, ref_trace, ref_meshing
         else:
-            summary, trace, meshing = _run(overrides, seam_length)
+            summary, trace, meshing = _best_of(overrides, seam_length, repeats)
         rows.append(
             {
                 "label": label,
@@ -157,6 +176,7 @@ def bench_tradeoff(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any
         row["pareto"] = front
     result = {
         "machine": machine_info(),
+        "repeats": repeats,
         "seam_length_mm": seam_length,
         "welding_speed_mm_s": SPEED_MM_S,
         "rows": rows,
@@ -171,7 +191,8 @@ def markdown(result: dict[str, Any]) -> str:
     m = result["machine"]
     lines = [
         f"Paper seam as a CAD V-groove, first {result['seam_length_mm']:g} mm at "
-        f"{result['welding_speed_mm_s']:g} mm/s; machine: {m['cpu']}, {m['cores']} cores.",
+        f"{result['welding_speed_mm_s']:g} mm/s; machine: {m['cpu']}, {m['cores']} cores; "
+        f"loop time the fastest of {result.get('repeats', 1)} identical runs.",
         "",
         "| run | tolerance mm | rays | float64 | frame Hz | control s | status | loop s | "
         "meshing s | total s | max error mm | RMS error mm | vs reference mm | Pareto |",
