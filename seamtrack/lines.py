@@ -4,7 +4,9 @@
 noise from second differences, cuts the profile at jumps, splits each run by Douglas-Peucker at a
 noise-scaled tolerance, merges neighbours that fit one line, and refits each piece by total
 least squares on its inliers. :func:`collinear_groups`, :func:`intersect` and
-:func:`corner_or_end` are the geometry the family extractors build on.
+:func:`corner_or_end` are the geometry the family extractors build on, and ``_Base`` their
+shared parameters and never-raise wrapper (the extractors themselves live in
+:mod:`seamtrack.features` and :mod:`seamtrack.plates`).
 
 Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groove).
 """
@@ -14,11 +16,12 @@ from __future__ import annotations
 import itertools
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from .profiles import Profile
+from .profiles import Feature, Profile
 
 FloatArray = NDArray[np.float64]
 #: Coordinates beyond this (mm) are not measurements: treated as invalid.
@@ -421,3 +424,129 @@ def corner_or_end(line: Line, at_end: bool, others: list[Line], seg: Segments) -
     """Where ``line`` ends: its crossing with a neighbour that meets it there (a visible
     corner, exact), else half a spacing beyond its last inlier (the edge lies between rays)."""
     return corner_with(line, at_end, others, seg)[0]
+
+
+# ----------------------------------------------------------------- the extractors' base
+@dataclass(frozen=True)
+class _Base:
+    """Shared parameters and the never-raise wrapper of the built-in extractors."""
+
+    name: str = "base"
+    min_tol_mm: float = 0.03
+    min_points: int = 8
+    min_arm_mm: float = 0.5
+
+    def __call__(self, profile: Profile) -> Feature:
+        try:
+            with np.errstate(all="ignore"):
+                seg = segment_profile(
+                    profile, min_tol_mm=self.min_tol_mm, min_points=self.min_points
+                )
+                if isinstance(seg, str):
+                    return Feature.failed(seg, joint=self.name)
+                return self._extract(profile, seg)
+        except (
+            ValueError,
+            IndexError,
+            ZeroDivisionError,
+            FloatingPointError,
+            np.linalg.LinAlgError,
+            AttributeError,
+            TypeError,
+        ) as exc:  # never raise on data
+            return Feature.failed(f"{self.name}: unusable profile ({exc})", joint=self.name)
+
+    def _extract(self, profile: Profile, seg: Segments) -> Feature:
+        raise NotImplementedError
+
+    def _found(self, profile: Profile, point: FloatArray, **kw: Any) -> Feature:
+        return Feature.found(point, profile.T_world_sensor, joint=self.name, **kw)
+
+    def _groups(self, seg: Segments) -> list[Line]:
+        """Collinear groups supported enough to be an arm or a plate."""
+        return [
+            g
+            for g in collinear_groups(seg)
+            if g.count >= self.min_points and g.extent >= self.min_arm_mm
+        ]
+
+    def _arms(
+        self,
+        seg: Segments,
+        opening_down: bool,
+        min_deg: float,
+        max_deg: float,
+        max_reach_mm: float,
+        groups: list[Line] | None = None,
+    ) -> tuple[Line, Line, FloatArray, float] | str:
+        """The best pair of lines forming a V (opening towards the sensor, -z) or a ridge
+        (``opening_down``: the arms fall away from the sensor): (left, right, apex, score)."""
+        if groups is None:
+            groups = self._groups(seg)
+        sign = 1.0 if opening_down else -1.0
+        best: tuple[Line, Line, FloatArray, float] | None = None
+        for i, a in enumerate(groups):
+            for b in groups[i + 1 :]:
+                x = intersect(a, b)
+                if x is None:
+                    continue
+                arms = []
+                for g in (a, b):
+                    v = g.centroid - x
+                    v = v / max(float(np.hypot(*v)), 1e-300)
+                    near = float(np.min((seg.points[g.index] - x) @ v))
+                    arms.append((v, near, g))
+                (va, na, ga), (vb, nb, gb) = sorted(arms, key=lambda arm: float(arm[0][0]))
+                included = math.degrees(math.acos(float(np.clip(va @ vb, -1, 1))))
+                bis = va + vb
+                ok = (
+                    va[0] < 0 < vb[0]
+                    and sign * va[1] > 0
+                    and sign * vb[1] > 0
+                    and min_deg <= included <= max_deg
+                    and sign * bis[1] > 0.7 * float(np.hypot(*bis))  # bisector within 45 deg
+                    and -seg.tol <= min(na, nb)
+                    and max(na, nb) <= max_reach_mm
+                )
+                score = float(ga.count + gb.count)
+                if ok and (best is None or score > best[3]):
+                    best = (ga, gb, x, score)
+        return best if best is not None else "no pair of lines forms the joint"
+
+
+def _confidence(arms: list[Line], seg: Segments) -> float:
+    """Share of the kept points explained by the feature's lines, scaled by their fit."""
+    explained = sum(a.count for a in arms) / max(len(seg.points), 1)
+    fit = max(0.0, 1.0 - max(a.rms for a in arms) / seg.tol)
+    return float(np.clip(0.5 * explained + 0.5 * fit, 0.0, 1.0))
+
+
+#: A gap's wall or a lap's edge face stands at least this steep on the plates (deg). A false
+#: reflection is a stray line tilted by at most 45 deg in the laser plane: up to 60 deg on a
+#: plate rolled by 15 deg, so it is never taken for a wall.
+_WALL_DEG = 65.0
+#: A gap's bottom (a backing seen through the gap) lies within this angle of the plates (deg).
+_BOTTOM_DEG = 10.0
+#: A piece within this angle of a plate (deg) is plate where it lies on the plate's line.
+_PLATE_DEG = 20.0
+
+
+def _on(line: Line, index: NDArray[np.intp], points: FloatArray) -> Line:
+    """``line`` carrying other inliers (their coordinates along it): a stub's edge measured
+    on the line of the whole plate."""
+    t = (points[index] - line.centroid) @ line.direction
+    return Line(index, line.centroid, line.direction, t, line.rms)
+
+
+def _towards_sensor(line: Line, q: FloatArray) -> FloatArray:
+    """Signed distance of points from ``line``, positive on the sensor's side (the origin)."""
+    h = (q - line.centroid) @ line.normal
+    return h if float(line.centroid @ line.normal) < 0 else -h
+
+
+def _ray_t(line: Line, q: FloatArray) -> FloatArray:
+    """Where the rays from the emitter (the origin) through points ``q`` cross ``line``, as
+    coordinates along it: which stretch of the plate those columns would have shown."""
+    n = line.normal
+    s = float(line.centroid @ n) / (q @ n)
+    return (q * s[:, None] - line.centroid) @ line.direction
