@@ -239,7 +239,11 @@ class CartesianRobot:
     def within_travel(self, q: tuple[float, float, float]) -> bool:
         """True when joint positions lie inside the axis travel (cheap: for the hot loop)."""
         lo, hi = self.position_min_mm, self.position_max_mm
-        return all(lo[i] - 1e-9 <= q[i] <= hi[i] + 1e-9 for i in range(3))
+        return (
+            lo[0] - 1e-9 <= q[0] <= hi[0] + 1e-9
+            and lo[1] - 1e-9 <= q[1] <= hi[1] + 1e-9
+            and lo[2] - 1e-9 <= q[2] <= hi[2] + 1e-9
+        )
 
     def state_at(self, q: ArrayLike) -> RobotState:
         """A state at rest at joint positions q (must be inside the travel)."""
@@ -265,15 +269,18 @@ class CartesianRobot:
                 # Path speed limited by every axis' velocity limit along this direction.
                 speed = command.speed
                 a_path = math.inf
-                for u, vm, am in (
-                    (ux, vmax[0], amax[0]),
-                    (uy, vmax[1], amax[1]),
-                    (uz, vmax[2], amax[2]),
-                ):
-                    au = abs(u)
-                    if au > 1e-12:
-                        speed = min(speed, vm / au)
-                        a_path = min(a_path, am / au)
+                au = abs(ux)
+                if au > 1e-12:
+                    speed = min(speed, vmax[0] / au)
+                    a_path = min(a_path, amax[0] / au)
+                au = abs(uy)
+                if au > 1e-12:
+                    speed = min(speed, vmax[1] / au)
+                    a_path = min(a_path, amax[1] / au)
+                au = abs(uz)
+                if au > 1e-12:
+                    speed = min(speed, vmax[2] / au)
+                    a_path = min(a_path, amax[2] / au)
                 if command.stop_at_target:
                     speed = min(speed, _stop_speed(dist, a_path, dt))
                 # Never step past the target in one tick.
