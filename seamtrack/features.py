@@ -39,6 +39,7 @@ from numpy.typing import NDArray
 from .errors import PluginError
 from .lines import (
     _WALL_DEG,
+    DATA_ERRORS,
     Line,
     Segments,
     _Base,
@@ -316,15 +317,7 @@ class GenericExtractor:
         try:
             with np.errstate(all="ignore"):
                 return self._extract(profile)
-        except (
-            ValueError,
-            IndexError,
-            ZeroDivisionError,
-            FloatingPointError,
-            np.linalg.LinAlgError,
-            AttributeError,
-            TypeError,
-        ) as exc:
+        except DATA_ERRORS as exc:  # never raise on data
             return Feature.failed(f"generic: unusable profile ({exc})", joint=self.name)
 
     def _extract(self, profile: Profile) -> Feature:

@@ -427,6 +427,19 @@ def corner_or_end(line: Line, at_end: bool, others: list[Line], seg: Segments) -
 
 
 # ----------------------------------------------------------------- the extractors' base
+#: What bad data (NaN, degenerate fits, empty selections) can raise inside an extractor: caught
+#: and turned into a falsy ``Feature.failed``.
+DATA_ERRORS = (
+    ValueError,
+    IndexError,
+    ZeroDivisionError,
+    FloatingPointError,
+    np.linalg.LinAlgError,
+    AttributeError,
+    TypeError,
+)
+
+
 @dataclass(frozen=True)
 class _Base:
     """Shared parameters and the never-raise wrapper of the built-in extractors."""
@@ -445,15 +458,7 @@ class _Base:
                 if isinstance(seg, str):
                     return Feature.failed(seg, joint=self.name)
                 return self._extract(profile, seg)
-        except (
-            ValueError,
-            IndexError,
-            ZeroDivisionError,
-            FloatingPointError,
-            np.linalg.LinAlgError,
-            AttributeError,
-            TypeError,
-        ) as exc:  # never raise on data
+        except DATA_ERRORS as exc:  # never raise on data
             return Feature.failed(f"{self.name}: unusable profile ({exc})", joint=self.name)
 
     def _extract(self, profile: Profile, seg: Segments) -> Feature:
