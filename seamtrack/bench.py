@@ -129,6 +129,22 @@ def _case(name: str, mesh: Any, poses: list[np.ndarray], calls: int, repeats: in
             scene.run(fan_o32, fan_d32, output=1)
             scene.run(sh_o32, sh_d32, dists=sh_far32.copy(), query="OCCLUDED")
 
+    def packets_fan() -> None:
+        for fan_o32, fan_d32, *_ in rays:
+            caster.cast_local(fan_o32[:1], fan_d32)
+
+    def packets_shadow() -> None:
+        for _, _, sh_o32, sh_d32, sh_far32, *_ in rays:
+            caster.occluded_local(sh_o32, sh_d32, sh_far32)
+
+    def bare_fan() -> None:
+        for fan_o32, fan_d32, *_ in rays:
+            scene.run(fan_o32, fan_d32, output=1)
+
+    def bare_shadow() -> None:
+        for _, _, sh_o32, sh_d32, sh_far32, *_ in rays:
+            scene.run(sh_o32, sh_d32, dists=sh_far32.copy(), query="OCCLUDED")
+
     def via_trimesh() -> None:
         for *_, fan_o64, fan_world, sh_o64, sh_d in rays:
             intersector.intersects_location(fan_o64, fan_world, multiple_hits=False)
@@ -159,6 +175,10 @@ def _case(name: str, mesh: Any, poses: list[np.ndarray], calls: int, repeats: in
         ),
         "bare embreex scene.run (same rays)": bare,
         "trimesh mesh.ray (same rays)": via_trimesh,
+        "part: Embree packets, fan only": packets_fan,
+        "part: Embree packets, shadow rays only": packets_shadow,
+        "part: bare embreex, fan only": bare_fan,
+        "part: bare embreex, shadow rays only": bare_shadow,
     }
     rates = {key: 0.0 for key in methods}
     for _ in range(repeats):  # interleaved, so that drift hits every method alike
@@ -332,12 +352,12 @@ def raycast_markdown(result: dict) -> str:
             f"`{case['trimesh_intersector']}`, embree "
             f"{'available' if case['trimesh_has_embree'] else 'NOT available'})",
             "",
-            "| method | profiles/s | vs bare embreex |",
-            "|---|---:|---:|",
+            "| method | profiles/s | us per profile | vs bare embreex |",
+            "|---|---:|---:|---:|",
         ]
         bare = case["profiles_per_s"]["bare embreex scene.run (same rays)"]
         for key, rate in case["profiles_per_s"].items():
-            lines.append(f"| {key} | {rate:,.0f} | {rate / bare:.2f}x |")
+            lines.append(f"| {key} | {rate:,.0f} | {1e6 / rate:.0f} | {rate / bare:.2f}x |")
         lines += ["", "| ratio | value |", "|---|---:|"]
         for key, value in case["ratios"].items():
             text = f"{value * 100:+.1f} %" if "cost" in key else f"{value:.2f}x"

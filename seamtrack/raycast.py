@@ -14,10 +14,10 @@ Vertices that coincide exactly are welded for that neighbour search (a CAD mesh 
 vertices along every B-rep edge, which is where the creases are); Embree sees the mesh as given.
 
 Embree is called in packets of 8 rays from numba (:mod:`seamtrack.embree`, on the library inside
-the embreex wheel), 1.3x (first hits) to 2.7x (shadow rays) faster than embreex's one-ray-at-a-time
-``scene.run``, which remains the fallback (``backend="embreex"``). Occlusion (shadow) rays start a
-small offset (:data:`seamtrack.constants.SHADOW_RAY_OFFSET_MM`) from the surface point towards
-their target, as embreex's fixed ``tnear = 0`` requires; both backends cast the same rays.
+the embreex wheel), faster than embreex's one-ray-at-a-time ``scene.run`` (``seamtrack bench
+raycast`` times both), which remains the fallback (``backend="embreex"``). Occlusion (shadow) rays
+start a small offset (:data:`seamtrack.constants.SHADOW_RAY_OFFSET_MM`) from the surface point
+towards their target, as embreex's fixed ``tnear = 0`` requires; both backends cast the same rays.
 """
 
 from __future__ import annotations
@@ -404,8 +404,15 @@ class RayCaster:
         naive world-frame float32 scene (useful only to measure what the shift buys).
     backend : {"auto", "packets", "embreex"}
         How Embree is called: ray packets from numba (:mod:`seamtrack.embree`, the default when
-        the embreex wheel's Embree 4 library is found) or embreex's ``scene.run``. Both give
-        the same hits up to Embree's float32 ties at shared edges, which refinement resolves.
+        the embreex wheel's Embree 4 library is found) or embreex's ``scene.run``. Both cast
+        the same float32 rays on a robust scene and give the same hits (tests/test_embree.py).
+
+    Attributes
+    ----------
+    backend : str
+        ``"packets"`` or ``"embreex"``, as chosen.
+    packets : seamtrack.embree.Scene or None
+        The packet backend's scene (None on the fallback, which uses ``scene``).
 
     Notes
     -----
@@ -438,16 +445,16 @@ class RayCaster:
         self.local_origin: FloatArray = origin
         self.vertices_local: FloatArray = np.ascontiguousarray(v - origin)
         self.faces: NDArray[np.int64] = np.ascontiguousarray(f)
-        lib = embree.library() if backend in ("auto", "packets") else None
         if backend not in ("auto", "packets", "embreex"):
             raise ValueError(f"backend must be 'auto', 'packets' or 'embreex', got {backend!r}")
+        lib = embree.library() if backend != "embreex" else None
         if backend == "packets" and lib is None:
             raise RuntimeError("no Embree 4 library found in the embreex wheel")
         self.backend: str = "packets" if lib is not None else "embreex"
-        self._packets: embree.Scene | None = None
+        self.packets: embree.Scene | None = None
         self.scene: Any = None  # embreex's EmbreeScene, on the fallback backend
         if lib is not None:
-            self._packets = embree.Scene(lib, self.vertices_local, self.faces)
+            self.packets = embree.Scene(lib, self.vertices_local, self.faces)
         else:
             self.scene = rtcore_scene.EmbreeScene()
             # The TriangleMesh object must outlive the scene's use of its buffers: keep it.
@@ -498,8 +505,8 @@ class RayCaster:
         ``origins`` is (1, 3) (shared by all rays) or (n, 3), ``directions`` (n, 3); Embree
         sees both rounded to float32.
         """
-        if self._packets is not None:
-            return self._packets.intersect(origins, directions)
+        if self.packets is not None:
+            return self.packets.intersect(origins, directions)
         d32 = np.ascontiguousarray(directions, dtype=np.float32)
         o32 = np.ascontiguousarray(np.broadcast_to(origins, d32.shape), dtype=np.float32)
         out = self.scene.run(o32, d32, output=1)
@@ -510,8 +517,8 @@ class RayCaster:
     ) -> BoolArray:
         """Bare Embree occlusion in the local frame: True where ray i meets the mesh in
         (0, far[i]]; arguments as :meth:`cast_local`, ``far`` (n,)."""
-        if self._packets is not None:
-            return self._packets.occluded(origins, directions, far)
+        if self.packets is not None:
+            return self.packets.occluded(origins, directions, far)
         d32 = np.ascontiguousarray(directions, dtype=np.float32)
         o32 = np.ascontiguousarray(np.broadcast_to(origins, d32.shape), dtype=np.float32)
         far32 = np.array(far, dtype=np.float32)  # a copy: embreex writes into it

@@ -298,7 +298,7 @@ def stripe_hits(
     rotation = np.ascontiguousarray(T[:3, :3])
     origin = T[:3, 3] - caster.local_origin
     do_quantize = bool(sensor.quantize if quantize is None else quantize)
-    packets = caster._packets
+    packets = caster.packets
     if packets is not None:  # one numba call does it all
         points, reason, t, face, cos_incidence, directions = raycast.fan_stripe_packets(
             packets.lib.intersect8, packets.lib.occluded8, packets.handle, origin, rotation,
