@@ -64,7 +64,6 @@ class Library:
         self.new_device = bind("rtcNewDevice", _u64, ctypes.c_char_p)
         self.device_property = bind("rtcGetDeviceProperty", ctypes.c_ssize_t, _u64, ctypes.c_int)
         self.device_error = bind("rtcGetDeviceError", ctypes.c_int, _u64)
-        self.release_device = bind("rtcReleaseDevice", None, _u64)
         self.new_scene = bind("rtcNewScene", _u64, _u64)
         self.commit_scene = bind("rtcCommitScene", None, _u64)
         self.release_scene = bind("rtcReleaseScene", None, _u64)
