@@ -1,4 +1,5 @@
-"""OCCT kernels behind :mod:`seamtrack.workpiece`: seam edge chains and sampling, meshing with
+"""OCCT kernels behind :mod:`seamtrack.workpiece.loader`: seam edge chains and sampling, meshing
+with
 an absolute tolerance, and measuring the mesh's deviation from the exact surfaces.
 
 Imported lazily by the loader (never by a seam-mode scene): it needs CadQuery/OCP.

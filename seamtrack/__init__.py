@@ -9,26 +9,26 @@ from __future__ import annotations
 import importlib
 from typing import Any
 
-__version__ = "0.1.0"
+from seamtrack._version import __version__ as __version__
 
 _EXPORTS = {
-    "LaserLineSensor": "seamtrack.sensor",
-    "Seam": "seamtrack.seam",
-    "Profile": "seamtrack.profiles",
-    "Feature": "seamtrack.profiles",
-    "Reason": "seamtrack.profiles",
-    "CartesianRobot": "seamtrack.robot",
-    "Command": "seamtrack.trackers",
-    "Measurement": "seamtrack.trackers",
-    "Tracker": "seamtrack.trackers",
-    "tracker": "seamtrack.trackers",
-    "load_scene": "seamtrack.scene",
-    "Scene": "seamtrack.scene",
-    "simulate": "seamtrack.simulation",
-    "Result": "seamtrack.simulation",
-    "extractor": "seamtrack.features",
-    "FeatureExtractor": "seamtrack.features",
-    "load_workpiece": "seamtrack.workpiece",
+    "LaserLineSensor": "seamtrack.sensing.sensor",
+    "Seam": "seamtrack.geometry.seam",
+    "Profile": "seamtrack.sensing.profiles",
+    "Feature": "seamtrack.sensing.profiles",
+    "Reason": "seamtrack.sensing.profiles",
+    "CartesianRobot": "seamtrack.control.robot",
+    "Command": "seamtrack.control.tracking",
+    "Measurement": "seamtrack.control.tracking",
+    "Tracker": "seamtrack.control.tracking",
+    "tracker": "seamtrack.control.registry",
+    "load_scene": "seamtrack.simulation.scene",
+    "Scene": "seamtrack.simulation.scene",
+    "simulate": "seamtrack.simulation.loop",
+    "Result": "seamtrack.simulation.loop",
+    "extractor": "seamtrack.features.extractors",
+    "FeatureExtractor": "seamtrack.features.extractors",
+    "load_workpiece": "seamtrack.workpiece.loader",
     "SeamtrackError": "seamtrack.errors",
 }
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 import seamtrack as st
-from seamtrack.sensor import preset
+from seamtrack.sensing.sensor import preset
 
 
 @pytest.fixture(scope="session")

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from seamtrack.bench_tradeoff import cases, pareto
+from seamtrack.bench.tradeoff import cases, pareto
 
 
 def row(t: float, mx: float, rms: float) -> dict[str, float]:

@@ -15,8 +15,8 @@ pytestmark = pytest.mark.cad
 
 cq = pytest.importorskip("cadquery")
 
-from seamtrack.seam import paper_curve  # noqa: E402
-from seamtrack.workpiece import load_workpiece  # noqa: E402
+from seamtrack.geometry.seam import paper_curve  # noqa: E402
+from seamtrack.workpiece.loader import load_workpiece  # noqa: E402
 
 FAMILIES = ("square_butt", "v_groove", "fillet_t", "lap", "outside_corner")
 PATHS = ("straight", "arc", "paper", "corner")

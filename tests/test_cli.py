@@ -159,7 +159,7 @@ def test_output_that_is_a_file_is_refused(tmp_path) -> None:
 def test_user_tracker_from_the_scene(tmp_path) -> None:
     (tmp_path / "slow_tracker.py").write_text(
         textwrap.dedent("""
-        from seamtrack.trackers import ConvergenceRadius
+        from seamtrack.control.trackers import ConvergenceRadius
 
         class Half(ConvergenceRadius):
             def reset(self, context):

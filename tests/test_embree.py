@@ -1,4 +1,4 @@
-"""Embree ray packets from numba (seamtrack.embree) against embreex's own ``scene.run``.
+"""Embree ray packets from numba (seamtrack.sensing.embree) against embreex's own ``scene.run``.
 
 The packet backend must be a drop-in for embreex: the same first hits and the same occlusion
 answers on the same float32 rays, for any number of rays (packets of 8, a partial last one),
@@ -10,10 +10,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from seamtrack import bench, embree, frames, raycast
-from seamtrack.raycast import RayCaster
-from seamtrack.scan import stripe_hits
-from seamtrack.sensor import preset
+from seamtrack.bench import raycast as bench
+from seamtrack.geometry import frames
+from seamtrack.sensing import embree, raycast
+from seamtrack.sensing.raycast import RayCaster
+from seamtrack.sensing.scan import stripe_hits
+from seamtrack.sensing.sensor import preset
 
 pytestmark = pytest.mark.embree
 

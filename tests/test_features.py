@@ -13,10 +13,10 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from seamtrack.errors import PluginError
-from seamtrack.features import BUILTIN, FeatureExtractor, extractor
-from seamtrack.profiles import Feature, Profile
-from seamtrack.sensor import preset
-from seamtrack.synthetic import Imperfections, ray_angles, synthetic_profile
+from seamtrack.features.extractors import BUILTIN, FeatureExtractor, extractor
+from seamtrack.features.synthetic import Imperfections, ray_angles, synthetic_profile
+from seamtrack.sensing.profiles import Feature, Profile
+from seamtrack.sensing.sensor import preset
 
 SENSOR = preset("paper")
 RESOLUTION_MM = 0.01  # the paper's sensor (Table 3)

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy.spatial.transform import Rotation
 
-from seamtrack import frames
+from seamtrack.geometry import frames
 
 
 def random_pose(rng: np.random.Generator) -> np.ndarray:

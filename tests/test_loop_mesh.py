@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 import seamtrack as st
-from seamtrack.scan import sense_seam
-from seamtrack.scene import builtin_scenes, load_scene
+from seamtrack.sensing.scan import sense_seam
+from seamtrack.simulation.assemble import build_parts
+from seamtrack.simulation.scene import builtin_scenes, load_scene
 
 pytestmark = [pytest.mark.cad, pytest.mark.embree]
 
@@ -20,7 +21,7 @@ MESH_SCENES = sorted(
 
 
 def test_there_is_a_mesh_scene_for_every_joint_family() -> None:
-    from seamtrack.workpiece import builtin_joints
+    from seamtrack.workpiece.loader import builtin_joints
 
     scripts = {load_scene(name).config.workpiece.script for name in MESH_SCENES}  # type: ignore[union-attr]
     assert set(builtin_joints()) <= scripts
@@ -65,7 +66,7 @@ def test_mesh_mode_and_seam_mode_agree_on_the_papers_seam() -> None:
     """At the same poses, the seam point the extractor finds in the ray-cast stripe and the
     crossing of the laser plane with the CAD seam (the paper's seam mode) agree within the
     sensor's resolution."""
-    parts = load_scene("paper-v-groove").build()
+    parts = build_parts(load_scene("paper-v-groove"))
     assert parts.scan is not None and parts.sensor is not None
     arc = np.linspace(5.0, parts.seam.length_mm - 20.0, 60)
     diffs = []

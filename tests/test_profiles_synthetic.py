@@ -8,9 +8,9 @@ import math
 import numpy as np
 import pytest
 
-from seamtrack.profiles import Reason
-from seamtrack.sensor import preset
-from seamtrack.synthetic import JOINTS, Imperfections, synthetic_profile
+from seamtrack.features.synthetic import JOINTS, Imperfections, synthetic_profile
+from seamtrack.sensing.profiles import Reason
+from seamtrack.sensing.sensor import preset
 
 SENSOR = preset("paper")
 IDEAL = dataclasses.replace(SENSOR, quantize=False)

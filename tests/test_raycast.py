@@ -1,4 +1,4 @@
-"""Embree ray casting in a local float32 frame, refined in float64 (seamtrack.raycast).
+"""Embree ray casting in a local float32 frame, refined in float64 (seamtrack.sensing.raycast).
 
 Oracles are analytic: every test mesh is a polyline cross-section extruded along x (a flat
 plate, a V-groove, a fillet T-joint), whose planes give each ray's exact hit.
@@ -15,11 +15,11 @@ import pytest
 import trimesh
 from scipy.spatial.transform import Rotation
 
-from seamtrack import frames
-from seamtrack.profiles import Reason
-from seamtrack.raycast import RayCaster
-from seamtrack.scan import laser_fan, scan_mesh
-from seamtrack.sensor import preset
+from seamtrack.geometry import frames
+from seamtrack.sensing.profiles import Reason
+from seamtrack.sensing.raycast import RayCaster
+from seamtrack.sensing.scan import laser_fan, scan_mesh
+from seamtrack.sensing.sensor import preset
 
 pytestmark = pytest.mark.embree
 
@@ -242,7 +242,7 @@ def test_caster_is_built_once_per_mesh_and_released_with_it() -> None:
     mesh = extruded_mesh(SECTIONS["flat"], np.eye(4))
     caster = RayCaster.for_mesh(mesh)
     assert RayCaster.for_mesh(mesh) is caster
-    from seamtrack import raycast
+    from seamtrack.sensing import raycast
 
     key = id(mesh)
     del mesh
@@ -251,7 +251,7 @@ def test_caster_is_built_once_per_mesh_and_released_with_it() -> None:
 
 
 def test_fused_kernels_match_the_sensor_methods() -> None:
-    from seamtrack.raycast import _chip, _pixel_center
+    from seamtrack.sensing.kernels import _chip, _pixel_center
 
     sp = laser_fan(SENSOR, 3).sensor_params
     rng = np.random.default_rng(3)

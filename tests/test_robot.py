@@ -9,8 +9,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as hs
 
+from seamtrack.control.robot import CartesianRobot, MoveCommand
 from seamtrack.errors import ReachError, SceneError
-from seamtrack.robot import CartesianRobot, MoveCommand
 
 ROBOT = CartesianRobot()  # Table 2, 1 ms
 
@@ -143,7 +143,7 @@ def test_end_stops_cannot_limit_a_robot_farther_than_its_free_travel(
     v: float, a: float, dt: float
 ) -> None:
     """The servo skips the end-stop braking test beyond _free_travel: exact there."""
-    from seamtrack.robot import _stop_speed
+    from seamtrack.control.robot import _stop_speed
 
     robot = CartesianRobot(
         velocity_max_mm_s=(v, v, v), acceleration_max_mm_s2=(a, a, a), control_period_s=dt

@@ -1,4 +1,5 @@
-"""Mesh-mode stripe profiles (seamtrack.scan.scan_mesh): clips, occlusion, noise knobs, files."""
+"""Mesh-mode stripe profiles (seamtrack.sensing.scan.scan_mesh): clips, occlusion, noise knobs,
+files."""
 
 from __future__ import annotations
 
@@ -13,11 +14,11 @@ import pytest
 import trimesh
 from test_raycast import SECTIONS, analytic_first_hit, extruded_mesh, posed
 
-from seamtrack import frames
-from seamtrack.profile_io import plot_profile_png, write_profile_csv
-from seamtrack.profiles import Feature, Reason
-from seamtrack.raycast import RayCaster
-from seamtrack.scan import (
+from seamtrack.geometry import frames
+from seamtrack.io.profiles import write_profile_csv
+from seamtrack.sensing.profiles import Feature, Reason
+from seamtrack.sensing.raycast import RayCaster
+from seamtrack.sensing.scan import (
     StripeNoise,
     dropout_probability,
     laser_fan,
@@ -26,7 +27,8 @@ from seamtrack.scan import (
     secondary_reflection_points,
     stripe_hits,
 )
-from seamtrack.sensor import preset
+from seamtrack.sensing.sensor import preset
+from seamtrack.viz.plots import plot_profile_png
 
 pytestmark = pytest.mark.embree
 
@@ -199,7 +201,7 @@ def test_part_types_and_defaults() -> None:
 
 def test_seam_mode_imports_neither_embree_nor_numba() -> None:
     code = (
-        "import sys, seamtrack.scan; "
+        "import sys, seamtrack.sensing.scan; "
         "assert not {'embreex', 'numba', 'trimesh'} & set(sys.modules), sys.modules.keys()"
     )
     subprocess.run([sys.executable, "-c", code], check=True)

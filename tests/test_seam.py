@@ -8,7 +8,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as hs
 
 from seamtrack.errors import SeamError
-from seamtrack.seam import Seam, _point_segment, paper_points
+from seamtrack.geometry.seam import Seam, _point_segment, paper_points
 
 
 def test_paper_seam_is_eq15_to_17() -> None:

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from seamtrack.errors import SensorGeometryError
-from seamtrack.sensor import LaserLineSensor, preset
+from seamtrack.sensing.sensor import LaserLineSensor, preset
 
 # A round-number sensor for hand computation: b = 50, lambda = 10, theta = 30 deg,
 # H = 4, V = 6, 1000 x 500 pixels.

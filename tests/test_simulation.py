@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import seamtrack as st
-from seamtrack.sweep import run_sweep, summarize
+from seamtrack.batch.sweep import run_sweep, summarize
 
 RADII = [6, 5, 1, 0.1, 0.05, 0.04, 0.02, 0.01]
 

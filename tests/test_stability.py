@@ -18,8 +18,8 @@ import pytest
 
 import seamtrack as st
 from seamtrack.errors import SceneError, SeamtrackError, SensorGeometryError
-from seamtrack.seam import paper_points
-from seamtrack.sensor import PRESET_SPECS, LaserLineSensor
+from seamtrack.geometry.seam import paper_points
+from seamtrack.sensing.sensor import PRESET_SPECS, LaserLineSensor
 
 #: Every run here stops after this much wall-clock time at the latest (status "stalled").
 WALL_LIMIT_S = 30.0

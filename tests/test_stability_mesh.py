@@ -5,14 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from seamtrack.scan import sense_seam
-from seamtrack.scene import load_scene
+from seamtrack.sensing.scan import sense_seam
+from seamtrack.simulation.assemble import build_parts
+from seamtrack.simulation.scene import load_scene
 
 pytestmark = [pytest.mark.cad, pytest.mark.embree]
 
 
 def test_4096_ray_profiles_are_finite_and_find_the_seam() -> None:
-    parts = load_scene("paper-v-groove", {"sensor.rays": 4096}).build()
+    parts = build_parts(load_scene("paper-v-groove", {"sensor.rays": 4096}))
     assert parts.scan is not None and parts.sensor is not None
     for s in np.linspace(10.0, 380.0, 12):
         tcp = parts.seam.interpolate([s])[0]
@@ -30,7 +31,7 @@ def test_a_1e_4_mm_mesh_is_built_measured_and_tracked(tmp_path, monkeypatch) -> 
     """A small arc V-groove meshed to 1e-4 mm: the measured deviation honours the request and
     a run on it completes with the extractor's accuracy."""
     monkeypatch.setenv("SEAMTRACK_CACHE_DIR", str(tmp_path))
-    from seamtrack.workpiece import load_workpiece
+    from seamtrack.workpiece.loader import load_workpiece
 
     part = load_workpiece(
         "v_groove",
@@ -55,7 +56,7 @@ def test_a_1e_4_mm_mesh_is_built_measured_and_tracked(tmp_path, monkeypatch) -> 
             "simulation.welding_speed_mm_s": 10.0,
         },
     )
-    from seamtrack.simulation import simulate
+    from seamtrack.simulation.loop import simulate
 
     summary = simulate(scene).summary
     assert summary["status"] == "completed"

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from seamtrack.sweep import markdown_table, run_sweep, summarize
+from seamtrack.batch.sweep import markdown_table, run_sweep, summarize
 
 SCENE = "paper-corner"
 #: paper-corner shortened to a 20 mm leg and a 14 mm leg after the 45 deg turn (~0.3 s a run).
@@ -93,7 +93,7 @@ def test_dask_cluster_gives_the_serial_numbers(serial_rows: list[dict[str, Any]]
 
 def test_dask_scheduler_that_cannot_be_reached_is_refused(monkeypatch: pytest.MonkeyPatch) -> None:
     pytest.importorskip("dask.distributed")
-    from seamtrack import sweep
+    from seamtrack.batch import sweep
     from seamtrack.errors import SeamtrackError
 
     monkeypatch.setattr(sweep, "DASK_CONNECT_TIMEOUT_S", 1.0)

@@ -8,16 +8,11 @@ import textwrap
 import numpy as np
 import pytest
 
+from seamtrack.control.registry import tracker, tracker_class
+from seamtrack.control.trackers import ConvergenceRadius, PointToPoint
+from seamtrack.control.tracking import Measurement, TrackerContext
 from seamtrack.errors import PluginError
-from seamtrack.profiles import Feature
-from seamtrack.trackers import (
-    ConvergenceRadius,
-    Measurement,
-    PointToPoint,
-    TrackerContext,
-    tracker,
-    tracker_class,
-)
+from seamtrack.sensing.profiles import Feature
 
 
 def context() -> TrackerContext:

@@ -8,12 +8,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from seamtrack.scene import load_scene
+from seamtrack.simulation.assemble import build_parts
+from seamtrack.simulation.scene import load_scene
 
 
 @pytest.fixture(scope="module")
 def corner():
-    return load_scene("v-groove-corner").build()
+    return build_parts(load_scene("v-groove-corner"))
 
 
 def _scan(parts, s_mm):

@@ -8,10 +8,10 @@ import math
 import numpy as np
 import pytest
 
-from seamtrack.features import extractor
-from seamtrack.profiles import Profile
-from seamtrack.sensor import preset
-from seamtrack.synthetic import Imperfections, ray_angles, synthetic_profile
+from seamtrack.features.extractors import extractor
+from seamtrack.features.synthetic import Imperfections, ray_angles, synthetic_profile
+from seamtrack.sensing.profiles import Profile
+from seamtrack.sensing.sensor import preset
 
 SENSOR = preset("paper")
 DETECTED_MM = 0.5

@@ -25,12 +25,13 @@ import numpy as np
 import pytest
 
 import seamtrack as st
-from seamtrack.sensor import preset
+from seamtrack.sensing.sensor import preset
 
 pv = pytest.importorskip("pyvista")
 trimesh = pytest.importorskip("trimesh")
 
-from seamtrack import viz, viz_run  # noqa: E402  (after the skip: needs pyvista)
+from seamtrack.viz import run as viz_run  # noqa: E402  (after the skip: needs pyvista)
+from seamtrack.viz import views as viz  # noqa: E402
 
 CACHE = Path(__file__).parent / "image_cache"
 UPDATE_ENV = "SEAMTRACK_UPDATE_IMAGES"
@@ -127,8 +128,8 @@ def test_mesh_view_with_stripe_and_fov_matches_cache(
 
 
 def test_profile_plot_matches_cache(tmp_path: Path) -> None:
-    from seamtrack.plots import plot_profile_2d
-    from seamtrack.synthetic import synthetic_profile
+    from seamtrack.features.synthetic import synthetic_profile
+    from seamtrack.viz.plots import plot_profile_2d
 
     profile, truth = synthetic_profile("v-groove", preset("paper"), rays=300, roll_deg=10.0)
     feature = st.extractor("v-groove")(profile)
@@ -155,8 +156,8 @@ def test_view_command_writes_png_without_display(tmp_path: Path) -> None:
     }
     out = tmp_path / "view.png"
     code = (
-        "from seamtrack.viz import has_display\n"
-        "from seamtrack.viz_run import view_command\n"
+        "from seamtrack.viz.views import has_display\n"
+        "from seamtrack.viz.run import view_command\n"
         "assert not has_display()\n"
         f"print(view_command('paper-corner', 50.0, {str(out)!r}, window_size=(320, 240)))\n"
     )

@@ -17,8 +17,8 @@ pytestmark = pytest.mark.cad
 cq = pytest.importorskip("cadquery")
 
 from seamtrack.errors import WorkpieceError  # noqa: E402
-from seamtrack.seam import paper_curve  # noqa: E402
-from seamtrack.workpiece import (  # noqa: E402
+from seamtrack.geometry.seam import paper_curve  # noqa: E402
+from seamtrack.workpiece.loader import (  # noqa: E402
     cache_dir,
     clear_cache,
     load_workpiece,
@@ -189,7 +189,7 @@ def _timed_load_in_subprocess(script: Path, cache: Path, **params) -> dict:
         f"""
         import json, sys, time
         import trimesh  # both loads need it; the timing is about CAD work versus the cache
-        from seamtrack.workpiece import load_workpiece
+        from seamtrack.workpiece.loader import load_workpiece
         t0 = time.perf_counter()
         part = load_workpiece({str(script)!r}, tolerance_mm=0.01, cache_dir={str(cache)!r},
                               **{params!r})

@@ -1,0 +1,270 @@
+"""Parameter sweeps: one scene, one key, many values (and seeds).
+
+Cases run in a local process pool (``workers``, default 1) or on a Dask cluster
+(``scheduler="tcp://host:port"``, needs the ``dask`` extra). Each finished case is appended to
+``results.jsonl`` in the output folder as it finishes, so a killed sweep loses nothing: a rerun
+skips the cases already there. A case that fails is recorded with its error and the sweep goes
+on; a rerun tries the failed cases again.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Iterable, Sequence
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from seamtrack.errors import SeamtrackError
+from seamtrack.io.output import json_safe, prepare_dir
+from seamtrack.simulation.scene import load_scene, parse_override
+
+#: How long to wait for a Dask scheduler to answer before refusing the sweep, s.
+DASK_CONNECT_TIMEOUT_S = 10.0
+
+#: Columns of the sweep table, in order.
+TABLE_KEYS = (
+    "status",
+    "max_error_mm",
+    "min_error_mm",
+    "rms_error_mm",
+    "mean_speed_mm_s",
+    "completed_fraction",
+)
+
+
+@dataclass(frozen=True)
+class Case:
+    """One run of a sweep: the swept value and the seed."""
+
+    param: str
+    value: Any
+    seed: int | None = None
+
+    @property
+    def key(self) -> str:
+        seed = "" if self.seed is None else f"|seed={self.seed}"
+        return f"{self.param}={json.dumps(self.value)}{seed}"
+
+
+def parse_values(text: str) -> list[Any]:
+    """``"6,5,1"`` -> ``[6, 5, 1]``; ``"[0,1,1],[1,1,1]"`` -> two lists; values that are not
+    TOML (``"I,II,trajectory"``) are split on commas and kept as strings."""
+    import tomllib
+
+    try:
+        return list(tomllib.loads(f"v = [{text}]")["v"])
+    except tomllib.TOMLDecodeError:
+        return [parse_override(f"v={item.strip()}")[1] for item in text.split(",") if item.strip()]
+
+
+def run_case(scene: str, case: Case, overrides: dict[str, Any]) -> dict[str, Any]:
+    """Run one case; never raises (a failure is returned as ``{"error": ...}``)."""
+    from seamtrack.simulation.loop import simulate
+
+    values = dict(overrides)
+    values[case.param] = case.value
+    if case.seed is not None:
+        values["simulation.seed"] = case.seed
+    try:
+        result = simulate(load_scene(scene, values))
+    except SeamtrackError as exc:
+        return {"case": case.key, "value": case.value, "seed": case.seed, "error": str(exc)}
+    except Exception as exc:  # a user tracker may raise anything; the sweep must go on
+        return {
+            "case": case.key,
+            "value": case.value,
+            "seed": case.seed,
+            "error": f"{type(exc).__name__}: {exc}",
+        }
+    return {
+        "case": case.key,
+        "value": case.value,
+        "seed": case.seed,
+        "summary": json_safe(result.summary),
+    }
+
+
+def _done(results_path: Path) -> dict[str, dict[str, Any]]:
+    """The cases already finished in ``results.jsonl``; a last line cut by a kill is dropped
+    from the file (that case runs again), so that new rows start on a line of their own. A case
+    that failed is not finished: a rerun tries it again (its cause may have been fixed)."""
+    done: dict[str, dict[str, Any]] = {}
+    if not results_path.exists():
+        return done
+    text = results_path.read_text()
+    if text and not text.endswith("\n"):
+        text = text[: text.rfind("\n") + 1]
+        results_path.write_text(text)
+    for line in text.splitlines():
+        try:
+            row = json.loads(line)
+        except json.JSONDecodeError:
+            continue  # a damaged line: that case runs again
+        if isinstance(row, dict) and "case" in row and "summary" in row:
+            done[row["case"]] = row
+    return done
+
+
+def run_sweep(
+    scene: str,
+    param: str,
+    values: Sequence[Any],
+    *,
+    overrides: dict[str, Any] | None = None,
+    seeds: Sequence[int] | None = None,
+    workers: int = 1,
+    scheduler: str | None = None,
+    out_dir: str | Path | None = None,
+    progress: bool = False,
+) -> list[dict[str, Any]]:
+    """Run every case (value x seed) and return one row per case, in case order.
+
+    ``out_dir`` enables streaming to ``results.jsonl`` and resuming.
+    """
+    overrides = dict(overrides or {})
+    load_scene(scene, {**overrides, param: values[0]})  # fail fast on a bad scene or key
+    seed_list: list[int | None] = list(seeds) if seeds else [None]
+    cases = [Case(param, v, s) for v in values for s in seed_list]
+    results_path = None
+    done: dict[str, dict[str, Any]] = {}
+    if out_dir is not None:
+        results_path = prepare_dir(out_dir) / "results.jsonl"
+        done = _done(results_path)
+    todo = [c for c in cases if c.key not in done]
+    bar = None
+    if progress and todo:
+        from tqdm import tqdm
+
+        bar = tqdm(total=len(todo), desc="sweep", unit="case", leave=False)
+    for row in _execute(scene, todo, overrides, workers, scheduler):
+        done[row["case"]] = row
+        if results_path is not None:
+            with results_path.open("a") as handle:
+                handle.write(json.dumps(row) + "\n")
+        if bar is not None:
+            bar.update(1)
+    if bar is not None:
+        bar.close()
+    return [done[c.key] for c in cases]
+
+
+def _execute(
+    scene: str, cases: list[Case], overrides: dict[str, Any], workers: int, scheduler: str | None
+) -> Iterable[dict[str, Any]]:
+    if scheduler is not None:
+        yield from _execute_dask(scene, cases, overrides, scheduler)
+    elif workers <= 1:
+        for case in cases:
+            yield run_case(scene, case, overrides)
+    else:
+        with ProcessPoolExecutor(max_workers=workers) as pool:
+            pending: set[Future[dict[str, Any]]] = {
+                pool.submit(run_case, scene, case, overrides) for case in cases
+            }
+            while pending:
+                finished, pending = wait(pending, return_when=FIRST_COMPLETED)
+                for future in finished:
+                    yield future.result()
+
+
+def _execute_dask(
+    scene: str, cases: list[Case], overrides: dict[str, Any], scheduler: str
+) -> Iterable[dict[str, Any]]:
+    try:
+        from dask.distributed import Client, as_completed
+    except ImportError:
+        raise SeamtrackError(
+            "Dask is not installed", field="--scheduler", fix="pip install 'seamtrack[dask]'"
+        ) from None
+    try:
+        client = Client(scheduler, timeout=f"{DASK_CONNECT_TIMEOUT_S}s")
+    except OSError as exc:
+        raise SeamtrackError(
+            f"cannot reach the Dask scheduler {scheduler!r}: {exc}",
+            field="--scheduler",
+            fix="start it or give its tcp:// address",
+        ) from None
+    try:
+        futures = [client.submit(run_case, scene, case, overrides, pure=False) for case in cases]
+        for future in as_completed(futures):
+            yield future.result()
+    finally:
+        client.close()
+
+
+def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
+    """One row per swept value; with several seeds, means and 95 % confidence half-widths."""
+    by_value: dict[str, list[dict[str, Any]]] = {}
+    for row in rows:
+        by_value.setdefault(json.dumps(row["value"]), []).append(row)
+    table = []
+    for key, group in by_value.items():
+        ok = [g["summary"] for g in group if "summary" in g]
+        out: dict[str, Any] = {
+            "value": json.loads(key),
+            "runs": len(group),
+            "failed": len(group) - len(ok),
+        }
+        if not ok:
+            out["error"] = group[0].get("error", "")
+            table.append(out)
+            continue
+        statuses = sorted({s["status"] for s in ok})
+        out["status"] = "/".join(statuses)
+        for metric in TABLE_KEYS[1:]:
+            values = np.array(
+                [np.nan if s.get(metric) is None else s[metric] for s in ok], dtype=float
+            )
+            out[metric] = float(np.mean(values))
+            if len(values) > 1:
+                out[metric + "_ci95"] = float(
+                    1.96 * np.std(values, ddof=1) / math.sqrt(len(values))
+                )
+        table.append(out)
+    return table
+
+
+def _label(value: Any) -> str:
+    """A table cell for a swept value (a replaced table shows its ``name``)."""
+    if isinstance(value, dict) and "name" in value:
+        return str(value["name"])
+    return json.dumps(value)
+
+
+def markdown_table(table: Sequence[dict[str, Any]], param: str) -> str:
+    """The sweep table as markdown (error columns to 3-4 significant digits)."""
+    header = [param, *TABLE_KEYS]
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    for row in table:
+        cells = [_label(row["value"])]
+        if "error" in row:
+            cells += [f"error: {row['error']}"] + [""] * (len(TABLE_KEYS) - 1)
+        else:
+            cells.append(row["status"])
+            for metric in TABLE_KEYS[1:]:
+                value = row.get(metric, float("nan"))
+                ci = row.get(metric + "_ci95")
+                text = f"{value:.4g}" if math.isfinite(value) else "n/a"
+                cells.append(text + (f" ± {ci:.2g}" if ci is not None else ""))
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def write_sweep(
+    table: Sequence[dict[str, Any]], param: str, out_dir: str | Path, plot: bool = True
+) -> None:
+    """sweep.md, sweep.json and sweep.png beside results.jsonl."""
+    out = prepare_dir(out_dir)
+    (out / "sweep.md").write_text(markdown_table(table, param))
+    (out / "sweep.json").write_text(json.dumps(json_safe(list(table)), indent=2) + "\n")
+    if plot:
+        from seamtrack.viz.plots import plot_sweep
+
+        numeric = [r for r in table if isinstance(r["value"], (int, float)) and "error" not in r]
+        if numeric:
+            plot_sweep(numeric, param, out / "sweep.png")

@@ -1,0 +1,1 @@
+"""Benchmarks and the speed/accuracy trade (``seamtrack bench``); the library never imports them."""

@@ -1,0 +1,49 @@
+"""What every benchmark shares: the machine it ran on, and a best-of-N rate."""
+
+from __future__ import annotations
+
+import os
+import platform
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+
+def best_rate(fn: Callable[[], object], calls: int, repeats: int) -> float:
+    """Profiles per second: best of ``repeats`` runs of ``calls`` calls."""
+    fn()
+    best = np.inf
+    for _ in range(repeats):
+        start = time.perf_counter()
+        for _ in range(calls):
+            fn()
+        best = min(best, (time.perf_counter() - start) / calls)
+    return 1.0 / best
+
+
+def machine_info() -> dict[str, Any]:
+    """CPU model (from /proc/cpuinfo), core count, Python and library versions."""
+    import embreex
+    import numba
+    import trimesh
+
+    cpu = platform.processor() or "unknown"
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                cpu = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return {
+        "cpu": cpu,
+        "cores": os.cpu_count(),
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "embreex": getattr(embreex, "__version__", "?"),
+        "trimesh": trimesh.__version__,
+        "numba": numba.__version__,
+    }

@@ -1,0 +1,334 @@
+"""Benchmarks: what a stripe profile costs, and what our code adds to bare Embree.
+
+``bench_raycast`` times one laser profile (a fan of 1024 rays and the shadow rays of its lit
+points) on a ~100k-triangle V-groove plate and, when CadQuery is available, on the CAD V-groove,
+on the same rays: :func:`seamtrack.sensing.scan.scan_mesh` (a ``Profile``) with float64 refinement
+on
+and off, :func:`seamtrack.sensing.scan.stripe_hits` (the arrays, no ``Profile``) on the default
+backend
+(Embree packets, :mod:`seamtrack.sensing.embree`) and on the embreex fallback, bare ``embreex``
+``scene.run`` calls on pre-built float32 arrays, and trimesh's ``mesh.ray`` methods
+(``intersects_location``, then ``intersects_any``). One thread, best of ``repeats`` runs.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from seamtrack import constants
+from seamtrack.bench.common import best_rate, machine_info
+from seamtrack.geometry import frames
+
+RAYS = 1024
+
+
+def v_groove_plate_mesh(
+    *,
+    triangles: int = 100_000,
+    width_mm: float = 100.0,
+    length_mm: float = 100.0,
+    depth_mm: float = 10.0,
+    half_angle_rad: float = np.radians(30.0),
+    roughness_mm: float = 0.005,
+    seed: int = 0,
+) -> Any:
+    """A finely triangulated V-groove plate (a sheet), with Gaussian roughness on z.
+
+    The groove runs along x at y = 0, its root at z = -depth; the plate's top is z = 0.
+    Returns a ``trimesh.Trimesh`` of about ``triangles`` faces.
+    """
+    import trimesh
+
+    g = depth_mm * np.tan(half_angle_rad)
+    ys = np.array([-0.5 * width_mm, -g, 0.0, g, 0.5 * width_mm])
+    zs = np.array([0.0, 0.0, -depth_mm, 0.0, 0.0])
+    n_across = int(np.sqrt(triangles / 4.0))
+    n_along = max(2, triangles // (2 * n_across))
+    arc = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(ys), np.diff(zs)))])
+    s = np.union1d(np.linspace(0.0, arc[-1], n_across), arc)
+    yz = np.column_stack([np.interp(s, arc, ys), np.interp(s, arc, zs)])
+    x = np.linspace(-0.5 * length_mm, 0.5 * length_mm, n_along + 1)
+    grid_x, grid_k = np.meshgrid(x, np.arange(len(yz)), indexing="ij")
+    vertices = np.column_stack([grid_x.ravel(), yz[grid_k.ravel()]])
+    vertices[:, 2] += np.random.default_rng(seed).normal(0.0, roughness_mm, len(vertices))
+    idx = np.arange(len(vertices)).reshape(len(x), len(yz))
+    a, b = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel()
+    c, d = idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
+    faces = np.concatenate([np.column_stack([a, c, b]), np.column_stack([a, d, c])])
+    return trimesh.Trimesh(vertices, faces, process=False)
+
+
+def _bare_rays(sensor: Any, caster: Any, T: np.ndarray) -> tuple[np.ndarray, ...]:
+    """The very rays the pipeline casts at pose T, as arrays for bare Embree and trimesh:
+    (fan origins f32, fan directions f32, shadow origins f32, shadow directions f32, shadow
+    lengths f32, fan origins world f64, fan directions f64, shadow origins world f64, shadow
+    directions f64)."""
+    from seamtrack.sensing.scan import laser_fan, stripe_hits
+
+    hits = stripe_hits(sensor, caster, T, RAYS)
+    fan_world = laser_fan(sensor, RAYS).directions @ T[:3, :3].T
+    origin_local = T[:3, 3] - caster.local_origin
+    fan_o32 = np.ascontiguousarray(np.broadcast_to(origin_local, fan_world.shape), np.float32)
+    shadow = np.flatnonzero(np.isin(hits.reason, [0, 2]) & (hits.face >= 0))
+    camera = origin_local + sensor.baseline_mm * T[:3, 0]
+    lit = origin_local + hits.distance_mm[shadow, None] * fan_world[shadow]
+    to_camera = camera - lit
+    length = np.linalg.norm(to_camera, axis=1)
+    sh_d = to_camera / length[:, None]
+    sh_o32 = (lit + constants.SHADOW_RAY_OFFSET_MM * sh_d).astype(np.float32)
+    return (
+        fan_o32,
+        fan_world.astype(np.float32),
+        sh_o32,
+        sh_d.astype(np.float32),
+        (length - constants.SHADOW_RAY_OFFSET_MM).astype(np.float32),
+        fan_o32.astype(np.float64) + caster.local_origin,
+        fan_world,
+        sh_o32.astype(np.float64) + caster.local_origin,
+        sh_d,
+    )
+
+
+def _case(name: str, mesh: Any, poses: list[np.ndarray], calls: int, repeats: int) -> dict:
+    """Time every method on one mesh: each call casts one profile at every pose in turn."""
+    import trimesh
+
+    from seamtrack.sensing import raycast
+    from seamtrack.sensing.scan import ray_caster, scan_mesh, stripe_hits
+    from seamtrack.sensing.sensor import preset
+
+    sensor = preset("paper")
+    build_start = time.perf_counter()
+    raycast.RayCaster.from_mesh(mesh)
+    build_s = time.perf_counter() - build_start
+    caster = ray_caster(mesh)  # the cached one that scan_mesh uses
+    # embreex's own scene (the fallback backend): the bare calls and the pipeline on it.
+    embreex_caster = raycast.RayCaster.from_mesh(mesh, backend="embreex")
+    rays = [_bare_rays(sensor, caster, T) for T in poses]
+    scene = embreex_caster.scene
+    intersector = mesh.ray
+
+    def bare() -> None:
+        for fan_o32, fan_d32, sh_o32, sh_d32, sh_far32, *_ in rays:
+            scene.run(fan_o32, fan_d32, output=1)
+            scene.run(sh_o32, sh_d32, dists=sh_far32.copy(), query="OCCLUDED")
+
+    def packets_fan() -> None:
+        for fan_o32, fan_d32, *_ in rays:
+            caster.cast_local(fan_o32[:1], fan_d32)
+
+    def packets_shadow() -> None:
+        for _, _, sh_o32, sh_d32, sh_far32, *_ in rays:
+            caster.occluded_local(sh_o32, sh_d32, sh_far32)
+
+    def bare_fan() -> None:
+        for fan_o32, fan_d32, *_ in rays:
+            scene.run(fan_o32, fan_d32, output=1)
+
+    def bare_shadow() -> None:
+        for _, _, sh_o32, sh_d32, sh_far32, *_ in rays:
+            scene.run(sh_o32, sh_d32, dists=sh_far32.copy(), query="OCCLUDED")
+
+    def via_trimesh() -> None:
+        for *_, fan_o64, fan_world, sh_o64, sh_d in rays:
+            intersector.intersects_location(fan_o64, fan_world, multiple_hits=False)
+            intersector.intersects_any(sh_o64, sh_d)
+
+    def every_pose(fn: Callable[[np.ndarray], object]) -> Callable[[], None]:
+        def run() -> None:
+            for T in poses:
+                fn(T)
+
+        return run
+
+    methods: dict[str, Callable[[], object]] = {
+        "scan_mesh (Profile), float64 refinement": every_pose(
+            lambda T: scan_mesh(sensor, mesh, T, rays=RAYS)
+        ),
+        "scan_mesh (Profile), float32 only": every_pose(
+            lambda T: scan_mesh(sensor, mesh, T, rays=RAYS, refine=False)
+        ),
+        "stripe_hits (arrays), float64 refinement": every_pose(
+            lambda T: stripe_hits(sensor, caster, T, RAYS)
+        ),
+        "stripe_hits (arrays), float32 only": every_pose(
+            lambda T: stripe_hits(sensor, caster, T, RAYS, refine=False)
+        ),
+        "stripe_hits (arrays), embreex backend": every_pose(
+            lambda T: stripe_hits(sensor, embreex_caster, T, RAYS)
+        ),
+        "bare embreex scene.run (same rays)": bare,
+        "trimesh mesh.ray (same rays)": via_trimesh,
+        "part: Embree packets, fan only": packets_fan,
+        "part: Embree packets, shadow rays only": packets_shadow,
+        "part: bare embreex, fan only": bare_fan,
+        "part: bare embreex, shadow rays only": bare_shadow,
+    }
+    rates = {key: 0.0 for key in methods}
+    for _ in range(repeats):  # interleaved, so that drift hits every method alike
+        for key, fn in methods.items():
+            rates[key] = max(rates[key], len(poses) * best_rate(fn, calls, 1))
+    shadow = [len(r[2]) for r in rays]
+    hits = stripe_hits(sensor, caster, poses[0], RAYS)
+    return {
+        "mesh": name,
+        "triangles": len(mesh.faces),
+        "backend": caster.backend,
+        "scene_build_s": build_s,
+        "rays": RAYS,
+        "poses": len(poses),
+        "shadow_rays": int(np.mean(shadow)),
+        "valid_points": int((hits.reason == 0).sum()),
+        "trimesh_intersector": f"{type(intersector).__module__}.{type(intersector).__name__}",
+        "trimesh_has_embree": bool(trimesh.ray.has_embree),
+        "profiles_per_s": rates,
+    }
+
+
+def bench_raycast(out_dir: str | Path, *, repeats: int = 30, quick: bool = False) -> dict:
+    """Profiles per second of the mesh-mode stripe; writes ``raycast.json`` and ``raycast.md``.
+
+    Parameters
+    ----------
+    out_dir : str or Path
+    repeats : int
+        Runs of 50 profiles per method (the best is kept), interleaved across methods, so
+        that other load on the machine shows as fewer fast runs, not as slower ones. The
+        paper part is cast at 200 poses along its seam, each run once through all of them
+        (``repeats // 6`` runs, at least 3): one pose repeated lets the CPU learn Embree's
+        branches, which new rays every profile do not allow.
+    quick : bool
+        Fewer calls per run and a 20k-triangle plate (a smoke test, not a measurement).
+
+    Returns
+    -------
+    dict
+        ``machine``, ``cases`` (one per mesh: rates per method), ``skipped`` (why a mesh was
+        left out) and the ``ratios`` the targets are stated in.
+    """
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    calls = 10 if quick else 50
+    repeats = min(repeats, 3) if quick else repeats
+    triangles = 20_000 if quick else 100_000
+    T_plate = frames.make(frames.look_rotation([0.0, 0.0, -1.0], [1.0, 0.0, 0.0]), [0.0, 0.0, 91.0])
+    cases = [
+        _case(
+            f"V-groove plate, {triangles // 1000}k triangles, 5 um roughness",
+            v_groove_plate_mesh(triangles=triangles),
+            [T_plate],
+            calls,
+            repeats,
+        )
+    ]
+    skipped: dict[str, str] = {}
+    try:
+        from seamtrack.sensing.sensor import preset
+        from seamtrack.workpiece.loader import load_workpiece
+
+        part = load_workpiece("v_groove", tolerance_mm=0.01)
+        root = part.seam.interpolate(0.5 * part.seam.length_mm)
+        T_cad = frames.make(
+            frames.look_rotation([0.0, 0.0, -1.0], [1.0, 0.0, 0.0]),
+            root + np.array([0.0, 0.0, preset("paper").range_center_mm]),
+        )
+        cases.append(
+            _case(
+                "CAD v_groove (load_workpiece, tolerance 0.01 mm)",
+                part.mesh,
+                [T_cad],
+                calls,
+                repeats,
+            )
+        )
+    except Exception as error:  # CadQuery missing or the CAD module not ready: say so
+        skipped["CAD v_groove"] = f"{type(error).__name__}: {error}"
+    try:  # the realistic case: a new pose, so new rays, for every profile
+        from seamtrack.simulation.assemble import build_parts
+        from seamtrack.simulation.scene import load_scene
+
+        overrides = {"workpiece.params.seam_length_mm": 40.0} if quick else {}
+        parts = build_parts(load_scene("paper-v-groove", overrides))
+        arc = np.linspace(0.0, 0.95 * parts.seam.length_mm, 20 if quick else 200)
+        robot = parts.robot
+        poses = [robot.T_world_sensor(robot.q_from_world(p)) for p in parts.seam.interpolate(arc)]
+        assert parts.mesh is not None
+        cases.append(
+            _case(
+                f"paper-v-groove part along its seam, {len(poses)} poses (new rays every profile)",
+                parts.mesh,
+                poses,
+                1,
+                max(3, repeats // 6),
+            )
+        )
+    except Exception as error:
+        skipped["paper-v-groove"] = f"{type(error).__name__}: {error}"
+    for case in cases:
+        r = case["profiles_per_s"]
+        case["ratios"] = {
+            "scan_mesh / bare embreex": r["scan_mesh (Profile), float64 refinement"]
+            / r["bare embreex scene.run (same rays)"],
+            "stripe_hits / bare embreex": r["stripe_hits (arrays), float64 refinement"]
+            / r["bare embreex scene.run (same rays)"],
+            "scan_mesh / trimesh": r["scan_mesh (Profile), float64 refinement"]
+            / r["trimesh mesh.ray (same rays)"],
+            "refinement cost (scan_mesh)": r["scan_mesh (Profile), float32 only"]
+            / r["scan_mesh (Profile), float64 refinement"]
+            - 1.0,
+            "refinement cost (stripe_hits)": r["stripe_hits (arrays), float32 only"]
+            / r["stripe_hits (arrays), float64 refinement"]
+            - 1.0,
+        }
+    result = {
+        "machine": machine_info(),
+        "rays": RAYS,
+        "repeats": repeats,
+        "calls": calls,
+        "quick": quick,
+        "cases": cases,
+        "skipped": skipped,
+    }
+    (out / "raycast.json").write_text(json.dumps(result, indent=2))
+    (out / "raycast.md").write_text(raycast_markdown(result))
+    return result
+
+
+def raycast_markdown(result: dict) -> str:
+    """The markdown table of a :func:`bench_raycast` result."""
+    m = result["machine"]
+    lines = [
+        f"Machine: {m['cpu']}, {m['cores']} cores; Python {m['python']}, numpy {m['numpy']}, "
+        f"embreex {m['embreex']}, trimesh {m['trimesh']}, numba {m['numba']}. One thread; "
+        f"{result['rays']} rays per profile plus one shadow ray per lit point in range; best "
+        f"of {result['repeats']} runs of {result['calls']} profiles.",
+        "",
+    ]
+    for case in result["cases"]:
+        lines += [
+            f"**{case['mesh']}** ({case['triangles']} triangles, {case['shadow_rays']} shadow "
+            f"rays, {case['valid_points']} valid points; `{case['backend']}` backend, scene "
+            f"built in {case['scene_build_s'] * 1e3:.0f} ms; trimesh intersector "
+            f"`{case['trimesh_intersector']}`, embree "
+            f"{'available' if case['trimesh_has_embree'] else 'NOT available'})",
+            "",
+            "| method | profiles/s | us per profile | vs bare embreex |",
+            "|---|---:|---:|---:|",
+        ]
+        bare = case["profiles_per_s"]["bare embreex scene.run (same rays)"]
+        for key, rate in case["profiles_per_s"].items():
+            lines.append(f"| {key} | {rate:,.0f} | {1e6 / rate:.0f} | {rate / bare:.2f}x |")
+        lines += ["", "| ratio | value |", "|---|---:|"]
+        for key, value in case["ratios"].items():
+            text = f"{value * 100:+.1f} %" if "cost" in key else f"{value:.2f}x"
+            lines.append(f"| {key} | {text} |")
+        lines.append("")
+    for key, why in result["skipped"].items():
+        lines.append(f"Skipped {key}: {why}")
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,266 @@
+"""``seamtrack bench``: the loop, sweep, mesh and extractor benchmarks, and the dispatcher that
+runs any of them (the ray-casting bench lives in :mod:`seamtrack.bench.raycast`, the
+speed/accuracy trade in :mod:`seamtrack.bench.tradeoff`).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from seamtrack.bench.common import machine_info
+from seamtrack.bench.raycast import bench_raycast
+
+# --------------------------------------------------------------------------- sweep
+#: paper-corner shortened to a 20 mm leg and a 14 mm leg after its 45 deg turn: ~0.3 s a run.
+SWEEP_BENCH_OVERRIDES: dict[str, Any] = {
+    "seam.points_mm": [[0.0, 0.0, 0.0], [20.0, 0.0, 0.0], [30.0, 10.0, 0.0]]
+}
+
+
+def bench_sweep(out_dir: str | Path, quick: bool = False) -> dict:
+    """Wall time of a 200-case sweep on 1 and on 2 local worker processes.
+
+    The cases are ``paper-corner`` shortened (:data:`SWEEP_BENCH_OVERRIDES`) over 200 radii of
+    convergence (40 radii x 5 seeds would cost the same); both runs must give the same numbers.
+    Writes ``sweep.json`` and ``sweep.md``.
+
+    Parameters
+    ----------
+    out_dir : str or Path
+    quick : bool
+        20 cases instead of 200 (a smoke test, not a measurement).
+
+    Returns
+    -------
+    dict
+        ``machine``, ``cases``, ``case_time_s`` (mean single-run wall time), ``runs`` (one per
+        worker count: ``workers``, ``wall_time_s``, ``ratio_to_1_worker``, ``cpu_time_s`` of
+        all processes, and the 1-minute ``load_average_before``: other work on the machine
+        shows there) and ``target``.
+    """
+    from seamtrack.batch.sweep import run_sweep
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    count = 20 if quick else 200
+    radii = [round(float(r), 6) for r in np.geomspace(0.05, 6.0, count)]
+    runs = []
+    numbers: list[list[Any]] = []
+    case_times: list[float] = []
+    import resource
+
+    for workers in (1, 2):
+        load_before = os.getloadavg()[0]
+        cpu_start = time.process_time()
+        children_start = resource.getrusage(resource.RUSAGE_CHILDREN)
+        start = time.perf_counter()
+        rows = run_sweep(
+            "paper-corner",
+            "tracker.radius_mm",
+            radii,
+            overrides=SWEEP_BENCH_OVERRIDES,
+            workers=workers,
+        )
+        wall = time.perf_counter() - start
+        children = resource.getrusage(resource.RUSAGE_CHILDREN)
+        cpu = (
+            time.process_time()
+            - cpu_start
+            + (children.ru_utime - children_start.ru_utime)
+            + (children.ru_stime - children_start.ru_stime)
+        )
+        failed = [row for row in rows if "summary" not in row]
+        if failed:
+            raise RuntimeError(f"bench_sweep: case failed: {failed[0]}")
+        numbers.append([row["summary"]["max_error_mm"] for row in rows])
+        if workers == 1:
+            case_times = [row["summary"]["wall_time_s"] for row in rows]
+        runs.append(
+            {
+                "workers": workers,
+                "wall_time_s": wall,
+                "cases_per_s": count / wall,
+                "cpu_time_s": cpu,
+                "load_average_before": load_before,
+            }
+        )
+    for run in runs:
+        run["ratio_to_1_worker"] = run["wall_time_s"] / runs[0]["wall_time_s"]
+    m = machine_info()
+    result: dict[str, Any] = {
+        "machine": m,
+        "scene": "paper-corner",
+        "overrides": SWEEP_BENCH_OVERRIDES,
+        "param": "tracker.radius_mm",
+        "cases": count,
+        "quick": quick,
+        "case_time_s": float(np.mean(case_times)),
+        "same_numbers": numbers[0] == numbers[1],
+        "runs": runs,
+        "target": "2 workers <= 0.6 x the wall time of 1 worker",
+    }
+    (out / "sweep.json").write_text(json.dumps(result, indent=2))
+    lines = [
+        f"Machine: {m['cpu']}, {m['cores']} cores; Python {m['python']}, numpy {m['numpy']}. "
+        f"{count} cases of paper-corner shortened (20 mm + 14 mm), tracker.radius_mm "
+        f"0.05..6 mm; one case takes {result['case_time_s']:.3f} s on its own; "
+        f"identical numbers on 1 and 2 workers: {'yes' if result['same_numbers'] else 'NO'}.",
+        "",
+        "| workers | wall time (s) | cases/s | ratio to 1 worker | CPU time (s) | load before |",
+        "|---:|---:|---:|---:|---:|---:|",
+    ]
+    for run in runs:
+        lines.append(
+            f"| {run['workers']} | {run['wall_time_s']:.1f} | {run['cases_per_s']:.2f} | "
+            f"{run['ratio_to_1_worker']:.2f}x | {run['cpu_time_s']:.1f} | "
+            f"{run['load_average_before']:.1f} |"
+        )
+    lines += ["", f"Target: {result['target']}."]
+    (out / "sweep.md").write_text("\n".join(lines) + "\n")
+    return result
+
+
+# --------------------------------------------------------------------------- dispatch
+def _bench_extractors(out: Path, quick: bool) -> Any:
+    import sys
+
+    from seamtrack.bench.extractors import bench_extractors
+
+    return bench_extractors(out, quick=quick, progress=sys.stderr.isatty())
+
+
+def _bench_mesh(out: Path, quick: bool) -> Any:
+    from seamtrack.workpiece.loader import mesh_tradeoff
+
+    tolerances = (1.0, 0.1, 0.01) if quick else (1.0, 0.1, 0.01, 0.001)
+    rows = mesh_tradeoff(tolerances=tolerances)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "mesh.json").write_text(
+        json.dumps({"machine": machine_info(), "rows": rows}, indent=2, default=float)
+    )
+    keys = list(rows[0]) if rows else []
+    lines = ["| " + " | ".join(keys) + " |", "|" + "---|" * len(keys)]
+    lines += [
+        "| "
+        + " | ".join(f"{r[k]:.4g}" if isinstance(r[k], float) else str(r[k]) for k in keys)
+        + " |"
+        for r in rows
+    ]
+    (out / "mesh.md").write_text("\n".join(lines) + "\n")
+    return rows
+
+
+def bench_loop(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]:
+    """The closed loop on the paper's mesh scene: simulated seconds per wall second, and the
+    share of the run spent outside ray casting and feature extraction.
+
+    ``paper-v-groove``: the Eq. 15-17 seam as a CAD V-groove, 100 profiles/s of 1024 rays with
+    shadow rays, the v-groove extractor, the trajectory tracker at 1 kHz control, 5 mm/s (the
+    whole 405 mm seam; ``quick``: 40 mm). Writes ``loop.json`` and ``loop.md``.
+    """
+    from seamtrack.simulation.assemble import build_parts
+    from seamtrack.simulation.loop import run
+    from seamtrack.simulation.scene import load_scene
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    overrides = {"workpiece.params.seam_length_mm": 40.0} if quick else {}
+    scene = load_scene("paper-v-groove", overrides)
+    parts = build_parts(scene)  # meshing and the Embree scene are set-up, not loop
+    result = run(parts)
+    s = result.summary
+    wall, sense = float(s["wall_time_s"]), float(s["sense_wall_time_s"])
+    # Split sensing into ray casting and extraction on frames along the seam.
+    from seamtrack.features.extractors import extractor
+    from seamtrack.sensing.scan import scan_mesh
+
+    assert parts.sensor is not None and parts.mesh is not None
+    find = extractor(scene.config.extractor.name)
+    arc = np.linspace(0.0, parts.seam.length_mm * 0.95, 200)
+    poses = [
+        parts.robot.T_world_sensor(parts.robot.q_from_world(p)) for p in parts.seam.interpolate(arc)
+    ]
+    find(scan_mesh(parts.sensor, parts.mesh, poses[0], rays=1024))  # set-up (Embree scene), untimed
+    profiles = []
+    start = time.perf_counter()
+    for T in poses:
+        profiles.append(scan_mesh(parts.sensor, parts.mesh, T, rays=1024))
+    scan_s = (time.perf_counter() - start) / len(poses)
+    start = time.perf_counter()
+    for profile in profiles:
+        find(profile)
+    extract_s = (time.perf_counter() - start) / len(poses)
+    row = {
+        "scene": "paper-v-groove",
+        "quick": quick,
+        "status": s["status"],
+        "simulated_s": float(s["sim_time_s"]),
+        "wall_s": wall,
+        "sensing_s": sense,
+        "frames": int(s["frames"]),
+        "control_ticks": int(round(s["sim_time_s"] / 1e-3)) + 1,
+        "sim_s_per_wall_s": float(s["sim_time_s"]) / wall,
+        "loop_overhead_fraction": (wall - sense) / wall,
+        "scan_ms_per_frame": 1e3 * scan_s,
+        "extract_ms_per_frame": 1e3 * extract_s,
+        "max_error_mm": float(s["max_error_mm"]),
+    }
+    result_dict: dict[str, Any] = {"machine": machine_info(), "rows": [row]}
+    (out / "loop.json").write_text(json.dumps(result_dict, indent=2))
+    m = result_dict["machine"]
+    lines = [
+        f"Machine: {m['cpu']}, {m['cores']} cores, Python {m['python']}.",
+        "",
+        "| scene | simulated s | wall s | sim s / wall s | sensing s | loop overhead | "
+        "ray cast ms/frame | extraction ms/frame | frames | max error mm |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+        f"| {row['scene']} | {row['simulated_s']:.1f} | {wall:.1f} | "
+        f"{row['sim_s_per_wall_s']:.2f} | {sense:.1f} | "
+        f"{100 * row['loop_overhead_fraction']:.0f} % | "
+        f"{row['scan_ms_per_frame']:.3f} | {row['extract_ms_per_frame']:.3f} | {row['frames']} | "
+        f"{row['max_error_mm']:.4f} |",
+    ]
+    (out / "loop.md").write_text("\n".join(lines) + "\n")
+    return result_dict
+
+
+def _bench_tradeoff(out: Path, quick: bool) -> Any:
+    from seamtrack.bench.tradeoff import bench_tradeoff
+
+    return bench_tradeoff(out, quick=quick)
+
+
+BENCHES: dict[str, Callable[[Path, bool], Any]] = {
+    "raycast": lambda out, quick: bench_raycast(out, quick=quick),
+    "extractors": _bench_extractors,
+    "mesh": _bench_mesh,
+    "loop": lambda out, quick: bench_loop(out, quick=quick),
+    "tradeoff": _bench_tradeoff,
+    "sweep": lambda out, quick: bench_sweep(out, quick=quick),
+}
+
+
+def run_benches(which: str, out_dir: Path, quick: bool = False) -> dict[str, Any]:
+    """Run one benchmark by name (or ``all``), each into ``out_dir/<name>/``."""
+    from seamtrack.errors import SceneError
+
+    names = list(BENCHES) if which == "all" else [which]
+    unknown = [n for n in names if n not in BENCHES]
+    if unknown:
+        raise SceneError(
+            f"unknown benchmark {unknown[0]!r}",
+            field="bench",
+            fix=f"use one of {', '.join(BENCHES)} or all",
+        )
+    results = {}
+    for name in names:
+        print(f"bench {name} -> {out_dir / name}")
+        results[name] = BENCHES[name](out_dir / name, quick)
+    return results

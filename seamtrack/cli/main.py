@@ -1,0 +1,525 @@
+"""The ``seamtrack`` command.
+
+Every command takes ``--set KEY=VALUE`` overrides (repeatable). Bad input prints one line per
+problem, ``seamtrack: error: <field>: <what>; fix: <how>``, and exits with code 2.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from collections.abc import Callable, Sequence
+from pathlib import Path
+from typing import Any
+
+from seamtrack.errors import OutputError, SceneError, SeamtrackError
+
+EXIT_USAGE = 2
+
+
+# --------------------------------------------------------------------------- formatting
+def _fmt(value: Any) -> str:
+    if isinstance(value, float):
+        if not math.isfinite(value):
+            return "n/a"
+        return f"{value:.6g}"
+    return str(value)
+
+
+def print_table(rows: Sequence[tuple[str, Any]], title: str = "") -> None:
+    """Two aligned columns."""
+    if title:
+        print(title)
+    width = max((len(k) for k, _ in rows), default=0)
+    for key, value in rows:
+        print(f"  {key:<{width}}  {_fmt(value)}")
+
+
+def print_grid(header: Sequence[str], rows: Sequence[Sequence[Any]]) -> None:
+    cells = [[_fmt(c) for c in row] for row in rows]
+    widths = [
+        max(len(h), *(len(r[i]) for r in cells)) if cells else len(h) for i, h in enumerate(header)
+    ]
+    print("  ".join(h.rjust(w) for h, w in zip(header, widths, strict=True)))
+    for row in cells:
+        print("  ".join(c.rjust(w) for c, w in zip(row, widths, strict=True)))
+
+
+def _overrides(args: argparse.Namespace) -> list[str]:
+    return list(getattr(args, "set", None) or [])
+
+
+def _progress_wanted(args: argparse.Namespace) -> bool:
+    return not getattr(args, "quiet", False) and sys.stderr.isatty()
+
+
+# --------------------------------------------------------------------------- commands
+def cmd_run(args: argparse.Namespace) -> int:
+    from seamtrack.io.output import prepare_dir, write_run
+    from seamtrack.simulation.assemble import build_parts
+    from seamtrack.simulation.loop import run
+    from seamtrack.simulation.scene import load_scene
+    from seamtrack.viz.plots import plot_run
+
+    scene = load_scene(args.scene, _overrides(args))
+    out = Path(args.out) if args.out else Path("runs") / scene.name
+    prepare_dir(out)  # fail before the run, not after it
+    parts = build_parts(scene)
+    result = run(parts, progress=_progress_wanted(args))
+    write_run(
+        result,
+        out,
+        scene.to_toml(),
+        scene.config.simulation.trace_period_s,
+        extra=None if args.no_plot else lambda stage: plot_run(result, stage / "error.png"),
+    )
+    if not args.quiet:
+        print_table(list(result.summary.items()), f"seamtrack run {scene.name}")
+        print(
+            f"wrote {out}/summary.json, trace.csv, frames.csv, scene.toml"
+            + ("" if args.no_plot else ", error.png")
+        )
+    if args.render:
+        from seamtrack.viz.run import render_run
+
+        paths = render_run(scene, result, out, progress=_progress_wanted(args))
+        if not args.quiet:
+            print("wrote " + ", ".join(str(p) for p in paths))
+    return 0
+
+
+def cmd_view(args: argparse.Namespace) -> int:
+    from seamtrack.viz.run import view_command
+
+    path = view_command(args.scene, args.at, args.out, overrides=_overrides(args))
+    print(f"wrote {path}")
+    return 0
+
+
+def cmd_extractors(args: argparse.Namespace) -> int:
+    if args.action == "list":
+        from seamtrack.features.extractors import available_extractors
+
+        for name in available_extractors():
+            print(name)
+        return 0
+    from seamtrack.bench.extractors import bench_extractors
+    from seamtrack.io.output import prepare_dir
+
+    out = prepare_dir(args.out)
+    bench_extractors(out, quick=args.quick, progress=_progress_wanted(args))
+    print((out / "extractors.md").read_text(), end="")
+    print(f"wrote {out}/extractors.csv, extractors.md, extractors_error_vs_noise.png")
+    return 0
+
+
+def cmd_cache(args: argparse.Namespace) -> int:
+    from seamtrack.workpiece.loader import cache_dir, clear_cache
+
+    if args.action == "clear":
+        print(f"removed {clear_cache()} cache entries from {cache_dir()}")
+    else:
+        print(cache_dir())
+    return 0
+
+
+def cmd_init(args: argparse.Namespace) -> int:
+    from seamtrack.simulation.scene import builtin_scenes, scene_text
+
+    scenes = builtin_scenes()
+    if args.list:
+        width = max(len(n) for n in scenes)
+        for name, description in scenes.items():
+            print(f"{name:<{width}}  {description}")
+        return 0
+    name = args.template or "paper-verification"
+    text, _ = scene_text(name) if name in scenes else (None, None)
+    if text is None:
+        raise SceneError(
+            f"no template {name!r}",
+            field="TEMPLATE",
+            fix=f"use one of {', '.join(scenes)} (seamtrack init --list)",
+        )
+    target = Path(args.output or f"{name}.toml")
+    if target.exists() and not args.force:
+        raise OutputError(
+            f"{str(target)!r} exists",
+            field="-o",
+            fix="choose another name or pass --force to overwrite",
+        )
+    if args.set:
+        from seamtrack.simulation.scene import load_scene
+
+        load_scene(name, _overrides(args))  # validate the overrides before writing
+        text = _apply_to_text(text, _overrides(args))
+    try:
+        target.write_text(text)
+    except OSError as exc:
+        raise OutputError(
+            f"cannot write {str(target)!r}: {exc.strerror}",
+            field="-o",
+            fix="choose a writable path",
+        ) from None
+    print(f"wrote {target} (edit it, then: seamtrack check {target})")
+    return 0
+
+
+def _apply_to_text(text: str, overrides: list[str]) -> str:
+    """Append overrides as TOML tables (a later key would clash, so rebuild from the data)."""
+    import tomllib
+
+    import tomli_w
+
+    from seamtrack.simulation.scene import _apply_overrides, parse_override
+
+    data = tomllib.loads(text)
+    _apply_overrides(data, dict(parse_override(o) for o in overrides))
+    header = "\n".join(line for line in text.splitlines() if line.startswith("#"))
+    return header + "\n\n" + tomli_w.dumps(data)
+
+
+def cmd_check(args: argparse.Namespace) -> int:
+    from seamtrack.simulation.assemble import build_parts
+    from seamtrack.simulation.scene import load_scene
+
+    scene = load_scene(args.scene, _overrides(args))
+    parts = build_parts(scene)
+    c = scene.config
+    settings = parts.settings
+    seam = parts.seam
+    start_pose = parts.robot.T_world_sensor(parts.robot.q_from_world(parts.tcp_start_world))
+    first = parts.sense(start_pose, 0.0)
+    rows: list[tuple[str, Any]] = [
+        ("scene", scene.name),
+        ("mode", c.sensor.mode),
+        ("seam points", len(seam.points)),
+        ("seam length (mm)", seam.length_mm),
+        ("tracker", c.tracker.name),
+        ("welding speed (mm/s)", settings.welding_speed_mm_s),
+        ("nominal weld time (s)", seam.length_mm / settings.welding_speed_mm_s),
+        ("frame period (s)", settings.frame_period_s),
+        ("travel per frame (mm)", settings.welding_speed_mm_s * settings.frame_period_s),
+        ("control period (s)", parts.robot.control_period_s),
+        ("end tolerance (mm)", settings.end_tolerance_mm),
+        ("time limit (s)", settings.time_limit_s),
+        ("seam seen at start", bool(first) or first.reason),
+        ("sensor resolution (mm)", parts.sensor_resolution_mm),
+    ]
+    print_table(rows, f"{scene.name}: valid")
+    return 0
+
+
+def cmd_sensor(args: argparse.Namespace) -> int:
+    from seamtrack.sensing.sensor import PRESET_SPECS, preset
+    from seamtrack.simulation.scene import parse_override
+
+    if args.list:
+        for name in PRESET_SPECS:
+            print(name)
+        return 0
+    overrides = dict(parse_override(o) for o in _overrides(args))
+    overrides = {k.removeprefix("sensor."): v for k, v in overrides.items()}
+    known = set(PRESET_SPECS[args.preset]) if args.preset in PRESET_SPECS else set()
+    for key in overrides:
+        if key not in known | {"quantize", "focal_length_mm"}:
+            raise SceneError(
+                f"unknown sensor spec {key!r}",
+                field=f"--set {key}",
+                fix=f"use one of {', '.join(sorted(known))}",
+            )
+    sensor = preset(args.preset, **overrides)
+    specs, geometry = sensor.specs(), sensor.geometry()
+    if args.json:
+        print(json.dumps({"preset": args.preset, "specs": specs, "geometry": geometry}, indent=2))
+        return 0
+    print_table(
+        list(geometry.items()),
+        f"sensor {args.preset!r}: geometry (b, lambda, theta_s, H, V, N_H, N_V)",
+    )
+    sheet = PRESET_SPECS.get(args.preset, {})
+    print("\nspecs through Eq. 4-8 (and the data sheet they came from)")
+    print_grid(
+        ["spec", "Eq. 4-8", "data sheet"], [(k, v, sheet.get(k, "")) for k, v in specs.items()]
+    )
+    return 0
+
+
+def cmd_sweep(args: argparse.Namespace) -> int:
+    from seamtrack.batch.sweep import (
+        markdown_table,
+        parse_values,
+        run_sweep,
+        summarize,
+        write_sweep,
+    )
+
+    values = parse_values(args.values)
+    if not values:
+        raise SceneError("no values given", field="--values", fix="e.g. --values 6,5,1")
+    seeds = None
+    if args.seeds:
+        seeds = list(range(args.seeds))
+    from seamtrack.simulation.scene import parse_override
+
+    overrides = dict(parse_override(o) for o in _overrides(args))
+    rows = run_sweep(
+        args.scene,
+        args.param,
+        values,
+        overrides=overrides,
+        seeds=seeds,
+        workers=args.workers,
+        scheduler=args.scheduler,
+        out_dir=args.out,
+        progress=_progress_wanted(args),
+    )
+    table = summarize(rows)
+    print(markdown_table(table, args.param), end="")
+    if args.out:
+        write_sweep(table, args.param, args.out)
+        print(f"wrote {args.out}/results.jsonl, sweep.md, sweep.json, sweep.png")
+    return 0
+
+
+def cmd_compare(args: argparse.Namespace) -> int:
+    """Each tracker on the same scene: a sweep over the whole ``[tracker]`` table, so the
+    scene's own tracker keeps its parameters and the others run with their defaults."""
+    from seamtrack.batch.sweep import markdown_table, run_sweep, summarize, write_sweep
+    from seamtrack.control.registry import ALIASES
+    from seamtrack.simulation.scene import load_scene, parse_override
+
+    trackers = [t.strip() for t in args.trackers.split(",") if t.strip()]
+    overrides = dict(parse_override(o) for o in _overrides(args))
+    own = load_scene(args.scene, overrides).config.tracker
+    own_name = ALIASES.get(own.name, own.name)
+    values = [
+        own.model_dump(exclude_none=True) if ALIASES.get(name, name) == own_name else {"name": name}
+        for name in trackers
+    ]
+    rows = run_sweep(
+        args.scene,
+        "tracker",
+        values,
+        overrides=overrides,
+        workers=args.workers,
+        out_dir=args.out,
+        progress=_progress_wanted(args),
+    )
+    table = summarize(rows)
+    print(markdown_table(table, "tracker"), end="")
+    if args.out:
+        write_sweep(table, "tracker", args.out, plot=False)
+    return 0
+
+
+def cmd_scan(args: argparse.Namespace) -> int:
+    """One stripe profile at arc length S along the seam, with its seam point."""
+    import numpy as np
+
+    from seamtrack.io.output import prepare_dir
+    from seamtrack.simulation.assemble import build_parts
+    from seamtrack.simulation.scene import load_scene
+
+    scene = load_scene(args.scene, _overrides(args))
+    parts = build_parts(scene)
+    seam = parts.seam
+    if not 0.0 <= args.at <= seam.length_mm:
+        raise SceneError(
+            f"{args.at} mm is not on the seam (0..{seam.length_mm:.3f} mm)",
+            field="--at",
+            fix="give an arc length along the seam in mm",
+        )
+    tcp = seam.interpolate([args.at])[0]
+    T_world_sensor = parts.robot.T_world_sensor(parts.robot.q_from_world(tcp))
+    out = Path(args.out) if args.out else Path(f"scan-{scene.name}-{args.at:g}mm.csv")
+    prepare_dir(out.parent if str(out.parent) else Path("."))
+    if scene.config.sensor.mode == "mesh":
+        from seamtrack.io.profiles import write_profile_csv
+        from seamtrack.viz.plots import plot_profile_png
+
+        assert parts.scan is not None
+        profile, feature = parts.scan(T_world_sensor, 0.0)
+        write_profile_csv(profile, out)
+        plot_profile_png(profile, out.with_suffix(".png"), feature=feature)
+        assert profile.valid is not None  # filled in by Profile itself
+        valid = int(np.count_nonzero(profile.valid))
+        print(f"profile: {len(profile)} rays, {valid} valid points")
+    else:
+        feature = parts.sense(T_world_sensor, 0.0)
+        point = feature.point_world if feature else np.full(3, np.nan)
+        np.savetxt(
+            out,
+            np.concatenate([feature.point_laser if feature else [np.nan] * 2, point])[None],
+            delimiter=",",
+            comments="",
+            header="y_L_mm,z_L_mm,x_mm,y_mm,z_mm",
+            fmt="%.6f",
+        )
+    if feature:
+        true = seam.closest(feature.point_world)
+        print(
+            f"seam point: laser (y, z) = {np.round(feature.point_laser, 4).tolist()} mm, "
+            f"world {np.round(feature.point_world, 4).tolist()} mm, "
+            f"{true.distance_mm[0]:.4f} mm from the true seam"
+        )
+    else:
+        print(f"no seam point: {feature.reason}")
+    print(
+        f"wrote {out}"
+        + (f" and {out.with_suffix('.png')}" if scene.config.sensor.mode == "mesh" else "")
+    )
+    return 0
+
+
+def cmd_bench(args: argparse.Namespace) -> int:
+    from seamtrack.bench.runner import run_benches
+
+    run_benches(args.which, Path(args.out), quick=args.quick)
+    return 0
+
+
+# --------------------------------------------------------------------------- parser
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="seamtrack",
+        description="Simulate robotic weld seam tracking with a laser vision sensor.",
+    )
+    sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
+
+    def add(
+        name: str, fn: Callable[[argparse.Namespace], int], help_: str
+    ) -> argparse.ArgumentParser:
+        p = sub.add_parser(name, help=help_, description=help_)
+        p.set_defaults(fn=fn)
+        p.add_argument(
+            "--set",
+            action="append",
+            metavar="KEY=VALUE",
+            help="override a scene key, e.g. --set tracker.radius_mm=0.5 (repeatable)",
+        )
+        return p
+
+    p = add("run", cmd_run, "run a scene and write summary.json, trace.csv, error.png")
+    p.add_argument(
+        "scene",
+        nargs="?",
+        default="paper-verification",
+        help="built-in scene name or .toml file (default: paper-verification)",
+    )
+    p.add_argument("--out", help="output folder (default: runs/<scene name>)")
+    p.add_argument("--no-plot", action="store_true", help="skip error.png")
+    p.add_argument(
+        "--render", action="store_true", help="also write scene.png and run.gif (3D views, PyVista)"
+    )
+    p.add_argument("-q", "--quiet", action="store_true")
+
+    p = add("init", cmd_init, "write a complete, commented scene file from a template")
+    p.add_argument("template", nargs="?", help="template name (see --list)")
+    p.add_argument("-o", "--output", help="file to write (default: TEMPLATE.toml)")
+    p.add_argument("--list", action="store_true", help="list the templates")
+    p.add_argument("--force", action="store_true", help="overwrite an existing file")
+
+    p = add("check", cmd_check, "validate a scene and print derived values")
+    p.add_argument("scene")
+
+    p = add("sensor", cmd_sensor, "sensor geometry and specs, both ways (Eq. 4-8)")
+    p.add_argument("--preset", default="paper")
+    p.add_argument("--json", action="store_true")
+    p.add_argument("--list", action="store_true", help="list the presets")
+
+    p = add("sweep", cmd_sweep, "run a scene over values of one key")
+    p.add_argument("scene")
+    p.add_argument("--param", required=True, help="dotted scene key, e.g. tracker.radius_mm")
+    p.add_argument("--values", required=True, help="comma-separated values")
+    p.add_argument(
+        "--seeds",
+        type=int,
+        default=0,
+        help="Monte Carlo: run each value with "
+        "seeds 0..N-1 and report means with 95%% confidence intervals",
+    )
+    p.add_argument("--workers", type=int, default=1, help="local processes (default 1)")
+    p.add_argument("--scheduler", help="Dask scheduler address (tcp://host:port)")
+    p.add_argument("--out", help="folder for results.jsonl (resumable), sweep.md/json/png")
+    p.add_argument("-q", "--quiet", action="store_true")
+
+    p = add("compare", cmd_compare, "compare trackers on one scene")
+    p.add_argument("scene")
+    p.add_argument(
+        "--trackers",
+        default="I,II,trajectory",
+        help="comma-separated tracker names (I, II, trajectory, or module:Class)",
+    )
+    p.add_argument("--workers", type=int, default=1)
+    p.add_argument("--out")
+    p.add_argument("-q", "--quiet", action="store_true")
+
+    p = add("scan", cmd_scan, "one stripe profile and its seam point at an arc length")
+    p.add_argument("scene")
+    p.add_argument(
+        "--at",
+        type=float,
+        default=0.0,
+        metavar="S_MM",
+        help="arc length along the seam, mm (default 0)",
+    )
+    p.add_argument("--out", help="CSV file (a PNG plot is written beside it in mesh mode)")
+
+    p = add(
+        "view",
+        cmd_view,
+        "render a scene (part, seam, sensor, laser fan, field of view, stripe) to a PNG",
+    )
+    p.add_argument("scene")
+    p.add_argument(
+        "--at",
+        type=float,
+        default=None,
+        metavar="S_MM",
+        help="torch position along the seam, mm (default: mid-seam)",
+    )
+    p.add_argument("--out", help="PNG to write (default: <scene>-view.png)")
+
+    p = add(
+        "extractors",
+        cmd_extractors,
+        "feature extractors: list them, or score them on synthetic profiles (bench)",
+    )
+    p.add_argument("action", choices=["bench", "list"])
+    p.add_argument("--out", default="bench-results/extractors")
+    p.add_argument("--quick", action="store_true")
+    p.add_argument("-q", "--quiet", action="store_true")
+
+    p = add("cache", cmd_cache, "the workpiece mesh cache: where it is, or clear it")
+    p.add_argument("action", choices=["dir", "clear"], nargs="?", default="dir")
+
+    p = add("bench", cmd_bench, "benchmarks; results go to a JSON and a markdown table")
+    p.add_argument(
+        "which",
+        nargs="?",
+        default="all",
+        help="raycast, extractors, mesh, loop, tradeoff, sweep, or all",
+    )
+    p.add_argument("--out", default="bench-results", help="folder for the results")
+    p.add_argument("--quick", action="store_true", help="fewer repeats (a smoke run)")
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.fn(args))
+    except SeamtrackError as exc:
+        for line in str(exc).splitlines():
+            print(f"seamtrack: error: {line}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print("seamtrack: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,105 @@
+"""The tracker protocol: what a tracker receives (:class:`Measurement`, :class:`TrackerContext`)
+and what it returns (:class:`Command`).
+
+A tracker is any object with three methods (the :class:`Tracker` protocol):
+
+* ``reset(context)`` once before the run, with the welding speed, periods and start pose;
+* ``update(measurement)`` at every sensor frame, when the measurement *arrives* (capture time
+  plus the sensor latency), with the seam point in the world frame (or a falsy measurement);
+* ``command(t_s, tcp_world, tcp_velocity_world)`` at every control tick, returning the move the
+  robot should execute (a :class:`Command`) or ``None`` to brake to rest and wait.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+from numpy.typing import NDArray
+
+from seamtrack.sensing.profiles import Feature
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class Command:
+    """A move in the world frame.
+
+    Attributes
+    ----------
+    target_world : (3,) float
+        Where the torch tip should go, mm.
+    speed_mm_s : float
+        Path speed towards it (the robot caps it at its axis limits).
+    velocity_ff_world : (3,) float or None
+        Velocity feed-forward added to the path velocity, mm/s.
+    stop_at_target : bool
+        Arrive at rest (a point-to-point move that "finishes") instead of passing through.
+    """
+
+    target_world: FloatArray
+    speed_mm_s: float
+    velocity_ff_world: FloatArray | None = None
+    stop_at_target: bool = False
+
+
+@dataclass(frozen=True, eq=False)
+class Measurement:
+    """One sensor frame as the tracker receives it.
+
+    Attributes
+    ----------
+    feature : Feature
+        The seam point found in the frame (laser and world frame), or a falsy failure.
+    t_capture_s, t_arrival_s : float
+        When the frame was taken, and when it reached the tracker (latency later).
+    T_world_sensor : (4, 4) float
+        Pose of the sensor at capture, from the robot's measured axis positions.
+    tcp_world : (3,) float
+        Torch tip at capture.
+    """
+
+    feature: Feature
+    t_capture_s: float
+    t_arrival_s: float
+    T_world_sensor: FloatArray
+    tcp_world: FloatArray
+
+    def __bool__(self) -> bool:
+        return bool(self.feature)
+
+    @property
+    def point_world(self) -> FloatArray:
+        """(3,) seam point in the world frame (empty when none was found)."""
+        return self.feature.point_world
+
+
+@dataclass(frozen=True)
+class TrackerContext:
+    """What a tracker may know about the run before it starts."""
+
+    welding_speed_mm_s: float
+    control_period_s: float
+    frame_period_s: float
+    latency_s: float
+    look_ahead_mm: float
+    sensor_resolution_mm: float
+    tcp_start_world: FloatArray
+    velocity_max_world: FloatArray
+    acceleration_max_world: FloatArray
+    rng: np.random.Generator = field(default_factory=lambda: np.random.default_rng(0))
+
+
+@runtime_checkable
+class Tracker(Protocol):
+    """The protocol every tracker satisfies (see the module docstring)."""
+
+    def reset(self, context: TrackerContext) -> None: ...
+
+    def update(self, measurement: Measurement) -> None: ...
+
+    def command(
+        self, t_s: float, tcp_world: FloatArray, tcp_velocity_world: FloatArray
+    ) -> Command | None: ...

@@ -1,0 +1,364 @@
+"""A look-ahead trajectory tracker (trajectory-based control in the manner of de Graaf, Aarts,
+Jonker and Meijer, "Real-time seam tracking for robotic laser welding using trajectory-based
+control", Control Engineering Practice 18, 2010).
+
+The sensor looks ahead of the torch, so every seam point is measured before the torch gets
+there. Each measurement is stored in world coordinates, computed with the sensor pose *at
+capture* (so a late-arriving frame is still placed right), and indexed by arc length along the
+stored path. The path is smoothed locally, and the torch is driven along it at the constant
+welding speed: the set-point moves along the path at that speed, its velocity is fed forward,
+and a proportional term corrects the remaining error. A measured point that jumps more than
+``max_jump_mm`` off the line through the last stored points (a tack weld, a reflection, a bogus
+detection at a shadow's edge) is held back until points agreeing with it span
+``reacquire_mm``. Frames without a usable seam point are bridged by extrapolating the stored
+path along the chord of its last ``direction_fit_mm`` for ``bridge_mm``; beyond that the
+set-point stops and the simulation reports the seam lost.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from seamtrack.control.tracking import Command, Measurement, TrackerContext
+
+FloatArray = NDArray[np.float64]
+
+
+#: Residuals below this never mark a stored point as an outlier (the sensor's noise floor).
+_MIN_INLIER_MM = 0.05
+
+
+def _line_fit(
+    w: FloatArray, ds: FloatArray, raw: FloatArray
+) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]]:
+    """Weighted least-squares lines p = a + b ds, one per row of the (m, n) weights.
+
+    Returns the intercepts (m, 3), the slopes (m, 3) and which rows had a well-posed fit.
+    """
+    n = w.sum(axis=1)
+    sx = (w * ds).sum(axis=1)
+    sxx = (w * ds * ds).sum(axis=1)
+    sy = w @ raw
+    sxy = (w * ds) @ raw
+    det = n * sxx - sx * sx
+    ok = (n >= 3) & (det > 1e-12 * np.maximum(n * sxx, 1e-300))
+    safe = np.where(ok, det, 1.0)[:, None]
+    return (
+        (sxx[:, None] * sy - sx[:, None] * sxy) / safe,
+        (n[:, None] * sxy - sx[:, None] * sy) / safe,
+        ok,
+    )
+
+
+class TrajectoryTracker:
+    """Drive the torch along the stored, smoothed seam path at constant speed.
+
+    Parameters
+    ----------
+    buffer_mm : float
+        Length of stored path kept behind the torch (older points are dropped).
+    smoothing_mm : float
+        Half-width of the moving least-squares line fit that smooths each stored point
+        (0 = raw points).
+    min_spacing_mm : float
+        Measured points closer than this (along the path) to the last stored one are ignored.
+    gain_1_s : float
+        Proportional gain of the position correction, 1/s.
+    bridge_mm : float
+        How far the set-point may run past the last measured point (along the last direction)
+        while frames come without a seam point.
+    end_margin_mm : float
+        The set-point stays this far behind the newest stored point while the sensor still
+        sees the seam (room for smoothing to settle).
+    use_capture_pose : bool
+        Place each point with the sensor pose at capture (True) or, naively, at arrival.
+    max_jump_mm : float
+        A new point farther than this from the extrapolated stored path is held back (and the
+        frame bridged): bogus detections at the edge of a shadow, reflections, tack welds.
+    reacquire_mm : float
+        Held-back points that agree with each other (within ``max_jump_mm`` of their own line)
+        over this length are accepted: the seam really turned or stepped.
+    direction_fit_mm : float
+        Length of stored path whose chord gives the direction for extrapolation.
+    corner_accel_fraction : float
+        Where the stored path turns, the set-point slows to sqrt(a / curvature), a being this
+        fraction of the set-point's acceleration limit, braking ahead of the turn in time; the
+        axes then turn the torch without cutting the corner. 0 switches it off.
+    curvature_window_mm : float
+        Arc length over which the turning of the stored path is measured.
+    """
+
+    name = "trajectory"
+
+    def __init__(
+        self,
+        buffer_mm: float = 100.0,
+        smoothing_mm: float = 1.0,
+        min_spacing_mm: float = 0.05,
+        gain_1_s: float = 20.0,
+        bridge_mm: float = 10.0,
+        end_margin_mm: float = 0.0,
+        use_capture_pose: bool = True,
+        max_jump_mm: float = 0.5,
+        reacquire_mm: float = 2.0,
+        corner_accel_fraction: float = 0.5,
+        curvature_window_mm: float = 3.0,
+        direction_fit_mm: float = 5.0,
+    ):
+        self.buffer_mm = buffer_mm
+        self.smoothing_mm = smoothing_mm
+        self.min_spacing_mm = min_spacing_mm
+        self.gain_1_s = gain_1_s
+        self.bridge_mm = bridge_mm
+        self.end_margin_mm = end_margin_mm
+        self.use_capture_pose = use_capture_pose
+        self.max_jump_mm = max_jump_mm
+        self.reacquire_mm = reacquire_mm
+        self.corner_accel_fraction = corner_accel_fraction
+        self.curvature_window_mm = curvature_window_mm
+        self.direction_fit_mm = direction_fit_mm
+
+    # ----------------------------------------------------------------- protocol
+    def reset(self, context: TrackerContext) -> None:
+        self.speed = context.welding_speed_mm_s
+        self.dt = context.control_period_s
+        # The set-point accelerates no faster than the weakest axis can follow.
+        self.accel = 0.9 * float(np.min(context.acceleration_max_world))
+        self._v_set = 0.0
+        self._env_s: list[float] = []  # arc lengths ahead of the set-point ...
+        self._env_v: list[float] = []  # ... and the speed allowed there (corners)
+        start = np.asarray(context.tcp_start_world, dtype=float)
+        self._raw: list[FloatArray] = [start]
+        self._path: list[FloatArray] = [start]
+        self._s: list[float] = [0.0]
+        self._s_set = 0.0
+        self._seen_seam = False
+        self._lost = False
+        self._held: list[FloatArray] = []
+        self._tcp_now = start
+
+    def update(self, measurement: Measurement) -> None:
+        if not measurement:
+            self._lost = self._seen_seam
+            return
+        point = np.asarray(measurement.point_world, dtype=float)
+        if not self.use_capture_pose:
+            # Naive: pretend the frame was taken where the robot is now.
+            point = point + (self._tcp_now - measurement.tcp_world)
+        step = float(np.linalg.norm(point - self._path[-1]))
+        if step < self.min_spacing_mm:
+            self._lost = False
+            return
+        if len(self._path) >= 3 and self._off_path(point) > self.max_jump_mm:
+            self._held.append(point)
+            if not self._reacquired():
+                self._lost = self._seen_seam  # bridge it, for now
+                return
+            held, self._held = self._held[:-1], []
+            for p in held:  # the seam moved: store what was held back, then this point
+                self._store(p)
+            step = float(np.linalg.norm(point - self._path[-1]))
+        else:
+            self._held = []
+        self._lost = False
+        self._seen_seam = True
+        self._store(point, step)
+
+    def _store(self, point: FloatArray, step: float | None = None) -> None:
+        if step is None:
+            step = float(np.linalg.norm(point - self._path[-1]))
+        if step < self.min_spacing_mm:
+            return
+        self._raw.append(point)
+        self._path.append(point)
+        self._s.append(self._s[-1] + step)
+        self._smooth_tail()
+        self._trim()
+        self._corner_envelope()
+
+    def _corner_envelope(self) -> None:
+        """The speed the set-point may have at each stored point ahead: sqrt(a / curvature)
+        where the path turns, lowered so that braking at ``accel`` reaches every later limit
+        in time (a backward pass over the points ahead, once per stored point)."""
+        if self.corner_accel_fraction <= 0 or len(self._s) < 4:
+            return
+        w = self.curvature_window_mm
+        # Only the settled path: the last two smoothing windows are still re-fitted as points
+        # arrive, and curvature read there would be transient. (That tail lies a look-ahead
+        # ahead of the torch, beyond any braking distance.) Refreshing each time the settled
+        # path has grown by half the curvature window keeps the envelope current cheaply.
+        settled = bisect.bisect_right(self._s, self._s[-1] - 2.0 * max(self.smoothing_mm, 0.0))
+        if self._env_s and self._s[settled - 1] - self._env_s[-1] < 0.5 * w:
+            return
+        i0 = max(bisect.bisect_left(self._s, self._s_set - w), 1)
+        s = np.asarray(self._s[i0:settled])
+        if len(s) < 3:
+            self._env_s, self._env_v = [], []
+            return
+        p = np.asarray(self._path[i0:settled])
+        back = np.searchsorted(s, s - w)
+        fwd = np.minimum(np.searchsorted(s, s + w), len(s) - 1)
+        d1 = p - p[back]
+        d2 = p[fwd] - p
+        n1 = np.linalg.norm(d1, axis=1)
+        n2 = np.linalg.norm(d2, axis=1)
+        ok = (n1 > 0.5 * w) & (n2 > 0.5 * w)
+        cos = np.sum(d1 * d2, axis=1) / np.where(ok, n1 * n2, 1.0)
+        turn = np.where(ok, np.arccos(np.clip(cos, -1.0, 1.0)), 0.0)
+        curvature = turn / np.where(ok, 0.5 * (n1 + n2), 1.0)
+        a_lat = self.corner_accel_fraction * self.accel
+        v_allow = np.sqrt(a_lat / np.maximum(curvature, 1e-12))
+        # Braking backwards from every later limit: v(s_j)^2 = min over i >= j of
+        # v_allow_i^2 + 2 a (s_i - s_j), a suffix minimum.
+        reach = np.minimum(v_allow, self.speed) ** 2 + 2.0 * self.accel * s
+        suffix = np.minimum.accumulate(reach[::-1])[::-1]
+        v = np.sqrt(np.maximum(suffix - 2.0 * self.accel * s, 0.0))
+        self._env_s, self._env_v = s.tolist(), v.tolist()
+
+    def _corner_speed(self, s: float) -> float:
+        """The corner envelope at arc length s (no limit beyond the stored points)."""
+        knots = self._env_s
+        if not knots or s > knots[-1]:
+            return math.inf
+        i = bisect.bisect_right(knots, s) - 1
+        if i < 0:
+            return self._env_v[0]
+        if i >= len(knots) - 1:
+            return self._env_v[-1]
+        f = (s - knots[i]) / (knots[i + 1] - knots[i])
+        return self._env_v[i] + f * (self._env_v[i + 1] - self._env_v[i])
+
+    def _reacquired(self) -> bool:
+        """True when the newest held-back points span ``reacquire_mm`` and lie on one line;
+        older held points (bogus ones before the seam's new course) are dropped."""
+        held = np.asarray(self._held)
+        reach = np.linalg.norm(held - held[-1], axis=1)
+        spanning = np.flatnonzero(reach >= self.reacquire_mm)
+        if len(spanning) == 0:
+            return False
+        self._held = self._held[int(spanning[-1]) :]
+        held = held[int(spanning[-1]) :]
+        if len(held) < 3:
+            # Sparse frames (1 frame/s: points 5 mm apart): two points that span the length
+            # are the evidence there is.
+            return len(held) == 2
+        centred = held - held.mean(axis=0)
+        direction = np.linalg.svd(centred, full_matrices=False)[2][0]
+        off = centred - np.outer(centred @ direction, direction)
+        return bool(np.max(np.linalg.norm(off, axis=1)) <= self.max_jump_mm)
+
+    def command(
+        self, t_s: float, tcp_world: FloatArray, tcp_velocity_world: FloatArray
+    ) -> Command | None:
+        self._tcp_now = tcp_world
+        if not self._seen_seam:
+            return None
+        # The set-point may run up to bridge_mm past the newest stored point: while the seam is
+        # in view the path grows ahead of it, and when it is lost this is the bridge. Braking
+        # room to that limit is what lets it keep speed with a short look-ahead.
+        s_limit = self._s[-1] - (0.0 if self._lost else self.end_margin_mm) + self.bridge_mm
+        # Set-point speed: ramp up at the acceleration limit, brake to stop at s_limit.
+        room = max(s_limit - self._s_set, 0.0)
+        wanted = min(
+            self.speed, math.sqrt(2.0 * self.accel * room), self._corner_speed(self._s_set)
+        )
+        # Speed up or brake at most at the acceleration limit: a limit that appears late (a
+        # corner just measured) is met as soon as braking allows, never by a jump in speed.
+        dv = self.accel * self.dt
+        self._v_set = min(max(wanted, self._v_set - dv), self._v_set + dv)
+        step = min(self._v_set * self.dt, room)
+        moving = step > 0.0
+        self._s_set += step
+        target, tangent = self._at(self._s_set)
+        ff = tangent * (step / self.dt)
+        error = math.dist(target.tolist(), tcp_world.tolist())
+        return Command(
+            target, self.gain_1_s * error, velocity_ff_world=ff, stop_at_target=not moving
+        )
+
+    # ----------------------------------------------------------------- path
+    def _end_direction(self) -> FloatArray:
+        """Unit chord of the last ``direction_fit_mm`` of stored path (robust to the jitter of
+        the last few points, which the last segment alone is not)."""
+        knots = self._s
+        i = max(bisect.bisect_left(knots, knots[-1] - self.direction_fit_mm) - 1, 0)
+        if len(knots) > 2:
+            i = max(i, 1)  # the start pose is not a seam point
+        chord = self._path[-1] - self._path[i]
+        length = float(np.linalg.norm(chord))
+        return chord / length if length > 0 else np.zeros(3)
+
+    def _off_path(self, point: FloatArray) -> float:
+        """Distance of a point from the line fitted (total least squares) to the raw stored
+        points of the last ``direction_fit_mm``: a ramp of bogus points trips it on its second
+        point, because the line they are measured against does not follow them."""
+        knots = self._s
+        i = max(bisect.bisect_left(knots, knots[-1] - self.direction_fit_mm), 1)
+        window = np.asarray(self._raw[i:])
+        if len(window) < 3:
+            d = self._end_direction()
+            v = point - self._path[-1]
+            return float(np.linalg.norm(v - (v @ d) * d))
+        centre = window.mean(axis=0)
+        direction = np.linalg.svd(window - centre, full_matrices=False)[2][0]
+        v = point - centre
+        return float(np.linalg.norm(v - (v @ direction) * direction))
+
+    def _at(self, s: float) -> tuple[FloatArray, FloatArray]:
+        """Point and unit direction on the stored path at arc length s (extrapolated past
+        the end along :meth:`_end_direction`)."""
+        knots = self._s
+        if len(knots) < 2:
+            return self._path[0], np.zeros(3)
+        if s > knots[-1]:
+            d = self._end_direction()
+            return self._path[-1] + (s - knots[-1]) * d, d
+        i = min(max(bisect.bisect_right(knots, s) - 1, 0), len(knots) - 2)
+        a, b = self._path[i], self._path[i + 1]
+        length = knots[i + 1] - knots[i]
+        direction = (b - a) / length if length > 0 else np.zeros(3)
+        return a + (s - knots[i]) * direction, direction
+
+    def _smooth_tail(self) -> None:
+        """Refit the stored points whose window the newest point entered: a robust line through
+        the raw points within +-smoothing_mm (arc length), evaluated at the point.
+
+        A first least-squares fit gives residuals; points farther than three times the window's
+        median residual (at least ``_MIN_INLIER_MM``) are dropped and the line is refitted, so a
+        few bogus detections (an extractor fooled at the edge of a shadow) do not bend the path,
+        while a real turn, which the majority of the window follows, does.
+        """
+        h = self.smoothing_mm
+        if h <= 0 or len(self._raw) < 3:
+            return
+        s_last = self._s[-1]
+        first = max(bisect.bisect_left(self._s, s_last - 2 * h), 1)  # index 0 is the start pose
+        s = np.asarray(self._s[first:])
+        raw = np.asarray(self._raw[first:])
+        targets = np.flatnonzero(s >= s_last - h)
+        ds = s[None, :] - s[targets, None]  # (m, n): offsets of the window points
+        w = (np.abs(ds) <= h).astype(float)
+        a, b, ok = _line_fit(w, ds, raw)
+        residual = np.linalg.norm(
+            raw[None, :, :] - (a[:, None, :] + ds[..., None] * b[:, None, :]), axis=2
+        )
+        # Each row's median residual over its window (a sort beats nanmedian tenfold here).
+        count = w.sum(axis=1).astype(int)
+        ordered = np.sort(np.where(w > 0, residual, np.inf), axis=1)
+        median = ordered[np.arange(len(ordered)), np.maximum(count // 2, 0)]
+        limit = np.maximum(3.0 * np.where(np.isfinite(median), median, 0.0), _MIN_INLIER_MM)
+        w = w * (residual <= limit[:, None])
+        a, _, ok = _line_fit(w, ds, raw)
+        for k, i in enumerate(targets):
+            if ok[k]:
+                self._path[first + i] = a[k]
+
+    def _trim(self) -> None:
+        """Drop stored points more than ``buffer_mm`` behind the set-point."""
+        cut = bisect.bisect_left(self._s, self._s_set - self.buffer_mm) - 1
+        if cut > 0:
+            del self._raw[:cut], self._path[:cut], self._s[:cut]

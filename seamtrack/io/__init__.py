@@ -1,0 +1,1 @@
+"""Input and output: run folders (summary, trace, frames), profile CSV files."""

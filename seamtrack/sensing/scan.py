@@ -1,0 +1,508 @@
+"""Sensing: what the posed sensor measures.
+
+Seam mode (the paper's model, Sec. 2.4 and Fig. 4): the laser plane of the posed sensor crosses
+the seam polyline; the crossing inside the field of view and depth of field is the measurement,
+pixel-quantized and optionally noisy. No mesh, no ray casting.
+
+Mesh mode (:func:`scan_mesh`): a fan of rays from the laser emitter in the laser plane hits the
+part's mesh (Embree, refined in float64: :mod:`seamtrack.sensing.raycast`); each lit point is kept
+when
+it lies in the trapezoidal field of view and depth of field, is lit at an incidence the sensor
+can measure, and the camera sees it (a shadow ray from the point to the camera centre); the
+survivors are projected onto the chip and pixel-quantized (Eq. 1-3). Realism knobs
+(:class:`StripeNoise`) are off by default. Embree, numba and trimesh are imported on first use,
+so seam-mode scenes never load them.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from seamtrack import constants
+from seamtrack.geometry.frames import invert
+from seamtrack.geometry.seam import Seam
+from seamtrack.sensing.profiles import Feature, Profile, Reason, laser_to_world
+
+if TYPE_CHECKING:  # annotations only: the sensor module imports this one
+    from seamtrack.sensing.raycast import RayCaster
+    from seamtrack.sensing.sensor import LaserLineSensor
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class SeamNoise:
+    """Seeded Gaussian noise on a seam-mode measurement (off when both sigmas are 0).
+
+    Attributes
+    ----------
+    range_sigma_mm : float
+        Standard deviation along z_L (range).
+    lateral_sigma_mm : float
+        Standard deviation along y_L.
+    """
+
+    range_sigma_mm: float = 0.0
+    lateral_sigma_mm: float = 0.0
+
+    def __bool__(self) -> bool:
+        return self.range_sigma_mm > 0 or self.lateral_sigma_mm > 0
+
+
+def laser_plane_crossings(seam: Seam, T_world_sensor: ArrayLike) -> FloatArray:
+    """All crossings of the laser plane x_L = 0 with the seam polyline, in the laser frame.
+
+    Returns
+    -------
+    crossings : (k, 2) float
+        (y_L, z_L) of each crossing, in seam order. A segment lying in the plane contributes
+        its end points.
+    """
+    T_sensor_world = invert(T_world_sensor)
+    p = seam.points @ np.ascontiguousarray(T_sensor_world[:3, :3].T) + T_sensor_world[:3, 3]
+    x = p[:, 0]
+    x0, x1 = x[:-1], x[1:]
+    # Half-open test: a vertex exactly on the plane belongs to the segment that starts there,
+    # so a polyline through the plane at a vertex is found once, not twice.
+    crossing = ((x0 <= 0) & (x1 > 0)) | ((x0 >= 0) & (x1 < 0))
+    last_on_plane = x1[-1:] == 0
+    idx = np.flatnonzero(crossing)
+    t = x0[idx] / (x0[idx] - x1[idx])
+    pts = p[idx] + t[:, None] * (p[idx + 1] - p[idx])
+    if last_on_plane.any():
+        pts = np.vstack([pts, p[-1:]])
+    return pts[:, 1:3]
+
+
+def sense_seam(
+    seam: Seam,
+    T_world_sensor: ArrayLike,
+    sensor: LaserLineSensor,
+    noise: SeamNoise | None = None,
+    rng: np.random.Generator | None = None,
+) -> Feature:
+    """The paper's seam finding: the seam point the sensor reports at this pose.
+
+    The crossing of the laser plane with the seam that lies in the field of view (nearest the
+    centre of the stripe when there are several) is measured: noise is added (if configured)
+    and the result is quantized to the sensor's pixels (if ``sensor.quantize``).
+
+    Returns
+    -------
+    Feature
+        Falsy with a reason when the plane does not cross the seam in the field of view.
+    """
+    crossings = laser_plane_crossings(seam, T_world_sensor)
+    if len(crossings) == 0:
+        return Feature.failed("the laser plane does not cross the seam", joint="seam")
+    y, z = crossings[:, 0], crossings[:, 1]
+    inside = sensor.in_field_of_view(y, z)
+    if not inside.any():
+        return Feature.failed(
+            "the seam crossing is outside the field of view / depth of field", joint="seam"
+        )
+    candidates = np.flatnonzero(inside)
+    best = candidates[np.argmin(np.abs(y[candidates]))]
+    y_true, z_true = float(y[best]), float(z[best])
+    if noise:
+        if rng is None:
+            raise ValueError("sense_seam: noise needs a seeded numpy Generator (rng)")
+        y_true += rng.normal(0.0, noise.lateral_sigma_mm)
+        z_true += rng.normal(0.0, noise.range_sigma_mm)
+        if not sensor.in_field_of_view(y_true, z_true):
+            return Feature.failed(
+                "the noisy measurement fell outside the field of view", joint="seam"
+            )
+    y_m, z_m = sensor.measure(y_true, z_true)
+    point = np.array([float(y_m), float(z_m)])
+    return Feature(
+        point_laser=point,
+        point_world=laser_to_world(T_world_sensor, point),
+        confidence=1.0,
+        joint="seam",
+    )
+
+
+# =========================================================================== mesh mode
+@dataclass(frozen=True)
+class StripeNoise:
+    """Seeded realism knobs for mesh-mode profiles; every knob is off (0) by default.
+
+    Applied in this order to the points that survived the geometric clips: dropout, the
+    secondary reflection, range noise and speckle, outliers; then the pixel quantization.
+    Range noise, speckle and outliers act on the chip coordinate x_c (where the stripe's peak
+    is detected), so the triangulated point moves along the camera's line of sight like a real
+    sensor's does.
+
+    Attributes
+    ----------
+    range_sigma_mm : float
+        Gaussian peak-detection noise, as its range (z_L) standard deviation at the centre of
+        the depth of field. A constant sigma on the chip, it grows with range like the local
+        depth resolution: sigma(z) = range_sigma_mm * res(z) / res(z_center).
+    speckle_sigma_mm : float
+        Laser speckle: the same kind of range error, but correlated along the stripe.
+    speckle_correlation_rays : float
+        Correlation length of the speckle, in fan rays (Gaussian kernel's standard deviation;
+        with ``rays = pixels_v`` that is about one chip pixel per ray).
+    dropout_rate : float
+        Probability that a point is lost (``Reason.DROPOUT``) at normal incidence. The returned
+        light falls as cos(incidence) (a Lambertian surface) and fully developed speckle makes
+        the intensity exponential, so a fixed detection threshold loses a point with
+        probability p(theta) = 1 - (1 - dropout_rate) ** (1 / cos(theta)).
+    secondary_probability : float
+        The classic false stripe of grooves: the laser reflects specularly at the lit point,
+        lights a second point of the part, and when the camera sees that point the sensor
+        triangulates it as if it lay on the laser plane (the camera ray through it, cut by
+        x_L = 0). The ray's reported point is replaced by that false point with this
+        probability (the peak detector chose the reflection).
+    outlier_fraction : float
+        Fraction of valid points replaced by a spurious peak (spatter, ambient light): a uniform
+        random x_c on the chip at the same lateral column z_c.
+    """
+
+    range_sigma_mm: float = 0.0
+    speckle_sigma_mm: float = 0.0
+    speckle_correlation_rays: float = 8.0
+    dropout_rate: float = 0.0
+    secondary_probability: float = 0.0
+    outlier_fraction: float = 0.0
+
+    def __post_init__(self) -> None:
+        for key in ("range_sigma_mm", "speckle_sigma_mm"):
+            if not getattr(self, key) >= 0:
+                raise ValueError(f"StripeNoise.{key} must be >= 0")
+        if not self.speckle_correlation_rays > 0:
+            raise ValueError("StripeNoise.speckle_correlation_rays must be > 0")
+        for key in ("dropout_rate", "secondary_probability", "outlier_fraction"):
+            if not 0.0 <= getattr(self, key) <= 1.0:
+                raise ValueError(f"StripeNoise.{key} must lie in [0, 1]")
+
+    def __bool__(self) -> bool:
+        return any(getattr(self, k) > 0 for k in (
+            "range_sigma_mm", "speckle_sigma_mm", "dropout_rate", "secondary_probability",
+            "outlier_fraction"))  # fmt: skip
+
+
+@dataclass(frozen=True, eq=False)
+class FanRays:
+    """The laser fan of a sensor: unit directions in the laser frame, x_L = 0.
+
+    Attributes
+    ----------
+    directions : (n, 3) float
+        (0, sin phi, cos phi), evenly spaced in tan(phi) = y_L / z_L (like the chip's columns)
+        over the widest opening of the field-of-view trapezoid (its near end).
+    sensor_params : (10,) float
+        The sensor as the stripe kernels take it (see :mod:`seamtrack.sensing.raycast`).
+    """
+
+    directions: NDArray[np.float64]
+    sensor_params: NDArray[np.float64]
+
+
+@functools.lru_cache(maxsize=32)
+def laser_fan(sensor: LaserLineSensor, rays: int) -> FanRays:
+    """The fan of ``rays`` rays spanning the sensor's field of view (cached per sensor)."""
+    if rays < 1:
+        raise ValueError(f"a laser fan needs at least one ray, got {rays}")
+    near = sensor.range_near_mm
+    tan_max = float(sensor.half_width_mm(near)) / near
+    tan_phi = np.linspace(-tan_max, tan_max, rays) if rays > 1 else np.zeros(1)
+    norm = np.sqrt(1.0 + tan_phi**2)
+    directions = np.column_stack([np.zeros(rays), tan_phi / norm, 1.0 / norm])
+    directions.flags.writeable = False
+    params = np.array([
+        sensor.baseline_mm, sensor.focal_length_mm, math.sin(sensor.angle_rad),
+        math.cos(sensor.angle_rad), sensor.chip_h_mm, sensor.chip_v_mm, sensor.pixels_h,
+        sensor.pixels_v, 1.0 + constants.CHIP_EDGE_RTOL, math.cos(sensor.max_incidence_rad),
+    ], dtype=np.float64)  # fmt: skip
+    params.flags.writeable = False
+    return FanRays(directions=directions, sensor_params=params)
+
+
+def ray_caster(part: Any) -> RayCaster:
+    """The (cached) :class:`~seamtrack.sensing.raycast.RayCaster` of a part.
+
+    ``part`` is a prepared ``RayCaster``, a ``trimesh.Trimesh``, or anything with a ``.mesh``
+    (a :class:`~seamtrack.workpiece.loader.Workpiece`).
+    """
+    from seamtrack.sensing.raycast import RayCaster
+
+    if isinstance(part, RayCaster):
+        return part
+    mesh = getattr(part, "mesh", part)
+    if not (hasattr(mesh, "vertices") and hasattr(mesh, "faces")):
+        raise TypeError(
+            f"cannot scan a {type(part).__name__}: give a trimesh.Trimesh, an "
+            "object with a .mesh, or a seamtrack.sensing.raycast.RayCaster"
+        )
+    return RayCaster.for_mesh(mesh)
+
+
+@dataclass(frozen=True, eq=False)
+class StripeHits:
+    """Everything :func:`scan_mesh` knows about one stripe before the noise models.
+
+    Attributes
+    ----------
+    points_laser : (n, 2) float
+        (y_L, z_L): measured (quantized if the sensor quantizes and no noise is configured) where
+        ``reason == 0``; the true lit point where the point was clipped; NaN on a miss.
+    reason : (n,) uint8
+        :class:`~seamtrack.sensing.profiles.Reason` codes.
+    distance_mm : (n,) float
+        Emitter to lit point along each ray; NaN on a miss.
+    face : (n,) int64
+        Triangle lit by each ray; -1 on a miss.
+    cos_incidence : (n,) float
+        |cos| of the angle between the laser ray and the face normal.
+    directions_local : (n, 3) float
+        The rays in the caster's local frame (= world directions).
+    origin_local : (3,) float
+        The emitter in the caster's local frame.
+    """
+
+    points_laser: NDArray[np.float64]
+    reason: NDArray[np.uint8]
+    distance_mm: NDArray[np.float64]
+    face: NDArray[np.int64]
+    cos_incidence: NDArray[np.float64]
+    directions_local: NDArray[np.float64]
+    origin_local: NDArray[np.float64]
+
+
+def stripe_hits(
+    sensor: LaserLineSensor,
+    caster: RayCaster,
+    T_world_sensor: NDArray[np.float64],
+    rays: int,
+    *,
+    refine: bool = True,
+    quantize: bool | None = None,
+) -> StripeHits:
+    """The noiseless stripe: fan -> Embree -> float64 -> clips -> shadow rays -> pixels.
+
+    The clips are tested in order (a point gets the first reason that applies): MISS,
+    OUT_OF_RANGE (trapezoid and depth of field), INCIDENCE, OCCLUDED (the camera is behind the
+    lit face or a shadow ray to the camera centre meets the part). Shadow rays are cast only
+    for points that passed the cheaper clips.
+    """
+    from seamtrack.sensing import kernels
+
+    fan = laser_fan(sensor, rays)
+    T = np.asarray(T_world_sensor, dtype=np.float64)
+    rotation = np.ascontiguousarray(T[:3, :3])
+    origin = T[:3, 3] - caster.local_origin
+    do_quantize = bool(sensor.quantize if quantize is None else quantize)
+    packets = caster.packets
+    if packets is not None:  # one numba call does it all
+        points, reason, t, face, cos_incidence, directions = kernels.fan_stripe_packets(
+            packets.lib.intersect8, packets.lib.occluded8, packets.handle, origin, rotation,
+            fan.directions, caster.vertices_local, caster.faces, caster.weld, caster.ring_ptr,
+            caster.ring_faces, caster.face_normals, bool(refine), constants.BARYCENTRIC_TOL,
+            fan.sensor_params, constants.SHADOW_RAY_OFFSET_MM, do_quantize,
+        )  # fmt: skip
+        return StripeHits(points_laser=points, reason=reason, distance_mm=t, face=face,
+                          cos_incidence=cos_incidence, directions_local=directions,
+                          origin_local=origin)  # fmt: skip
+    directions = fan.directions @ rotation.T
+    prim, tfar = caster.cast_local(origin[None], directions)
+    points, reason, t, face, cos_incidence, chip, shadow_o, shadow_d, shadow_far, shadow_index = (
+        kernels.fan_stripe_hits(
+            origin, rotation, fan.directions, directions, prim, tfar, caster.vertices_local,
+            caster.faces, caster.weld, caster.ring_ptr, caster.ring_faces, caster.face_normals,
+            bool(refine), constants.BARYCENTRIC_TOL, fan.sensor_params,
+            constants.SHADOW_RAY_OFFSET_MM,
+        )
+    )  # fmt: skip
+    blocked = caster.occluded_local(shadow_o, shadow_d, shadow_far)
+    kernels.fan_stripe_finish(points, reason, chip, blocked, shadow_index, fan.sensor_params,
+                              do_quantize)  # fmt: skip
+    return StripeHits(points_laser=points, reason=reason, distance_mm=t, face=face,
+                      cos_incidence=cos_incidence, directions_local=directions,
+                      origin_local=origin)  # fmt: skip
+
+
+def scan_mesh(
+    sensor: LaserLineSensor,
+    part: Any,
+    T_world_sensor: ArrayLike,
+    *,
+    rays: int | None = None,
+    refine: bool = True,
+    noise: StripeNoise | None = None,
+    rng: np.random.Generator | None = None,
+    t_s: float = float("nan"),
+) -> Profile:
+    """One stripe profile of a meshed part, as the posed sensor reports it.
+
+    Parameters
+    ----------
+    sensor : LaserLineSensor
+    part : trimesh.Trimesh, object with ``.mesh``, or RayCaster
+        The part, in the world frame. Its Embree scene is built once per mesh and cached.
+    T_world_sensor : (4, 4) float
+        Pose of the laser frame.
+    rays : int, optional
+        Rays in the fan (default ``sensor.pixels_v``, one per chip column).
+    refine : bool
+        Recompute every hit in float64 (default). False keeps Embree's float32 hits (error
+        ~1e-5 mm near the local origin, see docs/readme-raycast.md).
+    noise : StripeNoise, optional
+        Realism knobs; needs ``rng``.
+    rng : numpy.random.Generator, optional
+    t_s : float
+        Capture time stamped on the profile.
+
+    Returns
+    -------
+    Profile
+        One point per ray, in fan order (y_L increasing); ``reason`` says why each invalid point
+        was lost. Invalid points hold the true lit point (NaN on a miss).
+    """
+    if noise and rng is None:
+        raise ValueError("scan_mesh: noise needs a seeded numpy Generator (rng)")
+    caster = ray_caster(part)
+    T = np.asarray(T_world_sensor, dtype=np.float64)
+    if T.shape != (4, 4):
+        raise ValueError(f"T_world_sensor must be (4, 4), got {T.shape}")
+    n = sensor.pixels_v if rays is None else int(rays)
+    noisy = bool(noise)
+    hits = stripe_hits(sensor, caster, T, n, refine=refine, quantize=False if noisy else None)
+    points, reason = hits.points_laser, hits.reason
+    if noisy:
+        assert noise is not None and rng is not None
+        points, reason = _apply_stripe_noise(sensor, caster, T, hits, noise, rng)
+    # stripe_hits (and the noise models) leave valid points exactly where reason == VALID, and
+    # those finite: the checks of Profile() are not needed on this per-frame path.
+    return Profile._trusted(points, reason, T, t_s)
+
+
+# --------------------------------------------------------------------------- realism knobs
+def _apply_stripe_noise(
+    sensor: LaserLineSensor,
+    caster: RayCaster,
+    T_world_sensor: NDArray[np.float64],
+    hits: StripeHits,
+    noise: StripeNoise,
+    rng: np.random.Generator,
+) -> tuple[NDArray[np.float64], NDArray[np.uint8]]:
+    """The knobs of :class:`StripeNoise` on unquantized stripe hits; returns (points, reason)."""
+    points = hits.points_laser.copy()
+    reason = hits.reason.copy()
+    n = len(reason)
+    if noise.dropout_rate > 0:
+        idx = np.flatnonzero(reason == Reason.VALID)
+        p_lost = dropout_probability(noise.dropout_rate, hits.cos_incidence[idx])
+        reason[idx[rng.random(len(idx)) < p_lost]] = Reason.DROPOUT
+    if noise.secondary_probability > 0:
+        false_points, seen = secondary_reflection_points(sensor, caster, T_world_sensor, hits)
+        take = seen & (rng.random(n) < noise.secondary_probability)
+        points[take] = false_points[take]
+        reason[take] = Reason.VALID
+    idx = np.flatnonzero(reason == Reason.VALID)
+    x_c, z_c = sensor.project(points[idx, 0], points[idx, 1])
+    # Range noise is white on the chip; its z_L size at the centre of the depth of field is
+    # the knob, so the chip sigma is that over dz/dx_c there.
+    to_chip = sensor.pixel_pitch_mm[0] / float(
+        sensor.local_depth_resolution_mm(sensor.range_center_mm)
+    )
+    if noise.range_sigma_mm > 0:
+        x_c = x_c + rng.normal(0.0, noise.range_sigma_mm * to_chip, len(idx))
+    if noise.speckle_sigma_mm > 0:
+        field = _correlated_normal(n, noise.speckle_correlation_rays, rng)
+        x_c = x_c + noise.speckle_sigma_mm * to_chip * field[idx]
+    if noise.outlier_fraction > 0:
+        spurious = rng.random(len(idx)) < noise.outlier_fraction
+        x_c = np.where(spurious, rng.uniform(-0.5, 0.5, len(idx)) * sensor.chip_h_mm, x_c)
+    y, z = sensor.triangulate(x_c, z_c)
+    inside = sensor.in_field_of_view(y, z)
+    y, z = sensor.measure(y, z)
+    points[idx, 0] = y
+    points[idx, 1] = z
+    reason[idx[~inside]] = Reason.OUT_OF_RANGE
+    return points, reason
+
+
+def dropout_probability(dropout_rate: float, cos_incidence: ArrayLike) -> NDArray[np.float64]:
+    """p(theta) = 1 - (1 - dropout_rate) ** (1 / cos(theta)), see :class:`StripeNoise`.
+
+    Parameters
+    ----------
+    dropout_rate : float
+        Loss probability at normal incidence.
+    cos_incidence : (n,) float
+
+    Returns
+    -------
+    (n,) float
+    """
+    cos_i = np.clip(np.asarray(cos_incidence, dtype=np.float64), 1e-12, 1.0)
+    return np.asarray(-np.expm1(np.log1p(-dropout_rate) / cos_i))
+
+
+def _correlated_normal(n: int, correlation: float, rng: np.random.Generator) -> FloatArray:
+    """(n,) unit-variance Gaussian noise, correlated with a Gaussian kernel of ``correlation``."""
+    half = max(1, math.ceil(3.0 * correlation))
+    kernel = np.exp(-0.5 * (np.arange(-half, half + 1) / correlation) ** 2)
+    kernel /= np.sqrt(np.sum(kernel**2))
+    white = rng.standard_normal(n + 2 * half)
+    return np.convolve(white, kernel, mode="valid")
+
+
+def secondary_reflection_points(
+    sensor: LaserLineSensor,
+    caster: RayCaster,
+    T_world_sensor: NDArray[np.float64],
+    hits: StripeHits,
+) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """Where the sensor would report each ray's specular secondary reflection.
+
+    The laser ray reflects specularly at its lit point P (r = d - 2 (d.n) n), lights the first
+    point Q of the part along r, and if the camera sees Q (Q's lit side faces the camera and the
+    line of sight is clear), Q images onto the chip where the laser-plane point
+    C + s (Q - C), s = b / (b - x_Q), would: the camera cannot tell them apart.
+
+    Returns
+    -------
+    points_laser : (n, 2) float
+        The false (y_L, z_L); NaN where there is none.
+    seen : (n,) bool
+        A false point exists and lies in the field of view.
+    """
+    n = len(hits.reason)
+    out = np.full((n, 2), np.nan)
+    seen = np.zeros(n, dtype=bool)
+    idx = np.flatnonzero(hits.face >= 0)
+    if len(idx) == 0:
+        return out, seen
+    d = hits.directions_local[idx]
+    lit_local = hits.origin_local + hits.distance_mm[idx, None] * d
+    normal = caster.face_normals[hits.face[idx]]
+    reflected = d - 2.0 * np.einsum("ij,ij->i", d, normal)[:, None] * normal
+    start = lit_local + caster.local_origin + constants.SHADOW_RAY_OFFSET_MM * reflected
+    second = caster.first_hit(start, reflected)
+    camera = T_world_sensor[:3, :3] @ sensor.camera_center_laser + T_world_sensor[:3, 3]
+    to_camera = camera - second.points
+    faces_camera = np.einsum("ij,ij->i", second.normals, to_camera) > 0
+    candidate = np.flatnonzero(second.hit & faces_camera)
+    visible = ~caster.line_of_sight_blocked(second.points[candidate], camera)
+    candidate = candidate[visible]
+    q = (second.points[candidate] - T_world_sensor[:3, 3]) @ T_world_sensor[:3, :3]
+    b = sensor.baseline_mm
+    with np.errstate(divide="ignore", invalid="ignore"):
+        scale = b / (b - q[:, 0])
+    y, z = scale * q[:, 1], scale * q[:, 2]
+    ok = (scale > 0) & sensor.in_field_of_view(y, z)
+    rows = idx[candidate[ok]]
+    out[rows, 0] = y[ok]
+    out[rows, 1] = z[ok]
+    seen[rows] = True
+    return out, seen

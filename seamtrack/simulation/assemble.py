@@ -1,0 +1,260 @@
+"""Assemble a run's parts from a validated scene, building only what the scene asks for.
+
+A seam-mode scene builds a seam, a sensor, a robot and a tracker; only a mesh-mode scene loads
+a CAD workpiece (CadQuery, on a cache miss), an Embree scene and a feature extractor.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from seamtrack.control.registry import tracker, tracker_parameters
+from seamtrack.control.robot import CartesianRobot
+from seamtrack.control.tracking import Tracker
+from seamtrack.errors import SceneError
+from seamtrack.geometry import frames
+from seamtrack.geometry.seam import Seam
+from seamtrack.sensing.profiles import Feature, Profile, laser_to_world
+from seamtrack.sensing.scan import SeamNoise, sense_seam
+from seamtrack.sensing.sensor import LaserLineSensor
+from seamtrack.simulation.scene import Scene, make_sensor
+
+FloatArray = NDArray[np.float64]
+SenseFn = Callable[[FloatArray, float], Feature]
+ScanFn = Callable[[FloatArray, float], "tuple[Profile, Feature]"]
+
+
+@dataclass(frozen=True)
+class LoopSettings:
+    """Timing and termination of one run (all from the scene's ``[simulation]``/``[sensor]``)."""
+
+    welding_speed_mm_s: float
+    frame_period_s: float
+    latency_s: float = 0.0
+    end_tolerance_mm: float = 1.0
+    stall_time_s: float = 5.0
+    time_limit_s: float = 3600.0
+    wall_time_limit_s: float = 600.0
+    seed: int = 0
+    trace_period_s: float = 0.01
+
+
+@dataclass(frozen=True)
+class Parts:
+    """Everything a run needs, assembled (by :mod:`seamtrack.simulation.scene`) from a scene."""
+
+    seam: Seam
+    robot: CartesianRobot
+    tracker: Tracker
+    sense: SenseFn
+    tcp_start_world: FloatArray
+    settings: LoopSettings
+    sensor_resolution_mm: float
+    look_ahead_mm: float
+    scan: ScanFn | None = None  # mesh mode: the stripe profile and the feature found in it
+    sensor: LaserLineSensor | None = None
+    mesh: Any = None  # mesh mode: the ray-cast scene (workpiece and obstacles, world frame)
+
+
+def make_seam(scene: Scene) -> Seam:
+    """The true seam in the world frame (for ``source = "workpiece"`` see :func:`build_parts`)."""
+    c = scene.config.seam
+    if c.source == "paper":
+        seam = Seam.from_paper(c.step_mm, c.length_mm)
+    elif c.source == "points":
+        seam = Seam.from_points(c.points_mm or [], field="seam.points_mm", name=scene.name)
+    elif c.source == "csv":
+        assert c.file is not None
+        seam = Seam.from_csv(scene.resolve_path(c.file), field="seam.file")
+    else:
+        raise SceneError("make_seam does not build workpiece seams", field="seam.source")
+    return seam.transformed(frames.from_xyz_rpy_deg(c.offset_mm, c.rotation_deg))
+
+
+def make_robot(scene: Scene, sensor: LaserLineSensor) -> CartesianRobot:
+    """The Cartesian robot with the sensor mounted ahead of the torch.
+
+    The laser points down (z_L = -Z) with its baseline along +X (x_L = +X), turned by
+    ``sensor.mount_rotation_deg`` (x-y-z angles in the laser frame: a roll about x_L tilts the
+    laser sideways within its plane, as a fillet joint needs). The emitter sits on the laser
+    axis ``range_mm`` (default: where the optical axis crosses the laser, b / tan theta_s) from
+    the point ``look_ahead_mm`` ahead of the torch tip along base +X, so the central ray hits a
+    seam at the torch tip's height there whatever the tilt.
+    """
+    r, s = scene.config.robot, scene.config.sensor
+    distance = s.range_mm if s.range_mm is not None else sensor.range_center_mm
+    R_down = frames.look_rotation([0.0, 0.0, -1.0], [1.0, 0.0, 0.0])
+    R = R_down @ frames.from_xyz_rpy_deg([0.0, 0.0, 0.0], s.mount_rotation_deg)[:3, :3]
+    emitter = np.array([s.look_ahead_mm, 0.0, 0.0]) - distance * R[:, 2]
+    T_tcp_sensor = frames.make(R, emitter)
+    return CartesianRobot(
+        position_min_mm=r.position_min_mm,
+        position_max_mm=r.position_max_mm,
+        velocity_max_mm_s=r.velocity_max_mm_s,
+        acceleration_max_mm_s2=r.acceleration_max_mm_s2,
+        control_period_s=r.control_period_s,
+        T_world_base=frames.from_xyz_rpy_deg(r.base_origin_mm, r.base_rotation_deg),
+        T_tcp_sensor=T_tcp_sensor,
+    )
+
+
+def make_tracker(scene: Scene) -> Tracker:
+    """The scene's tracker. The shared keys ``radius_mm`` and ``tolerance_mm`` go to the trackers
+    that take them (so ``--set tracker.name=...`` works on any scene); ``[tracker.params]`` go
+    to the tracker as they are, and one it does not take is an error."""
+    c = scene.config.tracker
+    params = dict(c.params)
+    accepted = tracker_parameters(c.name)
+    for key in ("radius_mm", "tolerance_mm"):
+        value = getattr(c, key)
+        if value is not None and key in accepted:
+            params.setdefault(key, value)
+    return tracker(c.name, **params)
+
+
+def _mesh_scan(
+    scene: Scene, sensor: LaserLineSensor, rng: np.random.Generator
+) -> tuple[Seam, ScanFn, Any]:
+    """The workpiece's CAD seam (world frame) and the per-frame scan: ray-cast stripe, then the
+    scene's feature extractor."""
+    from seamtrack.features.extractors import extractor
+    from seamtrack.sensing.raycast import RayCaster
+    from seamtrack.sensing.scan import scan_mesh
+    from seamtrack.workpiece.loader import load_workpiece
+
+    w = scene.config.workpiece
+    assert w is not None
+    source = w.script if w.script is not None else w.step
+    assert source is not None
+    path = scene.resolve_path(source)
+    part = load_workpiece(
+        str(path) if path.exists() else source,
+        tolerance_mm=w.tolerance_mm,
+        angular_tolerance_rad=math.radians(w.angular_tolerance_deg),
+        seam=w.seam,
+        **w.params,
+    )
+    T_world_part = frames.from_xyz_rpy_deg(w.offset_mm, w.rotation_deg)
+    mesh = part.mesh.copy()
+    mesh.apply_transform(T_world_part)
+    if w.obstacles:
+        import trimesh
+
+        boxes = [trimesh.creation.box(bounds=[b.min_mm, b.max_mm]) for b in w.obstacles]
+        mesh = trimesh.util.concatenate([mesh, *boxes])  # type: ignore[assignment]
+    caster = RayCaster.from_mesh(mesh)
+    seam = part.seam.transformed(T_world_part)
+    find = extractor(scene.config.extractor.name, **scene.config.extractor.params)
+    offset = np.asarray(scene.config.extractor.offset_mm, dtype=float)
+    s = scene.config.sensor
+    noise = _stripe_noise(s.stripe_noise)
+
+    def scan(T_world_sensor: FloatArray, t_s: float) -> tuple[Profile, Feature]:
+        profile = scan_mesh(
+            sensor,
+            caster,
+            T_world_sensor,
+            rays=s.rays,
+            refine=s.refine_float64,
+            noise=noise,
+            rng=rng,
+            t_s=t_s,
+        )
+        feature = find(profile)
+        if feature and offset.any():
+            # The torch target relative to the feature (a TCP calibration): e.g. the root of a
+            # square butt joint, a plate thickness below the gap the stripe shows.
+            point = feature.point_laser + offset
+            feature = dataclasses.replace(
+                feature, point_laser=point, point_world=laser_to_world(T_world_sensor, point)
+            )
+        return profile, feature
+
+    return seam, scan, mesh
+
+
+def _stripe_noise(params: dict[str, Any]) -> Any:
+    if not params:
+        return None
+    from seamtrack.sensing import scan
+
+    try:
+        return scan.StripeNoise(**params)
+    except TypeError as exc:
+        raise SceneError(
+            str(exc),
+            field="sensor.stripe_noise",
+            fix="see the README's list of stripe noise parameters",
+        ) from None
+
+
+def build_parts(scene: Scene, rng: np.random.Generator | None = None) -> Parts:
+    """Everything :func:`seamtrack.simulation.loop.run` needs, validated against each other."""
+    c = scene.config
+    rng = rng if rng is not None else np.random.default_rng(c.simulation.seed)
+    sensor = make_sensor(c.sensor)
+    robot = make_robot(scene, sensor)
+    scan: ScanFn | None = None
+    mesh: Any = None
+    if c.sensor.mode == "mesh":
+        seam, scan, mesh = _mesh_scan(scene, sensor, rng)
+        if c.seam.source != "workpiece":
+            seam = make_seam(scene)  # a nominal seam to score against (e.g. a robot program)
+        mesh_scan = scan
+
+        def sense(T_world_sensor: FloatArray, t_s: float) -> Feature:
+            return mesh_scan(T_world_sensor, t_s)[1]
+    else:
+        seam = (
+            make_seam(scene) if c.seam.source != "workpiece" else _mesh_scan(scene, sensor, rng)[0]
+        )
+        noise = SeamNoise(c.sensor.noise_range_mm, c.sensor.noise_lateral_mm)
+        sensed = seam
+
+        def sense(T_world_sensor: FloatArray, t_s: float) -> Feature:
+            return sense_seam(sensed, T_world_sensor, sensor, noise=noise, rng=rng)
+
+    robot.require_reachable(seam.points, "seam", field="seam")
+    start = seam.points[0] + np.asarray(c.robot.start_offset_mm)
+    robot.require_reachable(start, "start", field="robot.start_offset_mm")
+    frame_period = 1.0 / c.sensor.frame_rate_hz
+    v = c.simulation.welding_speed_mm_s
+    settings = LoopSettings(
+        welding_speed_mm_s=v,
+        frame_period_s=frame_period,
+        latency_s=c.sensor.latency_s,
+        end_tolerance_mm=(
+            c.simulation.end_tolerance_mm
+            if c.simulation.end_tolerance_mm is not None
+            else v * frame_period + 1.0
+        ),
+        stall_time_s=c.simulation.stall_time_s,
+        time_limit_s=(
+            c.simulation.time_limit_s
+            if c.simulation.time_limit_s is not None
+            else 3.0 * seam.length_mm / v + 60.0
+        ),
+        wall_time_limit_s=c.simulation.wall_time_limit_s,
+        seed=c.simulation.seed,
+        trace_period_s=c.simulation.trace_period_s,
+    )
+    return Parts(
+        seam=seam,
+        robot=robot,
+        tracker=make_tracker(scene),
+        sense=sense,
+        tcp_start_world=start,
+        settings=settings,
+        sensor_resolution_mm=sensor.lateral_resolution_mm,
+        look_ahead_mm=c.sensor.look_ahead_mm,
+        scan=scan,
+        sensor=sensor,
+        mesh=mesh,
+    )

@@ -1,0 +1,391 @@
+"""The closed loop of the paper's Fig. 5: sense, track, move; then score the run.
+
+Timing: the robot servo runs every control period; the sensor takes a frame every frame
+period (captured at the robot's measured position at that tick); the frame reaches the tracker
+``latency_s`` later. Time is ``tick * dt`` (an integer tick count, so no drift).
+
+Scoring: the error is the distance from the torch tip to the true seam (the seam polyline of
+the scene, or the CAD edge in mesh mode). The run starts with an approach from the start
+position to the first seam point the sensor measured: before that point the tracker knows
+nothing about the seam. The *welding portion* begins at arc-on, the first tick at which the
+torch tip's closest seam point reaches the arc length of that first measured point, and lasts
+to the end of the run. Every error statistic is over the welding portion only.
+
+End of the run: the torch waits at rest, with the last frame showing no seam, for longer than
+a frame period plus the latency (nothing new can come): ``completed`` when it got within
+``end_tolerance_mm`` of the seam's end, else ``lost_seam``. No progress along the seam for
+``stall_time_s`` (or the time or wall-clock limit) is ``stalled``; a commanded target outside
+the axis travel is ``limit_violation``.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from array import array
+from collections import deque
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from seamtrack import constants
+from seamtrack.control.robot import CartesianRobot, MoveCommand
+from seamtrack.control.tracking import Command, Measurement, TrackerContext
+from seamtrack.geometry.seam import Seam
+from seamtrack.simulation.assemble import LoopSettings, Parts, build_parts
+from seamtrack.simulation.scene import Scene, load_scene
+
+FloatArray = NDArray[np.float64]
+
+#: How often (in simulated seconds) progress along the seam is checked.
+_CHECK_PERIOD_S = 0.01
+
+
+@dataclass(frozen=True, eq=False)
+class Trace:
+    """Per-tick record of a run (arrays share the tick index).
+
+    Attributes
+    ----------
+    t_s : (n,) float
+    tcp_world : (n, 3) float
+    target_world : (n, 3) float
+        Commanded target (NaN while the tracker commands nothing).
+    closest_world : (n, 3) float
+        Closest true seam point to the torch tip.
+    arc_length_mm : (n,) float
+        Its arc length.
+    error_mm : (n,) float
+        Distance torch tip to seam.
+    error_lateral_mm, error_vertical_mm : (n,) float
+        The error split along the seam's lateral direction (tangent x normal) and its torch
+        normal.
+    welding : (n,) bool
+        The welding portion (arc-on to the end).
+    frames : dict of arrays
+        Per sensor frame: ``t_capture_s``, ``found``, ``point_world`` (k, 3; NaN if none).
+    """
+
+    t_s: FloatArray
+    tcp_world: FloatArray
+    target_world: FloatArray
+    closest_world: FloatArray
+    arc_length_mm: FloatArray
+    error_mm: FloatArray
+    error_lateral_mm: FloatArray
+    error_vertical_mm: FloatArray
+    welding: NDArray[np.bool_]
+    frames: dict[str, FloatArray] = field(default_factory=dict)
+
+    def decimated(self, period_s: float) -> NDArray[np.intp]:
+        """Indices of ticks one ``period_s`` apart (plus the last tick)."""
+        if len(self.t_s) < 2 or period_s <= 0:
+            return np.arange(len(self.t_s))
+        dt = self.t_s[1] - self.t_s[0]
+        step = max(1, int(round(period_s / dt)))
+        idx = np.arange(0, len(self.t_s), step)
+        if idx[-1] != len(self.t_s) - 1:
+            idx = np.append(idx, len(self.t_s) - 1)
+        return idx
+
+
+@dataclass(frozen=True, eq=False)
+class Result:
+    """A finished run: ``summary`` (the dict written as summary.json) and ``trace``."""
+
+    summary: dict[str, Any]
+    trace: Trace
+
+    @property
+    def status(self) -> str:
+        return str(self.summary["status"])
+
+
+def simulate(scene: Any, progress: bool = False) -> Result:
+    """Run a scene (a :class:`~seamtrack.simulation.scene.Scene`, a built-in name or a path)."""
+
+    if not isinstance(scene, Scene):
+        scene = load_scene(scene)
+    return run(build_parts(scene), progress=progress, seed=scene.config.simulation.seed)
+
+
+def run(parts: Parts, progress: bool = False, seed: int | None = None) -> Result:
+    """The loop, then the metrics."""
+    cfg = parts.settings
+    robot = parts.robot
+    seam = parts.seam
+    dt = robot.control_period_s
+    rng = np.random.default_rng(cfg.seed if seed is None else seed)
+    wall_start = time.perf_counter()
+
+    R = robot.T_world_base[:3, :3]
+    p0 = robot.T_world_base[:3, 3]
+    state = robot.state_at(robot.q_from_world(parts.tcp_start_world))
+    context = TrackerContext(
+        welding_speed_mm_s=cfg.welding_speed_mm_s,
+        control_period_s=dt,
+        frame_period_s=cfg.frame_period_s,
+        latency_s=cfg.latency_s,
+        look_ahead_mm=parts.look_ahead_mm,
+        sensor_resolution_mm=parts.sensor_resolution_mm,
+        tcp_start_world=np.array(parts.tcp_start_world, dtype=float),
+        velocity_max_world=np.abs(R @ np.array(robot.velocity_max_mm_s)),
+        acceleration_max_world=np.abs(R @ np.array(robot.acceleration_max_mm_s2)),
+        rng=rng,
+    )
+    parts.tracker.reset(context)
+
+    tcp_log = array("d")
+    target_log = array("d")
+    frame_t = array("d")
+    frame_found = array("b")
+    frame_points = array("d")
+    pending: deque[Measurement] = deque()
+    nan3 = (math.nan, math.nan, math.nan)
+
+    max_ticks = int(math.ceil(cfg.time_limit_s / dt))
+    check_every = max(1, int(round(_CHECK_PERIOD_S / dt)))
+    rest_window = cfg.frame_period_s + cfg.latency_s + 2 * dt
+    next_capture = 0.0
+    last_cmd: Command | None = None
+    move: MoveCommand | None = None
+    last_seen = False
+    rest_since: float | None = None
+    s_best, t_progress = -math.inf, 0.0
+    s_now = 0.0  # the torch starts at the seam's start: follow the seam from there
+    check_t = array("d")
+    check_s = array("d")
+    status = ""
+    bar = _progress_bar(progress, cfg.time_limit_s, seam.length_mm)
+
+    sense_time = 0.0
+    tick = 0
+    unrotated = bool(np.array_equal(R, np.eye(3)))
+    p0x, p0y, p0z = p0.tolist()
+    for tick in range(max_ticks + 1):
+        t = tick * dt
+        q = state.q
+        if unrotated:  # the usual robot: spare the matrix products on this hot path
+            tcp_list = [q[0] + p0x, q[1] + p0y, q[2] + p0z]
+            tcp = np.array(tcp_list)
+            vel = np.array(state.v)
+        else:
+            tcp = R @ q + p0
+            tcp_list = tcp.tolist()
+            vel = R @ state.v
+        if t + 1e-9 >= next_capture:
+            next_capture += cfg.frame_period_s
+            T_ws = robot.T_world_sensor(q)
+            sense_start = time.perf_counter()
+            feature = parts.sense(T_ws, t)
+            sense_time += time.perf_counter() - sense_start
+            pending.append(Measurement(feature, t, t + cfg.latency_s, T_ws, tcp))
+            frame_t.append(t)
+            frame_found.append(1 if feature else 0)
+            frame_points.extend(feature.point_world if feature else nan3)
+        while pending and pending[0].t_arrival_s <= t + 1e-9:
+            measurement = pending.popleft()
+            last_seen = bool(measurement)
+            parts.tracker.update(measurement)
+        cmd = parts.tracker.command(t, tcp, vel)
+        if cmd is not last_cmd:
+            last_cmd = cmd
+            move = None if cmd is None else _to_move(robot, cmd)
+            if move is not None and not robot.within_travel(move.target):
+                status = "limit_violation"
+        tcp_log.extend(tcp_list)
+        target_log.extend(nan3 if cmd is None else np.asarray(cmd.target_world).tolist())
+        if status:
+            break
+        robot.step(state, move)
+
+        if tick % check_every == 0:
+            at_rest = math.sqrt(sum(v * v for v in state.v)) <= constants.AT_REST_SPEED_MM_S
+            rest_since = (rest_since if rest_since is not None else t) if at_rest else None
+            s_now = seam.closest_near(tcp, s_now)
+            check_t.append(t)
+            check_s.append(s_now)
+            if s_now > s_best + constants.PROGRESS_EPS_MM:
+                s_best, t_progress = s_now, t
+            if rest_since is not None and t - rest_since >= rest_window and not last_seen:
+                status = (
+                    "completed"
+                    if s_best >= seam.length_mm - cfg.end_tolerance_mm
+                    else ("lost_seam")
+                )
+                break
+            if t - t_progress >= cfg.stall_time_s:
+                status = "stalled"
+                break
+            if time.perf_counter() - wall_start > cfg.wall_time_limit_s:
+                status = "stalled"
+                break
+            if bar is not None and tick % (check_every * 100) == 0:
+                bar.update(t - bar.n)
+    if bar is not None:
+        bar.close()
+    if not status:
+        status = "stalled"
+
+    trace = _trace(
+        seam, dt, tcp_log, target_log, frame_t, frame_found, frame_points, (check_t, check_s)
+    )
+    summary = _summary(trace, seam, status, cfg, time.perf_counter() - wall_start)
+    summary["sense_wall_time_s"] = sense_time
+    return Result(summary=summary, trace=trace)
+
+
+def _to_move(robot: CartesianRobot, cmd: Command) -> MoveCommand:
+    return robot.command_in_base(
+        cmd.target_world, cmd.speed_mm_s, cmd.velocity_ff_world, cmd.stop_at_target
+    )
+
+
+def _progress_bar(enabled: bool, total_s: float, length_mm: float) -> Any:
+    if not enabled:
+        return None
+    from tqdm import tqdm
+
+    return tqdm(
+        total=None,
+        unit="sim s",
+        desc=f"seam {length_mm:.0f} mm",
+        leave=False,
+        bar_format="{desc}: {n:.1f} {unit} [{elapsed}, {rate_fmt}]",
+    )
+
+
+def _trace(
+    seam: Seam,
+    dt: float,
+    tcp_log: array,
+    target_log: array,
+    frame_t: array,
+    frame_found: array,
+    frame_points: array,
+    progress: tuple[array, array],
+) -> Trace:
+    tcp = np.frombuffer(tcp_log, dtype=np.float64).reshape(-1, 3).copy()
+    target = np.frombuffer(target_log, dtype=np.float64).reshape(-1, 3).copy()
+    n = len(tcp)
+    t_s = np.arange(n, dtype=np.float64) * dt
+    closest = seam.closest(tcp)
+    # Progress along the seam, followed continuously during the run (so a stretch of seam
+    # that passes close by, like a hairpin's other leg, is not mistaken for progress); the
+    # error itself is the distance to the nearest point of the whole seam.
+    check_t = np.frombuffer(progress[0], dtype=np.float64)
+    check_s = np.frombuffer(progress[1], dtype=np.float64)
+    arc_length = np.interp(t_s, check_t, check_s) if len(check_t) else closest.arc_length_mm
+    error_vec = tcp - closest.points
+    seg = closest.segment
+    tangent = seam.points[seg + 1] - seam.points[seg]
+    tangent /= np.linalg.norm(tangent, axis=1, keepdims=True)
+    # Torch normal at the closest point, interpolated between the segment's end normals.
+    w = np.clip(
+        (closest.arc_length_mm - seam.arc_length_mm[seg]) / seam.segment_lengths_mm[seg], 0.0, 1.0
+    )[:, None]
+    normal = (1 - w) * seam.normals[seg] + w * seam.normals[seg + 1]
+    normal -= np.sum(normal * tangent, axis=1, keepdims=True) * tangent
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    lateral = np.cross(tangent, normal)
+    frames = {
+        "t_capture_s": np.frombuffer(frame_t, dtype=np.float64).copy(),
+        "found": np.frombuffer(frame_found, dtype=np.int8).astype(bool),
+        "point_world": np.frombuffer(frame_points, dtype=np.float64).reshape(-1, 3).copy(),
+    }
+    welding = np.zeros(n, dtype=bool)
+    if frames["found"].any():
+        first_point = frames["point_world"][np.argmax(frames["found"])]
+        s_first = float(seam.closest(first_point).arc_length_mm[0])
+        arc_on = np.flatnonzero(arc_length >= s_first - constants.PROGRESS_EPS_MM)
+        if len(arc_on):
+            welding[arc_on[0] :] = True
+        # Past the seam's end the torch is off the joint: that is overrun, not welding.
+        at_end = np.flatnonzero(arc_length >= seam.length_mm - 1e-9)
+        if len(at_end):
+            welding[at_end[0] + 1 :] = False
+    return Trace(
+        t_s=t_s,
+        tcp_world=tcp,
+        target_world=target,
+        closest_world=closest.points,
+        arc_length_mm=arc_length,
+        error_mm=closest.distance_mm,
+        error_lateral_mm=np.sum(error_vec * lateral, axis=1),
+        error_vertical_mm=np.sum(error_vec * normal, axis=1),
+        welding=welding,
+        frames=frames,
+    )
+
+
+def _summary(
+    trace: Trace, seam: Seam, status: str, cfg: LoopSettings, wall_time_s: float
+) -> dict[str, Any]:
+    weld = trace.welding
+    err = trace.error_mm[weld]
+    nan = float("nan")
+    stats = {
+        "max_error_mm": nan,
+        "min_error_mm": nan,
+        "mean_error_mm": nan,
+        "rms_error_mm": nan,
+        "p95_error_mm": nan,
+    }
+    mean_speed = nan
+    speed_kept = nan
+    welded = 0.0
+    if err.size:
+        stats = {
+            "max_error_mm": float(err.max()),
+            "min_error_mm": float(err.min()),
+            "mean_error_mm": float(err.mean()),
+            "rms_error_mm": float(np.sqrt(np.mean(err**2))),
+            "p95_error_mm": float(np.percentile(err, 95)),
+        }
+        i0 = int(np.argmax(weld))
+        s = trace.arc_length_mm
+        s_end = float(np.max(s[i0:]))
+        # A completed run ends with the torch waiting at the seam's end: not welding time. Any
+        # other run's waiting is exactly what its mean speed must show.
+        i1 = (
+            i0 + int(np.argmax(s[i0:] >= s_end - constants.PROGRESS_EPS_MM))
+            if status == "completed"
+            else len(s) - 1
+        )
+        welded = s_end - float(s[i0])
+        if i1 > i0:
+            duration = trace.t_s[i1] - trace.t_s[i0]
+            mean_speed = welded / duration
+            dt = trace.t_s[1] - trace.t_s[0]
+            speed = np.linalg.norm(np.diff(trace.tcp_world[i0 : i1 + 1], axis=0), axis=1) / dt
+            speed_kept = float(
+                np.mean(np.abs(speed - cfg.welding_speed_mm_s) <= 0.1 * cfg.welding_speed_mm_s)
+            )
+    found = np.asarray(trace.frames.get("found", np.zeros(0)), dtype=bool)
+    # The error as a system that logs only at its sensor frames would see it.
+    frame_ticks = np.searchsorted(trace.t_s, trace.frames.get("t_capture_s", np.zeros(0)))
+    frame_ticks = frame_ticks[frame_ticks < len(weld)]
+    at_frames = trace.error_mm[frame_ticks[weld[frame_ticks]]]
+    s_max = float(np.max(trace.arc_length_mm)) if len(trace.arc_length_mm) else 0.0
+    past_end = trace.arc_length_mm >= seam.length_mm - 1e-9
+    overrun = float(np.max(trace.error_mm[past_end])) if past_end.any() else 0.0
+    return {
+        "status": status,
+        **stats,
+        "max_error_at_frames_mm": float(at_frames.max()) if at_frames.size else nan,
+        "min_error_at_frames_mm": float(at_frames.min()) if at_frames.size else nan,
+        "sim_time_s": float(trace.t_s[-1]) if len(trace.t_s) else 0.0,
+        "wall_time_s": wall_time_s,
+        "frames": len(found),
+        "frames_without_seam": int(np.count_nonzero(~found)),
+        "seam_length_mm": seam.length_mm,
+        "welded_length_mm": welded,
+        "completed_fraction": min(1.0, s_max / seam.length_mm),
+        "overrun_mm": overrun,
+        "mean_speed_mm_s": mean_speed,
+        "speed_kept_fraction": speed_kept,
+        "welding_speed_mm_s": cfg.welding_speed_mm_s,
+        "seed": cfg.seed,
+    }

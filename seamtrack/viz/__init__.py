@@ -1,0 +1,2 @@
+"""Views: matplotlib plots, PyVista scenes and run animations (imported only when a view is
+made)."""

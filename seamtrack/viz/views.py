@@ -1,0 +1,571 @@
+"""3D views of a scene with PyVista: workpiece, seam, sensor, laser fan, field of view, stripe.
+
+Nothing low-level imports this module, and PyVista is imported only when a view is built (an
+``ImportError`` names ``pip install pyvista`` when it is missing), so seam-mode runs never load
+it. What a view shows, all in the world frame (mm):
+
+- the workpiece mesh (mesh mode) and the true seam polyline;
+- the sensor at a pose ``T_world_sensor`` (the laser frame {L}): a housing box behind the
+  emitter (its front face ``standoff_mm`` before the near end of the depth of field), the
+  emitter and the camera centre joined by the baseline, the camera's optical axis, the laser fan
+  (the plane x_L = 0, from the emitter to the far end of the range, half transparent) and the
+  trapezoidal field of view (near and far widths, Eq. 5-6);
+- the stripe, one point per ray coloured by its :class:`~seamtrack.sensing.profiles.Reason` (misses
+at
+  the far end of their ray), and the seam point the extractor found (seam mode: the crossing);
+- after a run: the torch path coloured by the tracking error, and the sensed seam points.
+
+Interactive when a display exists (in Jupyter through the ``trame`` backend, ``static`` in a
+headless notebook); off screen, to a PNG, when not. ``pv.OFF_SCREEN = True`` (or the
+environment variable ``PYVISTA_OFF_SCREEN=true``) forces off-screen rendering.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from seamtrack.control.robot import CartesianRobot
+from seamtrack.geometry.frames import apply, look_rotation, make
+from seamtrack.geometry.seam import Seam
+from seamtrack.sensing.profiles import Feature, Profile, Reason
+from seamtrack.sensing.sensor import LaserLineSensor
+from seamtrack.viz.plots import REASON_COLORS, plot_profile_2d
+
+__all__ = [
+    "SceneView",
+    "add_sensor",
+    "has_display",
+    "plot_profile_2d",
+    "render_png",
+    "scene_plotter",
+    "scene_view",
+    "show",
+]
+
+FloatArray = NDArray[np.float64]
+ScanFn = Callable[[FloatArray, float], "tuple[Profile, Feature]"]
+SenseFn = Callable[[FloatArray, float], Feature]
+
+PIP_HINT = "pip install pyvista"
+_MESH_COLOR = "#b8c4d6"
+_SEAM_COLOR = "#1f3b99"
+_LASER_COLOR = "#e8161b"
+_FOV_COLOR = "#17a2b8"
+_HOUSING_COLOR = "#4d4d4d"
+_CAMERA_COLOR = "#1f77b4"
+_FEATURE_COLOR = "#ffd700"
+_LIFT_MM = 0.2
+
+
+def _pyvista() -> Any:
+    try:
+        import pyvista as pv
+    except ImportError as exc:
+        raise ImportError(f"seamtrack's 3D views need PyVista: {PIP_HINT}") from exc
+    return pv
+
+
+# --------------------------------------------------------------------------- environment
+def has_display() -> bool:
+    """True when an interactive window can open (Windows, macOS, or X11/Wayland on Linux)."""
+    if sys.platform in ("win32", "darwin"):
+        return True
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
+def in_notebook() -> bool:
+    """True inside a Jupyter kernel (IPython is not imported to find out)."""
+    ipython = sys.modules.get("IPython")
+    if ipython is None:
+        return False
+    shell = ipython.get_ipython()
+    return shell is not None and type(shell).__name__ == "ZMQInteractiveShell"
+
+
+def _off_screen(off_screen: bool | None) -> bool:
+    if off_screen is not None:
+        return bool(off_screen)
+    return bool(_pyvista().OFF_SCREEN) or not has_display()
+
+
+def jupyter_backend() -> str:
+    """``"trame"`` (interactive) in a notebook with a display, else ``"static"`` (an image)."""
+    return "trame" if has_display() and not _pyvista().OFF_SCREEN else "static"
+
+
+# --------------------------------------------------------------------------- the scene
+@dataclass(frozen=True, eq=False)
+class SceneView:
+    """What a view needs from a scene: the seam, the sensor and how it is posed and scans.
+
+    Attributes
+    ----------
+    seam : Seam
+        The true seam, world frame.
+    sensor : LaserLineSensor
+    name : str
+    mesh : trimesh.Trimesh or None
+        The workpiece in the world frame (mesh mode); None in seam mode.
+    robot : CartesianRobot or None
+        Poses the sensor (``robot.T_world_sensor``); None: mounted ``look_ahead_mm`` ahead of
+        the torch along the seam, ``sensor.range_center_mm`` above it along the torch normal.
+    look_ahead_mm : float
+    scan : callable or None
+        ``scan(T_world_sensor, t_s) -> (Profile, Feature)`` (a mesh-mode scene's own); None
+        with a mesh: ``sensor.scan`` and the ``extractor`` named below.
+    sense : callable or None
+        ``sense(T_world_sensor, t_s) -> Feature`` (seam mode); None: the ideal crossing.
+    extractor : str
+        Feature extractor used when ``scan`` is None.
+    """
+
+    seam: Seam
+    sensor: LaserLineSensor
+    name: str = "scene"
+    mesh: Any = None
+    robot: CartesianRobot | None = None
+    look_ahead_mm: float = 10.0
+    scan: ScanFn | None = None
+    sense: SenseFn | None = None
+    extractor: str = "v-groove"
+
+    def tcp_at(self, at_mm: float) -> FloatArray:
+        """(3,) the torch tip on the seam at arc length ``at_mm``."""
+        return np.asarray(self.seam.interpolate([at_mm])[0])
+
+    def pose_at_tcp(self, tcp_world: ArrayLike) -> FloatArray:
+        """(4, 4) ``T_world_sensor`` with the torch tip at ``tcp_world``."""
+        tcp = np.asarray(tcp_world, dtype=np.float64)
+        if self.robot is not None:
+            return self.robot.T_world_sensor(self.robot.q_from_world(tcp))
+        return self.T_world_tcp(tcp) @ make(
+            look_rotation([0.0, 0.0, -1.0], [1.0, 0.0, 0.0]),
+            [self.look_ahead_mm, 0.0, self.sensor.range_center_mm],
+        )
+
+    def T_world_tcp(self, tcp_world: ArrayLike) -> FloatArray:
+        """(4, 4) torch frame: at the tip, z up the torch, x along the travel."""
+        tcp = np.asarray(tcp_world, dtype=np.float64)
+        if self.robot is not None:
+            return self.robot.T_world_tcp(self.robot.q_from_world(tcp))
+        closest = self.seam.closest(tcp[None])
+        seg = int(closest.segment[0])
+        tangent = self.seam.tangent_at(closest.arc_length_mm)[0]
+        return make(look_rotation(self.seam.normals[seg], tangent), tcp)
+
+    def pose_at(self, at_mm: float) -> FloatArray:
+        """(4, 4) ``T_world_sensor`` with the torch at arc length ``at_mm`` (as ``scan --at``)."""
+        return self.pose_at_tcp(self.tcp_at(at_mm))
+
+    def stripe(self, T_world_sensor: ArrayLike, t_s: float = 0.0) -> tuple[Profile | None, Feature]:
+        """The stripe profile (None in seam mode) and the seam point the sensor reports."""
+        T = np.asarray(T_world_sensor, dtype=np.float64)
+        if self.scan is not None:
+            return self.scan(T, t_s)
+        if self.mesh is not None:
+            from seamtrack.features.extractors import extractor
+
+            profile = self.sensor.scan(self.mesh, T, t_s=t_s)
+            return profile, extractor(self.extractor)(profile)
+        if self.sense is not None:
+            return None, self.sense(T, t_s)
+        from seamtrack.sensing.scan import sense_seam
+
+        return None, sense_seam(self.seam, T, self.sensor)
+
+
+def scene_view(source: Any, overrides: dict[str, Any] | list[str] | None = None) -> SceneView:
+    """A :class:`SceneView` from a scene, a scene name or path, or a workpiece.
+
+    Parameters
+    ----------
+    source : SceneView, Scene, str, Path, or an object with ``.mesh`` and ``.seam``
+        A built-in scene name or TOML file is loaded (with ``overrides``) and built; a
+        workpiece (``load_workpiece(...)``) is viewed with the paper's sensor.
+    overrides : dict or list of "KEY=VALUE", optional
+        Scene overrides, as ``--set``.
+    """
+    if isinstance(source, SceneView):
+        return source
+    if hasattr(source, "mesh") and hasattr(source, "seam"):
+        from seamtrack.sensing.sensor import preset
+
+        return SceneView(
+            seam=source.seam,
+            sensor=preset("paper"),
+            mesh=source.mesh,
+            name=Path(str(getattr(source, "source", "workpiece"))).stem,
+        )
+    from seamtrack.simulation.scene import Scene, load_scene
+
+    scene = source if isinstance(source, Scene) else load_scene(source, overrides)
+    return _from_scene(scene)
+
+
+def _from_scene(scene: Any) -> SceneView:
+    from seamtrack.simulation.assemble import build_parts
+
+    c = scene.config
+    parts = build_parts(scene)
+    assert parts.sensor is not None  # every scene builds its sensor
+    return SceneView(
+        seam=parts.seam,
+        sensor=parts.sensor,
+        name=scene.name,
+        mesh=parts.mesh,
+        robot=parts.robot,
+        look_ahead_mm=parts.look_ahead_mm,
+        scan=parts.scan,
+        sense=parts.sense if parts.scan is None else None,
+        extractor=c.extractor.name,
+    )
+
+
+# --------------------------------------------------------------------------- geometry
+def _polyline(pv: Any, points: ArrayLike) -> Any:
+    pts = np.asarray(points, dtype=np.float64)
+    return pv.lines_from_points(pts) if len(pts) > 1 else pv.PolyData(pts)
+
+
+def sensor_meshes(pv: Any, sensor: LaserLineSensor) -> dict[str, Any]:
+    """The sensor's parts as PyVista meshes in the laser frame (x_L, y_L, z_L).
+
+    Returns
+    -------
+    dict
+        ``housing``, ``emitter``, ``camera``, ``baseline``, ``optical_axis``, ``fan``, ``fov``
+        (the trapezoid's outline) and ``fov_fill``.
+    """
+    b = sensor.baseline_mm
+    near, far = sensor.range_near_mm, sensor.range_far_mm
+    w_near, w_far = float(sensor.half_width_mm(near)), float(sensor.half_width_mm(far))
+    standoff = sensor.standoff_mm if math.isfinite(sensor.standoff_mm) else 0.5 * near
+    front = max(near - standoff, 0.0)
+    depth = max(0.6 * standoff, 0.6 * b)
+    half_y = max(0.6 * w_near, 0.2 * b)
+    housing = pv.Box(bounds=(-0.25 * b, 1.25 * b, -half_y, half_y, front - depth, front))
+    radius = 0.06 * b
+    tan_max = w_near / near  # the fan opens like scan.laser_fan: over the near width
+    angles = np.linspace(-math.atan(tan_max), math.atan(tan_max), 33)
+    rim = np.column_stack([np.zeros_like(angles), far * np.tan(angles), np.full_like(angles, far)])
+    fan_points = np.vstack([[0.0, 0.0, 0.0], rim])
+    fan_faces = np.hstack([[3, 0, k, k + 1] for k in range(1, len(rim))])
+    corners = np.array(
+        [[0, -w_near, near], [0, w_near, near], [0, w_far, far], [0, -w_far, far]], dtype=np.float64
+    )
+    crossing = np.array([0.0, 0.0, sensor.range_center_mm])
+    camera = np.asarray(sensor.camera_center_laser, dtype=np.float64)
+    return {
+        "housing": housing,
+        "emitter": pv.Sphere(radius=radius, center=(0.0, 0.0, 0.0)),
+        "camera": pv.Sphere(radius=1.3 * radius, center=tuple(camera)),
+        "baseline": _polyline(pv, np.vstack([np.zeros(3), camera])),
+        "optical_axis": _polyline(pv, np.vstack([camera, crossing])),
+        "fan": pv.PolyData(fan_points, faces=fan_faces),
+        "fov": _polyline(pv, np.vstack([corners, corners[:1]])),
+        "fov_fill": pv.PolyData(corners, faces=[4, 0, 1, 2, 3]),
+    }
+
+
+def add_sensor(plotter: Any, sensor: LaserLineSensor, T_world_sensor: ArrayLike) -> list[Any]:
+    """Draw the sensor at a pose; returns its actors (move them with ``actor.user_matrix``)."""
+    pv = _pyvista()
+    parts = sensor_meshes(pv, sensor)
+    styles: dict[str, dict[str, Any]] = {
+        "housing": {"color": _HOUSING_COLOR, "opacity": 0.35},
+        "emitter": {"color": _LASER_COLOR},
+        "camera": {"color": _CAMERA_COLOR},
+        "baseline": {"color": "black", "line_width": 3},
+        "optical_axis": {"color": _CAMERA_COLOR, "line_width": 1, "opacity": 0.6},
+        "fan": {"color": _LASER_COLOR, "opacity": 0.22, "show_edges": False},
+        "fov": {"color": _FOV_COLOR, "line_width": 3},
+        "fov_fill": {"color": _FOV_COLOR, "opacity": 0.15},
+    }
+    T = np.asarray(T_world_sensor, dtype=np.float64)
+    actors = []
+    for key, mesh in parts.items():
+        actor = plotter.add_mesh(
+            mesh,
+            name=f"sensor-{key}",
+            lighting=key in ("housing", "emitter", "camera"),
+            **styles[key],
+        )
+        actor.user_matrix = T
+        actors.append(actor)
+    return actors
+
+
+def _torch_mesh(pv: Any, height_mm: float) -> Any:
+    """A torch nozzle in the torch frame: a cone from the tip up the torch's z axis."""
+    return pv.Cone(
+        center=(0.0, 0.0, 0.5 * height_mm),
+        direction=(0.0, 0.0, -1.0),
+        height=height_mm,
+        radius=0.15 * height_mm,
+        resolution=24,
+    )
+
+
+def stripe_polydata(
+    pv: Any, sensor: LaserLineSensor, profile: Profile | None, T_world_sensor: ArrayLike
+) -> Any:
+    """The stripe as points with an ``rgb`` colour per :class:`Reason` (misses drawn at the far
+    end of their ray). Empty in seam mode (no profile)."""
+    if profile is None or len(profile) == 0:
+        return pv.PolyData()
+    from seamtrack.sensing.scan import laser_fan
+
+    assert profile.reason is not None
+    points = profile.points_laser.copy()
+    miss = ~np.isfinite(points).all(axis=1)
+    if miss.any():
+        directions = laser_fan(sensor, len(profile)).directions
+        points[miss] = directions[miss, 1:] * (sensor.range_far_mm / directions[miss, 2:3])
+    # Drawn 0.2 mm towards the emitter and the camera side of the laser plane, so that neither
+    # the lit surface nor the translucent fan in the same plane hides the stripe.
+    rng = np.linalg.norm(points, axis=1, keepdims=True)
+    points = points * np.maximum(1.0 - _LIFT_MM / np.maximum(rng, _LIFT_MM), 0.0)
+    world = apply(T_world_sensor, np.column_stack([np.full(len(points), _LIFT_MM), points]))
+    palette = {code: _rgb(color) for code, color in REASON_COLORS.items()}
+    rgb = np.array([palette[Reason(int(code))] for code in profile.reason], dtype=np.uint8)
+    cloud = pv.PolyData(world)
+    cloud.point_data["rgb"] = rgb.reshape(-1, 3)
+    return cloud
+
+
+def _rgb(hex_color: str) -> tuple[int, int, int]:
+    h = hex_color.lstrip("#")
+    return int(h[0:2], 16), int(h[2:4], 16), int(h[4:6], 16)
+
+
+def _torch_path(
+    pv: Any, view: SceneView, result: Any, stop: int | None = None, max_points: int = 4000
+) -> Any:
+    """The torch tip's path (up to tick ``stop``) with the tracking error as scalars; on a mesh
+    drawn 0.4 mm up the torch normal so the groove's surface and the seam line do not hide it."""
+    tr = result.trace
+    n = len(tr.t_s) if stop is None else max(1, stop)
+    idx = np.unique(np.linspace(0, n - 1, min(n, max_points)).astype(int))
+    points = tr.tcp_world[idx]
+    if view.mesh is not None:
+        points = points + 2 * _LIFT_MM * view.seam.normals[view.seam.closest(points).segment]
+    path = _polyline(pv, points)
+    path.point_data["tracking error (mm)"] = tr.error_mm[idx]
+    return path
+
+
+def _error_clim(result: Any) -> tuple[float, float]:
+    tr = result.trace
+    err = tr.error_mm[tr.welding] if tr.welding.any() else tr.error_mm
+    top = float(np.nanmax(err)) if err.size else 1.0
+    return 0.0, top if top > 0 else 1.0
+
+
+# --------------------------------------------------------------------------- views
+def scene_plotter(
+    scene: Any,
+    *,
+    at_mm: float | None = None,
+    result: Any = None,
+    off_screen: bool | None = None,
+    window_size: tuple[int, int] = (1200, 800),
+    overrides: dict[str, Any] | list[str] | None = None,
+    title: bool = True,
+) -> Any:
+    """A PyVista plotter showing a scene; call ``.show()`` or ``.screenshot(path)`` on it.
+
+    Parameters
+    ----------
+    scene : SceneView, Scene, str, Path or workpiece
+        See :func:`scene_view`.
+    at_mm : float, optional
+        Torch position as arc length along the seam; the sensor, fan, field of view and stripe
+        are drawn there and the camera looks at them. Default: mid-seam, or with a ``result``
+        the torch's final position and a camera on the whole run.
+    result : Result, optional
+        A finished run: its torch path coloured by the tracking error, and the sensed points.
+    off_screen : bool, optional
+        Default: off screen when ``pv.OFF_SCREEN`` is set or there is no display.
+    window_size : (2,) int
+    overrides : dict or list of "KEY=VALUE", optional
+        Scene overrides when ``scene`` is a name or a path.
+    title : bool
+        Write the scene name and position in a corner.
+
+    Returns
+    -------
+    pyvista.Plotter
+    """
+    pv = _pyvista()
+    view = scene_view(scene, overrides)
+    plotter = pv.Plotter(off_screen=_off_screen(off_screen), window_size=list(window_size))
+    plotter.set_background("white")
+    if view.mesh is not None:
+        plotter.add_mesh(
+            pv.wrap(view.mesh),
+            color=_MESH_COLOR,
+            name="workpiece",
+            specular=0.2,
+            smooth_shading=False,
+        )
+    lift = _LIFT_MM * view.seam.normals if view.mesh is not None else 0.0  # off the surface
+    plotter.add_mesh(
+        _polyline(pv, view.seam.points + lift), color=_SEAM_COLOR, line_width=3, name="seam"
+    )
+    whole_run = result is not None and at_mm is None
+    tcp = view.tcp_at(0.5 * view.seam.length_mm if at_mm is None else at_mm)
+    if whole_run:  # the sensor where the welding ended
+        welding = np.flatnonzero(result.trace.welding)
+        tcp = result.trace.tcp_world[welding[-1] if len(welding) else -1]
+    T = view.pose_at_tcp(tcp)
+    add_sensor(plotter, view.sensor, T)
+    plotter.add_mesh(
+        _torch_mesh(pv, 0.2 * view.sensor.range_center_mm), color="#c08000", name="torch"
+    ).user_matrix = view.T_world_tcp(tcp)
+    profile, feature = view.stripe(T)
+    if profile is not None:
+        cloud = stripe_polydata(pv, view.sensor, profile, T)
+        if cloud.n_points:
+            plotter.add_mesh(cloud, scalars="rgb", rgb=True, point_size=4, name="stripe")
+        _add_reason_legend(plotter, profile)
+    marker = pv.Sphere(radius=0.012 * view.sensor.range_center_mm)
+    if feature:
+        plotter.add_mesh(
+            marker.translate(feature.point_world), color=_FEATURE_COLOR, name="seam-point"
+        )
+    if result is not None:
+        _add_result(plotter, pv, view, result)
+    if title:
+        where = (
+            "whole run"
+            if whole_run
+            else f"torch at s = {float(view.seam.closest(tcp[None]).arc_length_mm[0]):.1f} mm"
+        )
+        found = f"; seam point {'found' if feature else 'not found'}"
+        plotter.add_text(f"{view.name}: {where}{found}", font_size=10, color="black", name="title")
+    _camera_on_sensor(plotter, view.sensor, T, fit=whole_run)
+    return plotter
+
+
+def _add_reason_legend(plotter: Any, profile: Profile) -> None:
+    assert profile.reason is not None
+    counts = np.bincount(profile.reason, minlength=len(Reason))
+    entries = [
+        [f"{code.name.lower().replace('_', ' ')} ({counts[code]})", REASON_COLORS[code]]
+        for code in Reason
+        if counts[code]
+    ]
+    if entries:
+        plotter.add_legend(
+            entries,
+            bcolor="white",
+            border=True,
+            face="rectangle",
+            loc="lower left",
+            size=(0.3, 0.04 * len(entries)),
+            background_opacity=0.8,
+        )
+
+
+def _add_result(plotter: Any, pv: Any, view: SceneView, result: Any) -> None:
+    plotter.add_mesh(
+        _torch_path(pv, view, result),
+        scalars="tracking error (mm)",
+        cmap="plasma",
+        clim=_error_clim(result),
+        line_width=5,
+        name="torch-path",
+        scalar_bar_args={"title": "tracking error (mm)", "color": "black"},
+    )
+    frames_ = result.trace.frames
+    found = np.asarray(frames_.get("found", np.zeros(0, dtype=bool)), dtype=bool)
+    if found.any():
+        plotter.add_mesh(
+            pv.PolyData(frames_["point_world"][found]),
+            color="black",
+            point_size=5,
+            name="sensed-points",
+        )
+
+
+def _camera_on_sensor(
+    plotter: Any, sensor: LaserLineSensor, T_world_sensor: ArrayLike, fit: bool = False
+) -> None:
+    """Look at the stripe from ahead, beside and well above (steep enough to see into a 60 deg
+    groove); ``fit``: then zoom out to show everything from that direction."""
+    T = np.asarray(T_world_sensor, dtype=np.float64)
+    focus = apply(T, [0.3 * sensor.baseline_mm, 0.0, 0.6 * sensor.range_center_mm])
+    down, along, across = T[:3, 2], T[:3, 0], T[:3, 1]
+    direction = (0.15 if fit else 0.5) * along - 0.4 * across - 0.85 * down
+    distance = 1.6 * sensor.range_far_mm
+    plotter.camera_position = [
+        tuple(focus + distance * direction / np.linalg.norm(direction)),
+        tuple(focus),
+        tuple(-down),
+    ]
+    if fit:
+        plotter.reset_camera()
+
+
+def render_png(
+    scene: Any,
+    path: str | Path,
+    *,
+    at_mm: float | None = None,
+    result: Any = None,
+    window_size: tuple[int, int] = (1200, 800),
+    overrides: dict[str, Any] | list[str] | None = None,
+) -> Path:
+    """Render a scene off screen to a PNG (see :func:`scene_plotter` for what is drawn).
+
+    Returns
+    -------
+    Path
+        The PNG written (its folder is created).
+    """
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    plotter = scene_plotter(
+        scene,
+        at_mm=at_mm,
+        result=result,
+        off_screen=True,
+        window_size=window_size,
+        overrides=overrides,
+    )
+    try:
+        plotter.screenshot(str(out))
+    finally:
+        plotter.close()
+    return out
+
+
+def show(
+    scene: Any, *, at_mm: float | None = None, result: Any = None, **kwargs: Any
+) -> Path | None:
+    """Show a scene: inline in Jupyter, in a window with a display, else as a PNG.
+
+    Returns
+    -------
+    Path or None
+        The PNG written when nothing could be shown (``<scene name>-view.png``), else None.
+    """
+    pv = _pyvista()
+    if in_notebook():
+        plotter = scene_plotter(scene, at_mm=at_mm, result=result, off_screen=True, **kwargs)
+        plotter.show(jupyter_backend=jupyter_backend())
+        return None
+    if not pv.OFF_SCREEN and has_display():
+        scene_plotter(scene, at_mm=at_mm, result=result, off_screen=False, **kwargs).show()
+        return None
+    view = scene_view(scene, kwargs.pop("overrides", None))
+    return render_png(view, Path(f"{view.name}-view.png"), at_mm=at_mm, result=result, **kwargs)

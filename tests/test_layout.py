@@ -1,0 +1,172 @@
+"""The package tree shows the data flow: one subpackage per stage, imports pointing down the
+pipeline, no import cycle between modules (lazy imports inside functions count), no module over
+600 lines.
+
+Every ``import`` and ``from ... import`` statement of every module is read with :mod:`ast`,
+wherever it stands (module level, inside a function, under ``try``). Only imports under
+``if TYPE_CHECKING:`` are left out: they never run. An import ``from a.b import c`` is an edge
+to ``a.b.c`` when that is a module, else to ``a.b``.
+"""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+import pytest
+
+import seamtrack
+
+ROOT = Path(seamtrack.__file__).parent
+
+#: The pipeline, bottom first: a module may import its own stage and the stages below it.
+STAGES = [
+    ("base", {"seamtrack.errors", "seamtrack.constants", "seamtrack._version"}),
+    ("geometry", {"seamtrack.geometry"}),
+    ("workpiece", {"seamtrack.workpiece", "seamtrack.cad"}),
+    ("sensing", {"seamtrack.sensing"}),
+    ("features", {"seamtrack.features"}),
+    ("control", {"seamtrack.control"}),
+    ("simulation", {"seamtrack.simulation"}),
+    ("io", {"seamtrack.io"}),
+    ("viz", {"seamtrack.viz"}),
+    ("batch", {"seamtrack.batch"}),
+    ("bench", {"seamtrack.bench"}),
+    ("cli", {"seamtrack.cli"}),
+    ("package", {"seamtrack"}),  # the lazy public names of `import seamtrack as st`
+]
+
+
+def _module_name(path: Path) -> str:
+    parts = list(path.relative_to(ROOT.parent).with_suffix("").parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def _modules() -> dict[str, Path]:
+    found = {_module_name(p): p for p in ROOT.rglob("*.py")}
+    cad = ROOT.parent / "cad"  # installed as seamtrack.cad
+    found.update({f"seamtrack.cad.{p.stem}": p for p in cad.glob("*.py") if p.stem != "__init__"})
+    return found
+
+
+def _is_type_checking(node: ast.If) -> bool:
+    test = node.test
+    return (isinstance(test, ast.Name) and test.id == "TYPE_CHECKING") or (
+        isinstance(test, ast.Attribute) and test.attr == "TYPE_CHECKING"
+    )
+
+
+def _imports(name: str, path: Path, modules: dict[str, Path]) -> set[str]:
+    tree = ast.parse(path.read_text(), filename=str(path))
+    package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+    skip: set[int] = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.If) and _is_type_checking(node):
+            skip.update(id(n) for child in node.body for n in ast.walk(child))
+    targets: set[str] = set()
+    for node in ast.walk(tree):
+        if id(node) in skip:
+            continue
+        if isinstance(node, ast.Import):
+            targets.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                anchor = package.split(".")[: len(package.split(".")) - node.level + 1]
+                base = ".".join([*anchor, base] if base else anchor)
+            for alias in node.names:
+                sub = f"{base}.{alias.name}"
+                targets.add(sub if sub in modules else base)
+    return {t for t in targets if t in modules and t != name}
+
+
+def _stage(module: str) -> int:
+    if module == "seamtrack":
+        return len(STAGES) - 1
+    for rank, (_, prefixes) in enumerate(STAGES[:-1]):
+        if any(module == p or module.startswith(p + ".") for p in prefixes):
+            return rank
+    raise AssertionError(f"{module} belongs to no stage: add it to STAGES")
+
+
+@pytest.fixture(scope="module")
+def graph() -> dict[str, set[str]]:
+    modules = _modules()
+    return {name: _imports(name, path, modules) for name, path in modules.items()}
+
+
+def test_every_import_points_down_the_pipeline(graph: dict[str, set[str]]) -> None:
+    upward = [
+        f"{a} ({STAGES[_stage(a)][0]}) imports {b} ({STAGES[_stage(b)][0]})"
+        for a, targets in graph.items()
+        for b in targets
+        if _stage(b) > _stage(a)
+    ]
+    assert upward == []
+
+
+def test_no_import_cycle(graph: dict[str, set[str]]) -> None:
+    # Tarjan's strongly connected components: any component of more than one module is a cycle.
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    cycles: list[list[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in graph[v]:
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                component.append(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                cycles.append(sorted(component))
+
+    for v in sorted(graph):
+        if v not in index:
+            visit(v)
+    assert cycles == []
+
+
+def test_the_checker_sees_a_lazy_import_cycle(tmp_path: Path) -> None:
+    """The checker itself can fail: a lazy import inside a function is an edge."""
+    a = tmp_path / "a.py"
+    a.write_text("def f():\n    from seamtrack.geometry import frames\n")
+    modules = {"seamtrack.sensing.a": a, "seamtrack.geometry.frames": a}
+    assert _imports("seamtrack.sensing.a", a, modules) == {"seamtrack.geometry.frames"}
+    b = tmp_path / "b.py"
+    b.write_text("from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    import seamtrack.x\n")
+    assert _imports("seamtrack.y", b, {"seamtrack.x": b, "seamtrack.y": b}) == set()
+
+
+def test_no_module_over_600_lines() -> None:
+    long = {
+        name: n
+        for name, path in _modules().items()
+        if (n := len(path.read_text().splitlines())) > 600
+    }
+    assert long == {}
+
+
+def test_every_subpackage_is_a_stage() -> None:
+    stages = {p for _, prefixes in STAGES for p in prefixes}
+    subpackages = {
+        f"seamtrack.{p.parent.name}"
+        for p in ROOT.glob("*/__init__.py")
+        if p.parent.name != "scenes"
+    }
+    assert subpackages <= stages
