@@ -20,3 +20,25 @@ PROGRESS_EPS_MM = 1e-3
 #: Barycentric slack (dimensionless) of the float64 inside test that refines Embree's hits: a
 #: point this far outside its triangle still belongs to it (rays through shared edges/vertices).
 BARYCENTRIC_TOL = 1e-9
+
+
+# --------------------------------------------------------------------------- size limits
+# Every knob that sets an array size is bounded when a scene is validated, so that a typo is
+# refused in one line instead of exhausting the memory (each bound leaves room for real use).
+
+#: Rays of one laser fan; a real sensor's profile has at most a few thousand points.
+MAX_RAYS = 100_000
+
+#: Points of a seam polyline (the paper's curve at 2 mm has 201; 1e6 points take ~0.2 GB).
+MAX_SEAM_POINTS = 1_000_000
+
+#: Control ticks of one run (time limit / control period); the loop logs ~100 bytes a tick and
+#: scoring takes a few hundred more, so the bound keeps a run under 2 GB.
+MAX_TICKS = 4_000_000
+
+#: Cases (values x seeds) of one sweep.
+MAX_SWEEP_CASES = 100_000
+
+#: Finest chordal meshing tolerance: below it a curved CAD face meshes into more triangles
+#: than fit in memory (and Embree's float32 cannot resolve the difference anyway).
+MIN_MESH_TOLERANCE_MM = 1e-4

@@ -59,3 +59,46 @@ class PluginError(SeamtrackError):
 
 class OutputError(SeamtrackError):
     """An output location that cannot be written."""
+
+
+class PluginRuntimeError(SeamtrackError):
+    """User code (a tracker, an extractor) that raised, or returned what it must not, during a
+    run. ``str()`` is the one line; :meth:`user_frames` the traceback of the user's own code."""
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        field: str | None = None,
+        fix: str | None = None,
+        error: BaseException | None = None,
+    ):
+        super().__init__(message, field=field, fix=fix)
+        self.error = error
+
+    def user_frames(self, all_frames: bool = False) -> str:
+        """The traceback of the exception, without seamtrack's own frames unless asked."""
+        import os
+        import traceback
+
+        if self.error is None:
+            return ""
+        package = os.path.dirname(os.path.abspath(__file__)) + os.sep
+        frames = [
+            f
+            for f in traceback.extract_tb(self.error.__traceback__)
+            if all_frames or not os.path.abspath(f.filename).startswith(package)
+        ]
+        return "".join(traceback.format_list(frames))
+
+
+def plugin_failed(
+    field: str, name: str, method: str, t_s: float, error: BaseException
+) -> PluginRuntimeError:
+    """The error for ``error`` raised inside a plugin's ``method`` at simulated time ``t_s``."""
+    return PluginRuntimeError(
+        f"{name!r} {method}() raised at t = {t_s:.6g} s: {type(error).__name__}: {error}",
+        field=field,
+        fix="fix the plugin (its own frames follow; --debug shows seamtrack's too)",
+        error=error,
+    )

@@ -21,7 +21,7 @@ ROOT = Path(seamtrack.__file__).parent
 
 #: The pipeline, bottom first: a module may import its own stage and the stages below it.
 STAGES = [
-    ("base", {"seamtrack.errors", "seamtrack.constants", "seamtrack._version"}),
+    ("base", {"seamtrack.errors", "seamtrack.constants", "seamtrack._version", "seamtrack.params"}),
     ("geometry", {"seamtrack.geometry"}),
     ("workpiece", {"seamtrack.workpiece", "seamtrack.cad"}),
     ("sensing", {"seamtrack.sensing"}),

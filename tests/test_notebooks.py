@@ -9,7 +9,6 @@ notebooks/*.ipynb``.
 from __future__ import annotations
 
 import os
-import time
 from pathlib import Path
 
 import nbclient  # dev dependencies: a missing one must fail the suite, not skip it
@@ -58,9 +57,7 @@ def test_notebook_runs_headless(
         kernel_name="python3",
         resources={"metadata": {"path": str(tmp_path)}},
     )
-    start = time.perf_counter()
     client.execute()  # raises CellExecutionError with the failing cell and traceback
-    elapsed = time.perf_counter() - start
     errors = [
         out
         for cell in book.cells
@@ -69,5 +66,4 @@ def test_notebook_runs_headless(
         if out.output_type == "error"
     ]
     assert not errors
-    assert elapsed < 120, f"{path.name} took {elapsed:.0f} s; keep notebooks under a minute"
     assert os.environ["PYVISTA_OFF_SCREEN"] == "true"

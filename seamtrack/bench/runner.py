@@ -237,6 +237,12 @@ def _bench_tradeoff(out: Path, quick: bool) -> Any:
     return bench_tradeoff(out, quick=quick)
 
 
+def _bench_scaling(out: Path, quick: bool) -> Any:
+    from seamtrack.bench.scaling import bench_scaling
+
+    return bench_scaling(out, quick=quick)
+
+
 BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "raycast": lambda out, quick: bench_raycast(out, quick=quick),
     "extractors": _bench_extractors,
@@ -244,6 +250,7 @@ BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "loop": lambda out, quick: bench_loop(out, quick=quick),
     "tradeoff": _bench_tradeoff,
     "sweep": lambda out, quick: bench_sweep(out, quick=quick),
+    "scaling": _bench_scaling,
 }
 
 

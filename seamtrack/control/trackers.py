@@ -12,6 +12,7 @@ from numpy.typing import NDArray
 
 from seamtrack.control.tracking import Command, Measurement, TrackerContext
 from seamtrack.errors import PluginError
+from seamtrack.params import NonNegative, Positive
 
 FloatArray = NDArray[np.float64]
 
@@ -68,9 +69,9 @@ class PointToPoint:
 
     def __init__(
         self,
-        tolerance_mm: float | None = None,
+        tolerance_mm: Positive | None = None,
         decelerate: bool = False,
-        min_spacing_mm: float = 0.05,
+        min_spacing_mm: NonNegative = 0.05,
     ):
         self.tolerance_mm = tolerance_mm
         self.decelerate = decelerate
@@ -128,7 +129,7 @@ class ConvergenceRadius:
 
     name = "convergence-radius"
 
-    def __init__(self, radius_mm: float = 1.0, min_spacing_mm: float = 0.05):
+    def __init__(self, radius_mm: Positive = 1.0, min_spacing_mm: NonNegative = 0.05):
         if not radius_mm > 0:
             raise PluginError(
                 f"radius must be > 0, got {radius_mm}",

@@ -24,6 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.control.tracking import Command, Measurement, TrackerContext
+from seamtrack.params import Fraction, NonNegative, Positive
 
 FloatArray = NDArray[np.float64]
 
@@ -96,18 +97,18 @@ class TrajectoryTracker:
 
     def __init__(
         self,
-        buffer_mm: float = 100.0,
-        smoothing_mm: float = 1.0,
-        min_spacing_mm: float = 0.05,
-        gain_1_s: float = 20.0,
-        bridge_mm: float = 10.0,
-        end_margin_mm: float = 0.0,
+        buffer_mm: Positive = 100.0,
+        smoothing_mm: NonNegative = 1.0,
+        min_spacing_mm: NonNegative = 0.05,
+        gain_1_s: Positive = 20.0,
+        bridge_mm: NonNegative = 10.0,
+        end_margin_mm: NonNegative = 0.0,
         use_capture_pose: bool = True,
-        max_jump_mm: float = 0.5,
-        reacquire_mm: float = 2.0,
-        corner_accel_fraction: float = 0.5,
-        curvature_window_mm: float = 3.0,
-        direction_fit_mm: float = 5.0,
+        max_jump_mm: Positive = 0.5,
+        reacquire_mm: NonNegative = 2.0,
+        corner_accel_fraction: Fraction = 0.5,
+        curvature_window_mm: Positive = 3.0,
+        direction_fit_mm: Positive = 5.0,
     ):
         self.buffer_mm = buffer_mm
         self.smoothing_mm = smoothing_mm

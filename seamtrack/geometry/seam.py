@@ -22,6 +22,9 @@ from seamtrack.errors import SeamError
 FloatArray = NDArray[np.float64]
 
 #: Segments tested exactly per query point before the exactness check (see :meth:`Seam.closest`).
+#: Query points per block of :meth:`Seam.closest` (its temporaries grow with the block).
+_QUERY_BLOCK = 32_768
+
 _CANDIDATE_SEGMENTS = 16
 
 
@@ -194,10 +197,22 @@ class Seam:
                 fix="give the path of a CSV seam file (relative to the scene file)",
             )
         rows: list[list[str]] = []
-        with path.open(newline="") as handle:
-            for row in csv.reader(line for line in handle if not line.lstrip().startswith("#")):
-                if row and any(cell.strip() for cell in row):
-                    rows.append([cell.strip() for cell in row])
+        try:
+            with path.open(newline="", encoding="utf-8") as handle:
+                lines = (line for line in handle if not line.lstrip().startswith("#"))
+                for row in csv.reader(lines):
+                    if row and any(cell.strip() for cell in row):
+                        rows.append([cell.strip() for cell in row])
+                    if len(rows) > constants.MAX_SEAM_POINTS + 1:
+                        raise SeamError(
+                            f"{path.name}: more than {constants.MAX_SEAM_POINTS:.0e} points",
+                            field=field,
+                            fix="thin the seam out (a point every 0.01 mm is plenty)",
+                        )
+        except UnicodeDecodeError:
+            raise SeamError(
+                f"{path.name} is not a text file", field=field, fix="give a CSV text file"
+            ) from None
         if rows and not _is_number(rows[0][0]):
             rows = rows[1:]
         try:
@@ -303,6 +318,14 @@ class Seam:
         q = np.asarray(query_points, dtype=np.float64)
         single = q.ndim == 1
         q = np.atleast_2d(q)
+        if len(q) > _QUERY_BLOCK:  # bounded temporaries: (block, candidates, 3) at a time
+            parts = [self.closest(q[i : i + _QUERY_BLOCK]) for i in range(0, len(q), _QUERY_BLOCK)]
+            return Closest(
+                points=np.concatenate([c.points for c in parts]),
+                arc_length_mm=np.concatenate([c.arc_length_mm for c in parts]),
+                distance_mm=np.concatenate([c.distance_mm for c in parts]),
+                segment=np.concatenate([c.segment for c in parts]),
+            )
         a = self.points[:-1]
         d = self.points[1:] - a
         n_seg = len(a)

@@ -19,14 +19,16 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 import numpy as np
+from annotated_types import Gt, Le
 from numpy.typing import ArrayLike, NDArray
 
 from seamtrack import constants
 from seamtrack.geometry.frames import invert
 from seamtrack.geometry.seam import Seam
+from seamtrack.params import Fraction, NonNegative
 from seamtrack.sensing.profiles import Feature, Profile, Reason, laser_to_world
 
 if TYPE_CHECKING:  # annotations only: the sensor module imports this one
@@ -167,12 +169,12 @@ class StripeNoise:
         random x_c on the chip at the same lateral column z_c.
     """
 
-    range_sigma_mm: float = 0.0
-    speckle_sigma_mm: float = 0.0
-    speckle_correlation_rays: float = 8.0
-    dropout_rate: float = 0.0
-    secondary_probability: float = 0.0
-    outlier_fraction: float = 0.0
+    range_sigma_mm: NonNegative = 0.0
+    speckle_sigma_mm: NonNegative = 0.0
+    speckle_correlation_rays: Annotated[float, Gt(0), Le(1e4)] = 8.0
+    dropout_rate: Fraction = 0.0
+    secondary_probability: Fraction = 0.0
+    outlier_fraction: Fraction = 0.0
 
     def __post_init__(self) -> None:
         for key in ("range_sigma_mm", "speckle_sigma_mm"):

@@ -18,13 +18,13 @@ from numpy.typing import NDArray
 from seamtrack.control.registry import tracker, tracker_parameters
 from seamtrack.control.robot import CartesianRobot
 from seamtrack.control.tracking import Tracker
-from seamtrack.errors import SceneError
+from seamtrack.errors import PluginRuntimeError, SceneError, plugin_failed
 from seamtrack.geometry import frames
 from seamtrack.geometry.seam import Seam
 from seamtrack.sensing.profiles import Feature, Profile, laser_to_world
 from seamtrack.sensing.scan import SeamNoise, sense_seam
 from seamtrack.sensing.sensor import LaserLineSensor
-from seamtrack.simulation.scene import Scene, make_sensor
+from seamtrack.simulation.scene import Scene, check_ticks, default_time_limit_s, make_sensor
 
 FloatArray = NDArray[np.float64]
 SenseFn = Callable[[FloatArray, float], Feature]
@@ -61,6 +61,7 @@ class Parts:
     scan: ScanFn | None = None  # mesh mode: the stripe profile and the feature found in it
     sensor: LaserLineSensor | None = None
     mesh: Any = None  # mesh mode: the ray-cast scene (workpiece and obstacles, world frame)
+    tracker_name: str = "tracker"  # as the scene names it, for errors raised in its code
 
 
 def make_seam(scene: Scene) -> Seam:
@@ -151,7 +152,8 @@ def _mesh_scan(
         mesh = trimesh.util.concatenate([mesh, *boxes])  # type: ignore[assignment]
     caster = RayCaster.from_mesh(mesh)
     seam = part.seam.transformed(T_world_part)
-    find = extractor(scene.config.extractor.name, **scene.config.extractor.params)
+    extractor_name = scene.config.extractor.name
+    find = extractor(extractor_name, **scene.config.extractor.params)
     offset = np.asarray(scene.config.extractor.offset_mm, dtype=float)
     s = scene.config.sensor
     noise = _stripe_noise(s.stripe_noise)
@@ -167,7 +169,26 @@ def _mesh_scan(
             rng=rng,
             t_s=t_s,
         )
-        feature = find(profile)
+        try:
+            feature = find(profile)
+        except Exception as exc:  # the user's extractor may fail in any way
+            raise plugin_failed("extractor.name", extractor_name, "__call__", t_s, exc) from exc
+        if not isinstance(feature, Feature):
+            raise PluginRuntimeError(
+                f"{extractor_name!r} returned {type(feature).__name__} at t = {t_s:.6g} s; "
+                "expected a Feature",
+                field="extractor.name",
+                fix="return seamtrack.Feature(...) (falsy with a reason when nothing is found)",
+            )
+        if feature and not (
+            np.isfinite(feature.point_laser).all() and len(feature.point_laser) == 2
+        ):
+            raise PluginRuntimeError(
+                f"{extractor_name!r} returned the seam point {feature.point_laser.tolist()} at "
+                f"t = {t_s:.6g} s",
+                field="extractor.name",
+                fix="return a finite (y_L, z_L) point, or a falsy Feature with a reason",
+            )
         if feature and offset.any():
             # The torch target relative to the feature (a TCP calibration): e.g. the root of a
             # square butt joint, a plate thickness below the gap the stripe shows.
@@ -224,6 +245,7 @@ def build_parts(scene: Scene, rng: np.random.Generator | None = None) -> Parts:
     robot.require_reachable(seam.points, "seam", field="seam")
     start = seam.points[0] + np.asarray(c.robot.start_offset_mm)
     robot.require_reachable(start, "start", field="robot.start_offset_mm")
+    check_ticks(c, seam.length_mm)
     frame_period = 1.0 / c.sensor.frame_rate_hz
     v = c.simulation.welding_speed_mm_s
     settings = LoopSettings(
@@ -239,7 +261,7 @@ def build_parts(scene: Scene, rng: np.random.Generator | None = None) -> Parts:
         time_limit_s=(
             c.simulation.time_limit_s
             if c.simulation.time_limit_s is not None
-            else 3.0 * seam.length_mm / v + 60.0
+            else default_time_limit_s(seam.length_mm, v)
         ),
         wall_time_limit_s=c.simulation.wall_time_limit_s,
         seed=c.simulation.seed,
@@ -249,6 +271,7 @@ def build_parts(scene: Scene, rng: np.random.Generator | None = None) -> Parts:
         seam=seam,
         robot=robot,
         tracker=make_tracker(scene),
+        tracker_name=c.tracker.name,
         sense=sense,
         tcp_start_world=start,
         settings=settings,

@@ -24,6 +24,7 @@ import math
 import time
 from array import array
 from collections import deque
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -33,6 +34,7 @@ from numpy.typing import NDArray
 from seamtrack import constants
 from seamtrack.control.robot import CartesianRobot, MoveCommand
 from seamtrack.control.tracking import Command, Measurement, TrackerContext
+from seamtrack.errors import PluginRuntimeError, plugin_failed
 from seamtrack.geometry.seam import Seam
 from seamtrack.simulation.assemble import LoopSettings, Parts, build_parts
 from seamtrack.simulation.scene import Scene, load_scene
@@ -41,6 +43,47 @@ FloatArray = NDArray[np.float64]
 
 #: How often (in simulated seconds) progress along the seam is checked.
 _CHECK_PERIOD_S = 0.01
+
+#: The wall-clock guard reads the clock every this many control ticks (a tick takes
+#: microseconds, a mesh-mode frame milliseconds: the guard holds to well within a second).
+WALL_CHECK_TICKS = 64
+
+
+def _checked(cmd: Any, name: str, t_s: float) -> Command:
+    """A tracker's command, refused with a clear error when it is not a usable move."""
+
+    def refuse(what: str, fix: str) -> PluginRuntimeError:
+        return PluginRuntimeError(
+            f"{name!r} command() returned {what} at t = {t_s:.6g} s", field="tracker.name", fix=fix
+        )
+
+    if not isinstance(cmd, Command):
+        raise refuse(type(cmd).__name__ + "; expected Command or None", "return Command(...)")
+    target = np.asarray(cmd.target_world, dtype=float) if _numeric(cmd.target_world) else None
+    if target is None or target.shape != (3,) or not np.isfinite(target).all():
+        raise refuse(
+            f"the target {cmd.target_world!r}",
+            "give target_world as a finite (x, y, z) point in mm",
+        )
+    speed = cmd.speed_mm_s
+    if isinstance(speed, bool) or not isinstance(speed, int | float) or not speed > 0:
+        raise refuse(f"the speed {speed!r}", "give a finite speed > 0 mm/s (return None to stop)")
+    if not math.isfinite(speed):
+        raise refuse(f"the speed {speed!r}", "give a finite speed > 0 mm/s")
+    ff = cmd.velocity_ff_world
+    if ff is not None:
+        ff_arr = np.asarray(ff, dtype=float) if _numeric(ff) else None
+        if ff_arr is None or ff_arr.shape != (3,) or not np.isfinite(ff_arr).all():
+            raise refuse(f"the feed-forward {ff!r}", "give a finite (vx, vy, vz) in mm/s or None")
+    return cmd
+
+
+def _numeric(value: Any) -> bool:
+    try:
+        np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        return False
+    return True
 
 
 @dataclass(frozen=True, eq=False)
@@ -111,14 +154,31 @@ def simulate(scene: Any, progress: bool = False) -> Result:
     return run(build_parts(scene), progress=progress, seed=scene.config.simulation.seed)
 
 
-def run(parts: Parts, progress: bool = False, seed: int | None = None) -> Result:
-    """The loop, then the metrics."""
+def run(
+    parts: Parts,
+    progress: bool = False,
+    seed: int | None = None,
+    clock: Callable[[], float] = time.perf_counter,
+) -> Result:
+    """The loop, then the metrics.
+
+    ``clock`` (seconds) drives the wall-clock guard; it is read every
+    :data:`WALL_CHECK_TICKS` ticks whatever the control period, so the guard stops a run
+    within about that many ticks of its limit.
+
+    Raises
+    ------
+    PluginRuntimeError
+        The tracker raised, or returned what is not a usable :class:`Command`.
+    """
     cfg = parts.settings
     robot = parts.robot
     seam = parts.seam
     dt = robot.control_period_s
     rng = np.random.default_rng(cfg.seed if seed is None else seed)
-    wall_start = time.perf_counter()
+    wall_start = clock()
+    tracker = parts.tracker
+    name = parts.tracker_name
 
     R = robot.T_world_base[:3, :3]
     p0 = robot.T_world_base[:3, 3]
@@ -135,7 +195,10 @@ def run(parts: Parts, progress: bool = False, seed: int | None = None) -> Result
         acceleration_max_world=np.abs(R @ np.array(robot.acceleration_max_mm_s2)),
         rng=rng,
     )
-    parts.tracker.reset(context)
+    try:
+        tracker.reset(context)
+    except Exception as exc:  # the user's tracker may fail in any way
+        raise plugin_failed("tracker.name", name, "reset", 0.0, exc) from exc
 
     tcp_log = array("d")
     target_log = array("d")
@@ -158,6 +221,7 @@ def run(parts: Parts, progress: bool = False, seed: int | None = None) -> Result
     check_t = array("d")
     check_s = array("d")
     status = ""
+    stop_reason = ""
     bar = _progress_bar(progress, cfg.time_limit_s, seam.length_mm)
 
     sense_time = 0.0
@@ -178,9 +242,9 @@ def run(parts: Parts, progress: bool = False, seed: int | None = None) -> Result
         if t + 1e-9 >= next_capture:
             next_capture += cfg.frame_period_s
             T_ws = robot.T_world_sensor(q)
-            sense_start = time.perf_counter()
+            sense_start = clock()
             feature = parts.sense(T_ws, t)
-            sense_time += time.perf_counter() - sense_start
+            sense_time += clock() - sense_start
             pending.append(Measurement(feature, t, t + cfg.latency_s, T_ws, tcp))
             frame_t.append(t)
             frame_found.append(1 if feature else 0)
@@ -188,11 +252,17 @@ def run(parts: Parts, progress: bool = False, seed: int | None = None) -> Result
         while pending and pending[0].t_arrival_s <= t + 1e-9:
             measurement = pending.popleft()
             last_seen = bool(measurement)
-            parts.tracker.update(measurement)
-        cmd = parts.tracker.command(t, tcp, vel)
+            try:
+                tracker.update(measurement)
+            except Exception as exc:
+                raise plugin_failed("tracker.name", name, "update", t, exc) from exc
+        try:
+            cmd = tracker.command(t, tcp, vel)
+        except Exception as exc:
+            raise plugin_failed("tracker.name", name, "command", t, exc) from exc
         if cmd is not last_cmd:
             last_cmd = cmd
-            move = None if cmd is None else _to_move(robot, cmd)
+            move = None if cmd is None else _to_move(robot, _checked(cmd, name, t))
             if move is not None and not robot.within_travel(move.target):
                 status = "limit_violation"
         tcp_log.extend(tcp_list)
@@ -200,6 +270,9 @@ def run(parts: Parts, progress: bool = False, seed: int | None = None) -> Result
         if status:
             break
         robot.step(state, move)
+        if not tick % WALL_CHECK_TICKS and clock() - wall_start > cfg.wall_time_limit_s:
+            status, stop_reason = "stalled", f"wall-clock limit {cfg.wall_time_limit_s:g} s"
+            break
 
         if tick % check_every == 0:
             at_rest = math.sqrt(sum(v * v for v in state.v)) <= constants.AT_REST_SPEED_MM_S
@@ -217,22 +290,20 @@ def run(parts: Parts, progress: bool = False, seed: int | None = None) -> Result
                 )
                 break
             if t - t_progress >= cfg.stall_time_s:
-                status = "stalled"
-                break
-            if time.perf_counter() - wall_start > cfg.wall_time_limit_s:
-                status = "stalled"
+                status, stop_reason = "stalled", f"no progress for {cfg.stall_time_s:g} s"
                 break
             if bar is not None and tick % (check_every * 100) == 0:
                 bar.update(t - bar.n)
     if bar is not None:
         bar.close()
     if not status:
-        status = "stalled"
+        status, stop_reason = "stalled", f"time limit {cfg.time_limit_s:g} s"
 
     trace = _trace(
         seam, dt, tcp_log, target_log, frame_t, frame_found, frame_points, (check_t, check_s)
     )
-    summary = _summary(trace, seam, status, cfg, time.perf_counter() - wall_start)
+    summary = _summary(trace, seam, status, cfg, clock() - wall_start)
+    summary["stop_reason"] = stop_reason
     summary["sense_wall_time_s"] = sense_time
     return Result(summary=summary, trace=trace)
 
