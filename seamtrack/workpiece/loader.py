@@ -528,7 +528,7 @@ def load_workpiece(
             "vertices": np.asarray(mesh.vertices),
             "faces": np.asarray(mesh.faces),
             "points": seam_obj.points,
-            "normals": seam_obj.normals,
+            "normals": torch,  # the input of Seam.from_points, so a hit rebuilds the same seam
             "face_normals": face_normals,
         }
         try:
