@@ -18,6 +18,7 @@ import numpy as np
 import pytest
 
 from seamtrack.batch.sweep import markdown_table, run_sweep, summarize
+from seamtrack.errors import SeamtrackError
 
 SCENE = "paper-corner"
 #: paper-corner shortened to a 20 mm leg and a 14 mm leg after the 45 deg turn (~0.3 s a run).
@@ -215,13 +216,39 @@ def test_failing_cases_are_recorded_and_the_sweep_goes_on(
     assert "summary" in rows[0] and "summary" in rows[2]
     assert "RuntimeError: tracker blew up" in rows[1]["error"]
 
-    radii = [1.0, -1.0, 0.5]
-    rows = run_sweep(SCENE, "tracker.radius_mm", radii, overrides=SHORT_CORNER)
-    assert "summary" in rows[0] and "summary" in rows[2]
-    assert "tracker.radius_mm" in rows[1]["error"]
+    assert "update() raised" in rows[1]["error"] and "bad_trackers:Explodes" in rows[1]["error"]
     table = summarize(rows)
     assert table[1]["failed"] == 1 and "error" in table[1]
-    assert "error: " in markdown_table(table, "tracker.radius_mm")
+    assert "error: " in markdown_table(table, "tracker.name")
+
+
+def test_an_invalid_value_refuses_the_sweep_before_anything_runs_or_is_written(
+    tmp_path: Path,
+) -> None:
+    """A negative radius among the values is a user error: refused up front, naming the
+    field, and no output folder is left behind."""
+    with pytest.raises(SeamtrackError) as info:
+        run_sweep(
+            SCENE,
+            "tracker.radius_mm",
+            [1.0, -1.0, 0.5],
+            overrides=SHORT_CORNER,
+            out_dir=tmp_path / "never",
+        )
+    assert "tracker.radius_mm" in str(info.value)
+    assert not (tmp_path / "never").exists()
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "field"),
+    [({"workers": 0}, "--workers"), ({"seeds": [-1]}, "--seeds"), ({"values": []}, "--values")],
+)
+def test_meaningless_sweep_settings_are_refused(kwargs: dict[str, Any], field: str) -> None:
+    settings: dict[str, Any] = {"values": [1.0], **kwargs}
+    values = settings.pop("values")
+    with pytest.raises(SeamtrackError) as info:
+        run_sweep(SCENE, "tracker.radius_mm", values, overrides=SHORT_CORNER, **settings)
+    assert info.value.field == field
 
 
 def test_monte_carlo_over_seeds_reports_95_percent_confidence_intervals() -> None:
@@ -247,3 +274,55 @@ def test_monte_carlo_over_seeds_reports_95_percent_confidence_intervals() -> Non
         )
         assert all(entry[f"{k}_ci95"] >= 0 for k in ("rms_error_mm", "mean_speed_mm_s"))
     assert "±" in markdown_table(table, "tracker.radius_mm")
+
+
+def _children(pid: int) -> list[int]:
+    """Processes whose parent is ``pid`` (Linux /proc)."""
+    found = []
+    for stat in Path("/proc").glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        if int(fields[1]) == pid:
+            found.append(int(stat.parent.name))
+    return found
+
+
+def _alive(pid: int) -> bool:
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except OSError:
+        return False
+    return state != "Z"
+
+
+@pytest.mark.skipif(not Path("/proc/self/stat").exists(), reason="needs Linux /proc")
+def test_sigkilled_sweep_takes_its_workers_with_it(tmp_path: Path) -> None:
+    """SIGKILL runs no clean-up in the parent; the workers end themselves (PR_SET_PDEATHSIG,
+    and a watcher thread) instead of living on as orphans holding the terminal's pipe."""
+    out = tmp_path / "sweep"
+    radii = [6.0, 5.0, 4.0, 3.0, 2.0, 1.0, 0.8, 0.5, 0.3, 0.2, 0.1, 0.05] * 4
+    args = [
+        sys.executable, "-m", "seamtrack.cli", "sweep", SCENE,
+        "--param", "simulation.seed", "--values", ",".join(str(i) for i in range(len(radii))),
+        "--set", f"seam.points_mm={SHORT_CORNER['seam.points_mm']}",
+        "--workers", "2", "--out", str(out), "-q",
+    ]  # fmt: skip
+    parent = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    workers: list[int] = []
+    try:
+        deadline = time.monotonic() + 120.0
+        while time.monotonic() < deadline and parent.poll() is None:
+            workers = _children(parent.pid)
+            if len(workers) >= 2 and (out / "results.jsonl").exists():
+                break
+            time.sleep(0.05)
+        assert parent.poll() is None and len(workers) >= 2, "the workers never started"
+        parent.kill()
+    finally:
+        parent.wait(timeout=30)
+    deadline = time.monotonic() + 60.0  # generous: this bounds a wait, it times nothing
+    while time.monotonic() < deadline and any(_alive(w) for w in workers):
+        time.sleep(0.1)
+    assert not [w for w in workers if _alive(w)]

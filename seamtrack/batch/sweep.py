@@ -9,18 +9,21 @@ on; a rerun tries the failed cases again.
 
 from __future__ import annotations
 
+import csv
 import json
 import math
 from collections.abc import Iterable, Sequence
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from contextlib import nullcontext
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from seamtrack import constants
 from seamtrack.errors import SeamtrackError
-from seamtrack.io.output import json_safe, prepare_dir
+from seamtrack.io.output import check_writable, json_safe, new_dir, prepare_dir
 from seamtrack.simulation.scene import load_scene, parse_override
 
 #: How long to wait for a Dask scheduler to answer before refusing the sweep, s.
@@ -127,13 +130,14 @@ def run_sweep(
     ``out_dir`` enables streaming to ``results.jsonl`` and resuming.
     """
     overrides = dict(overrides or {})
-    load_scene(scene, {**overrides, param: values[0]})  # fail fast on a bad scene or key
     seed_list: list[int | None] = list(seeds) if seeds else [None]
+    _check_sweep(scene, param, values, overrides, seed_list, workers)
     cases = [Case(param, v, s) for v in values for s in seed_list]
     results_path = None
     done: dict[str, dict[str, Any]] = {}
     if out_dir is not None:
-        results_path = prepare_dir(out_dir) / "results.jsonl"
+        check_writable(out_dir)
+        results_path = Path(out_dir) / "results.jsonl"
         done = _done(results_path)
     todo = [c for c in cases if c.key not in done]
     bar = None
@@ -141,16 +145,52 @@ def run_sweep(
         from tqdm import tqdm
 
         bar = tqdm(total=len(todo), desc="sweep", unit="case", leave=False)
-    for row in _execute(scene, todo, overrides, workers, scheduler):
-        done[row["case"]] = row
-        if results_path is not None:
-            with results_path.open("a") as handle:
-                handle.write(json.dumps(row) + "\n")
-        if bar is not None:
-            bar.update(1)
+    with new_dir(out_dir) if out_dir is not None else nullcontext():
+        for row in _execute(scene, todo, overrides, workers, scheduler):
+            done[row["case"]] = row
+            if results_path is not None:
+                with results_path.open("a") as handle:
+                    handle.write(json.dumps(row) + "\n")
+            if bar is not None:
+                bar.update(1)
     if bar is not None:
         bar.close()
     return [done[c.key] for c in cases]
+
+
+#: A sweep of up to this many values checks every one before running; a longer one its
+#: first and last (each check loads the scene).
+_CHECK_ALL_VALUES = 200
+
+
+def _check_sweep(
+    scene: str,
+    param: str,
+    values: Sequence[Any],
+    overrides: dict[str, Any],
+    seeds: Sequence[int | None],
+    workers: int,
+) -> None:
+    """Refuse a sweep that cannot run, before any case runs or any file is written."""
+    if not values:
+        raise SeamtrackError("no values given", field="--values", fix="e.g. --values 6,5,1")
+    if isinstance(workers, bool) or not isinstance(workers, int) or workers < 1:
+        raise SeamtrackError(
+            f"{workers!r} workers", field="--workers", fix="give a whole number >= 1"
+        )
+    bad_seed = next((s for s in seeds if s is not None and (s < 0 or s >= 2**63)), None)
+    if bad_seed is not None:
+        raise SeamtrackError(f"seed {bad_seed}", field="--seeds", fix="give seeds >= 0")
+    if len(values) * len(seeds) > constants.MAX_SWEEP_CASES:
+        raise SeamtrackError(
+            f"{len(values)} values x {len(seeds)} seeds is {len(values) * len(seeds)} cases, "
+            f"more than {constants.MAX_SWEEP_CASES}",
+            field="--values",
+            fix="split the sweep into several",
+        )
+    check = values if len(values) <= _CHECK_ALL_VALUES else [values[0], values[-1]]
+    for value in check:  # a bad scene, key or value fails here, with its field
+        load_scene(scene, {**overrides, param: value})
 
 
 def _execute(
@@ -162,7 +202,7 @@ def _execute(
         for case in cases:
             yield run_case(scene, case, overrides)
     else:
-        with ProcessPoolExecutor(max_workers=workers) as pool:
+        with ProcessPoolExecutor(max_workers=workers, initializer=die_with_parent) as pool:
             pending: set[Future[dict[str, Any]]] = {
                 pool.submit(run_case, scene, case, overrides) for case in cases
             }
@@ -170,6 +210,36 @@ def _execute(
                 finished, pending = wait(pending, return_when=FIRST_COMPLETED)
                 for future in finished:
                     yield future.result()
+
+
+def die_with_parent() -> None:
+    """Worker initializer: end this process when the sweep that started it dies, even by
+    SIGKILL (which runs no clean-up), so no orphan keeps computing or holds the terminal.
+
+    Linux: the kernel sends SIGKILL on the parent's death (``PR_SET_PDEATHSIG``). Elsewhere,
+    and as a second line, a daemon thread watches the parent's pid.
+    """
+    import ctypes
+    import os
+    import signal
+    import threading
+    import time
+
+    parent = os.getppid()
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG = 1
+    except (OSError, AttributeError):
+        pass
+    if os.getppid() != parent:  # the parent died before prctl took effect
+        os._exit(1)
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(0.5)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="die-with-parent", daemon=True).start()
 
 
 def _execute_dask(
@@ -231,6 +301,8 @@ def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
 
 def _label(value: Any) -> str:
     """A table cell for a swept value (a replaced table shows its ``name``)."""
+    if isinstance(value, str):
+        return value
     if isinstance(value, dict) and "name" in value:
         return str(value["name"])
     return json.dumps(value)
@@ -241,7 +313,7 @@ def markdown_table(table: Sequence[dict[str, Any]], param: str) -> str:
     header = [param, *TABLE_KEYS]
     lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
     for row in table:
-        cells = [_label(row["value"])]
+        cells = [row.get("label") or _label(row["value"])]
         if "error" in row:
             cells += [f"error: {row['error']}"] + [""] * (len(TABLE_KEYS) - 1)
         else:
@@ -255,12 +327,39 @@ def markdown_table(table: Sequence[dict[str, Any]], param: str) -> str:
     return "\n".join(lines) + "\n"
 
 
-def write_sweep(
-    table: Sequence[dict[str, Any]], param: str, out_dir: str | Path, plot: bool = True
+def write_csv(
+    rows: Sequence[dict[str, Any]], param: str, path: Path, labels: dict[str, str] | None = None
 ) -> None:
-    """sweep.md, sweep.json and sweep.png beside results.jsonl."""
+    """One line per case (value and seed): the swept key, the seed, the error if the case
+    failed, and every summary key, so ``pandas.read_csv(path)`` is the whole sweep."""
+    keys: list[str] = []
+    for row in rows:
+        keys += [k for k in row.get("summary", {}) if k not in keys]
+    with path.open("w", newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow([param, "seed", "error", *keys])
+        for row in rows:
+            summary = row.get("summary", {})
+            value = (labels or {}).get(json.dumps(row["value"])) or _label(row["value"])
+            seed = "" if row.get("seed") is None else row["seed"]
+            cells = ["" if summary.get(k) is None else summary[k] for k in keys]
+            writer.writerow([value, seed, row.get("error", ""), *cells])
+
+
+def write_sweep(
+    table: Sequence[dict[str, Any]],
+    param: str,
+    out_dir: str | Path,
+    plot: bool = True,
+    rows: Sequence[dict[str, Any]] | None = None,
+) -> None:
+    """sweep.md, sweep.json, sweep.csv (with ``rows``, one line per case) and sweep.png beside
+    results.jsonl."""
     out = prepare_dir(out_dir)
     (out / "sweep.md").write_text(markdown_table(table, param))
+    if rows is not None:
+        labels = {json.dumps(r["value"]): r["label"] for r in table if r.get("label")}
+        write_csv(rows, param, out / "sweep.csv", labels)
     (out / "sweep.json").write_text(json.dumps(json_safe(list(table)), indent=2) + "\n")
     if plot:
         from seamtrack.viz.plots import plot_sweep

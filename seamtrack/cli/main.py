@@ -14,9 +14,12 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
-from seamtrack.errors import OutputError, SceneError, SeamtrackError
+from seamtrack._version import __version__
+from seamtrack.errors import OutputError, PluginRuntimeError, SceneError, SeamtrackError
 
 EXIT_USAGE = 2
+SCENE_HELP = "built-in scene name (seamtrack init --list) or a .toml file"
+QUIET_HELP = "print nothing but errors"
 
 
 # --------------------------------------------------------------------------- formatting
@@ -57,7 +60,7 @@ def _progress_wanted(args: argparse.Namespace) -> bool:
 
 # --------------------------------------------------------------------------- commands
 def cmd_run(args: argparse.Namespace) -> int:
-    from seamtrack.io.output import prepare_dir, write_run
+    from seamtrack.io.output import check_writable, write_run
     from seamtrack.simulation.assemble import build_parts
     from seamtrack.simulation.loop import run
     from seamtrack.simulation.scene import load_scene
@@ -65,7 +68,7 @@ def cmd_run(args: argparse.Namespace) -> int:
 
     scene = load_scene(args.scene, _overrides(args))
     out = Path(args.out) if args.out else Path("runs") / scene.name
-    prepare_dir(out)  # fail before the run, not after it
+    check_writable(out)  # fail before the run, not after it (and create nothing yet)
     parts = build_parts(scene)
     result = run(parts, progress=_progress_wanted(args))
     write_run(
@@ -106,10 +109,10 @@ def cmd_extractors(args: argparse.Namespace) -> int:
             print(name)
         return 0
     from seamtrack.bench.extractors import bench_extractors
-    from seamtrack.io.output import prepare_dir
+    from seamtrack.io.output import new_dir
 
-    out = prepare_dir(args.out)
-    bench_extractors(out, quick=args.quick, progress=_progress_wanted(args))
+    with new_dir(args.out) as out:
+        bench_extractors(out, quick=args.quick, progress=_progress_wanted(args))
     print((out / "extractors.md").read_text(), end="")
     print(f"wrote {out}/extractors.csv, extractors.md, extractors_error_vs_noise.png")
     return 0
@@ -256,11 +259,9 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     )
 
     values = parse_values(args.values)
-    if not values:
-        raise SceneError("no values given", field="--values", fix="e.g. --values 6,5,1")
-    seeds = None
-    if args.seeds:
-        seeds = list(range(args.seeds))
+    if args.seeds < 0:
+        raise SceneError(f"{args.seeds} seeds", field="--seeds", fix="give 0 (no seeds) or more")
+    seeds = list(range(args.seeds)) if args.seeds else None
     from seamtrack.simulation.scene import parse_override
 
     overrides = dict(parse_override(o) for o in _overrides(args))
@@ -278,8 +279,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     table = summarize(rows)
     print(markdown_table(table, args.param), end="")
     if args.out:
-        write_sweep(table, args.param, args.out)
-        print(f"wrote {args.out}/results.jsonl, sweep.md, sweep.json, sweep.png")
+        write_sweep(table, args.param, args.out, rows=rows)
+        print(f"wrote {args.out}/results.jsonl, sweep.md, sweep.json, sweep.csv, sweep.png")
     return 0
 
 
@@ -308,9 +309,11 @@ def cmd_compare(args: argparse.Namespace) -> int:
         progress=_progress_wanted(args),
     )
     table = summarize(rows)
+    for row, given in zip(table, dict.fromkeys(trackers), strict=False):
+        row["label"] = given  # as the user named it ("I", "my.mod:Class"), not resolved
     print(markdown_table(table, "tracker"), end="")
     if args.out:
-        write_sweep(table, "tracker", args.out, plot=False)
+        write_sweep(table, "tracker", args.out, plot=False, rows=rows)
     return 0
 
 
@@ -318,7 +321,7 @@ def cmd_scan(args: argparse.Namespace) -> int:
     """One stripe profile at arc length S along the seam, with its seam point."""
     import numpy as np
 
-    from seamtrack.io.output import prepare_dir
+    from seamtrack.io.output import check_writable, new_dir
     from seamtrack.simulation.assemble import build_parts
     from seamtrack.simulation.scene import load_scene
 
@@ -334,29 +337,34 @@ def cmd_scan(args: argparse.Namespace) -> int:
     tcp = seam.interpolate([args.at])[0]
     T_world_sensor = parts.robot.T_world_sensor(parts.robot.q_from_world(tcp))
     out = Path(args.out) if args.out else Path(f"scan-{scene.name}-{args.at:g}mm.csv")
-    prepare_dir(out.parent if str(out.parent) else Path("."))
-    if scene.config.sensor.mode == "mesh":
+    folder = out.parent if str(out.parent) else Path(".")
+    check_writable(folder)
+    mesh_mode = scene.config.sensor.mode == "mesh"
+    if mesh_mode:
         from seamtrack.io.profiles import write_profile_csv
         from seamtrack.viz.plots import plot_profile_png
 
         assert parts.scan is not None
         profile, feature = parts.scan(T_world_sensor, 0.0)
-        write_profile_csv(profile, out)
-        plot_profile_png(profile, out.with_suffix(".png"), feature=feature)
-        assert profile.valid is not None  # filled in by Profile itself
-        valid = int(np.count_nonzero(profile.valid))
-        print(f"profile: {len(profile)} rays, {valid} valid points")
     else:
         feature = parts.sense(T_world_sensor, 0.0)
-        point = feature.point_world if feature else np.full(3, np.nan)
-        np.savetxt(
-            out,
-            np.concatenate([feature.point_laser if feature else [np.nan] * 2, point])[None],
-            delimiter=",",
-            comments="",
-            header="y_L_mm,z_L_mm,x_mm,y_mm,z_mm",
-            fmt="%.6f",
-        )
+    with new_dir(folder):
+        if mesh_mode:
+            write_profile_csv(profile, out)
+            plot_profile_png(profile, out.with_suffix(".png"), feature=feature)
+        else:
+            point = feature.point_world if feature else np.full(3, np.nan)
+            np.savetxt(
+                out,
+                np.concatenate([feature.point_laser if feature else [np.nan] * 2, point])[None],
+                delimiter=",",
+                comments="",
+                header="y_L_mm,z_L_mm,x_mm,y_mm,z_mm",
+                fmt="%.6f",
+            )
+    if mesh_mode:
+        assert profile.valid is not None  # filled in by Profile itself
+        print(f"profile: {len(profile)} rays, {int(np.count_nonzero(profile.valid))} valid points")
     if feature:
         true = seam.closest(feature.point_world)
         print(
@@ -388,17 +396,28 @@ def build_parser() -> argparse.ArgumentParser:
     )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
+    parser.add_argument("--version", action="version", version=f"seamtrack {__version__}")
+    parser.add_argument(
+        "--debug",
+        action="store_true",
+        help="on an error in a plugin, show seamtrack's own frames too",
+    )
+
     def add(
-        name: str, fn: Callable[[argparse.Namespace], int], help_: str
+        name: str,
+        fn: Callable[[argparse.Namespace], int],
+        help_: str,
+        scene: bool = True,
     ) -> argparse.ArgumentParser:
         p = sub.add_parser(name, help=help_, description=help_)
         p.set_defaults(fn=fn)
-        p.add_argument(
-            "--set",
-            action="append",
-            metavar="KEY=VALUE",
-            help="override a scene key, e.g. --set tracker.radius_mm=0.5 (repeatable)",
-        )
+        if scene:  # --set only where a scene is read
+            p.add_argument(
+                "--set",
+                action="append",
+                metavar="KEY=VALUE",
+                help="override a scene key, e.g. --set tracker.radius_mm=0.5 (repeatable)",
+            )
         return p
 
     p = add("run", cmd_run, "run a scene and write summary.json, trace.csv, error.png")
@@ -413,7 +432,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--render", action="store_true", help="also write scene.png and run.gif (3D views, PyVista)"
     )
-    p.add_argument("-q", "--quiet", action="store_true")
+    p.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)
 
     p = add("init", cmd_init, "write a complete, commented scene file from a template")
     p.add_argument("template", nargs="?", help="template name (see --list)")
@@ -422,15 +441,15 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--force", action="store_true", help="overwrite an existing file")
 
     p = add("check", cmd_check, "validate a scene and print derived values")
-    p.add_argument("scene")
+    p.add_argument("scene", help=SCENE_HELP)
 
     p = add("sensor", cmd_sensor, "sensor geometry and specs, both ways (Eq. 4-8)")
-    p.add_argument("--preset", default="paper")
-    p.add_argument("--json", action="store_true")
+    p.add_argument("--preset", default="paper", help="sensor preset (see --list; default paper)")
+    p.add_argument("--json", action="store_true", help="print JSON instead of tables")
     p.add_argument("--list", action="store_true", help="list the presets")
 
     p = add("sweep", cmd_sweep, "run a scene over values of one key")
-    p.add_argument("scene")
+    p.add_argument("scene", help=SCENE_HELP)
     p.add_argument("--param", required=True, help="dotted scene key, e.g. tracker.radius_mm")
     p.add_argument("--values", required=True, help="comma-separated values")
     p.add_argument(
@@ -442,22 +461,22 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--workers", type=int, default=1, help="local processes (default 1)")
     p.add_argument("--scheduler", help="Dask scheduler address (tcp://host:port)")
-    p.add_argument("--out", help="folder for results.jsonl (resumable), sweep.md/json/png")
-    p.add_argument("-q", "--quiet", action="store_true")
+    p.add_argument("--out", help="folder for results.jsonl (resumable), sweep.md/json/csv/png")
+    p.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)
 
     p = add("compare", cmd_compare, "compare trackers on one scene")
-    p.add_argument("scene")
+    p.add_argument("scene", help=SCENE_HELP)
     p.add_argument(
         "--trackers",
         default="I,II,trajectory",
         help="comma-separated tracker names (I, II, trajectory, or module:Class)",
     )
-    p.add_argument("--workers", type=int, default=1)
-    p.add_argument("--out")
-    p.add_argument("-q", "--quiet", action="store_true")
+    p.add_argument("--workers", type=int, default=1, help="local processes (default 1)")
+    p.add_argument("--out", help="folder for results.jsonl, sweep.md/json/csv")
+    p.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)
 
     p = add("scan", cmd_scan, "one stripe profile and its seam point at an arc length")
-    p.add_argument("scene")
+    p.add_argument("scene", help=SCENE_HELP)
     p.add_argument(
         "--at",
         type=float,
@@ -472,7 +491,7 @@ def build_parser() -> argparse.ArgumentParser:
         cmd_view,
         "render a scene (part, seam, sensor, laser fan, field of view, stripe) to a PNG",
     )
-    p.add_argument("scene")
+    p.add_argument("scene", help=SCENE_HELP)
     p.add_argument(
         "--at",
         type=float,
@@ -486,21 +505,37 @@ def build_parser() -> argparse.ArgumentParser:
         "extractors",
         cmd_extractors,
         "feature extractors: list them, or score them on synthetic profiles (bench)",
+        scene=False,
     )
-    p.add_argument("action", choices=["bench", "list"])
-    p.add_argument("--out", default="bench-results/extractors")
-    p.add_argument("--quick", action="store_true")
-    p.add_argument("-q", "--quiet", action="store_true")
+    p.add_argument("action", choices=["bench", "list"], help="list them, or run the bench")
+    p.add_argument(
+        "--out",
+        default="bench-results/extractors",
+        help="folder for the bench's CSV, table and plot (default bench-results/extractors)",
+    )
+    p.add_argument("--quick", action="store_true", help="fewer profiles (a smoke run)")
+    p.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)
 
-    p = add("cache", cmd_cache, "the workpiece mesh cache: where it is, or clear it")
-    p.add_argument("action", choices=["dir", "clear"], nargs="?", default="dir")
+    p = add("cache", cmd_cache, "the workpiece mesh cache: where it is, or clear it", scene=False)
+    p.add_argument(
+        "action",
+        choices=["dir", "clear"],
+        nargs="?",
+        default="dir",
+        help="dir: print the folder (default); clear: empty it",
+    )
 
-    p = add("bench", cmd_bench, "benchmarks; results go to a JSON and a markdown table")
+    p = add(
+        "bench",
+        cmd_bench,
+        "benchmarks; results go to a JSON and a markdown table",
+        scene=False,
+    )
     p.add_argument(
         "which",
         nargs="?",
         default="all",
-        help="raycast, extractors, mesh, loop, tradeoff, sweep, or all",
+        help="raycast, extractors, mesh, loop, tradeoff, sweep, scaling, or all",
     )
     p.add_argument("--out", default="bench-results", help="folder for the results")
     p.add_argument("--quick", action="store_true", help="fewer repeats (a smoke run)")
@@ -515,6 +550,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     except SeamtrackError as exc:
         for line in str(exc).splitlines():
             print(f"seamtrack: error: {line}", file=sys.stderr)
+        if isinstance(exc, PluginRuntimeError):
+            print(exc.user_frames(all_frames=args.debug), end="", file=sys.stderr)
         return EXIT_USAGE
     except KeyboardInterrupt:
         print("seamtrack: interrupted", file=sys.stderr)

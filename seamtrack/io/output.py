@@ -40,13 +40,37 @@ TRACE_COLUMNS = (
 )
 
 
-def prepare_dir(path: str | Path, field: str = "--out") -> Path:
-    """Create ``path`` (and parents) and prove it writable, or raise :class:`OutputError`."""
+def check_writable(path: str | Path, field: str = "--out") -> Path:
+    """Prove that the folder ``path`` can be written (or created) without creating anything,
+    or raise :class:`OutputError`: a refused run leaves no empty folder behind."""
     out = Path(path)
+    if out.exists() and not out.is_dir():
+        raise OutputError(
+            f"{str(out)!r} is a file, not a folder", field=field, fix="give a folder path"
+        )
+    existing = out.absolute()
+    while not existing.exists():
+        existing = existing.parent
+    if not existing.is_dir():
+        raise OutputError(
+            f"{str(existing)!r} is a file, so {str(out)!r} cannot be a folder",
+            field=field,
+            fix="give a folder path",
+        )
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise OutputError(
+            f"cannot write to {str(existing)!r}: permission denied",
+            field=field,
+            fix="choose a folder you can write to",
+        )
+    return out
+
+
+def prepare_dir(path: str | Path, field: str = "--out") -> Path:
+    """Create ``path`` (and parents), once there is something to write into it."""
+    out = check_writable(path, field)
     try:
         out.mkdir(parents=True, exist_ok=True)
-        with tempfile.NamedTemporaryFile(dir=out, prefix=".probe-"):
-            pass
     except OSError as exc:
         raise OutputError(
             f"cannot write to {str(out)!r}: {exc.strerror or exc}",
@@ -57,16 +81,38 @@ def prepare_dir(path: str | Path, field: str = "--out") -> Path:
 
 
 @contextmanager
+def new_dir(path: str | Path, field: str = "--out") -> Iterator[Path]:
+    """Create ``path`` for writing; if the block fails and the folder is still empty, remove
+    the folders this call created (an existing folder is left as it was)."""
+    out = check_writable(path, field)
+    created = []
+    probe = out.absolute()
+    while not probe.exists():
+        created.append(probe)
+        probe = probe.parent
+    prepare_dir(out, field)
+    try:
+        yield out
+    except BaseException:
+        for folder in created:  # innermost first
+            try:
+                folder.rmdir()  # only if empty
+            except OSError:
+                break
+        raise
+
+
+@contextmanager
 def staged(out_dir: str | Path) -> Iterator[Path]:
     """Yield a staging folder; on success move its files into ``out_dir``, else delete it."""
-    out = prepare_dir(out_dir)
-    stage = Path(tempfile.mkdtemp(prefix=".partial-", dir=out))
-    try:
-        yield stage
-        for item in sorted(stage.iterdir()):
-            os.replace(item, out / item.name)
-    finally:
-        shutil.rmtree(stage, ignore_errors=True)
+    with new_dir(out_dir) as out:
+        stage = Path(tempfile.mkdtemp(prefix=".partial-", dir=out))
+        try:
+            yield stage
+            for item in sorted(stage.iterdir()):
+                os.replace(item, out / item.name)
+        finally:
+            shutil.rmtree(stage, ignore_errors=True)
 
 
 def json_safe(value: Any) -> Any:

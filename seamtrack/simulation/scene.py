@@ -160,7 +160,27 @@ def scene_text(name_or_path: str | Path) -> tuple[str, Path | None]:
                 field="SCENE",
                 fix="give a .toml path, or a built-in name (seamtrack init --list)",
             )
-        return path.read_text(), path.resolve().parent
+        try:
+            text = path.read_text(encoding="utf-8")
+        except UnicodeDecodeError:
+            raise SceneError(
+                f"{str(path)!r} is not a text file",
+                field="SCENE",
+                fix="give a TOML scene file (seamtrack init -o my.toml writes one)",
+            ) from None
+        except OSError as exc:
+            raise SceneError(
+                f"cannot read {str(path)!r}: {exc.strerror or exc}",
+                field="SCENE",
+                fix="check the path and its permissions",
+            ) from None
+        if _is_toml(text) and not tomllib.loads(text):
+            raise SceneError(
+                f"{str(path)!r} is empty: no section, no key",
+                field="SCENE",
+                fix="start from a complete scene: seamtrack init paper-verification -o my.toml",
+            )
+        return text, path.resolve().parent
     name = str(name_or_path)
     available = builtin_scenes()
     if name not in available:
@@ -172,6 +192,14 @@ def scene_text(name_or_path: str | Path) -> tuple[str, Path | None]:
             fix=f"{hint}built-in scenes: {', '.join(available)}",
         )
     return resources.files("seamtrack.scenes").joinpath(f"{name}.toml").read_text(), None
+
+
+def _is_toml(text: str) -> bool:
+    try:
+        tomllib.loads(text)
+    except tomllib.TOMLDecodeError:
+        return False  # load_scene reports the syntax error with its line
+    return True
 
 
 def parse_override(text: str) -> tuple[str, Any]:
