@@ -26,7 +26,7 @@ from typing import Annotated, Any
 
 from annotated_types import Ge, Gt, Interval
 
-from seamtrack.errors import SceneError
+from seamtrack.errors import SceneError, SeamtrackError
 
 #: Range declarations the built-in plugins use in their signatures.
 Positive = Annotated[float, Gt(0)]
@@ -100,9 +100,14 @@ def _fix(error: dict[str, Any]) -> str:
     return "see the plugin's docstring for its parameters"
 
 
-def check_params(target: Callable[..., Any], params: dict[str, Any], field: str) -> dict[str, Any]:
+def check_params(
+    target: Callable[..., Any],
+    params: dict[str, Any],
+    field: str,
+    error: type[SeamtrackError] = SceneError,
+) -> dict[str, Any]:
     """Check ``params`` against the keyword parameters ``target`` (a class or a function)
-    takes; return them unchanged, or raise :class:`SceneError` naming ``field.KEY``."""
+    takes; return them unchanged, or raise ``error`` naming ``field.KEY``."""
     from pydantic import ConfigDict, ValidationError, create_model
 
     signature, hints = _signature(target)
@@ -119,8 +124,8 @@ def check_params(target: Callable[..., Any], params: dict[str, Any], field: str)
     unknown = [k for k in params if k not in fields]
     if unknown and not accepts_any:
         allowed = ", ".join(fields) or "none"
-        raise SceneError(
-            f"unknown parameter {unknown[0]!r}",
+        raise error(
+            f"takes no parameter {unknown[0]!r}",
             field=f"{field}.{unknown[0]}",
             fix=f"parameters here: {allowed}",
         )
@@ -132,17 +137,17 @@ def check_params(target: Callable[..., Any], params: dict[str, Any], field: str)
     try:
         model(**params)
     except ValidationError as exc:
-        error = exc.errors()[0]
-        loc = ".".join(str(x) for x in error["loc"])
-        raise SceneError(
-            f"{error['msg']} (got {error.get('input')!r})",
+        first = exc.errors()[0]
+        loc = ".".join(str(x) for x in first["loc"])
+        raise error(
+            f"{first['msg']} (got {first.get('input')!r})",
             field=f"{field}.{loc}",
-            fix=_fix(dict(error)),
+            fix=_fix(dict(first)),
         ) from None
     for key in params if accepts_any else ():
         value = params[key]
         if key not in fields and isinstance(value, float) and not math.isfinite(value):
-            raise SceneError(
+            raise error(
                 f"not a finite number (got {value!r})",
                 field=f"{field}.{key}",
                 fix="give a finite number",

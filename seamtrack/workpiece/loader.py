@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import hashlib
 import importlib.util
-import inspect
 import json
 import math
 import os
@@ -39,6 +38,7 @@ from numpy.typing import ArrayLike, NDArray
 from seamtrack._version import __version__
 from seamtrack.errors import WorkpieceError
 from seamtrack.geometry.seam import Seam
+from seamtrack.params import check_params
 
 if TYPE_CHECKING:
     import trimesh
@@ -270,16 +270,7 @@ def _run_script(path: Path, params: dict[str, Any]) -> tuple[Any, Any, dict[str,
             fix="define build(**params) returning the solid and its seam "
             "edges (see cad/v_groove.py)",
         )
-    sig = inspect.signature(build)
-    accepts_any = any(p.kind is p.VAR_KEYWORD for p in sig.parameters.values())
-    known = [n for n, p in sig.parameters.items() if p.kind is not p.VAR_KEYWORD]
-    for name in params:
-        if not accepts_any and name not in known:
-            raise WorkpieceError(
-                f"{path.name} has no parameter {name!r}",
-                field=f"workpiece.params.{name}",
-                fix=f"use one of: {', '.join(known)}",
-            )
+    check_params(build, params, "workpiece.params", WorkpieceError)  # names, types, finite
     try:
         result = build(**params)
     except Exception as exc:
