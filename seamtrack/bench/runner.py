@@ -243,6 +243,12 @@ def _bench_scaling(out: Path, quick: bool) -> Any:
     return bench_scaling(out, quick=quick)
 
 
+def _bench_failures(out: Path, quick: bool) -> Any:
+    from seamtrack.bench.failures import bench_failures
+
+    return bench_failures(out, quick=quick)
+
+
 BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "raycast": lambda out, quick: bench_raycast(out, quick=quick),
     "extractors": _bench_extractors,
@@ -251,6 +257,7 @@ BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "tradeoff": _bench_tradeoff,
     "sweep": lambda out, quick: bench_sweep(out, quick=quick),
     "scaling": _bench_scaling,
+    "failures": _bench_failures,
 }
 
 

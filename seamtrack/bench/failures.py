@@ -1,0 +1,459 @@
+"""The bad-input catalogue: every way a user has broken seamtrack so far, run through the real
+command line, and what each gave back.
+
+Each entry is a ``seamtrack`` command line (with the files it needs: a binary scene, a seam
+with NaN, trackers and extractors that raise or return garbage) and passes when the command
+exits 2 with one ``seamtrack: error:`` line naming a field (and, for an error inside user code,
+the user's own frames after it), prints no Python traceback, leaves no output folder behind,
+and peaks under 2 GB. ``seamtrack bench failures`` runs it all in fresh processes and measures
+memory and time; the test suite runs the quick entries in-process.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from seamtrack.bench.common import machine_info
+
+#: A short paper-verification seam: user-code failures show within a few frames.
+SHORT = ["--set", "seam.length_mm=20"]
+#: paper-v-groove cut to its first 30 mm: a mesh-mode run for the extractor entries.
+MESH = ["paper-v-groove", "--set", "workpiece.params.seam_length_mm=30"]
+
+PLUGINS = """
+import math
+from seamtrack.control.tracking import Command
+
+
+class _Base:
+    def reset(self, context):
+        self.speed = context.welding_speed_mm_s
+
+    def update(self, measurement):
+        pass
+
+    def command(self, t_s, tcp_world, tcp_velocity_world):
+        return Command(tcp_world + [1.0, 0.0, 0.0], self.speed)
+
+
+class RaisesInReset(_Base):
+    def reset(self, context):
+        raise RuntimeError("cannot start")
+
+
+class RaisesInUpdate(_Base):
+    def update(self, measurement):
+        return 1 / 0
+
+
+class RaisesInCommand(_Base):
+    def command(self, t_s, tcp_world, tcp_velocity_world):
+        raise KeyError("target")
+
+
+class ReturnsString(_Base):
+    def command(self, t_s, tcp_world, tcp_velocity_world):
+        return "go"
+
+
+class ReturnsShortTarget(_Base):
+    def command(self, t_s, tcp_world, tcp_velocity_world):
+        return Command([1.0, 2.0], self.speed)
+
+
+class ReturnsNaNTarget(_Base):
+    def command(self, t_s, tcp_world, tcp_velocity_world):
+        return Command([math.nan, 0.0, 0.0], self.speed)
+
+
+class ReturnsNegativeSpeed(_Base):
+    def command(self, t_s, tcp_world, tcp_velocity_world):
+        return Command(tcp_world + [1.0, 0.0, 0.0], -5.0)
+
+
+class RaisingExtractor:
+    name = "raising"
+
+    def __call__(self, profile):
+        raise ValueError("no idea")
+
+
+class NaNExtractor:
+    name = "nan-point"
+
+    def __call__(self, profile):
+        from seamtrack.sensing.profiles import Feature
+
+        return Feature.found([math.nan, 0.0], profile.T_world_sensor, joint=self.name)
+"""
+
+FILES: dict[str, bytes] = {
+    "bad_plugins.py": PLUGINS.encode(),
+    "binary.toml": bytes(range(256)) * 4,
+    "empty.toml": b"",
+    "comments.toml": b"# nothing but a comment\n",
+    "syntax.toml": b"[simulation\nwelding_speed_mm_s = 5\n",
+    "nan.csv": b"x_mm,y_mm,z_mm\n0,0,0\n1,nan,0\n2,0,0\n",
+    "one.csv": b"x_mm,y_mm,z_mm\n0,0,0\n",
+    "text.csv": b"x_mm,y_mm,z_mm\n0,zero,0\n",
+    "a_file": b"not a folder\n",
+}
+
+
+@dataclass(frozen=True)
+class Entry:
+    """One bad input: a name, the command's arguments, and whether it is quick enough (a few
+    seconds) for the test suite."""
+
+    name: str
+    args: tuple[str, ...]
+    quick: bool = True
+    field: str = ""  # the field the error line must name (a substring of it)
+
+
+def _set(*pairs: str) -> tuple[str, ...]:
+    out: list[str] = []
+    for pair in pairs:
+        out += ["--set", pair]
+    return tuple(out)
+
+
+def _run(*extra: str) -> tuple[str, ...]:
+    return ("run", *extra, "--out", "OUT")
+
+
+CATALOGUE: tuple[Entry, ...] = (
+    # --- scene files and keys
+    Entry("unknown key", _run(*_set("sensor.frame_rte_hz=2")), field="sensor.frame_rte_hz"),
+    Entry("'yes' for a boolean", _run(*_set('sensor.quantize="yes"')), field="sensor.quantize"),
+    Entry("false for a number", _run(*_set("sensor.look_ahead_mm=false")), field="look_ahead"),
+    Entry("true for a seed", _run(*_set("simulation.seed=true")), field="simulation.seed"),
+    Entry("NaN speed", _run(*_set("simulation.welding_speed_mm_s=nan")), field="welding_speed"),
+    Entry("binary scene file", ("check", "binary.toml"), field="SCENE"),
+    Entry("empty scene file", ("check", "empty.toml"), field="SCENE"),
+    Entry("comment-only scene file", ("check", "comments.toml"), field="SCENE"),
+    Entry("TOML syntax error", ("check", "syntax.toml"), field="syntax.toml"),
+    Entry("missing scene file", ("run", "missing.toml", "--out", "OUT"), field="SCENE"),
+    Entry("unknown built-in scene", ("run", "paper-verifcation", "--out", "OUT"), field="SCENE"),
+    # --- sizes that would not fit in memory
+    Entry("1e8 rays", _run(*_set("sensor.rays=100000000")), field="sensor.rays"),
+    Entry("seam step 1e-6 mm", _run(*_set("seam.step_mm=1e-6")), field="seam.step_mm"),
+    Entry("seam length 1e9 mm", _run(*_set("seam.length_mm=1e9")), field="seam.step_mm"),
+    Entry("control period 1e-8 s", _run(*_set("robot.control_period_s=1e-8")), field="control"),
+    Entry("trace period 1e-9 s", _run(*_set("simulation.trace_period_s=1e-9")), field="trace"),
+    Entry("near-zero speed", _run(*_set("simulation.welding_speed_mm_s=1e-3")), field="control"),
+    Entry(
+        "mesh tolerance 1e-9 mm",
+        ("run", *MESH, *_set("workpiece.tolerance_mm=1e-9"), "--out", "OUT"),
+        field="workpiece.tolerance_mm",
+    ),
+    # --- seam files
+    Entry(
+        "NaN in a seam file",
+        _run(*_set('seam.source="csv"', 'seam.file="nan.csv"')),
+        field="seam.file",
+    ),
+    Entry("one-point seam", _run(*_set('seam.source="csv"', 'seam.file="one.csv"')), field="seam"),
+    Entry("text in a seam file", _run(*_set('seam.source="csv"', 'seam.file="text.csv"'))),
+    Entry("missing seam file", _run(*_set('seam.source="csv"', 'seam.file="nope.csv"'))),
+    Entry("points source without points", _run(*_set('seam.source="points"')), field="points"),
+    # --- free-form sections
+    *(
+        Entry(
+            f"stripe_noise {kv}", _run(*_set(f"sensor.stripe_noise.{kv}")), field=kv.split("=")[0]
+        )
+        for kv in (
+            "range_sigma_mm=-1",
+            "dropout_rate=2",
+            "secondary_probability=1e9",
+            "range_sigma_mm=inf",
+            "speckle_correlation_rays=inf",
+            "bogus=1",
+            'dropout_rate="high"',
+        )
+    ),
+    *(
+        Entry(
+            f"tracker.params {kv}",
+            _run(*_set('tracker.name="trajectory"', f"tracker.params.{kv}")),
+            field=kv.split("=")[0],
+        )
+        for kv in ("gain_1_s=[1,2]", 'gain_1_s="x"', "bridge_mm=-inf", "use_capture_pose=1")
+    ),
+    Entry("unknown tracker", _run(*_set('tracker.name="nope"')), field="tracker.name"),
+    Entry("missing tracker module", _run(*_set('tracker.name="nomod:X"')), field="tracker.name"),
+    Entry("negative radius", _run(*_set("tracker.radius_mm=-1")), field="tracker.radius_mm"),
+    # --- impossible optics and geometry
+    Entry("unknown preset", _run(*_set('sensor.preset="nope"')), field="preset"),
+    Entry("impossible field of view", _run(*_set("sensor.fov_near_mm=100")), field="sensor"),
+    Entry("seam out of reach", _run(*_set("seam.offset_mm=[500, 0, 0]")), field="seam"),
+    Entry("frame rate below control", _run(*_set("sensor.frame_rate_hz=5000")), field="control"),
+    # --- CAD
+    Entry(
+        "unknown CAD parameter",
+        ("run", *MESH, *_set("workpiece.params.bogus_mm=1"), "--out", "OUT"),
+        quick=False,
+        field="workpiece.params.bogus_mm",
+    ),
+    Entry(
+        "boolean CAD parameter",
+        ("run", *MESH, *_set("workpiece.params.groove_angle_deg=true"), "--out", "OUT"),
+        quick=False,
+        field="workpiece.params.groove_angle_deg",
+    ),
+    Entry(
+        "missing CAD script",
+        ("run", *MESH, *_set('workpiece.script="missing_part.py"'), "--out", "OUT"),
+        field="workpiece.script",
+    ),
+    Entry(
+        "unknown extractor",
+        ("run", *MESH, *_set('extractor.name="nope"'), "--out", "OUT"),
+        quick=False,
+        field="extractor.name",
+    ),
+    # --- user code
+    *(
+        Entry(
+            f"tracker {cls}",
+            _run(*SHORT, *_set(f'tracker.name="bad_plugins:{cls}"')),
+            field="tracker.name",
+        )
+        for cls in (
+            "RaisesInReset",
+            "RaisesInUpdate",
+            "RaisesInCommand",
+            "ReturnsString",
+            "ReturnsShortTarget",
+            "ReturnsNaNTarget",
+            "ReturnsNegativeSpeed",
+        )
+    ),
+    *(
+        Entry(
+            f"extractor {cls}",
+            ("run", *MESH, *_set(f'extractor.name="bad_plugins:{cls}"'), "--out", "OUT"),
+            quick=False,
+            field="extractor.name",
+        )
+        for cls in ("RaisingExtractor", "NaNExtractor")
+    ),
+    # --- command-line flags
+    Entry(
+        "sweep --workers 0",
+        (
+            "sweep",
+            "paper-corner",
+            "--param",
+            "tracker.radius_mm",
+            "--values",
+            "1",
+            "--workers",
+            "0",
+            "--out",
+            "OUT",
+        ),
+        field="--workers",
+    ),
+    Entry(
+        "sweep --seeds -1",
+        (
+            "sweep",
+            "paper-corner",
+            "--param",
+            "tracker.radius_mm",
+            "--values",
+            "1",
+            "--seeds",
+            "-1",
+            "--out",
+            "OUT",
+        ),
+        field="--seeds",
+    ),
+    Entry(
+        "sweep over a bad value",
+        (
+            "sweep",
+            "paper-corner",
+            "--param",
+            "tracker.radius_mm",
+            "--values",
+            "1,-1",
+            "--out",
+            "OUT",
+        ),
+        field="tracker.radius_mm",
+    ),
+    Entry(
+        "sweep over an unknown key",
+        ("sweep", "paper-corner", "--param", "tracker.radius", "--values", "1", "--out", "OUT"),
+        field="tracker.radius",
+    ),
+    Entry(
+        "compare with an unknown tracker",
+        ("compare", "paper-corner", "--trackers", "I,nope", "--out", "OUT"),
+        field="tracker.name",
+    ),
+    Entry("scan off the seam", ("scan", "paper-verification", "--at", "-5"), field="--at"),
+    Entry("init an unknown template", ("init", "nope", "-o", "OUT/x.toml"), field="TEMPLATE"),
+    Entry("output under a file", ("run", *SHORT, "--out", "a_file/run"), field="--out"),
+    Entry("unknown benchmark", ("bench", "nope", "--out", "OUT"), field="bench"),
+    Entry("unknown sensor preset", ("sensor", "--preset", "nope"), field="preset"),
+)
+
+
+def workspace(root: Path) -> Path:
+    """Write the catalogue's files into ``root``; return it."""
+    for name, data in FILES.items():
+        (root / name).write_bytes(data)
+    return root
+
+
+@dataclass(frozen=True)
+class Outcome:
+    name: str
+    exit_code: int
+    stderr: str
+    out_left: bool
+    peak_mb: float
+    wall_s: float
+
+    def problems(self, field: str) -> list[str]:
+        """What makes this outcome fall short (empty: it passed)."""
+        found = []
+        lines = self.stderr.splitlines()
+        if self.exit_code != 2:
+            found.append(f"exit {self.exit_code}")
+        if "Traceback (most recent call last)" in self.stderr:
+            found.append("traceback")
+        if not lines or not lines[0].startswith("seamtrack: error: "):
+            found.append("no error line")
+        elif field and field not in lines[0]:
+            found.append(f"error line does not name {field!r}")
+        errors = [line for line in lines if line.startswith("seamtrack: error: ")]
+        if len(errors) != 1:
+            found.append(f"{len(errors)} error lines")
+        if self.out_left:
+            found.append("output folder left behind")
+        if self.peak_mb > 2048:
+            found.append(f"peak {self.peak_mb:.0f} MB")
+        return found
+
+
+def run_entry(entry: Entry, root: Path) -> Outcome:
+    """Run one entry in a fresh process, in ``root`` (which holds the files)."""
+    out = root / f"out-{abs(hash(entry.name))}"
+    args = [str(out) if a == "OUT" else a.replace("OUT/", f"{out}/") for a in entry.args]
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(root), *sys.path])}
+    start = time.perf_counter()
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "seamtrack.cli", *args],
+        cwd=root,
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    _, stderr = proc.communicate()
+    wall = time.perf_counter() - start
+    # The largest peak of any child so far (the kernel keeps the maximum): a running bound.
+    peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+    return Outcome(entry.name, proc.returncode, stderr, out.exists(), peak, wall)
+
+
+#: The largest run the size limits allow: 3.99e6 control ticks (0.2 ms over 799 s), a slow
+#: weld that lasts to its time limit. Measured for its memory, not refused.
+LARGEST_RUN = (
+    "run", *_set("robot.control_period_s=2e-4", "simulation.time_limit_s=799",
+                 "simulation.welding_speed_mm_s=0.4", "simulation.trace_period_s=0.01"),
+    "--out", "OUT", "--no-plot", "-q",
+)  # fmt: skip
+
+
+def _largest_run(root: Path) -> dict[str, Any]:
+    out = root / "largest"
+    start = time.perf_counter()
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "seamtrack.cli",
+            *(str(out) if a == "OUT" else a for a in LARGEST_RUN),
+        ],
+        cwd=root,
+        capture_output=True,
+        text=True,
+    )
+    wall = time.perf_counter() - start
+    summary = json.loads((out / "summary.json").read_text()) if proc.returncode == 0 else {}
+    return {
+        "command": "seamtrack " + " ".join(LARGEST_RUN),
+        "exit": proc.returncode,
+        "ticks": int(round(summary.get("sim_time_s", 0.0) / 2e-4)) + 1,
+        "status": summary.get("status"),
+        "peak_mb": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024,
+        "wall_s": wall,
+    }
+
+
+def bench_failures(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]:
+    """Run the catalogue (``quick``: its quick entries) in fresh processes, then the largest
+    run the limits allow; write ``failures.json`` and ``failures.md``."""
+    rows: list[dict[str, Any]] = []
+    with tempfile.TemporaryDirectory() as tmp:
+        root = workspace(Path(tmp))
+        largest = None if quick else _largest_run(root)
+        for entry in CATALOGUE:
+            if quick and not entry.quick:
+                continue
+            outcome = run_entry(entry, root)
+            rows.append(
+                {
+                    "name": entry.name,
+                    "command": "seamtrack " + " ".join(entry.args),
+                    "exit": outcome.exit_code,
+                    "first_line": (outcome.stderr.splitlines() or [""])[0],
+                    "problems": outcome.problems(entry.field),
+                    "peak_mb_so_far": outcome.peak_mb,
+                    "wall_s": outcome.wall_s,
+                }
+            )
+    result = {"machine": machine_info(), "rows": rows, "largest_run": largest}
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / "failures.json").write_text(json.dumps(result, indent=2) + "\n")
+    bad = [r for r in rows if r["problems"]]
+    lines = [
+        f"{len(rows)} bad inputs, {len(bad)} falling short; "
+        f"tracebacks: {sum('traceback' in r['problems'] for r in rows)}, "
+        f"output folders left: {sum('output folder left behind' in r['problems'] for r in rows)}, "
+        f"largest peak: {max(r['peak_mb_so_far'] for r in rows):.0f} MB.",
+        "",
+        "| input | exit | s | first line of the answer | problems |",
+        "|---|---|---|---|---|",
+    ]
+    for r in rows:
+        text = r["first_line"].removeprefix("seamtrack: error: ").replace("|", "/")
+        lines.append(
+            f"| {r['name']} | {r['exit']} | {r['wall_s']:.1f} | {text[:140]} | "
+            f"{', '.join(r['problems']) or 'ok'} |"
+        )
+    if largest is not None:
+        lines += [
+            "",
+            f"The largest run the limits allow (`{largest['command']}`): {largest['ticks']:,} "
+            f"control ticks, {largest['status']}, exit {largest['exit']}, "
+            f"{largest['wall_s']:.0f} s, peak {largest['peak_mb']:.0f} MB.",
+        ]
+    (out / "failures.md").write_text("\n".join(lines) + "\n")
+    return result

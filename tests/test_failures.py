@@ -1,0 +1,152 @@
+"""Every failure a clear answer: the bad-input catalogue (seamtrack.bench.failures) through the
+real command line, in-process, plus what a user plugin's error shows and the CLI's own manners.
+
+Each catalogue entry must exit 2 with exactly one ``seamtrack: error:`` line naming its field,
+print no traceback and leave no output folder (``seamtrack bench failures`` runs the same
+catalogue in fresh processes and also measures memory).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+from pathlib import Path
+
+import pytest
+
+from seamtrack._version import __version__
+from seamtrack.bench.failures import CATALOGUE, Entry, Outcome, workspace
+from seamtrack.cli.main import build_parser, main
+
+
+@pytest.fixture(scope="module")
+def root(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    return workspace(tmp_path_factory.mktemp("catalogue"))
+
+
+def _run_in_process(
+    args: list[str], root: Path, capsys: pytest.CaptureFixture[str], monkeypatch
+) -> tuple[int, str]:
+    monkeypatch.chdir(root)
+    monkeypatch.syspath_prepend(str(root))
+    code = main(args)
+    return code, capsys.readouterr().err
+
+
+@pytest.mark.parametrize("entry", [e for e in CATALOGUE if e.quick], ids=lambda e: e.name)
+def test_bad_input_gets_one_line_exit_2_and_leaves_nothing(
+    entry: Entry, root: Path, capsys: pytest.CaptureFixture[str], monkeypatch
+) -> None:
+    out = root / f"out-{abs(hash(entry.name))}"
+    args = [str(out) if a == "OUT" else a.replace("OUT/", f"{out}/") for a in entry.args]
+    code, err = _run_in_process(args, root, capsys, monkeypatch)
+    outcome = Outcome(entry.name, code, err, out.exists(), 0.0, 0.0)
+    assert outcome.problems(entry.field) == [], err
+
+
+def test_the_catalogue_covers_every_item_of_the_issue() -> None:
+    """The inputs the issue lists are all in the catalogue (names are the check)."""
+    names = {e.name for e in CATALOGUE}
+    for needed in (
+        "tracker RaisesInUpdate",
+        "tracker RaisesInReset",
+        "tracker ReturnsString",
+        "tracker ReturnsShortTarget",
+        "tracker ReturnsNaNTarget",
+        "tracker ReturnsNegativeSpeed",
+        "extractor RaisingExtractor",
+        "extractor NaNExtractor",
+        "stripe_noise range_sigma_mm=-1",
+        "stripe_noise dropout_rate=2",
+        "stripe_noise secondary_probability=1e9",
+        "stripe_noise range_sigma_mm=inf",
+        "stripe_noise speckle_correlation_rays=inf",
+        "tracker.params gain_1_s=[1,2]",
+        'tracker.params gain_1_s="x"',
+        "binary scene file",
+        "control period 1e-8 s",
+        "seam step 1e-6 mm",
+        "seam length 1e9 mm",
+        "1e8 rays",
+        "'yes' for a boolean",
+        "false for a number",
+        "empty scene file",
+        "sweep --workers 0",
+        "sweep --seeds -1",
+        "compare with an unknown tracker",
+    ):
+        assert needed in names
+
+
+def test_a_plugin_error_shows_the_users_frames_and_debug_shows_all(
+    root: Path, capsys: pytest.CaptureFixture[str], monkeypatch
+) -> None:
+    args = [
+        "run",
+        "--set",
+        "seam.length_mm=20",
+        "--set",
+        'tracker.name="bad_plugins:RaisesInUpdate"',
+    ]
+    code, err = _run_in_process([*args, "--out", str(root / "u1")], root, capsys, monkeypatch)
+    assert code == 2
+    first, *frames = err.splitlines()
+    assert first.startswith("seamtrack: error: tracker.name: 'bad_plugins:RaisesInUpdate' update()")
+    assert "ZeroDivisionError" in first and "t = " in first
+    assert any("bad_plugins.py" in f for f in frames)
+    assert not any(f"seamtrack{os.sep}simulation" in f for f in frames)
+    assert not (root / "u1").exists()
+    code, err = _run_in_process(
+        ["--debug", *args, "--out", str(root / "u2")], root, capsys, monkeypatch
+    )
+    assert code == 2
+    assert any(f"seamtrack{os.sep}simulation{os.sep}loop.py" in f for f in err.splitlines())
+
+
+def _options(parser: argparse.ArgumentParser) -> list[tuple[str, argparse.Action]]:
+    found = []
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, sub in action.choices.items():
+                found += [(f"{name} {a}", b) for a, b in _options(sub)]
+        elif not isinstance(action, argparse._HelpAction):
+            found.append((action.dest, action))
+    return found
+
+
+def test_every_cli_option_has_help_text() -> None:
+    missing = [name for name, action in _options(build_parser()) if not action.help]
+    assert missing == []
+
+
+def test_set_is_offered_only_where_a_scene_is_read() -> None:
+    parser = build_parser()
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    with_set = {name for name, p in sub.choices.items() if any(a.dest == "set" for a in p._actions)}
+    assert {"run", "check", "sweep", "compare", "scan", "view", "init"} <= with_set
+    assert not with_set & {"bench", "cache", "extractors"}
+
+
+def test_version(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as info:
+        main(["--version"])
+    assert info.value.code == 0
+    assert capsys.readouterr().out.strip() == f"seamtrack {__version__}"
+
+
+def test_compare_labels_trackers_as_given(capsys: pytest.CaptureFixture[str]) -> None:
+    code = main(
+        [
+            "compare",
+            "paper-corner",
+            "--trackers",
+            "I,convergence-radius",
+            "--set",
+            "seam.points_mm=[[0, 0, 0], [12, 0, 0], [20, 8, 0]]",
+            "-q",
+        ]
+    )
+    out = capsys.readouterr().out
+    assert code == 0
+    rows = [line.split("|")[1].strip() for line in out.splitlines()[2:]]
+    assert rows == ["I", "convergence-radius"]
