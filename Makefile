@@ -12,8 +12,16 @@ $(STAMP): pyproject.toml
 	$(BIN)/pip install -q -e ".[dev]"
 	touch $(STAMP)
 
+# The paper's verification (seam mode), then the first 60 mm of its V-groove as a CAD part in
+# mesh mode: Embree stripe, extractor, closed loop; and one stripe profile as a picture.
+MESH_DEMO := paper-v-groove --set workpiece.params.seam_length_mm=60
+
 demo: $(STAMP)
 	$(BIN)/seamtrack run --out runs/demo
+	$(BIN)/seamtrack run $(MESH_DEMO) --out runs/demo-mesh
+	$(BIN)/seamtrack scan $(MESH_DEMO) --at 30 --out runs/demo-mesh/stripe.csv
+	@echo "pictures: runs/demo/error.png (seam mode), runs/demo-mesh/error.png (mesh mode),"
+	@echo "          runs/demo-mesh/stripe.png (the laser stripe on the CAD V-groove at 30 mm)"
 
 lint: $(STAMP)
 	$(BIN)/ruff check seamtrack cad tests

@@ -16,7 +16,7 @@ from test_raycast import SECTIONS, analytic_first_hit, extruded_mesh, posed
 
 from seamtrack.geometry import frames
 from seamtrack.io.profiles import write_profile_csv
-from seamtrack.sensing.profiles import Feature, Reason
+from seamtrack.sensing.profiles import Feature, Profile, Reason
 from seamtrack.sensing.raycast import RayCaster
 from seamtrack.sensing.scan import (
     StripeNoise,
@@ -355,3 +355,28 @@ def test_profile_csv_and_png(tmp_path) -> None:  # type: ignore[no-untyped-def]
     feature = Feature.found([0.0, SENSOR.range_center_mm], T_world_sensor)
     png = plot_profile_png(profile, tmp_path / "profile.png", feature=feature)
     assert png.stat().st_size > 1000
+
+
+def test_profile_png_legend_markers_are_small(tmp_path, monkeypatch) -> None:
+    """The legend draws every entry at LEGEND_MARKER_PT, however large the marker in the plot
+    (the seam-point cross is 10 pt there): legible, and no legend entry covers the plot."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from seamtrack.viz.plots import LEGEND_MARKER_PT
+
+    y = np.linspace(-5.0, 5.0, 101)
+    profile = Profile(np.column_stack([y, 80.0 + np.abs(y)]))
+    edges = np.array([[-5.0, 85.0], [5.0, 85.0]])
+    feature = Feature.found([0.0, 80.0], None, edges_laser=edges)
+    figures = []
+    monkeypatch.setattr(plt, "close", figures.append)
+    plot_profile_png(profile, tmp_path / "p.png", feature=feature)
+    (ax,) = figures[0].axes
+    sizes = [h.get_markersize() for h in ax.get_legend().legend_handles]
+    assert len(sizes) == 3 and all(s == LEGEND_MARKER_PT for s in sizes)
+    assert max(line.get_markersize() for line in ax.get_lines()) == 10  # the plot keeps its size
+    monkeypatch.undo()
+    plt.close("all")
