@@ -53,12 +53,15 @@ def test_the_python_tour_runs_and_its_comments_hold(tour: dict[str, Any]) -> Non
     assert tour["part"].seam.closest(feature.point_world).distance_mm[0] < 0.05
 
 
-def test_the_tracker_example_tracks_the_paper_seam(tmp_path: Path, monkeypatch) -> None:
+def test_the_tracker_example_tracks_the_paper_seam(
+    tmp_path: Path, monkeypatch, request: pytest.FixtureRequest
+) -> None:
     blocks = _module_blocks()
     assert "my_trackers.py" in blocks
     (tmp_path / "my_trackers.py").write_text(blocks["my_trackers.py"])
     monkeypatch.syspath_prepend(str(tmp_path))
     monkeypatch.delitem(sys.modules, "my_trackers", raising=False)
+    request.addfinalizer(lambda: sys.modules.pop("my_trackers", None))  # other tests' module
     scene = st.load_scene(
         "paper-verification",
         {

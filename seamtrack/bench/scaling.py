@@ -31,19 +31,18 @@ def _cache_rows(quick: bool) -> dict[str, Any]:
 
 
 def _seam_density_rows(quick: bool) -> dict[str, Any]:
-    import seamtrack as st
-    from seamtrack.geometry.seam import paper_points
+    from seamtrack.geometry.seam import Seam, paper_points
+    from seamtrack.simulation.loop import simulate
+    from seamtrack.simulation.scene import load_scene
 
     length = 100.0 if quick else 400.0
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "dense.csv"
-        st.Seam.from_points(paper_points(0.004, length)).to_csv(path)
+        Seam.from_points(paper_points(0.004, length)).to_csv(path)
         base = {"seam.length_mm": length}
-        coarse = st.simulate(st.load_scene("paper-verification", base))
-        dense = st.simulate(
-            st.load_scene(
-                "paper-verification", {**base, "seam.source": "csv", "seam.file": str(path)}
-            )
+        coarse = simulate(load_scene("paper-verification", base))
+        dense = simulate(
+            load_scene("paper-verification", {**base, "seam.source": "csv", "seam.file": str(path)})
         )
     return {
         "dense_seam_points": int(length / 0.004) + 1,
@@ -54,7 +53,8 @@ def _seam_density_rows(quick: bool) -> dict[str, Any]:
 
 
 def _guard_rows(quick: bool) -> dict[str, Any]:
-    import seamtrack as st
+    from seamtrack.simulation.loop import simulate
+    from seamtrack.simulation.scene import load_scene
 
     limit = 1.0 if quick else 2.0
     over = {
@@ -65,7 +65,7 @@ def _guard_rows(quick: bool) -> dict[str, Any]:
         "robot.control_period_s": 1e-3,
     }
     start = time.perf_counter()
-    result = st.simulate(st.load_scene("paper-verification", over))
+    result = simulate(load_scene("paper-verification", over))
     wall = time.perf_counter() - start
     return {
         "guard_limit_s": limit,
