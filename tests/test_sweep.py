@@ -326,3 +326,24 @@ def test_sigkilled_sweep_takes_its_workers_with_it(tmp_path: Path) -> None:
     while time.monotonic() < deadline and any(_alive(w) for w in workers):
         time.sleep(0.1)
     assert not [w for w in workers if _alive(w)]
+
+
+def test_sweep_csv_is_one_pandas_line_per_case_and_seed(tmp_path: Path) -> None:
+    """``pandas.read_csv`` of sweep.csv gives every case and seed with every summary key,
+    equal to results.jsonl."""
+    pandas = pytest.importorskip("pandas")
+    from seamtrack.batch.sweep import write_sweep
+
+    over = {**SHORT_CORNER, "sensor.noise_range_mm": 0.05}
+    rows = run_sweep(
+        SCENE, "tracker.radius_mm", [1.0, 0.2], overrides=over, seeds=[0, 1], out_dir=tmp_path
+    )
+    write_sweep(summarize(rows), "tracker.radius_mm", tmp_path, plot=False, rows=rows)
+    frame = pandas.read_csv(tmp_path / "sweep.csv")
+    assert len(frame) == 4
+    assert list(frame["tracker.radius_mm"]) == [1.0, 1.0, 0.2, 0.2]
+    assert list(frame["seed"]) == [0, 1, 0, 1]
+    assert set(rows[0]["summary"]) <= set(frame.columns)
+    for row, (_, line) in zip(rows, frame.iterrows(), strict=True):
+        assert line["max_error_mm"] == pytest.approx(row["summary"]["max_error_mm"], rel=1e-12)
+        assert line["status"] == row["summary"]["status"]

@@ -433,6 +433,12 @@ def _load(name: str) -> Any:
         ) from exc
 
 
+def extractor_target(name: str) -> Any:
+    """What an extractor name stands for (a class to build with parameters, or a ready
+    extractor object), without building it; raises :class:`PluginError` like :func:`extractor`."""
+    return BUILTIN[name] if name in BUILTIN else _load(name)
+
+
 def extractor(name: str, **params: Any) -> FeatureExtractor:
     """An extractor by name, built with ``params``.
 

@@ -22,6 +22,7 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from seamtrack import constants
 from seamtrack.control.registry import tracker_class
 from seamtrack.errors import SceneError
+from seamtrack.features.extractors import extractor_target
 from seamtrack.params import check_params
 from seamtrack.sensing.scan import StripeNoise
 from seamtrack.sensing.sensor import LaserLineSensor, preset
@@ -501,6 +502,10 @@ def check_plugin_params(c: SceneConfig) -> None:
     ranges), so that a bad value is refused before the run rather than deep inside it."""
     check_params(StripeNoise, c.sensor.stripe_noise, "sensor.stripe_noise")
     check_params(tracker_class(c.tracker.name), c.tracker.params, "tracker.params")
+    if c.sensor.mode == "mesh" or c.extractor.params:
+        target = extractor_target(c.extractor.name)
+        if isinstance(target, type):
+            check_params(target, c.extractor.params, "extractor.params")
 
 
 _SPEC_KEYS = (
