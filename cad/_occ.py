@@ -1,6 +1,5 @@
-"""OCCT kernels behind :mod:`seamtrack.workpiece.loader`: seam edge chains and sampling, meshing
-with
-an absolute tolerance, and measuring the mesh's deviation from the exact surfaces.
+"""OCCT kernels behind :mod:`seamtrack.workpiece.loader`: seam edge chains and sampling,
+meshing with an absolute tolerance, and measuring the mesh's deviation from the exact surfaces.
 
 Imported lazily by the loader (never by a seam-mode scene): it needs CadQuery/OCP.
 """
@@ -29,6 +28,7 @@ from OCP.TopLoc import TopLoc_Location
 from OCP.TopoDS import TopoDS
 from OCP.TopTools import TopTools_IndexedDataMapOfShapeListOfShape
 
+from seamtrack import constants
 from seamtrack.errors import WorkpieceError
 
 FloatArray = NDArray[np.float64]
@@ -227,10 +227,23 @@ def mesh(
         BRepMesh_IncrementalMesh(shape.wrapped, deflection, False, angular_rad, True)
         spent += time.perf_counter() - t0
         vertices, faces, deviation = triangulation(shape)
-        if deviation <= tolerance_mm:
+        if deviation <= tolerance_mm and len(faces) <= constants.MAX_MESH_TRIANGLES:
             break
         # BRepMesh undershoots on twisted B-spline faces (measured up to 7x): aim below.
-        deflection *= min(0.7, max(0.1, 0.8 * tolerance_mm / deviation))
+        factor = min(0.7, max(0.1, 0.8 * tolerance_mm / deviation))
+        # The triangle count grows about as 1 / deflection (measured on the paper groove:
+        # 190k at 1e-3 mm, 1.66M after one pass at 1.2e-4 mm); refuse a pass that would not
+        # fit in memory instead of running it.
+        needed = len(faces) / factor if deviation > tolerance_mm else len(faces)
+        if needed > constants.MAX_MESH_TRIANGLES:
+            raise WorkpieceError(
+                f"meeting {tolerance_mm:.3g} mm on this part takes about {needed:.2g} triangles "
+                f"(BRepMesh reached {deviation:.2g} mm with {len(faces):,}), more than the "
+                f"{constants.MAX_MESH_TRIANGLES:.0e} that fit in memory",
+                field="workpiece.tolerance_mm",
+                fix=f"use a coarser tolerance (e.g. {2 * tolerance_mm:.2g} mm)",
+            )
+        deflection *= factor
     return vertices, faces, deviation, spent
 
 

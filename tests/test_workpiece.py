@@ -372,3 +372,23 @@ def test_step_takes_no_parameters(tmp_path, straight_step):
     with pytest.raises(WorkpieceError) as info:
         load_workpiece(straight_step, cache_dir=tmp_path, root_gap_mm=1.0)
     assert info.value.field == "workpiece.params.root_gap_mm"
+
+
+def test_a_tolerance_too_fine_for_the_parts_size_is_refused_before_meshing(tmp_path):
+    """The paper's 420 mm groove at 2e-4 mm would mesh into tens of millions of triangles:
+    refused, naming workpiece.tolerance_mm and the finest tolerance that fits."""
+    with pytest.raises(WorkpieceError) as info:
+        load_workpiece("v_groove", tolerance_mm=2e-4, path="paper", cache_dir=tmp_path)
+    assert info.value.field == "workpiece.tolerance_mm"
+    assert "use at least 0.0004" in str(info.value)
+
+
+def test_a_mesh_over_the_triangle_budget_is_refused(tmp_path, monkeypatch):
+    """The triangle budget holds for every meshing pass (lowered here so a small part hits it)."""
+    from seamtrack import constants
+
+    monkeypatch.setattr(constants, "MAX_MESH_TRIANGLES", 500)
+    with pytest.raises(WorkpieceError) as info:
+        load_workpiece("v_groove", tolerance_mm=0.01, path="arc", cache_dir=tmp_path)
+    assert info.value.field == "workpiece.tolerance_mm"
+    assert "triangles" in str(info.value)

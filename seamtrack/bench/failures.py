@@ -156,6 +156,12 @@ CATALOGUE: tuple[Entry, ...] = (
         ("run", *MESH, *_set("workpiece.tolerance_mm=1e-9"), "--out", "OUT"),
         field="workpiece.tolerance_mm",
     ),
+    Entry(
+        "mesh tolerance too fine for the part",
+        ("run", "paper-v-groove", *_set("workpiece.tolerance_mm=2e-4"), "--out", "OUT"),
+        quick=False,
+        field="workpiece.tolerance_mm",
+    ),
     # --- seam files
     Entry(
         "NaN in a seam file",

@@ -66,10 +66,8 @@ def _checked(cmd: Any, name: str, t_s: float) -> Command:
             "give target_world as a finite (x, y, z) point in mm",
         )
     speed = cmd.speed_mm_s
-    if isinstance(speed, bool) or not isinstance(speed, int | float) or not speed > 0:
+    if isinstance(speed, bool) or not isinstance(speed, int | float) or not 0 < speed < math.inf:
         raise refuse(f"the speed {speed!r}", "give a finite speed > 0 mm/s (return None to stop)")
-    if not math.isfinite(speed):
-        raise refuse(f"the speed {speed!r}", "give a finite speed > 0 mm/s")
     ff = cmd.velocity_ff_world
     if ff is not None:
         ff_arr = np.asarray(ff, dtype=float) if _numeric(ff) else None

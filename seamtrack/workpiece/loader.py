@@ -35,6 +35,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from seamtrack import constants
 from seamtrack._version import __version__
 from seamtrack.errors import WorkpieceError
 from seamtrack.geometry.seam import Seam
@@ -255,6 +256,20 @@ def _load_module(path: Path) -> Any:
     finally:
         sys.path.remove(str(path.parent))
     return module
+
+
+def _check_mesh_budget(diagonal_mm: float, tolerance_mm: float) -> None:
+    """Refuse a tolerance so fine for the part's size that its mesh would not fit in memory
+    (the paper's 420 mm part at 1e-3 mm, a ratio of 2.4e-6, is 1.7 million triangles)."""
+    finest = constants.MIN_MESH_TOLERANCE_RATIO * diagonal_mm
+    if tolerance_mm < finest:
+        raise WorkpieceError(
+            f"meshing tolerance {tolerance_mm:.3g} mm on a part {diagonal_mm:.0f} mm across "
+            f"is finer than {constants.MIN_MESH_TOLERANCE_RATIO:.0e} of its size: the mesh "
+            "would not fit in memory",
+            field="workpiece.tolerance_mm",
+            fix=f"use at least {finest:.2g} mm for this part",
+        )
 
 
 def _run_script(path: Path, params: dict[str, Any]) -> tuple[Any, Any, dict[str, list[Any]]]:
@@ -496,6 +511,7 @@ def load_workpiece(
         seam_solid, chained, float(tolerance_mm), float(seam_spacing_mm)
     )
     torch = face_normals.sum(axis=1)  # bisector of the outward normals: away from the material
+    _check_mesh_budget(float(solid.BoundingBox().DiagonalLength), tolerance_mm)
     vertices, faces, deviation, spent = _occ.mesh(
         solid, float(tolerance_mm), float(angular_tolerance_rad)
     )
