@@ -208,10 +208,15 @@ class ArticulatedRobot:
         omega = state.omega
         if command is not None and command.rotation is not None:
             err = pin.log3(command.rotation @ state.R_set.T)
-            want = ORIENTATION_GAIN_1_S * err
-            norm = float(np.linalg.norm(want))
-            if norm > self.angular_velocity_max_rad_s:
-                want *= self.angular_velocity_max_rad_s / norm
+            size = float(np.linalg.norm(err))
+            # Proportional, capped by the angular speed and by the speed from which braking
+            # at the angular acceleration limit stops on the target (no overshoot).
+            speed = min(
+                ORIENTATION_GAIN_1_S * size,
+                self.angular_velocity_max_rad_s,
+                math.sqrt(2.0 * self.angular_acceleration_max_rad_s2 * size),
+            )
+            want = err * (speed / size) if size > 0.0 else np.zeros(3)
         else:
             want = np.zeros(3)
         dw = want - omega

@@ -239,7 +239,11 @@ def build_parts(scene: Scene, rng: np.random.Generator | None = None) -> Parts:
     poses = np.tile(np.eye(4), (len(check_s), 1, 1))
     poses[:, :3, :3] = rotations
     poses[:, :3, 3] = program.frame(check_s)[0]
-    check_sensor_outside(poses, robot.T_tcp_sensor, sensor, seam, mesh)
+    tool = c.robot.tool
+    explicit = tool.sensor_xyz_mm is not None or tool.sensor_rpy_deg is not None
+    check_sensor_outside(
+        poses, robot.T_tcp_sensor, sensor, seam, mesh, explicit, bool(robot.turns_tool)
+    )
     check_ticks(c, seam.length_mm)
     frame_period = 1.0 / c.sensor.frame_rate_hz
     v = c.simulation.welding_speed_mm_s

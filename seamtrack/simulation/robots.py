@@ -210,6 +210,8 @@ def check_sensor_outside(
     sensor: LaserLineSensor,
     seam: Seam,
     mesh: Any = None,
+    explicit_mount: bool = False,
+    turns_tool: bool = True,
 ) -> None:
     """Refuse a sensor mount that puts the emitter or the camera inside the part.
 
@@ -231,10 +233,27 @@ def check_sensor_outside(
     if inside.any():
         i = int(np.flatnonzero(inside)[0])
         which = "emitter" if i < len(emitter) else "camera"
-        raise SceneError(
+        where = (
             f"the sensor's {which} would be inside the part at "
-            f"{np.round(points[i], 3).tolist()} mm (pose {i % len(emitter)} along the seam)",
-            field="robot.tool.sensor_xyz_mm",
-            fix="mount the sensor above the torch tip on the torch side (z_tcp > 0), laser "
-            "pointing down the torch",
+            f"{np.round(points[i], 3).tolist()} mm (pose {i % len(emitter)} along the seam, "
+            f"torch at {np.round(poses_T_world_tcp[i % len(emitter), :3, 3], 3).tolist()} mm)"
+        )
+        if explicit_mount:
+            raise SceneError(
+                where,
+                field="robot.tool.sensor_xyz_mm",
+                fix="mount the sensor above the torch tip on the torch side (z_tcp > 0), laser "
+                "pointing down the torch",
+            )
+        if not turns_tool:
+            raise SceneError(
+                where + ": the gantry's torch and sensor cannot turn with the seam",
+                field="robot.model",
+                fix='use an arm that turns its tool (robot.model = "ur10e"), or a seam the '
+                "sensor can see from above",
+            )
+        raise SceneError(
+            where,
+            field="sensor.look_ahead_mm",
+            fix="a shorter look-ahead or range (sensor.range_mm), or another torch angle",
         )

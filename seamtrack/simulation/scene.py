@@ -104,9 +104,9 @@ class RobotConfig(_Section):
     servo_gain_1_s: Positive | list[Positive] | None = None
     interpolation_period_s: Positive | None = None
     tcp_velocity_max_mm_s: PositiveVec3 = (250.0, 250.0, 250.0)
-    tcp_acceleration_max_mm_s2: PositiveVec3 = (500.0, 500.0, 500.0)
+    tcp_acceleration_max_mm_s2: PositiveVec3 = (200.0, 200.0, 200.0)
     angular_velocity_max_deg_s: Positive = 60.0
-    angular_acceleration_max_deg_s2: Positive = 60.0
+    angular_acceleration_max_deg_s2: Positive = 20.0
     joint_acceleration_max_deg_s2: Positive | list[Positive] | None = None
     min_wrist_angle_deg: Annotated[float, Field(ge=0, lt=90, strict=True)] = 5.0
     tool: ToolConfig = Field(default_factory=ToolConfig)

@@ -70,7 +70,7 @@ def orientation_summary(trace: Any, robot: Any, cfg: Any, state: Any) -> dict[st
     return out
 
 
-def joint_figures(robot: Any, trace: Any, period_s: float) -> dict[str, float]:
+def joint_figures(robot: Any, trace: Any, period_s: float) -> dict[str, Any]:
     """Joint-space figures of an arm's run (see the module docstring)."""
     kin = robot.kinematics
     joints = trace.joints_rad
@@ -94,4 +94,5 @@ def joint_figures(robot: Any, trace: Any, period_s: float) -> dict[str, float]:
         "min_joint_limit_margin_joint": int(closest[1]) + 1,
         "min_wrist_angle_deg": float(np.degrees(wrist.min())),
         "min_jacobian_sigma": float(sigma.min()),
+        "joint_travel_deg": np.round(np.degrees(np.ptp(joints, axis=0)), 3).tolist(),
     }
