@@ -320,7 +320,7 @@ class ArticulatedRobot:
                     fix="move the part (workpiece.offset_mm / seam.offset_mm) or the robot "
                     "base (robot.base_origin_mm) so the seam lies well inside the arm's reach",
                 )
-            q = result.q
+            q = _wrap_into_range(result.q, kin.lower_rad, kin.upper_rad)
             low = q < kin.lower_rad - 1e-9
             high = q > kin.upper_rad + 1e-9
             if low.any() or high.any():
@@ -346,3 +346,16 @@ class ArticulatedRobot:
                 )
             out[i] = q
         return out
+
+
+def _wrap_into_range(q: FloatArray, lower: FloatArray, upper: FloatArray) -> FloatArray:
+    """The same pose with each joint moved by whole turns into its range where that helps (a
+    revolute joint at q and at q +- 2 pi puts the arm in the same place)."""
+    out = q.copy()
+    turn = 2.0 * math.pi
+    for j in range(len(out)):
+        while out[j] > upper[j] + 1e-9 and out[j] - turn >= lower[j] - 1e-9:
+            out[j] -= turn
+        while out[j] < lower[j] - 1e-9 and out[j] + turn <= upper[j] + 1e-9:
+            out[j] += turn
+    return out
