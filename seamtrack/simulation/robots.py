@@ -215,9 +215,12 @@ def check_sensor_outside(
 ) -> None:
     """Refuse a sensor mount that puts the emitter or the camera inside the part.
 
-    With a mesh (mesh mode) the test is the mesh's own inside test; without one, the emitter
-    and camera must lie on the torch side of the seam (positive along its torch normal).
+    With a mesh (mesh mode) the test is the mesh's own inside test; without one (seam mode), a
+    mount given in ``[robot.tool]`` must put the emitter and camera on the torch side of the
+    seam (positive along its torch normal).
     """
+    if mesh is None and not explicit_mount:
+        return  # seam mode knows no part surface: only a mount the user set is judged there
     T = poses_T_world_tcp @ T_tcp_sensor
     emitter = T[:, :3, 3]
     camera = emitter + sensor.baseline_mm * T[:, :3, 0]
