@@ -106,7 +106,11 @@ FILES: dict[str, bytes] = {
     "one.csv": b"x_mm,y_mm,z_mm\n0,0,0\n",
     "text.csv": b"x_mm,y_mm,z_mm\n0,zero,0\n",
     "a_file": b"not a folder\n",
+    "broken.urdf": b"<robot name='x'><link name='a'/><joint name='j' type='revolute'>",
 }
+
+#: paper-verification on a UR10e beside the seam: the articulated-arm entries.
+ARM = ('robot.model="ur10e"', 'tracker.name="trajectory"', "robot.base_origin_mm=[200,-700,0]")
 
 
 @dataclass(frozen=True)
@@ -203,6 +207,20 @@ CATALOGUE: tuple[Entry, ...] = (
     Entry("impossible field of view", _run(*_set("sensor.fov_near_mm=100")), field="sensor"),
     Entry("seam out of reach", _run(*_set("seam.offset_mm=[500, 0, 0]")), field="seam"),
     Entry("frame rate below control", _run(*_set("sensor.frame_rate_hz=5000")), field="control"),
+    # --- articulated arms
+    Entry("unknown robot model", _run(*_set('robot.model="ur10"')), field="robot.model"),
+    Entry("URDF that does not parse", _run(*_set('robot.urdf="broken.urdf"')), field="robot.urdf"),
+    Entry(
+        "seam point out of an arm's reach",
+        _run(*_set(*ARM[:2], "robot.base_origin_mm=[-1400,-700,0]")),
+        field="seam",
+    ),
+    Entry(
+        "sensor mounted inside the part",
+        _run(*_set(*ARM, "robot.tool.sensor_xyz_mm=[10,0,-60]")),
+        field="robot.tool.sensor_xyz_mm",
+    ),
+    Entry("servo gain that rings", _run(*_set("robot.servo_gain_1_s=900")), field="servo_gain"),
     # --- CAD
     Entry(
         "unknown CAD parameter",

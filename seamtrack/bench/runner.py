@@ -197,6 +197,7 @@ def bench_loop(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]:
     for profile in profiles:
         find(profile)
     extract_s = (time.perf_counter() - start) / len(poses)
+    ticks = tick_cost()
     row = {
         "scene": "paper-v-groove",
         "quick": quick,
@@ -212,7 +213,7 @@ def bench_loop(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]:
         "extract_ms_per_frame": 1e3 * extract_s,
         "max_error_mm": float(s["max_error_mm"]),
     }
-    result_dict: dict[str, Any] = {"machine": machine_info(), "rows": [row]}
+    result_dict: dict[str, Any] = {"machine": machine_info(), "rows": [row], "tick_cost": ticks}
     (out / "loop.json").write_text(json.dumps(result_dict, indent=2))
     m = result_dict["machine"]
     lines = [
@@ -226,9 +227,56 @@ def bench_loop(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]:
         f"{100 * row['loop_overhead_fraction']:.0f} % | "
         f"{row['scan_ms_per_frame']:.3f} | {row['extract_ms_per_frame']:.3f} | {row['frames']} | "
         f"{row['max_error_mm']:.4f} |",
+        "",
+        "Cost of one control tick (wall time outside sensing / control ticks; the same seam-mode "
+        "scene, tracker and seam on each robot):",
+        "",
+        "| robot | control ticks | wall s | sensing s | us per tick | max error mm |",
+        "|---|---|---|---|---|---|",
+        *(
+            f"| {t['robot']} | {t['ticks']} | {t['wall_s']:.2f} | {t['sensing_s']:.3f} | "
+            f"{t['us_per_tick']:.1f} | {t['max_error_mm']:.4f} |"
+            for t in ticks
+        ),
     ]
     (out / "loop.md").write_text("\n".join(lines) + "\n")
     return result_dict
+
+
+#: The tick-cost scene: the paper's curve, 100 mm at 10 mm/s, 50 frames/s, trajectory tracker.
+TICK_SCENE: dict[str, Any] = {
+    "seam.length_mm": 100.0,
+    "simulation.welding_speed_mm_s": 10.0,
+    "sensor.frame_rate_hz": 50.0,
+    "tracker.name": "trajectory",
+}
+#: The same on a UR10e standing beside the seam.
+TICK_ARM: dict[str, Any] = {"robot.model": "ur10e", "robot.base_origin_mm": [200.0, -700.0, 0.0]}
+
+
+def tick_cost() -> list[dict[str, Any]]:
+    """Wall time per control tick outside sensing, on the gantry and on the UR10e."""
+    from seamtrack.simulation.assemble import build_parts
+    from seamtrack.simulation.loop import run
+    from seamtrack.simulation.scene import load_scene
+
+    rows = []
+    for robot, extra in (("cartesian", {}), ("ur10e", TICK_ARM)):
+        parts = build_parts(load_scene("paper-verification", {**TICK_SCENE, **extra}))
+        s = run(parts).summary
+        ticks = int(round(s["sim_time_s"] / parts.robot.control_period_s)) + 1
+        wall, sense = float(s["wall_time_s"]), float(s["sense_wall_time_s"])
+        rows.append(
+            {
+                "robot": robot,
+                "ticks": ticks,
+                "wall_s": wall,
+                "sensing_s": sense,
+                "us_per_tick": 1e6 * (wall - sense) / ticks,
+                "max_error_mm": float(s["max_error_mm"]),
+            }
+        )
+    return rows
 
 
 def _bench_tradeoff(out: Path, quick: bool) -> Any:

@@ -23,6 +23,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from seamtrack.control.servo import Servo, ServoState
 from seamtrack.errors import ReachError, SceneError
 from seamtrack.geometry import frames
 
@@ -49,20 +50,29 @@ class MoveCommand:
         Velocity added to the path velocity, mm/s.
     stop_at_target : bool
         Brake so as to arrive at rest (point-to-point) instead of passing through at speed.
+    rotation : (3, 3) float or None
+        Tool rotation ``R_base_tcp`` to turn to (a robot that turns its tool); None keeps it.
     """
 
     target: tuple[float, float, float]
     speed: float
     feed_forward: tuple[float, float, float] = (0.0, 0.0, 0.0)
     stop_at_target: bool = False
+    rotation: FloatArray | None = None
 
 
 @dataclass
 class RobotState:
-    """Mutable axis state, advanced in place by :meth:`CartesianRobot.step`."""
+    """Mutable axis state, advanced in place by :meth:`CartesianRobot.step`.
+
+    With a servo, ``q`` and ``v`` are the axes' actual positions and velocities, ``setpoint``
+    the interpolator's state and ``servo`` the position loops' state.
+    """
 
     q: list[float]
     v: list[float]
+    setpoint: RobotState | None = None
+    servo: ServoState | None = None
 
     @property
     def q_array(self) -> FloatArray:
@@ -107,6 +117,8 @@ class CartesianRobot:
         Pose of the robot base in the world.
     T_tcp_sensor : (4, 4) float
         Pose of the sensor's laser frame relative to the torch tip.
+    servo : Servo or None
+        Position loops of the axes (None: ideal axes, at their set-point on every tick).
     """
 
     position_min_mm: tuple[float, float, float] = (0.0, 0.0, 0.0)
@@ -116,7 +128,10 @@ class CartesianRobot:
     control_period_s: float = 1e-3
     T_world_base: FloatArray = field(default_factory=lambda: np.eye(4))
     T_tcp_sensor: FloatArray = field(default_factory=lambda: np.eye(4))
+    servo: Servo | None = None
+    turns_tool = False
     _T_base_world: FloatArray = field(init=False, repr=False, compare=False)
+    _ideal: CartesianRobot | None = field(init=False, repr=False, compare=False)
     _unrotated: bool = field(init=False, repr=False, compare=False)
     _base_shift: tuple[float, float, float] = field(init=False, repr=False, compare=False)
     _free_travel: tuple[float, float, float] = field(init=False, repr=False, compare=False)
@@ -163,6 +178,16 @@ class CartesianRobot:
         )
         object.__setattr__(self, "_free_travel", free)
         object.__setattr__(self, "T_tcp_sensor", np.asarray(self.T_tcp_sensor, dtype=float))
+        ideal = None
+        if self.servo is not None:
+            ideal = CartesianRobot(**{
+                k: getattr(self, k)
+                for k in (
+                    "position_min_mm", "position_max_mm", "velocity_max_mm_s",
+                    "acceleration_max_mm_s2", "control_period_s", "T_world_base", "T_tcp_sensor",
+                )
+            })  # fmt: skip
+        object.__setattr__(self, "_ideal", ideal)
 
     # ----------------------------------------------------------------- kinematics
     @staticmethod
@@ -176,6 +201,13 @@ class CartesianRobot:
     def T_world_sensor(self, q: ArrayLike) -> FloatArray:
         """``T_world_base @ T_base_tcp(q) @ T_tcp_sensor``."""
         return self.T_world_base @ self.T_base_tcp(q) @ self.T_tcp_sensor
+
+    def sensor_pose(self, state: RobotState) -> FloatArray:
+        """``T_world_sensor`` at the state's (actual) axis positions."""
+        return self.T_world_sensor(state.q)
+
+    def T_world_tcp_of(self, state: RobotState) -> FloatArray:
+        return self.T_world_tcp(state.q)
 
     def tcp_world(self, q: ArrayLike) -> FloatArray:
         return frames.apply(self.T_world_base, np.asarray(q, dtype=float))
@@ -212,6 +244,7 @@ class CartesianRobot:
         speed_mm_s: float,
         velocity_ff_world: ArrayLike | None = None,
         stop_at_target: bool = False,
+        rotation_world: ArrayLike | None = None,
     ) -> MoveCommand:
         """Convert a world-frame move to the base frame (on plain floats when the base is not
         rotated: this runs whenever a tracker issues a new command, often every tick)."""
@@ -224,7 +257,7 @@ class CartesianRobot:
                 ff0 = (fx, fy, fz)
             return MoveCommand(
                 (px + tx, py + ty, pz + tz), float(speed_mm_s), ff0, bool(stop_at_target)
-            )
+            )  # a gantry cannot turn its tool: a commanded rotation is ignored
         T_base_world: FloatArray = self._T_base_world
         q = frames.apply(T_base_world, np.asarray(target_world, dtype=float))
         ff = (0.0, 0.0, 0.0)
@@ -248,10 +281,27 @@ class CartesianRobot:
     def state_at(self, q: ArrayLike) -> RobotState:
         """A state at rest at joint positions q (must be inside the travel)."""
         qs = [float(x) for x in np.asarray(q, dtype=float)]
-        return RobotState(q=qs, v=[0.0, 0.0, 0.0])
+        if self.servo is None:
+            return RobotState(q=qs, v=[0.0, 0.0, 0.0])
+        servo = self.servo.new_state(qs)
+        return RobotState(servo.q, servo.v, RobotState(q=list(qs), v=[0.0, 0.0, 0.0]), servo)
+
+    def _step_servo(self, state: RobotState, command: MoveCommand | None) -> None:
+        """The interpolator moves the set-point; the position loops move the axes after it."""
+        assert self._ideal is not None and self.servo is not None
+        assert state.setpoint is not None and state.servo is not None
+        self._ideal.step(state.setpoint, command)
+        self.servo.follow(state.servo, state.setpoint.q)
+        lo, hi = self.position_min_mm, self.position_max_mm
+        q = state.servo.q
+        for i in range(3):
+            q[i] = min(max(q[i], lo[i]), hi[i])
 
     def step(self, state: RobotState, command: MoveCommand | None) -> None:
         """Advance ``state`` by one control period under ``command`` (None: brake to rest)."""
+        if self._ideal is not None:
+            self._step_servo(state, command)
+            return
         dt = self.control_period_s
         q, v = state.q, state.v
         vmax, amax = self.velocity_max_mm_s, self.acceleration_max_mm_s2

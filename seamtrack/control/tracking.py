@@ -13,7 +13,7 @@ A tracker is any object with three methods (the :class:`Tracker` protocol):
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Protocol, runtime_checkable
+from typing import Any, Protocol, runtime_checkable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -37,12 +37,17 @@ class Command:
         Velocity feed-forward added to the path velocity, mm/s.
     stop_at_target : bool
         Arrive at rest (a point-to-point move that "finishes") instead of passing through.
+    rotation_world : (3, 3) float or None
+        Tool orientation ``R_world_tcp`` to turn to (z along the torch away from the work, x
+        the direction the sensor looks ahead in); None keeps the tool's orientation. A robot
+        that cannot turn its tool (the paper's gantry) ignores it.
     """
 
     target_world: FloatArray
     speed_mm_s: float
     velocity_ff_world: FloatArray | None = None
     stop_at_target: bool = False
+    rotation_world: FloatArray | None = None
 
 
 @dataclass(frozen=True, eq=False)
@@ -78,7 +83,12 @@ class Measurement:
 
 @dataclass(frozen=True)
 class TrackerContext:
-    """What a tracker may know about the run before it starts."""
+    """What a tracker may know about the run before it starts.
+
+    ``tool_program`` gives the tool orientations along the nominal seam (a
+    :class:`~seamtrack.control.orientation.ToolProgram`: the robot program's torch angles and
+    look-ahead heading); ``turns_tool`` is False for a robot that cannot turn its tool.
+    """
 
     welding_speed_mm_s: float
     control_period_s: float
@@ -90,6 +100,8 @@ class TrackerContext:
     velocity_max_world: FloatArray
     acceleration_max_world: FloatArray
     rng: np.random.Generator = field(default_factory=lambda: np.random.default_rng(0))
+    tool_program: Any = None
+    turns_tool: bool = False
 
 
 @runtime_checkable

@@ -13,6 +13,11 @@ detection at a shadow's edge) is held back until points agreeing with it span
 ``reacquire_mm``. Frames without a usable seam point are bridged by extrapolating the stored
 path along the chord of its last ``direction_fit_mm`` for ``bridge_mm``; beyond that the
 set-point stops and the simulation reports the seam lost.
+
+On a robot that turns its tool, the tracker also commands the tool's orientation from the robot
+program (:class:`~seamtrack.control.orientation.ToolProgram`): the scene's work and travel
+angles in the nominal seam frame at the set-point, and the heading that keeps the laser line
+crossing the seam ``look_ahead_mm`` ahead. It is refreshed every ``orientation_period_s``.
 """
 
 from __future__ import annotations
@@ -85,6 +90,8 @@ class TrajectoryTracker:
         over this length are accepted: the seam really turned or stepped.
     direction_fit_mm : float
         Length of stored path whose chord gives the direction for extrapolation.
+    orientation_period_s : float
+        How often the commanded tool orientation is refreshed (robots that turn their tool).
     corner_accel_fraction : float
         Where the stored path turns, the set-point slows to sqrt(a / curvature), a being this
         fraction of the set-point's acceleration limit, braking ahead of the turn in time; the
@@ -109,6 +116,7 @@ class TrajectoryTracker:
         corner_accel_fraction: Fraction = 0.5,
         curvature_window_mm: Positive = 3.0,
         direction_fit_mm: Positive = 5.0,
+        orientation_period_s: Positive = 0.01,
     ):
         self.buffer_mm = buffer_mm
         self.smoothing_mm = smoothing_mm
@@ -122,6 +130,7 @@ class TrajectoryTracker:
         self.corner_accel_fraction = corner_accel_fraction
         self.curvature_window_mm = curvature_window_mm
         self.direction_fit_mm = direction_fit_mm
+        self.orientation_period_s = orientation_period_s
 
     # ----------------------------------------------------------------- protocol
     def reset(self, context: TrackerContext) -> None:
@@ -141,6 +150,14 @@ class TrajectoryTracker:
         self._lost = False
         self._held: list[FloatArray] = []
         self._tcp_now = start
+        program = context.tool_program if context.turns_tool else None
+        self._program = program
+        self._rotation: FloatArray | None = None
+        self._s_program = 0.0
+        self._orient_every = max(1, round(self.orientation_period_s / self.dt))
+        self._tick = 0
+        if program is not None:
+            self._rotation, self._s_program = program.rotation_near(start, 0.0)
 
     def update(self, measurement: Measurement) -> None:
         if not measurement:
@@ -277,8 +294,18 @@ class TrajectoryTracker:
         target, tangent = self._at(self._s_set)
         ff = tangent * (step / self.dt)
         error = math.dist(target.tolist(), tcp_world.tolist())
+        if self._program is not None:
+            self._tick += 1
+            if self._tick % self._orient_every == 0:
+                self._rotation, self._s_program = self._program.rotation_near(
+                    target, self._s_program
+                )
         return Command(
-            target, self.gain_1_s * error, velocity_ff_world=ff, stop_at_target=not moving
+            target,
+            self.gain_1_s * error,
+            velocity_ff_world=ff,
+            stop_at_target=not moving,
+            rotation_world=self._rotation,
         )
 
     # ----------------------------------------------------------------- path

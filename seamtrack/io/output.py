@@ -37,6 +37,8 @@ TRACE_COLUMNS = (
     "seam_z_mm",
     "arc_length_mm",
     "welding",
+    "work_angle_error_deg",
+    "travel_angle_error_deg",
 )
 
 
@@ -142,9 +144,14 @@ def write_trace_csv(result: Result, path: Path, period_s: float) -> None:
             tr.closest_world[idx],
             tr.arc_length_mm[idx],
             tr.welding[idx].astype(float),
+            np.degrees(tr.work_angle_error_rad[idx]),
+            np.degrees(tr.travel_angle_error_rad[idx]),
+            np.degrees(tr.joints_rad[idx]),  # an arm's joints (none for the gantry)
         ]
     )
-    np.savetxt(path, table, delimiter=",", header=",".join(TRACE_COLUMNS), comments="", fmt="%.6f")
+    joints = [f"q{j + 1}_deg" for j in range(tr.joints_rad.shape[1])]
+    header = ",".join([*TRACE_COLUMNS, *joints])
+    np.savetxt(path, table, delimiter=",", header=header, comments="", fmt="%.6f")
 
 
 def write_frames_csv(result: Result, path: Path) -> None:

@@ -16,7 +16,6 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.control.registry import tracker, tracker_parameters
-from seamtrack.control.robot import CartesianRobot
 from seamtrack.control.tracking import Tracker
 from seamtrack.errors import PluginRuntimeError, SceneError, plugin_failed
 from seamtrack.geometry import frames
@@ -24,6 +23,13 @@ from seamtrack.geometry.seam import Seam
 from seamtrack.sensing.profiles import Feature, Profile, laser_to_world
 from seamtrack.sensing.scan import SeamNoise, sense_seam
 from seamtrack.sensing.sensor import LaserLineSensor
+from seamtrack.simulation.robots import (
+    check_sensor_outside,
+    is_arm,
+    make_robot,
+    plan_arm,
+    tool_program,
+)
 from seamtrack.simulation.scene import Scene, check_ticks, default_time_limit_s, make_sensor
 
 FloatArray = NDArray[np.float64]
@@ -44,6 +50,8 @@ class LoopSettings:
     wall_time_limit_s: float = 600.0
     seed: int = 0
     trace_period_s: float = 0.01
+    work_angle_rad: float = 0.0
+    travel_angle_rad: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -51,7 +59,7 @@ class Parts:
     """Everything a run needs, assembled (by :mod:`seamtrack.simulation.scene`) from a scene."""
 
     seam: Seam
-    robot: CartesianRobot
+    robot: Any  # CartesianRobot or ArticulatedRobot
     tracker: Tracker
     sense: SenseFn
     tcp_start_world: FloatArray
@@ -62,6 +70,8 @@ class Parts:
     sensor: LaserLineSensor | None = None
     mesh: Any = None  # mesh mode: the ray-cast scene (workpiece and obstacles, world frame)
     tracker_name: str = "tracker"  # as the scene names it, for errors raised in its code
+    tool_program: Any = None  # the tool orientations along the nominal seam (ToolProgram)
+    start_joints: FloatArray | None = None  # an arm's planned start configuration
 
 
 def make_seam(scene: Scene) -> Seam:
@@ -77,33 +87,6 @@ def make_seam(scene: Scene) -> Seam:
     else:
         raise SceneError("make_seam does not build workpiece seams", field="seam.source")
     return seam.transformed(frames.from_xyz_rpy_deg(c.offset_mm, c.rotation_deg))
-
-
-def make_robot(scene: Scene, sensor: LaserLineSensor) -> CartesianRobot:
-    """The Cartesian robot with the sensor mounted ahead of the torch.
-
-    The laser points down (z_L = -Z) with its baseline along +X (x_L = +X), turned by
-    ``sensor.mount_rotation_deg`` (x-y-z angles in the laser frame: a roll about x_L tilts the
-    laser sideways within its plane, as a fillet joint needs). The emitter sits on the laser
-    axis ``range_mm`` (default: where the optical axis crosses the laser, b / tan theta_s) from
-    the point ``look_ahead_mm`` ahead of the torch tip along base +X, so the central ray hits a
-    seam at the torch tip's height there whatever the tilt.
-    """
-    r, s = scene.config.robot, scene.config.sensor
-    distance = s.range_mm if s.range_mm is not None else sensor.range_center_mm
-    R_down = frames.look_rotation([0.0, 0.0, -1.0], [1.0, 0.0, 0.0])
-    R = R_down @ frames.from_xyz_rpy_deg([0.0, 0.0, 0.0], s.mount_rotation_deg)[:3, :3]
-    emitter = np.array([s.look_ahead_mm, 0.0, 0.0]) - distance * R[:, 2]
-    T_tcp_sensor = frames.make(R, emitter)
-    return CartesianRobot(
-        position_min_mm=r.position_min_mm,
-        position_max_mm=r.position_max_mm,
-        velocity_max_mm_s=r.velocity_max_mm_s,
-        acceleration_max_mm_s2=r.acceleration_max_mm_s2,
-        control_period_s=r.control_period_s,
-        T_world_base=frames.from_xyz_rpy_deg(r.base_origin_mm, r.base_rotation_deg),
-        T_tcp_sensor=T_tcp_sensor,
-    )
 
 
 def make_tracker(scene: Scene) -> Tracker:
@@ -242,9 +225,25 @@ def build_parts(scene: Scene, rng: np.random.Generator | None = None) -> Parts:
         def sense(T_world_sensor: FloatArray, t_s: float) -> Feature:
             return sense_seam(sensed, T_world_sensor, sensor, noise=noise, rng=rng)
 
-    robot.require_reachable(seam.points, "seam", field="seam")
     start = seam.points[0] + np.asarray(c.robot.start_offset_mm)
-    robot.require_reachable(start, "start", field="robot.start_offset_mm")
+    program = tool_program(scene, seam)
+    start_joints = None
+    check_s = np.linspace(0.0, seam.length_mm, max(2, int(seam.length_mm // 5.0) + 1))
+    if is_arm(c):
+        start_joints = plan_arm(robot, program, start)
+        rotations = program.rotations(check_s)
+    else:
+        robot.require_reachable(seam.points, "seam", field="seam")
+        robot.require_reachable(start, "start", field="robot.start_offset_mm")
+        rotations = np.broadcast_to(robot.T_world_base[:3, :3], (len(check_s), 3, 3))
+    poses = np.tile(np.eye(4), (len(check_s), 1, 1))
+    poses[:, :3, :3] = rotations
+    poses[:, :3, 3] = program.frame(check_s)[0]
+    tool = c.robot.tool
+    explicit = tool.sensor_xyz_mm is not None or tool.sensor_rpy_deg is not None
+    check_sensor_outside(
+        poses, robot.T_tcp_sensor, sensor, seam, mesh, explicit, bool(robot.turns_tool)
+    )
     check_ticks(c, seam.length_mm)
     frame_period = 1.0 / c.sensor.frame_rate_hz
     v = c.simulation.welding_speed_mm_s
@@ -266,6 +265,8 @@ def build_parts(scene: Scene, rng: np.random.Generator | None = None) -> Parts:
         wall_time_limit_s=c.simulation.wall_time_limit_s,
         seed=c.simulation.seed,
         trace_period_s=c.simulation.trace_period_s,
+        work_angle_rad=math.radians(c.torch.work_angle_deg),
+        travel_angle_rad=math.radians(c.torch.travel_angle_deg),
     )
     return Parts(
         seam=seam,
@@ -280,4 +281,6 @@ def build_parts(scene: Scene, rng: np.random.Generator | None = None) -> Parts:
         scan=scan,
         sensor=sensor,
         mesh=mesh,
+        tool_program=program,
+        start_joints=start_joints,
     )

@@ -32,12 +32,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack import constants
-from seamtrack.control.robot import CartesianRobot, MoveCommand
+from seamtrack.control.orientation import is_closed
+from seamtrack.control.robot import MoveCommand
 from seamtrack.control.tracking import Command, Measurement, TrackerContext
 from seamtrack.errors import PluginRuntimeError, plugin_failed
 from seamtrack.geometry.seam import Seam
+from seamtrack.geometry.torch import torch_angles
 from seamtrack.simulation.assemble import LoopSettings, Parts, build_parts
 from seamtrack.simulation.scene import Scene, load_scene
+from seamtrack.simulation.scoring import orientation_summary, torch_axes, with_joints
 
 FloatArray = NDArray[np.float64]
 
@@ -49,7 +52,7 @@ _CHECK_PERIOD_S = 0.01
 WALL_CHECK_TICKS = 64
 
 
-def _checked(cmd: Any, name: str, t_s: float) -> Command:
+def _checked(cmd: Any, name: str, t_s: float, known_rotation: Any = None) -> Command:
     """A tracker's command, refused with a clear error when it is not a usable move."""
 
     def refuse(what: str, fix: str) -> PluginRuntimeError:
@@ -73,6 +76,19 @@ def _checked(cmd: Any, name: str, t_s: float) -> Command:
         ff_arr = np.asarray(ff, dtype=float) if _numeric(ff) else None
         if ff_arr is None or ff_arr.shape != (3,) or not np.isfinite(ff_arr).all():
             raise refuse(f"the feed-forward {ff!r}", "give a finite (vx, vy, vz) in mm/s or None")
+    rot = cmd.rotation_world
+    if rot is not None and rot is not known_rotation:
+        rot_arr = np.asarray(rot, dtype=float) if _numeric(rot) else None
+        if (
+            rot_arr is None
+            or rot_arr.shape != (3, 3)
+            or not np.isfinite(rot_arr).all()
+            or not np.allclose(rot_arr.T @ rot_arr, np.eye(3), atol=1e-6)
+            or np.linalg.det(rot_arr) < 0
+        ):
+            raise refuse(
+                f"the rotation {rot!r}", "give rotation_world as a (3, 3) rotation matrix or None"
+            )
     return cmd
 
 
@@ -107,6 +123,11 @@ class Trace:
         The welding portion (arc-on to the end).
     frames : dict of arrays
         Per sensor frame: ``t_capture_s``, ``found``, ``point_world`` (k, 3; NaN if none).
+    work_angle_error_rad, travel_angle_error_rad : (n,) float
+        The torch's work and travel angles in the seam frame at the closest seam point, less
+        the scene's (:mod:`seamtrack.geometry.torch`).
+    joints_rad : (n, k) float
+        An arm's joint positions (k = 0 for the gantry).
     """
 
     t_s: FloatArray
@@ -119,6 +140,9 @@ class Trace:
     error_vertical_mm: FloatArray
     welding: NDArray[np.bool_]
     frames: dict[str, FloatArray] = field(default_factory=dict)
+    work_angle_error_rad: FloatArray = field(default_factory=lambda: np.zeros(0))
+    travel_angle_error_rad: FloatArray = field(default_factory=lambda: np.zeros(0))
+    joints_rad: FloatArray = field(default_factory=lambda: np.zeros((0, 0)))
 
     def decimated(self, period_s: float) -> NDArray[np.intp]:
         """Indices of ticks one ``period_s`` apart (plus the last tick)."""
@@ -180,7 +204,11 @@ def run(
 
     R = robot.T_world_base[:3, :3]
     p0 = robot.T_world_base[:3, 3]
-    state = robot.state_at(robot.q_from_world(parts.tcp_start_world))
+    turns_tool = bool(robot.turns_tool)
+    if turns_tool:
+        state = robot.state_at_joints(parts.start_joints)
+    else:
+        state = robot.state_at(robot.q_from_world(parts.tcp_start_world))
     context = TrackerContext(
         welding_speed_mm_s=cfg.welding_speed_mm_s,
         control_period_s=dt,
@@ -192,6 +220,8 @@ def run(
         velocity_max_world=np.abs(R @ np.array(robot.velocity_max_mm_s)),
         acceleration_max_world=np.abs(R @ np.array(robot.acceleration_max_mm_s2)),
         rng=rng,
+        tool_program=parts.tool_program,
+        turns_tool=turns_tool,
     )
     try:
         tracker.reset(context)
@@ -203,6 +233,8 @@ def run(
     frame_t = array("d")
     frame_found = array("b")
     frame_points = array("d")
+    axis_log = array("d")  # an arm's torch axis (world) and joints, per tick
+    joint_log = array("d")
     pending: deque[Measurement] = deque()
     nan3 = (math.nan, math.nan, math.nan)
 
@@ -211,6 +243,7 @@ def run(
     rest_window = cfg.frame_period_s + cfg.latency_s + 2 * dt
     next_capture = 0.0
     last_cmd: Command | None = None
+    last_rot: Any = None
     move: MoveCommand | None = None
     last_seen = False
     rest_since: float | None = None
@@ -224,7 +257,8 @@ def run(
 
     sense_time = 0.0
     tick = 0
-    unrotated = bool(np.array_equal(R, np.eye(3)))
+    closed = is_closed(seam)
+    unrotated = bool(np.array_equal(R, np.eye(3))) and not turns_tool
     p0x, p0y, p0z = p0.tolist()
     for tick in range(max_ticks + 1):
         t = tick * dt
@@ -239,7 +273,7 @@ def run(
             vel = R @ state.v
         if t + 1e-9 >= next_capture:
             next_capture += cfg.frame_period_s
-            T_ws = robot.T_world_sensor(q)
+            T_ws = robot.sensor_pose(state)
             sense_start = clock()
             feature = parts.sense(T_ws, t)
             sense_time += clock() - sense_start
@@ -260,10 +294,14 @@ def run(
             raise plugin_failed("tracker.name", name, "command", t, exc) from exc
         if cmd is not last_cmd:
             last_cmd = cmd
-            move = None if cmd is None else _to_move(robot, _checked(cmd, name, t))
+            move = None if cmd is None else _to_move(robot, _checked(cmd, name, t, last_rot))
+            last_rot = None if cmd is None else cmd.rotation_world
             if move is not None and not robot.within_travel(move.target):
                 status = "limit_violation"
         tcp_log.extend(tcp_list)
+        if turns_tool:
+            axis_log.extend((R @ state.R[:, 2]).tolist())
+            joint_log.extend(state.joints.tolist())
         target_log.extend(nan3 if cmd is None else np.asarray(cmd.target_world).tolist())
         if status:
             break
@@ -287,6 +325,9 @@ def run(
                     else ("lost_seam")
                 )
                 break
+            if closed and s_best >= seam.length_mm - cfg.end_tolerance_mm:
+                status = "completed"  # a girth seam ends where it began: the program stops
+                break
             if t - t_progress >= cfg.stall_time_s:
                 status, stop_reason = "stalled", f"no progress for {cfg.stall_time_s:g} s"
                 break
@@ -297,18 +338,30 @@ def run(
     if not status:
         status, stop_reason = "stalled", f"time limit {cfg.time_limit_s:g} s"
 
+    axis = torch_axes(robot, axis_log)
     trace = _trace(
-        seam, dt, tcp_log, target_log, frame_t, frame_found, frame_points, (check_t, check_s)
-    )
+        seam, dt, tcp_log, target_log, frame_t, frame_found, frame_points, (check_t, check_s),
+        axis, (cfg.work_angle_rad, cfg.travel_angle_rad),
+    )  # fmt: skip
+    trace = with_joints(trace, joint_log, robot)
     summary = _summary(trace, seam, status, cfg, clock() - wall_start)
+    summary.update(orientation_summary(trace, robot, cfg, state))
     summary["stop_reason"] = stop_reason
     summary["sense_wall_time_s"] = sense_time
     return Result(summary=summary, trace=trace)
 
 
-def _to_move(robot: CartesianRobot, cmd: Command) -> MoveCommand:
+def _to_move(robot: Any, cmd: Command) -> MoveCommand:
+    if cmd.rotation_world is None:
+        return robot.command_in_base(
+            cmd.target_world, cmd.speed_mm_s, cmd.velocity_ff_world, cmd.stop_at_target
+        )
     return robot.command_in_base(
-        cmd.target_world, cmd.speed_mm_s, cmd.velocity_ff_world, cmd.stop_at_target
+        cmd.target_world,
+        cmd.speed_mm_s,
+        cmd.velocity_ff_world,
+        cmd.stop_at_target,
+        rotation_world=cmd.rotation_world,
     )
 
 
@@ -335,6 +388,8 @@ def _trace(
     frame_found: array,
     frame_points: array,
     progress: tuple[array, array],
+    axis_world: FloatArray | None = None,
+    angles_rad: tuple[float, float] = (0.0, 0.0),
 ) -> Trace:
     tcp = np.frombuffer(tcp_log, dtype=np.float64).reshape(-1, 3).copy()
     target = np.frombuffer(target_log, dtype=np.float64).reshape(-1, 3).copy()
@@ -359,6 +414,11 @@ def _trace(
     normal -= np.sum(normal * tangent, axis=1, keepdims=True) * tangent
     normal /= np.linalg.norm(normal, axis=1, keepdims=True)
     lateral = np.cross(tangent, normal)
+    if axis_world is None:
+        axis_world = np.array([0.0, 0.0, 1.0])
+    angles = torch_angles(axis_world, tangent, normal) if n else np.zeros((0, 2))
+    work_err = _wrap(angles[:, 0] - angles_rad[0])
+    travel_err = _wrap(angles[:, 1] - angles_rad[1])
     frames = {
         "t_capture_s": np.frombuffer(frame_t, dtype=np.float64).copy(),
         "found": np.frombuffer(frame_found, dtype=np.int8).astype(bool),
@@ -386,7 +446,13 @@ def _trace(
         error_vertical_mm=np.sum(error_vec * normal, axis=1),
         welding=welding,
         frames=frames,
+        work_angle_error_rad=work_err,
+        travel_angle_error_rad=travel_err,
     )
+
+
+def _wrap(angle: FloatArray) -> FloatArray:
+    return (angle + np.pi) % (2 * np.pi) - np.pi
 
 
 def _summary(

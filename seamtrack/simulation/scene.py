@@ -26,6 +26,7 @@ from seamtrack.features.extractors import extractor_target
 from seamtrack.params import check_params
 from seamtrack.sensing.scan import StripeNoise
 from seamtrack.sensing.sensor import LaserLineSensor, preset
+from seamtrack.simulation.robots import check_robot, is_arm
 
 # Strict: a number is never a boolean or a string, a boolean never "yes" or 1.
 Positive = Annotated[float, Field(gt=0, allow_inf_nan=False, strict=True)]
@@ -85,8 +86,31 @@ class SensorConfig(_Section):
     stripe_noise: dict[str, Any] = Field(default_factory=dict)
 
 
+class ToolConfig(_Section):
+    """The torch on the flange (``T_flange_tcp``) and, optionally, the sensor on the torch
+    (``T_tcp_sensor``; default: from ``sensor.look_ahead_mm``, ``range_mm`` and
+    ``mount_rotation_deg``). The tcp frame: z along the torch away from the work, x the
+    direction the sensor looks ahead in."""
+
+    tcp_xyz_mm: Vec3 = (0.0, 0.0, 300.0)
+    tcp_rpy_deg: Vec3 = (180.0, 0.0, 0.0)
+    sensor_xyz_mm: Vec3 | None = None
+    sensor_rpy_deg: Vec3 | None = None
+
+
 class RobotConfig(_Section):
+    model: str = "cartesian"
+    urdf: str | None = None
     control_period_s: Positive = 1e-3
+    servo_gain_1_s: Positive | list[Positive] | None = None
+    interpolation_period_s: Positive | None = None
+    tcp_velocity_max_mm_s: PositiveVec3 = (250.0, 250.0, 250.0)
+    tcp_acceleration_max_mm_s2: PositiveVec3 = (200.0, 200.0, 200.0)
+    angular_velocity_max_deg_s: Positive = 60.0
+    angular_acceleration_max_deg_s2: Positive = 20.0
+    joint_acceleration_max_deg_s2: Positive | list[Positive] | None = None
+    min_wrist_angle_deg: Annotated[float, Field(ge=0, lt=90, strict=True)] = 5.0
+    tool: ToolConfig = Field(default_factory=ToolConfig)
     position_min_mm: Vec3 = (0.0, 0.0, 0.0)
     position_max_mm: Vec3 = (800.0, 150.0, 150.0)
     velocity_max_mm_s: PositiveVec3 = (20.0, 10.0, 10.0)
@@ -94,6 +118,17 @@ class RobotConfig(_Section):
     base_origin_mm: Vec3 = (-100.0, -75.0, -75.0)
     base_rotation_deg: Vec3 = (0.0, 0.0, 0.0)
     start_offset_mm: Vec3 = (0.0, 0.0, 0.0)
+
+
+Angle = Annotated[float, Field(gt=-80, lt=80, allow_inf_nan=False, strict=True)]
+
+
+class TorchConfig(_Section):
+    """Torch angles relative to the seam frame (the trajectory tracker keeps them on a robot
+    that turns its tool; the score measures them on every robot)."""
+
+    work_angle_deg: Angle = 0.0
+    travel_angle_deg: Angle = 0.0
 
 
 class TrackerConfig(_Section):
@@ -135,6 +170,7 @@ class SceneConfig(_Section):
     seam: SeamConfig = Field(default_factory=SeamConfig)
     sensor: SensorConfig = Field(default_factory=SensorConfig)
     robot: RobotConfig = Field(default_factory=RobotConfig)
+    torch: TorchConfig = Field(default_factory=TorchConfig)
     tracker: TrackerConfig = Field(default_factory=TrackerConfig)
     extractor: ExtractorConfig = Field(default_factory=ExtractorConfig)
     workpiece: WorkpieceConfig | None = None
@@ -410,16 +446,19 @@ def check_consistency(scene: Scene) -> None:
             fix="use a control period at most the frame period (e.g. 0.001)",
         )
     # No path is faster than all three axes at their limits together.
-    speed_limit = math.hypot(*c.robot.velocity_max_mm_s)
+    arm = is_arm(c)
+    limits = c.robot.tcp_velocity_max_mm_s if arm else c.robot.velocity_max_mm_s
+    speed_limit = math.hypot(*limits)
     if c.simulation.welding_speed_mm_s > speed_limit:
         raise SceneError(
             f"welding speed {c.simulation.welding_speed_mm_s} mm/s exceeds what the axes can "
-            f"reach (velocity limits {list(c.robot.velocity_max_mm_s)} mm/s)",
+            f"reach (velocity limits {list(limits)} mm/s)",
             field="simulation.welding_speed_mm_s",
             fix=f"use at most {speed_limit:.4g} mm/s (and at most the axis limit along a seam "
             "that follows one axis)",
         )
     make_sensor(c.sensor)  # impossible sensor geometry is an error here, before any run
+    check_robot(c)
     check_plugin_params(c)
     check_sizes(c)
 

@@ -1,0 +1,111 @@
+"""The tool's orientation along a seam, as a robot program states it.
+
+Seam tracking corrects the torch's *position* from what the sensor measures; its *orientation*
+comes from the robot program, here the nominal seam (the scene's seam, or the CAD seam edge
+with its face bisectors): at arc length s the torch axis makes the scene's work and travel
+angles with the seam frame (tangent, torch normal: :mod:`seamtrack.geometry.torch`), and the
+tool is turned about that axis so that its x axis, along which the sensor looks ahead, points
+at the seam point ``look_ahead_mm`` further along the seam. Then the laser line crosses the
+seam near the centre of its field of view on curves and round corners, which a tool that
+never turns (the paper's gantry) cannot do.
+
+A closed seam (a pipe's girth) wraps around: the heading near its end points at its start.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from seamtrack.geometry.seam import Seam
+from seamtrack.geometry.torch import torch_axis
+
+FloatArray = NDArray[np.float64]
+
+#: A seam whose ends are closer than this (mm) is closed (a girth seam).
+CLOSED_TOL_MM = 1e-3
+
+
+def is_closed(seam: Seam) -> bool:
+    """True when the seam ends where it starts."""
+    return bool(np.linalg.norm(seam.points[-1] - seam.points[0]) <= CLOSED_TOL_MM)
+
+
+@dataclass(frozen=True, eq=False)
+class ToolProgram:
+    """Tool orientations along a nominal seam.
+
+    Parameters
+    ----------
+    seam : Seam
+        The nominal seam, world frame.
+    work_rad, travel_rad : float
+        Torch angles relative to the seam frame.
+    look_ahead_mm : float
+        How far ahead along the seam the tool's x axis points.
+    """
+
+    seam: Seam
+    work_rad: float = 0.0
+    travel_rad: float = 0.0
+    look_ahead_mm: float = 10.0
+
+    @property
+    def closed(self) -> bool:
+        return is_closed(self.seam)
+
+    def frame(self, arc_length_mm: ArrayLike) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Seam points, unit tangents and unit torch normals at arc lengths.
+
+        The normal is interpolated linearly between the seam points' normals and made
+        orthogonal to the segment's tangent.
+
+        Returns
+        -------
+        points, tangents, normals : (m, 3) float
+        """
+        seam = self.seam
+        s = np.clip(np.atleast_1d(np.asarray(arc_length_mm, dtype=np.float64)), 0, seam.length_mm)
+        knots = seam.arc_length_mm
+        seg = np.clip(np.searchsorted(knots, s, side="right") - 1, 0, len(knots) - 2)
+        w = ((s - knots[seg]) / seam.segment_lengths_mm[seg])[:, None]
+        a, b = seam.points[seg], seam.points[seg + 1]
+        tangent = (b - a) / seam.segment_lengths_mm[seg][:, None]
+        normal = (1 - w) * seam.normals[seg] + w * seam.normals[seg + 1]
+        normal -= np.sum(normal * tangent, axis=1, keepdims=True) * tangent
+        normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+        return a + w * (b - a), tangent, normal
+
+    def ahead(self, arc_length_mm: ArrayLike) -> FloatArray:
+        """(m, 3) the seam points ``look_ahead_mm`` further on (wrapping on a closed seam;
+        past an open seam's end, extended along its last segment)."""
+        seam = self.seam
+        s = np.atleast_1d(np.asarray(arc_length_mm, dtype=np.float64)) + self.look_ahead_mm
+        length = seam.length_mm
+        if self.closed:
+            return seam.interpolate(np.mod(s, length))
+        over = np.maximum(s - length, 0.0)[:, None]
+        end_dir = seam.tangent_at([length])[0]
+        return seam.interpolate(np.minimum(s, length)) + over * end_dir
+
+    def rotations(self, arc_length_mm: ArrayLike) -> FloatArray:
+        """(m, 3, 3) tool rotations ``R_world_tcp`` at arc lengths (z the torch axis, x towards
+        the seam ahead)."""
+        points, tangent, normal = self.frame(arc_length_mm)
+        axis = torch_axis(tangent, normal, self.work_rad, self.travel_rad)
+        heading = self.ahead(arc_length_mm) - points
+        heading -= np.sum(heading * axis, axis=1, keepdims=True) * axis
+        norm = np.linalg.norm(heading, axis=1, keepdims=True)
+        # Where the chord runs along the torch axis (never on a real seam), use the tangent.
+        fallback = tangent - np.sum(tangent * axis, axis=1, keepdims=True) * axis
+        heading = np.where(norm > 1e-9, heading, fallback)
+        heading /= np.linalg.norm(heading, axis=1, keepdims=True)
+        return np.stack([heading, np.cross(axis, heading), axis], axis=2)
+
+    def rotation_near(self, point: ArrayLike, hint_mm: float) -> tuple[FloatArray, float]:
+        """Tool rotation at the seam point closest to ``point`` near the arc length hint
+        (a torch moving along the seam), and that arc length."""
+        s = self.seam.closest_near(point, hint_mm)
+        return self.rotations([s])[0], s

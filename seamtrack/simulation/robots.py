@@ -1,0 +1,262 @@
+"""The scene's robot: the paper's Cartesian gantry or an articulated arm, the tool and the sensor
+mount, the servo, and (for an arm) the plan that proves the seam reachable before the run.
+
+Scene keys: ``robot.model`` (``"cartesian"`` or a name of
+:data:`~seamtrack.control.kinematics.ARM_MODELS`), ``robot.urdf`` (any serial arm),
+``robot.servo_gain_1_s`` (K_v; absent: ideal axes), ``robot.interpolation_period_s``,
+``[robot.tool]`` (``T_flange_tcp``, optionally ``T_tcp_sensor``) and ``[torch]`` (work and
+travel angles).
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from seamtrack.control.orientation import ToolProgram
+from seamtrack.control.robot import CartesianRobot
+from seamtrack.control.servo import MAX_GAIN_PERIOD, Servo
+from seamtrack.errors import ReachError, SceneError
+from seamtrack.geometry import frames
+from seamtrack.geometry.seam import Seam
+from seamtrack.sensing.sensor import LaserLineSensor
+
+if TYPE_CHECKING:
+    from seamtrack.simulation.scene import Scene, SceneConfig
+
+FloatArray = NDArray[np.float64]
+
+#: The plan checks a pose at least every this many mm along the seam.
+PLAN_STEP_MM = 1.0
+
+
+def is_arm(c: SceneConfig) -> bool:
+    """True when the scene's robot is an articulated arm (a named model or a URDF)."""
+    return c.robot.urdf is not None or c.robot.model != "cartesian"
+
+
+def check_robot(c: SceneConfig) -> None:
+    """The robot keys that the schema alone cannot check (before anything is built)."""
+    r = c.robot
+    if r.urdf is not None and r.model != "cartesian":
+        raise SceneError(
+            f"both robot.model = {r.model!r} and robot.urdf are given",
+            field="robot.urdf",
+            fix="give one of them",
+        )
+    if r.urdf is None and r.model != "cartesian":
+        from seamtrack.control.kinematics import ARM_MODELS
+
+        if r.model not in ARM_MODELS:
+            close = difflib.get_close_matches(r.model, ["cartesian", *ARM_MODELS], n=1)
+            hint = f"did you mean {close[0]!r}? " if close else ""
+            raise SceneError(
+                f"unknown robot model {r.model!r}",
+                field="robot.model",
+                fix=f"{hint}use one of cartesian, {', '.join(ARM_MODELS)}, or "
+                'robot.urdf = "my_arm.urdf"',
+            )
+    if r.servo_gain_1_s is not None:
+        gains = r.servo_gain_1_s if isinstance(r.servo_gain_1_s, list) else [r.servo_gain_1_s]
+        worst = max(gains) * r.control_period_s
+        if worst > MAX_GAIN_PERIOD:
+            raise SceneError(
+                f"K_v = {max(gains):g} 1/s at a control period of {r.control_period_s:g} s "
+                f"gives K_v dt = {worst:.3g}: the discrete position loop would ring",
+                field="robot.servo_gain_1_s",
+                fix=f"use K_v <= {MAX_GAIN_PERIOD / r.control_period_s:.4g} 1/s, or a shorter "
+                "robot.control_period_s",
+            )
+    if r.interpolation_period_s is not None and r.interpolation_period_s < r.control_period_s:
+        raise SceneError(
+            f"interpolation period {r.interpolation_period_s:g} s is shorter than the control "
+            f"period {r.control_period_s:g} s",
+            field="robot.interpolation_period_s",
+            fix="use a whole multiple of robot.control_period_s",
+        )
+
+
+def sensor_mount(scene: Scene, sensor: LaserLineSensor) -> FloatArray:
+    """``T_tcp_sensor``: given in ``[robot.tool]``, or the paper scenes' mount.
+
+    The default mount: the laser points down the torch (z_L = -z_tcp) with its baseline along
+    the look-ahead direction (x_L = +x_tcp), turned by ``sensor.mount_rotation_deg`` (x-y-z
+    angles in the laser frame); the emitter sits on the laser axis ``range_mm`` (default:
+    where the optical axis crosses the laser, b / tan theta_s) from the point ``look_ahead_mm``
+    ahead of the torch tip, so the central ray hits a seam at the torch tip's height there.
+    """
+    s, tool = scene.config.sensor, scene.config.robot.tool
+    if tool.sensor_xyz_mm is not None or tool.sensor_rpy_deg is not None:
+        return frames.from_xyz_rpy_deg(
+            tool.sensor_xyz_mm or (0.0, 0.0, 0.0), tool.sensor_rpy_deg or (0.0, 0.0, 0.0)
+        )
+    distance = s.range_mm if s.range_mm is not None else sensor.range_center_mm
+    R_down = frames.look_rotation([0.0, 0.0, -1.0], [1.0, 0.0, 0.0])
+    R = R_down @ frames.from_xyz_rpy_deg([0.0, 0.0, 0.0], s.mount_rotation_deg)[:3, :3]
+    emitter = np.array([s.look_ahead_mm, 0.0, 0.0]) - distance * R[:, 2]
+    return frames.make(R, emitter)
+
+
+def make_robot(scene: Scene, sensor: LaserLineSensor) -> Any:
+    """The scene's robot (a :class:`CartesianRobot` or an
+    :class:`~seamtrack.control.arm.ArticulatedRobot`) with its tool, sensor and servo."""
+    c = scene.config
+    r = c.robot
+    T_world_base = frames.from_xyz_rpy_deg(r.base_origin_mm, r.base_rotation_deg)
+    T_tcp_sensor = sensor_mount(scene, sensor)
+    ipo = r.interpolation_period_s if r.interpolation_period_s is not None else r.control_period_s
+    gains = r.servo_gain_1_s
+    gain_list = None if gains is None else (gains if isinstance(gains, list) else [gains])
+    if not is_arm(c):
+        servo = None
+        if gain_list is not None:
+            servo = Servo(
+                tuple(gain_list), ipo, r.control_period_s, r.velocity_max_mm_s,
+                r.acceleration_max_mm_s2,
+            )  # fmt: skip
+        return CartesianRobot(
+            position_min_mm=r.position_min_mm,
+            position_max_mm=r.position_max_mm,
+            velocity_max_mm_s=r.velocity_max_mm_s,
+            acceleration_max_mm_s2=r.acceleration_max_mm_s2,
+            control_period_s=r.control_period_s,
+            T_world_base=T_world_base,
+            T_tcp_sensor=T_tcp_sensor,
+            servo=servo,
+        )
+    import dataclasses
+
+    from seamtrack.control.arm import ArticulatedRobot
+    from seamtrack.control.kinematics import ArmKinematics
+
+    T_flange_tcp = frames.from_xyz_rpy_deg(r.tool.tcp_xyz_mm, r.tool.tcp_rpy_deg)
+    if r.urdf is not None:
+        kin = ArmKinematics.from_urdf(scene.resolve_path(r.urdf), T_flange_tcp)
+    else:
+        kin = ArmKinematics.named(r.model, T_flange_tcp)
+    if r.joint_acceleration_max_deg_s2 is not None:
+        accel = np.radians(np.broadcast_to(r.joint_acceleration_max_deg_s2, (kin.dof,)))
+        kin = dataclasses.replace(kin, acceleration_max_rad_s2=np.array(accel, dtype=float))
+    servo = None
+    if gain_list is not None:
+        if len(gain_list) not in (1, kin.dof):
+            raise SceneError(
+                f"{len(gain_list)} gains for an arm of {kin.dof} joints",
+                field="robot.servo_gain_1_s",
+                fix=f"give one K_v, or {kin.dof} (one per joint)",
+            )
+        servo = Servo(
+            tuple(gain_list), ipo, r.control_period_s, tuple(kin.velocity_max_rad_s.tolist()),
+            tuple(kin.acceleration_max_rad_s2.tolist()),
+        )  # fmt: skip
+    return ArticulatedRobot(
+        kinematics=kin,
+        control_period_s=r.control_period_s,
+        T_world_base=T_world_base,
+        T_tcp_sensor=T_tcp_sensor,
+        velocity_max_mm_s=r.tcp_velocity_max_mm_s,
+        acceleration_max_mm_s2=r.tcp_acceleration_max_mm_s2,
+        angular_velocity_max_rad_s=math.radians(r.angular_velocity_max_deg_s),
+        angular_acceleration_max_rad_s2=math.radians(r.angular_acceleration_max_deg_s2),
+        servo=servo,
+        min_wrist_angle_rad=math.radians(r.min_wrist_angle_deg),
+    )
+
+
+def tool_program(scene: Scene, seam: Seam) -> ToolProgram:
+    """The tool orientations along the scene's nominal seam."""
+    c = scene.config
+    return ToolProgram(
+        seam,
+        work_rad=math.radians(c.torch.work_angle_deg),
+        travel_rad=math.radians(c.torch.travel_angle_deg),
+        look_ahead_mm=c.sensor.look_ahead_mm,
+    )
+
+
+def plan_arm(robot: Any, program: ToolProgram, start_world: FloatArray) -> FloatArray:
+    """Joint positions at the start pose, after proving the whole seam reachable (a
+    :class:`ReachError` names the first seam point that is not)."""
+    seam = program.seam
+    count = max(2, int(math.ceil(seam.length_mm / PLAN_STEP_MM)) + 1)
+    s = np.linspace(0.0, seam.length_mm, count)
+    points, _, _ = program.frame(s)
+    rotations = program.rotations(s)
+    poses = np.tile(np.eye(4), (count, 1, 1))
+    poses[:, :3, :3] = rotations
+    poses[:, :3, 3] = points
+    joints = robot.plan(poses, "seam point", "seam")
+    start = np.eye(4)
+    start[:3, :3] = rotations[0]
+    start[:3, 3] = start_world
+    kin = robot.kinematics
+    result = kin.ik(robot._T_base_world @ start, joints[0], max_iterations=100)
+    if not result or (result.q < kin.lower_rad).any() or (result.q > kin.upper_rad).any():
+        raise ReachError(
+            f"the start point {np.round(start_world, 3).tolist()} mm is out of the arm's reach",
+            field="robot.start_offset_mm",
+            fix="start closer to the seam (robot.start_offset_mm)",
+        )
+    return np.asarray(result.q)
+
+
+def check_sensor_outside(
+    poses_T_world_tcp: FloatArray,
+    T_tcp_sensor: FloatArray,
+    sensor: LaserLineSensor,
+    seam: Seam,
+    mesh: Any = None,
+    explicit_mount: bool = False,
+    turns_tool: bool = True,
+) -> None:
+    """Refuse a sensor mount that puts the emitter or the camera inside the part.
+
+    With a mesh (mesh mode) the test is the mesh's own inside test; without one (seam mode), a
+    mount given in ``[robot.tool]`` must put the emitter and camera on the torch side of the
+    seam (positive along its torch normal).
+    """
+    if mesh is None and not explicit_mount:
+        return  # seam mode knows no part surface: only a mount the user set is judged there
+    T = poses_T_world_tcp @ T_tcp_sensor
+    emitter = T[:, :3, 3]
+    camera = emitter + sensor.baseline_mm * T[:, :3, 0]
+    points = np.concatenate([emitter, camera])
+    inside = np.zeros(len(points), dtype=bool)
+    if mesh is not None and getattr(mesh, "is_watertight", False):
+        inside = np.asarray(mesh.contains(points), dtype=bool)
+    else:
+        closest = seam.closest(points)
+        seg = closest.segment
+        normal = seam.normals[seg]
+        inside = np.sum((points - closest.points) * normal, axis=1) < 0.0
+    if inside.any():
+        i = int(np.flatnonzero(inside)[0])
+        which = "emitter" if i < len(emitter) else "camera"
+        where = (
+            f"the sensor's {which} would be inside the part at "
+            f"{np.round(points[i], 3).tolist()} mm (pose {i % len(emitter)} along the seam, "
+            f"torch at {np.round(poses_T_world_tcp[i % len(emitter), :3, 3], 3).tolist()} mm)"
+        )
+        if explicit_mount:
+            raise SceneError(
+                where,
+                field="robot.tool.sensor_xyz_mm",
+                fix="mount the sensor above the torch tip on the torch side (z_tcp > 0), laser "
+                "pointing down the torch",
+            )
+        if not turns_tool:
+            raise SceneError(
+                where + ": the gantry's torch and sensor cannot turn with the seam",
+                field="robot.model",
+                fix='use an arm that turns its tool (robot.model = "ur10e"), or a seam the '
+                "sensor can see from above",
+            )
+        raise SceneError(
+            where,
+            field="sensor.look_ahead_mm",
+            fix="a shorter look-ahead or range (sensor.range_mm), or another torch angle",
+        )
