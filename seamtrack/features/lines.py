@@ -15,28 +15,18 @@ from __future__ import annotations
 
 import itertools
 import math
-from dataclasses import dataclass
-from typing import Any
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.sensing.profiles import Feature, Profile
+from seamtrack.features.robust import (
+    DEFAULT_RESOLUTION_MM,
+    front_end,
+)
+from seamtrack.sensing.profiles import Profile
 
 FloatArray = NDArray[np.float64]
-#: Coordinates beyond this (mm) are not measurements: treated as invalid.
-_MAX_ABS_MM = 1e6
-
-
-def _median5(z: FloatArray) -> FloatArray:
-    """Running median of 5 (edges: the nearest full window), by a min/max network."""
-    if len(z) < 5:
-        return np.full_like(z, np.median(z))
-    a, b, c, d, e = z[:-4], z[1:-3], z[2:-2], z[3:-1], z[4:]
-    f = np.maximum(np.minimum(a, b), np.minimum(c, d))
-    g = np.minimum(np.maximum(a, b), np.maximum(c, d))
-    med = np.maximum(np.minimum(e, f), np.minimum(np.maximum(e, f), g))
-    return np.concatenate([np.full(2, med[0]), med, np.full(2, med[-1])])
 
 
 @dataclass
@@ -106,95 +96,68 @@ class Segments:
     tol: float  # split / inlier tolerance (mm)
     spacing: float  # median distance between neighbouring points (mm)
     lines: list[Line]
-
-
-def kept_points(profile: Profile) -> FloatArray:
-    """(m, 2) valid, finite, bounded points of a profile, in column order."""
-    pts = np.asarray(profile.points_laser, dtype=np.float64).reshape(-1, 2)
-    valid = np.asarray(profile.valid, dtype=bool).reshape(-1)
-    if valid.shape != (len(pts),):
-        return np.empty((0, 2))
-    a = np.abs(pts)
-    return pts[valid & (a[:, 0] < _MAX_ABS_MM) & (a[:, 1] < _MAX_ABS_MM)]  # NaN fails too
-
-
-def _median(x: FloatArray) -> float:
-    """Upper median, without ``np.median``'s overhead (0 for an empty array).
-
-    A full sort, not ``np.partition``: on quantized profiles most values repeat (second
-    differences are mostly 0 or one pixel step), and introselect then takes ~70 us for 1000
-    values where the sort takes 7 us.
-    """
-    n = len(x)
-    return float(np.sort(x)[n // 2]) if n else 0.0
-
-
-def _spacing(points: FloatArray) -> float:
-    """Typical distance between neighbouring columns (mm): the median lateral step, which
-    range noise does not inflate (the median absolute step when the profile is vertical)."""
-    d = np.abs(np.diff(points, axis=0))
-    lateral = _median(d[:, 0])
-    return lateral if lateral > 0 else _median(np.hypot(d[:, 0], d[:, 1]))
-
-
-def noise_sigma(points: FloatArray) -> float:
-    """Robust noise estimate (mm) in range z_L, where a triangulation sensor's noise lies:
-    1.4826 median |second difference of z_L| / sqrt(6). On lines sampled at even spacing the
-    second differences are noise only; corners and jumps are few."""
-    if len(points) < 3:
-        return 0.0
-    z = points[:, 1]
-    return 1.4826 / math.sqrt(6.0) * _median(np.abs(z[2:] - 2.0 * z[1:-1] + z[:-2]))
+    #: (m,) True for the points of detours (spikes, reflections: in no piece).
+    stray: NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, dtype=bool))
+    #: (m,) each kept point's column in the profile.
+    columns: NDArray[np.intp] = field(default_factory=lambda: np.zeros(0, dtype=np.intp))
+    #: The range step of the profile's units (mm; 0: not quantized) and the resolution used.
+    quantum: float = 0.0
+    resolution: float = DEFAULT_RESOLUTION_MM
 
 
 def segment_profile(
     profile: Profile,
     *,
-    min_tol_mm: float = 0.03,
+    min_tol_mm: float | None = None,
+    resolution_mm: float | None = None,
     sigma_factor: float = 5.0,
     min_points: int = 8,
     max_lines: int = 64,
+    max_detour_mm: float = 3.0,
 ) -> Segments | str:
     """Split-and-merge a profile into straight pieces, or say why not (a ``str``).
 
     Parameters
     ----------
     profile : Profile
-    min_tol_mm : float
-        Floor of the split tolerance (covers pixel quantization).
+    min_tol_mm : float, optional
+        Floor of the split tolerance (covers pixel quantization); default
+        :data:`TOL_RESOLUTIONS` resolutions.
+    resolution_mm : float, optional
+        The sensor's range resolution; default the profile's range step when its ranges are
+        quantized (:func:`~seamtrack.features.robust.range_quantum`), else
+        :data:`DEFAULT_RESOLUTION_MM`.
     sigma_factor : float
-        Split tolerance = max(min_tol_mm, sigma_factor * estimated noise).
+        Split tolerance = max(floor, sigma_factor * estimated noise).
     min_points : int
         Pieces with fewer inliers are dropped.
     max_lines : int
         More pieces than this means there is no line structure: give up.
+    max_detour_mm : float
+        Widest detour (spike, reflection) the surface is followed across (mm, lateral).
     """
-    p = kept_points(profile)
-    if len(p) < 2 * min_points:
-        return f"too few valid points ({len(p)})"
-    # Isolated outliers first: they would split lines and bias the noise estimate.
-    sigma = noise_sigma(p)
-    spacing = _spacing(p)
-    if not spacing > 0:
-        return "the valid points do not spread out (constant profile)"
-    dev = np.abs(p[:, 1] - _median5(p[:, 1]))
-    p = p[dev <= max(6.0 * sigma, 4.0 * min_tol_mm, 4.0 * spacing)]
-    sigma = noise_sigma(p)
-    tol = max(min_tol_mm, sigma_factor * sigma)
-    gaps = np.hypot(*np.diff(p, axis=0).T)
-    cuts = np.flatnonzero(gaps > max(6.0 * spacing, 2.0 * tol, 0.1)) + 1
-    bounds = np.concatenate([[0], cuts, [len(p)]])
+    fe = front_end(
+        profile,
+        min_tol_mm=min_tol_mm,
+        resolution_mm=resolution_mm,
+        sigma_factor=sigma_factor,
+        min_points=min_points,
+        max_detour_mm=max_detour_mm,
+    )
+    if isinstance(fe, str):
+        return fe
+    p, sigma, tol = fe.points, fe.sigma, fe.tol
     pieces: list[tuple[int, int]] = []
-    for lo, hi in itertools.pairwise(bounds):
-        if hi - lo >= min_points:
+    for lo, hi in itertools.pairwise(fe.runs):
+        if hi - lo >= min_points and not fe.stray[lo]:
             run = _split(p, int(lo), int(hi) - 1, tol, max_lines)
             if run is None:
                 return "no straight pieces (too noisy or curved)"
-            pieces.extend(_refine(p, _merge(p, run, tol), sigma, min_tol_mm, min_points))
+            pieces.extend(_refine(p, _merge(p, run, tol), sigma, fe.floor, min_points))
         if len(pieces) > max_lines:
             return "no straight pieces (too noisy or curved)"
     lines = []
-    trim = max(3.0 * sigma, 0.5 * min_tol_mm)
+    trim = max(3.0 * sigma, 0.5 * fe.floor)
     for lo, hi in pieces:
         idx = np.arange(lo, hi + 1)
         line = _fit(p, idx)
@@ -204,7 +167,9 @@ def segment_profile(
             lines.append(_fit(p, idx))
     if not lines:
         return "no straight pieces with enough points"
-    return Segments(p, sigma, tol, spacing, lines)
+    return Segments(
+        p, sigma, tol, fe.spacing, lines, fe.stray, fe.columns, fe.quantum, fe.resolution
+    )
 
 
 def _best_split(q: FloatArray, min_size: int) -> tuple[int, float, float]:
@@ -438,92 +403,6 @@ DATA_ERRORS = (
     AttributeError,
     TypeError,
 )
-
-
-@dataclass(frozen=True)
-class _Base:
-    """Shared parameters and the never-raise wrapper of the built-in extractors."""
-
-    name: str = "base"
-    min_tol_mm: float = 0.03
-    min_points: int = 8
-    min_arm_mm: float = 0.5
-
-    def __call__(self, profile: Profile) -> Feature:
-        try:
-            with np.errstate(all="ignore"):
-                seg = segment_profile(
-                    profile, min_tol_mm=self.min_tol_mm, min_points=self.min_points
-                )
-                if isinstance(seg, str):
-                    return Feature.failed(seg, joint=self.name)
-                return self._extract(profile, seg)
-        except DATA_ERRORS as exc:  # never raise on data
-            return Feature.failed(f"{self.name}: unusable profile ({exc})", joint=self.name)
-
-    def _extract(self, profile: Profile, seg: Segments) -> Feature:
-        raise NotImplementedError
-
-    def _found(self, profile: Profile, point: FloatArray, **kw: Any) -> Feature:
-        return Feature.found(point, profile.T_world_sensor, joint=self.name, **kw)
-
-    def _groups(self, seg: Segments) -> list[Line]:
-        """Collinear groups supported enough to be an arm or a plate."""
-        return [
-            g
-            for g in collinear_groups(seg)
-            if g.count >= self.min_points and g.extent >= self.min_arm_mm
-        ]
-
-    def _arms(
-        self,
-        seg: Segments,
-        opening_down: bool,
-        min_deg: float,
-        max_deg: float,
-        max_reach_mm: float,
-        groups: list[Line] | None = None,
-    ) -> tuple[Line, Line, FloatArray, float] | str:
-        """The best pair of lines forming a V (opening towards the sensor, -z) or a ridge
-        (``opening_down``: the arms fall away from the sensor): (left, right, apex, score)."""
-        if groups is None:
-            groups = self._groups(seg)
-        sign = 1.0 if opening_down else -1.0
-        best: tuple[Line, Line, FloatArray, float] | None = None
-        for i, a in enumerate(groups):
-            for b in groups[i + 1 :]:
-                x = intersect(a, b)
-                if x is None:
-                    continue
-                arms = []
-                for g in (a, b):
-                    v = g.centroid - x
-                    v = v / max(float(np.hypot(*v)), 1e-300)
-                    near = float(np.min((seg.points[g.index] - x) @ v))
-                    arms.append((v, near, g))
-                (va, na, ga), (vb, nb, gb) = sorted(arms, key=lambda arm: float(arm[0][0]))
-                included = math.degrees(math.acos(float(np.clip(va @ vb, -1, 1))))
-                bis = va + vb
-                ok = (
-                    va[0] < 0 < vb[0]
-                    and sign * va[1] > 0
-                    and sign * vb[1] > 0
-                    and min_deg <= included <= max_deg
-                    and sign * bis[1] > 0.7 * float(np.hypot(*bis))  # bisector within 45 deg
-                    and -seg.tol <= min(na, nb)
-                    and max(na, nb) <= max_reach_mm
-                )
-                score = float(ga.count + gb.count)
-                if ok and (best is None or score > best[3]):
-                    best = (ga, gb, x, score)
-        return best if best is not None else "no pair of lines forms the joint"
-
-
-def _confidence(arms: list[Line], seg: Segments) -> float:
-    """Share of the kept points explained by the feature's lines, scaled by their fit."""
-    explained = sum(a.count for a in arms) / max(len(seg.points), 1)
-    fit = max(0.0, 1.0 - max(a.rms for a in arms) / seg.tol)
-    return float(np.clip(0.5 * explained + 0.5 * fit, 0.0, 1.0))
 
 
 #: A gap's wall or a lap's edge face stands at least this steep on the plates (deg). A false

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.features.base import _Base, _confidence
 from seamtrack.features.lines import (
     _BOTTOM_DEG,
     _PLATE_DEG,
@@ -27,8 +28,6 @@ from seamtrack.features.lines import (
     Line,
     Segments,
     _angle,
-    _Base,
-    _confidence,
     _fit,
     _on,
     _ray_t,
