@@ -381,6 +381,14 @@ def cmd_scan(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_render(args: argparse.Namespace) -> int:
+    from seamtrack.viz.images import render_command
+
+    for line in render_command(args.scene, args.at, args.out, overrides=_overrides(args)):
+        print(line)
+    return 0
+
+
 def cmd_bench(args: argparse.Namespace) -> int:
     from seamtrack.bench.runner import run_benches
 
@@ -485,6 +493,21 @@ def build_parser() -> argparse.ArgumentParser:
         help="arc length along the seam, mm (default 0)",
     )
     p.add_argument("--out", help="CSV file (a PNG plot is written beside it in mesh mode)")
+
+    p = add(
+        "render",
+        cmd_render,
+        "the camera image at an arc length, and the profile measured from its pixels",
+    )
+    p.add_argument("scene", help=SCENE_HELP)
+    p.add_argument(
+        "--at",
+        type=float,
+        default=0.0,
+        metavar="S_MM",
+        help="arc length along the seam, mm (default 0)",
+    )
+    p.add_argument("--out", help="PNG to write (default: render-<scene>-<S>mm.png)")
 
     p = add(
         "view",

@@ -59,6 +59,8 @@ RAYS_PER_SUBCOLUMN = 1.25
 BLOCK_COLUMNS = 32
 #: A false stripe counts (StripeImage.reflection) above this share of a white plane's column.
 REFLECTION_LEVEL = 0.01
+#: Stripe pieces adding less than this share of the full well to any pixel are not drawn.
+MIN_SIGNAL = 1e-4
 #: Smallest |cos| of incidence used for a footprint (grazing rays would spread to infinity).
 MIN_COS_INCIDENCE = 1e-3
 
@@ -122,7 +124,13 @@ def render_image(
     u, w, half, slope, sigma, signal = (
         np.concatenate([a, b]) for a, b in zip(direct.arrays(), bounce.arrays(), strict=True)
     )
-    electrons = formation.form_image(u, w, half, slope, sigma, signal, grid, rng)
+    # A piece whose light (with its neighbours') adds less than MIN_SIGNAL of the full well to
+    # any pixel is a glow below a tenth of a grey level: left out (a rough surface's lobe
+    # scatters its bounce over hundreds of pixels).
+    peak = signal / (math.sqrt(2 * math.pi) * np.maximum(sigma, 0.5) * np.maximum(2 * half, 1.0))
+    seen = peak >= MIN_SIGNAL * cam.full_well_e
+    electrons = formation.form_image(u[seen], w[seen], half[seen], slope[seen], sigma[seen],
+                                     signal[seen], grid, rng)  # fmt: skip
     spacing = hits.distance_mm[direct.ray] * power[direct.ray]
     truth = formation.stripe_rows(direct.u, direct.w, direct.ray, direct.points, spacing,
                                   optics.columns)  # fmt: skip
