@@ -170,7 +170,7 @@ def _mesh_scan(
                          noise=noise, rng=rng, t_s=t_s)  # fmt: skip
 
     if s.source == "image":  # every frame rendered by the camera and measured from its pixels
-        camera, detector = make_camera(s.camera), s.camera or CameraConfig()
+        camera, detector = make_camera(s.camera, s.preset), s.camera or CameraConfig()
         surface = w.material or "mill-scale steel"
 
         def measure(T_world_sensor: FloatArray, t_s: float) -> Profile:

@@ -26,7 +26,7 @@ from seamtrack.params import check_params
 from seamtrack.sensing.camera import Camera
 from seamtrack.sensing.materials import material
 from seamtrack.sensing.scan import StripeNoise
-from seamtrack.sensing.sensor import LaserLineSensor, preset
+from seamtrack.sensing.sensor import LaserLineSensor, data_sheet, preset
 
 # Strict: a number is never a boolean or a string, a boolean never "yes" or 1.
 Positive = Annotated[float, Field(gt=0, allow_inf_nan=False, strict=True)]
@@ -71,9 +71,10 @@ class CameraConfig(_Section):
     roi: tuple[NonNegativeInt, NonNegativeInt, NonNegativeInt, NonNegativeInt] | None = None
     focal_length_mm: Positive | None = None
     f_number: Positive = 8.0
-    wavelength_nm: Annotated[float, Field(ge=200, le=2000, allow_inf_nan=False, strict=True)] = (
-        660.0
-    )
+    # Default: the preset's data sheet, else 660 nm.
+    wavelength_nm: (
+        Annotated[float, Field(ge=200, le=2000, allow_inf_nan=False, strict=True)] | None
+    ) = None
     line_thickness_mm: Positive = 0.2
     line_divergence_mrad: NonNegative | None = None
     waist_range_mm: Positive | None = None
@@ -463,7 +464,7 @@ def check_consistency(scene: Scene) -> None:
             fix='set sensor.mode = "mesh" (with a [workpiece]), or sensor.source = "geometry"',
         )
     if c.sensor.camera is not None or c.sensor.source == "image":
-        make_camera(c.sensor.camera).check(sensor)
+        make_camera(c.sensor.camera, c.sensor.preset).check(sensor)
     if c.workpiece is not None and c.workpiece.material is not None:
         material(c.workpiece.material)
     check_plugin_params(c)
@@ -562,15 +563,18 @@ _SPEC_KEYS = (
 )
 
 
-def make_camera(cfg: CameraConfig | None) -> Camera:
-    """The camera of ``[sensor.camera]`` (all defaults when the table is absent)."""
+def make_camera(cfg: CameraConfig | None, sensor_preset: str = "paper") -> Camera:
+    """The camera of ``[sensor.camera]`` (all defaults when the table is absent); the laser's
+    wavelength defaults to the preset's data sheet, else 660 nm."""
     c = cfg if cfg is not None else CameraConfig()
-    same = ("rows", "columns", "roi", "focal_length_mm", "f_number", "wavelength_nm",
+    sheet = data_sheet(sensor_preset)
+    wavelength = c.wavelength_nm or (sheet.wavelength_nm if sheet else None) or 660.0
+    same = ("rows", "columns", "roi", "focal_length_mm", "f_number",
             "line_thickness_mm", "waist_range_mm", "exposure", "full_well_e", "read_noise_e",
             "ambient", "speckle", "shot_noise", "supersample")  # fmt: skip
     divergence = None if c.line_divergence_mrad is None else 1e-3 * c.line_divergence_mrad
     camera = Camera(**{k: getattr(c, k) for k in same}, bit_depth=c.bit_depth or None,
-                    line_divergence_rad=divergence)  # fmt: skip
+                    line_divergence_rad=divergence, wavelength_nm=wavelength)  # fmt: skip
     return camera.without_noise() if c.ideal else camera
 
 

@@ -124,7 +124,8 @@ def render_command(
     tcp = seam.interpolate([at_mm])[0]
     T_world_sensor = parts.robot.T_world_sensor(parts.robot.q_from_world(tcp))
     detector = c.sensor.camera or CameraConfig()
-    image = parts.sensor.render(parts.mesh, T_world_sensor, camera=make_camera(c.sensor.camera),
+    camera = make_camera(c.sensor.camera, c.sensor.preset)
+    image = parts.sensor.render(parts.mesh, T_world_sensor, camera=camera,
                                 seed=c.simulation.seed, material=c.workpiece.material)  # fmt: skip
     rows = detect(image.pixels, method=detector.method, threshold=detector.threshold,
                   choose=detector.choose)  # fmt: skip
