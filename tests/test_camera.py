@@ -8,8 +8,9 @@ import math
 
 import numpy as np
 import pytest
-import trimesh
 
+from seamtrack.bench.camera import plane_rows as analytic_rows
+from seamtrack.bench.camera import plate
 from seamtrack.errors import SceneError, SensorGeometryError
 from seamtrack.geometry import frames
 from seamtrack.sensing.camera import Camera
@@ -24,31 +25,6 @@ SENSOR = preset("paper")
 #: The laser pointing down (-Z) at the range centre above the world origin; x_L = X, y_L = -Y.
 T_DOWN = frames.from_xyz_rpy_deg([0.0, 0.0, SENSOR.range_center_mm], [180.0, 0.0, 0.0])
 SMALL = {"rows": 256, "columns": 512}
-
-
-def plate(roll_deg: float = 0.0, pitch_deg: float = 0.0, size: float = 300.0) -> trimesh.Trimesh:
-    """A square plate through the world origin, turned about world x (roll) then y (pitch)."""
-    corners = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], float) * 0.5 * size
-    mesh = trimesh.Trimesh(corners, [[0, 1, 2], [0, 2, 3]], process=False)
-    mesh.apply_transform(frames.from_xyz_rpy_deg([0, 0, 0], [roll_deg, pitch_deg, 0]))
-    return mesh
-
-
-def analytic_rows(image, normal_world: np.ndarray) -> np.ndarray:
-    """Per image column, the row where the laser plane's line on the plane through the world
-    origin with this normal images: solved in closed form (Eq. 2-3 and the plane equation)."""
-    sensor = image.sensor
-    n = np.asarray(normal_world) @ image.T_world_sensor[:3, :3]  # laser frame
-    k = float(n @ (image.T_world_sensor[:3, :3].T @ -image.T_world_sensor[:3, 3]))
-    _, z_c = image.chip_coordinates(np.zeros(image.shape[1]), np.arange(image.shape[1]))
-    b, lam = sensor.baseline_mm, sensor.focal_length_mm
-    s, c = math.sin(sensor.angle_rad), math.cos(sensor.angle_rad)
-    # On the laser plane: y = z_c (z c + b s) / lam; the plane: n_y y + n_z z = k.
-    z = (k - n[1] * z_c * b * s / lam) / (n[1] * z_c * c / lam + n[2])
-    y = z_c * (z * c + b * s) / lam
-    x_c, _ = sensor.project(y, z)
-    pitch_h = sensor.pixel_pitch_mm[0]
-    return (x_c + 0.5 * sensor.chip_h_mm) / pitch_h - 0.5 - image.window[0]
 
 
 def plate_normal(roll_deg: float, pitch_deg: float) -> np.ndarray:
