@@ -13,7 +13,8 @@ measured from pixels, and what image mode costs.
    seam, the seam point from the ray-cast stripe (geometry) and from the camera image on two
    materials, scored against the CAD seam.
 5. **Throughput**: 1024 x 512 images per second on one core, and an image-mode frame against a
-   geometry-mode frame on the same part and poses.
+   geometry-mode frame on the same part and poses. Times are the process's CPU time (one thread
+   does all the work), so other load on the machine does not inflate them.
 
 Writes ``camera.json`` and ``camera.md``.
 """
@@ -314,9 +315,9 @@ def _extractor_rows(quick: bool) -> list[dict[str, Any]]:
             errors, elapsed = [], 0.0
             for tcp in parts.seam.interpolate(arcs):
                 T = parts.robot.T_world_sensor(parts.robot.q_from_world(tcp))
-                start = time.perf_counter()
+                start = time.process_time()
                 _, feature = parts.scan(T, 0.0)
-                elapsed += time.perf_counter() - start
+                elapsed += time.process_time() - start
                 errors.append(
                     float(parts.seam.closest(feature.point_world).distance_mm[0])
                     if feature
@@ -351,16 +352,16 @@ def _throughput(quick: bool) -> dict[str, Any]:
     out: dict[str, Any] = {"image_px": [GRID["rows"], GRID["columns"]], "poses": len(poses)}
     for name, cam in cameras.items():
         SENSOR.render(caster, poses[0], camera=cam, seed=0)  # compile and build, untimed
-        start = time.perf_counter()
+        start = time.process_time()
         images = [SENSOR.render(caster, T, camera=cam, seed=i) for i, T in enumerate(poses)]
-        render_s = (time.perf_counter() - start) / len(poses)
-        start = time.perf_counter()
+        render_s = (time.process_time() - start) / len(poses)
+        start = time.process_time()
         profiles = [image.profile("centroid", threshold=0.02) for image in images]
-        detect_s = (time.perf_counter() - start) / len(poses)
-        start = time.perf_counter()
+        detect_s = (time.process_time() - start) / len(poses)
+        start = time.process_time()
         for profile in profiles:
             find(profile)
-        extract_s = (time.perf_counter() - start) / len(poses)
+        extract_s = (time.process_time() - start) / len(poses)
         out[name] = {
             "render_ms": 1e3 * render_s,
             "images_per_s": 1.0 / render_s,
@@ -370,13 +371,13 @@ def _throughput(quick: bool) -> dict[str, Any]:
             "supersample": cam.supersampling(cam.imaging_sensor(SENSOR)),
         }
     scan_mesh(SENSOR, caster, poses[0], rays=1024)
-    start = time.perf_counter()
+    start = time.process_time()
     profiles = [scan_mesh(SENSOR, caster, T, rays=1024) for T in poses]
-    scan_s = (time.perf_counter() - start) / len(poses)
-    start = time.perf_counter()
+    scan_s = (time.process_time() - start) / len(poses)
+    start = time.process_time()
     for profile in profiles:
         find(profile)
-    extract_s = (time.perf_counter() - start) / len(poses)
+    extract_s = (time.process_time() - start) / len(poses)
     out["geometry"] = {
         "scan_ms": 1e3 * scan_s,
         "extract_ms": 1e3 * extract_s,
