@@ -13,6 +13,9 @@ from seamtrack._version import __version__ as __version__
 
 _EXPORTS = {
     "LaserLineSensor": "seamtrack.sensing.sensor",
+    "Camera": "seamtrack.sensing.camera",
+    "StripeImage": "seamtrack.sensing.camera",
+    "Material": "seamtrack.sensing.materials",
     "Seam": "seamtrack.geometry.seam",
     "Profile": "seamtrack.sensing.profiles",
     "Feature": "seamtrack.sensing.profiles",

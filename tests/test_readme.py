@@ -51,6 +51,11 @@ def test_the_python_tour_runs_and_its_comments_hold(tour: dict[str, Any]) -> Non
     feature = tour["feature"]
     assert feature  # the v-groove extractor found the seam in the scanned stripe
     assert tour["part"].seam.closest(feature.point_world).distance_mm[0] < 0.05
+    # Camera images: the same extractor on the profile measured from the rendered image.
+    assert tour["image"].pixels.shape == (512, 1024)
+    assert tour["seam_point"]
+    assert tour["part"].seam.closest(tour["seam_point"].point_world).distance_mm[0] < 0.1
+    assert len(tour["ideal"].truth_row) == 1024 and tour["ideal"].reflection.dtype == bool
 
 
 def test_the_tracker_example_tracks_the_paper_seam(

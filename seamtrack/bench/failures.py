@@ -28,6 +28,8 @@ from seamtrack.bench.common import machine_info
 SHORT = ["--set", "seam.length_mm=20"]
 #: paper-v-groove cut to its first 30 mm: a mesh-mode run for the extractor entries.
 MESH = ["paper-v-groove", "--set", "workpiece.params.seam_length_mm=30"]
+#: The image-mode scene, for the camera's entries on ``seamtrack render``.
+CAMERA = ["v-groove-camera", "--at", "10", "--out", "OUT/image.png"]
 
 PLUGINS = """
 import math
@@ -221,6 +223,50 @@ CATALOGUE: tuple[Entry, ...] = (
         field="robot.tool.sensor_xyz_mm",
     ),
     Entry("servo gain that rings", _run(*_set("robot.servo_gain_1_s=900")), field="servo_gain"),
+    # --- the camera (image mode)
+    Entry("f-number 0", _run(*_set("sensor.camera.f_number=0")), field="sensor.camera.f_number"),
+    Entry(
+        "f-number -2.8",
+        ("render", *CAMERA, *_set("sensor.camera.f_number=-2.8")),
+        field="sensor.camera.f_number",
+    ),
+    Entry(
+        "wavelength 150 nm",
+        _run(*_set("sensor.camera.wavelength_nm=150")),
+        field="sensor.camera.wavelength_nm",
+    ),
+    Entry(
+        "wavelength 2500 nm",
+        ("render", *CAMERA, *_set("sensor.camera.wavelength_nm=2500")),
+        field="sensor.camera.wavelength_nm",
+    ),
+    Entry(
+        "line wider than the field",
+        _run(*_set("sensor.camera.line_thickness_mm=30")),
+        field="sensor.camera.line_thickness_mm",
+    ),
+    Entry(
+        "roi off the chip",
+        _run(*_set("sensor.camera.rows=100", "sensor.camera.roi=[0, 200, 0, 50]")),
+        field="sensor.camera.roi",
+    ),
+    Entry(
+        "unknown peak detector",
+        _run(*_set('sensor.camera.method="peak"')),
+        field="sensor.camera.method",
+    ),
+    Entry(
+        "unknown material",
+        ("render", *CAMERA, *_set('workpiece.material="chrome"')),
+        field="workpiece.material",
+    ),
+    Entry("image mode without a mesh", _run(*_set('sensor.source="image"')), field="sensor.source"),
+    Entry(
+        "render a seam-mode scene",
+        ("render", "paper-verification", "--at", "10"),
+        field="sensor.mode",
+    ),
+    Entry("unknown real sensor", _run(*_set('sensor.preset="gocator-2331"')), field="preset"),
     # --- CAD
     Entry(
         "unknown CAD parameter",

@@ -291,6 +291,12 @@ def _bench_scaling(out: Path, quick: bool) -> Any:
     return bench_scaling(out, quick=quick)
 
 
+def _bench_camera(out: Path, quick: bool) -> Any:
+    from seamtrack.bench.camera import bench_camera
+
+    return bench_camera(out, quick=quick)
+
+
 def _bench_failures(out: Path, quick: bool) -> Any:
     from seamtrack.bench.failures import bench_failures
 
@@ -306,6 +312,7 @@ BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "sweep": lambda out, quick: bench_sweep(out, quick=quick),
     "scaling": _bench_scaling,
     "failures": _bench_failures,
+    "camera": _bench_camera,
 }
 
 

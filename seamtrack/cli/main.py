@@ -7,47 +7,18 @@ problem, ``seamtrack: error: <field>: <what>; fix: <how>``, and exits with code 
 from __future__ import annotations
 
 import argparse
-import json
-import math
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
 
 from seamtrack._version import __version__
+from seamtrack.cli.tables import print_table
 from seamtrack.errors import OutputError, PluginRuntimeError, SceneError, SeamtrackError
 
 EXIT_USAGE = 2
 SCENE_HELP = "built-in scene name (seamtrack init --list) or a .toml file"
 QUIET_HELP = "print nothing but errors"
-
-
-# --------------------------------------------------------------------------- formatting
-def _fmt(value: Any) -> str:
-    if isinstance(value, float):
-        if not math.isfinite(value):
-            return "n/a"
-        return f"{value:.6g}"
-    return str(value)
-
-
-def print_table(rows: Sequence[tuple[str, Any]], title: str = "") -> None:
-    """Two aligned columns."""
-    if title:
-        print(title)
-    width = max((len(k) for k, _ in rows), default=0)
-    for key, value in rows:
-        print(f"  {key:<{width}}  {_fmt(value)}")
-
-
-def print_grid(header: Sequence[str], rows: Sequence[Sequence[Any]]) -> None:
-    cells = [[_fmt(c) for c in row] for row in rows]
-    widths = [
-        max(len(h), *(len(r[i]) for r in cells)) if cells else len(h) for i, h in enumerate(header)
-    ]
-    print("  ".join(h.rjust(w) for h, w in zip(header, widths, strict=True)))
-    for row in cells:
-        print("  ".join(c.rjust(w) for c, w in zip(row, widths, strict=True)))
 
 
 def _overrides(args: argparse.Namespace) -> list[str]:
@@ -215,38 +186,10 @@ def cmd_check(args: argparse.Namespace) -> int:
 
 
 def cmd_sensor(args: argparse.Namespace) -> int:
-    from seamtrack.sensing.sensor import PRESET_SPECS, preset
-    from seamtrack.simulation.scene import parse_override
+    from seamtrack.cli.sensors import sensor_command
 
-    if args.list:
-        for name in PRESET_SPECS:
-            print(name)
-        return 0
-    overrides = dict(parse_override(o) for o in _overrides(args))
-    overrides = {k.removeprefix("sensor."): v for k, v in overrides.items()}
-    known = set(PRESET_SPECS[args.preset]) if args.preset in PRESET_SPECS else set()
-    for key in overrides:
-        if key not in known | {"quantize", "focal_length_mm"}:
-            raise SceneError(
-                f"unknown sensor spec {key!r}",
-                field=f"--set {key}",
-                fix=f"use one of {', '.join(sorted(known))}",
-            )
-    sensor = preset(args.preset, **overrides)
-    specs, geometry = sensor.specs(), sensor.geometry()
-    if args.json:
-        print(json.dumps({"preset": args.preset, "specs": specs, "geometry": geometry}, indent=2))
-        return 0
-    print_table(
-        list(geometry.items()),
-        f"sensor {args.preset!r}: geometry (b, lambda, theta_s, H, V, N_H, N_V)",
-    )
-    sheet = PRESET_SPECS.get(args.preset, {})
-    print("\nspecs through Eq. 4-8 (and the data sheet they came from)")
-    print_grid(
-        ["spec", "Eq. 4-8", "data sheet"], [(k, v, sheet.get(k, "")) for k, v in specs.items()]
-    )
-    return 0
+    return sensor_command(args.preset, list_all=args.list, as_json=args.json,
+                          overrides=_overrides(args))  # fmt: skip
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
@@ -381,6 +324,14 @@ def cmd_scan(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_render(args: argparse.Namespace) -> int:
+    from seamtrack.viz.images import render_command
+
+    for line in render_command(args.scene, args.at, args.out, overrides=_overrides(args)):
+        print(line)
+    return 0
+
+
 def cmd_bench(args: argparse.Namespace) -> int:
     from seamtrack.bench.runner import run_benches
 
@@ -487,6 +438,21 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", help="CSV file (a PNG plot is written beside it in mesh mode)")
 
     p = add(
+        "render",
+        cmd_render,
+        "the camera image at an arc length, and the profile measured from its pixels",
+    )
+    p.add_argument("scene", help=SCENE_HELP)
+    p.add_argument(
+        "--at",
+        type=float,
+        default=0.0,
+        metavar="S_MM",
+        help="arc length along the seam, mm (default 0)",
+    )
+    p.add_argument("--out", help="PNG to write (default: render-<scene>-<S>mm.png)")
+
+    p = add(
         "view",
         cmd_view,
         "render a scene (part, seam, sensor, laser fan, field of view, stripe) to a PNG",
@@ -535,7 +501,7 @@ def build_parser() -> argparse.ArgumentParser:
         "which",
         nargs="?",
         default="all",
-        help="raycast, extractors, mesh, loop, tradeoff, sweep, scaling, failures, or all",
+        help="raycast, extractors, mesh, loop, tradeoff, sweep, scaling, failures, camera, or all",
     )
     p.add_argument("--out", default="bench-results", help="folder for the results")
     p.add_argument("--quick", action="store_true", help="fewer repeats (a smoke run)")

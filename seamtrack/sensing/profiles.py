@@ -27,7 +27,7 @@ class Reason(IntEnum):
     OCCLUDED = 2  # the camera cannot see the lit point
     OUT_OF_RANGE = 3  # outside the depth of field or the trapezoidal field of view
     INCIDENCE = 4  # lit at a grazing angle beyond the sensor's limit: too dim
-    DROPOUT = 5  # lost to the noise model (dropout, speckle)
+    DROPOUT = 5  # lost to the noise model (dropout, speckle), or no peak in an image column
     SPIKE = 6  # an isolated point off its neighbours (a specular spike): left out by extractors
     REFLECTION = 7  # a run off the line the surface continues on across it (multipath streak)
 

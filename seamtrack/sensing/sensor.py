@@ -22,6 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from seamtrack import constants
 from seamtrack.errors import SensorGeometryError
+from seamtrack.sensing.presets import DATA_SHEETS, DataSheet
 from seamtrack.sensing.scan import scan_mesh
 
 FloatArray = NDArray[np.float64]
@@ -376,6 +377,29 @@ class LaserLineSensor:
         """
         return scan_mesh(self, part, T_world_sensor, **kwargs)
 
+    def render(
+        self,
+        part: Any,
+        T_world_sensor: ArrayLike,
+        *,
+        camera: Any = None,
+        seed: Any = None,
+        material: Any = None,
+        t_s: float = float("nan"),
+    ) -> Any:
+        """The camera image of the stripe on a mesh at a pose (a :class:`StripeImage`).
+
+        A thin delegate to :func:`seamtrack.sensing.render.render_image`: ``camera`` a
+        :class:`~seamtrack.sensing.camera.Camera` (default ``Camera()``), ``seed`` an int or a
+        numpy Generator, ``material`` a name (``"bright aluminium"``) or a
+        :class:`~seamtrack.sensing.materials.Material`. ``image.profile(method=...)`` measures
+        the profile from its pixels.
+        """
+        from seamtrack.sensing.render import render_image
+
+        return render_image(self, part, T_world_sensor, camera=camera, material_name=material,
+                            seed=seed, t_s=t_s)  # fmt: skip
+
 
 def _whole_pixels(count: float) -> int:
     nearest = round(count)
@@ -406,7 +430,56 @@ PRESET_SPECS: dict[str, dict[str, float]] = {
         "depth_resolution_mm": 0.05,
         "lateral_resolution_mm": 0.05,
     },
+    # Real sensors from their data sheets (seamtrack.sensing.presets names the sources).
+    **{name: sheet.specs() for name, sheet in DATA_SHEETS.items()},
 }
+
+
+def preset_source(name: str) -> str:
+    """Where a preset's figures come from (one line)."""
+    if name == "paper":
+        return "Jung, Sung and Rhee, Table 3 (the paper)"
+    if name == "wide":
+        return "illustrative specs of a wide seam-tracking head (not a product)"
+    sheet = DATA_SHEETS.get(name)
+    if sheet is None:
+        raise SensorGeometryError(f"unknown preset {name!r}", field="sensor.preset",
+                                  fix=f"use one of {', '.join(sorted(PRESET_SPECS))}")  # fmt: skip
+    return sheet.source
+
+
+def data_sheet(name: str) -> DataSheet | None:
+    """The :class:`~seamtrack.sensing.presets.DataSheet` of a real sensor preset, else None."""
+    return DATA_SHEETS.get(name)
+
+
+def angle_for_standoff(
+    depth_of_field_mm: float, fov_near_mm: float, fov_far_mm: float, standoff_mm: float
+) -> float:
+    """The triangulation angle (deg) at which the near end of the range lies ``standoff_mm``
+    from the emitter, for a data sheet that gives the range and field but no angle.
+
+    With D and F_max / F_min fixed, the near range falls monotonically as the angle grows
+    (``from_specs``), so it is found by bisection in (0.5, 60) deg.
+    """
+
+    def near(angle_deg: float) -> float:
+        return LaserLineSensor.from_specs(
+            depth_of_field_mm=depth_of_field_mm, fov_near_mm=fov_near_mm, fov_far_mm=fov_far_mm,
+            angle_deg=angle_deg, depth_resolution_mm=1.0, lateral_resolution_mm=1.0,
+        ).range_near_mm  # fmt: skip
+
+    lo, hi = 0.5, 60.0
+    if not near(hi) <= standoff_mm <= near(lo):
+        raise SensorGeometryError(
+            f"no angle in (0.5, 60) deg puts the range's near end at {standoff_mm} mm",
+            field="sensor.standoff_mm",
+            fix="check the data sheet's clearance, range and field of view",
+        )
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if near(mid) > standoff_mm else (lo, mid)
+    return 0.5 * (lo + hi)
 
 
 def preset(name: str, **overrides: Any) -> LaserLineSensor:

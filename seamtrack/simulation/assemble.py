@@ -30,7 +30,14 @@ from seamtrack.simulation.robots import (
     plan_arm,
     tool_program,
 )
-from seamtrack.simulation.scene import Scene, check_ticks, default_time_limit_s, make_sensor
+from seamtrack.simulation.scene import (
+    CameraConfig,
+    Scene,
+    check_ticks,
+    default_time_limit_s,
+    make_camera,
+    make_sensor,
+)
 
 FloatArray = NDArray[np.float64]
 SenseFn = Callable[[FloatArray, float], Feature]
@@ -141,17 +148,22 @@ def _mesh_scan(
     s = scene.config.sensor
     noise = _stripe_noise(s.stripe_noise)
 
+    def measure(T_world_sensor: FloatArray, t_s: float) -> Profile:
+        return scan_mesh(sensor, caster, T_world_sensor, rays=s.rays, refine=s.refine_float64,
+                         noise=noise, rng=rng, t_s=t_s)  # fmt: skip
+
+    if s.source == "image":  # every frame rendered by the camera and measured from its pixels
+        camera, detector = make_camera(s.camera, s.preset), s.camera or CameraConfig()
+        surface = w.material or "mill-scale steel"
+
+        def measure(T_world_sensor: FloatArray, t_s: float) -> Profile:
+            image = sensor.render(caster, T_world_sensor, camera=camera, seed=rng,
+                                  material=surface, t_s=t_s)  # fmt: skip
+            return image.profile(detector.method, threshold=detector.threshold,
+                                 choose=detector.choose)  # fmt: skip
+
     def scan(T_world_sensor: FloatArray, t_s: float) -> tuple[Profile, Feature]:
-        profile = scan_mesh(
-            sensor,
-            caster,
-            T_world_sensor,
-            rays=s.rays,
-            refine=s.refine_float64,
-            noise=noise,
-            rng=rng,
-            t_s=t_s,
-        )
+        profile = measure(T_world_sensor, t_s)
         try:
             feature = find(profile)
         except Exception as exc:  # the user's extractor may fail in any way

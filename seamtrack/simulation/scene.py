@@ -24,8 +24,10 @@ from seamtrack.control.registry import tracker_class
 from seamtrack.errors import SceneError
 from seamtrack.features.extractors import extractor_target
 from seamtrack.params import check_params
+from seamtrack.sensing.camera import Camera
+from seamtrack.sensing.materials import material
 from seamtrack.sensing.scan import StripeNoise
-from seamtrack.sensing.sensor import LaserLineSensor, preset
+from seamtrack.sensing.sensor import LaserLineSensor, data_sheet, preset
 from seamtrack.simulation.robots import check_robot, is_arm
 
 # Strict: a number is never a boolean or a string, a boolean never "yes" or 1.
@@ -33,6 +35,7 @@ Positive = Annotated[float, Field(gt=0, allow_inf_nan=False, strict=True)]
 NonNegative = Annotated[float, Field(ge=0, allow_inf_nan=False, strict=True)]
 Finite = Annotated[float, Field(allow_inf_nan=False, strict=True)]
 Flag = Annotated[bool, Field(strict=True)]
+NonNegativeInt = Annotated[int, Field(ge=0, strict=True)]
 Vec3 = tuple[Finite, Finite, Finite]
 PositiveVec3 = tuple[Positive, Positive, Positive]
 
@@ -61,9 +64,41 @@ class SeamConfig(_Section):
     rotation_deg: Vec3 = (0.0, 0.0, 0.0)
 
 
+class CameraConfig(_Section):
+    """``[sensor.camera]``: the camera of image mode (:class:`seamtrack.sensing.camera.Camera`)
+    and the peak detector that measures each image."""
+
+    rows: Annotated[int, Field(ge=3, le=20_000, strict=True)] | None = None
+    columns: Annotated[int, Field(ge=3, le=20_000, strict=True)] | None = None
+    roi: tuple[NonNegativeInt, NonNegativeInt, NonNegativeInt, NonNegativeInt] | None = None
+    focal_length_mm: Positive | None = None
+    f_number: Positive = 8.0
+    # Default: the preset's data sheet, else 660 nm.
+    wavelength_nm: (
+        Annotated[float, Field(ge=200, le=2000, allow_inf_nan=False, strict=True)] | None
+    ) = None
+    line_thickness_mm: Positive = 0.2
+    line_divergence_mrad: NonNegative | None = None
+    waist_range_mm: Positive | None = None
+    exposure: Positive = 0.5
+    full_well_e: Positive = 10_000.0
+    read_noise_e: NonNegative = 5.0
+    bit_depth: Annotated[int, Field(ge=0, le=16, strict=True)] = 10  # 0: no quantization
+    ambient: NonNegative = 0.0
+    speckle: Flag = True
+    shot_noise: Flag = True
+    supersample: Annotated[int, Field(ge=1, le=8, strict=True)] | None = None
+    ideal: Flag = False  # every noise source off (Camera.ideal)
+    method: Literal["centroid", "gaussian", "steger"] = "centroid"
+    threshold: Annotated[float, Field(ge=0, le=1, allow_inf_nan=False, strict=True)] = 0.1
+    choose: Literal["strongest", "first", "widest"] = "strongest"
+
+
 class SensorConfig(_Section):
     preset: str = "paper"
     mode: Literal["seam", "mesh"] = "seam"
+    source: Literal["geometry", "image"] = "geometry"
+    camera: CameraConfig | None = None
     frame_rate_hz: Positive = 1.0
     latency_s: NonNegative = 0.0
     look_ahead_mm: NonNegative = 10.0
@@ -161,6 +196,7 @@ class WorkpieceConfig(_Section):
     offset_mm: Vec3 = (0.0, 0.0, 0.0)
     rotation_deg: Vec3 = (0.0, 0.0, 0.0)
     obstacles: list[Box] = Field(default_factory=list)
+    material: str | None = None  # a name of seamtrack.sensing.materials.MATERIALS (image mode)
 
 
 class SceneConfig(_Section):
@@ -283,6 +319,8 @@ def _fix_for(error: Any, model: type[BaseModel]) -> str:
         return f"{hint}remove it; keys here: {', '.join(fields)}"
     if kind in {"greater_than", "greater_than_equal"}:
         return "give a positive number in the unit of the key's suffix"
+    if kind in {"less_than", "less_than_equal"}:
+        return "give a value within the range the message states"
     if kind == "literal_error":
         return "use one of the values listed"
     if kind in {"float_parsing", "float_type", "int_parsing", "int_type", "finite_number"}:
@@ -457,8 +495,18 @@ def check_consistency(scene: Scene) -> None:
             fix=f"use at most {speed_limit:.4g} mm/s (and at most the axis limit along a seam "
             "that follows one axis)",
         )
-    make_sensor(c.sensor)  # impossible sensor geometry is an error here, before any run
+    sensor = make_sensor(c.sensor)  # impossible sensor geometry is an error here, before any run
     check_robot(c)
+    if c.sensor.source == "image" and c.sensor.mode != "mesh":
+        raise SceneError(
+            "image mode renders the camera image of the part's mesh",
+            field="sensor.source",
+            fix='set sensor.mode = "mesh" (with a [workpiece]), or sensor.source = "geometry"',
+        )
+    if c.sensor.camera is not None or c.sensor.source == "image":
+        make_camera(c.sensor.camera, c.sensor.preset).check(sensor)
+    if c.workpiece is not None and c.workpiece.material is not None:
+        material(c.workpiece.material)
     check_plugin_params(c)
     check_sizes(c)
 
@@ -557,6 +605,21 @@ _SPEC_KEYS = (
     "focal_length_mm",
     "standoff_mm",
 )
+
+
+def make_camera(cfg: CameraConfig | None, sensor_preset: str = "paper") -> Camera:
+    """The camera of ``[sensor.camera]`` (all defaults when the table is absent); the laser's
+    wavelength defaults to the preset's data sheet, else 660 nm."""
+    c = cfg if cfg is not None else CameraConfig()
+    sheet = data_sheet(sensor_preset)
+    wavelength = c.wavelength_nm or (sheet.wavelength_nm if sheet else None) or 660.0
+    same = ("rows", "columns", "roi", "focal_length_mm", "f_number",
+            "line_thickness_mm", "waist_range_mm", "exposure", "full_well_e", "read_noise_e",
+            "ambient", "speckle", "shot_noise", "supersample")  # fmt: skip
+    divergence = None if c.line_divergence_mrad is None else 1e-3 * c.line_divergence_mrad
+    camera = Camera(**{k: getattr(c, k) for k in same}, bit_depth=c.bit_depth or None,
+                    line_divergence_rad=divergence, wavelength_nm=wavelength)  # fmt: skip
+    return camera.without_noise() if c.ideal else camera
 
 
 def make_sensor(cfg: SensorConfig) -> LaserLineSensor:

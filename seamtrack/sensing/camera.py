@@ -1,0 +1,363 @@
+"""The camera of the laser-line sensor: its optics and chip (:class:`Camera`) and the image it
+takes (:class:`StripeImage`), rendered by :func:`seamtrack.sensing.render.render_image`.
+
+Image axes follow the chip of Eq. 1-3: image **rows** run along x_c (which encodes range; row 0
+at x_c = -H/2, the far end of the depth of field) and image **columns** along z_c (lateral; column
+0 at z_c = -V/2, y_L < 0). A row coordinate r is continuous with pixel i covering
+[i - 0.5, i + 0.5], so x_c = (row0 + r + 0.5) * H / N_H - H / 2 in the full chip.
+
+The pinhole model of Eq. 1-3 takes the camera constant lambda (``focal_length_mm``) as the
+distance from the projection centre to the chip; the laser plane is in focus everywhere (a
+Scheimpflug camera, as triangulation sensors are built), so the lens blurs only by diffraction
+at its aperture. ``f_number`` is the working (image-side) f-number: the pupil diameter is
+lambda / f_number.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from seamtrack.errors import SensorGeometryError
+from seamtrack.sensing.materials import Material
+from seamtrack.sensing.profiles import Profile
+
+if TYPE_CHECKING:  # annotations only: the sensor module imports the renderer, which imports this
+    from seamtrack.sensing.sensor import LaserLineSensor
+
+FloatArray = NDArray[np.float64]
+
+#: Supersampling is capped here: finer speckle than the cap resolves is averaged on the pixel.
+MAX_SUPERSAMPLE = 8
+
+
+def _fail(key: str, message: str, fix: str) -> SensorGeometryError:
+    return SensorGeometryError(message, field=f"sensor.camera.{key}", fix=fix)
+
+
+@dataclass(frozen=True)
+class Camera:
+    """Optics, laser line and chip of a laser-line sensor's camera.
+
+    Parameters
+    ----------
+    rows, columns : int, optional
+        The chip's pixel grid along x_c (range) and z_c (lateral); default the sensor's N_H and
+        N_V. The chip keeps its size (the sensor's H and V), so these set the pixel pitch.
+    roi : (row0, row1, col0, col1), optional
+        A region of interest of that grid, half-open; the image holds only these pixels.
+    focal_length_mm : float, optional
+        The lens (camera constant lambda); default the sensor's. The chip scales with it, so
+        the field of view stays the sensor's (only H / lambda, V / lambda matter in Eq. 1-8).
+    f_number : float
+        Working f-number N: pupil diameter lambda / N; diffraction blur and speckle follow.
+    wavelength_nm : float
+        Laser wavelength, 200-2000 nm.
+    line_thickness_mm : float
+        Full 1/e^2 width of the laser sheet across its plane (along x_L) at the waist.
+    line_divergence_rad : float, optional
+        Full-angle 1/e^2 divergence of that thickness; default the diffraction limit of a
+        Gaussian beam of that waist, 4 lambda / (pi * thickness).
+    waist_range_mm : float, optional
+        Distance from the emitter to the waist along the laser; default the range centre.
+    exposure : float
+        Peak signal, as a fraction of the full well, that a white Lambertian plane across the
+        laser at the range centre gives (the level a sensor's exposure control aims at).
+    full_well_e : float
+        Electrons a pixel holds before it saturates.
+    read_noise_e : float
+        RMS read noise, electrons.
+    bit_depth : int, optional
+        ADC bits; None: no quantization.
+    ambient : float
+        Ambient or arc light, as a fraction of the full well added to every pixel.
+    speckle : bool
+        Laser speckle: the surface's coherent field imaged through the pupil.
+    shot_noise : bool
+        Poisson statistics of the collected electrons.
+    supersample : int, optional
+        Sub-pixels per pixel and axis for the speckle field; default from lambda N and the
+        pixel pitch (2 per speckle grain, at most :data:`MAX_SUPERSAMPLE`).
+    """
+
+    rows: int | None = None
+    columns: int | None = None
+    roi: tuple[int, int, int, int] | None = None
+    focal_length_mm: float | None = None
+    f_number: float = 8.0
+    wavelength_nm: float = 660.0
+    line_thickness_mm: float = 0.2
+    line_divergence_rad: float | None = None
+    waist_range_mm: float | None = None
+    exposure: float = 0.5
+    full_well_e: float = 10_000.0
+    read_noise_e: float = 5.0
+    bit_depth: int | None = 10
+    ambient: float = 0.0
+    speckle: bool = True
+    shot_noise: bool = True
+    supersample: int | None = None
+
+    def __post_init__(self) -> None:
+        for key in ("rows", "columns"):
+            value = getattr(self, key)
+            if value is not None and not (isinstance(value, int) and 3 <= value <= 20_000):
+                raise _fail(key, f"{value} pixels", "give a whole number of pixels, 3-20000")
+        if not (math.isfinite(self.f_number) and self.f_number > 0):
+            raise _fail("f_number", f"f-number {self.f_number} is not positive",
+                        "give the lens aperture as N > 0, e.g. 8")  # fmt: skip
+        if not 200.0 <= self.wavelength_nm <= 2000.0:
+            raise _fail("wavelength_nm", f"{self.wavelength_nm} nm is outside 200-2000 nm",
+                        "line lasers emit 405, 450, 635-690 or 808 nm")  # fmt: skip
+        positive = ("line_thickness_mm", "exposure", "full_well_e")
+        for key in positive:
+            value = getattr(self, key)
+            if not (math.isfinite(value) and value > 0):
+                raise _fail(key, f"{value} is not positive", "give a positive number")
+        for key in ("focal_length_mm", "waist_range_mm"):
+            value = getattr(self, key)
+            if value is not None and not (math.isfinite(value) and value > 0):
+                raise _fail(key, f"{value} is not positive", "give a length in mm, or leave it out")
+        div = self.line_divergence_rad
+        if div is not None and not (math.isfinite(div) and 0 <= div < 0.5):
+            raise _fail("line_divergence_mrad", f"{div * 1e3:.4g} mrad",
+                        "give the full-angle divergence, 0 to 500 mrad")  # fmt: skip
+        for key in ("read_noise_e", "ambient"):
+            value = getattr(self, key)
+            if not (math.isfinite(value) and value >= 0):
+                raise _fail(key, f"{value} is negative or not finite", "give a number >= 0")
+        if self.bit_depth is not None and not 1 <= self.bit_depth <= 16:
+            raise _fail("bit_depth", f"{self.bit_depth} bits", "give 1-16 bits, or none")
+        s = self.supersample
+        if s is not None and not 1 <= s <= MAX_SUPERSAMPLE:
+            raise _fail("supersample", f"{s}", f"give 1-{MAX_SUPERSAMPLE} sub-pixels per pixel")
+        if self.roi is not None:
+            r0, r1, c0, c1 = self.roi
+            if not (0 <= r0 and r1 - r0 >= 3 and 0 <= c0 and c1 - c0 >= 1):
+                raise _fail(
+                    "roi", f"{list(self.roi)} is empty or negative",
+                    "give [row0, row1, col0, col1] with row1 >= row0 + 3 and col1 > col0",
+                )  # fmt: skip
+
+    # ------------------------------------------------------------------ variants
+    @classmethod
+    def ideal(cls, **fields: Any) -> Camera:
+        """The optics (line width, diffraction blur, pixel integration) with every noise source
+        off: no speckle, shot or read noise, quantization or ambient light."""
+        return cls(**{**_NOISELESS, **fields})
+
+    def without_noise(self) -> Camera:
+        """This camera with every noise source off (as :meth:`ideal`)."""
+        return dataclasses.replace(self, **_NOISELESS)
+
+    @property
+    def is_ideal(self) -> bool:
+        """No noise source is on."""
+        return all(getattr(self, k) == v for k, v in _NOISELESS.items())
+
+    # ------------------------------------------------------------------ derived optics
+    @property
+    def wavelength_mm(self) -> float:
+        return self.wavelength_nm * 1e-6
+
+    @property
+    def speckle_size_mm(self) -> float:
+        """lambda * N on the chip: the diameter scale of a speckle grain (the Airy radius is
+        1.22 lambda N)."""
+        return self.wavelength_mm * self.f_number
+
+    @property
+    def blur_sigma_mm(self) -> float:
+        """Standard deviation of the Gaussian that fits the Airy disc, 0.42 lambda N, on the
+        chip (used for the blur when speckle is off; with speckle the pupil itself blurs)."""
+        return 0.42 * self.speckle_size_mm
+
+    def divergence_rad(self) -> float:
+        """Full-angle divergence of the line thickness (the Gaussian-beam value by default)."""
+        if self.line_divergence_rad is not None:
+            return self.line_divergence_rad
+        return 4.0 * self.wavelength_mm / (math.pi * self.line_thickness_mm)
+
+    def line_sigma_mm(self, distance_mm: Any, waist_mm: float) -> FloatArray:
+        """Standard deviation of the sheet's intensity across its plane at a distance from the
+        emitter: a quarter of the 1/e^2 width sqrt(W0^2 + (Theta (d - d_waist))^2)."""
+        d = np.asarray(distance_mm, dtype=np.float64)
+        width = np.hypot(self.line_thickness_mm, self.divergence_rad() * (d - waist_mm))
+        return np.asarray(0.25 * width)
+
+    def imaging_sensor(self, sensor: LaserLineSensor) -> LaserLineSensor:
+        """The sensor geometry this camera images with: its pixel grid and lens, the same field
+        of view, every point measured (no incidence limit, no pixel snapping)."""
+        f = self.focal_length_mm or sensor.focal_length_mm
+        scale = f / sensor.focal_length_mm
+        return dataclasses.replace(
+            sensor,
+            focal_length_mm=f,
+            chip_h_mm=sensor.chip_h_mm * scale,
+            chip_v_mm=sensor.chip_v_mm * scale,
+            pixels_h=self.rows or sensor.pixels_h,
+            pixels_v=self.columns or sensor.pixels_v,
+            quantize=False,
+            max_incidence_rad=math.pi / 2,
+        )
+
+    def window(self, imaging: LaserLineSensor) -> tuple[int, int, int, int]:
+        """(row0, row1, col0, col1) of the image in the full chip grid."""
+        if self.roi is None:
+            return 0, imaging.pixels_h, 0, imaging.pixels_v
+        return self.roi
+
+    def supersampling(self, imaging: LaserLineSensor) -> int:
+        """Sub-pixels per pixel and axis: 1 without speckle; with speckle, two per lambda N on
+        the chip (the intensity's band limit), at most :data:`MAX_SUPERSAMPLE`."""
+        if self.supersample is not None:
+            return self.supersample
+        if not self.speckle:
+            return 1
+        pitch = max(imaging.pixel_pitch_mm)
+        return int(min(MAX_SUPERSAMPLE, max(1, math.ceil(2.0 * pitch / self.speckle_size_mm))))
+
+    def check(self, sensor: LaserLineSensor) -> None:
+        """Refuse what cannot work with this sensor: a region of interest off the chip, a laser
+        line thicker than the field of view or the depth of field."""
+        imaging = self.imaging_sensor(sensor)
+        if self.roi is not None:
+            _, r1, _, c1 = self.roi
+            if r1 > imaging.pixels_h or c1 > imaging.pixels_v:
+                raise _fail("roi", f"{list(self.roi)} reaches beyond the {imaging.pixels_h} x "
+                            f"{imaging.pixels_v} pixel chip",
+                            "keep row1 <= rows and col1 <= columns")  # fmt: skip
+        waist = self.waist_range_mm or sensor.range_center_mm
+        widest = 4.0 * float(
+            np.max(self.line_sigma_mm([sensor.range_near_mm, sensor.range_far_mm], waist))
+        )
+        field = min(sensor.fov_near_mm, sensor.depth_of_field_mm)
+        if widest >= field:
+            raise _fail("line_thickness_mm", f"the laser line is {widest:.4g} mm thick in the "
+                        f"depth of field, wider than the field ({field:.4g} mm)",
+                        "give the 1/e^2 thickness of the line, typically 0.02-1 mm")  # fmt: skip
+
+
+_NOISELESS: dict[str, Any] = {
+    "speckle": False,
+    "shot_noise": False,
+    "read_noise_e": 0.0,
+    "bit_depth": None,
+    "ambient": 0.0,
+}
+
+
+# =========================================================================== the image
+@dataclass(frozen=True, eq=False)
+class StripeImage:
+    """A camera image of the laser stripe, with the truth it was rendered from.
+
+    Attributes
+    ----------
+    pixels : (rows, columns) float32
+        Signal as a fraction of full scale (1.0: saturated), quantized to the bit depth.
+    camera : Camera
+    sensor : LaserLineSensor
+        The imaging geometry (:meth:`Camera.imaging_sensor`): triangulates the measured rows.
+    material : Material
+    window : (row0, row1, col0, col1)
+        Where the image lies in the full chip grid.
+    truth_row : (columns,) float
+        Per column, the sub-pixel row where the ideal stripe (laser plane x_L = 0 on the part,
+        lit and seen) images; NaN where the column sees none. Where a column sees the stripe
+        twice (a step), the nearer one.
+    reflection : (columns,) bool
+        The column shows a false stripe (the laser's first specular bounce lighting the part
+        elsewhere) brighter than 1 % of the exposure level.
+    reflection_row : (columns,) float
+        Sub-pixel row of that false stripe's centre (its intensity-weighted mean); NaN where none.
+    T_world_sensor : (4, 4) float or None
+    t_s : float
+        Capture time.
+    """
+
+    pixels: NDArray[np.float32]
+    camera: Camera
+    sensor: LaserLineSensor
+    material: Material
+    window: tuple[int, int, int, int]
+    truth_row: FloatArray
+    reflection: NDArray[np.bool_]
+    reflection_row: FloatArray
+    T_world_sensor: FloatArray | None = None
+    t_s: float = float("nan")
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """(rows, columns)."""
+        return int(self.pixels.shape[0]), int(self.pixels.shape[1])
+
+    def chip_coordinates(self, rows: Any, columns: Any) -> tuple[FloatArray, FloatArray]:
+        """(x_c, z_c) in mm of sub-pixel image coordinates (arrays broadcast)."""
+        r0, _, c0, _ = self.window
+        pitch_h, pitch_v = self.sensor.pixel_pitch_mm
+        half_h, half_v = 0.5 * self.sensor.chip_h_mm, 0.5 * self.sensor.chip_v_mm
+        x_c = (r0 + np.asarray(rows, dtype=np.float64) + 0.5) * pitch_h - half_h
+        z_c = (c0 + np.asarray(columns, dtype=np.float64) + 0.5) * pitch_v - half_v
+        return x_c, z_c
+
+    def triangulate_rows(self, rows: Any) -> FloatArray:
+        """(columns, 2) (y_L, z_L) of one sub-pixel row per column (NaN stays NaN)."""
+        r = np.asarray(rows, dtype=np.float64)
+        x_c, z_c = self.chip_coordinates(r, np.arange(len(r)))
+        y, z = self.sensor.triangulate(x_c, z_c)
+        return np.column_stack([y, z])
+
+    @property
+    def truth_laser(self) -> FloatArray:
+        """(columns, 2) the ideal stripe points (y_L, z_L) per column; NaN where none."""
+        return self.triangulate_rows(self.truth_row)
+
+    def profile(
+        self,
+        method: str = "centroid",
+        *,
+        threshold: float = 0.1,
+        choose: str = "strongest",
+        sigma_px: float | None = None,
+    ) -> Profile:
+        """The stripe profile measured from the pixels, as ``scan()`` gives it.
+
+        Parameters
+        ----------
+        method : {"centroid", "gaussian", "steger"}
+            Sub-pixel peak in each column: the thresholded centroid, the 3-point Gaussian fit
+            on the brightest pixel, or Steger's line detector (Gaussian-smoothed derivatives).
+        threshold : float
+            Pixels above this fraction of full scale form the candidate peaks.
+        choose : {"strongest", "first", "widest"}
+            Among several peaks in one column: the brightest, the first along the range (the
+            nearest to the sensor) or the widest.
+        sigma_px : float, optional
+            Steger's smoothing scale (default from the median width of the peaks).
+
+        Returns
+        -------
+        Profile
+            One point (y_L, z_L) per image column, in column order (y_L increasing); columns
+            without a peak are invalid with ``Reason.DROPOUT``.
+        """
+        from seamtrack.sensing.peaks import detect
+
+        rows = detect(self.pixels, method=method, threshold=threshold, choose=choose,
+                      sigma_px=sigma_px)  # fmt: skip
+        return self.profile_from_rows(rows)
+
+    def profile_from_rows(self, rows: FloatArray) -> Profile:
+        """A :class:`Profile` of one sub-pixel row per column (NaN: no peak there)."""
+        from seamtrack.sensing.profiles import Reason
+
+        points = self.triangulate_rows(rows)
+        found = np.isfinite(points[:, 0]) & np.isfinite(points[:, 1])
+        reason = np.where(found, Reason.VALID, Reason.DROPOUT).astype(np.uint8)
+        return Profile._trusted(points, reason, self.T_world_sensor, self.t_s)

@@ -1,0 +1,268 @@
+"""Peak detectors: the sub-pixel row of the laser stripe in each image column, as a sensor's
+firmware finds it.
+
+A column's candidates are its runs of pixels above a threshold (a peak each). One is chosen per
+column (the brightest, the first along the range, or the widest) and located to a fraction of
+a pixel by
+
+- ``centroid``: the centroid of (I - threshold) over the run;
+- ``gaussian``: the 3-point Gaussian fit on the brightest pixel and its neighbours,
+  delta = (ln I[-1] - ln I[+1]) / (2 (ln I[-1] - 2 ln I[0] + ln I[+1])) (falls back to the
+  centroid on a saturated plateau or at the image edge);
+- ``steger``: Steger's curvilinear line detector (IEEE PAMI 20(2), 1998): Gaussian-smoothed
+  derivatives; at each pixel of the run the line's normal n is the Hessian's eigenvector of the
+  most negative eigenvalue; from the run's pixel of strongest response, Steger's step
+  t = -(g . n) / (n^T H n) points to the centre (which must lie within a pixel), located as the
+  zero of the directional derivative g . n between that pixel and its neighbour towards it; the
+  line is followed along its direction to the column's centre.
+
+Rows are centre-based: row i's centre is i (as :attr:`StripeImage.truth_row`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+from scipy import ndimage
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+METHODS = ("centroid", "gaussian", "steger")
+CHOICES = ("strongest", "first", "widest")
+
+
+@dataclass(frozen=True, eq=False)
+class Peaks:
+    """Every run of pixels above the threshold, column by column (rows increasing).
+
+    Attributes
+    ----------
+    column, start, stop : (k,) int
+        The run covers rows [start, stop) of that column.
+    peak : (k,) float
+        Its largest pixel value.
+    argmax : (k,) int
+        The row of that pixel.
+    centroid : (k,) float
+        Centroid of (I - threshold) over the run.
+    """
+
+    column: IntArray
+    start: IntArray
+    stop: IntArray
+    peak: FloatArray
+    argmax: IntArray
+    centroid: FloatArray
+
+    def __len__(self) -> int:
+        return len(self.column)
+
+    @property
+    def width(self) -> IntArray:
+        return self.stop - self.start
+
+
+@numba.njit(cache=True, nogil=True)
+def _runs(image_t: NDArray[np.float32], threshold: float) -> tuple[
+    IntArray, IntArray, IntArray, FloatArray, IntArray, FloatArray
+]:  # fmt: skip
+    """Runs above the threshold of a (columns, rows) image: two passes, count then fill."""
+    n_cols, n_rows = image_t.shape
+    count = 0
+    for c in range(n_cols):
+        inside = False
+        for r in range(n_rows):
+            above = image_t[c, r] > threshold
+            if above and not inside:
+                count += 1
+            inside = above
+    column = np.empty(count, dtype=np.int64)
+    start = np.empty(count, dtype=np.int64)
+    stop = np.empty(count, dtype=np.int64)
+    peak = np.empty(count)
+    argmax = np.empty(count, dtype=np.int64)
+    centroid = np.empty(count)
+    k = -1
+    for c in range(n_cols):
+        inside = False
+        total = 0.0
+        moment = 0.0
+        for r in range(n_rows + 1):
+            value = image_t[c, r] - threshold if r < n_rows else 0.0
+            if value > 0:
+                if not inside:
+                    k += 1
+                    column[k] = c
+                    start[k] = r
+                    peak[k] = -1.0
+                    total = 0.0
+                    moment = 0.0
+                    inside = True
+                total += value
+                moment += value * r
+                if value + threshold > peak[k]:
+                    peak[k] = value + threshold
+                    argmax[k] = r
+            elif inside:
+                stop[k] = r
+                centroid[k] = moment / total
+                inside = False
+    return column, start, stop, peak, argmax, centroid
+
+
+def find_peaks(pixels: NDArray[np.floating], threshold: float) -> Peaks:
+    """All candidate peaks of an image (rows, columns); ``threshold`` in pixel units."""
+    image_t = np.ascontiguousarray(np.asarray(pixels, dtype=np.float32).T)
+    return Peaks(*_runs(image_t, float(threshold)))
+
+
+def choose_peaks(peaks: Peaks, columns: int, choose: str) -> IntArray:
+    """Index of the chosen peak per column, (columns,), -1 where a column has none."""
+    if choose not in CHOICES:
+        raise ValueError(f"choose must be one of {CHOICES}, got {choose!r}")
+    out = np.full(columns, -1, dtype=np.int64)
+    if len(peaks) == 0:
+        return out
+    # "first" along the range is the nearest to the sensor: the largest row (x_c = +H/2 is
+    # the near end); runs come in row order, so the key is the index itself.
+    key = {"strongest": peaks.peak, "first": np.arange(len(peaks), dtype=float),
+           "widest": peaks.width + 1e-9 * peaks.peak}[choose]  # fmt: skip
+    order = np.lexsort((key, peaks.column))
+    out[peaks.column[order]] = order  # the last per column (largest key) wins
+    return out
+
+
+def detect(
+    pixels: NDArray[np.floating],
+    *,
+    method: str = "centroid",
+    threshold: float = 0.1,
+    choose: str = "strongest",
+    sigma_px: float | None = None,
+) -> FloatArray:
+    """Sub-pixel stripe row per column (see the module docstring); NaN where none.
+
+    Parameters
+    ----------
+    pixels : (rows, columns) float
+    method : {"centroid", "gaussian", "steger"}
+    threshold : float
+        In pixel units (a fraction of full scale for a :class:`StripeImage`).
+    choose : {"strongest", "first", "widest"}
+        "first" is the first along the range: the peak nearest the sensor (largest row).
+    sigma_px : float, optional
+        Steger's smoothing scale; default the median run width / (2 sqrt 3) (Steger's bound
+        for a bar-shaped line), at least 0.8.
+
+    Returns
+    -------
+    (columns,) float
+    """
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {METHODS}, got {method!r}")
+    if not (math.isfinite(threshold) and threshold >= 0):
+        raise ValueError(f"threshold must be >= 0, got {threshold}")
+    image = np.asarray(pixels, dtype=np.float32)
+    n_cols = image.shape[1]
+    peaks = find_peaks(image, threshold)
+    chosen = choose_peaks(peaks, n_cols, choose)
+    rows = np.full(n_cols, np.nan)
+    cols = np.flatnonzero(chosen >= 0)
+    k = chosen[cols]
+    if method == "centroid":
+        rows[cols] = peaks.centroid[k]
+    elif method == "gaussian":
+        rows[cols] = _gaussian(image, peaks, k, cols)
+    else:
+        rows[cols] = _steger(image, peaks, k, cols, sigma_px)
+    return rows
+
+
+def _gaussian(image: NDArray[np.float32], peaks: Peaks, k: IntArray, cols: IntArray) -> FloatArray:
+    m = peaks.argmax[k]
+    n_rows = image.shape[0]
+    inner = (m > 0) & (m < n_rows - 1)
+    below = image[np.clip(m - 1, 0, n_rows - 1), cols].astype(np.float64)
+    centre = image[m, cols].astype(np.float64)
+    above = image[np.clip(m + 1, 0, n_rows - 1), cols].astype(np.float64)
+    tiny = 1e-6
+    la, lb, lc = (np.log(np.maximum(v, tiny)) for v in (below, centre, above))
+    curvature = la - 2.0 * lb + lc
+    ok = inner & (curvature < 0) & (centre > below) & (centre > above)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        delta = 0.5 * (la - lc) / np.where(ok, curvature, -1.0)
+    return np.where(ok, m + delta, peaks.centroid[k])
+
+
+def _steger(
+    image: NDArray[np.float32], peaks: Peaks, k: IntArray, cols: IntArray, sigma_px: float | None
+) -> FloatArray:
+    if len(k) == 0:
+        return np.empty(0)
+    width = peaks.width[k]
+    sigma = sigma_px if sigma_px is not None else max(0.8, float(np.median(width)) / (2 * 3**0.5))
+    reach = int(math.ceil(4 * sigma)) + 1
+    r0 = max(0, int(peaks.start[k].min()) - reach)
+    r1 = min(image.shape[0], int(peaks.stop[k].max()) + reach)
+    crop = image[r0:r1].astype(np.float64)
+
+    def derivative(order: tuple[int, int]) -> FloatArray:
+        return np.asarray(ndimage.gaussian_filter(crop, sigma, order=order, mode="nearest"))
+
+    g_r, g_c = derivative((1, 0)), derivative((0, 1))
+    h_rr, h_cc, h_rc = derivative((2, 0)), derivative((0, 2)), derivative((1, 1))
+    # Every pixel of every chosen run, with the run it belongs to.
+    run_of = np.repeat(np.arange(len(k)), width)
+    first = np.repeat(peaks.start[k], width)
+    offset = np.arange(len(run_of)) - np.repeat(np.cumsum(width) - width, width)
+    rr = first + offset - r0
+    cc = np.repeat(cols, width)
+    a, b, d = h_rr[rr, cc], h_rc[rr, cc], h_cc[rr, cc]
+    # Most negative eigenvalue of [[a, b], [b, d]] and its eigenvector (the line's normal).
+    half_trace, root = 0.5 * (a + d), np.sqrt(0.25 * (a - d) ** 2 + b**2)
+    eig = half_trace - root
+    n_r, n_c = b, eig - a  # (H - eig I) v = 0 -> v = (b, eig - a), or (eig - d, b)
+    alt = np.hypot(n_r, n_c) < 1e-12 * (np.abs(a) + np.abs(d) + 1e-30)
+    n_r, n_c = np.where(alt, eig - d, n_r), np.where(alt, b, n_c)
+    norm = np.hypot(n_r, n_c)
+    norm = np.where(norm > 0, norm, 1.0)
+    n_r, n_c = n_r / norm, n_c / norm
+    curvature = n_r * n_r * a + 2 * n_r * n_c * b + n_c * n_c * d
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t = -(n_r * g_r[rr, cc] + n_c * g_c[rr, cc]) / curvature
+    # The ridge's pixel in each run: the strongest (most negative) curvature across the line.
+    best = np.full(len(k), np.inf)
+    np.minimum.at(best, run_of, eig)
+    winners = np.flatnonzero(eig == best[run_of])
+    pick = np.full(len(k), -1, dtype=np.int64)
+    pick[run_of[winners]] = winners
+    p = np.maximum(pick, 0)
+    good = (
+        (pick >= 0) & (eig[p] < 0) & (np.abs(t[p] * n_r[p]) <= 1.0) & (np.abs(t[p] * n_c[p]) <= 1.0)
+    )
+    # Steger's Newton step t is off by about -x^3 / sigma^2 at an offset x from the pixel; the
+    # zero of the first directional derivative between the pixel and its neighbour towards the
+    # centre is found by linear interpolation instead (exact for a symmetric line halfway).
+    nr, nc, tp = n_r[p], n_c[p], t[p]
+    step_r = np.rint(np.sign(tp) * nr).astype(np.int64)
+    step_c = np.rint(np.sign(tp) * nc).astype(np.int64)
+    pr, pc = rr[p], cc[p]
+    qr = np.clip(pr + step_r, 0, crop.shape[0] - 1)
+    qc = np.clip(pc + step_c, 0, crop.shape[1] - 1)
+    slope_p = nr * g_r[pr, pc] + nc * g_c[pr, pc]
+    slope_q = nr * g_r[qr, qc] + nc * g_c[qr, qc]
+    crossing = (slope_p * slope_q <= 0) & (slope_p != slope_q) & ((qr != pr) | (qc != pc))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        frac = np.where(crossing, slope_p / (slope_p - slope_q), 0.0)
+        point_r = np.where(crossing, pr + frac * (qr - pr), pr + tp * nr)
+        point_c = np.where(crossing, pc + frac * (qc - pc), pc + tp * nc)
+        # Along the line (perpendicular to n) back to the column's centre; a line nearly along
+        # the column keeps the point itself.
+        steep = np.abs(nr) < 0.3
+        row = np.where(steep, point_r, point_r - (pc - point_c) * nc / nr) + r0
+    return np.where(good, row, peaks.centroid[k])

@@ -1,0 +1,147 @@
+"""Data sheets of real laser profile sensors, as presets (``preset("gocator-2330")``).
+
+Each :class:`DataSheet` holds the published figures and names the document they come from; a
+figure the sources do not give is listed in ``assumed`` with the reason. The figures were read
+from the sources as quoted (their URLs are in ``source``); where we could only read a public
+transcription of a data sheet, ``source`` says so. Nothing here imports the sensor model:
+:func:`seamtrack.sensing.sensor.preset` solves the geometry from these specs.
+
+Two modelling choices apply to all of them (stated in ``assumed``):
+
+- The paper's model (Eq. 1-8) needs the triangulation angle, which these data sheets do not
+  give. It is derived instead: the angle at which the near end of the measuring range lies at
+  the data sheet's clearance distance from the emitter (the emitter taken at the window).
+  ``seamtrack.sensing.sensor.angle_for_standoff`` solves it; a test checks each value.
+- R_D = D / N_H is a pixel step in Eq. 7, not the sub-pixel "Z resolution" of a data sheet; we
+  take N_H = 1024 camera rows across the range.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+#: Camera rows assumed across the measuring range (R_D = D / ASSUMED_ROWS).
+ASSUMED_ROWS = 1024
+
+_LMI_2300 = (
+    "LMI Technologies, Gocator 2300 Series data sheet (DATASHEET_Gocator_2300_US_WEB.pdf, "
+    "lmi3d.com), p. 2: clearance distance CD, measurement range MR, field of view near/far "
+    "(read as transcribed in two independent public hardware catalogues); standard laser "
+    "660 nm (LMI's Gocator 2300 Series specification page)"
+)
+_LMI_2300_NOTE = (
+    "; X resolution, Z repeatability and scan rate as quoted from the same data sheet "
+    "(lakewoodautomation.com/support/manuals/LMI/DATASHEET_Gocator_2300_US_WEB.pdf) in a "
+    "public engineering note"
+)
+_KEYENCE_LJX = (
+    "Keyence LJ-X8000 Series specifications (keyence.com/products/measure/laser-2d/lj-x8000/"
+    "specs/): reference distance 380 mm, +-60 mm, X range 180-240 mm, repeatability 5 um, "
+    "16 kHz, as quoted in a public engineering note; 405 nm (blue) throughout the series"
+)
+_ANGLE = "derived: the near end of the range at the clearance distance from the emitter"
+_ROWS = f"not given: {ASSUMED_ROWS} camera rows across the measuring range"
+
+
+@dataclass(frozen=True)
+class DataSheet:
+    """Published figures of one sensor model (mm, Hz, nm).
+
+    Attributes
+    ----------
+    make, model, source : str
+    clearance_mm : float
+        From the sensor's front to the near end of the measuring range.
+    range_mm : float
+        The measuring range (depth of field) D.
+    fov_near_mm, fov_far_mm : float
+        Width of the laser line's measured field at the near and far ends.
+    angle_deg : float
+        Triangulation angle (derived where the data sheet gives none; see ``assumed``).
+    depth_resolution_mm, lateral_resolution_mm : float
+        R_D and R_L of Eq. 7-8 (average step per camera row / column).
+    points_per_profile : int or None
+    profile_rate_hz : float or None
+        The highest profile rate published.
+    repeatability_z_mm : float or None
+    wavelength_nm : float or None
+    assumed : dict of str to str
+        Field -> why it is not the data sheet's figure.
+    """
+
+    make: str
+    model: str
+    source: str
+    clearance_mm: float
+    range_mm: float
+    fov_near_mm: float
+    fov_far_mm: float
+    angle_deg: float
+    depth_resolution_mm: float
+    lateral_resolution_mm: float
+    points_per_profile: int | None = None
+    profile_rate_hz: float | None = None
+    repeatability_z_mm: float | None = None
+    wavelength_nm: float | None = None
+    assumed: dict[str, str] = field(default_factory=dict)
+
+    def specs(self) -> dict[str, float]:
+        """The specs ``LaserLineSensor.from_specs`` takes (and the stand-off)."""
+        return {
+            "standoff_mm": self.clearance_mm,
+            "depth_of_field_mm": self.range_mm,
+            "fov_near_mm": self.fov_near_mm,
+            "fov_far_mm": self.fov_far_mm,
+            "angle_deg": self.angle_deg,
+            "depth_resolution_mm": self.depth_resolution_mm,
+            "lateral_resolution_mm": self.lateral_resolution_mm,
+        }
+
+
+def _gocator(model: str, cd: float, mr: float, near: float, far: float, angle: float,
+             x_res: tuple[float, float] | None = None, rate_hz: float | None = None,
+             repeat_um: float | None = None) -> DataSheet:  # fmt: skip
+    assumed = {"angle_deg": _ANGLE, "depth_resolution_mm": _ROWS}
+    if x_res is None:
+        points = 1280
+        lateral = (near + far) / (2 * points)
+        assumed["lateral_resolution_mm"] = "not read: 1280 points per profile assumed"
+        assumed["points_per_profile"] = "not read: 1280 assumed"
+    else:
+        lateral, points = 0.5 * (x_res[0] + x_res[1]), None
+    return DataSheet(
+        make="LMI Technologies", model=f"Gocator {model}",
+        source=_LMI_2300 + (_LMI_2300_NOTE if x_res else ""),
+        clearance_mm=cd, range_mm=mr, fov_near_mm=near, fov_far_mm=far, angle_deg=angle,
+        depth_resolution_mm=mr / ASSUMED_ROWS, lateral_resolution_mm=lateral,
+        points_per_profile=points, profile_rate_hz=rate_hz,
+        repeatability_z_mm=None if repeat_um is None else repeat_um * 1e-3,
+        wavelength_nm=660.0, assumed=assumed,
+    )  # fmt: skip
+
+
+#: The built-in real sensors (``seamtrack sensor --list``).
+DATA_SHEETS: dict[str, DataSheet] = {
+    "gocator-2320": _gocator("2320", 40.0, 25.0, 18.0, 26.0, 29.631),
+    "gocator-2330": _gocator("2330", 90.0, 80.0, 47.0, 85.0, 15.366),
+    "gocator-2340": _gocator("2340", 190.0, 210.0, 96.0, 194.0, 13.824),
+    "gocator-2350": _gocator("2350", 300.0, 400.0, 158.0, 365.0, 6.411, x_res=(0.150, 0.300),
+                             rate_hz=5000.0, repeat_um=2.0),
+    "gocator-2380": _gocator("2380", 350.0, 800.0, 390.0, 1260.0, 7.207, x_res=(0.375, 1.100),
+                             rate_hz=5000.0, repeat_um=12.0),
+    "keyence-lj-x8400": DataSheet(
+        make="Keyence", model="LJ-X8400", source=_KEYENCE_LJX,
+        clearance_mm=320.0, range_mm=120.0, fov_near_mm=180.0, fov_far_mm=240.0,
+        angle_deg=18.168, depth_resolution_mm=120.0 / ASSUMED_ROWS,
+        lateral_resolution_mm=(180.0 + 240.0) / (2 * 3200), points_per_profile=3200,
+        profile_rate_hz=16_000.0, repeatability_z_mm=0.005, wavelength_nm=405.0,
+        assumed={
+            "clearance_mm": "reference distance 380 mm minus half the +-60 mm range",
+            "angle_deg": _ANGLE,
+            "depth_resolution_mm": _ROWS,
+            "points_per_profile": "3200, the profile data count published for the LJ-X8020/"
+            "8060/8080 heads of the series; not read for the 8400",
+            "lateral_resolution_mm": "from the 3200 points per profile",
+        },
+    ),
+}  # fmt: skip

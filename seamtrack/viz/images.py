@@ -1,0 +1,155 @@
+"""Pictures of rendered camera images: the stripe image with the rows a detector found, and the
+profile measured from it over the true one."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from seamtrack.errors import SceneError
+from seamtrack.sensing.camera import StripeImage
+from seamtrack.sensing.profiles import Feature, Profile
+from seamtrack.viz.plots import LEGEND_MARKER_PT, _pyplot
+
+
+def plot_stripe_image(
+    image: StripeImage,
+    profile: Profile,
+    path: str | Path,
+    *,
+    rows: Any = None,
+    feature: Feature | None = None,
+    title: str = "",
+    dpi: int = 120,
+) -> Path:
+    """Two panels: the camera image (rows along x_c, range; columns along z_c) with the
+    detected rows over it, and the measured profile against the ideal stripe in the laser plane.
+
+    Parameters
+    ----------
+    image : StripeImage
+    profile : Profile
+        Measured from ``image`` (``image.profile(...)``).
+    path : str or Path
+        PNG to write.
+    rows : (columns,) float, optional
+        The detected sub-pixel rows, drawn over the image.
+    feature : Feature, optional
+        A seam point found in ``profile``.
+
+    Returns
+    -------
+    Path
+    """
+    plt = _pyplot()
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(8.0, 7.5), height_ratios=[1.1, 1.0])
+    try:
+        top.imshow(image.pixels, cmap="gray", vmin=0.0, vmax=1.0, aspect="auto",
+                   interpolation="nearest")  # fmt: skip
+        cols = np.arange(image.shape[1])
+        top.plot(cols, image.truth_row, "-", color="C2", lw=0.6, alpha=0.8, label="ideal stripe")
+        if rows is not None:
+            top.plot(cols, rows, ".", color="C1", ms=1.0, label="detected")
+        if image.reflection.any():
+            top.plot(cols, image.reflection_row, "-", color="C3", lw=0.6, alpha=0.8,
+                     label="false stripe (reflection)")  # fmt: skip
+        top.set_xlabel("column (z_c)")
+        top.set_ylabel("row (x_c; down: nearer)")
+        cam = image.camera
+        top.set_title(
+            title
+            or f"camera image, {image.shape[0]} x {image.shape[1]} px, f/{cam.f_number:g}, "
+            f"{cam.wavelength_nm:g} nm, {image.material.name}"
+        )
+        legend = top.legend(loc="upper right", fontsize=7, framealpha=0.7)
+        truth = image.truth_laser
+        bottom.plot(truth[:, 0], truth[:, 1], "-", color="C2", lw=1.0, label="ideal stripe")
+        pts = profile.valid_points
+        bottom.plot(pts[:, 0], pts[:, 1], ".", color="C0", ms=1.5,
+                    label=f"measured ({len(pts)} of {len(profile)} columns)")  # fmt: skip
+        if feature:
+            bottom.plot(*feature.point_laser, "x", color="C3", ms=10, mew=2, label="seam point")
+        bottom.invert_yaxis()
+        bottom.set_aspect("equal", adjustable="datalim")
+        bottom.set_xlabel("y_L (mm)")
+        bottom.set_ylabel("z_L, range (mm)")
+        bottom.grid(True, lw=0.3)
+        legend2 = bottom.legend(loc="best", fontsize=8, framealpha=0.8)
+        for handle in [*legend.legend_handles, *legend2.legend_handles]:
+            if handle is not None and hasattr(handle, "set_markersize"):
+                handle.set_markersize(LEGEND_MARKER_PT)
+        fig.tight_layout()
+        fig.savefig(out, dpi=dpi)
+    finally:
+        plt.close(fig)
+    return out
+
+
+def render_command(
+    scene_name: str, at_mm: float, out: str | None, *, overrides: list[str] | None = None
+) -> list[str]:
+    """``seamtrack render``: the camera image at arc length ``at_mm`` along the seam, the profile
+    measured from it (the scene's ``[sensor.camera]`` detector) over the ideal stripe, and the
+    seam point the scene's extractor finds in it. Writes the PNG; returns the lines to print."""
+    from seamtrack.features.extractors import extractor
+    from seamtrack.io.output import check_writable, new_dir
+    from seamtrack.sensing.peaks import detect
+    from seamtrack.simulation.assemble import build_parts
+    from seamtrack.simulation.scene import CameraConfig, load_scene, make_camera
+
+    scene = load_scene(scene_name, overrides)
+    c = scene.config
+    if c.sensor.mode != "mesh":
+        raise SceneError(
+            "the camera renders the part's mesh; this scene has none",
+            field="sensor.mode",
+            fix="use a mesh scene (seamtrack init --list), e.g. v-groove-camera",
+        )
+    path = Path(out) if out else Path(f"render-{scene.name}-{at_mm:g}mm.png")
+    folder = path.parent if str(path.parent) else Path(".")
+    check_writable(folder)
+    parts = build_parts(scene)
+    seam = parts.seam
+    if not 0.0 <= at_mm <= seam.length_mm:
+        raise SceneError(
+            f"{at_mm} mm is not on the seam (0..{seam.length_mm:.3f} mm)",
+            field="--at",
+            fix="give an arc length along the seam in mm",
+        )
+    assert parts.sensor is not None and c.workpiece is not None
+    tcp = seam.interpolate([at_mm])[0]
+    T_world_sensor = parts.robot.T_world_sensor(parts.robot.q_from_world(tcp))
+    detector = c.sensor.camera or CameraConfig()
+    camera = make_camera(c.sensor.camera, c.sensor.preset)
+    image = parts.sensor.render(parts.mesh, T_world_sensor, camera=camera,
+                                seed=c.simulation.seed, material=c.workpiece.material)  # fmt: skip
+    rows = detect(image.pixels, method=detector.method, threshold=detector.threshold,
+                  choose=detector.choose)  # fmt: skip
+    profile = image.profile_from_rows(rows)
+    feature = extractor(c.extractor.name, **c.extractor.params)(profile)
+    with new_dir(folder):
+        plot_stripe_image(image, profile, path, rows=rows, feature=feature)
+    truth = image.truth_laser
+    both = profile.valid & np.isfinite(truth[:, 0])
+    error = np.linalg.norm(profile.points_laser[both] - truth[both], axis=1)
+    rms = float(np.sqrt(np.mean(error**2))) if len(error) else float("nan")
+    worst = float(error.max()) if len(error) else float("nan")
+    lines = [
+        f"image: {image.shape[0]} x {image.shape[1]} px, material {image.material.name!r}, "
+        f"peak {float(image.pixels.max()):.3f} of full scale",
+        f"profile ({detector.method}, threshold {detector.threshold:g}, {detector.choose}): "
+        f"{int(profile.valid.sum())} of {len(profile)} columns; against the ideal stripe RMS "
+        f"{rms:.4f} mm, max {worst:.4f} mm; false stripe in {int(image.reflection.sum())} columns",
+    ]
+    if feature:
+        point = feature.point_laser + np.asarray(c.extractor.offset_mm)
+        world = T_world_sensor[:3, :3] @ np.array([0.0, *point]) + T_world_sensor[:3, 3]
+        lines.append(f"seam point: laser (y, z) = {np.round(point, 4).tolist()} mm, "
+                     f"{seam.closest(world).distance_mm[0]:.4f} mm from the true seam")  # fmt: skip
+    else:
+        lines.append(f"no seam point: {feature.reason}")
+    return [*lines, f"wrote {path}"]

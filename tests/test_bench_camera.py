@@ -1,0 +1,33 @@
+"""``seamtrack bench camera`` runs and its accuracy numbers meet the must-shows (quick run; the
+timings it writes are reported, never asserted)."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import pytest
+
+from seamtrack.bench.camera import bench_camera
+
+pytestmark = [pytest.mark.cad, pytest.mark.embree, pytest.mark.slow]
+
+
+def test_bench_camera_quick_writes_its_tables_and_meets_the_must_shows(tmp_path) -> None:
+    result = bench_camera(tmp_path, quick=True)
+    assert json.loads((tmp_path / "camera.json").read_text())["quick"] is True
+    text = (tmp_path / "camera.md").read_text()
+    for heading in ("Ideal camera", "Speckle only", "False stripe", "Extractors", "Throughput"):
+        assert heading in text
+    assert max(r["rms_px"] for r in result["plane"]) < 0.05
+    for row in result["speckle"]:
+        assert row["centroid_ratio"] == pytest.approx(1.0, abs=0.3)
+    assert all(r["max_error_mm"] <= 0.01 for r in result["false_stripe"])
+    joints = {r["joint"] for r in result["extractors"]}
+    assert joints == {"square-butt", "v-groove", "fillet", "lap", "outside-corner"}
+    assert {r["profile"] for r in result["extractors"]} == {
+        "geometry",
+        "image, mill-scale steel",
+        "image, bright aluminium",
+    }
+    assert all(math.isfinite(result["throughput"][k]["frame_ms"]) for k in ("ideal", "full"))
