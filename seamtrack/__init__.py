@@ -31,6 +31,7 @@ _EXPORTS = {
     "Result": "seamtrack.simulation.loop",
     "extractor": "seamtrack.features.extractors",
     "FeatureExtractor": "seamtrack.features.extractors",
+    "classify": "seamtrack.features.classify",
     "load_workpiece": "seamtrack.workpiece.loader",
     "SeamtrackError": "seamtrack.errors",
 }

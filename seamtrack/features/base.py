@@ -7,16 +7,19 @@ Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groov
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.features.expect import Expect, parse_expect
 from seamtrack.features.lines import (
     DATA_ERRORS,
     Line,
     Segments,
+    _fit,
     collinear_groups,
     intersect,
     segment_profile,
@@ -24,6 +27,9 @@ from seamtrack.features.lines import (
 from seamtrack.sensing.profiles import Feature, Profile
 
 FloatArray = NDArray[np.float64]
+#: A stretch of kept points ``points[lo:hi]`` and the line(s) a joint's model puts there
+#: (None: left out of the count, such as a gap).
+Zone = tuple[int, int, Line | tuple[Line, ...] | None]
 
 
 @dataclass(frozen=True)
@@ -35,23 +41,65 @@ class _Base:
     resolution_mm: float | None = None
     min_points: int = 8
     min_arm_mm: float = 0.5
+    min_explained: float = 0.8
+    expect: Mapping[str, float] | Expect | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "expect", parse_expect(self.expect, self.name))
+
+    def _angles(self, min_deg: float, max_deg: float) -> tuple[float, float]:
+        """The family's included-angle range (deg), narrowed to the expected angle."""
+        if not isinstance(self.expect, Expect):
+            return min_deg, max_deg
+        lo, hi = self.expect.angle_range(math.radians(min_deg), math.radians(max_deg))
+        return math.degrees(lo), math.degrees(hi)
+
+    def _implausible(self, **measured: float | None) -> Feature | None:
+        """A failure when measured values break the expectation (``angle`` in rad,
+        ``depth`` and ``gap`` in mm), else None."""
+        if not isinstance(self.expect, Expect):
+            return None
+        why = self.expect.check(**measured)
+        return Feature.failed(f"{self.name}: {why}", joint=self.name) if why else None
 
     def __call__(self, profile: Profile) -> Feature:
+        return self.scored(profile)[0]
+
+    def segments(self, profile: Profile) -> Segments | str:
+        """The profile's straight pieces with this extractor's front-end parameters."""
+        return segment_profile(
+            profile,
+            min_tol_mm=self.min_tol_mm,
+            resolution_mm=self.resolution_mm,
+            min_points=self.min_points,
+        )
+
+    def scored(self, profile: Profile, seg: Segments | str | None = None) -> tuple[Feature, float]:
+        """The feature and the share of the profile's surface points its joint model explains
+        (0 when not found); ``seg``: the profile's pieces when already segmented. Never
+        raises on data."""
         try:
             with np.errstate(all="ignore"):
-                seg = segment_profile(
-                    profile,
-                    min_tol_mm=self.min_tol_mm,
-                    resolution_mm=self.resolution_mm,
-                    min_points=self.min_points,
-                )
+                if seg is None:
+                    seg = self.segments(profile)
                 if isinstance(seg, str):
-                    return Feature.failed(seg, joint=self.name)
-                return self._extract(profile, seg)
+                    return Feature.failed(seg, joint=self.name), 0.0
+                found = self._extract(profile, seg)
+                if isinstance(found, Feature):
+                    return found, 0.0
+                feature, share = found
+                if share < self.min_explained:
+                    return Feature.failed(
+                        f"not a {self.name}: its model explains {100 * share:.0f} % of the "
+                        f"profile (at least {100 * self.min_explained:.0f} % needed)",
+                        joint=self.name,
+                    ), share
+                return feature, share
         except DATA_ERRORS as exc:  # never raise on data
-            return Feature.failed(f"{self.name}: unusable profile ({exc})", joint=self.name)
+            return Feature.failed(f"{self.name}: unusable profile ({exc})", joint=self.name), 0.0
 
-    def _extract(self, profile: Profile, seg: Segments) -> Feature:
+    def _extract(self, profile: Profile, seg: Segments) -> Feature | tuple[Feature, float]:
+        """A failure, or the feature and the share of the profile its model explains."""
         raise NotImplementedError
 
     def _found(self, profile: Profile, point: FloatArray, **kw: Any) -> Feature:
@@ -82,6 +130,9 @@ class _Base:
         best: tuple[Line, Line, FloatArray, float] | None = None
         surface = seg.points[~seg.stray] if seg.stray.shape == (len(seg.points),) else seg.points
         band = 2.0 * seg.tol
+        owner = np.full(len(seg.points), -1, dtype=np.intp)  # each point's piece
+        for k, ln in enumerate(seg.lines):
+            owner[ln.index] = k
         for i, a in enumerate(groups):
             for b in groups[i + 1 :]:
                 x = intersect(a, b)
@@ -91,7 +142,18 @@ class _Base:
                 for g in (a, b):
                     v = g.centroid - x
                     v = v / max(float(np.hypot(*v)), 1e-300)
-                    near = float(np.min((seg.points[g.index] - x) @ v))
+                    # How near the arm comes to the apex. A tenth of a group may lie past it
+                    # in pieces of their own (fragments of the root collinear with a bevel;
+                    # trimmed below), but no piece may run through it.
+                    t = (seg.points[g.index] - x) @ v
+                    ahead = t >= -seg.tol
+                    over = g.count - int(np.count_nonzero(ahead))
+                    near = -np.inf  # the arm runs through the apex: no V there
+                    if over == 0 or (
+                        10 * over <= g.count
+                        and not np.isin(owner[g.index[~ahead]], owner[g.index[ahead]]).any()
+                    ):
+                        near = float(t[ahead].min())
                     arms.append((v, near, g))
                 (va, na, ga), (vb, nb, gb) = sorted(arms, key=lambda arm: float(arm[0][0]))
                 included = math.degrees(math.acos(float(np.clip(va @ vb, -1, 1))))
@@ -116,7 +178,10 @@ class _Base:
                     score += float(np.count_nonzero(on_line & (d @ v >= -seg.tol)))
                 if best is None or score > best[3]:
                     best = (ga, gb, x, score)
-        return best if best is not None else "no pair of lines forms the joint"
+        if best is None:
+            return "no pair of lines forms the joint"
+        ga, gb, x, score = best
+        return _short_of(ga, x, seg), _short_of(gb, x, seg), x, score
 
 
 def _confidence(arms: list[Line], seg: Segments) -> float:
@@ -124,3 +189,60 @@ def _confidence(arms: list[Line], seg: Segments) -> float:
     explained = sum(a.count for a in arms) / max(len(seg.points), 1)
     fit = max(0.0, 1.0 - max(a.rms for a in arms) / seg.tol)
     return float(np.clip(0.5 * explained + 0.5 * fit, 0.0, 1.0))
+
+
+def explained(seg: Segments, zones: list[tuple[int, int, Line | tuple[Line, ...] | None]]) -> float:
+    """Share of the profile's surface points (detours left out) that lie within three
+    tolerances of a line of their zone: ``(lo, hi, lines)`` spans of kept points
+    (``seg.points[lo:hi]``) in column order, each with the line (or lines) the joint's model
+    puts there; a zone without a line (a gap, a corner) is left out of the count. Points in
+    no zone count as unexplained."""
+    m = len(seg.points)
+    surface = ~seg.stray if seg.stray.shape == (m,) else np.ones(m, dtype=bool)
+    counted = surface.copy()
+    ok = np.zeros(m, dtype=bool)
+    band = 3.0 * seg.tol
+    for lo, hi, lines in zones:
+        lo, hi = max(int(lo), 0), min(int(hi), m)
+        if hi <= lo:
+            continue
+        if lines is None:
+            counted[lo:hi] = False
+            continue
+        for line in lines if isinstance(lines, tuple) else (lines,):
+            d = np.abs((seg.points[lo:hi] - line.centroid) @ line.normal)
+            ok[lo:hi] |= d <= band
+    total = int(np.count_nonzero(counted))
+    return float(np.count_nonzero(ok & counted)) / total if total else 0.0
+
+
+def largest_in(groups: list[Line], lo: int, hi: int, skip: tuple[Line, ...] = ()) -> Line | None:
+    """The group with the most inliers among kept points ``lo:hi``, ``skip`` left out; None
+    when there is none."""
+    best, count = None, 0
+    for g in groups:
+        if any(g is s for s in skip):
+            continue
+        n = int(np.count_nonzero((g.index >= lo) & (g.index < hi)))
+        if n > count:
+            best, count = g, n
+    return best
+
+
+def _short_of(arm: Line, apex: FloatArray, seg: Segments) -> Line:
+    """``arm`` without the inliers that lie past ``apex`` (more than a tolerance): the arm of
+    a V ends at its apex."""
+    v = arm.centroid - apex
+    t = (seg.points[arm.index] - apex) @ v
+    keep = t >= -seg.tol * float(np.hypot(*v))
+    if keep.all() or np.count_nonzero(keep) < 2:
+        return arm
+    return _fit(seg.points, arm.index[keep])
+
+
+def included(left: Line, right: Line, apex: FloatArray) -> float:
+    """Included angle (rad) of the V or ridge whose arms run from ``apex`` to the lines'
+    centroids."""
+    va, vb = left.centroid - apex, right.centroid - apex
+    c = float(va @ vb) / max(float(np.hypot(*va) * np.hypot(*vb)), 1e-300)
+    return math.acos(min(1.0, max(-1.0, c)))

@@ -38,9 +38,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.errors import PluginError
-from seamtrack.features.base import _Base, _confidence
+from seamtrack.features.base import Zone, _Base, _confidence, explained, included
 from seamtrack.features.lines import (
     DATA_ERRORS,
+    Line,
     Segments,
 )
 from seamtrack.features.plates import LapExtractor, SquareButtExtractor
@@ -74,12 +75,17 @@ class FilletExtractor(_Base):
     max_angle_deg: float = 150.0
     max_gap_mm: float = 2.0
 
-    def _extract(self, profile: Profile, seg: Segments) -> Feature:
-        found = self._arms(seg, False, self.min_angle_deg, self.max_angle_deg, self.max_gap_mm)
+    def _extract(self, profile: Profile, seg: Segments) -> Feature | tuple[Feature, float]:
+        lo, hi = self._angles(self.min_angle_deg, self.max_angle_deg)
+        found = self._arms(seg, False, lo, hi, self.max_gap_mm)
         if isinstance(found, str):
             return Feature.failed(found, joint=self.name)
         left, right, apex, _ = found
-        return self._found(profile, apex, confidence=_confidence([left, right], seg))
+        wrong = self._implausible(angle=included(left, right, apex))
+        if wrong is not None:
+            return wrong
+        feature = self._found(profile, apex, confidence=_confidence([left, right], seg))
+        return feature, explained(seg, _two_faces(seg, left, right))
 
 
 @dataclass(frozen=True)
@@ -91,12 +97,24 @@ class OutsideCornerExtractor(_Base):
     max_angle_deg: float = 160.0
     max_gap_mm: float = 2.0
 
-    def _extract(self, profile: Profile, seg: Segments) -> Feature:
-        found = self._arms(seg, True, self.min_angle_deg, self.max_angle_deg, self.max_gap_mm)
+    def _extract(self, profile: Profile, seg: Segments) -> Feature | tuple[Feature, float]:
+        lo, hi = self._angles(self.min_angle_deg, self.max_angle_deg)
+        found = self._arms(seg, True, lo, hi, self.max_gap_mm)
         if isinstance(found, str):
             return Feature.failed(found, joint=self.name)
         left, right, apex, _ = found
-        return self._found(profile, apex, confidence=_confidence([left, right], seg))
+        wrong = self._implausible(angle=included(left, right, apex))
+        if wrong is not None:
+            return wrong
+        feature = self._found(profile, apex, confidence=_confidence([left, right], seg))
+        return feature, explained(seg, _two_faces(seg, left, right))
+
+
+def _two_faces(seg: Segments, left: Line, right: Line) -> list[Zone]:
+    """The model of a corner: each face runs on to the profile's end; the corner between the
+    faces' last points is left out."""
+    lo, hi = int(left.index[-1]) + 1, int(right.index[0])
+    return [(0, lo, left), (lo, hi, None), (max(hi, lo), len(seg.points), right)]
 
 
 @dataclass(frozen=True)

@@ -100,6 +100,8 @@ class Segments:
     stray: NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, dtype=bool))
     #: (m,) each kept point's column in the profile.
     columns: NDArray[np.intp] = field(default_factory=lambda: np.zeros(0, dtype=np.intp))
+    #: Bounds of the runs between jumps: ``points[runs[k]:runs[k + 1]]``.
+    runs: NDArray[np.intp] = field(default_factory=lambda: np.zeros(0, dtype=np.intp))
     #: The range step of the profile's units (mm; 0: not quantized) and the resolution used.
     quantum: float = 0.0
     resolution: float = DEFAULT_RESOLUTION_MM
@@ -168,7 +170,7 @@ def segment_profile(
     if not lines:
         return "no straight pieces with enough points"
     return Segments(
-        p, sigma, tol, fe.spacing, lines, fe.stray, fe.columns, fe.quantum, fe.resolution
+        p, sigma, tol, fe.spacing, lines, fe.stray, fe.columns, fe.runs, fe.quantum, fe.resolution
     )
 
 

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features.base import _Base, _confidence
+from seamtrack.features.base import Zone, _Base, _confidence, explained
 from seamtrack.features.lines import (
     _BOTTOM_DEG,
     _PLATE_DEG,
@@ -102,9 +102,19 @@ def _hidden_edge(
     return line.point(0.5 * (t_end + float(t[part[s[-1]]]) + sign * 0.5 * spacing))
 
 
-def _hole(seg: Segments, owner: NDArray[np.intp], a: Line, b: Line, min_bottom_mm: float) -> _Hole:
+def _hole(
+    seg: Segments,
+    owner: NDArray[np.intp],
+    a: Line,
+    b: Line,
+    min_bottom_mm: float,
+    butt: bool = False,
+) -> _Hole:
     """What lies between run ``a``'s last inlier and run ``b``'s first (``owner``: each kept
-    point's piece, -1 for none)."""
+    point's piece, -1 for none). ``butt``: between two plates of a butt joint, a wall rising
+    in front of the plates covers (a raised part, not a gap's wall) and points in no piece
+    hardly off a plate are plate (a mark, where the laser did not fall through); a lap's
+    edge face rises in front of its lower sheet."""
     lo, hi = int(a.index[-1]), int(b.index[0])
     sp_a, sp_b = max(a.step(True), seg.spacing), max(b.step(False), seg.spacing)
     ta = float(a.t[-1]) + 0.5 * a.step(True)
@@ -121,16 +131,21 @@ def _hole(seg: Segments, owner: NDArray[np.intp], a: Line, b: Line, min_bottom_m
     off = np.minimum(off_a, off_b)
     plate = off <= seg.tol
     # What covers the hole (is no opening): the plates and any surface but a wall (steep on
-    # the plates, reaching off them) or a bottom far behind both plates (a backing seen
-    # through a gap). A line crossing a plate's line at an angle is no plate where it does.
+    # the plates, reaching off them behind them) or a bottom far behind both plates (a
+    # backing seen through a gap). A line crossing a plate's line at an angle is no plate
+    # where it does.
     cover = np.zeros(len(q), dtype=bool)
     wall, bottom = math.radians(_WALL_DEG), math.radians(_BOTTOM_DEG)
     for j in np.unique(own[own >= 0]):
         mine = own == j
         ln = seg.lines[int(j)]
         rel = _angle(ln, a)
-        if rel >= wall and float(off[mine].max()) >= 2 * seg.tol:
-            continue
+        if (
+            rel >= wall
+            and float(off[mine].max()) >= 2 * seg.tol
+            and (not butt or float(np.median(_towards_sensor(a, q[mine]))) < 0.0)
+        ):
+            continue  # a wall going down into a gap (one rising in front is a raised part)
         if rel <= bottom:
             c = ln.centroid.reshape(1, 2)
             depth = -max(float(_towards_sensor(a, c)[0]), float(_towards_sensor(b, c)[0]))
@@ -139,15 +154,23 @@ def _hole(seg: Segments, owner: NDArray[np.intp], a: Line, b: Line, min_bottom_m
         if rel > math.radians(_PLATE_DEG):
             plate &= ~mine
         cover |= mine
-    # Points in no piece off the plates: stray points (fewer than three in a row) and walls
-    # cover nothing; other runs of three or more do.
+    # Points in no piece off the plates: stray points (fewer than three in a row), walls and
+    # a bottom far behind cover nothing; other runs of three or more do, and so do points in
+    # no piece hardly off a plate (a dent, a mark: the laser did not fall through there).
+    if butt:
+        plate |= (own < 0) & (off <= 3.0 * seg.tol)
     loose = np.flatnonzero((own < 0) & ~plate)
     if loose.size >= 3:
         bounds = np.flatnonzero(np.diff(loose) > 1) + 1
         for i, j in zip([0, *bounds.tolist()], [*bounds.tolist(), len(loose)], strict=True):
             part = loose[i:j]
+            behind = -np.maximum(_towards_sensor(a, q[part]), _towards_sensor(b, q[part]))
+            if float(np.median(behind)) >= min_bottom_mm:
+                continue  # a bottom seen through the gap (a backing)
             if j - i >= 3 and (
-                _angle(_fit(q, part), a) < wall or float(off[part].max()) < 2 * seg.tol
+                _angle(_fit(q, part), a) < wall
+                or float(off[part].max()) < 2 * seg.tol
+                or (butt and float(np.median(_towards_sensor(a, q[part]))) > 0.0)
             ):
                 cover[part] = True
     cover |= plate
@@ -338,8 +361,9 @@ class SquareButtExtractor(_Base):
     max_tilt_deg: float = 40.0
     min_open_mm: float = 0.15
     min_bottom_mm: float = 5.0
+    max_step_ratio: float = 2.0
 
-    def _extract(self, profile: Profile, seg: Segments) -> Feature:
+    def _extract(self, profile: Profile, seg: Segments) -> Feature | tuple[Feature, float]:
         min_opening = max(self.min_gap_mm, 3 * seg.tol)
 
         holes: dict[tuple[int, int], _Hole] = {}
@@ -347,7 +371,7 @@ class SquareButtExtractor(_Base):
         def apart(left: Line, right: Line) -> bool:
             if float((right.end(False) - left.end(True)) @ left.direction) < min_opening:
                 return False
-            hole = _hole(seg, owner, left, right, self.min_bottom_mm)
+            hole = _hole(seg, owner, left, right, self.min_bottom_mm, butt=True)
             holes[int(left.index[-1]), int(right.index[0])] = hole
             return hole.open_mm >= self.min_open_mm
 
@@ -360,9 +384,12 @@ class SquareButtExtractor(_Base):
                 continue
             hole = holes.get((int(a.index[-1]), int(b.index[0])))
             if hole is None:
-                hole = _hole(seg, owner, a, b, self.min_bottom_mm)
-            # An open gap beats one a stray line covers.
-            key = (hole.open_mm >= self.min_open_mm, opening)
+                hole = _hole(seg, owner, a, b, self.min_bottom_mm, butt=True)
+            # An open gap beats one a stray line covers; one a surface covers is none.
+            is_open = hole.open_mm >= self.min_open_mm
+            if not is_open and hole.left is None and hole.right is None:
+                continue
+            key = (is_open, opening)
             if key > best_key:
                 best, best_key = (a, b, hole), key
         if best is None:
@@ -371,11 +398,22 @@ class SquareButtExtractor(_Base):
         ea = _edge(a, True, hole.left, sheets, seg)
         eb = _edge(b, False, hole.right, sheets, seg)
         gap = abs(float((eb - ea) @ a.direction))
+        step = abs(float((eb - ea) @ a.normal))
+        if step > self.max_step_ratio * max(gap, self.min_gap_mm):
+            return Feature.failed(
+                f"not a square butt: a step of {step:.2f} mm over a {gap:.2f} mm gap is an "
+                "edge standing on a plate (a lap)",
+                joint=self.name,
+            )
+        wrong = self._implausible(gap=gap)
+        if wrong is not None:
+            return wrong
         sure = best_key[0] and hole.left is None and hole.right is None
         conf = _confidence([a, b], seg) * (1.0 if sure else 0.5)
-        return self._found(
+        feature = self._found(
             profile, 0.5 * (ea + eb), confidence=conf, edges_laser=np.array([ea, eb]), gap_mm=gap
         )
+        return feature, explained(seg, _two_plates(seg, a, b))
 
 
 @dataclass(frozen=True)
@@ -395,7 +433,7 @@ class LapExtractor(_Base):
     min_plate_mm: float = 2.0
     max_tilt_deg: float = 40.0
 
-    def _extract(self, profile: Profile, seg: Segments) -> Feature:
+    def _extract(self, profile: Profile, seg: Segments) -> Feature | tuple[Feature, float]:
         sheets = _sheets(seg, _owner(seg), self.min_points, self.min_plate_mm,
                          self.max_tilt_deg, None)  # fmt: skip
         best, best_score = None, 0.0
@@ -409,6 +447,9 @@ class LapExtractor(_Base):
         if best is None:
             return Feature.failed("no step between two parallel sheets", joint=self.name)
         a, b, step = best
+        wrong = self._implausible(depth=abs(step))
+        if wrong is not None:
+            return wrong
         hole = _hole(seg, sheets.owner, a, b, math.inf)
         top, lower, at_end = (a, b, True) if step > 0 else (b, a, False)
         top_hidden, lower_hidden = (hole.left, hole.right) if at_end else (hole.right, hole.left)
@@ -441,12 +482,20 @@ class LapExtractor(_Base):
             edge = _edge(top, at_end, top_hidden, sheets, seg)
             seam = _foot(edge, lower)
         sure = top_hidden is None and lower_hidden is None
-        return self._found(
+        feature = self._found(
             profile,
             seam,
             confidence=_confidence([a, b], seg) * (1.0 if sure else 0.5),
             edges_laser=edge.reshape(1, 2),
         )
+        return feature, explained(seg, _two_plates(seg, a, b))
+
+
+def _two_plates(seg: Segments, a: Line, b: Line) -> list[Zone]:
+    """The model of a two-plate joint: each plate runs on to the profile's end; what lies
+    between them (a gap, its walls, an edge face) is left out."""
+    lo, hi = int(a.index[-1]) + 1, int(b.index[0])
+    return [(0, lo, a), (lo, hi, None), (max(hi, lo), len(seg.points), b)]
 
 
 def _foot(point: FloatArray, line: Line) -> FloatArray:

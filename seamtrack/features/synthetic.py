@@ -44,7 +44,7 @@ _FAR_MM = 1000.0
 #: Arcs (tack welds, bead caps) are drawn with this many straight pieces.
 _ARC_PIECES = 48
 
-JOINTS = ("square-butt", "v-groove", "fillet", "lap", "outside-corner", "flat")
+JOINTS = ("square-butt", "v-groove", "fillet", "lap", "outside-corner", "flat", "block")
 
 _DEFAULTS: dict[str, dict[str, float]] = {
     "square-butt": {"gap_mm": 1.0, "misalignment_mm": 0.0, "thickness_mm": 8.0},
@@ -59,6 +59,7 @@ _DEFAULTS: dict[str, dict[str, float]] = {
     "lap": {"thickness_mm": 2.0, "gap_mm": 0.0},
     "outside-corner": {"corner_angle_deg": 90.0},
     "flat": {},
+    "block": {"width_mm": 4.0, "height_mm": 6.0, "draft_deg": 5.0},
 }
 
 
@@ -195,6 +196,8 @@ def joint_section(joint: str, **params: float) -> tuple[FloatArray, FloatArray, 
       lies on the +y side.
     * ``outside-corner``: the apex where the two faces (``corner_angle_deg`` apart) meet, (0, 0).
     * ``flat``: a plate at z = 0, no seam.
+    * ``block``: a raised block on a plate (no joint, no seam): ``width_mm`` wide on top,
+      ``height_mm`` high, its walls leaning in by ``draft_deg`` from the plate's normal.
 
     Returns
     -------
@@ -218,6 +221,13 @@ def joint_section(joint: str, **params: float) -> tuple[FloatArray, FloatArray, 
     no_edges = np.empty((0, 2))
     if joint == "flat":
         return _polyline((-L, 0.0), (L, 0.0)), np.empty(0), no_edges, math.nan
+    if joint == "block":
+        w, h = p["width_mm"] / 2, p["height_mm"]
+        if not (w > 0 and h > 0 and 0 <= p["draft_deg"] < 90):
+            raise ValueError("block needs width_mm > 0, height_mm > 0, 0 <= draft_deg < 90")
+        foot = w + h * math.tan(math.radians(p["draft_deg"]))
+        segs = _polyline((-L, 0.0), (-foot, 0.0), (-w, -h), (w, -h), (foot, 0.0), (L, 0.0))
+        return segs, np.empty(0), no_edges, math.nan
     if joint == "square-butt":
         g, m, t = p["gap_mm"], p["misalignment_mm"], p["thickness_mm"]
         segs = np.concatenate(

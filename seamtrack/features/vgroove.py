@@ -12,7 +12,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features.base import _Base, _confidence
+from seamtrack.features.base import Zone, _Base, _confidence, explained, included, largest_in
+from seamtrack.features.expect import Expect
 from seamtrack.features.lines import (
     _WALL_DEG,
     Line,
@@ -21,11 +22,19 @@ from seamtrack.features.lines import (
     _towards_sensor,
     corner_or_end,
     corner_with,
+    intersect,
 )
 from seamtrack.features.robust import _median
 from seamtrack.sensing.profiles import Feature, Profile
 
 FloatArray = NDArray[np.float64]
+#: A bevel within this angle of a plate runs along it (deg): a quarter of the flattest V's
+#: opening off the straight (150 deg included: bevels 15 deg off the plates).
+_ALONG_DEG = 7.5
+#: A plate beside a bevel starts within this distance of the bevel's top edge (mm).
+_PLATE_REACH_MM = 1.5
+#: At most this share of the kept points lies between the bevels' lower ends (the root).
+_MAX_ROOT_SHARE = 0.35
 
 
 def _covered_end(
@@ -131,11 +140,10 @@ class VGrooveExtractor(_Base):
     max_gap_mm: float = 6.0
     min_gap_mm: float = 0.05
 
-    def _extract(self, profile: Profile, seg: Segments) -> Feature:
+    def _extract(self, profile: Profile, seg: Segments) -> Feature | tuple[Feature, float]:
         groups = self._groups(seg)
-        found = self._arms(
-            seg, False, self.min_angle_deg, self.max_angle_deg, self.max_gap_mm, groups
-        )
+        lo, hi = self._angles(self.min_angle_deg, self.max_angle_deg)
+        found = self._arms(seg, False, lo, hi, self.max_gap_mm, groups)
         if isinstance(found, str):
             return Feature.failed(found, joint=self.name)
         left, right, apex, _ = found
@@ -147,6 +155,10 @@ class VGrooveExtractor(_Base):
         top_r, plate_r = corner_with(right, True, others, seg)
         # The plates: the pieces met at the top edges, as whole lines (their groups).
         plate_l, plate_r = _group_of(plate_l, groups), _group_of(plate_r, groups)
+        model = _groove_zones(seg, groups, left, right, plate_l, plate_r)
+        if isinstance(model, str):
+            return Feature.failed(model, joint=self.name)
+        zones, plates = model
         sure = True
         ref_l, ref_r = plate_l or plate_r, plate_r or plate_l
         cover_l = _covered_end(seg, left, True, right, ref_l)
@@ -172,7 +184,10 @@ class VGrooveExtractor(_Base):
                         sure = False
         covered = cover_l is not None or cover_r is not None
         gap = float(np.hypot(*(root_r - root_l)))
-        if gap <= max(self.min_gap_mm, 2.0 * seg.spacing + seg.tol):
+        expect = self.expect if isinstance(self.expect, Expect) else None
+        if gap <= max(self.min_gap_mm, 2.0 * seg.spacing + seg.tol) or (
+            expect is not None and expect.gapless
+        ):
             seam, gap = apex, 0.0
         elif not _gap_seen(
             seg, left, right, root_l, root_r, apex, ref_l, ref_r, gap, covered, self.min_points
@@ -186,10 +201,88 @@ class VGrooveExtractor(_Base):
             # false V where the laser plane crosses a mitred corner, a tack over the root.
             if _bridged(seg, left, right, root_l, root_r, ref_l, self.min_points):
                 sure = False
+        wrong = self._implausible(
+            angle=included(left, right, apex),
+            depth=float(np.mean([_plate_depth(p, seam) for p in plates])),
+            gap=gap,
+        )
+        if wrong is not None:
+            return wrong
         conf = _confidence([left, right], seg) * (1.0 if sure else 0.5)
-        return self._found(
+        feature = self._found(
             profile, seam, confidence=conf, edges_laser=np.array([top_l, top_r]), gap_mm=gap
         )
+        return feature, explained(seg, zones)
+
+
+def _groove_zones(
+    seg: Segments,
+    groups: list[Line],
+    left: Line,
+    right: Line,
+    plate_l: Line | None,
+    plate_r: Line | None,
+) -> tuple[list[Zone], list[Line]] | str:
+    """The model of a groove, or why the V is none: plates (the piece met at each top edge
+    and the largest group beyond it) outside the bevels, the bevels, and the root between
+    them (left out). At least one plate must show, a bevel without a plate of its own may not
+    lie along the other's (within :data:`_ALONG_DEG`), and the root may hold at most
+    :data:`_MAX_ROOT_SHARE` of the points: two faces alone are a fillet or a corner, a face
+    along the plate is plate (a step, a raised block's foot), and a groove's root is
+    narrow."""
+    m = len(seg.points)
+    lo_l, hi_l = int(left.index[0]), int(left.index[-1]) + 1
+    lo_r, hi_r = int(right.index[0]), int(right.index[-1]) + 1
+    arms = (left, right)
+    flat = math.cos(math.radians(_ALONG_DEG))
+
+    def plates_beside(arm: Line, met: Line | None, lo: int, hi: int) -> tuple[Line, ...]:
+        # A plate turns away from its bevel (pieces along the bevel are more bevel) and
+        # starts at the top edge: the piece met there and the largest group beyond it whose
+        # nearest point lies within PLATE_REACH_MM of where its line crosses the bevel's (a
+        # plate bent at the edge shows both; a plate beyond a raised block is not beside
+        # the block's wall).
+        along = [g for g in groups if abs(float(g.direction @ arm.direction)) > flat]
+        if met is not None and (
+            all(met is not g for g in groups)  # a stub, no plate
+            or any(met is a for a in arms)
+            or abs(float(met.direction @ arm.direction)) > flat
+        ):
+            met = None
+        largest = largest_in(groups, lo, hi, (*arms, *along))
+        if largest is not None:
+            inside = largest.index[(largest.index >= lo) & (largest.index < hi)]
+            nearest = seg.points[inside[-1] if hi <= lo_l else inside[0]]
+            edge = intersect(largest, arm)
+            if edge is None or float(np.hypot(*(nearest - edge))) > _PLATE_REACH_MM:
+                largest = None
+        if largest is None or largest is met:
+            return () if met is None else (met,)
+        return (largest,) if met is None else (met, largest)
+
+    outer = (plates_beside(left, plate_l, 0, lo_l), plates_beside(right, plate_r, hi_r, m))
+    plates = [*outer[0], *outer[1]]
+    if not plates:
+        return "not a v-groove: no plate beside the bevels (two faces alone: a fillet?)"
+    # A side with no plate of its own that runs along the other side's plate is plate
+    # itself: the lower sheet of a lap, the plate at a raised block's foot.
+    for arm, own, other in ((left, outer[0], outer[1]), (right, outer[1], outer[0])):
+        if not own and any(abs(float(p.direction @ arm.direction)) > flat for p in other):
+            return "not a v-groove: a side of the V runs along a plate (a step or a block's foot)"
+    if hi_l < lo_r and lo_r - hi_l > _MAX_ROOT_SHARE * m:
+        return (
+            f"not a v-groove: {100 * (lo_r - hi_l) / m:.0f} % of the profile lies between the "
+            "bevels' lower ends (a raised block between two plates?)"
+        )
+    # Beyond a top edge: the plate, or the bevel going on (when no plate turns off it).
+    zones: list[Zone] = [
+        (0, lo_l, (*outer[0], left)),
+        (lo_l, hi_l, left),
+        (hi_l, lo_r, None),
+        (lo_r, hi_r, right),
+        (hi_r, m, (*outer[1], right)),
+    ]
+    return zones, plates
 
 
 def _gap_seen(
