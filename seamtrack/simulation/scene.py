@@ -317,9 +317,9 @@ def _fix_for(error: Any, model: type[BaseModel]) -> str:
         close = difflib.get_close_matches(loc[-1], fields, n=1)
         hint = f"did you mean {close[0]!r}? " if close else ""
         return f"{hint}remove it; keys here: {', '.join(fields)}"
-    if kind in {"greater_than", "greater_than_equal"}:
+    if kind in {"greater_than", "greater_than_equal"} and not any(error.get("ctx", {}).values()):
         return "give a positive number in the unit of the key's suffix"
-    if kind in {"less_than", "less_than_equal"}:
+    if kind in {"greater_than", "greater_than_equal", "less_than", "less_than_equal"}:
         return "give a value within the range the message states"
     if kind == "literal_error":
         return "use one of the values listed"
