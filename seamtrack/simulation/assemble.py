@@ -23,6 +23,7 @@ from seamtrack.geometry.seam import Seam
 from seamtrack.sensing.profiles import Feature, Profile, laser_to_world
 from seamtrack.sensing.scan import SeamNoise, sense_seam
 from seamtrack.sensing.sensor import LaserLineSensor
+from seamtrack.simulation.checks import check_ticks, default_time_limit_s
 from seamtrack.simulation.robots import (
     check_sensor_outside,
     is_arm,
@@ -33,8 +34,6 @@ from seamtrack.simulation.robots import (
 from seamtrack.simulation.scene import (
     CameraConfig,
     Scene,
-    check_ticks,
-    default_time_limit_s,
     make_camera,
     make_sensor,
 )

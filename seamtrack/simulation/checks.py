@@ -1,0 +1,105 @@
+"""Scene checks that bound what a run may cost, and the free-form sections checked against
+the plugins that take them: every knob that sets an array size (rays, seam points, control
+ticks, trace rows, mesh tolerance) against :mod:`seamtrack.constants`, so that a typo is
+refused in one line before anything runs.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from typing import TYPE_CHECKING
+
+from seamtrack import constants
+from seamtrack.control.registry import tracker_class
+from seamtrack.errors import SceneError
+from seamtrack.features.extractors import extractor_target
+from seamtrack.params import check_params
+from seamtrack.sensing.scan import StripeNoise
+
+if TYPE_CHECKING:  # annotations only: the scene module calls these checks
+    from seamtrack.simulation.scene import SceneConfig
+
+
+def default_time_limit_s(seam_length_mm: float, welding_speed_mm_s: float) -> float:
+    """The run's time limit when the scene sets none: three times the nominal welding time,
+    plus a minute."""
+    return 3.0 * seam_length_mm / welding_speed_mm_s + 60.0
+
+
+def check_ticks(c: SceneConfig, seam_length_mm: float | None) -> None:
+    """Refuse a run of more than :data:`constants.MAX_TICKS` control ticks (the loop's logs
+    grow with them); ``seam_length_mm`` None: not known before the seam is built."""
+    limit = c.simulation.time_limit_s
+    if limit is None and seam_length_mm is None:
+        return
+    if limit is None:
+        assert seam_length_mm is not None
+        limit = default_time_limit_s(seam_length_mm, c.simulation.welding_speed_mm_s)
+    ticks = limit / c.robot.control_period_s
+    if ticks > constants.MAX_TICKS:
+        raise SceneError(
+            f"a time limit of {limit:.4g} s at a control period of {c.robot.control_period_s:.3g} "
+            f"s is {ticks:.3g} control ticks, more than the {constants.MAX_TICKS:.0e} a run holds "
+            "in memory",
+            field="robot.control_period_s",
+            fix=f"use a control period of at least {limit / constants.MAX_TICKS:.3g} s, or "
+            "set a shorter simulation.time_limit_s",
+        )
+
+
+def _polyline_length(points: list[list[float]]) -> float:
+    return sum(math.dist(a, b) for a, b in itertools.pairwise(points))
+
+
+def check_sizes(c: SceneConfig) -> None:
+    """Every knob that sets an array size, against the bounds in :mod:`seamtrack.constants`."""
+    s = c.seam
+    if s.source == "paper" and s.length_mm / s.step_mm + 1 > constants.MAX_SEAM_POINTS:
+        raise SceneError(
+            f"a {s.length_mm:.4g} mm seam at a {s.step_mm:.3g} mm step has "
+            f"{s.length_mm / s.step_mm + 1:.3g} points, more than {constants.MAX_SEAM_POINTS:.0e}",
+            field="seam.step_mm",
+            fix=f"use a step of at least {s.length_mm / (constants.MAX_SEAM_POINTS - 1):.3g} mm "
+            "(or a shorter seam.length_mm)",
+        )
+    if s.points_mm is not None and len(s.points_mm) > constants.MAX_SEAM_POINTS:
+        raise SceneError(
+            f"{len(s.points_mm)} points, more than {constants.MAX_SEAM_POINTS:.0e}",
+            field="seam.points_mm",
+            fix="thin the points out, or give them as a CSV file",
+        )
+    if c.sensor.rays is not None and c.sensor.rays > constants.MAX_RAYS:
+        raise SceneError(
+            f"{c.sensor.rays} rays, more than the {constants.MAX_RAYS} a profile may have",
+            field="sensor.rays",
+            fix=f"use at most {constants.MAX_RAYS} (a real sensor has 1024-4096 points)",
+        )
+    if c.simulation.trace_period_s < c.robot.control_period_s:
+        raise SceneError(
+            f"trace period {c.simulation.trace_period_s:.3g} s is shorter than the control "
+            f"period {c.robot.control_period_s:.3g} s: the trace would repeat ticks",
+            field="simulation.trace_period_s",
+            fix=f"use at least the control period ({c.robot.control_period_s:.3g} s)",
+        )
+    if c.workpiece is not None and c.workpiece.tolerance_mm < constants.MIN_MESH_TOLERANCE_MM:
+        raise SceneError(
+            f"meshing tolerance {c.workpiece.tolerance_mm:.3g} mm is finer than "
+            f"{constants.MIN_MESH_TOLERANCE_MM:.0e} mm: a curved face would mesh into more "
+            "triangles than fit in memory",
+            field="workpiece.tolerance_mm",
+            fix=f"use at least {constants.MIN_MESH_TOLERANCE_MM:.0e} mm (0.01 is the default)",
+        )
+    length = {"paper": s.length_mm, "points": _polyline_length(s.points_mm or [])}.get(s.source)
+    check_ticks(c, length)
+
+
+def check_plugin_params(c: SceneConfig) -> None:
+    """The free-form sections against the signatures that take them (strict types, declared
+    ranges), so that a bad value is refused before the run rather than deep inside it."""
+    check_params(StripeNoise, c.sensor.stripe_noise, "sensor.stripe_noise")
+    check_params(tracker_class(c.tracker.name), c.tracker.params, "tracker.params")
+    if c.sensor.mode == "mesh" or c.extractor.params:
+        target = extractor_target(c.extractor.name)
+        if isinstance(target, type):
+            check_params(target, c.extractor.params, "extractor.params")
