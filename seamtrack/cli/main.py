@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from seamtrack._version import __version__
+from seamtrack.cli.dataset import add_dataset_parser
 from seamtrack.errors import OutputError, PluginRuntimeError, SceneError, SeamtrackError
 
 EXIT_USAGE = 2
@@ -516,6 +517,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quick", action="store_true", help="fewer profiles (a smoke run)")
     p.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)
 
+    add_dataset_parser(add)
+
     p = add("cache", cmd_cache, "the workpiece mesh cache: where it is, or clear it", scene=False)
     p.add_argument(
         "action",
@@ -535,7 +538,7 @@ def build_parser() -> argparse.ArgumentParser:
         "which",
         nargs="?",
         default="all",
-        help="raycast, extractors, mesh, loop, tradeoff, sweep, scaling, failures, or all",
+        help="raycast, extractors, mesh, loop, tradeoff, sweep, scaling, failures, dataset, or all",
     )
     p.add_argument("--out", default="bench-results", help="folder for the results")
     p.add_argument("--quick", action="store_true", help="fewer repeats (a smoke run)")

@@ -15,7 +15,15 @@ import tomllib
 from pathlib import Path
 from typing import Annotated, Any
 
-from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, model_validator
+from pydantic import (
+    AfterValidator,
+    BaseModel,
+    ConfigDict,
+    Field,
+    PlainSerializer,
+    ValidationError,
+    model_validator,
+)
 
 from seamtrack import constants
 from seamtrack.errors import SeamtrackError
@@ -58,7 +66,9 @@ def _as_range(value: float | list[float]) -> tuple[float, float]:
 
 _Number = Annotated[float, Field(strict=True, allow_inf_nan=True)]
 #: ``[min, max]`` or one number; validated to a ``(min, max)`` tuple.
-Range = Annotated[_Number | list[_Number], AfterValidator(_as_range)]
+Range = Annotated[
+    _Number | list[_Number], AfterValidator(_as_range), PlainSerializer(list, return_type=list)
+]
 Flag = Annotated[bool, Field(strict=True)]
 Names = Annotated[list[Annotated[str, Field(strict=True)]], Field(min_length=1)]
 
