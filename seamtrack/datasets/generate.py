@@ -297,8 +297,10 @@ def fill_sample(plan: Plan, index: int, out: dict[str, np.ndarray], row: int) ->
                           cos_incidence=cos_incidence, directions_local=directions,
                           origin_local=np.ascontiguousarray(T[:3, 3]))  # fmt: skip
         caster: Any = ExtrudedSection(segs)
-        points, reason = _apply_stripe_noise(sensor, caster, T, hits, StripeNoise(**noise_values),
-                                             rng)  # fmt: skip
+        # dropout_rate = 1 takes log(0) = -inf on the way to a loss probability of 1: correct.
+        with np.errstate(divide="ignore"):
+            noise = StripeNoise(**noise_values)
+            points, reason = _apply_stripe_noise(sensor, caster, T, hits, noise, rng)
     out["points_laser"][row] = points
     out["reason"][row] = reason
     out["valid"][row] = reason == Reason.VALID
