@@ -224,9 +224,7 @@ def test_v_groove_seam_point_is_the_bottom_of_the_fitted_bevels() -> None:
         errors.append(np.hypot(*(bottom - data["seam_point_laser"][i])))
     errors_mm = np.array(errors)
     assert errors_mm.max() <= 0.01, (errors_mm.argmax(), errors_mm.max())
-    print(
-        f"V bottom vs seam_point_laser: max {errors_mm.max():.5f} mm, median {np.median(errors_mm):.5f} mm"
-    )
+    print(f"V bottom vs label: max {errors_mm.max():.5f}, median {np.median(errors_mm):.5f} mm")
     # The oracle can fail: a label moved by 0.02 mm along z_L is caught.
     moved = data["seam_point_laser"][0] + [0.0, 0.02]
     bottom0 = v_bottom(data["points_laser"][0][data["valid"][0]])
