@@ -13,7 +13,7 @@ import json
 import math
 import tomllib
 from pathlib import Path
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 from pydantic import (
     AfterValidator,
@@ -65,10 +65,12 @@ def _as_range(value: float | list[float]) -> tuple[float, float]:
 
 
 _Number = Annotated[float, Field(strict=True, allow_inf_nan=True)]
-#: ``[min, max]`` or one number; validated to a ``(min, max)`` tuple.
-Range = Annotated[
-    _Number | list[_Number], AfterValidator(_as_range), PlainSerializer(list, return_type=list)
-]
+if TYPE_CHECKING:  # what a validated range is
+    Range = tuple[float, float]
+else:  #: ``[min, max]`` or one number; validated to a ``(min, max)`` tuple.
+    Range = Annotated[
+        _Number | list[_Number], AfterValidator(_as_range), PlainSerializer(list, return_type=list)
+    ]
 Flag = Annotated[bool, Field(strict=True)]
 Names = Annotated[list[Annotated[str, Field(strict=True)]], Field(min_length=1)]
 
