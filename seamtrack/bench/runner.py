@@ -249,6 +249,12 @@ def _bench_failures(out: Path, quick: bool) -> Any:
     return bench_failures(out, quick=quick)
 
 
+def _bench_dataset(out: Path, quick: bool) -> Any:
+    from seamtrack.bench.dataset import bench_dataset
+
+    return bench_dataset(out, quick=quick)
+
+
 BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "raycast": lambda out, quick: bench_raycast(out, quick=quick),
     "extractors": _bench_extractors,
@@ -258,6 +264,7 @@ BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "sweep": lambda out, quick: bench_sweep(out, quick=quick),
     "scaling": _bench_scaling,
     "failures": _bench_failures,
+    "dataset": _bench_dataset,
 }
 
 

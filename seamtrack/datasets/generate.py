@@ -7,9 +7,7 @@ only, never on which worker made it or in which order. Each sample draws, in thi
 uniform number per choice and per range (:data:`UNIFORMS`), then whatever its noise knobs need.
 
 The profile is the mesh-mode stripe of the sample's joint (:mod:`seamtrack.datasets.kernel`); the
-noise knobs are applied by the same code as in a mesh-mode scene
-(:func:`seamtrack.sensing.scan._apply_stripe_noise`), on an extruded-section stand-in for the
-ray caster (:class:`ExtrudedSection`).
+noise knobs are the mesh-mode model with its geometry in numba (:mod:`seamtrack.datasets.noise`).
 """
 
 from __future__ import annotations
@@ -17,18 +15,17 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass
-from types import SimpleNamespace
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack import constants
 from seamtrack.datasets import joints
-from seamtrack.datasets.kernel import first_hits, stripe
+from seamtrack.datasets.kernel import stripe
+from seamtrack.datasets.noise import apply_noise
 from seamtrack.datasets.spec import FAMILIES, DatasetSpec
 from seamtrack.sensing.profiles import Reason
-from seamtrack.sensing.scan import StripeHits, StripeNoise, _apply_stripe_noise, laser_fan
+from seamtrack.sensing.scan import StripeNoise, laser_fan
 from seamtrack.sensing.sensor import LaserLineSensor, preset
 
 FloatArray = NDArray[np.float64]
@@ -130,52 +127,6 @@ def lines_in_laser_plane(T_seam_sensor: FloatArray, yz: FloatArray) -> FloatArra
     p = np.column_stack([np.zeros(len(yz)), yz]) - o
     p[:, 0] -= (p @ R[:, 0]) / R[0, 0]
     return np.asarray((p @ R)[:, 1:])
-
-
-class ExtrudedSection:
-    """The extruded section seen through the parts of a ray caster the noise models use
-    (``face_normals``, ``local_origin``, ``first_hit``, ``line_of_sight_blocked``).
-
-    Parameters
-    ----------
-    segs : (k, 4) float
-        ``(y0, z0, y1, z1)`` in the seam frame (here the world frame of the profile).
-    """
-
-    def __init__(self, segs: FloatArray):
-        self.segs = segs
-        e = segs[:, 2:] - segs[:, :2]
-        length = np.hypot(e[:, 0], e[:, 1])
-        self.face_normals = (
-            np.column_stack([np.zeros(len(segs)), -e[:, 1], e[:, 0]]) / length[:, None]
-        )
-        self.local_origin = np.zeros(3)
-
-    def first_hit(self, origins: FloatArray, directions: FloatArray) -> SimpleNamespace:
-        """First hits; ``normals`` turned to face the ray origin (as the ray caster's)."""
-        o = np.ascontiguousarray(origins, dtype=np.float64).reshape(-1, 3)
-        d = np.ascontiguousarray(directions, dtype=np.float64).reshape(-1, 3)
-        t, seg = first_hits(o, d, self.segs, np.full(len(o), np.inf))
-        hit = seg >= 0
-        points = np.where(hit[:, None], o + np.where(hit, t, 0.0)[:, None] * d, np.nan)
-        normals = self.face_normals[np.where(hit, seg, 0)]
-        normals = np.where((np.einsum("ij,ij->i", normals, d) > 0)[:, None], -normals, normals)
-        return SimpleNamespace(hit=hit, points=points, normals=np.where(hit[:, None], normals,
-                                                                         np.nan))  # fmt: skip
-
-    def line_of_sight_blocked(
-        self, points: FloatArray, target: FloatArray, *,
-        offset_mm: float = constants.SHADOW_RAY_OFFSET_MM,
-    ) -> NDArray[np.bool_]:  # fmt: skip
-        """True where the segment from a point to ``target`` (3,) crosses the section."""
-        p = np.asarray(points, dtype=np.float64).reshape(-1, 3)
-        to_target = np.asarray(target, dtype=np.float64).reshape(3) - p
-        length = np.linalg.norm(to_target, axis=1)
-        d = to_target / length[:, None]
-        start = np.ascontiguousarray(p + offset_mm * d)
-        _, seg = first_hits(start, np.ascontiguousarray(d), self.segs,
-                            np.maximum(length - offset_mm, 0.0))  # fmt: skip
-        return np.asarray(seg >= 0)
 
 
 @dataclass(frozen=True, eq=False)
@@ -293,14 +244,8 @@ def fill_sample(plan: Plan, index: int, out: dict[str, np.ndarray], row: int) ->
         fan.sensor_params, constants.SHADOW_RAY_OFFSET_MM, bool(sensor.quantize and not noisy),
     )  # fmt: skip
     if noisy:
-        hits = StripeHits(points_laser=points, reason=reason, distance_mm=t, face=face,
-                          cos_incidence=cos_incidence, directions_local=directions,
-                          origin_local=np.ascontiguousarray(T[:3, 3]))  # fmt: skip
-        caster: Any = ExtrudedSection(segs)
-        # dropout_rate = 1 takes log(0) = -inf on the way to a loss probability of 1: correct.
-        with np.errstate(divide="ignore"):
-            noise = StripeNoise(**noise_values)
-            points, reason = _apply_stripe_noise(sensor, caster, T, hits, noise, rng)
+        hits = (points, reason, t, face, cos_incidence, directions)
+        points, reason = apply_noise(sensor, segs, T, hits, StripeNoise(**noise_values), rng)
     out["points_laser"][row] = points
     out["reason"][row] = reason
     out["valid"][row] = reason == Reason.VALID
