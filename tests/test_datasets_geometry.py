@@ -183,6 +183,7 @@ def v_bottom(points: np.ndarray) -> np.ndarray:
     intersect the two lines."""
     _, left_edge, bottom, right_edge, _ = _pieces(points, 4)
     margin = 4
+    assert min(bottom - left_edge, right_edge - bottom) > 5 * margin, "a bevel is not in view"
     c1, d1 = _bevel_line(points[left_edge + margin : bottom - margin])
     c2, d2 = _bevel_line(points[bottom + margin : right_edge - margin])
     # c1 + s d1 = c2 + u d2
@@ -202,7 +203,7 @@ def test_v_groove_seam_point_is_the_bottom_of_the_fitted_bevels() -> None:
                 "families": ["v-groove"],
                 "gap_mm": 0.0,
                 "misalignment_mm": 0.0,
-                "groove_angle_deg": [40.0, 75.0],  # the whole groove in view
+                "groove_angle_deg": [50.0, 75.0],  # both bevels in view, lit within 80 deg
                 "thickness_mm": [4.0, 8.0],
                 "root_face_mm": [0.0, 2.0],
             },

@@ -12,6 +12,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import shutil
 import tempfile
 import time
 from pathlib import Path
@@ -67,23 +68,29 @@ def bench_dataset(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]
         {"spec": "geometry (template, noise off)", **_rate(geometry, count)},
         {"spec": "template (every noise knob on)", **_rate(template, count // 5)},
     ]
-    n = 4000 if quick else 40000
-    runs = []
-    digests = []
+    n = 4000 if quick else 20000
+    best: dict[int, dict[str, Any]] = {}
+    digests: dict[int, str] = {}
     with tempfile.TemporaryDirectory() as tmp:
-        for workers in (1, 2):
+        # 1, 2, 1, 2 workers, the fastest of each: the load of other work on a shared machine
+        # comes and goes, and alternating gives both counts the same chances.
+        for attempt, workers in enumerate((1, 2, 1, 2)):
             load = os.getloadavg()[0]
-            folder = Path(tmp) / f"w{workers}"
+            folder = Path(tmp) / f"run{attempt}"
             start = time.perf_counter()
-            done = write_dataset(parse_spec({"noise": NOISE_OFF, "chunk_size": 1000}), n,
+            done = write_dataset(parse_spec({"noise": NOISE_OFF, "chunk_size": 500}), n,
                                  folder, workers=workers)  # fmt: skip
             wall = time.perf_counter() - start
-            digests.append(_digest(folder))
+            digests[workers] = _digest(folder)
             size = sum(p.stat().st_size for p in folder.glob("chunk-*.h5"))
-            runs.append({"workers": workers, "samples": n, "wall_s": wall,
-                         "samples_per_wall_s": n / wall, "cpu_s": done["cpu_s"],
-                         "samples_per_cpu_s": n / done["cpu_s"], "bytes": size,
-                         "load_average_before": load})  # fmt: skip
+            run = {"workers": workers, "samples": n, "wall_s": wall,
+                   "samples_per_wall_s": n / wall, "cpu_s": done["cpu_s"],
+                   "samples_per_cpu_s": n / done["cpu_s"], "bytes": size,
+                   "load_average_before": load}  # fmt: skip
+            if workers not in best or wall < best[workers]["wall_s"]:
+                best[workers] = run
+            shutil.rmtree(folder)  # 380 MB a run: keep only the digest
+    runs = [best[1], best[2]]
     speedup = runs[0]["wall_s"] / runs[1]["wall_s"]
     m = machine_info()
     result: dict[str, Any] = {
@@ -92,8 +99,8 @@ def bench_dataset(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]
         "rates": rows,
         "workers": runs,
         "speedup_2_workers": speedup,
-        "identical_bytes": digests[0] == digests[1],
-        "chunks_sha256": digests[0],
+        "identical_bytes": digests[1] == digests[2],
+        "chunks_sha256": digests[1],
         "targets": {"per_core": TARGET_RATE, "speedup_2_workers": TARGET_SPEEDUP},
     }
     (out / "dataset.json").write_text(json.dumps(result, indent=2) + "\n")
@@ -107,7 +114,8 @@ def bench_dataset(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]
         "|---|---:|---:|",
         *(f"| {r['spec']} | {r['per_cpu_s']:,.0f} | {r['per_wall_s']:,.0f} |" for r in rows),
         "",
-        f"Written to HDF5 (`seamtrack dataset`, geometry, {n:,} samples in chunks of 1,000):",
+        f"Written to HDF5 (`seamtrack dataset`, geometry, {n:,} samples in chunks of 500; "
+        "the faster of two runs each, alternating):",
         "",
         "| workers | wall s | samples / wall s | CPU s (all processes) | MB | load before |",
         "|---:|---:|---:|---:|---:|---:|",

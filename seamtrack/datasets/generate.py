@@ -40,6 +40,8 @@ RANGES: tuple[tuple[str, str, str, float], ...] = (
     ("joint", "misalignment_mm", "misalignment_mm", 1.0),
     ("joint", "web_angle_deg", "web_angle_rad", math.pi / 180),
     ("joint", "corner_angle_deg", "corner_angle_rad", math.pi / 180),
+    ("joint", "sheet_thickness_mm", "sheet_thickness_mm", 1.0),
+    ("joint", "sheet_gap_mm", "sheet_gap_mm", 1.0),
     ("joint", "tack_probability", "tack_probability", 1.0),
     ("joint", "tack_height_mm", "tack_height_mm", 1.0),
     ("joint", "tack_width_mm", "tack_width_mm", 1.0),
@@ -69,7 +71,7 @@ _USES = {
     "square-butt": {"thickness_mm", "gap_mm", "misalignment_mm"},
     "v-groove": {"thickness_mm", "groove_angle_rad", "root_face_mm", "gap_mm", "misalignment_mm"},
     "fillet": {"web_angle_rad"},
-    "lap": {"thickness_mm", "gap_mm"},
+    "lap": {"sheet_thickness_mm", "sheet_gap_mm"},
     "outside-corner": {"corner_angle_rad"},
     "flat": set(),
 }
@@ -217,12 +219,13 @@ def fill_sample(plan: Plan, index: int, out: dict[str, np.ndarray], row: int) ->
     v = d.values
     sensor = _sensor(spec.sensor.presets[d.preset], spec.sensor.quantize)
     deg = math.pi / 180
+    lap = d.family == "lap"
     polylines, seam, features = joints.section(
         d.family,
-        thickness_mm=v["thickness_mm"],
+        thickness_mm=v["sheet_thickness_mm"] if lap else v["thickness_mm"],
         groove_angle_rad=v["groove_angle_deg"] * deg,
         root_face_mm=v["root_face_mm"],
-        gap_mm=v["gap_mm"],
+        gap_mm=v["sheet_gap_mm"] if lap else v["gap_mm"],
         misalignment_mm=v["misalignment_mm"],
         web_angle_rad=v["web_angle_deg"] * deg,
         corner_angle_rad=v["corner_angle_deg"] * deg,

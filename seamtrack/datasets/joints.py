@@ -61,8 +61,8 @@ def section(
 ) -> tuple[list[list[tuple[float, float]]], tuple[float, float] | None, list[tuple[float, float]]]:
     """The cross-section of one joint, in the joint's own coordinates (top surface at z = 0).
 
-    Parameters not used by ``family`` are ignored. Lap joints use ``thickness_mm`` for the top
-    sheet and ``gap_mm`` for the sheet gap.
+    Parameters not used by ``family`` are ignored. Lap joints take ``thickness_mm`` as the top
+    sheet's thickness and ``gap_mm`` as the gap between the sheets.
 
     Returns
     -------

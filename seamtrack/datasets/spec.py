@@ -126,6 +126,8 @@ class JointSpec(_Section):
     misalignment_mm: Range = (-1.0, 1.0)
     web_angle_deg: AngleRange = (70.0, 110.0)
     corner_angle_deg: AngleRange = (70.0, 110.0)
+    sheet_thickness_mm: PositiveRange = (1.0, 2.5)
+    sheet_gap_mm: NonNegativeRange = (0.0, 0.5)
     tack_probability: FractionRange = (0.0, 0.0)
     tack_height_mm: PositiveRange = (0.5, 1.5)
     tack_width_mm: PositiveRange = (3.0, 6.0)
@@ -334,13 +336,15 @@ chunk_size = 1024   # samples per HDF5 file (chunk-000000.h5, ...); a killed run
 # Families drawn with equal odds (or give weights = [...], one per family). "flat" is a plate
 # with no seam (seam_point_laser is NaN). See the README ("Datasets") for each seam point.
 families = ["square-butt", "v-groove", "fillet", "lap", "outside-corner"]
-thickness_mm = [4.0, 12.0]       # plate thickness (square butt, V-groove) and lap top sheet
+thickness_mm = [4.0, 12.0]       # plate thickness (square butt, V-groove)
 groove_angle_deg = [40.0, 90.0]  # V-groove included angle
 root_face_mm = [0.0, 2.0]        # V-groove root face (its max must stay below thickness's min)
-gap_mm = [0.0, 2.0]              # root gap (square butt, V-groove), sheet gap (lap)
+gap_mm = [0.0, 2.0]              # root gap (square butt, V-groove)
 misalignment_mm = [-1.0, 1.0]    # high-low: the right plate this much deeper (butt, V-groove)
 web_angle_deg = [70.0, 110.0]    # fillet: angle between web and flange
 corner_angle_deg = [70.0, 110.0] # outside corner: angle between the two faces
+sheet_thickness_mm = [1.0, 2.5]  # lap: the top sheet
+sheet_gap_mm = [0.0, 0.5]        # lap: between the sheets
 tack_probability = 0.0           # chance that the stripe crosses a tack weld over the seam
 tack_height_mm = [0.5, 1.5]      # the tack's mound (the seam label stays the true root)
 tack_width_mm = [3.0, 6.0]
