@@ -43,8 +43,8 @@ def cmd_dataset(args: argparse.Namespace) -> int:
         return 0
     if args.images:
         raise SpecError(
-            "no camera renderer in this version of seamtrack: datasets hold the geometric "
-            "stripe profiles only",
+            "seamtrack dataset does not render camera images (there was no camera renderer "
+            "to build on when it was written): datasets hold the geometric stripe profiles",
             field="--images",
             fix="leave out --images",
         )
