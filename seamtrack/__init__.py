@@ -39,7 +39,15 @@ _EXPORTS = {
 __all__ = sorted(_EXPORTS)
 
 
+#: Subpackages reached as attributes (``st.datasets.open(...)``), imported on first use.
+_SUBPACKAGES = {"datasets": "seamtrack.datasets"}
+
+
 def __getattr__(name: str) -> Any:
+    if name in _SUBPACKAGES:
+        package = importlib.import_module(_SUBPACKAGES[name])
+        globals()[name] = package
+        return package
     module = _EXPORTS.get(name)
     if module is None:
         raise AttributeError(f"module 'seamtrack' has no attribute {name!r}")
@@ -49,4 +57,4 @@ def __getattr__(name: str) -> Any:
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_EXPORTS))
+    return sorted(set(globals()) | set(_EXPORTS) | set(_SUBPACKAGES))

@@ -31,6 +31,7 @@ STAGES = [
     ("io", {"seamtrack.io"}),
     ("viz", {"seamtrack.viz"}),
     ("batch", {"seamtrack.batch"}),
+    ("datasets", {"seamtrack.datasets"}),  # draws on sensing and features, uses io and batch
     ("bench", {"seamtrack.bench"}),
     ("cli", {"seamtrack.cli"}),
     ("package", {"seamtrack"}),  # the lazy public names of `import seamtrack as st`

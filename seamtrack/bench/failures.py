@@ -22,6 +22,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from seamtrack._version import __version__
 from seamtrack.bench.common import machine_info
 
 #: A short paper-verification seam: user-code failures show within a few frames.
@@ -109,6 +110,20 @@ FILES: dict[str, bytes] = {
     "text.csv": b"x_mm,y_mm,z_mm\n0,zero,0\n",
     "a_file": b"not a folder\n",
     "broken.urdf": b"<robot name='x'><link name='a'/><joint name='j' type='revolute'>",
+    # --- dataset specs (seamtrack dataset)
+    "dataset.toml": b'rays = 16\nchunk_size = 4\n[joint]\nfamilies = ["v-groove"]\n',
+    "dataset_min_max.toml": b"[joint]\ngap_mm = [2.0, 1.0]\n",
+    "dataset_family.toml": b'[joint]\nfamilies = ["v-groove", "x-groove"]\n',
+    "dataset_key.toml": b"[sensor]\ntilt_degs = 5\n",
+    # a dataset folder written by another spec (its manifest is what a resume reads)
+    "other_dataset/dataset.json": json.dumps(
+        {
+            "format": "seamtrack-dataset",
+            "seamtrack_version": __version__,
+            "n": 8,
+            "spec": {"seed": 7, "rays": 16},
+        }
+    ).encode(),
 }
 
 #: paper-verification on a UR10e beside the seam: the articulated-arm entries.
@@ -135,6 +150,10 @@ def _set(*pairs: str) -> tuple[str, ...]:
 
 def _run(*extra: str) -> tuple[str, ...]:
     return ("run", *extra, "--out", "OUT")
+
+
+def _dataset(spec: str, n: str = "8") -> tuple[str, ...]:
+    return ("dataset", spec, "--n", n, "--out", "OUT")
 
 
 CATALOGUE: tuple[Entry, ...] = (
@@ -379,12 +398,32 @@ CATALOGUE: tuple[Entry, ...] = (
     Entry("output under a file", ("run", *SHORT, "--out", "a_file/run"), field="--out"),
     Entry("unknown benchmark", ("bench", "nope", "--out", "OUT"), field="bench"),
     Entry("unknown sensor preset", ("sensor", "--preset", "nope"), field="preset"),
+    # --- seamtrack dataset
+    Entry("dataset range min > max", _dataset("dataset_min_max.toml"), field="joint.gap_mm"),
+    Entry("dataset unknown joint family", _dataset("dataset_family.toml"), field="families.1"),
+    Entry("dataset unknown spec key", _dataset("dataset_key.toml"), field="sensor.tilt_degs"),
+    Entry("dataset --n 0", _dataset("dataset.toml", n="0"), field="--n"),
+    Entry("dataset --n -5", _dataset("dataset.toml", n="-5"), field="--n"),
+    Entry("dataset --workers 0", (*_dataset("dataset.toml"), "--workers", "0"), field="--workers"),
+    Entry(
+        "dataset output is a file",
+        ("dataset", "dataset.toml", "--n", "8", "--out", "a_file"),
+        field="--out",
+    ),
+    Entry(
+        "dataset resume with another spec",
+        ("dataset", "dataset.toml", "--n", "8", "--out", "other_dataset"),
+        field="--out",
+    ),
+    Entry("dataset --images", (*_dataset("dataset.toml"), "--images"), field="--images"),
+    Entry("dataset missing spec file", _dataset("missing.toml"), field="SPEC"),
 )
 
 
 def workspace(root: Path) -> Path:
     """Write the catalogue's files into ``root``; return it."""
     for name, data in FILES.items():
+        (root / name).parent.mkdir(parents=True, exist_ok=True)
         (root / name).write_bytes(data)
     return root
 

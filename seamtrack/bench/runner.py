@@ -303,6 +303,12 @@ def _bench_failures(out: Path, quick: bool) -> Any:
     return bench_failures(out, quick=quick)
 
 
+def _bench_dataset(out: Path, quick: bool) -> Any:
+    from seamtrack.bench.dataset import bench_dataset
+
+    return bench_dataset(out, quick=quick)
+
+
 BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "raycast": lambda out, quick: bench_raycast(out, quick=quick),
     "extractors": _bench_extractors,
@@ -313,6 +319,7 @@ BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "scaling": _bench_scaling,
     "failures": _bench_failures,
     "camera": _bench_camera,
+    "dataset": _bench_dataset,
 }
 
 

@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from seamtrack._version import __version__
+from seamtrack.cli.dataset import add_dataset_parser
 from seamtrack.cli.tables import print_table
 from seamtrack.errors import OutputError, PluginRuntimeError, SceneError, SeamtrackError
 
@@ -482,6 +483,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quick", action="store_true", help="fewer profiles (a smoke run)")
     p.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)
 
+    add_dataset_parser(add)
+
     p = add("cache", cmd_cache, "the workpiece mesh cache: where it is, or clear it", scene=False)
     p.add_argument(
         "action",
@@ -501,7 +504,8 @@ def build_parser() -> argparse.ArgumentParser:
         "which",
         nargs="?",
         default="all",
-        help="raycast, extractors, mesh, loop, tradeoff, sweep, scaling, failures, camera, or all",
+        help="raycast, extractors, mesh, loop, tradeoff, sweep, scaling, failures, camera, "
+        "dataset, or all",
     )
     p.add_argument("--out", default="bench-results", help="folder for the results")
     p.add_argument("--quick", action="store_true", help="fewer repeats (a smoke run)")

@@ -1,0 +1,378 @@
+"""The dataset spec: what each sample is drawn from, as a TOML file validated with pydantic.
+
+Every knob is a range ``[min, max]`` (drawn uniformly per sample) or one number (fixed); lists
+of names (joint families, materials, sensor presets) are drawn with equal odds (or ``weights``).
+Checks are strict (a number is never a boolean or a string) and an error names the field:
+``joint.gap_mm: range min 2 > max 1; fix: ...``. :data:`TEMPLATE` is the commented spec that
+``seamtrack dataset --template`` writes; every key is optional.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import tomllib
+from pathlib import Path
+from typing import TYPE_CHECKING, Annotated, Any
+
+from pydantic import (
+    AfterValidator,
+    BaseModel,
+    ConfigDict,
+    Field,
+    PlainSerializer,
+    ValidationError,
+    model_validator,
+)
+
+from seamtrack import constants
+from seamtrack.errors import SeamtrackError
+
+#: Joint families a dataset draws from (``flat``: a plate with no seam, a negative sample).
+FAMILIES = ("square-butt", "v-groove", "fillet", "lap", "outside-corner", "flat")
+
+#: Path kinds of the seam. Geometry mode extrudes the joint's cross-section, which is exact on
+#: a straight seam only.
+PATHS = ("straight",)
+
+#: Largest number of profile points one chunk file holds in memory while it is built (about
+#: 150 MB of arrays): ``chunk_size * rays`` above it is refused.
+MAX_CHUNK_POINTS = 8_000_000
+
+#: Largest ``--n`` (the sample index is an int64; beyond this the disk is the limit anyway).
+MAX_SAMPLES = 1_000_000_000
+
+#: Tilts and yaws at or beyond this put the laser plane along the seam.
+MAX_TILT_DEG = 80.0
+
+
+class SpecError(SeamtrackError):
+    """A dataset spec (or a flag of ``seamtrack dataset``) that cannot be used."""
+
+
+def _as_range(value: float | list[float]) -> tuple[float, float]:
+    if isinstance(value, list):
+        if len(value) != 2:
+            raise ValueError(f"a range is [min, max], got {len(value)} numbers")
+        lo, hi = value
+    else:
+        lo = hi = value
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        raise ValueError("range bounds must be finite")
+    if lo > hi:
+        raise ValueError(f"range min {lo:g} > max {hi:g}")
+    return float(lo), float(hi)
+
+
+_Number = Annotated[float, Field(strict=True, allow_inf_nan=True)]
+if TYPE_CHECKING:  # what a validated range is
+    Range = tuple[float, float]
+else:  #: ``[min, max]`` or one number; validated to a ``(min, max)`` tuple.
+    Range = Annotated[
+        _Number | list[_Number], AfterValidator(_as_range), PlainSerializer(list, return_type=list)
+    ]
+Flag = Annotated[bool, Field(strict=True)]
+Names = Annotated[list[Annotated[str, Field(strict=True)]], Field(min_length=1)]
+
+
+def _nonnegative(r: tuple[float, float]) -> tuple[float, float]:
+    if r[0] < 0:
+        raise ValueError(f"must be >= 0, got min {r[0]:g}")
+    return r
+
+
+def _positive(r: tuple[float, float]) -> tuple[float, float]:
+    if r[0] <= 0:
+        raise ValueError(f"must be > 0, got min {r[0]:g}")
+    return r
+
+
+def _fraction(r: tuple[float, float]) -> tuple[float, float]:
+    if r[0] < 0 or r[1] > 1:
+        raise ValueError(f"must lie in [0, 1], got [{r[0]:g}, {r[1]:g}]")
+    return r
+
+
+def _open_angle(r: tuple[float, float]) -> tuple[float, float]:
+    if r[0] <= 0 or r[1] >= 180:
+        raise ValueError(f"must lie in (0, 180) deg, got [{r[0]:g}, {r[1]:g}]")
+    return r
+
+
+def _tilt(r: tuple[float, float]) -> tuple[float, float]:
+    if max(abs(r[0]), abs(r[1])) >= MAX_TILT_DEG:
+        raise ValueError(f"must lie in (-{MAX_TILT_DEG:g}, {MAX_TILT_DEG:g}) deg")
+    return r
+
+
+NonNegativeRange = Annotated[Range, AfterValidator(_nonnegative)]
+PositiveRange = Annotated[Range, AfterValidator(_positive)]
+FractionRange = Annotated[Range, AfterValidator(_fraction)]
+AngleRange = Annotated[Range, AfterValidator(_open_angle)]
+TiltRange = Annotated[Range, AfterValidator(_tilt)]
+
+
+class _Section(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class JointSpec(_Section):
+    families: Names = ["square-butt", "v-groove", "fillet", "lap", "outside-corner"]
+    weights: list[Annotated[float, Field(strict=True, gt=0, allow_inf_nan=False)]] | None = None
+    thickness_mm: PositiveRange = (4.0, 12.0)
+    groove_angle_deg: AngleRange = (40.0, 90.0)
+    root_face_mm: NonNegativeRange = (0.0, 2.0)
+    gap_mm: NonNegativeRange = (0.0, 2.0)
+    misalignment_mm: Range = (-1.0, 1.0)
+    web_angle_deg: AngleRange = (70.0, 110.0)
+    corner_angle_deg: AngleRange = (70.0, 110.0)
+    sheet_thickness_mm: PositiveRange = (1.0, 2.5)
+    sheet_gap_mm: NonNegativeRange = (0.0, 0.5)
+    tack_probability: FractionRange = (0.0, 0.0)
+    tack_height_mm: PositiveRange = (0.5, 1.5)
+    tack_width_mm: PositiveRange = (3.0, 6.0)
+
+    @model_validator(mode="after")
+    def _consistent(self) -> JointSpec:
+        for i, name in enumerate(self.families):
+            if name not in FAMILIES:
+                raise _FieldError(
+                    f"families.{i}",
+                    f"unknown joint family {name!r}",
+                    f"use one of {', '.join(FAMILIES)}",
+                )
+        if self.weights is not None and len(self.weights) != len(self.families):
+            raise _FieldError(
+                "weights",
+                f"{len(self.weights)} weights for {len(self.families)} families",
+                "give one weight per family, or none",
+            )
+        if "v-groove" in self.families and self.root_face_mm[1] >= self.thickness_mm[0]:
+            raise _FieldError(
+                "root_face_mm",
+                f"a root face up to {self.root_face_mm[1]:g} mm does not fit in plates from "
+                f"{self.thickness_mm[0]:g} mm",
+                "keep root_face_mm's max below thickness_mm's min",
+            )
+        return self
+
+
+class PathSpec(_Section):
+    kinds: Names = ["straight"]
+    position_mm: NonNegativeRange = (0.0, 200.0)
+
+    @model_validator(mode="after")
+    def _known(self) -> PathSpec:
+        for i, name in enumerate(self.kinds):
+            if name not in PATHS:
+                raise _FieldError(
+                    f"kinds.{i}",
+                    f"path {name!r} is not available in geometry mode (an extruded "
+                    "cross-section is exact on a straight seam only)",
+                    f"use one of {', '.join(PATHS)}",
+                )
+        return self
+
+
+class PartSpec(_Section):
+    materials: Names = ["mild-steel", "stainless-steel", "aluminium"]
+
+
+class SensorSpec(_Section):
+    presets: Names = ["paper"]
+    quantize: Flag = True
+    standoff_offset_mm: Range = (-15.0, 15.0)
+    lateral_offset_mm: Range = (-4.0, 4.0)
+    tilt_deg: TiltRange = (-10.0, 10.0)
+    roll_deg: TiltRange = (-10.0, 10.0)
+    yaw_deg: TiltRange = (0.0, 0.0)
+
+    @model_validator(mode="after")
+    def _known(self) -> SensorSpec:
+        from seamtrack.sensing.sensor import PRESET_SPECS
+
+        for i, name in enumerate(self.presets):
+            if name not in PRESET_SPECS:
+                raise _FieldError(
+                    f"presets.{i}",
+                    f"unknown sensor preset {name!r}",
+                    f"use one of {', '.join(PRESET_SPECS)}",
+                )
+        return self
+
+
+class NoiseSpec(_Section):
+    """The knobs of :class:`seamtrack.sensing.scan.StripeNoise`, each a range."""
+
+    range_sigma_mm: NonNegativeRange = (0.0, 0.01)
+    speckle_sigma_mm: NonNegativeRange = (0.0, 0.01)
+    speckle_correlation_rays: PositiveRange = (8.0, 8.0)
+    dropout_rate: FractionRange = (0.0, 0.02)
+    secondary_probability: FractionRange = (0.0, 0.05)
+    outlier_fraction: FractionRange = (0.0, 0.01)
+
+
+class DatasetSpec(_Section):
+    """A validated dataset spec (frozen)."""
+
+    seed: Annotated[int, Field(strict=True, ge=0, lt=2**63)] = 0
+    rays: Annotated[int, Field(strict=True, ge=2, le=constants.MAX_RAYS)] = 1024
+    chunk_size: Annotated[int, Field(strict=True, ge=1, le=1_000_000)] = 1024
+    joint: JointSpec = JointSpec()
+    path: PathSpec = PathSpec()
+    part: PartSpec = PartSpec()
+    sensor: SensorSpec = SensorSpec()
+    noise: NoiseSpec = NoiseSpec()
+
+    @model_validator(mode="after")
+    def _chunk_fits(self) -> DatasetSpec:
+        if self.chunk_size * self.rays > MAX_CHUNK_POINTS:
+            raise _FieldError(
+                "chunk_size",
+                f"{self.chunk_size} samples x {self.rays} rays is more than "
+                f"{MAX_CHUNK_POINTS:,} points in one chunk",
+                f"use chunk_size <= {MAX_CHUNK_POINTS // self.rays}",
+            )
+        return self
+
+    def canonical(self) -> str:
+        """The spec as sorted JSON, every default filled in: equal specs give equal text."""
+        return json.dumps(self.model_dump(mode="json"), sort_keys=True)
+
+    def to_toml(self) -> str:
+        import tomli_w
+
+        return tomli_w.dumps(self.model_dump(mode="json", exclude_none=True))
+
+
+class _FieldError(ValueError):
+    """Raised inside a model validator: pydantic wraps it; :func:`parse_spec` unwraps it."""
+
+    def __init__(self, field: str, message: str, fix: str):
+        super().__init__(message)
+        self.field, self.message, self.fix = field, message, fix
+
+
+_SECTIONS = {
+    "joint": JointSpec,
+    "path": PathSpec,
+    "part": PartSpec,
+    "sensor": SensorSpec,
+    "noise": NoiseSpec,
+}
+
+
+def _fix(kind: str, loc: list[str]) -> str:
+    if kind == "extra_forbidden":
+        import difflib
+
+        model: Any = _SECTIONS.get(loc[0], DatasetSpec) if len(loc) > 1 else DatasetSpec
+        keys = list(model.model_fields)
+        close = difflib.get_close_matches(loc[-1], keys, n=1)
+        return (f"did you mean {close[0]!r}? " if close else "") + f"keys here: {', '.join(keys)}"
+    if kind in {"float_type", "int_type", "finite_number", "float_parsing", "int_parsing"}:
+        return "give a finite number, or [min, max]"
+    if kind in {"bool_type", "bool_parsing"}:
+        return "give true or false"
+    if kind in {"string_type", "list_type", "too_short"}:
+        return 'give a list of names, e.g. ["v-groove"]'
+    if kind in {"greater_than", "greater_than_equal", "less_than", "less_than_equal"}:
+        return "give a number within the bound"
+    return "give [min, max] with min <= max in the key's unit (seamtrack dataset --template)"
+
+
+def parse_spec(data: dict[str, Any], source: str = "spec") -> DatasetSpec:
+    """Validate a spec dict; raise :class:`SpecError` naming the first bad field."""
+    try:
+        return DatasetSpec.model_validate(data)
+    except ValidationError as exc:
+        err = exc.errors()[0]
+        loc = [str(x) for x in err["loc"]]
+        cause = (err.get("ctx") or {}).get("error")
+        if isinstance(cause, _FieldError):
+            field = ".".join([*loc, cause.field])
+            raise SpecError(cause.message, field=f"{source}: {field}", fix=cause.fix) from None
+        # A union type reports its branch ("float", "list[float]") in the location: drop it.
+        loc = [p for p in loc if not p.startswith(("float", "list[", "function-after"))]
+        got = err.get("input")
+        got_text = "" if isinstance(got, dict) or err["type"] == "missing" else f" (got {got!r})"
+        message = err["msg"].removeprefix("Value error, ") + got_text
+        raise SpecError(
+            message, field=f"{source}: {'.'.join(loc)}", fix=_fix(err["type"], loc)
+        ) from None
+
+
+def load_spec(path: str | Path) -> DatasetSpec:
+    """Read and validate a spec file."""
+    p = Path(path)
+    try:
+        text = p.read_text()
+    except (OSError, UnicodeDecodeError) as exc:
+        reason = getattr(exc, "strerror", None) or "not a text file"
+        raise SpecError(
+            f"cannot read {str(p)!r}: {reason}",
+            field="SPEC",
+            fix="give a spec file (seamtrack dataset --template -o spec.toml writes one)",
+        ) from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise SpecError(f"not valid TOML: {exc}", field=p.name, fix="fix the syntax") from None
+    return parse_spec(data, source=p.name)
+
+
+TEMPLATE = """\
+# seamtrack dataset spec: every sample is drawn at random (seeded) from these ranges.
+#   seamtrack dataset THIS.toml --n 10000 --out DIR [--workers 2]
+# A range is [min, max] (drawn uniformly per sample) or one number (fixed). Units are in the key
+# names (mm); angles are in degrees only in keys ending _deg. Every key is optional: a missing
+# key takes the value shown here.
+
+seed = 0            # the same spec and seed give the same bytes, on any number of workers
+rays = 1024         # laser rays per profile (points per sample)
+chunk_size = 1024   # samples per HDF5 file (chunk-000000.h5, ...); a killed run redoes one chunk
+
+[joint]
+# Families drawn with equal odds (or give weights = [...], one per family). "flat" is a plate
+# with no seam (seam_point_laser is NaN). See the README ("Datasets") for each seam point.
+families = ["square-butt", "v-groove", "fillet", "lap", "outside-corner"]
+thickness_mm = [4.0, 12.0]       # plate thickness (square butt, V-groove)
+groove_angle_deg = [40.0, 90.0]  # V-groove included angle
+root_face_mm = [0.0, 2.0]        # V-groove root face (its max must stay below thickness's min)
+gap_mm = [0.0, 2.0]              # root gap (square butt, V-groove)
+misalignment_mm = [-1.0, 1.0]    # high-low: the right plate this much deeper (butt, V-groove)
+web_angle_deg = [70.0, 110.0]    # fillet: angle between web and flange
+corner_angle_deg = [70.0, 110.0] # outside corner: angle between the two faces
+sheet_thickness_mm = [1.0, 2.5]  # lap: the top sheet
+sheet_gap_mm = [0.0, 0.5]        # lap: between the sheets
+tack_probability = 0.0           # chance that the stripe crosses a tack weld over the seam
+tack_height_mm = [0.5, 1.5]      # the tack's mound (the seam label stays the true root)
+tack_width_mm = [3.0, 6.0]
+
+[path]
+kinds = ["straight"]             # geometry mode extrudes the cross-section: straight seams
+position_mm = [0.0, 200.0]       # where along the seam the profile is taken (T_world_seam)
+
+[part]
+materials = ["mild-steel", "stainless-steel", "aluminium"]  # a label: geometry mode has no
+                                                            # reflectance model
+
+[sensor]
+presets = ["paper"]              # seamtrack sensor --list
+quantize = true                  # snap points to the chip's pixels (Eq. 1-3)
+standoff_offset_mm = [-15.0, 15.0]  # range z_L of the seam point minus the preset's range centre
+lateral_offset_mm = [-4.0, 4.0]  # y_L of the seam point
+tilt_deg = [-10.0, 10.0]         # travel angle: the sensor leans along the seam (about y_S)
+roll_deg = [-10.0, 10.0]         # work angle: about the seam (x_S)
+yaw_deg = 0.0                    # about the laser axis (the plane turns against the seam)
+
+[noise]
+# The knobs of the mesh-mode stripe (sensor.stripe_noise in a scene), each drawn per sample.
+# All zero: the exact geometry, pixel-quantized.
+range_sigma_mm = [0.0, 0.01]         # Gaussian range noise at the centre of the depth of field
+speckle_sigma_mm = [0.0, 0.01]       # correlated range noise along the stripe
+speckle_correlation_rays = 8.0       # its correlation length, rays
+dropout_rate = [0.0, 0.02]           # chance a point is lost at normal incidence
+secondary_probability = [0.0, 0.05]  # chance a ray shows its specular secondary reflection
+outlier_fraction = [0.0, 0.01]       # points replaced by a spurious peak on the chip
+"""
