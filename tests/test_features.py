@@ -13,7 +13,9 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
 from seamtrack.errors import PluginError
+from seamtrack.features.classify import classify
 from seamtrack.features.extractors import BUILTIN, FeatureExtractor, extractor
+from seamtrack.features.robust import reject
 from seamtrack.features.synthetic import Imperfections, ray_angles, synthetic_profile
 from seamtrack.sensing.profiles import Feature, Profile
 from seamtrack.sensing.sensor import preset
@@ -221,16 +223,32 @@ _values = st.one_of(
 @st.composite
 def _profiles(draw):
     n = draw(st.integers(0, 300))
-    kind = draw(st.sampled_from(["random", "constant", "line", "nan", "huge"]))
+    kind = draw(
+        st.sampled_from(
+            ["random", "constant", "line", "nan", "huge", "1e6", "unsorted", "quantized", "spiky"]
+        )
+    )
     if kind == "random":
         pts = draw(arrays(np.float64, (n, 2), elements=_values))
     elif kind == "constant":
         pts = np.full((n, 2), draw(_values))
-    elif kind == "line":
+    elif kind in ("line", "unsorted", "quantized", "spiky"):
         y = np.linspace(-10, 10, n)
-        pts = np.column_stack([y, 90 + draw(st.floats(-5, 5)) * y])
+        pts = np.column_stack([y, 90 + draw(st.floats(-5, 5)) * np.abs(y)])
+        if kind == "unsorted":  # columns in no order
+            pts = pts[np.random.default_rng(draw(st.integers(0, 99))).permutation(n)]
+        elif kind == "quantized":  # integer range units
+            unit = draw(st.sampled_from([0.005, 0.05, 1.0]))
+            pts[:, 1] = np.round(pts[:, 1] / unit) * unit
+        elif kind == "spiky":  # every k-th point far off, behind or in front
+            k = draw(st.integers(2, 20))
+            pts[::k, 1] += draw(st.sampled_from([-30.0, 15.0, 1e5]))
     elif kind == "nan":
         pts = np.full((n, 2), np.nan)
+    elif kind == "1e6":  # at the bound of what counts as a measurement
+        pts = np.column_stack(
+            [np.linspace(-1e6, 1e6, n), np.full(n, draw(st.sampled_from([1e6, 999999.0])))]
+        )
     else:
         pts = np.column_stack([np.linspace(-1e200, 1e200, n), np.full(n, 1e250)])
     valid = draw(arrays(bool, (n,))) if draw(st.booleans()) else None
@@ -247,6 +265,24 @@ def test_extractors_never_raise(name, profile):
         assert feature.reason and feature.confidence == 0.0
     else:
         assert np.isfinite(feature.point_laser).all()
+
+
+@settings(max_examples=60, deadline=None)
+@given(profile=_profiles(), expect=st.sampled_from([None, {"angle_deg": 60.0, "gap_mm": 0.0}]))
+def test_v_groove_with_expectations_never_raises(profile, expect):
+    feature = extractor("v-groove", expect=expect)(profile)
+    assert isinstance(feature, Feature)
+    assert bool(feature) or feature.reason
+
+
+@settings(max_examples=60, deadline=None)
+@given(profile=_profiles())
+def test_classify_and_reject_never_raise(profile):
+    joint, confidence = classify(profile)
+    assert joint in (*FAMILIES, "none") and 0.0 <= confidence <= 1.0
+    cleaned = reject(profile)
+    assert cleaned.points_laser.shape == profile.points_laser.shape
+    assert (cleaned.valid <= profile.valid).all()  # only ever takes points out
 
 
 @pytest.mark.parametrize("name", sorted(BUILTIN))

@@ -184,3 +184,27 @@ def test_unknown_joint_or_parameter_is_refused():
         synthetic_profile("butt", SENSOR)
     with pytest.raises(ValueError, match="no parameter"):
         synthetic_profile("fillet", SENSOR, gap_mm=1.0)
+
+
+@pytest.mark.parametrize(("pitch_deg", "roll_deg"), TILTS)
+def test_raised_block_points_lie_on_its_faces_and_it_has_no_seam(pitch_deg, roll_deg):
+    """Plate z = 0, top z = -h for |y| <= w / 2, walls leaning in by the draft angle."""
+    w, h, draft = 4.0, 6.0, 5.0
+    profile, truth = synthetic_profile(
+        "block",
+        IDEAL,
+        pitch_deg=pitch_deg,
+        roll_deg=roll_deg,
+        width_mm=w,
+        height_mm=h,
+        draft_deg=draft,
+    )
+    p = _world(profile)
+    y, z = np.abs(p[:, 1]), p[:, 2]
+    foot = w / 2 + h * math.tan(math.radians(draft))
+    on_plate = (np.abs(z) < 1e-9) & (y >= foot - 1e-9)
+    on_top = (np.abs(z + h) < 1e-9) & (y <= w / 2 + 1e-9)
+    on_wall = np.abs(y - (w / 2 + (z + h) * math.tan(math.radians(draft)))) < 1e-9
+    assert np.all(on_plate | on_top | on_wall)
+    assert on_top.sum() > 100 and on_plate.sum() > 100
+    assert not truth.has_seam and truth.edges_laser.shape == (0, 2)

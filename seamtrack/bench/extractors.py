@@ -1,23 +1,30 @@
-"""Bench of the feature extractors on synthetic profiles with ground truth.
+"""Bench of the feature extractors on synthetic profiles with ground truth, and on real scans.
 
 Every extractor runs on its own joint family (the generic one on every family) and on flat
 plates, at a ladder of imperfection levels, with random tilts (+-15 deg about both axes) and
 lateral offsets (+-3 mm). Accuracy columns are seeded and repeat exactly; the timing column
 (microseconds per profile) is kept apart, as it depends on the machine.
+
+:func:`bench_real` runs the family extractors and the classifier on folders of real profiles
+with labels (:func:`load_real_set` reads the layout), one row per set.
 """
 
 from __future__ import annotations
 
 import csv
+import json
 import math
 import time
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from seamtrack.errors import SeamtrackError
 from seamtrack.features.extractors import BUILTIN, extractor
 from seamtrack.features.synthetic import Imperfections, synthetic_profile
+from seamtrack.sensing.profiles import Profile
 from seamtrack.sensing.sensor import LaserLineSensor, preset
 
 #: A seam point this close to the truth (mm) counts as detected.
@@ -255,3 +262,190 @@ def _plot(path: Path, rows: list[dict[str, Any]]) -> None:
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
+
+
+# --------------------------------------------------------------------------- real data
+#: The family extractors the real-data bench runs (the classifier's families).
+REAL_FAMILIES = ("v-groove", "square-butt", "fillet", "lap", "outside-corner")
+REAL_COLUMNS = (
+    "set",
+    "joint",
+    "n",
+    "detection_rate",
+    "wrong_rate",
+    "median_error_mm",
+    "p95_error_mm",
+    "false_joint_rate",
+    "worst_false",
+    "classified_rate",
+    "us_per_profile",
+    "classify_us",
+)
+
+
+@dataclass(frozen=True)
+class RealSet:
+    """One set of real profiles (:func:`load_real_sets`)."""
+
+    name: str
+    joint: str
+    profiles: list[Profile]
+    labels: np.ndarray | None  # (n, 2) seam points (y_L, z_L), mm; None for "none" sets
+    meta: dict[str, Any]
+
+
+def _real_error(message: str, path: Path, fix: str) -> SeamtrackError:
+    return SeamtrackError(f"{path}: {message}", field="--real", fix=fix)
+
+
+def load_real_set(path: str | Path) -> RealSet:
+    """A set in the bench's layout: ``set.json`` (``joint``: a family or ``"none"``; anything
+    else is kept as metadata), ``profiles.npz`` (``y_mm``, ``z_mm``: (n, m) laser-frame
+    coordinates in mm, the emitter at the origin, NaN where the sensor saw nothing; ``y_mm``
+    may be one (m,) row for all) and, for a joint, ``labels.csv`` (``index,y_mm,z_mm``: the
+    seam point of every profile).
+
+    Raises
+    ------
+    SeamtrackError
+        A missing or malformed file (field ``--real``, with a fix).
+    """
+    d = Path(path)
+    layout = "see docs/extractors.md, 'Real data' (set.json, profiles.npz, labels.csv)"
+    try:
+        meta = json.loads((d / "set.json").read_text())
+        with np.load(d / "profiles.npz") as data:
+            y, z = np.asarray(data["y_mm"], dtype=float), np.asarray(data["z_mm"], dtype=float)
+    except (OSError, ValueError, KeyError) as exc:
+        raise _real_error(f"not a real-data set ({exc})", d, layout) from exc
+    joint = meta.get("joint") if isinstance(meta, dict) else None
+    if joint not in (*REAL_FAMILIES, "none"):
+        raise _real_error(
+            f"set.json names no joint family ({joint!r})",
+            d,
+            f"set joint to one of {', '.join(REAL_FAMILIES)} or 'none'",
+        )
+    if z.ndim != 2 or y.shape not in (z.shape, z.shape[1:]):
+        raise _real_error(f"y_mm {y.shape} and z_mm {z.shape} do not match", d, layout)
+    y = np.broadcast_to(y, z.shape)
+    profiles = [Profile(np.column_stack([yi, zi])) for yi, zi in zip(y, z, strict=True)]
+    labels = None
+    if joint != "none":
+        try:
+            table = np.genfromtxt(d / "labels.csv", delimiter=",", names=True, ndmin=1)
+            labels = np.column_stack([table["y_mm"], table["z_mm"]]).astype(float)
+            index = np.asarray(table["index"], dtype=int)
+        except (OSError, ValueError) as exc:
+            raise _real_error(f"no usable labels.csv ({exc})", d, layout) from exc
+        if not np.array_equal(index, np.arange(len(profiles))):
+            raise _real_error(
+                f"labels.csv has {len(index)} rows, indices not 0..{len(profiles) - 1}",
+                d,
+                "give one label per profile, in order",
+            )
+    return RealSet(d.name, str(joint), profiles, labels, meta)
+
+
+def load_real_sets(path: str | Path) -> list[RealSet]:
+    """The set at ``path`` (a folder with ``set.json``), or every set in its sub-folders."""
+    d = Path(path)
+    if (d / "set.json").is_file():
+        return [load_real_set(d)]
+    sets = sorted(p for p in d.glob("*/set.json")) if d.is_dir() else []
+    if not sets:
+        raise _real_error(
+            "no real-data set here (no set.json in it or its sub-folders)",
+            d,
+            "point --real at a set folder or a folder of sets (docs/extractors.md, 'Real data')",
+        )
+    return [load_real_set(p.parent) for p in sets]
+
+
+def _timed(ex: Any, profiles: list[Profile]) -> tuple[list[Any], float]:
+    ex(profiles[0])  # warm-up, untimed
+    out, elapsed = [], 0.0
+    for p in profiles:
+        t0 = time.perf_counter()
+        out.append(ex(p))
+        elapsed += time.perf_counter() - t0
+    return out, 1e6 * elapsed / max(len(profiles), 1)
+
+
+def bench_real(
+    real_dir: str | Path, out_dir: str | Path, *, progress: bool = True
+) -> list[dict[str, Any]]:
+    """The family extractors and the classifier on real profiles, one row per set.
+
+    ``detection_rate``, ``wrong_rate``, ``median_error_mm``, ``p95_error_mm``: the set's own
+    family extractor against the labels (found within :data:`DETECTED_MM`, found farther;
+    errors over the found). ``false_joint_rate``: share of (profile, other family extractor)
+    answers that found a seam (every family on a ``"none"`` set); ``worst_false``: the
+    extractor that answered most. ``classified_rate``: share the classifier names the set's
+    joint (``"none"`` included). ``us_per_profile``: the set's extractor (on ``"none"``
+    sets, the families' mean), ``classify_us``: the classifier. Writes
+    ``extractors_real.csv`` and ``extractors_real.md`` into ``out_dir``.
+    """
+    from tqdm import tqdm
+
+    from seamtrack.features.classify import classify
+
+    sets = load_real_sets(real_dir)
+    exs = {name: extractor(name) for name in REAL_FAMILIES}
+    rows: list[dict[str, Any]] = []
+    for rs in tqdm(sets, disable=not progress, desc="real sets", unit="set"):
+        answers, times = {}, {}
+        for name, ex in exs.items():
+            answers[name], times[name] = _timed(ex, rs.profiles)
+        kinds, classify_us = _timed(lambda p: classify(p)[0], rs.profiles)
+        row: dict[str, Any] = {"set": rs.name, "joint": rs.joint, "n": len(rs.profiles)}
+        if rs.labels is not None:
+            e = np.array(
+                [
+                    float(np.hypot(*(f.point_laser - lab))) if f else math.inf
+                    for f, lab in zip(answers[rs.joint], rs.labels, strict=True)
+                ]
+            )
+            found = e[np.isfinite(e)]
+            row |= {
+                "detection_rate": float(np.mean(e <= DETECTED_MM)),
+                "wrong_rate": float(np.mean(np.isfinite(e) & (e > DETECTED_MM))),
+                "median_error_mm": float(np.median(found)) if found.size else math.nan,
+                "p95_error_mm": float(np.percentile(found, 95)) if found.size else math.nan,
+                "us_per_profile": times[rs.joint],
+            }
+        else:
+            row |= {k: math.nan for k in ("detection_rate", "wrong_rate")}
+            row |= {k: math.nan for k in ("median_error_mm", "p95_error_mm")}
+            row["us_per_profile"] = float(np.mean(list(times.values())))
+        others = {k: float(np.mean([bool(f) for f in v])) for k, v in answers.items()}
+        others.pop(rs.joint, None)
+        worst = max(others, key=lambda k: others[k])
+        row |= {
+            "false_joint_rate": float(np.mean(list(others.values()))),
+            "worst_false": f"{worst} {others[worst]:.3f}",
+            "classified_rate": float(np.mean([k == rs.joint for k in kinds])),
+            "classify_us": classify_us,
+        }
+        rows.append(row)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    with open(out / "extractors_real.csv", "w", newline="") as fh:
+        writer = csv.DictWriter(fh, fieldnames=REAL_COLUMNS)
+        writer.writeheader()
+        writer.writerows(rows)
+    (out / "extractors_real.md").write_text(real_table(rows))
+    return rows
+
+
+def real_table(rows: list[dict[str, Any]]) -> str:
+    """The real-data rows as a markdown table."""
+    head = (
+        "set", "joint", "n", "detect", "wrong", "median mm", "p95 mm", "false joints",
+        "worst false", "classified", "us/profile", "classify us",
+    )  # fmt: skip
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for r in rows:
+        cells = [_fmt(r[k]) for k in REAL_COLUMNS]
+        cells[-2:] = [f"{r['us_per_profile']:.0f}", f"{r['classify_us']:.0f}"]
+        lines.append("| " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"

@@ -83,6 +83,15 @@ def cmd_extractors(args: argparse.Namespace) -> int:
     from seamtrack.bench.extractors import bench_extractors
     from seamtrack.io.output import new_dir
 
+    if args.real is not None:
+        from seamtrack.bench.extractors import bench_real, load_real_sets
+
+        load_real_sets(args.real)  # a bad folder is refused before anything is written
+        with new_dir(args.out) as out:
+            bench_real(args.real, out, progress=_progress_wanted(args))
+        print((out / "extractors_real.md").read_text(), end="")
+        print(f"wrote {out}/extractors_real.csv, extractors_real.md")
+        return 0
     with new_dir(args.out) as out:
         bench_extractors(out, quick=args.quick, progress=_progress_wanted(args))
     print((out / "extractors.md").read_text(), end="")
@@ -481,6 +490,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="folder for the bench's CSV, table and plot (default bench-results/extractors)",
     )
     p.add_argument("--quick", action="store_true", help="fewer profiles (a smoke run)")
+    p.add_argument(
+        "--real",
+        metavar="DIR",
+        help="bench on real profiles instead: a set folder (set.json, profiles.npz, "
+        "labels.csv) or a folder of them; see docs/extractors.md",
+    )
     p.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)
 
     add_dataset_parser(add)

@@ -133,49 +133,58 @@ class _Base:
         owner = np.full(len(seg.points), -1, dtype=np.intp)  # each point's piece
         for k, ln in enumerate(seg.lines):
             owner[ln.index] = k
+        along: dict[int, FloatArray] = {}  # per group: its on-line surface points' coordinates
+
+        def supported(g: Line, x: FloatArray, v: FloatArray) -> int:
+            if id(g) not in along:
+                on_line = np.abs((surface - g.centroid) @ g.normal) <= band
+                along[id(g)] = surface[on_line] @ g.direction
+            s = 1.0 if float(v @ g.direction) > 0 else -1.0
+            return int(np.count_nonzero(s * (along[id(g)] - float(x @ g.direction)) >= -seg.tol))
+
+        def reach(g: Line, x: FloatArray, v: FloatArray) -> float:
+            # How near the arm comes to the apex. A tenth of a group may lie past it in
+            # pieces of their own (fragments of the root collinear with a bevel; trimmed
+            # below), but no piece may run through it (no V there).
+            t = (seg.points[g.index] - x) @ v
+            ahead = t >= -seg.tol
+            over = g.count - int(np.count_nonzero(ahead))
+            if over == 0 or (
+                10 * over <= g.count
+                and not np.isin(owner[g.index[~ahead]], owner[g.index[ahead]]).any()
+            ):
+                return float(t[ahead].min())
+            return -np.inf
+
         for i, a in enumerate(groups):
             for b in groups[i + 1 :]:
                 x = intersect(a, b)
                 if x is None:
                     continue
-                arms = []
-                for g in (a, b):
-                    v = g.centroid - x
-                    v = v / max(float(np.hypot(*v)), 1e-300)
-                    # How near the arm comes to the apex. A tenth of a group may lie past it
-                    # in pieces of their own (fragments of the root collinear with a bevel;
-                    # trimmed below), but no piece may run through it.
-                    t = (seg.points[g.index] - x) @ v
-                    ahead = t >= -seg.tol
-                    over = g.count - int(np.count_nonzero(ahead))
-                    near = -np.inf  # the arm runs through the apex: no V there
-                    if over == 0 or (
-                        10 * over <= g.count
-                        and not np.isin(owner[g.index[~ahead]], owner[g.index[ahead]]).any()
-                    ):
-                        near = float(t[ahead].min())
-                    arms.append((v, near, g))
-                (va, na, ga), (vb, nb, gb) = sorted(arms, key=lambda arm: float(arm[0][0]))
+                va, vb = a.centroid - x, b.centroid - x
+                va, vb = (
+                    va / max(float(np.hypot(*va)), 1e-300),
+                    vb / max(float(np.hypot(*vb)), 1e-300),
+                )
+                ga, gb = a, b
+                if vb[0] < va[0]:
+                    va, vb, ga, gb = vb, va, b, a
                 included = math.degrees(math.acos(float(np.clip(va @ vb, -1, 1))))
                 bis = va + vb
-                ok = (
+                if not (
                     va[0] < 0 < vb[0]
                     and sign * va[1] > 0
                     and sign * vb[1] > 0
                     and min_deg <= included <= max_deg
                     and sign * bis[1] > 0.7 * float(np.hypot(*bis))  # bisector within 45 deg
-                    and -seg.tol <= min(na, nb)
-                    and max(na, nb) <= max_reach_mm
-                )
-                if not ok:
+                ):
+                    continue
+                na, nb = reach(ga, x, va), reach(gb, x, vb)
+                if not (-seg.tol <= min(na, nb) and max(na, nb) <= max_reach_mm):
                     continue
                 # Support: the surface points on either arm's line, on its side of the apex
                 # (fragments of a bevel cut up by spikes count, whatever piece they are in).
-                score = 0.0
-                for v, g in ((va, ga), (vb, gb)):
-                    d = surface - x
-                    on_line = np.abs(d @ g.normal) <= band
-                    score += float(np.count_nonzero(on_line & (d @ v >= -seg.tol)))
+                score = float(supported(ga, x, va) + supported(gb, x, vb))
                 if best is None or score > best[3]:
                     best = (ga, gb, x, score)
         if best is None:
