@@ -143,18 +143,19 @@ class _Base:
             return int(np.count_nonzero(s * (along[id(g)] - float(x @ g.direction)) >= -seg.tol))
 
         def reach(g: Line, x: FloatArray, v: FloatArray) -> float:
-            # How near the arm comes to the apex. A tenth of a group may lie past it in
-            # pieces of their own (fragments of the root collinear with a bevel; trimmed
-            # below), but no piece may run through it (no V there).
+            # How near the arm comes to the apex. A tenth of a group may lie past it (trimmed
+            # below): fragments of the root collinear with a bevel, or a bevel's own piece
+            # rounding into the root, but none by more than three tolerances (a piece that
+            # runs on through the apex crosses the other arm: no V there).
             t = (seg.points[g.index] - x) @ v
             ahead = t >= -seg.tol
             over = g.count - int(np.count_nonzero(ahead))
-            if over == 0 or (
-                10 * over <= g.count
-                and not np.isin(owner[g.index[~ahead]], owner[g.index[ahead]]).any()
-            ):
-                return float(t[ahead].min())
-            return -np.inf
+            if over == 0:
+                return float(t.min())
+            if 10 * over > g.count:
+                return -np.inf
+            through = np.isin(owner[g.index], owner[g.index[ahead]]) & (t < -3.0 * seg.tol)
+            return -np.inf if through.any() else float(t[ahead].min())
 
         for i, a in enumerate(groups):
             for b in groups[i + 1 :]:

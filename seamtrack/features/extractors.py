@@ -6,21 +6,25 @@ profiles give a falsy ``Feature.failed(reason)``. :func:`extractor` builds one b
 built-in (:data:`BUILTIN`), a ``"package.module:Class"`` string, or an entry point in the
 group ``seamtrack.extractors`` (read lazily: a broken plugin never breaks ``import seamtrack``).
 
-The built-ins share one front end, :func:`segment_profile` (split-and-merge): drop isolated
-outliers against a 5-point running median, estimate the noise from second differences, cut the
-profile at jumps, split each run by Douglas-Peucker at a noise-scaled tolerance, merge neighbours
-that fit one line, and refit each piece by total least squares on its inliers. The family
-extractors then pick pieces by geometry (a V opening towards the sensor, two plates with a gap, a
-step between parallel sheets, a ridge) and intersect their lines; a line that ends at a gap ends
-half a ray spacing beyond its last point (the edge lies between two rays). The two-plate extractors
-(square butt, lap; in :mod:`seamtrack.features.plates`) gather pieces on one line into a plate
-however short
-they are, and read what lies between two plates: a stray line cut off both (a false reflection)
-hides the columns it covers, it opens no gap, and where it covers a plate's edge the edge is
-estimated under it. The v-groove extractor reads what lies just beyond each bevel's lower end: a
-stray line there (a false reflection over the root) hides the root corner, which is then put where
-the bevel reaches the other corner's depth below the plates. The generic extractor needs no
-segmentation: sliding-window slopes, the sharpest turn, two local fits.
+The built-ins share one front end, :func:`segment_profile` (split-and-merge), after the robust
+clean-up of :mod:`seamtrack.features.robust`: the range step of quantized profiles and a noise
+estimate over several lags set the tolerance; isolated spikes and detours (runs off the line on
+which the surface continues across them) are left out; the profile is cut at jumps, each run
+split by Douglas-Peucker, neighbours that fit one line merged, and each piece refitted by total
+least squares on its inliers. The family extractors then pick pieces by geometry (a V opening
+towards the sensor, two plates with a gap, a step between parallel sheets, a ridge) and
+intersect their lines; a line that ends at a gap ends half a ray spacing beyond its last point
+(the edge lies between two rays). Each checks that the profile shows its joint (its model
+explains ``min_explained`` of the points, and the family's own tests hold) and refuses with a
+reason otherwise; :func:`seamtrack.features.classify.classify` names the family. The two-plate
+extractors (square butt, lap; in :mod:`seamtrack.features.plates`) gather pieces on one line
+into a plate however short they are, and read what lies between two plates: a stray line cut off
+both (a false reflection) hides the columns it covers, it opens no gap, and where it covers a
+plate's edge the edge is estimated under it. The v-groove extractor
+(:mod:`seamtrack.features.vgroove`) reads what lies just beyond each bevel's lower end: a stray
+line there hides the root corner, which is then put where the bevel reaches the other corner's
+depth below the plates; with no gap showing, the bevels' intersection is the seam. The generic
+extractor needs no segmentation: sliding-window slopes, the sharpest turn, two local fits.
 
 Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groove).
 """

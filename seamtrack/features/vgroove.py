@@ -123,8 +123,11 @@ def _plate_depth(plate: Line, q: FloatArray) -> float:
 
 @dataclass(frozen=True)
 class VGrooveExtractor(_Base):
-    """V-groove: two bevels opening towards the sensor. Seam: the root centre, midpoint of
-    the bevels' lower ends (their intersection when they meet). Edges: the top edges.
+    """V-groove: two bevels opening towards the sensor, a plate beside at least one of them.
+    Seam: the root centre, midpoint of the bevels' lower ends, when a root gap shows between
+    them (the ends level, the V's tip below them empty, the columns between them open);
+    else the bevels' intersection (confidence halved unless they meet: the bottom is cut up
+    by spikes and dropouts, or filled). Edges: the top edges.
 
     Where a stray line (a false reflection) covers a bevel's root end, the end is hidden:
     it is put at the depth of the other root end below the plates (both root corners lie
@@ -132,6 +135,11 @@ class VGrooveExtractor(_Base):
     stretch (confidence halved). Confidence is halved too when a surface that is no wall
     joins the two root ends: there is no gap between them (a false V where the laser plane
     crosses a mitred corner, a tack weld over the root).
+
+    Refused with a reason when the profile shows no groove (:func:`_groove_zones`: two
+    faces alone, a side along the other's plate, a wide root, or less than
+    ``min_explained`` of the profile on the model's lines) or when ``expect`` says the
+    included angle, the depth below the plates or the gap is implausible.
     """
 
     name: str = "v-groove"
@@ -306,7 +314,7 @@ def _gap_seen(
         return False
     if _tip_filled(seg, left, right, root_l, root_r, apex, plate_l, min_points):
         return False
-    return covered or _covered_between(seg, left, right, plate_l, min_points) <= 0.5
+    return _covered_between(seg, left, right, plate_l, min_points) < 0.5
 
 
 def _continued(
@@ -336,8 +344,9 @@ def _covered_between(
     seg: Segments, left: Line, right: Line, plate: Line | None, min_points: int
 ) -> float:
     """Share of the columns between the bevels' lower ends that show a surface: points in no
-    wall (steep on ``plate``: a root face), no detour and no long straight piece off both
-    bevels (a reflection, a backing). Over a gap the laser falls through (no points)."""
+    wall (steep on ``plate``: a root face), no long straight piece off both bevels and no
+    piece cut off by jumps at both ends (a reflection, a backing), or, when more, the share
+    not in the longest run of open columns. Over a gap the laser falls through (no points)."""
     lo, hi = int(left.index[-1]), int(right.index[0])
     if hi - lo < 2 or seg.columns.shape != (len(seg.points),):
         return 0.0
@@ -348,14 +357,19 @@ def _covered_between(
     flat = plate.direction if plate is not None else np.array([1.0, 0.0])
     cos_wall = math.cos(math.radians(_WALL_DEG))
     cos_arm = math.cos(math.radians(15.0))
+    starts, ends = seg.runs[:-1], seg.runs[1:]
     for ln in seg.lines:
-        if int(ln.index[-1]) <= lo or int(ln.index[0]) >= hi:
+        first, last = int(ln.index[0]), int(ln.index[-1])
+        if last <= lo or first >= hi:
             continue
         wall = abs(float(ln.direction @ flat)) <= cos_wall
         stray = ln.count >= 2 * min_points and all(
             abs(float(ln.direction @ arm.direction)) < cos_arm for arm in (left, right)
         )
-        if wall or stray:
+        # A line cut off at both ends by jumps: a reflection over the root.
+        k = int(np.searchsorted(starts, first, side="right")) - 1
+        cut_off = 0 <= k < len(starts) and first - starts[k] <= 3 and ends[k] - 1 - last <= 3
+        if wall or stray or cut_off:
             inner = ln.index[(ln.index > lo) & (ln.index < hi)]
             keep[inner - lo - 1] = False
     # The open columns: no counted point in them. Over a gap they form one run.
