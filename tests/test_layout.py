@@ -171,3 +171,17 @@ def test_every_subpackage_is_a_stage() -> None:
         if p.parent.name != "scenes"
     }
     assert subpackages <= stages
+
+
+def test_every_subpackage_is_installed() -> None:
+    """pyproject.toml lists every subpackage (an editable install hides a missing one; a wheel
+    or a fresh non-editable install would not have it)."""
+    import tomllib
+
+    listed = set(
+        tomllib.loads((ROOT.parent / "pyproject.toml").read_text())["tool"]["setuptools"][
+            "packages"
+        ]
+    )
+    present = {f"seamtrack.{p.parent.name}" for p in ROOT.glob("*/__init__.py")}
+    assert present <= listed
