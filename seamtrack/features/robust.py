@@ -289,7 +289,7 @@ def front_end(
     floor = TOL_RESOLUTIONS * resolution if min_tol_mm is None else min_tol_mm
     rounding = q / math.sqrt(12.0)
     # Isolated outliers first: they would split lines and bias the noise estimate.
-    sigma = max(noise_sigma(p, NOISE_LAGS), rounding)
+    sigma = max(noise_sigma(p), rounding)
     dev = np.abs(p[:, 1] - _median5(p[:, 1]))
     keep = dev <= max(6.0 * sigma, 4.0 * floor, 4.0 * spacing)
     spikes = columns[~keep]
