@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 from typing import Any
+from xml.etree import ElementTree
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -229,6 +230,14 @@ class ArmKinematics:
                 field=field_name,
                 fix="give a URDF file (XML with a <robot> element)",
             )
+        try:  # well-formed XML first: urdfdom prints its own parse errors on the C stderr
+            ElementTree.fromstring(text)
+        except ElementTree.ParseError as exc:
+            raise SceneError(
+                f"{what} is not well-formed XML: {exc}",
+                field=field_name,
+                fix="check the file's XML (every element closed, quotes matched)",
+            ) from None
         try:
             return pin.buildModelFromXML(text)
         except Exception as exc:  # Pinocchio raises ValueError or RuntimeError
