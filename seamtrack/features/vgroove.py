@@ -308,10 +308,14 @@ def _gap_seen(
 ) -> bool:
     """Whether the stretch between the bevels' lower ends is a root gap: the ends lie at one
     depth (not read where a stray line hides an end: its depth is then taken from the other),
-    the V's tip below them is empty and the columns between them are open (the laser falls
-    through the gap). Otherwise the bevels end where spikes, dropouts or a fill take over."""
+    no detour lies between them (a surface continuing across spikes), the V's tip below them
+    is empty and the columns between them are open (the laser falls through the gap).
+    Otherwise the bevels end where spikes, dropouts or a fill take over."""
     if not covered and not _level(seg, left, right, root_l, root_r, plate_l, plate_r, gap):
         return False
+    lo, hi = int(left.index[-1]), int(right.index[0])
+    if seg.stray.shape == (len(seg.points),) and int(seg.stray[lo + 1 : hi].sum()) >= 3:
+        return False  # a detour between them: a surface goes on across it, no gap
     if _tip_filled(seg, left, right, root_l, root_r, apex, plate_l, min_points):
         return False
     return _covered_between(seg, left, right, plate_l, min_points) < 0.5
