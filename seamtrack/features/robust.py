@@ -14,8 +14,6 @@ reads a profile's scale from the data so that its tolerances hold at any pitch a
   surface continues across them (the surface before and after them fits one line): a specular
   spike or a reflection, not part of the part (:attr:`Reason.REFLECTION`); isolated points off
   a running median of 5 are :attr:`Reason.SPIKE`;
-* :func:`tukey_refit`: iteratively reweighted total least squares with Tukey's biweight, so that
-  the points a piece gathers off its line (bumps, streak ends) do not pull it.
 
 :func:`reject` returns the profile with those points invalid and their reasons set, the same
 points the extractors leave out.
@@ -303,34 +301,6 @@ def front_end(
     off = detours(p, runs[:-1], runs[1:], tol, min_points, max_detour_mm)
     stray = np.repeat(off, np.diff(runs))
     return FrontEnd(p, columns, spikes, runs, stray, sigma, tol, floor, spacing, q, resolution)
-
-
-def tukey_refit(
-    points: FloatArray, index: IntArray, scale: float, iterations: int = 4
-) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """Total-least-squares line through ``points[index]``, reweighted with Tukey's biweight
-    (cut-off ``scale``, mm): points beyond it get no weight. Returns (centroid, unit direction
-    pointing along the index order, weights)."""
-    q = points[index]
-    w = np.ones(len(q))
-    c = q.mean(axis=0)
-    u = np.array([1.0, 0.0])
-    for _ in range(iterations):
-        s = float(w.sum())
-        if s <= 0:
-            break
-        c = (w[:, None] * q).sum(axis=0) / s
-        d = q - c
-        syy = float(w @ (d[:, 0] * d[:, 0]))
-        szz = float(w @ (d[:, 1] * d[:, 1]))
-        syz = float(w @ (d[:, 0] * d[:, 1]))
-        theta = 0.5 * math.atan2(2.0 * syz, syy - szz)
-        u = np.array([math.cos(theta), math.sin(theta)])
-        r = (d @ np.array([-u[1], u[0]])) / scale
-        w = np.where(np.abs(r) < 1.0, (1.0 - r * r) ** 2, 0.0)
-    if u @ (q[-1] - q[0]) < 0:
-        u = -u
-    return c, u, w
 
 
 def reject(
