@@ -234,7 +234,7 @@ class ArmKinematics:
             ElementTree.fromstring(text)
         except ElementTree.ParseError as exc:
             raise SceneError(
-                f"{what} is not well-formed XML: {exc}",
+                f"{what} does not parse as a URDF: not well-formed XML ({exc})",
                 field=field_name,
                 fix="check the file's XML (every element closed, quotes matched)",
             ) from None
