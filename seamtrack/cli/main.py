@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from seamtrack._version import __version__
+from seamtrack.cli import seams as seams_command
 from seamtrack.errors import OutputError, PluginRuntimeError, SceneError, SeamtrackError
 
 EXIT_USAGE = 2
@@ -485,6 +486,8 @@ def build_parser() -> argparse.ArgumentParser:
         help="arc length along the seam, mm (default 0)",
     )
     p.add_argument("--out", help="CSV file (a PNG plot is written beside it in mesh mode)")
+
+    seams_command.add_parser(sub)
 
     p = add(
         "view",

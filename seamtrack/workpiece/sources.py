@@ -63,8 +63,9 @@ def helper_hash() -> str:
     return sha256(b"".join(folder.joinpath(n).read_bytes() for n in HELPERS))
 
 
-def resolve(source: str | Path) -> tuple[str, Path]:
-    """('script' | 'step', path) for a script path, a built-in name or a STEP path."""
+def resolve(source: str | Path, field: str | None = None) -> tuple[str, Path]:
+    """('script' | 'step', path) for a script path, a built-in name or a STEP path; errors
+    name ``field`` (default: ``workpiece.step`` or ``workpiece.script``)."""
     text = str(source)
     path = Path(text).expanduser()
     suffix = path.suffix.lower()
@@ -72,7 +73,7 @@ def resolve(source: str | Path) -> tuple[str, Path]:
         if not path.is_file():
             raise WorkpieceError(
                 f"STEP file {text!r} does not exist",
-                field="workpiece.step",
+                field=field or "workpiece.step",
                 fix="give the path of a .step/.stp file",
             )
         return "step", path
@@ -81,14 +82,14 @@ def resolve(source: str | Path) -> tuple[str, Path]:
     if not path.is_file():
         raise WorkpieceError(
             f"script {text!r} does not exist",
-            field="workpiece.script",
+            field=field or "workpiece.script",
             fix=f"give a cad/*.py path or a built-in joint: {', '.join(builtin_joints())} "
             f"(weldments: {', '.join(builtin_weldments())})",
         )
     if suffix != ".py":
         raise WorkpieceError(
             f"{text!r} is not a Python script (.py) or a STEP file",
-            field="workpiece.script",
+            field=field or "workpiece.script",
             fix="give a CadQuery script cad/<joint>.py or a .step file",
         )
     return "script", path

@@ -285,7 +285,7 @@ def load_bodies(source: str | Path, field: str, params: dict[str, Any]) -> list[
     """The named bodies of a STEP file or a weldment script."""
     from seamtrack.workpiece.sources import read_bodies, resolve, run_script
 
-    kind, path = resolve(source)
+    kind, path = resolve(source, None if field.startswith("workpiece.") else field)
     if kind == "step":
         if params:
             raise WorkpieceError(
