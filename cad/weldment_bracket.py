@@ -9,7 +9,8 @@ Bodies (mm; every plate runs ``length_mm`` along +X from x = 0 unless said other
 - ``base``: 80 wide (y = -40..40), ``plate_mm`` thick, top at z = 0; its +Y edge is bevelled
   for a single-V butt joint (``groove_angle_deg`` included, ``root_face_mm`` at the bottom);
 - ``extension``: 30 wide (y = 40..70), bevelled to match: butt joint with the base, root faces
-  touching at y = 40 (the groove's root line is y = 40, z = root_face_mm - plate_mm);
+  ``root_gap_mm`` apart about y = 40 (the groove's root line is y = 40, z = root_face_mm -
+  plate_mm; its root side, y = 40 on the bottom face, shows the gap);
 - ``web``: upright on the base, y = -5..5, ``web_height_mm`` tall: two fillets at y = -+5,
   the one at y = +5 interrupted by the gusset;
 - ``gusset``: a right triangle 10 thick (x = length/2 -+ 5) in the corner between the web's
@@ -39,6 +40,7 @@ def build(
     web_height_mm: float = 40.0,
     groove_angle_deg: float = 60.0,
     root_face_mm: float = 2.0,
+    root_gap_mm: float = 1.0,
     strap_mm: float = 6.0,
 ) -> _weldment.Weldment:
     """Build the bracket; see the module docstring for the parameters' meaning."""
@@ -59,13 +61,14 @@ def build(
         f"must be in (0, plate_mm), got {root_face_mm}",
     )
     _weldment.require(0 < strap_mm <= 20, "strap_mm", f"must be in (0, 20], got {strap_mm}")
-    t, c = plate_mm, root_face_mm
+    _weldment.require(0 <= root_gap_mm <= 4, "root_gap_mm", f"must be in [0, 4], got {root_gap_mm}")
+    t, c, g = plate_mm, root_face_mm, root_gap_mm / 2
     bevel = (t - c) * math.tan(math.radians(groove_angle_deg) / 2)  # width of each bevel's top
-    _weldment.require(bevel < 5, "groove_angle_deg", "the bevel would reach the gusset's toe")
+    _weldment.require(bevel + g < 10, "groove_angle_deg", "the groove would reach the gusset's toe")
     x = (0.0, length_mm)
     mid = length_mm / 2
-    base = [(-40.0, -t), (40.0, -t), (40.0, c - t), (40.0 - bevel, 0.0), (-40.0, 0.0)]
-    extension = [(40.0, -t), (70.0, -t), (70.0, 0.0), (40.0 + bevel, 0.0), (40.0, c - t)]
+    base = [(-40.0, -t), (40 - g, -t), (40 - g, c - t), (40 - g - bevel, 0.0), (-40.0, 0.0)]
+    extension = [(40 + g, -t), (70.0, -t), (70.0, 0.0), (40 + g + bevel, 0.0), (40 + g, c - t)]
     return Weldment(
         bodies={
             "base": _weldment.prism(base, x),

@@ -24,6 +24,7 @@ from seamtrack.geometry.seam import Seam
 from seamtrack.sensing.profiles import Feature, Profile, laser_to_world
 from seamtrack.sensing.scan import SeamNoise, sense_seam
 from seamtrack.sensing.sensor import LaserLineSensor
+from seamtrack.simulation.mount import Mount, angles_mount, seam_mount
 from seamtrack.simulation.scene import Scene, check_ticks, default_time_limit_s, make_sensor
 
 FloatArray = NDArray[np.float64]
@@ -62,6 +63,8 @@ class Parts:
     sensor: LaserLineSensor | None = None
     mesh: Any = None  # mesh mode: the ray-cast scene (workpiece and obstacles, world frame)
     tracker_name: str = "tracker"  # as the scene names it, for errors raised in its code
+    extractor_name: str = "v-groove"  # the scene's, or the one the seam's joint type calls for
+    mount: Mount | None = None  # where the sensor sits on the torch, and why
 
 
 def make_seam(scene: Scene) -> Seam:
@@ -79,22 +82,44 @@ def make_seam(scene: Scene) -> Seam:
     return seam.transformed(frames.from_xyz_rpy_deg(c.offset_mm, c.rotation_deg))
 
 
-def make_robot(scene: Scene, sensor: LaserLineSensor) -> CartesianRobot:
-    """The Cartesian robot with the sensor mounted ahead of the torch.
+def sensor_mount(
+    scene: Scene,
+    sensor: LaserLineSensor,
+    seam: Seam | None = None,
+    caster: Any = None,
+    view: FloatArray | None = None,
+) -> Mount:
+    """Where the sensor sits on the torch (``T_tcp_sensor`` in the base's axes).
 
-    The laser points down (z_L = -Z) with its baseline along +X (x_L = +X), turned by
-    ``sensor.mount_rotation_deg`` (x-y-z angles in the laser frame: a roll about x_L tilts the
-    laser sideways within its plane, as a fillet joint needs). The emitter sits on the laser
-    axis ``range_mm`` (default: where the optical axis crosses the laser, b / tan theta_s) from
-    the point ``look_ahead_mm`` ahead of the torch tip along base +X, so the central ray hits a
-    seam at the torch tip's height there whatever the tilt.
+    With ``sensor.mount_rotation_deg`` set (or no workpiece seam given), the classic mount:
+    the laser points down (z_L = -Z) with its baseline along +X (x_L = +X), turned by those
+    x-y-z angles in the laser frame (a roll about x_L tilts the laser sideways within its
+    plane, as a fillet joint needs). Unset, with the workpiece ``seam`` (world frame): the mount
+    comes from the seam's torch frame (:func:`seamtrack.simulation.mount.seam_mount`; ``view``:
+    a direction to look from instead of the torch's), the line of sight checked against the
+    ``caster``'s part. The emitter sits on the laser axis ``range_mm``
+    (default: where the optical axis crosses the laser, b / tan theta_s) from the point
+    ``look_ahead_mm`` ahead of the torch tip, so the central ray hits a seam at the torch tip's
+    height there whatever the tilt.
     """
     r, s = scene.config.robot, scene.config.sensor
     distance = s.range_mm if s.range_mm is not None else sensor.range_center_mm
-    R_down = frames.look_rotation([0.0, 0.0, -1.0], [1.0, 0.0, 0.0])
-    R = R_down @ frames.from_xyz_rpy_deg([0.0, 0.0, 0.0], s.mount_rotation_deg)[:3, :3]
-    emitter = np.array([s.look_ahead_mm, 0.0, 0.0]) - distance * R[:, 2]
-    T_tcp_sensor = frames.make(R, emitter)
+    if s.mount_rotation_deg is not None or seam is None:
+        return angles_mount(s.mount_rotation_deg or (0.0, 0.0, 0.0), s.look_ahead_mm, distance)
+    half_fan = math.atan(0.25 * (sensor.fov_near_mm + sensor.fov_far_mm) / distance)
+    world = seam_mount(seam, s.look_ahead_mm, distance, sensor.baseline_mm, half_fan, caster, view)
+    R_base_world = frames.from_xyz_rpy_deg(r.base_origin_mm, r.base_rotation_deg)[:3, :3].T
+    T = world.T_tcp_sensor.copy()  # the TCP frame has the base's axes
+    T[:3, :3] = R_base_world @ world.T_tcp_sensor[:3, :3]
+    T[:3, 3] = R_base_world @ world.T_tcp_sensor[:3, 3]
+    return dataclasses.replace(world, T_tcp_sensor=T)
+
+
+def make_robot(scene: Scene, sensor: LaserLineSensor, mount: Mount | None = None) -> CartesianRobot:
+    """The Cartesian robot with the sensor mounted ahead of the torch (default: the scene's
+    mount angles, see :func:`sensor_mount`)."""
+    r = scene.config.robot
+    mount = mount if mount is not None else sensor_mount(scene, sensor)
     return CartesianRobot(
         position_min_mm=r.position_min_mm,
         position_max_mm=r.position_max_mm,
@@ -102,7 +127,7 @@ def make_robot(scene: Scene, sensor: LaserLineSensor) -> CartesianRobot:
         acceleration_max_mm_s2=r.acceleration_max_mm_s2,
         control_period_s=r.control_period_s,
         T_world_base=frames.from_xyz_rpy_deg(r.base_origin_mm, r.base_rotation_deg),
-        T_tcp_sensor=T_tcp_sensor,
+        T_tcp_sensor=mount.T_tcp_sensor,
     )
 
 
@@ -120,11 +145,46 @@ def make_tracker(scene: Scene) -> Tracker:
     return tracker(c.name, **params)
 
 
-def _mesh_scan(
-    scene: Scene, sensor: LaserLineSensor, rng: np.random.Generator
-) -> tuple[Seam, ScanFn, Any]:
+#: The extractor a joint type calls for when the scene names none (``extractor.name`` unset).
+JOINT_EXTRACTORS = {
+    "fillet": "fillet",
+    "lap": "lap",
+    "edge": "generic",
+}
+
+
+#: Their parameters in that case: a lap found in a weldment may be a plate of any thickness, so
+#: the step between its sheets may exceed the lap extractor's default (3 mm, thin sheet).
+JOINT_EXTRACTOR_PARAMS: dict[str, dict[str, Any]] = {"lap": {"max_gap_mm": 25.0}}
+
+
+def joint_extractor(joint: str, opening_rad: float) -> str:
+    """The built-in extractor for a joint type and its opening angle (v-groove when unknown)."""
+    if joint in JOINT_EXTRACTORS:
+        return JOINT_EXTRACTORS[joint]
+    if joint == "butt" and abs(opening_rad - math.pi) < math.radians(10):
+        return "square-butt"  # no groove: the gap between two plates
+    if joint == "outside_corner" and opening_rad > math.pi:
+        return "outside-corner"  # a ridge
+    return "v-groove"  # a groove, an outside V, or nothing known
+
+
+@dataclass(frozen=True)
+class MeshScan:
+    """A loaded workpiece in the world frame: its CAD seam, the per-frame scan, the ray-cast
+    mesh and its caster, and the extractor the scan uses."""
+
+    seam: Seam
+    scan: ScanFn
+    mesh: Any
+    caster: Any
+    extractor_name: str
+    view: FloatArray | None = None  # where a sensor looks from, when not the torch direction
+
+
+def _mesh_scan(scene: Scene, sensor: LaserLineSensor, rng: np.random.Generator) -> MeshScan:
     """The workpiece's CAD seam (world frame) and the per-frame scan: ray-cast stripe, then the
-    scene's feature extractor."""
+    scene's feature extractor (by default the one the seam's joint type calls for)."""
     from seamtrack.features.extractors import extractor
     from seamtrack.sensing.raycast import RayCaster
     from seamtrack.sensing.scan import scan_mesh
@@ -133,13 +193,16 @@ def _mesh_scan(
     w = scene.config.workpiece
     assert w is not None
     source = w.script if w.script is not None else w.step
-    assert source is not None
-    path = scene.resolve_path(source)
+    if source is not None:
+        path = scene.resolve_path(source)
+        source = str(path) if path.exists() else source
     part = load_workpiece(
-        str(path) if path.exists() else source,
+        source,
         tolerance_mm=w.tolerance_mm,
         angular_tolerance_rad=math.radians(w.angular_tolerance_deg),
         seam=w.seam,
+        seam_near_mm=w.seam_near_mm,
+        groove=w.groove,
         **w.params,
     )
     T_world_part = frames.from_xyz_rpy_deg(w.offset_mm, w.rotation_deg)
@@ -152,8 +215,12 @@ def _mesh_scan(
         mesh = trimesh.util.concatenate([mesh, *boxes])  # type: ignore[assignment]
     caster = RayCaster.from_mesh(mesh)
     seam = part.seam.transformed(T_world_part)
+    params = dict(scene.config.extractor.params)
     extractor_name = scene.config.extractor.name
-    find = extractor(extractor_name, **scene.config.extractor.params)
+    if extractor_name is None:
+        extractor_name = joint_extractor(part.joint, part.opening_rad)
+        params = dict(JOINT_EXTRACTOR_PARAMS.get(extractor_name, {}))
+    find = extractor(extractor_name, **params)
     offset = np.asarray(scene.config.extractor.offset_mm, dtype=float)
     s = scene.config.sensor
     noise = _stripe_noise(s.stripe_noise)
@@ -198,7 +265,8 @@ def _mesh_scan(
             )
         return profile, feature
 
-    return seam, scan, mesh
+    view = None if part.view_normal is None else T_world_part[:3, :3] @ part.view_normal
+    return MeshScan(seam, scan, mesh, caster, extractor_name, view)
 
 
 def _stripe_noise(params: dict[str, Any]) -> Any:
@@ -221,11 +289,14 @@ def build_parts(scene: Scene, rng: np.random.Generator | None = None) -> Parts:
     c = scene.config
     rng = rng if rng is not None else np.random.default_rng(c.simulation.seed)
     sensor = make_sensor(c.sensor)
-    robot = make_robot(scene, sensor)
     scan: ScanFn | None = None
     mesh: Any = None
+    loaded = None
+    if c.sensor.mode == "mesh" or c.seam.source == "workpiece":
+        loaded = _mesh_scan(scene, sensor, rng)
     if c.sensor.mode == "mesh":
-        seam, scan, mesh = _mesh_scan(scene, sensor, rng)
+        assert loaded is not None
+        seam, scan, mesh = loaded.seam, loaded.scan, loaded.mesh
         if c.seam.source != "workpiece":
             seam = make_seam(scene)  # a nominal seam to score against (e.g. a robot program)
         mesh_scan = scan
@@ -233,14 +304,21 @@ def build_parts(scene: Scene, rng: np.random.Generator | None = None) -> Parts:
         def sense(T_world_sensor: FloatArray, t_s: float) -> Feature:
             return mesh_scan(T_world_sensor, t_s)[1]
     else:
-        seam = (
-            make_seam(scene) if c.seam.source != "workpiece" else _mesh_scan(scene, sensor, rng)[0]
-        )
+        seam = make_seam(scene) if loaded is None else loaded.seam
         noise = SeamNoise(c.sensor.noise_range_mm, c.sensor.noise_lateral_mm)
         sensed = seam
 
         def sense(T_world_sensor: FloatArray, t_s: float) -> Feature:
             return sense_seam(sensed, T_world_sensor, sensor, noise=noise, rng=rng)
+
+    mount = sensor_mount(
+        scene,
+        sensor,
+        None if loaded is None else loaded.seam,
+        None if loaded is None else loaded.caster,
+        None if loaded is None else loaded.view,
+    )
+    robot = make_robot(scene, sensor, mount)
 
     robot.require_reachable(seam.points, "seam", field="seam")
     start = seam.points[0] + np.asarray(c.robot.start_offset_mm)
@@ -280,4 +358,31 @@ def build_parts(scene: Scene, rng: np.random.Generator | None = None) -> Parts:
         scan=scan,
         sensor=sensor,
         mesh=mesh,
+        extractor_name=(
+            loaded.extractor_name if loaded is not None else c.extractor.name or "v-groove"
+        ),
+        mount=mount,
+    )
+
+
+def workpiece_seams(scene: Scene) -> list[Any]:
+    """The seams found in the scene's weldment (a STEP file of several bodies or a weldment
+    script), as :func:`seamtrack.workpiece.weldment.find_seams` gives them."""
+    from seamtrack.workpiece.weldment import find_seams
+
+    w = scene.config.workpiece
+    source = None if w is None else (w.step or w.script)
+    if w is None or source is None:
+        raise SceneError(
+            "the scene has no weldment whose seams could be listed",
+            field="workpiece.step",
+            fix='give workpiece.step = "part.step" (several solids) or a weldment script',
+        )
+    path = scene.resolve_path(source)
+    field = "workpiece.step" if w.step else "workpiece.script"
+    return find_seams(
+        str(path) if path.exists() else source,
+        tolerance_mm=w.tolerance_mm,
+        field=field,
+        **w.params,
     )

@@ -107,6 +107,9 @@ class Workpiece:
         ``"lap"``, ``"butt"``, ``"outside_corner"``, ``"edge"``), else ``""``.
     opening_rad : float
         Angle of free space between the two faces at the seam (median; nan when unknown).
+    view_normal : (3,) float or None
+        The direction a sensor should look from at the seam's start (part frame) when it is not
+        the torch direction (a lap joint: square to its sheets); None: the torch direction.
     """
 
     mesh: trimesh.Trimesh
@@ -121,6 +124,7 @@ class Workpiece:
     from_cache: bool = False
     joint: str = ""
     opening_rad: float = math.nan
+    view_normal: FloatArray | None = None
     _shape: Any = field(default=None, repr=False)
     _rebuild: Callable[[], Any] | None = field(default=None, repr=False)
 
@@ -143,6 +147,7 @@ class _Built:
     name: str
     joint: str = ""
     opening_rad: float = math.nan
+    view: FloatArray | None = None
 
 
 def _check_mesh_budget(diagonal_mm: float, tolerance_mm: float) -> None:
@@ -250,6 +255,7 @@ def _build(
             f"{path.stem}:{chosen.id}",
             chosen.joint,
             chosen.opening_rad,
+            chosen.view_normal,
         )
     from seamtrack.cad import _occ
 
@@ -410,6 +416,7 @@ def load_workpiece(
                 from_cache=True,
                 joint=meta.get("joint", ""),
                 opening_rad=float(meta.get("opening_rad") or math.nan),
+                view_normal=None if meta.get("view") is None else np.array(meta["view"]),
                 _rebuild=rebuild,
             )
     built = _build(
@@ -429,6 +436,7 @@ def load_workpiece(
             "tolerance_mm": tolerance_mm,
             "joint": built.joint,
             "opening_rad": None if math.isnan(built.opening_rad) else built.opening_rad,
+            "view": None if built.view is None else [float(v) for v in built.view],
             "seamtrack": __version__,
         }
         arrays = {
@@ -454,6 +462,7 @@ def load_workpiece(
         tolerance_mm=float(tolerance_mm),
         joint=built.joint,
         opening_rad=built.opening_rad,
+        view_normal=built.view,
         _shape=built.shape,
         _rebuild=rebuild,
     )

@@ -111,6 +111,8 @@ class FoundSeam:
         point.
     reach_fraction : float
         Share of the tested points where it is.
+    ends : (bool, bool)
+        Whether body a, and body b, end at the seam (else its face goes on beyond it).
     """
 
     id: str
@@ -126,6 +128,15 @@ class FoundSeam:
     length_mm: float
     reachable: bool
     reach_fraction: float
+    ends: tuple[bool, bool] = (True, True)
+
+    @property
+    def view_normal(self) -> FloatArray:
+        """The direction a sensor looks from at the start, (3,): the torch direction, except
+        for a lap joint, seen square to the sheet that goes on beyond the seam."""
+        if self.joint == "lap" and self.ends[0] != self.ends[1]:
+            return self.face_normals[0, 1 if self.ends[0] else 0].copy()
+        return self.normals[0].copy()
 
     @property
     def groove_angle_rad(self) -> float | None:
@@ -429,6 +440,7 @@ def _candidates(
                 "opening": float(np.median(opening[index])),
                 "gap": piece.gap_mm,
                 "length": length,
+                "ends": piece.ends,
             }
         )
     return out
@@ -494,6 +506,7 @@ def _number(seams: list[dict[str, Any]]) -> list[FoundSeam]:
                 length_mm=s["length"],
                 reachable=bool(s["reach"] == 1.0),
                 reach_fraction=s["reach"],
+                ends=s["ends"],
             )
         )
     return out
