@@ -29,13 +29,19 @@ _EXPORTS = {
     "extractor": "seamtrack.features.extractors",
     "FeatureExtractor": "seamtrack.features.extractors",
     "load_workpiece": "seamtrack.workpiece.loader",
+    "find_seams": "seamtrack.workpiece.weldment",
     "SeamtrackError": "seamtrack.errors",
 }
+
+#: Subpackages reachable as attributes (``st.workpiece.find_seams``), imported on first use.
+_SUBPACKAGES = {"workpiece"}
 
 __all__ = sorted(_EXPORTS)
 
 
 def __getattr__(name: str) -> Any:
+    if name in _SUBPACKAGES:
+        return importlib.import_module(f"seamtrack.{name}")
     module = _EXPORTS.get(name)
     if module is None:
         raise AttributeError(f"module 'seamtrack' has no attribute {name!r}")
@@ -45,4 +51,4 @@ def __getattr__(name: str) -> Any:
 
 
 def __dir__() -> list[str]:
-    return sorted(set(globals()) | set(_EXPORTS))
+    return sorted(set(globals()) | set(_EXPORTS) | _SUBPACKAGES)

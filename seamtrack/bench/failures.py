@@ -106,7 +106,30 @@ FILES: dict[str, bytes] = {
     "one.csv": b"x_mm,y_mm,z_mm\n0,0,0\n",
     "text.csv": b"x_mm,y_mm,z_mm\n0,zero,0\n",
     "a_file": b"not a folder\n",
+    "weld.toml": b'[seam]\nsource = "workpiece"\n[workpiece]\nstep = "apart.step"\n'
+    b'seam = "s1"\n[sensor]\nmode = "mesh"\n',
 }
+
+
+def _no_solid(path: Path) -> None:
+    """A STEP file that holds a face and no solid."""
+    import cadquery as cq
+
+    cq.exporters.export(cq.Workplane().rect(10, 10).extrude(1).faces(">Z").val(), str(path))
+
+
+def _apart(path: Path) -> None:
+    """A STEP assembly of two boxes 10 mm apart: solids that never touch."""
+    import cadquery as cq
+
+    assembly = cq.Assembly(name="apart")
+    assembly.add(cq.Solid.makeBox(10, 10, 10), name="a")
+    assembly.add(cq.Solid.makeBox(10, 10, 10, cq.Vector(20, 0, 0)), name="b")
+    assembly.export(str(path), exportType="STEP")
+
+
+#: Files made when the workspace is (CadQuery imported then, not with this module).
+GENERATED: dict[str, Any] = {"sheet.step": _no_solid, "apart.step": _apart}
 
 
 @dataclass(frozen=True)
@@ -314,6 +337,53 @@ CATALOGUE: tuple[Entry, ...] = (
     Entry("init an unknown template", ("init", "nope", "-o", "OUT/x.toml"), field="TEMPLATE"),
     Entry("output under a file", ("run", *SHORT, "--out", "a_file/run"), field="--out"),
     Entry("unknown benchmark", ("bench", "nope", "--out", "OUT"), field="bench"),
+    # --- weldments and weldx
+    Entry(
+        "seams of a STEP without solids",
+        ("seams", "sheet.step", "--view", "OUT/v.png"),
+        field="PART",
+    ),
+    Entry(
+        "seams of solids that never touch",
+        ("seams", "apart.step", "--view", "OUT/v.png"),
+        field="PART",
+    ),
+    Entry(
+        "weldment scene, STEP without solids",
+        ("run", "weld.toml", *_set('workpiece.step="sheet.step"'), "--out", "OUT"),
+        field="workpiece.step",
+    ),
+    Entry(
+        "weldment scene, solids that never touch",
+        ("run", "weld.toml", "--out", "OUT"),
+        field="workpiece.step",
+    ),
+    Entry(
+        "workpiece.seam naming no seam",
+        ("run", "weldment-bracket", *_set('workpiece.seam="s99"'), "--out", "OUT"),
+        field="workpiece.seam",
+    ),
+    Entry(
+        "groove weldx does not define",
+        ("run", "weldx-v-groove", *_set('workpiece.groove.type="ZGroove"'), "--out", "OUT"),
+        field="workpiece.groove.type",
+    ),
+    Entry(
+        "groove missing parameters",
+        (
+            "run",
+            "weldx-v-groove",
+            *_set('workpiece.groove={type="VGroove", t_mm=10}'),
+            "--out",
+            "OUT",
+        ),
+        field="workpiece.groove.alpha_deg",
+    ),
+    Entry(
+        "--weldx under a file",
+        ("run", *SHORT, "--weldx", "a_file/run.wx", "--out", "OUT"),
+        field="--weldx",
+    ),
     Entry("unknown sensor preset", ("sensor", "--preset", "nope"), field="preset"),
 )
 
@@ -322,6 +392,8 @@ def workspace(root: Path) -> Path:
     """Write the catalogue's files into ``root``; return it."""
     for name, data in FILES.items():
         (root / name).write_bytes(data)
+    for name, make in GENERATED.items():
+        make(root / name)
     return root
 
 
