@@ -230,3 +230,15 @@ def test_one_solid_is_no_weldment(tmp_path):
     cq.exporters.export(cq.Workplane().box(10, 10, 10), str(path))
     with pytest.raises(WorkpieceError, match="holds 1 solid"):
         find_seams(path)
+
+
+def test_a_step_file_edited_in_place_is_searched_again(tmp_path):
+    upright = _export(tmp_path, "weldment_t")
+    first = find_seams(upright)
+    tilted = _export(tmp_path, "weldment_t", web_angle_deg=60.0)
+    assert tilted == upright  # the same path, new content
+    again = find_seams(tilted)
+    assert math.degrees(first[0].opening_rad) == pytest.approx(90.0)
+    assert math.degrees(again[0].opening_rad) == pytest.approx(60.0)
+    with pytest.raises(ValueError):
+        again[0].points[0, 0] = 1.0  # shared results are read-only

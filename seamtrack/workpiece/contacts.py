@@ -130,7 +130,10 @@ def bounds(shape: TopoDS_Shape) -> tuple[FloatArray, FloatArray]:
     return np.array([x0, y0, z0]), np.array([x1, y1, z1])
 
 
-def _boxes_meet(a: tuple[FloatArray, FloatArray], b: tuple[FloatArray, FloatArray], gap: float):
+def boxes_meet(
+    a: tuple[FloatArray, FloatArray], b: tuple[FloatArray, FloatArray], gap: float
+) -> bool:
+    """Whether two axis-aligned boxes (min, max) come within ``gap`` of each other."""
     return bool(np.all(a[0] <= b[1] + gap) and np.all(b[0] <= a[1] + gap))
 
 
@@ -221,9 +224,9 @@ def facing_regions(
     """(face of A, face of B, gap, region) for every pair of planar faces that face each other
     within ``max_gap_mm``; the region lies in B's face plane."""
     box_b = bounds(solid_b)
-    faces_a = [f for f in planar_faces(solid_a) if _boxes_meet((f.lo, f.hi), box_b, max_gap_mm)]
+    faces_a = [f for f in planar_faces(solid_a) if boxes_meet((f.lo, f.hi), box_b, max_gap_mm)]
     box_a = bounds(solid_a)
-    faces_b = [f for f in planar_faces(solid_b) if _boxes_meet((f.lo, f.hi), box_a, max_gap_mm)]
+    faces_b = [f for f in planar_faces(solid_b) if boxes_meet((f.lo, f.hi), box_a, max_gap_mm)]
     limit = -math.cos(ANTIPARALLEL_TOL_RAD)
     out = []
     for fa in faces_a:
@@ -233,7 +236,7 @@ def facing_regions(
             gap = float((fb.point - fa.point) @ fa.normal)
             if not -ON_TOL_MM <= gap <= max_gap_mm + ON_TOL_MM:
                 continue
-            if not _boxes_meet((fa.lo, fa.hi), (fb.lo, fb.hi), max_gap_mm + ON_TOL_MM):
+            if not boxes_meet((fa.lo, fa.hi), (fb.lo, fb.hi), max_gap_mm + ON_TOL_MM):
                 continue
             gap = max(gap, 0.0)
             moved = _translated(fa.face, gap * fa.normal) if gap > 0 else fa.face

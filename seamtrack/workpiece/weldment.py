@@ -252,22 +252,31 @@ def find_seams(
     -------
     list of FoundSeam
     """
-    return list(
-        _find_cached(
-            str(source),
-            max_gap_mm,
-            torch_length_mm,
-            tolerance_mm,
-            spacing_mm,
-            min_length_mm,
-            field,
-            tuple(sorted(params.items())),
-        )
-    )
+    args = (max_gap_mm, torch_length_mm, tolerance_mm, spacing_mm, min_length_mm, field)
+    settings = tuple(sorted(params.items()))
+    try:
+        hash(settings)
+    except TypeError:  # parameters that cannot key a cache: search without one
+        return list(_find(str(source), *args, settings))
+    return list(_find_memo(str(source), _content_key(source, field), *args, settings))
+
+
+def _content_key(source: str | Path, field: str) -> str:
+    """What the found seams depend on besides the settings: the file's bytes (a STEP file, or
+    a weldment script and the shared helpers), so that an edited file is searched again."""
+    from seamtrack.workpiece.cache import sha256
+    from seamtrack.workpiece.sources import helper_hash, resolve
+
+    kind, path = resolve(source, None if field.startswith("workpiece.") else field)
+    return sha256(path.read_bytes()) + ("" if kind == "step" else helper_hash())
 
 
 @functools.lru_cache(maxsize=16)
-def _find_cached(
+def _find_memo(source: str, _content: str, *rest: Any) -> tuple[FoundSeam, ...]:
+    return _find(source, *rest)
+
+
+def _find(
     source: str,
     max_gap_mm: float,
     torch_length_mm: float,
@@ -348,7 +357,7 @@ def seams_of_bodies(
     raw: list[tuple[tuple[int, int], dict[str, Any]]] = []
     for i in range(len(solids)):
         for j in range(i + 1, len(solids)):
-            if not contacts._boxes_meet(space.boxes[i], space.boxes[j], max_gap_mm):
+            if not contacts.boxes_meet(space.boxes[i], space.boxes[j], max_gap_mm):
                 continue
             d = contacts.distance(solids[i], solids[j])
             nearest = min(nearest, (d, i, j))
@@ -486,6 +495,10 @@ def _start_key(points: FloatArray) -> tuple[float, ...]:
 
 def _number(seams: list[dict[str, Any]]) -> list[FoundSeam]:
     seams = sorted(seams, key=lambda s: _start_key(s["points"]))
+    for s in seams:  # results are shared (find_seams caches them): keep them read-only
+        for key in ("points", "tangents", "normals", "face_normals"):
+            s[key] = np.array(s[key], dtype=np.float64)
+            s[key].setflags(write=False)
     per_pair: dict[tuple[int, int], int] = {}
     out = []
     for k, s in enumerate(seams):
