@@ -83,20 +83,32 @@ def edges_near(shape: cq.Shape, points: FloatArray) -> list[cq.Edge]:
                 if min((e.startPoint() - at).Length, (e.endPoint() - at).Length) > 1e-6
             ]
         if len(tied) != 1:
-            raise _seam_error(
+            raise WorkpieceError(
                 f"seam_near_mm point {i} is equally near {max(len(tied), 2)} edges",
-                "place the points along the seam, away from its ends and corners",
+                field="workpiece.seam_near_mm",
+                fix="place the points along the seam, away from its ends and corners",
             )
         if not any(tied[0].isSame(e) for e in picked):
             picked.append(tied[0])
     return picked
 
 
+def lexicographic_first(points: Sequence[FloatArray]) -> FloatArray:
+    """The lexicographically smallest point (x, then y, then z); coordinates closer than
+    :data:`constants.LEXICOGRAPHIC_TIE_MM` count as equal, so float noise never decides."""
+    candidates = list(points)
+    for axis in range(3):
+        low = min(p[axis] for p in candidates)
+        candidates = [p for p in candidates if p[axis] <= low + constants.LEXICOGRAPHIC_TIE_MM]
+    return candidates[0]
+
+
 def chain(edges: Sequence[cq.Edge], what: str) -> list[tuple[cq.Edge, bool]]:
     """Order edges into one connected chain: (edge, forward) pairs.
 
-    The chain starts at its lexicographically smallest free end (x, then y, then z), so the
-    same edges give the same seam direction whatever their order or orientation.
+    The chain starts at its lexicographically smallest free end (x, then y, then z; see
+    :func:`lexicographic_first`), so the same edges give the same seam direction whatever
+    their order or orientation.
     """
     ends = [(np.array(e.startPoint().toTuple()), np.array(e.endPoint().toTuple())) for e in edges]
     flat = [p for pair in ends for p in pair]
@@ -105,7 +117,7 @@ def chain(edges: Sequence[cq.Edge], what: str) -> list[tuple[cq.Edge, bool]]:
         return sum(bool(np.linalg.norm(p - q) <= CHAIN_TOL_MM) for q in flat)
 
     free = [p for p in flat if degree(p) == 1]
-    start = min(free or flat, key=lambda p: tuple(np.round(p, 6)))
+    start = lexicographic_first(free or flat)
     remaining = list(range(len(edges)))
     out: list[tuple[cq.Edge, bool]] = []
     point = start
@@ -245,6 +257,15 @@ def mesh(
             )
         deflection *= factor
     return vertices, faces, deviation, spent
+
+
+def face_triangle_counts(shape: cq.Shape) -> list[int]:
+    """Triangles of each face's current triangulation, in the order of ``shape.Faces()``."""
+    counts = []
+    for face in shape.Faces():
+        tri = BRep_Tool.Triangulation_s(face.wrapped, TopLoc_Location())
+        counts.append(0 if tri is None else tri.NbTriangles())
+    return counts
 
 
 def triangulation(shape: cq.Shape) -> tuple[FloatArray, NDArray[np.int64], float]:

@@ -33,14 +33,16 @@ _EXPORTS = {
     "FeatureExtractor": "seamtrack.features.extractors",
     "classify": "seamtrack.features.classify",
     "load_workpiece": "seamtrack.workpiece.loader",
+    "find_seams": "seamtrack.workpiece.weldment",
     "SeamtrackError": "seamtrack.errors",
 }
 
 __all__ = sorted(_EXPORTS)
 
 
-#: Subpackages reached as attributes (``st.datasets.open(...)``), imported on first use.
-_SUBPACKAGES = {"datasets": "seamtrack.datasets"}
+#: Subpackages reached as attributes (``st.datasets.open(...)``, ``st.workpiece.find_seams``),
+#: imported on first use.
+_SUBPACKAGES = {"datasets": "seamtrack.datasets", "workpiece": "seamtrack.workpiece"}
 
 
 def __getattr__(name: str) -> Any:

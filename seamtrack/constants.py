@@ -51,3 +51,7 @@ MIN_MESH_TOLERANCE_RATIO = 1e-6
 #: a triangle (8.1 GB for the paper groove's 1.66 million at 1e-3 mm, measured): this keeps a
 #: load under about 10 GB of the 24 GB machine.
 MAX_MESH_TRIANGLES = 2_000_000
+
+#: Seams run from their lexicographically smallest end (x, then y, then z); coordinates closer
+#: than this count as equal, so float noise in a STEP file never decides the direction.
+LEXICOGRAPHIC_TIE_MM = 1e-3

@@ -110,3 +110,54 @@ def test_corner_angle_expectation(name, joint):
     profile, _ = synthetic_profile(joint, SENSOR, roll_deg=3.0)
     assert extractor(name, expect={"angle_deg": 90, "angle_tol_deg": 2})(profile)
     assert not extractor(name, expect={"angle_deg": 120, "angle_tol_deg": 5})(profile)
+
+
+# ----------------------------------------------------------- the scene's [extractor.expect]
+SHORT_GROOVE = {"workpiece.params.seam_length_mm": 20.0, "sensor.rays": 512}
+
+
+def _seam_point_at(parts, s_mm: float):
+    tcp = parts.seam.interpolate([s_mm])[0]
+    T_world_sensor = parts.robot.T_world_sensor(parts.robot.q_from_world(tcp))
+    return parts.scan(T_world_sensor, 0.0)[1]
+
+
+def test_scene_expectation_reaches_the_extractor_and_refuses_a_wrong_groove():
+    """paper-v-groove's bevels meet at 60 deg: expected so, the seam point is found; expected
+    at 90 +- 5 deg, no pair of bevels in 85-95 deg forms the joint and the stripe is refused."""
+    from seamtrack.simulation.assemble import build_parts
+    from seamtrack.simulation.scene import load_scene
+
+    right = build_parts(
+        load_scene("paper-v-groove", {**SHORT_GROOVE, "extractor.expect": {"angle_deg": 60}})
+    )
+    assert right.extract.expect == parse_expect({"angle_deg": 60}, "v-groove")
+    assert _seam_point_at(right, 5.0)
+    wrong = build_parts(
+        load_scene(
+            "paper-v-groove",
+            {**SHORT_GROOVE, "extractor.expect": {"angle_deg": 90, "angle_tol_deg": 5}},
+        )
+    )
+    assert wrong.extract.expect.angle == pytest.approx(math.radians(90))
+    assert not _seam_point_at(wrong, 5.0)
+
+
+@pytest.mark.parametrize(
+    ("overrides", "field"),
+    [
+        ({"extractor.expect": {"angel_deg": 60}}, "extractor.expect.angel_deg"),
+        (
+            {"extractor.expect": {"gap_mm": 1}, "extractor.name": "fillet"},
+            "extractor.expect.gap_mm",
+        ),
+        ({"extractor.expect": {"angle_deg": 60}, "extractor.name": "generic"}, "extractor.expect"),
+    ],
+)
+def test_a_bad_scene_expectation_is_refused_when_the_scene_loads(overrides, field):
+    from seamtrack.errors import SeamtrackError
+    from seamtrack.simulation.scene import load_scene
+
+    with pytest.raises(SeamtrackError) as info:
+        load_scene("paper-v-groove", {**SHORT_GROOVE, "extractor.name": "v-groove", **overrides})
+    assert info.value.field == field and info.value.fix

@@ -75,6 +75,13 @@ def test_the_catalogue_covers_every_item_of_the_issue() -> None:
         "sweep --workers 0",
         "sweep --seeds -1",
         "compare with an unknown tracker",
+        "seams of a STEP without solids",
+        "seams of solids that never touch",
+        "weldment scene, STEP without solids",
+        "weldment scene, solids that never touch",
+        "workpiece.seam naming no seam",
+        "groove weldx does not define",
+        "groove missing parameters",
     ):
         assert needed in names
 

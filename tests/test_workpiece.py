@@ -183,6 +183,24 @@ def test_step_seam_by_selector(tmp_path, module_cache):
     assert np.abs(loaded.seam.points - scripted.seam.points).max() < 1e-6
 
 
+def test_a_step_seam_runs_from_its_smallest_end_whatever_the_float_noise(tmp_path):
+    """A seam along Y whose ends' x differ by 4e-5 mm (what a writer's rounding leaves) runs
+    from its smaller y: the x difference is noise, not the lexicographic order (it used to
+    decide, and the seam ran from its largest end)."""
+    import importlib
+
+    joint = importlib.import_module("seamtrack.cad.fillet_t").build(seam_length_mm=200.0)
+    turn = 90.0 + math.degrees(2e-7)
+    step = tmp_path / "turned.step"
+    cq.exporters.export(joint.solid.rotate((0, 0, 0), (0, 0, 1), turn), str(step))
+    c, s = math.cos(math.radians(turn)), math.sin(math.radians(turn))
+    near = [[c * x, s * x, 0.0] for x in (30.0, 90.0, 170.0)]
+    loaded = load_workpiece(step, tolerance_mm=0.1, seam_near_mm=near, cache_dir=tmp_path)
+    start, end = loaded.seam.points[0], loaded.seam.points[-1]
+    assert abs(end[0] - start[0]) > 1e-5  # the noise is there
+    assert start[1] == pytest.approx(0.0, abs=1e-9) and end[1] > 199.0
+
+
 # ----------------------------------------------------------------------------- cache
 def _load_in_subprocess(script: Path, cache: Path, **params) -> dict:
     code = textwrap.dedent(
@@ -357,7 +375,8 @@ def straight_step(tmp_path_factory) -> Path:
 def test_bad_seam_choice_names_the_field(tmp_path, straight_step, kwargs, says):
     with pytest.raises(WorkpieceError) as info:
         load_workpiece(straight_step, cache_dir=tmp_path, **kwargs)
-    assert info.value.field == "workpiece.seam"
+    expected = "workpiece.seam_near_mm" if "seam_near_mm" in kwargs else "workpiece.seam"
+    assert info.value.field == expected
     assert says in info.value.message
 
 

@@ -130,6 +130,7 @@ def run_sweep(
     ``out_dir`` enables streaming to ``results.jsonl`` and resuming.
     """
     overrides = dict(overrides or {})
+    values = expand_values(scene, param, values, overrides)
     seed_list: list[int | None] = list(seeds) if seeds else [None]
     _check_sweep(scene, param, values, overrides, seed_list, workers)
     cases = [Case(param, v, s) for v in values for s in seed_list]
@@ -156,6 +157,23 @@ def run_sweep(
     if bar is not None:
         bar.close()
     return [done[c.key] for c in cases]
+
+
+def expand_values(
+    scene: str, param: str, values: Sequence[Any], overrides: dict[str, Any]
+) -> list[Any]:
+    """The values as given, except ``workpiece.seam`` over ``all``: every seam id of the
+    scene's weldment, in order."""
+    if param != "workpiece.seam" or list(values) != ["all"]:
+        return list(values)
+    return list(seam_labels(scene, overrides))
+
+
+def seam_labels(scene: str, overrides: dict[str, Any]) -> dict[str, str]:
+    """Seam id -> ``"s3 fillet base/web/1"`` for the scene's weldment."""
+    from seamtrack.simulation.assemble import workpiece_seams
+
+    return {s.id: s.label for s in workpiece_seams(load_scene(scene, overrides))}
 
 
 #: A sweep of up to this many values checks every one before running; a longer one its

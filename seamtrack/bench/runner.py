@@ -182,7 +182,7 @@ def bench_loop(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]:
     from seamtrack.sensing.scan import scan_mesh
 
     assert parts.sensor is not None and parts.mesh is not None
-    find = extractor(scene.config.extractor.name)
+    find = extractor(parts.extractor_name)
     arc = np.linspace(0.0, parts.seam.length_mm * 0.95, 200)
     poses = [
         parts.robot.T_world_sensor(parts.robot.q_from_world(p)) for p in parts.seam.interpolate(arc)

@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from seamtrack._version import __version__
+from seamtrack.cli import seams as seams_command
 from seamtrack.cli.dataset import add_dataset_parser
 from seamtrack.cli.tables import print_table
 from seamtrack.errors import OutputError, PluginRuntimeError, SceneError, SeamtrackError
@@ -41,6 +42,10 @@ def cmd_run(args: argparse.Namespace) -> int:
     scene = load_scene(args.scene, _overrides(args))
     out = Path(args.out) if args.out else Path("runs") / scene.name
     check_writable(out)  # fail before the run, not after it (and create nothing yet)
+    if args.weldx:
+        from seamtrack.io.weldx_file import check_weldx_target, write_weldx
+
+        check_weldx_target(args.weldx)
     parts = build_parts(scene)
     result = run(parts, progress=_progress_wanted(args))
     write_run(
@@ -50,11 +55,14 @@ def cmd_run(args: argparse.Namespace) -> int:
         scene.config.simulation.trace_period_s,
         extra=None if args.no_plot else lambda stage: plot_run(result, stage / "error.png"),
     )
+    if args.weldx:
+        write_weldx(result, scene, parts, args.weldx, scene.config.simulation.trace_period_s)
     if not args.quiet:
         print_table(list(result.summary.items()), f"seamtrack run {scene.name}")
         print(
             f"wrote {out}/summary.json, trace.csv, frames.csv, scene.toml"
             + ("" if args.no_plot else ", error.png")
+            + (f"; and {args.weldx}" if args.weldx else "")
         )
     if args.render:
         from seamtrack.viz.run import render_run
@@ -189,6 +197,8 @@ def cmd_check(args: argparse.Namespace) -> int:
         ("end tolerance (mm)", settings.end_tolerance_mm),
         ("time limit (s)", settings.time_limit_s),
         ("seam seen at start", bool(first) or first.reason),
+        ("sensor mount", parts.mount.describe() if parts.mount else "sensor.mount_rotation_deg"),
+        ("extractor", parts.extractor_name if c.sensor.mode == "mesh" else "none (seam mode)"),
         ("sensor resolution (mm)", parts.sensor_resolution_mm),
     ]
     print_table(rows, f"{scene.name}: valid")
@@ -207,6 +217,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         markdown_table,
         parse_values,
         run_sweep,
+        seam_labels,
         summarize,
         write_sweep,
     )
@@ -230,6 +241,13 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         progress=_progress_wanted(args),
     )
     table = summarize(rows)
+    if args.param == "workpiece.seam":  # name each found seam: id, joint type, bodies
+        try:
+            labels = seam_labels(args.scene, overrides)
+        except SeamtrackError:  # no weldment: seams named by a joint script
+            labels = {}
+        for row in table:
+            row["label"] = labels.get(row["value"])
     print(markdown_table(table, args.param), end="")
     if args.out:
         write_sweep(table, args.param, args.out, rows=rows)
@@ -390,6 +408,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--out", help="output folder (default: runs/<scene name>)")
     p.add_argument("--no-plot", action="store_true", help="skip error.png")
+    p.add_argument("--weldx", metavar="FILE", help="also write the run as a weldx file (.wx)")
     p.add_argument(
         "--render", action="store_true", help="also write scene.png and run.gif (3D views, PyVista)"
     )
@@ -412,7 +431,11 @@ def build_parser() -> argparse.ArgumentParser:
     p = add("sweep", cmd_sweep, "run a scene over values of one key")
     p.add_argument("scene", help=SCENE_HELP)
     p.add_argument("--param", required=True, help="dotted scene key, e.g. tracker.radius_mm")
-    p.add_argument("--values", required=True, help="comma-separated values")
+    p.add_argument(
+        "--values",
+        required=True,
+        help="comma-separated values (with --param workpiece.seam, 'all': every seam found)",
+    )
     p.add_argument(
         "--seeds",
         type=int,
@@ -446,6 +469,8 @@ def build_parser() -> argparse.ArgumentParser:
         help="arc length along the seam, mm (default 0)",
     )
     p.add_argument("--out", help="CSV file (a PNG plot is written beside it in mesh mode)")
+
+    seams_command.add_parser(sub)
 
     p = add(
         "render",

@@ -42,6 +42,9 @@ class _Base:
     min_points: int = 8
     min_arm_mm: float = 0.5
     min_explained: float = 0.8
+    #: Also try single pieces of a collinear group as arms (a weldment's web seen on both sides
+    #: of a gusset standing on it); off by default: a raised block's base would read as a joint.
+    arms_from_pieces: bool = False
     expect: Mapping[str, float] | Expect | None = None
 
     def __post_init__(self) -> None:
@@ -126,6 +129,17 @@ class _Base:
         (``opening_down``: the arms fall away from the sensor): (left, right, apex, score)."""
         if groups is None:
             groups = self._groups(seg)
+        if self.arms_from_pieces:
+            # A plane seen on both sides of something standing on it (a web either side of a
+            # gusset) is one collinear group running through the corner: its pieces are arms.
+            grouped = {id(g) for g in groups}
+            groups = groups + [
+                ln
+                for ln in seg.lines
+                if id(ln) not in grouped
+                and ln.count >= self.min_points
+                and ln.extent >= self.min_arm_mm
+            ]
         sign = 1.0 if opening_down else -1.0
         best: tuple[Line, Line, FloatArray, float] | None = None
         surface = seg.points[~seg.stray] if seg.stray.shape == (len(seg.points),) else seg.points

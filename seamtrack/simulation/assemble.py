@@ -23,12 +23,14 @@ from seamtrack.geometry.seam import Seam
 from seamtrack.sensing.profiles import Feature, Profile, laser_to_world
 from seamtrack.sensing.scan import SeamNoise, sense_seam
 from seamtrack.sensing.sensor import LaserLineSensor
-from seamtrack.simulation.checks import check_ticks, default_time_limit_s
+from seamtrack.simulation.checks import check_expect, check_ticks, default_time_limit_s
+from seamtrack.simulation.mount import Mount
 from seamtrack.simulation.robots import (
     check_sensor_outside,
     is_arm,
     make_robot,
     plan_arm,
+    sensor_mount,
     tool_program,
 )
 from seamtrack.simulation.scene import (
@@ -78,6 +80,9 @@ class Parts:
     tracker_name: str = "tracker"  # as the scene names it, for errors raised in its code
     tool_program: Any = None  # the tool orientations along the nominal seam (ToolProgram)
     start_joints: FloatArray | None = None  # an arm's planned start configuration
+    extractor_name: str = "v-groove"  # the scene's, or the one the seam's joint type calls for
+    mount: Mount | None = None  # where the sensor sits on the torch, and why
+    extract: Any = None  # mesh mode: the extractor instance the scan calls
 
 
 def make_seam(scene: Scene) -> Seam:
@@ -109,11 +114,54 @@ def make_tracker(scene: Scene) -> Tracker:
     return tracker(c.name, **params)
 
 
-def _mesh_scan(
-    scene: Scene, sensor: LaserLineSensor, rng: np.random.Generator
-) -> tuple[Seam, ScanFn, Any]:
+#: The extractor a joint type calls for when the scene names none (``extractor.name`` unset).
+JOINT_EXTRACTORS = {
+    "fillet": "fillet",
+    "lap": "lap",
+    "edge": "generic",
+}
+
+
+#: Their parameters in that case: a lap found in a weldment may be a plate of any thickness, so
+#: the step between its sheets may exceed the lap extractor's default (3 mm, thin sheet); a
+#: fillet's stripe crosses other bodies of the weldment too (a gusset narrowing towards its tip
+#: leaves a fillet face of a few mm beside the gusset's far side and the web beyond it), so its
+#: two faces explain less of the profile than on a lone T joint (64 % on the bracket's
+#: web/gusset fillet 15 mm up), and the web, seen on both sides of the gusset, is one line.
+JOINT_EXTRACTOR_PARAMS: dict[str, dict[str, Any]] = {
+    "lap": {"max_gap_mm": 25.0},
+    "fillet": {"min_explained": 0.5, "arms_from_pieces": True},
+}
+
+
+def joint_extractor(joint: str, opening_rad: float) -> str:
+    """The built-in extractor for a joint type and its opening angle (v-groove when unknown)."""
+    if joint in JOINT_EXTRACTORS:
+        return JOINT_EXTRACTORS[joint]
+    if joint == "butt" and abs(opening_rad - math.pi) < math.radians(10):
+        return "square-butt"  # no groove: the gap between two plates
+    if joint == "outside_corner" and opening_rad > math.pi:
+        return "outside-corner"  # a ridge
+    return "v-groove"  # a groove, an outside V, or nothing known
+
+
+@dataclass(frozen=True)
+class MeshScan:
+    """A loaded workpiece in the world frame: its CAD seam, the per-frame scan, the ray-cast
+    mesh and its caster, and the extractor the scan uses."""
+
+    seam: Seam
+    scan: ScanFn
+    mesh: Any
+    caster: Any
+    extractor_name: str
+    view: FloatArray | None = None  # where a sensor looks from, when not the torch direction
+    extract: Any = None  # the extractor instance ``scan`` calls
+
+
+def _mesh_scan(scene: Scene, sensor: LaserLineSensor, rng: np.random.Generator) -> MeshScan:
     """The workpiece's CAD seam (world frame) and the per-frame scan: ray-cast stripe, then the
-    scene's feature extractor."""
+    scene's feature extractor (by default the one the seam's joint type calls for)."""
     from seamtrack.features.extractors import extractor
     from seamtrack.sensing.raycast import RayCaster
     from seamtrack.sensing.scan import scan_mesh
@@ -122,13 +170,16 @@ def _mesh_scan(
     w = scene.config.workpiece
     assert w is not None
     source = w.script if w.script is not None else w.step
-    assert source is not None
-    path = scene.resolve_path(source)
+    if source is not None:
+        path = scene.resolve_path(source)
+        source = str(path) if path.exists() else source
     part = load_workpiece(
-        str(path) if path.exists() else source,
+        source,
         tolerance_mm=w.tolerance_mm,
         angular_tolerance_rad=math.radians(w.angular_tolerance_deg),
         seam=w.seam,
+        seam_near_mm=w.seam_near_mm,
+        groove=w.groove,
         **w.params,
     )
     T_world_part = frames.from_xyz_rpy_deg(w.offset_mm, w.rotation_deg)
@@ -141,8 +192,16 @@ def _mesh_scan(
         mesh = trimesh.util.concatenate([mesh, *boxes])  # type: ignore[assignment]
     caster = RayCaster.from_mesh(mesh)
     seam = part.seam.transformed(T_world_part)
+    params = dict(scene.config.extractor.params)
     extractor_name = scene.config.extractor.name
-    find = extractor(extractor_name, **scene.config.extractor.params)
+    if extractor_name is None:
+        extractor_name = joint_extractor(part.joint, part.opening_rad)
+        params = dict(JOINT_EXTRACTOR_PARAMS.get(extractor_name, {}))
+    if scene.config.extractor.expect:
+        if scene.config.extractor.name is None:
+            check_expect(extractor_name, scene.config.extractor.expect)
+        params["expect"] = dict(scene.config.extractor.expect)
+    find = extractor(extractor_name, **params)
     offset = np.asarray(scene.config.extractor.offset_mm, dtype=float)
     s = scene.config.sensor
     noise = _stripe_noise(s.stripe_noise)
@@ -192,7 +251,8 @@ def _mesh_scan(
             )
         return profile, feature
 
-    return seam, scan, mesh
+    view = None if part.view_normal is None else T_world_part[:3, :3] @ part.view_normal
+    return MeshScan(seam, scan, mesh, caster, extractor_name, view, find)
 
 
 def _stripe_noise(params: dict[str, Any]) -> Any:
@@ -215,11 +275,14 @@ def build_parts(scene: Scene, rng: np.random.Generator | None = None) -> Parts:
     c = scene.config
     rng = rng if rng is not None else np.random.default_rng(c.simulation.seed)
     sensor = make_sensor(c.sensor)
-    robot = make_robot(scene, sensor)
     scan: ScanFn | None = None
     mesh: Any = None
+    loaded = None
+    if c.sensor.mode == "mesh" or c.seam.source == "workpiece":
+        loaded = _mesh_scan(scene, sensor, rng)
     if c.sensor.mode == "mesh":
-        seam, scan, mesh = _mesh_scan(scene, sensor, rng)
+        assert loaded is not None
+        seam, scan, mesh = loaded.seam, loaded.scan, loaded.mesh
         if c.seam.source != "workpiece":
             seam = make_seam(scene)  # a nominal seam to score against (e.g. a robot program)
         mesh_scan = scan
@@ -227,15 +290,21 @@ def build_parts(scene: Scene, rng: np.random.Generator | None = None) -> Parts:
         def sense(T_world_sensor: FloatArray, t_s: float) -> Feature:
             return mesh_scan(T_world_sensor, t_s)[1]
     else:
-        seam = (
-            make_seam(scene) if c.seam.source != "workpiece" else _mesh_scan(scene, sensor, rng)[0]
-        )
+        seam = make_seam(scene) if loaded is None else loaded.seam
         noise = SeamNoise(c.sensor.noise_range_mm, c.sensor.noise_lateral_mm)
         sensed = seam
 
         def sense(T_world_sensor: FloatArray, t_s: float) -> Feature:
             return sense_seam(sensed, T_world_sensor, sensor, noise=noise, rng=rng)
 
+    mount = sensor_mount(
+        scene,
+        sensor,
+        None if loaded is None else loaded.seam,
+        None if loaded is None else loaded.caster,
+        None if loaded is None else loaded.view,
+    )
+    robot = make_robot(scene, sensor, mount)
     start = seam.points[0] + np.asarray(c.robot.start_offset_mm)
     program = tool_program(scene, seam)
     start_joints = None
@@ -294,4 +363,32 @@ def build_parts(scene: Scene, rng: np.random.Generator | None = None) -> Parts:
         mesh=mesh,
         tool_program=program,
         start_joints=start_joints,
+        extractor_name=(
+            loaded.extractor_name if loaded is not None else c.extractor.name or "v-groove"
+        ),
+        mount=mount,
+        extract=None if loaded is None else loaded.extract,
+    )
+
+
+def workpiece_seams(scene: Scene) -> list[Any]:
+    """The seams found in the scene's weldment (a STEP file of several bodies or a weldment
+    script), as :func:`seamtrack.workpiece.weldment.find_seams` gives them."""
+    from seamtrack.workpiece.weldment import find_seams
+
+    w = scene.config.workpiece
+    source = None if w is None else (w.step or w.script)
+    if w is None or source is None:
+        raise SceneError(
+            "the scene has no weldment whose seams could be listed",
+            field="workpiece.step",
+            fix='give workpiece.step = "part.step" (several solids) or a weldment script',
+        )
+    path = scene.resolve_path(source)
+    field = "workpiece.step" if w.step else "workpiece.script"
+    return find_seams(
+        str(path) if path.exists() else source,
+        tolerance_mm=w.tolerance_mm,
+        field=field,
+        **w.params,
     )

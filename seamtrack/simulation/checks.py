@@ -8,11 +8,13 @@ from __future__ import annotations
 
 import itertools
 import math
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from seamtrack import constants
 from seamtrack.control.registry import tracker_class
 from seamtrack.errors import SceneError
+from seamtrack.features.base import _Base
+from seamtrack.features.expect import parse_expect
 from seamtrack.features.extractors import extractor_target
 from seamtrack.params import check_params
 from seamtrack.sensing.scan import StripeNoise
@@ -99,7 +101,30 @@ def check_plugin_params(c: SceneConfig) -> None:
     ranges), so that a bad value is refused before the run rather than deep inside it."""
     check_params(StripeNoise, c.sensor.stripe_noise, "sensor.stripe_noise")
     check_params(tracker_class(c.tracker.name), c.tracker.params, "tracker.params")
-    if c.sensor.mode == "mesh" or c.extractor.params:
+    if c.extractor.params and c.extractor.name is None:
+        raise SceneError(
+            "extractor.params given, but no extractor.name (the joint type picks one)",
+            field="extractor.name",
+            fix='name the extractor the parameters are for, e.g. extractor.name = "fillet"',
+        )
+    if c.extractor.name is not None and (c.sensor.mode == "mesh" or c.extractor.params):
         target = extractor_target(c.extractor.name)
         if isinstance(target, type):
             check_params(target, c.extractor.params, "extractor.params")
+    if c.extractor.expect:
+        check_expect(c.extractor.name, c.extractor.expect)
+
+
+def check_expect(name: str | None, expect: dict[str, Any]) -> None:
+    """``[extractor.expect]`` against the family extractor it is for (the joint type's, checked
+    when the part is loaded, when ``name`` is None)."""
+    if name is None:
+        return
+    target = extractor_target(name)
+    if not (isinstance(target, type) and issubclass(target, _Base)):
+        raise SceneError(
+            f"{name!r} takes no expectations (only the built-in family extractors do)",
+            field="extractor.expect",
+            fix="remove [extractor.expect], or name a family extractor (v-groove, fillet, ...)",
+        )
+    parse_expect(expect, str(target.name))

@@ -10,6 +10,7 @@ travel angles).
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
 import math
 from typing import TYPE_CHECKING, Any
@@ -24,6 +25,7 @@ from seamtrack.errors import ReachError, SceneError
 from seamtrack.geometry import frames
 from seamtrack.geometry.seam import Seam
 from seamtrack.sensing.sensor import LaserLineSensor
+from seamtrack.simulation.mount import Mount, angles_mount, seam_mount
 
 if TYPE_CHECKING:
     from seamtrack.simulation.scene import Scene, SceneConfig
@@ -80,34 +82,56 @@ def check_robot(c: SceneConfig) -> None:
         )
 
 
-def sensor_mount(scene: Scene, sensor: LaserLineSensor) -> FloatArray:
-    """``T_tcp_sensor``: given in ``[robot.tool]``, or the paper scenes' mount.
+def sensor_mount(
+    scene: Scene,
+    sensor: LaserLineSensor,
+    seam: Seam | None = None,
+    caster: Any = None,
+    view: FloatArray | None = None,
+) -> Mount:
+    """Where the sensor sits on the torch (``T_tcp_sensor``), and why.
 
-    The default mount: the laser points down the torch (z_L = -z_tcp) with its baseline along
-    the look-ahead direction (x_L = +x_tcp), turned by ``sensor.mount_rotation_deg`` (x-y-z
-    angles in the laser frame); the emitter sits on the laser axis ``range_mm`` (default:
-    where the optical axis crosses the laser, b / tan theta_s) from the point ``look_ahead_mm``
-    ahead of the torch tip, so the central ray hits a seam at the torch tip's height there.
+    - Given in ``[robot.tool]`` (``sensor_xyz_mm``, ``sensor_rpy_deg``): as given.
+    - ``sensor.mount_rotation_deg`` set, an arm, or no workpiece ``seam``: the paper scenes'
+      mount: the laser points down the torch (z_L = -z_tcp) with its baseline along the
+      look-ahead direction (x_L = +x_tcp), turned by those x-y-z angles in the laser frame. An
+      arm turns its tool with the seam, so this mount keeps crossing it.
+    - Otherwise, on a 3-axis robot with the workpiece ``seam`` (world frame): from the seam's
+      torch frame (:func:`seamtrack.simulation.mount.seam_mount`; ``view``: a direction to look
+      from instead of the torch's), the line of sight checked against the ``caster``'s part.
+
+    The emitter sits on the laser axis ``range_mm`` (default: where the optical axis crosses the
+    laser, b / tan theta_s) from the point ``look_ahead_mm`` ahead of the torch tip, so the
+    central ray hits a seam at the torch tip's height there whatever the tilt.
     """
-    s, tool = scene.config.sensor, scene.config.robot.tool
+    c = scene.config
+    s, tool = c.sensor, c.robot.tool
     if tool.sensor_xyz_mm is not None or tool.sensor_rpy_deg is not None:
-        return frames.from_xyz_rpy_deg(
+        T = frames.from_xyz_rpy_deg(
             tool.sensor_xyz_mm or (0.0, 0.0, 0.0), tool.sensor_rpy_deg or (0.0, 0.0, 0.0)
         )
+        return Mount(T)
     distance = s.range_mm if s.range_mm is not None else sensor.range_center_mm
-    R_down = frames.look_rotation([0.0, 0.0, -1.0], [1.0, 0.0, 0.0])
-    R = R_down @ frames.from_xyz_rpy_deg([0.0, 0.0, 0.0], s.mount_rotation_deg)[:3, :3]
-    emitter = np.array([s.look_ahead_mm, 0.0, 0.0]) - distance * R[:, 2]
-    return frames.make(R, emitter)
+    if s.mount_rotation_deg is not None or seam is None or is_arm(c):
+        return angles_mount(s.mount_rotation_deg or (0.0, 0.0, 0.0), s.look_ahead_mm, distance)
+    half_fan = math.atan(0.25 * (sensor.fov_near_mm + sensor.fov_far_mm) / distance)
+    world = seam_mount(seam, s.look_ahead_mm, distance, sensor.baseline_mm, half_fan, caster, view)
+    r = c.robot
+    R_base_world = frames.from_xyz_rpy_deg(r.base_origin_mm, r.base_rotation_deg)[:3, :3].T
+    T = world.T_tcp_sensor.copy()  # a gantry's TCP frame has the base's axes
+    T[:3, :3] = R_base_world @ world.T_tcp_sensor[:3, :3]
+    T[:3, 3] = R_base_world @ world.T_tcp_sensor[:3, 3]
+    return dataclasses.replace(world, T_tcp_sensor=T)
 
 
-def make_robot(scene: Scene, sensor: LaserLineSensor) -> Any:
+def make_robot(scene: Scene, sensor: LaserLineSensor, mount: Mount | None = None) -> Any:
     """The scene's robot (a :class:`CartesianRobot` or an
-    :class:`~seamtrack.control.arm.ArticulatedRobot`) with its tool, sensor and servo."""
+    :class:`~seamtrack.control.arm.ArticulatedRobot`) with its tool, sensor (``mount``, default
+    :func:`sensor_mount` without a seam) and servo."""
     c = scene.config
     r = c.robot
     T_world_base = frames.from_xyz_rpy_deg(r.base_origin_mm, r.base_rotation_deg)
-    T_tcp_sensor = sensor_mount(scene, sensor)
+    T_tcp_sensor = (mount if mount is not None else sensor_mount(scene, sensor)).T_tcp_sensor
     ipo = r.interpolation_period_s if r.interpolation_period_s is not None else r.control_period_s
     gains = r.servo_gain_1_s
     gain_list = None if gains is None else (gains if isinstance(gains, list) else [gains])
@@ -128,8 +152,6 @@ def make_robot(scene: Scene, sensor: LaserLineSensor) -> Any:
             T_tcp_sensor=T_tcp_sensor,
             servo=servo,
         )
-    import dataclasses
-
     from seamtrack.control.arm import ArticulatedRobot
     from seamtrack.control.kinematics import ArmKinematics
 

@@ -98,7 +98,7 @@ class SensorConfig(_Section):
     latency_s: NonNegative = 0.0
     look_ahead_mm: NonNegative = 10.0
     range_mm: Positive | None = None
-    mount_rotation_deg: Vec3 = (0.0, 0.0, 0.0)
+    mount_rotation_deg: Vec3 | None = None
     quantize: Flag = True
     noise_range_mm: NonNegative = 0.0
     noise_lateral_mm: NonNegative = 0.0
@@ -169,9 +169,12 @@ class TrackerConfig(_Section):
 
 
 class ExtractorConfig(_Section):
-    name: str = "v-groove"
+    name: str | None = None
     offset_mm: tuple[Finite, Finite] = (0.0, 0.0)
     params: dict[str, Any] = Field(default_factory=dict)
+    #: Expected joint geometry (``angle_deg``, ``depth_mm``, ``gap_mm`` and their ``_tol``):
+    #: a family extractor refuses answers that break it (:mod:`seamtrack.features.expect`).
+    expect: dict[str, Any] = Field(default_factory=dict)
 
 
 class Box(_Section):
@@ -185,6 +188,8 @@ class WorkpieceConfig(_Section):
     script: str | None = None
     step: str | None = None
     seam: str | None = None
+    seam_near_mm: list[Vec3] | None = None
+    groove: dict[str, Any] | None = None
     tolerance_mm: Positive = 0.01
     angular_tolerance_deg: Positive = 5.0
     params: dict[str, Any] = Field(default_factory=dict)
@@ -451,18 +456,29 @@ def check_consistency(scene: Scene) -> None:
         )
     if c.sensor.mode == "mesh" or c.seam.source == "workpiece":
         w = c.workpiece
-        if w is None or (w.script is None and w.step is None):
+        if w is None or (w.script is None and w.step is None and w.groove is None):
             raise SceneError(
                 "mesh mode needs a workpiece",
                 field="workpiece.script",
-                fix='add [workpiece] with script = "v_groove" (or step = "part.step")',
+                fix='add [workpiece] with script = "v_groove" (or step = "part.step", or a groove)',
             )
-        if w.script is not None and w.step is not None:
+        given = [k for k in ("script", "step", "groove") if getattr(w, k) is not None]
+        if len(given) > 1:
             raise SceneError(
-                "give either script or step, not both",
-                field="workpiece.step",
+                f"give one of script, step and groove, not {' and '.join(given)}",
+                field=f"workpiece.{given[-1]}",
+                fix="remove all but one of them",
+            )
+        if w.seam is not None and w.seam_near_mm is not None:
+            raise SceneError(
+                "give either seam or seam_near_mm, not both",
+                field="workpiece.seam_near_mm",
                 fix="remove one of them",
             )
+        if w.groove is not None:
+            from seamtrack.workpiece.grooves import groove_spec
+
+            groove_spec(w.groove)  # a groove weldx does not define, or lacks parameters
     for i, box in enumerate(c.workpiece.obstacles if c.workpiece else []):
         if not all(a < b for a, b in zip(box.min_mm, box.max_mm, strict=True)):
             raise SceneError(

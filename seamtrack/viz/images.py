@@ -95,7 +95,6 @@ def render_command(
     """``seamtrack render``: the camera image at arc length ``at_mm`` along the seam, the profile
     measured from it (the scene's ``[sensor.camera]`` detector) over the ideal stripe, and the
     seam point the scene's extractor finds in it. Writes the PNG; returns the lines to print."""
-    from seamtrack.features.extractors import extractor
     from seamtrack.io.output import check_writable, new_dir
     from seamtrack.sensing.peaks import detect
     from seamtrack.simulation.assemble import build_parts
@@ -130,7 +129,7 @@ def render_command(
     rows = detect(image.pixels, method=detector.method, threshold=detector.threshold,
                   choose=detector.choose)  # fmt: skip
     profile = image.profile_from_rows(rows)
-    feature = extractor(c.extractor.name, **c.extractor.params)(profile)
+    feature = parts.extract(profile)
     with new_dir(folder):
         plot_stripe_image(image, profile, path, rows=rows, feature=feature)
     truth = image.truth_laser

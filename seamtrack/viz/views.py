@@ -214,7 +214,6 @@ def scene_view(source: Any, overrides: dict[str, Any] | list[str] | None = None)
 def _from_scene(scene: Any) -> SceneView:
     from seamtrack.simulation.assemble import build_parts
 
-    c = scene.config
     parts = build_parts(scene)
     assert parts.sensor is not None  # every scene builds its sensor
     return SceneView(
@@ -226,7 +225,7 @@ def _from_scene(scene: Any) -> SceneView:
         look_ahead_mm=parts.look_ahead_mm,
         scan=parts.scan,
         sense=parts.sense if parts.scan is None else None,
-        extractor=c.extractor.name,
+        extractor=parts.extractor_name,
     )
 
 

@@ -18,17 +18,10 @@ CadQuery and OCP are imported only inside the functions that need them.
 
 from __future__ import annotations
 
-import hashlib
-import importlib.util
 import json
 import math
-import os
-import shutil
-import sys
-import tempfile
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
-from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -39,17 +32,45 @@ from seamtrack import constants
 from seamtrack._version import __version__
 from seamtrack.errors import WorkpieceError
 from seamtrack.geometry.seam import Seam
-from seamtrack.params import check_params
+from seamtrack.workpiece.cache import (
+    cache_dir,
+    cache_key,
+    clear_cache,
+    read_cache,
+    sha256,
+    source_hash,
+    write_cache,
+)
+from seamtrack.workpiece.sources import (
+    builtin_joints,
+    builtin_weldments,
+    helper_hash,
+    read_bodies,
+    read_step,
+    resolve,
+    run_script,
+)
 
 if TYPE_CHECKING:
     import trimesh
 
+__all__ = [
+    "DEFAULT_ANGULAR_TOLERANCE_RAD",
+    "Workpiece",
+    "builtin_joints",
+    "builtin_weldments",
+    "cache_dir",
+    "clear_cache",
+    "load_workpiece",
+    "mesh_tradeoff",
+]
+
 FloatArray = NDArray[np.float64]
 
-#: Bump when the cache layout changes.
-CACHE_FORMAT = 1
 #: Default angular deflection of the mesher (rad); the chordal tolerance usually governs.
 DEFAULT_ANGULAR_TOLERANCE_RAD = 0.5
+#: The modules whose code decides a weldment's or a groove's seam (part of the cache key).
+FINDER_MODULES = ("contacts.py", "weldment.py", "grooves.py")
 
 
 @dataclass(frozen=True, eq=False)
@@ -59,7 +80,10 @@ class Workpiece:
     Attributes
     ----------
     mesh : trimesh.Trimesh
-        Welded, watertight triangle mesh in the part frame (mm, float64).
+        Triangle mesh in the part frame (mm, float64). One solid: welded and watertight. Several
+        solids (a weldment, plates with a gap): one welded, watertight shell per solid, the shells
+        concatenated; where bodies touch, their contact faces lie on each other inside the part
+        (the laser never sees them).
     seam : Seam
         Seam points (n, 3) sampled along the seam edge(s); normals are torch directions (the
         bisector of the two adjacent faces' outward normals: away from the material).
@@ -72,12 +96,20 @@ class Workpiece:
     meshing_time_s : float
         Time spent in the mesher (all passes).
     source : str
-        The script or STEP path that was loaded.
+        The script or STEP path that was loaded (or the groove's type).
     params : dict
         Parameters given to the script's ``build``.
     tolerance_mm : float
         The requested chordal tolerance.
     from_cache : bool
+    joint : str
+        The joint type when it is known (a weldment's found seam, a weldx groove: ``"fillet"``,
+        ``"lap"``, ``"butt"``, ``"outside_corner"``, ``"edge"``), else ``""``.
+    opening_rad : float
+        Angle of free space between the two faces at the seam (median; nan when unknown).
+    view_normal : (3,) float or None
+        The direction a sensor should look from at the seam's start (part frame) when it is not
+        the torch direction (a lap joint: square to its sheets); None: the torch direction.
     """
 
     mesh: trimesh.Trimesh
@@ -90,6 +122,9 @@ class Workpiece:
     params: dict[str, Any]
     tolerance_mm: float
     from_cache: bool = False
+    joint: str = ""
+    opening_rad: float = math.nan
+    view_normal: FloatArray | None = None
     _shape: Any = field(default=None, repr=False)
     _rebuild: Callable[[], Any] | None = field(default=None, repr=False)
 
@@ -101,161 +136,18 @@ class Workpiece:
         return self._shape
 
 
-# ----------------------------------------------------------------------------- cache
-def cache_dir() -> Path:
-    """The cache folder: ``$SEAMTRACK_CACHE_DIR`` or ``~/.cache/seamtrack``."""
-    env = os.environ.get("SEAMTRACK_CACHE_DIR")
-    return Path(env).expanduser() if env else Path.home() / ".cache" / "seamtrack"
+@dataclass(frozen=True)
+class _Built:
+    """A part before meshing: the shape, its seam samples and what is known of the joint."""
 
-
-def clear_cache(cache_dir: str | Path | None = None) -> int:
-    """Delete every cached workpiece; return how many entries were removed."""
-    root = Path(cache_dir) if cache_dir is not None else globals()["cache_dir"]()
-    root = root / "workpieces"
-    if not root.is_dir():
-        return 0
-    count = 0
-    for entry in root.iterdir():
-        if entry.is_dir():
-            shutil.rmtree(entry, ignore_errors=True)
-            count += 1
-    return count
-
-
-def _sha256(data: bytes) -> str:
-    return hashlib.sha256(data).hexdigest()
-
-
-def _cache_key(parts: dict[str, Any]) -> str:
-    text = json.dumps(parts, sort_keys=True, default=repr)
-    return _sha256(text.encode())[:32]
-
-
-def _read_cache(entry: Path, key: str) -> dict[str, Any] | None:
-    """The cached arrays and metadata, or None when missing or corrupt (never trusted blindly)."""
-    try:
-        meta = json.loads((entry / "meta.json").read_text())
-        if meta.get("key") != key or meta.get("format") != CACHE_FORMAT:
-            return None
-        arrays: dict[str, Any] = {"meta": meta}
-        for name in ("mesh.npz", "seam.npz"):
-            blob = (entry / name).read_bytes()
-            if _sha256(blob) != meta["sha256"][name]:
-                return None
-            with np.load(entry / name, allow_pickle=False) as data:
-                arrays.update({k: np.array(data[k]) for k in data.files})
-        v, f, p = arrays["vertices"], arrays["faces"], arrays["points"]
-        ok = (
-            v.ndim == 2
-            and v.shape[1] == 3
-            and f.ndim == 2
-            and f.shape[1] == 3
-            and len(f) == meta["triangle_count"]
-            and f.max() < len(v)
-            and f.min() >= 0
-            and p.ndim == 2
-            and p.shape[1] == 3
-            and arrays["normals"].shape == p.shape
-            and arrays["face_normals"].shape == (len(p), 2, 3)
-        )
-        return arrays if ok else None
-    except (OSError, ValueError, KeyError, TypeError, AttributeError, json.JSONDecodeError):
-        return None
-    except Exception:  # zipfile.BadZipFile and kin from a truncated npz
-        return None
-
-
-def _write_cache(
-    entry: Path, key: str, arrays: dict[str, FloatArray], meta: dict[str, Any]
-) -> None:
-    entry.parent.mkdir(parents=True, exist_ok=True)
-    tmp = Path(tempfile.mkdtemp(prefix=".tmp-", dir=entry.parent))
-    try:
-        np.savez(tmp / "mesh.npz", vertices=arrays["vertices"], faces=arrays["faces"])
-        np.savez(
-            tmp / "seam.npz",
-            points=arrays["points"],
-            normals=arrays["normals"],
-            face_normals=arrays["face_normals"],
-        )
-        sums = {n: _sha256((tmp / n).read_bytes()) for n in ("mesh.npz", "seam.npz")}
-        full = {**meta, "key": key, "format": CACHE_FORMAT, "sha256": sums}
-        (tmp / "meta.json").write_text(json.dumps(full, indent=1, default=repr))
-        if entry.exists():
-            shutil.rmtree(entry, ignore_errors=True)
-        os.replace(tmp, entry)
-    finally:
-        if tmp.exists():
-            shutil.rmtree(tmp, ignore_errors=True)
-
-
-# ----------------------------------------------------------------------------- sources
-def builtin_joints() -> list[str]:
-    """Names of the packaged joint scripts (``seamtrack.cad``)."""
-    folder = resources.files("seamtrack.cad")
-    return sorted(
-        p.name[:-3]
-        for p in folder.iterdir()
-        if p.name.endswith(".py") and not p.name.startswith("_")
-    )
-
-
-def _helper_hash() -> str:
-    """Hash of the shared helpers: a change in them changes every part."""
-    folder = resources.files("seamtrack.cad")
-    return _sha256(b"".join(folder.joinpath(n).read_bytes() for n in ("_paths.py", "_occ.py")))
-
-
-def _resolve(source: str | Path) -> tuple[str, Path]:
-    """('script' | 'step', path) for a script path, a built-in name or a STEP path."""
-    text = str(source)
-    path = Path(text).expanduser()
-    suffix = path.suffix.lower()
-    if suffix in (".step", ".stp"):
-        if not path.is_file():
-            raise WorkpieceError(
-                f"STEP file {text!r} does not exist",
-                field="workpiece.step",
-                fix="give the path of a .step/.stp file",
-            )
-        return "step", path
-    if suffix == "" and not path.exists() and text in builtin_joints():
-        return "script", Path(str(resources.files("seamtrack.cad").joinpath(text + ".py")))
-    if not path.is_file():
-        raise WorkpieceError(
-            f"script {text!r} does not exist",
-            field="workpiece.script",
-            fix=f"give a cad/*.py path or a built-in joint: {', '.join(builtin_joints())}",
-        )
-    if suffix != ".py":
-        raise WorkpieceError(
-            f"{text!r} is not a Python script (.py) or a STEP file",
-            field="workpiece.script",
-            fix="give a CadQuery script cad/<joint>.py or a .step file",
-        )
-    return "script", path
-
-
-def _load_module(path: Path) -> Any:
-    name = "seamtrack_cad_script_" + _sha256(str(path.resolve()).encode())[:12]
-    spec = importlib.util.spec_from_file_location(name, path)
-    if spec is None or spec.loader is None:
-        raise WorkpieceError(
-            f"cannot load {path}", field="workpiece.script", fix="give a Python file"
-        )
-    module = importlib.util.module_from_spec(spec)
-    sys.path.insert(0, str(path.parent))  # scripts may import helpers beside them
-    try:
-        spec.loader.exec_module(module)
-    except Exception as exc:
-        raise WorkpieceError(
-            f"{path.name} failed to import: {type(exc).__name__}: {exc}",
-            field="workpiece.script",
-            fix="run the script alone to see the full traceback and fix it",
-        ) from exc
-    finally:
-        sys.path.remove(str(path.parent))
-    return module
+    shape: Any
+    points: FloatArray
+    face_normals: FloatArray
+    torch: FloatArray
+    name: str
+    joint: str = ""
+    opening_rad: float = math.nan
+    view: FloatArray | None = None
 
 
 def _check_mesh_budget(diagonal_mm: float, tolerance_mm: float) -> None:
@@ -272,93 +164,6 @@ def _check_mesh_budget(diagonal_mm: float, tolerance_mm: float) -> None:
         )
 
 
-def _run_script(path: Path, params: dict[str, Any]) -> tuple[Any, Any, dict[str, list[Any]]]:
-    """Run ``build(**params)``; return (solid, seam solid, named seam edges)."""
-    import cadquery as cq
-
-    module = _load_module(path)
-    build = getattr(module, "build", None)
-    if not callable(build):
-        raise WorkpieceError(
-            f"{path.name} has no build() function",
-            field="workpiece.script",
-            fix="define build(**params) returning the solid and its seam "
-            "edges (see cad/v_groove.py)",
-        )
-    check_params(build, params, "workpiece.params", WorkpieceError)  # names, types, finite
-    try:
-        result = build(**params)
-    except Exception as exc:
-        param = getattr(exc, "param", None)
-        where = f"workpiece.params.{param}" if isinstance(param, str) else "workpiece.script"
-        raise WorkpieceError(
-            f"{path.name} build() failed: {exc}",
-            field=where,
-            fix=f"change {param} (the script's docstring says what it means)"
-            if param
-            else "check the parameters against the script's docstring",
-        ) from exc
-    if hasattr(result, "solid") and hasattr(result, "seams"):
-        solid, seams = result.solid, dict(result.seams)
-        seam_solid = getattr(result, "seam_solid", None) or solid
-    elif isinstance(result, tuple) and len(result) == 2:
-        solid, seams = result[0], dict(result[1])
-        seam_solid = solid
-    else:
-        solid, seams, seam_solid = result, {}, result
-    solid, seam_solid = (_as_shape(s, cq) for s in (solid, seam_solid))
-    if solid is None or not solid.Solids() or not solid.isValid():
-        raise WorkpieceError(
-            f"{path.name} build({_fmt(params)}) made no valid solid",
-            field="workpiece.params",
-            fix="change the parameters (gaps, angles, thicknesses) to ones that make a real part",
-        )
-    return solid, seam_solid, seams
-
-
-def _as_shape(obj: Any, cq: Any) -> Any:
-    if isinstance(obj, cq.Workplane):
-        vals = [v for v in obj.vals() if isinstance(v, cq.Shape)]
-        return vals[0] if len(vals) == 1 else (cq.Compound.makeCompound(vals) if vals else None)
-    return obj if isinstance(obj, cq.Shape) else None
-
-
-def _fmt(params: dict[str, Any]) -> str:
-    return ", ".join(f"{k}={v!r}" for k, v in params.items())
-
-
-def _read_step(path: Path) -> Any:
-    import cadquery as cq
-
-    head = path.read_bytes()[:200]
-    if not head.strip():
-        raise WorkpieceError(
-            f"{path.name} is empty", field="workpiece.step", fix="export the part again as STEP"
-        )
-    if b"ISO-10303-21" not in head:
-        raise WorkpieceError(
-            f"{path.name} is not a STEP file (no ISO-10303-21 header)",
-            field="workpiece.step",
-            fix="export the part as STEP AP203/AP214",
-        )
-    try:
-        shapes = [v for v in cq.importers.importStep(str(path)).vals() if isinstance(v, cq.Shape)]
-    except Exception as exc:
-        raise WorkpieceError(
-            f"{path.name} could not be read: {exc}",
-            field="workpiece.step",
-            fix="export the part again as STEP",
-        ) from exc
-    solids = [s for shape in shapes for s in shape.Solids()]
-    if not solids:
-        raise WorkpieceError(
-            f"{path.name} holds no solid",
-            field="workpiece.step",
-            fix="export a closed solid body, not surfaces or curves",
-        )
-    return solids[0] if len(solids) == 1 else cq.Compound.makeCompound(solids)
-
-
 def _seam_edges(
     occ: Any, shape: Any, named: dict[str, list[Any]], seam: str | None, near: ArrayLike | None
 ) -> list[Any]:
@@ -368,7 +173,7 @@ def _seam_edges(
         if points.ndim != 2 or points.shape[1] != 3 or not np.isfinite(points).all():
             raise WorkpieceError(
                 "seam_near_mm must be finite (m, 3) points",
-                field="workpiece.seam",
+                field="workpiece.seam_near_mm",
                 fix="give x, y, z triples in mm",
             )
         return list(occ.edges_near(shape, points))
@@ -385,48 +190,7 @@ def _seam_edges(
     return list(occ.select_edges(shape, seam, list(named)))
 
 
-# ----------------------------------------------------------------------------- loading
-def load_workpiece(
-    source: str | Path,
-    *,
-    tolerance_mm: float = 0.01,
-    angular_tolerance_rad: float = DEFAULT_ANGULAR_TOLERANCE_RAD,
-    seam: str | None = None,
-    seam_near_mm: ArrayLike | None = None,
-    seam_spacing_mm: float = 1.0,
-    cache: bool = True,
-    cache_dir: str | Path | None = None,
-    **params: Any,
-) -> Workpiece:
-    """Build or read a CAD part, mesh it with an absolute tolerance and extract its seam.
-
-    Parameters
-    ----------
-    source : str or Path
-        A joint script (``"cad/v_groove.py"``), a built-in joint name (``"v_groove"``) or a
-        STEP file (``.step`` / ``.stp``).
-    tolerance_mm : float
-        Chordal tolerance of the mesh and of the seam polyline (mm, absolute).
-    angular_tolerance_rad : float
-        Angular deflection of the mesher.
-    seam : str, optional
-        A seam name the script returns (default: its first, ``"root"``) or a CadQuery edge
-        selector string (``"|X and <Z"``); needed for STEP files unless ``seam_near_mm``.
-    seam_near_mm : (m, 3) float, optional
-        Points near the seam: the edges nearest to them form the seam.
-    seam_spacing_mm : float
-        Largest spacing of the seam points (finer where the chord tolerance needs it).
-    cache : bool
-        Read and write the on-disk cache.
-    cache_dir : str or Path, optional
-        Cache folder; default :func:`cache_dir`.
-    **params
-        Parameters of the script's ``build`` (``root_gap_mm=1.5, path="arc"``...).
-
-    Returns
-    -------
-    Workpiece
-    """
+def _check_numbers(tolerance_mm: float, angular_tolerance_rad: float, spacing_mm: float) -> None:
     if not (
         isinstance(tolerance_mm, int | float) and math.isfinite(tolerance_mm) and tolerance_mm > 0
     ):
@@ -441,15 +205,166 @@ def load_workpiece(
             field="workpiece.angular_tolerance_rad",
             fix="give e.g. 0.5 (rad)",
         )
-    if not seam_spacing_mm > 0:
+    if not spacing_mm > 0:
         raise WorkpieceError(
-            f"seam spacing must be > 0, got {seam_spacing_mm}",
+            f"seam spacing must be > 0, got {spacing_mm}",
             field="workpiece.seam_spacing_mm",
             fix="give e.g. 1.0 (mm)",
         )
+
+
+def _build(
+    kind: str,
+    path: Path | None,
+    params: dict[str, Any],
+    groove: dict[str, Any] | None,
+    seam: str | None,
+    seam_near_mm: ArrayLike | None,
+    tolerance_mm: float,
+    spacing_mm: float,
+) -> _Built:
+    """Build or read the part and sample its seam (exact CAD geometry)."""
+    if kind == "groove":
+        from seamtrack.workpiece.grooves import build_groove
+
+        assert groove is not None
+        return _Built(**build_groove(groove, tolerance_mm, spacing_mm, **params))
+    assert path is not None
+    if kind == "script":
+        result = run_script(path, params)
+        bodies = result.bodies
+        solid, seam_solid, named = result.solid, result.seam_solid, result.seams
+    else:
+        bodies = read_bodies(path)
+        solid = seam_solid = read_step(path) if len(bodies) == 1 else None
+        named = {}
+    if bodies is not None and len(bodies) > 1:  # a weldment: its seams are found, not picked
+        from seamtrack.workpiece.weldment import pick_seam, seams_of_bodies
+
+        found = seams_of_bodies(
+            bodies, tolerance_mm=tolerance_mm, spacing_mm=spacing_mm, source=path.name
+        )
+        chosen = pick_seam(found, seam, seam_near_mm, path.name)
+        import cadquery as cq
+
+        return _Built(
+            cq.Compound.makeCompound([b for _, b in bodies]),
+            chosen.points,
+            chosen.face_normals,
+            chosen.normals,
+            f"{path.stem}:{chosen.id}",
+            chosen.joint,
+            chosen.opening_rad,
+            chosen.view_normal,
+        )
+    from seamtrack.cad import _occ
+
+    chained = _occ.chain(_seam_edges(_occ, seam_solid, named, seam, seam_near_mm), "the seam")
+    points, face_normals = _occ.sample_seam(seam_solid, chained, tolerance_mm, spacing_mm)
+    torch = face_normals.sum(axis=1)  # bisector of the outward normals: away from the material
+    label = seam or (next(iter(named)) if named and seam_near_mm is None else "seam")
+    return _Built(solid, points, face_normals, torch, f"{path.stem}:{label}")
+
+
+def _mesh(shape: Any, tolerance_mm: float, angular_rad: float) -> tuple[Any, float, float]:
+    """The mesh (one welded, watertight shell per solid), its measured deviation and time."""
+    import trimesh
+
+    from seamtrack.cad import _occ
+
+    vertices, faces, deviation, spent = _occ.mesh(shape, tolerance_mm, angular_rad)
+    solids = shape.Solids()
+    if len(solids) == 1:
+        return trimesh.Trimesh(vertices, faces, process=True), deviation, spent
+    # Faces come solid by solid: weld each solid's nodes on their own, so that shells that
+    # touch stay separate closed surfaces.
+    counts = _occ.face_triangle_counts(shape)
+    per_solid = [len(s.Faces()) for s in solids]
+    shells, first = [], 0
+    bounds = np.concatenate([[0], np.cumsum(counts)])
+    for n in per_solid:
+        chosen = faces[bounds[first] : bounds[first + n]]
+        shell = trimesh.Trimesh(vertices, chosen, process=True)
+        shell.remove_unreferenced_vertices()
+        shells.append(shell)
+        first += n
+    return trimesh.util.concatenate(shells), deviation, spent
+
+
+# ----------------------------------------------------------------------------- loading
+def load_workpiece(
+    source: str | Path | None = None,
+    *,
+    tolerance_mm: float = 0.01,
+    angular_tolerance_rad: float = DEFAULT_ANGULAR_TOLERANCE_RAD,
+    seam: str | None = None,
+    seam_near_mm: ArrayLike | None = None,
+    groove: dict[str, Any] | None = None,
+    seam_spacing_mm: float = 1.0,
+    cache: bool = True,
+    cache_dir: str | Path | None = None,
+    **params: Any,
+) -> Workpiece:
+    """Build or read a CAD part, mesh it with an absolute tolerance and extract its seam.
+
+    Parameters
+    ----------
+    source : str or Path, optional
+        A joint or weldment script (``"cad/v_groove.py"``), a built-in name (``"v_groove"``,
+        ``"weldment_bracket"``) or a STEP file (``.step`` / ``.stp``); None with ``groove``.
+    tolerance_mm : float
+        Chordal tolerance of the mesh and of the seam polyline (mm, absolute).
+    angular_tolerance_rad : float
+        Angular deflection of the mesher.
+    seam : str, optional
+        A joint script: a seam name it returns (default: its first, ``"root"``) or a CadQuery
+        edge selector (``"|X and <Z"``). A weldment (a weldment script, a STEP file of several
+        solids): the id or name of a found seam (``"s3"``, ``"base/web/0"``; see
+        :func:`seamtrack.workpiece.weldment.find_seams`). A one-solid STEP file: a selector.
+    seam_near_mm : (m, 3) float, optional
+        Points near the seam: the edges nearest to them form the seam; on a weldment, the found
+        seam within 1 mm of every point.
+    groove : dict, optional
+        An ISO 9692-1 groove as weldx defines it (``{"type": "VGroove", "t_mm": 10,
+        "alpha_deg": 60, "b_mm": 1, "c_mm": 1}``): its two plates are swept along the path
+        the ``params`` give (``path``, ``seam_length_mm``, ``plate_width_mm`` ...); needs weldx.
+    seam_spacing_mm : float
+        Largest spacing of the seam points (finer where the chord tolerance needs it).
+    cache : bool
+        Read and write the on-disk cache.
+    cache_dir : str or Path, optional
+        Cache folder; default :func:`cache_dir`.
+    **params
+        Parameters of the script's ``build`` (``root_gap_mm=1.5, path="arc"``...).
+
+    Returns
+    -------
+    Workpiece
+    """
+    _check_numbers(tolerance_mm, angular_tolerance_rad, seam_spacing_mm)
     import trimesh  # here, not at import: seam-mode scenes never load it
 
-    kind, path = _resolve(source)
+    path: Path | None
+    if groove is not None:
+        from seamtrack.workpiece.grooves import groove_spec
+
+        if source is not None:
+            raise WorkpieceError(
+                "a groove builds its own part: give either a script/STEP or a groove",
+                field="workpiece.groove",
+                fix="remove workpiece.script / workpiece.step, or the groove",
+            )
+        groove = groove_spec(groove)
+        kind, path, content = "groove", None, json.dumps(groove, sort_keys=True).encode()
+    else:
+        if source is None:
+            raise WorkpieceError(
+                "no part given",
+                field="workpiece.script",
+                fix="give a script, a STEP file or a groove",
+            )
+        kind, path = resolve(source)
+        content = path.read_bytes()
     if kind == "step" and params:
         name = next(iter(params))
         raise WorkpieceError(
@@ -458,12 +373,12 @@ def load_workpiece(
             fix="remove the parameters, or load the part's script instead",
         )
     near = None if seam_near_mm is None else np.asarray(seam_near_mm, dtype=np.float64).tolist()
-    content = path.read_bytes()
-    key = _cache_key(
+    key = cache_key(
         {
             "kind": kind,
-            "content": _sha256(content),
-            "helpers": _helper_hash(),
+            "content": sha256(content),
+            "helpers": helper_hash(),
+            "finder": source_hash(*FINDER_MODULES),
             "params": params,
             "tolerance_mm": float(tolerance_mm),
             "angular_rad": float(angular_tolerance_rad),
@@ -475,17 +390,19 @@ def load_workpiece(
     )
     root = (Path(cache_dir) if cache_dir is not None else globals()["cache_dir"]()) / "workpieces"
     entry = root / key
+    label = str(path) if path is not None else f"groove {groove['type'] if groove else ''}"
 
     def rebuild() -> Any:
-        return _run_script(path, params)[0] if kind == "script" else _read_step(path)
+        return _build(
+            kind, path, params, groove, seam, seam_near_mm, tolerance_mm, seam_spacing_mm
+        ).shape
 
     if cache:
-        hit = _read_cache(entry, key)
+        hit = read_cache(entry, key)
         if hit is not None:
             meta = hit["meta"]
-            mesh = trimesh.Trimesh(hit["vertices"], hit["faces"], process=False)
             return Workpiece(
-                mesh=mesh,
+                mesh=trimesh.Trimesh(hit["vertices"], hit["faces"], process=False),
                 seam=Seam.from_points(
                     hit["points"], hit["normals"], name=meta["name"], field="workpiece.seam"
                 ),
@@ -493,66 +410,60 @@ def load_workpiece(
                 deviation_mm=meta["deviation_mm"],
                 triangle_count=len(hit["faces"]),
                 meshing_time_s=meta["meshing_time_s"],
-                source=str(path),
+                source=label,
                 params=dict(params),
                 tolerance_mm=float(tolerance_mm),
                 from_cache=True,
+                joint=meta.get("joint", ""),
+                opening_rad=float(meta.get("opening_rad") or math.nan),
+                view_normal=None if meta.get("view") is None else np.array(meta["view"]),
                 _rebuild=rebuild,
             )
-    if kind == "script":
-        solid, seam_solid, named = _run_script(path, params)
-    else:
-        solid = seam_solid = _read_step(path)
-        named = {}
-    from seamtrack.cad import _occ
-
-    chained = _occ.chain(_seam_edges(_occ, seam_solid, named, seam, seam_near_mm), "the seam")
-    points, face_normals = _occ.sample_seam(
-        seam_solid, chained, float(tolerance_mm), float(seam_spacing_mm)
+    built = _build(
+        kind, path, params, groove, seam, seam_near_mm, float(tolerance_mm), seam_spacing_mm
     )
-    torch = face_normals.sum(axis=1)  # bisector of the outward normals: away from the material
-    _check_mesh_budget(float(solid.BoundingBox().DiagonalLength), tolerance_mm)
-    vertices, faces, deviation, spent = _occ.mesh(
-        solid, float(tolerance_mm), float(angular_tolerance_rad)
-    )
-    mesh = trimesh.Trimesh(vertices, faces, process=True)  # welds shared edge nodes
-    name = (
-        f"{path.stem}:{seam or (next(iter(named)) if named and seam_near_mm is None else 'seam')}"
-    )
-    seam_obj = Seam.from_points(points, torch, name=name, field="workpiece.seam")
+    _check_mesh_budget(float(built.shape.BoundingBox().DiagonalLength), tolerance_mm)
+    mesh, deviation, spent = _mesh(built.shape, float(tolerance_mm), float(angular_tolerance_rad))
+    seam_obj = Seam.from_points(built.points, built.torch, name=built.name, field="workpiece.seam")
     if cache:
         meta = {
-            "name": name,
+            "name": built.name,
             "deviation_mm": deviation,
             "meshing_time_s": spent,
             "triangle_count": len(mesh.faces),
-            "source": str(path),
+            "source": label,
             "params": params,
             "tolerance_mm": tolerance_mm,
+            "joint": built.joint,
+            "opening_rad": None if math.isnan(built.opening_rad) else built.opening_rad,
+            "view": None if built.view is None else [float(v) for v in built.view],
             "seamtrack": __version__,
         }
         arrays = {
             "vertices": np.asarray(mesh.vertices),
             "faces": np.asarray(mesh.faces),
             "points": seam_obj.points,
-            "normals": torch,  # the input of Seam.from_points, so a hit rebuilds the same seam
-            "face_normals": face_normals,
+            "normals": built.torch,  # the input of Seam.from_points: a hit rebuilds the same seam
+            "face_normals": built.face_normals,
         }
         try:
-            _write_cache(entry, key, arrays, meta)
+            write_cache(entry, key, arrays, meta)
         except OSError:
             pass  # a read-only cache costs speed, not correctness
     return Workpiece(
         mesh=mesh,
         seam=seam_obj,
-        seam_face_normals=face_normals,
+        seam_face_normals=built.face_normals,
         deviation_mm=deviation,
         triangle_count=len(mesh.faces),
         meshing_time_s=spent,
-        source=str(path),
+        source=label,
         params=dict(params),
         tolerance_mm=float(tolerance_mm),
-        _shape=solid,
+        joint=built.joint,
+        opening_rad=built.opening_rad,
+        view_normal=built.view,
+        _shape=built.shape,
         _rebuild=rebuild,
     )
 

@@ -1,0 +1,501 @@
+"""The bad inputs of :mod:`seamtrack.bench.failures`: the catalogue of command lines and the
+files they need (scenes, seams, plugins, STEP parts, dataset specs)."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from seamtrack._version import __version__
+
+#: A short paper-verification seam: user-code failures show within a few frames.
+SHORT = ["--set", "seam.length_mm=20"]
+#: paper-v-groove cut to its first 30 mm: a mesh-mode run for the extractor entries.
+MESH = ["paper-v-groove", "--set", "workpiece.params.seam_length_mm=30"]
+#: The image-mode scene, for the camera's entries on ``seamtrack render``.
+CAMERA = ["v-groove-camera", "--at", "10", "--out", "OUT/image.png"]
+
+PLUGINS = """
+import math
+from seamtrack.control.tracking import Command
+
+
+class _Base:
+    def reset(self, context):
+        self.speed = context.welding_speed_mm_s
+
+    def update(self, measurement):
+        pass
+
+    def command(self, t_s, tcp_world, tcp_velocity_world):
+        return Command(tcp_world + [1.0, 0.0, 0.0], self.speed)
+
+
+class RaisesInReset(_Base):
+    def reset(self, context):
+        raise RuntimeError("cannot start")
+
+
+class RaisesInUpdate(_Base):
+    def update(self, measurement):
+        return 1 / 0
+
+
+class RaisesInCommand(_Base):
+    def command(self, t_s, tcp_world, tcp_velocity_world):
+        raise KeyError("target")
+
+
+class ReturnsString(_Base):
+    def command(self, t_s, tcp_world, tcp_velocity_world):
+        return "go"
+
+
+class ReturnsShortTarget(_Base):
+    def command(self, t_s, tcp_world, tcp_velocity_world):
+        return Command([1.0, 2.0], self.speed)
+
+
+class ReturnsNaNTarget(_Base):
+    def command(self, t_s, tcp_world, tcp_velocity_world):
+        return Command([math.nan, 0.0, 0.0], self.speed)
+
+
+class ReturnsNegativeSpeed(_Base):
+    def command(self, t_s, tcp_world, tcp_velocity_world):
+        return Command(tcp_world + [1.0, 0.0, 0.0], -5.0)
+
+
+class RaisingExtractor:
+    name = "raising"
+
+    def __call__(self, profile):
+        raise ValueError("no idea")
+
+
+class NaNExtractor:
+    name = "nan-point"
+
+    def __call__(self, profile):
+        from seamtrack.sensing.profiles import Feature
+
+        return Feature.found([math.nan, 0.0], profile.T_world_sensor, joint=self.name)
+"""
+
+FILES: dict[str, bytes] = {
+    "bad_plugins.py": PLUGINS.encode(),
+    "binary.toml": bytes(range(256)) * 4,
+    "empty.toml": b"",
+    "comments.toml": b"# nothing but a comment\n",
+    "syntax.toml": b"[simulation\nwelding_speed_mm_s = 5\n",
+    "nan.csv": b"x_mm,y_mm,z_mm\n0,0,0\n1,nan,0\n2,0,0\n",
+    "one.csv": b"x_mm,y_mm,z_mm\n0,0,0\n",
+    "text.csv": b"x_mm,y_mm,z_mm\n0,zero,0\n",
+    "a_file": b"not a folder\n",
+    "broken.urdf": b"<robot name='x'><link name='a'/><joint name='j' type='revolute'>",
+    # --- dataset specs (seamtrack dataset)
+    "dataset.toml": b'rays = 16\nchunk_size = 4\n[joint]\nfamilies = ["v-groove"]\n',
+    "dataset_min_max.toml": b"[joint]\ngap_mm = [2.0, 1.0]\n",
+    "dataset_family.toml": b'[joint]\nfamilies = ["v-groove", "x-groove"]\n',
+    "dataset_key.toml": b"[sensor]\ntilt_degs = 5\n",
+    # a dataset folder written by another spec (its manifest is what a resume reads)
+    "other_dataset/dataset.json": json.dumps(
+        {
+            "format": "seamtrack-dataset",
+            "seamtrack_version": __version__,
+            "n": 8,
+            "spec": {"seed": 7, "rays": 16},
+        }
+    ).encode(),
+    "weld.toml": b'[seam]\nsource = "workpiece"\n[workpiece]\nstep = "apart.step"\n'
+    b'seam = "s1"\n[sensor]\nmode = "mesh"\n',
+}
+
+#: paper-verification on a UR10e beside the seam: the articulated-arm entries.
+ARM = ('robot.model="ur10e"', 'tracker.name="trajectory"', "robot.base_origin_mm=[200,-700,0]")
+
+
+def _no_solid(path: Path) -> None:
+    """A STEP file that holds a face and no solid."""
+    import cadquery as cq
+
+    cq.exporters.export(cq.Face.makePlane(10, 10), str(path))
+
+
+def _apart(path: Path) -> None:
+    """A STEP assembly of two boxes 10 mm apart: solids that never touch."""
+    import cadquery as cq
+
+    assembly = cq.Assembly(name="apart")
+    assembly.add(cq.Solid.makeBox(10, 10, 10), name="a")
+    assembly.add(cq.Solid.makeBox(10, 10, 10, cq.Vector(20, 0, 0)), name="b")
+    assembly.export(str(path), exportType="STEP")
+
+
+#: Files made when the workspace is (CadQuery imported then, not with this module).
+GENERATED: dict[str, Any] = {"sheet.step": _no_solid, "apart.step": _apart}
+
+
+@dataclass(frozen=True)
+class Entry:
+    """One bad input: a name, the command's arguments, and whether it is quick enough (a few
+    seconds) for the test suite."""
+
+    name: str
+    args: tuple[str, ...]
+    quick: bool = True
+    field: str = ""  # the field the error line must name (a substring of it)
+
+
+def _set(*pairs: str) -> tuple[str, ...]:
+    out: list[str] = []
+    for pair in pairs:
+        out += ["--set", pair]
+    return tuple(out)
+
+
+def _run(*extra: str) -> tuple[str, ...]:
+    return ("run", *extra, "--out", "OUT")
+
+
+def _dataset(spec: str, n: str = "8") -> tuple[str, ...]:
+    return ("dataset", spec, "--n", n, "--out", "OUT")
+
+
+CATALOGUE: tuple[Entry, ...] = (
+    # --- scene files and keys
+    Entry("unknown key", _run(*_set("sensor.frame_rte_hz=2")), field="sensor.frame_rte_hz"),
+    Entry("'yes' for a boolean", _run(*_set('sensor.quantize="yes"')), field="sensor.quantize"),
+    Entry("false for a number", _run(*_set("sensor.look_ahead_mm=false")), field="look_ahead"),
+    Entry("true for a seed", _run(*_set("simulation.seed=true")), field="simulation.seed"),
+    Entry("NaN speed", _run(*_set("simulation.welding_speed_mm_s=nan")), field="welding_speed"),
+    Entry("binary scene file", ("check", "binary.toml"), field="SCENE"),
+    Entry("empty scene file", ("check", "empty.toml"), field="SCENE"),
+    Entry("comment-only scene file", ("check", "comments.toml"), field="SCENE"),
+    Entry("TOML syntax error", ("check", "syntax.toml"), field="syntax.toml"),
+    Entry("missing scene file", ("run", "missing.toml", "--out", "OUT"), field="SCENE"),
+    Entry("unknown built-in scene", ("run", "paper-verifcation", "--out", "OUT"), field="SCENE"),
+    # --- sizes that would not fit in memory
+    Entry("1e8 rays", _run(*_set("sensor.rays=100000000")), field="sensor.rays"),
+    Entry("seam step 1e-6 mm", _run(*_set("seam.step_mm=1e-6")), field="seam.step_mm"),
+    Entry("seam length 1e9 mm", _run(*_set("seam.length_mm=1e9")), field="seam.step_mm"),
+    Entry("control period 1e-8 s", _run(*_set("robot.control_period_s=1e-8")), field="control"),
+    Entry("trace period 1e-9 s", _run(*_set("simulation.trace_period_s=1e-9")), field="trace"),
+    Entry("near-zero speed", _run(*_set("simulation.welding_speed_mm_s=1e-3")), field="control"),
+    Entry(
+        "mesh tolerance 1e-9 mm",
+        ("run", *MESH, *_set("workpiece.tolerance_mm=1e-9"), "--out", "OUT"),
+        field="workpiece.tolerance_mm",
+    ),
+    Entry(
+        "mesh tolerance too fine for the part",
+        ("run", "paper-v-groove", *_set("workpiece.tolerance_mm=2e-4"), "--out", "OUT"),
+        quick=False,
+        field="workpiece.tolerance_mm",
+    ),
+    # --- seam files
+    Entry(
+        "NaN in a seam file",
+        _run(*_set('seam.source="csv"', 'seam.file="nan.csv"')),
+        field="seam.file",
+    ),
+    Entry("one-point seam", _run(*_set('seam.source="csv"', 'seam.file="one.csv"')), field="seam"),
+    Entry("text in a seam file", _run(*_set('seam.source="csv"', 'seam.file="text.csv"'))),
+    Entry("missing seam file", _run(*_set('seam.source="csv"', 'seam.file="nope.csv"'))),
+    Entry("points source without points", _run(*_set('seam.source="points"')), field="points"),
+    # --- free-form sections
+    *(
+        Entry(
+            f"stripe_noise {kv}", _run(*_set(f"sensor.stripe_noise.{kv}")), field=kv.split("=")[0]
+        )
+        for kv in (
+            "range_sigma_mm=-1",
+            "dropout_rate=2",
+            "secondary_probability=1e9",
+            "range_sigma_mm=inf",
+            "speckle_correlation_rays=inf",
+            "bogus=1",
+            'dropout_rate="high"',
+        )
+    ),
+    *(
+        Entry(
+            f"tracker.params {kv}",
+            _run(*_set('tracker.name="trajectory"', f"tracker.params.{kv}")),
+            field=kv.split("=")[0],
+        )
+        for kv in ("gain_1_s=[1,2]", 'gain_1_s="x"', "bridge_mm=-inf", "use_capture_pose=1")
+    ),
+    Entry("unknown tracker", _run(*_set('tracker.name="nope"')), field="tracker.name"),
+    Entry("missing tracker module", _run(*_set('tracker.name="nomod:X"')), field="tracker.name"),
+    Entry("negative radius", _run(*_set("tracker.radius_mm=-1")), field="tracker.radius_mm"),
+    # --- impossible optics and geometry
+    Entry("unknown preset", _run(*_set('sensor.preset="nope"')), field="preset"),
+    Entry("impossible field of view", _run(*_set("sensor.fov_near_mm=100")), field="sensor"),
+    Entry("seam out of reach", _run(*_set("seam.offset_mm=[500, 0, 0]")), field="seam"),
+    Entry("frame rate below control", _run(*_set("sensor.frame_rate_hz=5000")), field="control"),
+    # --- articulated arms
+    Entry("unknown robot model", _run(*_set('robot.model="ur10"')), field="robot.model"),
+    Entry("URDF that does not parse", _run(*_set('robot.urdf="broken.urdf"')), field="robot.urdf"),
+    Entry(
+        "seam point out of an arm's reach",
+        _run(*_set(*ARM[:2], "robot.base_origin_mm=[-1400,-700,0]")),
+        field="seam",
+    ),
+    Entry(
+        "sensor mounted inside the part",
+        _run(*_set(*ARM, "robot.tool.sensor_xyz_mm=[10,0,-60]")),
+        field="robot.tool.sensor_xyz_mm",
+    ),
+    Entry("servo gain that rings", _run(*_set("robot.servo_gain_1_s=900")), field="servo_gain"),
+    # --- the camera (image mode)
+    Entry("f-number 0", _run(*_set("sensor.camera.f_number=0")), field="sensor.camera.f_number"),
+    Entry(
+        "f-number -2.8",
+        ("render", *CAMERA, *_set("sensor.camera.f_number=-2.8")),
+        field="sensor.camera.f_number",
+    ),
+    Entry(
+        "wavelength 150 nm",
+        _run(*_set("sensor.camera.wavelength_nm=150")),
+        field="sensor.camera.wavelength_nm",
+    ),
+    Entry(
+        "wavelength 2500 nm",
+        ("render", *CAMERA, *_set("sensor.camera.wavelength_nm=2500")),
+        field="sensor.camera.wavelength_nm",
+    ),
+    Entry(
+        "line wider than the field",
+        _run(*_set("sensor.camera.line_thickness_mm=30")),
+        field="sensor.camera.line_thickness_mm",
+    ),
+    Entry(
+        "roi off the chip",
+        _run(*_set("sensor.camera.rows=100", "sensor.camera.roi=[0, 200, 0, 50]")),
+        field="sensor.camera.roi",
+    ),
+    Entry(
+        "unknown peak detector",
+        _run(*_set('sensor.camera.method="peak"')),
+        field="sensor.camera.method",
+    ),
+    Entry(
+        "unknown material",
+        ("render", *CAMERA, *_set('workpiece.material="chrome"')),
+        field="workpiece.material",
+    ),
+    Entry("image mode without a mesh", _run(*_set('sensor.source="image"')), field="sensor.source"),
+    Entry(
+        "render a seam-mode scene",
+        ("render", "paper-verification", "--at", "10"),
+        field="sensor.mode",
+    ),
+    Entry("unknown real sensor", _run(*_set('sensor.preset="gocator-2331"')), field="preset"),
+    # --- CAD
+    Entry(
+        "unknown CAD parameter",
+        ("run", *MESH, *_set("workpiece.params.bogus_mm=1"), "--out", "OUT"),
+        quick=False,
+        field="workpiece.params.bogus_mm",
+    ),
+    Entry(
+        "boolean CAD parameter",
+        ("run", *MESH, *_set("workpiece.params.groove_angle_deg=true"), "--out", "OUT"),
+        quick=False,
+        field="workpiece.params.groove_angle_deg",
+    ),
+    Entry(
+        "missing CAD script",
+        ("run", *MESH, *_set('workpiece.script="missing_part.py"'), "--out", "OUT"),
+        field="workpiece.script",
+    ),
+    Entry(
+        "unknown extractor",
+        ("run", *MESH, *_set('extractor.name="nope"'), "--out", "OUT"),
+        quick=False,
+        field="extractor.name",
+    ),
+    # --- user code
+    *(
+        Entry(
+            f"tracker {cls}",
+            _run(*SHORT, *_set(f'tracker.name="bad_plugins:{cls}"')),
+            field="tracker.name",
+        )
+        for cls in (
+            "RaisesInReset",
+            "RaisesInUpdate",
+            "RaisesInCommand",
+            "ReturnsString",
+            "ReturnsShortTarget",
+            "ReturnsNaNTarget",
+            "ReturnsNegativeSpeed",
+        )
+    ),
+    *(
+        Entry(
+            f"extractor {cls}",
+            ("run", *MESH, *_set(f'extractor.name="bad_plugins:{cls}"'), "--out", "OUT"),
+            quick=False,
+            field="extractor.name",
+        )
+        for cls in ("RaisingExtractor", "NaNExtractor")
+    ),
+    # --- command-line flags
+    Entry(
+        "sweep --workers 0",
+        (
+            "sweep",
+            "paper-corner",
+            "--param",
+            "tracker.radius_mm",
+            "--values",
+            "1",
+            "--workers",
+            "0",
+            "--out",
+            "OUT",
+        ),
+        field="--workers",
+    ),
+    Entry(
+        "sweep --seeds -1",
+        (
+            "sweep",
+            "paper-corner",
+            "--param",
+            "tracker.radius_mm",
+            "--values",
+            "1",
+            "--seeds",
+            "-1",
+            "--out",
+            "OUT",
+        ),
+        field="--seeds",
+    ),
+    Entry(
+        "sweep over a bad value",
+        (
+            "sweep",
+            "paper-corner",
+            "--param",
+            "tracker.radius_mm",
+            "--values",
+            "1,-1",
+            "--out",
+            "OUT",
+        ),
+        field="tracker.radius_mm",
+    ),
+    Entry(
+        "sweep over an unknown key",
+        ("sweep", "paper-corner", "--param", "tracker.radius", "--values", "1", "--out", "OUT"),
+        field="tracker.radius",
+    ),
+    Entry(
+        "compare with an unknown tracker",
+        ("compare", "paper-corner", "--trackers", "I,nope", "--out", "OUT"),
+        field="tracker.name",
+    ),
+    Entry("scan off the seam", ("scan", "paper-verification", "--at", "-5"), field="--at"),
+    Entry("init an unknown template", ("init", "nope", "-o", "OUT/x.toml"), field="TEMPLATE"),
+    Entry("output under a file", ("run", *SHORT, "--out", "a_file/run"), field="--out"),
+    Entry("unknown benchmark", ("bench", "nope", "--out", "OUT"), field="bench"),
+    Entry(
+        "extractor.expect with an unknown key",
+        ("run", *MESH, *_set("extractor.expect={angel_deg=60}"), "--out", "OUT"),
+        field="extractor.expect.angel_deg",
+    ),
+    Entry(
+        "extractor.expect on the generic extractor",
+        (
+            "run",
+            *MESH,
+            *_set('extractor.name="generic"', "extractor.expect={angle_deg=60}"),
+            "--out",
+            "OUT",
+        ),
+        field="extractor.expect",
+    ),
+    # --- weldments and weldx
+    Entry(
+        "seams of a STEP without solids",
+        ("seams", "sheet.step", "--view", "OUT/v.png"),
+        field="PART",
+    ),
+    Entry(
+        "seams of solids that never touch",
+        ("seams", "apart.step", "--view", "OUT/v.png"),
+        field="PART",
+    ),
+    Entry(
+        "weldment scene, STEP without solids",
+        ("run", "weld.toml", *_set('workpiece.step="sheet.step"'), "--out", "OUT"),
+        field="workpiece.step",
+    ),
+    Entry(
+        "weldment scene, solids that never touch",
+        ("run", "weld.toml", "--out", "OUT"),
+        field="workpiece.step",
+    ),
+    Entry(
+        "workpiece.seam naming no seam",
+        ("run", "weldment-bracket", *_set('workpiece.seam="s99"'), "--out", "OUT"),
+        field="workpiece.seam",
+    ),
+    Entry(
+        "groove weldx does not define",
+        ("run", "weldx-v-groove", *_set('workpiece.groove.type="ZGroove"'), "--out", "OUT"),
+        field="workpiece.groove.type",
+    ),
+    Entry(
+        "groove missing parameters",
+        (
+            "run",
+            "weldx-v-groove",
+            *_set('workpiece.groove={type="VGroove", t_mm=10}'),
+            "--out",
+            "OUT",
+        ),
+        field="workpiece.groove.alpha_deg",
+    ),
+    Entry(
+        "--weldx under a file",
+        ("run", *SHORT, "--weldx", "a_file/run.wx", "--out", "OUT"),
+        field="--weldx",
+    ),
+    Entry("unknown sensor preset", ("sensor", "--preset", "nope"), field="preset"),
+    # --- seamtrack dataset
+    Entry("dataset range min > max", _dataset("dataset_min_max.toml"), field="joint.gap_mm"),
+    Entry("dataset unknown joint family", _dataset("dataset_family.toml"), field="families.1"),
+    Entry("dataset unknown spec key", _dataset("dataset_key.toml"), field="sensor.tilt_degs"),
+    Entry("dataset --n 0", _dataset("dataset.toml", n="0"), field="--n"),
+    Entry("dataset --n -5", _dataset("dataset.toml", n="-5"), field="--n"),
+    Entry("dataset --workers 0", (*_dataset("dataset.toml"), "--workers", "0"), field="--workers"),
+    Entry(
+        "dataset output is a file",
+        ("dataset", "dataset.toml", "--n", "8", "--out", "a_file"),
+        field="--out",
+    ),
+    Entry(
+        "dataset resume with another spec",
+        ("dataset", "dataset.toml", "--n", "8", "--out", "other_dataset"),
+        field="--out",
+    ),
+    Entry("dataset --images", (*_dataset("dataset.toml"), "--images"), field="--images"),
+    Entry("dataset missing spec file", _dataset("missing.toml"), field="SPEC"),
+)
+
+
+def workspace(root: Path) -> Path:
+    """Write the catalogue's files into ``root``; return it."""
+    for name, data in FILES.items():
+        (root / name).parent.mkdir(parents=True, exist_ok=True)
+        (root / name).write_bytes(data)
+    for name, make in GENERATED.items():
+        make(root / name)
+    return root
