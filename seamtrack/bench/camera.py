@@ -54,7 +54,10 @@ FAMILIES = {
     "outside-corner": "outside-corner",
 }
 MATERIALS = ("mill-scale steel", "bright aluminium")
-_CAMERA_NOTE = "512 x 1024 px, f/8, speckle, shot and read noise, 10 bits, centroid, threshold 0.02"
+_SET_META = {
+    "sensor": "paper",
+    "camera": "512 x 1024 px, f/8, speckle, shot and read noise, 10 bits, centroid, threshold 0.02",
+}
 
 
 # --------------------------------------------------------------------------- parts and oracles
@@ -354,6 +357,13 @@ def _extractor_rows(quick: bool) -> tuple[list[dict[str, Any]], list[ImageSet]]:
     return rows, sets
 
 
+def write_image_sets(out_dir: str | Path, *, quick: bool = False) -> list[Path]:
+    """Write section 6's sets (every family on both materials) as real-data sets under
+    ``out_dir``, for ``seamtrack extractors bench --real out_dir``; return their folders."""
+    _, sets = _extractor_rows(quick)
+    return [s.write(out_dir, _SET_META) for s in sets]
+
+
 def _throughput(quick: bool) -> dict[str, Any]:
     from seamtrack.features.extractors import extractor
     from seamtrack.sensing.raycast import RayCaster
@@ -419,7 +429,7 @@ def bench_camera(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]:
         "false_stripe": _false_stripe(quick),
     }
     result["extractors"], sets = _extractor_rows(quick)
-    result["image_sets"] = bench_image_sets(sets, {"sensor": "paper", "camera": _CAMERA_NOTE})
+    result["image_sets"] = bench_image_sets(sets, _SET_META)
     result["throughput"] = _throughput(quick)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
