@@ -17,7 +17,8 @@ def test_bench_camera_quick_writes_its_tables_and_meets_the_must_shows(tmp_path)
     result = bench_camera(tmp_path, quick=True)
     assert json.loads((tmp_path / "camera.json").read_text())["quick"] is True
     text = (tmp_path / "camera.md").read_text()
-    for heading in ("Ideal camera", "Speckle only", "False stripe", "Extractors", "Throughput"):
+    for heading in ("Ideal camera", "Speckle only", "False stripe", "Extractors", "Throughput",
+                    "real-data bench"):  # fmt: skip
         assert heading in text
     assert max(r["rms_px"] for r in result["plane"]) < 0.05
     for row in result["speckle"]:
@@ -31,3 +32,19 @@ def test_bench_camera_quick_writes_its_tables_and_meets_the_must_shows(tmp_path)
         "image, bright aluminium",
     }
     assert all(math.isfinite(result["throughput"][k]["frame_ms"]) for k in ("ideal", "full"))
+
+    # Section 6: the same image-mode profiles as labelled sets through the real-data bench.
+    # Its oracle (the seam's crossing of the laser plane, in the plane) is independent of
+    # section 4's (the distance to the seam polyline in space); where the scene runs the
+    # family extractor with its defaults, both must count the same frames as detected.
+    sets = {(r["family"], r["material"]): r for r in result["image_sets"]}
+    assert set(sets) == {(f, m) for f in joints for m in ("mill-scale steel", "bright aluminium")}
+    section4 = {(r["joint"], r["profile"].removeprefix("image, ")): r for r in result["extractors"]}
+    for family in ("square-butt", "v-groove", "fillet", "outside-corner"):
+        for material in ("mill-scale steel", "bright aluminium"):
+            a, b = sets[family, material], section4[family, material]
+            assert a["detection_rate"] == pytest.approx(b["detection_rate"])
+            if a["detection_rate"] > 0:
+                assert a["median_error_mm"] == pytest.approx(b["median_error_mm"], abs=2e-3)
+    for row in result["image_sets"]:
+        assert 0.0 <= row["false_joint_rate"] <= 1.0 and 0.0 <= row["classified_rate"] <= 1.0

@@ -15,6 +15,9 @@ measured from pixels, and what image mode costs.
 5. **Throughput**: 1024 x 512 images per second on one core, and an image-mode frame against a
    geometry-mode frame on the same part and poses. Times are the process's CPU time (one thread
    does all the work), so other load on the machine does not inflate them.
+6. **Image-mode sets through the real-data bench**: section 4's image-mode profiles, labelled
+   with the CAD seam's crossing of the laser plane, as sets of the real-data extractor bench
+   (:mod:`seamtrack.bench.camera_sets`): detection, error, false joints, classification.
 
 Writes ``camera.json`` and ``camera.md``.
 """
@@ -30,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+from seamtrack.bench.camera_sets import ImageSet, bench_image_sets, markdown_rows
 from seamtrack.bench.common import machine_info
 from seamtrack.geometry import frames
 from seamtrack.sensing.camera import Camera, StripeImage
@@ -50,6 +54,10 @@ FAMILIES = {
     "outside-corner": "outside-corner",
 }
 MATERIALS = ("mill-scale steel", "bright aluminium")
+_SET_META = {
+    "sensor": "paper",
+    "camera": "512 x 1024 px, f/8, speckle, shot and read noise, 10 bits, centroid, threshold 0.02",
+}
 
 
 # --------------------------------------------------------------------------- parts and oracles
@@ -299,11 +307,11 @@ def _scene_overrides(mode: str) -> dict[str, Any]:
     }
 
 
-def _extractor_rows(quick: bool) -> list[dict[str, Any]]:
+def _extractor_rows(quick: bool) -> tuple[list[dict[str, Any]], list[ImageSet]]:
     from seamtrack.simulation.assemble import build_parts
     from seamtrack.simulation.scene import load_scene
 
-    rows = []
+    rows, sets = [], []
     poses = 6 if quick else 20
     for family, scene_name in FAMILIES.items():
         for mode in ("geometry", *MATERIALS):
@@ -313,11 +321,18 @@ def _extractor_rows(quick: bool) -> list[dict[str, Any]]:
             ahead = scene.config.sensor.look_ahead_mm
             arcs = np.linspace(2.0, parts.seam.length_mm - ahead - 2.0, poses)
             errors, elapsed = [], 0.0
+            ex = scene.config.extractor
+            offset = (float(ex.offset_mm[0]), float(ex.offset_mm[1]))
+            kept = (
+                None if mode == "geometry" else ImageSet(family, ex.name, mode, scene_name, offset)
+            )
             for tcp in parts.seam.interpolate(arcs):
                 T = parts.robot.T_world_sensor(parts.robot.q_from_world(tcp))
                 start = time.process_time()
-                _, feature = parts.scan(T, 0.0)
+                profile, feature = parts.scan(T, 0.0)
                 elapsed += time.process_time() - start
+                if kept is not None:
+                    kept.add(profile, parts.seam.points, T)
                 errors.append(
                     float(parts.seam.closest(feature.point_world).distance_mm[0])
                     if feature
@@ -337,7 +352,16 @@ def _extractor_rows(quick: bool) -> list[dict[str, Any]]:
                     "ms_per_frame": 1e3 * elapsed / poses,
                 }
             )
-    return rows
+            if kept is not None:
+                sets.append(kept)
+    return rows, sets
+
+
+def write_image_sets(out_dir: str | Path, *, quick: bool = False) -> list[Path]:
+    """Write section 6's sets (every family on both materials) as real-data sets under
+    ``out_dir``, for ``seamtrack extractors bench --real out_dir``; return their folders."""
+    _, sets = _extractor_rows(quick)
+    return [s.write(out_dir, _SET_META) for s in sets]
 
 
 def _throughput(quick: bool) -> dict[str, Any]:
@@ -403,9 +427,10 @@ def bench_camera(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]:
             for w in ((0.05, 0.5) if quick else (0.05, 0.1, 0.2, 0.5, 1.0))
         ],
         "false_stripe": _false_stripe(quick),
-        "extractors": _extractor_rows(quick),
-        "throughput": _throughput(quick),
     }
+    result["extractors"], sets = _extractor_rows(quick)
+    result["image_sets"] = bench_image_sets(sets, _SET_META)
+    result["throughput"] = _throughput(quick)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     (out / "camera.json").write_text(json.dumps(result, indent=2, default=float) + "\n")
@@ -555,4 +580,5 @@ def markdown(result: dict[str, Any]) -> str:
             ]
         ],
     )
+    lines += markdown_rows(result.get("image_sets", []), _table)
     return "\n".join(lines) + "\n"
