@@ -71,9 +71,13 @@ def draw_camera(spec: DatasetSpec, rng: np.random.Generator) -> tuple[Any, Float
     chances = (sum(c.speckle_probability) / 2, sum(c.shot_noise_probability) / 2)
     coins = [bool(u[i] < p) for i, p in enumerate(chances)]
     values = [_draw(getattr(c, key), u[len(COINS) + i]) for i, key in enumerate(CAMERA_RANGES)]
-    kw = dict(zip(CAMERA_RANGES, values, strict=True))
-    camera = Camera(rows=c.rows, columns=c.columns, bit_depth=c.bit_depth,
-                    speckle=coins[0], shot_noise=coins[1], **kw)  # fmt: skip
+    f_number, wavelength, thickness, exposure, full_well, read_noise, ambient = values
+    camera = Camera(
+        rows=c.rows, columns=c.columns, bit_depth=c.bit_depth, f_number=f_number,
+        wavelength_nm=wavelength, line_thickness_mm=thickness, exposure=exposure,
+        full_well_e=full_well, read_noise_e=read_noise, ambient=ambient, speckle=coins[0],
+        shot_noise=coins[1],
+    )  # fmt: skip
     return camera, np.array([*values, *(float(x) for x in coins)])
 
 

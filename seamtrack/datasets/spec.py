@@ -283,7 +283,8 @@ class DatasetSpec(_Section):
         """With images and no chunk size given, chunks as large as :data:`MAX_CHUNK_PIXELS`
         allows (at most the default 1024)."""
         if isinstance(data, dict) and data.get("images") is True and "chunk_size" not in data:
-            camera = data.get("camera") if isinstance(data.get("camera"), dict) else {}
+            given = data.get("camera")
+            camera = given if isinstance(given, dict) else {}
             rows, columns = camera.get("rows", 512), camera.get("columns", 1024)
             if isinstance(rows, int) and isinstance(columns, int) and rows > 0 and columns > 0:
                 size = max(1, min(1024, MAX_CHUNK_PIXELS // (rows * columns)))
