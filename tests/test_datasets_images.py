@@ -92,8 +92,8 @@ def test_image_truth_lies_on_the_drawn_section(ideal_v_groove: dict[str, np.ndar
 def test_profile_measured_from_an_ideal_image_follows_the_truth(
     ideal_v_groove: dict[str, np.ndarray],
 ) -> None:
-    """The centroid detector on an image without noise finds every column with a truth, and its points
-    are within 0.005 mm of the truth (median) and 0.06 mm everywhere (columns at a corner)."""
+    """The centroid detector on an image without noise finds every column with a truth, and
+    its points are within 0.005 mm of the truth (median), 0.06 mm everywhere (at a corner)."""
     measured = ideal_v_groove["image_points_laser"]
     truth = ideal_v_groove["image_truth_laser"]
     valid = ideal_v_groove["image_valid"]
