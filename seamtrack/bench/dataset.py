@@ -19,15 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from seamtrack.bench.common import machine_info
-
-#: Every noise knob off: the exact stripe of the drawn joint, pixel-quantized.
-NOISE_OFF = {
-    "range_sigma_mm": 0.0,
-    "speckle_sigma_mm": 0.0,
-    "dropout_rate": 0.0,
-    "secondary_probability": 0.0,
-    "outlier_fraction": 0.0,
-}
+from seamtrack.datasets.spec import NOISE_OFF
 
 TARGET_RATE = 4000.0
 TARGET_SPEEDUP = 1.7

@@ -43,6 +43,16 @@ MAX_CHUNK_POINTS = 8_000_000
 #: Largest ``--n`` (the sample index is an int64; beyond this the disk is the limit anyway).
 MAX_SAMPLES = 1_000_000_000
 
+#: The ``[noise]`` of a spec with every knob off: the exact stripe of the drawn joint,
+#: pixel-quantized.
+NOISE_OFF = {
+    "range_sigma_mm": 0.0,
+    "speckle_sigma_mm": 0.0,
+    "dropout_rate": 0.0,
+    "secondary_probability": 0.0,
+    "outlier_fraction": 0.0,
+}
+
 #: Tilts and yaws at or beyond this put the laser plane along the seam.
 MAX_TILT_DEG = 80.0
 

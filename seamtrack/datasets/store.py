@@ -282,22 +282,11 @@ def _execute(
 def _execute_dask(
     spec: DatasetSpec, out: Path, todo: list[int], counts: list[int], scheduler: str
 ) -> Iterable[int]:
-    from seamtrack.batch.sweep import DASK_CONNECT_TIMEOUT_S
+    from seamtrack.batch.sweep import dask_client
 
-    try:
-        from dask.distributed import Client, as_completed
-    except ImportError:
-        raise SpecError(
-            "Dask is not installed", field="--scheduler", fix="pip install 'seamtrack[dask]'"
-        ) from None
-    try:
-        client = Client(scheduler, timeout=f"{DASK_CONNECT_TIMEOUT_S}s")
-    except OSError as exc:
-        raise SpecError(
-            f"cannot reach the Dask scheduler {scheduler!r}: {exc}",
-            field="--scheduler",
-            fix="start it or give its tcp:// address",
-        ) from None
+    client = dask_client(scheduler)
+    from dask.distributed import as_completed
+
     try:
         futures = {client.submit(make_chunk, spec, k, counts[k], None, pure=False): k
                    for k in todo}  # fmt: skip
