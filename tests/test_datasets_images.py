@@ -151,4 +151,8 @@ def test_images_flag_through_the_cli(tmp_path: Path, capsys: pytest.CaptureFixtu
     assert data.spec.images and data.spec.chunk_size == min(1024, MAX_CHUNK_PIXELS // (32 * 64))
     assert data[1]["image"].shape == (32, 64)
     assert np.isfinite(data[1]["image_truth_row"]).any()
+    assert data.column("image", stop=1).shape == (1, 32, 64)
     data.close()
+    capsys.readouterr()
+    assert main(["dataset", "--info", str(tmp_path / "d")]) == 0
+    assert "images 64 x 32 (uint16, 10 bits)" in capsys.readouterr().out

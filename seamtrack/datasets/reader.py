@@ -182,13 +182,21 @@ class Dataset:
             return {k: np.empty((0, *v.shape), v.dtype) for k, v in empty.items()}
         return {name: np.concatenate(p) for name, p in parts.items()}
 
-    def column(self, name: str) -> np.ndarray:
-        """One array of every sample (``data.column("seam_point_laser")``: (n, 2))."""
+    def column(self, name: str, stop: int | None = None) -> np.ndarray:
+        """One array of every sample (``data.column("seam_point_laser")``: (n, 2)), or of the
+        first ``stop`` samples."""
         if name not in self.arrays:
             raise KeyError(f"no array {name!r}; arrays: {', '.join(self.arrays)}")
         if not self._counts:
             return self[0:0][name]
-        return np.concatenate([self._file(k)[name][:] for k in range(len(self._counts))])
+        end = len(self) if stop is None else max(0, min(stop, len(self)))
+        parts = []
+        for k in range(len(self._counts)):
+            lo = int(self._starts[k])
+            if lo >= end:
+                break
+            parts.append(self._file(k)[name][: end - lo])
+        return np.concatenate(parts) if parts else self[0:0][name]
 
     def joint_name(self, code: int) -> str:
         return FAMILIES[int(code)]
@@ -220,17 +228,29 @@ def info(path: str | Path, sample_limit: int = 10_000) -> str:
             lines.append(
                 "joints: " + ", ".join(f"{FAMILIES[j]} {c}" for j, c in enumerate(counts) if c)
             )
-            head = data[: min(n, sample_limit)]
-            seam = head["seam_point_laser"]
+            seam = data.column("seam_point_laser", sample_limit)
+            valid = data.column("valid", sample_limit)
+            tack = data.column("tack", sample_limit)
             has_seam = np.isfinite(seam[:, 0])
             lines.append(
-                f"over the first {len(seam)} samples: {head['valid'].mean():.1%} of the points "
+                f"over the first {len(seam)} samples: {valid.mean():.1%} of the points "
                 f"valid; seam point range z_L {np.nanmin(seam[:, 1]) if has_seam.any() else 0:.2f}"
                 f"..{np.nanmax(seam[:, 1]) if has_seam.any() else 0:.2f} mm, lateral y_L "
                 f"{np.nanmin(seam[:, 0]) if has_seam.any() else 0:.2f}.."
                 f"{np.nanmax(seam[:, 0]) if has_seam.any() else 0:.2f} mm; "
-                f"{head['tack'].mean():.1%} cross a tack"
+                f"{tack.mean():.1%} cross a tack"
             )
+            if spec.images:
+                c = spec.camera
+                truth = np.isfinite(data.column("image_truth_row", sample_limit))
+                measured = data.column("image_valid", sample_limit)
+                reflection = data.column("image_reflection", sample_limit)
+                lines.append(
+                    f"images {c.columns} x {c.rows} (uint16, {c.bit_depth} bits): "
+                    f"{truth.mean():.1%} of the columns see the stripe, the {c.method} detector "
+                    f"measures {measured[truth].mean() if truth.any() else 0:.1%} of those; "
+                    f"{reflection.any(axis=1).mean():.1%} of the images show a false stripe"
+                )
         lines.append(
             f"families {', '.join(spec.joint.families)}; presets {', '.join(spec.sensor.presets)}"
             f"; spec: {data.path / 'spec.toml'}"
