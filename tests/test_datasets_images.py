@@ -156,3 +156,24 @@ def test_images_flag_through_the_cli(tmp_path: Path, capsys: pytest.CaptureFixtu
     capsys.readouterr()
     assert main(["dataset", "--info", str(tmp_path / "d")]) == 0
     assert "images 64 x 32 (uint16, 10 bits)" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize(
+    ("material", "shows"), [("bright aluminium", True), ("white matte", False)]
+)
+def test_the_material_decides_the_false_stripe(material: str, shows: bool) -> None:
+    """The drawn material reaches the renderer: with the laser pitched 12-20 deg along a
+    V-groove, bright aluminium's specular bounce throws a false stripe into every image (as in
+    image mode, README "Camera images"); a white Lambertian part throws none."""
+    spec = parse_spec({"images": True, "rays": 128, "joint": V_GROOVE,
+                       "part": {"materials": [material]},
+                       "sensor": {"tilt_deg": [12.0, 20.0], "roll_deg": 0.0,
+                                  "lateral_offset_mm": 0.0},
+                       "camera": {"rows": 128, "columns": 256, **IDEAL}})  # fmt: skip
+    out = generate(spec, 0, 3)
+    reflection = out["image_reflection"]
+    assert np.array_equal(np.isfinite(out["image_reflection_row"]), reflection)
+    if shows:
+        assert (reflection.sum(axis=1) >= 20).all()
+    else:
+        assert not reflection.any()
