@@ -20,19 +20,11 @@ from seamtrack.datasets.generate import (
     sample_generator,
 )
 from seamtrack.datasets.kernel import stripe
-from seamtrack.datasets.spec import parse_spec
+from seamtrack.datasets.spec import NOISE_OFF, parse_spec
 from seamtrack.features.synthetic import joint_section
 from seamtrack.sensing.profiles import Reason
 from seamtrack.sensing.scan import laser_fan, scan_mesh
 from seamtrack.sensing.sensor import preset
-
-NOISE_OFF = {
-    "range_sigma_mm": 0.0,
-    "speckle_sigma_mm": 0.0,
-    "dropout_rate": 0.0,
-    "secondary_probability": 0.0,
-    "outlier_fraction": 0.0,
-}
 
 PARAMS = {
     "thickness_mm": 8.0,
@@ -89,13 +81,7 @@ def test_sections_are_the_synthetic_profiles_joints(family: str) -> None:
 
 def _extruded_mesh(segs: np.ndarray, half_length_mm: float = 300.0):  # -> trimesh.Trimesh
     trimesh = pytest.importorskip("trimesh")
-    vertices, faces = [], []
-    for y0, z0, y1, z1 in segs:
-        base = len(vertices)
-        vertices += [(-half_length_mm, y0, z0), (half_length_mm, y0, z0),
-                     (half_length_mm, y1, z1), (-half_length_mm, y1, z1)]  # fmt: skip
-        faces += [(base, base + 1, base + 2), (base, base + 2, base + 3)]
-    return trimesh.Trimesh(np.array(vertices), np.array(faces), process=False)
+    return trimesh.Trimesh(*joints.extruded_mesh(segs, half_length_mm), process=False)
 
 
 @pytest.mark.embree

@@ -260,23 +260,32 @@ def die_with_parent() -> None:
     threading.Thread(target=watch, name="die-with-parent", daemon=True).start()
 
 
-def _execute_dask(
-    scene: str, cases: list[Case], overrides: dict[str, Any], scheduler: str
-) -> Iterable[dict[str, Any]]:
+def dask_client(scheduler: str) -> Any:
+    """A ``dask.distributed.Client`` of the scheduler at ``scheduler``, or an error naming
+    ``--scheduler`` (Dask missing, or the scheduler unreachable within
+    :data:`DASK_CONNECT_TIMEOUT_S`)."""
     try:
-        from dask.distributed import Client, as_completed
+        from dask.distributed import Client
     except ImportError:
         raise SeamtrackError(
             "Dask is not installed", field="--scheduler", fix="pip install 'seamtrack[dask]'"
         ) from None
     try:
-        client = Client(scheduler, timeout=f"{DASK_CONNECT_TIMEOUT_S}s")
+        return Client(scheduler, timeout=f"{DASK_CONNECT_TIMEOUT_S}s")
     except OSError as exc:
         raise SeamtrackError(
             f"cannot reach the Dask scheduler {scheduler!r}: {exc}",
             field="--scheduler",
             fix="start it or give its tcp:// address",
         ) from None
+
+
+def _execute_dask(
+    scene: str, cases: list[Case], overrides: dict[str, Any], scheduler: str
+) -> Iterable[dict[str, Any]]:
+    client = dask_client(scheduler)
+    from dask.distributed import as_completed
+
     try:
         futures = [client.submit(run_case, scene, case, overrides, pure=False) for case in cases]
         for future in as_completed(futures):

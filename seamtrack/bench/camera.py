@@ -324,7 +324,9 @@ def _extractor_rows(quick: bool) -> tuple[list[dict[str, Any]], list[ImageSet]]:
             ex = scene.config.extractor
             offset = (float(ex.offset_mm[0]), float(ex.offset_mm[1]))
             kept = (
-                None if mode == "geometry" else ImageSet(family, ex.name, mode, scene_name, offset)
+                None
+                if mode == "geometry"
+                else ImageSet(family, parts.extractor_name, mode, scene_name, offset)
             )
             for tcp in parts.seam.interpolate(arcs):
                 T = parts.robot.T_world_sensor(parts.robot.q_from_world(tcp))

@@ -100,6 +100,10 @@ FILES: dict[str, bytes] = {
     "dataset_min_max.toml": b"[joint]\ngap_mm = [2.0, 1.0]\n",
     "dataset_family.toml": b'[joint]\nfamilies = ["v-groove", "x-groove"]\n',
     "dataset_key.toml": b"[sensor]\ntilt_degs = 5\n",
+    "dataset_material.toml": b'[part]\nmaterials = ["mild-steel"]\n',
+    "dataset_image_chunk.toml": b"images = true\nchunk_size = 1024\n",
+    "dataset_line.toml": b"images = true\n[camera]\nline_thickness_mm = 50.0\n",
+    "dataset_bits.toml": b"[camera]\nbit_depth = 17\n",
     # a dataset folder written by another spec (its manifest is what a resume reads)
     "other_dataset/dataset.json": json.dumps(
         {
@@ -486,7 +490,20 @@ CATALOGUE: tuple[Entry, ...] = (
         ("dataset", "dataset.toml", "--n", "8", "--out", "other_dataset"),
         field="--out",
     ),
-    Entry("dataset --images", (*_dataset("dataset.toml"), "--images"), field="--images"),
+    Entry("dataset unknown material", _dataset("dataset_material.toml"), field="part.materials.0"),
+    Entry(
+        "dataset images chunk too large", _dataset("dataset_image_chunk.toml"), field="chunk_size"
+    ),
+    Entry(
+        "dataset images line too thick",
+        _dataset("dataset_line.toml"),
+        field="camera.line_thickness_mm",
+    ),
+    Entry(
+        "dataset camera bit depth 17",
+        (*_dataset("dataset_bits.toml"), "--images"),
+        field="camera.bit_depth",
+    ),
     Entry("dataset missing spec file", _dataset("missing.toml"), field="SPEC"),
 )
 

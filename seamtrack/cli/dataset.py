@@ -41,13 +41,6 @@ def cmd_dataset(args: argparse.Namespace) -> int:
 
         print(info(args.info))
         return 0
-    if args.images:
-        raise SpecError(
-            "seamtrack dataset does not render camera images (there was no camera renderer "
-            "to build on when it was written): datasets hold the geometric stripe profiles",
-            field="--images",
-            fix="leave out --images",
-        )
     if args.spec is None:
         raise SpecError(
             "no spec given",
@@ -57,10 +50,12 @@ def cmd_dataset(args: argparse.Namespace) -> int:
     for flag, value in (("--n", args.n), ("--out", args.out)):
         if value is None:
             raise SpecError("missing", field=flag, fix=f"give {flag}, e.g. --n 1000 --out data")
-    from seamtrack.datasets.spec import load_spec
+    from seamtrack.datasets.spec import load_spec, with_images
     from seamtrack.datasets.store import write_dataset
 
     spec = load_spec(args.spec)
+    if args.images:
+        spec = with_images(spec)
     done = write_dataset(spec, args.n, args.out, workers=args.workers, scheduler=args.scheduler,
                          progress=_progress_wanted(args))  # fmt: skip
     if not args.quiet:
@@ -87,7 +82,9 @@ def add_dataset_parser(add: Callable[..., Any]) -> None:
     p.add_argument("--workers", type=int, default=1, help="local processes (default 1)")
     p.add_argument("--scheduler", help="Dask scheduler address (tcp://host:port)")
     p.add_argument(
-        "--images", action="store_true", help="camera images too (refused: no renderer yet)"
+        "--images",
+        action="store_true",
+        help="camera images too, rendered as in image mode (the spec's [camera]); = images = true",
     )
     p.add_argument("--template", action="store_true", help="print (or -o: write) a commented spec")
     p.add_argument("-o", "--output", help="with --template: the file to write")

@@ -33,19 +33,22 @@ def write(
     *,
     workers: int = 1,
     scheduler: str | None = None,
+    images: bool = False,
 ) -> dict[str, Any]:
     """Samples 0..n-1 of ``spec`` (a spec file, a dict as in the TOML, or a
     :class:`~seamtrack.datasets.spec.DatasetSpec`) into the folder ``out``: what
-    ``seamtrack dataset SPEC --n N --out DIR`` does (resuming or appending there, if the folder
-    holds this spec's dataset). Returns the counts and times of
+    ``seamtrack dataset SPEC --n N --out DIR [--images]`` does (resuming or appending there, if
+    the folder holds this spec's dataset). Returns the counts and times of
     :func:`seamtrack.datasets.store.write_dataset`."""
-    from seamtrack.datasets.spec import DatasetSpec, load_spec, parse_spec
+    from seamtrack.datasets.spec import DatasetSpec, load_spec, parse_spec, with_images
     from seamtrack.datasets.store import write_dataset
 
     if isinstance(spec, dict):
         spec = parse_spec(spec)
     elif not isinstance(spec, DatasetSpec):
         spec = load_spec(spec)
+    if images:
+        spec = with_images(spec)
     return write_dataset(spec, n, out, workers=workers, scheduler=scheduler)
 
 

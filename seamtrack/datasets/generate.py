@@ -8,6 +8,8 @@ uniform number per choice and per range (:data:`UNIFORMS`), then whatever its no
 
 The profile is the mesh-mode stripe of the sample's joint (:mod:`seamtrack.datasets.kernel`); the
 noise knobs are the mesh-mode model with its geometry in numba (:mod:`seamtrack.datasets.noise`).
+With ``images``, the camera image of the same joint and pose follows
+(:mod:`seamtrack.datasets.images`), from a generator of its own.
 """
 
 from __future__ import annotations
@@ -191,9 +193,11 @@ def draw(plan: Plan, rng: np.random.Generator) -> Drawn:
     )
 
 
-def empty_chunk(count: int, rays: int) -> dict[str, np.ndarray]:
-    """The arrays of ``count`` samples (see the README's dataset table), NaN / zero filled."""
-    return {
+def empty_chunk(spec: DatasetSpec, count: int) -> dict[str, np.ndarray]:
+    """The arrays of ``count`` samples (see the README's dataset table), NaN / zero filled;
+    with ``spec.images`` those of :func:`seamtrack.datasets.images.empty_images` too."""
+    rays = spec.rays
+    arrays = {
         "points_laser": np.full((count, rays, 2), np.nan),
         "valid": np.zeros((count, rays), dtype=bool),
         "reason": np.zeros((count, rays), dtype=np.uint8),
@@ -209,6 +213,11 @@ def empty_chunk(count: int, rays: int) -> dict[str, np.ndarray]:
         "T_world_seam": np.zeros((count, 4, 4)),
         "index": np.zeros(count, dtype=np.int64),
     }
+    if spec.images:
+        from seamtrack.datasets.images import empty_images
+
+        arrays.update(empty_images(spec, count))
+    return arrays
 
 
 def fill_sample(plan: Plan, index: int, out: dict[str, np.ndarray], row: int) -> None:
@@ -276,11 +285,15 @@ def fill_sample(plan: Plan, index: int, out: dict[str, np.ndarray], row: int) ->
     T_world_seam[0, 3] = v["position_mm"]
     out["T_world_seam"][row] = T_world_seam
     out["index"][row] = index
+    if spec.images:
+        from seamtrack.datasets.images import fill_image
+
+        fill_image(spec, index, sensor, spec.part.materials[d.material], segs, T, out, row)
 
 
 def generate(spec: DatasetSpec, start: int, count: int) -> dict[str, np.ndarray]:
     """Samples ``start .. start + count - 1`` as arrays (first axis: the sample)."""
-    out = empty_chunk(count, spec.rays)
+    out = empty_chunk(spec, count)
     plan = Plan.of(spec)
     for row in range(count):
         fill_sample(plan, start + row, out, row)

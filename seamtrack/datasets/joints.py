@@ -135,3 +135,17 @@ def segments(polylines: list[list[tuple[float, float]]], shift: tuple[float, flo
             if y0 != y1 or z0 != z1:
                 flat.append((y0 - sy, z0 - sz, y1 - sy, z1 - sz))
     return np.array(flat, dtype=np.float64)
+
+
+def extruded_mesh(segs: NDArray, half_length_mm: float = FAR_MM) -> tuple[NDArray, NDArray]:
+    """The section's segments ``(y0, z0, y1, z1)`` (k, 4) extruded along x_S over
+    ``[-half_length_mm, half_length_mm]``: vertices (4k, 3) float and faces (2k, 3) int, two
+    triangles a segment (the surface that :mod:`seamtrack.datasets.kernel` intersects)."""
+    s = np.asarray(segs, dtype=np.float64)
+    k = len(s)
+    x = np.array([-half_length_mm, half_length_mm, half_length_mm, -half_length_mm])
+    yz = s[:, [0, 1, 0, 1, 2, 3, 2, 3]].reshape(k, 4, 2)  # corners: (a, a, b, b)
+    vertices = np.concatenate([np.broadcast_to(x[None, :, None], (k, 4, 1)), yz], axis=2)
+    base = 4 * np.arange(k)[:, None]
+    faces = np.concatenate([base + [0, 1, 2], base + [0, 2, 3]], axis=1).reshape(2 * k, 3)
+    return vertices.reshape(4 * k, 3), faces

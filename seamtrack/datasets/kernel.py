@@ -5,10 +5,11 @@ sample costs more than the whole profile may (the target is 4,000 labelled profi
 per core). The joint is an extrusion along the seam (x_S), so the first hit of a 3D ray
 ``o + t d`` is the first crossing of its (y, z) projection with the section's segments, at the
 same parameter t: a 2D ray / segment test, exact in float64, with no mesh and no float32 stage.
-Everything after the hit is the mesh-mode stripe of :mod:`seamtrack.sensing.kernels`, in the same
-order and with the same helpers: field of view and depth of field (``_chip``), incidence, the
-camera on the lit side, a shadow ray from ``SHADOW_RAY_OFFSET_MM`` off the point to the camera
-centre, and pixel quantization (``_pixel_center``). A test holds the result equal to
+Everything after the hit is the mesh-mode stripe itself: these exact hits go through the kernels
+of :mod:`seamtrack.sensing.kernels` (``fan_stripe_hits``: field of view and depth of field,
+incidence, the camera on the lit side, the shadow rays from ``SHADOW_RAY_OFFSET_MM`` off the
+point to the camera centre; ``fan_stripe_finish``: occlusion and pixel quantization), with the
+shadow rays cast by the same 2D test. A test holds the result equal to
 :func:`seamtrack.sensing.scan.scan_mesh` on the extruded mesh of the same section.
 """
 
@@ -18,16 +19,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.sensing.kernels import (
-    INCIDENCE,
-    MISS,
-    OCCLUDED,
-    OUT_OF_RANGE,
-    SP_B,
-    SP_COS_MAX_INC,
-    _chip,
-    _pixel_center,
-)
+from seamtrack.sensing.kernels import fan_stripe_finish, fan_stripe_hits
 
 #: A crossing at a segment's end counts for the segment within this fraction of its length
 #: (rays through a shared vertex hit one of the two segments, never neither).
@@ -112,86 +104,39 @@ def stripe(
         The rays in the seam frame.
     """
     n = fan.shape[0]
-    points = np.empty((n, 2))
-    reason = np.empty(n, dtype=np.uint8)
-    t_out = np.empty(n)
-    face = np.empty(n, dtype=np.int64)
-    cos_incidence = np.empty(n)
     directions = np.empty((n, 3))
     for i in range(n):
         for a in range(3):
             directions[i, a] = (rotation[a, 0] * fan[i, 0] + rotation[a, 1] * fan[i, 1]
                                 + rotation[a, 2] * fan[i, 2])  # fmt: skip
-    oy = np.full(n, origin[1])
-    oz = np.full(n, origin[2])
-    dy = np.ascontiguousarray(directions[:, 1])
-    dz = np.ascontiguousarray(directions[:, 2])
-    _crossings(oy, oz, dy, dz, segs, T_MIN_MM, np.full(n, NO_HIT), t_out, face)
-    b = sp[SP_B]
-    cam_x = origin[0] + b * rotation[0, 0]
-    cam_y = origin[1] + b * rotation[1, 0]
-    cam_z = origin[2] + b * rotation[2, 0]
-    # The batch of shadow rays (lit point -> camera centre) of the points that pass the clips.
-    sy, sz = np.empty(n), np.empty(n)
-    svy, svz = np.empty(n), np.empty(n)
-    sfar = np.empty(n)
-    schip = np.empty((n, 2))
-    sindex = np.empty(n, dtype=np.int64)
-    m = 0
-    for i in range(n):
-        k = face[i]
-        if k < 0:
-            points[i, 0] = np.nan
-            points[i, 1] = np.nan
-            reason[i] = MISS
-            t_out[i] = np.nan
-            cos_incidence[i] = np.nan
-            continue
-        t = t_out[i]
-        dx, dyi, dzi = directions[i, 0], directions[i, 1], directions[i, 2]
-        y = t * fan[i, 1]
-        z = t * fan[i, 2]
-        points[i, 0] = y
-        points[i, 1] = z
+    t_hit = np.empty(n)
+    face = np.empty(n, dtype=np.int64)
+    _crossings(np.full(n, origin[1]), np.full(n, origin[2]),
+               np.ascontiguousarray(directions[:, 1]), np.ascontiguousarray(directions[:, 2]),
+               segs, T_MIN_MM, np.full(n, NO_HIT), t_hit, face)  # fmt: skip
+    # The segments' normals (x component 0: an extrusion), then the mesh-mode stripe's clips
+    # on these exact hits (nothing to refine: the arrays of the refinement stay empty).
+    normals = np.zeros((segs.shape[0], 3))
+    for k in range(segs.shape[0]):
         ey, ez = segs[k, 2] - segs[k, 0], segs[k, 3] - segs[k, 1]
         inv = 1.0 / np.sqrt(ey * ey + ez * ez)
-        ny, nz = -ez * inv, ey * inv  # the segment's normal; x component 0 (extrusion)
-        n_dot_d = ny * dyi + nz * dzi
-        cos_incidence[i] = abs(n_dot_d)
-        x_c, z_c, inside = _chip(y, z, sp)
-        if not inside:
-            reason[i] = OUT_OF_RANGE
-            continue
-        if abs(n_dot_d) < sp[SP_COS_MAX_INC]:
-            reason[i] = INCIDENCE
-            continue
-        px, py, pz = origin[0] + t * dx, origin[1] + t * dyi, origin[2] + t * dzi
-        vx, vy, vz = cam_x - px, cam_y - py, cam_z - pz
-        length = np.sqrt(vx * vx + vy * vy + vz * vz)
-        vx, vy, vz = vx / length, vy / length, vz / length
-        if (ny * vy + nz * vz) * n_dot_d >= 0.0:  # the camera is behind the lit face
-            reason[i] = OCCLUDED
-            continue
-        reason[i] = 0
-        sy[m] = py + offset * vy
-        sz[m] = pz + offset * vz
-        svy[m] = vy
-        svz[m] = vz
-        sfar[m] = max(length - offset, 0.0)
-        schip[m, 0] = x_c
-        schip[m, 1] = z_c
-        sindex[m] = i
-        m += 1
+        normals[k, 1], normals[k, 2] = -ez * inv, ey * inv
+    none = np.empty(0, dtype=np.int64)
+    # Embree gives (int32, float32) hits; these are (int64, float64), exact: numba compiles the
+    # kernel for them, the annotations name the Embree case.
+    points, reason, t, face, cos_incidence, chip, s_origins, s_directions, s_far, s_index = (
+        fan_stripe_hits(origin, rotation, fan, directions, face, t_hit,  # type: ignore[arg-type]
+                        np.empty((0, 3)), np.empty((0, 3), dtype=np.int64), none, none, none,
+                        normals, False, 0.0, sp, offset)
+    )  # fmt: skip
+    m = s_index.shape[0]
     blocked_t = np.empty(m)
     blocker = np.empty(m, dtype=np.int64)
-    _crossings(sy[:m], sz[:m], svy[:m], svz[:m], segs, 0.0, sfar[:m], blocked_t, blocker)
-    for j in range(m):
-        i = sindex[j]
-        if blocker[j] >= 0:
-            reason[i] = OCCLUDED
-        elif quantize:
-            points[i, 0], points[i, 1] = _pixel_center(schip[j, 0], schip[j, 1], sp)
-    return points, reason, t_out, face, cos_incidence, directions
+    _crossings(np.ascontiguousarray(s_origins[:, 1]), np.ascontiguousarray(s_origins[:, 2]),
+               np.ascontiguousarray(s_directions[:, 1]), np.ascontiguousarray(s_directions[:, 2]),
+               segs, 0.0, s_far, blocked_t, blocker)  # fmt: skip
+    fan_stripe_finish(points, reason, chip, blocker >= 0, s_index, sp, quantize)
+    return points, reason, t, face, cos_incidence, directions
 
 
 @numba.njit(cache=True, nogil=True)

@@ -20,7 +20,17 @@ ARRAYS = (
     "points_laser", "valid", "reason", "seam_point_laser", "features_laser", "joint", "path",
     "material", "preset", "tack", "params", "T_seam_sensor", "T_world_seam", "index",
 )  # fmt: skip
+#: The arrays a chunk file adds with images (``images = true``, ``--images``).
+IMAGE_ARRAYS = (
+    "image", "image_truth_row", "image_truth_laser", "image_reflection", "image_reflection_row",
+    "image_points_laser", "image_valid", "camera_params",
+)  # fmt: skip
 REASON_NAMES = ("valid", "miss", "occluded", "out_of_range", "incidence", "dropout")
+
+
+def arrays(images: bool) -> tuple[str, ...]:
+    """The arrays of a chunk file of a dataset with or without images."""
+    return ARRAYS + IMAGE_ARRAYS if images else ARRAYS
 
 
 def chunk_path(out: Path, k: int) -> Path:

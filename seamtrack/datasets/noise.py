@@ -20,7 +20,7 @@ from numpy.typing import NDArray
 from seamtrack import constants
 from seamtrack.datasets.kernel import NO_HIT, T_MIN_MM, _crossings
 from seamtrack.sensing.profiles import Reason
-from seamtrack.sensing.scan import StripeNoise, _correlated_normal, dropout_probability
+from seamtrack.sensing.scan import StripeNoise, chip_noise, dropout_probability
 from seamtrack.sensing.sensor import LaserLineSensor
 
 FloatArray = NDArray[np.float64]
@@ -227,16 +227,6 @@ def apply_noise(
         reason[take] = Reason.VALID
     idx = np.flatnonzero(reason == Reason.VALID)
     x_c, z_c = _project(points, idx, k)
-    to_chip = sensor.pixel_pitch_mm[0] / float(
-        sensor.local_depth_resolution_mm(sensor.range_center_mm)
-    )
-    if noise.range_sigma_mm > 0:
-        x_c = x_c + rng.normal(0.0, noise.range_sigma_mm * to_chip, len(idx))
-    if noise.speckle_sigma_mm > 0:
-        field = _correlated_normal(n, noise.speckle_correlation_rays, rng)
-        x_c = x_c + noise.speckle_sigma_mm * to_chip * field[idx]
-    if noise.outlier_fraction > 0:
-        spurious = rng.random(len(idx)) < noise.outlier_fraction
-        x_c = np.where(spurious, rng.uniform(-0.5, 0.5, len(idx)) * sensor.chip_h_mm, x_c)
+    x_c = chip_noise(sensor, noise, x_c, idx, n, rng)
     _finish(points, reason, idx, np.ascontiguousarray(x_c), z_c, k, bool(sensor.quantize))
     return points, reason

@@ -16,8 +16,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+from pydantic import ValidationError
 
-from seamtrack.datasets.layout import ARRAYS, MANIFEST, chunk_path, read_manifest
+from seamtrack.datasets.layout import MANIFEST, chunk_path, read_manifest
+from seamtrack.datasets.layout import arrays as arrays_of
 from seamtrack.datasets.spec import FAMILIES, DatasetSpec
 from seamtrack.errors import OutputError
 
@@ -50,6 +52,14 @@ class Dataset:
     uint8 codes; ``tack`` bool; ``params`` (P,) float (``names["param_names"]``; NaN where the
     family has no such parameter); ``T_seam_sensor`` and ``T_world_seam`` (4, 4); ``index``
     int64, the sample's number (its seed is ``SeedSequence(spec.seed).spawn(index + 1)[index]``).
+
+    With images (``spec.images``), C camera columns and H rows: ``image`` (H, C) uint16 grey
+    levels (full scale ``names["image_levels"]``); its truth ``image_truth_row`` (C,) float, the
+    sub-pixel row of the ideal stripe per column (NaN where none) and ``image_truth_laser``
+    (C, 2) the same as (y_L, z_L) mm, ``image_reflection`` (C,)
+    bool and ``image_reflection_row`` (C,) float, a false stripe (the first specular bounce);
+    the profile the spec's peak detector measures from the image, ``image_points_laser``
+    (C, 2) mm and ``image_valid`` (C,); ``camera_params`` (``names["camera_param_names"]``).
     """
 
     def __init__(self, path: str | Path):
@@ -63,7 +73,16 @@ class Dataset:
         manifest = read_manifest(self.path)
         assert manifest is not None
         self.manifest = manifest
-        self.spec = DatasetSpec.model_validate(manifest["spec"])
+        try:
+            self.spec = DatasetSpec.model_validate(manifest["spec"])
+        except (ValidationError, KeyError, TypeError):
+            raise OutputError(
+                f"{str(self.path)!r} was written by seamtrack "
+                f"{manifest.get('seamtrack_version', '?')}, whose spec this version cannot read",
+                field="DIR",
+                fix="read it with that version, or write it anew",
+            ) from None
+        self.arrays = arrays_of(self.spec.images)
         self.version = str(manifest.get("seamtrack_version", "?"))
         self._handles: dict[int, Any] = {}
         self._pid = os.getpid()
@@ -134,7 +153,7 @@ class Dataset:
                 raise IndexError(f"sample {key} of a dataset of {n}")
             k = int(np.searchsorted(self._starts, i, side="right")) - 1
             f, row = self._file(k), i - int(self._starts[k])
-            return {name: np.asarray(f[name][row]) for name in ARRAYS}
+            return {name: np.asarray(f[name][row]) for name in self.arrays}
         if isinstance(key, slice):
             return self._rows(np.arange(n)[key])
         rows = np.asarray(key)
@@ -146,7 +165,7 @@ class Dataset:
 
     def _rows(self, rows: np.ndarray) -> dict[str, np.ndarray]:
         """The samples ``rows`` (any order), stacked; contiguous runs read as one slice."""
-        parts: dict[str, list[np.ndarray]] = {name: [] for name in ARRAYS}
+        parts: dict[str, list[np.ndarray]] = {name: [] for name in self.arrays}
         chunk = np.searchsorted(self._starts, rows, side="right") - 1
         i = 0
         while i < len(rows):
@@ -155,7 +174,7 @@ class Dataset:
                 j += 1
             f, base = self._file(int(chunk[i])), int(self._starts[chunk[i]])
             lo, hi = int(rows[i]) - base, int(rows[j - 1]) - base + 1
-            for name in ARRAYS:
+            for name in self.arrays:
                 parts[name].append(f[name][lo:hi])
             i = j
         if not len(rows):
@@ -163,13 +182,21 @@ class Dataset:
             return {k: np.empty((0, *v.shape), v.dtype) for k, v in empty.items()}
         return {name: np.concatenate(p) for name, p in parts.items()}
 
-    def column(self, name: str) -> np.ndarray:
-        """One array of every sample (``data.column("seam_point_laser")``: (n, 2))."""
-        if name not in ARRAYS:
-            raise KeyError(f"no array {name!r}; arrays: {', '.join(ARRAYS)}")
+    def column(self, name: str, stop: int | None = None) -> np.ndarray:
+        """One array of every sample (``data.column("seam_point_laser")``: (n, 2)), or of the
+        first ``stop`` samples."""
+        if name not in self.arrays:
+            raise KeyError(f"no array {name!r}; arrays: {', '.join(self.arrays)}")
         if not self._counts:
             return self[0:0][name]
-        return np.concatenate([self._file(k)[name][:] for k in range(len(self._counts))])
+        end = len(self) if stop is None else max(0, min(stop, len(self)))
+        parts = []
+        for k in range(len(self._counts)):
+            lo = int(self._starts[k])
+            if lo >= end:
+                break
+            parts.append(self._file(k)[name][: end - lo])
+        return np.concatenate(parts) if parts else self[0:0][name]
 
     def joint_name(self, code: int) -> str:
         return FAMILIES[int(code)]
@@ -201,17 +228,29 @@ def info(path: str | Path, sample_limit: int = 10_000) -> str:
             lines.append(
                 "joints: " + ", ".join(f"{FAMILIES[j]} {c}" for j, c in enumerate(counts) if c)
             )
-            head = data[: min(n, sample_limit)]
-            seam = head["seam_point_laser"]
+            seam = data.column("seam_point_laser", sample_limit)
+            valid = data.column("valid", sample_limit)
+            tack = data.column("tack", sample_limit)
             has_seam = np.isfinite(seam[:, 0])
             lines.append(
-                f"over the first {len(seam)} samples: {head['valid'].mean():.1%} of the points "
+                f"over the first {len(seam)} samples: {valid.mean():.1%} of the points "
                 f"valid; seam point range z_L {np.nanmin(seam[:, 1]) if has_seam.any() else 0:.2f}"
                 f"..{np.nanmax(seam[:, 1]) if has_seam.any() else 0:.2f} mm, lateral y_L "
                 f"{np.nanmin(seam[:, 0]) if has_seam.any() else 0:.2f}.."
                 f"{np.nanmax(seam[:, 0]) if has_seam.any() else 0:.2f} mm; "
-                f"{head['tack'].mean():.1%} cross a tack"
+                f"{tack.mean():.1%} cross a tack"
             )
+            if spec.images:
+                c = spec.camera
+                truth = np.isfinite(data.column("image_truth_row", sample_limit))
+                measured = data.column("image_valid", sample_limit)
+                reflection = data.column("image_reflection", sample_limit)
+                lines.append(
+                    f"images {c.columns} x {c.rows} (uint16, {c.bit_depth} bits): "
+                    f"{truth.mean():.1%} of the columns see the stripe, the {c.method} detector "
+                    f"measures {measured[truth].mean() if truth.any() else 0:.1%} of those; "
+                    f"{reflection.any(axis=1).mean():.1%} of the images show a false stripe"
+                )
         lines.append(
             f"families {', '.join(spec.joint.families)}; presets {', '.join(spec.sensor.presets)}"
             f"; spec: {data.path / 'spec.toml'}"

@@ -9,11 +9,12 @@ Checks are strict (a number is never a boolean or a string) and an error names t
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 import tomllib
 from pathlib import Path
-from typing import TYPE_CHECKING, Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any, Literal
 
 from pydantic import (
     AfterValidator,
@@ -42,8 +43,23 @@ MAX_CHUNK_POINTS = 8_000_000
 #: Largest ``--n`` (the sample index is an int64; beyond this the disk is the limit anyway).
 MAX_SAMPLES = 1_000_000_000
 
+#: The ``[noise]`` of a spec with every knob off: the exact stripe of the drawn joint,
+#: pixel-quantized.
+NOISE_OFF = {
+    "range_sigma_mm": 0.0,
+    "speckle_sigma_mm": 0.0,
+    "dropout_rate": 0.0,
+    "secondary_probability": 0.0,
+    "outlier_fraction": 0.0,
+}
+
 #: Tilts and yaws at or beyond this put the laser plane along the seam.
 MAX_TILT_DEG = 80.0
+
+
+#: Largest number of image pixels one chunk holds in memory while it is built (128 MB of
+#: uint16): with ``images``, ``chunk_size * rows * columns`` above it is refused.
+MAX_CHUNK_PIXELS = 64 * 1024 * 1024
 
 
 class SpecError(SeamtrackError):
@@ -105,11 +121,18 @@ def _tilt(r: tuple[float, float]) -> tuple[float, float]:
     return r
 
 
+def _wavelength(r: tuple[float, float]) -> tuple[float, float]:
+    if r[0] < 200 or r[1] > 2000:
+        raise ValueError(f"must lie in [200, 2000] nm, got [{r[0]:g}, {r[1]:g}]")
+    return r
+
+
 NonNegativeRange = Annotated[Range, AfterValidator(_nonnegative)]
 PositiveRange = Annotated[Range, AfterValidator(_positive)]
 FractionRange = Annotated[Range, AfterValidator(_fraction)]
 AngleRange = Annotated[Range, AfterValidator(_open_angle)]
 TiltRange = Annotated[Range, AfterValidator(_tilt)]
+WavelengthRange = Annotated[Range, AfterValidator(_wavelength)]
 
 
 class _Section(BaseModel):
@@ -175,7 +198,24 @@ class PathSpec(_Section):
 
 
 class PartSpec(_Section):
-    materials: Names = ["mild-steel", "stainless-steel", "aluminium"]
+    materials: Names = ["mill-scale steel", "blasted steel", "brushed stainless"]
+
+    @model_validator(mode="after")
+    def _known(self) -> PartSpec:
+        from seamtrack.sensing.materials import MATERIALS
+
+        for i, name in enumerate(self.materials):
+            if name not in MATERIALS:
+                import difflib
+
+                close = difflib.get_close_matches(name, list(MATERIALS), n=1)
+                raise _FieldError(
+                    f"materials.{i}",
+                    f"unknown material {name!r}",
+                    (f"did you mean {close[0]!r}? " if close else "")
+                    + f"use one of {', '.join(repr(k) for k in MATERIALS)}",
+                )
+        return self
 
 
 class SensorSpec(_Section):
@@ -212,6 +252,27 @@ class NoiseSpec(_Section):
     outlier_fraction: FractionRange = (0.0, 0.01)
 
 
+class CameraSpec(_Section):
+    """The camera of ``--images`` (:class:`seamtrack.sensing.camera.Camera`), its knobs drawn
+    per sample, and the peak detector that measures each image as a sensor's firmware does."""
+
+    rows: Annotated[int, Field(strict=True, ge=3, le=4096)] = 512
+    columns: Annotated[int, Field(strict=True, ge=3, le=4096)] = 1024
+    bit_depth: Annotated[int, Field(strict=True, ge=1, le=16)] = 10
+    f_number: PositiveRange = (4.0, 16.0)
+    wavelength_nm: WavelengthRange = (660.0, 660.0)
+    line_thickness_mm: PositiveRange = (0.1, 0.3)
+    exposure: PositiveRange = (0.3, 0.8)
+    full_well_e: PositiveRange = (10_000.0, 10_000.0)
+    read_noise_e: NonNegativeRange = (0.0, 10.0)
+    ambient: NonNegativeRange = (0.0, 0.005)
+    speckle_probability: FractionRange = (1.0, 1.0)
+    shot_noise_probability: FractionRange = (1.0, 1.0)
+    method: Literal["centroid", "gaussian", "steger"] = "centroid"
+    threshold: Annotated[float, Field(strict=True, ge=0, le=1, allow_inf_nan=False)] = 0.03
+    choose: Literal["strongest", "first", "widest"] = "strongest"
+
+
 class DatasetSpec(_Section):
     """A validated dataset spec (frozen)."""
 
@@ -223,6 +284,22 @@ class DatasetSpec(_Section):
     part: PartSpec = PartSpec()
     sensor: SensorSpec = SensorSpec()
     noise: NoiseSpec = NoiseSpec()
+    images: Flag = False
+    camera: CameraSpec = CameraSpec()
+
+    @model_validator(mode="before")
+    @classmethod
+    def _image_chunks(cls, data: Any) -> Any:
+        """With images and no chunk size given, chunks as large as :data:`MAX_CHUNK_PIXELS`
+        allows (at most the default 1024)."""
+        if isinstance(data, dict) and data.get("images") is True and "chunk_size" not in data:
+            given = data.get("camera")
+            camera = given if isinstance(given, dict) else {}
+            rows, columns = camera.get("rows", 512), camera.get("columns", 1024)
+            if isinstance(rows, int) and isinstance(columns, int) and rows > 0 and columns > 0:
+                size = max(1, min(1024, MAX_CHUNK_PIXELS // (rows * columns)))
+                data = {**data, "chunk_size": size}
+        return data
 
     @model_validator(mode="after")
     def _chunk_fits(self) -> DatasetSpec:
@@ -233,7 +310,36 @@ class DatasetSpec(_Section):
                 f"{MAX_CHUNK_POINTS:,} points in one chunk",
                 f"use chunk_size <= {MAX_CHUNK_POINTS // self.rays}",
             )
+        pixels = self.camera.rows * self.camera.columns
+        if self.images and self.chunk_size * pixels > MAX_CHUNK_PIXELS:
+            raise _FieldError(
+                "chunk_size",
+                f"{self.chunk_size} images of {self.camera.rows} x {self.camera.columns} are more "
+                f"than {MAX_CHUNK_PIXELS:,} pixels in one chunk",
+                f"use chunk_size <= {max(1, MAX_CHUNK_PIXELS // pixels)}",
+            )
+        if self.images:
+            self._check_camera()
         return self
+
+    def _check_camera(self) -> None:
+        """The spec's laser line fits each preset's field (:meth:`Camera.check`)."""
+        from seamtrack.errors import SensorGeometryError
+        from seamtrack.sensing.camera import Camera
+        from seamtrack.sensing.sensor import preset
+
+        c = self.camera
+        # A thick line is wide at its waist, a thin one diverges most: check both ends.
+        for name, thickness in itertools.product(self.sensor.presets, c.line_thickness_mm):
+            try:
+                Camera(rows=c.rows, columns=c.columns, wavelength_nm=c.wavelength_nm[1],
+                       line_thickness_mm=thickness).check(preset(name))  # fmt: skip
+            except SensorGeometryError as exc:
+                raise _FieldError(
+                    "camera.line_thickness_mm",
+                    f"{exc.message} with preset {name!r}",
+                    exc.fix or "give a thinner line",
+                ) from None
 
     def canonical(self) -> str:
         """The spec as sorted JSON, every default filled in: equal specs give equal text."""
@@ -259,6 +365,7 @@ _SECTIONS = {
     "part": PartSpec,
     "sensor": SensorSpec,
     "noise": NoiseSpec,
+    "camera": CameraSpec,
 }
 
 
@@ -302,6 +409,14 @@ def parse_spec(data: dict[str, Any], source: str = "spec") -> DatasetSpec:
         ) from None
 
 
+def with_images(spec: DatasetSpec) -> DatasetSpec:
+    """``spec`` with ``images = true`` (what ``--images`` does): the keys it was given stay, a
+    chunk size it was not given follows the image size."""
+    if spec.images:
+        return spec
+    return parse_spec({**spec.model_dump(mode="json", exclude_unset=True), "images": True})
+
+
 def load_spec(path: str | Path) -> DatasetSpec:
     """Read and validate a spec file."""
     p = Path(path)
@@ -331,6 +446,8 @@ TEMPLATE = """\
 seed = 0            # the same spec and seed give the same bytes, on any number of workers
 rays = 1024         # laser rays per profile (points per sample)
 chunk_size = 1024   # samples per HDF5 file (chunk-000000.h5, ...); a killed run redoes one chunk
+                    # (with images and no chunk_size: as many as 64 Mpixel hold, e.g. 128)
+images = false      # camera images too ([camera] below); the --images flag sets it
 
 [joint]
 # Families drawn with equal odds (or give weights = [...], one per family). "flat" is a plate
@@ -354,8 +471,10 @@ kinds = ["straight"]             # geometry mode extrudes the cross-section: str
 position_mm = [0.0, 200.0]       # where along the seam the profile is taken (T_world_seam)
 
 [part]
-materials = ["mild-steel", "stainless-steel", "aluminium"]  # a label: geometry mode has no
-                                                            # reflectance model
+# Reflectance models of seamtrack.sensing.materials (they shape the images; the geometric
+# profile does not depend on them): "mill-scale steel", "blasted steel", "brushed stainless",
+# "bright aluminium", "white matte".
+materials = ["mill-scale steel", "blasted steel", "brushed stainless"]
 
 [sensor]
 presets = ["paper"]              # seamtrack sensor --list
@@ -375,4 +494,24 @@ speckle_correlation_rays = 8.0       # its correlation length, rays
 dropout_rate = [0.0, 0.02]           # chance a point is lost at normal incidence
 secondary_probability = [0.0, 0.05]  # chance a ray shows its specular secondary reflection
 outlier_fraction = [0.0, 0.01]       # points replaced by a spurious peak on the chip
+
+[camera]
+# Used with images = true (--images): the image of the stripe on the drawn joint, rendered as in
+# image mode (seamtrack.sensing.render), the profile measured from it by the peak detector below.
+rows = 512                       # pixels along the range (x_c); the chip keeps its size
+columns = 1024                   # pixels along the stripe (z_c)
+bit_depth = 10                   # stored as uint16 grey levels 0 .. 2^bit_depth - 1
+f_number = [4.0, 16.0]           # working f-number: diffraction blur and speckle grain
+wavelength_nm = 660.0
+line_thickness_mm = [0.1, 0.3]   # 1/e^2 thickness of the laser sheet at its waist
+exposure = [0.3, 0.8]            # peak of a white plane at the range centre, share of full well
+full_well_e = 10000.0
+read_noise_e = [0.0, 10.0]       # electrons RMS
+ambient = [0.0, 0.005]           # ambient or arc light, share of full well on every pixel
+speckle_probability = 1.0        # chance a sample's image has laser speckle (0: never)
+shot_noise_probability = 1.0     # chance it has shot noise
+method = "centroid"              # peak detector: centroid, gaussian or steger
+threshold = 0.03                 # candidate pixels above this share of full scale (keep it
+                                 # above ambient: dark steel peaks at 0.05-0.2 of full scale)
+choose = "strongest"             # several peaks in a column: strongest, first or widest
 """

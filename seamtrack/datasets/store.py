@@ -32,7 +32,6 @@ from seamtrack._version import __version__
 from seamtrack.datasets import joints
 from seamtrack.datasets.generate import PARAM_NAMES, generate
 from seamtrack.datasets.layout import (
-    ARRAYS,
     FORMAT,
     FORMAT_VERSION,
     MANIFEST,
@@ -41,13 +40,14 @@ from seamtrack.datasets.layout import (
     chunk_path,
     read_manifest,
 )
+from seamtrack.datasets.layout import arrays as arrays_of
 from seamtrack.datasets.spec import FAMILIES, MAX_SAMPLES, DatasetSpec, SpecError
 from seamtrack.errors import OutputError
 
 
 def names(spec: DatasetSpec) -> dict[str, Any]:
     """What the integer codes and columns of the arrays mean (stored in every file)."""
-    return {
+    out: dict[str, Any] = {
         "joint_names": list(FAMILIES),
         "feature_names": {f: list(v) for f, v in joints.FEATURES.items()},
         "param_names": list(PARAM_NAMES),
@@ -56,6 +56,17 @@ def names(spec: DatasetSpec) -> dict[str, Any]:
         "preset_names": list(spec.sensor.presets),
         "reason_names": list(REASON_NAMES),
     }
+    if spec.images:
+        from seamtrack.datasets.images import CAMERA_PARAM_NAMES
+
+        out["camera_param_names"] = list(CAMERA_PARAM_NAMES)
+        out["image_levels"] = 2**spec.camera.bit_depth - 1
+    return out
+
+
+#: HDF5 filters of the image array: byte shuffle then deflate at level 1 (the stripe is a few
+#: rows of each column; the rest is dark, so most of an image compresses to nothing).
+IMAGE_COMPRESSION: dict[str, Any] = {"compression": "gzip", "compression_opts": 1, "shuffle": True}
 
 
 def write_chunk(out: Path, spec: DatasetSpec, k: int, arrays: dict[str, np.ndarray]) -> Path:
@@ -66,8 +77,14 @@ def write_chunk(out: Path, spec: DatasetSpec, k: int, arrays: dict[str, np.ndarr
     tmp = out / f".{path.name}.{os.getpid()}.tmp"
     try:
         with h5py.File(tmp, "w") as f:
-            for name in ARRAYS:
-                f.create_dataset(name, data=arrays[name], track_times=False)
+            for name in arrays_of(spec.images):
+                # One HDF5 chunk an image, compressed (mostly dark pixels).
+                filters = (
+                    {"chunks": (1, *arrays[name].shape[1:]), **IMAGE_COMPRESSION}
+                    if name == "image"
+                    else {}
+                )
+                f.create_dataset(name, data=arrays[name], track_times=False, **filters)
             f.attrs["format"] = FORMAT
             f.attrs["seamtrack_version"] = __version__
             f.attrs["spec"] = spec.canonical()
@@ -265,22 +282,11 @@ def _execute(
 def _execute_dask(
     spec: DatasetSpec, out: Path, todo: list[int], counts: list[int], scheduler: str
 ) -> Iterable[int]:
-    from seamtrack.batch.sweep import DASK_CONNECT_TIMEOUT_S
+    from seamtrack.batch.sweep import dask_client
 
-    try:
-        from dask.distributed import Client, as_completed
-    except ImportError:
-        raise SpecError(
-            "Dask is not installed", field="--scheduler", fix="pip install 'seamtrack[dask]'"
-        ) from None
-    try:
-        client = Client(scheduler, timeout=f"{DASK_CONNECT_TIMEOUT_S}s")
-    except OSError as exc:
-        raise SpecError(
-            f"cannot reach the Dask scheduler {scheduler!r}: {exc}",
-            field="--scheduler",
-            fix="start it or give its tcp:// address",
-        ) from None
+    client = dask_client(scheduler)
+    from dask.distributed import as_completed
+
     try:
         futures = {client.submit(make_chunk, spec, k, counts[k], None, pure=False): k
                    for k in todo}  # fmt: skip

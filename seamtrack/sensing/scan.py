@@ -411,8 +411,30 @@ def _apply_stripe_noise(
         reason[take] = Reason.VALID
     idx = np.flatnonzero(reason == Reason.VALID)
     x_c, z_c = sensor.project(points[idx, 0], points[idx, 1])
-    # Range noise is white on the chip; its z_L size at the centre of the depth of field is
-    # the knob, so the chip sigma is that over dz/dx_c there.
+    x_c = chip_noise(sensor, noise, x_c, idx, n, rng)
+    y, z = sensor.triangulate(x_c, z_c)
+    inside = sensor.in_field_of_view(y, z)
+    y, z = sensor.measure(y, z)
+    points[idx, 0] = y
+    points[idx, 1] = z
+    reason[idx[~inside]] = Reason.OUT_OF_RANGE
+    return points, reason
+
+
+def chip_noise(
+    sensor: LaserLineSensor,
+    noise: StripeNoise,
+    x_c: NDArray[np.float64],
+    idx: NDArray[np.intp],
+    n: int,
+    rng: np.random.Generator,
+) -> NDArray[np.float64]:
+    """The range noise, speckle and spurious peaks of ``noise`` on the chip rows ``x_c`` (m,)
+    (mm) of the valid rays ``idx`` (m,) of an ``n``-ray stripe; returns the new ``x_c``.
+
+    Range noise is white on the chip; its z_L size at the centre of the depth of field is the
+    knob, so the chip sigma is that over dz/dx_c there.
+    """
     to_chip = sensor.pixel_pitch_mm[0] / float(
         sensor.local_depth_resolution_mm(sensor.range_center_mm)
     )
@@ -424,13 +446,7 @@ def _apply_stripe_noise(
     if noise.outlier_fraction > 0:
         spurious = rng.random(len(idx)) < noise.outlier_fraction
         x_c = np.where(spurious, rng.uniform(-0.5, 0.5, len(idx)) * sensor.chip_h_mm, x_c)
-    y, z = sensor.triangulate(x_c, z_c)
-    inside = sensor.in_field_of_view(y, z)
-    y, z = sensor.measure(y, z)
-    points[idx, 0] = y
-    points[idx, 1] = z
-    reason[idx[~inside]] = Reason.OUT_OF_RANGE
-    return points, reason
+    return x_c
 
 
 def dropout_probability(dropout_rate: float, cos_incidence: ArrayLike) -> NDArray[np.float64]:
