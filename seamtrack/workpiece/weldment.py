@@ -363,12 +363,20 @@ def seams_of_bodies(
             nearest = min(nearest, (d, i, j))
             if d > max_gap_mm:
                 continue
-            for fa, fb, gap, region in contacts.facing_regions(solids[i], solids[j], max_gap_mm):
+            pieces = [
+                piece
+                for fa, fb, gap, region in contacts.facing_regions(solids[i], solids[j], max_gap_mm)
                 for piece in contacts.region_pieces(
                     (solids[i], solids[j]), (i, j), fa, fb, gap, region, tolerance_mm, spacing_mm
-                ):
-                    for candidate in _candidates(piece, space, thin, min_length_mm):
-                        raw.append(((i, j), candidate))
+                )
+            ]
+            if d <= contacts.ON_TOL_MM and contacts.overlap(solids[i], solids[j]):
+                pieces += contacts.crossing_pieces(
+                    (solids[i], solids[j]), (i, j), tolerance_mm, spacing_mm
+                )
+            for piece in pieces:
+                for candidate in _candidates(piece, space, thin, min_length_mm):
+                    raw.append(((i, j), candidate))
     if not raw:
         if nearest[0] > max_gap_mm:
             if math.isinf(nearest[0]):  # no bounding boxes met: measure every pair
