@@ -623,14 +623,15 @@ def crossing_pieces(
             for j, (face, other) in enumerate(((face_a, solids[1]), (face_b, solids[0]))):
                 normals[:, j] = [face_normal(face, p) for p in points]
                 across = _unit_rows(np.cross(normals[:, j], tangents))
-                signs = set()
+                signs: set[float] = set()
                 for k in probes:  # which side shows, decided where the line runs clear
                     side = _showing_side(face, points[k], normals[k, j], tangents[k], other)
-                    signs.add(None if side is None else float(np.sign(side @ across[k])))
-                if len(signs) != 1 or None in signs:
+                    signs.add(math.nan if side is None else float(np.sign(side @ across[k])))
+                sign = signs.pop() if len(signs) == 1 else math.nan
+                if math.isnan(sign):
                     shown = False
                     break
-                along[:, j] = signs.pop() * across
+                along[:, j] = sign * across
             if not shown:
                 continue
             length = float(np.sum(np.linalg.norm(np.diff(points, axis=0), axis=1)))
