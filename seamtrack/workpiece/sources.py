@@ -221,12 +221,21 @@ def read_bodies(path: Path, field: str = "workpiece.step") -> list[tuple[str, An
             field=field,
             fix="export closed solid bodies, not surfaces or curves",
         )
+    bases = [
+        re.sub(r"[/\s]+", "_", n).strip("_") or f"body{i + 1}" for i, (n, _) in enumerate(found)
+    ]
     out: list[tuple[str, Any]] = []
+    taken = set(bases)  # a repeat's suffix never takes a name another body has in the file
     seen: dict[str, int] = {}
-    for i, (name, solid) in enumerate(found):
-        base = re.sub(r"[/\s]+", "_", name).strip("_") or f"body{i + 1}"
+    for base, (_, solid) in zip(bases, found, strict=True):
         seen[base] = seen.get(base, 0) + 1
-        out.append((base if seen[base] == 1 else f"{base}.{seen[base]}", solid))
+        name = base
+        if seen[base] > 1:
+            while f"{base}.{seen[base]}" in taken:
+                seen[base] += 1
+            name = f"{base}.{seen[base]}"
+            taken.add(name)
+        out.append((name, solid))
     return out
 
 

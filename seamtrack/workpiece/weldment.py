@@ -35,8 +35,13 @@ Ids are ``s1``, ``s2``... in order of the seams' start points (x, then y, then z
 ``body_a/body_b/k`` (bodies in file order, k counting that pair's seams in the same order).
 Seams run from their lexicographically smallest end, like every seam (docs/cad.md).
 
-Only planar contact and facing faces are examined: bodies that touch along curved faces (a
-tube in a saddle), only along a line or at a point give no seam.
+7. Bodies modelled into each other (sharing volume: a tube pushed through a flange's port)
+   are also cut against each other (``contacts.crossing_pieces``): where their surfaces cross,
+   on any surface type, and exactly one side of each body's face shows, the line is a seam
+   (body A taken as the one that ends there), classified and filtered as above.
+
+Bodies that only touch along curved faces (a tube resting in a saddle), along a line or at a
+point give no seam.
 """
 
 from __future__ import annotations
@@ -363,12 +368,20 @@ def seams_of_bodies(
             nearest = min(nearest, (d, i, j))
             if d > max_gap_mm:
                 continue
-            for fa, fb, gap, region in contacts.facing_regions(solids[i], solids[j], max_gap_mm):
+            pieces = [
+                piece
+                for fa, fb, gap, region in contacts.facing_regions(solids[i], solids[j], max_gap_mm)
                 for piece in contacts.region_pieces(
                     (solids[i], solids[j]), (i, j), fa, fb, gap, region, tolerance_mm, spacing_mm
-                ):
-                    for candidate in _candidates(piece, space, thin, min_length_mm):
-                        raw.append(((i, j), candidate))
+                )
+            ]
+            if d <= contacts.ON_TOL_MM and contacts.overlap(solids[i], solids[j]):
+                pieces += contacts.crossing_pieces(
+                    (solids[i], solids[j]), (i, j), tolerance_mm, spacing_mm
+                )
+            for piece in pieces:
+                for candidate in _candidates(piece, space, thin, min_length_mm):
+                    raw.append(((i, j), candidate))
     if not raw:
         if nearest[0] > max_gap_mm:
             if math.isinf(nearest[0]):  # no bounding boxes met: measure every pair
@@ -388,8 +401,8 @@ def seams_of_bodies(
                 fix="check the bodies' placement and units, or raise max_gap_mm",
             )
         raise WorkpieceError(
-            f"{source}: the bodies touch, but nowhere along planar faces (only at points, "
-            "lines or curved faces), so no seam was found",
+            f"{source}: the bodies touch, but nowhere along planar faces or crossing "
+            "surfaces (only at points, lines or curved faces), so no seam was found",
             field=field,
             fix="seams are found between planar faces that touch or face each other",
         )
