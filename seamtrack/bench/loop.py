@@ -156,7 +156,11 @@ def bench_loop(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]:
         return feature
 
     load_before = os.getloadavg()[0]
-    result = run(dataclasses.replace(parts, sense=recording))
+    # The loop's own clock is this process's CPU time: the time on one core, which other jobs
+    # on a shared machine inflate far less than the wall clock (measured beside it).
+    wall_start = time.perf_counter()
+    result = run(dataclasses.replace(parts, sense=recording), clock=time.process_time)
+    wall_clock = time.perf_counter() - wall_start
     s = result.summary
     wall, sensing = float(s["wall_time_s"]), float(s["sense_wall_time_s"])
     simulated = float(s["sim_time_s"])
@@ -176,13 +180,13 @@ def bench_loop(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]:
         parts.robot.T_world_sensor(parts.robot.q_from_world(p)) for p in parts.seam.interpolate(arc)
     ]
     find(scan_mesh(parts.sensor, parts.mesh, poses[0], rays=1024))  # set-up, untimed
-    start = time.perf_counter()
+    start = time.process_time()
     profiles = [scan_mesh(parts.sensor, parts.mesh, T, rays=1024) for T in poses]
-    scan_s = (time.perf_counter() - start) / len(poses)
-    start = time.perf_counter()
+    scan_s = (time.process_time() - start) / len(poses)
+    start = time.process_time()
     for profile in profiles:
         find(profile)
-    extract_s = (time.perf_counter() - start) / len(poses)
+    extract_s = (time.process_time() - start) / len(poses)
 
     # Projected: the same run with extraction at its target (labelled as a projection).
     projected_wall = wall - frames * max(extract_s - EXTRACT_TARGET_MS * 1e-3, 0.0)
@@ -192,11 +196,13 @@ def bench_loop(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]:
         "quick": quick,
         "status": s["status"],
         "simulated_s": simulated,
-        "wall_s": wall,
+        "cpu_s": wall,
+        "wall_clock_s": wall_clock,
         "sensing_s": sensing,
         "frames": frames,
         "control_ticks": ticks,
-        "sim_s_per_wall_s": simulated / wall,
+        "sim_s_per_cpu_s": simulated / wall,
+        "sim_s_per_wall_s": simulated / wall_clock,
         "loop_overhead_fraction": (wall - sensing) / wall,
         "scan_ms_per_frame": 1e3 * scan_s,
         "extract_ms_per_frame": 1e3 * extract_s,
@@ -204,7 +210,7 @@ def bench_loop(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]:
         "tracker_update_ms_per_frame": 1e3 * replay["update"] / frames,
         "scoring_s": replay["scoring"],
         "replay_cpu_s": replay["total_s"],
-        "projected_sim_s_per_wall_s": simulated / projected_wall,
+        "projected_sim_s_per_cpu_s": simulated / projected_wall,
         "projected_loop_overhead_fraction": (projected_wall - projected_sensing) / projected_wall,
         "max_error_mm": float(s["max_error_mm"]),
         "load_average_before": load_before,
@@ -234,12 +240,16 @@ def _markdown(result: dict[str, Any]) -> str:
     return "\n".join(
         [
             f"Machine: {m['cpu']}, {m['cores']} cores, Python {m['python']}; 1-minute load average "
-            f"before the run {row['load_average_before']:.1f}. Command: `seamtrack bench loop`.",
+            f"before the run {row['load_average_before']:.1f}. Command: `seamtrack bench loop`. "
+            "Times are CPU seconds of the one process (the time on one core; other jobs on the "
+            "machine inflate the wall clock, shown beside it).",
             "",
-            "| scene | simulated s | wall s | sim s / wall s | sensing s | loop overhead | "
-            "ray cast ms/frame | extraction ms/frame | control us/tick | frames | max error mm |",
-            "|---|---|---|---|---|---|---|---|---|---|---|",
-            f"| {row['scene']} | {row['simulated_s']:.1f} | {row['wall_s']:.1f} | "
+            "| scene | simulated s | CPU s | sim s / CPU s | wall s | sim s / wall s | sensing s | "
+            "loop overhead | ray cast ms/frame | extraction ms/frame | control us/tick | frames | "
+            "max error mm |",
+            "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+            f"| {row['scene']} | {row['simulated_s']:.1f} | {row['cpu_s']:.1f} | "
+            f"{row['sim_s_per_cpu_s']:.2f} | {row['wall_clock_s']:.1f} | "
             f"{row['sim_s_per_wall_s']:.2f} | {row['sensing_s']:.1f} | "
             f"{100 * row['loop_overhead_fraction']:.0f} % | {row['scan_ms_per_frame']:.3f} | "
             f"{row['extract_ms_per_frame']:.3f} | {row['control_us_per_tick']:.2f} | "
@@ -252,14 +262,14 @@ def _markdown(result: dict[str, Any]) -> str:
             "",
             f"**Projected** (not measured): with extraction at its target "
             f"({result['extract_target_ms']} ms per frame) and everything else as measured, "
-            f"{row['projected_sim_s_per_wall_s']:.1f} simulated s per wall s, loop overhead "
+            f"{row['projected_sim_s_per_cpu_s']:.1f} simulated s per CPU s, loop overhead "
             f"{100 * row['projected_loop_overhead_fraction']:.0f} %.",
             "",
             "| target | measured | |",
             "|---|---|---|",
-            f"| >= {TARGETS['sim_s_per_wall_s']:g} sim s / wall s | "
-            f"{row['sim_s_per_wall_s']:.2f} (projected {row['projected_sim_s_per_wall_s']:.1f}) | "
-            f"{_met(row['sim_s_per_wall_s'] >= TARGETS['sim_s_per_wall_s'])} |",
+            f"| >= {TARGETS['sim_s_per_wall_s']:g} sim s per s on one core | "
+            f"{row['sim_s_per_cpu_s']:.2f} (projected {row['projected_sim_s_per_cpu_s']:.1f}) | "
+            f"{_met(row['sim_s_per_cpu_s'] >= TARGETS['sim_s_per_wall_s'])} |",
             f"| extraction <= ray casting per frame | {row['extract_ms_per_frame']:.3f} vs "
             f"{row['scan_ms_per_frame']:.3f} ms | "
             f"{_met(row['extract_ms_per_frame'] <= row['scan_ms_per_frame'])} |",
@@ -273,7 +283,7 @@ def _markdown(result: dict[str, Any]) -> str:
             "Cost of one control tick on the seam-mode scene (wall time outside sensing / control "
             "ticks; the same scene, tracker and seam on each robot):",
             "",
-            "| robot | control ticks | wall s | sensing s | us per tick | max error mm |",
+            "| robot | control ticks | CPU s | sensing s | us per tick | max error mm |",
             "|---|---|---|---|---|---|",
             *(
                 f"| {t['robot']} | {t['ticks']} | {t['wall_s']:.2f} | {t['sensing_s']:.3f} | "
@@ -319,7 +329,8 @@ TICK_ARM: dict[str, Any] = {"robot.model": "ur10e", "robot.base_origin_mm": [200
 
 
 def tick_cost() -> list[dict[str, Any]]:
-    """Wall time per control tick outside sensing, on the gantry and on the UR10e."""
+    """CPU time per control tick outside sensing (scoring included), on the gantry and on the
+    UR10e."""
     from seamtrack.simulation.assemble import build_parts
     from seamtrack.simulation.loop import run
     from seamtrack.simulation.scene import load_scene
@@ -327,7 +338,7 @@ def tick_cost() -> list[dict[str, Any]]:
     rows = []
     for robot, extra in (("cartesian", {}), ("ur10e", TICK_ARM)):
         parts = build_parts(load_scene("paper-verification", {**TICK_SCENE, **extra}))
-        s = run(parts).summary
+        s = run(parts, clock=time.process_time).summary
         ticks = int(round(s["sim_time_s"] / parts.robot.control_period_s)) + 1
         wall, sense = float(s["wall_time_s"]), float(s["sense_wall_time_s"])
         rows.append(
