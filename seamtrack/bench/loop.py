@@ -280,8 +280,8 @@ def _markdown(result: dict[str, Any]) -> str:
             f"{100 * row['loop_overhead_fraction']:.0f} % | "
             f"{_met(row['loop_overhead_fraction'] <= TARGETS['loop_overhead_fraction'])} |",
             "",
-            "Cost of one control tick on the seam-mode scene (wall time outside sensing / control "
-            "ticks; the same scene, tracker and seam on each robot):",
+            "Cost of one control tick on the seam-mode scene (CPU time outside sensing, scoring "
+            "included, / control ticks; the same scene, tracker and seam on each robot):",
             "",
             "| robot | control ticks | CPU s | sensing s | us per tick | max error mm |",
             "|---|---|---|---|---|---|",
