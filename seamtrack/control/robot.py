@@ -34,6 +34,8 @@ PAPER_STROKE_MM = (800.0, 150.0, 150.0)
 PAPER_VELOCITY_MAX_MM_S = (20.0, 10.0, 10.0)
 PAPER_ACCELERATION_MAX_MM_S2 = (30.0, 15.0, 15.0)
 
+_NO_FEED_FORWARD = (0.0, 0.0, 0.0)
+
 
 @dataclass(frozen=True)
 class MoveCommand:
@@ -286,11 +288,18 @@ class CartesianRobot:
         servo = self.servo.new_state(qs)
         return RobotState(servo.q, servo.v, RobotState(q=list(qs), v=[0.0, 0.0, 0.0]), servo)
 
-    def _step_servo(self, state: RobotState, command: MoveCommand | None) -> None:
+    def _step_servo(
+        self,
+        state: RobotState,
+        target: tuple[float, float, float] | None,
+        speed: float,
+        feed_forward: tuple[float, float, float],
+        stop_at_target: bool,
+    ) -> None:
         """The interpolator moves the set-point; the position loops move the axes after it."""
         assert self._ideal is not None and self.servo is not None
         assert state.setpoint is not None and state.servo is not None
-        self._ideal.step(state.setpoint, command)
+        self._ideal.step_move(state.setpoint, target, speed, feed_forward, stop_at_target)
         self.servo.follow(state.servo, state.setpoint.q)
         lo, hi = self.position_min_mm, self.position_max_mm
         q = state.servo.q
@@ -299,42 +308,67 @@ class CartesianRobot:
 
     def step(self, state: RobotState, command: MoveCommand | None) -> None:
         """Advance ``state`` by one control period under ``command`` (None: brake to rest)."""
+        if command is None:
+            self.step_move(state, None, 0.0, _NO_FEED_FORWARD, False)
+        else:
+            self.step_move(
+                state, command.target, command.speed, command.feed_forward, command.stop_at_target
+            )
+
+    def step_move(
+        self,
+        state: RobotState,
+        target: tuple[float, float, float] | None,
+        speed: float,
+        feed_forward: tuple[float, float, float],
+        stop_at_target: bool,
+    ) -> None:
+        """:meth:`step` on the fields of a :class:`MoveCommand` (``target`` None: brake to
+        rest), so that the loop's fast path creates no command object per tick."""
         if self._ideal is not None:
-            self._step_servo(state, command)
+            self._step_servo(state, target, speed, feed_forward, stop_at_target)
             return
         dt = self.control_period_s
         q, v = state.q, state.v
         vmax, amax = self.velocity_max_mm_s, self.acceleration_max_mm_s2
         lo, hi = self.position_min_mm, self.position_max_mm
-        if command is None:
+        if target is None:
             desired = [0.0, 0.0, 0.0]
         else:
-            ex = command.target[0] - q[0]
-            ey = command.target[1] - q[1]
-            ez = command.target[2] - q[2]
+            ex = target[0] - q[0]
+            ey = target[1] - q[1]
+            ez = target[2] - q[2]
             dist = math.sqrt(ex * ex + ey * ey + ez * ez)
-            ff = command.feed_forward
+            ff = feed_forward
             if dist > 0.0:
                 ux, uy, uz = ex / dist, ey / dist, ez / dist
                 # Path speed limited by every axis' velocity limit along this direction.
-                speed = command.speed
                 a_path = math.inf
+                # (``b if b < a else a`` is ``min(a, b)``, exactly, without the call: this runs
+                # every control tick.)
                 au = abs(ux)
                 if au > 1e-12:
-                    speed = min(speed, vmax[0] / au)
-                    a_path = min(a_path, amax[0] / au)
+                    c = vmax[0] / au
+                    speed = c if c < speed else speed
+                    a_path = amax[0] / au
                 au = abs(uy)
                 if au > 1e-12:
-                    speed = min(speed, vmax[1] / au)
-                    a_path = min(a_path, amax[1] / au)
+                    c = vmax[1] / au
+                    speed = c if c < speed else speed
+                    c = amax[1] / au
+                    a_path = c if c < a_path else a_path
                 au = abs(uz)
                 if au > 1e-12:
-                    speed = min(speed, vmax[2] / au)
-                    a_path = min(a_path, amax[2] / au)
-                if command.stop_at_target:
-                    speed = min(speed, _stop_speed(dist, a_path, dt))
+                    c = vmax[2] / au
+                    speed = c if c < speed else speed
+                    c = amax[2] / au
+                    a_path = c if c < a_path else a_path
+                if stop_at_target:
+                    c = _stop_speed(dist, a_path, dt)
+                    speed = c if c < speed else speed
                 # Never step past the target in one tick.
-                speed = min(speed, dist / dt)
+                c = dist / dt
+                speed = c if c < speed else speed
                 desired = [ff[0] + ux * speed, ff[1] + uy * speed, ff[2] + uz * speed]
             else:
                 desired = [ff[0], ff[1], ff[2]]
@@ -348,16 +382,23 @@ class CartesianRobot:
         free = self._free_travel
         for i in range(3):
             vd = desired[i] * scale
+            qi = q[i]
+            lo_i, hi_i = lo[i], hi[i]
             # Keep the ability to stop before the axis travel ends (near an end stop only).
-            if vd > 0.0 and hi[i] - q[i] < free[i]:
-                vd = min(vd, _stop_speed(hi[i] - q[i], amax[i], dt))
-            elif vd < 0.0 and q[i] - lo[i] < free[i]:
-                vd = max(vd, -_stop_speed(q[i] - lo[i], amax[i], dt))
+            if vd > 0.0 and hi_i - qi < free[i]:
+                vd = min(vd, _stop_speed(hi_i - qi, amax[i], dt))
+            elif vd < 0.0 and qi - lo_i < free[i]:
+                vd = max(vd, -_stop_speed(qi - lo_i, amax[i], dt))
             dv_max = amax[i] * dt
-            vi = v[i] + min(max(vd - v[i], -dv_max), dv_max)
-            qi = q[i] + vi * dt
+            vi = v[i]
+            change = vd - vi  # clipped to +-dv_max: min(max(change, -dv_max), dv_max)
+            change = -dv_max if -dv_max > change else change
+            change = dv_max if dv_max < change else change
+            vi += change
+            qi += vi * dt
             # Rounding can leave a sub-nanometre overshoot: clamp the position to the end stop
             # (the velocity is already the last braking step; zeroing it would be a jump).
-            qi = min(max(qi, lo[i]), hi[i])
+            qi = lo_i if lo_i > qi else qi
+            qi = hi_i if hi_i < qi else qi
             q[i] = qi
             v[i] = vi

@@ -146,10 +146,11 @@ class TrajectoryTracker:
         self._path: list[FloatArray] = [start]
         self._s: list[float] = [0.0]
         self._s_set = 0.0
+        self._segments: dict[int, tuple[float, ...]] = {}  # _at_floats' cache, by segment
         self._seen_seam = False
         self._lost = False
         self._held: list[FloatArray] = []
-        self._tcp_now = start
+        self._tcp_now: tuple[float, ...] = tuple(start.tolist())
         program = context.tool_program if context.turns_tool else None
         self._program = program
         self._rotation: FloatArray | None = None
@@ -166,7 +167,7 @@ class TrajectoryTracker:
         point = np.asarray(measurement.point_world, dtype=float)
         if not self.use_capture_pose:
             # Naive: pretend the frame was taken where the robot is now.
-            point = point + (self._tcp_now - measurement.tcp_world)
+            point = point + (np.asarray(self._tcp_now) - measurement.tcp_world)
         step = float(np.linalg.norm(point - self._path[-1]))
         if step < self.min_spacing_mm:
             self._lost = False
@@ -194,6 +195,7 @@ class TrajectoryTracker:
         self._raw.append(point)
         self._path.append(point)
         self._s.append(self._s[-1] + step)
+        self._segments.clear()  # the path changes (smoothing, trimming): index by index
         self._smooth_tail()
         self._trim()
         self._corner_envelope()
@@ -272,7 +274,28 @@ class TrajectoryTracker:
     def command(
         self, t_s: float, tcp_world: FloatArray, tcp_velocity_world: FloatArray
     ) -> Command | None:
-        self._tcp_now = tcp_world
+        x, y, z = np.asarray(tcp_world, dtype=float).tolist()
+        move = self.command_floats(x, y, z)
+        if move is None:
+            return None
+        tx, ty, tz, speed, fx, fy, fz, stop = move
+        return Command(
+            np.array((tx, ty, tz)),
+            speed,
+            velocity_ff_world=np.array((fx, fy, fz)),
+            stop_at_target=stop,
+            rotation_world=self._rotation,
+        )
+
+    def command_floats(
+        self, x: float, y: float, z: float
+    ) -> tuple[float, float, float, float, float, float, float, bool] | None:
+        """:meth:`command` on plain floats, for the loop's fast path (no objects per tick).
+
+        Returns the target (3 floats, world), the speed, the feed-forward (3 floats, world) and
+        ``stop_at_target``, or None; the commanded rotation is :attr:`rotation_world`.
+        """
+        self._tcp_now = (x, y, z)
         if not self._seen_seam:
             return None
         # The set-point may run up to bridge_mm past the newest stored point: while the seam is
@@ -280,33 +303,34 @@ class TrajectoryTracker:
         # room to that limit is what lets it keep speed with a short look-ahead.
         s_limit = self._s[-1] - (0.0 if self._lost else self.end_margin_mm) + self.bridge_mm
         # Set-point speed: ramp up at the acceleration limit, brake to stop at s_limit.
-        room = max(s_limit - self._s_set, 0.0)
-        wanted = min(
-            self.speed, math.sqrt(2.0 * self.accel * room), self._corner_speed(self._s_set)
-        )
+        s_set, dt = self._s_set, self.dt
+        room = max(s_limit - s_set, 0.0)
+        env = self._env_s
+        corner = math.inf if not env or s_set > env[-1] else self._corner_speed(s_set)
+        wanted = min(self.speed, math.sqrt(2.0 * self.accel * room), corner)
         # Speed up or brake at most at the acceleration limit: a limit that appears late (a
         # corner just measured) is met as soon as braking allows, never by a jump in speed.
-        dv = self.accel * self.dt
-        self._v_set = min(max(wanted, self._v_set - dv), self._v_set + dv)
-        step = min(self._v_set * self.dt, room)
+        dv = self.accel * dt
+        v_set = self._v_set
+        self._v_set = v_set = min(max(wanted, v_set - dv), v_set + dv)
+        step = min(v_set * dt, room)
         moving = step > 0.0
-        self._s_set += step
-        target, tangent = self._at(self._s_set)
-        ff = tangent * (step / self.dt)
-        error = math.dist(target.tolist(), tcp_world.tolist())
+        self._s_set = s_set = s_set + step
+        tx, ty, tz, dx, dy, dz = self._at_floats(s_set)
+        rate = step / dt
+        error = math.dist((tx, ty, tz), (x, y, z))
         if self._program is not None:
             self._tick += 1
             if self._tick % self._orient_every == 0:
                 self._rotation, self._s_program = self._program.rotation_near(
-                    target, self._s_program
+                    np.array((tx, ty, tz)), self._s_program
                 )
-        return Command(
-            target,
-            self.gain_1_s * error,
-            velocity_ff_world=ff,
-            stop_at_target=not moving,
-            rotation_world=self._rotation,
-        )
+        return (tx, ty, tz, self.gain_1_s * error, dx * rate, dy * rate, dz * rate, not moving)
+
+    @property
+    def rotation_world(self) -> FloatArray | None:
+        """The tool rotation the tracker commands (None: keep it)."""
+        return self._rotation
 
     # ----------------------------------------------------------------- path
     def _end_direction(self) -> FloatArray:
@@ -335,6 +359,34 @@ class TrajectoryTracker:
         direction = np.linalg.svd(window - centre, full_matrices=False)[2][0]
         v = point - centre
         return float(np.linalg.norm(v - (v @ direction) * direction))
+
+    def _at_floats(self, s: float) -> tuple[float, float, float, float, float, float]:
+        """:meth:`_at` as six floats (the same arithmetic, element by element), with the
+        segments and the end direction cached until the stored path changes."""
+        knots = self._s
+        if len(knots) < 2:
+            px, py, pz = self._path[0].tolist()
+            return px, py, pz, 0.0, 0.0, 0.0
+        cache = self._segments
+        if s > knots[-1]:
+            end = cache.get(-1)
+            if end is None:
+                end = (*self._path[-1].tolist(), *self._end_direction().tolist())
+                cache[-1] = end
+            ax, ay, az, dx, dy, dz = end
+            k = s - knots[-1]
+            return ax + k * dx, ay + k * dy, az + k * dz, dx, dy, dz
+        i = min(max(bisect.bisect_right(knots, s) - 1, 0), len(knots) - 2)
+        seg = cache.get(i)
+        if seg is None:
+            a, b = self._path[i], self._path[i + 1]
+            length = knots[i + 1] - knots[i]
+            direction = (b - a) / length if length > 0 else np.zeros(3)
+            seg = (*a.tolist(), *direction.tolist())
+            cache[i] = seg
+        ax, ay, az, dx, dy, dz = seg
+        k = s - knots[i]
+        return ax + k * dx, ay + k * dy, az + k * dz, dx, dy, dz
 
     def _at(self, s: float) -> tuple[FloatArray, FloatArray]:
         """Point and unit direction on the stored path at arc length s (extrapolated past

@@ -33,12 +33,14 @@ from numpy.typing import NDArray
 
 from seamtrack import constants
 from seamtrack.control.orientation import is_closed
-from seamtrack.control.robot import MoveCommand
+from seamtrack.control.robot import CartesianRobot, MoveCommand
 from seamtrack.control.tracking import Command, Measurement, TrackerContext
+from seamtrack.control.trajectory import TrajectoryTracker
 from seamtrack.errors import PluginRuntimeError, plugin_failed
 from seamtrack.geometry.seam import Seam
 from seamtrack.geometry.torch import torch_angles
 from seamtrack.simulation.assemble import LoopSettings, Parts, build_parts
+from seamtrack.simulation.progress import ProgressTracker
 from seamtrack.simulation.scene import Scene, load_scene
 from seamtrack.simulation.scoring import orientation_summary, torch_axes, with_joints
 
@@ -258,12 +260,25 @@ def run(
     sense_time = 0.0
     tick = 0
     closed = is_closed(seam)
+    progress_near = ProgressTracker(seam).closest_near  # Seam.closest_near, the same numbers
     unrotated = bool(np.array_equal(R, np.eye(3))) and not turns_tool
     p0x, p0y, p0z = p0.tolist()
+    # The fast path: the built-in trajectory tracker on an unrotated gantry, on plain floats
+    # (no arrays or command objects per tick); the same arithmetic, so the same numbers.
+    fast = unrotated and type(tracker) is TrajectoryTracker and type(robot) is CartesianRobot
+    fast = fast and bool(robot._unrotated)
+    sx, sy, sz = robot._base_shift if fast else (0.0, 0.0, 0.0)
+    command_floats: Any = tracker.command_floats if fast else None  # type: ignore[attr-defined]
+    step_move: Any = robot.step_move if fast else None
+    within_travel = robot.within_travel
+    log_tcp, log_target = tcp_log.extend, target_log.extend
+    tcp: Any = None
     for tick in range(max_ticks + 1):
         t = tick * dt
         q = state.q
-        if unrotated:  # the usual robot: spare the matrix products on this hot path
+        if fast:
+            x, y, z = tcp_list = [q[0] + p0x, q[1] + p0y, q[2] + p0z]
+        elif unrotated:  # the usual robot: spare the matrix products on this hot path
             tcp_list = [q[0] + p0x, q[1] + p0y, q[2] + p0z]
             tcp = np.array(tcp_list)
             vel = np.array(state.v)
@@ -277,6 +292,8 @@ def run(
             sense_start = clock()
             feature = parts.sense(T_ws, t)
             sense_time += clock() - sense_start
+            if fast:
+                tcp = np.array(tcp_list)
             pending.append(Measurement(feature, t, t + cfg.latency_s, T_ws, tcp))
             frame_t.append(t)
             frame_found.append(1 if feature else 0)
@@ -288,24 +305,50 @@ def run(
                 tracker.update(measurement)
             except Exception as exc:
                 raise plugin_failed("tracker.name", name, "update", t, exc) from exc
-        try:
-            cmd = tracker.command(t, tcp, vel)
-        except Exception as exc:
-            raise plugin_failed("tracker.name", name, "command", t, exc) from exc
-        if cmd is not last_cmd:
-            last_cmd = cmd
-            move = None if cmd is None else _to_move(robot, _checked(cmd, name, t, last_rot))
-            last_rot = None if cmd is None else cmd.rotation_world
-            if move is not None and not robot.within_travel(move.target):
-                status = "limit_violation"
-        tcp_log.extend(tcp_list)
-        if turns_tool:
-            axis_log.extend((R @ state.R[:, 2]).tolist())
-            joint_log.extend(state.joints.tolist())
-        target_log.extend(nan3 if cmd is None else np.asarray(cmd.target_world).tolist())
-        if status:
-            break
-        robot.step(state, move)
+        if fast:
+            try:
+                out = command_floats(x, y, z)
+            except Exception as exc:
+                raise plugin_failed("tracker.name", name, "command", t, exc) from exc
+            log_tcp(tcp_list)
+            if out is None:
+                log_target(nan3)
+                if status:
+                    break
+                step_move(state, None, 0.0, (0.0, 0.0, 0.0), False)
+            else:
+                tx, ty, tz, speed, fx, fy, fz, stop = out
+                if not (0.0 < speed < math.inf and math.isfinite(tx + ty + tz + fx + fy + fz)):
+                    # What the reference path would refuse, refused the same way.
+                    ff_world = np.array((fx, fy, fz))
+                    refused = Command(np.array((tx, ty, tz)), speed, ff_world, stop)
+                    _checked(refused, name, t)
+                log_target((tx, ty, tz))
+                base_target = (tx + sx, ty + sy, tz + sz)
+                if not within_travel(base_target):
+                    status = "limit_violation"
+                if status:
+                    break
+                step_move(state, base_target, speed, (fx, fy, fz), stop)
+        else:
+            try:
+                cmd = tracker.command(t, tcp, vel)
+            except Exception as exc:
+                raise plugin_failed("tracker.name", name, "command", t, exc) from exc
+            if cmd is not last_cmd:
+                last_cmd = cmd
+                move = None if cmd is None else _to_move(robot, _checked(cmd, name, t, last_rot))
+                last_rot = None if cmd is None else cmd.rotation_world
+                if move is not None and not robot.within_travel(move.target):
+                    status = "limit_violation"
+            tcp_log.extend(tcp_list)
+            if turns_tool:
+                axis_log.extend((R @ state.R[:, 2]).tolist())
+                joint_log.extend(state.joints.tolist())
+            target_log.extend(nan3 if cmd is None else np.asarray(cmd.target_world).tolist())
+            if status:
+                break
+            robot.step(state, move)
         if not tick % WALL_CHECK_TICKS and clock() - wall_start > cfg.wall_time_limit_s:
             status, stop_reason = "stalled", f"wall-clock limit {cfg.wall_time_limit_s:g} s"
             break
@@ -313,7 +356,7 @@ def run(
         if tick % check_every == 0:
             at_rest = math.sqrt(sum(v * v for v in state.v)) <= constants.AT_REST_SPEED_MM_S
             rest_since = (rest_since if rest_since is not None else t) if at_rest else None
-            s_now = seam.closest_near(tcp, s_now)
+            s_now = progress_near(tcp_list, s_now)
             check_t.append(t)
             check_s.append(s_now)
             if s_now > s_best + constants.PROGRESS_EPS_MM:

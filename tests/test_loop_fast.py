@@ -1,0 +1,99 @@
+"""The loop's fast path (built-in trajectory tracker on a gantry, plain floats) against the
+reference path (the same tracker seen through the public tracker protocol), and the progress
+kernel against :meth:`Seam.closest_near`: the same numbers, to the last bit."""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import numpy as np
+import pytest
+
+from seamtrack.control.trajectory import TrajectoryTracker
+from seamtrack.geometry.seam import Seam
+from seamtrack.simulation.assemble import build_parts
+from seamtrack.simulation.loop import run
+from seamtrack.simulation.progress import ProgressTracker
+from seamtrack.simulation.scene import load_scene
+
+#: The paper's curve, 25 mm of it: about 5 s simulated, with a corner envelope and an end.
+SHORT: dict[str, Any] = {"seam.length_mm": 25.0, "tracker.name": "trajectory"}
+
+
+class Delegating:
+    """A user's tracker as the loop sees one: the built-in tracker behind the protocol only."""
+
+    def __init__(self, inner: Any):
+        self.inner = inner
+
+    def reset(self, context: Any) -> None:
+        self.inner.reset(context)
+
+    def update(self, measurement: Any) -> None:
+        self.inner.update(measurement)
+
+    def command(self, t_s: float, tcp_world: Any, tcp_velocity_world: Any) -> Any:
+        return self.inner.command(t_s, tcp_world, tcp_velocity_world)
+
+
+def _both(overrides: dict[str, Any], monkeypatch: pytest.MonkeyPatch) -> tuple[Any, Any]:
+    parts = build_parts(load_scene("paper-verification", {**SHORT, **overrides}))
+    assert type(parts.tracker) is TrajectoryTracker
+    reference = run(dataclasses.replace(parts, tracker=Delegating(parts.tracker)))
+    with monkeypatch.context() as patch:
+        # The fast path never builds a Command: calling command() would be the slow path.
+        patch.setattr(TrajectoryTracker, "command", None)
+        fast = run(parts)
+    return reference, fast
+
+
+@pytest.mark.parametrize(
+    "overrides",
+    [
+        {},
+        {"robot.servo_gain_1_s": 40.0, "robot.interpolation_period_s": 0.004},
+        {"sensor.latency_s": 0.03, "tracker.params.use_capture_pose": False},
+    ],
+    ids=["ideal-axes", "servo", "latency-naive-pose"],
+)
+def test_fast_path_gives_the_reference_paths_numbers(
+    overrides: dict[str, Any], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    reference, fast = _both(overrides, monkeypatch)
+    for name in ("tcp_world", "target_world", "error_mm", "arc_length_mm", "welding"):
+        np.testing.assert_array_equal(getattr(fast.trace, name), getattr(reference.trace, name))
+    for key in ("t_capture_s", "found", "point_world"):
+        np.testing.assert_array_equal(fast.trace.frames[key], reference.trace.frames[key])
+    timing = {"wall_time_s", "sense_wall_time_s"}
+    expected = {k: v for k, v in reference.summary.items() if k not in timing}
+    got = {k: v for k, v in fast.summary.items() if k not in timing}
+    assert got.keys() == expected.keys()
+    for key, value in expected.items():
+        if isinstance(value, float) and np.isnan(value):
+            assert np.isnan(got[key]), key
+        else:
+            assert got[key] == value, key
+    assert reference.summary["status"] == "completed"
+
+
+def _hairpin() -> Seam:
+    points = [[0.0, 0.0, 0.0], [10.0, 0.0, 0.0], [10.0, 0.5, 0.0], [0.0, 0.5, 0.0]]
+    return Seam.from_points(np.array(points))
+
+
+@pytest.mark.parametrize(
+    "seam",
+    [Seam.from_paper(2.0, 405.0), Seam.from_paper(0.25, 30.0), _hairpin()],
+    ids=["paper-2mm", "paper-0.25mm", "hairpin"],
+)
+def test_progress_kernel_is_seam_closest_near(seam: Seam) -> None:
+    rng = np.random.default_rng(14)
+    kernel = ProgressTracker(seam)
+    for _ in range(400):
+        s = rng.uniform(-1.0, seam.length_mm + 1.0)
+        point = seam.interpolate([s])[0] + rng.normal(size=3) * 10.0 ** rng.uniform(-6, 1)
+        hint = float(np.clip(s + 3.0 * rng.normal(), 0.0, seam.length_mm))
+        if rng.random() < 0.1:  # on a knot, or at an end: the window's cut ends
+            hint = float(rng.choice(seam.arc_length_mm))
+        assert kernel.closest_near(point.tolist(), hint) == seam.closest_near(point, hint)
