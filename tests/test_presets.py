@@ -46,6 +46,9 @@ SHEET_ORACLE = {
     # LMI DATASHEET_Gocator_2600_US-1.4: 2690 CD 325, MR 1550, FOV 385-2000, 3700 points,
     # 900-10000 Hz, 660 nm.
     "gocator-2690": (325.0, 1550.0, 385.0, 2000.0, 3700, 10_000.0, 660.0),
+    # SICK TriSpector1000 data sheet part 1060428, as quoted: working range 291-1091 mm, field
+    # "540 x 200 mm" (read near 200, far 540), 0.43 mm/px (so 861 points), 5 kHz, no wavelength.
+    "sick-trispector1060": (291.0, 800.0, 200.0, 540.0, 861, 5000.0, None),
 }
 
 
@@ -69,6 +72,13 @@ def test_cognex_resolution_x_brackets_the_mean_point_step() -> None:
         step = DATA_SHEETS[name].lateral_resolution_mm
         assert lo <= step <= hi
         assert "lateral_resolution_mm" in DATA_SHEETS[name].assumed
+
+
+def test_trispector_field_reading_is_marked_assumed() -> None:
+    """The quoted "540 x 200 mm" does not say which width is near: both are flagged."""
+    assumed = DATA_SHEETS["sick-trispector1060"].assumed
+    assert {"fov_near_mm", "fov_far_mm"} <= set(assumed)
+    assert DATA_SHEETS["sick-trispector1060"].wavelength_nm is None
 
 
 @pytest.mark.parametrize("name", SHEETS)

@@ -54,6 +54,12 @@ _LMI_2600 = (
     "clearance distance, measurement range, field of view, data points/profile, scan rate, "
     "repeatability Z, 660 nm; read as transcribed in a public engineering note"
 )
+_SICK_TRISPECTOR = (
+    "SICK TriSpector1000 data sheet, part 1060428 (V3T13S-MR62A8; sick.com/media/pdf/5/45/145/"
+    "dataSheet_V3T13S-MR62A8_1060428_en.pdf): working range 291-1091 mm, field of view "
+    "'540 x 200 mm', X resolution 0.43 mm/px, 5 kHz; as quoted in a public engineering note "
+    "(the one the Gocator 2350/2380 and LJ-X8400 figures come from)"
+)
 _DS900_ROWS = (
     "not given: 1024 camera rows across the measuring range (the DS900 image matrix has "
     "1280 x 1024 pixels; its rows are assumed to span the range)"
@@ -188,6 +194,21 @@ DATA_SHEETS: dict[str, DataSheet] = {
                                    res_x=(0.0073, 0.0084), res_z_mm=0.001),
     "cognex-ds925b": _cognex_ds900("DS925B", 53.5, 25.0, 23.4, 29.1, 41.082,
                                    res_x=(0.0183, 0.0227), res_z_mm=0.002),
+    "sick-trispector1060": DataSheet(
+        make="SICK", model="TriSpector1060", source=_SICK_TRISPECTOR,
+        clearance_mm=291.0, range_mm=1091.0 - 291.0, fov_near_mm=200.0, fov_far_mm=540.0,
+        angle_deg=30.754, depth_resolution_mm=800.0 / ASSUMED_ROWS, lateral_resolution_mm=0.43,
+        profile_rate_hz=5000.0,
+        assumed={
+            "fov_near_mm": "the note gives the field of view as '540 x 200 mm' without saying "
+            "which width is where; read as 200 mm at the near end of the working range",
+            "fov_far_mm": "read as 540 mm at the far end (see fov_near_mm)",
+            "angle_deg": _ANGLE,
+            "depth_resolution_mm": _ROWS,
+            "lateral_resolution_mm": "the sheet's 0.43 mm/px taken as the mean step over the "
+            "field (861 points)",
+        },
+    ),
     "keyence-lj-x8400": DataSheet(
         make="Keyence", model="LJ-X8400", source=_KEYENCE_LJX,
         clearance_mm=320.0, range_mm=120.0, fov_near_mm=180.0, fov_far_mm=240.0,
