@@ -61,6 +61,7 @@ def sensor_command(
         facts = [("points_per_profile", sheet.points_per_profile),
                  ("profile_rate_hz", sheet.profile_rate_hz),
                  ("repeatability_z_mm", sheet.repeatability_z_mm),
+                 ("resolution_z_mm", sheet.resolution_z_mm),
                  ("wavelength_nm", sheet.wavelength_nm)]  # fmt: skip
         print_table([(k + ("*" if k in assumed else ""), "not given" if v is None else v)
                      for k, v in facts], "\nalso on the sheet")  # fmt: skip

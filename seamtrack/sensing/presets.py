@@ -39,6 +39,31 @@ _KEYENCE_LJX = (
     "specs/): reference distance 380 mm, +-60 mm, X range 180-240 mm, repeatability 5 um, "
     "16 kHz, as quoted in a public engineering note; 405 nm (blue) throughout the series"
 )
+_COGNEX_DS900 = (
+    "Cognex, DS900 Series Displacement Sensors Reference (copyright 2015, revision "
+    "02/06/2017), its specifications tables 'DS910B - Measurement Specifications' and "
+    "'DS925B - Measurement Specifications' (near and far field of view, clearance distance "
+    "CD, measurement range MR, resolution X and Z), 'Sensor Specifications' (scan rate up to "
+    "1.2 kHz, 405 nm laser) and 'Series Technical Data' (1280 points/profile); read as a "
+    "Markdown transcription of the manual in a public GitHub repository (our code index "
+    "returned the file, not its repository name)"
+)
+_LMI_2600 = (
+    "LMI Technologies, Gocator 2600 Series data sheet DATASHEET_Gocator_2600_US-1.4 (2023; "
+    "ftp.stemmer-imaging.com/webdavs/docmanager/166909-DATASHEET_Gocator_2600.pdf): 2690 "
+    "clearance distance, measurement range, field of view, data points/profile, scan rate, "
+    "repeatability Z, 660 nm; read as transcribed in a public engineering note"
+)
+_SICK_TRISPECTOR = (
+    "SICK TriSpector1000 data sheet, part 1060428 (V3T13S-MR62A8; sick.com/media/pdf/5/45/145/"
+    "dataSheet_V3T13S-MR62A8_1060428_en.pdf): working range 291-1091 mm, field of view "
+    "'540 x 200 mm', X resolution 0.43 mm/px, 5 kHz; as quoted in a public engineering note "
+    "(the one the Gocator 2350/2380 and LJ-X8400 figures come from)"
+)
+_DS900_ROWS = (
+    "not given: 1024 camera rows across the measuring range (the DS900 image matrix has "
+    "1280 x 1024 pixels; its rows are assumed to span the range)"
+)
 _ANGLE = "derived: the near end of the range at the clearance distance from the emitter"
 _ROWS = f"not given: {ASSUMED_ROWS} camera rows across the measuring range"
 
@@ -64,6 +89,8 @@ class DataSheet:
     profile_rate_hz : float or None
         The highest profile rate published.
     repeatability_z_mm : float or None
+    resolution_z_mm : float or None
+        The sheet's Z resolution (not Eq. 7's R_D), where it gives one.
     wavelength_nm : float or None
     assumed : dict of str to str
         Field -> why it is not the data sheet's figure.
@@ -82,6 +109,7 @@ class DataSheet:
     points_per_profile: int | None = None
     profile_rate_hz: float | None = None
     repeatability_z_mm: float | None = None
+    resolution_z_mm: float | None = None
     wavelength_nm: float | None = None
     assumed: dict[str, str] = field(default_factory=dict)
 
@@ -120,6 +148,24 @@ def _gocator(model: str, cd: float, mr: float, near: float, far: float, angle: f
     )  # fmt: skip
 
 
+def _cognex_ds900(model: str, cd: float, mr: float, near: float, far: float, angle: float,
+                  res_x: tuple[float, float], res_z_mm: float) -> DataSheet:  # fmt: skip
+    points = 1280
+    return DataSheet(
+        make="Cognex", model=model, source=_COGNEX_DS900,
+        clearance_mm=cd, range_mm=mr, fov_near_mm=near, fov_far_mm=far, angle_deg=angle,
+        depth_resolution_mm=mr / ASSUMED_ROWS, lateral_resolution_mm=(near + far) / (2 * points),
+        points_per_profile=points, profile_rate_hz=1200.0, resolution_z_mm=res_z_mm,
+        wavelength_nm=405.0,
+        assumed={
+            "angle_deg": _ANGLE,
+            "depth_resolution_mm": _DS900_ROWS,
+            "lateral_resolution_mm": f"the 1280 points' mean step over the near and far field "
+            f"(the sheet's Resolution X: {res_x[0]:g}-{res_x[1]:g} mm)",
+        },
+    )  # fmt: skip
+
+
 #: The built-in real sensors (``seamtrack sensor --list``).
 DATA_SHEETS: dict[str, DataSheet] = {
     "gocator-2320": _gocator("2320", 40.0, 25.0, 18.0, 26.0, 29.631),
@@ -129,6 +175,40 @@ DATA_SHEETS: dict[str, DataSheet] = {
                              rate_hz=5000.0, repeat_um=2.0),
     "gocator-2380": _gocator("2380", 350.0, 800.0, 390.0, 1260.0, 7.207, x_res=(0.375, 1.100),
                              rate_hz=5000.0, repeat_um=12.0),
+    "gocator-2690": DataSheet(
+        make="LMI Technologies", model="Gocator 2690", source=_LMI_2600,
+        clearance_mm=325.0, range_mm=1550.0, fov_near_mm=385.0, fov_far_mm=2000.0,
+        angle_deg=15.544, depth_resolution_mm=1550.0 / ASSUMED_ROWS,
+        lateral_resolution_mm=(385.0 + 2000.0) / (2 * 3700), points_per_profile=3700,
+        profile_rate_hz=10_000.0, repeatability_z_mm=0.012, wavelength_nm=660.0,
+        assumed={
+            "angle_deg": _ANGLE,
+            "depth_resolution_mm": _ROWS,
+            "lateral_resolution_mm": "the 3700 points' mean step over the near and far field "
+            "(the sheet's Resolution X: 0.124-0.550 mm)",
+            "profile_rate_hz": "10 kHz needs a reduced field and range; 900 Hz over the full "
+            "field (the sheet's range 900-10000 Hz)",
+        },
+    ),
+    "cognex-ds910b": _cognex_ds900("DS910B", 53.0, 8.0, 9.4, 10.7, 16.291,
+                                   res_x=(0.0073, 0.0084), res_z_mm=0.001),
+    "cognex-ds925b": _cognex_ds900("DS925B", 53.5, 25.0, 23.4, 29.1, 41.082,
+                                   res_x=(0.0183, 0.0227), res_z_mm=0.002),
+    "sick-trispector1060": DataSheet(
+        make="SICK", model="TriSpector1060", source=_SICK_TRISPECTOR,
+        clearance_mm=291.0, range_mm=1091.0 - 291.0, fov_near_mm=200.0, fov_far_mm=540.0,
+        angle_deg=30.754, depth_resolution_mm=800.0 / ASSUMED_ROWS, lateral_resolution_mm=0.43,
+        profile_rate_hz=5000.0,
+        assumed={
+            "fov_near_mm": "the note gives the field of view as '540 x 200 mm' without saying "
+            "which width is where; read as 200 mm at the near end of the working range",
+            "fov_far_mm": "read as 540 mm at the far end (see fov_near_mm)",
+            "angle_deg": _ANGLE,
+            "depth_resolution_mm": _ROWS,
+            "lateral_resolution_mm": "the sheet's 0.43 mm/px taken as the mean step over the "
+            "field (861 points)",
+        },
+    ),
     "keyence-lj-x8400": DataSheet(
         make="Keyence", model="LJ-X8400", source=_KEYENCE_LJX,
         clearance_mm=320.0, range_mm=120.0, fov_near_mm=180.0, fov_far_mm=240.0,
