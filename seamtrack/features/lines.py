@@ -20,6 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.features.kernels import pieces
 from seamtrack.features.robust import (
     DEFAULT_RESOLUTION_MM,
     front_end,
@@ -27,6 +28,8 @@ from seamtrack.features.robust import (
 from seamtrack.sensing.profiles import Profile
 
 FloatArray = NDArray[np.float64]
+#: A run's end piece is split at a kink of at least this much (rad): a root face at a slant.
+_MIN_KINK = math.radians(5.0)
 
 
 @dataclass
@@ -149,26 +152,19 @@ def segment_profile(
     if isinstance(fe, str):
         return fe
     p, sigma, tol = fe.points, fe.sigma, fe.tol
-    pieces: list[tuple[int, int]] = []
-    for lo, hi in itertools.pairwise(fe.runs):
-        if hi - lo >= min_points and not fe.stray[lo]:
-            run = _split(p, int(lo), int(hi) - 1, tol, max_lines)
-            if run is None:
-                return "no straight pieces (too noisy or curved)"
-            pieces.extend(_refine(p, _merge(p, run, tol), sigma, fe.floor, min_points))
-        if len(pieces) > max_lines:
-            return "no straight pieces (too noisy or curved)"
-    lines = []
-    trim = max(3.0 * sigma, 0.5 * fe.floor)
-    for lo, hi in pieces:
-        idx = np.arange(lo, hi + 1)
-        line = _fit(p, idx)
-        resid = np.abs((p[idx] - line.centroid) @ line.normal)
-        idx = idx[resid <= trim]
-        if len(idx) >= min_points:
-            lines.append(_fit(p, idx))
-    if not lines:
+    code, offsets, index, fits, along = pieces(
+        p, fe.runs, fe.stray, tol, sigma, fe.floor, int(min_points), int(max_lines), _MIN_KINK
+    )
+    if code == 1:
+        return "no straight pieces (too noisy or curved)"
+    if code == 2:
         return "no straight pieces with enough points"
+    bounds = offsets.tolist()
+    rms = fits[:, 4].tolist()
+    lines = [
+        Line(index[a:b], fits[j, 0:2], fits[j, 2:4], along[a:b], rms[j])
+        for j, (a, b) in enumerate(itertools.pairwise(bounds))
+    ]
     return Segments(
         p, sigma, tol, fe.spacing, lines, fe.stray, fe.columns, fe.runs, fe.quantum, fe.resolution
     )

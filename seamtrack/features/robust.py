@@ -275,31 +275,37 @@ def front_end(
     max_detour_mm: float = 3.0,
 ) -> FrontEnd | str:
     """Kept points, noise, tolerance, runs between jumps and detours of a profile, or why
-    there are none (a ``str``); the parameters as for :func:`segment_profile`."""
-    p, columns = _kept(profile)
-    if len(p) < 2 * min_points:
+    there are none (a ``str``); the parameters as for :func:`segment_profile`.
+
+    One compiled pass (:func:`seamtrack.features.kernels.front`): the valid bounded points,
+    their spacing (:func:`_spacing`) and range quantum (:func:`range_quantum`), the noise at
+    lag 1 (:func:`noise_sigma`), isolated spikes off a running median of 5 (:func:`_median5`)
+    dropped, the noise again over :data:`NOISE_LAGS`, the runs between jumps and their
+    detours (:func:`detours`).
+    """
+    from seamtrack.features.kernels import front
+
+    pts = np.ascontiguousarray(profile.points_laser, dtype=np.float64).reshape(-1, 2)
+    valid = np.ascontiguousarray(profile.valid, dtype=np.bool_).reshape(-1)
+    if valid.shape != (len(pts),):
+        return "too few valid points (0)"
+    code, p, columns, spikes, runs, stray, s = front(
+        pts,
+        valid,
+        _MAX_ABS_MM,
+        int(min_points),
+        float(resolution_mm) if resolution_mm else 0.0,
+        math.nan if min_tol_mm is None else float(min_tol_mm),
+        float(sigma_factor),
+        float(max_detour_mm),
+        DEFAULT_RESOLUTION_MM,
+        TOL_RESOLUTIONS,
+    )
+    if code == 1:
         return f"too few valid points ({len(p)})"
-    spacing = _spacing(p)
-    if not spacing > 0:
+    if code == 2:
         return "the valid points do not spread out (constant profile)"
-    q = range_quantum(np.ascontiguousarray(p[:, 1]))
-    resolution = resolution_mm if resolution_mm else q if q > 0 else DEFAULT_RESOLUTION_MM
-    floor = TOL_RESOLUTIONS * resolution if min_tol_mm is None else min_tol_mm
-    rounding = q / math.sqrt(12.0)
-    # Isolated outliers first: they would split lines and bias the noise estimate.
-    sigma = max(noise_sigma(p), rounding)
-    dev = np.abs(p[:, 1] - _median5(p[:, 1]))
-    keep = dev <= max(6.0 * sigma, 4.0 * floor, 4.0 * spacing)
-    spikes = columns[~keep]
-    p, columns = p[keep], columns[keep]
-    sigma = max(noise_sigma(p, NOISE_LAGS), rounding)
-    tol = max(floor, sigma_factor * sigma)
-    jump = max(6.0 * spacing, 2.0 * tol, 0.1)
-    gaps = np.hypot(*np.diff(p, axis=0).T)
-    cuts = np.flatnonzero(gaps > jump) + 1
-    runs = np.concatenate([[0], cuts, [len(p)]]).astype(np.intp)
-    off = detours(p, runs[:-1], runs[1:], tol, min_points, max_detour_mm)
-    stray = np.repeat(off, np.diff(runs))
+    sigma, tol, floor, spacing, q, resolution = (float(v) for v in s)
     return FrontEnd(p, columns, spikes, runs, stray, sigma, tol, floor, spacing, q, resolution)
 
 
