@@ -170,7 +170,7 @@ class _Base:
                 ga, gb = a, b
                 if vb[0] < va[0]:
                     va, vb, ga, gb = vb, va, b, a
-                included = math.degrees(math.acos(float(np.clip(va @ vb, -1, 1))))
+                included = math.degrees(math.acos(min(max(float(va @ vb), -1.0), 1.0)))
                 bis = va + vb
                 if not (
                     va[0] < 0 < vb[0]
@@ -198,7 +198,7 @@ def _confidence(arms: list[Line], seg: Segments) -> float:
     """Share of the kept points explained by the feature's lines, scaled by their fit."""
     explained = sum(a.count for a in arms) / max(len(seg.points), 1)
     fit = max(0.0, 1.0 - max(a.rms for a in arms) / seg.tol)
-    return float(np.clip(0.5 * explained + 0.5 * fit, 0.0, 1.0))
+    return min(max(float(0.5 * explained + 0.5 * fit), 0.0), 1.0)  # NaN stays NaN
 
 
 def explained(seg: Segments, zones: list[tuple[int, int, Line | tuple[Line, ...] | None]]) -> float:

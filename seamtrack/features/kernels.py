@@ -510,3 +510,16 @@ def pieces(
     if k == 0:
         return 2, offsets[:1], index[:0], fits[:0], along[:0]
     return 0, offsets[: k + 1], index[:used], fits[:k], along[:used]
+
+
+@numba.njit(cache=True, nogil=True)
+def fit_line(p: FloatArray, idx: IntArray) -> tuple[float, float, float, float, float, FloatArray]:
+    """Total-least-squares line through ``p[idx]`` (at least one point): centroid, unit
+    direction (from the first point towards the last), rms residual, and the points'
+    coordinates along it; :func:`seamtrack.features.lines._fit` in one call."""
+    n = idx.shape[0]
+    cy, cz, uy, uz, rms = _fit(p, idx, n)
+    t = np.empty(n)
+    for k in range(n):
+        t[k] = (p[idx[k], 0] - cy) * uy + (p[idx[k], 1] - cz) * uz
+    return cy, cz, uy, uz, rms, t

@@ -13,6 +13,7 @@ Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groov
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from dataclasses import dataclass, field
@@ -20,7 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features.kernels import pieces
+from seamtrack.features.kernels import fit_line, pieces
 from seamtrack.features.robust import (
     DEFAULT_RESOLUTION_MM,
     front_end,
@@ -46,7 +47,7 @@ class Line:
     t: FloatArray
     rms: float
 
-    @property
+    @functools.cached_property
     def normal(self) -> FloatArray:
         return np.array([-self.direction[1], self.direction[0]])
 
@@ -76,18 +77,13 @@ class Line:
 
 
 def _fit(points: FloatArray, index: NDArray[np.intp]) -> Line:
-    """Total-least-squares line through ``points[index]`` (column order kept)."""
-    p = points[index]
-    c = p.sum(axis=0) / len(p)  # (sum / n: np.mean's overhead is most of the cost here)
-    q = p - c
-    syy, szz, syz = float(q[:, 0] @ q[:, 0]), float(q[:, 1] @ q[:, 1]), float(q[:, 0] @ q[:, 1])
-    theta = 0.5 * math.atan2(2.0 * syz, syy - szz)
-    u = np.array([math.cos(theta), math.sin(theta)])
-    if u @ (p[-1] - p[0]) < 0:
-        u = -u
-    t = q @ u
-    r = q @ np.array([-u[1], u[0]])
-    return Line(index, c, u, t, math.sqrt(float(r @ r) / len(r)))
+    """Total-least-squares line through ``points[index]`` (column order kept); compiled
+    (:func:`seamtrack.features.kernels.fit_line`): numpy's per-call overhead on a few hundred
+    points was most of its cost."""
+    if len(index) == 0:
+        raise ValueError("no points to fit a line to")
+    cy, cz, uy, uz, rms, t = fit_line(points, np.asarray(index, dtype=np.int64))
+    return Line(index, np.array([cy, cz]), np.array([uy, uz]), t, rms)
 
 
 @dataclass

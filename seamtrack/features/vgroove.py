@@ -501,4 +501,4 @@ def _at_depth(line: Line, plate: Line, depth: float, stretch: tuple[float, float
     if abs(rate) < 1e-6:
         return line.point(stretch[0])
     t = float((depth - _plate_depth(plate, line.centroid)) / rate)
-    return line.point(float(np.clip(t, lo, hi)))
+    return line.point(min(max(t, lo), hi))  # as np.clip (NaN stays NaN)
