@@ -53,10 +53,21 @@ def test_fit_line_equals_svd(seed: int) -> None:
     np.testing.assert_allclose(along, (p[idx] - c) @ u, atol=1e-8)
 
 
-@pytest.mark.parametrize("n", [1, 2, 3, 4, 7, 100, 1001])
+@pytest.mark.parametrize("n", [1, 2, 3, 4, 7, 100, 255, 256, 1001, 2048])
 def test_upper_median_equals_sort(n: int) -> None:
+    """Small arrays by quickselect, larger ones bracketed from a sample first (sorted,
+    reversed, clustered and repeating values included, where a sample can mislead)."""
     rng = np.random.default_rng(n)
-    for x in (rng.normal(size=n), rng.integers(0, 3, n).astype(float), np.zeros(n)):
+    normal = rng.normal(size=n)
+    cases = (
+        normal,
+        np.sort(normal),
+        np.sort(normal)[::-1].copy(),
+        np.where(np.arange(n) % 2 == 0, 0.0, 1e6) + rng.normal(size=n),
+        rng.integers(0, 3, n).astype(float),
+        np.zeros(n),
+    )
+    for x in cases:
         assert kernels._upper_median(x.copy()) == np.sort(x)[n // 2]
 
 
