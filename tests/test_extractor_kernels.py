@@ -1,6 +1,7 @@
-"""The extractors' compiled kernels (seamtrack.features.kernels) against independent references:
-numpy's SVD for line fits, brute-force two-line splits, sorting for medians, and the numpy
-formulation of the robust front end (seamtrack.features.robust's helpers)."""
+"""The extractors' compiled kernels (seamtrack.features.kernels, robust.front) against
+independent references: numpy's SVD for line fits, brute-force two-line splits, sorting for
+medians, and the numpy formulation of the robust front end (seamtrack.features.robust's
+helpers)."""
 
 from __future__ import annotations
 
@@ -18,6 +19,7 @@ from seamtrack.features.robust import (
     _kept,
     _median5,
     _spacing,
+    _upper_median,
     detours,
     front_end,
     noise_sigma,
@@ -68,7 +70,7 @@ def test_upper_median_equals_sort(n: int) -> None:
         np.zeros(n),
     )
     for x in cases:
-        assert kernels._upper_median(x.copy()) == np.sort(x)[n // 2]
+        assert _upper_median(x.copy()) == np.sort(x)[n // 2]
 
 
 @pytest.mark.parametrize("seed", range(4))

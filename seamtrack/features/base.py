@@ -14,8 +14,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.features.counts import explained_share, support
 from seamtrack.features.expect import Expect, parse_expect
-from seamtrack.features.kernels import explained_share, support
 from seamtrack.features.lines import (
     DATA_ERRORS,
     Line,
