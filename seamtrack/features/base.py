@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.features.counts import explained_share, support
 from seamtrack.features.expect import Expect, parse_expect
 from seamtrack.features.lines import (
     DATA_ERRORS,
@@ -142,19 +143,19 @@ class _Base:
             ]
         sign = 1.0 if opening_down else -1.0
         best: tuple[Line, Line, FloatArray, float] | None = None
-        surface = seg.points[~seg.stray] if seg.stray.shape == (len(seg.points),) else seg.points
+        m = len(seg.points)
+        surface = ~seg.stray if seg.stray.shape == (m,) else np.ones(m, dtype=np.bool_)
         band = 2.0 * seg.tol
         owner = np.full(len(seg.points), -1, dtype=np.intp)  # each point's piece
         for k, ln in enumerate(seg.lines):
             owner[ln.index] = k
-        along: dict[int, FloatArray] = {}  # per group: its on-line surface points' coordinates
 
         def supported(g: Line, x: FloatArray, v: FloatArray) -> int:
-            if id(g) not in along:
-                on_line = np.abs((surface - g.centroid) @ g.normal) <= band
-                along[id(g)] = surface[on_line] @ g.direction
+            # The surface points on the line (within the band), on the arm's side of x.
             s = 1.0 if float(v @ g.direction) > 0 else -1.0
-            return int(np.count_nonzero(s * (along[id(g)] - float(x @ g.direction)) >= -seg.tol))
+            (cy, cz), (uy, uz) = g.centroid.tolist(), g.direction.tolist()
+            x_u = float(x @ g.direction)
+            return int(support(seg.points, surface, cy, cz, uy, uz, band, x_u, s, seg.tol))
 
         def reach(g: Line, x: FloatArray, v: FloatArray) -> float:
             # How near the arm comes to the apex. A tenth of a group may lie past it (trimmed
@@ -171,8 +172,37 @@ class _Base:
             through = np.isin(owner[g.index], owner[g.index[ahead]]) & (t < -3.0 * seg.tol)
             return -np.inf if through.any() else float(t[ahead].min())
 
+        # The groups' lines as floats: most pairs fail the V's shape, which scalar arithmetic
+        # rules out at a fraction of numpy's cost on 2-vectors; the pairs left (within a
+        # hair of passing) are then tested exactly as before.
+        flat = [(*g.centroid.tolist(), *g.direction.tolist()) for g in groups]
+        lo_deg, hi_deg = min_deg - 1e-6, max_deg + 1e-6
         for i, a in enumerate(groups):
-            for b in groups[i + 1 :]:
+            ay, az, ady, adz = flat[i]
+            for j in range(i + 1, len(groups)):
+                by, bz, bdy, bdz = flat[j]
+                d = ady * bdz - adz * bdy
+                if abs(d) < 1e-9:
+                    continue  # parallel: no apex
+                s_ = ((by - ay) * bdz - (bz - az) * bdy) / d
+                xy, xz = ay + s_ * ady, az + s_ * adz
+                uy, uz, wy, wz = ay - xy, az - xz, by - xy, bz - xz
+                nu, nw = max(math.hypot(uy, uz), 1e-300), max(math.hypot(wy, wz), 1e-300)
+                uy, uz, wy, wz = uy / nu, uz / nu, wy / nw, wz / nw
+                if wy < uy:
+                    uy, uz, wy, wz = wy, wz, uy, uz
+                c = min(max(uy * wy + uz * wz, -1.0), 1.0)
+                eps = 1e-9
+                if not (
+                    uy < eps
+                    and wy > -eps
+                    and sign * uz > -eps
+                    and sign * wz > -eps
+                    and lo_deg <= math.degrees(math.acos(c)) <= hi_deg
+                    and sign * (uz + wz) > 0.7 * math.hypot(uy + wy, uz + wz) - eps
+                ):
+                    continue
+                b = groups[j]
                 x = intersect(a, b)
                 if x is None:
                     continue
@@ -184,7 +214,7 @@ class _Base:
                 ga, gb = a, b
                 if vb[0] < va[0]:
                     va, vb, ga, gb = vb, va, b, a
-                included = math.degrees(math.acos(float(np.clip(va @ vb, -1, 1))))
+                included = math.degrees(math.acos(min(max(float(va @ vb), -1.0), 1.0)))
                 bis = va + vb
                 if not (
                     va[0] < 0 < vb[0]
@@ -212,7 +242,7 @@ def _confidence(arms: list[Line], seg: Segments) -> float:
     """Share of the kept points explained by the feature's lines, scaled by their fit."""
     explained = sum(a.count for a in arms) / max(len(seg.points), 1)
     fit = max(0.0, 1.0 - max(a.rms for a in arms) / seg.tol)
-    return float(np.clip(0.5 * explained + 0.5 * fit, 0.0, 1.0))
+    return min(max(float(0.5 * explained + 0.5 * fit), 0.0), 1.0)  # NaN stays NaN
 
 
 def explained(seg: Segments, zones: list[tuple[int, int, Line | tuple[Line, ...] | None]]) -> float:
@@ -223,21 +253,18 @@ def explained(seg: Segments, zones: list[tuple[int, int, Line | tuple[Line, ...]
     no zone count as unexplained."""
     m = len(seg.points)
     surface = ~seg.stray if seg.stray.shape == (m,) else np.ones(m, dtype=bool)
-    counted = surface.copy()
-    ok = np.zeros(m, dtype=bool)
-    band = 3.0 * seg.tol
-    for lo, hi, lines in zones:
-        lo, hi = max(int(lo), 0), min(int(hi), m)
-        if hi <= lo:
-            continue
-        if lines is None:
-            counted[lo:hi] = False
-            continue
-        for line in lines if isinstance(lines, tuple) else (lines,):
-            d = np.abs((seg.points[lo:hi] - line.centroid) @ line.normal)
-            ok[lo:hi] |= d <= band
-    total = int(np.count_nonzero(counted))
-    return float(np.count_nonzero(ok & counted)) / total if total else 0.0
+    if not zones:
+        return 0.0
+    groups = [() if z is None else z if isinstance(z, tuple) else (z,) for _, _, z in zones]
+    spans = np.array(
+        [(lo, hi, len(g)) for (lo, hi, _), g in zip(zones, groups, strict=True)], dtype=np.int64
+    )
+    fits = np.zeros((len(zones), max((len(g) for g in groups), default=1), 4))
+    for k, group in enumerate(groups):
+        for j, line in enumerate(group):
+            fits[k, j, :2] = line.centroid
+            fits[k, j, 2:] = line.normal
+    return float(explained_share(seg.points, surface, spans, fits, 3.0 * seg.tol))
 
 
 def largest_in(groups: list[Line], lo: int, hi: int, skip: tuple[Line, ...] = ()) -> Line | None:

@@ -13,6 +13,7 @@ Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groov
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 from dataclasses import dataclass, field
@@ -20,6 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.features.kernels import fit_line, pieces
 from seamtrack.features.robust import (
     DEFAULT_RESOLUTION_MM,
     front_end,
@@ -27,6 +29,8 @@ from seamtrack.features.robust import (
 from seamtrack.sensing.profiles import Profile
 
 FloatArray = NDArray[np.float64]
+#: A run's end piece is split at a kink of at least this much (rad): a root face at a slant.
+_MIN_KINK = math.radians(5.0)
 
 
 @dataclass
@@ -43,7 +47,7 @@ class Line:
     t: FloatArray
     rms: float
 
-    @property
+    @functools.cached_property
     def normal(self) -> FloatArray:
         return np.array([-self.direction[1], self.direction[0]])
 
@@ -58,13 +62,25 @@ class Line:
     def point(self, t: float) -> FloatArray:
         return self.centroid + t * self.direction
 
-    def step(self, at_end: bool) -> float:
-        """Mean spacing of the last (``at_end``) or first ten inliers along the line."""
+    @functools.cached_property
+    def scalars(self) -> tuple[float, float, float, float, float, float]:
+        """Centroid (y, z), direction (y, z) and the first and last inliers' coordinates
+        along the line, as floats (scalar tests without numpy's per-call overhead)."""
+        (cy, cz), (dy, dz) = self.centroid.tolist(), self.direction.tolist()
+        t0, t1 = float(self.t[0]), float(self.t[-1])  # IndexError on no inliers, as before
+        return cy, cz, dy, dz, t0, t1
+
+    @functools.cached_property
+    def _steps(self) -> tuple[float, float]:
         k = min(10, len(self.t) - 1)
         if k < 1:
-            return 0.0
+            return 0.0, 0.0
         t = self.t
-        return float(abs(t[-1] - t[-1 - k]) if at_end else abs(t[k] - t[0])) / k
+        return float(abs(t[k] - t[0])) / k, float(abs(t[-1] - t[-1 - k])) / k
+
+    def step(self, at_end: bool) -> float:
+        """Mean spacing of the last (``at_end``) or first ten inliers along the line."""
+        return self._steps[1 if at_end else 0]
 
     def end(self, at_end: bool) -> FloatArray:
         """The line's end half a spacing beyond its last (first) inlier."""
@@ -73,18 +89,13 @@ class Line:
 
 
 def _fit(points: FloatArray, index: NDArray[np.intp]) -> Line:
-    """Total-least-squares line through ``points[index]`` (column order kept)."""
-    p = points[index]
-    c = p.sum(axis=0) / len(p)  # (sum / n: np.mean's overhead is most of the cost here)
-    q = p - c
-    syy, szz, syz = float(q[:, 0] @ q[:, 0]), float(q[:, 1] @ q[:, 1]), float(q[:, 0] @ q[:, 1])
-    theta = 0.5 * math.atan2(2.0 * syz, syy - szz)
-    u = np.array([math.cos(theta), math.sin(theta)])
-    if u @ (p[-1] - p[0]) < 0:
-        u = -u
-    t = q @ u
-    r = q @ np.array([-u[1], u[0]])
-    return Line(index, c, u, t, math.sqrt(float(r @ r) / len(r)))
+    """Total-least-squares line through ``points[index]`` (column order kept); compiled
+    (:func:`seamtrack.features.kernels.fit_line`): numpy's per-call overhead on a few hundred
+    points was most of its cost."""
+    if len(index) == 0:
+        raise ValueError("no points to fit a line to")
+    cy, cz, uy, uz, rms, t = fit_line(points, np.asarray(index, dtype=np.int64))
+    return Line(index, np.array([cy, cz]), np.array([uy, uz]), t, rms)
 
 
 @dataclass
@@ -149,26 +160,19 @@ def segment_profile(
     if isinstance(fe, str):
         return fe
     p, sigma, tol = fe.points, fe.sigma, fe.tol
-    pieces: list[tuple[int, int]] = []
-    for lo, hi in itertools.pairwise(fe.runs):
-        if hi - lo >= min_points and not fe.stray[lo]:
-            run = _split(p, int(lo), int(hi) - 1, tol, max_lines)
-            if run is None:
-                return "no straight pieces (too noisy or curved)"
-            pieces.extend(_refine(p, _merge(p, run, tol), sigma, fe.floor, min_points))
-        if len(pieces) > max_lines:
-            return "no straight pieces (too noisy or curved)"
-    lines = []
-    trim = max(3.0 * sigma, 0.5 * fe.floor)
-    for lo, hi in pieces:
-        idx = np.arange(lo, hi + 1)
-        line = _fit(p, idx)
-        resid = np.abs((p[idx] - line.centroid) @ line.normal)
-        idx = idx[resid <= trim]
-        if len(idx) >= min_points:
-            lines.append(_fit(p, idx))
-    if not lines:
+    code, offsets, index, fits, along = pieces(
+        p, fe.runs, fe.stray, tol, sigma, fe.floor, int(min_points), int(max_lines), _MIN_KINK
+    )
+    if code == 1:
+        return "no straight pieces (too noisy or curved)"
+    if code == 2:
         return "no straight pieces with enough points"
+    bounds = offsets.tolist()
+    rms = fits[:, 4].tolist()
+    lines = [
+        Line(index[a:b], fits[j, 0:2], fits[j, 2:4], along[a:b], rms[j])
+        for j, (a, b) in enumerate(itertools.pairwise(bounds))
+    ]
     return Segments(
         p, sigma, tol, fe.spacing, lines, fe.stray, fe.columns, fe.runs, fe.quantum, fe.resolution
     )
@@ -302,10 +306,7 @@ def collinear_members(
     cos_max = math.cos(math.radians(max_angle_deg))
     tol = seg.tol
     for i in order:
-        ln = lines[i]
-        cy, cz = float(ln.centroid[0]), float(ln.centroid[1])
-        dy, dz = float(ln.direction[0]), float(ln.direction[1])
-        t0, t1 = float(ln.t[0]), float(ln.t[-1])
+        cy, cz, dy, dz, t0, t1 = lines[i].scalars
         ends = ((cy + t0 * dy, cz + t0 * dz), (cy + t1 * dy, cz + t1 * dz))
         for k, (ay, az, ady, adz) in enumerate(anchors):
             if abs(ady * dy + adz * dz) >= cos_max and all(
@@ -332,12 +333,13 @@ def collinear_groups(seg: Segments, max_angle_deg: float = 30.0) -> list[Line]:
 
 def intersect(a: Line, b: Line) -> FloatArray | None:
     """(2,) crossing of two lines, or None when (nearly) parallel."""
-    d = a.direction[0] * b.direction[1] - a.direction[1] * b.direction[0]
+    (ay, az), (ady, adz) = a.centroid.tolist(), a.direction.tolist()
+    (by, bz), (bdy, bdz) = b.centroid.tolist(), b.direction.tolist()
+    d = ady * bdz - adz * bdy
     if abs(d) < 1e-9:
         return None
-    w = b.centroid - a.centroid
-    s = (w[0] * b.direction[1] - w[1] * b.direction[0]) / d
-    return a.point(s)
+    s = ((by - ay) * bdz - (bz - az) * bdy) / d
+    return np.array([ay + s * ady, az + s * adz])
 
 
 def _angle(a: Line, b: Line) -> float:
@@ -353,9 +355,8 @@ def corner_with(
     beyond its last inlier (the edge lies between rays) and None."""
     # Scalars, not numpy: a handful of tests per neighbour, where numpy's per-call overhead
     # would dominate (the extractors call this four times per profile).
-    cy, cz = float(line.centroid[0]), float(line.centroid[1])
-    dy, dz = float(line.direction[0]), float(line.direction[1])
-    t_tip = float(line.t[-1] if at_end else line.t[0])
+    cy, cz, dy, dz, t_first, t_last = line.scalars
+    t_tip = t_last if at_end else t_first
     tip_y, tip_z = cy + t_tip * dy, cz + t_tip * dz
     reach = 3.0 * max(line.step(at_end), seg.spacing) + seg.tol
     cos_min = math.cos(math.radians(20))
@@ -363,21 +364,19 @@ def corner_with(
     for other in others:
         if other is line:
             continue
-        ody, odz = float(other.direction[0]), float(other.direction[1])
+        ocy, ocz, ody, odz, o_first, o_last = other.scalars
         if abs(dy * ody + dz * odz) > cos_min:
             continue  # within 20 deg: no corner
         det = dy * odz - dz * ody
         if abs(det) < 1e-9:
             continue
-        ocy, ocz = float(other.centroid[0]), float(other.centroid[1])
         s = ((ocy - cy) * odz - (ocz - cz) * ody) / det
         xy, xz = cy + s * dy, cz + s * dz
         d = math.hypot(xy - tip_y, xz - tip_z)
         if d > reach or d >= best_d:
             continue
         near_other = min(
-            math.hypot(ocy + t * ody - xy, ocz + t * odz - xz)
-            for t in (float(other.t[0]), float(other.t[-1]))
+            math.hypot(ocy + t * ody - xy, ocz + t * odz - xz) for t in (o_first, o_last)
         )
         reach_other = 3.0 * max(other.step(True), other.step(False), seg.spacing) + seg.tol
         if near_other <= reach_other:

@@ -265,6 +265,237 @@ class FrontEnd:
     resolution: float
 
 
+@numba.njit(cache=True, nogil=True)
+def _select(x: FloatArray, k: int) -> float:
+    """The k-th smallest of ``x`` (``np.sort(x)[k]``) by quickselect with a three-way
+    partition, in place: O(n) also when most values repeat (quantized ranges)."""
+    lo, hi = 0, x.shape[0] - 1
+    while lo < hi:
+        a, b, c = x[lo], x[(lo + hi) // 2], x[hi]
+        pivot = max(min(a, b), min(max(a, b), c))
+        lt, i, gt = lo, lo, hi
+        while i <= gt:
+            v = x[i]
+            if v < pivot:
+                x[i], x[lt] = x[lt], v
+                lt += 1
+                i += 1
+            elif v > pivot:
+                x[i], x[gt] = x[gt], v
+                gt -= 1
+            else:
+                i += 1
+        if k < lt:
+            hi = lt - 1
+        elif k > gt:
+            lo = gt + 1
+        else:
+            return pivot
+    return x[lo]
+
+
+@numba.njit(cache=True, nogil=True)
+def _upper_median(x: FloatArray) -> float:
+    """``np.sort(x)[len(x) // 2]`` (0 for an empty array); ``x`` is reordered.
+
+    A sample of ~100 values brackets the median (Floyd and Rivest's idea); one branch-free
+    pass counts the values below the bracket and copies those inside, and the median is
+    selected among those few (else, rarely, among all). Quickselect alone on ~1,000 fresh
+    values is mostly mispredicted branches."""
+    n = x.shape[0]
+    if n == 0:
+        return 0.0
+    k = n // 2
+    if n < 256:
+        return _select(x, k)
+    s = 99
+    sample = np.empty(s)
+    for i in range(s):
+        sample[i] = x[((2 * i + 1) * n) // (2 * s)]
+    sample.sort()
+    r = (k * s) // n
+    lo_v = sample[max(r - 12, 0)]
+    hi_v = sample[min(r + 12, s - 1)]
+    band = np.empty(n)
+    below = 0
+    j = 0
+    for i in range(n):
+        v = x[i]
+        below += v < lo_v
+        band[j] = v
+        j += (v >= lo_v) & (v <= hi_v)
+    if below <= k < below + j:
+        return _select(band[:j], k - below)
+    return _select(x, k)
+
+
+@numba.njit(cache=True, nogil=True)
+def _noise(z: FloatArray, lags: IntArray) -> float:
+    """1.4826 / sqrt(6) median |second difference| at each lag that fits; the first lag's
+    estimate unless a later one exceeds it by half (then the largest)."""
+    n = z.shape[0]
+    first = -1.0
+    best = -1.0
+    for j in range(lags.shape[0]):
+        k = lags[j]
+        if n <= 2 * k:
+            continue
+        d = np.empty(n - 2 * k)
+        for i in range(n - 2 * k):
+            d[i] = abs(z[i + 2 * k] - 2.0 * z[i + k] + z[i])
+        e = _SIGMA_FROM_SECOND_DIFF * _upper_median(d)
+        if first < 0.0:
+            first = e
+        best = max(best, e)
+    if first < 0.0:
+        return 0.0
+    return first if best <= 1.5 * first else best
+
+
+@numba.njit(cache=True, nogil=True)
+def front(
+    points: FloatArray,
+    valid: NDArray[np.bool_],
+    max_abs: float,
+    min_points: int,
+    resolution_mm: float,
+    min_tol_mm: float,
+    sigma_factor: float,
+    max_detour_mm: float,
+    default_resolution: float,
+    tol_resolutions: float,
+) -> tuple[
+    int,
+    FloatArray,
+    IntArray,
+    IntArray,
+    IntArray,
+    NDArray[np.bool_],
+    FloatArray,
+]:
+    """The front end of :func:`seamtrack.features.robust.front_end` in one pass.
+
+    ``resolution_mm`` 0: not given (read from the data); ``min_tol_mm`` NaN: not given.
+
+    Returns
+    -------
+    code : int
+        0 ok; 1 too few valid points (``len(p)`` of the kept points); 2 constant profile.
+    p : (m, 2) kept points (spikes removed)
+    columns, spike_columns : their columns, the removed spikes' columns
+    runs : bounds of the runs between jumps
+    stray : (m,) points of detours
+    scalars : (sigma, tol, floor, spacing, quantum, resolution)
+    """
+    n = points.shape[0]
+    m = 0
+    for i in range(n):
+        if valid[i] and abs(points[i, 0]) < max_abs and abs(points[i, 1]) < max_abs:
+            m += 1
+    p = np.empty((m, 2))
+    cols = np.empty(m, dtype=np.int64)
+    j = 0
+    for i in range(n):
+        if valid[i] and abs(points[i, 0]) < max_abs and abs(points[i, 1]) < max_abs:
+            p[j, 0] = points[i, 0]
+            p[j, 1] = points[i, 1]
+            cols[j] = i
+            j += 1
+    empty_i = np.empty(0, dtype=np.int64)
+    scalars = np.zeros(6)
+    if m < 2 * min_points:
+        return 1, p, cols, empty_i, empty_i, np.zeros(m, dtype=np.bool_), scalars
+    if m < 2:
+        return 2, p, cols, empty_i, empty_i, np.zeros(m, dtype=np.bool_), scalars
+    d = np.empty(m - 1)
+    for i in range(m - 1):
+        d[i] = abs(p[i + 1, 0] - p[i, 0])
+    spacing = _upper_median(d)
+    if not spacing > 0.0:
+        for i in range(m - 1):
+            d[i] = math.hypot(p[i + 1, 0] - p[i, 0], p[i + 1, 1] - p[i, 1])
+        spacing = _upper_median(d)
+    if not spacing > 0.0:
+        return 2, p, cols, empty_i, empty_i, np.zeros(m, dtype=np.bool_), scalars
+    z = np.ascontiguousarray(p[:, 1])
+    q = range_quantum(z)
+    if resolution_mm != 0.0:
+        resolution = resolution_mm
+    elif q > 0.0:
+        resolution = q
+    else:
+        resolution = default_resolution
+    floor = tol_resolutions * resolution if math.isnan(min_tol_mm) else min_tol_mm
+    rounding = q / math.sqrt(12.0)
+    one = np.ones(1, dtype=np.int64)
+    sigma = max(_noise(z, one), rounding)
+    # Isolated outliers against a running median of 5 (edges: the nearest full window).
+    med = np.empty(m)
+    if m < 5:
+        med[:] = np.median(z)
+    else:
+        for i in range(m - 4):
+            a, b, c, dd, e = z[i], z[i + 1], z[i + 2], z[i + 3], z[i + 4]
+            f = max(min(a, b), min(c, dd))
+            g = min(max(a, b), max(c, dd))
+            med[i + 2] = max(min(e, f), min(max(e, f), g))
+        med[0] = med[1] = med[2]
+        med[m - 1] = med[m - 2] = med[m - 3]
+    limit = max(6.0 * sigma, 4.0 * floor, 4.0 * spacing)
+    keep = np.empty(m, dtype=np.bool_)
+    kept = 0
+    for i in range(m):
+        keep[i] = abs(z[i] - med[i]) <= limit
+        if keep[i]:
+            kept += 1
+    p2 = np.empty((kept, 2))
+    cols2 = np.empty(kept, dtype=np.int64)
+    spikes = np.empty(m - kept, dtype=np.int64)
+    j = 0
+    s = 0
+    for i in range(m):
+        if keep[i]:
+            p2[j, 0] = p[i, 0]
+            p2[j, 1] = p[i, 1]
+            cols2[j] = cols[i]
+            j += 1
+        else:
+            spikes[s] = cols[i]
+            s += 1
+    lags = np.array([1, 2, 4, 8], dtype=np.int64)
+    sigma = max(_noise(np.ascontiguousarray(p2[:, 1]), lags), rounding)
+    tol = max(floor, sigma_factor * sigma)
+    jump = max(6.0 * spacing, 2.0 * tol, 0.1)
+    jump2 = jump * jump
+    cut = np.empty(max(kept - 1, 0), dtype=np.bool_)
+    ncut = 0
+    for i in range(kept - 1):
+        dy, dz = p2[i + 1, 0] - p2[i, 0], p2[i + 1, 1] - p2[i, 1]
+        cut[i] = dy * dy + dz * dz > jump2
+        if cut[i]:
+            ncut += 1
+    runs = np.empty(ncut + 2, dtype=np.int64)
+    runs[0] = 0
+    r = 1
+    for i in range(kept - 1):
+        if cut[i]:
+            runs[r] = i + 1
+            r += 1
+    runs[r] = kept
+    off = detours(p2, runs[:-1], runs[1:], tol, min_points, max_detour_mm)
+    stray = np.zeros(kept, dtype=np.bool_)
+    for k in range(runs.shape[0] - 1):
+        if off[k]:
+            stray[runs[k] : runs[k + 1]] = True
+    scalars[0] = sigma
+    scalars[1] = tol
+    scalars[2] = floor
+    scalars[3] = spacing
+    scalars[4] = q
+    scalars[5] = resolution
+    return 0, p2, cols2, spikes, runs, stray, scalars
+
+
 def front_end(
     profile: Profile,
     *,
@@ -275,31 +506,35 @@ def front_end(
     max_detour_mm: float = 3.0,
 ) -> FrontEnd | str:
     """Kept points, noise, tolerance, runs between jumps and detours of a profile, or why
-    there are none (a ``str``); the parameters as for :func:`segment_profile`."""
-    p, columns = _kept(profile)
-    if len(p) < 2 * min_points:
+    there are none (a ``str``); the parameters as for :func:`segment_profile`.
+
+    One compiled pass (:func:`front`): the valid bounded points,
+    their spacing (:func:`_spacing`) and range quantum (:func:`range_quantum`), the noise at
+    lag 1 (:func:`noise_sigma`), isolated spikes off a running median of 5 (:func:`_median5`)
+    dropped, the noise again over :data:`NOISE_LAGS`, the runs between jumps and their
+    detours (:func:`detours`).
+    """
+    pts = np.ascontiguousarray(profile.points_laser, dtype=np.float64).reshape(-1, 2)
+    valid = np.ascontiguousarray(profile.valid, dtype=np.bool_).reshape(-1)
+    if valid.shape != (len(pts),):
+        return "too few valid points (0)"
+    code, p, columns, spikes, runs, stray, s = front(
+        pts,
+        valid,
+        _MAX_ABS_MM,
+        int(min_points),
+        float(resolution_mm) if resolution_mm else 0.0,
+        math.nan if min_tol_mm is None else float(min_tol_mm),
+        float(sigma_factor),
+        float(max_detour_mm),
+        DEFAULT_RESOLUTION_MM,
+        TOL_RESOLUTIONS,
+    )
+    if code == 1:
         return f"too few valid points ({len(p)})"
-    spacing = _spacing(p)
-    if not spacing > 0:
+    if code == 2:
         return "the valid points do not spread out (constant profile)"
-    q = range_quantum(np.ascontiguousarray(p[:, 1]))
-    resolution = resolution_mm if resolution_mm else q if q > 0 else DEFAULT_RESOLUTION_MM
-    floor = TOL_RESOLUTIONS * resolution if min_tol_mm is None else min_tol_mm
-    rounding = q / math.sqrt(12.0)
-    # Isolated outliers first: they would split lines and bias the noise estimate.
-    sigma = max(noise_sigma(p), rounding)
-    dev = np.abs(p[:, 1] - _median5(p[:, 1]))
-    keep = dev <= max(6.0 * sigma, 4.0 * floor, 4.0 * spacing)
-    spikes = columns[~keep]
-    p, columns = p[keep], columns[keep]
-    sigma = max(noise_sigma(p, NOISE_LAGS), rounding)
-    tol = max(floor, sigma_factor * sigma)
-    jump = max(6.0 * spacing, 2.0 * tol, 0.1)
-    gaps = np.hypot(*np.diff(p, axis=0).T)
-    cuts = np.flatnonzero(gaps > jump) + 1
-    runs = np.concatenate([[0], cuts, [len(p)]]).astype(np.intp)
-    off = detours(p, runs[:-1], runs[1:], tol, min_points, max_detour_mm)
-    stray = np.repeat(off, np.diff(runs))
+    sigma, tol, floor, spacing, q, resolution = (float(v) for v in s)
     return FrontEnd(p, columns, spikes, runs, stray, sigma, tol, floor, spacing, q, resolution)
 
 

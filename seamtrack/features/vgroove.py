@@ -117,8 +117,11 @@ def _group_of(piece: Line | None, groups: list[Line]) -> Line | None:
 
 def _plate_depth(plate: Line, q: FloatArray) -> float:
     """Depth of ``q`` behind ``plate``'s line (away from the sensor, at the origin)."""
-    n = plate.normal if float(plate.centroid @ plate.normal) > 0 else -plate.normal
-    return float((q - plate.centroid) @ n)
+    (cy, cz), (dy, dz), (qy, qz) = plate.centroid.tolist(), plate.direction.tolist(), q.tolist()
+    ny, nz = -dz, dy  # the normal, turned away from the sensor
+    if not cy * ny + cz * nz > 0:
+        ny, nz = -ny, -nz
+    return (qy - cy) * ny + (qz - cz) * nz
 
 
 @dataclass(frozen=True)
@@ -501,4 +504,4 @@ def _at_depth(line: Line, plate: Line, depth: float, stretch: tuple[float, float
     if abs(rate) < 1e-6:
         return line.point(stretch[0])
     t = float((depth - _plate_depth(plate, line.centroid)) / rate)
-    return line.point(float(np.clip(t, lo, hi)))
+    return line.point(min(max(t, lo), hi))  # as np.clip (NaN stays NaN)

@@ -1,0 +1,76 @@
+"""Compiled counts of the family extractors' joint models: the share of a profile a model's
+lines explain (:func:`seamtrack.features.base.explained`) and an arm's support in the V search
+(:meth:`seamtrack.features.base._Base._arms`). One pass over the kept points each, where the
+numpy formulation made a dozen small array operations per zone or group."""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+
+@numba.njit(cache=True, nogil=True)
+def explained_share(
+    p: FloatArray,
+    surface: NDArray[np.bool_],
+    zones: IntArray,
+    lines: FloatArray,
+    band: float,
+) -> float:
+    """Share of the surface points within ``band`` of a line of their zone
+    (:func:`seamtrack.features.base.explained`): zone ``k`` spans ``p[zones[k, 0]:zones[k, 1]]``
+    with ``zones[k, 2]`` lines (``lines[k, j]``: centroid y, z, normal y, z); a zone without
+    a line is left out of the count; points in no zone count as unexplained."""
+    m = p.shape[0]
+    counted = surface.copy()
+    ok = np.zeros(m, dtype=np.bool_)
+    for k in range(zones.shape[0]):
+        lo, hi = max(zones[k, 0], 0), min(zones[k, 1], m)
+        if hi <= lo:
+            continue
+        if zones[k, 2] == 0:
+            counted[lo:hi] = False
+            continue
+        for j in range(zones[k, 2]):
+            cy, cz, ny, nz = lines[k, j, 0], lines[k, j, 1], lines[k, j, 2], lines[k, j, 3]
+            for i in range(lo, hi):
+                if abs((p[i, 0] - cy) * ny + (p[i, 1] - cz) * nz) <= band:
+                    ok[i] = True
+    total = 0
+    good = 0
+    for i in range(m):
+        if counted[i]:
+            total += 1
+            if ok[i]:
+                good += 1
+    return good / total if total else 0.0
+
+
+@numba.njit(cache=True, nogil=True)
+def support(
+    p: FloatArray,
+    surface: NDArray[np.bool_],
+    cy: float,
+    cz: float,
+    uy: float,
+    uz: float,
+    band: float,
+    x_u: float,
+    sign: float,
+    tol: float,
+) -> int:
+    """Surface points within ``band`` of the line (centroid, unit direction) on one side of
+    the point whose projection on the direction is ``x_u`` (``sign``: which side; a
+    tolerance past it counts): an arm's support (:meth:`seamtrack.features.base._Base._arms`)."""
+    n = 0
+    for i in range(p.shape[0]):
+        if surface[i]:
+            dy, dz = p[i, 0] - cy, p[i, 1] - cz
+            if abs(dy * -uz + dz * uy) <= band:
+                if sign * ((p[i, 0] * uy + p[i, 1] * uz) - x_u) >= -tol:
+                    n += 1
+    return n
