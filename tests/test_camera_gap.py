@@ -42,3 +42,31 @@ def test_the_backing_seen_through_the_gap_spans_the_gap(ideal: bool) -> None:
     lo, hi = float(backing[:, 0].min()), float(backing[:, 0].max())
     assert hi - lo == pytest.approx(GAP_MM, abs=spacing)
     assert 0.5 * (lo + hi) == pytest.approx(seam_y, abs=spacing)
+
+
+def _butt_with_backing(backing_width_mm: float) -> np.ndarray:
+    """A square butt seen square on: plates at z = 100 mm either side of a 1 mm gap centred at
+    y = 0, and the backing 10 mm behind seen through it over ``backing_width_mm``; 0.02 mm pitch."""
+    y = np.arange(-10.0, 10.0, 0.02)
+    z = np.full_like(y, 100.0)
+    z[np.abs(y) < 0.5 * backing_width_mm] = 110.0
+    keep = (np.abs(y) >= 0.5) | (np.abs(y) < 0.5 * backing_width_mm)
+    return np.column_stack([y, z])[keep]
+
+
+@pytest.mark.parametrize("width", [0.6, 0.98, 1.2])
+def test_a_backing_as_wide_as_the_plate_minimum_is_no_third_plate(width: float) -> None:
+    """What a camera sees of the backing through the gap spans the gap (the test above), as
+    wide as the extractor's smallest plate (1 mm): 10 mm behind both plates it is no plate, so
+    the two plates stay neighbours and the gap between them is the joint. With the backing
+    test off (``min_bottom_mm`` beyond its depth), a backing over 1 mm reads as a third plate
+    and no gap is found: the failure the image-mode bench showed."""
+    from seamtrack.features.extractors import extractor
+    from seamtrack.sensing.profiles import Profile
+
+    profile = Profile(_butt_with_backing(width))
+    feature = extractor("square-butt")(profile)
+    assert feature, feature.reason
+    assert abs(feature.point_laser[0]) < 0.05 and abs(feature.point_laser[1] - 100.0) < 0.05
+    if width > 1.0:
+        assert not extractor("square-butt", min_bottom_mm=50.0)(profile)

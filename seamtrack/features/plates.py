@@ -236,6 +236,7 @@ def _sheets(
     min_plate_mm: float,
     max_tilt_deg: float,
     apart: Callable[[Line, Line], bool] | None,
+    behind_mm: float = math.inf,
 ) -> _Sheets:
     """Plates and where they are interrupted.
 
@@ -244,7 +245,8 @@ def _sheets(
     plate); a line spanning ``min_plate_mm`` is a plate. Column order then gives runs:
     consecutive pieces of one plate line stay one run unless ``apart(left, right)`` says
     the hole between them is a joint (a square butt's open gap), so a reflection or a
-    dropout never splits a plate.
+    dropout never splits a plate. A stretch ``behind_mm`` or more behind the plate on both
+    sides of it is no plate either, however wide: it is what a gap shows of the backing.
     """
     tilt = math.radians(max_tilt_deg)
     flat = [
@@ -283,8 +285,11 @@ def _sheets(
                 j += 1
             if j < len(plates) and plates[i - 1][0] == plates[j][0]:
                 block = [p for _, p in plates[i:j]]
-                tilted = _angle(block[0], groups[plates[j][0]][0]) > math.radians(10)
-                if tilted or span(groups[plates[i][0]][0], block) < min_plate_mm:
+                host = groups[plates[j][0]][0]
+                tilted = _angle(block[0], host) > math.radians(10)
+                centres = np.array([p.centroid for p in block])
+                behind = -float(np.median(_towards_sensor(host, centres))) >= behind_mm
+                if tilted or behind or span(groups[plates[i][0]][0], block) < min_plate_mm:
                     blocks.append((sum(p.count for p in block), i, j))
             i = j
         if not blocks:
@@ -376,7 +381,8 @@ class SquareButtExtractor(_Base):
             return hole.open_mm >= self.min_open_mm
 
         owner = _owner(seg)
-        sheets = _sheets(seg, owner, self.min_points, self.min_plate_mm, self.max_tilt_deg, apart)
+        sheets = _sheets(seg, owner, self.min_points, self.min_plate_mm, self.max_tilt_deg, apart,
+                         behind_mm=self.min_bottom_mm)  # fmt: skip
         best, best_key = None, (False, 0.0)
         for a, b, _ in _neighbours(sheets, self.max_gap_mm):
             opening = float(np.hypot(*(b.end(False) - a.end(True))))
