@@ -216,3 +216,55 @@ def test_arm_tracks_the_paper_curve_and_keeps_the_torch_on_the_normal() -> None:
     assert s["max_travel_angle_error_deg"] < 1.0
     assert s["joint_limited_ticks"] == 0
     assert s["min_wrist_angle_deg"] > 5.0
+
+
+def test_program_turns_at_v_over_r_round_a_girth() -> None:
+    """A tool kept looking ahead along a horizontal circle of radius r turns about the
+    vertical at v / r (counter-clockwise travel: +z)."""
+    from seamtrack.control.orientation import ToolProgram
+    from seamtrack.geometry.seam import Seam
+
+    radius, speed = 50.0, 10.0
+    angle = np.linspace(0.0, 2 * math.pi, 721)
+    points = np.column_stack([radius * np.cos(angle), radius * np.sin(angle), np.zeros(721)])
+    points[-1] = points[0]
+    program = ToolProgram(Seam.from_points(points), look_ahead_mm=10.0)
+    for s in (5.0, 100.0, 300.0):
+        omega = program.angular_velocity(s, speed)
+        assert np.allclose(omega, [0.0, 0.0, speed / radius], rtol=1e-3, atol=1e-5)
+
+
+@pytest.mark.parametrize("feed_forward", [False, True])
+def test_orientation_feed_forward_removes_the_turning_lag(feed_forward: bool) -> None:
+    """The tool must keep turning about its axis at omega. Without feed-forward the set-point
+    trails the goal by omega^2 / (2 alpha), the error from which braking at the angular
+    acceleration limit alpha stops in time, plus up to omega times the refresh period (the goal
+    it chases is held between refreshes); with it, by less than 0.01 deg."""
+    from seamtrack.control.arm import ArmMove
+
+    robot = _arm()
+    state = robot.state_at_joints(robot.kinematics.home_rad)
+    omega, dt = 0.2, robot.control_period_s
+    alpha = robot.angular_acceleration_max_rad_s2
+    R0, target = state.R.copy(), tuple(state.q)
+
+    def about_z(t: float) -> np.ndarray:
+        c, s = math.cos(omega * t), math.sin(omega * t)
+        return R0 @ np.array([[c, -s, 0], [s, c, 0], [0, 0, 1.0]])
+
+    rate = R0[:, 2] * omega if feed_forward else None  # about the tool's z, base axes
+    move = None
+    lags = []
+    for tick in range(3000):
+        if tick % 10 == 0:  # the tracker refreshes the orientation every 10 ms
+            move = ArmMove(target, 1.0, rotation=about_z(tick * dt), angular_velocity=rate)
+        robot.step(state, move)
+        goal = about_z((tick + 1) * dt)
+        cos = (np.trace(goal.T @ state.R) - 1.0) / 2.0
+        lags.append(math.acos(min(1.0, cos)))
+    steady = max(lags[-1000:])
+    if feed_forward:
+        assert steady < math.radians(0.01)
+    else:
+        assert steady == pytest.approx(omega**2 / (2 * alpha) + omega * 10 * dt, rel=0.05)
+    assert state.limited_ticks == 0

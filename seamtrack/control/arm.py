@@ -6,8 +6,11 @@ Every control tick (:meth:`ArticulatedRobot.step`), as an arm controller does:
    paper's gantry (:class:`~seamtrack.control.robot.CartesianRobot`, without end stops): a path
    speed capped by Cartesian velocity limits per base axis, changed at most by the
    acceleration limits, and a velocity feed-forward.
-2. **Orientation set-point**: turned towards the commanded tool rotation with an angular
-   velocity proportional to the rotation error, capped by an angular speed and acceleration.
+2. **Orientation set-point**: the commanded tool rotation is a goal that turns on at the
+   command's angular velocity (the feed-forward: a robot program that keeps turning the tool
+   along a saddle or a girth) until the next command; the set-point turns at that rate plus a
+   correction proportional to its rotation error (braking in time so as not to overshoot),
+   capped by an angular speed and acceleration.
 3. **Inverse kinematics** of the set-point pose (damped least squares from the last joint
    set-point: one or two Newton steps at 1 kHz, since the pose moves microns per tick).
 4. **Joint limits** on the joint set-point: its velocity is scaled down (as a whole, keeping the
@@ -53,6 +56,20 @@ TICK_DAMPING = 1e-3
 _DAMPING2 = TICK_DAMPING**2 * np.eye(6)
 
 
+@dataclass(frozen=True)
+class ArmMove(MoveCommand):
+    """A :class:`MoveCommand` with the orientation's feed-forward.
+
+    Attributes
+    ----------
+    angular_velocity : (3,) float or None
+        Rate (rad/s, base axes) at which the goal ``rotation`` turns on until the next
+        command's rotation.
+    """
+
+    angular_velocity: FloatArray | None = None
+
+
 @dataclass
 class ArmState:
     """The arm's moving state (the loop owns it).
@@ -73,6 +90,8 @@ class ArmState:
     qd_ref: FloatArray
     servo: ServoState | None
     data: Any
+    R_goal: FloatArray = field(default_factory=lambda: np.eye(3))
+    goal_from: FloatArray | None = None
     limited_ticks: int = 0
     clamped_ticks: int = 0
     worst_ik_mm: float = 0.0
@@ -157,6 +176,7 @@ class ArticulatedRobot:
         velocity_ff_world: ArrayLike | None = None,
         stop_at_target: bool = False,
         rotation_world: ArrayLike | None = None,
+        angular_velocity_world: ArrayLike | None = None,
     ) -> MoveCommand:
         T = self._T_base_world
         q = frames.apply(T, np.asarray(target_world, dtype=float))
@@ -164,15 +184,18 @@ class ArticulatedRobot:
         if velocity_ff_world is not None:
             ffv = frames.apply_vectors(T, np.asarray(velocity_ff_world, dtype=float))
             ff = (float(ffv[0]), float(ffv[1]), float(ffv[2]))
-        rotation = None
+        rotation = omega = None
         if rotation_world is not None:
             rotation = T[:3, :3] @ np.asarray(rotation_world, dtype=float)
-        return MoveCommand(
+            if angular_velocity_world is not None:
+                omega = T[:3, :3] @ np.asarray(angular_velocity_world, dtype=float)
+        return ArmMove(
             (float(q[0]), float(q[1]), float(q[2])),
             float(speed_mm_s),
             ff,
             bool(stop_at_target),
             rotation,
+            omega,
         )
 
     # ----------------------------------------------------------------- state
@@ -207,16 +230,29 @@ class ArticulatedRobot:
         # Orientation set-point.
         omega = state.omega
         if command is not None and command.rotation is not None:
-            err = pin.log3(command.rotation @ state.R_set.T)
+            ff = getattr(command, "angular_velocity", None)
+            rotation = command.rotation
+            if state.goal_from is not None and np.array_equal(rotation, state.goal_from):
+                if ff is not None:  # the same goal as the last tick's: it turns on
+                    state.R_goal = pin.exp3(ff * dt) @ state.R_goal
+            else:
+                state.goal_from = rotation
+                state.R_goal = rotation
+            err = pin.log3(state.R_goal @ state.R_set.T)
             size = float(np.linalg.norm(err))
-            # Proportional, capped by the angular speed and by the speed from which braking
-            # at the angular acceleration limit stops on the target (no overshoot).
+            # Proportional, capped by the speed from which braking at the angular
+            # acceleration limit stops on the goal (no overshoot), on top of the goal's own
+            # turning; all capped by the angular speed.
             speed = min(
                 ORIENTATION_GAIN_1_S * size,
-                self.angular_velocity_max_rad_s,
                 math.sqrt(2.0 * self.angular_acceleration_max_rad_s2 * size),
             )
             want = err * (speed / size) if size > 0.0 else np.zeros(3)
+            if ff is not None:
+                want = want + ff
+            norm = float(np.linalg.norm(want))
+            if norm > self.angular_velocity_max_rad_s:
+                want *= self.angular_velocity_max_rad_s / norm
         else:
             want = np.zeros(3)
         dw = want - omega
