@@ -124,13 +124,26 @@ class ToolProgram:
         This is the orientation's feed-forward: a tool that must keep turning (a saddle, a
         girth) turns at this rate without waiting for an orientation error to build up.
         """
-        length = self.seam.length_mm
-        lo = max(arc_length_mm - TURN_RATE_STEP_MM, 0.0)
-        hi = min(arc_length_mm + TURN_RATE_STEP_MM, length)
+        return self._turning(arc_length_mm, speed_mm_s)[1]
+
+    def _turning(self, s: float, speed_mm_s: float) -> tuple[FloatArray, FloatArray]:
+        """The rotation at s and the angular velocity there, from one call of
+        :meth:`rotations`."""
+        lo = max(s - TURN_RATE_STEP_MM, 0.0)
+        hi = min(s + TURN_RATE_STEP_MM, self.seam.length_mm)
+        R, R_lo, R_hi = self.rotations([s, lo, hi])
         if hi <= lo:
-            return np.zeros(3)
-        R_lo, R_hi = self.rotations([lo, hi])
-        return rotation_vector(R_hi @ R_lo.T) * (speed_mm_s / (hi - lo))
+            return R, np.zeros(3)
+        return R, rotation_vector(R_hi @ R_lo.T) * (speed_mm_s / (hi - lo))
+
+    def turning_near(
+        self, point: ArrayLike, hint_mm: float, speed_mm_s: float
+    ) -> tuple[FloatArray, FloatArray, float]:
+        """Tool rotation and angular velocity (at ``speed_mm_s`` along the seam) at the seam
+        point closest to ``point`` near the arc length hint, and that arc length."""
+        s = self.seam.closest_near(point, hint_mm)
+        R, omega = self._turning(s, speed_mm_s)
+        return R, omega, s
 
     def rotation_near(self, point: ArrayLike, hint_mm: float) -> tuple[FloatArray, float]:
         """Tool rotation at the seam point closest to ``point`` near the arc length hint

@@ -300,10 +300,9 @@ class TrajectoryTracker:
         if self._program is not None:
             self._tick += 1
             if self._tick % self._orient_every == 0:
-                self._rotation, self._s_program = self._program.rotation_near(
-                    target, self._s_program
+                self._rotation, self._omega, self._s_program = self._program.turning_near(
+                    target, self._s_program, self._v_set
                 )
-                self._omega = self._program.angular_velocity(self._s_program, self._v_set)
         return Command(
             target,
             self.gain_1_s * error,
