@@ -270,3 +270,36 @@ def test_orientation_feed_forward_removes_the_turning_lag(feed_forward: bool) ->
     else:
         assert steady == pytest.approx(omega**2 / (2 * alpha) + omega * 10 * dt, rel=0.05)
     assert state.limited_ticks == 0
+
+
+def test_a_trackers_non_finite_angular_velocity_is_refused_naming_the_tracker() -> None:
+    import dataclasses
+
+    from seamtrack.control.tracking import Command
+    from seamtrack.errors import PluginRuntimeError
+    from seamtrack.simulation.assemble import build_parts
+    from seamtrack.simulation.loop import run
+
+    class Spinning:
+        def reset(self, context):  # type: ignore[no-untyped-def]
+            self.start = np.asarray(context.tcp_start_world)
+
+        def update(self, measurement):  # type: ignore[no-untyped-def]
+            pass
+
+        def command(self, t_s, tcp_world, tcp_velocity_world):  # type: ignore[no-untyped-def]
+            return Command(self.start, 1.0, rotation_world=np.eye(3),
+                           angular_velocity_world=np.array([math.nan, 0.0, 0.0]))  # fmt: skip
+
+    scene = st.load_scene(
+        "paper-verification",
+        overrides={
+            "robot.model": "ur10e",
+            "tracker.name": "trajectory",
+            "robot.base_origin_mm": [200.0, -700.0, 0.0],
+            "seam.length_mm": 20.0,
+        },
+    )
+    parts = dataclasses.replace(build_parts(scene), tracker=Spinning())
+    with pytest.raises(PluginRuntimeError, match="tracker.name.*angular velocity.*rad/s"):
+        run(parts)
