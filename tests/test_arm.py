@@ -95,11 +95,13 @@ def _arm(servo_gain: float | None = None) -> ArticulatedRobot:
     dz=st_h.floats(-400, 400),
     turn=st_h.floats(-math.pi, math.pi),
     speed=st_h.floats(1.0, 250.0),
+    servo_gain=st_h.sampled_from([None, 20.0, 100.0]),
 )
-def test_joint_limits_are_never_exceeded(dx, dy, dz, turn, speed) -> None:
-    """Any move, reachable or not, at any speed: positions, velocities and accelerations of
-    the joints stay within their limits on every tick."""
-    robot = _arm()
+def test_joint_limits_are_never_exceeded(dx, dy, dz, turn, speed, servo_gain) -> None:
+    """Any move, reachable or not, at any speed, with ideal joints or behind a servo:
+    positions, velocities and accelerations of the joints stay within their limits on every
+    tick."""
+    robot = _arm(servo_gain)
     kin = robot.kinematics
     state = robot.state_at_joints(kin.home_rad)
     c, s = math.cos(turn), math.sin(turn)
@@ -216,3 +218,88 @@ def test_arm_tracks_the_paper_curve_and_keeps_the_torch_on_the_normal() -> None:
     assert s["max_travel_angle_error_deg"] < 1.0
     assert s["joint_limited_ticks"] == 0
     assert s["min_wrist_angle_deg"] > 5.0
+
+
+def test_program_turns_at_v_over_r_round_a_girth() -> None:
+    """A tool kept looking ahead along a horizontal circle of radius r turns about the
+    vertical at v / r (counter-clockwise travel: +z)."""
+    from seamtrack.control.orientation import ToolProgram
+    from seamtrack.geometry.seam import Seam
+
+    radius, speed = 50.0, 10.0
+    angle = np.linspace(0.0, 2 * math.pi, 721)
+    points = np.column_stack([radius * np.cos(angle), radius * np.sin(angle), np.zeros(721)])
+    points[-1] = points[0]
+    program = ToolProgram(Seam.from_points(points), look_ahead_mm=10.0)
+    for s in (5.0, 100.0, 300.0):
+        omega = program.angular_velocity(s, speed)
+        assert np.allclose(omega, [0.0, 0.0, speed / radius], rtol=1e-3, atol=1e-5)
+
+
+@pytest.mark.parametrize("feed_forward", [False, True])
+def test_orientation_feed_forward_removes_the_turning_lag(feed_forward: bool) -> None:
+    """The tool must keep turning about its axis at omega. Without feed-forward the set-point
+    trails the goal by omega^2 / (2 alpha), the error from which braking at the angular
+    acceleration limit alpha stops in time, plus up to omega times the refresh period (the goal
+    it chases is held between refreshes); with it, by less than 0.01 deg."""
+    from seamtrack.control.arm import ArmMove
+
+    robot = _arm()
+    state = robot.state_at_joints(robot.kinematics.home_rad)
+    omega, dt = 0.2, robot.control_period_s
+    alpha = robot.angular_acceleration_max_rad_s2
+    R0, target = state.R.copy(), tuple(state.q)
+
+    def about_z(t: float) -> np.ndarray:
+        c, s = math.cos(omega * t), math.sin(omega * t)
+        return R0 @ np.array([[c, -s, 0], [s, c, 0], [0, 0, 1.0]])
+
+    rate = R0[:, 2] * omega if feed_forward else None  # about the tool's z, base axes
+    move = None
+    lags = []
+    for tick in range(3000):
+        if tick % 10 == 0:  # the tracker refreshes the orientation every 10 ms
+            move = ArmMove(target, 1.0, rotation=about_z(tick * dt), angular_velocity=rate)
+        robot.step(state, move)
+        goal = about_z((tick + 1) * dt)
+        cos = (np.trace(goal.T @ state.R) - 1.0) / 2.0
+        lags.append(math.acos(min(1.0, cos)))
+    steady = max(lags[-1000:])
+    if feed_forward:
+        assert steady < math.radians(0.01)
+    else:
+        assert steady == pytest.approx(omega**2 / (2 * alpha) + omega * 10 * dt, rel=0.05)
+    assert state.limited_ticks == 0
+
+
+def test_a_trackers_non_finite_angular_velocity_is_refused_naming_the_tracker() -> None:
+    import dataclasses
+
+    from seamtrack.control.tracking import Command
+    from seamtrack.errors import PluginRuntimeError
+    from seamtrack.simulation.assemble import build_parts
+    from seamtrack.simulation.loop import run
+
+    class Spinning:
+        def reset(self, context):  # type: ignore[no-untyped-def]
+            self.start = np.asarray(context.tcp_start_world)
+
+        def update(self, measurement):  # type: ignore[no-untyped-def]
+            pass
+
+        def command(self, t_s, tcp_world, tcp_velocity_world):  # type: ignore[no-untyped-def]
+            return Command(self.start, 1.0, rotation_world=np.eye(3),
+                           angular_velocity_world=np.array([math.nan, 0.0, 0.0]))  # fmt: skip
+
+    scene = st.load_scene(
+        "paper-verification",
+        overrides={
+            "robot.model": "ur10e",
+            "tracker.name": "trajectory",
+            "robot.base_origin_mm": [200.0, -700.0, 0.0],
+            "seam.length_mm": 20.0,
+        },
+    )
+    parts = dataclasses.replace(build_parts(scene), tracker=Spinning())
+    with pytest.raises(PluginRuntimeError, match="tracker.name.*angular velocity.*rad/s"):
+        run(parts)

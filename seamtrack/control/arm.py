@@ -6,8 +6,11 @@ Every control tick (:meth:`ArticulatedRobot.step`), as an arm controller does:
    paper's gantry (:class:`~seamtrack.control.robot.CartesianRobot`, without end stops): a path
    speed capped by Cartesian velocity limits per base axis, changed at most by the
    acceleration limits, and a velocity feed-forward.
-2. **Orientation set-point**: turned towards the commanded tool rotation with an angular
-   velocity proportional to the rotation error, capped by an angular speed and acceleration.
+2. **Orientation set-point**: the commanded tool rotation is a goal that turns on at the
+   command's angular velocity (the feed-forward: a robot program that keeps turning the tool
+   along a saddle or a girth) until the next command; the set-point turns at that rate plus a
+   correction proportional to its rotation error (braking in time so as not to overshoot),
+   capped by an angular speed and acceleration.
 3. **Inverse kinematics** of the set-point pose (damped least squares from the last joint
    set-point: one or two Newton steps at 1 kHz, since the pose moves microns per tick).
 4. **Joint limits** on the joint set-point: its velocity is scaled down (as a whole, keeping the
@@ -32,6 +35,7 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
+from scipy.linalg.lapack import dposv as _dposv
 
 from seamtrack.control.kinematics import M_PER_MM, ArmKinematics, _pinocchio
 from seamtrack.control.robot import CartesianRobot, MoveCommand, RobotState
@@ -51,6 +55,25 @@ ORIENTATION_GAIN_1_S = 20.0
 #: a singularity (smallest singular value ~0.1-0.3), a bounded one near it.
 TICK_DAMPING = 1e-3
 _DAMPING2 = TICK_DAMPING**2 * np.eye(6)
+
+#: A tick's pose error (m, rad) below which one Newton step is enough: its residual is of the
+#: order of the error squared, plus the damping's share (TICK_DAMPING / sigma_min)^2 of it,
+#: below 1e-5 mm; a larger error (a limit acted, or the start) gets up to two more steps.
+ONE_STEP_ERROR = 1e-4
+
+
+@dataclass(frozen=True)
+class ArmMove(MoveCommand):
+    """A :class:`MoveCommand` with the orientation's feed-forward.
+
+    Attributes
+    ----------
+    angular_velocity : (3,) float or None
+        Rate (rad/s, base axes) at which the goal ``rotation`` turns on until the next
+        command's rotation.
+    """
+
+    angular_velocity: FloatArray | None = None
 
 
 @dataclass
@@ -73,6 +96,9 @@ class ArmState:
     qd_ref: FloatArray
     servo: ServoState | None
     data: Any
+    R_goal: FloatArray = field(default_factory=lambda: np.eye(3))
+    goal_from: FloatArray | None = None
+    tcp_at_q_ref: tuple[FloatArray, FloatArray] | None = None  # (T_base_tcp in m, J) at q_ref
     limited_ticks: int = 0
     clamped_ticks: int = 0
     worst_ik_mm: float = 0.0
@@ -112,6 +138,13 @@ class ArticulatedRobot:
     _cart: CartesianRobot = field(init=False, repr=False)
     _T_base_world: FloatArray = field(init=False, repr=False)
     _reach_mm: float = field(init=False, repr=False)
+    #: The last orientation command converted to the base frame: (world rotation, world
+    #: angular velocity, base rotation, base angular velocity). A tracker hands the same
+    #: rotation for many ticks; converting it once keeps one object, which the tick then
+    #: recognises by identity.
+    _last_turn: list[Any] = field(init=False, repr=False, compare=False)
+    _inv_velocity_max: FloatArray = field(init=False, repr=False)
+    _inv_acceleration_max_dt: FloatArray = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "T_world_base", np.asarray(self.T_world_base, dtype=float))
@@ -130,6 +163,11 @@ class ArticulatedRobot:
         links += sum(float(np.linalg.norm(f.placement.translation)) for f in model.frames)
         tool = float(np.linalg.norm(self.kinematics.T_flange_tcp[:3, 3]))
         object.__setattr__(self, "_reach_mm", links / M_PER_MM + tool)
+        object.__setattr__(self, "_last_turn", [None, None, None, None])
+        kin = self.kinematics
+        object.__setattr__(self, "_inv_velocity_max", 1.0 / kin.velocity_max_rad_s)
+        accel_dt = kin.acceleration_max_rad_s2 * self.control_period_s
+        object.__setattr__(self, "_inv_acceleration_max_dt", 1.0 / accel_dt)
 
     # ----------------------------------------------------------------- poses
     def T_world_tcp_of(self, state: ArmState) -> FloatArray:
@@ -157,22 +195,32 @@ class ArticulatedRobot:
         velocity_ff_world: ArrayLike | None = None,
         stop_at_target: bool = False,
         rotation_world: ArrayLike | None = None,
+        angular_velocity_world: ArrayLike | None = None,
     ) -> MoveCommand:
         T = self._T_base_world
-        q = frames.apply(T, np.asarray(target_world, dtype=float))
+        R = T[:3, :3]
+        q = (R @ np.asarray(target_world, dtype=float) + T[:3, 3]).tolist()
         ff = (0.0, 0.0, 0.0)
         if velocity_ff_world is not None:
-            ffv = frames.apply_vectors(T, np.asarray(velocity_ff_world, dtype=float))
-            ff = (float(ffv[0]), float(ffv[1]), float(ffv[2]))
-        rotation = None
+            ffv = (R @ np.asarray(velocity_ff_world, dtype=float)).tolist()
+            ff = (ffv[0], ffv[1], ffv[2])
+        rotation = omega = None
         if rotation_world is not None:
-            rotation = T[:3, :3] @ np.asarray(rotation_world, dtype=float)
-        return MoveCommand(
+            last = self._last_turn
+            if rotation_world is last[0] and angular_velocity_world is last[1]:
+                rotation, omega = last[2], last[3]
+            else:
+                rotation = R @ np.asarray(rotation_world, dtype=float)
+                if angular_velocity_world is not None:
+                    omega = R @ np.asarray(angular_velocity_world, dtype=float)
+                last[:] = [rotation_world, angular_velocity_world, rotation, omega]
+        return ArmMove(
             (float(q[0]), float(q[1]), float(q[2])),
             float(speed_mm_s),
             ff,
             bool(stop_at_target),
             rotation,
+            omega,
         )
 
     # ----------------------------------------------------------------- state
@@ -207,55 +255,78 @@ class ArticulatedRobot:
         # Orientation set-point.
         omega = state.omega
         if command is not None and command.rotation is not None:
-            err = pin.log3(command.rotation @ state.R_set.T)
-            size = float(np.linalg.norm(err))
-            # Proportional, capped by the angular speed and by the speed from which braking
-            # at the angular acceleration limit stops on the target (no overshoot).
+            ff = getattr(command, "angular_velocity", None)
+            rotation = command.rotation
+            # The same goal as the last tick's (command_in_base converts a rotation once, so
+            # it is the same object, or failing that equal): it turns on at the feed-forward.
+            if rotation is state.goal_from or (
+                state.goal_from is not None and np.array_equal(rotation, state.goal_from)
+            ):
+                if ff is not None:
+                    state.R_goal = pin.exp3(ff * dt) @ state.R_goal
+            else:
+                state.goal_from = rotation
+                state.R_goal = rotation
+            err = pin.log3(state.R_goal @ state.R_set.T)
+            size = math.sqrt(err @ err)
+            # Proportional, capped by the speed from which braking at the angular
+            # acceleration limit stops on the goal (no overshoot), on top of the goal's own
+            # turning; all capped by the angular speed.
             speed = min(
                 ORIENTATION_GAIN_1_S * size,
-                self.angular_velocity_max_rad_s,
                 math.sqrt(2.0 * self.angular_acceleration_max_rad_s2 * size),
             )
             want = err * (speed / size) if size > 0.0 else np.zeros(3)
+            if ff is not None:
+                want = want + ff
+            norm = math.sqrt(want @ want)
+            if norm > self.angular_velocity_max_rad_s:
+                want *= self.angular_velocity_max_rad_s / norm
         else:
             want = np.zeros(3)
         dw = want - omega
-        norm = float(np.linalg.norm(dw))
+        norm = math.sqrt(dw @ dw)
         dw_max = self.angular_acceleration_max_rad_s2 * dt
         if norm > dw_max:
             dw *= dw_max / norm
         omega += dw
         if omega.any():
             state.R_set = pin.exp3(omega * dt) @ state.R_set
-        # Inverse kinematics from the last joint set-point.
-        # One Newton step follows a pose that moved microns since the last tick to well below a
-        # nanometre; a larger error (a limit acted, or the start) gets up to two more.
+        # Inverse kinematics from the last joint set-point, whose pose and Jacobian the last
+        # tick left (without a servo the joints are at their set-point). One Newton step
+        # follows a pose that moved microns since the last tick (ONE_STEP_ERROR).
         p_set = np.array(state.setpoint.q) * M_PER_MM
         q = state.q_ref
         data = state.data
+        known = state.tcp_at_q_ref
+        e = np.empty(6)
         for _ in range(3):
-            T, J = kin.jacobian(q, data)
-            e = np.empty(6)
-            e[:3] = p_set - T[:3, 3] * M_PER_MM
+            T, J = known if known is not None else kin.tcp_jacobian_m(q, data)
+            known = None
+            e[:3] = p_set - T[:3, 3]
             e[3:] = pin.log3(state.R_set @ T[:3, :3].T)
-            q = q + J.T @ np.linalg.solve(J @ J.T + _DAMPING2, e)
-            if abs(e).max() < 1e-7:
+            A = J @ J.T + _DAMPING2
+            y, info = _spd_solve(A, e)
+            if info != 0:  # not positive definite: a NaN in the pose; let numpy say so
+                y = np.asarray(np.linalg.solve(A, e), dtype=np.float64)
+            q = q + J.T @ y
+            if abs(e).max() < ONE_STEP_ERROR:
                 break
         # Joint limits on the set-point's motion.
         qd = (q - state.q_ref) / dt
         limited = False
-        over = float(np.max(np.abs(qd) / kin.velocity_max_rad_s))
+        over = float((np.abs(qd) * self._inv_velocity_max).max())
         if over > 1.0:
             qd /= over
             limited = True
         dqd = qd - state.qd_ref
-        over = float(np.max(np.abs(dqd) / (kin.acceleration_max_rad_s2 * dt)))
+        over = float((np.abs(dqd) * self._inv_acceleration_max_dt).max())
         if over > 1.0:
             qd = state.qd_ref + dqd / over
             limited = True
         q_ref = state.q_ref + qd * dt
-        clamped = np.clip(q_ref, kin.lower_rad, kin.upper_rad)
-        if not np.array_equal(clamped, q_ref):
+        if (q_ref < kin.lower_rad).any() or (q_ref > kin.upper_rad).any():
+            clamped = np.clip(q_ref, kin.lower_rad, kin.upper_rad)
             state.clamped_ticks += 1
             qd = (clamped - state.q_ref) / dt
             q_ref = clamped
@@ -269,9 +340,10 @@ class ArticulatedRobot:
         else:
             joints = q_ref
         state.joints = joints
-        T = kin.fk(joints, data)
+        T, J = kin.tcp_jacobian_m(joints, data)
+        state.tcp_at_q_ref = (T, J) if joints is q_ref else None
         old = state.q
-        new = T[:3, 3].tolist()
+        new = (T[:3, 3] / M_PER_MM).tolist()
         state.v = [(new[i] - old[i]) / dt for i in range(3)]
         state.q = new
         state.R = T[:3, :3]
@@ -346,6 +418,14 @@ class ArticulatedRobot:
                 )
             out[i] = q
         return out
+
+
+def _spd_solve(A: FloatArray, b: FloatArray) -> tuple[FloatArray, int]:
+    """x with A x = b for a symmetric positive definite A (LAPACK's Cholesky ``dposv``: a
+    third of ``numpy.linalg.solve``'s call overhead on a 6 x 6 system), and LAPACK's info
+    (0: solved)."""
+    _, x, info = _dposv(A, b)
+    return x, int(info)
 
 
 def _wrap_into_range(q: FloatArray, lower: FloatArray, upper: FloatArray) -> FloatArray:

@@ -335,6 +335,20 @@ class ArmKinematics:
         )  # fmt: skip
         return self._tcp_mm(data), J
 
+    def tcp_jacobian_m(self, q: FloatArray, data: Any) -> tuple[FloatArray, FloatArray]:
+        """TCP pose in metres and its Jacobian (see :meth:`jacobian`), for the control tick:
+        one Pinocchio call and one copy, no unit conversion of the pose.
+
+        Returns
+        -------
+        T_base_tcp : (4, 4) float
+            **metres** (a fresh array).
+        J : (6, n) float
+        """
+        pin = _pinocchio()
+        J = pin.computeFrameJacobian(self.model, data, q, self.tcp_id, pin.LOCAL_WORLD_ALIGNED)
+        return data.oMf[self.tcp_id].np, J
+
     def ik(
         self,
         T_base_tcp: ArrayLike,

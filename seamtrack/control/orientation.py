@@ -27,6 +27,19 @@ FloatArray = NDArray[np.float64]
 #: A seam whose ends are closer than this (mm) is closed (a girth seam).
 CLOSED_TOL_MM = 1e-3
 
+#: Half the arc length (mm) over which the program's rate of turning is differenced.
+TURN_RATE_STEP_MM = 0.5
+
+
+def rotation_vector(R: ArrayLike) -> FloatArray:
+    """(3,) axis times angle (rad) of a rotation matrix (angle below pi)."""
+    R = np.asarray(R, dtype=np.float64)
+    v = 0.5 * np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    angle = float(np.arccos(np.clip(0.5 * (np.trace(R) - 1.0), -1.0, 1.0)))
+    if angle < 1e-8:
+        return v
+    return v * (angle / np.sin(angle))
+
 
 def is_closed(seam: Seam) -> bool:
     """True when the seam ends where it starts."""
@@ -103,6 +116,34 @@ class ToolProgram:
         heading = np.where(norm > 1e-9, heading, fallback)
         heading /= np.linalg.norm(heading, axis=1, keepdims=True)
         return np.stack([heading, np.cross(axis, heading), axis], axis=2)
+
+    def angular_velocity(self, arc_length_mm: float, speed_mm_s: float) -> FloatArray:
+        """(3,) world angular velocity (rad/s) of the tool moving along the program at a speed:
+        ``omega = (dR/ds R^T)^vee v``, by a central difference over +-0.5 mm.
+
+        This is the orientation's feed-forward: a tool that must keep turning (a saddle, a
+        girth) turns at this rate without waiting for an orientation error to build up.
+        """
+        return self._turning(arc_length_mm, speed_mm_s)[1]
+
+    def _turning(self, s: float, speed_mm_s: float) -> tuple[FloatArray, FloatArray]:
+        """The rotation at s and the angular velocity there, from one call of
+        :meth:`rotations`."""
+        lo = max(s - TURN_RATE_STEP_MM, 0.0)
+        hi = min(s + TURN_RATE_STEP_MM, self.seam.length_mm)
+        R, R_lo, R_hi = self.rotations([s, lo, hi])
+        if hi <= lo:
+            return R, np.zeros(3)
+        return R, rotation_vector(R_hi @ R_lo.T) * (speed_mm_s / (hi - lo))
+
+    def turning_near(
+        self, point: ArrayLike, hint_mm: float, speed_mm_s: float
+    ) -> tuple[FloatArray, FloatArray, float]:
+        """Tool rotation and angular velocity (at ``speed_mm_s`` along the seam) at the seam
+        point closest to ``point`` near the arc length hint, and that arc length."""
+        s = self.seam.closest_near(point, hint_mm)
+        R, omega = self._turning(s, speed_mm_s)
+        return R, omega, s
 
     def rotation_near(self, point: ArrayLike, hint_mm: float) -> tuple[FloatArray, float]:
         """Tool rotation at the seam point closest to ``point`` near the arc length hint

@@ -41,6 +41,10 @@ class Command:
         Tool orientation ``R_world_tcp`` to turn to (z along the torch away from the work, x
         the direction the sensor looks ahead in); None keeps the tool's orientation. A robot
         that cannot turn its tool (the paper's gantry) ignores it.
+    angular_velocity_world : (3,) float or None
+        The rate (rad/s, world axes) at which ``rotation_world`` itself turns: the arm turns
+        its orientation goal on at this rate until the next command's rotation (feed-forward
+        of the orientation). None: the goal holds still.
     """
 
     target_world: FloatArray
@@ -48,6 +52,7 @@ class Command:
     velocity_ff_world: FloatArray | None = None
     stop_at_target: bool = False
     rotation_world: FloatArray | None = None
+    angular_velocity_world: FloatArray | None = None
 
 
 @dataclass(frozen=True, eq=False)

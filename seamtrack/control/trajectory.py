@@ -17,7 +17,9 @@ set-point stops and the simulation reports the seam lost.
 On a robot that turns its tool, the tracker also commands the tool's orientation from the robot
 program (:class:`~seamtrack.control.orientation.ToolProgram`): the scene's work and travel
 angles in the nominal seam frame at the set-point, and the heading that keeps the laser line
-crossing the seam ``look_ahead_mm`` ahead. It is refreshed every ``orientation_period_s``.
+crossing the seam ``look_ahead_mm`` ahead. It is refreshed every ``orientation_period_s``, with
+the program's rate of turning at the set-point's speed as a feed-forward (the arm turns its
+goal on at that rate between refreshes).
 """
 
 from __future__ import annotations
@@ -154,6 +156,7 @@ class TrajectoryTracker:
         program = context.tool_program if context.turns_tool else None
         self._program = program
         self._rotation: FloatArray | None = None
+        self._omega: FloatArray | None = None
         self._s_program = 0.0
         self._orient_every = max(1, round(self.orientation_period_s / self.dt))
         self._tick = 0
@@ -285,6 +288,7 @@ class TrajectoryTracker:
             velocity_ff_world=np.array((fx, fy, fz)),
             stop_at_target=stop,
             rotation_world=self._rotation,
+            angular_velocity_world=self._omega,
         )
 
     def command_floats(
@@ -322,8 +326,8 @@ class TrajectoryTracker:
         if self._program is not None:
             self._tick += 1
             if self._tick % self._orient_every == 0:
-                self._rotation, self._s_program = self._program.rotation_near(
-                    np.array((tx, ty, tz)), self._s_program
+                self._rotation, self._omega, self._s_program = self._program.turning_near(
+                    np.array((tx, ty, tz)), self._s_program, self._v_set
                 )
         return (tx, ty, tz, self.gain_1_s * error, dx * rate, dy * rate, dz * rate, not moving)
 

@@ -54,7 +54,9 @@ _CHECK_PERIOD_S = 0.01
 WALL_CHECK_TICKS = 64
 
 
-def _checked(cmd: Any, name: str, t_s: float, known_rotation: Any = None) -> Command:
+def _checked(
+    cmd: Any, name: str, t_s: float, known_rotation: Any = None, known_omega: Any = None
+) -> Command:
     """A tracker's command, refused with a clear error when it is not a usable move."""
 
     def refuse(what: str, fix: str) -> PluginRuntimeError:
@@ -78,6 +80,13 @@ def _checked(cmd: Any, name: str, t_s: float, known_rotation: Any = None) -> Com
         ff_arr = np.asarray(ff, dtype=float) if _numeric(ff) else None
         if ff_arr is None or ff_arr.shape != (3,) or not np.isfinite(ff_arr).all():
             raise refuse(f"the feed-forward {ff!r}", "give a finite (vx, vy, vz) in mm/s or None")
+    omega = cmd.angular_velocity_world
+    if omega is not None and omega is not known_omega:
+        omega_arr = np.asarray(omega, dtype=float) if _numeric(omega) else None
+        if omega_arr is None or omega_arr.shape != (3,) or not np.isfinite(omega_arr).all():
+            raise refuse(
+                f"the angular velocity {omega!r}", "give a finite (wx, wy, wz) in rad/s or None"
+            )
     rot = cmd.rotation_world
     if rot is not None and rot is not known_rotation:
         rot_arr = np.asarray(rot, dtype=float) if _numeric(rot) else None
@@ -245,7 +254,7 @@ def run(
     rest_window = cfg.frame_period_s + cfg.latency_s + 2 * dt
     next_capture = 0.0
     last_cmd: Command | None = None
-    last_rot: Any = None
+    last_rot: tuple[Any, Any] = (None, None)  # the last command's rotation, angular velocity
     move: MoveCommand | None = None
     last_seen = False
     rest_since: float | None = None
@@ -337,8 +346,12 @@ def run(
                 raise plugin_failed("tracker.name", name, "command", t, exc) from exc
             if cmd is not last_cmd:
                 last_cmd = cmd
-                move = None if cmd is None else _to_move(robot, _checked(cmd, name, t, last_rot))
-                last_rot = None if cmd is None else cmd.rotation_world
+                move = None if cmd is None else _to_move(robot, _checked(cmd, name, t, *last_rot))
+                last_rot = (
+                    (None, None)
+                    if cmd is None
+                    else (cmd.rotation_world, cmd.angular_velocity_world)
+                )
                 if move is not None and not robot.within_travel(move.target):
                     status = "limit_violation"
             tcp_log.extend(tcp_list)
@@ -405,6 +418,7 @@ def _to_move(robot: Any, cmd: Command) -> MoveCommand:
         cmd.velocity_ff_world,
         cmd.stop_at_target,
         rotation_world=cmd.rotation_world,
+        angular_velocity_world=cmd.angular_velocity_world,
     )
 
 

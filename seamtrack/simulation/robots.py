@@ -200,18 +200,30 @@ def tool_program(scene: Scene, seam: Seam) -> ToolProgram:
     )
 
 
-def plan_arm(robot: Any, program: ToolProgram, start_world: FloatArray) -> FloatArray:
-    """Joint positions at the start pose, after proving the whole seam reachable (a
-    :class:`ReachError` names the first seam point that is not)."""
+def plan_along(robot: Any, program: ToolProgram) -> tuple[FloatArray, FloatArray]:
+    """The arm's joint positions along the whole seam, every :data:`PLAN_STEP_MM` or closer.
+
+    Returns
+    -------
+    arc_length_mm : (m,) float
+    joints : (m, n) float
+        rad; a :class:`ReachError` names the first seam point that cannot be reached.
+    """
     seam = program.seam
     count = max(2, int(math.ceil(seam.length_mm / PLAN_STEP_MM)) + 1)
     s = np.linspace(0.0, seam.length_mm, count)
     points, _, _ = program.frame(s)
-    rotations = program.rotations(s)
     poses = np.tile(np.eye(4), (count, 1, 1))
-    poses[:, :3, :3] = rotations
+    poses[:, :3, :3] = program.rotations(s)
     poses[:, :3, 3] = points
-    joints = robot.plan(poses, "seam point", "seam")
+    return s, robot.plan(poses, "seam point", "seam")
+
+
+def plan_arm(robot: Any, program: ToolProgram, start_world: FloatArray) -> FloatArray:
+    """Joint positions at the start pose, after proving the whole seam reachable (a
+    :class:`ReachError` names the first seam point that is not)."""
+    _, joints = plan_along(robot, program)
+    rotations = program.rotations([0.0])
     start = np.eye(4)
     start[:3, :3] = rotations[0]
     start[:3, 3] = start_world

@@ -20,6 +20,7 @@ from seamtrack.viz.views import (
     _error_clim,
     _pyvista,
     _torch_path,
+    camera_on_cell,
     has_display,
     render_png,
     scene_plotter,
@@ -79,7 +80,8 @@ def animate_run(
     overrides: dict[str, Any] | list[str] | None = None,
 ) -> Path:
     """Animate a run: the sensor, its fan and stripe moving along the seam, the torch path
-    growing coloured by the tracking error. GIF (Pillow) or MP4 (imageio-ffmpeg, by suffix).
+    growing coloured by the tracking error; an articulated arm is drawn at the run's joint
+    positions, seen from beside the cell. GIF (Pillow) or MP4 (imageio-ffmpeg, by suffix).
 
     Parameters
     ----------
@@ -110,6 +112,11 @@ def animate_run(
     ticks = _frame_ticks(result, frames)
     tr = result.trace
     plotter = scene_plotter(view, at_mm=0.0, off_screen=True, window_size=window_size, title=False)
+    arm = None
+    if view.is_arm and tr.joints_rad.shape[1] > 0:
+        from seamtrack.viz.arm import ArmActors
+
+        arm = ArmActors(plotter, view.robot, tr.joints_rad[0])  # type: ignore[arg-type]
     sensor_actors = [plotter.actors[k] for k in plotter.actors if k.startswith("sensor-")]
     torch_actor = plotter.actors["torch"]
     for name in ("stripe", "seam-point"):
@@ -144,10 +151,16 @@ def animate_run(
     try:
         for tick in ticks.tolist():
             tcp = tr.tcp_world[tick]
-            T = view.pose_at_tcp(tcp)
+            if arm is not None:  # the pose the run had, from its joints
+                arm.move(tr.joints_rad[tick])
+                T_tcp = view.T_world_tcp_at_joints(tr.joints_rad[tick])
+                T = T_tcp @ view.robot.T_tcp_sensor  # type: ignore[union-attr]
+            else:
+                T_tcp = view.T_world_tcp(tcp)
+                T = view.pose_at_tcp(tcp)
             for actor in sensor_actors:
                 actor.user_matrix = T
-            torch_actor.user_matrix = view.T_world_tcp(tcp)
+            torch_actor.user_matrix = T_tcp
             profile, feature = view.stripe(T, float(tr.t_s[tick]))
             cloud = stripe_polydata(pv, view.sensor, profile, T)
             if cloud.n_points:
@@ -163,7 +176,10 @@ def animate_run(
                 color="black",
                 name="title",
             )
-            _camera_on_sensor(plotter, view.sensor, T)
+            if arm is None:
+                _camera_on_sensor(plotter, view.sensor, T)
+            elif tick == ticks[0]:
+                camera_on_cell(plotter, view)
             plotter.render()
             append(plotter.screenshot(return_img=True))
             bar.update(1)

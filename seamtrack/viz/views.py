@@ -22,11 +22,11 @@ environment variable ``PYVISTA_OFF_SCREEN=true``) forces off-screen rendering.
 
 from __future__ import annotations
 
-import math
 import os
 import sys
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 from typing import Any
 
@@ -39,6 +39,13 @@ from seamtrack.geometry.seam import Seam
 from seamtrack.sensing.profiles import Feature, Profile, Reason
 from seamtrack.sensing.sensor import LaserLineSensor
 from seamtrack.viz.plots import REASON_COLORS, plot_profile_2d
+from seamtrack.viz.sensor_view import PIP_HINT as PIP_HINT  # re-exported
+from seamtrack.viz.sensor_view import (
+    _polyline,
+    _pyvista,
+    add_sensor,
+)
+from seamtrack.viz.sensor_view import sensor_meshes as sensor_meshes  # re-exported
 
 __all__ = [
     "SceneView",
@@ -55,23 +62,10 @@ FloatArray = NDArray[np.float64]
 ScanFn = Callable[[FloatArray, float], "tuple[Profile, Feature]"]
 SenseFn = Callable[[FloatArray, float], Feature]
 
-PIP_HINT = "pip install pyvista"
 _MESH_COLOR = "#b8c4d6"
 _SEAM_COLOR = "#1f3b99"
-_LASER_COLOR = "#e8161b"
-_FOV_COLOR = "#17a2b8"
-_HOUSING_COLOR = "#4d4d4d"
-_CAMERA_COLOR = "#1f77b4"
 _FEATURE_COLOR = "#ffd700"
 _LIFT_MM = 0.2
-
-
-def _pyvista() -> Any:
-    try:
-        import pyvista as pv
-    except ImportError as exc:
-        raise ImportError(f"seamtrack's 3D views need PyVista: {PIP_HINT}") from exc
-    return pv
 
 
 # --------------------------------------------------------------------------- environment
@@ -115,8 +109,9 @@ class SceneView:
     name : str
     mesh : trimesh.Trimesh or None
         The workpiece in the world frame (mesh mode); None in seam mode.
-    robot : CartesianRobot or None
-        Poses the sensor (``robot.T_world_sensor``); None: mounted ``look_ahead_mm`` ahead of
+    robot : CartesianRobot, ArticulatedRobot or None
+        Poses the sensor (``robot.T_world_sensor``; an arm: its joints solved for the tool
+        pose of ``tool_program`` at the torch); None: mounted ``look_ahead_mm`` ahead of
         the torch along the seam, ``sensor.range_center_mm`` above it along the torch normal.
     look_ahead_mm : float
     scan : callable or None
@@ -126,6 +121,8 @@ class SceneView:
         ``sense(T_world_sensor, t_s) -> Feature`` (seam mode); None: the ideal crossing.
     extractor : str
         Feature extractor used when ``scan`` is None.
+    tool_program : ToolProgram or None
+        An arm's tool orientations along the seam (the robot program).
     """
 
     seam: Seam
@@ -137,6 +134,31 @@ class SceneView:
     scan: ScanFn | None = None
     sense: SenseFn | None = None
     extractor: str = "v-groove"
+    tool_program: Any = None
+
+    @property
+    def is_arm(self) -> bool:
+        """True when an articulated arm carries the torch (it is drawn, and turns its tool)."""
+        return self.robot is not None and bool(getattr(self.robot, "turns_tool", False))
+
+    @cached_property
+    def _arm_plan(self) -> tuple[FloatArray, FloatArray]:
+        from seamtrack.simulation.robots import plan_along
+
+        return plan_along(self.robot, self.tool_program)
+
+    def joints_at_tcp(self, tcp_world: ArrayLike) -> FloatArray:
+        """(n,) an arm's joints (rad) with the torch tip at ``tcp_world`` and the tool turned
+        as the robot program says at the closest seam point (solved from the plan there)."""
+        assert self.is_arm and self.tool_program is not None
+        robot: Any = self.robot
+        tcp = np.asarray(tcp_world, dtype=np.float64)
+        s_plan, joints = self._arm_plan
+        s = float(self.tool_program.seam.closest(tcp[None]).arc_length_mm[0])
+        seed = joints[int(np.argmin(np.abs(s_plan - s)))]
+        T_world_tcp = make(self.tool_program.rotations([s])[0], tcp)
+        result = robot.kinematics.ik(robot._T_base_world @ T_world_tcp, seed)
+        return np.asarray(result.q) if result else seed
 
     def tcp_at(self, at_mm: float) -> FloatArray:
         """(3,) the torch tip on the seam at arc length ``at_mm``."""
@@ -145,6 +167,8 @@ class SceneView:
     def pose_at_tcp(self, tcp_world: ArrayLike) -> FloatArray:
         """(4, 4) ``T_world_sensor`` with the torch tip at ``tcp_world``."""
         tcp = np.asarray(tcp_world, dtype=np.float64)
+        if self.is_arm:
+            return self.T_world_tcp(tcp) @ self.robot.T_tcp_sensor  # type: ignore[union-attr]
         if self.robot is not None:
             return self.robot.T_world_sensor(self.robot.q_from_world(tcp))
         return self.T_world_tcp(tcp) @ make(
@@ -155,12 +179,19 @@ class SceneView:
     def T_world_tcp(self, tcp_world: ArrayLike) -> FloatArray:
         """(4, 4) torch frame: at the tip, z up the torch, x along the travel."""
         tcp = np.asarray(tcp_world, dtype=np.float64)
+        if self.is_arm:
+            return self.T_world_tcp_at_joints(self.joints_at_tcp(tcp))
         if self.robot is not None:
             return self.robot.T_world_tcp(self.robot.q_from_world(tcp))
         closest = self.seam.closest(tcp[None])
         seg = int(closest.segment[0])
         tangent = self.seam.tangent_at(closest.arc_length_mm)[0]
         return make(look_rotation(self.seam.normals[seg], tangent), tcp)
+
+    def T_world_tcp_at_joints(self, joints: ArrayLike) -> FloatArray:
+        """(4, 4) an arm's torch frame at joint positions (rad)."""
+        robot: Any = self.robot
+        return np.asarray(robot.T_world_base @ robot.kinematics.fk(joints))
 
     def pose_at(self, at_mm: float) -> FloatArray:
         """(4, 4) ``T_world_sensor`` with the torch at arc length ``at_mm`` (as ``scan --at``)."""
@@ -226,83 +257,11 @@ def _from_scene(scene: Any) -> SceneView:
         scan=parts.scan,
         sense=parts.sense if parts.scan is None else None,
         extractor=parts.extractor_name,
+        tool_program=parts.tool_program,
     )
 
 
 # --------------------------------------------------------------------------- geometry
-def _polyline(pv: Any, points: ArrayLike) -> Any:
-    pts = np.asarray(points, dtype=np.float64)
-    return pv.lines_from_points(pts) if len(pts) > 1 else pv.PolyData(pts)
-
-
-def sensor_meshes(pv: Any, sensor: LaserLineSensor) -> dict[str, Any]:
-    """The sensor's parts as PyVista meshes in the laser frame (x_L, y_L, z_L).
-
-    Returns
-    -------
-    dict
-        ``housing``, ``emitter``, ``camera``, ``baseline``, ``optical_axis``, ``fan``, ``fov``
-        (the trapezoid's outline) and ``fov_fill``.
-    """
-    b = sensor.baseline_mm
-    near, far = sensor.range_near_mm, sensor.range_far_mm
-    w_near, w_far = float(sensor.half_width_mm(near)), float(sensor.half_width_mm(far))
-    standoff = sensor.standoff_mm if math.isfinite(sensor.standoff_mm) else 0.5 * near
-    front = max(near - standoff, 0.0)
-    depth = max(0.6 * standoff, 0.6 * b)
-    half_y = max(0.6 * w_near, 0.2 * b)
-    housing = pv.Box(bounds=(-0.25 * b, 1.25 * b, -half_y, half_y, front - depth, front))
-    radius = 0.06 * b
-    tan_max = w_near / near  # the fan opens like scan.laser_fan: over the near width
-    angles = np.linspace(-math.atan(tan_max), math.atan(tan_max), 33)
-    rim = np.column_stack([np.zeros_like(angles), far * np.tan(angles), np.full_like(angles, far)])
-    fan_points = np.vstack([[0.0, 0.0, 0.0], rim])
-    fan_faces = np.hstack([[3, 0, k, k + 1] for k in range(1, len(rim))])
-    corners = np.array(
-        [[0, -w_near, near], [0, w_near, near], [0, w_far, far], [0, -w_far, far]], dtype=np.float64
-    )
-    crossing = np.array([0.0, 0.0, sensor.range_center_mm])
-    camera = np.asarray(sensor.camera_center_laser, dtype=np.float64)
-    return {
-        "housing": housing,
-        "emitter": pv.Sphere(radius=radius, center=(0.0, 0.0, 0.0)),
-        "camera": pv.Sphere(radius=1.3 * radius, center=tuple(camera)),
-        "baseline": _polyline(pv, np.vstack([np.zeros(3), camera])),
-        "optical_axis": _polyline(pv, np.vstack([camera, crossing])),
-        "fan": pv.PolyData(fan_points, faces=fan_faces),
-        "fov": _polyline(pv, np.vstack([corners, corners[:1]])),
-        "fov_fill": pv.PolyData(corners, faces=[4, 0, 1, 2, 3]),
-    }
-
-
-def add_sensor(plotter: Any, sensor: LaserLineSensor, T_world_sensor: ArrayLike) -> list[Any]:
-    """Draw the sensor at a pose; returns its actors (move them with ``actor.user_matrix``)."""
-    pv = _pyvista()
-    parts = sensor_meshes(pv, sensor)
-    styles: dict[str, dict[str, Any]] = {
-        "housing": {"color": _HOUSING_COLOR, "opacity": 0.35},
-        "emitter": {"color": _LASER_COLOR},
-        "camera": {"color": _CAMERA_COLOR},
-        "baseline": {"color": "black", "line_width": 3},
-        "optical_axis": {"color": _CAMERA_COLOR, "line_width": 1, "opacity": 0.6},
-        "fan": {"color": _LASER_COLOR, "opacity": 0.22, "show_edges": False},
-        "fov": {"color": _FOV_COLOR, "line_width": 3},
-        "fov_fill": {"color": _FOV_COLOR, "opacity": 0.15},
-    }
-    T = np.asarray(T_world_sensor, dtype=np.float64)
-    actors = []
-    for key, mesh in parts.items():
-        actor = plotter.add_mesh(
-            mesh,
-            name=f"sensor-{key}",
-            lighting=key in ("housing", "emitter", "camera"),
-            **styles[key],
-        )
-        actor.user_matrix = T
-        actors.append(actor)
-    return actors
-
-
 def _torch_mesh(pv: Any, height_mm: float) -> Any:
     """A torch nozzle in the torch frame: a cone from the tip up the torch's z axis."""
     return pv.Cone(
@@ -379,6 +338,7 @@ def scene_plotter(
     window_size: tuple[int, int] = (1200, 800),
     overrides: dict[str, Any] | list[str] | None = None,
     title: bool = True,
+    camera: str | None = None,
 ) -> Any:
     """A PyVista plotter showing a scene; call ``.show()`` or ``.screenshot(path)`` on it.
 
@@ -399,6 +359,9 @@ def scene_plotter(
         Scene overrides when ``scene`` is a name or a path.
     title : bool
         Write the scene name and position in a corner.
+    camera : {"sensor", "cell"}, optional
+        ``"sensor"``: close on the stripe (default for the gantry); ``"cell"``: the whole arm
+        and the part (default for an articulated arm, which is then drawn too).
 
     Returns
     -------
@@ -422,14 +385,28 @@ def scene_plotter(
     )
     whole_run = result is not None and at_mm is None
     tcp = view.tcp_at(0.5 * view.seam.length_mm if at_mm is None else at_mm)
+    tick = None
     if whole_run:  # the sensor where the welding ended
         welding = np.flatnonzero(result.trace.welding)
-        tcp = result.trace.tcp_world[welding[-1] if len(welding) else -1]
-    T = view.pose_at_tcp(tcp)
+        tick = int(welding[-1]) if len(welding) else len(result.trace.t_s) - 1
+        tcp = result.trace.tcp_world[tick]
+    joints = None
+    if view.is_arm:
+        ran = tick is not None and result.trace.joints_rad.shape[1] > 0
+        joints = result.trace.joints_rad[tick] if ran else view.joints_at_tcp(tcp)
+        T_tcp = view.T_world_tcp_at_joints(joints)
+        T = T_tcp @ view.robot.T_tcp_sensor  # type: ignore[union-attr]
+    else:
+        T_tcp = view.T_world_tcp(tcp)
+        T = view.pose_at_tcp(tcp)
     add_sensor(plotter, view.sensor, T)
     plotter.add_mesh(
         _torch_mesh(pv, 0.2 * view.sensor.range_center_mm), color="#c08000", name="torch"
-    ).user_matrix = view.T_world_tcp(tcp)
+    ).user_matrix = T_tcp
+    if joints is not None:
+        from seamtrack.viz.arm import ArmActors
+
+        ArmActors(plotter, view.robot, joints)  # type: ignore[arg-type]
     profile, feature = view.stripe(T)
     if profile is not None:
         cloud = stripe_polydata(pv, view.sensor, profile, T)
@@ -451,7 +428,10 @@ def scene_plotter(
         )
         found = f"; seam point {'found' if feature else 'not found'}"
         plotter.add_text(f"{view.name}: {where}{found}", font_size=10, color="black", name="title")
-    _camera_on_sensor(plotter, view.sensor, T, fit=whole_run)
+    if (camera or ("cell" if view.is_arm else "sensor")) == "cell":
+        camera_on_cell(plotter, view)
+    else:
+        _camera_on_sensor(plotter, view.sensor, T, fit=whole_run)
     return plotter
 
 
@@ -515,6 +495,25 @@ def _camera_on_sensor(
         plotter.reset_camera()
 
 
+def camera_on_cell(plotter: Any, view: SceneView) -> None:
+    """Look at the robot and the part from the side of the line from the robot's base to the
+    seam, and from above, fitting everything drawn into the view."""
+    robot: Any = view.robot
+    base = np.asarray(robot.T_world_base[:3, 3]) if robot is not None else np.zeros(3)
+    part = view.seam.points.mean(axis=0)
+    reach = part - base
+    reach[2] = 0.0
+    if np.linalg.norm(reach) < 1e-9:
+        reach = np.array([1.0, 0.0, 0.0])
+    reach /= np.linalg.norm(reach)
+    up = np.array([0.0, 0.0, 1.0])
+    side = np.cross(up, reach)
+    direction = 0.8 * side - 0.35 * reach + 0.55 * up
+    focus = 0.5 * (base + part)
+    plotter.camera_position = [tuple(focus + 1000.0 * direction), tuple(focus), tuple(up)]
+    plotter.reset_camera()
+
+
 def render_png(
     scene: Any,
     path: str | Path,
@@ -523,6 +522,7 @@ def render_png(
     result: Any = None,
     window_size: tuple[int, int] = (1200, 800),
     overrides: dict[str, Any] | list[str] | None = None,
+    camera: str | None = None,
 ) -> Path:
     """Render a scene off screen to a PNG (see :func:`scene_plotter` for what is drawn).
 
@@ -540,6 +540,7 @@ def render_png(
         off_screen=True,
         window_size=window_size,
         overrides=overrides,
+        camera=camera,
     )
     try:
         plotter.screenshot(str(out))

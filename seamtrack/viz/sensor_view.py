@@ -1,0 +1,102 @@
+"""The sensor drawn in PyVista: its housing, emitter, camera, laser fan and field of view, in
+the laser frame {L}, posed in the world with each actor's ``user_matrix``; and the import of
+PyVista with the ``pip install`` that fixes its absence. Views are built in
+:mod:`seamtrack.viz.views`.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from seamtrack.sensing.sensor import LaserLineSensor
+
+PIP_HINT = "pip install pyvista"
+_LASER_COLOR = "#e8161b"
+_FOV_COLOR = "#17a2b8"
+_HOUSING_COLOR = "#4d4d4d"
+_CAMERA_COLOR = "#1f77b4"
+
+
+def _pyvista() -> Any:
+    try:
+        import pyvista as pv
+    except ImportError as exc:
+        raise ImportError(f"seamtrack's 3D views need PyVista: {PIP_HINT}") from exc
+    return pv
+
+
+def _polyline(pv: Any, points: ArrayLike) -> Any:
+    pts = np.asarray(points, dtype=np.float64)
+    return pv.lines_from_points(pts) if len(pts) > 1 else pv.PolyData(pts)
+
+
+def sensor_meshes(pv: Any, sensor: LaserLineSensor) -> dict[str, Any]:
+    """The sensor's parts as PyVista meshes in the laser frame (x_L, y_L, z_L).
+
+    Returns
+    -------
+    dict
+        ``housing``, ``emitter``, ``camera``, ``baseline``, ``optical_axis``, ``fan``, ``fov``
+        (the trapezoid's outline) and ``fov_fill``.
+    """
+    b = sensor.baseline_mm
+    near, far = sensor.range_near_mm, sensor.range_far_mm
+    w_near, w_far = float(sensor.half_width_mm(near)), float(sensor.half_width_mm(far))
+    standoff = sensor.standoff_mm if math.isfinite(sensor.standoff_mm) else 0.5 * near
+    front = max(near - standoff, 0.0)
+    depth = max(0.6 * standoff, 0.6 * b)
+    half_y = max(0.6 * w_near, 0.2 * b)
+    housing = pv.Box(bounds=(-0.25 * b, 1.25 * b, -half_y, half_y, front - depth, front))
+    radius = 0.06 * b
+    tan_max = w_near / near  # the fan opens like scan.laser_fan: over the near width
+    angles = np.linspace(-math.atan(tan_max), math.atan(tan_max), 33)
+    rim = np.column_stack([np.zeros_like(angles), far * np.tan(angles), np.full_like(angles, far)])
+    fan_points = np.vstack([[0.0, 0.0, 0.0], rim])
+    fan_faces = np.hstack([[3, 0, k, k + 1] for k in range(1, len(rim))])
+    corners = np.array(
+        [[0, -w_near, near], [0, w_near, near], [0, w_far, far], [0, -w_far, far]], dtype=np.float64
+    )
+    crossing = np.array([0.0, 0.0, sensor.range_center_mm])
+    camera = np.asarray(sensor.camera_center_laser, dtype=np.float64)
+    return {
+        "housing": housing,
+        "emitter": pv.Sphere(radius=radius, center=(0.0, 0.0, 0.0)),
+        "camera": pv.Sphere(radius=1.3 * radius, center=tuple(camera)),
+        "baseline": _polyline(pv, np.vstack([np.zeros(3), camera])),
+        "optical_axis": _polyline(pv, np.vstack([camera, crossing])),
+        "fan": pv.PolyData(fan_points, faces=fan_faces),
+        "fov": _polyline(pv, np.vstack([corners, corners[:1]])),
+        "fov_fill": pv.PolyData(corners, faces=[4, 0, 1, 2, 3]),
+    }
+
+
+def add_sensor(plotter: Any, sensor: LaserLineSensor, T_world_sensor: ArrayLike) -> list[Any]:
+    """Draw the sensor at a pose; returns its actors (move them with ``actor.user_matrix``)."""
+    pv = _pyvista()
+    parts = sensor_meshes(pv, sensor)
+    styles: dict[str, dict[str, Any]] = {
+        "housing": {"color": _HOUSING_COLOR, "opacity": 0.35},
+        "emitter": {"color": _LASER_COLOR},
+        "camera": {"color": _CAMERA_COLOR},
+        "baseline": {"color": "black", "line_width": 3},
+        "optical_axis": {"color": _CAMERA_COLOR, "line_width": 1, "opacity": 0.6},
+        "fan": {"color": _LASER_COLOR, "opacity": 0.22, "show_edges": False},
+        "fov": {"color": _FOV_COLOR, "line_width": 3},
+        "fov_fill": {"color": _FOV_COLOR, "opacity": 0.15},
+    }
+    T = np.asarray(T_world_sensor, dtype=np.float64)
+    actors = []
+    for key, mesh in parts.items():
+        actor = plotter.add_mesh(
+            mesh,
+            name=f"sensor-{key}",
+            lighting=key in ("housing", "emitter", "camera"),
+            **styles[key],
+        )
+        actor.user_matrix = T
+        actors.append(actor)
+    return actors
