@@ -87,7 +87,7 @@ def test_the_bracket_butt_seams_lie_on_the_lines_where_the_pieces_meet(bracket):
 # per tube: the fillet all round where the tube comes out of the flange's top face (4). Not
 # welds: the flush bores at the underside, the four mounting holes (one body), the tubes'
 # free ends. The tubes do not touch each other. Found: the 4 fillets, false seams: 0. These
-# seams come from where the two bodies' surfaces cross (`contacts.crossing_pieces`), not
+# seams come from where the two bodies' surfaces cross (`crossings.crossing_pieces`), not
 # from facing planar faces: there are none between a tube and the flange.
 EXHAUST = DATA / "kittycad-exhaust-manifold.step.gz"
 TUBE_OD_MM = 1.625 * INCH

@@ -36,7 +36,7 @@ Ids are ``s1``, ``s2``... in order of the seams' start points (x, then y, then z
 Seams run from their lexicographically smallest end, like every seam (docs/cad.md).
 
 7. Bodies modelled into each other (sharing volume: a tube pushed through a flange's port)
-   are also cut against each other (``contacts.crossing_pieces``): where their surfaces cross,
+   are also cut against each other (``crossings.crossing_pieces``): where their surfaces cross,
    on any surface type, and exactly one side of each body's face shows, the line is a seam
    (body A taken as the one that ends there), classified and filtered as above.
 
@@ -337,7 +337,7 @@ def seams_of_bodies(
     field: str = "workpiece.step",
 ) -> list[FoundSeam]:
     """Every candidate weld between the given (name, solid) bodies; see :func:`find_seams`."""
-    from seamtrack.workpiece import contacts
+    from seamtrack.workpiece import contacts, crossings
 
     for name, value in (
         ("max_gap_mm", max_gap_mm),
@@ -375,8 +375,8 @@ def seams_of_bodies(
                     (solids[i], solids[j]), (i, j), fa, fb, gap, region, tolerance_mm, spacing_mm
                 )
             ]
-            if d <= contacts.ON_TOL_MM and contacts.overlap(solids[i], solids[j]):
-                pieces += contacts.crossing_pieces(
+            if d <= contacts.ON_TOL_MM and crossings.overlap(solids[i], solids[j]):
+                pieces += crossings.crossing_pieces(
                     (solids[i], solids[j]), (i, j), tolerance_mm, spacing_mm
                 )
             for piece in pieces:
