@@ -406,8 +406,9 @@ def require(condition: bool, param: str, message: str) -> None:
         raise ParamError(param, message)
 
 
-def run_script(build, argv: Sequence[str] | None = None) -> None:  # type: ignore[no-untyped-def]
-    """Command line of a joint script: ``python cad/x.py [key=value ...] [--step OUT.step]``."""
+def script_args(argv: Sequence[str] | None = None) -> tuple[dict[str, object], str | None]:
+    """A cad script's command line, ``[key=value ...] [--step OUT.step]``: the keyword arguments
+    of its ``build()`` (numbers where they parse) and the STEP file to write, if any."""
     import sys
 
     args = list(sys.argv[1:] if argv is None else argv)
@@ -428,6 +429,12 @@ def run_script(build, argv: Sequence[str] | None = None) -> None:  # type: ignor
             except ValueError:
                 value = text
         params[key] = value
+    return params, out
+
+
+def run_script(build, argv: Sequence[str] | None = None) -> None:  # type: ignore[no-untyped-def]
+    """Command line of a joint script: ``python cad/x.py [key=value ...] [--step OUT.step]``."""
+    params, out = script_args(argv)
     joint = build(**params)
     print(joint.summary())
     if out:

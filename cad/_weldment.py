@@ -15,9 +15,9 @@ from dataclasses import dataclass, field
 import cadquery as cq
 
 try:
-    from seamtrack.cad._paths import ParamError, require
+    from seamtrack.cad._paths import ParamError, require, script_args
 except ImportError:  # run from a copy of cad/ without seamtrack installed
-    from _paths import ParamError, require  # type: ignore[no-redef]
+    from _paths import ParamError, require, script_args  # type: ignore[no-redef]
 
 __all__ = ["ParamError", "Weldment", "box", "prism", "require", "run_script"]
 
@@ -81,21 +81,7 @@ def prism(profile_yz: Sequence[tuple[float, float]], x: tuple[float, float]) -> 
 
 def run_script(build, argv: Sequence[str] | None = None) -> None:  # type: ignore[no-untyped-def]
     """Command line of a weldment script: ``python cad/weldment_x.py [k=v ...] [--step F]``."""
-    import sys
-
-    args = list(sys.argv[1:] if argv is None else argv)
-    out = None
-    if "--step" in args:
-        i = args.index("--step")
-        out = args[i + 1]
-        del args[i : i + 2]
-    params: dict[str, object] = {}
-    for arg in args:
-        key, _, text = arg.partition("=")
-        try:
-            params[key] = float(text)
-        except ValueError:
-            params[key] = text
+    params, out = script_args(argv)
     weldment = build(**params)
     print(weldment.summary())
     if out:

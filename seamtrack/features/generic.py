@@ -18,6 +18,8 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.features.kernels import fit_range
+
 FloatArray = NDArray[np.float64]
 
 _SIGMA_FROM_SECOND_DIFF = 1.4826 / math.sqrt(6.0)
@@ -143,33 +145,6 @@ def window_turns(p: FloatArray, k: int, jump_mm: float) -> tuple[FloatArray, Flo
 
 
 @numba.njit(cache=True, nogil=True)
-def _tls_line(p: FloatArray, lo: int, hi: int) -> tuple[float, float, float, float]:
-    """Total-least-squares line through p[lo:hi]: centroid and unit direction (pointing from
-    the first point to the last), as ``seamtrack.features.lines._fit``."""
-    n = hi - lo
-    cy = 0.0
-    cz = 0.0
-    for i in range(lo, hi):
-        cy += p[i, 0]
-        cz += p[i, 1]
-    cy /= n
-    cz /= n
-    syy = 0.0
-    szz = 0.0
-    syz = 0.0
-    for i in range(lo, hi):
-        dy, dz = p[i, 0] - cy, p[i, 1] - cz
-        syy += dy * dy
-        szz += dz * dz
-        syz += dy * dz
-    theta = 0.5 * math.atan2(2.0 * syz, syy - szz)
-    uy, uz = math.cos(theta), math.sin(theta)
-    if uy * (p[hi - 1, 0] - p[lo, 0]) + uz * (p[hi - 1, 1] - p[lo, 1]) < 0.0:
-        uy, uz = -uy, -uz
-    return cy, cz, uy, uz
-
-
-@numba.njit(cache=True, nogil=True)
 def corner_point(p: FloatArray, c: int, k: int) -> tuple[int, float, float]:
     """The corner at point c: the crossing of the lines fitted 2k points to each side (a guard
     of k/2 points left out), or point c itself when the crossing is implausibly far.
@@ -182,8 +157,8 @@ def corner_point(p: FloatArray, c: int, k: int) -> tuple[int, float, float]:
     rlo, rhi = c + guard, min(c + guard + 2 * k, m)
     if lhi - llo < 3 or rhi - rlo < 3:
         return 1, 0.0, 0.0
-    ay, az, ady, adz = _tls_line(p, llo, lhi)
-    by, bz, bdy, bdz = _tls_line(p, rlo, rhi)
+    ay, az, ady, adz = fit_range(p, llo, lhi)
+    by, bz, bdy, bdz = fit_range(p, rlo, rhi)
     # Spacing along the left line over its last ten points, as Line.step(True).
     kk = min(10, lhi - llo - 1)
     t_last = (p[lhi - 1, 0] - ay) * ady + (p[lhi - 1, 1] - az) * adz

@@ -56,7 +56,7 @@ def _fit(p: FloatArray, idx: IntArray, n: int) -> tuple[float, float, float, flo
 
 
 @numba.njit(cache=True, nogil=True)
-def _fit_range(p: FloatArray, lo: int, hi: int) -> tuple[float, float, float, float]:
+def fit_range(p: FloatArray, lo: int, hi: int) -> tuple[float, float, float, float]:
     """Total-least-squares line through ``p[lo:hi]``: centroid and unit direction."""
     n = hi - lo
     cy = 0.0
@@ -187,7 +187,7 @@ def _merge(p: FloatArray, lo: IntArray, hi: IntArray, n: int, tol: float) -> int
     k = 0
     for j in range(1, n):
         a, b = lo[k], hi[j]
-        cy, cz, uy, uz = _fit_range(p, a, b + 1)
+        cy, cz, uy, uz = fit_range(p, a, b + 1)
         worst = 0.0
         for i in range(a, b + 1):
             worst = max(worst, abs(-(p[i, 0] - cy) * uz + (p[i, 1] - cz) * uy))
@@ -260,8 +260,8 @@ def pieces(
                         bb, split, single = best_split(p, h_lo, h_hi, min_points)
                         if single - split > significant:
                             cut = h_lo + bb
-                            _, _, uy1, uz1 = _fit_range(p, a, cut)
-                            _, _, uy2, uz2 = _fit_range(p, cut, b + 1)
+                            _, _, uy1, uz1 = fit_range(p, a, cut)
+                            _, _, uy2, uz2 = fit_range(p, cut, b + 1)
                             kink = math.acos(min(1.0, abs(uy1 * uy2 + uz1 * uz2)))
                             if kink > min_kink_rad:
                                 cuts[nc] = cut
@@ -287,7 +287,7 @@ def pieces(
     used = 0
     for j in range(total):
         a, b = all_lo[j], all_hi[j]
-        cy, cz, uy, uz = _fit_range(p, a, b + 1)
+        cy, cz, uy, uz = fit_range(p, a, b + 1)
         n = 0
         for i in range(a, b + 1):
             if abs(-(p[i, 0] - cy) * uz + (p[i, 1] - cz) * uy) <= trim:
