@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 import pytest
+from arm_oracles import UR10E_DH, dh
 from hypothesis import given, settings
 from hypothesis import strategies as st_h
 
@@ -21,26 +22,6 @@ from seamtrack.geometry.torch import torch_angles, torch_axis
 TOOL = np.array([[1.0, 0, 0, 0], [0, -1.0, 0, 0], [0, 0, -1.0, 300.0], [0, 0, 0, 1.0]])
 
 
-def _dh(theta: float, d: float, a: float, alpha: float) -> np.ndarray:
-    """Standard DH link transform, the independent oracle."""
-    ct, st_, ca, sa = math.cos(theta), math.sin(theta), math.cos(alpha), math.sin(alpha)
-    return np.array(
-        [[ct, -st_ * ca, st_ * sa, a * ct], [st_, ct * ca, -ct * sa, a * st_], [0, sa, ca, d],
-         [0, 0, 0, 1.0]]
-    )  # fmt: skip
-
-
-#: Universal Robots' published UR10e DH table (mm, rad).
-UR10E_DH = [
-    (180.7, 0.0, math.pi / 2),
-    (0.0, -612.7, 0.0),
-    (0.0, -571.55, 0.0),
-    (174.15, 0.0, math.pi / 2),
-    (119.85, 0.0, -math.pi / 2),
-    (116.55, 0.0, 0.0),
-]
-
-
 def test_ur10e_forward_kinematics_matches_the_published_dh_table() -> None:
     kin = ArmKinematics.named("ur10e")
     rng = np.random.default_rng(1)
@@ -48,7 +29,7 @@ def test_ur10e_forward_kinematics_matches_the_published_dh_table() -> None:
         q = rng.uniform(-math.pi, math.pi, 6)
         T = np.eye(4)
         for qi, (d, a, alpha) in zip(q, UR10E_DH, strict=True):
-            T = T @ _dh(qi, d, a, alpha)
+            T = T @ dh(qi, d, a, alpha)
         assert np.allclose(kin.fk(q), T, atol=1e-9)
 
 

@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from arm_oracles import UR10E_DH, dh
 
 import seamtrack as st
 from seamtrack.control.arm import ArticulatedRobot
@@ -23,15 +24,6 @@ from seamtrack.viz import views as viz  # noqa: E402
 
 TOOL = np.array([[1.0, 0, 0, 0], [0, -1.0, 0, 0], [0, 0, -1.0, 300.0], [0, 0, 0, 1.0]])
 
-#: Universal Robots' published UR10e DH table (d, a, alpha; mm, rad): the independent oracle.
-UR10E_DH = [
-    (180.7, 0.0, math.pi / 2),
-    (0.0, -612.7, 0.0),
-    (0.0, -571.55, 0.0),
-    (174.15, 0.0, math.pi / 2),
-    (119.85, 0.0, -math.pi / 2),
-    (116.55, 0.0, 0.0),
-]
 
 #: A UR10e beside the paper's verification curve (seam mode), short.
 ARM_SCENE = {
@@ -47,14 +39,6 @@ ARM_SCENE = {
 @pytest.fixture(autouse=True)
 def _off_screen(monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.setattr(pv, "OFF_SCREEN", True)
-
-
-def _dh(theta: float, d: float, a: float, alpha: float) -> np.ndarray:
-    ct, st_, ca, sa = math.cos(theta), math.sin(theta), math.cos(alpha), math.sin(alpha)
-    return np.array(
-        [[ct, -st_ * ca, st_ * sa, a * ct], [st_, ct * ca, -ct * sa, a * st_], [0, sa, ca, d],
-         [0, 0, 0, 1.0]]
-    )  # fmt: skip
 
 
 def _world(actor, point: np.ndarray) -> np.ndarray:
@@ -77,7 +61,7 @@ def test_drawn_ur10e_links_end_at_the_dh_joint_origins_and_the_torch_at_the_tcp(
             # The DH frame origins 1..6: joint 2..6's origins, then the flange.
             T, origins = T_world_base.copy(), []
             for qi, (d, a, alpha) in zip(q, UR10E_DH, strict=True):
-                T = T @ _dh(qi, d, a, alpha)
+                T = T @ dh(qi, d, a, alpha)
                 origins.append(T[:3, 3].copy())
             tcp = (T @ TOOL)[:3, 3]
             links = [k for k, kind in enumerate(arm.segments.kind) if kind == "link"]
