@@ -139,6 +139,36 @@ def chain(edges: Sequence[cq.Edge], what: str) -> list[tuple[cq.Edge, bool]]:
     return out
 
 
+def edge_samples(
+    curve: BRepAdaptor_Curve, tolerance_mm: float, spacing_mm: float
+) -> tuple[FloatArray, FloatArray]:
+    """Parameters (n,) and points (n, 3) along an edge's exact curve, at most ``spacing_mm``
+    apart and closer where the chord error would exceed ``tolerance_mm``, in the curve's
+    direction. The two samplers' merged parameters may give near-duplicates: points closer
+    than 1e-4 of the spacing to the last kept one (or to the end) are left out."""
+    u0, u1 = curve.FirstParameter(), curve.LastParameter()
+    params = {u0, u1}
+    for sampler in (
+        GCPnts_QuasiUniformDeflection(curve, tolerance_mm, u0, u1),
+        GCPnts_UniformAbscissa(curve, spacing_mm, u0, u1),
+    ):
+        if sampler.IsDone():
+            params.update(sampler.Parameter(i) for i in range(1, sampler.NbPoints() + 1))
+    ts = np.array(sorted(params))
+    pts = np.array([curve.Value(t).Coord() for t in ts])
+    keep = np.ones(len(ts), dtype=bool)
+    last = pts[0]
+    for i in range(1, len(ts) - 1):
+        if (
+            np.linalg.norm(pts[i] - last) < 1e-4 * spacing_mm
+            or np.linalg.norm(pts[-1] - pts[i]) < 1e-4 * spacing_mm
+        ):
+            keep[i] = False
+        else:
+            last = pts[i]
+    return ts[keep], pts[keep]
+
+
 def sample_seam(
     shape: cq.Shape, chained: list[tuple[cq.Edge, bool]], tolerance_mm: float, spacing_mm: float
 ) -> tuple[FloatArray, FloatArray]:
@@ -172,28 +202,7 @@ def sample_seam(
                 "pick an edge where two faces of the part meet",
             )
         curve = BRepAdaptor_Curve(edge.wrapped)
-        u0, u1 = curve.FirstParameter(), curve.LastParameter()
-        params = {u0, u1}
-        for sampler in (
-            GCPnts_QuasiUniformDeflection(curve, tolerance_mm, u0, u1),
-            GCPnts_UniformAbscissa(curve, spacing_mm, u0, u1),
-        ):
-            if sampler.IsDone():
-                params.update(sampler.Parameter(i) for i in range(1, sampler.NbPoints() + 1))
-        ts = np.array(sorted(params))
-        # Merged samplers may give near-duplicates: keep points at least 1e-4 spacing apart.
-        pts = np.array([curve.Value(t).Coord() for t in ts])
-        keep = np.ones(len(ts), dtype=bool)
-        last = pts[0]
-        for i in range(1, len(ts) - 1):
-            if (
-                np.linalg.norm(pts[i] - last) < 1e-4 * spacing_mm
-                or np.linalg.norm(pts[-1] - pts[i]) < 1e-4 * spacing_mm
-            ):
-                keep[i] = False
-            else:
-                last = pts[i]
-        ts, pts = ts[keep], pts[keep]
+        ts, pts = edge_samples(curve, tolerance_mm, spacing_mm)
         if not forward:
             ts, pts = ts[::-1], pts[::-1]
         face_n = np.empty((len(ts), 2, 3))

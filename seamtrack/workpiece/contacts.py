@@ -35,7 +35,6 @@ from OCP.BRepClass3d import BRepClass3d_SolidClassifier
 from OCP.BRepExtrema import BRepExtrema_DistShapeShape
 from OCP.BRepGProp import BRepGProp, BRepGProp_Face
 from OCP.BRepTools import BRepTools
-from OCP.GCPnts import GCPnts_QuasiUniformDeflection, GCPnts_UniformAbscissa
 from OCP.GeomAbs import GeomAbs_Plane
 from OCP.gp import gp_Dir, gp_Lin, gp_Pnt, gp_Trsf, gp_Vec
 from OCP.GProp import GProp_GProps
@@ -297,16 +296,10 @@ def sample_edge(
 ) -> tuple[FloatArray, FloatArray]:
     """Points (n, 3) on the exact edge curve, at most ``spacing_mm`` apart and closer where the
     chord error would exceed ``tolerance_mm``, with unit tangents (n, 3), in chain order."""
+    from seamtrack.cad._occ import edge_samples
+
     curve = BRepAdaptor_Curve(edge)
-    u0, u1 = curve.FirstParameter(), curve.LastParameter()
-    params = {u0, u1}
-    for sampler in (
-        GCPnts_QuasiUniformDeflection(curve, tolerance_mm, u0, u1),
-        GCPnts_UniformAbscissa(curve, spacing_mm, u0, u1),
-    ):
-        if sampler.IsDone():
-            params.update(sampler.Parameter(i) for i in range(1, sampler.NbPoints() + 1))
-    ts = np.array(sorted(params))
+    ts, _ = edge_samples(curve, tolerance_mm, spacing_mm)
     pts, tangents = [], []
     pnt, vec = gp_Pnt(), gp_Vec()
     for t in ts:
@@ -314,15 +307,6 @@ def sample_edge(
         pts.append(_vec(pnt))
         tangents.append(_unit(_vec(vec)))
     points, tan = np.array(pts), np.array(tangents)
-    keep = np.ones(len(ts), dtype=bool)  # merged samplers may give near-duplicates
-    last = points[0]
-    for i in range(1, len(ts) - 1):
-        near_end = np.linalg.norm(points[-1] - points[i]) < 1e-4 * spacing_mm
-        if np.linalg.norm(points[i] - last) < 1e-4 * spacing_mm or near_end:
-            keep[i] = False
-        else:
-            last = points[i]
-    points, tan = points[keep], tan[keep]
     return (points, tan) if forward else (points[::-1], -tan[::-1])
 
 
