@@ -30,6 +30,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.control.path_kernels import PathBuffer, off_line, smooth_tail
 from seamtrack.control.tracking import Command, Measurement, TrackerContext
 from seamtrack.params import Fraction, NonNegative, Positive
 
@@ -38,28 +39,6 @@ FloatArray = NDArray[np.float64]
 
 #: Residuals below this never mark a stored point as an outlier (the sensor's noise floor).
 _MIN_INLIER_MM = 0.05
-
-
-def _line_fit(
-    w: FloatArray, ds: FloatArray, raw: FloatArray
-) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]]:
-    """Weighted least-squares lines p = a + b ds, one per row of the (m, n) weights.
-
-    Returns the intercepts (m, 3), the slopes (m, 3) and which rows had a well-posed fit.
-    """
-    n = w.sum(axis=1)
-    sx = (w * ds).sum(axis=1)
-    sxx = (w * ds * ds).sum(axis=1)
-    sy = w @ raw
-    sxy = (w * ds) @ raw
-    det = n * sxx - sx * sx
-    ok = (n >= 3) & (det > 1e-12 * np.maximum(n * sxx, 1e-300))
-    safe = np.where(ok, det, 1.0)[:, None]
-    return (
-        (sxx[:, None] * sy - sx[:, None] * sxy) / safe,
-        (n[:, None] * sxy - sx[:, None] * sy) / safe,
-        ok,
-    )
 
 
 class TrajectoryTracker:
@@ -144,8 +123,9 @@ class TrajectoryTracker:
         self._env_s: list[float] = []  # arc lengths ahead of the set-point ...
         self._env_v: list[float] = []  # ... and the speed allowed there (corners)
         start = np.asarray(context.tcp_start_world, dtype=float)
-        self._raw: list[FloatArray] = [start]
-        self._path: list[FloatArray] = [start]
+        # The stored points in arrays (compiled smoothing works on them in place); their arc
+        # lengths also as a list, which the per-tick bisection reads fastest.
+        self._buffer = PathBuffer(start)
         self._s: list[float] = [0.0]
         self._s_set = 0.0
         self._segments: dict[int, tuple[float, ...]] = {}  # _at_floats' cache, by segment
@@ -195,9 +175,9 @@ class TrajectoryTracker:
             step = float(np.linalg.norm(point - self._path[-1]))
         if step < self.min_spacing_mm:
             return
-        self._raw.append(point)
-        self._path.append(point)
-        self._s.append(self._s[-1] + step)
+        s = self._s[-1] + step
+        self._buffer.append(point, s)
+        self._s.append(s)
         self._segments.clear()  # the path changes (smoothing, trimming): index by index
         self._smooth_tail()
         self._trim()
@@ -348,21 +328,23 @@ class TrajectoryTracker:
         length = float(np.linalg.norm(chord))
         return chord / length if length > 0 else np.zeros(3)
 
+    @property
+    def _path(self) -> FloatArray:
+        """The stored (smoothed) points, (n, 3), oldest first."""
+        return self._buffer.path
+
     def _off_path(self, point: FloatArray) -> float:
         """Distance of a point from the line fitted (total least squares) to the raw stored
         points of the last ``direction_fit_mm``: a ramp of bogus points trips it on its second
         point, because the line they are measured against does not follow them."""
         knots = self._s
         i = max(bisect.bisect_left(knots, knots[-1] - self.direction_fit_mm), 1)
-        window = np.asarray(self._raw[i:])
+        window = self._buffer.raw[i:]
         if len(window) < 3:
             d = self._end_direction()
             v = point - self._path[-1]
             return float(np.linalg.norm(v - (v @ d) * d))
-        centre = window.mean(axis=0)
-        direction = np.linalg.svd(window - centre, full_matrices=False)[2][0]
-        v = point - centre
-        return float(np.linalg.norm(v - (v @ direction) * direction))
+        return float(off_line(window, point))
 
     def _at_floats(self, s: float) -> tuple[float, float, float, float, float, float]:
         """:meth:`_at` as six floats (the same arithmetic, element by element), with the
@@ -417,32 +399,15 @@ class TrajectoryTracker:
         while a real turn, which the majority of the window follows, does.
         """
         h = self.smoothing_mm
-        if h <= 0 or len(self._raw) < 3:
+        buffer = self._buffer
+        if h <= 0 or len(buffer) < 3:
             return
-        s_last = self._s[-1]
-        first = max(bisect.bisect_left(self._s, s_last - 2 * h), 1)  # index 0 is the start pose
-        s = np.asarray(self._s[first:])
-        raw = np.asarray(self._raw[first:])
-        targets = np.flatnonzero(s >= s_last - h)
-        ds = s[None, :] - s[targets, None]  # (m, n): offsets of the window points
-        w = (np.abs(ds) <= h).astype(float)
-        a, b, ok = _line_fit(w, ds, raw)
-        residual = np.linalg.norm(
-            raw[None, :, :] - (a[:, None, :] + ds[..., None] * b[:, None, :]), axis=2
-        )
-        # Each row's median residual over its window (a sort beats nanmedian tenfold here).
-        count = w.sum(axis=1).astype(int)
-        ordered = np.sort(np.where(w > 0, residual, np.inf), axis=1)
-        median = ordered[np.arange(len(ordered)), np.maximum(count // 2, 0)]
-        limit = np.maximum(3.0 * np.where(np.isfinite(median), median, 0.0), _MIN_INLIER_MM)
-        w = w * (residual <= limit[:, None])
-        a, _, ok = _line_fit(w, ds, raw)
-        for k, i in enumerate(targets):
-            if ok[k]:
-                self._path[first + i] = a[k]
+        first = max(bisect.bisect_left(self._s, self._s[-1] - 2 * h), 1)  # 0: the start pose
+        smooth_tail(buffer.raw, buffer.path, buffer.s, first, h, _MIN_INLIER_MM)
 
     def _trim(self) -> None:
         """Drop stored points more than ``buffer_mm`` behind the set-point."""
         cut = bisect.bisect_left(self._s, self._s_set - self.buffer_mm) - 1
         if cut > 0:
-            del self._raw[:cut], self._path[:cut], self._s[:cut]
+            self._buffer.drop(cut)
+            del self._s[:cut]
