@@ -161,3 +161,107 @@ def off_line(window: FloatArray, point: FloatArray) -> float:
         e = v[c] - along * direction[c]
         off += e * e
     return math.sqrt(off)
+
+
+# ----------------------------------------------------------------------------- the set-point
+#: Layout of the set-point's float array (:func:`setpoint_step`): its state, then the tracker's
+#: parameters.
+S_SET, V_SET, TCP_X, TCP_Y, TCP_Z, LOST = 0, 1, 2, 3, 4, 5
+SPEED, ACCEL, DT, END_MARGIN, BRIDGE, GAIN, DIRECTION_FIT = 6, 7, 8, 9, 10, 11, 12
+SETPOINT_FIELDS = 13
+
+
+@numba.njit(cache=True, nogil=True)
+def end_direction(path: FloatArray, s: FloatArray, fit_mm: float) -> tuple[float, float, float]:
+    """Unit chord of the last ``fit_mm`` of stored path (zero when it has no length)."""
+    n = s.shape[0]
+    i = max(np.searchsorted(s, s[n - 1] - fit_mm) - 1, 0)
+    if n > 2:
+        i = max(i, 1)  # the start pose is not a seam point
+    cx = path[n - 1, 0] - path[i, 0]
+    cy = path[n - 1, 1] - path[i, 1]
+    cz = path[n - 1, 2] - path[i, 2]
+    length = math.sqrt(cx * cx + cy * cy + cz * cz)
+    if length > 0.0:
+        return cx / length, cy / length, cz / length
+    return 0.0, 0.0, 0.0
+
+
+@numba.njit(cache=True, nogil=True)
+def point_at(
+    path: FloatArray, s: FloatArray, at: float, fit_mm: float
+) -> tuple[float, float, float, float, float, float]:
+    """Point and unit direction on the stored path at arc length ``at``, extrapolated past the
+    end along :func:`end_direction`."""
+    n = s.shape[0]
+    if n < 2:
+        return path[0, 0], path[0, 1], path[0, 2], 0.0, 0.0, 0.0
+    if at > s[n - 1]:
+        dx, dy, dz = end_direction(path, s, fit_mm)
+        k = at - s[n - 1]
+        return path[n - 1, 0] + k * dx, path[n - 1, 1] + k * dy, path[n - 1, 2] + k * dz, dx, dy, dz
+    i = min(max(np.searchsorted(s, at, side="right") - 1, 0), n - 2)
+    length = s[i + 1] - s[i]
+    dx = dy = dz = 0.0
+    if length > 0.0:
+        dx = (path[i + 1, 0] - path[i, 0]) / length
+        dy = (path[i + 1, 1] - path[i, 1]) / length
+        dz = (path[i + 1, 2] - path[i, 2]) / length
+    k = at - s[i]
+    return path[i, 0] + k * dx, path[i, 1] + k * dy, path[i, 2] + k * dz, dx, dy, dz
+
+
+@numba.njit(cache=True, nogil=True)
+def corner_speed(env_s: FloatArray, env_v: FloatArray, at: float) -> float:
+    """The corner envelope at arc length ``at`` (no limit beyond its last point)."""
+    n = env_s.shape[0]
+    if n == 0 or at > env_s[n - 1]:
+        return math.inf
+    i = np.searchsorted(env_s, at, side="right") - 1
+    if i < 0:
+        return env_v[0]
+    if i >= n - 1:
+        return env_v[n - 1]
+    f = (at - env_s[i]) / (env_s[i + 1] - env_s[i])
+    return env_v[i] + f * (env_v[i + 1] - env_v[i])
+
+
+@numba.njit(cache=True, nogil=True)
+def setpoint_step(
+    sp: FloatArray,
+    path: FloatArray,
+    s: FloatArray,
+    env_s: FloatArray,
+    env_v: FloatArray,
+    x: float,
+    y: float,
+    z: float,
+) -> tuple[float, float, float, float, float, float, float, bool]:
+    """One control tick of the set-point (``sp``: state and parameters, updated in place) with
+    the torch at (x, y, z): it runs along the stored path at the welding speed, ramping at the
+    acceleration limit, braking for corners and to stop where the path (or its bridge) ends.
+
+    Returns the target (x, y, z), the speed of the proportional correction, the feed-forward
+    velocity (x, y, z) and whether the set-point has stopped.
+    """
+    sp[TCP_X], sp[TCP_Y], sp[TCP_Z] = x, y, z
+    # The set-point may run up to bridge_mm past the newest stored point: while the seam is
+    # in view the path grows ahead of it, and when it is lost this is the bridge. Braking
+    # room to that limit is what lets it keep speed with a short look-ahead.
+    s_limit = s[s.shape[0] - 1] - (0.0 if sp[LOST] else sp[END_MARGIN]) + sp[BRIDGE]
+    s_set, dt, accel = sp[S_SET], sp[DT], sp[ACCEL]
+    room = max(s_limit - s_set, 0.0)
+    corner = corner_speed(env_s, env_v, s_set)
+    wanted = min(sp[SPEED], math.sqrt(2.0 * accel * room), corner)
+    # Speed up or brake at most at the acceleration limit: a limit that appears late (a
+    # corner just measured) is met as soon as braking allows, never by a jump in speed.
+    dv = accel * dt
+    v_set = min(max(wanted, sp[V_SET] - dv), sp[V_SET] + dv)
+    step = min(v_set * dt, room)
+    s_set += step
+    sp[V_SET], sp[S_SET] = v_set, s_set
+    tx, ty, tz, dx, dy, dz = point_at(path, s, s_set, sp[DIRECTION_FIT])
+    rate = step / dt
+    ex, ey, ez = tx - x, ty - y, tz - z
+    error = math.sqrt(ex * ex + ey * ey + ez * ez)
+    return tx, ty, tz, sp[GAIN] * error, dx * rate, dy * rate, dz * rate, not step > 0.0
