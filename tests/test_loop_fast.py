@@ -1,4 +1,4 @@
-"""The loop's fast path (built-in trajectory tracker on a gantry, plain floats) against the
+"""The loop's fast path (built-in trajectory tracker on a gantry, compiled ticks) against the
 reference path (the same tracker seen through the public tracker protocol), and the progress
 kernel against :meth:`Seam.closest_near`: the same numbers, to the last bit."""
 
@@ -54,8 +54,10 @@ def _both(overrides: dict[str, Any], monkeypatch: pytest.MonkeyPatch) -> tuple[A
         {},
         {"robot.servo_gain_1_s": 40.0, "robot.interpolation_period_s": 0.004},
         {"sensor.latency_s": 0.03, "tracker.params.use_capture_pose": False},
+        # The set-point bridges past the seam's end into the x end stop: a limit violation.
+        {"robot.position_max_mm": [126.0, 150.0, 150.0]},
     ],
-    ids=["ideal-axes", "servo", "latency-naive-pose"],
+    ids=["ideal-axes", "servo", "latency-naive-pose", "end-stop"],
 )
 def test_fast_path_gives_the_reference_paths_numbers(
     overrides: dict[str, Any], monkeypatch: pytest.MonkeyPatch
@@ -74,7 +76,8 @@ def test_fast_path_gives_the_reference_paths_numbers(
             assert np.isnan(got[key]), key
         else:
             assert got[key] == value, key
-    assert reference.summary["status"] == "completed"
+    expected_status = "limit_violation" if "robot.position_max_mm" in overrides else "completed"
+    assert reference.summary["status"] == expected_status
 
 
 def _hairpin() -> Seam:

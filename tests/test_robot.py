@@ -143,9 +143,9 @@ def test_end_stops_cannot_limit_a_robot_farther_than_its_free_travel(
     v: float, a: float, dt: float
 ) -> None:
     """The servo skips the end-stop braking test beyond _free_travel: exact there."""
-    from seamtrack.control.robot import _stop_speed
+    from seamtrack.control.robot import stop_speed
 
     robot = CartesianRobot(
         velocity_max_mm_s=(v, v, v), acceleration_max_mm_s2=(a, a, a), control_period_s=dt
     )
-    assert _stop_speed(robot._free_travel[0], a, dt) >= v
+    assert stop_speed(robot._free_travel[0], a, dt) >= v

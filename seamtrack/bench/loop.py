@@ -49,11 +49,16 @@ _STAGES: tuple[tuple[str, tuple[str, ...]], ...] = (
         "scoring after the run",
         ("loop.py:_trace", "loop.py:_summary", "scoring.py:orientation_summary"),
     ),
-    ("tracker command", ("trajectory.py:command_floats",)),
-    ("robot step", ("robot.py:step_move",)),
+    ("control ticks between events (compiled: set-point, axes, trace)", ("ticks.py:run",)),
     ("progress check", ("progress.py:closest_near",)),
     ("sensor pose at each frame", ("robot.py:sensor_pose",)),
-    ("trace and frame logs (array.extend)", ("~:<method 'extend' of 'array.array' objects>",)),
+    (
+        "trace and frame logs (array.extend, frombytes)",
+        (
+            "~:<method 'extend' of 'array.array' objects>",
+            "~:<method 'frombytes' of 'array.array' objects>",
+        ),
+    ),
 )
 _REST = "loop body (frames, checks, the rest)"
 

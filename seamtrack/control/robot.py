@@ -8,7 +8,7 @@ velocity feed-forward) becomes a desired velocity along the straight line to the
 down as a whole if any axis would exceed its velocity limit; each axis then limits its component
 to the speed from which it can still stop before its position limit, and finally its change
 to the acceleration limit times dt. The
-"can still stop" speed is the exact discrete-time one (:func:`_stop_speed`): braking by a dt per
+"can still stop" speed is the exact discrete-time one (:func:`stop_speed`): braking by a dt per
 tick from it covers exactly d, so no limit is ever crossed. A point-to-point
 move (``stop_at_target``) uses the same law towards its target and lands on it exactly.
 
@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -85,7 +86,8 @@ class RobotState:
         return np.array(self.v)
 
 
-def _stop_speed(distance: float, accel: float, dt: float) -> float:
+@numba.njit(cache=True, nogil=True)
+def stop_speed(distance: float, accel: float, dt: float) -> float:
     """Largest speed from which braking by ``accel * dt`` per tick stops within ``distance``.
 
     Braking from (m + f) a dt through (m - 1 + f) a dt, ..., f a dt to 0 covers
@@ -171,7 +173,7 @@ class CartesianRobot:
         )
         shift = self._T_base_world[:3, 3]
         object.__setattr__(self, "_base_shift", (float(shift[0]), float(shift[1]), float(shift[2])))
-        # Braking from v (discrete, :func:`_stop_speed`) covers at most v^2/2a + v dt/2 + a dt^2/8:
+        # Braking from v (discrete, :func:`stop_speed`) covers at most v^2/2a + v dt/2 + a dt^2/8:
         # farther than this from an end stop, the end stop cannot limit any allowed speed.
         dt = self.control_period_s
         free = tuple(
@@ -364,7 +366,7 @@ class CartesianRobot:
                     c = amax[2] / au
                     a_path = c if c < a_path else a_path
                 if stop_at_target:
-                    c = _stop_speed(dist, a_path, dt)
+                    c = stop_speed(dist, a_path, dt)
                     speed = c if c < speed else speed
                 # Never step past the target in one tick.
                 c = dist / dt
@@ -386,9 +388,9 @@ class CartesianRobot:
             lo_i, hi_i = lo[i], hi[i]
             # Keep the ability to stop before the axis travel ends (near an end stop only).
             if vd > 0.0 and hi_i - qi < free[i]:
-                vd = min(vd, _stop_speed(hi_i - qi, amax[i], dt))
+                vd = min(vd, stop_speed(hi_i - qi, amax[i], dt))
             elif vd < 0.0 and qi - lo_i < free[i]:
-                vd = max(vd, -_stop_speed(qi - lo_i, amax[i], dt))
+                vd = max(vd, -stop_speed(qi - lo_i, amax[i], dt))
             dv_max = amax[i] * dt
             vi = v[i]
             change = vd - vi  # clipped to +-dv_max: min(max(change, -dv_max), dv_max)

@@ -24,12 +24,11 @@ goal on at that rate between refreshes).
 
 from __future__ import annotations
 
-import bisect
-import math
-
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.control import path_kernels as pk
+from seamtrack.control.path_kernels import PathBuffer, off_line, smooth_tail
 from seamtrack.control.tracking import Command, Measurement, TrackerContext
 from seamtrack.params import Fraction, NonNegative, Positive
 
@@ -40,26 +39,14 @@ FloatArray = NDArray[np.float64]
 _MIN_INLIER_MM = 0.05
 
 
-def _line_fit(
-    w: FloatArray, ds: FloatArray, raw: FloatArray
-) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]]:
-    """Weighted least-squares lines p = a + b ds, one per row of the (m, n) weights.
+def _left(a: FloatArray, x: float) -> int:
+    """``bisect.bisect_left`` on a sorted array."""
+    return int(np.searchsorted(a, x))
 
-    Returns the intercepts (m, 3), the slopes (m, 3) and which rows had a well-posed fit.
-    """
-    n = w.sum(axis=1)
-    sx = (w * ds).sum(axis=1)
-    sxx = (w * ds * ds).sum(axis=1)
-    sy = w @ raw
-    sxy = (w * ds) @ raw
-    det = n * sxx - sx * sx
-    ok = (n >= 3) & (det > 1e-12 * np.maximum(n * sxx, 1e-300))
-    safe = np.where(ok, det, 1.0)[:, None]
-    return (
-        (sxx[:, None] * sy - sx[:, None] * sxy) / safe,
-        (n[:, None] * sxy - sx[:, None] * sy) / safe,
-        ok,
-    )
+
+def _right(a: FloatArray, x: float) -> int:
+    """``bisect.bisect_right`` on a sorted array."""
+    return int(np.searchsorted(a, x, side="right"))
 
 
 class TrajectoryTracker:
@@ -140,19 +127,19 @@ class TrajectoryTracker:
         self.dt = context.control_period_s
         # The set-point accelerates no faster than the weakest axis can follow.
         self.accel = 0.9 * float(np.min(context.acceleration_max_world))
-        self._v_set = 0.0
-        self._env_s: list[float] = []  # arc lengths ahead of the set-point ...
-        self._env_v: list[float] = []  # ... and the speed allowed there (corners)
+        # The set-point's state and parameters, in the array its compiled step works on.
+        self._sp = sp = np.zeros(pk.SETPOINT_FIELDS)
+        sp[pk.SPEED], sp[pk.ACCEL], sp[pk.DT] = self.speed, self.accel, self.dt
+        sp[pk.END_MARGIN], sp[pk.BRIDGE] = self.end_margin_mm, self.bridge_mm
+        sp[pk.GAIN], sp[pk.DIRECTION_FIT] = self.gain_1_s, self.direction_fit_mm
+        self._env_s = np.empty(0)  # arc lengths ahead of the set-point ...
+        self._env_v = np.empty(0)  # ... and the speed allowed there (corners)
         start = np.asarray(context.tcp_start_world, dtype=float)
-        self._raw: list[FloatArray] = [start]
-        self._path: list[FloatArray] = [start]
-        self._s: list[float] = [0.0]
-        self._s_set = 0.0
-        self._segments: dict[int, tuple[float, ...]] = {}  # _at_floats' cache, by segment
+        # The stored points in arrays (the compiled smoothing and set-point work on them).
+        self._buffer = PathBuffer(start)
         self._seen_seam = False
-        self._lost = False
         self._held: list[FloatArray] = []
-        self._tcp_now: tuple[float, ...] = tuple(start.tolist())
+        sp[pk.TCP_X : pk.TCP_Z + 1] = start
         program = context.tool_program if context.turns_tool else None
         self._program = program
         self._rotation: FloatArray | None = None
@@ -170,7 +157,7 @@ class TrajectoryTracker:
         point = np.asarray(measurement.point_world, dtype=float)
         if not self.use_capture_pose:
             # Naive: pretend the frame was taken where the robot is now.
-            point = point + (np.asarray(self._tcp_now) - measurement.tcp_world)
+            point = point + (self._sp[pk.TCP_X : pk.TCP_Z + 1] - measurement.tcp_world)
         step = float(np.linalg.norm(point - self._path[-1]))
         if step < self.min_spacing_mm:
             self._lost = False
@@ -195,10 +182,7 @@ class TrajectoryTracker:
             step = float(np.linalg.norm(point - self._path[-1]))
         if step < self.min_spacing_mm:
             return
-        self._raw.append(point)
-        self._path.append(point)
-        self._s.append(self._s[-1] + step)
-        self._segments.clear()  # the path changes (smoothing, trimming): index by index
+        self._buffer.append(point, float(self._s[-1]) + step)
         self._smooth_tail()
         self._trim()
         self._corner_envelope()
@@ -214,13 +198,13 @@ class TrajectoryTracker:
         # arrive, and curvature read there would be transient. (That tail lies a look-ahead
         # ahead of the torch, beyond any braking distance.) Refreshing each time the settled
         # path has grown by half the curvature window keeps the envelope current cheaply.
-        settled = bisect.bisect_right(self._s, self._s[-1] - 2.0 * max(self.smoothing_mm, 0.0))
-        if self._env_s and self._s[settled - 1] - self._env_s[-1] < 0.5 * w:
+        settled = _right(self._s, self._s[-1] - 2.0 * max(self.smoothing_mm, 0.0))
+        if len(self._env_s) and self._s[settled - 1] - self._env_s[-1] < 0.5 * w:
             return
-        i0 = max(bisect.bisect_left(self._s, self._s_set - w), 1)
+        i0 = max(_left(self._s, self._s_set - w), 1)
         s = np.asarray(self._s[i0:settled])
         if len(s) < 3:
-            self._env_s, self._env_v = [], []
+            self._env_s, self._env_v = np.empty(0), np.empty(0)
             return
         p = np.asarray(self._path[i0:settled])
         back = np.searchsorted(s, s - w)
@@ -240,20 +224,7 @@ class TrajectoryTracker:
         reach = np.minimum(v_allow, self.speed) ** 2 + 2.0 * self.accel * s
         suffix = np.minimum.accumulate(reach[::-1])[::-1]
         v = np.sqrt(np.maximum(suffix - 2.0 * self.accel * s, 0.0))
-        self._env_s, self._env_v = s.tolist(), v.tolist()
-
-    def _corner_speed(self, s: float) -> float:
-        """The corner envelope at arc length s (no limit beyond the stored points)."""
-        knots = self._env_s
-        if not knots or s > knots[-1]:
-            return math.inf
-        i = bisect.bisect_right(knots, s) - 1
-        if i < 0:
-            return self._env_v[0]
-        if i >= len(knots) - 1:
-            return self._env_v[-1]
-        f = (s - knots[i]) / (knots[i + 1] - knots[i])
-        return self._env_v[i] + f * (self._env_v[i + 1] - self._env_v[i])
+        self._env_s, self._env_v = s, v
 
     def _reacquired(self) -> bool:
         """True when the newest held-back points span ``reacquire_mm`` and lie on one line;
@@ -299,37 +270,18 @@ class TrajectoryTracker:
         Returns the target (3 floats, world), the speed, the feed-forward (3 floats, world) and
         ``stop_at_target``, or None; the commanded rotation is :attr:`rotation_world`.
         """
-        self._tcp_now = (x, y, z)
         if not self._seen_seam:
+            self._sp[pk.TCP_X : pk.TCP_Z + 1] = x, y, z
             return None
-        # The set-point may run up to bridge_mm past the newest stored point: while the seam is
-        # in view the path grows ahead of it, and when it is lost this is the bridge. Braking
-        # room to that limit is what lets it keep speed with a short look-ahead.
-        s_limit = self._s[-1] - (0.0 if self._lost else self.end_margin_mm) + self.bridge_mm
-        # Set-point speed: ramp up at the acceleration limit, brake to stop at s_limit.
-        s_set, dt = self._s_set, self.dt
-        room = max(s_limit - s_set, 0.0)
-        env = self._env_s
-        corner = math.inf if not env or s_set > env[-1] else self._corner_speed(s_set)
-        wanted = min(self.speed, math.sqrt(2.0 * self.accel * room), corner)
-        # Speed up or brake at most at the acceleration limit: a limit that appears late (a
-        # corner just measured) is met as soon as braking allows, never by a jump in speed.
-        dv = self.accel * dt
-        v_set = self._v_set
-        self._v_set = v_set = min(max(wanted, v_set - dv), v_set + dv)
-        step = min(v_set * dt, room)
-        moving = step > 0.0
-        self._s_set = s_set = s_set + step
-        tx, ty, tz, dx, dy, dz = self._at_floats(s_set)
-        rate = step / dt
-        error = math.dist((tx, ty, tz), (x, y, z))
+        buffer = self._buffer
+        out = pk.setpoint_step(self._sp, buffer.path, buffer.s, self._env_s, self._env_v, x, y, z)
         if self._program is not None:
             self._tick += 1
             if self._tick % self._orient_every == 0:
                 self._rotation, self._omega, self._s_program = self._program.turning_near(
-                    np.array((tx, ty, tz)), self._s_program, self._v_set
+                    np.array(out[:3]), self._s_program, self._v_set
                 )
-        return (tx, ty, tz, self.gain_1_s * error, dx * rate, dy * rate, dz * rate, not moving)
+        return out
 
     @property
     def rotation_world(self) -> FloatArray | None:
@@ -340,72 +292,57 @@ class TrajectoryTracker:
     def _end_direction(self) -> FloatArray:
         """Unit chord of the last ``direction_fit_mm`` of stored path (robust to the jitter of
         the last few points, which the last segment alone is not)."""
-        knots = self._s
-        i = max(bisect.bisect_left(knots, knots[-1] - self.direction_fit_mm) - 1, 0)
-        if len(knots) > 2:
-            i = max(i, 1)  # the start pose is not a seam point
-        chord = self._path[-1] - self._path[i]
-        length = float(np.linalg.norm(chord))
-        return chord / length if length > 0 else np.zeros(3)
+        buffer = self._buffer
+        return np.array(pk.end_direction(buffer.path, buffer.s, self.direction_fit_mm))
+
+    @property
+    def _s_set(self) -> float:
+        """Arc length of the set-point along the stored path."""
+        return float(self._sp[pk.S_SET])
+
+    @property
+    def _v_set(self) -> float:
+        """Speed of the set-point along the path."""
+        return float(self._sp[pk.V_SET])
+
+    @property
+    def _lost(self) -> bool:
+        """The last frame gave no usable point: the set-point bridges."""
+        return bool(self._sp[pk.LOST])
+
+    @_lost.setter
+    def _lost(self, lost: bool) -> None:
+        self._sp[pk.LOST] = 1.0 if lost else 0.0
+
+    @property
+    def _s(self) -> FloatArray:
+        """Arc lengths of the stored points, (n,)."""
+        return self._buffer.s
+
+    @property
+    def _path(self) -> FloatArray:
+        """The stored (smoothed) points, (n, 3), oldest first."""
+        return self._buffer.path
 
     def _off_path(self, point: FloatArray) -> float:
         """Distance of a point from the line fitted (total least squares) to the raw stored
         points of the last ``direction_fit_mm``: a ramp of bogus points trips it on its second
         point, because the line they are measured against does not follow them."""
         knots = self._s
-        i = max(bisect.bisect_left(knots, knots[-1] - self.direction_fit_mm), 1)
-        window = np.asarray(self._raw[i:])
+        i = max(_left(knots, knots[-1] - self.direction_fit_mm), 1)
+        window = self._buffer.raw[i:]
         if len(window) < 3:
             d = self._end_direction()
             v = point - self._path[-1]
             return float(np.linalg.norm(v - (v @ d) * d))
-        centre = window.mean(axis=0)
-        direction = np.linalg.svd(window - centre, full_matrices=False)[2][0]
-        v = point - centre
-        return float(np.linalg.norm(v - (v @ direction) * direction))
-
-    def _at_floats(self, s: float) -> tuple[float, float, float, float, float, float]:
-        """:meth:`_at` as six floats (the same arithmetic, element by element), with the
-        segments and the end direction cached until the stored path changes."""
-        knots = self._s
-        if len(knots) < 2:
-            px, py, pz = self._path[0].tolist()
-            return px, py, pz, 0.0, 0.0, 0.0
-        cache = self._segments
-        if s > knots[-1]:
-            end = cache.get(-1)
-            if end is None:
-                end = (*self._path[-1].tolist(), *self._end_direction().tolist())
-                cache[-1] = end
-            ax, ay, az, dx, dy, dz = end
-            k = s - knots[-1]
-            return ax + k * dx, ay + k * dy, az + k * dz, dx, dy, dz
-        i = min(max(bisect.bisect_right(knots, s) - 1, 0), len(knots) - 2)
-        seg = cache.get(i)
-        if seg is None:
-            a, b = self._path[i], self._path[i + 1]
-            length = knots[i + 1] - knots[i]
-            direction = (b - a) / length if length > 0 else np.zeros(3)
-            seg = (*a.tolist(), *direction.tolist())
-            cache[i] = seg
-        ax, ay, az, dx, dy, dz = seg
-        k = s - knots[i]
-        return ax + k * dx, ay + k * dy, az + k * dz, dx, dy, dz
+        return float(off_line(window, point))
 
     def _at(self, s: float) -> tuple[FloatArray, FloatArray]:
         """Point and unit direction on the stored path at arc length s (extrapolated past
         the end along :meth:`_end_direction`)."""
-        knots = self._s
-        if len(knots) < 2:
-            return self._path[0], np.zeros(3)
-        if s > knots[-1]:
-            d = self._end_direction()
-            return self._path[-1] + (s - knots[-1]) * d, d
-        i = min(max(bisect.bisect_right(knots, s) - 1, 0), len(knots) - 2)
-        a, b = self._path[i], self._path[i + 1]
-        length = knots[i + 1] - knots[i]
-        direction = (b - a) / length if length > 0 else np.zeros(3)
-        return a + (s - knots[i]) * direction, direction
+        buffer = self._buffer
+        at = pk.point_at(buffer.path, buffer.s, s, self.direction_fit_mm)
+        return np.array(at[:3]), np.array(at[3:])
 
     def _smooth_tail(self) -> None:
         """Refit the stored points whose window the newest point entered: a robust line through
@@ -417,32 +354,14 @@ class TrajectoryTracker:
         while a real turn, which the majority of the window follows, does.
         """
         h = self.smoothing_mm
-        if h <= 0 or len(self._raw) < 3:
+        buffer = self._buffer
+        if h <= 0 or len(buffer) < 3:
             return
-        s_last = self._s[-1]
-        first = max(bisect.bisect_left(self._s, s_last - 2 * h), 1)  # index 0 is the start pose
-        s = np.asarray(self._s[first:])
-        raw = np.asarray(self._raw[first:])
-        targets = np.flatnonzero(s >= s_last - h)
-        ds = s[None, :] - s[targets, None]  # (m, n): offsets of the window points
-        w = (np.abs(ds) <= h).astype(float)
-        a, b, ok = _line_fit(w, ds, raw)
-        residual = np.linalg.norm(
-            raw[None, :, :] - (a[:, None, :] + ds[..., None] * b[:, None, :]), axis=2
-        )
-        # Each row's median residual over its window (a sort beats nanmedian tenfold here).
-        count = w.sum(axis=1).astype(int)
-        ordered = np.sort(np.where(w > 0, residual, np.inf), axis=1)
-        median = ordered[np.arange(len(ordered)), np.maximum(count // 2, 0)]
-        limit = np.maximum(3.0 * np.where(np.isfinite(median), median, 0.0), _MIN_INLIER_MM)
-        w = w * (residual <= limit[:, None])
-        a, _, ok = _line_fit(w, ds, raw)
-        for k, i in enumerate(targets):
-            if ok[k]:
-                self._path[first + i] = a[k]
+        first = max(_left(self._s, self._s[-1] - 2 * h), 1)  # 0: the start pose
+        smooth_tail(buffer.raw, buffer.path, buffer.s, first, h, _MIN_INLIER_MM)
 
     def _trim(self) -> None:
         """Drop stored points more than ``buffer_mm`` behind the set-point."""
-        cut = bisect.bisect_left(self._s, self._s_set - self.buffer_mm) - 1
+        cut = _left(self._s, self._s_set - self.buffer_mm) - 1
         if cut > 0:
-            del self._raw[:cut], self._path[:cut], self._s[:cut]
+            self._buffer.drop(cut)

@@ -43,6 +43,7 @@ from seamtrack.simulation.assemble import LoopSettings, Parts, build_parts
 from seamtrack.simulation.progress import ProgressTracker
 from seamtrack.simulation.scene import Scene, load_scene
 from seamtrack.simulation.scoring import orientation_summary, torch_axes, with_joints
+from seamtrack.simulation.ticks import LIMIT, REFUSED, GantryTicks
 
 FloatArray = NDArray[np.float64]
 
@@ -272,21 +273,19 @@ def run(
     progress_near = ProgressTracker(seam).closest_near  # Seam.closest_near, the same numbers
     unrotated = bool(np.array_equal(R, np.eye(3))) and not turns_tool
     p0x, p0y, p0z = p0.tolist()
-    # The fast path: the built-in trajectory tracker on an unrotated gantry, on plain floats
-    # (no arrays or command objects per tick); the same arithmetic, so the same numbers.
+    # The fast path: the built-in trajectory tracker on an unrotated gantry, its ticks between
+    # events compiled (seamtrack.simulation.ticks); the same arithmetic, so the same numbers.
     fast = unrotated and type(tracker) is TrajectoryTracker and type(robot) is CartesianRobot
     fast = fast and bool(robot._unrotated)
-    sx, sy, sz = robot._base_shift if fast else (0.0, 0.0, 0.0)
-    command_floats: Any = tracker.command_floats if fast else None  # type: ignore[attr-defined]
-    step_move: Any = robot.step_move if fast else None
-    within_travel = robot.within_travel
-    log_tcp, log_target = tcp_log.extend, target_log.extend
+    ticks = GantryTicks(robot, (p0x, p0y, p0z)) if fast else None
     tcp: Any = None
-    for tick in range(max_ticks + 1):
+    tick = -1
+    while tick < max_ticks:
+        tick += 1
         t = tick * dt
         q = state.q
         if fast:
-            x, y, z = tcp_list = [q[0] + p0x, q[1] + p0y, q[2] + p0z]
+            tcp_list = [q[0] + p0x, q[1] + p0y, q[2] + p0z]
         elif unrotated:  # the usual robot: spare the matrix products on this hot path
             tcp_list = [q[0] + p0x, q[1] + p0y, q[2] + p0z]
             tcp = np.array(tcp_list)
@@ -314,31 +313,32 @@ def run(
                 tracker.update(measurement)
             except Exception as exc:
                 raise plugin_failed("tracker.name", name, "update", t, exc) from exc
-        if fast:
-            try:
-                out = command_floats(x, y, z)
-            except Exception as exc:
-                raise plugin_failed("tracker.name", name, "command", t, exc) from exc
-            log_tcp(tcp_list)
-            if out is None:
-                log_target(nan3)
-                if status:
-                    break
-                step_move(state, None, 0.0, (0.0, 0.0, 0.0), False)
-            else:
-                tx, ty, tz, speed, fx, fy, fz, stop = out
-                if not (0.0 < speed < math.inf and math.isfinite(tx + ty + tz + fx + fy + fz)):
-                    # What the reference path would refuse, refused the same way.
-                    ff_world = np.array((fx, fy, fz))
-                    refused = Command(np.array((tx, ty, tz)), speed, ff_world, stop)
-                    _checked(refused, name, t)
-                log_target((tx, ty, tz))
-                base_target = (tx + sx, ty + sy, tz + sz)
-                if not within_travel(base_target):
-                    status = "limit_violation"
-                if status:
-                    break
-                step_move(state, base_target, speed, (fx, fy, fz), stop)
+        if ticks is not None:
+            arrival = pending[0].t_arrival_s if pending else math.inf
+            n, why = ticks.run(
+                state,
+                tick,
+                max_ticks,
+                next_capture,
+                arrival,
+                check_every,
+                WALL_CHECK_TICKS,
+                tracker,
+            )
+            if why == REFUSED:  # what the reference path would refuse, refused the same way
+                tx, ty, tz, speed, fx, fy, fz, stop = ticks.refused.tolist()
+                ff = np.array((fx, fy, fz))
+                _checked(
+                    Command(np.array((tx, ty, tz)), speed, ff, stop > 0), name, (tick + n) * dt
+                )
+            tcp_log.frombytes(ticks.tcp[:n].tobytes())
+            target_log.frombytes(ticks.target[:n].tobytes())
+            if why == LIMIT:
+                status = "limit_violation"
+                break
+            tick += n - 1  # the last tick run: its checks follow
+            t = tick * dt
+            tcp_list = ticks.tcp[n - 1].tolist()
         else:
             try:
                 cmd = tracker.command(t, tcp, vel)

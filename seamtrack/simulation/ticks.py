@@ -1,0 +1,236 @@
+"""The loop's compiled control ticks: the built-in trajectory tracker on a gantry.
+
+Between two events (a frame captured, a measurement arriving, a progress or wall-clock check)
+every control tick does the same small arithmetic: the torch tip from the axes, the tracker's
+set-point step (:func:`seamtrack.control.path_kernels.setpoint_step`), the axis travel check,
+the axes' step (the interpolator, and the position loops when the robot has a servo), and the
+trace. In Python that costs ~10 us a tick, dozens of float operations each wrapped in an
+object; :func:`gantry_ticks` runs the whole stretch in one compiled call, with the same
+arithmetic in the same order as :meth:`CartesianRobot.step_move` and :meth:`Servo.follow`, so
+the run is the same to the last bit as the one the tracker protocol drives
+(``tests/test_loop_fast.py``).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+from seamtrack.control.path_kernels import setpoint_step
+from seamtrack.control.robot import CartesianRobot, RobotState, stop_speed
+
+FloatArray = NDArray[np.float64]
+
+#: What :func:`gantry_ticks` stopped on (besides an event tick).
+EVENT, LIMIT, REFUSED = 0, 1, 2
+#: Rows of :class:`GantryTicks`' axis limits: velocity, acceleration, travel, free travel.
+_VMAX, _AMAX, _LO, _HI, _FREE = 0, 1, 2, 3, 4
+
+
+@numba.njit(cache=True, nogil=True)
+def _interpolate(
+    q: FloatArray, v: FloatArray, lim: FloatArray, dt: float, has_target: bool,
+    tx: float, ty: float, tz: float, speed: float, fx: float, fy: float, fz: float, stop: bool,
+) -> None:  # fmt: skip
+    """:meth:`CartesianRobot.step_move` of an ideal gantry on arrays (``lim`` rows: velocity,
+    acceleration, travel min and max, free travel)."""
+    if not has_target:
+        d0 = d1 = d2 = 0.0
+    else:
+        ex, ey, ez = tx - q[0], ty - q[1], tz - q[2]
+        dist = math.sqrt(ex * ex + ey * ey + ez * ez)
+        if dist > 0.0:
+            ux, uy, uz = ex / dist, ey / dist, ez / dist
+            a_path = math.inf
+            au = abs(ux)
+            if au > 1e-12:
+                c = lim[_VMAX, 0] / au
+                speed = c if c < speed else speed
+                a_path = lim[_AMAX, 0] / au
+            au = abs(uy)
+            if au > 1e-12:
+                c = lim[_VMAX, 1] / au
+                speed = c if c < speed else speed
+                c = lim[_AMAX, 1] / au
+                a_path = c if c < a_path else a_path
+            au = abs(uz)
+            if au > 1e-12:
+                c = lim[_VMAX, 2] / au
+                speed = c if c < speed else speed
+                c = lim[_AMAX, 2] / au
+                a_path = c if c < a_path else a_path
+            if stop:
+                c = stop_speed(dist, a_path, dt)
+                speed = c if c < speed else speed
+            c = dist / dt
+            speed = c if c < speed else speed
+            d0, d1, d2 = fx + ux * speed, fy + uy * speed, fz + uz * speed
+        else:
+            d0, d1, d2 = fx, fy, fz
+    desired = (d0, d1, d2)
+    scale = 1.0
+    for i in range(3):
+        if abs(desired[i]) > lim[_VMAX, i]:
+            scale = min(scale, lim[_VMAX, i] / abs(desired[i]))
+    for i in range(3):
+        vd = desired[i] * scale
+        qi = q[i]
+        lo_i, hi_i = lim[_LO, i], lim[_HI, i]
+        if vd > 0.0 and hi_i - qi < lim[_FREE, i]:
+            vd = min(vd, stop_speed(hi_i - qi, lim[_AMAX, i], dt))
+        elif vd < 0.0 and qi - lo_i < lim[_FREE, i]:
+            vd = max(vd, -stop_speed(qi - lo_i, lim[_AMAX, i], dt))
+        dv_max = lim[_AMAX, i] * dt
+        vi = v[i]
+        change = vd - vi
+        change = -dv_max if -dv_max > change else change
+        change = dv_max if dv_max < change else change
+        vi += change
+        qi += vi * dt
+        qi = lo_i if lo_i > qi else qi
+        qi = hi_i if hi_i < qi else qi
+        q[i] = qi
+        v[i] = vi
+
+
+@numba.njit(cache=True, nogil=True)
+def _follow(
+    q: FloatArray, v: FloatArray, held: FloatArray, tick: int, ipo_ticks: int,
+    servo: FloatArray, setpoint: FloatArray, lim: FloatArray, dt: float,
+) -> None:  # fmt: skip
+    """:meth:`Servo.follow` and the travel clamp of ``_step_servo`` (``servo`` rows: gain,
+    velocity and acceleration limits)."""
+    if tick % ipo_ticks == 0:
+        held[:] = setpoint
+    for i in range(3):
+        vmax = servo[1, i]
+        dv = servo[2, i] * dt
+        want = servo[0, i] * (held[i] - q[i])
+        want = min(max(want, -vmax), vmax)
+        vi = v[i] + min(max(want - v[i], -dv), dv)
+        v[i] = vi
+        q[i] += vi * dt
+    for i in range(3):
+        q[i] = min(max(q[i], lim[_LO, i]), lim[_HI, i])
+
+
+@numba.njit(cache=True, nogil=True)
+def gantry_ticks(
+    tick: int, max_ticks: int, dt: float, next_capture: float, next_arrival: float,
+    check_every: int, wall_every: int, offset: FloatArray, axes: FloatArray, lim: FloatArray,
+    servo: FloatArray, ipo: NDArray[np.int64], sp: FloatArray, path: FloatArray, s: FloatArray,
+    env_s: FloatArray, env_v: FloatArray, seen: bool, tcp_out: FloatArray,
+    target_out: FloatArray, refused: FloatArray,
+) -> tuple[int, int]:  # fmt: skip
+    """Control ticks from ``tick`` on, until the next event: stops before a tick at which a
+    frame is due (``next_capture``) or a measurement arrives (``next_arrival``), after a tick
+    at which progress (``check_every``) or the wall clock (``wall_every``) is checked, or at a
+    target outside the travel (``LIMIT``) or an unusable command (``REFUSED``: its target,
+    speed, feed-forward and stop in ``refused``).
+
+    ``offset``: (tcp from axes (3), world to base (3)); ``axes``: rows q, v (the servo's
+    output), set-point q, v, held set-point; ``ipo``: (ticks per interpolation, servo tick;
+    -1: ideal axes). Writes the torch tip and the target of each tick into ``tcp_out`` and
+    ``target_out``. Returns (ticks run, what stopped it).
+    """
+    q, v, sq, sv, held = axes[0], axes[1], axes[2], axes[3], axes[4]
+    has_servo = ipo[0] > 0
+    first = tick
+    while tick <= max_ticks:
+        t = tick * dt
+        if tick > first and (t + 1e-9 >= next_capture or next_arrival <= t + 1e-9):
+            break
+        k = tick - first
+        x, y, z = q[0] + offset[0], q[1] + offset[1], q[2] + offset[2]
+        tcp_out[k, 0], tcp_out[k, 1], tcp_out[k, 2] = x, y, z
+        if not seen:
+            sp[2], sp[3], sp[4] = x, y, z  # the tracker's view of the torch (naive poses)
+            target_out[k, :] = np.nan
+            has_target = False
+            tx = ty = tz = speed = fx = fy = fz = 0.0
+            stop = False
+        else:
+            tx, ty, tz, speed, fx, fy, fz, stop = setpoint_step(sp, path, s, env_s, env_v, x, y, z)
+            if not (0.0 < speed < math.inf and math.isfinite(tx + ty + tz + fx + fy + fz)):
+                refused[:] = (tx, ty, tz, speed, fx, fy, fz, 1.0 if stop else 0.0)
+                return k, REFUSED
+            target_out[k, 0], target_out[k, 1], target_out[k, 2] = tx, ty, tz
+            tx, ty, tz = tx + offset[3], ty + offset[4], tz + offset[5]
+            if not (
+                lim[_LO, 0] - 1e-9 <= tx <= lim[_HI, 0] + 1e-9
+                and lim[_LO, 1] - 1e-9 <= ty <= lim[_HI, 1] + 1e-9
+                and lim[_LO, 2] - 1e-9 <= tz <= lim[_HI, 2] + 1e-9
+            ):
+                return k + 1, LIMIT
+            has_target = True
+        if has_servo:
+            _interpolate(sq, sv, lim, dt, has_target, tx, ty, tz, speed, fx, fy, fz, stop)
+            _follow(q, v, held, ipo[1], ipo[0], servo, sq, lim, dt)
+            ipo[1] += 1
+        else:
+            _interpolate(q, v, lim, dt, has_target, tx, ty, tz, speed, fx, fy, fz, stop)
+        tick += 1
+        if (tick - 1) % wall_every == 0 or (tick - 1) % check_every == 0:
+            break
+    return tick - first, EVENT
+
+
+class GantryTicks:
+    """The compiled ticks of one run: the robot's limits and state in arrays, the traces'
+    scratch rows; :meth:`run` advances a :class:`RobotState` in place."""
+
+    def __init__(self, robot: CartesianRobot, tcp_offset: tuple[float, float, float]) -> None:
+        self.robot = robot
+        self.dt = robot.control_period_s
+        self.lim = np.array(
+            [
+                robot.velocity_max_mm_s,
+                robot.acceleration_max_mm_s2,
+                robot.position_min_mm,
+                robot.position_max_mm,
+                robot._free_travel,
+            ]
+        )
+        self.offset = np.array([*tcp_offset, *robot._base_shift])
+        servo = robot.servo
+        self.servo = np.zeros((3, 3))
+        self.ipo = np.array([-1, 0], dtype=np.int64)
+        if servo is not None and robot._ideal is not None:
+            self.servo = np.array([servo.gain_1_s, servo.velocity_max, servo.acceleration_max])
+            self.ipo[0] = servo.ipo_ticks
+        self.axes = np.zeros((5, 3))
+        self.tcp = np.empty((1024, 3))
+        self.target = np.empty((1024, 3))
+        self.refused = np.zeros(8)
+
+    def run(
+        self, state: RobotState, tick: int, max_ticks: int, next_capture: float,
+        next_arrival: float, check_every: int, wall_every: int, tracker: Any,
+    ) -> tuple[int, int]:  # fmt: skip
+        """Ticks from ``tick`` to the next event, ``state`` advanced (see :func:`gantry_ticks`);
+        the ticks' torch tips and targets are in ``self.tcp`` and ``self.target``."""
+        axes = self.axes
+        axes[0], axes[1] = state.q, state.v
+        servo = state.servo
+        if servo is not None:
+            assert state.setpoint is not None
+            axes[2], axes[3], axes[4] = state.setpoint.q, state.setpoint.v, servo.held
+            self.ipo[1] = servo.tick
+        path = tracker._buffer
+        n, why = gantry_ticks(
+            tick, max_ticks, self.dt, next_capture, next_arrival, check_every, wall_every,
+            self.offset, axes, self.lim, self.servo, self.ipo, tracker._sp, path.path, path.s,
+            tracker._env_s, tracker._env_v, tracker._seen_seam, self.tcp, self.target,
+            self.refused,
+        )  # fmt: skip
+        state.q[:], state.v[:] = axes[0].tolist(), axes[1].tolist()
+        if servo is not None:
+            assert state.setpoint is not None
+            state.setpoint.q[:], state.setpoint.v[:] = axes[2].tolist(), axes[3].tolist()
+            servo.held[:] = axes[4].tolist()
+            servo.tick = int(self.ipo[1])
+        return n, why
