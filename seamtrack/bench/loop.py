@@ -160,6 +160,9 @@ def bench_loop(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]:
         features.append(feature)
         return feature
 
+    # Warm-up, untimed: the compiled kernels (extractor, ticks, tracker) load from their cache,
+    # or compile on a fresh checkout, before anything is timed.
+    run(dataclasses.replace(parts, settings=dataclasses.replace(parts.settings, time_limit_s=2.0)))
     load_before = os.getloadavg()[0]
     # The loop's own clock is this process's CPU time: the time on one core, which other jobs
     # on a shared machine inflate far less than the wall clock (measured beside it).
