@@ -105,6 +105,86 @@ def stop_speed(distance: float, accel: float, dt: float) -> float:
     return accel * dt * (m + f)
 
 
+#: Rows of :attr:`CartesianRobot._limits` (:func:`axes_step`).
+_VMAX, _AMAX, _LO, _HI, _FREE = 0, 1, 2, 3, 4
+
+
+@numba.njit(cache=True, nogil=True)
+def axes_step(
+    q: FloatArray, v: FloatArray, lim: FloatArray, dt: float, has_target: bool,
+    tx: float, ty: float, tz: float, speed: float, fx: float, fy: float, fz: float, stop: bool,
+) -> None:  # fmt: skip
+    """One control period of three ideal axes (``q``, ``v`` updated in place) moving towards
+    a target (``has_target``; else braking to rest) at ``speed`` along the straight line, plus
+    the feed-forward velocity; ``stop``: arrive at rest. ``lim`` rows: velocity and
+    acceleration limits, travel min and max, free travel (beyond it no end stop can limit an
+    allowed speed). Compiled: the loop runs it every tick (:mod:`seamtrack.simulation.ticks`)."""
+    if not has_target:
+        d0 = d1 = d2 = 0.0
+    else:
+        ex, ey, ez = tx - q[0], ty - q[1], tz - q[2]
+        dist = math.sqrt(ex * ex + ey * ey + ez * ez)
+        if dist > 0.0:
+            ux, uy, uz = ex / dist, ey / dist, ez / dist
+            # Path speed limited by every axis' velocity limit along this direction.
+            a_path = math.inf
+            au = abs(ux)
+            if au > 1e-12:
+                c = lim[_VMAX, 0] / au
+                speed = c if c < speed else speed
+                a_path = lim[_AMAX, 0] / au
+            au = abs(uy)
+            if au > 1e-12:
+                c = lim[_VMAX, 1] / au
+                speed = c if c < speed else speed
+                c = lim[_AMAX, 1] / au
+                a_path = c if c < a_path else a_path
+            au = abs(uz)
+            if au > 1e-12:
+                c = lim[_VMAX, 2] / au
+                speed = c if c < speed else speed
+                c = lim[_AMAX, 2] / au
+                a_path = c if c < a_path else a_path
+            if stop:
+                c = stop_speed(dist, a_path, dt)
+                speed = c if c < speed else speed
+            # Never step past the target in one tick.
+            c = dist / dt
+            speed = c if c < speed else speed
+            d0, d1, d2 = fx + ux * speed, fy + uy * speed, fz + uz * speed
+        else:
+            d0, d1, d2 = fx, fy, fz
+    desired = (d0, d1, d2)
+    # A velocity beyond an axis limit is scaled down as a whole, keeping its direction (as a
+    # Cartesian controller's speed override does); clipping one axis alone would bend the path.
+    scale = 1.0
+    for i in range(3):
+        if abs(desired[i]) > lim[_VMAX, i]:
+            scale = min(scale, lim[_VMAX, i] / abs(desired[i]))
+    for i in range(3):
+        vd = desired[i] * scale
+        qi = q[i]
+        lo_i, hi_i = lim[_LO, i], lim[_HI, i]
+        # Keep the ability to stop before the axis travel ends (near an end stop only).
+        if vd > 0.0 and hi_i - qi < lim[_FREE, i]:
+            vd = min(vd, stop_speed(hi_i - qi, lim[_AMAX, i], dt))
+        elif vd < 0.0 and qi - lo_i < lim[_FREE, i]:
+            vd = max(vd, -stop_speed(qi - lo_i, lim[_AMAX, i], dt))
+        dv_max = lim[_AMAX, i] * dt
+        vi = v[i]
+        change = vd - vi  # clipped to +-dv_max
+        change = -dv_max if -dv_max > change else change
+        change = dv_max if dv_max < change else change
+        vi += change
+        qi += vi * dt
+        # Rounding can leave a sub-nanometre overshoot: clamp the position to the end stop
+        # (the velocity is already the last braking step; zeroing it would be a jump).
+        qi = lo_i if lo_i > qi else qi
+        qi = hi_i if hi_i < qi else qi
+        q[i] = qi
+        v[i] = vi
+
+
 @dataclass(frozen=True)
 class CartesianRobot:
     """Three independent linear axes with position, velocity and acceleration limits.
@@ -139,6 +219,8 @@ class CartesianRobot:
     _unrotated: bool = field(init=False, repr=False, compare=False)
     _base_shift: tuple[float, float, float] = field(init=False, repr=False, compare=False)
     _free_travel: tuple[float, float, float] = field(init=False, repr=False, compare=False)
+    #: Rows velocity, acceleration, travel min, travel max, free travel (:func:`axes_step`).
+    _limits: FloatArray = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         for key in ("velocity_max_mm_s", "acceleration_max_mm_s2"):
@@ -181,6 +263,8 @@ class CartesianRobot:
             for v, a in zip(self.velocity_max_mm_s, self.acceleration_max_mm_s2, strict=True)
         )
         object.__setattr__(self, "_free_travel", free)
+        limits = (self.velocity_max_mm_s, self.acceleration_max_mm_s2, lo, hi, free)
+        object.__setattr__(self, "_limits", np.array(limits, dtype=np.float64))
         object.__setattr__(self, "T_tcp_sensor", np.asarray(self.T_tcp_sensor, dtype=float))
         ideal = None
         if self.servo is not None:
@@ -330,77 +414,9 @@ class CartesianRobot:
         if self._ideal is not None:
             self._step_servo(state, target, speed, feed_forward, stop_at_target)
             return
-        dt = self.control_period_s
-        q, v = state.q, state.v
-        vmax, amax = self.velocity_max_mm_s, self.acceleration_max_mm_s2
-        lo, hi = self.position_min_mm, self.position_max_mm
-        if target is None:
-            desired = [0.0, 0.0, 0.0]
-        else:
-            ex = target[0] - q[0]
-            ey = target[1] - q[1]
-            ez = target[2] - q[2]
-            dist = math.sqrt(ex * ex + ey * ey + ez * ez)
-            ff = feed_forward
-            if dist > 0.0:
-                ux, uy, uz = ex / dist, ey / dist, ez / dist
-                # Path speed limited by every axis' velocity limit along this direction.
-                a_path = math.inf
-                # (``b if b < a else a`` is ``min(a, b)``, exactly, without the call: this runs
-                # every control tick.)
-                au = abs(ux)
-                if au > 1e-12:
-                    c = vmax[0] / au
-                    speed = c if c < speed else speed
-                    a_path = amax[0] / au
-                au = abs(uy)
-                if au > 1e-12:
-                    c = vmax[1] / au
-                    speed = c if c < speed else speed
-                    c = amax[1] / au
-                    a_path = c if c < a_path else a_path
-                au = abs(uz)
-                if au > 1e-12:
-                    c = vmax[2] / au
-                    speed = c if c < speed else speed
-                    c = amax[2] / au
-                    a_path = c if c < a_path else a_path
-                if stop_at_target:
-                    c = stop_speed(dist, a_path, dt)
-                    speed = c if c < speed else speed
-                # Never step past the target in one tick.
-                c = dist / dt
-                speed = c if c < speed else speed
-                desired = [ff[0] + ux * speed, ff[1] + uy * speed, ff[2] + uz * speed]
-            else:
-                desired = [ff[0], ff[1], ff[2]]
-        # A velocity beyond an axis limit is scaled down as a whole, keeping its direction (as
-        # a Cartesian controller's speed override does); clipping one axis alone would bend
-        # the path.
-        scale = 1.0
-        for i in range(3):
-            if abs(desired[i]) > vmax[i]:
-                scale = min(scale, vmax[i] / abs(desired[i]))
-        free = self._free_travel
-        for i in range(3):
-            vd = desired[i] * scale
-            qi = q[i]
-            lo_i, hi_i = lo[i], hi[i]
-            # Keep the ability to stop before the axis travel ends (near an end stop only).
-            if vd > 0.0 and hi_i - qi < free[i]:
-                vd = min(vd, stop_speed(hi_i - qi, amax[i], dt))
-            elif vd < 0.0 and qi - lo_i < free[i]:
-                vd = max(vd, -stop_speed(qi - lo_i, amax[i], dt))
-            dv_max = amax[i] * dt
-            vi = v[i]
-            change = vd - vi  # clipped to +-dv_max: min(max(change, -dv_max), dv_max)
-            change = -dv_max if -dv_max > change else change
-            change = dv_max if dv_max < change else change
-            vi += change
-            qi += vi * dt
-            # Rounding can leave a sub-nanometre overshoot: clamp the position to the end stop
-            # (the velocity is already the last braking step; zeroing it would be a jump).
-            qi = lo_i if lo_i > qi else qi
-            qi = hi_i if hi_i < qi else qi
-            q[i] = qi
-            v[i] = vi
+        q, v = np.array(state.q), np.array(state.v)
+        tx, ty, tz = (0.0, 0.0, 0.0) if target is None else target
+        fx, fy, fz = feed_forward
+        axes_step(q, v, self._limits, self.control_period_s, target is not None, tx, ty, tz,
+                  speed, fx, fy, fz, stop_at_target)  # fmt: skip
+        state.q[:], state.v[:] = q.tolist(), v.tolist()

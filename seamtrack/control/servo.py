@@ -18,12 +18,34 @@ set-point on every tick.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
 
 from seamtrack.errors import SceneError
 
 #: Largest K_v dt allowed: beyond it the discrete position loop overshoots.
 MAX_GAIN_PERIOD = 0.5
+
+
+@numba.njit(cache=True, nogil=True)
+def loops_step(
+    q: NDArray[np.float64], v: NDArray[np.float64], held: NDArray[np.float64],
+    table: NDArray[np.float64], dt: float,
+) -> None:  # fmt: skip
+    """One control period of the axes' position loops (``q``, ``v`` in place) after the held
+    set-point: K_v times the following error, within the velocity and acceleration limits
+    (``table`` rows: gain, velocity limit, acceleration limit, per axis)."""
+    for i in range(q.shape[0]):
+        vmax = table[1, i]
+        dv = table[2, i] * dt
+        want = table[0, i] * (held[i] - q[i])
+        want = min(max(want, -vmax), vmax)
+        vi = v[i] + min(max(want - v[i], -dv), dv)
+        v[i] = vi
+        q[i] += vi * dt
 
 
 @dataclass(frozen=True)
@@ -47,6 +69,8 @@ class Servo:
     control_period_s: float
     velocity_max: tuple[float, ...]
     acceleration_max: tuple[float, ...]
+    #: Rows gain, velocity limit, acceleration limit, per axis (:func:`loops_step`).
+    _table: NDArray[np.float64] = field(init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         n = len(self.velocity_max)
@@ -77,6 +101,8 @@ class Servo:
                 fix="use a whole multiple of robot.control_period_s",
             )
         object.__setattr__(self, "gain_1_s", gains)
+        table = np.array([gains, self.velocity_max, self.acceleration_max], dtype=np.float64)
+        object.__setattr__(self, "_table", table)
 
     @property
     def ipo_ticks(self) -> int:
@@ -97,16 +123,9 @@ class Servo:
         if state.tick % self.ipo_ticks == 0:
             state.held[:] = setpoint
         state.tick += 1
-        dt = self.control_period_s
-        q, v, held = state.q, state.v, state.held
-        for i in range(len(q)):
-            vmax = self.velocity_max[i]
-            dv = self.acceleration_max[i] * dt
-            want = self.gain_1_s[i] * (held[i] - q[i])
-            want = min(max(want, -vmax), vmax)
-            vi = v[i] + min(max(want - v[i], -dv), dv)
-            v[i] = vi
-            q[i] += vi * dt
+        q, v = np.array(state.q), np.array(state.v)
+        loops_step(q, v, np.array(state.held), self._table, self.control_period_s)
+        state.q[:], state.v[:] = q.tolist(), v.tolist()
 
 
 @dataclass

@@ -5,9 +5,9 @@ every control tick does the same small arithmetic: the torch tip from the axes, 
 set-point step (:func:`seamtrack.control.path_kernels.setpoint_step`), the axis travel check,
 the axes' step (the interpolator, and the position loops when the robot has a servo), and the
 trace. In Python that costs ~10 us a tick, dozens of float operations each wrapped in an
-object; :func:`gantry_ticks` runs the whole stretch in one compiled call, with the same
-arithmetic in the same order as :meth:`CartesianRobot.step_move` and :meth:`Servo.follow`, so
-the run is the same to the last bit as the one the tracker protocol drives
+object; :func:`gantry_ticks` runs the whole stretch in one compiled call, calling the compiled
+steps the tracker and the robot use themselves (``setpoint_step``, ``axes_step``,
+``loops_step``), so the run is the same to the last bit as the one the tracker protocol drives
 (``tests/test_loop_fast.py``).
 """
 
@@ -21,101 +21,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.control.path_kernels import setpoint_step
-from seamtrack.control.robot import CartesianRobot, RobotState, stop_speed
+from seamtrack.control.robot import CartesianRobot, RobotState, axes_step
+from seamtrack.control.servo import loops_step
 
 FloatArray = NDArray[np.float64]
 
 #: What :func:`gantry_ticks` stopped on (besides an event tick).
 EVENT, LIMIT, REFUSED = 0, 1, 2
-#: Rows of :class:`GantryTicks`' axis limits: velocity, acceleration, travel, free travel.
-_VMAX, _AMAX, _LO, _HI, _FREE = 0, 1, 2, 3, 4
-
-
-@numba.njit(cache=True, nogil=True)
-def _interpolate(
-    q: FloatArray, v: FloatArray, lim: FloatArray, dt: float, has_target: bool,
-    tx: float, ty: float, tz: float, speed: float, fx: float, fy: float, fz: float, stop: bool,
-) -> None:  # fmt: skip
-    """:meth:`CartesianRobot.step_move` of an ideal gantry on arrays (``lim`` rows: velocity,
-    acceleration, travel min and max, free travel)."""
-    if not has_target:
-        d0 = d1 = d2 = 0.0
-    else:
-        ex, ey, ez = tx - q[0], ty - q[1], tz - q[2]
-        dist = math.sqrt(ex * ex + ey * ey + ez * ez)
-        if dist > 0.0:
-            ux, uy, uz = ex / dist, ey / dist, ez / dist
-            a_path = math.inf
-            au = abs(ux)
-            if au > 1e-12:
-                c = lim[_VMAX, 0] / au
-                speed = c if c < speed else speed
-                a_path = lim[_AMAX, 0] / au
-            au = abs(uy)
-            if au > 1e-12:
-                c = lim[_VMAX, 1] / au
-                speed = c if c < speed else speed
-                c = lim[_AMAX, 1] / au
-                a_path = c if c < a_path else a_path
-            au = abs(uz)
-            if au > 1e-12:
-                c = lim[_VMAX, 2] / au
-                speed = c if c < speed else speed
-                c = lim[_AMAX, 2] / au
-                a_path = c if c < a_path else a_path
-            if stop:
-                c = stop_speed(dist, a_path, dt)
-                speed = c if c < speed else speed
-            c = dist / dt
-            speed = c if c < speed else speed
-            d0, d1, d2 = fx + ux * speed, fy + uy * speed, fz + uz * speed
-        else:
-            d0, d1, d2 = fx, fy, fz
-    desired = (d0, d1, d2)
-    scale = 1.0
-    for i in range(3):
-        if abs(desired[i]) > lim[_VMAX, i]:
-            scale = min(scale, lim[_VMAX, i] / abs(desired[i]))
-    for i in range(3):
-        vd = desired[i] * scale
-        qi = q[i]
-        lo_i, hi_i = lim[_LO, i], lim[_HI, i]
-        if vd > 0.0 and hi_i - qi < lim[_FREE, i]:
-            vd = min(vd, stop_speed(hi_i - qi, lim[_AMAX, i], dt))
-        elif vd < 0.0 and qi - lo_i < lim[_FREE, i]:
-            vd = max(vd, -stop_speed(qi - lo_i, lim[_AMAX, i], dt))
-        dv_max = lim[_AMAX, i] * dt
-        vi = v[i]
-        change = vd - vi
-        change = -dv_max if -dv_max > change else change
-        change = dv_max if dv_max < change else change
-        vi += change
-        qi += vi * dt
-        qi = lo_i if lo_i > qi else qi
-        qi = hi_i if hi_i < qi else qi
-        q[i] = qi
-        v[i] = vi
-
-
-@numba.njit(cache=True, nogil=True)
-def _follow(
-    q: FloatArray, v: FloatArray, held: FloatArray, tick: int, ipo_ticks: int,
-    servo: FloatArray, setpoint: FloatArray, lim: FloatArray, dt: float,
-) -> None:  # fmt: skip
-    """:meth:`Servo.follow` and the travel clamp of ``_step_servo`` (``servo`` rows: gain,
-    velocity and acceleration limits)."""
-    if tick % ipo_ticks == 0:
-        held[:] = setpoint
-    for i in range(3):
-        vmax = servo[1, i]
-        dv = servo[2, i] * dt
-        want = servo[0, i] * (held[i] - q[i])
-        want = min(max(want, -vmax), vmax)
-        vi = v[i] + min(max(want - v[i], -dv), dv)
-        v[i] = vi
-        q[i] += vi * dt
-    for i in range(3):
-        q[i] = min(max(q[i], lim[_LO, i]), lim[_HI, i])
+#: Rows of the axis limits (:attr:`CartesianRobot._limits`): travel min and max.
+_LO, _HI = 2, 3
 
 
 @numba.njit(cache=True, nogil=True)
@@ -167,12 +81,16 @@ def gantry_ticks(
             ):
                 return k + 1, LIMIT
             has_target = True
-        if has_servo:
-            _interpolate(sq, sv, lim, dt, has_target, tx, ty, tz, speed, fx, fy, fz, stop)
-            _follow(q, v, held, ipo[1], ipo[0], servo, sq, lim, dt)
+        if has_servo:  # CartesianRobot._step_servo and Servo.follow
+            axes_step(sq, sv, lim, dt, has_target, tx, ty, tz, speed, fx, fy, fz, stop)
+            if ipo[1] % ipo[0] == 0:
+                held[:] = sq
             ipo[1] += 1
+            loops_step(q, v, held, servo, dt)
+            for i in range(3):
+                q[i] = min(max(q[i], lim[_LO, i]), lim[_HI, i])
         else:
-            _interpolate(q, v, lim, dt, has_target, tx, ty, tz, speed, fx, fy, fz, stop)
+            axes_step(q, v, lim, dt, has_target, tx, ty, tz, speed, fx, fy, fz, stop)
         tick += 1
         if (tick - 1) % wall_every == 0 or (tick - 1) % check_every == 0:
             break
@@ -186,21 +104,13 @@ class GantryTicks:
     def __init__(self, robot: CartesianRobot, tcp_offset: tuple[float, float, float]) -> None:
         self.robot = robot
         self.dt = robot.control_period_s
-        self.lim = np.array(
-            [
-                robot.velocity_max_mm_s,
-                robot.acceleration_max_mm_s2,
-                robot.position_min_mm,
-                robot.position_max_mm,
-                robot._free_travel,
-            ]
-        )
+        self.lim = robot._limits
         self.offset = np.array([*tcp_offset, *robot._base_shift])
         servo = robot.servo
         self.servo = np.zeros((3, 3))
         self.ipo = np.array([-1, 0], dtype=np.int64)
         if servo is not None and robot._ideal is not None:
-            self.servo = np.array([servo.gain_1_s, servo.velocity_max, servo.acceleration_max])
+            self.servo = servo._table
             self.ipo[0] = servo.ipo_ticks
         self.axes = np.zeros((5, 3))
         self.tcp = np.empty((1024, 3))
