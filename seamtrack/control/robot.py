@@ -128,23 +128,14 @@ def axes_step(
             ux, uy, uz = ex / dist, ey / dist, ez / dist
             # Path speed limited by every axis' velocity limit along this direction.
             a_path = math.inf
-            au = abs(ux)
-            if au > 1e-12:
-                c = lim[_VMAX, 0] / au
-                speed = c if c < speed else speed
-                a_path = lim[_AMAX, 0] / au
-            au = abs(uy)
-            if au > 1e-12:
-                c = lim[_VMAX, 1] / au
-                speed = c if c < speed else speed
-                c = lim[_AMAX, 1] / au
-                a_path = c if c < a_path else a_path
-            au = abs(uz)
-            if au > 1e-12:
-                c = lim[_VMAX, 2] / au
-                speed = c if c < speed else speed
-                c = lim[_AMAX, 2] / au
-                a_path = c if c < a_path else a_path
+            unit = (ux, uy, uz)
+            for i in range(3):
+                au = abs(unit[i])
+                if au > 1e-12:
+                    c = lim[_VMAX, i] / au
+                    speed = c if c < speed else speed
+                    c = lim[_AMAX, i] / au
+                    a_path = c if c < a_path else a_path
             if stop:
                 c = stop_speed(dist, a_path, dt)
                 speed = c if c < speed else speed
