@@ -14,17 +14,16 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features.counts import explained_share, support
+from seamtrack.features.counts import explained_share
 from seamtrack.features.expect import Expect, parse_expect
 from seamtrack.features.lines import (
     DATA_ERRORS,
     Line,
     Segments,
-    _fit,
     collinear_groups,
-    intersect,
     segment_profile,
 )
+from seamtrack.features.vkernels import arm_pair, table_of
 from seamtrack.sensing.profiles import Feature, Profile
 
 FloatArray = NDArray[np.float64]
@@ -124,118 +123,58 @@ class _Base:
         min_deg: float,
         max_deg: float,
         max_reach_mm: float,
-        groups: list[Line] | None = None,
     ) -> tuple[Line, Line, FloatArray, float] | str:
         """The best pair of lines forming a V (opening towards the sensor, -z) or a ridge
-        (``opening_down``: the arms fall away from the sensor): (left, right, apex, score)."""
-        if groups is None:
-            groups = self._groups(seg)
-        if self.arms_from_pieces:
-            # A plane seen on both sides of something standing on it (a web either side of a
-            # gusset) is one collinear group running through the corner: its pieces are arms.
-            grouped = {id(g) for g in groups}
-            groups = groups + [
-                ln
-                for ln in seg.lines
-                if id(ln) not in grouped
-                and ln.count >= self.min_points
-                and ln.extent >= self.min_arm_mm
-            ]
-        sign = 1.0 if opening_down else -1.0
-        best: tuple[Line, Line, FloatArray, float] | None = None
-        m = len(seg.points)
-        surface = ~seg.stray if seg.stray.shape == (m,) else np.ones(m, dtype=np.bool_)
-        band = 2.0 * seg.tol
-        owner = np.full(len(seg.points), -1, dtype=np.intp)  # each point's piece
-        for k, ln in enumerate(seg.lines):
-            owner[ln.index] = k
+        (``opening_down``: the arms fall away from the sensor): (left, right, apex, score).
 
-        def supported(g: Line, x: FloatArray, v: FloatArray) -> int:
-            # The surface points on the line (within the band), on the arm's side of x.
-            s = 1.0 if float(v @ g.direction) > 0 else -1.0
-            (cy, cz), (uy, uz) = g.centroid.tolist(), g.direction.tolist()
-            x_u = float(x @ g.direction)
-            return int(support(seg.points, surface, cy, cz, uy, uz, band, x_u, s, seg.tol))
-
-        def reach(g: Line, x: FloatArray, v: FloatArray) -> float:
-            # How near the arm comes to the apex. A tenth of a group may lie past it (trimmed
-            # below): fragments of the root collinear with a bevel, or a bevel's own piece
-            # rounding into the root, but none by more than three tolerances (a piece that
-            # runs on through the apex crosses the other arm: no V there).
-            t = (seg.points[g.index] - x) @ v
-            ahead = t >= -seg.tol
-            over = g.count - int(np.count_nonzero(ahead))
-            if over == 0:
-                return float(t.min())
-            if 10 * over > g.count:
-                return -np.inf
-            through = np.isin(owner[g.index], owner[g.index[ahead]]) & (t < -3.0 * seg.tol)
-            return -np.inf if through.any() else float(t[ahead].min())
-
-        # The groups' lines as floats: most pairs fail the V's shape, which scalar arithmetic
-        # rules out at a fraction of numpy's cost on 2-vectors; the pairs left (within a
-        # hair of passing) are then tested exactly as before.
-        flat = [(*g.centroid.tolist(), *g.direction.tolist()) for g in groups]
-        lo_deg, hi_deg = min_deg - 1e-6, max_deg + 1e-6
-        for i, a in enumerate(groups):
-            ay, az, ady, adz = flat[i]
-            for j in range(i + 1, len(groups)):
-                by, bz, bdy, bdz = flat[j]
-                d = ady * bdz - adz * bdy
-                if abs(d) < 1e-9:
-                    continue  # parallel: no apex
-                s_ = ((by - ay) * bdz - (bz - az) * bdy) / d
-                xy, xz = ay + s_ * ady, az + s_ * adz
-                uy, uz, wy, wz = ay - xy, az - xz, by - xy, bz - xz
-                nu, nw = max(math.hypot(uy, uz), 1e-300), max(math.hypot(wy, wz), 1e-300)
-                uy, uz, wy, wz = uy / nu, uz / nu, wy / nw, wz / nw
-                if wy < uy:
-                    uy, uz, wy, wz = wy, wz, uy, uz
-                c = min(max(uy * wy + uz * wz, -1.0), 1.0)
-                eps = 1e-9
-                if not (
-                    uy < eps
-                    and wy > -eps
-                    and sign * uz > -eps
-                    and sign * wz > -eps
-                    and lo_deg <= math.degrees(math.acos(c)) <= hi_deg
-                    and sign * (uz + wz) > 0.7 * math.hypot(uy + wy, uz + wz) - eps
-                ):
-                    continue
-                b = groups[j]
-                x = intersect(a, b)
-                if x is None:
-                    continue
-                va, vb = a.centroid - x, b.centroid - x
-                va, vb = (
-                    va / max(float(np.hypot(*va)), 1e-300),
-                    vb / max(float(np.hypot(*vb)), 1e-300),
-                )
-                ga, gb = a, b
-                if vb[0] < va[0]:
-                    va, vb, ga, gb = vb, va, b, a
-                included = math.degrees(math.acos(min(max(float(va @ vb), -1.0), 1.0)))
-                bis = va + vb
-                if not (
-                    va[0] < 0 < vb[0]
-                    and sign * va[1] > 0
-                    and sign * vb[1] > 0
-                    and min_deg <= included <= max_deg
-                    and sign * bis[1] > 0.7 * float(np.hypot(*bis))  # bisector within 45 deg
-                ):
-                    continue
-                na, nb = reach(ga, x, va), reach(gb, x, vb)
-                if not (-seg.tol <= min(na, nb) and max(na, nb) <= max_reach_mm):
-                    continue
-                # Support: the surface points on either arm's line, on its side of the apex
-                # (fragments of a bevel cut up by spikes count, whatever piece they are in).
-                score = float(supported(ga, x, va) + supported(gb, x, vb))
-                if best is None or score > best[3]:
-                    best = (ga, gb, x, score)
-        if best is None:
+        Pairs of collinear groups (:meth:`_groups`; with ``arms_from_pieces`` also the pieces
+        in no group) are tried: the apex is their crossing, each arm's direction points from
+        the apex to its centroid; the arms must lie either side of the apex, open the right
+        way, enclose ``min_deg..max_deg`` and have their bisector within 45 deg of the
+        opening. Each arm must come within ``max_reach_mm`` of the apex, and not run on
+        through it: a tenth of a group may lie past it (fragments of the root collinear with
+        a bevel, a bevel's own piece rounding into the root), none by more than three
+        tolerances when that piece also lies ahead. The best pair has the most surface points
+        on the arms' lines (within two tolerances), on their sides of the apex (fragments of
+        a bevel cut up by spikes count, whatever piece they are in). The arms are returned
+        without their inliers more than a tolerance past the apex (refitted). Compiled
+        (:func:`seamtrack.features.vkernels.arm_pair`)."""
+        if not seg.lines:
             return "no pair of lines forms the joint"
-        ga, gb, x, score = best
-        return _short_of(ga, x, seg), _short_of(gb, x, seg), x, score
+        tb = table_of(seg.lines)
+        left, right, y, z, score = arm_pair(
+            np.ascontiguousarray(seg.points, dtype=np.float64),
+            np.asarray(seg.stray, dtype=np.bool_),
+            float(seg.tol),
+            tb,
+            len(seg.lines),
+            1.0 if opening_down else -1.0,
+            float(min_deg),
+            float(max_deg),
+            float(max_reach_mm),
+            bool(self.arms_from_pieces),
+            int(self.min_points),
+            float(self.min_arm_mm),
+        )
+        if left < 0:
+            return "no pair of lines forms the joint"
+        return _record(seg, tb, left), _record(seg, tb, right), np.array([y, z]), float(score)
+
+
+def _record(seg: Segments, tb: tuple, r: int) -> Line:
+    """The line of record ``r`` of a table (:mod:`seamtrack.features.vkernels`): the piece
+    itself when it is one, else a new line."""
+    if r < len(seg.lines):
+        return seg.lines[r]
+    geo, span, pool_index, pool_t, _ = tb
+    a, c = int(span[r, 0]), int(span[r, 1])
+    return Line(
+        pool_index[a : a + c].copy(),
+        geo[r, 0:2].copy(),
+        geo[r, 2:4].copy(),
+        pool_t[a : a + c].copy(),
+        float(geo[r, 4]),
+    )
 
 
 def _confidence(arms: list[Line], seg: Segments) -> float:
@@ -265,30 +204,6 @@ def explained(seg: Segments, zones: list[tuple[int, int, Line | tuple[Line, ...]
             fits[k, j, :2] = line.centroid
             fits[k, j, 2:] = line.normal
     return float(explained_share(seg.points, surface, spans, fits, 3.0 * seg.tol))
-
-
-def largest_in(groups: list[Line], lo: int, hi: int, skip: tuple[Line, ...] = ()) -> Line | None:
-    """The group with the most inliers among kept points ``lo:hi``, ``skip`` left out; None
-    when there is none."""
-    best, count = None, 0
-    for g in groups:
-        if any(g is s for s in skip):
-            continue
-        n = int(np.count_nonzero((g.index >= lo) & (g.index < hi)))
-        if n > count:
-            best, count = g, n
-    return best
-
-
-def _short_of(arm: Line, apex: FloatArray, seg: Segments) -> Line:
-    """``arm`` without the inliers that lie past ``apex`` (more than a tolerance): the arm of
-    a V ends at its apex."""
-    v = arm.centroid - apex
-    t = (seg.points[arm.index] - apex) @ v
-    keep = t >= -seg.tol * float(np.hypot(*v))
-    if keep.all() or np.count_nonzero(keep) < 2:
-        return arm
-    return _fit(seg.points, arm.index[keep])
 
 
 def included(left: Line, right: Line, apex: FloatArray) -> float:

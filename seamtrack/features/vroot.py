@@ -1,0 +1,378 @@
+"""Compiled reading of a V-groove's root (:class:`seamtrack.features.vgroove.VGrooveExtractor`):
+what lies between and beyond the bevels' lower ends, on the line table of
+:mod:`seamtrack.features.vkernels` (records: the profile's pieces, their groups, the arms).
+
+Each function is the kernel of the Python helper it names, with the same tests in the same
+order and the same floating-point operations; see :mod:`seamtrack.features.vgroove` for what
+each one means for the joint.
+
+Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groove).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from seamtrack.features.vkernels import (
+    NONE,
+    contains,
+    dot_dir,
+    end,
+    first,
+    last,
+    pmax,
+    pmin,
+    point,
+    step,
+    t_end,
+)
+
+#: A piece steeper than this on the plates is a wall (a root face; ``_WALL_DEG``).
+COS_WALL = math.cos(math.radians(65.0))
+#: A piece within this angle of a bevel is part of it (deg).
+COS_ARM = math.cos(math.radians(15.0))
+#: A plate within this angle of its bevel is a piece of the bevel (deg; ``_level``).
+COS_LEVEL = math.cos(math.radians(20.0))
+
+
+@numba.njit(cache=True, nogil=True)
+def plate_depth(tb, plate, qy, qz):
+    """``_plate_depth``: depth of (qy, qz) behind record ``plate``'s line."""
+    g = tb[0]
+    cy, cz, dy, dz = g[plate, 0], g[plate, 1], g[plate, 2], g[plate, 3]
+    ny, nz = -dz, dy
+    if not cy * ny + cz * nz > 0:
+        ny, nz = -ny, -nz
+    return (qy - cy) * ny + (qz - cz) * nz
+
+
+@numba.njit(cache=True, nogil=True)
+def _off(tb, r, qy, qz):
+    """``abs(_towards_sensor(r, q))``: distance of (qy, qz) from record ``r``'s line."""
+    g = tb[0]
+    return abs((qy - g[r, 0]) * -g[r, 3] + (qz - g[r, 1]) * g[r, 2])
+
+
+@numba.njit(cache=True, nogil=True)
+def _along(tb, r, qy, qz):
+    """``(q - r.centroid) @ r.direction``."""
+    g = tb[0]
+    return (qy - g[r, 0]) * g[r, 2] + (qz - g[r, 1]) * g[r, 3]
+
+
+@numba.njit(cache=True, nogil=True)
+def _flat_dot(tb, r, plate):
+    """``abs(r.direction @ flat)``, flat: ``plate``'s direction, else (1, 0)."""
+    g = tb[0]
+    if plate == NONE:
+        return abs(g[r, 2] * 1.0 + g[r, 3] * 0.0)
+    return abs(g[r, 2] * g[plate, 2] + g[r, 3] * g[plate, 3])
+
+
+@numba.njit(cache=True, nogil=True)
+def continued(points, tb, n, arm, at_end, ay, az, ey, ez, tol):
+    """``_continued``: where bevel ``arm`` ends when pieces beyond it towards the apex
+    (ay, az) lie on its line; else (ey, ez)."""
+    t_apex = _along(tb, arm, ay, az)
+    t_stop = t_end(tb, arm, at_end)
+    best = t_stop
+    span, pool = tb[1], tb[2]
+    for k in range(n):
+        if abs(dot_dir(tb, k, arm)) < COS_ARM:
+            continue
+        if _off(tb, arm, tb[0][k, 0], tb[0][k, 1]) > 2.0 * tol:
+            continue
+        lo, hi = np.inf, -np.inf
+        for j in range(span[k, 0], span[k, 0] + span[k, 1]):
+            t = _along(tb, arm, points[pool[j], 0], points[pool[j], 1])
+            lo, hi = min(lo, t), max(hi, t)
+        if at_end and lo > t_stop and hi <= t_apex + tol:
+            best = pmax(best, hi)
+        elif not at_end and hi < t_stop and lo >= t_apex - tol:
+            best = pmin(best, lo)
+    if best == t_stop:
+        return ey, ez
+    return point(tb, arm, best)
+
+
+@numba.njit(cache=True, nogil=True)
+def covered_end(points, tb, n, line, at_end, other, plate, tol, spacing, sigma):
+    """``_covered_end``: (covered, t0, t1), the stretch along bevel ``line`` where its root
+    end may lie when a stray line covers it."""
+    m = points.shape[0]
+    s = 1 if at_end else -1
+    i = last(tb, line) if at_end else first(tb, line)
+    piece = NONE
+    for k in range(n):
+        if at_end and first(tb, k) > i:
+            piece = k
+            break
+        if not at_end and last(tb, k) < i:
+            piece = k
+    if piece == NONE:
+        return False, 0.0, 0.0
+    near = first(tb, piece) if at_end else last(tb, piece)
+    far = last(tb, piece) if at_end else first(tb, piece)
+    if contains(tb, other, near):
+        return False, 0.0, 0.0  # the other bevel (no gap) or a piece of it
+    a, c = tb[1][line, 0], tb[1][line, 1]
+    own = tb[2][a + max(c - 11, 0) : a + c] if at_end else tb[2][a : a + min(c, 11)]
+    steps = np.empty(max(own.shape[0] - 1, 0))
+    for k in range(steps.shape[0]):
+        steps[k] = abs(
+            math.atan2(points[own[k + 1], 0], points[own[k + 1], 1])
+            - math.atan2(points[own[k], 0], points[own[k], 1])
+        )
+    dphi = np.sort(steps)[steps.shape[0] // 2] if steps.shape[0] else 0.0
+    phi_i = math.atan2(points[i, 0], points[i, 1])
+    phi_near = math.atan2(points[near, 0], points[near, 1])
+    phi_far = math.atan2(points[far, 0], points[far, 1])
+    lo, hi = min(i, near) + 1, max(i, near)
+    lost = abs(phi_near - phi_i) / dphi - max(hi - lo, 0) - 1 if dphi > 0 else np.inf
+    if lost > 2.5:
+        return False, 0.0, 0.0
+    off = 0
+    for j in range(lo, hi):
+        off += _off(tb, line, points[j, 0], points[j, 1]) > 2.0 * tol
+    if off > 2:
+        return False, 0.0, 0.0  # lost columns (the gap, a shadow) or another surface first
+    if _flat_dot(tb, piece, plate) <= COS_WALL:
+        return False, 0.0, 0.0  # a wall: a root face
+    nxt = far + s
+    if 0 <= nxt < m:
+        held = pmax(pmax(6.0 * spacing, 4.0 * sigma), 0.1)
+        on_other = _off(tb, other, points[nxt, 0], points[nxt, 1]) <= 2.0 * tol
+        if (
+            on_other
+            and abs(math.atan2(points[nxt, 0], points[nxt, 1]) - phi_far) <= 3.5 * dphi
+            and math.hypot(points[nxt, 0] - points[far, 0], points[nxt, 1] - points[far, 1]) <= held
+        ):
+            return False, 0.0, 0.0  # runs on into the other bevel: part of the part
+    half = s * 0.5 * pmax(step(tb, line, at_end), spacing)
+    g = tb[0]
+    cy, cz, dy, dz = g[line, 0], g[line, 1], g[line, 2], g[line, 3]
+    qy, qz = points[far, 0], points[far, 1]
+    ray = (cy * -dz + cz * dy) / (qy * -dz + qz * dy)  # _ray_t: the ray's crossing
+    t_far = (qy * ray - cy) * dy + (qz * ray - cz) * dz + half
+    # Beyond the stray piece the bevel may show again.
+    again, at = 0, far + s
+    if s > 0 or far > 0:
+        while 0 <= at < m and again < 400 and _off(tb, line, points[at, 0], points[at, 1]) <= tol:
+            again += 1
+            at += s
+    if again >= 3:
+        q = far + s * again
+        return True, t_far, _along(tb, line, points[q, 0], points[q, 1]) + half
+    return True, t_end(tb, line, at_end) + half, t_far
+
+
+@numba.njit(cache=True, nogil=True)
+def at_depth(tb, line, plate, depth, s0, s1):
+    """``_at_depth``: the point of ``line`` at ``depth`` behind ``plate``, within s0..s1."""
+    g = tb[0]
+    ny, nz = -g[plate, 3], g[plate, 2]
+    if not g[plate, 0] * ny + g[plate, 1] * nz > 0:
+        ny, nz = -ny, -nz
+    rate = g[line, 2] * ny + g[line, 3] * nz
+    lo, hi = pmin(s0, s1), pmax(s0, s1)
+    if abs(rate) < 1e-6:
+        return point(tb, line, s0)
+    t = (depth - plate_depth(tb, plate, g[line, 0], g[line, 1])) / rate
+    return point(tb, line, pmin(pmax(t, lo), hi))
+
+
+@numba.njit(cache=True, nogil=True)
+def level(tb, left, right, lx, ly, rx, ry, plate_l, plate_r, gap, tol):
+    """``_level``: whether the root ends (lx, ly), (rx, ry) lie at one depth."""
+    if plate_l != NONE and abs(dot_dir(tb, plate_l, left)) > COS_LEVEL:
+        plate_l = NONE  # a piece of the bevel, no plate
+    if plate_r != NONE and abs(dot_dir(tb, plate_r, right)) > COS_LEVEL:
+        plate_r = NONE
+    plate_l, plate_r = (
+        plate_l if plate_l != NONE else plate_r,
+        plate_r if plate_r != NONE else plate_l,
+    )
+    if plate_l != NONE and plate_r != NONE:
+        d_l, d_r = plate_depth(tb, plate_l, lx, ly), plate_depth(tb, plate_r, rx, ry)
+    else:
+        g = tb[0]
+        uy, uz = -(g[left, 2] + g[right, 2]), -(g[left, 3] + g[right, 3])
+        if uz > 0:
+            uy, uz = -uy, -uz
+        norm = max(math.hypot(uy, uz), 1e-300)
+        uy, uz = uy / norm, uz / norm
+        d_l, d_r = -(lx * uy + ly * uz), -(rx * uy + ry * uz)
+    return abs(d_l - d_r) <= pmax(3.0 * tol, 0.25 * gap)
+
+
+@numba.njit(cache=True, nogil=True)
+def _inert(tb, k, left, right, plate, min_points):
+    """A wall (steep on ``plate``) or a long straight piece off both bevels."""
+    if _flat_dot(tb, k, plate) <= COS_WALL:
+        return True
+    return (
+        tb[1][k, 1] >= 2 * min_points
+        and abs(dot_dir(tb, k, left)) < COS_ARM
+        and abs(dot_dir(tb, k, right)) < COS_ARM
+    )
+
+
+@numba.njit(cache=True, nogil=True)
+def tip_filled(
+    points, surface, tb, n, left, right, lx, lz, rx, rz, ax, az, plate, min_points, tol, spacing
+):
+    """``_tip_filled``: whether surface points fill the V's tip below the root ends."""
+    cy, cz = rx - lx, rz - lz
+    length = math.hypot(cy, cz)
+    if length <= 0:
+        return False
+    ny, nz = -cz / length, cy / length
+    if abs((ax - lx) * ny + (az - lz) * nz) <= 3.0 * tol:
+        return False
+    keep = surface.copy()
+    span, pool = tb[1], tb[2]
+    for k in range(n):
+        if _inert(tb, k, left, right, plate, min_points):
+            keep[pool[span[k, 0] : span[k, 0] + span[k, 1]]] = False
+    for r in (left, right):
+        keep[pool[span[r, 0] : span[r, 0] + span[r, 1]]] = False
+    ty = np.array([lx, rx, ax])
+    tz = np.array([lz, rz, az])
+    my, mz = np.empty(3), np.empty(3)
+    ey_c, ez_c = ((lx + rx) + ax) / 3.0, ((lz + rz) + az) / 3.0
+    for e in range(3):
+        a, b = e, (e + 1) % 3
+        dy, dz = ty[b] - ty[a], tz[b] - tz[a]
+        norm = max(math.hypot(dy, dz), 1e-300)
+        my[e], mz[e] = -dz / norm, dy / norm
+        if (ey_c - ty[a]) * my[e] + (ez_c - tz[a]) * mz[e] < 0:
+            my[e], mz[e] = -my[e], -mz[e]
+    r0 = 2.0 * tol + 3.0 * spacing
+    count = 0
+    for i in range(points.shape[0]):
+        if not keep[i]:
+            continue
+        qy, qz = points[i, 0], points[i, 1]
+        inside = True
+        for e in range(3):
+            inside = inside and (qy - ty[e]) * my[e] + (qz - tz[e]) * mz[e] >= -tol
+        if inside and math.hypot(qy - lx, qz - lz) > r0 and math.hypot(qy - rx, qz - rz) > r0:
+            count += 1
+    return count > min_points
+
+
+@numba.njit(cache=True, nogil=True)
+def covered_between(points, columns, runs, tb, n, left, right, plate, min_points):
+    """``_covered_between``: share of the columns between the root ends showing a surface."""
+    lo, hi = last(tb, left), first(tb, right)
+    if hi - lo < 2 or columns.shape[0] != points.shape[0]:
+        return 0.0
+    width = columns[hi] - columns[lo] - 1
+    if width <= 0:
+        return 0.0
+    keep = np.ones(hi - lo - 1, dtype=np.bool_)
+    span, pool = tb[1], tb[2]
+    starts = runs[:-1]
+    for k in range(n):
+        fst, lst = first(tb, k), last(tb, k)
+        if lst <= lo or fst >= hi:
+            continue
+        j = np.searchsorted(starts, fst, side="right") - 1
+        cut_off = 0 <= j < starts.shape[0] and fst - starts[j] <= 3 and runs[j + 1] - 1 - lst <= 3
+        if cut_off or _inert(tb, k, left, right, plate, min_points):
+            for q in range(span[k, 0], span[k, 0] + span[k, 1]):
+                if lo < pool[q] < hi:
+                    keep[pool[q] - lo - 1] = False
+    hit = np.zeros(width, dtype=np.bool_)
+    kept = 0
+    for j in range(hi - lo - 1):
+        if keep[j]:
+            kept += 1
+            c = columns[lo + 1 + j] - columns[lo] - 1
+            if 0 <= c < width:
+                hit[c] = True
+    longest, run = 0, 0
+    for c in range(width):
+        run = 0 if hit[c] else run + 1
+        longest = max(longest, run)
+    return pmax(kept / width, 1.0 - longest / width)
+
+
+@numba.njit(cache=True, nogil=True)
+def bridged(tb, n, left, right, lx, lz, rx, rz, plate, min_points, tol, spacing):
+    """``_bridged``: whether a piece between the bevels that is no wall joins the root ends."""
+    lo, hi = last(tb, left), first(tb, right)
+    for k in range(n):
+        if tb[1][k, 1] < min_points or first(tb, k) <= lo or last(tb, k) >= hi:
+            continue
+        if _flat_dot(tb, k, plate) <= COS_WALL:
+            continue
+        reach = 3.0 * pmax(pmax(spacing, step(tb, k, True)), step(tb, k, False)) + tol
+        y0, z0 = end(tb, k, False)
+        y1, z1 = end(tb, k, True)
+        if math.hypot(y0 - lx, z0 - lz) <= reach and math.hypot(y1 - rx, z1 - rz) <= reach:
+            return True
+    return False
+
+
+@numba.njit(cache=True, nogil=True)
+def gap_seen(
+    points,
+    stray,
+    columns,
+    runs,
+    tb,
+    n,
+    left,
+    right,
+    lx,
+    lz,
+    rx,
+    rz,
+    ax,
+    az,
+    plate_l,
+    plate_r,
+    gap,
+    covered,
+    min_points,
+    tol,
+    spacing,
+):
+    """``_gap_seen``: whether the stretch between the root ends is a root gap."""
+    if not covered and not level(tb, left, right, lx, lz, rx, rz, plate_l, plate_r, gap, tol):
+        return False
+    lo, hi = last(tb, left), first(tb, right)
+    m = points.shape[0]
+    if stray.shape[0] == m:
+        detour = 0
+        for i in range(lo + 1, hi):
+            detour += stray[i]
+        if detour >= 3:
+            return False  # a detour between them: a surface goes on across it, no gap
+        surface = ~stray
+    else:
+        surface = np.ones(m, dtype=np.bool_)
+    if tip_filled(
+        points,
+        surface,
+        tb,
+        n,
+        left,
+        right,
+        lx,
+        lz,
+        rx,
+        rz,
+        ax,
+        az,
+        plate_l,
+        min_points,
+        tol,
+        spacing,
+    ):
+        return False
+    return covered_between(points, columns, runs, tb, n, left, right, plate_l, min_points) < 0.5
