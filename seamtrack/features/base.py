@@ -23,7 +23,7 @@ from seamtrack.features.lines import (
     collinear_groups,
     segment_profile,
 )
-from seamtrack.features.vkernels import arm_pair, table_of
+from seamtrack.features.vkernels import arm_pair, flat_lines
 from seamtrack.sensing.profiles import Feature, Profile
 
 FloatArray = NDArray[np.float64]
@@ -141,13 +141,11 @@ class _Base:
         (:func:`seamtrack.features.vkernels.arm_pair`)."""
         if not seg.lines:
             return "no pair of lines forms the joint"
-        tb = table_of(seg.lines)
-        left, right, y, z, score = arm_pair(
+        left, right, y, z, score, tb = arm_pair(
             np.ascontiguousarray(seg.points, dtype=np.float64),
             np.asarray(seg.stray, dtype=np.bool_),
             float(seg.tol),
-            tb,
-            len(seg.lines),
+            flat_lines(seg.lines),
             1.0 if opening_down else -1.0,
             float(min_deg),
             float(max_deg),

@@ -14,7 +14,7 @@ from numpy.typing import NDArray
 from seamtrack.features.base import _Base
 from seamtrack.features.expect import Expect
 from seamtrack.features.lines import Segments
-from seamtrack.features.vkernels import table_of
+from seamtrack.features.vkernels import flat_lines
 from seamtrack.features.vmodel import vgroove
 from seamtrack.sensing.profiles import Feature, Profile
 
@@ -62,6 +62,8 @@ class VGrooveExtractor(_Base):
     min_gap_mm: float = 0.05
 
     def _extract(self, profile: Profile, seg: Segments) -> Feature | tuple[Feature, float]:
+        if not seg.lines:
+            return Feature.failed(_REFUSALS[1], joint=self.name)
         lo, hi = self._angles(self.min_angle_deg, self.max_angle_deg)
         expect = self.expect if isinstance(self.expect, Expect) else None
         params = np.array(
@@ -85,8 +87,7 @@ class VGrooveExtractor(_Base):
             float(seg.tol),
             float(seg.sigma),
             float(seg.spacing),
-            table_of(seg.lines),
-            len(seg.lines),
+            flat_lines(seg.lines),
             params,
         )
         code = int(out[0])

@@ -22,6 +22,7 @@ Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groov
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numba
 import numpy as np
@@ -44,26 +45,68 @@ NONE = -1
 
 @numba.njit(cache=True, nogil=True)
 def new_table(
-    offsets: IntArray, index: IntArray, along: FloatArray, geo: FloatArray
+    index: IntArray,
+    along: FloatArray,
+    centroids: FloatArray,
+    directions: FloatArray,
+    fits: FloatArray,
 ) -> tuple[FloatArray, IntArray, IntArray, FloatArray, IntArray]:
-    """The table of a profile's ``n`` pieces (``index[offsets[k]:offsets[k + 1]]``, their
-    coordinates ``along``, ``geo[k]``: centroid, direction, rms), with room for ``n`` groups
-    and two arms cut short."""
-    n = offsets.shape[0] - 1
-    total = offsets[n]
+    """The table of a profile's ``n`` pieces (see :func:`flat_lines`), with room for ``n``
+    groups and two arms cut short."""
+    n = fits.shape[0]
+    total = index.shape[0]
     cap = 2 * n + 4
-    table_geo = np.zeros((cap, 5))
+    geo = np.zeros((cap, 5))
     span = np.zeros((cap, 2), dtype=np.int64)
     pool_index = np.empty(3 * total + 16, dtype=np.int64)
     pool_t = np.empty(3 * total + 16)
-    pool_index[:total] = index[:total]
-    pool_t[:total] = along[:total]
+    for k in range(total):
+        pool_index[k] = index[k]
+        pool_t[k] = along[k]
+    at = 0
     for k in range(n):
-        table_geo[k, :] = geo[k, :]
-        span[k, 0] = offsets[k]
-        span[k, 1] = offsets[k + 1] - offsets[k]
-    state = np.array([n, total], dtype=np.int64)
-    return table_geo, span, pool_index, pool_t, state
+        geo[k, 0], geo[k, 1] = centroids[2 * k], centroids[2 * k + 1]
+        geo[k, 2], geo[k, 3] = directions[2 * k], directions[2 * k + 1]
+        geo[k, 4] = fits[k, 0]
+        span[k, 0], span[k, 1] = at, int(fits[k, 1])
+        at += span[k, 1]
+    state = np.zeros(2, dtype=np.int64)
+    state[0], state[1] = n, total
+    return geo, span, pool_index, pool_t, state
+
+
+@numba.njit(cache=True, nogil=True)
+def surface_of(stray, m):
+    """(m,) True for the surface points: not in a detour (``stray``, when it has m entries)."""
+    surface = np.ones(m, dtype=np.bool_)
+    if stray.shape[0] == m:
+        for i in range(m):
+            surface[i] = not stray[i]
+    return surface
+
+
+@numba.njit(cache=True, nogil=True)
+def owners(owner, span, pool, n):
+    """Each kept point's piece (-1: none) into ``owner``."""
+    for i in range(owner.shape[0]):
+        owner[i] = -1
+    for k in range(n):
+        for q in range(span[k, 0], span[k, 0] + span[k, 1]):
+            owner[pool[q]] = k
+
+
+@numba.njit(cache=True, nogil=True)
+def sort_small(x):
+    """Sort ``x`` in place by insertion (stable; few values, or runs already in order: the
+    generic sorts cost seconds of compile time for nothing here)."""
+    for i in range(1, x.shape[0]):
+        v = x[i]
+        j = i - 1
+        while j >= 0 and x[j] > v:
+            x[j + 1] = x[j]
+            j -= 1
+        x[j + 1] = v
+    return x
 
 
 @numba.njit(cache=True, nogil=True)
@@ -74,8 +117,9 @@ def add_fit(points, tb, sel):
     cy, cz, uy, uz, rms, t = fit_line(points, sel)
     geo[r, 0], geo[r, 1], geo[r, 2], geo[r, 3], geo[r, 4] = cy, cz, uy, uz, rms
     span[r, 0], span[r, 1] = a, n
-    pool_index[a : a + n] = sel
-    pool_t[a : a + n] = t
+    for k in range(n):
+        pool_index[a + k] = sel[k]
+        pool_t[a + k] = t[k]
     state[0] = r + 1
     state[1] = a + n
     return r
@@ -150,9 +194,15 @@ def pmin(a, b):
 @numba.njit(cache=True, nogil=True)
 def contains(tb, r, i):
     """Whether kept point ``i`` is an inlier of record ``r`` (sorted inliers)."""
-    a, c = tb[1][r, 0], tb[1][r, 1]
-    k = np.searchsorted(tb[2][a : a + c], i)
-    return k < c and tb[2][a + k] == i
+    pool = tb[2]
+    lo, hi = tb[1][r, 0], tb[1][r, 0] + tb[1][r, 1]
+    while lo < hi:  # np.searchsorted (left)
+        mid = (lo + hi) // 2
+        if pool[mid] < i:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo < tb[1][r, 0] + tb[1][r, 1] and pool[lo] == i
 
 
 @numba.njit(cache=True, nogil=True)
@@ -160,10 +210,13 @@ def groups_of(points, tb, n, tol, min_points, min_arm):
     """``_Base._groups``: the collinear groups (``collinear_members``, refitted on the union
     of their pieces) with at least ``min_points`` inliers over ``min_arm`` (mm), as records."""
     geo, span = tb[0], tb[1]
-    counts = np.empty(n, dtype=np.int64)
-    for k in range(n):
-        counts[k] = -span[k, 1]
-    order = np.argsort(counts, kind="mergesort")  # stable, as sorted()
+    order = np.empty(n, dtype=np.int64)  # by count, largest first, stable (as sorted())
+    for i in range(n):
+        j = i - 1
+        while j >= 0 and span[order[j], 1] < span[i, 1]:
+            order[j + 1] = order[j]
+            j -= 1
+        order[j + 1] = i
     anchor = np.empty(n, dtype=np.int64)
     size = np.zeros(n, dtype=np.int64)
     member = np.empty(n, dtype=np.int64)
@@ -204,9 +257,10 @@ def groups_of(points, tb, n, tol, min_points, min_arm):
             for i in range(n):
                 if member[i] == k:
                     a, c = span[i, 0], span[i, 1]
-                    sel[at : at + c] = tb[2][a : a + c]
+                    for q in range(c):
+                        sel[at + q] = tb[2][a + q]
                     at += c
-            r = add_fit(points, tb, np.sort(sel))
+            r = add_fit(points, tb, sort_small(sel))  # pieces in column order: sorted
         c = span[r, 1]
         extent = t_end(tb, r, True) - t_end(tb, r, False) if c else 0.0
         if c >= min_points and extent >= min_arm:
@@ -262,7 +316,13 @@ def _short_of(points, tb, r, xy, xz, tol):
         kept += keep[k]
     if kept == c or kept < 2:
         return r
-    return add_fit(points, tb, tb[2][a : a + c][keep])
+    sel = np.empty(kept, dtype=np.int64)
+    kept = 0
+    for k in range(c):
+        if keep[k]:
+            sel[kept] = tb[2][a + k]
+            kept += 1
+    return add_fit(points, tb, sel)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -300,7 +360,11 @@ def arms(
             if c >= min_points and t_end(tb, k, True) - t_end(tb, k, False) >= min_arm:
                 extra[e] = k
                 e += 1
-        cand = np.concatenate((groups, extra[:e]))
+        cand = np.empty(groups.shape[0] + e, dtype=np.int64)
+        for k in range(groups.shape[0]):
+            cand[k] = groups[k]
+        for k in range(e):
+            cand[groups.shape[0] + k] = extra[k]
     band = 2.0 * tol
     mark = np.zeros(n + 1, dtype=np.bool_)
     best_a, best_b, best_y, best_z, best_score = NONE, NONE, 0.0, 0.0, 0.0
@@ -391,18 +455,20 @@ def corner_with(tb, line, at_end, others, spacing, tol):
 
 @numba.njit(cache=True, nogil=True)
 def arm_pair(
-    points, stray, tol, tb, n, sign, min_deg, max_deg, max_reach, pieces_too, min_points, min_arm
+    points, stray, tol, lines, sign, min_deg, max_deg, max_reach, pieces_too, min_points, min_arm
 ):
-    """``_Base._arms`` on the table ``tb`` of the profile's ``n`` pieces: the groups, then
-    the best pair (left, right, apex y, z, score; left -1: none)."""
+    """``_Base._arms`` on the profile's pieces (``lines``: :func:`flat_lines`): the groups,
+    then the best pair (left, right, apex y, z, score; left -1: none) and the table of lines
+    that holds them."""
+    tb = new_table(lines[0], lines[1], lines[2], lines[3], lines[4])
+    n = lines[4].shape[0]
     m = points.shape[0]
-    surface = ~stray if stray.shape[0] == m else np.ones(m, dtype=np.bool_)
-    owner = np.full(m, -1, dtype=np.int64)  # each point's piece
+    surface = surface_of(stray, m)
+    owner = np.empty(m, dtype=np.int64)  # each point's piece
     span, pool = tb[1], tb[2]
-    for k in range(n):
-        owner[pool[span[k, 0] : span[k, 0] + span[k, 1]]] = k
+    owners(owner, span, pool, n)
     groups = groups_of(points, tb, n, tol, min_points, min_arm)
-    return arms(
+    left, right, y, z, score = arms(
         points,
         surface,
         owner,
@@ -418,17 +484,19 @@ def arm_pair(
         min_points,
         min_arm,
     )
+    return left, right, y, z, score, tb
 
 
-def table_of(lines: list) -> tuple:
-    """The table (see the module's docstring) of a profile's pieces ``lines``
-    (:class:`~seamtrack.features.lines.Line`, at least one)."""
-    counts = [len(ln.index) for ln in lines]
-    offsets = np.zeros(len(lines) + 1, dtype=np.int64)
-    np.cumsum(counts, out=offsets[1:])
-    index = np.concatenate([ln.index for ln in lines]).astype(np.int64, copy=False)
-    along = np.concatenate([ln.t for ln in lines])
-    geo = np.array(
-        [(*ln.centroid.tolist(), *ln.direction.tolist(), ln.rms) for ln in lines], dtype=np.float64
+def flat_lines(
+    lines: list[Any],
+) -> tuple[IntArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+    """A profile's pieces (:class:`~seamtrack.features.lines.Line`, at least one) as flat
+    arrays: inliers' positions and coordinates, piece after piece; centroids and directions
+    (y, z per piece); rms residual and inlier count per piece."""
+    return (
+        np.concatenate([ln.index for ln in lines]),
+        np.concatenate([ln.t for ln in lines]),
+        np.concatenate([ln.centroid for ln in lines]),
+        np.concatenate([ln.direction for ln in lines]),
+        np.array([(ln.rms, len(ln.index)) for ln in lines], dtype=np.float64),
     )
-    return new_table(offsets, index, along, geo)

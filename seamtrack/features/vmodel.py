@@ -23,9 +23,12 @@ from seamtrack.features.vkernels import (
     first,
     groups_of,
     last,
+    new_table,
+    owners,
     pmax,
     pmin,
     point,
+    surface_of,
 )
 from seamtrack.features.vroot import (
     at_depth,
@@ -120,27 +123,29 @@ def vgroove(
     tol,
     sigma,
     spacing,
-    tb,
-    n,
+    lines,
     params,
 ):
-    """:meth:`VGrooveExtractor._extract` after segmentation, on the table ``tb`` of the
-    profile's ``n`` pieces. ``params``: min points, min arm (mm), min and max included angle
-    (deg), max gap (mm), min gap (mm), pieces as arms (0/1), gapless (0/1).
+    """:meth:`VGrooveExtractor._extract` after segmentation, on the profile's pieces
+    (``lines``: :func:`~seamtrack.features.vkernels.flat_lines`). ``params``: min points,
+    min arm (mm), min and max included angle (deg), max gap (mm), min gap (mm), pieces as
+    arms (0/1), gapless (0/1).
 
     Returns (13,): code (0 found; 1 no V; 2 no plate; 3 a side along a plate; 4 a wide
     root, its share in [12]), seam y, z, confidence, gap, top edges (y, z) left and right,
     the share explained, the included angle (rad), the seam's mean depth below the plates.
     """
-    out = np.full(13, np.nan)
+    tb = new_table(lines[0], lines[1], lines[2], lines[3], lines[4])
+    n = lines[4].shape[0]
+    out = np.empty(13)
+    for k in range(13):
+        out[k] = np.nan
     min_points, min_arm = int(params[0]), params[1]
     m = points.shape[0]
-    has_stray = stray.shape[0] == m
-    surface = ~stray if has_stray else np.ones(m, dtype=np.bool_)
-    owner = np.full(m, -1, dtype=np.int64)  # each point's piece
+    surface = surface_of(stray, m)
+    owner = np.empty(m, dtype=np.int64)  # each point's piece
     span, pool, geo = tb[1], tb[2], tb[0]
-    for k in range(n):
-        owner[pool[span[k, 0] : span[k, 0] + span[k, 1]]] = k
+    owners(owner, span, pool, n)
     groups = groups_of(points, tb, n, tol, min_points, min_arm)
     left, right, ax, az, _ = arms(
         points,
@@ -221,6 +226,7 @@ def vgroove(
     elif not gap_seen(
         points,
         stray,
+        surface,
         columns,
         runs,
         tb,
@@ -265,10 +271,10 @@ def vgroove(
             plates += 1
     out[11] = depth / plates
     # explained(): the plates and bevels beside the root, the root left out.
-    zones = np.array(
-        [[0, lo_l, 1], [lo_l, hi_l, 1], [hi_l, lo_r, 0], [lo_r, hi_r, 1], [hi_r, m, 1]],
-        dtype=np.int64,
-    )
+    zones = np.zeros((5, 3), dtype=np.int64)
+    bounds = (0, lo_l, hi_l, lo_r, hi_r, m)
+    for k in range(5):
+        zones[k, 0], zones[k, 1], zones[k, 2] = bounds[k], bounds[k + 1], k != 2
     fits = np.zeros((5, 3, 4))
     for k, side, arm in ((0, outer_l, left), (4, outer_r, right)):
         for p in (side[0], side[1], arm):

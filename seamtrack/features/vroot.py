@@ -26,6 +26,7 @@ from seamtrack.features.vkernels import (
     pmax,
     pmin,
     point,
+    sort_small,
     step,
     t_end,
 )
@@ -126,7 +127,7 @@ def covered_end(points, tb, n, line, at_end, other, plate, tol, spacing, sigma):
             math.atan2(points[own[k + 1], 0], points[own[k + 1], 1])
             - math.atan2(points[own[k], 0], points[own[k], 1])
         )
-    dphi = np.sort(steps)[steps.shape[0] // 2] if steps.shape[0] else 0.0
+    dphi = sort_small(steps)[steps.shape[0] // 2] if steps.shape[0] else 0.0
     phi_i = math.atan2(points[i, 0], points[i, 1])
     phi_near = math.atan2(points[near, 0], points[near, 1])
     phi_far = math.atan2(points[far, 0], points[far, 1])
@@ -232,16 +233,19 @@ def tip_filled(
     ny, nz = -cz / length, cy / length
     if abs((ax - lx) * ny + (az - lz) * nz) <= 3.0 * tol:
         return False
-    keep = surface.copy()
+    keep = np.empty(surface.shape[0], dtype=np.bool_)
+    for i in range(keep.shape[0]):
+        keep[i] = surface[i]
     span, pool = tb[1], tb[2]
     for k in range(n):
         if _inert(tb, k, left, right, plate, min_points):
-            keep[pool[span[k, 0] : span[k, 0] + span[k, 1]]] = False
+            for q in range(span[k, 0], span[k, 0] + span[k, 1]):
+                keep[pool[q]] = False
     for r in (left, right):
-        keep[pool[span[r, 0] : span[r, 0] + span[r, 1]]] = False
-    ty = np.array([lx, rx, ax])
-    tz = np.array([lz, rz, az])
-    my, mz = np.empty(3), np.empty(3)
+        for q in range(span[r, 0], span[r, 0] + span[r, 1]):
+            keep[pool[q]] = False
+    ty, tz, my, mz = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
+    ty[0], ty[1], ty[2], tz[0], tz[1], tz[2] = lx, rx, ax, lz, rz, az
     ey_c, ez_c = ((lx + rx) + ax) / 3.0, ((lz + rz) + az) / 3.0
     for e in range(3):
         a, b = e, (e + 1) % 3
@@ -280,7 +284,9 @@ def covered_between(points, columns, runs, tb, n, left, right, plate, min_points
         fst, lst = first(tb, k), last(tb, k)
         if lst <= lo or fst >= hi:
             continue
-        j = np.searchsorted(starts, fst, side="right") - 1
+        j = -1  # np.searchsorted(starts, fst, side="right") - 1
+        while j + 1 < starts.shape[0] and starts[j + 1] <= fst:
+            j += 1
         cut_off = 0 <= j < starts.shape[0] and fst - starts[j] <= 3 and runs[j + 1] - 1 - lst <= 3
         if cut_off or _inert(tb, k, left, right, plate, min_points):
             for q in range(span[k, 0], span[k, 0] + span[k, 1]):
@@ -322,6 +328,7 @@ def bridged(tb, n, left, right, lx, lz, rx, rz, plate, min_points, tol, spacing)
 def gap_seen(
     points,
     stray,
+    surface,
     columns,
     runs,
     tb,
@@ -353,9 +360,6 @@ def gap_seen(
             detour += stray[i]
         if detour >= 3:
             return False  # a detour between them: a surface goes on across it, no gap
-        surface = ~stray
-    else:
-        surface = np.ones(m, dtype=np.bool_)
     if tip_filled(
         points,
         surface,
