@@ -20,7 +20,6 @@ from seamtrack.features.lines import (
     DATA_ERRORS,
     Line,
     Segments,
-    collinear_groups,
     segment_profile,
 )
 from seamtrack.features.vkernels import arm_pair, flat_lines
@@ -108,14 +107,6 @@ class _Base:
     def _found(self, profile: Profile, point: FloatArray, **kw: Any) -> Feature:
         return Feature.found(point, profile.T_world_sensor, joint=self.name, **kw)
 
-    def _groups(self, seg: Segments) -> list[Line]:
-        """Collinear groups supported enough to be an arm or a plate."""
-        return [
-            g
-            for g in collinear_groups(seg)
-            if g.count >= self.min_points and g.extent >= self.min_arm_mm
-        ]
-
     def _arms(
         self,
         seg: Segments,
@@ -141,18 +132,24 @@ class _Base:
         (:func:`seamtrack.features.vkernels.arm_pair`)."""
         if not seg.lines:
             return "no pair of lines forms the joint"
+        params = np.array(
+            [
+                1.0 if opening_down else -1.0,
+                min_deg,
+                max_deg,
+                max_reach_mm,
+                self.arms_from_pieces,
+                self.min_points,
+                self.min_arm_mm,
+            ],
+            dtype=np.float64,
+        )
         left, right, y, z, score, tb = arm_pair(
             np.ascontiguousarray(seg.points, dtype=np.float64),
             np.asarray(seg.stray, dtype=np.bool_),
             float(seg.tol),
-            flat_lines(seg.lines),
-            1.0 if opening_down else -1.0,
-            float(min_deg),
-            float(max_deg),
-            float(max_reach_mm),
-            bool(self.arms_from_pieces),
-            int(self.min_points),
-            float(self.min_arm_mm),
+            *flat_lines(seg.lines),
+            params,
         )
         if left < 0:
             return "no pair of lines forms the joint"

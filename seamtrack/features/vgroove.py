@@ -87,7 +87,7 @@ class VGrooveExtractor(_Base):
             float(seg.tol),
             float(seg.sigma),
             float(seg.spacing),
-            flat_lines(seg.lines),
+            *flat_lines(seg.lines),
             params,
         )
         code = int(out[0])

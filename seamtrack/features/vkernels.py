@@ -454,14 +454,15 @@ def corner_with(tb, line, at_end, others, spacing, tol):
 
 
 @numba.njit(cache=True, nogil=True)
-def arm_pair(
-    points, stray, tol, lines, sign, min_deg, max_deg, max_reach, pieces_too, min_points, min_arm
-):
-    """``_Base._arms`` on the profile's pieces (``lines``: :func:`flat_lines`): the groups,
-    then the best pair (left, right, apex y, z, score; left -1: none) and the table of lines
-    that holds them."""
-    tb = new_table(lines[0], lines[1], lines[2], lines[3], lines[4])
-    n = lines[4].shape[0]
+def arm_pair(points, stray, tol, index, along, centroids, directions, fits, params):
+    """``_Base._arms`` on the profile's pieces (:func:`flat_lines`: ``index`` .. ``fits``):
+    the groups, then the best pair (left, right, apex y, z, score; left -1: none) and the
+    table of lines that holds them. ``params``: sign (-1: a V, 1: a ridge), min and max
+    included angle (deg), max reach (mm), pieces as arms (0/1), min points, min arm (mm)."""
+    sign, min_deg, max_deg, max_reach = params[0], params[1], params[2], params[3]
+    pieces_too, min_points, min_arm = params[4] != 0, int(params[5]), params[6]
+    tb = new_table(index, along, centroids, directions, fits)
+    n = fits.shape[0]
     m = points.shape[0]
     surface = surface_of(stray, m)
     owner = np.empty(m, dtype=np.int64)  # each point's piece

@@ -123,11 +123,16 @@ def vgroove(
     tol,
     sigma,
     spacing,
-    lines,
+    index,
+    along,
+    centroids,
+    directions,
+    fits,
     params,
 ):
     """:meth:`VGrooveExtractor._extract` after segmentation, on the profile's pieces
-    (``lines``: :func:`~seamtrack.features.vkernels.flat_lines`). ``params``: min points,
+    (:func:`~seamtrack.features.vkernels.flat_lines`: ``index`` .. ``fits``; separate
+    arguments, as a tuple costs microseconds to dispatch). ``params``: min points,
     min arm (mm), min and max included angle (deg), max gap (mm), min gap (mm), pieces as
     arms (0/1), gapless (0/1).
 
@@ -135,8 +140,8 @@ def vgroove(
     root, its share in [12]), seam y, z, confidence, gap, top edges (y, z) left and right,
     the share explained, the included angle (rad), the seam's mean depth below the plates.
     """
-    tb = new_table(lines[0], lines[1], lines[2], lines[3], lines[4])
-    n = lines[4].shape[0]
+    tb = new_table(index, along, centroids, directions, fits)
+    n = fits.shape[0]
     out = np.empty(13)
     for k in range(13):
         out[k] = np.nan
