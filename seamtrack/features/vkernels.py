@@ -111,7 +111,8 @@ def sort_small(x):
 
 @numba.njit(cache=True, nogil=True)
 def add_fit(points, tb, sel):
-    """A new record: the total-least-squares line through ``points[sel]`` (``_fit``)."""
+    """A new record: the total-least-squares line through ``points[sel]`` (as
+    :func:`~seamtrack.features.lines._fit`)."""
     geo, span, pool_index, pool_t, state = tb
     r, a, n = state[0], state[1], sel.shape[0]
     cy, cz, uy, uz, rms, t = fit_line(points, sel)
@@ -146,7 +147,7 @@ def t_end(tb, r, at_end):
 
 @numba.njit(cache=True, nogil=True)
 def step(tb, r, at_end):
-    """``Line.step``: mean spacing of the last (first) ten inliers along the line."""
+    """As ``Line.step``: mean spacing of the last (first) ten inliers along the line."""
     a, c = tb[1][r, 0], tb[1][r, 1]
     k = min(10, c - 1)
     if k < 1:
@@ -159,14 +160,14 @@ def step(tb, r, at_end):
 
 @numba.njit(cache=True, nogil=True)
 def point(tb, r, t):
-    """``Line.point``: the point at coordinate ``t`` along record ``r``."""
+    """As ``Line.point``: the point at coordinate ``t`` along record ``r``."""
     g = tb[0]
     return g[r, 0] + t * g[r, 2], g[r, 1] + t * g[r, 3]
 
 
 @numba.njit(cache=True, nogil=True)
 def end(tb, r, at_end):
-    """``Line.end``: half a spacing beyond the last (first) inlier."""
+    """As ``Line.end``: half a spacing beyond the last (first) inlier."""
     half = 0.5 * step(tb, r, at_end)
     t = t_end(tb, r, True) + half if at_end else t_end(tb, r, False) - half
     return point(tb, r, t)
@@ -207,7 +208,8 @@ def contains(tb, r, i):
 
 @numba.njit(cache=True, nogil=True)
 def groups_of(points, tb, n, tol, min_points, min_arm):
-    """``_Base._groups``: the collinear groups (``collinear_members``, refitted on the union
+    """The collinear groups (as :func:`~seamtrack.features.lines.collinear_groups`, refitted
+    on the union
     of their pieces) with at least ``min_points`` inliers over ``min_arm`` (mm), as records."""
     geo, span = tb[0], tb[1]
     order = np.empty(n, dtype=np.int64)  # by count, largest first, stable (as sorted())
@@ -271,7 +273,11 @@ def groups_of(points, tb, n, tol, min_points, min_arm):
 
 @numba.njit(cache=True, nogil=True)
 def _reach(points, tb, g, xy, xz, vy, vz, tol, owner, mark):
-    """How near arm ``g`` comes to the apex (see ``_Base._arms``)."""
+    """How near arm ``g`` comes to the apex (x, y), along its direction (vy, vz) from the
+    apex. A tenth of a group may lie past it: fragments of the root collinear with a bevel,
+    or a bevel's own piece rounding into the root, but none by more than three tolerances
+    when its piece also lies ahead (a piece that runs on through the apex crosses the other
+    arm: no V there, -inf). ``mark``: (n + 1,) False, scratch, left False."""
     a, c = tb[1][g, 0], tb[1][g, 1]
     pool = tb[2]
     over = 0
@@ -303,7 +309,8 @@ def _reach(points, tb, g, xy, xz, vy, vz, tol, owner, mark):
 
 @numba.njit(cache=True, nogil=True)
 def _short_of(points, tb, r, xy, xz, tol):
-    """``_short_of``: record ``r`` without the inliers more than a tolerance past the apex."""
+    """Record ``r`` without the inliers that lie past the apex (more than a tolerance): the
+    arm of a V ends at its apex (a new record, refitted; ``r`` when none or all but one)."""
     geo, span = tb[0], tb[1]
     vy, vz = geo[r, 0] - xy, geo[r, 1] - xz
     floor = -tol * math.hypot(vy, vz)
@@ -418,7 +425,8 @@ def arms(
 
 @numba.njit(cache=True, nogil=True)
 def corner_with(tb, line, at_end, others, spacing, tol):
-    """``corner_with``: where record ``line`` ends and the record of ``others`` it meets
+    """As :func:`~seamtrack.features.lines.corner_with`: where record ``line`` ends and the
+    record of ``others`` it meets
     there (y, z, record; -1: none, the end half a spacing beyond the last inlier)."""
     geo = tb[0]
     cy, cz, dy, dz = geo[line, 0], geo[line, 1], geo[line, 2], geo[line, 3]

@@ -39,8 +39,10 @@ from seamtrack.features.vroot import (
     plate_depth,
 )
 
-#: A bevel within this angle of a plate runs along it (deg; ``_ALONG_DEG``).
-COS_ALONG = math.cos(math.radians(7.5))
+#: A bevel within this angle of a plate runs along it (deg): a quarter of the flattest V's
+#: opening off the straight (150 deg included: bevels 15 deg off the plates).
+ALONG_DEG = 7.5
+COS_ALONG = math.cos(math.radians(ALONG_DEG))
 #: A plate beside a bevel starts within this distance of the bevel's top edge (mm).
 PLATE_REACH_MM = 1.5
 #: At most this share of the kept points lies between the bevels' lower ends (the root).
@@ -49,7 +51,7 @@ MAX_ROOT_SHARE = 0.35
 
 @numba.njit(cache=True, nogil=True)
 def group_of(tb, piece, groups):
-    """``_group_of``: the group that holds ``piece``, else the piece itself."""
+    """The group (collinear pieces joined) that holds record ``piece``, else the piece."""
     if piece == NONE:
         return NONE
     i = first(tb, piece)
@@ -61,8 +63,12 @@ def group_of(tb, piece, groups):
 
 @numba.njit(cache=True, nogil=True)
 def plates_beside(points, tb, groups, arm, met, lo, hi, left, right, lo_l):
-    """The plates beside bevel ``arm`` among kept points ``lo:hi`` (``_groove_zones``): the
-    piece ``met`` at its top edge and the largest group there, as two records (-1: none)."""
+    """The plates beside bevel ``arm`` among kept points ``lo:hi``, as two records (-1:
+    none). A plate turns away from its bevel (pieces along the bevel are more bevel) and
+    starts at the top edge: the piece ``met`` there (when it is a group) and the largest
+    group beyond it whose nearest point lies within :data:`PLATE_REACH_MM` of where its line
+    crosses the bevel's (a plate bent at the edge shows both; a plate beyond a raised block
+    is not beside the block's wall)."""
     if met != NONE:
         grouped = False
         for g in groups:
@@ -135,6 +141,15 @@ def vgroove(
     arguments, as a tuple costs microseconds to dispatch). ``params``: min points,
     min arm (mm), min and max included angle (deg), max gap (mm), min gap (mm), pieces as
     arms (0/1), gapless (0/1).
+
+    The model of a groove: plates (the piece met at each top edge and the largest group
+    beyond it, :func:`plates_beside`) outside the bevels, the bevels, and the root between
+    them (left out of the share explained). At least one plate must show, a bevel without a
+    plate of its own may not lie along the other's (within :data:`ALONG_DEG`), and the root
+    may hold at most :data:`MAX_ROOT_SHARE` of the points: two faces alone are a fillet or a
+    corner, a face along the plate is plate (a step, a raised block's foot), and a groove's
+    root is narrow. The root ends, the covered ends and the gap are read by
+    :mod:`seamtrack.features.vroot`.
 
     Returns (13,): code (0 found; 1 no V; 2 no plate; 3 a side along a plate; 4 a wide
     root, its share in [12]), seam y, z, confidence, gap, top edges (y, z) left and right,

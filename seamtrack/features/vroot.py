@@ -2,9 +2,9 @@
 what lies between and beyond the bevels' lower ends, on the line table of
 :mod:`seamtrack.features.vkernels` (records: the profile's pieces, their groups, the arms).
 
-Each function is the kernel of the Python helper it names, with the same tests in the same
-order and the same floating-point operations; see :mod:`seamtrack.features.vgroove` for what
-each one means for the joint.
+These were the extractor's Python helpers (``_covered_end``, ``_continued``, ...): compiled with
+the same tests in the same order and the same floating-point operations, so results do not
+change. Lines are records of the table (numbers; -1: none); points are passed as scalars.
 
 Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groove).
 """
@@ -16,6 +16,7 @@ import math
 import numba
 import numpy as np
 
+from seamtrack.features.lines import _WALL_DEG
 from seamtrack.features.vkernels import (
     NONE,
     contains,
@@ -31,8 +32,8 @@ from seamtrack.features.vkernels import (
     t_end,
 )
 
-#: A piece steeper than this on the plates is a wall (a root face; ``_WALL_DEG``).
-COS_WALL = math.cos(math.radians(65.0))
+#: A piece steeper than this on the plates is a wall (a root face).
+COS_WALL = math.cos(math.radians(_WALL_DEG))
 #: A piece within this angle of a bevel is part of it (deg).
 COS_ARM = math.cos(math.radians(15.0))
 #: A plate within this angle of its bevel is a piece of the bevel (deg; ``_level``).
@@ -41,7 +42,8 @@ COS_LEVEL = math.cos(math.radians(20.0))
 
 @numba.njit(cache=True, nogil=True)
 def plate_depth(tb, plate, qy, qz):
-    """``_plate_depth``: depth of (qy, qz) behind record ``plate``'s line."""
+    """Depth of (qy, qz) behind record ``plate``'s line (away from the sensor, at the
+    origin)."""
     g = tb[0]
     cy, cz, dy, dz = g[plate, 0], g[plate, 1], g[plate, 2], g[plate, 3]
     ny, nz = -dz, dy
@@ -75,8 +77,9 @@ def _flat_dot(tb, r, plate):
 
 @numba.njit(cache=True, nogil=True)
 def continued(points, tb, n, arm, at_end, ay, az, ey, ez, tol):
-    """``_continued``: where bevel ``arm`` ends when pieces beyond it towards the apex
-    (ay, az) lie on its line; else (ey, ez)."""
+    """Where bevel ``arm`` ends when pieces beyond its last (``at_end``, else first) inlier,
+    towards the apex (ay, az), lie on its line (within 15 deg and two tolerances: the bevel
+    goes on past spikes or a dropout): the farthest such point; else (ey, ez)."""
     t_apex = _along(tb, arm, ay, az)
     t_stop = t_end(tb, arm, at_end)
     best = t_stop
@@ -101,8 +104,21 @@ def continued(points, tb, n, arm, at_end, ay, az, ey, ez, tol):
 
 @numba.njit(cache=True, nogil=True)
 def covered_end(points, tb, n, line, at_end, other, plate, tol, spacing, sigma):
-    """``_covered_end``: (covered, t0, t1), the stretch along bevel ``line`` where its root
-    end may lie when a stray line covers it."""
+    """Where along bevel ``line`` its root end may lie when a stray line covers the columns
+    beyond its last seen point (``at_end``: its last inlier, else its first): (True, t0, t1),
+    or (False, 0, 0) when the end is seen.
+
+    The end is covered when the first piece beyond it lies in the next columns (at most two
+    columns lost, at most two points off the line in between), is no wall (steep on
+    ``plate``: a root face) and no part of ``other`` (the other bevel), and does not run on
+    into ``other`` without a jump: a false reflection, in front of or behind the surface,
+    which hides where the bevel really ends. Lost columns (the gap, a shadow) hide nothing.
+    (t0, t1) are coordinates along the line, from the end outwards: from the last point seen
+    to where the ray of the stray piece's last point crosses the line; or, when at least
+    three points beyond the piece lie on the line again (the bevel shows beyond the
+    reflection), from there to the last of them (which may already lie on a root face that
+    leaves the line at a small angle). Ends are half a spacing out.
+    """
     m = points.shape[0]
     s = 1 if at_end else -1
     i = last(tb, line) if at_end else first(tb, line)
@@ -172,7 +188,8 @@ def covered_end(points, tb, n, line, at_end, other, plate, tol, spacing, sigma):
 
 @numba.njit(cache=True, nogil=True)
 def at_depth(tb, line, plate, depth, s0, s1):
-    """``_at_depth``: the point of ``line`` at ``depth`` behind ``plate``, within s0..s1."""
+    """The point of ``line`` at ``depth`` behind ``plate``, kept within the stretch s0..s1
+    (coordinates along the line)."""
     g = tb[0]
     ny, nz = -g[plate, 3], g[plate, 2]
     if not g[plate, 0] * ny + g[plate, 1] * nz > 0:
@@ -187,7 +204,8 @@ def at_depth(tb, line, plate, depth, s0, s1):
 
 @numba.njit(cache=True, nogil=True)
 def level(tb, left, right, lx, ly, rx, ry, plate_l, plate_r, gap, tol):
-    """``_level``: whether the root ends (lx, ly), (rx, ry) lie at one depth."""
+    """Whether the bevels' lower ends (lx, ly), (rx, ry) lie at one depth (below their own
+    plates, else along the V's bisector): within 3 tolerances or a quarter of the gap."""
     if plate_l != NONE and abs(dot_dir(tb, plate_l, left)) > COS_LEVEL:
         plate_l = NONE  # a piece of the bevel, no plate
     if plate_r != NONE and abs(dot_dir(tb, plate_r, right)) > COS_LEVEL:
@@ -225,7 +243,13 @@ def _inert(tb, k, left, right, plate, min_points):
 def tip_filled(
     points, surface, tb, n, left, right, lx, lz, rx, rz, ax, az, plate, min_points, tol, spacing
 ):
-    """``_tip_filled``: whether surface points fill the V's tip below the root ends."""
+    """Whether surface points fill the V's tip below the bevels' lower ends: the triangle of
+    the two lower ends and the apex (grown by a tolerance), away from the lower ends (root
+    faces start there). Under a gap the tip is open air; there the bevels go on (cut up by
+    spikes and dropouts) or a fill lies. Walls (root faces: steep on ``plate``) and straight
+    pieces that are no part of a bevel (a reflection, a backing) do not count. Only read
+    when the apex lies more than three tolerances below the lower ends (else noise fills
+    any tip)."""
     cy, cz = rx - lx, rz - lz
     length = math.hypot(cy, cz)
     if length <= 0:
@@ -270,7 +294,10 @@ def tip_filled(
 
 @numba.njit(cache=True, nogil=True)
 def covered_between(points, columns, runs, tb, n, left, right, plate, min_points):
-    """``_covered_between``: share of the columns between the root ends showing a surface."""
+    """Share of the columns between the bevels' lower ends that show a surface: points in no
+    wall (steep on ``plate``: a root face), no long straight piece off both bevels and no
+    piece cut off by jumps at both ends (a reflection, a backing), or, when more, the share
+    not in the longest run of open columns. Over a gap the laser falls through (no points)."""
     lo, hi = last(tb, left), first(tb, right)
     if hi - lo < 2 or columns.shape[0] != points.shape[0]:
         return 0.0
@@ -309,7 +336,8 @@ def covered_between(points, columns, runs, tb, n, left, right, plate, min_points
 
 @numba.njit(cache=True, nogil=True)
 def bridged(tb, n, left, right, lx, lz, rx, rz, plate, min_points, tol, spacing):
-    """``_bridged``: whether a piece between the bevels that is no wall joins the root ends."""
+    """Whether a piece between the bevels that is no wall (steep on ``plate``) runs from one
+    root end to the other: the "gap" between them is a surface."""
     lo, hi = last(tb, left), first(tb, right)
     for k in range(n):
         if tb[1][k, 1] < min_points or first(tb, k) <= lo or last(tb, k) >= hi:
@@ -349,7 +377,11 @@ def gap_seen(
     tol,
     spacing,
 ):
-    """``_gap_seen``: whether the stretch between the root ends is a root gap."""
+    """Whether the stretch between the bevels' lower ends is a root gap: the ends lie at one
+    depth (not read where a stray line hides an end: its depth is then taken from the
+    other), no detour lies between them (a surface continuing across spikes), the V's tip
+    below them is empty and the columns between them are open (the laser falls through the
+    gap). Otherwise the bevels end where spikes, dropouts or a fill take over."""
     if not covered and not level(tb, left, right, lx, lz, rx, rz, plate_l, plate_r, gap, tol):
         return False
     lo, hi = last(tb, left), first(tb, right)
