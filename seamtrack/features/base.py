@@ -14,7 +14,6 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features.counts import explained_share
 from seamtrack.features.expect import Expect, parse_expect
 from seamtrack.features.lines import (
     DATA_ERRORS,
@@ -22,7 +21,7 @@ from seamtrack.features.lines import (
     Segments,
     segment_profile,
 )
-from seamtrack.features.vkernels import arm_pair, flat_lines
+from seamtrack.features.vkernels import arm_pair, explained_of, flat_lines
 from seamtrack.sensing.profiles import Feature, Profile
 
 FloatArray = NDArray[np.float64]
@@ -185,25 +184,31 @@ def explained(seg: Segments, zones: list[tuple[int, int, Line | tuple[Line, ...]
     (``seg.points[lo:hi]``) in column order, each with the line (or lines) the joint's model
     puts there; a zone without a line (a gap, a corner) is left out of the count. Points in
     no zone count as unexplained."""
-    m = len(seg.points)
-    surface = ~seg.stray if seg.stray.shape == (m,) else np.ones(m, dtype=bool)
     if not zones:
         return 0.0
-    groups = [() if z is None else z if isinstance(z, tuple) else (z,) for _, _, z in zones]
-    spans = np.array(
-        [(lo, hi, len(g)) for (lo, hi, _), g in zip(zones, groups, strict=True)], dtype=np.int64
+    spans, rows = [], []
+    for lo, hi, z in zones:
+        group = () if z is None else z if isinstance(z, tuple) else (z,)
+        spans.append((lo, hi, len(group)))
+        # Centroid and normal of each line, as floats: one array built, not one per line.
+        rows.append([(*ln.centroid.tolist(), -ln.direction[1], ln.direction[0]) for ln in group])
+    width = max(1, max(len(r) for r in rows))
+    fits = np.array([r + [(0.0, 0.0, 0.0, 0.0)] * (width - len(r)) for r in rows], dtype=np.float64)
+    return float(
+        explained_of(
+            np.ascontiguousarray(seg.points, dtype=np.float64),
+            np.asarray(seg.stray, dtype=np.bool_),
+            np.array(spans, dtype=np.int64),
+            fits,
+            3.0 * seg.tol,
+        )
     )
-    fits = np.zeros((len(zones), max((len(g) for g in groups), default=1), 4))
-    for k, group in enumerate(groups):
-        for j, line in enumerate(group):
-            fits[k, j, :2] = line.centroid
-            fits[k, j, 2:] = line.normal
-    return float(explained_share(seg.points, surface, spans, fits, 3.0 * seg.tol))
 
 
 def included(left: Line, right: Line, apex: FloatArray) -> float:
     """Included angle (rad) of the V or ridge whose arms run from ``apex`` to the lines'
     centroids."""
-    va, vb = left.centroid - apex, right.centroid - apex
-    c = float(va @ vb) / max(float(np.hypot(*va) * np.hypot(*vb)), 1e-300)
+    (ly, lz), (ry, rz), (ay, az) = left.centroid.tolist(), right.centroid.tolist(), apex.tolist()
+    vay, vaz, vby, vbz = ly - ay, lz - az, ry - ay, rz - az  # floats: numpy's calls cost more
+    c = (vay * vby + vaz * vbz) / max(math.hypot(vay, vaz) * math.hypot(vby, vbz), 1e-300)
     return math.acos(min(1.0, max(-1.0, c)))

@@ -28,7 +28,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features.counts import support
+from seamtrack.features.counts import explained_share, support
 from seamtrack.features.kernels import fit_line
 
 FloatArray = NDArray[np.float64]
@@ -83,6 +83,15 @@ def surface_of(stray, m):
         for i in range(m):
             surface[i] = not stray[i]
     return surface
+
+
+@numba.njit(cache=True, nogil=True)
+def explained_of(
+    points: FloatArray, stray: NDArray[np.bool_], zones: IntArray, fits: FloatArray, band: float
+) -> float:
+    """:func:`~seamtrack.features.counts.explained_share` over the surface points (not in a
+    detour: ``stray``, when it has an entry per point): the share a joint's model explains."""
+    return explained_share(points, surface_of(stray, points.shape[0]), zones, fits, band)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -502,10 +511,19 @@ def flat_lines(
     """A profile's pieces (:class:`~seamtrack.features.lines.Line`, at least one) as flat
     arrays: inliers' positions and coordinates, piece after piece; centroids and directions
     (y, z per piece); rms residual and inlier count per piece."""
+    index, along, centroids, directions, fits = [], [], [], [], []
+    for ln in lines:
+        index.append(ln.index)
+        along.append(ln.t)
+        centroids.append(ln.centroid)
+        directions.append(ln.direction)
+        fits.append((ln.rms, len(ln.index)))
+    geo = np.concatenate(centroids + directions)  # one call for both
+    n = 2 * len(lines)
     return (
-        np.concatenate([ln.index for ln in lines]),
-        np.concatenate([ln.t for ln in lines]),
-        np.concatenate([ln.centroid for ln in lines]),
-        np.concatenate([ln.direction for ln in lines]),
-        np.array([(ln.rms, len(ln.index)) for ln in lines], dtype=np.float64),
+        np.concatenate(index),
+        np.concatenate(along),
+        geo[:n],
+        geo[n:],
+        np.array(fits, dtype=np.float64),
     )
