@@ -186,20 +186,28 @@ def explained(seg: Segments, zones: list[tuple[int, int, Line | tuple[Line, ...]
     no zone count as unexplained."""
     if not zones:
         return 0.0
-    spans, rows = [], []
+    # The zones' lines as one flat list of floats (centroid, normal): one array built, where
+    # numpy calls per line cost more than the count.
+    spans: list[int] = []
+    groups = []
+    width = 1
     for lo, hi, z in zones:
         group = () if z is None else z if isinstance(z, tuple) else (z,)
-        spans.append((lo, hi, len(group)))
-        # Centroid and normal of each line, as floats: one array built, not one per line.
-        rows.append([(*ln.centroid.tolist(), -ln.direction[1], ln.direction[0]) for ln in group])
-    width = max(1, max(len(r) for r in rows))
-    fits = np.array([r + [(0.0, 0.0, 0.0, 0.0)] * (width - len(r)) for r in rows], dtype=np.float64)
+        spans += (lo, hi, len(group))
+        groups.append(group)
+        width = max(width, len(group))
+    flat: list[float] = []
+    for group in groups:
+        for ln in group:
+            (cy, cz), (dy, dz) = ln.centroid.tolist(), ln.direction.tolist()
+            flat += (cy, cz, -dz, dy)
+        flat += (0.0,) * (4 * (width - len(group)))
     return float(
         explained_of(
             np.ascontiguousarray(seg.points, dtype=np.float64),
             np.asarray(seg.stray, dtype=np.bool_),
-            np.array(spans, dtype=np.int64),
-            fits,
+            np.array(spans, dtype=np.int64).reshape(-1, 3),
+            np.array(flat, dtype=np.float64).reshape(len(zones), width, 4),
             3.0 * seg.tol,
         )
     )
