@@ -14,17 +14,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features.counts import explained_share, support
 from seamtrack.features.expect import Expect, parse_expect
 from seamtrack.features.lines import (
     DATA_ERRORS,
     Line,
     Segments,
-    _fit,
-    collinear_groups,
-    intersect,
     segment_profile,
 )
+from seamtrack.features.vkernels import arm_pair, explained_of, flat_lines
 from seamtrack.sensing.profiles import Feature, Profile
 
 FloatArray = NDArray[np.float64]
@@ -109,14 +106,6 @@ class _Base:
     def _found(self, profile: Profile, point: FloatArray, **kw: Any) -> Feature:
         return Feature.found(point, profile.T_world_sensor, joint=self.name, **kw)
 
-    def _groups(self, seg: Segments) -> list[Line]:
-        """Collinear groups supported enough to be an arm or a plate."""
-        return [
-            g
-            for g in collinear_groups(seg)
-            if g.count >= self.min_points and g.extent >= self.min_arm_mm
-        ]
-
     def _arms(
         self,
         seg: Segments,
@@ -124,118 +113,62 @@ class _Base:
         min_deg: float,
         max_deg: float,
         max_reach_mm: float,
-        groups: list[Line] | None = None,
     ) -> tuple[Line, Line, FloatArray, float] | str:
         """The best pair of lines forming a V (opening towards the sensor, -z) or a ridge
-        (``opening_down``: the arms fall away from the sensor): (left, right, apex, score)."""
-        if groups is None:
-            groups = self._groups(seg)
-        if self.arms_from_pieces:
-            # A plane seen on both sides of something standing on it (a web either side of a
-            # gusset) is one collinear group running through the corner: its pieces are arms.
-            grouped = {id(g) for g in groups}
-            groups = groups + [
-                ln
-                for ln in seg.lines
-                if id(ln) not in grouped
-                and ln.count >= self.min_points
-                and ln.extent >= self.min_arm_mm
-            ]
-        sign = 1.0 if opening_down else -1.0
-        best: tuple[Line, Line, FloatArray, float] | None = None
-        m = len(seg.points)
-        surface = ~seg.stray if seg.stray.shape == (m,) else np.ones(m, dtype=np.bool_)
-        band = 2.0 * seg.tol
-        owner = np.full(len(seg.points), -1, dtype=np.intp)  # each point's piece
-        for k, ln in enumerate(seg.lines):
-            owner[ln.index] = k
+        (``opening_down``: the arms fall away from the sensor): (left, right, apex, score).
 
-        def supported(g: Line, x: FloatArray, v: FloatArray) -> int:
-            # The surface points on the line (within the band), on the arm's side of x.
-            s = 1.0 if float(v @ g.direction) > 0 else -1.0
-            (cy, cz), (uy, uz) = g.centroid.tolist(), g.direction.tolist()
-            x_u = float(x @ g.direction)
-            return int(support(seg.points, surface, cy, cz, uy, uz, band, x_u, s, seg.tol))
-
-        def reach(g: Line, x: FloatArray, v: FloatArray) -> float:
-            # How near the arm comes to the apex. A tenth of a group may lie past it (trimmed
-            # below): fragments of the root collinear with a bevel, or a bevel's own piece
-            # rounding into the root, but none by more than three tolerances (a piece that
-            # runs on through the apex crosses the other arm: no V there).
-            t = (seg.points[g.index] - x) @ v
-            ahead = t >= -seg.tol
-            over = g.count - int(np.count_nonzero(ahead))
-            if over == 0:
-                return float(t.min())
-            if 10 * over > g.count:
-                return -np.inf
-            through = np.isin(owner[g.index], owner[g.index[ahead]]) & (t < -3.0 * seg.tol)
-            return -np.inf if through.any() else float(t[ahead].min())
-
-        # The groups' lines as floats: most pairs fail the V's shape, which scalar arithmetic
-        # rules out at a fraction of numpy's cost on 2-vectors; the pairs left (within a
-        # hair of passing) are then tested exactly as before.
-        flat = [(*g.centroid.tolist(), *g.direction.tolist()) for g in groups]
-        lo_deg, hi_deg = min_deg - 1e-6, max_deg + 1e-6
-        for i, a in enumerate(groups):
-            ay, az, ady, adz = flat[i]
-            for j in range(i + 1, len(groups)):
-                by, bz, bdy, bdz = flat[j]
-                d = ady * bdz - adz * bdy
-                if abs(d) < 1e-9:
-                    continue  # parallel: no apex
-                s_ = ((by - ay) * bdz - (bz - az) * bdy) / d
-                xy, xz = ay + s_ * ady, az + s_ * adz
-                uy, uz, wy, wz = ay - xy, az - xz, by - xy, bz - xz
-                nu, nw = max(math.hypot(uy, uz), 1e-300), max(math.hypot(wy, wz), 1e-300)
-                uy, uz, wy, wz = uy / nu, uz / nu, wy / nw, wz / nw
-                if wy < uy:
-                    uy, uz, wy, wz = wy, wz, uy, uz
-                c = min(max(uy * wy + uz * wz, -1.0), 1.0)
-                eps = 1e-9
-                if not (
-                    uy < eps
-                    and wy > -eps
-                    and sign * uz > -eps
-                    and sign * wz > -eps
-                    and lo_deg <= math.degrees(math.acos(c)) <= hi_deg
-                    and sign * (uz + wz) > 0.7 * math.hypot(uy + wy, uz + wz) - eps
-                ):
-                    continue
-                b = groups[j]
-                x = intersect(a, b)
-                if x is None:
-                    continue
-                va, vb = a.centroid - x, b.centroid - x
-                va, vb = (
-                    va / max(float(np.hypot(*va)), 1e-300),
-                    vb / max(float(np.hypot(*vb)), 1e-300),
-                )
-                ga, gb = a, b
-                if vb[0] < va[0]:
-                    va, vb, ga, gb = vb, va, b, a
-                included = math.degrees(math.acos(min(max(float(va @ vb), -1.0), 1.0)))
-                bis = va + vb
-                if not (
-                    va[0] < 0 < vb[0]
-                    and sign * va[1] > 0
-                    and sign * vb[1] > 0
-                    and min_deg <= included <= max_deg
-                    and sign * bis[1] > 0.7 * float(np.hypot(*bis))  # bisector within 45 deg
-                ):
-                    continue
-                na, nb = reach(ga, x, va), reach(gb, x, vb)
-                if not (-seg.tol <= min(na, nb) and max(na, nb) <= max_reach_mm):
-                    continue
-                # Support: the surface points on either arm's line, on its side of the apex
-                # (fragments of a bevel cut up by spikes count, whatever piece they are in).
-                score = float(supported(ga, x, va) + supported(gb, x, vb))
-                if best is None or score > best[3]:
-                    best = (ga, gb, x, score)
-        if best is None:
+        Pairs of collinear groups (:meth:`_groups`; with ``arms_from_pieces`` also the pieces
+        in no group) are tried: the apex is their crossing, each arm's direction points from
+        the apex to its centroid; the arms must lie either side of the apex, open the right
+        way, enclose ``min_deg..max_deg`` and have their bisector within 45 deg of the
+        opening. Each arm must come within ``max_reach_mm`` of the apex, and not run on
+        through it: a tenth of a group may lie past it (fragments of the root collinear with
+        a bevel, a bevel's own piece rounding into the root), none by more than three
+        tolerances when that piece also lies ahead. The best pair has the most surface points
+        on the arms' lines (within two tolerances), on their sides of the apex (fragments of
+        a bevel cut up by spikes count, whatever piece they are in). The arms are returned
+        without their inliers more than a tolerance past the apex (refitted). Compiled
+        (:func:`seamtrack.features.vkernels.arm_pair`)."""
+        if not seg.lines:
             return "no pair of lines forms the joint"
-        ga, gb, x, score = best
-        return _short_of(ga, x, seg), _short_of(gb, x, seg), x, score
+        params = np.array(
+            [
+                1.0 if opening_down else -1.0,
+                min_deg,
+                max_deg,
+                max_reach_mm,
+                self.arms_from_pieces,
+                self.min_points,
+                self.min_arm_mm,
+            ],
+            dtype=np.float64,
+        )
+        left, right, y, z, score, tb = arm_pair(
+            np.ascontiguousarray(seg.points, dtype=np.float64),
+            np.asarray(seg.stray, dtype=np.bool_),
+            float(seg.tol),
+            *flat_lines(seg.lines),
+            params,
+        )
+        if left < 0:
+            return "no pair of lines forms the joint"
+        return _record(seg, tb, left), _record(seg, tb, right), np.array([y, z]), float(score)
+
+
+def _record(seg: Segments, tb: tuple, r: int) -> Line:
+    """The line of record ``r`` of a table (:mod:`seamtrack.features.vkernels`): the piece
+    itself when it is one, else a new line."""
+    if r < len(seg.lines):
+        return seg.lines[r]
+    geo, span, pool_index, pool_t, _ = tb
+    a, c = int(span[r, 0]), int(span[r, 1])
+    return Line(
+        pool_index[a : a + c].copy(),
+        geo[r, 0:2].copy(),
+        geo[r, 2:4].copy(),
+        pool_t[a : a + c].copy(),
+        float(geo[r, 4]),
+    )
 
 
 def _confidence(arms: list[Line], seg: Segments) -> float:
@@ -251,49 +184,39 @@ def explained(seg: Segments, zones: list[tuple[int, int, Line | tuple[Line, ...]
     (``seg.points[lo:hi]``) in column order, each with the line (or lines) the joint's model
     puts there; a zone without a line (a gap, a corner) is left out of the count. Points in
     no zone count as unexplained."""
-    m = len(seg.points)
-    surface = ~seg.stray if seg.stray.shape == (m,) else np.ones(m, dtype=bool)
     if not zones:
         return 0.0
-    groups = [() if z is None else z if isinstance(z, tuple) else (z,) for _, _, z in zones]
-    spans = np.array(
-        [(lo, hi, len(g)) for (lo, hi, _), g in zip(zones, groups, strict=True)], dtype=np.int64
+    # The zones' lines as one flat list of floats (centroid, normal): one array built, where
+    # numpy calls per line cost more than the count.
+    spans: list[int] = []
+    groups = []
+    width = 1
+    for lo, hi, z in zones:
+        group = () if z is None else z if isinstance(z, tuple) else (z,)
+        spans += (lo, hi, len(group))
+        groups.append(group)
+        width = max(width, len(group))
+    flat: list[float] = []
+    for group in groups:
+        for ln in group:
+            (cy, cz), (dy, dz) = ln.centroid.tolist(), ln.direction.tolist()
+            flat += (cy, cz, -dz, dy)
+        flat += (0.0,) * (4 * (width - len(group)))
+    return float(
+        explained_of(
+            np.ascontiguousarray(seg.points, dtype=np.float64),
+            np.asarray(seg.stray, dtype=np.bool_),
+            np.array(spans, dtype=np.int64).reshape(-1, 3),
+            np.array(flat, dtype=np.float64).reshape(len(zones), width, 4),
+            3.0 * seg.tol,
+        )
     )
-    fits = np.zeros((len(zones), max((len(g) for g in groups), default=1), 4))
-    for k, group in enumerate(groups):
-        for j, line in enumerate(group):
-            fits[k, j, :2] = line.centroid
-            fits[k, j, 2:] = line.normal
-    return float(explained_share(seg.points, surface, spans, fits, 3.0 * seg.tol))
-
-
-def largest_in(groups: list[Line], lo: int, hi: int, skip: tuple[Line, ...] = ()) -> Line | None:
-    """The group with the most inliers among kept points ``lo:hi``, ``skip`` left out; None
-    when there is none."""
-    best, count = None, 0
-    for g in groups:
-        if any(g is s for s in skip):
-            continue
-        n = int(np.count_nonzero((g.index >= lo) & (g.index < hi)))
-        if n > count:
-            best, count = g, n
-    return best
-
-
-def _short_of(arm: Line, apex: FloatArray, seg: Segments) -> Line:
-    """``arm`` without the inliers that lie past ``apex`` (more than a tolerance): the arm of
-    a V ends at its apex."""
-    v = arm.centroid - apex
-    t = (seg.points[arm.index] - apex) @ v
-    keep = t >= -seg.tol * float(np.hypot(*v))
-    if keep.all() or np.count_nonzero(keep) < 2:
-        return arm
-    return _fit(seg.points, arm.index[keep])
 
 
 def included(left: Line, right: Line, apex: FloatArray) -> float:
     """Included angle (rad) of the V or ridge whose arms run from ``apex`` to the lines'
     centroids."""
-    va, vb = left.centroid - apex, right.centroid - apex
-    c = float(va @ vb) / max(float(np.hypot(*va) * np.hypot(*vb)), 1e-300)
+    (ly, lz), (ry, rz), (ay, az) = left.centroid.tolist(), right.centroid.tolist(), apex.tolist()
+    vay, vaz, vby, vbz = ly - ay, lz - az, ry - ay, rz - az  # floats: numpy's calls cost more
+    c = (vay * vby + vaz * vbz) / max(math.hypot(vay, vaz) * math.hypot(vby, vbz), 1e-300)
     return math.acos(min(1.0, max(-1.0, c)))

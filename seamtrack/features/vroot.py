@@ -1,0 +1,414 @@
+"""Compiled reading of a V-groove's root (:class:`seamtrack.features.vgroove.VGrooveExtractor`):
+what lies between and beyond the bevels' lower ends, on the line table of
+:mod:`seamtrack.features.vkernels` (records: the profile's pieces, their groups, the arms).
+
+These were the extractor's Python helpers (``_covered_end``, ``_continued``, ...): compiled with
+the same tests in the same order and the same floating-point operations, so results do not
+change. Lines are records of the table (numbers; -1: none); points are passed as scalars.
+
+Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groove).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from seamtrack.features.lines import _WALL_DEG
+from seamtrack.features.vkernels import (
+    NONE,
+    contains,
+    dot_dir,
+    end,
+    first,
+    last,
+    pmax,
+    pmin,
+    point,
+    sort_small,
+    step,
+    t_end,
+)
+
+#: A piece steeper than this on the plates is a wall (a root face).
+COS_WALL = math.cos(math.radians(_WALL_DEG))
+#: A piece within this angle of a bevel is part of it (deg).
+COS_ARM = math.cos(math.radians(15.0))
+#: A plate within this angle of its bevel is a piece of the bevel (deg; ``_level``).
+COS_LEVEL = math.cos(math.radians(20.0))
+
+
+@numba.njit(cache=True, nogil=True)
+def plate_depth(tb, plate, qy, qz):
+    """Depth of (qy, qz) behind record ``plate``'s line (away from the sensor, at the
+    origin)."""
+    g = tb[0]
+    cy, cz, dy, dz = g[plate, 0], g[plate, 1], g[plate, 2], g[plate, 3]
+    ny, nz = -dz, dy
+    if not cy * ny + cz * nz > 0:
+        ny, nz = -ny, -nz
+    return (qy - cy) * ny + (qz - cz) * nz
+
+
+@numba.njit(cache=True, nogil=True)
+def _off(tb, r, qy, qz):
+    """``abs(_towards_sensor(r, q))``: distance of (qy, qz) from record ``r``'s line."""
+    g = tb[0]
+    return abs((qy - g[r, 0]) * -g[r, 3] + (qz - g[r, 1]) * g[r, 2])
+
+
+@numba.njit(cache=True, nogil=True)
+def _along(tb, r, qy, qz):
+    """``(q - r.centroid) @ r.direction``."""
+    g = tb[0]
+    return (qy - g[r, 0]) * g[r, 2] + (qz - g[r, 1]) * g[r, 3]
+
+
+@numba.njit(cache=True, nogil=True)
+def _flat_dot(tb, r, plate):
+    """``abs(r.direction @ flat)``, flat: ``plate``'s direction, else (1, 0)."""
+    g = tb[0]
+    if plate == NONE:
+        return abs(g[r, 2] * 1.0 + g[r, 3] * 0.0)
+    return abs(g[r, 2] * g[plate, 2] + g[r, 3] * g[plate, 3])
+
+
+@numba.njit(cache=True, nogil=True)
+def continued(points, tb, n, arm, at_end, ay, az, ey, ez, tol):
+    """Where bevel ``arm`` ends when pieces beyond its last (``at_end``, else first) inlier,
+    towards the apex (ay, az), lie on its line (within 15 deg and two tolerances: the bevel
+    goes on past spikes or a dropout): the farthest such point; else (ey, ez)."""
+    t_apex = _along(tb, arm, ay, az)
+    t_stop = t_end(tb, arm, at_end)
+    best = t_stop
+    span, pool = tb[1], tb[2]
+    for k in range(n):
+        if abs(dot_dir(tb, k, arm)) < COS_ARM:
+            continue
+        if _off(tb, arm, tb[0][k, 0], tb[0][k, 1]) > 2.0 * tol:
+            continue
+        lo, hi = np.inf, -np.inf
+        for j in range(span[k, 0], span[k, 0] + span[k, 1]):
+            t = _along(tb, arm, points[pool[j], 0], points[pool[j], 1])
+            lo, hi = min(lo, t), max(hi, t)
+        if at_end and lo > t_stop and hi <= t_apex + tol:
+            best = pmax(best, hi)
+        elif not at_end and hi < t_stop and lo >= t_apex - tol:
+            best = pmin(best, lo)
+    if best == t_stop:
+        return ey, ez
+    return point(tb, arm, best)
+
+
+@numba.njit(cache=True, nogil=True)
+def covered_end(points, tb, n, line, at_end, other, plate, tol, spacing, sigma):
+    """Where along bevel ``line`` its root end may lie when a stray line covers the columns
+    beyond its last seen point (``at_end``: its last inlier, else its first): (True, t0, t1),
+    or (False, 0, 0) when the end is seen.
+
+    The end is covered when the first piece beyond it lies in the next columns (at most two
+    columns lost, at most two points off the line in between), is no wall (steep on
+    ``plate``: a root face) and no part of ``other`` (the other bevel), and does not run on
+    into ``other`` without a jump: a false reflection, in front of or behind the surface,
+    which hides where the bevel really ends. Lost columns (the gap, a shadow) hide nothing.
+    (t0, t1) are coordinates along the line, from the end outwards: from the last point seen
+    to where the ray of the stray piece's last point crosses the line; or, when at least
+    three points beyond the piece lie on the line again (the bevel shows beyond the
+    reflection), from there to the last of them (which may already lie on a root face that
+    leaves the line at a small angle). Ends are half a spacing out.
+    """
+    m = points.shape[0]
+    s = 1 if at_end else -1
+    i = last(tb, line) if at_end else first(tb, line)
+    piece = NONE
+    for k in range(n):
+        if at_end and first(tb, k) > i:
+            piece = k
+            break
+        if not at_end and last(tb, k) < i:
+            piece = k
+    if piece == NONE:
+        return False, 0.0, 0.0
+    near = first(tb, piece) if at_end else last(tb, piece)
+    far = last(tb, piece) if at_end else first(tb, piece)
+    if contains(tb, other, near):
+        return False, 0.0, 0.0  # the other bevel (no gap) or a piece of it
+    a, c = tb[1][line, 0], tb[1][line, 1]
+    own = tb[2][a + max(c - 11, 0) : a + c] if at_end else tb[2][a : a + min(c, 11)]
+    steps = np.empty(max(own.shape[0] - 1, 0))
+    for k in range(steps.shape[0]):
+        steps[k] = abs(
+            math.atan2(points[own[k + 1], 0], points[own[k + 1], 1])
+            - math.atan2(points[own[k], 0], points[own[k], 1])
+        )
+    dphi = sort_small(steps)[steps.shape[0] // 2] if steps.shape[0] else 0.0
+    phi_i = math.atan2(points[i, 0], points[i, 1])
+    phi_near = math.atan2(points[near, 0], points[near, 1])
+    phi_far = math.atan2(points[far, 0], points[far, 1])
+    lo, hi = min(i, near) + 1, max(i, near)
+    lost = abs(phi_near - phi_i) / dphi - max(hi - lo, 0) - 1 if dphi > 0 else np.inf
+    if lost > 2.5:
+        return False, 0.0, 0.0
+    off = 0
+    for j in range(lo, hi):
+        off += _off(tb, line, points[j, 0], points[j, 1]) > 2.0 * tol
+    if off > 2:
+        return False, 0.0, 0.0  # lost columns (the gap, a shadow) or another surface first
+    if _flat_dot(tb, piece, plate) <= COS_WALL:
+        return False, 0.0, 0.0  # a wall: a root face
+    nxt = far + s
+    if 0 <= nxt < m:
+        held = pmax(pmax(6.0 * spacing, 4.0 * sigma), 0.1)
+        on_other = _off(tb, other, points[nxt, 0], points[nxt, 1]) <= 2.0 * tol
+        if (
+            on_other
+            and abs(math.atan2(points[nxt, 0], points[nxt, 1]) - phi_far) <= 3.5 * dphi
+            and math.hypot(points[nxt, 0] - points[far, 0], points[nxt, 1] - points[far, 1]) <= held
+        ):
+            return False, 0.0, 0.0  # runs on into the other bevel: part of the part
+    half = s * 0.5 * pmax(step(tb, line, at_end), spacing)
+    g = tb[0]
+    cy, cz, dy, dz = g[line, 0], g[line, 1], g[line, 2], g[line, 3]
+    qy, qz = points[far, 0], points[far, 1]
+    ray = (cy * -dz + cz * dy) / (qy * -dz + qz * dy)  # _ray_t: the ray's crossing
+    t_far = (qy * ray - cy) * dy + (qz * ray - cz) * dz + half
+    # Beyond the stray piece the bevel may show again.
+    again, at = 0, far + s
+    if s > 0 or far > 0:
+        while 0 <= at < m and again < 400 and _off(tb, line, points[at, 0], points[at, 1]) <= tol:
+            again += 1
+            at += s
+    if again >= 3:
+        q = far + s * again
+        return True, t_far, _along(tb, line, points[q, 0], points[q, 1]) + half
+    return True, t_end(tb, line, at_end) + half, t_far
+
+
+@numba.njit(cache=True, nogil=True)
+def at_depth(tb, line, plate, depth, s0, s1):
+    """The point of ``line`` at ``depth`` behind ``plate``, kept within the stretch s0..s1
+    (coordinates along the line)."""
+    g = tb[0]
+    ny, nz = -g[plate, 3], g[plate, 2]
+    if not g[plate, 0] * ny + g[plate, 1] * nz > 0:
+        ny, nz = -ny, -nz
+    rate = g[line, 2] * ny + g[line, 3] * nz
+    lo, hi = pmin(s0, s1), pmax(s0, s1)
+    if abs(rate) < 1e-6:
+        return point(tb, line, s0)
+    t = (depth - plate_depth(tb, plate, g[line, 0], g[line, 1])) / rate
+    return point(tb, line, pmin(pmax(t, lo), hi))
+
+
+@numba.njit(cache=True, nogil=True)
+def level(tb, left, right, lx, ly, rx, ry, plate_l, plate_r, gap, tol):
+    """Whether the bevels' lower ends (lx, ly), (rx, ry) lie at one depth (below their own
+    plates, else along the V's bisector): within 3 tolerances or a quarter of the gap."""
+    if plate_l != NONE and abs(dot_dir(tb, plate_l, left)) > COS_LEVEL:
+        plate_l = NONE  # a piece of the bevel, no plate
+    if plate_r != NONE and abs(dot_dir(tb, plate_r, right)) > COS_LEVEL:
+        plate_r = NONE
+    plate_l, plate_r = (
+        plate_l if plate_l != NONE else plate_r,
+        plate_r if plate_r != NONE else plate_l,
+    )
+    if plate_l != NONE and plate_r != NONE:
+        d_l, d_r = plate_depth(tb, plate_l, lx, ly), plate_depth(tb, plate_r, rx, ry)
+    else:
+        g = tb[0]
+        uy, uz = -(g[left, 2] + g[right, 2]), -(g[left, 3] + g[right, 3])
+        if uz > 0:
+            uy, uz = -uy, -uz
+        norm = max(math.hypot(uy, uz), 1e-300)
+        uy, uz = uy / norm, uz / norm
+        d_l, d_r = -(lx * uy + ly * uz), -(rx * uy + ry * uz)
+    return abs(d_l - d_r) <= pmax(3.0 * tol, 0.25 * gap)
+
+
+@numba.njit(cache=True, nogil=True)
+def _inert(tb, k, left, right, plate, min_points):
+    """A wall (steep on ``plate``) or a long straight piece off both bevels."""
+    if _flat_dot(tb, k, plate) <= COS_WALL:
+        return True
+    return (
+        tb[1][k, 1] >= 2 * min_points
+        and abs(dot_dir(tb, k, left)) < COS_ARM
+        and abs(dot_dir(tb, k, right)) < COS_ARM
+    )
+
+
+@numba.njit(cache=True, nogil=True)
+def tip_filled(
+    points, surface, tb, n, left, right, lx, lz, rx, rz, ax, az, plate, min_points, tol, spacing
+):
+    """Whether surface points fill the V's tip below the bevels' lower ends: the triangle of
+    the two lower ends and the apex (grown by a tolerance), away from the lower ends (root
+    faces start there). Under a gap the tip is open air; there the bevels go on (cut up by
+    spikes and dropouts) or a fill lies. Walls (root faces: steep on ``plate``) and straight
+    pieces that are no part of a bevel (a reflection, a backing) do not count. Only read
+    when the apex lies more than three tolerances below the lower ends (else noise fills
+    any tip)."""
+    cy, cz = rx - lx, rz - lz
+    length = math.hypot(cy, cz)
+    if length <= 0:
+        return False
+    ny, nz = -cz / length, cy / length
+    if abs((ax - lx) * ny + (az - lz) * nz) <= 3.0 * tol:
+        return False
+    keep = np.empty(surface.shape[0], dtype=np.bool_)
+    for i in range(keep.shape[0]):
+        keep[i] = surface[i]
+    span, pool = tb[1], tb[2]
+    for k in range(n):
+        if _inert(tb, k, left, right, plate, min_points):
+            for q in range(span[k, 0], span[k, 0] + span[k, 1]):
+                keep[pool[q]] = False
+    for r in (left, right):
+        for q in range(span[r, 0], span[r, 0] + span[r, 1]):
+            keep[pool[q]] = False
+    ty, tz, my, mz = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
+    ty[0], ty[1], ty[2], tz[0], tz[1], tz[2] = lx, rx, ax, lz, rz, az
+    ey_c, ez_c = ((lx + rx) + ax) / 3.0, ((lz + rz) + az) / 3.0
+    for e in range(3):
+        a, b = e, (e + 1) % 3
+        dy, dz = ty[b] - ty[a], tz[b] - tz[a]
+        norm = max(math.hypot(dy, dz), 1e-300)
+        my[e], mz[e] = -dz / norm, dy / norm
+        if (ey_c - ty[a]) * my[e] + (ez_c - tz[a]) * mz[e] < 0:
+            my[e], mz[e] = -my[e], -mz[e]
+    r0 = 2.0 * tol + 3.0 * spacing
+    count = 0
+    for i in range(points.shape[0]):
+        if not keep[i]:
+            continue
+        qy, qz = points[i, 0], points[i, 1]
+        inside = True
+        for e in range(3):
+            inside = inside and (qy - ty[e]) * my[e] + (qz - tz[e]) * mz[e] >= -tol
+        if inside and math.hypot(qy - lx, qz - lz) > r0 and math.hypot(qy - rx, qz - rz) > r0:
+            count += 1
+    return count > min_points
+
+
+@numba.njit(cache=True, nogil=True)
+def covered_between(points, columns, runs, tb, n, left, right, plate, min_points):
+    """Share of the columns between the bevels' lower ends that show a surface: points in no
+    wall (steep on ``plate``: a root face), no long straight piece off both bevels and no
+    piece cut off by jumps at both ends (a reflection, a backing), or, when more, the share
+    not in the longest run of open columns. Over a gap the laser falls through (no points)."""
+    lo, hi = last(tb, left), first(tb, right)
+    if hi - lo < 2 or columns.shape[0] != points.shape[0]:
+        return 0.0
+    width = columns[hi] - columns[lo] - 1
+    if width <= 0:
+        return 0.0
+    keep = np.ones(hi - lo - 1, dtype=np.bool_)
+    span, pool = tb[1], tb[2]
+    starts = runs[:-1]
+    for k in range(n):
+        fst, lst = first(tb, k), last(tb, k)
+        if lst <= lo or fst >= hi:
+            continue
+        j = -1  # np.searchsorted(starts, fst, side="right") - 1
+        while j + 1 < starts.shape[0] and starts[j + 1] <= fst:
+            j += 1
+        cut_off = 0 <= j < starts.shape[0] and fst - starts[j] <= 3 and runs[j + 1] - 1 - lst <= 3
+        if cut_off or _inert(tb, k, left, right, plate, min_points):
+            for q in range(span[k, 0], span[k, 0] + span[k, 1]):
+                if lo < pool[q] < hi:
+                    keep[pool[q] - lo - 1] = False
+    hit = np.zeros(width, dtype=np.bool_)
+    kept = 0
+    for j in range(hi - lo - 1):
+        if keep[j]:
+            kept += 1
+            c = columns[lo + 1 + j] - columns[lo] - 1
+            if 0 <= c < width:
+                hit[c] = True
+    longest, run = 0, 0
+    for c in range(width):
+        run = 0 if hit[c] else run + 1
+        longest = max(longest, run)
+    return pmax(kept / width, 1.0 - longest / width)
+
+
+@numba.njit(cache=True, nogil=True)
+def bridged(tb, n, left, right, lx, lz, rx, rz, plate, min_points, tol, spacing):
+    """Whether a piece between the bevels that is no wall (steep on ``plate``) runs from one
+    root end to the other: the "gap" between them is a surface."""
+    lo, hi = last(tb, left), first(tb, right)
+    for k in range(n):
+        if tb[1][k, 1] < min_points or first(tb, k) <= lo or last(tb, k) >= hi:
+            continue
+        if _flat_dot(tb, k, plate) <= COS_WALL:
+            continue
+        reach = 3.0 * pmax(pmax(spacing, step(tb, k, True)), step(tb, k, False)) + tol
+        y0, z0 = end(tb, k, False)
+        y1, z1 = end(tb, k, True)
+        if math.hypot(y0 - lx, z0 - lz) <= reach and math.hypot(y1 - rx, z1 - rz) <= reach:
+            return True
+    return False
+
+
+@numba.njit(cache=True, nogil=True)
+def gap_seen(
+    points,
+    stray,
+    surface,
+    columns,
+    runs,
+    tb,
+    n,
+    left,
+    right,
+    lx,
+    lz,
+    rx,
+    rz,
+    ax,
+    az,
+    plate_l,
+    plate_r,
+    gap,
+    covered,
+    min_points,
+    tol,
+    spacing,
+):
+    """Whether the stretch between the bevels' lower ends is a root gap: the ends lie at one
+    depth (not read where a stray line hides an end: its depth is then taken from the
+    other), no detour lies between them (a surface continuing across spikes), the V's tip
+    below them is empty and the columns between them are open (the laser falls through the
+    gap). Otherwise the bevels end where spikes, dropouts or a fill take over."""
+    if not covered and not level(tb, left, right, lx, lz, rx, rz, plate_l, plate_r, gap, tol):
+        return False
+    lo, hi = last(tb, left), first(tb, right)
+    m = points.shape[0]
+    if stray.shape[0] == m:
+        detour = 0
+        for i in range(lo + 1, hi):
+            detour += stray[i]
+        if detour >= 3:
+            return False  # a detour between them: a surface goes on across it, no gap
+    if tip_filled(
+        points,
+        surface,
+        tb,
+        n,
+        left,
+        right,
+        lx,
+        lz,
+        rx,
+        rz,
+        ax,
+        az,
+        plate_l,
+        min_points,
+        tol,
+        spacing,
+    ):
+        return False
+    return covered_between(points, columns, runs, tb, n, left, right, plate_l, min_points) < 0.5

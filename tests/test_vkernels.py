@@ -1,0 +1,76 @@
+"""The V search's compiled line table (seamtrack.features.vkernels) against the Python geometry
+it replaces in the V extractors (seamtrack.features.lines: collinear_groups, corner_with,
+Line.step and Line.end), on synthetic profiles of every joint with noise, outliers, dropouts,
+false reflections and tacks."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from seamtrack.features import vkernels
+from seamtrack.features.lines import Line, Segments, collinear_groups, corner_with, segment_profile
+from seamtrack.features.synthetic import Imperfections, synthetic_profile
+from seamtrack.sensing.sensor import preset
+
+_JOINTS = ("v-groove", "square-butt", "fillet", "lap", "outside-corner")
+
+
+def _segments(joint: str, seed: int) -> Segments:
+    rng = np.random.default_rng(seed)
+    imperfections = Imperfections(
+        noise_mm=0.03,
+        outlier_fraction=0.01,
+        dropout_runs=2,
+        reflection_probability=0.5,
+        tack_probability=0.3,
+    )
+    profile, _ = synthetic_profile(joint, preset("paper"), rng=rng, imperfections=imperfections)
+    seg = segment_profile(profile)
+    assert isinstance(seg, Segments), seg
+    return seg
+
+
+def _table(seg: Segments) -> tuple[np.ndarray, ...]:
+    return vkernels.new_table(*vkernels.flat_lines(seg.lines))
+
+
+def _line(tb: tuple[np.ndarray, ...], r: int) -> Line:
+    geo, span, pool_index, pool_t, _ = tb
+    a, c = span[r]
+    return Line(pool_index[a : a + c], geo[r, 0:2], geo[r, 2:4], pool_t[a : a + c], geo[r, 4])
+
+
+@pytest.mark.parametrize("joint", _JOINTS)
+@pytest.mark.parametrize("seed", range(4))
+def test_groups_equal_collinear_groups(joint: str, seed: int) -> None:
+    """The table's groups are collinear_groups' lines with enough inliers over min_arm mm,
+    in the same order, with the same inliers and the same fits."""
+    seg = _segments(joint, seed)
+    expected = [g for g in collinear_groups(seg) if g.count >= 8 and g.extent >= 0.5]
+    tb = _table(seg)
+    records = vkernels.groups_of(seg.points, tb, len(seg.lines), seg.tol, 8, 0.5)
+    assert len(records) == len(expected)
+    for r, g in zip(records, expected, strict=True):
+        line = _line(tb, int(r))
+        np.testing.assert_array_equal(line.index, g.index)
+        np.testing.assert_allclose(line.centroid, g.centroid, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(line.direction, g.direction, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(line.t, g.t, rtol=0, atol=1e-12)
+
+
+@pytest.mark.parametrize("joint", _JOINTS)
+@pytest.mark.parametrize("seed", range(4))
+def test_corner_with_equals_lines_corner_with(joint: str, seed: int) -> None:
+    """Every piece's corner at either end among the pieces, as lines.corner_with finds it:
+    the same neighbour and the same point; and the pieces' ends (Line.end)."""
+    seg = _segments(joint, seed)
+    tb = _table(seg)
+    others = np.arange(len(seg.lines), dtype=np.int64)
+    for k, line in enumerate(seg.lines):
+        for at_end in (False, True):
+            point, met = corner_with(line, at_end, seg.lines, seg)
+            y, z, r = vkernels.corner_with(tb, k, at_end, others, seg.spacing, seg.tol)
+            assert r == next((i for i, ln in enumerate(seg.lines) if ln is met), -1)
+            np.testing.assert_allclose([y, z], point, rtol=0, atol=1e-12)
+            np.testing.assert_allclose(vkernels.end(tb, k, at_end), line.end(at_end), atol=1e-12)
