@@ -390,26 +390,32 @@ def segment(
     max_detour_mm: float,
     max_lines: int,
     min_kink_rad: float,
-    p: FloatArray,
-    cols: IntArray,
-    runs: IntArray,
+    floats: FloatArray,
+    ints: IntArray,
     stray: NDArray[np.bool_],
-    offsets: IntArray,
-    index: IntArray,
-    fits: FloatArray,
-    along: FloatArray,
 ) -> tuple[int, int, int, int, float, float, float, float, float]:
     """:func:`seamtrack.features.lines.segment_profile` in one compiled call: the front end
     (:func:`seamtrack.features.robust.front`) and the straight pieces (:func:`_pieces`),
-    written to the given arrays (each call from Python, and each array it returns, costs
-    about a microsecond): ``p`` (n, 2), ``cols``, ``stray``, ``index``, ``along`` (n,),
-    ``runs`` (n + 1,), ``offsets`` (max_lines + 1,), ``fits`` (max_lines, 7) for a profile
-    of n points (``resolution_mm`` 0 and ``min_tol_mm`` NaN: not given).
+    written to three given arrays (each array passed to or returned from a compiled call
+    costs a fraction of a microsecond) for a profile of n points (``resolution_mm`` 0 and
+    ``min_tol_mm`` NaN: not given):
+
+    * ``floats`` (3 n + 7 max_lines,): the kept points ((n, 2) from 0), their coordinates
+      along their pieces (from 2 n) and the pieces' fits ((max_lines, 7) from 3 n:
+      centroid, direction, rms, first and last coordinate along the line);
+    * ``ints`` (3 n + max_lines + 2,): the kept points' columns (from 0), the pieces'
+      inliers (from n), the run bounds (from 2 n) and the pieces' offsets into the inliers
+      (from 3 n + 1);
+    * ``stray`` (n,): the points of detours.
 
     Returns (code, m, runs, k, sigma, tol, spacing, quantum, resolution): ``code`` 0 ok,
     1 too few valid points (``m`` of them), 2 constant profile, 3 too many pieces, 4 no piece
     with ``min_points`` inliers; ``m`` kept points, the count of run bounds, ``k`` pieces.
     """
+    n = points.shape[0]
+    p = floats[: 2 * n].reshape((n, 2))
+    runs = ints[2 * n : 3 * n + 1]
+    # The spikes' columns go where the inliers will: they are not returned.
     code, m, _, nr, sigma, tol, floor, spacing, q, resolution = _front(
         points,
         valid,
@@ -422,8 +428,8 @@ def segment(
         DEFAULT_RESOLUTION_MM,
         TOL_RESOLUTIONS,
         p,
-        cols,
-        index,  # the spikes' columns: not returned, and index is not yet in use
+        ints[:n],
+        ints[n : 2 * n],
         runs,
         stray,
     )
@@ -439,10 +445,10 @@ def segment(
             min_points,
             max_lines,
             min_kink_rad,
-            offsets,
-            index,
-            fits,
-            along,
+            ints[3 * n + 1 :],
+            ints[n : 2 * n],
+            floats[3 * n :].reshape((max_lines, 7)),
+            floats[2 * n : 3 * n],
         )
         if code:
             code += 2

@@ -152,15 +152,10 @@ def segment_profile(
     if valid.shape != (n,):
         return "too few valid points (0)"
     max_lines = int(max_lines)
-    # The compiled call writes into these (returning arrays from it costs more).
-    p = np.empty((n, 2))
-    columns = np.empty(n, dtype=np.intp)
-    runs = np.empty(n + 1, dtype=np.intp)
+    # The compiled call writes into these (see :func:`seamtrack.features.kernels.segment`).
+    floats = np.empty(3 * n + 7 * max_lines)
+    ints = np.empty(3 * n + max_lines + 2, dtype=np.intp)
     stray = np.empty(n, dtype=np.bool_)
-    offsets = np.empty(max_lines + 1, dtype=np.intp)
-    index = np.empty(n, dtype=np.intp)
-    fits = np.empty((max_lines, 7))
-    along = np.empty(n)
     code, m, nr, k, sigma, tol, spacing, q, resolution = segment(
         pts,
         valid,
@@ -171,26 +166,34 @@ def segment_profile(
         float(max_detour_mm),
         max_lines,
         _MIN_KINK,
-        p,
-        columns,
-        runs,
+        floats,
+        ints,
         stray,
-        offsets,
-        index,
-        fits,
-        along,
     )
     if code:
         return _WHY[code].format(m)
-    bounds = offsets[: k + 1].tolist()
+    bounds = ints[3 * n + 1 : 3 * n + 2 + k].tolist()
+    fits = floats[3 * n : 3 * n + 7 * k].reshape(k, 7)
     lines = []
-    for j, (cy, cz, uy, uz, rms, t0, t1) in enumerate(fits[:k].tolist()):
-        a, b = bounds[j], bounds[j + 1]
-        line = Line(index[a:b], fits[j, 0:2], fits[j, 2:4], along[a:b], rms)
+    # Row views by iteration, scalars by one tolist: numpy's per-call overhead is most of
+    # the cost here.
+    for (a, b), c, d, (cy, cz, uy, uz, rms, t0, t1) in zip(
+        itertools.pairwise(bounds), fits[:, 0:2], fits[:, 2:4], fits.tolist(), strict=True
+    ):
+        line = Line(ints[n + a : n + b], c, d, floats[2 * n + a : 2 * n + b], rms)
         line.__dict__["scalars"] = (cy, cz, uy, uz, t0, t1)  # the cached property, as floats
         lines.append(line)
     return Segments(
-        p[:m], sigma, tol, spacing, lines, stray[:m], columns[:m], runs[:nr], q, resolution
+        floats[: 2 * m].reshape(m, 2),
+        sigma,
+        tol,
+        spacing,
+        lines,
+        stray[:m],
+        ints[:m],
+        ints[2 * n : 2 * n + nr],
+        q,
+        resolution,
     )
 
 
