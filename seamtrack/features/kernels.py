@@ -165,7 +165,7 @@ def _split(
     ``limit`` (pieces and pending ranges)."""
     stack_a = np.empty(limit + 2, dtype=np.int64)
     stack_b = np.empty(limit + 2, dtype=np.int64)
-    dist = np.empty(hi - lo + 1)
+    dist = np.empty(hi - lo + 1)  # the distances of the points inside a range
     stack_a[0], stack_b[0] = lo, hi
     ns = 1
     no = 0
@@ -179,18 +179,20 @@ def _split(
             ay, az = p[a, 0], p[a, 1]
             cy, cz = p[b, 0] - ay, p[b, 1] - az
             norm = math.hypot(cy, cz)
-            # All distances first (divisions in SIMD lanes), then the first farthest point.
+            # All distances first (divisions in SIMD lanes: loops from 0 over views), then
+            # the first farthest point.
+            q = p[a + 1 : b]
             if norm == 0.0:
-                for i in range(a + 1, b):
-                    dist[i - a] = math.hypot(p[i, 0] - ay, p[i, 1] - az)
+                for t in range(b - a - 1):
+                    dist[t] = math.hypot(q[t, 0] - ay, q[t, 1] - az)
             else:
-                for i in range(a + 1, b):
-                    dist[i - a] = abs((p[i, 0] - ay) * cz - (p[i, 1] - az) * cy) / norm
+                for t in range(b - a - 1):
+                    dist[t] = abs((q[t, 0] - ay) * cz - (q[t, 1] - az) * cy) / norm
             kmax = 0
             dmax = -1.0
-            for i in range(a + 1, b):
-                if dist[i - a] > dmax:
-                    dmax, kmax = dist[i - a], i
+            for t in range(b - a - 1):
+                if dist[t] > dmax:
+                    dmax, kmax = dist[t], a + 1 + t
             if dmax > tol:
                 stack_a[ns], stack_b[ns] = kmax, b
                 stack_a[ns + 1], stack_b[ns + 1] = a, kmax
@@ -296,8 +298,8 @@ def _pieces(
     along: FloatArray,
 ) -> tuple[int, int]:
     """The straight pieces of :func:`seamtrack.features.lines.segment_profile`, written to
-    ``offsets`` (>= max_lines + 1,), ``index``, ``along`` (>= len(p),) and ``fits``
-    (>= max_lines, 7).
+    ``offsets`` (>= max_lines + 1,), ``index``, ``along`` (>= len(p) + max_lines,: pieces of
+    fewer than 6 points may share an end point) and ``fits`` (>= max_lines, 7).
 
     Returns
     -------
@@ -397,16 +399,19 @@ def segment(
     """:func:`seamtrack.features.lines.segment_profile` in one compiled call: the front end
     (:func:`seamtrack.features.robust.front`) and the straight pieces (:func:`_pieces`),
     written to three given arrays (each array passed to or returned from a compiled call
-    costs a fraction of a microsecond) for a profile of n points (``resolution_mm`` 0 and
-    ``min_tol_mm`` NaN: not given):
+    costs a fraction of a microsecond) for a profile of n points and L = ``max_lines``
+    (``resolution_mm`` 0 and ``min_tol_mm`` NaN: not given):
 
-    * ``floats`` (3 n + 7 max_lines,): the kept points ((n, 2) from 0), their coordinates
-      along their pieces (from 2 n) and the pieces' fits ((max_lines, 7) from 3 n:
-      centroid, direction, rms, first and last coordinate along the line);
-    * ``ints`` (3 n + max_lines + 2,): the kept points' columns (from 0), the pieces'
-      inliers (from n), the run bounds (from 2 n) and the pieces' offsets into the inliers
-      (from 3 n + 1);
+    * ``floats`` (3 n + 8 L,): the kept points ((n, 2) from 0), the pieces' fits ((L, 7)
+      from 2 n: centroid, direction, rms, first and last coordinate along the line) and the
+      inliers' coordinates along their pieces (from 2 n + 7 L);
+    * ``ints`` (3 n + 2 L + 2,): the kept points' columns (from 0), the run bounds (from n),
+      the pieces' offsets into the inliers (from 2 n + 1) and the inliers (from
+      2 n + L + 2);
     * ``stray`` (n,): the points of detours.
+
+    Pieces of fewer than 6 points may share an end point (Douglas-Peucker's), so there may
+    be up to L more inliers than points: hence n + L for them.
 
     Returns (code, m, runs, k, sigma, tol, spacing, quantum, resolution): ``code`` 0 ok,
     1 too few valid points (``m`` of them), 2 constant profile, 3 too many pieces, 4 no piece
@@ -414,7 +419,8 @@ def segment(
     """
     n = points.shape[0]
     p = floats[: 2 * n].reshape((n, 2))
-    runs = ints[2 * n : 3 * n + 1]
+    runs = ints[n : 2 * n + 1]
+    inliers = ints[2 * n + max_lines + 2 :]
     # The spikes' columns go where the inliers will: they are not returned.
     code, m, _, nr, sigma, tol, floor, spacing, q, resolution = _front(
         points,
@@ -429,7 +435,7 @@ def segment(
         TOL_RESOLUTIONS,
         p,
         ints[:n],
-        ints[n : 2 * n],
+        inliers,
         runs,
         stray,
     )
@@ -445,10 +451,10 @@ def segment(
             min_points,
             max_lines,
             min_kink_rad,
-            ints[3 * n + 1 :],
-            ints[n : 2 * n],
-            floats[3 * n :].reshape((max_lines, 7)),
-            floats[2 * n : 3 * n],
+            ints[2 * n + 1 : 2 * n + max_lines + 2],
+            inliers,
+            floats[2 * n : 2 * n + 7 * max_lines].reshape((max_lines, 7)),
+            floats[2 * n + 7 * max_lines :],
         )
         if code:
             code += 2

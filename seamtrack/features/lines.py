@@ -153,8 +153,8 @@ def segment_profile(
         return "too few valid points (0)"
     max_lines = int(max_lines)
     # The compiled call writes into these (see :func:`seamtrack.features.kernels.segment`).
-    floats = np.empty(3 * n + 7 * max_lines)
-    ints = np.empty(3 * n + max_lines + 2, dtype=np.intp)
+    floats = np.empty(3 * n + 8 * max_lines)
+    ints = np.empty(3 * n + 2 * max_lines + 2, dtype=np.intp)
     stray = np.empty(n, dtype=np.bool_)
     code, m, nr, k, sigma, tol, spacing, q, resolution = segment(
         pts,
@@ -172,15 +172,17 @@ def segment_profile(
     )
     if code:
         return _WHY[code].format(m)
-    bounds = ints[3 * n + 1 : 3 * n + 2 + k].tolist()
-    fits = floats[3 * n : 3 * n + 7 * k].reshape(k, 7)
+    bounds = ints[2 * n + 1 : 2 * n + 2 + k].tolist()
+    fits = floats[2 * n : 2 * n + 7 * k].reshape(k, 7)
+    at_t = 2 * n + 7 * max_lines  # the inliers' coordinates along their lines
+    at_index = 2 * n + max_lines + 2  # the inliers
     lines = []
     # Row views by iteration, scalars by one tolist: numpy's per-call overhead is most of
     # the cost here.
     for (a, b), c, d, (cy, cz, uy, uz, rms, t0, t1) in zip(
         itertools.pairwise(bounds), fits[:, 0:2], fits[:, 2:4], fits.tolist(), strict=True
     ):
-        line = Line(ints[n + a : n + b], c, d, floats[2 * n + a : 2 * n + b], rms)
+        line = Line(ints[at_index + a : at_index + b], c, d, floats[at_t + a : at_t + b], rms)
         line.__dict__["scalars"] = (cy, cz, uy, uz, t0, t1)  # the cached property, as floats
         lines.append(line)
     return Segments(
@@ -191,7 +193,7 @@ def segment_profile(
         lines,
         stray[:m],
         ints[:m],
-        ints[2 * n : 2 * n + nr],
+        ints[n : n + nr],
         q,
         resolution,
     )
