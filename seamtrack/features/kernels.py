@@ -213,10 +213,12 @@ def _merge(p: FloatArray, lo: IntArray, hi: IntArray, n: int, tol: float) -> int
     for j in range(1, n):
         a, b = lo[k], hi[j]
         cy, cz, uy, uz = fit_range(p, a, b + 1)
-        worst = 0.0
+        fits = True  # the largest residual within tol: no residual beyond it (stop at one)
         for i in range(a, b + 1):
-            worst = max(worst, abs(-(p[i, 0] - cy) * uz + (p[i, 1] - cz) * uy))
-        if worst <= tol:
+            if abs(-(p[i, 0] - cy) * uz + (p[i, 1] - cz) * uy) > tol:
+                fits = False
+                break
+        if fits:
             hi[k] = b
         else:
             k += 1
