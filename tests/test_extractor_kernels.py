@@ -19,12 +19,12 @@ from seamtrack.features.robust import (
     _kept,
     _median5,
     _spacing,
-    _upper_median,
     detours,
     front_end,
     noise_sigma,
     range_quantum,
 )
+from seamtrack.features.select import BUCKETS, kth_nonneg
 from seamtrack.features.synthetic import Imperfections, synthetic_profile
 from seamtrack.sensing.sensor import preset
 
@@ -55,22 +55,31 @@ def test_fit_line_equals_svd(seed: int) -> None:
     np.testing.assert_allclose(along, (p[idx] - c) @ u, atol=1e-8)
 
 
-@pytest.mark.parametrize("n", [1, 2, 3, 4, 7, 100, 255, 256, 1001, 2048])
-def test_upper_median_equals_sort(n: int) -> None:
-    """Small arrays by quickselect, larger ones bracketed from a sample first (sorted,
-    reversed, clustered and repeating values included, where a sample can mislead)."""
+@pytest.mark.parametrize("n", [1, 2, 3, 4, 7, 24, 25, 96, 97, 100, 255, 256, 1001, 2048])
+def test_kth_nonneg_equals_sort(n: int) -> None:
+    """Counted on the bits, bucketed around a sample's median: the sorted array's k-th, bit
+    for bit (sorted, reversed, clustered, repeating, zero, subnormal and huge values
+    included, where a sample can mislead)."""
     rng = np.random.default_rng(n)
-    normal = rng.normal(size=n)
+    normal = np.abs(rng.normal(size=n))
     cases = (
         normal,
         np.sort(normal),
-        np.sort(normal)[::-1].copy(),
-        np.where(np.arange(n) % 2 == 0, 0.0, 1e6) + rng.normal(size=n),
+        np.sort(normal)[::-1],
+        np.abs(np.where(np.arange(n) % 2 == 0, 0.0, 1e6) + rng.normal(size=n)),
         rng.integers(0, 3, n).astype(float),
+        np.round(normal * 5.0) * 0.02,
         np.zeros(n),
+        np.where(rng.random(n) < 0.5, 0.0, normal * 1e-300),
+        np.abs(rng.standard_cauchy(n)) * 1e-3,
+        normal * 1e300,
     )
+    work = np.empty(n, dtype=np.int64)
+    hist = np.empty(2 * BUCKETS, dtype=np.int64)
     for x in cases:
-        assert _upper_median(x.copy()) == np.sort(x)[n // 2]
+        x = np.ascontiguousarray(x)
+        for k in sorted({0, n // 3, n // 2, n - 1}):
+            assert kth_nonneg(x, n, k, work, hist).hex() == np.sort(x)[k].hex()
 
 
 @pytest.mark.parametrize("seed", range(4))

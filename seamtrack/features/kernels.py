@@ -1,11 +1,11 @@
 """Compiled inner loops of the family extractors' segmentation.
 
-:func:`pieces` is the split-and-merge of :func:`seamtrack.features.lines.segment_profile`
-(Douglas-Peucker, merge, best two-line corners, end kinks, trimmed total-least-squares
-refits) and :func:`fit_line` its line fit; the front end before it is
-:func:`seamtrack.features.robust.front` (compiled too). Done as numpy calls on ~1,000 points
-they were some hundreds of small array operations per profile, whose per-call overhead was
-most of an extractor's time. The arithmetic is that of the numpy
+:func:`segment` is :func:`seamtrack.features.lines.segment_profile` in one call: the front end
+(:func:`seamtrack.features.robust.front`), then the split-and-merge (:func:`_pieces`:
+Douglas-Peucker, merge, best two-line corners, end kinks, trimmed total-least-squares
+refits); :func:`fit_line` is its line fit. Done as numpy calls on ~1,000 points they were
+some hundreds of small array operations per profile, whose per-call overhead was most of an
+extractor's time. The arithmetic is that of the numpy
 formulation (upper medians by sorting, the median-of-5 network, prefix-sum split costs,
 total-least-squares directions from atan2 of the second moments); sums run in another order,
 so results agree to rounding, not bit for bit.
@@ -18,6 +18,13 @@ import math
 import numba
 import numpy as np
 from numpy.typing import NDArray
+
+from seamtrack.features.robust import (
+    _MAX_ABS_MM,
+    DEFAULT_RESOLUTION_MM,
+    TOL_RESOLUTIONS,
+    _front,
+)
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -93,10 +100,14 @@ def _cost(n: float, s1: float, s2: float, s3: float, s4: float, s5: float) -> fl
 
 
 @numba.njit(cache=True, nogil=True)
-def best_split(p: FloatArray, lo: int, hi: int, min_size: int) -> tuple[int, float, float]:
-    """Best split of ``p[lo:hi]`` into two lines: (b, cost of the two, cost of one line),
-    total-least-squares sums of squared residuals for every b from prefix sums (O(n));
-    ``b`` counts from ``lo``."""
+def _best_split(
+    p: FloatArray, lo: int, hi: int, min_size: int, pre: FloatArray, cost: FloatArray
+) -> tuple[int, float, float]:
+    """:func:`best_split` with scratch space: ``pre`` (6, >= hi - lo), ``cost`` (>= hi - lo).
+
+    The prefix sums are kept by column and the split costs computed for every b before the
+    minimum is sought, so that the divisions and square roots run in SIMD lanes (the
+    arithmetic of each cost is unchanged)."""
     k = hi - lo
     my = 0.0
     mz = 0.0
@@ -105,7 +116,6 @@ def best_split(p: FloatArray, lo: int, hi: int, min_size: int) -> tuple[int, flo
         mz += p[i, 1]
     my /= k
     mz /= k
-    pre = np.empty((k, 6))
     a0 = a1 = a2 = a3 = a4 = a5 = 0.0
     for i in range(k):
         y, z = p[lo + i, 0] - my, p[lo + i, 1] - mz
@@ -115,26 +125,35 @@ def best_split(p: FloatArray, lo: int, hi: int, min_size: int) -> tuple[int, flo
         a3 += y * y
         a4 += z * z
         a5 += y * z
-        pre[i, 0], pre[i, 1], pre[i, 2] = a0, a1, a2
-        pre[i, 3], pre[i, 4], pre[i, 5] = a3, a4, a5
+        pre[0, i], pre[1, i], pre[2, i] = a0, a1, a2
+        pre[3, i], pre[4, i], pre[5, i] = a3, a4, a5
     single = _cost(a0, a1, a2, a3, a4, a5)
     if k - min_size + 1 <= min_size:
         return k, single, single
-    best_b = min_size
-    best = np.inf
-    for b in range(min_size, k - min_size + 1):
-        j = b - 1
-        c = _cost(pre[j, 0], pre[j, 1], pre[j, 2], pre[j, 3], pre[j, 4], pre[j, 5]) + _cost(
-            a0 - pre[j, 0],
-            a1 - pre[j, 1],
-            a2 - pre[j, 2],
-            a3 - pre[j, 3],
-            a4 - pre[j, 4],
-            a5 - pre[j, 5],
+    # cost[t]: the split at b = min_size + t (left: the first b points, prefix row b - 1)
+    m = k - 2 * min_size + 1
+    first = min_size - 1
+    p0, p1, p2 = pre[0, first:], pre[1, first:], pre[2, first:]
+    p3, p4, p5 = pre[3, first:], pre[4, first:], pre[5, first:]
+    for t in range(m):
+        cost[t] = _cost(p0[t], p1[t], p2[t], p3[t], p4[t], p5[t]) + _cost(
+            a0 - p0[t], a1 - p1[t], a2 - p2[t], a3 - p3[t], a4 - p4[t], a5 - p5[t]
         )
-        if c < best or (b == min_size):
-            best, best_b = c, b
+    best = cost[0]
+    best_b = min_size
+    for t in range(1, m):
+        if cost[t] < best:
+            best, best_b = cost[t], min_size + t
     return best_b, best, single
+
+
+@numba.njit(cache=True, nogil=True)
+def best_split(p: FloatArray, lo: int, hi: int, min_size: int) -> tuple[int, float, float]:
+    """Best split of ``p[lo:hi]`` into two lines: (b, cost of the two, cost of one line),
+    total-least-squares sums of squared residuals for every b from prefix sums (O(n));
+    ``b`` counts from ``lo``."""
+    k = max(hi - lo, 1)
+    return _best_split(p, lo, hi, min_size, np.empty((6, k)), np.empty(k))
 
 
 @numba.njit(cache=True, nogil=True)
@@ -146,6 +165,7 @@ def _split(
     ``limit`` (pieces and pending ranges)."""
     stack_a = np.empty(limit + 2, dtype=np.int64)
     stack_b = np.empty(limit + 2, dtype=np.int64)
+    dist = np.empty(hi - lo + 1)  # the distances of the points inside a range
     stack_a[0], stack_b[0] = lo, hi
     ns = 1
     no = 0
@@ -156,18 +176,23 @@ def _split(
             out_lo[no], out_hi[no] = a, b
             no += 1
         else:
-            cy, cz = p[b, 0] - p[a, 0], p[b, 1] - p[a, 1]
+            ay, az = p[a, 0], p[a, 1]
+            cy, cz = p[b, 0] - ay, p[b, 1] - az
             norm = math.hypot(cy, cz)
+            # All distances first (divisions in SIMD lanes: loops from 0 over views), then
+            # the first farthest point.
+            q = p[a + 1 : b]
+            if norm == 0.0:
+                for t in range(b - a - 1):
+                    dist[t] = math.hypot(q[t, 0] - ay, q[t, 1] - az)
+            else:
+                for t in range(b - a - 1):
+                    dist[t] = abs((q[t, 0] - ay) * cz - (q[t, 1] - az) * cy) / norm
             kmax = 0
             dmax = -1.0
-            for i in range(a + 1, b):
-                qy, qz = p[i, 0] - p[a, 0], p[i, 1] - p[a, 1]
-                if norm == 0.0:
-                    d = math.hypot(qy, qz)
-                else:
-                    d = abs(qy * cz - qz * cy) / norm
-                if d > dmax:
-                    dmax, kmax = d, i
+            for t in range(b - a - 1):
+                if dist[t] > dmax:
+                    dmax, kmax = dist[t], a + 1 + t
             if dmax > tol:
                 stack_a[ns], stack_b[ns] = kmax, b
                 stack_a[ns + 1], stack_b[ns + 1] = a, kmax
@@ -188,10 +213,12 @@ def _merge(p: FloatArray, lo: IntArray, hi: IntArray, n: int, tol: float) -> int
     for j in range(1, n):
         a, b = lo[k], hi[j]
         cy, cz, uy, uz = fit_range(p, a, b + 1)
-        worst = 0.0
+        fits = True  # the largest residual within tol: no residual beyond it (stop at one)
         for i in range(a, b + 1):
-            worst = max(worst, abs(-(p[i, 0] - cy) * uz + (p[i, 1] - cz) * uy))
-        if worst <= tol:
+            if abs(-(p[i, 0] - cy) * uz + (p[i, 1] - cz) * uy) > tol:
+                fits = False
+                break
+        if fits:
             hi[k] = b
         else:
             k += 1
@@ -200,7 +227,64 @@ def _merge(p: FloatArray, lo: IntArray, hi: IntArray, n: int, tol: float) -> int
 
 
 @numba.njit(cache=True, nogil=True)
-def pieces(
+def _refit(
+    p: FloatArray,
+    a: int,
+    b: int,
+    trim: float,
+    min_points: int,
+    index: IntArray,
+    along: FloatArray,
+    fit: FloatArray,
+) -> int:
+    """The trimmed refit of the piece ``p[a:b + 1]``: its inliers (within ``trim`` of its
+    first fit) written to ``index`` and their count returned; when there are ``min_points``,
+    their total-least-squares line written to ``fit`` (centroid, direction, rms, first and
+    last coordinate along it) and their coordinates along it to ``along``.
+
+    The arithmetic of :func:`fit_range` and then :func:`_fit` on the inliers, in fewer
+    passes: the inliers' sums are taken while they are picked, and the residuals while
+    their coordinates are."""
+    cy, cz, uy, uz = fit_range(p, a, b + 1)
+    n = 0
+    sy = 0.0
+    sz = 0.0
+    for i in range(a, b + 1):
+        if abs(-(p[i, 0] - cy) * uz + (p[i, 1] - cz) * uy) <= trim:
+            index[n] = i
+            sy += p[i, 0]
+            sz += p[i, 1]
+            n += 1
+    if n < min_points:
+        return n
+    cy = sy / n
+    cz = sz / n
+    syy = 0.0
+    szz = 0.0
+    syz = 0.0
+    for k in range(n):
+        dy, dz = p[index[k], 0] - cy, p[index[k], 1] - cz
+        syy += dy * dy
+        szz += dz * dz
+        syz += dy * dz
+    theta = 0.5 * math.atan2(2.0 * syz, syy - szz)
+    uy, uz = math.cos(theta), math.sin(theta)
+    f, g = index[0], index[n - 1]
+    if uy * (p[g, 0] - p[f, 0]) + uz * (p[g, 1] - p[f, 1]) < 0.0:
+        uy, uz = -uy, -uz
+    rr = 0.0
+    for k in range(n):
+        dy, dz = p[index[k], 0] - cy, p[index[k], 1] - cz
+        r = -dy * uz + dz * uy
+        rr += r * r
+        along[k] = dy * uy + dz * uz
+    fit[0], fit[1], fit[2], fit[3] = cy, cz, uy, uz
+    fit[4], fit[5], fit[6] = math.sqrt(rr / n), along[0], along[n - 1]
+    return n
+
+
+@numba.njit(cache=True, nogil=True)
+def _pieces(
     p: FloatArray,
     runs: IntArray,
     stray: NDArray[np.bool_],
@@ -210,18 +294,25 @@ def pieces(
     min_points: int,
     max_lines: int,
     min_kink_rad: float,
-) -> tuple[int, IntArray, IntArray, FloatArray, FloatArray]:
-    """The straight pieces of :func:`seamtrack.features.lines.segment_profile`.
+    offsets: IntArray,
+    index: IntArray,
+    fits: FloatArray,
+    along: FloatArray,
+) -> tuple[int, int]:
+    """The straight pieces of :func:`seamtrack.features.lines.segment_profile`, written to
+    ``offsets`` (>= max_lines + 1,), ``index``, ``along`` (>= len(p) + max_lines,: pieces of
+    fewer than 6 points may share an end point) and ``fits`` (>= max_lines, 7).
 
     Returns
     -------
     code : int
         0 ok; 1 too noisy or curved (more than ``max_lines`` pieces); 2 no piece keeps
         ``min_points`` inliers.
-    offsets : (k + 1,) the pieces' inliers are ``index[offsets[j]:offsets[j + 1]]``
-    index : inlier positions in ``p``, column order within each piece
-    fits : (k, 5) centroid y, z, direction y, z, rms
-    along : the inliers' coordinates along their piece's line (from its centroid)
+    k : int
+        The pieces: the inliers of piece j are ``index[offsets[j]:offsets[j + 1]]`` (their
+        positions in ``p``, column order), their coordinates along its line
+        ``along[offsets[j]:offsets[j + 1]]``; ``fits[j]`` holds its centroid y, z, direction
+        y, z, rms, and the first and last inliers' coordinates along it.
     """
     cap = 2 * max_lines + 8
     all_lo = np.empty(cap, dtype=np.int64)
@@ -231,19 +322,20 @@ def pieces(
     run_hi = np.empty(max_lines + 2, dtype=np.int64)
     significant = 30.0 * max(sigma, floor / 5.0) ** 2
     cuts = np.empty(2, dtype=np.int64)
-    scratch = np.empty(p.shape[0], dtype=np.int64)
+    pre = np.empty((6, p.shape[0]))
+    cost = np.empty(p.shape[0])
     for r in range(runs.shape[0] - 1):
         lo, hi = runs[r], runs[r + 1]
         if hi - lo >= min_points and not stray[lo]:
             n = _split(p, lo, hi - 1, tol, max_lines, run_lo, run_hi)
             if n < 0:
-                return 1, np.zeros(1, np.int64), scratch[:0], np.empty((0, 5)), np.empty(0)
+                return 1, 0
             n = _merge(p, run_lo, run_hi, n, tol)
             # Corners at the best two-line split (in order: each moves the next's start).
             for j in range(n - 1):
                 a, b = run_lo[j], run_hi[j + 1] + 1
                 if b - a >= 6:
-                    cut = a + best_split(p, a, b, 3)[0]
+                    cut = a + _best_split(p, a, b, 3, pre, cost)[0]
                     run_hi[j], run_lo[j + 1] = cut - 1, cut
             # A run's end pieces split at a small kink.
             for j in range(n):
@@ -257,7 +349,7 @@ def pieces(
                         if h == 1 and j != n - 1:
                             continue
                         h_lo, h_hi = (a, mid + 1) if h == 0 else (mid, b + 1)
-                        bb, split, single = best_split(p, h_lo, h_hi, min_points)
+                        bb, split, single = _best_split(p, h_lo, h_hi, min_points, pre, cost)
                         if single - split > significant:
                             cut = h_lo + bb
                             _, _, uy1, uz1 = fit_range(p, a, cut)
@@ -276,34 +368,99 @@ def pieces(
                         total += 1
                     prev = nxt
         if total > max_lines:
-            return 1, np.zeros(1, np.int64), scratch[:0], np.empty((0, 5)), np.empty(0)
+            return 1, 0
     # Trimmed refits: inliers within max(3 sigma, floor / 2) of each piece's first fit.
     trim = max(3.0 * sigma, 0.5 * floor)
-    offsets = np.zeros(total + 1, dtype=np.int64)
-    index = np.empty(p.shape[0], dtype=np.int64)
-    along = np.empty(p.shape[0])
-    fits = np.empty((total, 5))
+    offsets[0] = 0
     k = 0
     used = 0
     for j in range(total):
-        a, b = all_lo[j], all_hi[j]
-        cy, cz, uy, uz = fit_range(p, a, b + 1)
-        n = 0
-        for i in range(a, b + 1):
-            if abs(-(p[i, 0] - cy) * uz + (p[i, 1] - cz) * uy) <= trim:
-                index[used + n] = i
-                n += 1
+        n = _refit(p, all_lo[j], all_hi[j], trim, min_points, index[used:], along[used:], fits[k])
         if n >= min_points:
-            fy, fz, fuy, fuz, rms = _fit(p, index[used:], n)
-            fits[k, 0], fits[k, 1], fits[k, 2], fits[k, 3], fits[k, 4] = fy, fz, fuy, fuz, rms
-            for i in range(used, used + n):
-                along[i] = (p[index[i], 0] - fy) * fuy + (p[index[i], 1] - fz) * fuz
             used += n
             k += 1
             offsets[k] = used
-    if k == 0:
-        return 2, offsets[:1], index[:0], fits[:0], along[:0]
-    return 0, offsets[: k + 1], index[:used], fits[:k], along[:used]
+    return (0 if k else 2), k
+
+
+@numba.njit(cache=True, nogil=True)
+def segment(
+    points: FloatArray,
+    valid: NDArray[np.bool_],
+    min_points: int,
+    resolution_mm: float,
+    min_tol_mm: float,
+    sigma_factor: float,
+    max_detour_mm: float,
+    max_lines: int,
+    min_kink_rad: float,
+    floats: FloatArray,
+    ints: IntArray,
+    stray: NDArray[np.bool_],
+) -> tuple[int, int, int, int, float, float, float, float, float]:
+    """:func:`seamtrack.features.lines.segment_profile` in one compiled call: the front end
+    (:func:`seamtrack.features.robust.front`) and the straight pieces (:func:`_pieces`),
+    written to three given arrays (each array passed to or returned from a compiled call
+    costs a fraction of a microsecond) for a profile of n points and L = ``max_lines``
+    (``resolution_mm`` 0 and ``min_tol_mm`` NaN: not given):
+
+    * ``floats`` (3 n + 8 L,): the kept points ((n, 2) from 0), the pieces' fits ((L, 7)
+      from 2 n: centroid, direction, rms, first and last coordinate along the line) and the
+      inliers' coordinates along their pieces (from 2 n + 7 L);
+    * ``ints`` (3 n + 2 L + 2,): the kept points' columns (from 0), the run bounds (from n),
+      the pieces' offsets into the inliers (from 2 n + 1) and the inliers (from
+      2 n + L + 2);
+    * ``stray`` (n,): the points of detours.
+
+    Pieces of fewer than 6 points may share an end point (Douglas-Peucker's), so there may
+    be up to L more inliers than points: hence n + L for them.
+
+    Returns (code, m, runs, k, sigma, tol, spacing, quantum, resolution): ``code`` 0 ok,
+    1 too few valid points (``m`` of them), 2 constant profile, 3 too many pieces, 4 no piece
+    with ``min_points`` inliers; ``m`` kept points, the count of run bounds, ``k`` pieces.
+    """
+    n = points.shape[0]
+    p = floats[: 2 * n].reshape((n, 2))
+    runs = ints[n : 2 * n + 1]
+    inliers = ints[2 * n + max_lines + 2 :]
+    # The spikes' columns go where the inliers will: they are not returned.
+    code, m, _, nr, sigma, tol, floor, spacing, q, resolution = _front(
+        points,
+        valid,
+        _MAX_ABS_MM,
+        min_points,
+        resolution_mm,
+        min_tol_mm,
+        sigma_factor,
+        max_detour_mm,
+        DEFAULT_RESOLUTION_MM,
+        TOL_RESOLUTIONS,
+        p,
+        ints[:n],
+        inliers,
+        runs,
+        stray,
+    )
+    k = 0
+    if code == 0:
+        code, k = _pieces(
+            p[:m],
+            runs[:nr],
+            stray,
+            tol,
+            sigma,
+            floor,
+            min_points,
+            max_lines,
+            min_kink_rad,
+            ints[2 * n + 1 : 2 * n + max_lines + 2],
+            inliers,
+            floats[2 * n : 2 * n + 7 * max_lines].reshape((max_lines, 7)),
+            floats[2 * n + 7 * max_lines :],
+        )
+        if code:
+            code += 2
+    return code, m, nr, k, sigma, tol, spacing, q, resolution
 
 
 @numba.njit(cache=True, nogil=True)

@@ -21,11 +21,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features.kernels import fit_line, pieces
-from seamtrack.features.robust import (
-    DEFAULT_RESOLUTION_MM,
-    front_end,
-)
+from seamtrack.features.kernels import fit_line, segment
+from seamtrack.features.robust import DEFAULT_RESOLUTION_MM
 from seamtrack.sensing.profiles import Profile
 
 FloatArray = NDArray[np.float64]
@@ -149,33 +146,66 @@ def segment_profile(
     max_detour_mm : float
         Widest detour (spike, reflection) the surface is followed across (mm, lateral).
     """
-    fe = front_end(
-        profile,
-        min_tol_mm=min_tol_mm,
-        resolution_mm=resolution_mm,
-        sigma_factor=sigma_factor,
-        min_points=min_points,
-        max_detour_mm=max_detour_mm,
+    pts = np.ascontiguousarray(profile.points_laser, dtype=np.float64).reshape(-1, 2)
+    valid = np.ascontiguousarray(profile.valid, dtype=np.bool_).reshape(-1)
+    n = len(pts)
+    if valid.shape != (n,):
+        return "too few valid points (0)"
+    max_lines = int(max_lines)
+    # The compiled call writes into these (see :func:`seamtrack.features.kernels.segment`).
+    floats = np.empty(3 * n + 8 * max_lines)
+    ints = np.empty(3 * n + 2 * max_lines + 2, dtype=np.intp)
+    stray = np.empty(n, dtype=np.bool_)
+    code, m, nr, k, sigma, tol, spacing, q, resolution = segment(
+        pts,
+        valid,
+        int(min_points),
+        float(resolution_mm) if resolution_mm else 0.0,
+        math.nan if min_tol_mm is None else float(min_tol_mm),
+        float(sigma_factor),
+        float(max_detour_mm),
+        max_lines,
+        _MIN_KINK,
+        floats,
+        ints,
+        stray,
     )
-    if isinstance(fe, str):
-        return fe
-    p, sigma, tol = fe.points, fe.sigma, fe.tol
-    code, offsets, index, fits, along = pieces(
-        p, fe.runs, fe.stray, tol, sigma, fe.floor, int(min_points), int(max_lines), _MIN_KINK
-    )
-    if code == 1:
-        return "no straight pieces (too noisy or curved)"
-    if code == 2:
-        return "no straight pieces with enough points"
-    bounds = offsets.tolist()
-    rms = fits[:, 4].tolist()
-    lines = [
-        Line(index[a:b], fits[j, 0:2], fits[j, 2:4], along[a:b], rms[j])
-        for j, (a, b) in enumerate(itertools.pairwise(bounds))
-    ]
+    if code:
+        return _WHY[code].format(m)
+    bounds = ints[2 * n + 1 : 2 * n + 2 + k].tolist()
+    fits = floats[2 * n : 2 * n + 7 * k].reshape(k, 7)
+    at_t = 2 * n + 7 * max_lines  # the inliers' coordinates along their lines
+    at_index = 2 * n + max_lines + 2  # the inliers
+    lines = []
+    # Row views by iteration, scalars by one tolist: numpy's per-call overhead is most of
+    # the cost here.
+    for (a, b), c, d, (cy, cz, uy, uz, rms, t0, t1) in zip(
+        itertools.pairwise(bounds), fits[:, 0:2], fits[:, 2:4], fits.tolist(), strict=True
+    ):
+        line = Line(ints[at_index + a : at_index + b], c, d, floats[at_t + a : at_t + b], rms)
+        line.__dict__["scalars"] = (cy, cz, uy, uz, t0, t1)  # the cached property, as floats
+        lines.append(line)
     return Segments(
-        p, sigma, tol, fe.spacing, lines, fe.stray, fe.columns, fe.runs, fe.quantum, fe.resolution
+        floats[: 2 * m].reshape(m, 2),
+        sigma,
+        tol,
+        spacing,
+        lines,
+        stray[:m],
+        ints[:m],
+        ints[n : n + nr],
+        q,
+        resolution,
     )
+
+
+#: Why :func:`segment_profile` found no pieces, by the compiled call's code.
+_WHY = {
+    1: "too few valid points ({})",
+    2: "the valid points do not spread out (constant profile)",
+    3: "no straight pieces (too noisy or curved)",
+    4: "no straight pieces with enough points",
+}
 
 
 def _best_split(q: FloatArray, min_size: int) -> tuple[int, float, float]:

@@ -28,6 +28,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.features.select import BUCKETS, kth_nonneg
 from seamtrack.sensing.profiles import Profile, Reason
 
 FloatArray = NDArray[np.float64]
@@ -60,32 +61,41 @@ def range_quantum(z: FloatArray) -> float:
     n = z.shape[0]
     if n < 8:
         return 0.0
-    scale = 0.0
-    for i in range(n):
-        scale = max(scale, abs(z[i]))
-    tiny = 1e-12 * max(scale, 1.0)
-    step = np.inf
-    for i in range(n - 1):
-        d = abs(z[i + 1] - z[i])
-        if tiny < d < step:
-            step = d
+    lo = z[0]
+    hi = z[0]
+    for i in range(1, n):
+        lo = min(lo, z[i])
+        hi = max(hi, z[i])
+    tiny = 1e-12 * max(max(abs(lo), abs(hi)), 1.0)
+    # The smallest step, branch-free over two running minima (taken in any order, a minimum
+    # is the same).
+    s0 = np.inf
+    s1 = np.inf
+    for i in range(0, n - 2, 2):
+        d0 = abs(z[i + 1] - z[i])
+        d1 = abs(z[i + 2] - z[i + 1])
+        s0 = min(s0, d0 if d0 > tiny else np.inf)
+        s1 = min(s1, d1 if d1 > tiny else np.inf)
+    if n % 2 == 0:
+        d0 = abs(z[n - 1] - z[n - 2])
+        s0 = min(s0, d0 if d0 > tiny else np.inf)
+    step = min(s0, s1)
     if not np.isfinite(step):
         return 0.0
     on, small, ones = 0, 0, 0
+    slack = tiny / step
     for i in range(n - 1):
         k = abs(z[i + 1] - z[i]) / step
-        r = round(k)
-        if abs(k - r) <= 1e-6 * max(r, 1.0) + tiny / step:
-            on += 1
-            if r <= 1:
-                small += 1
-            if r == 1:
-                ones += 1
+        r = np.rint(k)  # as round(): halves to even
+        hit = abs(k - r) <= 1e-6 * max(r, 1.0) + slack
+        on += hit
+        small += hit & (r <= 1.0)
+        ones += hit & (r == 1.0)
     if (
         on >= 0.98 * (n - 1)
         and small >= 0.2 * (n - 1)
         and ones >= max(3, 0.02 * (n - 1))
-        and step <= 0.1 * (np.max(z) - np.min(z))
+        and step <= 0.1 * (hi - lo)
     ):
         return step
     return 0.0
@@ -266,90 +276,148 @@ class FrontEnd:
 
 
 @numba.njit(cache=True, nogil=True)
-def _select(x: FloatArray, k: int) -> float:
-    """The k-th smallest of ``x`` (``np.sort(x)[k]``) by quickselect with a three-way
-    partition, in place: O(n) also when most values repeat (quantized ranges)."""
-    lo, hi = 0, x.shape[0] - 1
-    while lo < hi:
-        a, b, c = x[lo], x[(lo + hi) // 2], x[hi]
-        pivot = max(min(a, b), min(max(a, b), c))
-        lt, i, gt = lo, lo, hi
-        while i <= gt:
-            v = x[i]
-            if v < pivot:
-                x[i], x[lt] = x[lt], v
-                lt += 1
-                i += 1
-            elif v > pivot:
-                x[i], x[gt] = x[gt], v
-                gt -= 1
-            else:
-                i += 1
-        if k < lt:
-            hi = lt - 1
-        elif k > gt:
-            lo = gt + 1
-        else:
-            return pivot
-    return x[lo]
+def _estimate(
+    z: FloatArray, n: int, lag: int, d: FloatArray, work: IntArray, hist: IntArray
+) -> float:
+    """1.4826 / sqrt(6) times the upper median |second difference| of ``z[:n]`` at ``lag``
+    (``n > 2 lag``)."""
+    m = n - 2 * lag
+    for i in range(m):
+        d[i] = abs(z[i + 2 * lag] - 2.0 * z[i + lag] + z[i])
+    return _SIGMA_FROM_SECOND_DIFF * kth_nonneg(d, m, m // 2, work, hist)
 
 
 @numba.njit(cache=True, nogil=True)
-def _upper_median(x: FloatArray) -> float:
-    """``np.sort(x)[len(x) // 2]`` (0 for an empty array); ``x`` is reordered.
+def _noise(
+    z: FloatArray, n: int, first: float, d: FloatArray, work: IntArray, hist: IntArray
+) -> float:
+    """:func:`noise_sigma` of ``z[:n]`` over :data:`NOISE_LAGS` (1, 2, 4, 8), given the
+    estimate at lag 1 (``first``; ``n > 2``).
 
-    A sample of ~100 values brackets the median (Floyd and Rivest's idea); one branch-free
-    pass counts the values below the bracket and copies those inside, and the median is
-    selected among those few (else, rarely, among all). Quickselect alone on ~1,000 fresh
-    values is mostly mispredicted branches."""
-    n = x.shape[0]
-    if n == 0:
-        return 0.0
-    k = n // 2
-    if n < 256:
-        return _select(x, k)
-    s = 99
-    sample = np.empty(s)
-    for i in range(s):
-        sample[i] = x[((2 * i + 1) * n) // (2 * s)]
-    sample.sort()
-    r = (k * s) // n
-    lo_v = sample[max(r - 12, 0)]
-    hi_v = sample[min(r + 12, s - 1)]
-    band = np.empty(n)
-    below = 0
-    j = 0
-    for i in range(n):
-        v = x[i]
-        below += v < lo_v
-        band[j] = v
-        j += (v >= lo_v) & (v <= hi_v)
-    if below <= k < below + j:
-        return _select(band[:j], k - below)
-    return _select(x, k)
-
-
-@numba.njit(cache=True, nogil=True)
-def _noise(z: FloatArray, lags: IntArray) -> float:
-    """1.4826 / sqrt(6) median |second difference| at each lag that fits; the first lag's
-    estimate unless a later one exceeds it by half (then the largest)."""
-    n = z.shape[0]
-    first = -1.0
+    The first estimate stands unless a later one exceeds it by half, and whether one does is
+    a count: the upper median ``d[m // 2]`` of ``m`` values is at most ``x`` when at least
+    ``m // 2 + 1`` of them are (the scaling is monotone), so only an estimate that exceeds it
+    is taken exactly (the largest of those is the result)."""
+    limit = 1.5 * first
     best = -1.0
-    for j in range(lags.shape[0]):
-        k = lags[j]
-        if n <= 2 * k:
-            continue
-        d = np.empty(n - 2 * k)
-        for i in range(n - 2 * k):
-            d[i] = abs(z[i + 2 * k] - 2.0 * z[i + k] + z[i])
-        e = _SIGMA_FROM_SECOND_DIFF * _upper_median(d)
-        if first < 0.0:
-            first = e
-        best = max(best, e)
-    if first < 0.0:
-        return 0.0
-    return first if best <= 1.5 * first else best
+    for lag in (2, 4, 8):
+        m = n - 2 * lag
+        if m <= 0:
+            break
+        within = 0
+        for i in range(m):
+            v = _SIGMA_FROM_SECOND_DIFF * abs(z[i + 2 * lag] - 2.0 * z[i + lag] + z[i])
+            within += v <= limit
+        if within < m // 2 + 1:
+            best = max(best, _estimate(z, n, lag, d, work, hist))
+    return first if best < 0.0 else best
+
+
+@numba.njit(cache=True, nogil=True)
+def _front(
+    points: FloatArray,
+    valid: NDArray[np.bool_],
+    max_abs: float,
+    min_points: int,
+    resolution_mm: float,
+    min_tol_mm: float,
+    sigma_factor: float,
+    max_detour_mm: float,
+    default_resolution: float,
+    tol_resolutions: float,
+    p: FloatArray,
+    cols: IntArray,
+    spikes: IntArray,
+    runs: IntArray,
+    stray: NDArray[np.bool_],
+) -> tuple[int, int, int, int, float, float, float, float, float, float]:
+    """:func:`front` into given arrays: ``p`` (n, 2), ``cols``, ``spikes``, ``stray`` (n,),
+    ``runs`` (n + 1,) for n profile points.
+
+    Returns (code, m, spikes, runs, sigma, tol, floor, spacing, quantum, resolution): ``m``
+    kept points (before spikes are removed when ``code`` is not 0), the counts of spikes
+    and run bounds written."""
+    n = points.shape[0]
+    z = np.empty(n)
+    m = 0
+    for i in range(n):
+        y0, z0 = points[i, 0], points[i, 1]
+        p[m, 0], p[m, 1], z[m], cols[m] = y0, z0, z0, i
+        m += valid[i] & (abs(y0) < max_abs) & (abs(z0) < max_abs)
+    if m < 2 * min_points:
+        return 1, m, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    if m < 2:
+        return 2, m, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    d = np.empty(m)
+    work = np.empty(m, dtype=np.int64)
+    hist = np.empty(2 * BUCKETS, dtype=np.int64)
+    for i in range(m - 1):
+        d[i] = abs(p[i + 1, 0] - p[i, 0])
+    spacing = kth_nonneg(d, m - 1, (m - 1) // 2, work, hist)
+    if not spacing > 0.0:
+        for i in range(m - 1):
+            d[i] = math.hypot(p[i + 1, 0] - p[i, 0], p[i + 1, 1] - p[i, 1])
+        spacing = kth_nonneg(d, m - 1, (m - 1) // 2, work, hist)
+    if not spacing > 0.0:
+        return 2, m, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+    q = range_quantum(z[:m])
+    if resolution_mm != 0.0:
+        resolution = resolution_mm
+    elif q > 0.0:
+        resolution = q
+    else:
+        resolution = default_resolution
+    floor = tol_resolutions * resolution if math.isnan(min_tol_mm) else min_tol_mm
+    rounding = q / math.sqrt(12.0)
+    first = _estimate(z, m, 1, d, work, hist) if m > 2 else 0.0
+    sigma = max(first, rounding)
+    # Isolated outliers against a running median of 5 (edges: the nearest full window).
+    med = np.empty(m)
+    if m < 5:
+        med[:] = np.median(z[:m])
+    else:
+        for i in range(m - 4):
+            a, b, c, dd, e = z[i], z[i + 1], z[i + 2], z[i + 3], z[i + 4]
+            f = max(min(a, b), min(c, dd))
+            g = min(max(a, b), max(c, dd))
+            med[i + 2] = max(min(e, f), min(max(e, f), g))
+        med[0] = med[1] = med[2]
+        med[m - 1] = med[m - 2] = med[m - 3]
+    limit = max(6.0 * sigma, 4.0 * floor, 4.0 * spacing)
+    kept = 0
+    ns = 0
+    for i in range(m):
+        if abs(z[i] - med[i]) <= limit:
+            p[kept, 0], p[kept, 1], z[kept], cols[kept] = p[i, 0], p[i, 1], z[i], cols[i]
+            kept += 1
+        else:
+            spikes[ns] = cols[i]
+            ns += 1
+    # Without spikes the lag-1 differences are those already counted.
+    if kept <= 2:
+        sigma = 0.0
+    else:
+        if ns > 0:
+            first = _estimate(z, kept, 1, d, work, hist)
+        sigma = _noise(z, kept, first, d, work, hist)
+    sigma = max(sigma, rounding)
+    tol = max(floor, sigma_factor * sigma)
+    jump = max(6.0 * spacing, 2.0 * tol, 0.1)
+    jump2 = jump * jump
+    runs[0] = 0
+    r = 1
+    for i in range(kept - 1):
+        dy, dz = p[i + 1, 0] - p[i, 0], p[i + 1, 1] - p[i, 1]
+        if dy * dy + dz * dz > jump2:
+            runs[r] = i + 1
+            r += 1
+    runs[r] = kept
+    off = detours(p[:kept], runs[:r], runs[1 : r + 1], tol, min_points, max_detour_mm)
+    stray[:kept] = False
+    for k in range(r):
+        if off[k]:
+            stray[runs[k] : runs[k + 1]] = True
+    return 0, kept, ns, r + 1, sigma, tol, floor, spacing, q, resolution
 
 
 @numba.njit(cache=True, nogil=True)
@@ -388,112 +456,30 @@ def front(
     scalars : (sigma, tol, floor, spacing, quantum, resolution)
     """
     n = points.shape[0]
-    m = 0
-    for i in range(n):
-        if valid[i] and abs(points[i, 0]) < max_abs and abs(points[i, 1]) < max_abs:
-            m += 1
-    p = np.empty((m, 2))
-    cols = np.empty(m, dtype=np.int64)
-    j = 0
-    for i in range(n):
-        if valid[i] and abs(points[i, 0]) < max_abs and abs(points[i, 1]) < max_abs:
-            p[j, 0] = points[i, 0]
-            p[j, 1] = points[i, 1]
-            cols[j] = i
-            j += 1
-    empty_i = np.empty(0, dtype=np.int64)
-    scalars = np.zeros(6)
-    if m < 2 * min_points:
-        return 1, p, cols, empty_i, empty_i, np.zeros(m, dtype=np.bool_), scalars
-    if m < 2:
-        return 2, p, cols, empty_i, empty_i, np.zeros(m, dtype=np.bool_), scalars
-    d = np.empty(m - 1)
-    for i in range(m - 1):
-        d[i] = abs(p[i + 1, 0] - p[i, 0])
-    spacing = _upper_median(d)
-    if not spacing > 0.0:
-        for i in range(m - 1):
-            d[i] = math.hypot(p[i + 1, 0] - p[i, 0], p[i + 1, 1] - p[i, 1])
-        spacing = _upper_median(d)
-    if not spacing > 0.0:
-        return 2, p, cols, empty_i, empty_i, np.zeros(m, dtype=np.bool_), scalars
-    z = np.ascontiguousarray(p[:, 1])
-    q = range_quantum(z)
-    if resolution_mm != 0.0:
-        resolution = resolution_mm
-    elif q > 0.0:
-        resolution = q
-    else:
-        resolution = default_resolution
-    floor = tol_resolutions * resolution if math.isnan(min_tol_mm) else min_tol_mm
-    rounding = q / math.sqrt(12.0)
-    one = np.ones(1, dtype=np.int64)
-    sigma = max(_noise(z, one), rounding)
-    # Isolated outliers against a running median of 5 (edges: the nearest full window).
-    med = np.empty(m)
-    if m < 5:
-        med[:] = np.median(z)
-    else:
-        for i in range(m - 4):
-            a, b, c, dd, e = z[i], z[i + 1], z[i + 2], z[i + 3], z[i + 4]
-            f = max(min(a, b), min(c, dd))
-            g = min(max(a, b), max(c, dd))
-            med[i + 2] = max(min(e, f), min(max(e, f), g))
-        med[0] = med[1] = med[2]
-        med[m - 1] = med[m - 2] = med[m - 3]
-    limit = max(6.0 * sigma, 4.0 * floor, 4.0 * spacing)
-    keep = np.empty(m, dtype=np.bool_)
-    kept = 0
-    for i in range(m):
-        keep[i] = abs(z[i] - med[i]) <= limit
-        if keep[i]:
-            kept += 1
-    p2 = np.empty((kept, 2))
-    cols2 = np.empty(kept, dtype=np.int64)
-    spikes = np.empty(m - kept, dtype=np.int64)
-    j = 0
-    s = 0
-    for i in range(m):
-        if keep[i]:
-            p2[j, 0] = p[i, 0]
-            p2[j, 1] = p[i, 1]
-            cols2[j] = cols[i]
-            j += 1
-        else:
-            spikes[s] = cols[i]
-            s += 1
-    lags = np.array([1, 2, 4, 8], dtype=np.int64)
-    sigma = max(_noise(np.ascontiguousarray(p2[:, 1]), lags), rounding)
-    tol = max(floor, sigma_factor * sigma)
-    jump = max(6.0 * spacing, 2.0 * tol, 0.1)
-    jump2 = jump * jump
-    cut = np.empty(max(kept - 1, 0), dtype=np.bool_)
-    ncut = 0
-    for i in range(kept - 1):
-        dy, dz = p2[i + 1, 0] - p2[i, 0], p2[i + 1, 1] - p2[i, 1]
-        cut[i] = dy * dy + dz * dz > jump2
-        if cut[i]:
-            ncut += 1
-    runs = np.empty(ncut + 2, dtype=np.int64)
-    runs[0] = 0
-    r = 1
-    for i in range(kept - 1):
-        if cut[i]:
-            runs[r] = i + 1
-            r += 1
-    runs[r] = kept
-    off = detours(p2, runs[:-1], runs[1:], tol, min_points, max_detour_mm)
-    stray = np.zeros(kept, dtype=np.bool_)
-    for k in range(runs.shape[0] - 1):
-        if off[k]:
-            stray[runs[k] : runs[k + 1]] = True
-    scalars[0] = sigma
-    scalars[1] = tol
-    scalars[2] = floor
-    scalars[3] = spacing
-    scalars[4] = q
-    scalars[5] = resolution
-    return 0, p2, cols2, spikes, runs, stray, scalars
+    p = np.empty((n, 2))
+    cols = np.empty(n, dtype=np.int64)
+    spikes = np.empty(n, dtype=np.int64)
+    runs = np.empty(n + 1, dtype=np.int64)
+    stray = np.zeros(n, dtype=np.bool_)
+    code, m, ns, nr, sigma, tol, floor, spacing, q, resolution = _front(
+        points,
+        valid,
+        max_abs,
+        min_points,
+        resolution_mm,
+        min_tol_mm,
+        sigma_factor,
+        max_detour_mm,
+        default_resolution,
+        tol_resolutions,
+        p,
+        cols,
+        spikes,
+        runs,
+        stray,
+    )
+    scalars = np.array([sigma, tol, floor, spacing, q, resolution])
+    return code, p[:m], cols[:m], spikes[:ns], runs[:nr], stray[:m], scalars
 
 
 def front_end(
@@ -509,7 +495,8 @@ def front_end(
     there are none (a ``str``); the parameters as for :func:`segment_profile`.
 
     One compiled pass (:func:`front`): the valid bounded points,
-    their spacing (:func:`_spacing`) and range quantum (:func:`range_quantum`), the noise at
+    their spacing (:func:`_spacing`; medians by :func:`seamtrack.features.select.kth_nonneg`)
+    and range quantum (:func:`range_quantum`), the noise at
     lag 1 (:func:`noise_sigma`), isolated spikes off a running median of 5 (:func:`_median5`)
     dropped, the noise again over :data:`NOISE_LAGS`, the runs between jumps and their
     detours (:func:`detours`).
