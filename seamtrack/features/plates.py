@@ -22,23 +22,19 @@ from numpy.typing import NDArray
 
 from seamtrack.features.base import Zone, _Base, _confidence, explained
 from seamtrack.features.lines import (
-    _BOTTOM_DEG,
-    _PLATE_DEG,
-    _WALL_DEG,
     Line,
     Segments,
-    _angle,
     _fit,
     _on,
-    _ray_t,
-    _towards_sensor,
     collinear_members,
     corner_or_end,
-    intersect,
 )
+from seamtrack.features.pkernels import hole, on_ends
 from seamtrack.sensing.profiles import Feature, Profile
 
 FloatArray = NDArray[np.float64]
+#: Each kept point's piece (-1: none) and the pieces' rows ``(cy, cz, dy, dz)`` (:func:`_owner`).
+_Owner = tuple[NDArray[np.int64], FloatArray]
 
 
 @dataclass(frozen=True)
@@ -57,54 +53,17 @@ class _Hole:
     right: FloatArray | None
 
 
-def _stretches(
-    keep: NDArray[np.bool_], t: FloatArray, spacing: float
-) -> tuple[FloatArray, FloatArray, list[NDArray[np.intp]]]:
-    """The stretches of consecutive kept points, broken by another point or by missing
-    columns: their starts and ends along a line (``t``: where the points' columns cross it),
-    and the positions of the points of the first and of the last stretch."""
-    k = np.flatnonzero(keep)
-    if not k.size:
-        return np.empty(0), np.empty(0), []
-    tk = t[k]
-    starts = np.flatnonzero((np.diff(k) > 1) | (np.abs(np.diff(tk)) > 3.0 * spacing)) + 1
-    starts = np.concatenate([[0], starts])
-    t0 = np.minimum.reduceat(tk, starts) - 0.5 * spacing
-    t1 = np.maximum.reduceat(tk, starts) + 0.5 * spacing
-    ends = [*starts[1:].tolist(), len(k)]
-    return t0, t1, [k[i:j] for i, j in ((starts[0], ends[0]), (starts[-1], ends[-1]))]
-
-
-def _hidden_edge(
-    line: Line,
-    part: NDArray[np.intp],
-    t: FloatArray,
-    on_line: NDArray[np.bool_],
-    stray: NDArray[np.bool_],
-    t_end: float,
-    spacing: float,
-    at_end: bool,
-) -> FloatArray | None:
-    """Where a run's edge lies when the covered stretch next to it (``part``, from the run's
-    end outwards) holds a stray line: the middle of the stray line's stretch along the run's
-    line (the edge may lie anywhere under it), or, when the plate shows again beyond it, the
-    last plate point seen. None when no stray line touches the run's end."""
-    seen = on_line[part] | stray[part]
-    stop = int(np.argmin(seen)) if not seen.all() else len(part)
-    part = part[:stop]  # up to the first point of anything else (the other plate, a surface)
-    s = np.flatnonzero(stray[part])
-    if not s.size:
-        return None
-    p = np.flatnonzero(on_line[part])
-    sign = 1.0 if at_end else -1.0
-    if p.size and p[-1] > s[-1]:
-        return line.point(float(t[part[p[-1]]]) + sign * 0.5 * spacing)
-    return line.point(0.5 * (t_end + float(t[part[s[-1]]]) + sign * 0.5 * spacing))
+def _floats(line: Line) -> tuple[float, float, float, float]:
+    """A line's centroid (y, z) and direction (y, z) as floats: the tests on lines below are a
+    handful of scalar operations, where numpy's per-call overhead on 2-vectors would
+    dominate."""
+    (cy, cz), (dy, dz) = line.centroid.tolist(), line.direction.tolist()
+    return cy, cz, dy, dz
 
 
 def _hole(
     seg: Segments,
-    owner: NDArray[np.intp],
+    owner: _Owner,
     a: Line,
     b: Line,
     min_bottom_mm: float,
@@ -114,101 +73,49 @@ def _hole(
     point's piece, -1 for none). ``butt``: between two plates of a butt joint, a wall rising
     in front of the plates covers (a raised part, not a gap's wall) and points in no piece
     hardly off a plate are plate (a mark, where the laser did not fall through); a lap's
-    edge face rises in front of its lower sheet."""
-    lo, hi = int(a.index[-1]), int(b.index[0])
-    sp_a, sp_b = max(a.step(True), seg.spacing), max(b.step(False), seg.spacing)
-    ta = float(a.t[-1]) + 0.5 * a.step(True)
-    tb_b = float(b.t[0]) - 0.5 * b.step(False)
-    tb = float((b.point(tb_b) - a.centroid) @ a.direction)
-    width = tb - ta
-    if hi - lo < 2:
-        return _Hole(width, None, None)
-    q = seg.points[lo + 1 : hi]
-    own = owner[lo + 1 : hi]
-    # Points on a plate's line (leftovers too short for a piece, a corner piece's end) are
-    # plate: no opening, no stray line.
-    off_a, off_b = np.abs(_towards_sensor(a, q)), np.abs(_towards_sensor(b, q))
-    off = np.minimum(off_a, off_b)
-    plate = off <= seg.tol
-    # What covers the hole (is no opening): the plates and any surface but a wall (steep on
-    # the plates, reaching off them behind them) or a bottom far behind both plates (a
-    # backing seen through a gap). A line crossing a plate's line at an angle is no plate
-    # where it does.
-    cover = np.zeros(len(q), dtype=bool)
-    wall, bottom = math.radians(_WALL_DEG), math.radians(_BOTTOM_DEG)
-    for j in np.unique(own[own >= 0]):
-        mine = own == j
-        ln = seg.lines[int(j)]
-        rel = _angle(ln, a)
-        if (
-            rel >= wall
-            and float(off[mine].max()) >= 2 * seg.tol
-            and (not butt or float(np.median(_towards_sensor(a, q[mine]))) < 0.0)
-        ):
-            continue  # a wall going down into a gap (one rising in front is a raised part)
-        if rel <= bottom:
-            c = ln.centroid.reshape(1, 2)
-            depth = -max(float(_towards_sensor(a, c)[0]), float(_towards_sensor(b, c)[0]))
-            if depth >= min_bottom_mm:
-                continue
-        if rel > math.radians(_PLATE_DEG):
-            plate &= ~mine
-        cover |= mine
-    # Points in no piece off the plates: stray points (fewer than three in a row), walls and
-    # a bottom far behind cover nothing; other runs of three or more do, and so do points in
-    # no piece hardly off a plate (a dent, a mark: the laser did not fall through there).
-    if butt:
-        plate |= (own < 0) & (off <= 3.0 * seg.tol)
-    loose = np.flatnonzero((own < 0) & ~plate)
-    if loose.size >= 3:
-        bounds = np.flatnonzero(np.diff(loose) > 1) + 1
-        for i, j in zip([0, *bounds.tolist()], [*bounds.tolist(), len(loose)], strict=True):
-            part = loose[i:j]
-            behind = -np.maximum(_towards_sensor(a, q[part]), _towards_sensor(b, q[part]))
-            if float(np.median(behind)) >= min_bottom_mm:
-                continue  # a bottom seen through the gap (a backing)
-            if j - i >= 3 and (
-                _angle(_fit(q, part), a) < wall
-                or float(off[part].max()) < 2 * seg.tol
-                or (butt and float(np.median(_towards_sensor(a, q[part]))) > 0.0)
-            ):
-                cover[part] = True
-    cover |= plate
-    if not cover.any():
-        return _Hole(width, None, None)
-    # A surface that runs on from a plate without a jump (a tack, an edge face, a chamfer) is
-    # part of the part; a line cut off both plates by jumps (a false reflection) is stray:
-    # its columns are unknown, and over a plate's end it may hide the edge. A stray line
-    # ends next to a plate only by chance, so a plate holds on to its surface more tightly
-    # (noise, not the split tolerance) than the surface holds together.
-    seq = seg.points[lo : hi + 1]
-    d = np.hypot(*np.diff(seq, axis=0).T)
-    cut = d > max(6 * seg.spacing, 2 * seg.tol, 0.1)
-    held = max(6 * seg.spacing, 4 * seg.sigma, 0.1)
-    cut[0], cut[-1] = d[0] > held, d[-1] > held
-    stray = cover & ~plate
-    if not cut.any():
-        stray[:] = False
-    else:
-        k = np.flatnonzero(cut)
-        if not cut[0]:
-            stray[: k[0]] = False  # held by the left plate
-        if not cut[-1]:
-            stray[k[-1] :] = False  # held by the right plate
-    qa = _ray_t(a, q)
-    t0, t1, (first, _) = _stretches(cover, qa, sp_a)
-    covered = float(np.clip(np.minimum(t1, tb) - np.maximum(t0, ta), 0.0, None).sum())
-    left = right = None
-    if stray.any():
-        on_a = plate & (off_a <= seg.tol)
-        if t0[0] <= ta + 2.0 * sp_a:
-            left = _hidden_edge(a, first, qa, on_a, stray, ta, sp_a, True)
-        qb = _ray_t(b, q)
-        t0, t1, (_, last) = _stretches(cover, qb, sp_b)
-        if t1[-1] >= tb_b - 2.0 * sp_b:
-            on_b = plate & (off_b <= seg.tol)
-            right = _hidden_edge(b, last[::-1], qb, on_b, stray, tb_b, sp_b, False)
-    return _Hole(max(0.0, width - covered), left, right)
+    edge face rises in front of its lower sheet. See :func:`_hole_between`."""
+    return _hole_between(
+        seg, owner, _floats(a), float(a.t[-1]), a.step(True), int(a.index[-1]),
+        _floats(b), float(b.t[0]), b.step(False), int(b.index[0]), min_bottom_mm, butt,
+    )  # fmt: skip
+
+
+def _hole_between(
+    seg: Segments,
+    owner: _Owner,
+    a: tuple[float, float, float, float],
+    a_t: float,
+    a_step: float,
+    lo: int,
+    b: tuple[float, float, float, float],
+    b_t: float,
+    b_step: float,
+    hi: int,
+    min_bottom_mm: float,
+    butt: bool,
+) -> _Hole:
+    """:func:`_hole` of a run ending at kept point ``lo`` on line ``a`` (its last inlier's
+    coordinate ``a_t`` along it, its step there) and one starting at ``hi`` on line ``b``.
+
+    Points on a plate's line (leftovers too short for a piece, a corner piece's end) are
+    plate: no opening, no stray line. What covers the hole (is no opening): the plates and
+    any surface but a wall (steep on the plates, reaching off them behind them) or a bottom
+    far behind both plates (a backing seen through a gap); a line crossing a plate's line at
+    an angle is no plate where it does. Points in no piece off the plates: stray points
+    (fewer than three in a row), walls and a bottom far behind cover nothing; other runs of
+    three or more do. A surface that runs on from a plate without a jump (a tack, an edge
+    face, a chamfer) is part of the part; a line cut off both plates by jumps (a false
+    reflection) is stray: its columns are unknown, and over a plate's end it may hide the
+    edge (:func:`seamtrack.features.pkernels.hole`, compiled).
+    """
+    index, rows = owner
+    open_mm, left, ly, lz, right, ry, rz = hole(
+        seg.points, index, rows, *a, a_t, a_step, *b, b_t, b_step, lo, hi,
+        float(seg.tol), float(seg.spacing), float(seg.sigma), float(min_bottom_mm), butt,
+    )  # fmt: skip
+    return _Hole(
+        open_mm, np.array([ly, lz]) if left else None, np.array([ry, rz]) if right else None
+    )
 
 
 @dataclass(frozen=True)
@@ -217,25 +124,54 @@ class _Sheets:
 
     runs: list[Line]
     groups: list[int]
-    owner: NDArray[np.intp]
+    owner: _Owner
     others: list[Line]
 
 
-def _owner(seg: Segments) -> NDArray[np.intp]:
-    """The piece each kept point is an inlier of (-1: none)."""
-    owner = np.full(len(seg.points), -1, dtype=np.intp)
+def _owner(seg: Segments) -> _Owner:
+    """The piece each kept point is an inlier of (-1: none), and the pieces' centroids and
+    directions as rows ``(cy, cz, dy, dz)``."""
+    owner = np.full(len(seg.points), -1, dtype=np.int64)
+    rows = np.array([_floats(ln) for ln in seg.lines], dtype=np.float64).reshape(-1, 4)
     for j, ln in enumerate(seg.lines):
         owner[ln.index] = j
-    return owner
+    return owner, rows
+
+
+def _span(line: Line, pieces: list[Line]) -> float:
+    """Extent along ``line`` of pieces on it (from their ends)."""
+    ly, lz, ldy, ldz = _floats(line)
+    t = []
+    for p in pieces:
+        cy, cz, dy, dz = _floats(p)
+        c = (cy - ly) * ldy + (cz - lz) * ldz
+        d = dy * ldy + dz * ldz
+        t += [c + d * float(p.t[0]), c + d * float(p.t[-1])]
+    return max(t) - min(t)
+
+
+def _cos(a: Line, b: Line) -> float:
+    """``|cos|`` of the angle between two lines (see :func:`seamtrack.features.lines._angle`)."""
+    (ady, adz), (bdy, bdz) = a.direction.tolist(), b.direction.tolist()
+    return abs(ady * bdy + adz * bdz)
+
+
+def _median(values: list[float]) -> float:
+    """numpy's median of a few floats (the mean of the middle two of an even count)."""
+    v = sorted(values)
+    if any(math.isnan(x) for x in v):
+        return math.nan
+    n = len(v)
+    return v[n // 2] if n % 2 else (v[n // 2 - 1] + v[n // 2]) / 2.0
 
 
 def _sheets(
     seg: Segments,
-    owner: NDArray[np.intp],
+    owner: _Owner,
     min_points: int,
     min_plate_mm: float,
     max_tilt_deg: float,
-    apart: Callable[[Line, Line], bool] | None,
+    apart: Callable[[Line, NDArray[np.intp], NDArray[np.intp]], bool] | None,
     behind_mm: float = math.inf,
 ) -> _Sheets:
     """Plates and where they are interrupted.
@@ -243,35 +179,27 @@ def _sheets(
     Flat pieces (within ``max_tilt_deg`` of the y axis) that lie on one line form a plate
     line, however short each piece is (a stub cut off a plate by a reflection stays on its
     plate); a line spanning ``min_plate_mm`` is a plate. Column order then gives runs:
-    consecutive pieces of one plate line stay one run unless ``apart(left, right)`` says
-    the hole between them is a joint (a square butt's open gap), so a reflection or a
-    dropout never splits a plate. A stretch ``behind_mm`` or more behind the plate on both
-    sides of it is no plate either, however wide: it is what a gap shows of the backing.
+    consecutive pieces of one plate line stay one run unless ``apart(line, left, right)``
+    says the hole between them is a joint (a square butt's open gap; ``left``, ``right``:
+    the facing inliers, measured on the plate's ``line``), so a reflection or a dropout
+    never splits a plate. A stretch ``behind_mm`` or more behind the plate on both sides of
+    it is no plate either, however wide: it is what a gap shows of the backing.
     """
     tilt = math.radians(max_tilt_deg)
-    flat = [
-        ln
-        for ln in seg.lines
-        if ln.count >= min_points and abs(math.atan2(ln.direction[1], ln.direction[0])) <= tilt
-    ]
-
-    def span(line: Line, pieces: list[Line]) -> float:
-        """Extent along ``line`` of pieces on it (from their ends)."""
-        t = []
-        for p in pieces:
-            c = float((p.centroid - line.centroid) @ line.direction)
-            d = float(p.direction @ line.direction)
-            t += [c + d * float(p.t[0]), c + d * float(p.t[-1])]
-        return max(t) - min(t)
-
-    plates: list[tuple[int, Line]] = []
+    flat = []
+    for ln in seg.lines:
+        if ln.count >= min_points:
+            dy, dz = ln.direction.tolist()
+            if abs(math.atan2(dz, dy)) <= tilt:
+                flat.append(ln)
+    plates: list[tuple[int, int, Line]] = []  # (group, first inlier, piece)
     groups: list[list[Line]] = []
     for members in collinear_members(seg, flat):
         pieces = [flat[i] for i in members]
-        if span(pieces[0], pieces) >= min_plate_mm:
-            plates += [(len(groups), p) for p in pieces]
+        if _span(pieces[0], pieces) >= min_plate_mm:
+            plates += [(len(groups), int(p.index[0]), p) for p in pieces]
             groups.append(pieces)
-    plates.sort(key=lambda gp: int(gp[1].index[0]))
+    plates.sort(key=lambda gp: gp[1])
     # Plates follow each other in column order: a plate line that shows only briefly between
     # two stretches of another, or not parallel to it, is no plate there (a reflection lying
     # on its line by chance, a tilted one long enough to pass for a plate).
@@ -284,12 +212,18 @@ def _sheets(
             while j < len(plates) and plates[j][0] == plates[i][0]:
                 j += 1
             if j < len(plates) and plates[i - 1][0] == plates[j][0]:
-                block = [p for _, p in plates[i:j]]
+                block = [p for _, _, p in plates[i:j]]
                 host = groups[plates[j][0]][0]
-                tilted = _angle(block[0], host) > math.radians(10)
-                centres = np.array([p.centroid for p in block])
-                behind = -float(np.median(_towards_sensor(host, centres))) >= behind_mm
-                if tilted or behind or span(groups[plates[i][0]][0], block) < min_plate_mm:
+                tilted = math.acos(min(1.0, _cos(block[0], host))) > math.radians(10)
+                hy, hz, hdy, hdz = _floats(host)
+                flip = not hy * -hdz + hz * hdy < 0  # the sensor on the normal's other side
+                heights = []
+                for p in block:
+                    py, pz = p.centroid.tolist()
+                    h = (py - hy) * -hdz + (pz - hz) * hdy
+                    heights.append(-h if flip else h)
+                behind = -_median(heights) >= behind_mm
+                if tilted or behind or _span(groups[plates[i][0]][0], block) < min_plate_mm:
                     blocks.append((sum(p.count for p in block), i, j))
             i = j
         if not blocks:
@@ -297,13 +231,12 @@ def _sheets(
         _, i, j = min(blocks)
         del plates[i:j]
     runs: list[tuple[int, list[Line]]] = []
-    for g, piece in plates:
+    for g, _, piece in plates:
         if runs and runs[-1][0] == g:
             # The hole between the run so far and this piece, on the plate's line (the ends
             # suffice: its last and first inliers and their spacing).
             if apart is None or not apart(
-                _on(groups[g][0], runs[-1][1][-1].index[-11:], seg.points),
-                _on(groups[g][0], piece.index[:11], seg.points),
+                groups[g][0], runs[-1][1][-1].index[-11:], piece.index[:11]
             ):
                 runs[-1][1].append(piece)
                 continue
@@ -316,7 +249,7 @@ def _sheets(
             out.append(pieces[0])
             continue
         idx = np.concatenate([p.index for p in pieces])
-        if span(groups[g][0], pieces) >= min_plate_mm:
+        if _span(groups[g][0], pieces) >= min_plate_mm:
             out.append(_fit(seg.points, idx))
         else:
             out.append(_on(groups[g][0], idx, seg.points))
@@ -324,14 +257,26 @@ def _sheets(
     return _Sheets(out, [g for g, _ in runs], owner, others)
 
 
+def _end(line: Line, at_end: bool) -> tuple[float, float]:
+    """:meth:`~seamtrack.features.lines.Line.end` as floats."""
+    cy, cz, dy, dz = _floats(line)
+    half = 0.5 * line.step(at_end)
+    t = float(line.t[-1]) + half if at_end else float(line.t[0]) - half
+    return cy + t * dy, cz + t * dz
+
+
 def _neighbours(sheets: _Sheets, max_gap_mm: float) -> list[tuple[Line, Line, bool]]:
     """Consecutive near-parallel runs (left, right, same plate line) whose facing ends are at
     most ``max_gap_mm`` apart."""
     out = []
     for (a, ga), (b, gb) in itertools.pairwise(zip(sheets.runs, sheets.groups, strict=True)):
-        if (
-            _angle(a, b) <= math.radians(10)
-            and float(np.hypot(*(b.point(float(b.t[0])) - a.point(float(a.t[-1]))))) <= max_gap_mm
+        if math.acos(min(1.0, _cos(a, b))) > math.radians(10):
+            continue
+        acy, acz, ady, adz = _floats(a)
+        bcy, bcz, bdy, bdz = _floats(b)
+        ta, tb = float(a.t[-1]), float(b.t[0])
+        if math.hypot(bcy + tb * bdy - (acy + ta * ady), bcz + tb * bdz - (acz + ta * adz)) <= (
+            max_gap_mm
         ):
             out.append((a, b, ga == gb))
     return out
@@ -372,12 +317,22 @@ class SquareButtExtractor(_Base):
         min_opening = max(self.min_gap_mm, 3 * seg.tol)
 
         holes: dict[tuple[int, int], _Hole] = {}
+        points = seg.points
 
-        def apart(left: Line, right: Line) -> bool:
-            if float((right.end(False) - left.end(True)) @ left.direction) < min_opening:
+        def apart(line: Line, left: NDArray[np.intp], right: NDArray[np.intp]) -> bool:
+            g = cy, cz, dy, dz = _floats(line)
+            _, t_left, _, step_left = on_ends(points, left, cy, cz, dy, dz)
+            t_right, _, step_right, _ = on_ends(points, right, cy, cz, dy, dz)
+            # The facing ends (half a step beyond the last inliers), along the line.
+            tl, tr = t_left + 0.5 * step_left, t_right - 0.5 * step_right
+            if (cy + tr * dy - (cy + tl * dy)) * dy + (cz + tr * dz - (cz + tl * dz)) * dz < (
+                min_opening
+            ):
                 return False
-            hole = _hole(seg, owner, left, right, self.min_bottom_mm, butt=True)
-            holes[int(left.index[-1]), int(right.index[0])] = hole
+            lo, hi = int(left[-1]), int(right[0])
+            hole = _hole_between(seg, owner, g, t_left, step_left, lo, g, t_right, step_right,
+                                 hi, self.min_bottom_mm, True)  # fmt: skip
+            holes[lo, hi] = hole
             return hole.open_mm >= self.min_open_mm
 
         owner = _owner(seg)
@@ -385,7 +340,8 @@ class SquareButtExtractor(_Base):
                          behind_mm=self.min_bottom_mm)  # fmt: skip
         best, best_key = None, (False, 0.0)
         for a, b, _ in _neighbours(sheets, self.max_gap_mm):
-            opening = float(np.hypot(*(b.end(False) - a.end(True))))
+            (ay, az), (by, bz) = _end(a, True), _end(b, False)
+            opening = math.hypot(by - ay, bz - az)
             if opening < min_opening:
                 continue
             hole = holes.get((int(a.index[-1]), int(b.index[0])))
@@ -403,8 +359,10 @@ class SquareButtExtractor(_Base):
         a, b, hole = best
         ea = _edge(a, True, hole.left, sheets, seg)
         eb = _edge(b, False, hole.right, sheets, seg)
-        gap = abs(float((eb - ea) @ a.direction))
-        step = abs(float((eb - ea) @ a.normal))
+        _, _, dy, dz = _floats(a)
+        (ey_a, ez_a), (ey_b, ez_b) = ea.tolist(), eb.tolist()
+        gap = abs((ey_b - ey_a) * dy + (ez_b - ez_a) * dz)
+        step = abs((ey_b - ey_a) * -dz + (ez_b - ez_a) * dy)
         if step > self.max_step_ratio * max(gap, self.min_gap_mm):
             return Feature.failed(
                 f"not a square butt: a step of {step:.2f} mm over a {gap:.2f} mm gap is an "
@@ -444,7 +402,9 @@ class LapExtractor(_Base):
                          self.max_tilt_deg, None)  # fmt: skip
         best, best_score = None, 0.0
         for a, b, same in _neighbours(sheets, self.max_gap_mm):
-            step = float((b.centroid - a.centroid) @ a.normal)  # > 0: b is deeper
+            acy, acz, ady, adz = _floats(a)
+            bcy, bcz = b.centroid.tolist()
+            step = (bcy - acy) * -adz + (bcz - acz) * ady  # > 0: b is deeper
             if same or abs(step) < max(self.min_step_mm, 3 * seg.tol):
                 continue
             score = float(a.count + b.count)
@@ -468,7 +428,7 @@ class LapExtractor(_Base):
             # sheet at `shadow`: beyond the foot (away from the top sheet) the corner is in
             # shadow and the foot is the best estimate; otherwise the lower sheet is seen up
             # to the corner.
-            shadow = intersect(_ray(edge), lower)
+            shadow = _ray_hit(edge, lower)
             if lower_hidden is not None or (
                 shadow is not None and float((shadow - foot) @ away) > 0.0
             ):
@@ -479,7 +439,7 @@ class LapExtractor(_Base):
             # The lower sheet's visible end is the corner, or (in the edge's shadow) where
             # the ray over the hidden top edge lands.
             end = corner_or_end(lower, not at_end, sheets.others, seg)
-            over = intersect(_ray(end), top)
+            over = _ray_hit(end, top)
             seam = end
             edge = _edge(top, at_end, top_hidden, sheets, seg)
             if over is not None and float((_foot(over, lower) - end) @ away) < 0.0:
@@ -506,10 +466,21 @@ def _two_plates(seg: Segments, a: Line, b: Line) -> list[Zone]:
 
 def _foot(point: FloatArray, line: Line) -> FloatArray:
     """``point`` projected normally onto ``line``."""
-    return point - float((point - line.centroid) @ line.normal) * line.normal
+    py, pz = point.tolist()
+    cy, cz, dy, dz = _floats(line)
+    h = (py - cy) * -dz + (pz - cz) * dy
+    return np.array([py - h * -dz, pz - h * dy])
 
 
-def _ray(point: FloatArray) -> Line:
-    """The ray from the emitter (the origin) through ``point``, as a line."""
-    u = point / max(float(np.hypot(*point)), 1e-300)
-    return Line(np.empty(0, np.intp), np.zeros(2), u, np.empty(0), 0.0)
+def _ray_hit(point: FloatArray, line: Line) -> FloatArray | None:
+    """Where the ray from the emitter (the origin) through ``point`` crosses ``line``
+    (``intersect(_ray(point), line)``, in floats), or None when (nearly) parallel."""
+    py, pz = point.tolist()
+    norm = max(math.hypot(py, pz), 1e-300)
+    uy, uz = py / norm, pz / norm
+    by, bz, bdy, bdz = _floats(line)
+    d = uy * bdz - uz * bdy
+    if abs(d) < 1e-9:
+        return None
+    s = ((by - 0.0) * bdz - (bz - 0.0) * bdy) / d
+    return np.array([0.0 + s * uy, 0.0 + s * uz])
