@@ -392,20 +392,3 @@ def hole(
             ry, rz = bcy + t * bdy, bcz + t * bdz
     rest = width - covered
     return (rest if rest > 0.0 else 0.0), left, ly, lz, right, ry, rz
-
-
-@numba.njit(cache=True, nogil=True, error_model="numpy")
-def on_ends(
-    points: FloatArray, idx: IntArray, cy: float, cz: float, dy: float, dz: float
-) -> tuple[float, float, float, float]:
-    """Inliers ``idx`` measured along a line (:func:`seamtrack.features.lines._on`): the
-    first and last coordinates and the steps at the start and at the end
-    (:meth:`~seamtrack.features.lines.Line.step`)."""
-    n = idx.shape[0]
-    t = np.empty(n)
-    for i in range(n):
-        t[i] = (points[idx[i], 0] - cy) * dy + (points[idx[i], 1] - cz) * dz
-    k = min(10, n - 1)
-    if k < 1:
-        return t[0], t[n - 1], 0.0, 0.0
-    return t[0], t[n - 1], abs(t[k] - t[0]) / k, abs(t[n - 1] - t[n - 1 - k]) / k
