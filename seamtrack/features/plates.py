@@ -22,8 +22,6 @@ from seamtrack.features.base import Zone, _Base, _confidence, explained
 from seamtrack.features.lines import (
     Line,
     Segments,
-    _fit,
-    _on,
     corner_or_end,
 )
 from seamtrack.features.psheets import FIT, PIECE, two_plates
@@ -68,13 +66,24 @@ class _Pair:
     step: float
 
 
-def _run(seg: Segments, kind: int, pieces: list[int], anchor: int) -> Line:
+def _run(
+    seg: Segments,
+    kind: int,
+    piece: int,
+    anchor: int,
+    fit: list[float],
+    index: NDArray[np.intp],
+    t: FloatArray,
+) -> Line:
     """A run's line (:func:`seamtrack.features.psheets.two_plates`): a long piece as it is,
-    a refit of its pieces' inliers, or those measured on the plate's line (a stub)."""
+    a refit of its pieces' inliers (``fit``: cy, cz, dy, dz, rms), or those inliers
+    measured on the plate's line (``anchor``'s; a stub)."""
     if kind == PIECE:
-        return seg.lines[pieces[0]]
-    idx = np.concatenate([seg.lines[k].index for k in pieces])
-    return _fit(seg.points, idx) if kind == FIT else _on(seg.lines[anchor], idx, seg.points)
+        return seg.lines[piece]
+    if kind == FIT:
+        return Line(index, np.array(fit[:2]), np.array(fit[2:4]), t, fit[4])
+    line = seg.lines[anchor]
+    return Line(index, line.centroid, line.direction, t, line.rms)
 
 
 def _pair(
@@ -100,30 +109,29 @@ def _pair(
     line covers), a lap the best supported pair with a step.
     """
     lines = seg.lines
-    offsets = np.zeros(len(lines) + 1, dtype=np.int64)
-    np.cumsum([ln.count for ln in lines], out=offsets[1:])
-    index = np.concatenate([ln.index for ln in lines]).astype(np.int64, copy=False)
+    counts = np.array([len(ln.index) for ln in lines], dtype=np.int64)
+    index = np.concatenate([ln.index for ln in lines])
     along = np.concatenate([ln.t for ln in lines])
-    rows = np.array([_floats(ln) for ln in lines], dtype=np.float64).reshape(-1, 4)
-    ints, out, order = two_plates(
-        seg.points, index, along, offsets, rows, int(ex.min_points), float(ex.min_plate_mm),
+    geo = np.concatenate([x for ln in lines for x in (ln.centroid, ln.direction)])
+    ints, out, a_index, a_t, b_index, b_t = two_plates(
+        seg.points, index, along, counts, geo, int(ex.min_points), float(ex.min_plate_mm),
         float(ex.max_tilt_deg), float(ex.max_gap_mm), float(seg.tol), float(seg.spacing),
         float(seg.sigma), butt, float(min_opening),
         float(getattr(ex, "min_open_mm", 0.0)), float(getattr(ex, "min_bottom_mm", math.inf)),
         float(getattr(ex, "min_step_mm", 0.0)),
     )  # fmt: skip
-    (ra, _, kind_a, kind_b, anchor_a, anchor_b, lo_a, hi_a, lo_b, hi_b,
+    (ra, _, kind_a, kind_b, piece_a, piece_b, anchor_a, anchor_b, _, _,
      is_open, left, right) = ints.tolist()  # fmt: skip
     if ra < 0:
         return None
-    open_mm, ly, lz, ry, rz, step = out.tolist()
-    pieces = order.tolist()
+    floats = out.tolist()
+    open_mm, ly, lz, ry, rz, step = floats[:6]
     hole = _Hole(
         open_mm, np.array([ly, lz]) if left else None, np.array([ry, rz]) if right else None
     )
     return _Pair(
-        _run(seg, kind_a, pieces[lo_a:hi_a], anchor_a),
-        _run(seg, kind_b, pieces[lo_b:hi_b], anchor_b),
+        _run(seg, kind_a, piece_a, anchor_a, floats[6:11], a_index, a_t),
+        _run(seg, kind_b, piece_b, anchor_b, floats[11:16], b_index, b_t),
         hole,
         bool(is_open),
         step,

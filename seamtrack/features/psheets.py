@@ -44,9 +44,9 @@ def _steps(t: FloatArray) -> tuple[float, float]:
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _fit(p: FloatArray, idx: IntArray) -> tuple[float, float, float, float, FloatArray]:
+def _fit(p: FloatArray, idx: IntArray) -> tuple[float, float, float, float, float, FloatArray]:
     """Total-least-squares line through ``p[idx]``: centroid, unit direction (from the first
-    point towards the last) and the points' coordinates along it, computed as
+    point towards the last), rms residual and the points' coordinates along it, computed as
     :func:`seamtrack.features.kernels.fit_line` does (the same bits)."""
     n = idx.shape[0]
     cy = 0.0
@@ -69,10 +69,14 @@ def _fit(p: FloatArray, idx: IntArray) -> tuple[float, float, float, float, Floa
     a, b = idx[0], idx[n - 1]
     if uy * (p[b, 0] - p[a, 0]) + uz * (p[b, 1] - p[a, 1]) < 0.0:
         uy, uz = -uy, -uz
+    rr = 0.0
+    for k in range(n):
+        r = -(p[idx[k], 0] - cy) * uz + (p[idx[k], 1] - cz) * uy
+        rr += r * r
     t = np.empty(n)
     for k in range(n):
         t[k] = (p[idx[k], 0] - cy) * uy + (p[idx[k], 1] - cz) * uz
-    return cy, cz, uy, uz, t
+    return cy, cz, uy, uz, math.sqrt(rr / n), t
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
@@ -104,12 +108,51 @@ def _along(
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def two_plates(
+def _run_line(
     points: FloatArray,
     index: IntArray,
     along: FloatArray,
     offsets: IntArray,
     rows: FloatArray,
+    t_first: FloatArray,
+    t_last: FloatArray,
+    pieces: IntArray,
+    anchor: int,
+    min_plate_mm: float,
+) -> tuple[int, float, float, float, float, float, IntArray, FloatArray]:
+    """A run's line from its ``pieces`` (of the plate line whose anchor is ``anchor``): a
+    long piece as it is (:data:`PIECE`), else a refit of the pieces' inliers when they span
+    ``min_plate_mm`` (:data:`FIT`), else those inliers measured on the anchor's line
+    (:data:`ON`, a stub): (kind, cy, cz, dy, dz, rms (FIT only), inliers, their
+    coordinates)."""
+    p0 = pieces[0]
+    if pieces.shape[0] == 1 and t_last[p0] - t_first[p0] >= min_plate_mm:
+        a, b = offsets[p0], offsets[p0 + 1]
+        cy, cz, dy, dz = rows[p0, 0], rows[p0, 1], rows[p0, 2], rows[p0, 3]
+        return PIECE, cy, cz, dy, dz, 0.0, index[a:b].copy(), along[a:b].copy()
+    total = 0
+    for q in pieces:
+        total += offsets[q + 1] - offsets[q]
+    idx = np.empty(total, dtype=np.int64)
+    c = 0
+    for q in pieces:
+        for k in range(offsets[q], offsets[q + 1]):
+            idx[c] = index[k]
+            c += 1
+    if _span(rows, t_first, t_last, anchor, pieces) >= min_plate_mm:
+        cy, cz, dy, dz, rms, t = _fit(points, idx)
+        return FIT, cy, cz, dy, dz, rms, idx, t
+    cy, cz, dy, dz = rows[anchor, 0], rows[anchor, 1], rows[anchor, 2], rows[anchor, 3]
+    return ON, cy, cz, dy, dz, 0.0, idx, _along(points, idx, cy, cz, dy, dz)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def two_plates(
+    points: FloatArray,
+    index: IntArray,
+    along: FloatArray,
+    counts: IntArray,
+    geo: FloatArray,
     min_points: int,
     min_plate_mm: float,
     max_tilt_deg: float,
@@ -122,17 +165,22 @@ def two_plates(
     min_open_mm: float,
     min_bottom_mm: float,
     min_step_mm: float,
-) -> tuple[IntArray, FloatArray, IntArray]:
+) -> tuple[IntArray, FloatArray, IntArray, FloatArray, IntArray, FloatArray]:
     """The two plates of a square butt (``butt``) or a lap, as the extractors choose them.
 
-    Returns ``(ints, floats, order)``: ``ints`` = (left run, right run, their kinds
-    (:data:`PIECE`, :data:`FIT`, :data:`ON`), their plates' anchor pieces, the bounds of
-    their pieces in ``order``, open gap?, left edge hidden?, right edge hidden?), runs -1
-    when no pair qualifies; ``floats`` = (open width, left hidden edge y, z, right hidden
-    edge y, z, the lap's step) of the hole between them; ``order``: the plates' pieces in
-    column order.
+    ``counts``: each piece's number of inliers; ``geo``: the pieces' ``(cy, cz, dy, dz)``,
+    concatenated. Returns ``(ints, floats, a_index, a_t, b_index, b_t)``: ``ints`` = (left
+    run, right run (-1: no pair qualifies), their kinds (:data:`PIECE`, :data:`FIT`,
+    :data:`ON`), their first pieces, their plate lines' anchor pieces, -, -, open gap?, left
+    edge hidden?, right edge hidden?); ``floats`` = (open width, left hidden edge y, z,
+    right hidden edge y, z, the lap's step, the left run's cy, cz, dy, dz, rms, the right
+    run's); then each run's inliers and their coordinates along its line.
     """
+    rows = geo.reshape(-1, 4)
     nl = rows.shape[0]
+    offsets = np.zeros(nl + 1, dtype=np.int64)
+    for j in range(nl):
+        offsets[j + 1] = offsets[j] + counts[j]
     m = points.shape[0]
     owner = np.full(m, -1, dtype=np.int64)
     count = np.empty(nl, dtype=np.int64)
@@ -303,44 +351,22 @@ def two_plates(
         nr += 1
     # Each run's line: a long piece as it is, else a refit of its pieces (long enough) or
     # its pieces measured on their plate's line.
-    kind = np.empty(nr, dtype=np.int64)
     line = np.empty((nr, 4))
     ends = np.empty((nr, 4))  # first t, last t, step at the start, step at the end
     lims = np.empty((nr, 3), dtype=np.int64)  # first inlier, last inlier, count
     for r in range(nr):
         lo, hi = run_lo[r], run_hi[r]
-        p0 = pl[lo]
         g = plate_anchor[pg[lo]]
-        if hi - lo == 1 and t_last[p0] - t_first[p0] >= min_plate_mm:
-            kind[r] = PIECE
-            line[r] = rows[p0]
-            t = along[offsets[p0] : offsets[p0 + 1]]
-            idx = index[offsets[p0] : offsets[p0 + 1]]
-        else:
-            total = 0
-            for q in range(lo, hi):
-                total += count[pl[q]]
-            idx = np.empty(total, dtype=np.int64)
-            c = 0
-            for q in range(lo, hi):
-                s = pl[q]
-                for k in range(offsets[s], offsets[s + 1]):
-                    idx[c] = index[k]
-                    c += 1
-            if _span(rows, t_first, t_last, g, pl[lo:hi]) >= min_plate_mm:
-                kind[r] = FIT
-                cy, cz, dy, dz, t = _fit(points, idx)
-                line[r, 0], line[r, 1], line[r, 2], line[r, 3] = cy, cz, dy, dz
-            else:
-                kind[r] = ON
-                line[r] = rows[g]
-                t = _along(points, idx, rows[g, 0], rows[g, 1], rows[g, 2], rows[g, 3])
+        _, cy, cz, dy, dz, _, idx, t = _run_line(
+            points, index, along, offsets, rows, t_first, t_last, pl[lo:hi], g, min_plate_mm
+        )
+        line[r, 0], line[r, 1], line[r, 2], line[r, 3] = cy, cz, dy, dz
         s0, s1 = _steps(t)
         ends[r, 0], ends[r, 1], ends[r, 2], ends[r, 3] = t[0], t[-1], s0, s1
         lims[r, 0], lims[r, 1], lims[r, 2] = idx[0], idx[-1], idx.shape[0]
     # Neighbouring runs near parallel, their facing ends near; the best pair.
     ints = np.full(13, -1, dtype=np.int64)
-    out = np.zeros(6)
+    out = np.zeros(16)
     best_open = False
     best_key = 0.0
     for a in range(nr - 1):
@@ -415,8 +441,9 @@ def two_plates(
                 best_key = score
                 ints[0], ints[1] = a, b
                 out[5] = step
+    none = np.empty(0, dtype=np.int64)
     if ints[0] < 0:
-        return ints, out, pl
+        return ints, out, none, np.empty(0), none, np.empty(0)
     a, b = ints[0], ints[1]
     if not butt:
         res = hole(
@@ -446,7 +473,17 @@ def two_plates(
         ints[11] = 1 if res[1] else 0
         ints[12] = 1 if res[4] else 0
         out[0], out[1], out[2], out[3], out[4] = res[0], res[2], res[3], res[5], res[6]
-    ints[2], ints[3] = kind[a], kind[b]
-    ints[4], ints[5] = plate_anchor[pg[run_lo[a]]], plate_anchor[pg[run_lo[b]]]
-    ints[6], ints[7], ints[8], ints[9] = run_lo[a], run_hi[a], run_lo[b], run_hi[b]
-    return ints, out, pl
+    ka, ay, az, ady, adz, a_rms, a_idx, a_t = _run_line(
+        points, index, along, offsets, rows, t_first, t_last, pl[run_lo[a] : run_hi[a]],
+        plate_anchor[pg[run_lo[a]]], min_plate_mm,
+    )  # fmt: skip
+    kb, by, bz, bdy, bdz, b_rms, b_idx, b_t = _run_line(
+        points, index, along, offsets, rows, t_first, t_last, pl[run_lo[b] : run_hi[b]],
+        plate_anchor[pg[run_lo[b]]], min_plate_mm,
+    )  # fmt: skip
+    ints[2], ints[3] = ka, kb
+    ints[4], ints[5] = pl[run_lo[a]], pl[run_lo[b]]
+    ints[6], ints[7] = plate_anchor[pg[run_lo[a]]], plate_anchor[pg[run_lo[b]]]
+    out[6], out[7], out[8], out[9], out[10] = ay, az, ady, adz, a_rms
+    out[11], out[12], out[13], out[14], out[15] = by, bz, bdy, bdz, b_rms
+    return ints, out, a_idx, a_t, b_idx, b_t
