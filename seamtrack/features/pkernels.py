@@ -392,3 +392,96 @@ def hole(
             ry, rz = bcy + t * bdy, bcz + t * bdz
     rest = width - covered
     return (rest if rest > 0.0 else 0.0), left, ly, lz, right, ry, rz
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _fit(p: FloatArray, idx: IntArray) -> tuple[float, float, float, float, float, FloatArray]:
+    """Total-least-squares line through ``p[idx]``: centroid, unit direction (from the first
+    point towards the last), rms residual and the points' coordinates along it, computed as
+    :func:`seamtrack.features.kernels.fit_line` does (the same bits)."""
+    n = idx.shape[0]
+    cy = 0.0
+    cz = 0.0
+    for k in range(n):
+        cy += p[idx[k], 0]
+        cz += p[idx[k], 1]
+    cy /= n
+    cz /= n
+    syy = 0.0
+    szz = 0.0
+    syz = 0.0
+    for k in range(n):
+        dy, dz = p[idx[k], 0] - cy, p[idx[k], 1] - cz
+        syy += dy * dy
+        szz += dz * dz
+        syz += dy * dz
+    theta = 0.5 * math.atan2(2.0 * syz, syy - szz)
+    uy, uz = math.cos(theta), math.sin(theta)
+    a, b = idx[0], idx[n - 1]
+    if uy * (p[b, 0] - p[a, 0]) + uz * (p[b, 1] - p[a, 1]) < 0.0:
+        uy, uz = -uy, -uz
+    rr = 0.0
+    for k in range(n):
+        r = -(p[idx[k], 0] - cy) * uz + (p[idx[k], 1] - cz) * uy
+        rr += r * r
+    t = np.empty(n)
+    for k in range(n):
+        t[k] = (p[idx[k], 0] - cy) * uy + (p[idx[k], 1] - cz) * uz
+    return cy, cz, uy, uz, math.sqrt(rr / n), t
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _corner(
+    run: FloatArray,
+    ends: FloatArray,
+    at_end: bool,
+    skip: int,
+    rows: FloatArray,
+    count: IntArray,
+    t_first: FloatArray,
+    t_last: FloatArray,
+    steps: FloatArray,
+    min_points: int,
+    spacing: float,
+    tol: float,
+) -> tuple[float, float]:
+    """Where a run's line ends (:func:`seamtrack.features.lines.corner_or_end` with the
+    pieces of ``min_points`` as the others, ``skip`` the run's own piece or -1): its crossing
+    with a piece meeting it there (a visible corner), else half a step beyond its last
+    inlier. ``run``: (cy, cz, dy, dz); ``ends``: (first t, last t, first step, last step);
+    ``steps``: each piece's first and last step."""
+    cy, cz, dy, dz = run[0], run[1], run[2], run[3]
+    t_tip = ends[1] if at_end else ends[0]
+    tip_y, tip_z = cy + t_tip * dy, cz + t_tip * dz
+    reach = ends[3] if at_end else ends[2]
+    reach = 3.0 * (spacing if spacing > reach else reach) + tol
+    cos_min = math.cos(math.radians(20))
+    found = False
+    best_y = best_z = 0.0
+    best_d = math.inf
+    for j in range(rows.shape[0]):
+        if count[j] < min_points or j == skip:
+            continue
+        ocy, ocz, ody, odz = rows[j, 0], rows[j, 1], rows[j, 2], rows[j, 3]
+        if abs(dy * ody + dz * odz) > cos_min:
+            continue  # within 20 deg: no corner
+        det = dy * odz - dz * ody
+        if abs(det) < 1e-9:
+            continue
+        s = ((ocy - cy) * odz - (ocz - cz) * ody) / det
+        xy, xz = cy + s * dy, cz + s * dz
+        d = math.hypot(xy - tip_y, xz - tip_z)
+        if d > reach or d >= best_d:
+            continue
+        near = math.hypot(ocy + t_first[j] * ody - xy, ocz + t_first[j] * odz - xz)
+        far = math.hypot(ocy + t_last[j] * ody - xy, ocz + t_last[j] * odz - xz)
+        near = far if far < near else near
+        wide = steps[j, 1]
+        wide = steps[j, 0] if steps[j, 0] > wide else wide
+        wide = spacing if spacing > wide else wide
+        if near <= 3.0 * wide + tol:
+            found, best_y, best_z, best_d = True, xy, xz, d
+    if found:
+        return best_y, best_z
+    t = ends[1] + 0.5 * ends[3] if at_end else ends[0] - 0.5 * ends[2]
+    return cy + t * dy, cz + t * dz

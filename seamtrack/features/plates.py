@@ -18,72 +18,54 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features.base import Zone, _Base, _confidence, explained
-from seamtrack.features.lines import (
-    Line,
-    Segments,
-    corner_or_end,
-)
+from seamtrack.features.base import _Base
+from seamtrack.features.lines import Segments
 from seamtrack.features.psheets import FIT, PIECE, two_plates
 from seamtrack.sensing.profiles import Feature, Profile
 
 FloatArray = NDArray[np.float64]
+#: A point or a direction (y, z), as floats.
+_Vec = tuple[float, float]
+#: A line: centroid (y, z) and unit direction (y, z), as floats.
+_Ln = tuple[float, float, float, float]
 
 
 @dataclass(frozen=True)
 class _Hole:
-    """What lies between two consecutive plate runs (:func:`_hole`).
+    """What lies between two consecutive plate runs
+    (:func:`seamtrack.features.pkernels.hole`).
 
     ``open_mm``: how much of the stretch between their ends (along the left run's line)
     nothing covers: columns with no point (the laser fell through a gap or into a shadow), a
     wall, or a bottom far behind both plates. A false reflection's columns are unknown, not
     open. ``left`` / ``right``: where a stray line covers a run's end, the best estimate of
-    its edge (:func:`_hidden_edge`); None where the end is seen.
+    its edge; None where the end is seen.
     """
 
     open_mm: float
-    left: FloatArray | None
-    right: FloatArray | None
-
-
-def _floats(line: Line) -> tuple[float, float, float, float]:
-    """A line's centroid (y, z) and direction (y, z) as floats: the tests on lines below are a
-    handful of scalar operations, where numpy's per-call overhead on 2-vectors would
-    dominate."""
-    (cy, cz), (dy, dz) = line.centroid.tolist(), line.direction.tolist()
-    return cy, cz, dy, dz
+    left: _Vec | None
+    right: _Vec | None
 
 
 @dataclass(frozen=True)
 class _Pair:
-    """The two plate runs a two-plate extractor chose (left, right in column order), what
-    lies between them, and for a lap the step from ``a`` down to ``b`` (> 0: b is deeper)."""
+    """The two plate runs a two-plate extractor chose (``a`` left of ``b`` in column
+    order) as lines, where ``a`` ends and ``b`` starts (a visible corner, else half a step
+    beyond the last inlier), what lies between them, whether it is an open gap, the step
+    from ``a`` down to ``b`` (lap only; > 0: b is deeper), the confidence of the two lines
+    (:func:`seamtrack.features.base._confidence`) and the share of the profile the model
+    of a two-plate joint explains (each plate running on to the profile's end; what lies
+    between them left out)."""
 
-    a: Line
-    b: Line
+    a: _Ln
+    b: _Ln
+    end_a: _Vec
+    start_b: _Vec
     hole: _Hole
     is_open: bool
     step: float
-
-
-def _run(
-    seg: Segments,
-    kind: int,
-    piece: int,
-    anchor: int,
-    fit: list[float],
-    index: NDArray[np.intp],
-    t: FloatArray,
-) -> Line:
-    """A run's line (:func:`seamtrack.features.psheets.two_plates`): a long piece as it is,
-    a refit of its pieces' inliers (``fit``: cy, cz, dy, dz, rms), or those inliers
-    measured on the plate's line (``anchor``'s; a stub)."""
-    if kind == PIECE:
-        return seg.lines[piece]
-    if kind == FIT:
-        return Line(index, np.array(fit[:2]), np.array(fit[2:4]), t, fit[4])
-    line = seg.lines[anchor]
-    return Line(index, line.centroid, line.direction, t, line.rms)
+    confidence: float
+    share: float
 
 
 def _pair(
@@ -113,39 +95,58 @@ def _pair(
     index = np.concatenate([ln.index for ln in lines])
     along = np.concatenate([ln.t for ln in lines])
     geo = np.concatenate([x for ln in lines for x in (ln.centroid, ln.direction)])
-    ints, out, a_index, a_t, b_index, b_t = two_plates(
-        seg.points, index, along, counts, geo, int(ex.min_points), float(ex.min_plate_mm),
-        float(ex.max_tilt_deg), float(ex.max_gap_mm), float(seg.tol), float(seg.spacing),
-        float(seg.sigma), butt, float(min_opening),
+    ints, out = two_plates(
+        seg.points, index, along, counts, geo, seg.stray, int(ex.min_points),
+        float(ex.min_plate_mm), float(ex.max_tilt_deg), float(ex.max_gap_mm), float(seg.tol),
+        float(seg.spacing), float(seg.sigma), butt, float(min_opening),
         float(getattr(ex, "min_open_mm", 0.0)), float(getattr(ex, "min_bottom_mm", math.inf)),
         float(getattr(ex, "min_step_mm", 0.0)),
     )  # fmt: skip
-    (ra, _, kind_a, kind_b, piece_a, piece_b, anchor_a, anchor_b, _, _,
+    (ra, _, kind_a, kind_b, piece_a, piece_b, anchor_a, anchor_b, count_a, count_b,
      is_open, left, right) = ints.tolist()  # fmt: skip
     if ra < 0:
         return None
-    floats = out.tolist()
-    open_mm, ly, lz, ry, rz, step = floats[:6]
-    hole = _Hole(
-        open_mm, np.array([ly, lz]) if left else None, np.array([ry, rz]) if right else None
+    f = out.tolist()
+    hole = _Hole(f[0], (f[1], f[2]) if left else None, (f[3], f[4]) if right else None)
+    # The runs' rms: a piece's, a refit's, or (a stub measured on its plate's line) the
+    # plate line's anchor's.
+    rms_a = (
+        lines[piece_a].rms if kind_a == PIECE else f[10] if kind_a == FIT else lines[anchor_a].rms
     )
+    rms_b = (
+        lines[piece_b].rms if kind_b == PIECE else f[15] if kind_b == FIT else lines[anchor_b].rms
+    )
+    # As base._confidence of the two runs' lines.
+    explained = (0 + count_a + count_b) / max(len(seg.points), 1)
+    fit = max(0.0, 1.0 - max(rms_a, rms_b) / seg.tol)
+    conf = min(max(float(0.5 * explained + 0.5 * fit), 0.0), 1.0)  # NaN stays NaN
     return _Pair(
-        _run(seg, kind_a, piece_a, anchor_a, floats[6:11], a_index, a_t),
-        _run(seg, kind_b, piece_b, anchor_b, floats[11:16], b_index, b_t),
-        hole,
-        bool(is_open),
-        step,
-    )
+        (f[6], f[7], f[8], f[9]), (f[11], f[12], f[13], f[14]), (f[16], f[17]), (f[18], f[19]),
+        hole, bool(is_open), f[5], conf, f[20],
+    )  # fmt: skip
 
 
-def _edge(
-    line: Line, at_end: bool, hidden: FloatArray | None, others: list[Line], seg: Segments
-) -> FloatArray:
-    """A run's edge: its corner or end, or where a stray line covers its end, the estimate
-    of :func:`_hole` (on the run's line)."""
-    if hidden is None:
-        return corner_or_end(line, at_end, others, seg)
-    return _foot(hidden, line)
+def _foot(point: _Vec, line: _Ln) -> _Vec:
+    """``point`` projected normally onto ``line``."""
+    py, pz = point
+    cy, cz, dy, dz = line
+    h = (py - cy) * -dz + (pz - cz) * dy
+    return py - h * -dz, pz - h * dy
+
+
+def _ray_hit(point: _Vec, line: _Ln) -> _Vec | None:
+    """Where the ray from the emitter (the origin) through ``point`` crosses ``line``, or
+    None when (nearly) parallel (:func:`seamtrack.features.lines.intersect` of the ray and
+    the line)."""
+    py, pz = point
+    norm = max(math.hypot(py, pz), 1e-300)
+    uy, uz = py / norm, pz / norm
+    by, bz, bdy, bdz = line
+    d = uy * bdz - uz * bdy
+    if abs(d) < 1e-9:
+        return None
+    s = ((by - 0.0) * bdz - (bz - 0.0) * bdy) / d
+    return 0.0 + s * uy, 0.0 + s * uz
 
 
 @dataclass(frozen=True)
@@ -171,16 +172,16 @@ class SquareButtExtractor(_Base):
 
     def _extract(self, profile: Profile, seg: Segments) -> Feature | tuple[Feature, float]:
         min_opening = max(self.min_gap_mm, 3 * seg.tol)
-
         found = _pair(seg, self, True, min_opening)
         if found is None:
             return Feature.failed("no gap or step between two plates", joint=self.name)
         a, b, hole = found.a, found.b, found.hole
-        others = [ln for ln in seg.lines if ln.count >= self.min_points]
-        ea = _edge(a, True, hole.left, others, seg)
-        eb = _edge(b, False, hole.right, others, seg)
-        _, _, dy, dz = _floats(a)
-        (ey_a, ez_a), (ey_b, ez_b) = ea.tolist(), eb.tolist()
+        # A run's edge: its corner or end, or where a stray line covers its end, the estimate
+        # under it (on the run's line).
+        ea = found.end_a if hole.left is None else _foot(hole.left, a)
+        eb = found.start_b if hole.right is None else _foot(hole.right, b)
+        _, _, dy, dz = a
+        (ey_a, ez_a), (ey_b, ez_b) = ea, eb
         gap = abs((ey_b - ey_a) * dy + (ez_b - ez_a) * dz)
         step = abs((ey_b - ey_a) * -dz + (ez_b - ez_a) * dy)
         if step > self.max_step_ratio * max(gap, self.min_gap_mm):
@@ -193,11 +194,15 @@ class SquareButtExtractor(_Base):
         if wrong is not None:
             return wrong
         sure = found.is_open and hole.left is None and hole.right is None
-        conf = _confidence([a, b], seg) * (1.0 if sure else 0.5)
+        conf = found.confidence * (1.0 if sure else 0.5)
         feature = self._found(
-            profile, 0.5 * (ea + eb), confidence=conf, edges_laser=np.array([ea, eb]), gap_mm=gap
+            profile,
+            np.array([0.5 * (ey_a + ey_b), 0.5 * (ez_a + ez_b)]),
+            confidence=conf,
+            edges_laser=np.array([ea, eb]),
+            gap_mm=gap,
         )
-        return feature, explained(seg, _two_plates(seg, a, b))
+        return feature, found.share
 
 
 @dataclass(frozen=True)
@@ -225,13 +230,17 @@ class LapExtractor(_Base):
         wrong = self._implausible(depth=abs(step))
         if wrong is not None:
             return wrong
-        others = [ln for ln in seg.lines if ln.count >= self.min_points]
+        # The top sheet's edge and the lower sheet's end, seen (a corner or an end) or hidden
+        # (the estimate under a stray line, on the run's line).
         top, lower, at_end = (a, b, True) if step > 0 else (b, a, False)
+        top_seen, lower_seen = (
+            (found.end_a, found.start_b) if at_end else (found.start_b, found.end_a)
+        )
         top_hidden, lower_hidden = (hole.left, hole.right) if at_end else (hole.right, hole.left)
         # Away from the top sheet, along the lower one.
-        away = lower.direction if at_end else -lower.direction
+        away_y, away_z = (lower[2], lower[3]) if at_end else (-lower[2], -lower[3])
         if top_hidden is None:
-            edge = corner_or_end(top, at_end, others, seg)
+            edge = top_seen
             foot = _foot(edge, lower)
             # The ray over the top edge (from the emitter at the origin) lands on the lower
             # sheet at `shadow`: beyond the foot (away from the top sheet) the corner is in
@@ -239,57 +248,31 @@ class LapExtractor(_Base):
             # to the corner.
             shadow = _ray_hit(edge, lower)
             if lower_hidden is not None or (
-                shadow is not None and float((shadow - foot) @ away) > 0.0
+                shadow is not None
+                and (shadow[0] - foot[0]) * away_y + (shadow[1] - foot[1]) * away_z > 0.0
             ):
                 seam = foot
             else:
-                seam = corner_or_end(lower, not at_end, others, seg)
+                seam = lower_seen
         elif lower_hidden is None:
             # The lower sheet's visible end is the corner, or (in the edge's shadow) where
             # the ray over the hidden top edge lands.
-            end = corner_or_end(lower, not at_end, others, seg)
+            end = lower_seen
             over = _ray_hit(end, top)
             seam = end
-            edge = _edge(top, at_end, top_hidden, others, seg)
-            if over is not None and float((_foot(over, lower) - end) @ away) < 0.0:
-                edge, seam = over, _foot(over, lower)
+            edge = _foot(top_hidden, top)
+            if over is not None:
+                landing = _foot(over, lower)
+                if (landing[0] - end[0]) * away_y + (landing[1] - end[1]) * away_z < 0.0:
+                    edge, seam = over, landing
         else:
-            edge = _edge(top, at_end, top_hidden, others, seg)
+            edge = _foot(top_hidden, top)
             seam = _foot(edge, lower)
         sure = top_hidden is None and lower_hidden is None
         feature = self._found(
             profile,
-            seam,
-            confidence=_confidence([a, b], seg) * (1.0 if sure else 0.5),
-            edges_laser=edge.reshape(1, 2),
+            np.array(seam),
+            confidence=found.confidence * (1.0 if sure else 0.5),
+            edges_laser=np.array([edge]),
         )
-        return feature, explained(seg, _two_plates(seg, a, b))
-
-
-def _two_plates(seg: Segments, a: Line, b: Line) -> list[Zone]:
-    """The model of a two-plate joint: each plate runs on to the profile's end; what lies
-    between them (a gap, its walls, an edge face) is left out."""
-    lo, hi = int(a.index[-1]) + 1, int(b.index[0])
-    return [(0, lo, a), (lo, hi, None), (max(hi, lo), len(seg.points), b)]
-
-
-def _foot(point: FloatArray, line: Line) -> FloatArray:
-    """``point`` projected normally onto ``line``."""
-    py, pz = point.tolist()
-    cy, cz, dy, dz = _floats(line)
-    h = (py - cy) * -dz + (pz - cz) * dy
-    return np.array([py - h * -dz, pz - h * dy])
-
-
-def _ray_hit(point: FloatArray, line: Line) -> FloatArray | None:
-    """Where the ray from the emitter (the origin) through ``point`` crosses ``line``
-    (``intersect(_ray(point), line)``, in floats), or None when (nearly) parallel."""
-    py, pz = point.tolist()
-    norm = max(math.hypot(py, pz), 1e-300)
-    uy, uz = py / norm, pz / norm
-    by, bz, bdy, bdz = _floats(line)
-    d = uy * bdz - uz * bdy
-    if abs(d) < 1e-9:
-        return None
-    s = ((by - 0.0) * bdz - (bz - 0.0) * bdy) / d
-    return np.array([0.0 + s * uy, 0.0 + s * uz])
+        return feature, found.share

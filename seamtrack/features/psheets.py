@@ -22,7 +22,8 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features.pkernels import _median, hole
+from seamtrack.features.counts import explained_share
+from seamtrack.features.pkernels import _corner, _fit, _median, hole
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -41,42 +42,6 @@ def _steps(t: FloatArray) -> tuple[float, float]:
     if k < 1:
         return 0.0, 0.0
     return abs(t[k] - t[0]) / k, abs(t[n - 1] - t[n - 1 - k]) / k
-
-
-@numba.njit(cache=True, nogil=True, error_model="numpy")
-def _fit(p: FloatArray, idx: IntArray) -> tuple[float, float, float, float, float, FloatArray]:
-    """Total-least-squares line through ``p[idx]``: centroid, unit direction (from the first
-    point towards the last), rms residual and the points' coordinates along it, computed as
-    :func:`seamtrack.features.kernels.fit_line` does (the same bits)."""
-    n = idx.shape[0]
-    cy = 0.0
-    cz = 0.0
-    for k in range(n):
-        cy += p[idx[k], 0]
-        cz += p[idx[k], 1]
-    cy /= n
-    cz /= n
-    syy = 0.0
-    szz = 0.0
-    syz = 0.0
-    for k in range(n):
-        dy, dz = p[idx[k], 0] - cy, p[idx[k], 1] - cz
-        syy += dy * dy
-        szz += dz * dz
-        syz += dy * dz
-    theta = 0.5 * math.atan2(2.0 * syz, syy - szz)
-    uy, uz = math.cos(theta), math.sin(theta)
-    a, b = idx[0], idx[n - 1]
-    if uy * (p[b, 0] - p[a, 0]) + uz * (p[b, 1] - p[a, 1]) < 0.0:
-        uy, uz = -uy, -uz
-    rr = 0.0
-    for k in range(n):
-        r = -(p[idx[k], 0] - cy) * uz + (p[idx[k], 1] - cz) * uy
-        rr += r * r
-    t = np.empty(n)
-    for k in range(n):
-        t[k] = (p[idx[k], 0] - cy) * uy + (p[idx[k], 1] - cz) * uz
-    return cy, cz, uy, uz, math.sqrt(rr / n), t
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
@@ -153,6 +118,7 @@ def two_plates(
     along: FloatArray,
     counts: IntArray,
     geo: FloatArray,
+    stray: NDArray[np.bool_],
     min_points: int,
     min_plate_mm: float,
     max_tilt_deg: float,
@@ -165,16 +131,19 @@ def two_plates(
     min_open_mm: float,
     min_bottom_mm: float,
     min_step_mm: float,
-) -> tuple[IntArray, FloatArray, IntArray, FloatArray, IntArray, FloatArray]:
+) -> tuple[IntArray, FloatArray]:
     """The two plates of a square butt (``butt``) or a lap, as the extractors choose them.
 
     ``counts``: each piece's number of inliers; ``geo``: the pieces' ``(cy, cz, dy, dz)``,
-    concatenated. Returns ``(ints, floats, a_index, a_t, b_index, b_t)``: ``ints`` = (left
-    run, right run (-1: no pair qualifies), their kinds (:data:`PIECE`, :data:`FIT`,
-    :data:`ON`), their first pieces, their plate lines' anchor pieces, -, -, open gap?, left
-    edge hidden?, right edge hidden?); ``floats`` = (open width, left hidden edge y, z,
-    right hidden edge y, z, the lap's step, the left run's cy, cz, dy, dz, rms, the right
-    run's); then each run's inliers and their coordinates along its line.
+    concatenated; ``stray``: the segmentation's detour points (left out of the explained
+    share). Returns ``(ints, floats)``: ``ints`` = (left run, right run (-1: no pair
+    qualifies), their kinds (:data:`PIECE`, :data:`FIT`, :data:`ON`), their first pieces,
+    their plate lines' anchor pieces, their inlier counts, open gap?, left edge hidden?,
+    right edge hidden?); ``floats`` = (open width, left hidden edge y, z, right hidden edge
+    y, z, the lap's step, the left run's cy, cz, dy, dz, rms (FIT only), the right run's,
+    the left run's end y, z (:func:`_corner`), the right run's start y, z, the share of the
+    surface points the two-plate model explains (:func:`seamtrack.features.base.explained`
+    of :func:`seamtrack.features.plates._two_plates`)).
     """
     rows = geo.reshape(-1, 4)
     nl = rows.shape[0]
@@ -351,13 +320,15 @@ def two_plates(
         nr += 1
     # Each run's line: a long piece as it is, else a refit of its pieces (long enough) or
     # its pieces measured on their plate's line.
+    kind = np.empty(nr, dtype=np.int64)
+    rms = np.empty(nr)  # the refits' (FIT only)
     line = np.empty((nr, 4))
     ends = np.empty((nr, 4))  # first t, last t, step at the start, step at the end
     lims = np.empty((nr, 3), dtype=np.int64)  # first inlier, last inlier, count
     for r in range(nr):
         lo, hi = run_lo[r], run_hi[r]
         g = plate_anchor[pg[lo]]
-        _, cy, cz, dy, dz, _, idx, t = _run_line(
+        kind[r], cy, cz, dy, dz, rms[r], idx, t = _run_line(
             points, index, along, offsets, rows, t_first, t_last, pl[lo:hi], g, min_plate_mm
         )
         line[r, 0], line[r, 1], line[r, 2], line[r, 3] = cy, cz, dy, dz
@@ -366,7 +337,7 @@ def two_plates(
         lims[r, 0], lims[r, 1], lims[r, 2] = idx[0], idx[-1], idx.shape[0]
     # Neighbouring runs near parallel, their facing ends near; the best pair.
     ints = np.full(13, -1, dtype=np.int64)
-    out = np.zeros(16)
+    out = np.zeros(21)
     best_open = False
     best_key = 0.0
     for a in range(nr - 1):
@@ -441,9 +412,8 @@ def two_plates(
                 best_key = score
                 ints[0], ints[1] = a, b
                 out[5] = step
-    none = np.empty(0, dtype=np.int64)
     if ints[0] < 0:
-        return ints, out, none, np.empty(0), none, np.empty(0)
+        return ints, out
     a, b = ints[0], ints[1]
     if not butt:
         res = hole(
@@ -473,17 +443,68 @@ def two_plates(
         ints[11] = 1 if res[1] else 0
         ints[12] = 1 if res[4] else 0
         out[0], out[1], out[2], out[3], out[4] = res[0], res[2], res[3], res[5], res[6]
-    ka, ay, az, ady, adz, a_rms, a_idx, a_t = _run_line(
-        points, index, along, offsets, rows, t_first, t_last, pl[run_lo[a] : run_hi[a]],
-        plate_anchor[pg[run_lo[a]]], min_plate_mm,
-    )  # fmt: skip
-    kb, by, bz, bdy, bdz, b_rms, b_idx, b_t = _run_line(
-        points, index, along, offsets, rows, t_first, t_last, pl[run_lo[b] : run_hi[b]],
-        plate_anchor[pg[run_lo[b]]], min_plate_mm,
-    )  # fmt: skip
-    ints[2], ints[3] = ka, kb
+    # The runs' ends (a visible corner or half a step beyond the last inlier), the share of
+    # the profile the model (each plate running on to the profile's end) explains.
+    piece_a = pl[run_lo[a]] if kind[a] == PIECE else -1
+    piece_b = pl[run_lo[b]] if kind[b] == PIECE else -1
+    steps = np.empty((nl, 2))
+    for j in range(nl):
+        steps[j, 0], steps[j, 1] = _steps(along[offsets[j] : offsets[j + 1]])
+    out[16], out[17] = _corner(
+        line[a],
+        ends[a],
+        True,
+        piece_a,
+        rows,
+        count,
+        t_first,
+        t_last,
+        steps,
+        min_points,
+        spacing,
+        tol,
+    )
+    out[18], out[19] = _corner(
+        line[b],
+        ends[b],
+        False,
+        piece_b,
+        rows,
+        count,
+        t_first,
+        t_last,
+        steps,
+        min_points,
+        spacing,
+        tol,
+    )
+    lo, hi = lims[a, 1] + 1, lims[b, 0]
+    zones = np.array([[0, lo, 1], [lo, hi, 0], [max(hi, lo), m, 1]], dtype=np.int64)
+    fits = np.zeros((3, 1, 4))
+    fits[0, 0, 0], fits[0, 0, 1], fits[0, 0, 2], fits[0, 0, 3] = (
+        line[a, 0],
+        line[a, 1],
+        -line[a, 3],
+        line[a, 2],
+    )
+    fits[2, 0, 0], fits[2, 0, 1], fits[2, 0, 2], fits[2, 0, 3] = (
+        line[b, 0],
+        line[b, 1],
+        -line[b, 3],
+        line[b, 2],
+    )
+    surface = ~stray if stray.shape[0] == m else np.ones(m, dtype=np.bool_)
+    out[20] = explained_share(points, surface, zones, fits, 3.0 * tol)
+    out[6], out[7], out[8], out[9], out[10] = line[a, 0], line[a, 1], line[a, 2], line[a, 3], rms[a]
+    out[11], out[12], out[13], out[14], out[15] = (
+        line[b, 0],
+        line[b, 1],
+        line[b, 2],
+        line[b, 3],
+        rms[b],
+    )
+    ints[2], ints[3] = kind[a], kind[b]
     ints[4], ints[5] = pl[run_lo[a]], pl[run_lo[b]]
     ints[6], ints[7] = plate_anchor[pg[run_lo[a]]], plate_anchor[pg[run_lo[b]]]
-    out[6], out[7], out[8], out[9], out[10] = ay, az, ady, adz, a_rms
-    out[11], out[12], out[13], out[14], out[15] = by, bz, bdy, bdz, b_rms
-    return ints, out, a_idx, a_t, b_idx, b_t
+    ints[8], ints[9] = lims[a, 2], lims[b, 2]
+    return ints, out
