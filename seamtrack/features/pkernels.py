@@ -20,6 +20,8 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.features.counts import explained_share
+
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
@@ -485,3 +487,36 @@ def _corner(
         return best_y, best_z
     t = ends[1] + 0.5 * ends[3] if at_end else ends[0] - 0.5 * ends[2]
     return cy + t * dy, cz + t * dz
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def two_lines_share(
+    points: FloatArray,
+    stray: NDArray[np.bool_],
+    lo: int,
+    hi: int,
+    acy: float,
+    acz: float,
+    ady: float,
+    adz: float,
+    bcy: float,
+    bcz: float,
+    bdy: float,
+    bdz: float,
+    band: float,
+) -> float:
+    """Share of the surface points (``stray`` left out when it flags each point) within
+    ``band`` of their line when line ``a`` (centroid, unit direction) runs from the profile's
+    start to kept point ``lo`` and line ``b`` from ``hi`` to its end, what lies between
+    them left out: :func:`seamtrack.features.base.explained` of a two-plate or two-face
+    model (:func:`seamtrack.features.counts.explained_share`)."""
+    m = points.shape[0]
+    zones = np.empty((3, 3), dtype=np.int64)
+    zones[0, 0], zones[0, 1], zones[0, 2] = 0, lo, 1
+    zones[1, 0], zones[1, 1], zones[1, 2] = lo, hi, 0
+    zones[2, 0], zones[2, 1], zones[2, 2] = max(hi, lo), m, 1
+    fits = np.zeros((3, 1, 4))
+    fits[0, 0, 0], fits[0, 0, 1], fits[0, 0, 2], fits[0, 0, 3] = acy, acz, -adz, ady
+    fits[2, 0, 0], fits[2, 0, 1], fits[2, 0, 2], fits[2, 0, 3] = bcy, bcz, -bdz, bdy
+    surface = ~stray if stray.shape[0] == m else np.ones(m, dtype=np.bool_)
+    return explained_share(points, surface, zones, fits, band)

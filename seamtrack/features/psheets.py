@@ -22,8 +22,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features.counts import explained_share
-from seamtrack.features.pkernels import _corner, _fit, _median, hole
+from seamtrack.features.pkernels import _corner, _fit, _median, hole, two_lines_share
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -478,23 +477,11 @@ def two_plates(
         spacing,
         tol,
     )
+    ay, az, ady, adz = line[a, 0], line[a, 1], line[a, 2], line[a, 3]
+    by, bz, bdy, bdz = line[b, 0], line[b, 1], line[b, 2], line[b, 3]
     lo, hi = lims[a, 1] + 1, lims[b, 0]
-    zones = np.array([[0, lo, 1], [lo, hi, 0], [max(hi, lo), m, 1]], dtype=np.int64)
-    fits = np.zeros((3, 1, 4))
-    fits[0, 0, 0], fits[0, 0, 1], fits[0, 0, 2], fits[0, 0, 3] = (
-        line[a, 0],
-        line[a, 1],
-        -line[a, 3],
-        line[a, 2],
-    )
-    fits[2, 0, 0], fits[2, 0, 1], fits[2, 0, 2], fits[2, 0, 3] = (
-        line[b, 0],
-        line[b, 1],
-        -line[b, 3],
-        line[b, 2],
-    )
-    surface = ~stray if stray.shape[0] == m else np.ones(m, dtype=np.bool_)
-    out[20] = explained_share(points, surface, zones, fits, 3.0 * tol)
+    out[20] = two_lines_share(points, stray, lo, hi, ay, az, ady, adz, by, bz, bdy, bdz, 3.0 * tol)
+
     out[6], out[7], out[8], out[9], out[10] = line[a, 0], line[a, 1], line[a, 2], line[a, 3], rms[a]
     out[11], out[12], out[13], out[14], out[15] = (
         line[b, 0],
