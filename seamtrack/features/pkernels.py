@@ -46,15 +46,45 @@ def _angle(ady: float, adz: float, bdy: float, bdz: float) -> float:
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def _median(v: FloatArray) -> float:
-    """numpy's median (mean of the two middle values of an even count; NaN propagates)."""
+    """numpy's median (mean of the two middle values of an even count; NaN propagates). A
+    Shell sort of a copy: small code (numba's sort made the kernels slow to compile) and
+    fast enough on the few hundred values of a hole."""
     n = v.shape[0]
     for x in v:
         if math.isnan(x):
             return math.nan
-    s = np.sort(v)
+    s = v.copy()
+    gap = 1
+    while gap < n // 3:
+        gap = 3 * gap + 1
+    while gap > 0:
+        for i in range(gap, n):
+            x = s[i]
+            j = i
+            while j >= gap and s[j - gap] > x:
+                s[j] = s[j - gap]
+                j -= gap
+            s[j] = x
+        gap //= 3
     if n % 2:
         return s[n // 2]
     return (s[n // 2 - 1] + s[n // 2]) / 2.0
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _kept(keep: NDArray[np.bool_]) -> IntArray:
+    """Positions of the True flags (``np.flatnonzero``)."""
+    n = 0
+    for x in keep:
+        if x:
+            n += 1
+    k = np.empty(n, dtype=np.int64)
+    n = 0
+    for i in range(keep.shape[0]):
+        if keep[i]:
+            k[n] = i
+            n += 1
+    return k
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
@@ -93,7 +123,7 @@ def _stretch_ends(
     three spacings along the line, as :func:`seamtrack.features.plates._stretches`): the
     first one's start, the last one's end, and the positions of the points of the first
     (``first``) or of the last stretch."""
-    k = np.flatnonzero(keep)
+    k = _kept(keep)
     n = k.shape[0]
     hi_first = n
     for i in range(1, n):
@@ -123,7 +153,7 @@ def _stretch_ends(
 def _covered(keep: NDArray[np.bool_], t: FloatArray, spacing: float, ta: float, tb: float) -> float:
     """Summed length along the line of the stretches of consecutive kept points, clipped to
     ``[ta, tb]`` (NaN propagates, as numpy's reductions do)."""
-    k = np.flatnonzero(keep)
+    k = _kept(keep)
     n = k.shape[0]
     total = 0.0
     i = 0
@@ -390,7 +420,10 @@ def hole(
             qb[i] = (q[i, 0] * s_ - bcy) * bdy + (q[i, 1] * s_ - bcz) * bdz
         _, t1, last = _stretch_ends(cover, qb, sp_b, False)
         if t1 >= tb_b - 2.0 * sp_b:
-            right, t = _hidden_edge(last[::-1].copy(), qb, on_b, stray, tb_b, sp_b, False)
+            back = np.empty_like(last)
+            for i in range(last.shape[0]):
+                back[i] = last[last.shape[0] - 1 - i]
+            right, t = _hidden_edge(back, qb, on_b, stray, tb_b, sp_b, False)
             ry, rz = bcy + t * bdy, bcz + t * bdz
     rest = width - covered
     return (rest if rest > 0.0 else 0.0), left, ly, lz, right, ry, rz

@@ -44,6 +44,22 @@ def _steps(t: FloatArray) -> tuple[float, float]:
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
+def _order(keys: IntArray) -> IntArray:
+    """Stable ascending order of a few keys (an insertion sort: small code, where numba's
+    sorts made the kernel slow to compile)."""
+    n = keys.shape[0]
+    o = np.arange(n)
+    for i in range(1, n):
+        x = o[i]
+        j = i
+        while j > 0 and keys[o[j - 1]] > keys[x]:
+            o[j] = o[j - 1]
+            j -= 1
+        o[j] = x
+    return o
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
 def _span(
     rows: FloatArray, t_first: FloatArray, t_last: FloatArray, line: int, pieces: IntArray
 ) -> float:
@@ -172,7 +188,10 @@ def two_plates(
             flat[nf] = j
             nf += 1
     flat = flat[:nf]
-    order = np.argsort(-count[flat], kind="mergesort")
+    minus = np.empty(nf, dtype=np.int64)
+    for o in range(nf):
+        minus[o] = -count[flat[o]]
+    order = _order(minus)
     cos_max = math.cos(math.radians(30.0))
     group = np.empty(nf, dtype=np.int64)  # each flat piece's group (position in flat)
     anchors = np.empty(nf, dtype=np.int64)  # each group's anchor (a piece)
@@ -203,7 +222,13 @@ def two_plates(
     plate_anchor = np.empty(ng, dtype=np.int64)
     npl = 0
     for k in range(ng):
-        pieces = flat[group == k]
+        pieces = np.empty(nf, dtype=np.int64)
+        c = 0
+        for o in range(nf):
+            if group[o] == k:
+                pieces[c] = flat[o]
+                c += 1
+        pieces = pieces[:c]
         if _span(rows, t_first, t_last, anchors[k], pieces) >= min_plate_mm:
             plate_of[k] = npl
             plate_anchor[npl] = anchors[k]
@@ -215,8 +240,13 @@ def two_plates(
         if plate_of[group[o]] >= 0:
             pg[n], pl[n] = plate_of[group[o]], flat[o]
             n += 1
-    srt = np.argsort(first[pl[:n]], kind="mergesort")
-    pg, pl = pg[:n][srt].copy(), pl[:n][srt].copy()
+    starts = np.empty(n, dtype=np.int64)
+    for o in range(n):
+        starts[o] = first[pl[o]]
+    srt = _order(starts)
+    pg0, pl0 = pg.copy(), pl.copy()
+    for o in range(n):
+        pg[o], pl[o] = pg0[srt[o]], pl0[srt[o]]
     # A plate line showing briefly between two stretches of another, tilted to it, far
     # behind it or too short, is no plate there; of competing blocks the smallest goes.
     ten = math.radians(10.0)
@@ -249,10 +279,9 @@ def two_plates(
             i = j
         if bi < 0:
             break
-        keep = np.ones(n, dtype=np.bool_)
-        keep[bi:bj] = False
-        pg, pl = pg[:n][keep].copy(), pl[:n][keep].copy()
-        n = pg.shape[0]
+        for o in range(bj, n):
+            pg[o - (bj - bi)], pl[o - (bj - bi)] = pg[o], pl[o]
+        n -= bj - bi
     # Runs: consecutive pieces of one plate line, unless (square butt) an open gap lies
     # between them. Holes found on the way are kept for the pair chosen below.
     run_lo = np.empty(n + 1, dtype=np.int64)
