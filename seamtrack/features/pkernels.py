@@ -409,21 +409,23 @@ def hole(
         for i in range(n):
             on_a[i] = plate[i] and off_a[i] <= tol
             on_b[i] = plate[i] and off_b[i] <= tol
-        t0, _, first = _stretch_ends(cover, qa, sp_a, True)
+        # Runtime flags: a literal True or False would compile a copy of the callee each.
+        at_end, at_start = butt | True, butt & False
+        t0, _, first = _stretch_ends(cover, qa, sp_a, at_end)
         if t0 <= ta + 2.0 * sp_a:
-            left, t = _hidden_edge(first, qa, on_a, stray, ta, sp_a, True)
+            left, t = _hidden_edge(first, qa, on_a, stray, ta, sp_a, at_end)
             ly, lz = acy + t * ady, acz + t * adz
         qb = np.empty(n)
         nb = bcy * -bdz + bcz * bdy
         for i in range(n):
             s_ = nb / (q[i, 0] * -bdz + q[i, 1] * bdy)
             qb[i] = (q[i, 0] * s_ - bcy) * bdy + (q[i, 1] * s_ - bcz) * bdz
-        _, t1, last = _stretch_ends(cover, qb, sp_b, False)
+        _, t1, last = _stretch_ends(cover, qb, sp_b, at_start)
         if t1 >= tb_b - 2.0 * sp_b:
             back = np.empty_like(last)
             for i in range(last.shape[0]):
                 back[i] = last[last.shape[0] - 1 - i]
-            right, t = _hidden_edge(back, qb, on_b, stray, tb_b, sp_b, False)
+            right, t = _hidden_edge(back, qb, on_b, stray, tb_b, sp_b, at_start)
             ry, rz = bcy + t * bdy, bcz + t * bdz
     rest = width - covered
     return (rest if rest > 0.0 else 0.0), left, ly, lz, right, ry, rz

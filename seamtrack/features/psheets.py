@@ -331,7 +331,7 @@ def two_plates(
                         spacing,
                         sigma,
                         min_bottom_mm,
-                        True,
+                        butt,
                     )
                     cache_key[nc, 0], cache_key[nc, 1] = lo, hi
                     cache_val[nc, 0] = res[0]
@@ -419,7 +419,7 @@ def two_plates(
                     spacing,
                     sigma,
                     min_bottom_mm,
-                    True,
+                    butt,
                 )
             is_open = res[0] >= min_open_mm
             if not is_open and not res[1] and not res[4]:
@@ -466,13 +466,15 @@ def two_plates(
             spacing,
             sigma,
             math.inf,
-            False,
+            butt,
         )
         ints[11] = 1 if res[1] else 0
         ints[12] = 1 if res[4] else 0
         out[0], out[1], out[2], out[3], out[4] = res[0], res[2], res[3], res[5], res[6]
     # The runs' ends (a visible corner or half a step beyond the last inlier), the share of
     # the profile the model (each plate running on to the profile's end) explains.
+    # Runtime flags: a literal True or False would compile a copy of the callee each.
+    at_end, at_start = butt | True, butt & False
     piece_a = pl[run_lo[a]] if kind[a] == PIECE else -1
     piece_b = pl[run_lo[b]] if kind[b] == PIECE else -1
     steps = np.empty((nl, 2))
@@ -481,7 +483,7 @@ def two_plates(
     out[16], out[17] = _corner(
         line[a],
         ends[a],
-        True,
+        at_end,
         piece_a,
         rows,
         count,
@@ -495,7 +497,7 @@ def two_plates(
     out[18], out[19] = _corner(
         line[b],
         ends[b],
-        False,
+        at_start,
         piece_b,
         rows,
         count,
