@@ -1,12 +1,14 @@
 """Compiled inner loops of the two-plate extractors (:mod:`seamtrack.features.plates`).
 
-:func:`hole` reads what lies between two plate runs (:func:`seamtrack.features.plates._hole`)
-in one call: done as numpy calls on the few dozen points of a hole, its masks, medians and
-stretches were some hundred small array operations per profile, whose per-call overhead was
-most of the extractor's time, and more on the profiles with reflections or outliers (one
-pass per piece and per run of loose points). The arithmetic is that of the numpy formulation
-(the same formulas, medians as numpy takes them); sums run in the same order, so results
-agree to rounding.
+:func:`hole` reads what lies between two plate runs in one call: done as numpy calls on the
+few dozen points of a hole, its masks, medians and stretches were some hundred small array
+operations per profile, whose per-call overhead was most of the extractor's time, and more on
+the profiles with reflections or outliers (one pass per piece and per run of loose points).
+:func:`_corner` is :func:`seamtrack.features.lines.corner_or_end` and
+:func:`two_lines_share` :func:`seamtrack.features.base.explained` of a two-line model, on
+floats. The arithmetic is that of the numpy formulation (the same formulas, medians as numpy
+takes them), so results agree to rounding. Booleans are passed to callees at run time: a
+literal True or False compiles a copy of the callee per value.
 
 Lines are passed as floats: centroid (y, z) and unit direction (y, z); ``lines`` holds the
 profile's pieces as rows ``(cy, cz, dy, dz)``.
@@ -120,9 +122,8 @@ def _stretch_ends(
     keep: NDArray[np.bool_], t: FloatArray, spacing: float, first: bool
 ) -> tuple[float, float, IntArray]:
     """Of the stretches of consecutive kept points (broken by another point or a jump of
-    three spacings along the line, as :func:`seamtrack.features.plates._stretches`): the
-    first one's start, the last one's end, and the positions of the points of the first
-    (``first``) or of the last stretch."""
+    three spacings along the line): the first one's start, the last one's end, and the
+    positions of the points of the first (``first``) or of the last stretch."""
     k = _kept(keep)
     n = k.shape[0]
     hi_first = n
@@ -191,8 +192,12 @@ def _hidden_edge(
     spacing: float,
     at_end: bool,
 ) -> tuple[bool, float]:
-    """As :func:`seamtrack.features.plates._hidden_edge`: (found, coordinate along the run's
-    line of the hidden edge)."""
+    """Where a run's edge lies when the covered stretch next to it (``part``, from the run's
+    end outwards) holds a stray line: the middle of the stray line's stretch along the run's
+    line (the edge may lie anywhere under it), or, when the plate shows again beyond it, the
+    last plate point seen (half a spacing on); up to the first point of anything else (the
+    other plate, a surface). (found, coordinate along the run's line); not found when no
+    stray line touches the run's end."""
     stop = part.shape[0]
     for i in range(part.shape[0]):
         if not (on_line[part[i]] or stray[part[i]]):
@@ -239,8 +244,24 @@ def hole(
     butt: bool,
 ) -> tuple[float, bool, float, float, bool, float, float]:
     """What lies between run ``a``'s last inlier (kept point ``lo``) and run ``b``'s first
-    (``hi``): (open_mm, left hidden?, left edge y, z, right hidden?, right edge y, z), as
-    :func:`seamtrack.features.plates._hole`.
+    (``hi``): (open_mm, left hidden?, left edge y, z, right hidden?, right edge y, z).
+
+    ``open_mm``: how much of the stretch between their ends (along ``a``) nothing covers.
+    Points on a plate's line (leftovers too short for a piece, a corner piece's end) are
+    plate: no opening, no stray line. What covers the hole: the plates and any surface but
+    a wall (steep on the plates, reaching off them behind them) or a bottom
+    ``min_bottom_mm`` behind both plates (a backing seen through a gap); a line crossing a
+    plate's line at an angle is no plate where it does. Points in no piece off the plates:
+    stray points (fewer than three in a row), walls and a bottom far behind cover nothing;
+    other runs of three or more do. ``butt``: between two plates of a butt joint, a wall
+    rising in front of the plates covers (a raised part, not a gap's wall) and points in no
+    piece hardly off a plate are plate (a mark, where the laser did not fall through); a
+    lap's edge face rises in front of its lower sheet. A surface that runs on from a plate
+    without a jump (a tack, an edge face, a chamfer) is part of the part; a line cut off
+    both plates by jumps (a false reflection) is stray: its columns are unknown, not open,
+    and over a plate's end it may hide the edge (:func:`_hidden_edge`). A plate holds on to
+    its surface more tightly (noise, not the split tolerance) than the surface holds
+    together: a stray line ends next to a plate only by chance.
 
     Run ``a``: centroid, direction, its last inlier's coordinate along it and its step
     there (:meth:`~seamtrack.features.lines.Line.step`); run ``b``: the same at its first

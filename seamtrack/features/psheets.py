@@ -1,17 +1,15 @@
 """Compiled plate search of the two-plate extractors (:mod:`seamtrack.features.plates`).
 
-:func:`two_plates` runs :func:`~seamtrack.features.plates._sheets` (plate lines, runs, the
-square butt's test for an open gap between pieces of one plate line),
-:func:`~seamtrack.features.plates._neighbours` and the extractors' choice of the pair of runs
-in one call, on the profile's pieces held as flat arrays: as Python on ``Line`` objects it was
-some hundreds of small operations per profile, most of an extractor's time once the
-segmentation is compiled. The arithmetic is that of the Python formulation (the same
-formulas, the same order of pieces and groups); the plate lines' groups are
+:func:`two_plates` finds the plates (plate lines, runs, the square butt's test for an open
+gap between pieces of one plate line), their neighbours and the extractors' choice of the
+pair of runs in one call, on the profile's pieces held as flat arrays: as Python on ``Line``
+objects it was some hundreds of small operations per profile, most of an extractor's time
+once the segmentation is compiled. The plate lines' groups are
 :func:`seamtrack.features.lines.collinear_members`' and the runs' refits
 :func:`seamtrack.features.kernels.fit_line`'s, computed the same way.
 
 The pieces: ``index`` and ``along`` concatenate their inliers' positions and coordinates
-along them, ``offsets`` bound each piece's share, ``rows`` are their ``(cy, cz, dy, dz)``.
+along them, ``counts`` are their numbers of inliers, ``geo`` their ``(cy, cz, dy, dz)``.
 """
 
 from __future__ import annotations
@@ -157,8 +155,8 @@ def two_plates(
     right edge hidden?); ``floats`` = (open width, left hidden edge y, z, right hidden edge
     y, z, the lap's step, the left run's cy, cz, dy, dz, rms (FIT only), the right run's,
     the left run's end y, z (:func:`_corner`), the right run's start y, z, the share of the
-    surface points the two-plate model explains (:func:`seamtrack.features.base.explained`
-    of :func:`seamtrack.features.plates._two_plates`)).
+    surface points the two-plate model explains (each plate running on to the profile's
+    end, what lies between them left out; :func:`seamtrack.features.base.explained`)).
     """
     rows = geo.reshape(-1, 4)
     nl = rows.shape[0]
