@@ -42,12 +42,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.errors import PluginError
-from seamtrack.features.base import Zone, _Base, _confidence, explained, included
+from seamtrack.features.base import _Base, _confidence, included
+from seamtrack.features.expect import Expect
 from seamtrack.features.lines import (
     DATA_ERRORS,
     Line,
     Segments,
 )
+from seamtrack.features.pkernels import two_lines_share
 from seamtrack.features.plates import LapExtractor, SquareButtExtractor
 from seamtrack.features.vgroove import VGrooveExtractor
 from seamtrack.sensing.profiles import Feature, Profile
@@ -84,12 +86,7 @@ class FilletExtractor(_Base):
         found = self._arms(seg, False, lo, hi, self.max_gap_mm)
         if isinstance(found, str):
             return Feature.failed(found, joint=self.name)
-        left, right, apex, _ = found
-        wrong = self._implausible(angle=included(left, right, apex))
-        if wrong is not None:
-            return wrong
-        feature = self._found(profile, apex, confidence=_confidence([left, right], seg))
-        return feature, explained(seg, _two_faces(seg, left, right))
+        return _two_faces(self, profile, seg, found)
 
 
 @dataclass(frozen=True)
@@ -106,19 +103,29 @@ class OutsideCornerExtractor(_Base):
         found = self._arms(seg, True, lo, hi, self.max_gap_mm)
         if isinstance(found, str):
             return Feature.failed(found, joint=self.name)
-        left, right, apex, _ = found
-        wrong = self._implausible(angle=included(left, right, apex))
+        return _two_faces(self, profile, seg, found)
+
+
+def _two_faces(
+    ex: _Base, profile: Profile, seg: Segments, found: tuple[Line, Line, FloatArray, float]
+) -> Feature | tuple[Feature, float]:
+    """A corner's feature from its faces (left, right, apex, score), and the share of the
+    profile the model of a corner explains: each face runs on to the profile's end; the
+    corner between the faces' last points is left out (:func:`~.base.explained`, here in one
+    compiled call, :func:`seamtrack.features.pkernels.two_lines_share`)."""
+    left, right, apex, _ = found
+    if isinstance(ex.expect, Expect):  # the included angle matters only against an expectation
+        wrong = ex._implausible(angle=included(left, right, apex))
         if wrong is not None:
             return wrong
-        feature = self._found(profile, apex, confidence=_confidence([left, right], seg))
-        return feature, explained(seg, _two_faces(seg, left, right))
-
-
-def _two_faces(seg: Segments, left: Line, right: Line) -> list[Zone]:
-    """The model of a corner: each face runs on to the profile's end; the corner between the
-    faces' last points is left out."""
+    feature = ex._found(profile, apex, confidence=_confidence([left, right], seg))
+    (ay, az), (ady, adz) = left.centroid.tolist(), left.direction.tolist()
+    (by, bz), (bdy, bdz) = right.centroid.tolist(), right.direction.tolist()
     lo, hi = int(left.index[-1]) + 1, int(right.index[0])
-    return [(0, lo, left), (lo, hi, None), (max(hi, lo), len(seg.points), right)]
+    share = two_lines_share(
+        seg.points, seg.stray, lo, hi, ay, az, ady, adz, by, bz, bdy, bdz, 3.0 * seg.tol
+    )
+    return feature, share
 
 
 @dataclass(frozen=True)
