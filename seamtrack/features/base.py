@@ -21,7 +21,7 @@ from seamtrack.features.lines import (
     Segments,
     segment_profile,
 )
-from seamtrack.features.vkernels import arm_pair, explained_of, flat_lines
+from seamtrack.features.vkernels import arm_pair, explained_of, pieces_of
 from seamtrack.sensing.profiles import Feature, Profile
 
 FloatArray = NDArray[np.float64]
@@ -147,7 +147,7 @@ class _Base:
             np.ascontiguousarray(seg.points, dtype=np.float64),
             np.asarray(seg.stray, dtype=np.bool_),
             float(seg.tol),
-            *flat_lines(seg.lines),
+            *pieces_of(seg),
             params,
         )
         if left < 0:

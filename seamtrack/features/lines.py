@@ -113,6 +113,11 @@ class Segments:
     #: The range step of the profile's units (mm; 0: not quantized) and the resolution used.
     quantum: float = 0.0
     resolution: float = DEFAULT_RESOLUTION_MM
+    #: The pieces as :func:`segment_profile`'s compiled call left them, for the compiled joint
+    #: models: the inliers and their coordinates along their lines, piece after piece; per
+    #: piece (centroid y, z, direction y, z, rms, first and last coordinate); the bounds of
+    #: each piece's inliers in the first two. None: build them from ``lines``.
+    table: tuple[NDArray[np.intp], FloatArray, FloatArray, NDArray[np.intp]] | None = None
 
 
 def segment_profile(
@@ -196,6 +201,12 @@ def segment_profile(
         ints[n : n + nr],
         q,
         resolution,
+        (
+            ints[at_index : at_index + bounds[-1]],
+            floats[at_t : at_t + bounds[-1]],
+            fits,
+            ints[2 * n + 1 : 2 * n + 2 + k],
+        ),
     )
 
 

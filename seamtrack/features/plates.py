@@ -91,10 +91,14 @@ def _pair(
     line covers), a lap the best supported pair with a step.
     """
     lines = seg.lines
-    counts = np.array([len(ln.index) for ln in lines], dtype=np.int64)
-    index = np.concatenate([ln.index for ln in lines])
-    along = np.concatenate([ln.t for ln in lines])
-    geo = np.concatenate([x for ln in lines for x in (ln.centroid, ln.direction)])
+    if seg.table is not None:  # the arrays segmentation left
+        index, along, fits, bounds = seg.table
+        counts, geo = np.diff(bounds), fits[:, 0:4].ravel()
+    else:
+        counts = np.array([len(ln.index) for ln in lines], dtype=np.int64)
+        index = np.concatenate([ln.index for ln in lines])
+        along = np.concatenate([ln.t for ln in lines])
+        geo = np.concatenate([x for ln in lines for x in (ln.centroid, ln.direction)])
     ints, out = two_plates(
         seg.points, index, along, counts, geo, seg.stray, int(ex.min_points),
         float(ex.min_plate_mm), float(ex.max_tilt_deg), float(ex.max_gap_mm), float(seg.tol),

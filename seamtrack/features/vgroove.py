@@ -14,7 +14,7 @@ from numpy.typing import NDArray
 from seamtrack.features.base import _Base
 from seamtrack.features.expect import Expect
 from seamtrack.features.lines import Segments
-from seamtrack.features.vkernels import flat_lines
+from seamtrack.features.vkernels import pieces_of
 from seamtrack.features.vmodel import vgroove
 from seamtrack.sensing.profiles import Feature, Profile
 
@@ -83,7 +83,7 @@ class VGrooveExtractor(_Base):
             float(seg.tol),
             float(seg.sigma),
             float(seg.spacing),
-            *flat_lines(seg.lines),
+            *pieces_of(seg),
             params,
         )
         code = int(out[0])

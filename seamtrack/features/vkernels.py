@@ -505,6 +505,22 @@ def arm_pair(points, stray, tol, index, along, centroids, directions, fits, para
     return left, right, y, z, score, tb
 
 
+def pieces_of(seg: Any) -> tuple[IntArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+    """:func:`flat_lines` of a :class:`~seamtrack.features.lines.Segments`' pieces, from the
+    arrays segmentation left (``seg.table``) when it has them."""
+    if seg.table is None:
+        return flat_lines(seg.lines)
+    index, along, fits, bounds = seg.table
+    counts = np.diff(bounds)
+    return (
+        index,
+        along,
+        fits[:, 0:2].ravel(),
+        fits[:, 2:4].ravel(),
+        np.column_stack((fits[:, 4], counts)),
+    )
+
+
 def flat_lines(
     lines: list[Any],
 ) -> tuple[IntArray, FloatArray, FloatArray, FloatArray, FloatArray]:
