@@ -129,7 +129,7 @@ class _Base:
         a bevel cut up by spikes count, whatever piece they are in). The arms are returned
         without their inliers more than a tolerance past the apex (refitted). Compiled
         (:func:`seamtrack.features.vkernels.arm_pair`)."""
-        if not seg.lines:
+        if not seg.n_lines:
             return "no pair of lines forms the joint"
         params = np.array(
             [
@@ -158,8 +158,8 @@ class _Base:
 def _record(seg: Segments, tb: tuple, r: int) -> Line:
     """The line of record ``r`` of a table (:mod:`seamtrack.features.vkernels`): the piece
     itself when it is one, else a new line."""
-    if r < len(seg.lines):
-        return seg.lines[r]
+    if r < seg.n_lines:
+        return seg.line(r)
     geo, span, pool_index, pool_t, _ = tb
     a, c = int(span[r, 0]), int(span[r, 1])
     return Line(

@@ -103,7 +103,8 @@ class Segments:
     sigma: float  # noise estimate (mm)
     tol: float  # split / inlier tolerance (mm)
     spacing: float  # median distance between neighbouring points (mm)
-    lines: list[Line]
+    #: The straight pieces; None: built from ``table`` when first asked for (:attr:`lines`).
+    pieces: list[Line] | None
     #: (m,) True for the points of detours (spikes, reflections: in no piece).
     stray: NDArray[np.bool_] = field(default_factory=lambda: np.zeros(0, dtype=bool))
     #: (m,) each kept point's column in the profile.
@@ -118,6 +119,31 @@ class Segments:
     #: piece (centroid y, z, direction y, z, rms, first and last coordinate); the bounds of
     #: each piece's inliers in the first two. None: build them from ``lines``.
     table: tuple[NDArray[np.intp], FloatArray, FloatArray, NDArray[np.intp]] | None = None
+
+    @property
+    def lines(self) -> list[Line]:
+        """The straight pieces, in column order (built on first use: the compiled joint models
+        read ``table`` and never need most of them)."""
+        if self.pieces is None:
+            assert self.table is not None
+            self.pieces = [self.line(j) for j in range(self.n_lines)]
+        return self.pieces
+
+    @property
+    def n_lines(self) -> int:
+        return len(self.pieces) if self.pieces is not None else len(self.table[3]) - 1  # type: ignore[index]
+
+    def line(self, j: int) -> Line:
+        """Piece ``j`` (without building the others)."""
+        if self.pieces is not None:
+            return self.pieces[j]
+        assert self.table is not None
+        index, along, fits, bounds = self.table
+        a, b = int(bounds[j]), int(bounds[j + 1])
+        cy, cz, uy, uz, rms, t0, t1 = fits[j].tolist()
+        line = Line(index[a:b], fits[j, 0:2], fits[j, 2:4], along[a:b], rms)
+        line.__dict__["scalars"] = (cy, cz, uy, uz, t0, t1)  # the cached property, as floats
+        return line
 
 
 def segment_profile(
@@ -177,36 +203,23 @@ def segment_profile(
     )
     if code:
         return _WHY[code].format(m)
-    bounds = ints[2 * n + 1 : 2 * n + 2 + k].tolist()
+    bounds = ints[2 * n + 1 : 2 * n + 2 + k]
     fits = floats[2 * n : 2 * n + 7 * k].reshape(k, 7)
     at_t = 2 * n + 7 * max_lines  # the inliers' coordinates along their lines
     at_index = 2 * n + max_lines + 2  # the inliers
-    lines = []
-    # Row views by iteration, scalars by one tolist: numpy's per-call overhead is most of
-    # the cost here.
-    for (a, b), c, d, (cy, cz, uy, uz, rms, t0, t1) in zip(
-        itertools.pairwise(bounds), fits[:, 0:2], fits[:, 2:4], fits.tolist(), strict=True
-    ):
-        line = Line(ints[at_index + a : at_index + b], c, d, floats[at_t + a : at_t + b], rms)
-        line.__dict__["scalars"] = (cy, cz, uy, uz, t0, t1)  # the cached property, as floats
-        lines.append(line)
+    end = int(bounds[-1])
     return Segments(
         floats[: 2 * m].reshape(m, 2),
         sigma,
         tol,
         spacing,
-        lines,
+        None,
         stray[:m],
         ints[:m],
         ints[n : n + nr],
         q,
         resolution,
-        (
-            ints[at_index : at_index + bounds[-1]],
-            floats[at_t : at_t + bounds[-1]],
-            fits,
-            ints[2 * n + 1 : 2 * n + 2 + k],
-        ),
+        (ints[at_index : at_index + end], floats[at_t : at_t + end], fits, bounds),
     )
 
 

@@ -90,11 +90,11 @@ def _pair(
     ``max_gap_mm``, a square butt takes the widest opening (an open gap before one a stray
     line covers), a lap the best supported pair with a step.
     """
-    lines = seg.lines
     if seg.table is not None:  # the arrays segmentation left
         index, along, fits, bounds = seg.table
         counts, geo = np.diff(bounds), fits[:, 0:4].ravel()
     else:
+        lines = seg.lines
         counts = np.array([len(ln.index) for ln in lines], dtype=np.int64)
         index = np.concatenate([ln.index for ln in lines])
         along = np.concatenate([ln.t for ln in lines])
@@ -115,10 +115,18 @@ def _pair(
     # The runs' rms: a piece's, a refit's, or (a stub measured on its plate's line) the
     # plate line's anchor's.
     rms_a = (
-        lines[piece_a].rms if kind_a == PIECE else f[10] if kind_a == FIT else lines[anchor_a].rms
+        seg.line(piece_a).rms
+        if kind_a == PIECE
+        else f[10]
+        if kind_a == FIT
+        else seg.line(anchor_a).rms
     )
     rms_b = (
-        lines[piece_b].rms if kind_b == PIECE else f[15] if kind_b == FIT else lines[anchor_b].rms
+        seg.line(piece_b).rms
+        if kind_b == PIECE
+        else f[15]
+        if kind_b == FIT
+        else seg.line(anchor_b).rms
     )
     # As base._confidence of the two runs' lines.
     explained = (0 + count_a + count_b) / max(len(seg.points), 1)
