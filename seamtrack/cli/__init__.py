@@ -2,10 +2,10 @@
 
 One process uses one core: its arrays are small (a profile, a 4 x 4 pose), and parallel work
 runs in processes (``--workers``, Dask). The BLAS library's worker threads would only spin
-beside it: after a large product they busy-wait, and on the 2-core machine they inflated the
-extractors' CPU time per profile by 1.3-1.6x (``seamtrack extractors bench``) and took the
-other core from a sweep's second worker. So the command starts with one BLAS thread unless the
-environment says otherwise (set ``OPENBLAS_NUM_THREADS`` and friends to choose).
+beside it: after a large product they busy-wait, taking the core a sweep's other worker needs,
+and the benchmarks' CPU time counts their spinning (0.8 ms of Python right after a 400 x 400
+product measured 5.0 ms of CPU time on the 2-core machine). So the command starts with one
+BLAS thread unless the environment says otherwise (set ``OPENBLAS_NUM_THREADS`` and friends).
 """
 
 import os
