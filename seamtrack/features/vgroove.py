@@ -58,7 +58,7 @@ class VGrooveExtractor(_Base):
     min_gap_mm: float = 0.05
 
     def _extract(self, profile: Profile, seg: Segments) -> Feature | tuple[Feature, float]:
-        if not seg.lines:
+        if not seg.n_lines:
             return Feature.failed(_REFUSALS[1], joint=self.name)
         lo, hi = self._angles(self.min_angle_deg, self.max_angle_deg)
         expect = self.expect if isinstance(self.expect, Expect) else None

@@ -179,5 +179,12 @@ class Feature:
     ) -> Feature:
         """A seam point; its world position follows from the pose when one is given."""
         p = np.asarray(point_laser, dtype=np.float64).reshape(2)
-        world = np.empty(0) if T_world_sensor is None else laser_to_world(T_world_sensor, p)
+        if T_world_sensor is None:
+            world = np.empty(0)
+        else:  # laser_to_world on floats: one point, called once per frame
+            y, z = p.tolist()
+            (_, ay, az, ax), (_, by, bz, bx), (_, cy, cz, cx) = np.asarray(
+                T_world_sensor, dtype=np.float64
+            )[:3].tolist()
+            world = np.array((y * ay + z * az + ax, y * by + z * bz + bx, y * cy + z * cz + cx))
         return cls(point_laser=p, point_world=world, **kwargs)  # type: ignore[arg-type]
