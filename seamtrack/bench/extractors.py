@@ -3,9 +3,10 @@
 Every extractor runs on its own joint family (the generic one on every family) and on flat
 plates, at a ladder of imperfection levels, with random tilts (+-15 deg about both axes) and
 lateral offsets (+-3 mm). Accuracy columns are seeded and repeat exactly; the timing columns
-(CPU microseconds per profile: the mean, median and 95th percentile of each profile's
-``time.process_time_ns``, which other processes on a loaded machine disturb less than wall
-time) are kept apart, as they depend on the machine.
+(CPU microseconds per profile: the mean, median and 95th percentile over the profiles of each
+profile's fastest of :data:`TIMING_REPEATS` calls, by ``time.process_time_ns``, which other
+processes on a loaded machine disturb less than wall time) are kept apart, as they depend on
+the machine.
 
 :func:`bench_real` runs the family extractors and the classifier on folders of real profiles
 with labels (:func:`load_real_set` reads the layout), one row per set.
@@ -59,6 +60,8 @@ ACCURACY_COLUMNS = (
     "flat_false_rate",
 )
 TIMING_COLUMNS = ("us_per_profile", "median_us", "p95_us")
+#: Calls timed per profile; the fastest counts (extractors are deterministic: the same answer).
+TIMING_REPEATS = 3
 
 
 def _profiles(
@@ -150,12 +153,18 @@ def bench_extractors(
         for name, joint in jobs:
             ex = extractors[name]
             ex(cache[joint][0][0])  # warm-up, untimed: a tracking loop runs in steady state
-            # Timed back to back, as a tracking loop calls it; scored afterwards.
+            # Timed back to back, as a tracking loop calls it, each profile TIMING_REPEATS
+            # times, its fastest kept (the rest is other jobs on a shared machine); scored
+            # afterwards.
             features, took = [], []
             for profile, _ in cache[joint]:
-                t0 = time.process_time_ns()
-                features.append(ex(profile))
-                took.append(time.process_time_ns() - t0)
+                best = math.inf
+                for _ in range(TIMING_REPEATS):
+                    t0 = time.process_time_ns()
+                    feature = ex(profile)
+                    best = min(best, time.process_time_ns() - t0)
+                features.append(feature)
+                took.append(best)
             errors = [
                 float(np.hypot(*(feature.point_laser - truth.seam_laser))) if feature else math.inf
                 for feature, (_, truth) in zip(features, cache[joint], strict=True)
