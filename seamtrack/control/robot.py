@@ -401,7 +401,7 @@ class CartesianRobot:
         stop_at_target: bool,
     ) -> None:
         """:meth:`step` on the fields of a :class:`MoveCommand` (``target`` None: brake to
-        rest), so that the loop's fast path creates no command object per tick."""
+        rest): the servo's interpolator and ideal axes take one :func:`axes_step`."""
         if self._ideal is not None:
             self._step_servo(state, target, speed, feed_forward, stop_at_target)
             return

@@ -265,7 +265,9 @@ class TrajectoryTracker:
     def command_floats(
         self, x: float, y: float, z: float
     ) -> tuple[float, float, float, float, float, float, float, bool] | None:
-        """:meth:`command` on plain floats, for the loop's fast path (no objects per tick).
+        """:meth:`command` on plain floats: one step of the set-point (compiled,
+        :func:`~seamtrack.control.path_kernels.setpoint_step`, which the loop's compiled ticks
+        call directly on the built-in tracker), then the tool's orientation when it turns.
 
         Returns the target (3 floats, world), the speed, the feed-forward (3 floats, world) and
         ``stop_at_target``, or None; the commanded rotation is :attr:`rotation_world`.
