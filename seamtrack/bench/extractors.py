@@ -164,7 +164,7 @@ def bench_extractors(
                     feature = ex(profile)
                     best = min(best, time.process_time_ns() - t0)
                 features.append(feature)
-                took.append(best)
+                took.append(int(best))
             errors = [
                 float(np.hypot(*(feature.point_laser - truth.seam_laser))) if feature else math.inf
                 for feature, (_, truth) in zip(features, cache[joint], strict=True)
