@@ -202,11 +202,11 @@ class TrajectoryTracker:
         if len(self._env_s) and self._s[settled - 1] - self._env_s[-1] < 0.5 * w:
             return
         i0 = max(_left(self._s, self._s_set - w), 1)
-        s = np.asarray(self._s[i0:settled])
+        s = self._s[i0:settled].copy()  # kept as the envelope: not a view of the buffer
         if len(s) < 3:
             self._env_s, self._env_v = np.empty(0), np.empty(0)
             return
-        p = np.asarray(self._path[i0:settled])
+        p = self._path[i0:settled]
         back = np.searchsorted(s, s - w)
         fwd = np.minimum(np.searchsorted(s, s + w), len(s) - 1)
         d1 = p - p[back]
