@@ -12,7 +12,6 @@ import csv
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
@@ -335,7 +334,9 @@ class Seam:
         mid_dist, cand = tree.query(q, k=k)
         cand = np.asarray(cand).reshape(len(q), k)
         mid_dist = np.asarray(mid_dist).reshape(len(q), k)
-        seg, best_dist, best_t = _nearest_of(q, a, d, np.ascontiguousarray(cand, dtype=np.int64))
+        from seamtrack.geometry.nearest import nearest_of  # compiled: imported when first used
+
+        seg, best_dist, best_t = nearest_of(q, a, d, np.ascontiguousarray(cand, dtype=np.int64))
         if k < n_seg:
             # Exactness: the nearest segment's midpoint is within best + half the longest
             # segment. Queries that cannot prove it ask the tree again with more candidates.
@@ -425,35 +426,6 @@ def _vertex_tangents(points: FloatArray) -> FloatArray:
     flat = norm[:, 0] < 1e-12
     t[flat] = np.vstack([seg[:1], seg])[flat]
     return t / np.linalg.norm(t, axis=1, keepdims=True)
-
-
-@numba.njit(cache=True, nogil=True)
-def _nearest_of(
-    q: FloatArray, a: FloatArray, d: FloatArray, cand: NDArray[np.int64]
-) -> tuple[NDArray[np.int64], FloatArray, FloatArray]:
-    """For each query point, the nearest of its candidate segments (the first on a tie):
-    (segment, distance, t); :func:`_point_segment`'s arithmetic in loops, without its
-    (m, k, 3) temporaries (the scoring of a run asks this for every control tick)."""
-    m, k = cand.shape
-    seg = np.empty(m, dtype=np.int64)
-    best_dist = np.empty(m)
-    best_t = np.empty(m)
-    for i in range(m):
-        best, bt, bs = np.inf, 0.0, cand[i, 0]
-        for j in range(k):
-            c = cand[i, j]
-            dd = max(d[c, 0] * d[c, 0] + d[c, 1] * d[c, 1] + d[c, 2] * d[c, 2], 1e-300)
-            num = (q[i, 0] - a[c, 0]) * d[c, 0] + (q[i, 1] - a[c, 1]) * d[c, 1]
-            num += (q[i, 2] - a[c, 2]) * d[c, 2]
-            t = min(max(num / dd, 0.0), 1.0)
-            e0 = q[i, 0] - (a[c, 0] + t * d[c, 0])
-            e1 = q[i, 1] - (a[c, 1] + t * d[c, 1])
-            e2 = q[i, 2] - (a[c, 2] + t * d[c, 2])
-            dist = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
-            if dist < best:
-                best, bt, bs = dist, t, c
-        seg[i], best_dist[i], best_t[i] = bs, best, bt
-    return seg, best_dist, best_t
 
 
 def _point_segment(q: FloatArray, a: FloatArray, d: FloatArray) -> tuple[FloatArray, FloatArray]:
