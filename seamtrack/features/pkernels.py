@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.features.counts import explained_share
+from seamtrack.features.kernels import _fit as _fit_tls
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -87,34 +88,6 @@ def _kept(keep: NDArray[np.bool_]) -> IntArray:
             k[n] = i
             n += 1
     return k
-
-
-@numba.njit(cache=True, nogil=True, error_model="numpy")
-def _fit_direction(q: FloatArray, part: IntArray) -> tuple[float, float]:
-    """Unit direction of the total-least-squares line through ``q[part]`` (from the first
-    point towards the last), as :func:`seamtrack.features.lines._fit`."""
-    n = part.shape[0]
-    cy = 0.0
-    cz = 0.0
-    for k in range(n):
-        cy += q[part[k], 0]
-        cz += q[part[k], 1]
-    cy /= n
-    cz /= n
-    syy = 0.0
-    szz = 0.0
-    syz = 0.0
-    for k in range(n):
-        dy, dz = q[part[k], 0] - cy, q[part[k], 1] - cz
-        syy += dy * dy
-        szz += dz * dz
-        syz += dy * dz
-    theta = 0.5 * math.atan2(2.0 * syz, syy - szz)
-    uy, uz = math.cos(theta), math.sin(theta)
-    a, b = part[0], part[n - 1]
-    if uy * (q[b, 0] - q[a, 0]) + uz * (q[b, 1] - q[a, 1]) < 0.0:
-        uy, uz = -uy, -uz
-    return uy, uz
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
@@ -362,7 +335,7 @@ def hole(
                 behind[r] = -(math.nan if math.isnan(x) or math.isnan(y) else max(x, y))
             if not _median(behind) >= min_bottom_mm:
                 if e - s >= 3:
-                    uy, uz = _fit_direction(q, part)
+                    _, _, uy, uz, _ = _fit_tls(q, part, part.shape[0])
                     yes = _angle(uy, uz, ady, adz) < _WALL
                     if not yes:
                         top = -math.inf
@@ -450,42 +423,6 @@ def hole(
             ry, rz = bcy + t * bdy, bcz + t * bdz
     rest = width - covered
     return (rest if rest > 0.0 else 0.0), left, ly, lz, right, ry, rz
-
-
-@numba.njit(cache=True, nogil=True, error_model="numpy")
-def _fit(p: FloatArray, idx: IntArray) -> tuple[float, float, float, float, float, FloatArray]:
-    """Total-least-squares line through ``p[idx]``: centroid, unit direction (from the first
-    point towards the last), rms residual and the points' coordinates along it, computed as
-    :func:`seamtrack.features.kernels.fit_line` does (the same bits)."""
-    n = idx.shape[0]
-    cy = 0.0
-    cz = 0.0
-    for k in range(n):
-        cy += p[idx[k], 0]
-        cz += p[idx[k], 1]
-    cy /= n
-    cz /= n
-    syy = 0.0
-    szz = 0.0
-    syz = 0.0
-    for k in range(n):
-        dy, dz = p[idx[k], 0] - cy, p[idx[k], 1] - cz
-        syy += dy * dy
-        szz += dz * dz
-        syz += dy * dz
-    theta = 0.5 * math.atan2(2.0 * syz, syy - szz)
-    uy, uz = math.cos(theta), math.sin(theta)
-    a, b = idx[0], idx[n - 1]
-    if uy * (p[b, 0] - p[a, 0]) + uz * (p[b, 1] - p[a, 1]) < 0.0:
-        uy, uz = -uy, -uz
-    rr = 0.0
-    for k in range(n):
-        r = -(p[idx[k], 0] - cy) * uz + (p[idx[k], 1] - cz) * uy
-        rr += r * r
-    t = np.empty(n)
-    for k in range(n):
-        t[k] = (p[idx[k], 0] - cy) * uy + (p[idx[k], 1] - cz) * uz
-    return cy, cz, uy, uz, math.sqrt(rr / n), t
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")

@@ -20,7 +20,8 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features.pkernels import _corner, _fit, _median, hole, two_lines_share
+from seamtrack.features.kernels import fit_line
+from seamtrack.features.pkernels import _corner, _median, hole, two_lines_share
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -118,7 +119,7 @@ def _run_line(
             idx[c] = index[k]
             c += 1
     if _span(rows, t_first, t_last, anchor, pieces) >= min_plate_mm:
-        cy, cz, dy, dz, rms, t = _fit(points, idx)
+        cy, cz, dy, dz, rms, t = fit_line(points, idx)
         return FIT, cy, cz, dy, dz, rms, idx, t
     cy, cz, dy, dz = rows[anchor, 0], rows[anchor, 1], rows[anchor, 2], rows[anchor, 3]
     return ON, cy, cz, dy, dz, 0.0, idx, _along(points, idx, cy, cz, dy, dz)
