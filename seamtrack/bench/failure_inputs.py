@@ -4,18 +4,21 @@ files they need (scenes, seams, plugins, STEP parts, dataset specs)."""
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from seamtrack._version import __version__
-
-#: A short paper-verification seam: user-code failures show within a few frames.
-SHORT = ["--set", "seam.length_mm=20"]
-#: paper-v-groove cut to its first 30 mm: a mesh-mode run for the extractor entries.
-MESH = ["paper-v-groove", "--set", "workpiece.params.seam_length_mm=30"]
-#: The image-mode scene, for the camera's entries on ``seamtrack render``.
-CAMERA = ["v-groove-camera", "--at", "10", "--out", "OUT/image.png"]
+from seamtrack.bench import failure_inputs_arms, failure_inputs_camera, failure_inputs_parts
+from seamtrack.bench.failure_kit import (
+    ARM,
+    CAMERA,
+    MESH,
+    SHORT,
+    Entry,
+    _dataset,
+    _run,
+    _set,
+)
 
 PLUGINS = """
 import math
@@ -117,9 +120,6 @@ FILES: dict[str, bytes] = {
     b'seam = "s1"\n[sensor]\nmode = "mesh"\n',
 }
 
-#: paper-verification on a UR10e beside the seam: the articulated-arm entries.
-ARM = ('robot.model="ur10e"', 'tracker.name="trajectory"', "robot.base_origin_mm=[200,-700,0]")
-
 
 def _no_solid(path: Path) -> None:
     """A STEP file that holds a face and no solid."""
@@ -140,32 +140,6 @@ def _apart(path: Path) -> None:
 
 #: Files made when the workspace is (CadQuery imported then, not with this module).
 GENERATED: dict[str, Any] = {"sheet.step": _no_solid, "apart.step": _apart}
-
-
-@dataclass(frozen=True)
-class Entry:
-    """One bad input: a name, the command's arguments, and whether it is quick enough (a few
-    seconds) for the test suite."""
-
-    name: str
-    args: tuple[str, ...]
-    quick: bool = True
-    field: str = ""  # the field the error line must name (a substring of it)
-
-
-def _set(*pairs: str) -> tuple[str, ...]:
-    out: list[str] = []
-    for pair in pairs:
-        out += ["--set", pair]
-    return tuple(out)
-
-
-def _run(*extra: str) -> tuple[str, ...]:
-    return ("run", *extra, "--out", "OUT")
-
-
-def _dataset(spec: str, n: str = "8") -> tuple[str, ...]:
-    return ("dataset", spec, "--n", n, "--out", "OUT")
 
 
 CATALOGUE: tuple[Entry, ...] = (
@@ -505,14 +479,25 @@ CATALOGUE: tuple[Entry, ...] = (
         field="camera.bit_depth",
     ),
     Entry("dataset missing spec file", _dataset("missing.toml"), field="SPEC"),
+    # --- the newer features, each area in its own module
+    *failure_inputs_camera.ENTRIES,
+    *failure_inputs_arms.ENTRIES,
+    *failure_inputs_parts.ENTRIES,
 )
+
+_AREAS = (failure_inputs_camera, failure_inputs_arms, failure_inputs_parts)
 
 
 def workspace(root: Path) -> Path:
     """Write the catalogue's files into ``root``; return it."""
-    for name, data in FILES.items():
+    files = dict(FILES)
+    generated = dict(GENERATED)
+    for area in _AREAS:
+        files.update(area.FILES)
+        generated.update(area.GENERATED)
+    for name, data in files.items():
         (root / name).parent.mkdir(parents=True, exist_ok=True)
         (root / name).write_bytes(data)
-    for name, make in GENERATED.items():
+    for name, make in generated.items():
         make(root / name)
     return root

@@ -1,0 +1,42 @@
+"""The pieces every part of the bad-input catalogue builds its entries from: :class:`Entry` and
+the command lines the entries share."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+#: A short paper-verification seam: user-code failures show within a few frames.
+SHORT = ["--set", "seam.length_mm=20"]
+#: paper-v-groove cut to its first 30 mm: a mesh-mode run for the extractor entries.
+MESH = ["paper-v-groove", "--set", "workpiece.params.seam_length_mm=30"]
+#: The image-mode scene, for the camera's entries on ``seamtrack render``.
+CAMERA = ["v-groove-camera", "--at", "10", "--out", "OUT/image.png"]
+
+#: paper-verification on a UR10e beside the seam: the articulated-arm entries.
+ARM = ('robot.model="ur10e"', 'tracker.name="trajectory"', "robot.base_origin_mm=[200,-700,0]")
+
+
+@dataclass(frozen=True)
+class Entry:
+    """One bad input: a name, the command's arguments, and whether it is quick enough (a few
+    seconds) for the test suite."""
+
+    name: str
+    args: tuple[str, ...]
+    quick: bool = True
+    field: str = ""  # the field the error line must name (a substring of it)
+
+
+def _set(*pairs: str) -> tuple[str, ...]:
+    out: list[str] = []
+    for pair in pairs:
+        out += ["--set", pair]
+    return tuple(out)
+
+
+def _run(*extra: str) -> tuple[str, ...]:
+    return ("run", *extra, "--out", "OUT")
+
+
+def _dataset(spec: str, n: str = "8") -> tuple[str, ...]:
+    return ("dataset", spec, "--n", n, "--out", "OUT")
