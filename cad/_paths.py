@@ -21,6 +21,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import cadquery as cq
 from OCP.BRepBuilderAPI import BRepBuilderAPI_RightCorner
@@ -398,6 +399,50 @@ def finish(
     if not solid.isValid():
         raise ParamError("path", "these parameters make an invalid solid")
     return Joint(solid=solid, seams=seams, seam_solid=shape, params=dict(params))
+
+
+#: The path and tack keywords every swept joint's ``build()`` takes, passed on to :func:`finish`.
+PATH_KEYS = (
+    "path",
+    "seam_length_mm",
+    "arc_radius_mm",
+    "corner_angle_deg",
+    "tacks",
+    "tack_length_mm",
+    "tack_height_mm",
+)
+
+
+def finish_joint(
+    profiles: Sequence[Profile],
+    seam_uv: dict[str, tuple[float, float]],
+    params: dict[str, object],
+    tack_anchor_uv: tuple[float, float] = (0.0, 0.0),
+) -> Joint:
+    """:func:`finish` with the path and tack keywords (:data:`PATH_KEYS`) read from ``params``,
+    the ``build()``'s own arguments (``dict(locals())``)."""
+    path_keys: dict[str, Any] = {key: params[key] for key in PATH_KEYS}
+    return finish(profiles, seam_uv, params, tack_anchor_uv=tack_anchor_uv, **path_keys)
+
+
+def on_backing(
+    plates: Profile, gap_mm: float, plate_width_mm: float, thickness_mm: float, width_mm: float
+) -> list[tuple[float, float]]:
+    """Two plates across an open root gap, set on a backing strip centred under the gap (the
+    weld root at (0, 0), the plates' bottoms at v = 0): the strip's checks, then one outline.
+
+    ``plates`` is the plates' outline from the +u plate's bottom outer corner round to the -u
+    plate's (both at v = 0); the strip's corners close it below.
+    """
+    require(thickness_mm > 0, "backing_thickness_mm", "an open root gap needs a backing strip > 0")
+    require(width_mm > gap_mm, "backing_width_mm", f"must be wider than the root gap ({gap_mm} mm)")
+    require(
+        width_mm / 2 <= gap_mm / 2 + plate_width_mm,
+        "backing_width_mm",
+        "must not be wider than the plates",
+    )
+    half = width_mm / 2
+    return [(-half, -thickness_mm), (half, -thickness_mm), (half, 0.0), *plates, (-half, 0.0)]
 
 
 def require(condition: bool, param: str, message: str) -> None:

@@ -79,18 +79,7 @@ def build(
     else:
         flange = [(lo, -tf), (hi, -tf), (hi, 0.0), (foot, 0.0), (0.0, 0.0), (lo, 0.0)]
         profiles = [flange, web]
-    return _paths.finish(
-        profiles,
-        {"root": (0.0, 0.0), "root_opposite": (foot, 0.0)},
-        params,
-        path=path,
-        seam_length_mm=seam_length_mm,
-        arc_radius_mm=arc_radius_mm,
-        corner_angle_deg=corner_angle_deg,
-        tacks=tacks,
-        tack_length_mm=tack_length_mm,
-        tack_height_mm=tack_height_mm,
-    )
+    return _paths.finish_joint(profiles, {"root": (0.0, 0.0), "root_opposite": (foot, 0.0)}, params)
 
 
 if __name__ == "__main__":

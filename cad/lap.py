@@ -58,18 +58,7 @@ def build(
         profiles = [[(lo, -t1), (o, -t1), (o, 0.0), *top, (lo, 0.0)]]
     else:
         profiles = [[(lo, -t1), (o, -t1), (o, 0.0), (0.0, 0.0), (lo, 0.0)], [top[-1], *top[:-1]]]
-    return _paths.finish(
-        profiles,
-        {"root": (0.0, 0.0)},
-        params,
-        path=path,
-        seam_length_mm=seam_length_mm,
-        arc_radius_mm=arc_radius_mm,
-        corner_angle_deg=corner_angle_deg,
-        tacks=tacks,
-        tack_length_mm=tack_length_mm,
-        tack_height_mm=tack_height_mm,
-    )
+    return _paths.finish_joint(profiles, {"root": (0.0, 0.0)}, params)
 
 
 if __name__ == "__main__":

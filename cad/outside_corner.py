@@ -54,18 +54,7 @@ def build(
     left = [(-u, v) for u, v in half]
     # Both halves end at the inner corner (0, -sqrt(2) f): keep it once.
     profile = [(0.0, 0.0), *half, *list(reversed(left))[1:]]
-    return _paths.finish(
-        [profile],
-        {"root": (0.0, 0.0)},
-        params,
-        path=path,
-        seam_length_mm=seam_length_mm,
-        arc_radius_mm=arc_radius_mm,
-        corner_angle_deg=corner_angle_deg,
-        tacks=tacks,
-        tack_length_mm=tack_length_mm,
-        tack_height_mm=tack_height_mm,
-    )
+    return _paths.finish_joint([profile], {"root": (0.0, 0.0)}, params)
 
 
 if __name__ == "__main__":

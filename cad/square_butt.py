@@ -55,14 +55,7 @@ def build(
             profile = [(-w, -t), (w, -t), (w, 0.0), (0.0, 0.0), (-w, 0.0)]
         anchor = (0.0, 0.0)
     else:
-        bt, bw = backing_thickness_mm, backing_width_mm
-        _paths.require(bt > 0, "backing_thickness_mm", "an open root gap needs a backing strip > 0")
-        _paths.require(bw > g, "backing_width_mm", f"must be wider than the root gap ({g} mm)")
-        _paths.require(bw / 2 <= h + w, "backing_width_mm", "must not be wider than the plates")
-        profile = [
-            (-bw / 2, -bt),
-            (bw / 2, -bt),
-            (bw / 2, 0.0),
+        plates = [
             (h + w, 0.0),
             (h + w, t + m),
             (h, t + m),
@@ -72,22 +65,10 @@ def build(
             (-h, t),
             (-h - w, t),
             (-h - w, 0.0),
-            (-bw / 2, 0.0),
         ]
+        profile = _paths.on_backing(plates, g, w, backing_thickness_mm, backing_width_mm)
         anchor = (0.0, t)
-    return _paths.finish(
-        [profile],
-        {"root": (0.0, 0.0)},
-        params,
-        path=path,
-        seam_length_mm=seam_length_mm,
-        arc_radius_mm=arc_radius_mm,
-        corner_angle_deg=corner_angle_deg,
-        tacks=tacks,
-        tack_length_mm=tack_length_mm,
-        tack_height_mm=tack_height_mm,
-        tack_anchor_uv=anchor,
-    )
+    return _paths.finish_joint([profile], {"root": (0.0, 0.0)}, params, anchor)
 
 
 if __name__ == "__main__":

@@ -80,15 +80,8 @@ def build(
         profiles = [profile]
         anchor = (0.0, 0.0)
     else:
-        bt, bw = backing_thickness_mm, backing_width_mm
-        _paths.require(bt > 0, "backing_thickness_mm", "an open root gap needs a backing strip > 0")
-        _paths.require(bw > g, "backing_width_mm", f"must be wider than the root gap ({g} mm)")
-        _paths.require(bw / 2 <= h + w, "backing_width_mm", "must not be wider than the plates")
         # Seam at the gap centre on the backing (0, 0); plate bottoms at v = 0.
-        profile = [
-            (-bw / 2, -bt),
-            (bw / 2, -bt),
-            (bw / 2, 0.0),
+        plates = [
             (h + w, 0.0),
             (h + w, t),
             (h + bevel, t),
@@ -100,23 +93,10 @@ def build(
             (-h - bevel, t),
             (-h - w, t),
             (-h - w, 0.0),
-            (-bw / 2, 0.0),
         ]
-        profiles = [profile]
+        profiles = [_paths.on_backing(plates, g, w, backing_thickness_mm, backing_width_mm)]
         anchor = (0.0, f)
-    return _paths.finish(
-        profiles,
-        {"root": (0.0, 0.0)},
-        params,
-        path=path,
-        seam_length_mm=seam_length_mm,
-        arc_radius_mm=arc_radius_mm,
-        corner_angle_deg=corner_angle_deg,
-        tacks=tacks,
-        tack_length_mm=tack_length_mm,
-        tack_height_mm=tack_height_mm,
-        tack_anchor_uv=anchor,
-    )
+    return _paths.finish_joint(profiles, {"root": (0.0, 0.0)}, params, anchor)
 
 
 if __name__ == "__main__":

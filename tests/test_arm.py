@@ -130,11 +130,21 @@ def test_servo_lags_by_v_over_kv_at_steady_speed() -> None:
 
 
 def test_servo_off_is_the_ideal_axis() -> None:
+    """No servo: no set-point is held, and once the commanded speed is reached (a few ticks
+    of the acceleration limit) the axis moves exactly v dt each tick, with no following lag;
+    the other axes stay where they were."""
     robot = CartesianRobot()
     state = robot.state_at([10.0, 75.0, 75.0])
-    for _ in range(100):
+    dt = robot.control_period_s
+    ramp = math.ceil(5.0 / robot.acceleration_max_mm_s2[0] / dt)  # ticks to reach 5 mm/s
+    x = []
+    for _ in range(ramp + 100):
         robot.step(state, MoveCommand((700.0, 75.0, 75.0), 5.0))
+        x.append(state.q[0])
     assert state.setpoint is None and state.servo is None
+    assert np.diff(x[ramp:]) == pytest.approx(5.0 * dt, rel=1e-9)
+    assert list(state.v) == pytest.approx([5.0, 0.0, 0.0], abs=1e-9)
+    assert list(state.q[1:]) == [75.0, 75.0]
 
 
 def test_torch_angles_round_trip() -> None:

@@ -4,7 +4,6 @@ timings it writes are reported, never asserted)."""
 from __future__ import annotations
 
 import json
-import math
 
 import pytest
 
@@ -31,7 +30,7 @@ def test_bench_camera_quick_writes_its_tables_and_meets_the_must_shows(tmp_path)
         "image, mill-scale steel",
         "image, bright aluminium",
     }
-    assert all(math.isfinite(result["throughput"][k]["frame_ms"]) for k in ("ideal", "full"))
+    assert all("frame_ms" in result["throughput"][k] for k in ("ideal", "full"))  # not timed
 
     # Section 6: the same image-mode profiles as labelled sets through the real-data bench.
     # Its oracle (the seam's crossing of the laser plane, in the plane) is independent of

@@ -187,6 +187,7 @@ def test_user_tracker_from_the_scene(tmp_path) -> None:
         text=True,
         env=env,
         cwd=tmp_path,
+        timeout=600,
     )
     assert res.returncode == 0, res.stderr
     summary = json.loads((out / "summary.json").read_text())

@@ -4,9 +4,7 @@ a larger --n appended, refusals that leave the dataset as it was, and the reader
 from __future__ import annotations
 
 import hashlib
-import os
 import pickle
-import signal
 import subprocess
 import sys
 import time
@@ -19,7 +17,7 @@ import pytest
 import seamtrack as st
 from seamtrack.cli.main import main
 from seamtrack.datasets.generate import generate
-from seamtrack.datasets.layout import ARRAYS
+from seamtrack.datasets.layout import ARRAYS, chunk_path
 from seamtrack.datasets.spec import TEMPLATE, DatasetSpec, parse_spec
 from seamtrack.datasets.store import write_dataset
 from seamtrack.errors import SeamtrackError
@@ -69,7 +67,7 @@ def test_a_dask_cluster_gives_the_same_bytes(serial: Path, tmp_path: Path) -> No
             write_dataset(parse_spec(SMALL), 110, tmp_path / "data",
                           scheduler=cluster.scheduler_address)  # fmt: skip
         finally:
-            cluster.close()
+            cluster.close(timeout=60)
     assert _digests(tmp_path / "data") == _digests(serial)
 
 
@@ -94,24 +92,51 @@ def test_a_larger_n_appends_and_a_smaller_one_keeps_everything(serial: Path, tmp
     assert len(st.datasets.open(out)) == 110 and _digests(out) == before
 
 
+#: Run in a child: the CLI's dataset command, where the writer stops half-way through chunk
+#: ``HALTED`` (its temporary file begun, as a kill during a write leaves it), says so in the file
+#: ``argv[1]`` and waits to be killed. The parent kills on that state, not on a count it must
+#: catch in time: the outcome is the same on a fast or a slow machine.
+HALTED = 3
+_HALT_IN_A_WRITE = f"""
+import sys, time
+from pathlib import Path
+from seamtrack.cli.main import main
+from seamtrack.datasets import store
+
+real = store.write_chunk
+
+def write_chunk(out, spec, k, arrays):
+    if k == {HALTED}:
+        (Path(out) / f".chunk-{{k}}.halted.tmp").write_bytes(b"half an HDF5 file")
+        Path(sys.argv[1]).touch()
+        time.sleep(3600)
+    return real(out, spec, k, arrays)
+
+store.write_chunk = write_chunk
+sys.exit(main(sys.argv[2:]))
+"""
+
+
 def test_a_killed_run_continues_where_it_stopped(tmp_path: Path) -> None:
-    """SIGKILL while the chunks are being written; the rerun makes only the missing ones and
+    """SIGKILL while a chunk is being written; the rerun makes only the missing ones and
     the folder ends up byte for byte what an uninterrupted run writes."""
     spec = tmp_path / "spec.toml"
-    spec.write_text("rays = 1024\nchunk_size = 10\nseed = 5\n")  # the template's noise: slow
+    spec.write_text("rays = 1024\nchunk_size = 10\nseed = 5\n")
     out = tmp_path / "data"
-    command = [sys.executable, "-m", "seamtrack.cli", "dataset", str(spec), "--n", "400",
-               "--out", str(out), "-q"]  # fmt: skip
+    halted = tmp_path / "halted"
+    command = [sys.executable, "-c", _HALT_IN_A_WRITE, str(halted), "dataset", str(spec),
+               "--n", "400", "--out", str(out), "-q"]  # fmt: skip
     proc = subprocess.Popen(command, stderr=subprocess.DEVNULL)
-    deadline = time.monotonic() + 120
-    while len(list(out.glob("chunk-*.h5"))) < 3 and time.monotonic() < deadline:
-        if proc.poll() is not None:
-            break
-        time.sleep(0.005)
-    os.kill(proc.pid, signal.SIGKILL)
-    proc.wait()
-    made = len(list(out.glob("chunk-*.h5")))
-    assert 3 <= made < 40, f"{made} chunks when killed"
+    try:
+        deadline = time.monotonic() + 300  # bounds the wait; it times nothing
+        while not halted.exists() and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.02)
+        assert halted.exists(), "the run never reached the chunk it stops in"
+    finally:
+        proc.kill()
+        proc.wait(timeout=30)
+    assert sorted(out.glob("chunk-*.h5")) == [chunk_path(out, k) for k in range(HALTED)]
+    assert list(out.glob(".chunk-*.tmp"))  # the killed write left its temporary file
     assert st.datasets.open(out).missing  # the reader says it is incomplete
     code = main(["dataset", str(spec), "--n", "400", "--out", str(out), "-q"])
     assert code == 0
@@ -184,6 +209,6 @@ def test_datasets_is_a_lazy_attribute_of_the_package() -> None:
         "st.datasets\n"
         "print(sorted(m for m in ('h5py', 'numba') if m in sys.modules))\n"
     )
-    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300)
     assert res.returncode == 0, res.stderr
     assert res.stdout.strip() == "[]"

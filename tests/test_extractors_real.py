@@ -65,8 +65,8 @@ def test_rows_per_set_match_the_extractors_run_directly(sets, tmp_path):
     b = rows["block"]
     assert np.isnan(b["detection_rate"]) and b["false_joint_rate"] <= 0.1
     assert b["classified_rate"] >= 0.9
-    for r in rows.values():
-        assert r["us_per_profile"] > 0 and r["classify_us"] > 0
+    for r in rows.values():  # timings are reported (the bench), never asserted
+        assert {"us_per_profile", "classify_us"} <= set(r)
     text = (tmp_path / "extractors_real.md").read_text()
     assert "| groove | v-groove | 12 |" in text and "| block | none | 8 |" in text
     with open(tmp_path / "extractors_real.csv") as fh:

@@ -171,13 +171,33 @@ def test_v_groove_with_real_sensor_artefacts_detects_90_percent(unit, rays):
     of 0.005-0.05 mm (460-4600 columns over the paper sensor's field of view)."""
     e = _errors("v-groove", _campaign("v-groove", 30, 21, unit, rays, **LDS_V))
     assert np.mean(e <= DETECTED_MM) >= 0.9
-    assert np.percentile(e[np.isfinite(e)], 95) <= 0.5
+    assert np.percentile(e[np.isfinite(e)], 95) <= _cell_mm(unit, rays)
+
+
+def _cell_mm(unit: float, rays: int) -> float:
+    """The sampling cell of a profile: the range unit, or the column pitch (the field of view
+    at its widest over the columns), whichever is coarser. The seam point is where lines fitted
+    over many samples meet, so 95 % of them lie within one cell of the truth (the fit
+    averages the quantization and the noise of 0.45 units; what is left is the corner's own
+    sampling)."""
+    return max(unit, SENSOR.fov_far_mm / rays)
+
+
+#: The lap's seam is the corner under the top sheet's edge. Where a stray line (a spike run,
+#: geometric in length with a mean of ``spike_mean_run_mm``) covers the corner, the extractor
+#: takes the lower sheet's visible end or the edge's foot: off by up to the covered length. Of
+#: geometric runs, 95 % are shorter than ln(20) ~ 3 of their means.
+LAP_P95_MM = 3.0 * SensorArtefacts().spike_mean_run_mm
 
 
 @pytest.mark.parametrize("shape", ["square-butt", "fillet", "lap", "outside-corner"])
 def test_other_families_with_real_sensor_artefacts_detect_90_percent(shape):
+    """At the LDS's range unit (0.05 mm) and 2048 columns; the seam points within one sampling
+    cell, the lap's within what a stray line over its corner can cover (LAP_P95_MM)."""
     e = _errors(shape, _campaign(shape, 30, 22))
     assert np.mean(e <= DETECTED_MM) >= 0.9
+    bound = LAP_P95_MM if shape == "lap" else _cell_mm(0.05, 2048)
+    assert np.percentile(e[np.isfinite(e)], 95) <= bound
 
 
 @pytest.mark.parametrize("shape", ["v-groove", *FAMILIES[1:], "flat", "block"])

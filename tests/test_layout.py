@@ -1,11 +1,10 @@
 """The package tree shows the data flow: one subpackage per stage, imports pointing down the
-pipeline, no import cycle between modules (lazy imports inside functions count), no module over
-600 lines.
+pipeline, no import cycle between modules (lazy imports inside functions count, and so do
+imports for annotations only, under ``if TYPE_CHECKING:``), no module over 600 lines.
 
 Every ``import`` and ``from ... import`` statement of every module is read with :mod:`ast`,
-wherever it stands (module level, inside a function, under ``try``). Only imports under
-``if TYPE_CHECKING:`` are left out: they never run. An import ``from a.b import c`` is an edge
-to ``a.b.c`` when that is a module, else to ``a.b``.
+wherever it stands (module level, inside a function, under ``try``, under ``if TYPE_CHECKING:``).
+An import ``from a.b import c`` is an edge to ``a.b.c`` when that is a module, else to ``a.b``.
 """
 
 from __future__ import annotations
@@ -59,12 +58,17 @@ def _is_type_checking(node: ast.If) -> bool:
     )
 
 
-def _imports(name: str, path: Path, modules: dict[str, Path]) -> set[str]:
+def _imports(
+    name: str, path: Path, modules: dict[str, Path], *, type_only: bool = True
+) -> set[str]:
+    """The modules ``name`` imports; ``type_only=False`` leaves out the imports under
+    ``if TYPE_CHECKING:`` (they never run, but a circle through them is still a circle: the two
+    modules cannot be read, typed or moved apart)."""
     tree = ast.parse(path.read_text(), filename=str(path))
     package = name if path.name == "__init__.py" else name.rpartition(".")[0]
     skip: set[int] = set()
     for node in ast.walk(tree):
-        if isinstance(node, ast.If) and _is_type_checking(node):
+        if not type_only and isinstance(node, ast.If) and _is_type_checking(node):
             skip.update(id(n) for child in node.body for n in ast.walk(child))
     targets: set[str] = set()
     for node in ast.walk(tree):
@@ -108,8 +112,9 @@ def test_every_import_points_down_the_pipeline(graph: dict[str, set[str]]) -> No
     assert upward == []
 
 
-def test_no_import_cycle(graph: dict[str, set[str]]) -> None:
-    # Tarjan's strongly connected components: any component of more than one module is a cycle.
+def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """Tarjan's strongly connected components: any component of more than one module is a
+    cycle."""
     index: dict[str, int] = {}
     low: dict[str, int] = {}
     stack: list[str] = []
@@ -140,7 +145,41 @@ def test_no_import_cycle(graph: dict[str, set[str]]) -> None:
     for v in sorted(graph):
         if v not in index:
             visit(v)
-    assert cycles == []
+    return sorted(cycles)
+
+
+def test_no_import_cycle(graph: dict[str, set[str]]) -> None:
+    """No cycle among the imports that run (lazy ones included)."""
+    modules = _modules()
+    running = {
+        name: _imports(name, path, modules, type_only=False) for name, path in modules.items()
+    }
+    assert _cycles(running) == []
+
+
+#: The one circle left through imports for annotations only. ``LaserLineSensor`` (sensor.py)
+#: offers ``sensor.scan(...)`` and ``sensor.render(...)``, thin delegates down to scan.py and
+#: render.py (public API: README, notebooks), while those modules and camera.py take the
+#: sensor as an argument and name its type. A protocol would have to list some twenty members
+#: of the triangulation model (no small protocol), and moving the type means splitting the
+#: sensor into a geometry base class below scan.py and a subclass adding the delegates: a class
+#: hierarchy made for the import checker. Listed exactly: a new circle fails, and so does
+#: breaking this one without removing it here.
+KNOWN_TYPE_ONLY_CIRCLES = [
+    [
+        "seamtrack.sensing.camera",
+        "seamtrack.sensing.render",
+        "seamtrack.sensing.scan",
+        "seamtrack.sensing.sensor",
+    ]
+]
+
+
+def test_no_circle_even_through_imports_for_annotations(graph: dict[str, set[str]]) -> None:
+    """A circle closed by an ``if TYPE_CHECKING:`` import is a circle too: the modules cannot
+    be read, typed or moved apart (simulation/scene.py and checks.py/robots.py were one, until
+    the scene's types moved to simulation/config.py)."""
+    assert _cycles(graph) == KNOWN_TYPE_ONLY_CIRCLES
 
 
 def test_the_checker_sees_a_lazy_import_cycle(tmp_path: Path) -> None:
@@ -149,9 +188,15 @@ def test_the_checker_sees_a_lazy_import_cycle(tmp_path: Path) -> None:
     a.write_text("def f():\n    from seamtrack.geometry import frames\n")
     modules = {"seamtrack.sensing.a": a, "seamtrack.geometry.frames": a}
     assert _imports("seamtrack.sensing.a", a, modules) == {"seamtrack.geometry.frames"}
+
+
+def test_the_checker_sees_an_import_for_annotations_only(tmp_path: Path) -> None:
+    """An import under ``if TYPE_CHECKING:`` is an edge too (a type-only circle is a circle)."""
     b = tmp_path / "b.py"
     b.write_text("from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    import seamtrack.x\n")
-    assert _imports("seamtrack.y", b, {"seamtrack.x": b, "seamtrack.y": b}) == set()
+    modules = {"seamtrack.x": b, "seamtrack.y": b}
+    assert _imports("seamtrack.y", b, modules) == {"seamtrack.x"}
+    assert _imports("seamtrack.y", b, modules, type_only=False) == set()
 
 
 def test_no_module_over_600_lines() -> None:

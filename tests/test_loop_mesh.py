@@ -10,6 +10,7 @@ import pytest
 
 import seamtrack as st
 from seamtrack.sensing.scan import sense_seam
+from seamtrack.sensing.sensor import preset
 from seamtrack.simulation.assemble import build_parts
 from seamtrack.simulation.scene import builtin_scenes, load_scene
 
@@ -34,15 +35,44 @@ def test_there_is_a_mesh_scene_for_every_joint_family() -> None:
 OWN_TESTS = ("paper-v-groove", "tacks-and-clamp", "pipe-on-plate", "pipe-saddle")
 
 
+#: The paper's accuracy target at its welding speed: a max error of 0.1 mm at 5 mm/s (Sec. 4;
+#: its tracker in seam mode). The trajectory tracker keeps it up to 20 mm/s in seam mode
+#: (README, "the paper reproduced").
+PAPER_TARGET_MM = 0.1
+
+#: The mitred corners: the false V where the laser plane crosses the mitre puts the seam point
+#: up to ~0.75 mm off (tests/test_v_groove_false_v.py, a strict xfail until the mitre fix),
+#: and the 45 deg turn is cut while the set-point brakes. Loose until that fix lands.
+CORNER_SCENES_MM = {"v-groove-corner": 2.0, "v-groove-corner-arm": 2.0}
+
+
+def mesh_budget_mm(scene: st.Scene) -> float:
+    """What mesh mode may add to the paper's target: the part's chordal mesh tolerance (the
+    surface the stripe falls on is off the CAD surface by up to that) and one sampling cell of
+    the stripe (the coarser of the depth resolution and the column pitch at the far end of
+    the field of view), within which the extractor places the seam point."""
+    c = scene.config
+    assert c.workpiece is not None
+    sensor = preset(c.sensor.preset)
+    depth, columns = sensor.depth_resolution_mm, c.sensor.rays or sensor.pixels_v
+    if c.sensor.source == "image":  # the camera's pixels: its rows span the depth of field
+        assert c.sensor.camera is not None
+        depth = sensor.depth_of_field_mm / c.sensor.camera.rows
+        columns = c.sensor.camera.columns
+    cell = max(depth, sensor.fov_far_mm / columns)
+    return PAPER_TARGET_MM + c.workpiece.tolerance_mm + cell
+
+
 @pytest.mark.parametrize("name", [n for n in MESH_SCENES if n not in OWN_TESTS])
 def test_every_mesh_scene_completes_with_the_trajectory_tracker(name: str) -> None:
-    s = st.simulate(load_scene(name)).summary
+    scene = load_scene(name)
+    s = st.simulate(scene).summary
     assert s["status"] == "completed", s
     assert s["completed_fraction"] > 0.99
     assert s["mean_speed_mm_s"] == pytest.approx(s["welding_speed_mm_s"], rel=0.05)
-    # Straight joints are tracked to the extractor's accuracy; the corner and the tacks are
-    # bounded by the cornering and the bridging.
-    assert s["max_error_mm"] <= (2.0 if name in ("v-groove-corner", "v-groove-corner-arm") else 0.5)
+    # Straight joints within the paper's target plus what mesh mode adds (0.14 mm at 1024
+    # rays on 0.01 mm meshes; 0.23 mm through the 512-row camera); the mitred corners, above.
+    assert s["max_error_mm"] <= CORNER_SCENES_MM.get(name, mesh_budget_mm(scene))
 
 
 @pytest.fixture(scope="module")

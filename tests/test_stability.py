@@ -26,6 +26,11 @@ WALL_LIMIT_S = 30.0
 #: A short version of the paper's verification seam (the sensor looks 10 mm ahead).
 SHORT = {"seam.length_mm": 20.0}
 
+#: The paper's accuracy targets for its tracker on its sensor: a max error of 0.1 mm at 5 mm/s
+#: and 0.5 mm at 20 mm/s (Sec. 4; README "the paper reproduced"). A stable run at an extreme
+#: of the inputs must still meet them: they bound the tracking tests below.
+PAPER_TARGET_MM = {5.0: 0.1, 20.0: 0.5}
+
 #: A straight seam along the robot's X axis (paper-corner's placement).
 STRAIGHT_X = {"seam.points_mm": [[0.0, 0.0, 0.0], [100.0, 0.0, 0.0]]}
 
@@ -162,7 +167,7 @@ def test_welding_speed_at_the_x_axis_limit_completes_at_that_speed() -> None:
     assert s["mean_speed_mm_s"] == pytest.approx(20.0, rel=0.02)
     velocity = np.diff(result.trace.tcp_world, axis=0) / 1e-3
     assert np.abs(velocity[:, 0]).max() <= 20.0 * (1 + 1e-9)
-    assert s["max_error_mm"] < 0.5
+    assert s["max_error_mm"] <= PAPER_TARGET_MM[20.0]
 
 
 @pytest.mark.parametrize("speed", [25.0, 30.0, 100.0])
@@ -202,7 +207,7 @@ def test_extreme_sensor_angle_runs_to_completion(angle_deg: float) -> None:
     result = _run("paper-verification", {**SHORT, "sensor.angle_deg": angle_deg})
     _assert_finite_trace(result)
     assert result.summary["status"] == "completed"
-    assert result.summary["max_error_mm"] < 0.5
+    assert result.summary["max_error_mm"] <= PAPER_TARGET_MM[5.0]  # paper-verification: 5 mm/s
     assert result.summary["frames"] > result.summary["frames_without_seam"]
 
 
@@ -355,7 +360,7 @@ def test_point_to_point_with_a_tolerance_of_0_1_um_converges_on_every_point() ->
     s = result.summary
     _assert_finite_trace(result)
     assert s["status"] == "completed"
-    assert s["max_error_mm"] < 0.5
+    assert s["max_error_mm"] <= PAPER_TARGET_MM[5.0]  # paper-verification: 5 mm/s
     # The torch ends on the last measured point, within the tolerance.
     found = result.trace.frames["found"]
     last_point = result.trace.frames["point_world"][np.flatnonzero(found)[-1]]

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from test_loop_mesh import mesh_budget_mm
 
 from seamtrack.sensing.scan import sense_seam
 from seamtrack.simulation.assemble import build_parts
@@ -24,7 +25,9 @@ def test_4096_ray_profiles_are_finite_and_find_the_seam() -> None:
         assert profile.valid.sum() > 3500
         assert feature
         crossing = sense_seam(parts.seam, T, parts.sensor)
-        assert np.linalg.norm(feature.point_world - crossing.point_world) <= 0.02
+        # Two of the sensor's resolutions: the pixel grid of the stripe and of the crossing.
+        resolution = max(parts.sensor.depth_resolution_mm, parts.sensor.lateral_resolution_mm)
+        assert np.linalg.norm(feature.point_world - crossing.point_world) <= 2 * resolution
 
 
 def test_a_1e_4_mm_mesh_is_built_measured_and_tracked(tmp_path, monkeypatch) -> None:
@@ -60,4 +63,5 @@ def test_a_1e_4_mm_mesh_is_built_measured_and_tracked(tmp_path, monkeypatch) -> 
 
     summary = simulate(scene).summary
     assert summary["status"] == "completed"
-    assert np.isfinite(summary["max_error_mm"]) and summary["max_error_mm"] < 0.2
+    # The paper's target plus what mesh mode adds (tests/test_loop_mesh.py): 0.13 mm here.
+    assert np.isfinite(summary["max_error_mm"]) and summary["max_error_mm"] <= mesh_budget_mm(scene)

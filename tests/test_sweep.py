@@ -88,7 +88,7 @@ def test_dask_cluster_gives_the_serial_numbers(serial_rows: list[dict[str, Any]]
                 scheduler=cluster.scheduler_address,
             )
         finally:
-            cluster.close()
+            cluster.close(timeout=60)
     _assert_same_numbers(serial_rows, rows)
 
 
@@ -120,14 +120,34 @@ def _result_lines(path: Path) -> list[dict[str, Any]]:
     return rows
 
 
+#: Run in a child: the CLI's sweep, whose third case says so in the file ``argv[1]`` and waits
+#: to be killed (the two before it are in results.jsonl by then: a row is written before the
+#: next case starts). The parent kills on that state, not on a count it must catch in time.
+_HALT_AT_THE_THIRD_CASE = """
+import sys, time
+from pathlib import Path
+from seamtrack.batch import sweep
+from seamtrack.cli.main import main
+
+real, started = sweep.run_case, []
+
+def run_case(scene, case, overrides):
+    if len(started) == 2:
+        Path(sys.argv[1]).touch()
+        time.sleep(3600)
+    started.append(case)
+    return real(scene, case, overrides)
+
+sweep.run_case = run_case
+sys.exit(main(sys.argv[2:]))
+"""
+
+
 def test_killed_sweep_resumes_without_redoing_finished_cases(tmp_path: Path) -> None:
     """Kill the CLI once two cases are in results.jsonl; the rerun runs only the rest."""
     out = tmp_path / "sweep"
     radii = [6.0, 5.0, 4.0, 3.0, 2.0, 1.0, 0.8, 0.5, 0.3, 0.2, 0.1, 0.05]
     args = [
-        sys.executable,
-        "-m",
-        "seamtrack.cli",
         "sweep",
         SCENE,
         "--param",
@@ -141,21 +161,26 @@ def test_killed_sweep_resumes_without_redoing_finished_cases(tmp_path: Path) -> 
         "-q",
     ]
     results = out / "results.jsonl"
-    first = subprocess.Popen(args, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    halted = tmp_path / "halted"
+    first = subprocess.Popen(
+        [sys.executable, "-c", _HALT_AT_THE_THIRD_CASE, str(halted), *args],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
     try:
-        deadline = time.monotonic() + 60.0
-        while time.monotonic() < deadline and first.poll() is None:
-            if results.exists() and len(_result_lines(results)) >= 2:
-                break
+        deadline = time.monotonic() + 300.0  # bounds the wait; it times nothing
+        while not halted.exists() and first.poll() is None and time.monotonic() < deadline:
             time.sleep(0.02)
-        assert first.poll() is None, "the sweep finished before it could be killed"
-        first.kill()
+        assert halted.exists(), "the sweep never reached its third case"
     finally:
+        first.kill()
         first.wait(timeout=30)
     before = {row["case"]: row for row in _result_lines(results)}
-    assert 2 <= len(before) < len(radii)
+    assert len(before) == 2
 
-    second = subprocess.run(args, capture_output=True, text=True, timeout=120)
+    second = subprocess.run(
+        [sys.executable, "-m", "seamtrack.cli", *args], capture_output=True, text=True, timeout=300
+    )
     assert second.returncode == 0, second.stderr
     after = _result_lines(results)
     cases = [row["case"] for row in after]

@@ -25,17 +25,32 @@ def _scan(parts, s_mm):
     return feature, error
 
 
-def test_false_v_at_the_mitred_corner_has_halved_confidence(corner):
-    """At 50.1-50.9 mm (the plane 10 mm ahead crosses the corner) the point lies 0.08-0.75 mm
-    off the seam (the midpoint of the lower ends was 0.23-2.2 mm off); its confidence drops
-    from 0.71-0.76 to below 0.4."""
-    errors = []
-    for s in np.arange(50.1, 50.95, 0.1):
-        feature, error = _scan(corner, s)
+#: Where the plane 10 mm ahead crosses the corner (s = 50.1-50.9 mm).
+AT_THE_CORNER = np.arange(50.1, 50.95, 0.1)
+
+
+def test_the_false_v_at_the_mitred_corner_is_flagged(corner):
+    """Today's handling of the ambiguity: no gap is measured and the confidence drops from
+    0.71-0.76 (a true V next to the corner) to below 0.4, so a tracker can discount it."""
+    for s in AT_THE_CORNER:
+        feature, _ = _scan(corner, s)
         assert feature and np.isnan(feature.gap_mm)
         assert feature.confidence < 0.4
-        errors.append(error)
-    assert 0.05 < min(errors) and max(errors) < 0.8
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="the false V: the extractor reports the crossing of the two walls it paired, up to "
+    "~0.75 mm off the seam; the fidelity issue's mitre fix must bring it within 0.5 mm (then this "
+    "passes, fails as strict, and is to be made an ordinary test)",
+)
+def test_at_the_mitred_corner_the_seam_point_lies_on_the_seam(corner):
+    """The truth a fix must meet: at every pose across the corner a seam point is found within
+    0.5 mm of the CAD seam (the suite's 'detected' radius, tests/test_extractors_robust.py)."""
+    for s in AT_THE_CORNER:
+        feature, error = _scan(corner, s)
+        assert feature and error is not None
+        assert error <= 0.5, f"{error:.3f} mm off the seam at s = {s:.1f} mm"
 
 
 @pytest.mark.parametrize("s_mm", [30.0, 49.5, 50.0, 51.0, 55.0, 80.0])

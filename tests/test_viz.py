@@ -105,6 +105,9 @@ def v_groove_view() -> viz.SceneView:
 
 def test_analytic_v_groove_is_a_closed_outward_solid() -> None:
     mesh = v_groove_mesh()
+    # Closed: every edge shared by exactly two faces, wound the same way on both; outward:
+    # the enclosed volume is positive.
+    assert mesh.is_watertight and mesh.is_winding_consistent
     assert mesh.volume > 0
     assert np.allclose(mesh.bounds, [[0, -50, -1], [200, 50, 9]])
 

@@ -139,7 +139,8 @@ def _profile(parts: Any, features: list[Any]) -> list[dict[str, Any]]:
 def bench_loop(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]:
     """Write ``loop.json``, ``loop.md`` and ``profile.md`` into ``out_dir``.
 
-    ``quick``: a 40 mm seam instead of the whole 405 mm (a smoke test, not a measurement).
+    ``quick``: a 40 mm seam instead of the whole 405 mm, and short tick-cost runs (a smoke
+    test, not a measurement).
     """
     from seamtrack.features.extractors import extractor
     from seamtrack.sensing.scan import scan_mesh
@@ -224,7 +225,7 @@ def bench_loop(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]:
         "load_average_before": load_before,
     }
     stages = _profile(parts, features)
-    ticks_rows = tick_cost()
+    ticks_rows = tick_cost(quick)
     result_dict: dict[str, Any] = {
         "machine": machine_info(),
         "rows": [row],
@@ -336,16 +337,17 @@ TICK_SCENE: dict[str, Any] = {
 TICK_ARM: dict[str, Any] = {"robot.model": "ur10e", "robot.base_origin_mm": [200.0, -700.0, 0.0]}
 
 
-def tick_cost() -> list[dict[str, Any]]:
+def tick_cost(quick: bool = False) -> list[dict[str, Any]]:
     """CPU time per control tick outside sensing (scoring included), on the gantry and on the
-    UR10e."""
+    UR10e (``quick``: a 20 mm seam instead of 100 mm, a smoke test)."""
     from seamtrack.simulation.assemble import build_parts
     from seamtrack.simulation.loop import run
     from seamtrack.simulation.scene import load_scene
 
     rows = []
     for robot, extra in (("cartesian", {}), ("ur10e", TICK_ARM)):
-        parts = build_parts(load_scene("paper-verification", {**TICK_SCENE, **extra}))
+        short = {"seam.length_mm": 20.0} if quick else {}
+        parts = build_parts(load_scene("paper-verification", {**TICK_SCENE, **extra, **short}))
         s = run(parts, clock=time.process_time).summary
         ticks = int(round(s["sim_time_s"] / parts.robot.control_period_s)) + 1
         wall, sense = float(s["wall_time_s"]), float(s["sense_wall_time_s"])

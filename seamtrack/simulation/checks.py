@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 from seamtrack import constants
 from seamtrack.control.registry import tracker_class
@@ -18,9 +18,7 @@ from seamtrack.features.expect import parse_expect
 from seamtrack.features.extractors import extractor_target
 from seamtrack.params import check_params
 from seamtrack.sensing.scan import StripeNoise
-
-if TYPE_CHECKING:  # annotations only: the scene module calls these checks
-    from seamtrack.simulation.scene import SceneConfig
+from seamtrack.simulation.config import SceneConfig
 
 
 def default_time_limit_s(seam_length_mm: float, welding_speed_mm_s: float) -> float:

@@ -13,7 +13,7 @@ from __future__ import annotations
 import dataclasses
 import difflib
 import math
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -25,10 +25,8 @@ from seamtrack.errors import ReachError, SceneError
 from seamtrack.geometry import frames
 from seamtrack.geometry.seam import Seam
 from seamtrack.sensing.sensor import LaserLineSensor
+from seamtrack.simulation.config import Scene, SceneConfig
 from seamtrack.simulation.mount import Mount, angles_mount, seam_mount
-
-if TYPE_CHECKING:
-    from seamtrack.simulation.scene import Scene, SceneConfig
 
 FloatArray = NDArray[np.float64]
 

@@ -1,0 +1,224 @@
+"""The scene's validated form: one frozen pydantic model per section of a scene file
+(``[simulation]``, ``[seam]``, ``[sensor]`` ...), :class:`SceneConfig` holding them, and
+:class:`Scene` (a config, its name and the folder it came from).
+
+Types only, no loading and no checks: :mod:`seamtrack.simulation.scene` reads and validates
+scene files into these, and the checks it runs (:mod:`~seamtrack.simulation.checks`,
+:mod:`~seamtrack.simulation.robots`) take them, importing this module and not the loader.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+# Strict: a number is never a boolean or a string, a boolean never "yes" or 1.
+Positive = Annotated[float, Field(gt=0, allow_inf_nan=False, strict=True)]
+NonNegative = Annotated[float, Field(ge=0, allow_inf_nan=False, strict=True)]
+Finite = Annotated[float, Field(allow_inf_nan=False, strict=True)]
+Flag = Annotated[bool, Field(strict=True)]
+NonNegativeInt = Annotated[int, Field(ge=0, strict=True)]
+Vec3 = tuple[Finite, Finite, Finite]
+PositiveVec3 = tuple[Positive, Positive, Positive]
+
+
+class _Section(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class SimulationConfig(_Section):
+    welding_speed_mm_s: Positive = 5.0
+    seed: Annotated[int, Field(ge=0, strict=True)] = 0
+    end_tolerance_mm: Positive | None = None
+    stall_time_s: Positive = 5.0
+    time_limit_s: Positive | None = None
+    wall_time_limit_s: Positive = 600.0
+    trace_period_s: Positive = 0.01
+
+
+class SeamConfig(_Section):
+    source: Literal["paper", "points", "csv", "workpiece"] = "paper"
+    step_mm: Positive = 2.0
+    length_mm: Positive = 400.0
+    points_mm: list[list[Finite]] | None = None
+    file: str | None = None
+    offset_mm: Vec3 = (0.0, 0.0, 0.0)
+    rotation_deg: Vec3 = (0.0, 0.0, 0.0)
+
+
+class CameraConfig(_Section):
+    """``[sensor.camera]``: the camera of image mode (:class:`seamtrack.sensing.camera.Camera`)
+    and the peak detector that measures each image."""
+
+    rows: Annotated[int, Field(ge=3, le=20_000, strict=True)] | None = None
+    columns: Annotated[int, Field(ge=3, le=20_000, strict=True)] | None = None
+    roi: tuple[NonNegativeInt, NonNegativeInt, NonNegativeInt, NonNegativeInt] | None = None
+    focal_length_mm: Positive | None = None
+    f_number: Positive = 8.0
+    # Default: the preset's data sheet, else 660 nm.
+    wavelength_nm: (
+        Annotated[float, Field(ge=200, le=2000, allow_inf_nan=False, strict=True)] | None
+    ) = None
+    line_thickness_mm: Positive = 0.2
+    line_divergence_mrad: NonNegative | None = None
+    waist_range_mm: Positive | None = None
+    exposure: Positive = 0.5
+    full_well_e: Positive = 10_000.0
+    read_noise_e: NonNegative = 5.0
+    bit_depth: Annotated[int, Field(ge=0, le=16, strict=True)] = 10  # 0: no quantization
+    ambient: NonNegative = 0.0
+    speckle: Flag = True
+    shot_noise: Flag = True
+    supersample: Annotated[int, Field(ge=1, le=8, strict=True)] | None = None
+    ideal: Flag = False  # every noise source off (Camera.ideal)
+    method: Literal["centroid", "gaussian", "steger"] = "centroid"
+    threshold: Annotated[float, Field(ge=0, le=1, allow_inf_nan=False, strict=True)] = 0.1
+    choose: Literal["strongest", "first", "widest"] = "strongest"
+
+
+class SensorConfig(_Section):
+    preset: str = "paper"
+    mode: Literal["seam", "mesh"] = "seam"
+    source: Literal["geometry", "image"] = "geometry"
+    camera: CameraConfig | None = None
+    frame_rate_hz: Positive = 1.0
+    latency_s: NonNegative = 0.0
+    look_ahead_mm: NonNegative = 10.0
+    range_mm: Positive | None = None
+    mount_rotation_deg: Vec3 | None = None
+    quantize: Flag = True
+    noise_range_mm: NonNegative = 0.0
+    noise_lateral_mm: NonNegative = 0.0
+    rays: Annotated[int, Field(ge=2, strict=True)] | None = None
+    refine_float64: Flag = True
+    max_incidence_deg: Annotated[float, Field(gt=0, le=90, strict=True)] = 80.0
+    depth_of_field_mm: Positive | None = None
+    fov_near_mm: Positive | None = None
+    fov_far_mm: Positive | None = None
+    angle_deg: Positive | None = None
+    depth_resolution_mm: Positive | None = None
+    lateral_resolution_mm: Positive | None = None
+    focal_length_mm: Positive | None = None
+    standoff_mm: Positive | None = None
+    stripe_noise: dict[str, Any] = Field(default_factory=dict)
+
+
+class ToolConfig(_Section):
+    """The torch on the flange (``T_flange_tcp``) and, optionally, the sensor on the torch
+    (``T_tcp_sensor``; default: from ``sensor.look_ahead_mm``, ``range_mm`` and
+    ``mount_rotation_deg``). The tcp frame: z along the torch away from the work, x the
+    direction the sensor looks ahead in."""
+
+    tcp_xyz_mm: Vec3 = (0.0, 0.0, 300.0)
+    tcp_rpy_deg: Vec3 = (180.0, 0.0, 0.0)
+    sensor_xyz_mm: Vec3 | None = None
+    sensor_rpy_deg: Vec3 | None = None
+
+
+class RobotConfig(_Section):
+    model: str = "cartesian"
+    urdf: str | None = None
+    control_period_s: Positive = 1e-3
+    servo_gain_1_s: Positive | list[Positive] | None = None
+    interpolation_period_s: Positive | None = None
+    tcp_velocity_max_mm_s: PositiveVec3 = (250.0, 250.0, 250.0)
+    tcp_acceleration_max_mm_s2: PositiveVec3 = (200.0, 200.0, 200.0)
+    angular_velocity_max_deg_s: Positive = 60.0
+    angular_acceleration_max_deg_s2: Positive = 20.0
+    joint_acceleration_max_deg_s2: Positive | list[Positive] | None = None
+    min_wrist_angle_deg: Annotated[float, Field(ge=0, lt=90, strict=True)] = 5.0
+    tool: ToolConfig = Field(default_factory=ToolConfig)
+    position_min_mm: Vec3 = (0.0, 0.0, 0.0)
+    position_max_mm: Vec3 = (800.0, 150.0, 150.0)
+    velocity_max_mm_s: PositiveVec3 = (20.0, 10.0, 10.0)
+    acceleration_max_mm_s2: PositiveVec3 = (30.0, 15.0, 15.0)
+    base_origin_mm: Vec3 = (-100.0, -75.0, -75.0)
+    base_rotation_deg: Vec3 = (0.0, 0.0, 0.0)
+    start_offset_mm: Vec3 = (0.0, 0.0, 0.0)
+
+
+Angle = Annotated[float, Field(gt=-80, lt=80, allow_inf_nan=False, strict=True)]
+
+
+class TorchConfig(_Section):
+    """Torch angles relative to the seam frame (the trajectory tracker keeps them on a robot
+    that turns its tool; the score measures them on every robot)."""
+
+    work_angle_deg: Angle = 0.0
+    travel_angle_deg: Angle = 0.0
+
+
+class TrackerConfig(_Section):
+    name: str = "convergence-radius"
+    radius_mm: Positive | None = None
+    tolerance_mm: Positive | None = None
+    params: dict[str, Any] = Field(default_factory=dict)
+
+
+class ExtractorConfig(_Section):
+    name: str | None = None
+    offset_mm: tuple[Finite, Finite] = (0.0, 0.0)
+    params: dict[str, Any] = Field(default_factory=dict)
+    #: Expected joint geometry (``angle_deg``, ``depth_mm``, ``gap_mm`` and their ``_tol``):
+    #: a family extractor refuses answers that break it (:mod:`seamtrack.features.expect`).
+    expect: dict[str, Any] = Field(default_factory=dict)
+
+
+class Box(_Section):
+    """An axis-aligned box in the world frame (a clamp, a fixture) that the laser can hit."""
+
+    min_mm: Vec3
+    max_mm: Vec3
+
+
+class WorkpieceConfig(_Section):
+    script: str | None = None
+    step: str | None = None
+    seam: str | None = None
+    seam_near_mm: list[Vec3] | None = None
+    groove: dict[str, Any] | None = None
+    tolerance_mm: Positive = 0.01
+    angular_tolerance_deg: Positive = 5.0
+    params: dict[str, Any] = Field(default_factory=dict)
+    offset_mm: Vec3 = (0.0, 0.0, 0.0)
+    rotation_deg: Vec3 = (0.0, 0.0, 0.0)
+    obstacles: list[Box] = Field(default_factory=list)
+    material: str | None = None  # a name of seamtrack.sensing.materials.MATERIALS (image mode)
+
+
+class SceneConfig(_Section):
+    name: str = ""
+    description: str = ""
+    simulation: SimulationConfig = Field(default_factory=SimulationConfig)
+    seam: SeamConfig = Field(default_factory=SeamConfig)
+    sensor: SensorConfig = Field(default_factory=SensorConfig)
+    robot: RobotConfig = Field(default_factory=RobotConfig)
+    torch: TorchConfig = Field(default_factory=TorchConfig)
+    tracker: TrackerConfig = Field(default_factory=TrackerConfig)
+    extractor: ExtractorConfig = Field(default_factory=ExtractorConfig)
+    workpiece: WorkpieceConfig | None = None
+
+
+@dataclass(frozen=True)
+class Scene:
+    """A validated scene: the config, where it came from, and how to build its parts."""
+
+    config: SceneConfig
+    name: str
+    base_dir: Path | None = None
+
+    def resolve_path(self, text: str) -> Path:
+        """A file named in the scene, relative to the scene file's folder."""
+        path = Path(text).expanduser()
+        if not path.is_absolute() and self.base_dir is not None:
+            path = self.base_dir / path
+        return path
+
+    def to_toml(self) -> str:
+        import tomli_w
+
+        data = self.config.model_dump(mode="json", exclude_none=True)
+        return tomli_w.dumps(data)
