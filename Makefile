@@ -30,12 +30,15 @@ lint: $(STAMP)
 
 # The documentation site (docs/, mkdocs.yml) into build/site, warnings as errors: a broken
 # link, a docstring griffe cannot read or a gallery example that raises fails it. The gallery's
-# examples (docs/examples/) run on every build.
+# examples (docs/examples/) run on every build. `make test` builds it after the tests, whose
+# runs have compiled the numba kernels the examples use (a fresh checkout's first build
+# compiles them itself: about a minute of CPU more).
 docs: $(STAMP)
 	MPLBACKEND=Agg NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict --quiet
 
-test: $(STAMP) lint docs
+test: $(STAMP) lint
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q -n auto
+	$(MAKE) --no-print-directory docs
 
 bench: $(STAMP)
 	$(BIN)/seamtrack bench all --out bench-results
