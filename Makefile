@@ -33,12 +33,14 @@ lint: $(STAMP)
 # examples (docs/examples/) run on every build. `make test` builds it after the tests, whose
 # runs have compiled the numba kernels the examples use (a fresh checkout's first build
 # compiles them itself: about a minute of CPU more).
+DOCS_BUILD := MPLBACKEND=Agg NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict --quiet
+
 docs: $(STAMP)
-	MPLBACKEND=Agg NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict --quiet
+	$(DOCS_BUILD)
 
 test: $(STAMP) lint
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q -n auto
-	$(MAKE) --no-print-directory docs
+	$(DOCS_BUILD)
 
 bench: $(STAMP)
 	$(BIN)/seamtrack bench all --out bench-results
