@@ -136,3 +136,14 @@ def test_the_figures_page_renders_every_bench(tmp_path: Path) -> None:
             assert (DOCS / "bench" / name / file).is_file(), f"bench {name} wrote no {file}"
             assert f"From `docs/bench/{name}/{file}`" in page
     assert "No `" not in page
+
+
+def test_make_test_builds_the_site_with_warnings_as_errors() -> None:
+    makefile = (DOCS.parent / "Makefile").read_text()
+    build = re.search(r"^DOCS_BUILD := (.*)$", makefile, flags=re.M)
+    assert build and "mkdocs build --strict" in build.group(1)
+    for target in ("docs", "test"):
+        recipe = re.search(rf"^{target}:.*\n((?:\t.*\n)+)", makefile, flags=re.M)
+        assert recipe and "$(DOCS_BUILD)" in recipe.group(1), target
+    assert "site_dir: build/site" in (DOCS.parent / "mkdocs.yml").read_text()  # git-ignored
+    assert "build/" in (DOCS.parent / ".gitignore").read_text().splitlines()
