@@ -4,7 +4,7 @@ VENV   := .venv
 BIN    := $(VENV)/bin
 STAMP  := $(VENV)/.installed
 
-.PHONY: demo test lint bench images clean
+.PHONY: demo test lint docs bench images clean
 
 $(STAMP): pyproject.toml
 	$(PYTHON) -m venv $(VENV)
@@ -28,11 +28,22 @@ lint: $(STAMP)
 	$(BIN)/ruff format --check seamtrack cad tests
 	$(BIN)/mypy
 
+# The documentation site (docs/, mkdocs.yml) into build/site, warnings as errors: a broken
+# link, a docstring griffe cannot read or a gallery example that raises fails it. The gallery's
+# examples (docs/examples/) run on every build. `make test` builds it after the tests, whose
+# runs have compiled the numba kernels the examples use (a fresh checkout's first build
+# compiles them itself: about a minute of CPU more).
+DOCS_BUILD := MPLBACKEND=Agg NO_MKDOCS_2_WARNING=1 $(BIN)/mkdocs build --strict --quiet
+
+docs: $(STAMP)
+	$(DOCS_BUILD)
+
 test: $(STAMP) lint
 	MPLBACKEND=Agg $(BIN)/python -m pytest -q -n auto
+	$(DOCS_BUILD)
 
 bench: $(STAMP)
 	$(BIN)/seamtrack bench all --out bench-results
 
 clean:
-	rm -rf $(VENV) runs build *.egg-info
+	rm -rf $(VENV) runs build docs/generated *.egg-info

@@ -1,33 +1,48 @@
-"""The README's Python blocks run as written, in order, and do what their comments say."""
+"""The README: short, the two commands first, its Python tour runs and does what its comments
+say, and its headline figures are what the benches' JSON says (``docs/figures.py --check``).
+
+The text that moved into the documentation site is checked in ``tests/test_docs.py``."""
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import re
-import sys
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
 
-import seamtrack as st
-
-README = Path(__file__).resolve().parents[1] / "README.md"
-
-
-def _blocks() -> list[str]:
-    return re.findall(r"^```python\n(.*?)^```", README.read_text(), flags=re.S | re.M)
+ROOT = Path(__file__).resolve().parents[1]
+README = ROOT / "README.md"
 
 
-def _module_blocks() -> dict[str, str]:
-    """Blocks that are files of the user's own (their first line names the file)."""
-    found = {}
-    for block in _blocks():
-        first = block.splitlines()[0]
-        if first.startswith("# ") and first.endswith(".py"):
-            found[first[2:]] = block
-    return found
+def python_blocks(path: Path) -> list[str]:
+    """The ```python blocks of a Markdown file, in order."""
+    return re.findall(r"^```python\n(.*?)^```", path.read_text(), flags=re.S | re.M)
+
+
+def _figures() -> Any:
+    spec = importlib.util.spec_from_file_location("figures", ROOT / "docs" / "figures.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_readme_is_short_and_starts_with_the_two_commands() -> None:
+    lines = README.read_text().splitlines()
+    assert len(lines) <= 300
+    head = "\n".join(lines[:40])
+    assert "make demo" in head and "make test" in head
+
+
+def test_the_readme_links_only_to_files_that_exist() -> None:
+    targets = re.findall(r"\]\(([^)#\s]+)(?:#[^)]*)?\)", README.read_text())
+    assert targets
+    missing = [t for t in targets if "://" not in t and not (ROOT / t).exists()]
+    assert not missing
 
 
 @pytest.fixture(scope="module")
@@ -36,7 +51,7 @@ def tour(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     cwd = Path.cwd()
     os.chdir(tmp_path_factory.mktemp("readme"))
     try:
-        for block in _blocks():
+        for block in python_blocks(README):
             exec(compile(block, str(README), "exec"), namespace)
     finally:
         os.chdir(cwd)
@@ -51,43 +66,25 @@ def test_the_python_tour_runs_and_its_comments_hold(tour: dict[str, Any]) -> Non
     feature = tour["feature"]
     assert feature  # the v-groove extractor found the seam in the scanned stripe
     assert tour["part"].seam.closest(feature.point_world).distance_mm[0] < 0.05
-    # Camera images: the same extractor on the profile measured from the rendered image.
-    assert tour["image"].pixels.shape == (512, 1024)
-    assert tour["seam_point"]
-    assert tour["part"].seam.closest(tour["seam_point"].point_world).distance_mm[0] < 0.1
-    assert len(tour["ideal"].truth_row) == 1024 and tour["ideal"].reflection.dtype == bool
 
 
-def test_the_tracker_example_tracks_the_paper_seam(
-    tmp_path: Path, monkeypatch, request: pytest.FixtureRequest
-) -> None:
-    blocks = _module_blocks()
-    assert "my_trackers.py" in blocks
-    (tmp_path / "my_trackers.py").write_text(blocks["my_trackers.py"])
-    monkeypatch.syspath_prepend(str(tmp_path))
-    monkeypatch.delitem(sys.modules, "my_trackers", raising=False)
-    request.addfinalizer(lambda: sys.modules.pop("my_trackers", None))  # other tests' module
-    scene = st.load_scene(
-        "paper-verification",
-        {
-            "seam.length_mm": 40.0,
-            "tracker.name": "my_trackers:FollowNewest",
-            "tracker.params.slow_factor": 0.5,
-        },
-    )
-    result = st.simulate(scene)
-    assert result.status == "completed"
-    assert result.summary["max_error_mm"] < 1.0
+def test_the_headline_figures_are_the_benches_json() -> None:
+    """The README's table is rendered from docs/bench/*/*.json: written by hand, or left stale
+    after a bench's re-run, it differs, and this fails."""
+    figures = _figures()
+    table = figures.readme_table(README.read_text())
+    assert figures.main(["--check"]) == 0
+    assert table == figures.headline()
+    assert "(no figure" not in table  # every bench's JSON was read
+    rows = [line for line in table.splitlines()[2:] if line.startswith("| ")]
+    assert len(rows) == len(figures.HEADLINE)
+    assert all(row.count(" | ") == 2 and row.endswith("` |") for row in rows)
 
 
-def test_the_extractor_example_finds_the_deepest_point(tour: dict[str, Any]) -> None:
-    blocks = _module_blocks()
-    assert "mypkg/mymod.py" in blocks
-    namespace: dict[str, Any] = {}
-    exec(compile(blocks["mypkg/mymod.py"], "mymod.py", "exec"), namespace)
-    profile = tour["profile"]
-    feature = namespace["DeepestPoint"]()(profile)
-    assert feature
-    deepest = profile.valid_points[:, 1].max()
-    assert feature.point_laser[1] == deepest
-    assert not namespace["DeepestPoint"](min_points=10**6)(profile)  # fails with a reason
+def test_the_check_fails_on_a_figure_copied_by_hand(tmp_path: Path, monkeypatch) -> None:
+    figures = _figures()
+    text = README.read_text()
+    edited = tmp_path / "README.md"
+    edited.write_text(text.replace("| bad input | ", "| bad input | 1 of 1 fine; ", 1))
+    monkeypatch.setattr(figures, "README", edited)
+    assert figures.main(["--check"]) == 1

@@ -204,6 +204,42 @@ def _write(out: Path, rows: list[dict[str, Any]], pooled: dict[str, list[int]]) 
         writer.writeheader()
         writer.writerows(rows)
     (out / "extractors.md").write_text(markdown_table(rows, pooled))
+    timing = {k: [1e-3 * t for t in v] for k, v in pooled.items()}
+    write_json(out / "extractors.json", rows, timing_summary(timing))
+
+
+def timing_summary(timing: dict[str, list[float]]) -> dict[str, dict[str, float]]:
+    """Per extractor: the profiles timed and the median, p95 and max CPU us per profile (the
+    markdown table's timing rows)."""
+    return {
+        k: {
+            "profiles": len(v),
+            "median_us": float(np.median(v)),
+            "p95_us": float(np.percentile(v, 95)),
+            "max_us": float(np.max(v)),
+        }
+        for k, v in timing.items()
+    }
+
+
+def _json_value(value: Any) -> Any:
+    return None if isinstance(value, float) and math.isnan(value) else value
+
+
+def write_json(
+    path: Path, rows: list[dict[str, Any]], timing: dict[str, dict[str, float]] | None = None
+) -> None:
+    """The bench's rows (and per-extractor timing, if any) as JSON, the machine beside them;
+    NaN (no seam point found) is written as null."""
+    from seamtrack.bench.common import machine_info
+
+    data: dict[str, Any] = {
+        "machine": machine_info(),
+        "rows": [{k: _json_value(v) for k, v in r.items()} for r in rows],
+    }
+    if timing is not None:
+        data["timing"] = timing
+    path.write_text(json.dumps(data, indent=2) + "\n")
 
 
 def _fmt(value: Any) -> str:
@@ -409,7 +445,8 @@ def bench_real(
     joint (``"none"`` included). ``us_per_profile``: the median CPU time per profile of the
     set's extractor (on ``"none"`` sets, the families' mean), ``classify_us``: the
     classifier's. Writes
-    ``extractors_real.csv`` and ``extractors_real.md`` into ``out_dir``.
+    ``extractors_real.csv``, ``extractors_real.md`` and ``extractors_real.json`` into
+    ``out_dir``.
     """
     from tqdm import tqdm
 
@@ -460,6 +497,7 @@ def bench_real(
         writer.writeheader()
         writer.writerows(rows)
     (out / "extractors_real.md").write_text(real_table(rows))
+    write_json(out / "extractors_real.json", rows)
     return rows
 
 

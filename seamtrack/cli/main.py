@@ -98,12 +98,12 @@ def cmd_extractors(args: argparse.Namespace) -> int:
         with new_dir(args.out) as out:
             bench_real(args.real, out, progress=_progress_wanted(args))
         print((out / "extractors_real.md").read_text(), end="")
-        print(f"wrote {out}/extractors_real.csv, extractors_real.md")
+        print(f"wrote {out}/extractors_real.csv, extractors_real.md, extractors_real.json")
         return 0
     with new_dir(args.out) as out:
         bench_extractors(out, quick=args.quick, progress=_progress_wanted(args))
     print((out / "extractors.md").read_text(), end="")
-    print(f"wrote {out}/extractors.csv, extractors.md, extractors_error_vs_noise.png")
+    print(f"wrote {out}/extractors.csv, .md, .json, extractors_error_vs_noise.png")
     return 0
 
 

@@ -1,0 +1,339 @@
+"""The measured figures, rendered from the benches' JSON (``docs/bench/<name>/*.json``).
+
+No figure is copied by hand: the README's headline table and the documentation's "Measured
+figures" page are both made here from what the benches wrote.
+
+    python docs/figures.py            # print the headline table
+    python docs/figures.py --write    # put it into README.md, between its two markers
+    python docs/figures.py --check    # exit 1 if README.md's table is not what the JSON says
+
+The site's build calls :func:`figures_page` through ``docs/hooks.py``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[1]
+BENCH = ROOT / "docs" / "bench"
+README = ROOT / "README.md"
+BEGIN = "<!-- figures:begin (python docs/figures.py --write) -->"
+END = "<!-- figures:end -->"
+
+#: The benches, in the order of the figures page: name -> (JSON files, the command that writes
+#: them, what it measures).
+BENCHES: dict[str, tuple[tuple[str, ...], str, str]] = {
+    "scaling": (
+        ("scaling.json",),
+        "seamtrack bench scaling",
+        "the paper's verification run, the CAD cache, a 1e5-point seam, the wall-clock guard",
+    ),
+    "loop": (("loop.json",), "seamtrack bench loop", "the closed loop on `paper-v-groove`"),
+    "raycast": (("raycast.json",), "seamtrack bench raycast", "stripe profiles by ray casting"),
+    "extractors": (
+        ("extractors.json", "extractors_real.json"),
+        "seamtrack extractors bench (--real DIR for the real sets)",
+        "the joint-feature extractors on synthetic profiles with ground truth, and on real scans",
+    ),
+    "mesh": (("mesh.json",), "seamtrack bench mesh", "meshing CAD parts at a tolerance"),
+    "camera": (("camera.json",), "seamtrack bench camera", "image mode: camera images"),
+    "tradeoff": (("tradeoff.json",), "seamtrack bench tradeoff", "speed against accuracy"),
+    "sweep": (("sweep.json",), "seamtrack bench sweep", "a sweep on 1 and 2 workers"),
+    "dataset": (("dataset.json",), "seamtrack bench dataset", "labelled profiles and images"),
+    "failures": (
+        ("failures.json",),
+        "seamtrack bench failures",
+        "every bad input of the catalogue through the command line",
+    ),
+}
+
+
+def load(name: str, file: str | None = None) -> dict[str, Any]:
+    """One bench's JSON (its first file unless ``file`` names another)."""
+    files = BENCHES[name][0]
+    return json.loads((BENCH / name / (file or files[0])).read_text())
+
+
+# --------------------------------------------------------------------------- headline table
+def _row(name: str, what: str, measured: Callable[[], str], command: str) -> str:
+    try:
+        text = measured()
+    except (OSError, KeyError, IndexError, TypeError, ValueError) as exc:  # a bench re-shaped
+        text = f"(no figure: {type(exc).__name__} {exc} reading docs/bench/{name})"
+    return f"| {what} | {text} | `{command}` |"
+
+
+def _scaling() -> str:
+    r = load("scaling")["row"]
+    return (
+        f"{r['coarse_status']}, max error {r['coarse_max_error_mm']:.3f} mm (the paper asks "
+        f"0.5), RMS {r['coarse_rms_error_mm']:.3f} mm, {r['coarse_wall_s']:.2f} s wall"
+    )
+
+
+def _loop() -> str:
+    r = load("loop")["rows"][0]
+    return (
+        f"{r['sim_s_per_cpu_s']:.1f} simulated s per CPU s, max error {r['max_error_mm']:.3f} "
+        f"mm; per frame {r['scan_ms_per_frame']:.2f} ms ray casting, "
+        f"{r['extract_ms_per_frame']:.2f} ms extraction"
+    )
+
+
+def _raycast() -> str:
+    case = load("raycast")["cases"][0]
+    rate = case["profiles_per_s"]["scan_mesh (Profile), float64 refinement"]
+    ratios = case["ratios"]
+    return (
+        f"{rate:,.0f} profiles/s per core on {case['triangles']:,} triangles; "
+        f"{ratios['scan_mesh / bare embreex']:.2f}x bare embreex, "
+        f"{ratios['scan_mesh / trimesh']:.2f}x trimesh"
+    )
+
+
+def _extractors() -> str:
+    data = load("extractors")
+    rows = [
+        r
+        for r in data["rows"]
+        if r["level"] == "outliers+reflection" and r["extractor"] == r["joint"]
+    ]
+    detect = [r["detection_rate"] for r in rows]
+    p95 = [r["p95_error_mm"] for r in rows if r["p95_error_mm"] is not None]
+    median_us = [t["median_us"] for k, t in data["timing"].items() if k != "generic"]
+    return (
+        f"{len(rows)} families with 5 % outliers and a false reflection: detected "
+        f"{100 * min(detect):.1f}-{100 * max(detect):.1f} %, p95 error <= {max(p95):.3f} mm; "
+        f"{min(median_us):.0f}-{max(median_us):.0f} us per profile (median)"
+    )
+
+
+def _mesh() -> str:
+    rows = load("mesh")["rows"]
+    held = sum(r["deviation_mm"] <= r["tolerance_mm"] for r in rows)
+    finest = max(rows, key=lambda r: r["triangles"])
+    return (
+        f"deviation within the tolerance in {held} of {len(rows)} meshes (1 to 0.001 mm); "
+        f"{finest['triangles']:,} triangles in {finest['meshing_time_s']:.0f} s at the finest"
+    )
+
+
+def _camera() -> str:
+    data = load("camera")
+    worst = max(r["rms_px"] for r in data["plane"])
+    ratios = [r["centroid_ratio"] for r in data["speckle"]]
+    ideal = data["throughput"]["ideal"]["images_per_s"]
+    return (
+        f"detectors within {worst:.3f} px RMS of the analytic plane; speckle noise "
+        f"{min(ratios):.2f}-{max(ratios):.2f}x Dorsch et al.'s; {ideal:.0f} ideal images/s"
+    )
+
+
+def _tradeoff() -> str:
+    rows = {r["label"]: r for r in load("tradeoff")["rows"]}
+    parts = [
+        f"{label} {rows[label]['total_s']:.2f} s, RMS {rows[label]['rms_error_mm']:.4f} mm"
+        for label in ("fast preview", "default", "reference")
+        if label in rows
+    ]
+    return "; ".join(parts)
+
+
+def _sweep() -> str:
+    data = load("sweep")
+    two = next(r for r in data["runs"] if r["workers"] == 2)
+    same = "identical numbers" if data["same_numbers"] else "numbers DIFFER"
+    ratio = two["ratio_to_1_worker"]
+    return f"{data['cases']} cases: 2 workers take {ratio:.2f}x the wall time of 1; {same}"
+
+
+def _dataset() -> str:
+    rates = load("dataset")["rates"]
+    geometry = [r for r in rates if not r["spec"].startswith("images")]
+    images = [r for r in rates if r["spec"].startswith("images")]
+    return (
+        f"{geometry[0]['per_cpu_s']:,.0f} profiles per CPU s ({geometry[-1]['per_cpu_s']:,.0f} "
+        f"with every noise knob on); {min(r['per_cpu_s'] for r in images):.1f}-"
+        f"{max(r['per_cpu_s'] for r in images):.0f} images per CPU s"
+    )
+
+
+def _failures() -> str:
+    data = load("failures")
+    rows = data["rows"]
+    one_line = sum(
+        r.get("exit") == 2 and str(r.get("first_line", "")).startswith("seamtrack: error: ")
+        for r in rows
+    )
+    clean = sum(not r.get("problems") for r in rows)
+    peaks = [r.get("peak_mb_so_far", r.get("peak_mb", math.nan)) for r in rows]
+    peak = max([*peaks, data.get("largest_run", {}).get("peak_mb", math.nan)])
+    return (
+        f"{len(rows)} inputs: {one_line} answered with one error line and exit 2, {clean} "
+        f"without a problem found; largest peak {peak:,.0f} MB"
+    )
+
+
+#: The README's rows: bench, what was measured, the command a user runs to see it.
+HEADLINE = (
+    ("scaling", "the paper's verification (Fig. 7), seam mode", "seamtrack run"),
+    ("loop", "closed loop, mesh mode, 1024 rays at 100 Hz", "seamtrack bench loop"),
+    ("raycast", "stripe profile, 1024 rays + shadow rays", "seamtrack bench raycast"),
+    ("extractors", "joint-feature extractors", "seamtrack extractors bench"),
+    ("mesh", "meshing CAD at a tolerance", "seamtrack bench mesh"),
+    ("camera", "image mode, 1024 x 512 camera", "seamtrack bench camera"),
+    ("tradeoff", "speed against accuracy (60 mm, mesh mode)", "seamtrack bench tradeoff"),
+    ("sweep", "sweeps on 2 cores", "seamtrack bench sweep"),
+    ("dataset", "labelled datasets, one core", "seamtrack bench dataset"),
+    ("failures", "bad input", "seamtrack bench failures"),
+)
+
+
+def headline() -> str:
+    """The README's table: one line per figure, each with the command that measured it."""
+    measured = {
+        "scaling": _scaling,
+        "loop": _loop,
+        "raycast": _raycast,
+        "extractors": _extractors,
+        "mesh": _mesh,
+        "camera": _camera,
+        "tradeoff": _tradeoff,
+        "sweep": _sweep,
+        "dataset": _dataset,
+        "failures": _failures,
+    }
+    rows = [_row(name, what, measured[name], command) for name, what, command in HEADLINE]
+    head = ["| figure | measured | command |", "|---|---|---|"]
+    return "\n".join(head + rows) + "\n"
+
+
+# --------------------------------------------------------------------------- the whole page
+def _cell(value: Any) -> str:
+    if value is None:
+        return "-"
+    if isinstance(value, bool):
+        return "yes" if value else "no"
+    if isinstance(value, float):
+        if math.isnan(value):
+            return "-"
+        return f"{value:,.0f}" if abs(value) >= 1e4 else f"{value:.4g}"
+    if isinstance(value, int):
+        return f"{value:,}" if abs(value) >= 1e4 else str(value)
+    if isinstance(value, list) and all(not isinstance(v, (dict, list)) for v in value):
+        return ", ".join(_cell(v) for v in value)
+    return str(value).replace("|", "\\|").replace("\n", " ")
+
+
+def _scalar(value: Any) -> bool:
+    return not isinstance(value, (dict, list)) or (
+        isinstance(value, list) and all(not isinstance(v, (dict, list)) for v in value)
+    )
+
+
+def _tables(obj: Any, title: str, level: int) -> list[str]:
+    """Markdown for one JSON value: a key/value table of a dict's scalars, a table of a list of
+    records, and a sub-section for anything nested deeper."""
+    out: list[str] = []
+    hashes = "#" * min(level, 6)
+    if isinstance(obj, dict):
+        flat = {k: v for k, v in obj.items() if _scalar(v) and k != "machine"}
+        if flat:
+            out += [f"{hashes} {title}", "", "| quantity | value |", "|---|---|"]
+            out += [f"| {k} | {_cell(v)} |" for k, v in flat.items()]
+            out.append("")
+        for key, value in obj.items():
+            if key != "machine" and not _scalar(value):
+                out += _tables(value, f"{title}: {key}", level + 1)
+    elif isinstance(obj, list) and obj and all(isinstance(v, dict) for v in obj):
+        columns: list[str] = []
+        for record in obj:
+            columns += [k for k, v in record.items() if _scalar(v) and k not in columns]
+        out += [f"{hashes} {title}", ""]
+        out += ["| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
+        out += ["| " + " | ".join(_cell(r.get(k)) for k in columns) + " |" for r in obj]
+        out.append("")
+        for i, record in enumerate(obj):
+            label = _cell(next(iter(record.values()))) if record else str(i)
+            for key, value in record.items():
+                if not _scalar(value):
+                    out += _tables(value, f"{title}: {label}: {key}", level + 1)
+    return out
+
+
+def _machine(data: dict[str, Any]) -> str:
+    m = data.get("machine")
+    if not isinstance(m, dict):
+        return ""
+    return "Machine: " + ", ".join(f"{k} {v}" for k, v in m.items()) + "."
+
+
+def figures_page() -> str:
+    """The "Measured figures" page: the headline table, then every bench's JSON as tables."""
+    lines = [
+        "# Measured figures",
+        "",
+        "Rendered from the benches' JSON in `docs/bench/<name>/` by `docs/figures.py` when this",
+        "site is built: no figure here is copied by hand. `make bench` runs every bench into",
+        "`bench-results/`; copy a bench's folder over `docs/bench/<name>/` to publish it.",
+        "",
+        "## Headline",
+        "",
+        headline(),
+    ]
+    for name, (files, command, what) in BENCHES.items():
+        lines += [f"## {name}", "", f"{what[0].upper()}{what[1:]}: `{command}`.", ""]
+        for file in files:
+            path = BENCH / name / file
+            if not path.is_file():
+                lines += [f"No `{file}` in `docs/bench/{name}/` yet.", ""]
+                continue
+            data = json.loads(path.read_text())
+            lines += [f"From `docs/bench/{name}/{file}`. {_machine(data)}", ""]
+            lines += _tables(data, file.removesuffix(".json"), 3)
+        for image in sorted((BENCH / name).glob("*.png")):
+            lines += [f"![{image.stem}](bench/{name}/{image.name})", ""]
+    return "\n".join(lines) + "\n"
+
+
+# --------------------------------------------------------------------------- README
+def readme_table(text: str) -> str:
+    """The table between the README's markers."""
+    if BEGIN not in text or END not in text:
+        raise SystemExit(f"README.md: no {BEGIN} ... {END} markers")
+    return text.split(BEGIN, 1)[1].split(END, 1)[0].strip("\n") + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    group = parser.add_mutually_exclusive_group()
+    group.add_argument("--write", action="store_true", help="write the README's table")
+    group.add_argument("--check", action="store_true", help="fail if the README's table differs")
+    args = parser.parse_args(argv)
+    table = headline()
+    if not (args.write or args.check):
+        print(table, end="")
+        return 0
+    text = README.read_text()
+    if args.check:
+        if readme_table(text) != table:
+            print(
+                "README.md: the headline figures differ from docs/bench/*/*.json; "
+                "fix: python docs/figures.py --write",
+                file=sys.stderr,
+            )
+            return 1
+        return 0
+    head, rest = text.split(BEGIN, 1)
+    README.write_text(head + BEGIN + "\n" + table + rest[rest.index(END) :])
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

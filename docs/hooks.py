@@ -1,0 +1,19 @@
+"""MkDocs hooks: the "Measured figures" page is rendered from the benches' JSON at build time
+(``docs/figures.py``), so the site never shows a stale or hand-copied figure."""
+
+from __future__ import annotations
+
+import importlib.util
+from pathlib import Path
+from typing import Any
+
+_spec = importlib.util.spec_from_file_location("figures", Path(__file__).with_name("figures.py"))
+assert _spec is not None and _spec.loader is not None
+figures = importlib.util.module_from_spec(_spec)
+_spec.loader.exec_module(figures)
+
+
+def on_page_markdown(markdown: str, page: Any, **kwargs: Any) -> str:
+    if page.file.src_uri == "figures.md":
+        return figures.figures_page()
+    return markdown

@@ -1,0 +1,149 @@
+"""The documentation site's pages (``docs/*.md``): their Python examples run as written and do
+what their comments say, the tracker and extractor examples work as plugins, and the measured
+figures page is rendered from every bench's JSON.
+
+The site's build itself (``make docs``: ``mkdocs build --strict``, the gallery's examples
+executed) runs in ``make test``; these tests need no MkDocs."""
+
+from __future__ import annotations
+
+import importlib.util
+import os
+import re
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+import seamtrack as st
+
+DOCS = Path(__file__).resolve().parents[1] / "docs"
+#: Pages whose Python blocks run here (in order, one namespace per page). Left out: cad.md
+#: (reads a STEP file of the user's), sweeps.md (starts a Dask cluster), views.md (renders with
+#: PyVista): their commands are covered by tests/test_cad.py, test_sweep.py and test_viz.py.
+RUN = ("mesh-mode.md", "camera.md", "weldments.md", "datasets.md", "extractors.md")
+
+
+def python_blocks(path: Path) -> list[str]:
+    """The ```python blocks of a Markdown file, in order."""
+    return re.findall(r"^```python\n(.*?)^```", path.read_text(), flags=re.S | re.M)
+
+
+def _module_blocks() -> dict[str, str]:
+    """Blocks that are files of the user's own (their first line names the file)."""
+    found = {}
+    for page in sorted(DOCS.glob("*.md")):
+        for block in python_blocks(page):
+            first = block.splitlines()[0]
+            if first.startswith("# ") and first.endswith(".py"):
+                found[first[2:]] = block
+    return found
+
+
+def _run_page(name: str, tmp_path: Path) -> dict[str, Any]:
+    namespace: dict[str, Any] = {}
+    cwd = Path.cwd()
+    os.chdir(tmp_path)
+    try:
+        for block in python_blocks(DOCS / name):
+            if block in _module_blocks().values():
+                continue
+            exec(compile(block, str(DOCS / name), "exec"), namespace)
+    finally:
+        os.chdir(cwd)
+    return namespace
+
+
+@pytest.mark.parametrize("page", RUN)
+def test_the_pages_python_blocks_run(page: str, tmp_path: Path) -> None:
+    assert python_blocks(DOCS / page), f"{page} has no Python example left to run"
+    _run_page(page, tmp_path)
+
+
+def test_mesh_mode_example_finds_the_cad_seam(tmp_path: Path) -> None:
+    ns = _run_page("mesh-mode.md", tmp_path)
+    assert ns["feature"]
+    assert ns["part"].seam.closest(ns["feature"].point_world).distance_mm[0] < 0.05
+
+
+def test_camera_example_measures_the_seam_from_pixels(tmp_path: Path) -> None:
+    ns = _run_page("camera.md", tmp_path)
+    assert ns["image"].pixels.shape == (512, 1024)
+    assert ns["seam_point"]
+    assert ns["part"].seam.closest(ns["seam_point"].point_world).distance_mm[0] < 0.1
+    assert len(ns["ideal"].truth_row) == 1024 and ns["ideal"].reflection.dtype == bool
+
+
+def test_weldment_example_lists_the_bracket_seams(tmp_path: Path) -> None:
+    ns = _run_page("weldments.md", tmp_path)
+    assert [(s.id, s.joint, s.name) for s in ns["seams"][:1]] == [("s1", "lap", "base/strap/0")]
+
+
+def test_dataset_example_gives_what_its_comments_say(tmp_path: Path) -> None:
+    ns = _run_page("datasets.md", tmp_path)
+    assert (len(ns["data"]), ns["data"].spec.rays) == (64, 256)
+    assert ns["sample"]["points_laser"].shape == (256, 2)
+    assert ns["sample"]["seam_point_laser"].shape == (2,)
+    assert ns["batch"]["points_laser"].shape == (32, 256, 2)
+
+
+def test_the_tracker_example_tracks_the_paper_seam(
+    tmp_path: Path, monkeypatch, request: pytest.FixtureRequest
+) -> None:
+    blocks = _module_blocks()
+    assert "my_trackers.py" in blocks
+    (tmp_path / "my_trackers.py").write_text(blocks["my_trackers.py"])
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.delitem(sys.modules, "my_trackers", raising=False)
+    request.addfinalizer(lambda: sys.modules.pop("my_trackers", None))  # other tests' module
+    scene = st.load_scene(
+        "paper-verification",
+        {
+            "seam.length_mm": 40.0,
+            "tracker.name": "my_trackers:FollowNewest",
+            "tracker.params.slow_factor": 0.5,
+        },
+    )
+    result = st.simulate(scene)
+    assert result.status == "completed"
+    assert result.summary["max_error_mm"] < 1.0
+
+
+def test_the_extractor_example_finds_the_deepest_point(tmp_path: Path) -> None:
+    blocks = _module_blocks()
+    assert "mypkg/mymod.py" in blocks
+    namespace: dict[str, Any] = {}
+    exec(compile(blocks["mypkg/mymod.py"], "mymod.py", "exec"), namespace)
+    profile = _run_page("mesh-mode.md", tmp_path)["profile"]
+    feature = namespace["DeepestPoint"]()(profile)
+    assert feature
+    valid = profile.valid_points
+    deepest = valid[np.isfinite(valid).all(axis=1), 1].max()
+    assert feature.point_laser[1] == deepest
+    assert not namespace["DeepestPoint"](min_points=10**6)(profile)  # fails with a reason
+
+
+def test_the_figures_page_renders_every_bench(tmp_path: Path) -> None:
+    spec = importlib.util.spec_from_file_location("figures", DOCS / "figures.py")
+    assert spec is not None and spec.loader is not None
+    figures = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(figures)
+    page = figures.figures_page()
+    for name, (files, _, _) in figures.BENCHES.items():
+        for file in files:
+            assert (DOCS / "bench" / name / file).is_file(), f"bench {name} wrote no {file}"
+            assert f"From `docs/bench/{name}/{file}`" in page
+    assert "No `" not in page
+
+
+def test_make_test_builds_the_site_with_warnings_as_errors() -> None:
+    makefile = (DOCS.parent / "Makefile").read_text()
+    build = re.search(r"^DOCS_BUILD := (.*)$", makefile, flags=re.M)
+    assert build and "mkdocs build --strict" in build.group(1)
+    for target in ("docs", "test"):
+        recipe = re.search(rf"^{target}:.*\n((?:\t.*\n)+)", makefile, flags=re.M)
+        assert recipe and "$(DOCS_BUILD)" in recipe.group(1), target
+    assert "site_dir: build/site" in (DOCS.parent / "mkdocs.yml").read_text()  # git-ignored
+    assert "build/" in (DOCS.parent / ".gitignore").read_text().splitlines()
