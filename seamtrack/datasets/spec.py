@@ -390,10 +390,13 @@ class DatasetSpec(_Section):
                 ).check(preset(name))
             except SensorGeometryError as exc:
                 key = (exc.field or "line_thickness_mm").rsplit(".", 1)[-1]
+                fix = exc.fix or "give a thinner line"
+                if key == "supersample":  # a spec has no supersample: it follows the f-number
+                    key = "rows"
+                    fix = "give fewer rows x columns, or raise f_number's min (a faster lens "
+                    fix += "needs finer sub-pixels for its speckle)"
                 raise _FieldError(
-                    f"camera.{key}",
-                    f"{exc.message} with preset {name!r}",
-                    exc.fix or "give a thinner line",
+                    f"camera.{key}", f"{exc.message} with preset {name!r}", fix
                 ) from None
 
     def canonical(self) -> str:
@@ -535,7 +538,9 @@ materials = ["mill-scale steel", "blasted steel", "brushed stainless"]
 presets = ["paper"]              # seamtrack sensor --list
 quantize = true                  # snap points to the chip's pixels (Eq. 1-3)
 standoff_offset_mm = [-15.0, 15.0]  # range z_L of the seam point minus the preset's range centre
-lateral_offset_mm = [-4.0, 4.0]  # y_L of the seam point
+                                    # (within each preset's range: paper -21.6 to 38.4)
+lateral_offset_mm = [-4.0, 4.0]  # y_L of the seam point (within each preset's field of view at
+                                 # the nearest standoff drawn: paper +-9.77 at -15)
 tilt_deg = [-10.0, 10.0]         # travel angle: the sensor leans along the seam (about y_S)
 roll_deg = [-10.0, 10.0]         # work angle: about the seam (x_S)
 yaw_deg = 0.0                    # about the laser axis (the plane turns against the seam)
@@ -553,16 +558,19 @@ outlier_fraction = [0.0, 0.01]       # points replaced by a spurious peak on the
 [camera]
 # Used with images = true (--images): the image of the stripe on the drawn joint, rendered as in
 # image mode (seamtrack.sensing.render), the profile measured from it by the peak detector below.
-rows = 512                       # pixels along the range (x_c); the chip keeps its size
-columns = 1024                   # pixels along the stripe (z_c)
-bit_depth = 10                   # stored as uint16 grey levels 0 .. 2^bit_depth - 1
-f_number = [4.0, 16.0]           # working f-number: diffraction blur and speckle grain
-wavelength_nm = 660.0
-line_thickness_mm = [0.1, 0.3]   # 1/e^2 thickness of the laser sheet at its waist
-exposure = [0.3, 0.8]            # peak of a white plane at the range centre, share of full well
-full_well_e = 10000.0
-read_noise_e = [0.0, 10.0]       # electrons RMS
-ambient = [0.0, 0.005]           # ambient or arc light, share of full well on every pixel
+# Each range lies within what real lenses, lasers and chips have (seamtrack.sensing.camera.RANGES,
+# as in a scene's [sensor.camera]): the bounds are given per key.
+rows = 512                       # pixels along the range (x_c), 3-4096; the chip keeps its size
+columns = 1024                   # pixels along the stripe (z_c), 3-4096
+bit_depth = 10                   # 1-16: stored as uint16 grey levels 0 .. 2^bit_depth - 1
+f_number = [4.0, 16.0]           # working f-number, 0.95-64: diffraction blur and speckle grain
+wavelength_nm = 660.0            # 200-2000
+line_thickness_mm = [0.1, 0.3]   # 1/e^2 thickness of the laser sheet at its waist, 0.005-5
+exposure = [0.3, 0.8]            # peak of a white plane at the range centre, share of full well,
+                                 # 1e-4-100
+full_well_e = 10000.0            # electrons, 1000-1000000
+read_noise_e = [0.0, 10.0]       # electrons RMS, 0-100
+ambient = [0.0, 0.005]           # ambient or arc light, share of full well on every pixel, 0-1
 speckle_probability = 1.0        # chance a sample's image has laser speckle (0: never)
 shot_noise_probability = 1.0     # chance it has shot noise
 method = "centroid"              # peak detector: centroid, gaussian or steger
