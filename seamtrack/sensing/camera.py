@@ -159,6 +159,9 @@ def range_error(key: str, value: float, field: str | None = None) -> SensorGeome
 class Camera:
     """Optics, laser line and chip of a laser-line sensor's camera.
 
+    Every field must lie within its physical range (:data:`RANGES`: real lenses, lasers and
+    chips); :meth:`check` also bounds the image's memory (:data:`MAX_IMAGE_BYTES`).
+
     Parameters
     ----------
     rows, columns : int, optional
