@@ -287,9 +287,10 @@ class CameraSpec(_Section):
     """The camera of ``--images`` (:class:`seamtrack.sensing.camera.Camera`), its knobs drawn
     per sample, and the peak detector that measures each image as a sensor's firmware does."""
 
-    rows: Annotated[int, Field(strict=True, ge=3, le=4096)] = 512
-    columns: Annotated[int, Field(strict=True, ge=3, le=4096)] = 1024
-    bit_depth: Annotated[int, Field(strict=True, ge=1, le=16)] = 10
+    # The physical ranges are the camera's (_physical); a dataset's chunks cap the chip at 4096.
+    rows: Annotated[int, Field(strict=True, le=4096)] = 512
+    columns: Annotated[int, Field(strict=True, le=4096)] = 1024
+    bit_depth: Annotated[int, Field(strict=True)] = 10
     f_number: PositiveRange = (4.0, 16.0)
     wavelength_nm: PositiveRange = (660.0, 660.0)
     line_thickness_mm: PositiveRange = (0.1, 0.3)

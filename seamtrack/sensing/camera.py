@@ -110,7 +110,7 @@ RANGES: dict[str, Bound] = {
     # Read noise: below 1 e- (sCMOS) to some 50 e- (old CCDs, high-speed readout).
     "read_noise_e": Bound(0.0, 100.0, "e-", "electrons RMS, typically 2-20"),
     # ADCs of machine-vision chips: 8-12 bits, scientific ones 16.
-    "bit_depth": Bound(1, 16, "bits", "ADC bits, or none (0 in a scene): no quantization"),
+    "bit_depth": Bound(1, 16, "bits", "machine-vision ADCs have 8-12 (0 in a scene: none)"),
     # Light beyond the full well on every pixel saturates the whole chip.
     "ambient": Bound(0.0, 1.0, "", "ambient light as a fraction of the full well on every pixel"),
     "supersample": Bound(
