@@ -53,8 +53,12 @@ def test_impossible_optics_name_the_field(fields, field) -> None:
 
 
 def test_a_line_thicker_than_the_field_and_a_roi_off_the_chip_are_refused() -> None:
+    with pytest.raises(SensorGeometryError, match="outside 0.005-5 mm") as info:
+        Camera(line_thickness_mm=25.0)  # thicker than any line laser
+    assert info.value.field == "sensor.camera.line_thickness_mm"
+    # 4 mm at the waist, diverging by 0.49 rad: 19 mm thick at the far end, the field is 18 mm.
     with pytest.raises(SensorGeometryError, match="wider than the field") as info:
-        Camera(line_thickness_mm=25.0).check(SENSOR)
+        Camera(line_thickness_mm=4.0, line_divergence_rad=0.49).check(SENSOR)
     assert info.value.field == "sensor.camera.line_thickness_mm"
     with pytest.raises(SensorGeometryError) as info:
         Camera(rows=100, columns=100, roi=(0, 50, 0, 120)).check(SENSOR)

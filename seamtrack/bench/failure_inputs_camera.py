@@ -1,15 +1,207 @@
 """Bad inputs for the camera (image mode) and its chip, and datasets: entries of the catalogue in
-:mod:`seamtrack.bench.failure_inputs`, with the files they need."""
+:mod:`seamtrack.bench.failure_inputs`, with the files they need.
+
+Every camera value has a physical range (:data:`seamtrack.sensing.camera.RANGES`) and an image
+a memory bound (:data:`seamtrack.sensing.camera.MAX_IMAGE_BYTES`); each reproducer of issue 23
+is here with neighbours: other values, other commands (run, render, check, dataset --images),
+other scenes and presets. All are refused while the scene or spec is read, so all are quick.
+"""
 
 from __future__ import annotations
 
 from typing import Any
 
-from seamtrack.bench.failure_kit import Entry
+from seamtrack.bench.failure_kit import CAMERA, MESH, Entry, _dataset, _run, _set
 
 #: Files written into the workspace (name -> bytes).
-FILES: dict[str, bytes] = {}
+FILES: dict[str, bytes] = {
+    "camera_f_number.toml": b"[camera]\nf_number = [4.0, 1e9]\n",
+    "camera_f_number_1e4.toml": b"[camera]\nf_number = 1e4\n",
+    "camera_full_well.toml": b"[camera]\nfull_well_e = 1e-300\n",
+    "camera_full_well_big.toml": b"images = true\n[camera]\nfull_well_e = [1e4, 1e300]\n",
+    "camera_ambient.toml": b"[camera]\nambient = [0.0, 1e300]\n",
+    "camera_exposure.toml": b"[camera]\nexposure = 1e300\n",
+    "camera_read_noise.toml": b"[camera]\nread_noise_e = [0.0, 1e300]\n",
+    "camera_thickness.toml": b"[camera]\nline_thickness_mm = [1e-9, 0.3]\n",
+    "camera_wavelength.toml": b"[camera]\nwavelength_nm = [100.0, 660.0]\n",
+    # 4096 x 4096 at f/0.95 and 405 nm: 4 sub-pixels per pixel, more than an image may take
+    "camera_fast_lens.toml": b"images = true\n[camera]\nrows = 4096\ncolumns = 4096\n"
+    b"f_number = [0.95, 8.0]\nwavelength_nm = 405.0\n",
+    "offsets_1000.toml": b"[sensor]\nstandoff_offset_mm = [-1000.0, 1000.0]\n"
+    b"lateral_offset_mm = [-1000.0, 1000.0]\n",
+    "offsets_lateral.toml": b"[sensor]\nlateral_offset_mm = [-50.0, 50.0]\n",
+    "offsets_far.toml": b"images = true\n[sensor]\nstandoff_offset_mm = [0.0, 45.0]\n",
+    # the Cognex DS910B's depth of field is 8 mm: the default +-15 mm leaves it
+    "offsets_small_preset.toml": b'[sensor]\npresets = ["paper", "cognex-ds910b"]\n',
+}
 #: Files made when the workspace is (name -> a function of the path).
 GENERATED: dict[str, Any] = {}
 
-ENTRIES: tuple[Entry, ...] = ()
+F = "sensor.camera."
+
+
+def _render(*pairs: str) -> tuple[str, ...]:
+    """``seamtrack render v-groove-camera --at 10 --out OUT/image.png --set ...``"""
+    return ("render", *CAMERA, *_set(*pairs))
+
+
+def _image_run(*pairs: str) -> tuple[str, ...]:
+    """``seamtrack run v-groove-camera --set ... --out OUT``"""
+    return _run("v-groove-camera", *_set(*pairs))
+
+
+def _check(*pairs: str) -> tuple[str, ...]:
+    """``seamtrack check v-groove-camera --set ...``"""
+    return ("check", "v-groove-camera", *_set(*pairs))
+
+
+#: paper-v-groove (a mesh scene) in image mode: the camera on another scene.
+IMAGE_MESH = (*MESH, *_set('sensor.source="image"'))
+
+ENTRIES: tuple[Entry, ...] = (
+    # --- issue 23.1: camera values checked for size, not only sign
+    Entry("camera f-number 1e9", _render(f"{F}f_number=1e9"), field=f"{F}f_number"),
+    Entry("camera f-number 1e4", _image_run(f"{F}f_number=1e4"), field=f"{F}f_number"),
+    Entry("camera f-number 0.5", _check(f"{F}f_number=0.5"), field=f"{F}f_number"),
+    Entry(
+        "camera f-number 100 on paper-v-groove",
+        ("run", *IMAGE_MESH, *_set(f"{F}f_number=100"), "--out", "OUT"),
+        field=f"{F}f_number",
+    ),
+    Entry("camera focal length 1e-9 mm", _render(f"{F}focal_length_mm=1e-9"), field="focal_length"),
+    Entry(
+        "camera focal length 1e6 mm", _image_run(f"{F}focal_length_mm=1e6"), field="focal_length"
+    ),
+    Entry("camera exposure 1e300", _render(f"{F}exposure=1e300"), field=f"{F}exposure"),
+    Entry("camera exposure 1e-9", _check(f"{F}exposure=1e-9"), field=f"{F}exposure"),
+    Entry("camera full well 1e300 e", _render(f"{F}full_well_e=1e300"), field=f"{F}full_well_e"),
+    Entry("camera full well 1e-300 e", _render(f"{F}full_well_e=1e-300"), field=f"{F}full_well_e"),
+    Entry("camera full well 10 e", _image_run(f"{F}full_well_e=10"), field=f"{F}full_well_e"),
+    Entry("camera ambient 1e300", _render(f"{F}ambient=1e300"), field=f"{F}ambient"),
+    Entry("camera ambient 1.5", _check(f"{F}ambient=1.5"), field=f"{F}ambient"),
+    Entry(
+        "camera ambient 2 with a gocator",
+        (
+            "run",
+            *IMAGE_MESH,
+            *_set('sensor.preset="gocator-2340"', f"{F}ambient=2"),
+            "--out",
+            "OUT",
+        ),
+        field=f"{F}ambient",
+    ),
+    Entry("camera read noise 1e300 e", _render(f"{F}read_noise_e=1e300"), field="read_noise_e"),
+    Entry("camera read noise 500 e", _image_run(f"{F}read_noise_e=500"), field="read_noise_e"),
+    Entry("camera line 1e-9 mm thick", _check(f"{F}line_thickness_mm=1e-9"), field="thickness"),
+    Entry(
+        "camera line divergence 1e300 mrad",
+        _render(f"{F}line_divergence_mrad=1e300"),
+        field=f"{F}line_divergence_mrad",
+    ),
+    Entry("camera waist 1e300 mm", _image_run(f"{F}waist_range_mm=1e300"), field="waist_range"),
+    Entry("camera bit depth -1", _check(f"{F}bit_depth=-1"), field=f"{F}bit_depth"),
+    Entry("camera wavelength nan", _render(f"{F}wavelength_nm=nan"), field=f"{F}wavelength_nm"),
+    Entry("camera rows 2.5", _check(f"{F}rows=2.5"), field=f"{F}rows"),
+    # --- issue 23.2: chip size x supersampling within the memory a run may take
+    Entry(
+        "camera chip 20000 x 20000",
+        _render(f"{F}rows=20000", f"{F}columns=20000"),
+        field=f"{F}rows",
+    ),
+    Entry("camera columns 16385", _check(f"{F}columns=16385"), field=f"{F}columns"),
+    Entry(
+        "camera chip 16384 x 16384",
+        _image_run(f"{F}rows=16384", f"{F}columns=16384"),
+        field=f"{F}rows",
+    ),
+    Entry(
+        "camera chip 4096 x 8192 supersample 8",
+        _render(f"{F}rows=4096", f"{F}columns=8192", f"{F}supersample=8"),
+        field=f"{F}columns",
+    ),
+    Entry(
+        "camera chip 4096 x 8192 supersample 1",
+        _check(f"{F}rows=4096", f"{F}columns=8192", f"{F}supersample=1"),
+        field=f"{F}columns",
+    ),
+    Entry(
+        "camera chip 4096 x 4096 supersample 8",
+        _check(f"{F}rows=4096", f"{F}columns=4096", f"{F}supersample=8"),
+        field=f"{F}supersample",
+    ),
+    Entry(
+        "camera roi of 16384 x 4000",
+        _image_run(f"{F}rows=16384", f"{F}columns=16384", f"{F}roi=[0, 16384, 0, 4000]"),
+        field=f"{F}roi",
+    ),
+    # --- the same values through dataset specs: refused before dataset.json or spec.toml
+    Entry(
+        "dataset --images camera f-number 1e9",
+        (*_dataset("camera_f_number.toml"), "--images"),
+        field="camera.f_number",
+    ),
+    Entry(
+        "dataset camera f-number 1e4", _dataset("camera_f_number_1e4.toml"), field="camera.f_number"
+    ),
+    Entry(
+        "dataset --images full well 1e-300",
+        (*_dataset("camera_full_well.toml"), "--images"),
+        field="camera.full_well_e",
+    ),
+    Entry(
+        "dataset images full well 1e300",
+        _dataset("camera_full_well_big.toml"),
+        field="camera.full_well_e",
+    ),
+    Entry(
+        "dataset --images ambient 1e300",
+        (*_dataset("camera_ambient.toml"), "--images"),
+        field="camera.ambient",
+    ),
+    Entry(
+        "dataset --images exposure 1e300",
+        (*_dataset("camera_exposure.toml"), "--images"),
+        field="camera.exposure",
+    ),
+    Entry(
+        "dataset --images read noise 1e300",
+        (*_dataset("camera_read_noise.toml"), "--images"),
+        field="camera.read_noise_e",
+    ),
+    Entry(
+        "dataset --images line 1e-9 mm thick",
+        (*_dataset("camera_thickness.toml"), "--images"),
+        field="camera.line_thickness_mm",
+    ),
+    Entry(
+        "dataset wavelength 100 nm",
+        _dataset("camera_wavelength.toml"),
+        field="camera.wavelength_nm",
+    ),
+    Entry(
+        "dataset images 4096 x 4096 at f/0.95",
+        _dataset("camera_fast_lens.toml"),
+        field="camera.rows",
+    ),
+    # --- issue 23.8: the seam within the sensor's range and field of view
+    Entry(
+        "dataset offsets of 1000 mm",
+        _dataset("offsets_1000.toml"),
+        field="sensor.standoff_offset_mm",
+    ),
+    Entry(
+        "dataset lateral offset 50 mm",
+        _dataset("offsets_lateral.toml"),
+        field="sensor.lateral_offset_mm",
+    ),
+    Entry(
+        "dataset images standoff 45 mm beyond the range",
+        _dataset("offsets_far.toml"),
+        field="sensor.standoff_offset_mm",
+    ),
+    Entry(
+        "dataset standoff beyond a small preset's range",
+        _dataset("offsets_small_preset.toml"),
+        field="sensor.standoff_offset_mm",
+    ),
+)

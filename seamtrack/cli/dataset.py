@@ -58,11 +58,14 @@ def cmd_dataset(args: argparse.Namespace) -> int:
         spec = with_images(spec)
     done = write_dataset(spec, args.n, args.out, workers=args.workers, scheduler=args.scheduler,
                          progress=_progress_wanted(args))  # fmt: skip
-    if not args.quiet:
+    if not args.quiet and done["written"] == 0:
+        print(f"{done['samples_there']} samples already there; nothing to do")
+    elif not args.quiet:
         rate = done["samples_written"] / done["cpu_s"] if done["cpu_s"] > 0 else math.nan
         print(
             f"wrote {done['samples_written']} samples in {done['written']} chunk files "
-            f"({done['kept']} already there) into {args.out} in {done['wall_s']:.1f} s "
+            f"({done['kept']} chunk files already there) into {args.out} in "
+            f"{done['wall_s']:.1f} s "
             f"({rate:,.0f} samples per CPU second); seamtrack dataset --info {args.out}"
         )
     return 0

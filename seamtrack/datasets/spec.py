@@ -121,18 +121,11 @@ def _tilt(r: tuple[float, float]) -> tuple[float, float]:
     return r
 
 
-def _wavelength(r: tuple[float, float]) -> tuple[float, float]:
-    if r[0] < 200 or r[1] > 2000:
-        raise ValueError(f"must lie in [200, 2000] nm, got [{r[0]:g}, {r[1]:g}]")
-    return r
-
-
 NonNegativeRange = Annotated[Range, AfterValidator(_nonnegative)]
 PositiveRange = Annotated[Range, AfterValidator(_positive)]
 FractionRange = Annotated[Range, AfterValidator(_fraction)]
 AngleRange = Annotated[Range, AfterValidator(_open_angle)]
 TiltRange = Annotated[Range, AfterValidator(_tilt)]
-WavelengthRange = Annotated[Range, AfterValidator(_wavelength)]
 
 
 class _Section(BaseModel):
@@ -238,7 +231,45 @@ class SensorSpec(_Section):
                     f"unknown sensor preset {name!r}",
                     f"use one of {', '.join(PRESET_SPECS)}",
                 )
+        for name in self.presets:
+            self._seam_in_view(name)
         return self
+
+    def _seam_in_view(self, name: str) -> None:
+        """The seam point within the preset's range (its depth of field about the range
+        centre) and, at the nearest standoff drawn (the narrowest field), its field of view."""
+        from seamtrack.sensing.sensor import preset
+
+        sensor = preset(name)
+        centre = sensor.range_center_mm
+        low, high = sensor.range_near_mm - centre, sensor.range_far_mm - centre
+        lo, hi = self.standoff_offset_mm
+        slack = 1e-9 * sensor.depth_of_field_mm
+        if lo < low - slack or hi > high + slack:
+            raise _FieldError(
+                "standoff_offset_mm",
+                f"[{lo:g}, {hi:g}] mm puts the seam outside the range of preset {name!r} "
+                f"({sensor.range_near_mm:.4g}-{sensor.range_far_mm:.4g} mm, centre "
+                f"{centre:.4g} mm): those samples would see nothing",
+                f"keep it within [{_inward(low, +1):g}, {_inward(high, -1):g}] mm",
+            )
+        half = float(sensor.half_width_mm(centre + lo))
+        widest = max(abs(x) for x in self.lateral_offset_mm)
+        if widest > half * (1 + 1e-9):
+            raise _FieldError(
+                "lateral_offset_mm",
+                f"{list(self.lateral_offset_mm)} mm puts the seam outside the field of view of "
+                f"preset {name!r} ({2 * half:.4g} mm wide at the nearest standoff drawn, "
+                f"{centre + lo:.4g} mm)",
+                f"keep it within [-{_inward(half, -1):g}, {_inward(half, -1):g}] mm (or raise "
+                "standoff_offset_mm's min: the field widens with range)",
+            )
+
+
+def _inward(value: float, direction: int) -> float:
+    """``value`` rounded to 0.01 towards ``direction`` (+1 up, -1 down): a bound to print."""
+    step = math.ceil if direction > 0 else math.floor
+    return step(round(value * 100, 6)) / 100
 
 
 class NoiseSpec(_Section):
@@ -256,11 +287,12 @@ class CameraSpec(_Section):
     """The camera of ``--images`` (:class:`seamtrack.sensing.camera.Camera`), its knobs drawn
     per sample, and the peak detector that measures each image as a sensor's firmware does."""
 
-    rows: Annotated[int, Field(strict=True, ge=3, le=4096)] = 512
-    columns: Annotated[int, Field(strict=True, ge=3, le=4096)] = 1024
-    bit_depth: Annotated[int, Field(strict=True, ge=1, le=16)] = 10
+    # The physical ranges are the camera's (_physical); a dataset's chunks cap the chip at 4096.
+    rows: Annotated[int, Field(strict=True, le=4096)] = 512
+    columns: Annotated[int, Field(strict=True, le=4096)] = 1024
+    bit_depth: Annotated[int, Field(strict=True)] = 10
     f_number: PositiveRange = (4.0, 16.0)
-    wavelength_nm: WavelengthRange = (660.0, 660.0)
+    wavelength_nm: PositiveRange = (660.0, 660.0)
     line_thickness_mm: PositiveRange = (0.1, 0.3)
     exposure: PositiveRange = (0.3, 0.8)
     full_well_e: PositiveRange = (10_000.0, 10_000.0)
@@ -271,6 +303,21 @@ class CameraSpec(_Section):
     method: Literal["centroid", "gaussian", "steger"] = "centroid"
     threshold: Annotated[float, Field(strict=True, ge=0, le=1, allow_inf_nan=False)] = 0.03
     choose: Literal["strongest", "first", "widest"] = "strongest"
+
+    @model_validator(mode="after")
+    def _physical(self) -> CameraSpec:
+        """Both ends of every range within the camera's physical range (the one definition,
+        :data:`seamtrack.sensing.camera.RANGES`)."""
+        from seamtrack.sensing.camera import RANGES, range_error
+
+        for key in CameraSpec.model_fields:
+            if key not in RANGES:
+                continue
+            value = getattr(self, key)
+            for end in value if isinstance(value, tuple) else (value,):
+                if error := range_error(key, end):
+                    raise _FieldError(key, error.message, error.fix or "")
+        return self
 
 
 class DatasetSpec(_Section):
@@ -329,16 +376,28 @@ class DatasetSpec(_Section):
         from seamtrack.sensing.sensor import preset
 
         c = self.camera
-        # A thick line is wide at its waist, a thin one diverges most: check both ends.
-        for name, thickness in itertools.product(self.sensor.presets, c.line_thickness_mm):
+        # A thick line is wide at its waist, a thin one diverges most (at the longest
+        # wavelength): check the ends. The fastest lens at the shortest wavelength supersamples
+        # most: the image's memory bound.
+        ends = itertools.product(self.sensor.presets, c.line_thickness_mm, c.wavelength_nm)
+        for name, thickness, wavelength in ends:
             try:
-                Camera(rows=c.rows, columns=c.columns, wavelength_nm=c.wavelength_nm[1],
-                       line_thickness_mm=thickness).check(preset(name))  # fmt: skip
+                Camera(
+                    rows=c.rows,
+                    columns=c.columns,
+                    wavelength_nm=wavelength,
+                    f_number=c.f_number[0],
+                    line_thickness_mm=thickness,
+                ).check(preset(name))
             except SensorGeometryError as exc:
+                key = (exc.field or "line_thickness_mm").rsplit(".", 1)[-1]
+                fix = exc.fix or "give a thinner line"
+                if key == "supersample":  # a spec has no supersample: it follows the f-number
+                    key = "rows"
+                    fix = "give fewer rows x columns, or raise f_number's min (a faster lens "
+                    fix += "needs finer sub-pixels for its speckle)"
                 raise _FieldError(
-                    "camera.line_thickness_mm",
-                    f"{exc.message} with preset {name!r}",
-                    exc.fix or "give a thinner line",
+                    f"camera.{key}", f"{exc.message} with preset {name!r}", fix
                 ) from None
 
     def canonical(self) -> str:
@@ -480,7 +539,9 @@ materials = ["mill-scale steel", "blasted steel", "brushed stainless"]
 presets = ["paper"]              # seamtrack sensor --list
 quantize = true                  # snap points to the chip's pixels (Eq. 1-3)
 standoff_offset_mm = [-15.0, 15.0]  # range z_L of the seam point minus the preset's range centre
-lateral_offset_mm = [-4.0, 4.0]  # y_L of the seam point
+                                    # (within each preset's range: paper -21.6 to 38.4)
+lateral_offset_mm = [-4.0, 4.0]  # y_L of the seam point (within each preset's field of view at
+                                 # the nearest standoff drawn: paper +-9.77 at -15)
 tilt_deg = [-10.0, 10.0]         # travel angle: the sensor leans along the seam (about y_S)
 roll_deg = [-10.0, 10.0]         # work angle: about the seam (x_S)
 yaw_deg = 0.0                    # about the laser axis (the plane turns against the seam)
@@ -498,16 +559,19 @@ outlier_fraction = [0.0, 0.01]       # points replaced by a spurious peak on the
 [camera]
 # Used with images = true (--images): the image of the stripe on the drawn joint, rendered as in
 # image mode (seamtrack.sensing.render), the profile measured from it by the peak detector below.
-rows = 512                       # pixels along the range (x_c); the chip keeps its size
-columns = 1024                   # pixels along the stripe (z_c)
-bit_depth = 10                   # stored as uint16 grey levels 0 .. 2^bit_depth - 1
-f_number = [4.0, 16.0]           # working f-number: diffraction blur and speckle grain
-wavelength_nm = 660.0
-line_thickness_mm = [0.1, 0.3]   # 1/e^2 thickness of the laser sheet at its waist
-exposure = [0.3, 0.8]            # peak of a white plane at the range centre, share of full well
-full_well_e = 10000.0
-read_noise_e = [0.0, 10.0]       # electrons RMS
-ambient = [0.0, 0.005]           # ambient or arc light, share of full well on every pixel
+# Each range lies within what real lenses, lasers and chips have (seamtrack.sensing.camera.RANGES,
+# as in a scene's [sensor.camera]): the bounds are given per key.
+rows = 512                       # pixels along the range (x_c), 3-4096; the chip keeps its size
+columns = 1024                   # pixels along the stripe (z_c), 3-4096
+bit_depth = 10                   # 1-16: stored as uint16 grey levels 0 .. 2^bit_depth - 1
+f_number = [4.0, 16.0]           # working f-number, 0.95-64: diffraction blur and speckle grain
+wavelength_nm = 660.0            # 200-2000
+line_thickness_mm = [0.1, 0.3]   # 1/e^2 thickness of the laser sheet at its waist, 0.005-5
+exposure = [0.3, 0.8]            # peak of a white plane at the range centre, share of full well,
+                                 # 1e-4-100
+full_well_e = 10000.0            # electrons, 1000-1000000
+read_noise_e = [0.0, 10.0]       # electrons RMS, 0-100
+ambient = [0.0, 0.005]           # ambient or arc light, share of full well on every pixel, 0-1
 speckle_probability = 1.0        # chance a sample's image has laser speckle (0: never)
 shot_noise_probability = 1.0     # chance it has shot noise
 method = "centroid"              # peak detector: centroid, gaussian or steger

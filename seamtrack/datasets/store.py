@@ -208,7 +208,9 @@ def write_dataset(
     -------
     dict
         ``n``, ``chunks`` (all chunks of n), ``written`` and ``kept`` (chunks made now / found
-        whole), ``wall_s`` and ``cpu_s`` (this process and its finished workers).
+        whole), ``samples_written``, ``samples_there`` (in whole chunks before this run),
+        ``wall_s`` and ``cpu_s`` (this process and its finished workers). When every sample
+        asked for is there already, nothing is written.
     """
     import resource
 
@@ -225,6 +227,14 @@ def write_dataset(
         else [False] * len(counts)
     )
     todo = [k for k, ok in enumerate(done) if not ok]
+    there = 0
+    if manifest:  # the samples already written, in whole chunks (a killed run redoes its chunk)
+        known = math.ceil(int(manifest["n"]) / size)
+        there = sum(chunk_count(chunk_path(out_path, k)) for k in range(known))
+    if not todo:  # every sample asked for is there: nothing is written, not even the manifest
+        nothing = {"written": 0, "samples_written": 0, "wall_s": 0.0, "cpu_s": 0.0}
+        return {"n": n, "chunks": len(counts), "kept": len(counts), "samples_there": there,
+                **nothing}  # fmt: skip
     start = time.perf_counter()
     cpu_start = time.process_time()
     children = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -251,6 +261,7 @@ def write_dataset(
         "written": len(todo),
         "kept": len(counts) - len(todo),
         "samples_written": sum(counts[k] for k in todo),
+        "samples_there": there,
         "wall_s": time.perf_counter() - start,
         "cpu_s": cpu,
     }

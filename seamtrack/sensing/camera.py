@@ -40,9 +40,127 @@ def _fail(key: str, message: str, fix: str) -> SensorGeometryError:
     return SensorGeometryError(message, field=f"sensor.camera.{key}", fix=fix)
 
 
+def _number(x: float) -> str:
+    return f"{x:,.0f}" if x == int(x) and abs(x) < 1e7 else f"{x:g}"
+
+
+@dataclass(frozen=True)
+class Bound:
+    """The physical range of one camera field: ``lo <= value <= hi`` in ``unit``; ``real`` says
+    what real lenses, lasers and chips have (the fix of an error)."""
+
+    lo: float
+    hi: float
+    unit: str
+    real: str
+
+    def complaint(self, value: float) -> str | None:
+        """What is wrong with ``value`` (None: it lies in the range)."""
+        if math.isfinite(value) and self.lo <= value <= self.hi:
+            return None
+        unit = f" {self.unit}" if self.unit else ""
+        return f"{value:g}{unit} is outside {_number(self.lo)}-{_number(self.hi)}{unit}"
+
+
+#: The physical range of every camera field, the one definition: :class:`Camera` checks its
+#: fields against it (so a scene's ``[sensor.camera]`` and any later exposure mode do), and a
+#: dataset spec's ``[camera]`` ranges must lie within it. Keys are the scene's.
+RANGES: dict[str, Bound] = {
+    # Area-scan CMOS chips of machine vision are 480 to ~14,000 pixels a side (Sony IMX411:
+    # 14,192 x 10,640); line-scan chips reach 16,384. A peak needs 3 rows. (How many pixels a
+    # run may hold in memory is a separate bound: MAX_IMAGE_BYTES.)
+    "rows": Bound(3, 16_384, "pixels", "real chips have up to 16384 pixels a side"),
+    "columns": Bound(3, 16_384, "pixels", "real chips have up to 16384 pixels a side"),
+    # Machine-vision lenses: M12 board lenses from about 1.5 mm, C-mount and F-mount lenses to
+    # about 300 mm (the chip scales with the lens here, so the field of view stays the sensor's).
+    "focal_length_mm": Bound(1.0, 500.0, "mm", "machine-vision lenses have 1.5-300 mm"),
+    # Working (image-side) f-number N (1 + m): the fastest machine-vision lenses open to f/0.95,
+    # the smallest stop is f/32, doubled at 1:1 magnification.
+    "f_number": Bound(
+        0.95,
+        64.0,
+        "",
+        "lenses open to f/0.95 and stop down to f/32, a working f-number of 64 "
+        "at 1:1 magnification; triangulation sensors work at f/4-f/16",
+    ),
+    # UV diode lasers (a silicon chip with UV coating) to SWIR (InGaAs chips end near 1700 nm,
+    # thulium lasers at 2000 nm).
+    "wavelength_nm": Bound(200.0, 2000.0, "nm", "line lasers emit 405, 450, 635-690 or 808 nm"),
+    # Line generators: micro-line optics focus to 5-10 um, wide lines reach a few mm.
+    "line_thickness_mm": Bound(
+        0.005, 5.0, "mm", "the 1/e^2 thickness of the line at its waist, typically 0.02-1 mm"
+    ),
+    # Full-angle divergence of the sheet's thickness: a Gaussian beam of a 5 um waist at 2000 nm
+    # diverges by 4 lambda / (pi W0) = 0.5 rad.
+    "line_divergence_mrad": Bound(
+        0.0, 500.0, "mrad", "the full-angle divergence of the line's thickness"
+    ),
+    # The focusing optics of a line laser put the waist within a few metres of the emitter.
+    "waist_range_mm": Bound(1.0, 10_000.0, "mm", "the distance from the emitter to the waist"),
+    # Exposure control (1 us to 10 ms shutter, gain) spans 10^4 about its nominal level; 100 full
+    # wells on white saturates a 1 % reflector, 1e-4 leaves dark steel at a few electrons.
+    "exposure": Bound(
+        1e-4, 100.0, "", "the peak of a white plane as a fraction of the full well (0.5: half)"
+    ),
+    # CMOS full-well capacities: about 1,000 e- (1 um pixels) to 500,000 e- (large-pixel sCMOS,
+    # CCDs).
+    "full_well_e": Bound(
+        1_000.0, 1_000_000.0, "e-", "CMOS pixels hold typically 5000-30000 electrons"
+    ),
+    # Read noise: below 1 e- (sCMOS) to some 50 e- (old CCDs, high-speed readout).
+    "read_noise_e": Bound(0.0, 100.0, "e-", "electrons RMS, typically 2-20"),
+    # ADCs of machine-vision chips: 8-12 bits, scientific ones 16.
+    "bit_depth": Bound(1, 16, "bits", "machine-vision ADCs have 8-12 (0 in a scene: none)"),
+    # Light beyond the full well on every pixel saturates the whole chip.
+    "ambient": Bound(0.0, 1.0, "", "ambient light as a fraction of the full well on every pixel"),
+    "supersample": Bound(
+        1, MAX_SUPERSAMPLE, "", "sub-pixels per pixel and axis, or leave it out (from the optics)"
+    ),
+}
+
+
+#: Pixel columns per block of the renderer's band processing (:mod:`seamtrack.sensing.render`).
+BLOCK_COLUMNS = 32
+#: Bytes a rendered image costs per pixel at its peak. Measured (peak RSS of ``seamtrack render
+#: v-groove-camera``, less the 0.37 GB of a 512 x 1024 image): 52 B a pixel at 1024 x 2048 and
+#: supersample 4, 66 B at 2048 x 4096 and 73 B at 4096 x 8192 (supersample 1): the float64
+#: electrons, the chip readout's float32 stages, the peak detector and the PNG's colour mapping.
+BYTES_PER_PIXEL = 80
+#: Bytes per sub-pixel cell of one block's box (speckle: float64 cells, two float32 noise planes,
+#: the complex64 field, its padded spectrum and inverse, the float32 intensity and its float64
+#: copy).
+BYTES_PER_CELL = 100
+#: What the image may take: the rest of a run (Python, CadQuery, the mesh, Embree, the ray fan
+#: of at most MAX_RAYS) holds about 0.4 GB, so a run stays under 2 GB.
+MAX_IMAGE_BYTES = 1408 * 2**20
+
+
+def image_bytes(rows: int, columns: int, s: int, apron_cells: int) -> int:
+    """Peak bytes of rendering a ``rows`` x ``columns`` image at ``s`` sub-pixels per pixel and
+    axis: the pixels, and one block's box of cells with its apron, as tall as the image (a stripe
+    that crosses every row within one block)."""
+    box = (rows * s + 2 * apron_cells) * (BLOCK_COLUMNS * s + 2 * apron_cells)
+    return BYTES_PER_PIXEL * rows * columns + BYTES_PER_CELL * box
+
+
+def range_error(key: str, value: float, field: str | None = None) -> SensorGeometryError | None:
+    """The error for camera field ``key`` set to ``value`` outside :data:`RANGES` (None: in
+    range); ``field`` names it (default ``sensor.camera.<key>``)."""
+    bound = RANGES[key]
+    message = bound.complaint(float(value))
+    if message is None:
+        return None
+    unit = f" {bound.unit}" if bound.unit else ""
+    fix = f"give {_number(bound.lo)}-{_number(bound.hi)}{unit}: {bound.real}"
+    return SensorGeometryError(message, field=field or f"sensor.camera.{key}", fix=fix)
+
+
 @dataclass(frozen=True)
 class Camera:
     """Optics, laser line and chip of a laser-line sensor's camera.
+
+    Every field must lie within its physical range (:data:`RANGES`: real lenses, lasers and
+    chips); :meth:`check` also bounds the image's memory (:data:`MAX_IMAGE_BYTES`).
 
     Parameters
     ----------
@@ -104,38 +222,31 @@ class Camera:
     supersample: int | None = None
 
     def __post_init__(self) -> None:
-        for key in ("rows", "columns"):
+        for key in ("rows", "columns", "supersample", "bit_depth"):
             value = getattr(self, key)
-            if value is not None and not (isinstance(value, int) and 3 <= value <= 20_000):
-                raise _fail(key, f"{value} pixels", "give a whole number of pixels, 3-20000")
-        if not (math.isfinite(self.f_number) and self.f_number > 0):
-            raise _fail("f_number", f"f-number {self.f_number} is not positive",
-                        "give the lens aperture as N > 0, e.g. 8")  # fmt: skip
-        if not 200.0 <= self.wavelength_nm <= 2000.0:
-            raise _fail("wavelength_nm", f"{self.wavelength_nm} nm is outside 200-2000 nm",
-                        "line lasers emit 405, 450, 635-690 or 808 nm")  # fmt: skip
-        positive = ("line_thickness_mm", "exposure", "full_well_e")
-        for key in positive:
+            if value is None:
+                continue
+            if isinstance(value, bool) or not isinstance(value, int):
+                raise _fail(key, f"{value!r} is not a whole number", RANGES[key].real)
+            if error := range_error(key, value):
+                raise error
+        for key in (
+            "focal_length_mm",
+            "f_number",
+            "wavelength_nm",
+            "line_thickness_mm",
+            "waist_range_mm",
+            "exposure",
+            "full_well_e",
+            "read_noise_e",
+            "ambient",
+        ):
             value = getattr(self, key)
-            if not (math.isfinite(value) and value > 0):
-                raise _fail(key, f"{value} is not positive", "give a positive number")
-        for key in ("focal_length_mm", "waist_range_mm"):
-            value = getattr(self, key)
-            if value is not None and not (math.isfinite(value) and value > 0):
-                raise _fail(key, f"{value} is not positive", "give a length in mm, or leave it out")
+            if value is not None and (error := range_error(key, value)):
+                raise error
         div = self.line_divergence_rad
-        if div is not None and not (math.isfinite(div) and 0 <= div < 0.5):
-            raise _fail("line_divergence_mrad", f"{div * 1e3:.4g} mrad",
-                        "give the full-angle divergence, 0 to 500 mrad")  # fmt: skip
-        for key in ("read_noise_e", "ambient"):
-            value = getattr(self, key)
-            if not (math.isfinite(value) and value >= 0):
-                raise _fail(key, f"{value} is negative or not finite", "give a number >= 0")
-        if self.bit_depth is not None and not 1 <= self.bit_depth <= 16:
-            raise _fail("bit_depth", f"{self.bit_depth} bits", "give 1-16 bits, or none")
-        s = self.supersample
-        if s is not None and not 1 <= s <= MAX_SUPERSAMPLE:
-            raise _fail("supersample", f"{s}", f"give 1-{MAX_SUPERSAMPLE} sub-pixels per pixel")
+        if div is not None and (error := range_error("line_divergence_mrad", 1e3 * div)):
+            raise error
         if self.roi is not None:
             r0, r1, c0, c1 = self.roi
             if not (0 <= r0 and r1 - r0 >= 3 and 0 <= c0 and c1 - c0 >= 1):
@@ -232,6 +343,7 @@ class Camera:
                 raise _fail("roi", f"{list(self.roi)} reaches beyond the {imaging.pixels_h} x "
                             f"{imaging.pixels_v} pixel chip",
                             "keep row1 <= rows and col1 <= columns")  # fmt: skip
+        self._check_memory(imaging)
         waist = self.waist_range_mm or sensor.range_center_mm
         widest = 4.0 * float(
             np.max(self.line_sigma_mm([sensor.range_near_mm, sensor.range_far_mm], waist))
@@ -241,6 +353,40 @@ class Camera:
             raise _fail("line_thickness_mm", f"the laser line is {widest:.4g} mm thick in the "
                         f"depth of field, wider than the field ({field:.4g} mm)",
                         "give the 1/e^2 thickness of the line, typically 0.02-1 mm")  # fmt: skip
+
+    def apron_cells(self, imaging: LaserLineSensor, s: int) -> int:
+        """Cells the renderer adds around each box: 4 blur sigmas, or 4 lambda N with speckle;
+        a whole number of pixels (as :meth:`seamtrack.sensing.formation.Optics.apron_cells`)."""
+        reach = 4.0 * (self.speckle_size_mm if self.speckle else self.blur_sigma_mm)
+        cells = math.ceil(reach / (min(imaging.pixel_pitch_mm) / s)) + 1
+        return s * math.ceil(cells / s)
+
+    def _check_memory(self, imaging: LaserLineSensor) -> None:
+        """Refuse an image whose rendering would take more than :data:`MAX_IMAGE_BYTES`: name
+        the supersampling when less of it fits, else the chip size."""
+        r0, r1, c0, c1 = self.window(imaging)
+        rows, columns = r1 - r0, c1 - c0
+        s = self.supersampling(imaging)
+        need = image_bytes(rows, columns, s, self.apron_cells(imaging, s))
+        if need <= MAX_IMAGE_BYTES:
+            return
+        size = f"{rows} x {columns} pixels at supersample {s}"
+        message = (
+            f"{size} need about {need / 2**30:.3g} GB to render, more than the "
+            f"{MAX_IMAGE_BYTES / 2**30:.3g} GB an image may take (a run stays under 2 GB)"
+        )
+        fits = [
+            k
+            for k in range(1, s)
+            if image_bytes(rows, columns, k, self.apron_cells(imaging, k)) <= MAX_IMAGE_BYTES
+        ]
+        if fits:
+            raise _fail("supersample", message, f"give supersample = {max(fits)} or less, or "
+                        "fewer rows and columns")  # fmt: skip
+        most = MAX_IMAGE_BYTES // BYTES_PER_PIXEL
+        key = "roi" if self.roi is not None else "rows" if rows >= columns else "columns"
+        fix = f"give rows x columns (or a roi) of at most {most / 1e6:.3g} million pixels, e.g. "
+        raise _fail(key, message, fix + "2048 x 4096, at supersample 1")
 
 
 _NOISELESS: dict[str, Any] = {

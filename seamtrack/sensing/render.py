@@ -41,7 +41,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from seamtrack import constants
 from seamtrack.sensing import formation
-from seamtrack.sensing.camera import Camera, StripeImage
+from seamtrack.sensing.camera import BLOCK_COLUMNS, Camera, StripeImage
 from seamtrack.sensing.materials import DEFAULT_MATERIAL, Material, material
 from seamtrack.sensing.profiles import Reason
 from seamtrack.sensing.scan import laser_fan, ray_caster, stripe_hits
@@ -55,8 +55,6 @@ FloatArray = NDArray[np.float64]
 #: Fan rays per sub-pixel column (at least one per sub-pixel column everywhere in the field: the
 #: fan spans the near end's angle, the widest).
 RAYS_PER_SUBCOLUMN = 1.25
-#: Pixel columns per block of the band processing.
-BLOCK_COLUMNS = 32
 #: A false stripe counts (StripeImage.reflection) above this share of a white plane's column.
 REFLECTION_LEVEL = 0.01
 #: Stripe pieces adding less than this share of the full well to any pixel are not drawn.

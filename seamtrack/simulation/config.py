@@ -51,28 +51,27 @@ class SeamConfig(_Section):
 
 class CameraConfig(_Section):
     """``[sensor.camera]``: the camera of image mode (:class:`seamtrack.sensing.camera.Camera`)
-    and the peak detector that measures each image."""
+    and the peak detector that measures each image. The types are checked here, the physical
+    ranges by the camera itself (:data:`seamtrack.sensing.camera.RANGES`, one definition)."""
 
-    rows: Annotated[int, Field(ge=3, le=20_000, strict=True)] | None = None
-    columns: Annotated[int, Field(ge=3, le=20_000, strict=True)] | None = None
+    rows: Annotated[int, Field(strict=True)] | None = None
+    columns: Annotated[int, Field(strict=True)] | None = None
     roi: tuple[NonNegativeInt, NonNegativeInt, NonNegativeInt, NonNegativeInt] | None = None
     focal_length_mm: Positive | None = None
     f_number: Positive = 8.0
     # Default: the preset's data sheet, else 660 nm.
-    wavelength_nm: (
-        Annotated[float, Field(ge=200, le=2000, allow_inf_nan=False, strict=True)] | None
-    ) = None
+    wavelength_nm: Positive | None = None
     line_thickness_mm: Positive = 0.2
     line_divergence_mrad: NonNegative | None = None
     waist_range_mm: Positive | None = None
     exposure: Positive = 0.5
     full_well_e: Positive = 10_000.0
     read_noise_e: NonNegative = 5.0
-    bit_depth: Annotated[int, Field(ge=0, le=16, strict=True)] = 10  # 0: no quantization
+    bit_depth: Annotated[int, Field(strict=True)] = 10  # 0: no quantization
     ambient: NonNegative = 0.0
     speckle: Flag = True
     shot_noise: Flag = True
-    supersample: Annotated[int, Field(ge=1, le=8, strict=True)] | None = None
+    supersample: Annotated[int, Field(strict=True)] | None = None
     ideal: Flag = False  # every noise source off (Camera.ideal)
     method: Literal["centroid", "gaussian", "steger"] = "centroid"
     threshold: Annotated[float, Field(ge=0, le=1, allow_inf_nan=False, strict=True)] = 0.1
