@@ -136,6 +136,8 @@ ENTRIES: tuple[Entry, ...] = (
           field=_ACCEL),
     Entry("servo gains [] on a UR10e", _arm("robot.servo_gain_1_s=[]"),
           field="robot.servo_gain_1_s"),
+    Entry("servo gains [50,true] on a UR10e", _arm("robot.servo_gain_1_s=[50,true]"),
+          field="robot.servo_gain_1_s.1"),
     Entry("servo gains [] on the gantry", _run(*SHORT, *_set("robot.servo_gain_1_s=[]")),
           field="robot.servo_gain_1_s"),
     Entry("4 servo gains on a KR 16", _arm("robot.servo_gain_1_s=[50,50,50,50]", model=KR16),
