@@ -124,3 +124,30 @@ def test_closest_near_follows_the_leg_it_is_on() -> None:
     assert float(seam.closest([0.0, 0.4, 0.0]).arc_length_mm[0]) > 90
     assert seam.closest_near([0.0, 0.4, 0.0], 0.0) == pytest.approx(0.0)
     assert seam.closest_near([30.0, 0.1, 0.0], 28.0) == pytest.approx(30.0)
+
+
+@pytest.mark.parametrize("scale", [1e13, 1e200, 1e300])
+def test_closest_of_a_far_point_is_the_seam_point_farthest_along_its_direction(
+    scale: float,
+) -> None:
+    """A point far away (a sensor mounted 1e300 mm off, scaled overflowing every squared
+    distance) gets the seam's support point in its direction, the vertex maximising p . u (an
+    independent oracle), at its true distance; no IndexError."""
+    seam = Seam.from_paper(2.0, 40.0)
+    rng = np.random.default_rng(7)
+    directions = np.vstack([np.eye(3), -np.eye(3), rng.normal(size=(6, 3))])
+    directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+    found = seam.closest(scale * directions)
+    for u, point, distance in zip(directions, found.points, found.distance_mm, strict=True):
+        along = seam.points @ u
+        if np.sort(along)[-1] - np.sort(along)[-2] < 1e-6:
+            continue  # two vertices equally far along u: either is right
+        np.testing.assert_allclose(point, seam.points[int(np.argmax(along))], atol=1e-6)
+        assert distance == pytest.approx(scale, rel=1e-9)
+
+
+def test_closest_refuses_non_finite_points() -> None:
+    seam = Seam.from_paper(2.0, 40.0)
+    for bad in ([np.nan, 0.0, 0.0], [0.0, np.inf, 0.0]):
+        with pytest.raises(ValueError, match="finite"):
+            seam.closest(bad)

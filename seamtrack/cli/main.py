@@ -173,6 +173,7 @@ def _apply_to_text(text: str, overrides: list[str]) -> str:
 
 
 def cmd_check(args: argparse.Namespace) -> int:
+    from seamtrack.geometry.frames import make as make_pose
     from seamtrack.simulation.assemble import build_parts
     from seamtrack.simulation.scene import load_scene
 
@@ -181,7 +182,11 @@ def cmd_check(args: argparse.Namespace) -> int:
     c = scene.config
     settings = parts.settings
     seam = parts.seam
-    start_pose = parts.robot.T_world_sensor(parts.robot.q_from_world(parts.tcp_start_world))
+    robot = parts.robot
+    start_joints = parts.start_joints  # an arm's, planned; a gantry's are its axis positions
+    if start_joints is None:
+        start_joints = robot.joints_for_tool(make_pose(translation=parts.tcp_start_world))
+    start_pose = robot.T_world_sensor(start_joints)
     first = parts.sense(start_pose, 0.0)
     rows: list[tuple[str, Any]] = [
         ("scene", scene.name),
@@ -294,6 +299,7 @@ def cmd_scan(args: argparse.Namespace) -> int:
 
     from seamtrack.io.output import check_writable, new_dir
     from seamtrack.simulation.assemble import build_parts
+    from seamtrack.simulation.robots import sensor_pose_at
     from seamtrack.simulation.scene import load_scene
 
     scene = load_scene(args.scene, _overrides(args))
@@ -305,8 +311,7 @@ def cmd_scan(args: argparse.Namespace) -> int:
             field="--at",
             fix="give an arc length along the seam in mm",
         )
-    tcp = seam.interpolate([args.at])[0]
-    T_world_sensor = parts.robot.T_world_sensor(parts.robot.q_from_world(tcp))
+    T_world_sensor, _ = sensor_pose_at(parts.robot, parts.tool_program, args.at)
     out = Path(args.out) if args.out else Path(f"scan-{scene.name}-{args.at:g}mm.csv")
     folder = out.parent if str(out.parent) else Path(".")
     check_writable(folder)

@@ -180,9 +180,26 @@ class ArticulatedRobot:
     def torch_axis_base(self, state: ArmState) -> FloatArray:
         return state.R[:, 2]
 
-    def T_world_sensor_at(self, q: ArrayLike) -> FloatArray:
-        """``T_world_base @ T_base_tcp(q) @ T_tcp_sensor`` for joint positions q."""
+    def T_world_sensor(self, q: ArrayLike) -> FloatArray:
+        """``T_world_base @ T_base_tcp(q) @ T_tcp_sensor`` for joint positions q (rad): the
+        same call as :meth:`CartesianRobot.T_world_sensor <seamtrack.control.robot.
+        CartesianRobot.T_world_sensor>` on axis positions."""
         return self.T_world_base @ self.kinematics.fk(q) @ self.T_tcp_sensor
+
+    def joints_for_tool(
+        self,
+        T_world_tcp: ArrayLike,
+        seed: ArrayLike | None = None,
+        what: str = "tool pose",
+        field_name: str = "seam",
+    ) -> FloatArray:
+        """(n,) joint positions (rad) that put the tool at the pose ``T_world_tcp`` (world,
+        mm): inverse kinematics from ``seed`` (default: the home configuration), with the
+        plan's checks (a :class:`ReachError` naming ``field_name`` where the pose is out of
+        reach, out of a joint's range or at a wrist singularity). ``T_world_sensor`` of the
+        result is the sensor pose at that tool placement, as on the gantry."""
+        T = np.asarray(T_world_tcp, dtype=np.float64)[None]
+        return self.plan(T, what, field_name, start=seed)[0]
 
     def within_travel(self, target: tuple[float, float, float]) -> bool:
         """Cheap reach bound for the loop's commanded targets (base frame, mm)."""
@@ -349,12 +366,19 @@ class ArticulatedRobot:
         state.R = T[:3, :3]
 
     # ----------------------------------------------------------------- plan
-    def plan(self, T_world_tcp: FloatArray, what: str, field_name: str) -> FloatArray:
+    def plan(
+        self,
+        T_world_tcp: FloatArray,
+        what: str,
+        field_name: str,
+        start: ArrayLike | None = None,
+    ) -> FloatArray:
         """Joint positions along a sequence of tool poses, or a refusal naming the first pose
         that cannot be reached.
 
-        The first pose is solved from the arm's home configuration, each later one from the
-        previous solution (so the path stays on one branch, as a robot program's would).
+        The first pose is solved from ``start`` (default: the arm's home configuration), each
+        later one from the previous solution (so the path stays on one branch, as a robot
+        program's would).
 
         Parameters
         ----------
@@ -376,7 +400,7 @@ class ArticulatedRobot:
         kin = self.kinematics
         data = kin.new_data()
         out = np.empty((len(T_world_tcp), kin.dof))
-        q = kin.home_rad.copy()
+        q = kin.home_rad.copy() if start is None else np.array(start, dtype=np.float64)
         for i, T_world in enumerate(T_world_tcp):
             T = self._T_base_world @ T_world
             result = kin.ik(T, q, data, max_iterations=200 if i == 0 else 50)

@@ -17,11 +17,11 @@ from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 from typing import Any
-from xml.etree import ElementTree
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from seamtrack.control.urdf import check_urdf, quiet_c_stderr, read_urdf
 from seamtrack.errors import SceneError
 
 FloatArray = NDArray[np.float64]
@@ -199,14 +199,7 @@ class ArmKinematics:
     ) -> ArmKinematics:
         """A serial arm from a URDF file (revolute or prismatic joints, one chain)."""
         path = Path(path)
-        try:
-            text = path.read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError) as exc:
-            raise SceneError(
-                f"cannot read URDF {str(path)!r}: {getattr(exc, 'strerror', None) or exc}",
-                field="robot.urdf",
-                fix="give the path of a URDF file (relative to the scene file)",
-            ) from None
+        text = read_urdf(path, "robot.urdf")
         model = cls._parse(text, "robot.urdf", str(path))
         n = model.nq
         accel = (
@@ -224,26 +217,16 @@ class ArmKinematics:
     @staticmethod
     def _parse(text: str, field_name: str, what: str) -> Any:
         pin = _pinocchio()
-        if "<robot" not in text:
-            raise SceneError(
-                f"{what} is not a URDF: no <robot> element",
-                field=field_name,
-                fix="give a URDF file (XML with a <robot> element)",
-            )
-        try:  # well-formed XML first: urdfdom prints its own parse errors on the C stderr
-            ElementTree.fromstring(text)
-        except ElementTree.ParseError as exc:
-            raise SceneError(
-                f"{what} does not parse as a URDF: not well-formed XML ({exc})",
-                field=field_name,
-                fix="check the file's XML (every element closed, quotes matched)",
-            ) from None
+        check_urdf(text, what, field_name)  # what urdfdom would print its own errors about
         try:
-            return pin.buildModelFromXML(text)
+            with quiet_c_stderr() as printed:
+                return pin.buildModelFromXML(text)
         except Exception as exc:  # Pinocchio raises ValueError or RuntimeError
+            said = [line.strip() for line in printed if line.strip()]
             first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
             raise SceneError(
-                f"{what} does not parse as a URDF: {first}",
+                f"{what} does not parse as a URDF: {first}"
+                + (f" (urdfdom: {said[0]})" if said else ""),
                 field=field_name,
                 fix="check the file's XML (links, joints with parent, child, axis and limits)",
             ) from None
@@ -260,9 +243,9 @@ class ArmKinematics:
     ) -> ArmKinematics:
         model = cls._parse(text, field, name)
         n = model.nq
-        if n < 6 or model.nv != n:
+        if n < 6 or model.nv != n:  # nv: one per joint (nq counts a continuous joint twice)
             raise SceneError(
-                f"{name}: a tool needs 6 joints to take any orientation; the URDF has {n}",
+                f"{name}: a tool needs 6 joints to take any orientation; the URDF has {model.nv}",
                 field=field,
                 fix="give a 6-axis (or longer) serial arm with revolute or prismatic joints",
             )

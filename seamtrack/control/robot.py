@@ -281,6 +281,22 @@ class CartesianRobot:
         """``T_world_base @ T_base_tcp(q) @ T_tcp_sensor``."""
         return self.T_world_base @ self.T_base_tcp(q) @ self.T_tcp_sensor
 
+    def joints_for_tool(
+        self,
+        T_world_tcp: ArrayLike,
+        seed: ArrayLike | None = None,
+        what: str = "tool pose",
+        field_name: str = "seam",
+    ) -> FloatArray:
+        """Axis positions (mm) that put the torch tip at the origin of ``T_world_tcp``: the
+        same call as :meth:`ArticulatedRobot.joints_for_tool
+        <seamtrack.control.arm.ArticulatedRobot.joints_for_tool>`. A gantry cannot turn its
+        tool, so the pose's rotation is the base's whatever is asked, and ``seed`` is not
+        needed; a tip outside the axis travel is a :class:`ReachError` naming ``field_name``."""
+        tcp = np.asarray(T_world_tcp, dtype=np.float64)[:3, 3]
+        self.require_reachable(tcp, what, field_name)
+        return self.q_from_world(tcp)
+
     def sensor_pose(self, state: RobotState) -> FloatArray:
         """``T_world_sensor`` at the state's (actual) axis positions."""
         return self.T_world_sensor(state.q)

@@ -27,6 +27,13 @@ _QUERY_BLOCK = 32_768
 
 _CANDIDATE_SEGMENTS = 16
 
+#: A query point farther than this from the origin (mm) is searched for at this distance along
+#: its direction (:meth:`Seam.closest`): squared distances past ~1e154 mm overflow, and far
+#: before that the distances to different seam points agree to the last digit. At 1e12 mm they
+#: still resolve 1e-4 mm, and the nearest seam point of a point that far moves by less than
+#: (seam size)^2 / 1e12 mm as the point recedes further along its direction.
+FAR_MM = 1e12
+
 
 def paper_points(step_mm: float = 2.0, length_mm: float = 400.0) -> FloatArray:
     """The seam of the paper's verification, Eq. (15)-(17).
@@ -314,10 +321,25 @@ class Seam:
         Parameters
         ----------
         query_points : (m, 3) or (3,) float
+            Finite (a NaN or an infinity is the caller's bug: a ``ValueError``). A point
+            farther than :data:`FAR_MM` from the origin is answered by the same point moved
+            along its direction to that distance (the same nearest seam point to well below a
+            micron), with its true distance.
         """
         q = np.asarray(query_points, dtype=np.float64)
         single = q.ndim == 1
         q = np.atleast_2d(q)
+        if not np.isfinite(q).all():
+            raise ValueError("Seam.closest: the query points must be finite (NaN or inf given)")
+        scale = np.abs(q).max(axis=1) if len(q) else np.zeros(0)
+        far = scale > FAR_MM
+        if far.any():
+            near = self.closest(q * np.where(far, FAR_MM / np.maximum(scale, 1.0), 1.0)[:, None])
+            m = scale[far][:, None]  # |q - p| = m |q / m - p / m|, without overflow
+            near.distance_mm[far] = m[:, 0] * np.linalg.norm(
+                q[far] / m - near.points[far] / m, axis=1
+            )
+            return Closest(near.points, near.arc_length_mm, near.distance_mm, near.segment)
         if len(q) > _QUERY_BLOCK:  # bounded temporaries: (block, candidates, 3) at a time
             parts = [self.closest(q[i : i + _QUERY_BLOCK]) for i in range(0, len(q), _QUERY_BLOCK)]
             return Closest(

@@ -126,3 +126,35 @@ def check_expect(name: str | None, expect: dict[str, Any]) -> None:
             fix="remove [extractor.expect], or name a family extractor (v-groove, fillet, ...)",
         )
     parse_expect(expect, str(target.name))
+
+
+def union_errors(errors: list[Any]) -> list[Any]:
+    """Pydantic's errors with those of a union field (a number or a list, e.g.
+    ``robot.servo_gain_1_s``) cut to what concerns the value given: a value that fits no member
+    is told by every member, "not a number" by one and "the list's item 2 must be > 0" by the
+    other. Each union field keeps its members' errors other than a mere wrong type (or, when
+    there are only those, the one deepest in the value), under the field's own path (without
+    the member's name that pydantic puts in it, like ``list[constrained-float]``)."""
+    out: list[Any] = []
+    groups: dict[tuple[Any, ...], list[Any]] = {}
+    for err in errors:
+        loc = tuple(err["loc"])
+        tag = next((i for i, p in enumerate(loc) if isinstance(p, str) and ("[" in p or "-" in p)),
+                   None)  # fmt: skip
+        if tag is None:
+            out.append(err)
+            continue
+        field = loc[:tag]
+        if field not in groups:
+            groups[field] = []
+            out.append(field)  # a placeholder: the group's errors go here, in order
+        groups[field].append({**err, "loc": field + loc[tag + 1 :]})
+    kept: list[Any] = []
+    for item in out:
+        if isinstance(item, tuple):
+            group = groups[item]
+            specific = [e for e in group if not e["type"].endswith(("_type", "_parsing"))]
+            kept += specific or [max(group, key=lambda e: len(e["loc"]))]  # the deepest
+        else:
+            kept.append(item)
+    return kept

@@ -105,38 +105,59 @@ class SensorConfig(_Section):
     stripe_noise: dict[str, Any] = Field(default_factory=dict)
 
 
+#: Physical ranges of the robot's and the tool's fields: a torch or a sensor bracket reaches
+#: well under a metre (TOOL_MM, the torch on the flange and the sensor on the torch); a robot
+#: cell is tens of metres (CELL_MM, the base in the world); the start point is an approach of
+#: centimetres (START_MM); angles are within a turn; the fastest arms move their tool at a few
+#: m/s, turn their wrists at several hundred deg/s and accelerate at a few g. Far beyond these
+#: a value is a typo (1e300 mm would also overflow the frames).
+TOOL_MM, CELL_MM, START_MM = 2_000.0, 100_000.0, 1_000.0
+ToolLength = Annotated[float, Field(ge=-TOOL_MM, le=TOOL_MM, allow_inf_nan=False, strict=True)]
+CellLength = Annotated[float, Field(ge=-CELL_MM, le=CELL_MM, allow_inf_nan=False, strict=True)]
+StartLength = Annotated[float, Field(ge=-START_MM, le=START_MM, allow_inf_nan=False, strict=True)]
+Turn = Annotated[float, Field(ge=-360, le=360, allow_inf_nan=False, strict=True)]
+Speed = Annotated[float, Field(gt=0, le=10_000, allow_inf_nan=False, strict=True)]  # mm/s
+Accel = Annotated[float, Field(gt=0, le=100_000, allow_inf_nan=False, strict=True)]  # mm/s^2
+TurnRate = Annotated[float, Field(gt=0, le=3_600, allow_inf_nan=False, strict=True)]  # deg/s
+TurnAccel = Annotated[float, Field(gt=0, le=100_000, allow_inf_nan=False, strict=True)]  # deg/s^2
+Gain = Annotated[float, Field(gt=0, allow_inf_nan=False, strict=True)]
+
+
 class ToolConfig(_Section):
     """The torch on the flange (``T_flange_tcp``) and, optionally, the sensor on the torch
     (``T_tcp_sensor``; default: from ``sensor.look_ahead_mm``, ``range_mm`` and
     ``mount_rotation_deg``). The tcp frame: z along the torch away from the work, x the
     direction the sensor looks ahead in."""
 
-    tcp_xyz_mm: Vec3 = (0.0, 0.0, 300.0)
-    tcp_rpy_deg: Vec3 = (180.0, 0.0, 0.0)
-    sensor_xyz_mm: Vec3 | None = None
-    sensor_rpy_deg: Vec3 | None = None
+    tcp_xyz_mm: tuple[ToolLength, ToolLength, ToolLength] = (0.0, 0.0, 300.0)
+    tcp_rpy_deg: tuple[Turn, Turn, Turn] = (180.0, 0.0, 0.0)
+    sensor_xyz_mm: tuple[ToolLength, ToolLength, ToolLength] | None = None
+    sensor_rpy_deg: tuple[Turn, Turn, Turn] | None = None
 
 
 class RobotConfig(_Section):
     model: str = "cartesian"
     urdf: str | None = None
     control_period_s: Positive = 1e-3
-    servo_gain_1_s: Positive | list[Positive] | None = None
+    # A list: one per axis or joint (its length is checked against the robot's).
+    servo_gain_1_s: Positive | Annotated[list[Gain], Field(min_length=1)] | None = None
     interpolation_period_s: Positive | None = None
-    tcp_velocity_max_mm_s: PositiveVec3 = (250.0, 250.0, 250.0)
-    tcp_acceleration_max_mm_s2: PositiveVec3 = (200.0, 200.0, 200.0)
-    angular_velocity_max_deg_s: Positive = 60.0
-    angular_acceleration_max_deg_s2: Positive = 20.0
-    joint_acceleration_max_deg_s2: Positive | list[Positive] | None = None
+    tcp_velocity_max_mm_s: tuple[Speed, Speed, Speed] = (250.0, 250.0, 250.0)
+    tcp_acceleration_max_mm_s2: tuple[Accel, Accel, Accel] = (200.0, 200.0, 200.0)
+    angular_velocity_max_deg_s: TurnRate = 60.0
+    angular_acceleration_max_deg_s2: TurnAccel = 20.0
+    joint_acceleration_max_deg_s2: (
+        TurnAccel | Annotated[list[TurnAccel], Field(min_length=1)] | None
+    ) = None
     min_wrist_angle_deg: Annotated[float, Field(ge=0, lt=90, strict=True)] = 5.0
     tool: ToolConfig = Field(default_factory=ToolConfig)
     position_min_mm: Vec3 = (0.0, 0.0, 0.0)
     position_max_mm: Vec3 = (800.0, 150.0, 150.0)
     velocity_max_mm_s: PositiveVec3 = (20.0, 10.0, 10.0)
     acceleration_max_mm_s2: PositiveVec3 = (30.0, 15.0, 15.0)
-    base_origin_mm: Vec3 = (-100.0, -75.0, -75.0)
-    base_rotation_deg: Vec3 = (0.0, 0.0, 0.0)
-    start_offset_mm: Vec3 = (0.0, 0.0, 0.0)
+    base_origin_mm: tuple[CellLength, CellLength, CellLength] = (-100.0, -75.0, -75.0)
+    base_rotation_deg: tuple[Turn, Turn, Turn] = (0.0, 0.0, 0.0)
+    start_offset_mm: tuple[StartLength, StartLength, StartLength] = (0.0, 0.0, 0.0)
 
 
 Angle = Annotated[float, Field(gt=-80, lt=80, allow_inf_nan=False, strict=True)]

@@ -159,7 +159,15 @@ def make_robot(scene: Scene, sensor: LaserLineSensor, mount: Mount | None = None
     else:
         kin = ArmKinematics.named(r.model, T_flange_tcp)
     if r.joint_acceleration_max_deg_s2 is not None:
-        accel = np.radians(np.broadcast_to(r.joint_acceleration_max_deg_s2, (kin.dof,)))
+        accels = r.joint_acceleration_max_deg_s2
+        accel_list = accels if isinstance(accels, list) else [accels]
+        if len(accel_list) not in (1, kin.dof):
+            raise SceneError(
+                f"{len(accel_list)} accelerations for an arm of {kin.dof} joints",
+                field="robot.joint_acceleration_max_deg_s2",
+                fix=f"give one value (deg/s^2, for every joint), or {kin.dof} (one per joint)",
+            )
+        accel = np.radians(np.broadcast_to(np.array(accel_list, dtype=float), (kin.dof,)))
         kin = dataclasses.replace(kin, acceleration_max_rad_s2=np.array(accel, dtype=float))
     servo = None
     if gain_list is not None:
@@ -198,8 +206,11 @@ def tool_program(scene: Scene, seam: Seam) -> ToolProgram:
     )
 
 
-def plan_along(robot: Any, program: ToolProgram) -> tuple[FloatArray, FloatArray]:
-    """The arm's joint positions along the whole seam, every :data:`PLAN_STEP_MM` or closer.
+def plan_along(
+    robot: Any, program: ToolProgram, end_mm: float | None = None
+) -> tuple[FloatArray, FloatArray]:
+    """The arm's joint positions along the whole seam (or from its start to the arc length
+    ``end_mm``), every :data:`PLAN_STEP_MM` or closer.
 
     Returns
     -------
@@ -208,8 +219,9 @@ def plan_along(robot: Any, program: ToolProgram) -> tuple[FloatArray, FloatArray
         rad; a :class:`ReachError` names the first seam point that cannot be reached.
     """
     seam = program.seam
-    count = max(2, int(math.ceil(seam.length_mm / PLAN_STEP_MM)) + 1)
-    s = np.linspace(0.0, seam.length_mm, count)
+    end = seam.length_mm if end_mm is None else float(end_mm)
+    count = max(2, int(math.ceil(end / PLAN_STEP_MM)) + 1)
+    s = np.linspace(0.0, end, count)
     points, _, _ = program.frame(s)
     poses = np.tile(np.eye(4), (count, 1, 1))
     poses[:, :3, :3] = program.rotations(s)
@@ -234,6 +246,29 @@ def plan_arm(robot: Any, program: ToolProgram, start_world: FloatArray) -> Float
             fix="start closer to the seam (robot.start_offset_mm)",
         )
     return np.asarray(result.q)
+
+
+def sensor_pose_at(robot: Any, program: ToolProgram, at_mm: float) -> tuple[FloatArray, FloatArray]:
+    """The sensor pose with the torch tip on the seam at arc length ``at_mm``, the tool placed
+    as the robot would place it there (what ``seamtrack scan`` and ``render`` look from).
+
+    Either robot answers :meth:`joints_for_tool` and :meth:`T_world_sensor` the same way: the
+    gantry keeps its base's orientation; an arm turns the tool as the robot program says
+    (``program``) and takes the joints of the run's plan, walked from the seam's start to
+    ``at_mm`` (the same branch of the inverse kinematics as the run).
+
+    Returns
+    -------
+    T_world_sensor : (4, 4) float
+    joints : (n,) float
+        Axis positions (mm) or joint positions (rad).
+    """
+    point = program.seam.interpolate([at_mm])[0]
+    if robot.turns_tool:
+        joints = plan_along(robot, program, at_mm)[1][-1]
+    else:
+        joints = robot.joints_for_tool(frames.make(robot.T_world_base[:3, :3], point))
+    return robot.T_world_sensor(joints), joints
 
 
 def check_sensor_outside(

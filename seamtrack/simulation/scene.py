@@ -21,7 +21,7 @@ from seamtrack.errors import SceneError
 from seamtrack.sensing.camera import Camera
 from seamtrack.sensing.materials import material
 from seamtrack.sensing.sensor import LaserLineSensor, data_sheet, preset
-from seamtrack.simulation.checks import check_plugin_params, check_sizes
+from seamtrack.simulation.checks import check_plugin_params, check_sizes, union_errors
 from seamtrack.simulation.config import (  # the types live there; imported by name here too
     CameraConfig,
     Scene,
@@ -178,7 +178,7 @@ def validate(data: dict[str, Any], source: str = "scene") -> SceneConfig:
         return SceneConfig.model_validate(data)
     except ValidationError as exc:
         lines, fields, fixes = [], [], []
-        for err in exc.errors():
+        for err in union_errors(exc.errors()):
             loc = ".".join(str(x) for x in err["loc"])
             got = err.get("input")
             skip_got = err["type"] in {"missing"} or isinstance(got, dict)

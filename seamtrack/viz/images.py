@@ -98,6 +98,7 @@ def render_command(
     from seamtrack.io.output import check_writable, new_dir
     from seamtrack.sensing.peaks import detect
     from seamtrack.simulation.assemble import build_parts
+    from seamtrack.simulation.robots import sensor_pose_at
     from seamtrack.simulation.scene import CameraConfig, load_scene, make_camera
 
     scene = load_scene(scene_name, overrides)
@@ -120,8 +121,7 @@ def render_command(
             fix="give an arc length along the seam in mm",
         )
     assert parts.sensor is not None and c.workpiece is not None
-    tcp = seam.interpolate([at_mm])[0]
-    T_world_sensor = parts.robot.T_world_sensor(parts.robot.q_from_world(tcp))
+    T_world_sensor, _ = sensor_pose_at(parts.robot, parts.tool_program, at_mm)
     detector = c.sensor.camera or CameraConfig()
     camera = make_camera(c.sensor.camera, c.sensor.preset)
     image = parts.sensor.render(parts.mesh, T_world_sensor, camera=camera,
