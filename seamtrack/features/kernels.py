@@ -14,6 +14,7 @@ so results agree to rounding, not bit for bit.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -28,6 +29,26 @@ from seamtrack.features.robust import (
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
+
+
+class PieceTable(NamedTuple):
+    """A profile's straight pieces as segmentation leaves them (a numba-supported named
+    tuple: compiled joint models take it whole).
+
+    Piece ``j``'s inliers are ``index[bounds[j]:bounds[j + 1]]`` (their positions among the
+    kept points, column order) and their coordinates along its line
+    ``along[bounds[j]:bounds[j + 1]]``; ``fits[j]`` is its line, columns :data:`FIT_CY` ...
+    :data:`FIT_LAST` (centroid y, z, direction y, z, rms, first and last coordinate along).
+    """
+
+    index: NDArray[np.intp]
+    along: FloatArray
+    fits: FloatArray
+    bounds: NDArray[np.intp]
+
+
+#: The columns of :attr:`PieceTable.fits`.
+FIT_CY, FIT_CZ, FIT_UY, FIT_UZ, FIT_RMS, FIT_FIRST, FIT_LAST = range(7)
 
 
 # ----------------------------------------------------------------------- split and merge

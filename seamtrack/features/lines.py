@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features.kernels import fit_line, segment
+from seamtrack.features.kernels import PieceTable, fit_line, segment
 from seamtrack.features.robust import DEFAULT_RESOLUTION_MM
 from seamtrack.sensing.profiles import Profile
 
@@ -115,10 +115,9 @@ class Segments:
     quantum: float = 0.0
     resolution: float = DEFAULT_RESOLUTION_MM
     #: The pieces as :func:`segment_profile`'s compiled call left them, for the compiled joint
-    #: models: the inliers and their coordinates along their lines, piece after piece; per
-    #: piece (centroid y, z, direction y, z, rms, first and last coordinate); the bounds of
-    #: each piece's inliers in the first two. None: build them from ``lines``.
-    table: tuple[NDArray[np.intp], FloatArray, FloatArray, NDArray[np.intp]] | None = None
+    #: models (:class:`~seamtrack.features.kernels.PieceTable`: ``index, along, fits,
+    #: bounds``). None: build them from ``lines``.
+    table: PieceTable | None = None
 
     @property
     def lines(self) -> list[Line]:
@@ -131,7 +130,7 @@ class Segments:
 
     @property
     def n_lines(self) -> int:
-        return len(self.pieces) if self.pieces is not None else len(self.table[3]) - 1  # type: ignore[index]
+        return len(self.pieces) if self.pieces is not None else len(self.table.bounds) - 1  # type: ignore[union-attr]
 
     def line(self, j: int) -> Line:
         """Piece ``j`` (without building the others)."""
@@ -219,7 +218,7 @@ def segment_profile(
         ints[n : n + nr],
         q,
         resolution,
-        (ints[at_index : at_index + end], floats[at_t : at_t + end], fits, bounds),
+        PieceTable(ints[at_index : at_index + end], floats[at_t : at_t + end], fits, bounds),
     )
 
 
