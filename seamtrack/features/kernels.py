@@ -23,7 +23,9 @@ from numpy.typing import NDArray
 from seamtrack.features.robust import (
     _MAX_ABS_MM,
     DEFAULT_RESOLUTION_MM,
+    KEPT,
     TOL_RESOLUTIONS,
+    LineThrough,
     _front,
 )
 
@@ -41,7 +43,7 @@ class PieceTable(NamedTuple):
     :data:`FIT_LAST` (centroid y, z, direction y, z, rms, first and last coordinate along).
     """
 
-    index: NDArray[np.intp]
+    index: NDArray[np.intp]  # type: ignore[assignment]  # a field, over tuple.index
     along: FloatArray
     fits: FloatArray
     bounds: NDArray[np.intp]
@@ -50,10 +52,72 @@ class PieceTable(NamedTuple):
 #: The columns of :attr:`PieceTable.fits`.
 FIT_CY, FIT_CZ, FIT_UY, FIT_UZ, FIT_RMS, FIT_FIRST, FIT_LAST = range(7)
 
+#: Segmentation's codes (:attr:`Segmentation.code`): pieces found (:data:`SEGMENTED`); the
+#: front end's too few valid points and constant profile (:data:`~.robust.TOO_FEW_POINTS`,
+#: :data:`~.robust.CONSTANT`); more pieces than allowed (too noisy or curved); no piece with
+#: enough inliers.
+SEGMENTED = KEPT
+TOO_MANY_PIECES, NO_PIECE = 3, 4
+
+
+class LineFit(NamedTuple):
+    """A total-least-squares line: centroid (y, z), unit direction (y, z), rms residual."""
+
+    cy: float
+    cz: float
+    uy: float
+    uz: float
+    rms: float
+
+
+class LineAlong(NamedTuple):
+    """A :class:`LineFit` and its points' coordinates along the line."""
+
+    cy: float
+    cz: float
+    uy: float
+    uz: float
+    rms: float
+    along: FloatArray
+
+
+class Split(NamedTuple):
+    """The best split of a run into two lines: its position (from the run's start), the
+    total-least-squares cost of the two lines and that of one line (sums of squared
+    residuals, mm^2)."""
+
+    at: int
+    cost_two: float
+    cost_one: float
+
+
+class PieceCount(NamedTuple):
+    """What :func:`_pieces` found: a code of :class:`Segmentation` and the pieces written."""
+
+    code: int
+    pieces: int
+
+
+class Segmentation(NamedTuple):
+    """What :func:`segment` found besides the arrays it wrote: the code (:data:`SEGMENTED`,
+    :data:`TOO_FEW_POINTS`, :data:`CONSTANT`, :data:`TOO_MANY_PIECES`, :data:`NO_PIECE`),
+    the kept points, the run bounds, the pieces, the noise, tolerance, spacing, range
+    quantum and resolution (mm)."""
+
+    code: int
+    kept: int
+    n_runs: int
+    n_pieces: int
+    sigma: float
+    tol: float
+    spacing: float
+    quantum: float
+    resolution: float
+
 
 # ----------------------------------------------------------------------- split and merge
 @numba.njit(cache=True, nogil=True)
-def _fit(p: FloatArray, idx: IntArray, n: int) -> tuple[float, float, float, float, float]:
+def _fit(p: FloatArray, idx: IntArray, n: int) -> LineFit:
     """Total-least-squares line through ``p[idx[:n]]``: centroid, unit direction (from the
     first point towards the last), rms residual; as ``seamtrack.features.lines._fit``."""
     cy = 0.0
@@ -80,11 +144,11 @@ def _fit(p: FloatArray, idx: IntArray, n: int) -> tuple[float, float, float, flo
     for k in range(n):
         r = -(p[idx[k], 0] - cy) * uz + (p[idx[k], 1] - cz) * uy
         rr += r * r
-    return cy, cz, uy, uz, math.sqrt(rr / n)
+    return LineFit(cy, cz, uy, uz, math.sqrt(rr / n))
 
 
 @numba.njit(cache=True, nogil=True)
-def fit_range(p: FloatArray, lo: int, hi: int) -> tuple[float, float, float, float]:
+def fit_range(p: FloatArray, lo: int, hi: int) -> LineThrough:
     """Total-least-squares line through ``p[lo:hi]``: centroid and unit direction."""
     n = hi - lo
     cy = 0.0
@@ -106,7 +170,7 @@ def fit_range(p: FloatArray, lo: int, hi: int) -> tuple[float, float, float, flo
     uy, uz = math.cos(theta), math.sin(theta)
     if uy * (p[hi - 1, 0] - p[lo, 0]) + uz * (p[hi - 1, 1] - p[lo, 1]) < 0.0:
         uy, uz = -uy, -uz
-    return cy, cz, uy, uz
+    return LineThrough(cy, cz, uy, uz)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -123,7 +187,7 @@ def _cost(n: float, s1: float, s2: float, s3: float, s4: float, s5: float) -> fl
 @numba.njit(cache=True, nogil=True)
 def _best_split(
     p: FloatArray, lo: int, hi: int, min_size: int, pre: FloatArray, cost: FloatArray
-) -> tuple[int, float, float]:
+) -> Split:
     """:func:`best_split` with scratch space: ``pre`` (6, >= hi - lo), ``cost`` (>= hi - lo).
 
     The prefix sums are kept by column and the split costs computed for every b before the
@@ -150,7 +214,7 @@ def _best_split(
         pre[3, i], pre[4, i], pre[5, i] = a3, a4, a5
     single = _cost(a0, a1, a2, a3, a4, a5)
     if k - min_size + 1 <= min_size:
-        return k, single, single
+        return Split(k, single, single)
     # cost[t]: the split at b = min_size + t (left: the first b points, prefix row b - 1)
     m = k - 2 * min_size + 1
     first = min_size - 1
@@ -165,14 +229,13 @@ def _best_split(
     for t in range(1, m):
         if cost[t] < best:
             best, best_b = cost[t], min_size + t
-    return best_b, best, single
+    return Split(best_b, best, single)
 
 
 @numba.njit(cache=True, nogil=True)
-def best_split(p: FloatArray, lo: int, hi: int, min_size: int) -> tuple[int, float, float]:
-    """Best split of ``p[lo:hi]`` into two lines: (b, cost of the two, cost of one line),
-    total-least-squares sums of squared residuals for every b from prefix sums (O(n));
-    ``b`` counts from ``lo``."""
+def best_split(p: FloatArray, lo: int, hi: int, min_size: int) -> Split:
+    """Best split of ``p[lo:hi]`` into two lines (:class:`Split`), total-least-squares sums
+    of squared residuals for every split from prefix sums (O(n)); ``at`` counts from ``lo``."""
     k = max(hi - lo, 1)
     return _best_split(p, lo, hi, min_size, np.empty((6, k)), np.empty(k))
 
@@ -319,21 +382,18 @@ def _pieces(
     index: IntArray,
     fits: FloatArray,
     along: FloatArray,
-) -> tuple[int, int]:
+) -> PieceCount:
     """The straight pieces of :func:`seamtrack.features.lines.segment_profile`, written to
     ``offsets`` (>= max_lines + 1,), ``index``, ``along`` (>= len(p) + max_lines,: pieces of
     fewer than 6 points may share an end point) and ``fits`` (>= max_lines, 7).
 
-    Returns
-    -------
-    code : int
-        0 ok; 1 too noisy or curved (more than ``max_lines`` pieces); 2 no piece keeps
-        ``min_points`` inliers.
-    k : int
-        The pieces: the inliers of piece j are ``index[offsets[j]:offsets[j + 1]]`` (their
-        positions in ``p``, column order), their coordinates along its line
-        ``along[offsets[j]:offsets[j + 1]]``; ``fits[j]`` holds its centroid y, z, direction
-        y, z, rms, and the first and last inliers' coordinates along it.
+    Returns a :class:`PieceCount`: ``code`` :data:`SEGMENTED`, :data:`TOO_MANY_PIECES` (too
+    noisy or curved: more than ``max_lines`` pieces) or :data:`NO_PIECE` (none keeps
+    ``min_points`` inliers); ``pieces`` written: the inliers of piece j are
+    ``index[offsets[j]:offsets[j + 1]]`` (their positions in ``p``, column order), their
+    coordinates along its line ``along[offsets[j]:offsets[j + 1]]``; ``fits[j]`` holds its
+    centroid y, z, direction y, z, rms, and the first and last inliers' coordinates along it
+    (columns ``FIT_*``).
     """
     cap = 2 * max_lines + 8
     all_lo = np.empty(cap, dtype=np.int64)
@@ -350,13 +410,13 @@ def _pieces(
         if hi - lo >= min_points and not stray[lo]:
             n = _split(p, lo, hi - 1, tol, max_lines, run_lo, run_hi)
             if n < 0:
-                return 1, 0
+                return PieceCount(TOO_MANY_PIECES, 0)
             n = _merge(p, run_lo, run_hi, n, tol)
             # Corners at the best two-line split (in order: each moves the next's start).
             for j in range(n - 1):
                 a, b = run_lo[j], run_hi[j + 1] + 1
                 if b - a >= 6:
-                    cut = a + _best_split(p, a, b, 3, pre, cost)[0]
+                    cut = a + _best_split(p, a, b, 3, pre, cost).at
                     run_hi[j], run_lo[j + 1] = cut - 1, cut
             # A run's end pieces split at a small kink.
             for j in range(n):
@@ -370,9 +430,9 @@ def _pieces(
                         if h == 1 and j != n - 1:
                             continue
                         h_lo, h_hi = (a, mid + 1) if h == 0 else (mid, b + 1)
-                        bb, split, single = _best_split(p, h_lo, h_hi, min_points, pre, cost)
-                        if single - split > significant:
-                            cut = h_lo + bb
+                        best = _best_split(p, h_lo, h_hi, min_points, pre, cost)
+                        if best.cost_one - best.cost_two > significant:
+                            cut = h_lo + best.at
                             _, _, uy1, uz1 = fit_range(p, a, cut)
                             _, _, uy2, uz2 = fit_range(p, cut, b + 1)
                             kink = math.acos(min(1.0, abs(uy1 * uy2 + uz1 * uz2)))
@@ -389,7 +449,7 @@ def _pieces(
                         total += 1
                     prev = nxt
         if total > max_lines:
-            return 1, 0
+            return PieceCount(TOO_MANY_PIECES, 0)
     # Trimmed refits: inliers within max(3 sigma, floor / 2) of each piece's first fit.
     trim = max(3.0 * sigma, 0.5 * floor)
     offsets[0] = 0
@@ -401,7 +461,7 @@ def _pieces(
             used += n
             k += 1
             offsets[k] = used
-    return (0 if k else 2), k
+    return PieceCount(SEGMENTED if k else NO_PIECE, k)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -418,7 +478,7 @@ def segment(
     floats: FloatArray,
     ints: IntArray,
     stray: NDArray[np.bool_],
-) -> tuple[int, int, int, int, float, float, float, float, float]:
+) -> Segmentation:
     """:func:`seamtrack.features.lines.segment_profile` in one compiled call: the front end
     (:func:`seamtrack.features.robust.front`) and the straight pieces (:func:`_pieces`),
     written to three given arrays (each array passed to or returned from a compiled call
@@ -436,16 +496,15 @@ def segment(
     Pieces of fewer than 6 points may share an end point (Douglas-Peucker's), so there may
     be up to L more inliers than points: hence n + L for them.
 
-    Returns (code, m, runs, k, sigma, tol, spacing, quantum, resolution): ``code`` 0 ok,
-    1 too few valid points (``m`` of them), 2 constant profile, 3 too many pieces, 4 no piece
-    with ``min_points`` inliers; ``m`` kept points, the count of run bounds, ``k`` pieces.
+    Returns a :class:`Segmentation` (with :data:`TOO_FEW_POINTS`, ``kept`` counts the valid
+    points).
     """
     n = points.shape[0]
     p = floats[: 2 * n].reshape((n, 2))
     runs = ints[n : 2 * n + 1]
     inliers = ints[2 * n + max_lines + 2 :]
     # The spikes' columns go where the inliers will: they are not returned.
-    code, m, _, nr, sigma, tol, floor, spacing, q, resolution = _front(
+    front = _front(
         points,
         valid,
         _MAX_ABS_MM,
@@ -462,15 +521,15 @@ def segment(
         runs,
         stray,
     )
-    k = 0
-    if code == 0:
-        code, k = _pieces(
-            p[:m],
-            runs[:nr],
+    found = PieceCount(front.code, 0)
+    if front.code == KEPT:
+        found = _pieces(
+            p[: front.kept],
+            runs[: front.n_runs],
             stray,
-            tol,
-            sigma,
-            floor,
+            front.tol,
+            front.sigma,
+            front.floor,
             min_points,
             max_lines,
             min_kink_rad,
@@ -479,13 +538,21 @@ def segment(
             floats[2 * n : 2 * n + 7 * max_lines].reshape((max_lines, 7)),
             floats[2 * n + 7 * max_lines :],
         )
-        if code:
-            code += 2
-    return code, m, nr, k, sigma, tol, spacing, q, resolution
+    return Segmentation(
+        found.code,
+        front.kept,
+        front.n_runs,
+        found.pieces,
+        front.sigma,
+        front.tol,
+        front.spacing,
+        front.quantum,
+        front.resolution,
+    )
 
 
 @numba.njit(cache=True, nogil=True)
-def fit_line(p: FloatArray, idx: IntArray) -> tuple[float, float, float, float, float, FloatArray]:
+def fit_line(p: FloatArray, idx: IntArray) -> LineAlong:
     """Total-least-squares line through ``p[idx]`` (at least one point): centroid, unit
     direction (from the first point towards the last), rms residual, and the points'
     coordinates along it; :func:`seamtrack.features.lines._fit` in one call."""
@@ -494,4 +561,4 @@ def fit_line(p: FloatArray, idx: IntArray) -> tuple[float, float, float, float, 
     t = np.empty(n)
     for k in range(n):
         t[k] = (p[idx[k], 0] - cy) * uy + (p[idx[k], 1] - cz) * uz
-    return cy, cz, uy, uz, rms, t
+    return LineAlong(cy, cz, uy, uz, rms, t)

@@ -21,8 +21,15 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features.kernels import PieceTable, fit_line, segment
-from seamtrack.features.robust import DEFAULT_RESOLUTION_MM
+from seamtrack.features.kernels import (
+    NO_PIECE,
+    SEGMENTED,
+    TOO_MANY_PIECES,
+    PieceTable,
+    fit_line,
+    segment,
+)
+from seamtrack.features.robust import CONSTANT, DEFAULT_RESOLUTION_MM, TOO_FEW_POINTS
 from seamtrack.sensing.profiles import Profile
 
 FloatArray = NDArray[np.float64]
@@ -186,7 +193,7 @@ def segment_profile(
     floats = np.empty(3 * n + 8 * max_lines)
     ints = np.empty(3 * n + 2 * max_lines + 2, dtype=np.intp)
     stray = np.empty(n, dtype=np.bool_)
-    code, m, nr, k, sigma, tol, spacing, q, resolution = segment(
+    found = segment(
         pts,
         valid,
         int(min_points),
@@ -200,8 +207,9 @@ def segment_profile(
         ints,
         stray,
     )
-    if code:
-        return _WHY[code].format(m)
+    if found.code != SEGMENTED:
+        return _WHY[found.code].format(found.kept)
+    m, k = found.kept, found.n_pieces
     bounds = ints[2 * n + 1 : 2 * n + 2 + k]
     fits = floats[2 * n : 2 * n + 7 * k].reshape(k, 7)
     at_t = 2 * n + 7 * max_lines  # the inliers' coordinates along their lines
@@ -209,25 +217,25 @@ def segment_profile(
     end = int(bounds[-1])
     return Segments(
         floats[: 2 * m].reshape(m, 2),
-        sigma,
-        tol,
-        spacing,
+        found.sigma,
+        found.tol,
+        found.spacing,
         None,
         stray[:m],
         ints[:m],
-        ints[n : n + nr],
-        q,
-        resolution,
+        ints[n : n + found.n_runs],
+        found.quantum,
+        found.resolution,
         PieceTable(ints[at_index : at_index + end], floats[at_t : at_t + end], fits, bounds),
     )
 
 
 #: Why :func:`segment_profile` found no pieces, by the compiled call's code.
 _WHY = {
-    1: "too few valid points ({})",
-    2: "the valid points do not spread out (constant profile)",
-    3: "no straight pieces (too noisy or curved)",
-    4: "no straight pieces with enough points",
+    TOO_FEW_POINTS: "too few valid points ({})",
+    CONSTANT: "the valid points do not spread out (constant profile)",
+    TOO_MANY_PIECES: "no straight pieces (too noisy or curved)",
+    NO_PIECE: "no straight pieces with enough points",
 }
 
 
