@@ -289,7 +289,7 @@ def v_groove(points, stray, columns, runs, tol, sigma, spacing, pieces, params):
         tol,
         pieces,
         SearchParams(
-            -1.0,
+            -1.0,  # sign: a V, opening towards the sensor
             params.min_deg,
             params.max_deg,
             params.max_gap,

@@ -146,13 +146,13 @@ class _Base:
         if not seg.n_lines:
             return "no pair of lines forms the joint"
         params = SearchParams(
-            1.0 if opening_down else -1.0,
-            float(min_deg),
-            float(max_deg),
-            float(max_reach_mm),
-            bool(self.arms_from_pieces),
-            int(self.min_points),
-            float(self.min_arm_mm),
+            sign=1.0 if opening_down else -1.0,
+            min_deg=float(min_deg),
+            max_deg=float(max_deg),
+            max_reach=float(max_reach_mm),
+            pieces_too=bool(self.arms_from_pieces),
+            min_points=int(self.min_points),
+            min_arm=float(self.min_arm_mm),
         )
         found = search(
             np.ascontiguousarray(seg.points, dtype=np.float64),

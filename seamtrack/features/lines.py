@@ -98,8 +98,8 @@ def _fit(points: FloatArray, index: NDArray[np.intp]) -> Line:
     points was most of its cost."""
     if len(index) == 0:
         raise ValueError("no points to fit a line to")
-    cy, cz, uy, uz, rms, t = fit_line(points, np.asarray(index, dtype=np.int64))
-    return Line(index, np.array([cy, cz]), np.array([uy, uz]), t, rms)
+    f = fit_line(points, np.asarray(index, dtype=np.int64))
+    return Line(index, np.array([f.cy, f.cz]), np.array([f.uy, f.uz]), f.along, f.rms)
 
 
 @dataclass

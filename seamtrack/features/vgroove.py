@@ -79,14 +79,14 @@ class VGrooveExtractor(_Base):
         lo, hi = self._angles(self.min_angle_deg, self.max_angle_deg)
         expect = self.expect if isinstance(self.expect, Expect) else None
         params = GrooveParams(
-            int(self.min_points),
-            float(self.min_arm_mm),
-            float(lo),
-            float(hi),
-            float(self.max_gap_mm),
-            float(self.min_gap_mm),
-            bool(self.arms_from_pieces),
-            bool(expect is not None and expect.gapless),
+            min_points=int(self.min_points),
+            min_arm=float(self.min_arm_mm),
+            min_deg=float(lo),
+            max_deg=float(hi),
+            max_gap=float(self.max_gap_mm),
+            min_gap=float(self.min_gap_mm),
+            pieces_too=bool(self.arms_from_pieces),
+            gapless=bool(expect is not None and expect.gapless),
         )
         groove = v_groove(
             np.ascontiguousarray(seg.points, dtype=np.float64),
