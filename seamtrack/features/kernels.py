@@ -98,6 +98,43 @@ class PieceCount(NamedTuple):
     pieces: int
 
 
+class BufferLayout(NamedTuple):
+    """Where :func:`segment` writes in its two buffers, for a profile of n points and
+    L = ``max_lines`` (:func:`buffer_layout`): in ``floats``, the kept points ((n, 2) from
+    ``points``), the pieces' fits ((L, 7) from ``fits``: columns ``FIT_*``) and the inliers'
+    coordinates along their pieces (n + L from ``along``), ``floats`` in all; in ``ints``,
+    the kept points' columns (n from ``columns``), the run bounds (n + 1 from ``runs``), the
+    pieces' bounds in the inliers (L + 1 from ``offsets``) and the inliers (n + L from
+    ``inliers``), ``ints`` in all."""
+
+    points: int
+    fits: int
+    along: int
+    floats: int
+    columns: int
+    runs: int
+    offsets: int
+    inliers: int
+    ints: int
+
+
+def buffer_layout(n: int, max_lines: int) -> BufferLayout:
+    """The :class:`BufferLayout` of a profile of ``n`` points (pieces of fewer than 6 points
+    may share an end point, Douglas-Peucker's, so there may be up to ``max_lines`` more
+    inliers than points)."""
+    fits = 2 * n
+    along = fits + 7 * max_lines
+    runs = n
+    offsets = runs + n + 1
+    inliers = offsets + max_lines + 1
+    return BufferLayout(
+        0, fits, along, along + n + max_lines, 0, runs, offsets, inliers, inliers + n + max_lines
+    )
+
+
+_buffer_layout = numba.njit(cache=True, nogil=True)(buffer_layout)
+
+
 class Segmentation(NamedTuple):
     """What :func:`segment` found besides the arrays it wrote: the code (:data:`SEGMENTED`,
     :data:`TOO_FEW_POINTS`, :data:`CONSTANT`, :data:`TOO_MANY_PIECES`, :data:`NO_PIECE`),
@@ -482,27 +519,18 @@ def segment(
     """:func:`seamtrack.features.lines.segment_profile` in one compiled call: the front end
     (:func:`seamtrack.features.robust.front`) and the straight pieces (:func:`_pieces`),
     written to three given arrays (each array passed to or returned from a compiled call
-    costs a fraction of a microsecond) for a profile of n points and L = ``max_lines``
-    (``resolution_mm`` 0 and ``min_tol_mm`` NaN: not given):
-
-    * ``floats`` (3 n + 8 L,): the kept points ((n, 2) from 0), the pieces' fits ((L, 7)
-      from 2 n: centroid, direction, rms, first and last coordinate along the line) and the
-      inliers' coordinates along their pieces (from 2 n + 7 L);
-    * ``ints`` (3 n + 2 L + 2,): the kept points' columns (from 0), the run bounds (from n),
-      the pieces' offsets into the inliers (from 2 n + 1) and the inliers (from
-      2 n + L + 2);
-    * ``stray`` (n,): the points of detours.
-
-    Pieces of fewer than 6 points may share an end point (Douglas-Peucker's), so there may
-    be up to L more inliers than points: hence n + L for them.
+    costs a fraction of a microsecond): ``floats`` and ``ints``, laid out as
+    :func:`buffer_layout` says, and ``stray`` (n,), the points of detours
+    (``resolution_mm`` 0 and ``min_tol_mm`` NaN: not given).
 
     Returns a :class:`Segmentation` (with :data:`TOO_FEW_POINTS`, ``kept`` counts the valid
     points).
     """
     n = points.shape[0]
-    p = floats[: 2 * n].reshape((n, 2))
-    runs = ints[n : 2 * n + 1]
-    inliers = ints[2 * n + max_lines + 2 :]
+    at = _buffer_layout(n, max_lines)
+    p = floats[at.points : at.fits].reshape((n, 2))
+    runs = ints[at.runs : at.offsets]
+    inliers = ints[at.inliers :]
     # The spikes' columns go where the inliers will: they are not returned.
     front = _front(
         points,
@@ -516,7 +544,7 @@ def segment(
         DEFAULT_RESOLUTION_MM,
         TOL_RESOLUTIONS,
         p,
-        ints[:n],
+        ints[at.columns : at.runs],
         inliers,
         runs,
         stray,
@@ -533,10 +561,10 @@ def segment(
             min_points,
             max_lines,
             min_kink_rad,
-            ints[2 * n + 1 : 2 * n + max_lines + 2],
+            ints[at.offsets : at.inliers],
             inliers,
-            floats[2 * n : 2 * n + 7 * max_lines].reshape((max_lines, 7)),
-            floats[2 * n + 7 * max_lines :],
+            floats[at.fits : at.along].reshape((max_lines, 7)),
+            floats[at.along :],
         )
     return Segmentation(
         found.code,

@@ -26,6 +26,7 @@ from seamtrack.features.kernels import (
     SEGMENTED,
     TOO_MANY_PIECES,
     PieceTable,
+    buffer_layout,
     fit_line,
     segment,
 )
@@ -190,8 +191,9 @@ def segment_profile(
         return "too few valid points (0)"
     max_lines = int(max_lines)
     # The compiled call writes into these (see :func:`seamtrack.features.kernels.segment`).
-    floats = np.empty(3 * n + 8 * max_lines)
-    ints = np.empty(3 * n + 2 * max_lines + 2, dtype=np.intp)
+    at = buffer_layout(n, max_lines)
+    floats = np.empty(at.floats)
+    ints = np.empty(at.ints, dtype=np.intp)
     stray = np.empty(n, dtype=np.bool_)
     found = segment(
         pts,
@@ -210,23 +212,23 @@ def segment_profile(
     if found.code != SEGMENTED:
         return _WHY[found.code].format(found.kept)
     m, k = found.kept, found.n_pieces
-    bounds = ints[2 * n + 1 : 2 * n + 2 + k]
-    fits = floats[2 * n : 2 * n + 7 * k].reshape(k, 7)
-    at_t = 2 * n + 7 * max_lines  # the inliers' coordinates along their lines
-    at_index = 2 * n + max_lines + 2  # the inliers
+    bounds = ints[at.offsets : at.offsets + k + 1]
+    fits = floats[at.fits : at.fits + 7 * k].reshape(k, 7)
     end = int(bounds[-1])
     return Segments(
-        floats[: 2 * m].reshape(m, 2),
+        floats[at.points : at.points + 2 * m].reshape(m, 2),
         found.sigma,
         found.tol,
         found.spacing,
         None,
         stray[:m],
-        ints[:m],
-        ints[n : n + found.n_runs],
+        ints[at.columns : at.columns + m],
+        ints[at.runs : at.runs + found.n_runs],
         found.quantum,
         found.resolution,
-        PieceTable(ints[at_index : at_index + end], floats[at_t : at_t + end], fits, bounds),
+        PieceTable(
+            ints[at.inliers : at.inliers + end], floats[at.along : at.along + end], fits, bounds
+        ),
     )
 
 
