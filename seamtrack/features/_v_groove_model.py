@@ -44,7 +44,16 @@ from seamtrack.features._v_search import (
     point,
     search,
 )
-from seamtrack.features.counts import explained_share
+from seamtrack.features.counts import (
+    LINE_CY,
+    LINE_CZ,
+    LINE_NY,
+    LINE_NZ,
+    ZONE_HI,
+    ZONE_LINES,
+    ZONE_LO,
+    explained_share,
+)
 
 #: A bevel within this angle of a plate runs along it (deg): a quarter of the flattest V's
 #: opening off the straight (150 deg included: bevels 15 deg off the plates).
@@ -54,6 +63,8 @@ COS_ALONG = math.cos(math.radians(ALONG_DEG))
 PLATE_REACH_MM = 1.5
 #: At most this share of the kept points lies between the bevels' lower ends (the root).
 MAX_ROOT_SHARE = 0.35
+#: The zones of the share explained, in column order.
+_PLATE_L, _BEVEL_L, _ROOT, _BEVEL_R, _PLATE_R = range(5)
 
 #: What the model found (:attr:`VGrooveResult.code`): a groove; no V; no plate beside the
 #: bevels; a side of the V along a plate; a root wider than :data:`MAX_ROOT_SHARE`.
@@ -245,22 +256,26 @@ def _explained(points, surface, tb, bevels, outer_l, outer_r, tol):
     m = points.shape[0]
     lo_l, hi_l = first(tb, left), last(tb, left) + 1
     lo_r, hi_r = first(tb, right), last(tb, right) + 1
+    # Zones: the left plate(s), the left bevel, the root (no line), the right bevel, the
+    # right plate(s); a plate's zone holds its bevel's line too.
     zones = np.zeros((5, 3), dtype=np.int64)
     bounds = (0, lo_l, hi_l, lo_r, hi_r, m)
     for k in range(5):
-        zones[k, 0], zones[k, 1], zones[k, 2] = bounds[k], bounds[k + 1], k != 2
+        zones[k, ZONE_LO], zones[k, ZONE_HI] = bounds[k], bounds[k + 1]
+        zones[k, ZONE_LINES] = k != _ROOT
     fits = np.zeros((5, 3, 4))
-    for k, side, arm in ((0, outer_l, left), (4, outer_r, right)):
+    for k, side, arm in ((_PLATE_L, outer_l, left), (_PLATE_R, outer_r, right)):
         for p in (side.near, side.far, arm):
             if p != NONE:
-                j = zones[k, 2] - 1
-                fits[k, j, 0], fits[k, j, 1] = geo[p, CY], geo[p, CZ]
-                fits[k, j, 2], fits[k, j, 3] = -geo[p, UZ], geo[p, UY]
-                zones[k, 2] += 1
-        zones[k, 2] -= 1
-    for k, arm in ((1, left), (3, right)):
-        fits[k, 0, 0], fits[k, 0, 1] = geo[arm, CY], geo[arm, CZ]
-        fits[k, 0, 2], fits[k, 0, 3] = -geo[arm, UZ], geo[arm, UY]
+                line = fits[k, zones[k, ZONE_LINES] - 1]
+                line[LINE_CY], line[LINE_CZ] = geo[p, CY], geo[p, CZ]
+                line[LINE_NY], line[LINE_NZ] = -geo[p, UZ], geo[p, UY]
+                zones[k, ZONE_LINES] += 1
+        zones[k, ZONE_LINES] -= 1
+    for k, arm in ((_BEVEL_L, left), (_BEVEL_R, right)):
+        line = fits[k, 0]
+        line[LINE_CY], line[LINE_CZ] = geo[arm, CY], geo[arm, CZ]
+        line[LINE_NY], line[LINE_NZ] = -geo[arm, UZ], geo[arm, UY]
     return explained_share(points, surface, zones, fits, 3.0 * tol)
 
 
