@@ -69,7 +69,7 @@ class FrontScalars(NamedTuple):
 class Front(NamedTuple):
     """The front end of one profile (:func:`front`): the code, the kept points (m, 2), their
     columns, the removed spikes' columns, the bounds of the runs between jumps, the points
-    of detours (m,), and the scalars of :class:`FrontScalars`."""
+    of detours (m,), and the noise, tolerance and the rest (:class:`FrontScalars`)."""
 
     code: int
     points: FloatArray
@@ -77,12 +77,7 @@ class Front(NamedTuple):
     spikes: IntArray
     runs: IntArray
     stray: NDArray[np.bool_]
-    sigma: float
-    tol: float
-    floor: float
-    spacing: float
-    quantum: float
-    resolution: float
+    scalars: FrontScalars
 
 
 #: Coordinates beyond this (mm) are not measurements: treated as invalid.
@@ -490,8 +485,8 @@ def front(
 
     Returns a :class:`Front`: ``code`` :data:`KEPT`, :data:`TOO_FEW_POINTS` (``len(points)``
     of them) or :data:`CONSTANT`; the kept points (spikes removed), their columns, the removed
-    spikes' columns, the bounds of the runs between jumps, the points of detours, and the
-    noise, tolerance, its floor, spacing, range quantum and resolution.
+    spikes' columns, the bounds of the runs between jumps, the points of detours, and
+    ``scalars``: noise, tolerance, its floor, spacing, range quantum and resolution.
     """
     n = points.shape[0]
     p = np.empty((n, 2))
@@ -517,20 +512,7 @@ def front(
         stray,
     )
     m = f.kept
-    return Front(
-        f.code,
-        p[:m],
-        cols[:m],
-        spikes[: f.n_spikes],
-        runs[: f.n_runs],
-        stray[:m],
-        f.sigma,
-        f.tol,
-        f.floor,
-        f.spacing,
-        f.quantum,
-        f.resolution,
-    )
+    return Front(f.code, p[:m], cols[:m], spikes[: f.n_spikes], runs[: f.n_runs], stray[:m], f)
 
 
 def front_end(
@@ -572,18 +554,10 @@ def front_end(
         return f"too few valid points ({len(fr.points)})"
     if fr.code == CONSTANT:
         return "the valid points do not spread out (constant profile)"
+    s = fr.scalars
     return FrontEnd(
-        fr.points,
-        fr.columns,
-        fr.spikes,
-        fr.runs,
-        fr.stray,
-        float(fr.sigma),
-        float(fr.tol),
-        float(fr.floor),
-        float(fr.spacing),
-        float(fr.quantum),
-        float(fr.resolution),
+        *(fr.points, fr.columns, fr.spikes, fr.runs, fr.stray),
+        *(float(v) for v in (s.sigma, s.tol, s.floor, s.spacing, s.quantum, s.resolution)),
     )
 
 
