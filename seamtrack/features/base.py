@@ -14,6 +14,21 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.features._v_search import (
+    COUNT,
+    CY,
+    CZ,
+    NONE,
+    RMS,
+    START,
+    UY,
+    UZ,
+    LineTable,
+    SearchParams,
+    explained_of,
+    pieces_of,
+    search,
+)
 from seamtrack.features.expect import Expect, parse_expect
 from seamtrack.features.lines import (
     DATA_ERRORS,
@@ -21,7 +36,6 @@ from seamtrack.features.lines import (
     Segments,
     segment_profile,
 )
-from seamtrack.features.vkernels import arm_pair, explained_of, pieces_of
 from seamtrack.sensing.profiles import Feature, Profile
 
 FloatArray = NDArray[np.float64]
@@ -128,46 +142,44 @@ class _Base:
         on the arms' lines (within two tolerances), on their sides of the apex (fragments of
         a bevel cut up by spikes count, whatever piece they are in). The arms are returned
         without their inliers more than a tolerance past the apex (refitted). Compiled
-        (:func:`seamtrack.features.vkernels.arm_pair`)."""
+        (:func:`seamtrack.features._v_search.search`)."""
         if not seg.n_lines:
             return "no pair of lines forms the joint"
-        params = np.array(
-            [
-                1.0 if opening_down else -1.0,
-                min_deg,
-                max_deg,
-                max_reach_mm,
-                self.arms_from_pieces,
-                self.min_points,
-                self.min_arm_mm,
-            ],
-            dtype=np.float64,
+        params = SearchParams(
+            sign=1.0 if opening_down else -1.0,
+            min_deg=float(min_deg),
+            max_deg=float(max_deg),
+            max_reach=float(max_reach_mm),
+            pieces_too=bool(self.arms_from_pieces),
+            min_points=int(self.min_points),
+            min_arm=float(self.min_arm_mm),
         )
-        left, right, y, z, score, tb = arm_pair(
+        found = search(
             np.ascontiguousarray(seg.points, dtype=np.float64),
             np.asarray(seg.stray, dtype=np.bool_),
             float(seg.tol),
-            *pieces_of(seg),
+            pieces_of(seg),
             params,
         )
-        if left < 0:
+        pair = found.pair
+        if pair.left == NONE:
             return "no pair of lines forms the joint"
-        return _record(seg, tb, left), _record(seg, tb, right), np.array([y, z]), float(score)
+        left, right = _record(seg, found.table, pair.left), _record(seg, found.table, pair.right)
+        return left, right, np.array([pair.apex_y, pair.apex_z]), float(pair.score)
 
 
-def _record(seg: Segments, tb: tuple, r: int) -> Line:
-    """The line of record ``r`` of a table (:mod:`seamtrack.features.vkernels`): the piece
-    itself when it is one, else a new line."""
+def _record(seg: Segments, tb: LineTable, r: int) -> Line:
+    """The line of record ``r`` of a table (:class:`seamtrack.features._v_search.LineTable`):
+    the piece itself when it is one, else a new line."""
     if r < seg.n_lines:
         return seg.line(r)
-    geo, span, pool_index, pool_t, _ = tb
-    a, c = int(span[r, 0]), int(span[r, 1])
+    a, c = int(tb.span[r, START]), int(tb.span[r, COUNT])
     return Line(
-        pool_index[a : a + c].copy(),
-        geo[r, 0:2].copy(),
-        geo[r, 2:4].copy(),
-        pool_t[a : a + c].copy(),
-        float(geo[r, 4]),
+        tb.index[a : a + c].copy(),
+        tb.geo[r, CY : CZ + 1].copy(),
+        tb.geo[r, UY : UZ + 1].copy(),
+        tb.along[a : a + c].copy(),
+        float(tb.geo[r, RMS]),
     )
 
 

@@ -11,6 +11,10 @@ from numpy.typing import NDArray
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
+#: The columns of :func:`explained_share`'s zones: first and past-the-end kept point, lines.
+ZONE_LO, ZONE_HI, ZONE_LINES = range(3)
+#: The columns of its lines: a point of the line (its centroid y, z) and its unit normal.
+LINE_CY, LINE_CZ, LINE_NY, LINE_NZ = range(4)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -22,21 +26,23 @@ def explained_share(
     band: float,
 ) -> float:
     """Share of the surface points within ``band`` of a line of their zone
-    (:func:`seamtrack.features.base.explained`): zone ``k`` spans ``p[zones[k, 0]:zones[k, 1]]``
-    with ``zones[k, 2]`` lines (``lines[k, j]``: centroid y, z, normal y, z); a zone without
-    a line is left out of the count; points in no zone count as unexplained."""
+    (:func:`seamtrack.features.base.explained`): zone ``k`` spans
+    ``p[zones[k, ZONE_LO]:zones[k, ZONE_HI]]`` with ``zones[k, ZONE_LINES]`` lines
+    (``lines[k, j]``: centroid y, z, normal y, z, columns ``LINE_*``); a zone without a line
+    is left out of the count; points in no zone count as unexplained."""
     m = p.shape[0]
     counted = surface.copy()
     ok = np.zeros(m, dtype=np.bool_)
     for k in range(zones.shape[0]):
-        lo, hi = max(zones[k, 0], 0), min(zones[k, 1], m)
+        lo, hi = max(zones[k, ZONE_LO], 0), min(zones[k, ZONE_HI], m)
         if hi <= lo:
             continue
-        if zones[k, 2] == 0:
+        if zones[k, ZONE_LINES] == 0:
             counted[lo:hi] = False
             continue
-        for j in range(zones[k, 2]):
-            cy, cz, ny, nz = lines[k, j, 0], lines[k, j, 1], lines[k, j, 2], lines[k, j, 3]
+        for j in range(zones[k, ZONE_LINES]):
+            line = lines[k, j]
+            cy, cz, ny, nz = line[LINE_CY], line[LINE_CZ], line[LINE_NY], line[LINE_NZ]
             for i in range(lo, hi):
                 if abs((p[i, 0] - cy) * ny + (p[i, 1] - cz) * nz) <= band:
                     ok[i] = True

@@ -51,6 +51,7 @@ from seamtrack.features.lines import (
 )
 from seamtrack.features.pkernels import two_lines_share
 from seamtrack.features.plates import LapExtractor, SquareButtExtractor
+from seamtrack.features.robust import CONSTANT, TOO_FEW_POINTS
 from seamtrack.features.vgroove import VGrooveExtractor
 from seamtrack.sensing.profiles import Feature, Profile
 
@@ -155,9 +156,9 @@ class GenericExtractor:
         if valid.shape != (len(points),):
             return Feature.failed("valid does not match the points", joint=self.name)
         code, p, spacing, sigma = front_end(points, valid, _MAX_ABS_MM, 4 * self.min_points)
-        if code == 1:
+        if code == TOO_FEW_POINTS:
             return Feature.failed(f"too few valid points ({len(p)})", joint=self.name)
-        if code == 2:
+        if code == CONSTANT:
             return Feature.failed("the valid points do not spread out", joint=self.name)
         m = len(p)
         k = min(max(round(max(self.window_mm, 20 * sigma) / spacing), 4), max(4, m // 4))

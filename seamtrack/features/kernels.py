@@ -14,6 +14,7 @@ so results agree to rounding, not bit for bit.
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -22,7 +23,9 @@ from numpy.typing import NDArray
 from seamtrack.features.robust import (
     _MAX_ABS_MM,
     DEFAULT_RESOLUTION_MM,
+    KEPT,
     TOL_RESOLUTIONS,
+    LineThrough,
     _front,
 )
 
@@ -30,9 +33,128 @@ FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 
+class PieceTable(NamedTuple):
+    """A profile's straight pieces as segmentation leaves them (a numba-supported named
+    tuple: compiled joint models take it whole).
+
+    Piece ``j``'s inliers are ``index[bounds[j]:bounds[j + 1]]`` (their positions among the
+    kept points, column order) and their coordinates along its line
+    ``along[bounds[j]:bounds[j + 1]]``; ``fits[j]`` is its line, columns :data:`FIT_CY` ...
+    :data:`FIT_LAST` (centroid y, z, direction y, z, rms, first and last coordinate along).
+    """
+
+    index: NDArray[np.intp]  # type: ignore[assignment]  # a field, over tuple.index
+    along: FloatArray
+    fits: FloatArray
+    bounds: NDArray[np.intp]
+
+
+#: The columns of :attr:`PieceTable.fits`.
+FIT_CY, FIT_CZ, FIT_UY, FIT_UZ, FIT_RMS, FIT_FIRST, FIT_LAST = range(7)
+
+#: Segmentation's codes (:attr:`Segmentation.code`): pieces found (:data:`SEGMENTED`); the
+#: front end's too few valid points and constant profile (:data:`~.robust.TOO_FEW_POINTS`,
+#: :data:`~.robust.CONSTANT`); more pieces than allowed (too noisy or curved); no piece with
+#: enough inliers.
+SEGMENTED = KEPT
+TOO_MANY_PIECES, NO_PIECE = 3, 4
+
+
+class LineFit(NamedTuple):
+    """A total-least-squares line: centroid (y, z), unit direction (y, z), rms residual."""
+
+    cy: float
+    cz: float
+    uy: float
+    uz: float
+    rms: float
+
+
+class LineAlong(NamedTuple):
+    """A :class:`LineFit` and its points' coordinates along the line."""
+
+    cy: float
+    cz: float
+    uy: float
+    uz: float
+    rms: float
+    along: FloatArray
+
+
+class Split(NamedTuple):
+    """The best split of a run into two lines: its position (from the run's start), the
+    total-least-squares cost of the two lines and that of one line (sums of squared
+    residuals, mm^2)."""
+
+    at: int
+    cost_two: float
+    cost_one: float
+
+
+class PieceCount(NamedTuple):
+    """What :func:`_pieces` found: a code of :class:`Segmentation` and the pieces written."""
+
+    code: int
+    pieces: int
+
+
+class BufferLayout(NamedTuple):
+    """Where :func:`segment` writes in its two buffers, for a profile of n points and
+    L = ``max_lines`` (:func:`buffer_layout`): in ``floats``, the kept points ((n, 2) from
+    ``points``), the pieces' fits ((L, 7) from ``fits``: columns ``FIT_*``) and the inliers'
+    coordinates along their pieces (n + L from ``along``), ``floats`` in all; in ``ints``,
+    the kept points' columns (n from ``columns``), the run bounds (n + 1 from ``runs``), the
+    pieces' bounds in the inliers (L + 1 from ``offsets``) and the inliers (n + L from
+    ``inliers``), ``ints`` in all."""
+
+    points: int
+    fits: int
+    along: int
+    floats: int
+    columns: int
+    runs: int
+    offsets: int
+    inliers: int
+    ints: int
+
+
+def buffer_layout(n: int, max_lines: int) -> BufferLayout:
+    """The :class:`BufferLayout` of a profile of ``n`` points (pieces of fewer than 6 points
+    may share an end point, Douglas-Peucker's, so there may be up to ``max_lines`` more
+    inliers than points)."""
+    fits = 2 * n
+    along = fits + 7 * max_lines
+    runs = n
+    offsets = runs + n + 1
+    inliers = offsets + max_lines + 1
+    return BufferLayout(
+        0, fits, along, along + n + max_lines, 0, runs, offsets, inliers, inliers + n + max_lines
+    )
+
+
+_buffer_layout = numba.njit(cache=True, nogil=True)(buffer_layout)
+
+
+class Segmentation(NamedTuple):
+    """What :func:`segment` found besides the arrays it wrote: the code (:data:`SEGMENTED`,
+    :data:`TOO_FEW_POINTS`, :data:`CONSTANT`, :data:`TOO_MANY_PIECES`, :data:`NO_PIECE`),
+    the kept points, the run bounds, the pieces, the noise, tolerance, spacing, range
+    quantum and resolution (mm)."""
+
+    code: int
+    kept: int
+    n_runs: int
+    n_pieces: int
+    sigma: float
+    tol: float
+    spacing: float
+    quantum: float
+    resolution: float
+
+
 # ----------------------------------------------------------------------- split and merge
 @numba.njit(cache=True, nogil=True)
-def _fit(p: FloatArray, idx: IntArray, n: int) -> tuple[float, float, float, float, float]:
+def _fit(p: FloatArray, idx: IntArray, n: int) -> LineFit:
     """Total-least-squares line through ``p[idx[:n]]``: centroid, unit direction (from the
     first point towards the last), rms residual; as ``seamtrack.features.lines._fit``."""
     cy = 0.0
@@ -59,11 +181,11 @@ def _fit(p: FloatArray, idx: IntArray, n: int) -> tuple[float, float, float, flo
     for k in range(n):
         r = -(p[idx[k], 0] - cy) * uz + (p[idx[k], 1] - cz) * uy
         rr += r * r
-    return cy, cz, uy, uz, math.sqrt(rr / n)
+    return LineFit(cy, cz, uy, uz, math.sqrt(rr / n))
 
 
 @numba.njit(cache=True, nogil=True)
-def fit_range(p: FloatArray, lo: int, hi: int) -> tuple[float, float, float, float]:
+def fit_range(p: FloatArray, lo: int, hi: int) -> LineThrough:
     """Total-least-squares line through ``p[lo:hi]``: centroid and unit direction."""
     n = hi - lo
     cy = 0.0
@@ -85,7 +207,7 @@ def fit_range(p: FloatArray, lo: int, hi: int) -> tuple[float, float, float, flo
     uy, uz = math.cos(theta), math.sin(theta)
     if uy * (p[hi - 1, 0] - p[lo, 0]) + uz * (p[hi - 1, 1] - p[lo, 1]) < 0.0:
         uy, uz = -uy, -uz
-    return cy, cz, uy, uz
+    return LineThrough(cy, cz, uy, uz)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -102,7 +224,7 @@ def _cost(n: float, s1: float, s2: float, s3: float, s4: float, s5: float) -> fl
 @numba.njit(cache=True, nogil=True)
 def _best_split(
     p: FloatArray, lo: int, hi: int, min_size: int, pre: FloatArray, cost: FloatArray
-) -> tuple[int, float, float]:
+) -> Split:
     """:func:`best_split` with scratch space: ``pre`` (6, >= hi - lo), ``cost`` (>= hi - lo).
 
     The prefix sums are kept by column and the split costs computed for every b before the
@@ -129,7 +251,7 @@ def _best_split(
         pre[3, i], pre[4, i], pre[5, i] = a3, a4, a5
     single = _cost(a0, a1, a2, a3, a4, a5)
     if k - min_size + 1 <= min_size:
-        return k, single, single
+        return Split(k, single, single)
     # cost[t]: the split at b = min_size + t (left: the first b points, prefix row b - 1)
     m = k - 2 * min_size + 1
     first = min_size - 1
@@ -144,14 +266,13 @@ def _best_split(
     for t in range(1, m):
         if cost[t] < best:
             best, best_b = cost[t], min_size + t
-    return best_b, best, single
+    return Split(best_b, best, single)
 
 
 @numba.njit(cache=True, nogil=True)
-def best_split(p: FloatArray, lo: int, hi: int, min_size: int) -> tuple[int, float, float]:
-    """Best split of ``p[lo:hi]`` into two lines: (b, cost of the two, cost of one line),
-    total-least-squares sums of squared residuals for every b from prefix sums (O(n));
-    ``b`` counts from ``lo``."""
+def best_split(p: FloatArray, lo: int, hi: int, min_size: int) -> Split:
+    """Best split of ``p[lo:hi]`` into two lines (:class:`Split`), total-least-squares sums
+    of squared residuals for every split from prefix sums (O(n)); ``at`` counts from ``lo``."""
     k = max(hi - lo, 1)
     return _best_split(p, lo, hi, min_size, np.empty((6, k)), np.empty(k))
 
@@ -298,21 +419,18 @@ def _pieces(
     index: IntArray,
     fits: FloatArray,
     along: FloatArray,
-) -> tuple[int, int]:
+) -> PieceCount:
     """The straight pieces of :func:`seamtrack.features.lines.segment_profile`, written to
     ``offsets`` (>= max_lines + 1,), ``index``, ``along`` (>= len(p) + max_lines,: pieces of
     fewer than 6 points may share an end point) and ``fits`` (>= max_lines, 7).
 
-    Returns
-    -------
-    code : int
-        0 ok; 1 too noisy or curved (more than ``max_lines`` pieces); 2 no piece keeps
-        ``min_points`` inliers.
-    k : int
-        The pieces: the inliers of piece j are ``index[offsets[j]:offsets[j + 1]]`` (their
-        positions in ``p``, column order), their coordinates along its line
-        ``along[offsets[j]:offsets[j + 1]]``; ``fits[j]`` holds its centroid y, z, direction
-        y, z, rms, and the first and last inliers' coordinates along it.
+    Returns a :class:`PieceCount`: ``code`` :data:`SEGMENTED`, :data:`TOO_MANY_PIECES` (too
+    noisy or curved: more than ``max_lines`` pieces) or :data:`NO_PIECE` (none keeps
+    ``min_points`` inliers); ``pieces`` written: the inliers of piece j are
+    ``index[offsets[j]:offsets[j + 1]]`` (their positions in ``p``, column order), their
+    coordinates along its line ``along[offsets[j]:offsets[j + 1]]``; ``fits[j]`` holds its
+    centroid y, z, direction y, z, rms, and the first and last inliers' coordinates along it
+    (columns ``FIT_*``).
     """
     cap = 2 * max_lines + 8
     all_lo = np.empty(cap, dtype=np.int64)
@@ -329,13 +447,13 @@ def _pieces(
         if hi - lo >= min_points and not stray[lo]:
             n = _split(p, lo, hi - 1, tol, max_lines, run_lo, run_hi)
             if n < 0:
-                return 1, 0
+                return PieceCount(TOO_MANY_PIECES, 0)
             n = _merge(p, run_lo, run_hi, n, tol)
             # Corners at the best two-line split (in order: each moves the next's start).
             for j in range(n - 1):
                 a, b = run_lo[j], run_hi[j + 1] + 1
                 if b - a >= 6:
-                    cut = a + _best_split(p, a, b, 3, pre, cost)[0]
+                    cut = a + _best_split(p, a, b, 3, pre, cost).at
                     run_hi[j], run_lo[j + 1] = cut - 1, cut
             # A run's end pieces split at a small kink.
             for j in range(n):
@@ -349,9 +467,9 @@ def _pieces(
                         if h == 1 and j != n - 1:
                             continue
                         h_lo, h_hi = (a, mid + 1) if h == 0 else (mid, b + 1)
-                        bb, split, single = _best_split(p, h_lo, h_hi, min_points, pre, cost)
-                        if single - split > significant:
-                            cut = h_lo + bb
+                        best = _best_split(p, h_lo, h_hi, min_points, pre, cost)
+                        if best.cost_one - best.cost_two > significant:
+                            cut = h_lo + best.at
                             _, _, uy1, uz1 = fit_range(p, a, cut)
                             _, _, uy2, uz2 = fit_range(p, cut, b + 1)
                             kink = math.acos(min(1.0, abs(uy1 * uy2 + uz1 * uz2)))
@@ -368,7 +486,7 @@ def _pieces(
                         total += 1
                     prev = nxt
         if total > max_lines:
-            return 1, 0
+            return PieceCount(TOO_MANY_PIECES, 0)
     # Trimmed refits: inliers within max(3 sigma, floor / 2) of each piece's first fit.
     trim = max(3.0 * sigma, 0.5 * floor)
     offsets[0] = 0
@@ -380,7 +498,7 @@ def _pieces(
             used += n
             k += 1
             offsets[k] = used
-    return (0 if k else 2), k
+    return PieceCount(SEGMENTED if k else NO_PIECE, k)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -397,34 +515,24 @@ def segment(
     floats: FloatArray,
     ints: IntArray,
     stray: NDArray[np.bool_],
-) -> tuple[int, int, int, int, float, float, float, float, float]:
+) -> Segmentation:
     """:func:`seamtrack.features.lines.segment_profile` in one compiled call: the front end
     (:func:`seamtrack.features.robust.front`) and the straight pieces (:func:`_pieces`),
     written to three given arrays (each array passed to or returned from a compiled call
-    costs a fraction of a microsecond) for a profile of n points and L = ``max_lines``
-    (``resolution_mm`` 0 and ``min_tol_mm`` NaN: not given):
+    costs a fraction of a microsecond): ``floats`` and ``ints``, laid out as
+    :func:`buffer_layout` says, and ``stray`` (n,), the points of detours
+    (``resolution_mm`` 0 and ``min_tol_mm`` NaN: not given).
 
-    * ``floats`` (3 n + 8 L,): the kept points ((n, 2) from 0), the pieces' fits ((L, 7)
-      from 2 n: centroid, direction, rms, first and last coordinate along the line) and the
-      inliers' coordinates along their pieces (from 2 n + 7 L);
-    * ``ints`` (3 n + 2 L + 2,): the kept points' columns (from 0), the run bounds (from n),
-      the pieces' offsets into the inliers (from 2 n + 1) and the inliers (from
-      2 n + L + 2);
-    * ``stray`` (n,): the points of detours.
-
-    Pieces of fewer than 6 points may share an end point (Douglas-Peucker's), so there may
-    be up to L more inliers than points: hence n + L for them.
-
-    Returns (code, m, runs, k, sigma, tol, spacing, quantum, resolution): ``code`` 0 ok,
-    1 too few valid points (``m`` of them), 2 constant profile, 3 too many pieces, 4 no piece
-    with ``min_points`` inliers; ``m`` kept points, the count of run bounds, ``k`` pieces.
+    Returns a :class:`Segmentation` (with :data:`TOO_FEW_POINTS`, ``kept`` counts the valid
+    points).
     """
     n = points.shape[0]
-    p = floats[: 2 * n].reshape((n, 2))
-    runs = ints[n : 2 * n + 1]
-    inliers = ints[2 * n + max_lines + 2 :]
+    at = _buffer_layout(n, max_lines)
+    p = floats[at.points : at.fits].reshape((n, 2))
+    runs = ints[at.runs : at.offsets]
+    inliers = ints[at.inliers :]
     # The spikes' columns go where the inliers will: they are not returned.
-    code, m, _, nr, sigma, tol, floor, spacing, q, resolution = _front(
+    front = _front(
         points,
         valid,
         _MAX_ABS_MM,
@@ -436,35 +544,43 @@ def segment(
         DEFAULT_RESOLUTION_MM,
         TOL_RESOLUTIONS,
         p,
-        ints[:n],
+        ints[at.columns : at.runs],
         inliers,
         runs,
         stray,
     )
-    k = 0
-    if code == 0:
-        code, k = _pieces(
-            p[:m],
-            runs[:nr],
+    found = PieceCount(front.code, 0)
+    if front.code == KEPT:
+        found = _pieces(
+            p[: front.kept],
+            runs[: front.n_runs],
             stray,
-            tol,
-            sigma,
-            floor,
+            front.tol,
+            front.sigma,
+            front.floor,
             min_points,
             max_lines,
             min_kink_rad,
-            ints[2 * n + 1 : 2 * n + max_lines + 2],
+            ints[at.offsets : at.inliers],
             inliers,
-            floats[2 * n : 2 * n + 7 * max_lines].reshape((max_lines, 7)),
-            floats[2 * n + 7 * max_lines :],
+            floats[at.fits : at.along].reshape((max_lines, 7)),
+            floats[at.along :],
         )
-        if code:
-            code += 2
-    return code, m, nr, k, sigma, tol, spacing, q, resolution
+    return Segmentation(
+        found.code,
+        front.kept,
+        front.n_runs,
+        found.pieces,
+        front.sigma,
+        front.tol,
+        front.spacing,
+        front.quantum,
+        front.resolution,
+    )
 
 
 @numba.njit(cache=True, nogil=True)
-def fit_line(p: FloatArray, idx: IntArray) -> tuple[float, float, float, float, float, FloatArray]:
+def fit_line(p: FloatArray, idx: IntArray) -> LineAlong:
     """Total-least-squares line through ``p[idx]`` (at least one point): centroid, unit
     direction (from the first point towards the last), rms residual, and the points'
     coordinates along it; :func:`seamtrack.features.lines._fit` in one call."""
@@ -473,4 +589,4 @@ def fit_line(p: FloatArray, idx: IntArray) -> tuple[float, float, float, float, 
     t = np.empty(n)
     for k in range(n):
         t[k] = (p[idx[k], 0] - cy) * uy + (p[idx[k], 1] - cz) * uz
-    return cy, cz, uy, uz, rms, t
+    return LineAlong(cy, cz, uy, uz, rms, t)

@@ -21,8 +21,16 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features.kernels import fit_line, segment
-from seamtrack.features.robust import DEFAULT_RESOLUTION_MM
+from seamtrack.features.kernels import (
+    NO_PIECE,
+    SEGMENTED,
+    TOO_MANY_PIECES,
+    PieceTable,
+    buffer_layout,
+    fit_line,
+    segment,
+)
+from seamtrack.features.robust import CONSTANT, DEFAULT_RESOLUTION_MM, TOO_FEW_POINTS
 from seamtrack.sensing.profiles import Profile
 
 FloatArray = NDArray[np.float64]
@@ -91,8 +99,8 @@ def _fit(points: FloatArray, index: NDArray[np.intp]) -> Line:
     points was most of its cost."""
     if len(index) == 0:
         raise ValueError("no points to fit a line to")
-    cy, cz, uy, uz, rms, t = fit_line(points, np.asarray(index, dtype=np.int64))
-    return Line(index, np.array([cy, cz]), np.array([uy, uz]), t, rms)
+    f = fit_line(points, np.asarray(index, dtype=np.int64))
+    return Line(index, np.array([f.cy, f.cz]), np.array([f.uy, f.uz]), f.along, f.rms)
 
 
 @dataclass
@@ -115,10 +123,9 @@ class Segments:
     quantum: float = 0.0
     resolution: float = DEFAULT_RESOLUTION_MM
     #: The pieces as :func:`segment_profile`'s compiled call left them, for the compiled joint
-    #: models: the inliers and their coordinates along their lines, piece after piece; per
-    #: piece (centroid y, z, direction y, z, rms, first and last coordinate); the bounds of
-    #: each piece's inliers in the first two. None: build them from ``lines``.
-    table: tuple[NDArray[np.intp], FloatArray, FloatArray, NDArray[np.intp]] | None = None
+    #: models (:class:`~seamtrack.features.kernels.PieceTable`: ``index, along, fits,
+    #: bounds``). None: build them from ``lines``.
+    table: PieceTable | None = None
 
     @property
     def lines(self) -> list[Line]:
@@ -131,7 +138,7 @@ class Segments:
 
     @property
     def n_lines(self) -> int:
-        return len(self.pieces) if self.pieces is not None else len(self.table[3]) - 1  # type: ignore[index]
+        return len(self.pieces) if self.pieces is not None else len(self.table.bounds) - 1  # type: ignore[union-attr]
 
     def line(self, j: int) -> Line:
         """Piece ``j`` (without building the others)."""
@@ -184,10 +191,11 @@ def segment_profile(
         return "too few valid points (0)"
     max_lines = int(max_lines)
     # The compiled call writes into these (see :func:`seamtrack.features.kernels.segment`).
-    floats = np.empty(3 * n + 8 * max_lines)
-    ints = np.empty(3 * n + 2 * max_lines + 2, dtype=np.intp)
+    at = buffer_layout(n, max_lines)
+    floats = np.empty(at.floats)
+    ints = np.empty(at.ints, dtype=np.intp)
     stray = np.empty(n, dtype=np.bool_)
-    code, m, nr, k, sigma, tol, spacing, q, resolution = segment(
+    found = segment(
         pts,
         valid,
         int(min_points),
@@ -201,34 +209,35 @@ def segment_profile(
         ints,
         stray,
     )
-    if code:
-        return _WHY[code].format(m)
-    bounds = ints[2 * n + 1 : 2 * n + 2 + k]
-    fits = floats[2 * n : 2 * n + 7 * k].reshape(k, 7)
-    at_t = 2 * n + 7 * max_lines  # the inliers' coordinates along their lines
-    at_index = 2 * n + max_lines + 2  # the inliers
+    if found.code != SEGMENTED:
+        return _WHY[found.code].format(found.kept)
+    m, k = found.kept, found.n_pieces
+    bounds = ints[at.offsets : at.offsets + k + 1]
+    fits = floats[at.fits : at.fits + 7 * k].reshape(k, 7)
     end = int(bounds[-1])
     return Segments(
-        floats[: 2 * m].reshape(m, 2),
-        sigma,
-        tol,
-        spacing,
+        floats[at.points : at.points + 2 * m].reshape(m, 2),
+        found.sigma,
+        found.tol,
+        found.spacing,
         None,
         stray[:m],
-        ints[:m],
-        ints[n : n + nr],
-        q,
-        resolution,
-        (ints[at_index : at_index + end], floats[at_t : at_t + end], fits, bounds),
+        ints[at.columns : at.columns + m],
+        ints[at.runs : at.runs + found.n_runs],
+        found.quantum,
+        found.resolution,
+        PieceTable(
+            ints[at.inliers : at.inliers + end], floats[at.along : at.along + end], fits, bounds
+        ),
     )
 
 
 #: Why :func:`segment_profile` found no pieces, by the compiled call's code.
 _WHY = {
-    1: "too few valid points ({})",
-    2: "the valid points do not spread out (constant profile)",
-    3: "no straight pieces (too noisy or curved)",
-    4: "no straight pieces with enough points",
+    TOO_FEW_POINTS: "too few valid points ({})",
+    CONSTANT: "the valid points do not spread out (constant profile)",
+    TOO_MANY_PIECES: "no straight pieces (too noisy or curved)",
+    NO_PIECE: "no straight pieces with enough points",
 }
 
 

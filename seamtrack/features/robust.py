@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -33,6 +34,51 @@ from seamtrack.sensing.profiles import Profile, Reason
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
+
+#: The front end's codes (:attr:`Front.code`): points kept; too few valid points; the valid
+#: points do not spread out (a constant profile).
+KEPT, TOO_FEW_POINTS, CONSTANT = 0, 1, 2
+
+
+class LineThrough(NamedTuple):
+    """A total-least-squares line: centroid (y, z) and unit direction (y, z)."""
+
+    cy: float
+    cz: float
+    uy: float
+    uz: float
+
+
+class FrontScalars(NamedTuple):
+    """What :func:`_front` found besides the arrays it wrote: the front end's code, the
+    points kept, the spikes and run bounds written, the noise (mm), the tolerance (mm), its
+    floor (mm), the median spacing (mm), the range quantum (mm) and the resolution (mm)."""
+
+    code: int
+    kept: int
+    n_spikes: int
+    n_runs: int
+    sigma: float
+    tol: float
+    floor: float
+    spacing: float
+    quantum: float
+    resolution: float
+
+
+class Front(NamedTuple):
+    """The front end of one profile (:func:`front`): the code, the kept points (m, 2), their
+    columns, the removed spikes' columns, the bounds of the runs between jumps, the points
+    of detours (m,), and the noise, tolerance and the rest (:class:`FrontScalars`)."""
+
+    code: int
+    points: FloatArray
+    columns: IntArray
+    spikes: IntArray
+    runs: IntArray
+    stray: NDArray[np.bool_]
+    scalars: FrontScalars
+
 
 #: Coordinates beyond this (mm) are not measurements: treated as invalid.
 _MAX_ABS_MM = 1e6
@@ -102,7 +148,7 @@ def range_quantum(z: FloatArray) -> float:
 
 
 @numba.njit(cache=True, nogil=True)
-def _tls(p: FloatArray, lo: int, hi: int, lo2: int, hi2: int) -> tuple[float, float, float, float]:
+def _tls(p: FloatArray, lo: int, hi: int, lo2: int, hi2: int) -> LineThrough:
     """Total-least-squares line through p[lo:hi] and p[lo2:hi2]: centroid, unit direction."""
     n = (hi - lo) + (hi2 - lo2)
     cy = 0.0
@@ -123,7 +169,7 @@ def _tls(p: FloatArray, lo: int, hi: int, lo2: int, hi2: int) -> tuple[float, fl
             szz += dz * dz
             syz += dy * dz
     theta = 0.5 * math.atan2(2.0 * syz, syy - szz)
-    return cy, cz, math.cos(theta), math.sin(theta)
+    return LineThrough(cy, cz, math.cos(theta), math.sin(theta))
 
 
 @numba.njit(cache=True, nogil=True)
@@ -330,13 +376,13 @@ def _front(
     spikes: IntArray,
     runs: IntArray,
     stray: NDArray[np.bool_],
-) -> tuple[int, int, int, int, float, float, float, float, float, float]:
+) -> FrontScalars:
     """:func:`front` into given arrays: ``p`` (n, 2), ``cols``, ``spikes``, ``stray`` (n,),
     ``runs`` (n + 1,) for n profile points.
 
-    Returns (code, m, spikes, runs, sigma, tol, floor, spacing, quantum, resolution): ``m``
-    kept points (before spikes are removed when ``code`` is not 0), the counts of spikes
-    and run bounds written."""
+    Returns a :class:`FrontScalars`: ``kept`` points (before spikes are removed when
+    ``code`` is not :data:`KEPT`), the counts of spikes and run bounds written, and the
+    noise, tolerance, its floor, the spacing, the range quantum and the resolution."""
     n = points.shape[0]
     z = np.empty(n)
     m = 0
@@ -345,9 +391,9 @@ def _front(
         p[m, 0], p[m, 1], z[m], cols[m] = y0, z0, z0, i
         m += valid[i] & (abs(y0) < max_abs) & (abs(z0) < max_abs)
     if m < 2 * min_points:
-        return 1, m, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        return FrontScalars(TOO_FEW_POINTS, m, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     if m < 2:
-        return 2, m, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        return FrontScalars(CONSTANT, m, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     d = np.empty(m)
     work = np.empty(m, dtype=np.int64)
     hist = np.empty(2 * BUCKETS, dtype=np.int64)
@@ -359,7 +405,7 @@ def _front(
             d[i] = math.hypot(p[i + 1, 0] - p[i, 0], p[i + 1, 1] - p[i, 1])
         spacing = kth_nonneg(d, m - 1, (m - 1) // 2, work, hist)
     if not spacing > 0.0:
-        return 2, m, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0
+        return FrontScalars(CONSTANT, m, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     q = range_quantum(z[:m])
     if resolution_mm != 0.0:
         resolution = resolution_mm
@@ -417,7 +463,7 @@ def _front(
     for k in range(r):
         if off[k]:
             stray[runs[k] : runs[k + 1]] = True
-    return 0, kept, ns, r + 1, sigma, tol, floor, spacing, q, resolution
+    return FrontScalars(KEPT, kept, ns, r + 1, sigma, tol, floor, spacing, q, resolution)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -432,28 +478,15 @@ def front(
     max_detour_mm: float,
     default_resolution: float,
     tol_resolutions: float,
-) -> tuple[
-    int,
-    FloatArray,
-    IntArray,
-    IntArray,
-    IntArray,
-    NDArray[np.bool_],
-    FloatArray,
-]:
+) -> Front:
     """The front end of :func:`seamtrack.features.robust.front_end` in one pass.
 
     ``resolution_mm`` 0: not given (read from the data); ``min_tol_mm`` NaN: not given.
 
-    Returns
-    -------
-    code : int
-        0 ok; 1 too few valid points (``len(p)`` of the kept points); 2 constant profile.
-    p : (m, 2) kept points (spikes removed)
-    columns, spike_columns : their columns, the removed spikes' columns
-    runs : bounds of the runs between jumps
-    stray : (m,) points of detours
-    scalars : (sigma, tol, floor, spacing, quantum, resolution)
+    Returns a :class:`Front`: ``code`` :data:`KEPT`, :data:`TOO_FEW_POINTS` (``len(points)``
+    of them) or :data:`CONSTANT`; the kept points (spikes removed), their columns, the removed
+    spikes' columns, the bounds of the runs between jumps, the points of detours, and
+    ``scalars``: noise, tolerance, its floor, spacing, range quantum and resolution.
     """
     n = points.shape[0]
     p = np.empty((n, 2))
@@ -461,7 +494,7 @@ def front(
     spikes = np.empty(n, dtype=np.int64)
     runs = np.empty(n + 1, dtype=np.int64)
     stray = np.zeros(n, dtype=np.bool_)
-    code, m, ns, nr, sigma, tol, floor, spacing, q, resolution = _front(
+    f = _front(
         points,
         valid,
         max_abs,
@@ -478,8 +511,8 @@ def front(
         runs,
         stray,
     )
-    scalars = np.array([sigma, tol, floor, spacing, q, resolution])
-    return code, p[:m], cols[:m], spikes[:ns], runs[:nr], stray[:m], scalars
+    m = f.kept
+    return Front(f.code, p[:m], cols[:m], spikes[: f.n_spikes], runs[: f.n_runs], stray[:m], f)
 
 
 def front_end(
@@ -505,7 +538,7 @@ def front_end(
     valid = np.ascontiguousarray(profile.valid, dtype=np.bool_).reshape(-1)
     if valid.shape != (len(pts),):
         return "too few valid points (0)"
-    code, p, columns, spikes, runs, stray, s = front(
+    fr = front(
         pts,
         valid,
         _MAX_ABS_MM,
@@ -517,12 +550,15 @@ def front_end(
         DEFAULT_RESOLUTION_MM,
         TOL_RESOLUTIONS,
     )
-    if code == 1:
-        return f"too few valid points ({len(p)})"
-    if code == 2:
+    if fr.code == TOO_FEW_POINTS:
+        return f"too few valid points ({len(fr.points)})"
+    if fr.code == CONSTANT:
         return "the valid points do not spread out (constant profile)"
-    sigma, tol, floor, spacing, q, resolution = (float(v) for v in s)
-    return FrontEnd(p, columns, spikes, runs, stray, sigma, tol, floor, spacing, q, resolution)
+    s = fr.scalars
+    return FrontEnd(
+        *(fr.points, fr.columns, fr.spikes, fr.runs, fr.stray),
+        *(float(v) for v in (s.sigma, s.tol, s.floor, s.spacing, s.quantum, s.resolution)),
+    )
 
 
 def reject(

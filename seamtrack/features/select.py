@@ -13,6 +13,8 @@ its partitions uneven.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numba
 import numpy as np
 from numpy.typing import NDArray
@@ -29,16 +31,23 @@ _FEW = 24
 
 
 @numba.njit(cache=True, nogil=True)
+def sort_small(x: NDArray[Any]) -> NDArray[Any]:
+    """Sort ``x`` in place by insertion (stable; few values, or runs already in order: the
+    generic sorts cost seconds of compile time for nothing here); ``x``."""
+    for i in range(1, x.shape[0]):
+        v = x[i]
+        j = i - 1
+        while j >= 0 and x[j] > v:
+            x[j + 1] = x[j]
+            j -= 1
+        x[j + 1] = v
+    return x
+
+
+@numba.njit(cache=True, nogil=True)
 def _sorted_kth(w: IntArray, c: int, k: int) -> int:
     """The k-th smallest of ``w[:c]`` by insertion sort (few values)."""
-    for i in range(1, c):
-        v = w[i]
-        j = i - 1
-        while j >= 0 and w[j] > v:
-            w[j + 1] = w[j]
-            j -= 1
-        w[j + 1] = v
-    return w[k]
+    return sort_small(w[:c])[k]
 
 
 @numba.njit(cache=True, nogil=True)

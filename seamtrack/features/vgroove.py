@@ -11,19 +11,33 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.features._v_groove_model import (
+    GROOVE,
+    NO_PLATE,
+    NO_V,
+    SIDE_ALONG_PLATE,
+    WIDE_ROOT,
+    GrooveParams,
+    v_groove,
+)
+from seamtrack.features._v_search import pieces_of
 from seamtrack.features.base import _Base
 from seamtrack.features.expect import Expect
 from seamtrack.features.lines import Segments
-from seamtrack.features.vkernels import pieces_of
-from seamtrack.features.vmodel import vgroove
 from seamtrack.sensing.profiles import Feature, Profile
 
 FloatArray = NDArray[np.float64]
-#: Why a V is no groove, by the code of :func:`seamtrack.features.vmodel.vgroove`.
+#: Why a V is no groove, by the code of :func:`seamtrack.features._v_groove_model.v_groove`.
 _REFUSALS = {
-    1: "no pair of lines forms the joint",
-    2: "not a v-groove: no plate beside the bevels (two faces alone: a fillet?)",
-    3: "not a v-groove: a side of the V runs along a plate (a step or a block's foot)",
+    NO_V: "no pair of lines forms the joint",
+    NO_PLATE: "not a v-groove: no plate beside the bevels (two faces alone: a fillet?)",
+    SIDE_ALONG_PLATE: (
+        "not a v-groove: a side of the V runs along a plate (a step or a block's foot)"
+    ),
+    WIDE_ROOT: (
+        "not a v-groove: {:.0f} % of the profile lies between the bevels' lower ends "
+        "(a raised block between two plates?)"
+    ),
 }
 
 
@@ -47,8 +61,10 @@ class VGrooveExtractor(_Base):
     ``min_explained`` of the profile on the model's lines) or when ``expect`` says the
     included angle, the depth below the plates or the gap is implausible.
 
-    The model runs compiled, in one call (:func:`seamtrack.features.vmodel.vgroove`): the
-    Python formulation spent ten times the arithmetic's cost on numpy calls on 2-vectors.
+    The model runs compiled, in one call (:func:`seamtrack.features._v_groove_model.v_groove`):
+    the Python formulation spent ten times the arithmetic's cost on numpy calls on 2-vectors.
+    Its steps: segment the profile (``_Base.segments``), run the groove's model on the pieces,
+    refuse what it refuses or what ``expect`` finds implausible, else the seam point.
     """
 
     name: str = "v-groove"
@@ -59,23 +75,20 @@ class VGrooveExtractor(_Base):
 
     def _extract(self, profile: Profile, seg: Segments) -> Feature | tuple[Feature, float]:
         if not seg.n_lines:
-            return Feature.failed(_REFUSALS[1], joint=self.name)
+            return Feature.failed(_REFUSALS[NO_V], joint=self.name)
         lo, hi = self._angles(self.min_angle_deg, self.max_angle_deg)
         expect = self.expect if isinstance(self.expect, Expect) else None
-        params = np.array(
-            [
-                self.min_points,
-                self.min_arm_mm,
-                lo,
-                hi,
-                self.max_gap_mm,
-                self.min_gap_mm,
-                self.arms_from_pieces,
-                expect is not None and expect.gapless,
-            ],
-            dtype=np.float64,
+        params = GrooveParams(
+            min_points=int(self.min_points),
+            min_arm=float(self.min_arm_mm),
+            min_deg=float(lo),
+            max_deg=float(hi),
+            max_gap=float(self.max_gap_mm),
+            min_gap=float(self.min_gap_mm),
+            pieces_too=bool(self.arms_from_pieces),
+            gapless=bool(expect is not None and expect.gapless),
         )
-        out = vgroove(
+        groove = v_groove(
             np.ascontiguousarray(seg.points, dtype=np.float64),
             np.asarray(seg.stray, dtype=np.bool_),
             np.asarray(seg.columns, dtype=np.int64),
@@ -83,27 +96,22 @@ class VGrooveExtractor(_Base):
             float(seg.tol),
             float(seg.sigma),
             float(seg.spacing),
-            *pieces_of(seg),
+            pieces_of(seg),
             params,
         )
-        code = int(out[0])
-        if code == 4:
-            return Feature.failed(
-                f"not a v-groove: {out[12]:.0f} % of the profile lies between the bevels' "
-                "lower ends (a raised block between two plates?)",
-                joint=self.name,
-            )
-        if code:
-            return Feature.failed(_REFUSALS[code], joint=self.name)
-        gap = float(out[4])
-        wrong = self._implausible(angle=float(out[10]), depth=float(out[11]), gap=gap)
+        if groove.code != GROOVE:
+            why = _REFUSALS[groove.code].format(groove.root_share)
+            return Feature.failed(why, joint=self.name)
+        wrong = self._implausible(angle=groove.angle, depth=groove.depth, gap=groove.gap)
         if wrong is not None:
             return wrong
         feature = self._found(
             profile,
-            out[1:3].copy(),
-            confidence=float(out[3]),
-            edges_laser=out[5:9].reshape(2, 2),
-            gap_mm=gap,
+            np.array([groove.seam_y, groove.seam_z]),
+            confidence=groove.confidence,
+            edges_laser=np.array(
+                [[groove.top_left_y, groove.top_left_z], [groove.top_right_y, groove.top_right_z]]
+            ),
+            gap_mm=groove.gap,
         )
-        return feature, float(out[9])
+        return feature, groove.explained

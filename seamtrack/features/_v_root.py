@@ -1,6 +1,8 @@
-"""Compiled reading of a V-groove's root (:class:`seamtrack.features.vgroove.VGrooveExtractor`):
-what lies between and beyond the bevels' lower ends, on the line table of
-:mod:`seamtrack.features.vkernels` (records: the profile's pieces, their groups, the arms).
+"""The V-groove's root, compiled (:class:`seamtrack.features.vgroove.VGrooveExtractor`): what
+lies between and beyond the bevels' lower ends, on the line table of the V search
+(:class:`seamtrack.features._v_search.LineTable`: the profile's pieces, their groups, the
+arms). The bevels are a :class:`Bevels` (two records and the apex), their lower ends a
+:class:`RootEnds`.
 
 These were the extractor's Python helpers (``_covered_end``, ``_continued``, ...): compiled with
 the same tests in the same order and the same floating-point operations, so results do not
@@ -12,13 +14,20 @@ Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groov
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numba
 import numpy as np
 
-from seamtrack.features.lines import _WALL_DEG
-from seamtrack.features.vkernels import (
+from seamtrack.features._v_search import (
+    COUNT,
+    CY,
+    CZ,
     NONE,
+    START,
+    UY,
+    UZ,
+    Point,
     contains,
     dot_dir,
     end,
@@ -27,10 +36,11 @@ from seamtrack.features.vkernels import (
     pmax,
     pmin,
     point,
-    sort_small,
     step,
     t_end,
 )
+from seamtrack.features.lines import _WALL_DEG
+from seamtrack.features.select import sort_small
 
 #: A piece steeper than this on the plates is a wall (a root face).
 COS_WALL = math.cos(math.radians(_WALL_DEG))
@@ -40,12 +50,44 @@ COS_ARM = math.cos(math.radians(15.0))
 COS_LEVEL = math.cos(math.radians(20.0))
 
 
+class Bevels(NamedTuple):
+    """A V's two bevels (records of the line table; the left one first in column order)
+    and their lines' crossing, the apex (y, z)."""
+
+    left: int
+    right: int
+    apex_y: float
+    apex_z: float
+
+
+class RootEnds(NamedTuple):
+    """The bevels' lower ends: left (y, z) and right (y, z)."""
+
+    ly: float
+    lz: float
+    ry: float
+    rz: float
+
+
+class CoveredEnd(NamedTuple):
+    """Whether a stray line covers a bevel's root end, and the stretch along the bevel
+    (coordinates, from the end outwards) where the end may lie (0, 0: not covered)."""
+
+    covered: bool
+    t0: float
+    t1: float
+
+
+#: A root end in plain view.
+SEEN = CoveredEnd(False, 0.0, 0.0)
+
+
 @numba.njit(cache=True, nogil=True)
 def plate_depth(tb, plate, qy, qz):
     """Depth of (qy, qz) behind record ``plate``'s line (away from the sensor, at the
     origin)."""
-    g = tb[0]
-    cy, cz, dy, dz = g[plate, 0], g[plate, 1], g[plate, 2], g[plate, 3]
+    g = tb.geo
+    cy, cz, dy, dz = g[plate, CY], g[plate, CZ], g[plate, UY], g[plate, UZ]
     ny, nz = -dz, dy
     if not cy * ny + cz * nz > 0:
         ny, nz = -ny, -nz
@@ -55,42 +97,43 @@ def plate_depth(tb, plate, qy, qz):
 @numba.njit(cache=True, nogil=True)
 def _off(tb, r, qy, qz):
     """``abs(_towards_sensor(r, q))``: distance of (qy, qz) from record ``r``'s line."""
-    g = tb[0]
-    return abs((qy - g[r, 0]) * -g[r, 3] + (qz - g[r, 1]) * g[r, 2])
+    g = tb.geo
+    return abs((qy - g[r, CY]) * -g[r, UZ] + (qz - g[r, CZ]) * g[r, UY])
 
 
 @numba.njit(cache=True, nogil=True)
 def _along(tb, r, qy, qz):
     """``(q - r.centroid) @ r.direction``."""
-    g = tb[0]
-    return (qy - g[r, 0]) * g[r, 2] + (qz - g[r, 1]) * g[r, 3]
+    g = tb.geo
+    return (qy - g[r, CY]) * g[r, UY] + (qz - g[r, CZ]) * g[r, UZ]
 
 
 @numba.njit(cache=True, nogil=True)
 def _flat_dot(tb, r, plate):
     """``abs(r.direction @ flat)``, flat: ``plate``'s direction, else (1, 0)."""
-    g = tb[0]
+    g = tb.geo
     if plate == NONE:
-        return abs(g[r, 2] * 1.0 + g[r, 3] * 0.0)
-    return abs(g[r, 2] * g[plate, 2] + g[r, 3] * g[plate, 3])
+        return abs(g[r, UY] * 1.0 + g[r, UZ] * 0.0)
+    return abs(g[r, UY] * g[plate, UY] + g[r, UZ] * g[plate, UZ])
 
 
 @numba.njit(cache=True, nogil=True)
 def continued(points, tb, n, arm, at_end, ay, az, ey, ez, tol):
     """Where bevel ``arm`` ends when pieces beyond its last (``at_end``, else first) inlier,
     towards the apex (ay, az), lie on its line (within 15 deg and two tolerances: the bevel
-    goes on past spikes or a dropout): the farthest such point; else (ey, ez)."""
+    goes on past spikes or a dropout): the farthest such point; else (ey, ez)
+    (:class:`~seamtrack.features._v_search.Point`)."""
     t_apex = _along(tb, arm, ay, az)
     t_stop = t_end(tb, arm, at_end)
     best = t_stop
-    span, pool = tb[1], tb[2]
+    span, pool = tb.span, tb.index
     for k in range(n):
         if abs(dot_dir(tb, k, arm)) < COS_ARM:
             continue
-        if _off(tb, arm, tb[0][k, 0], tb[0][k, 1]) > 2.0 * tol:
+        if _off(tb, arm, tb.geo[k, CY], tb.geo[k, CZ]) > 2.0 * tol:
             continue
         lo, hi = np.inf, -np.inf
-        for j in range(span[k, 0], span[k, 0] + span[k, 1]):
+        for j in range(span[k, START], span[k, START] + span[k, COUNT]):
             t = _along(tb, arm, points[pool[j], 0], points[pool[j], 1])
             lo, hi = min(lo, t), max(hi, t)
         if at_end and lo > t_stop and hi <= t_apex + tol:
@@ -98,15 +141,15 @@ def continued(points, tb, n, arm, at_end, ay, az, ey, ez, tol):
         elif not at_end and hi < t_stop and lo >= t_apex - tol:
             best = pmin(best, lo)
     if best == t_stop:
-        return ey, ez
+        return Point(ey, ez)
     return point(tb, arm, best)
 
 
 @numba.njit(cache=True, nogil=True)
 def covered_end(points, tb, n, line, at_end, other, plate, tol, spacing, sigma):
     """Where along bevel ``line`` its root end may lie when a stray line covers the columns
-    beyond its last seen point (``at_end``: its last inlier, else its first): (True, t0, t1),
-    or (False, 0, 0) when the end is seen.
+    beyond its last seen point (``at_end``: its last inlier, else its first): a
+    :class:`CoveredEnd` (:data:`SEEN` when the end is seen).
 
     The end is covered when the first piece beyond it lies in the next columns (at most two
     columns lost, at most two points off the line in between), is no wall (steep on
@@ -130,13 +173,13 @@ def covered_end(points, tb, n, line, at_end, other, plate, tol, spacing, sigma):
         if not at_end and last(tb, k) < i:
             piece = k
     if piece == NONE:
-        return False, 0.0, 0.0
+        return SEEN
     near = first(tb, piece) if at_end else last(tb, piece)
     far = last(tb, piece) if at_end else first(tb, piece)
     if contains(tb, other, near):
-        return False, 0.0, 0.0  # the other bevel (no gap) or a piece of it
-    a, c = tb[1][line, 0], tb[1][line, 1]
-    own = tb[2][a + max(c - 11, 0) : a + c] if at_end else tb[2][a : a + min(c, 11)]
+        return SEEN  # the other bevel (no gap) or a piece of it
+    a, c = tb.span[line, START], tb.span[line, COUNT]
+    own = tb.index[a + max(c - 11, 0) : a + c] if at_end else tb.index[a : a + min(c, 11)]
     steps = np.empty(max(own.shape[0] - 1, 0))
     for k in range(steps.shape[0]):
         steps[k] = abs(
@@ -150,14 +193,14 @@ def covered_end(points, tb, n, line, at_end, other, plate, tol, spacing, sigma):
     lo, hi = min(i, near) + 1, max(i, near)
     lost = abs(phi_near - phi_i) / dphi - max(hi - lo, 0) - 1 if dphi > 0 else np.inf
     if lost > 2.5:
-        return False, 0.0, 0.0
+        return SEEN
     off = 0
     for j in range(lo, hi):
         off += _off(tb, line, points[j, 0], points[j, 1]) > 2.0 * tol
     if off > 2:
-        return False, 0.0, 0.0  # lost columns (the gap, a shadow) or another surface first
+        return SEEN  # lost columns (the gap, a shadow) or another surface first
     if _flat_dot(tb, piece, plate) <= COS_WALL:
-        return False, 0.0, 0.0  # a wall: a root face
+        return SEEN  # a wall: a root face
     nxt = far + s
     if 0 <= nxt < m:
         held = pmax(pmax(6.0 * spacing, 4.0 * sigma), 0.1)
@@ -167,10 +210,10 @@ def covered_end(points, tb, n, line, at_end, other, plate, tol, spacing, sigma):
             and abs(math.atan2(points[nxt, 0], points[nxt, 1]) - phi_far) <= 3.5 * dphi
             and math.hypot(points[nxt, 0] - points[far, 0], points[nxt, 1] - points[far, 1]) <= held
         ):
-            return False, 0.0, 0.0  # runs on into the other bevel: part of the part
+            return SEEN  # runs on into the other bevel: part of the part
     half = s * 0.5 * pmax(step(tb, line, at_end), spacing)
-    g = tb[0]
-    cy, cz, dy, dz = g[line, 0], g[line, 1], g[line, 2], g[line, 3]
+    g = tb.geo
+    cy, cz, dy, dz = g[line, CY], g[line, CZ], g[line, UY], g[line, UZ]
     qy, qz = points[far, 0], points[far, 1]
     ray = (cy * -dz + cz * dy) / (qy * -dz + qz * dy)  # _ray_t: the ray's crossing
     t_far = (qy * ray - cy) * dy + (qz * ray - cz) * dz + half
@@ -182,30 +225,32 @@ def covered_end(points, tb, n, line, at_end, other, plate, tol, spacing, sigma):
             at += s
     if again >= 3:
         q = far + s * again
-        return True, t_far, _along(tb, line, points[q, 0], points[q, 1]) + half
-    return True, t_end(tb, line, at_end) + half, t_far
+        return CoveredEnd(True, t_far, _along(tb, line, points[q, 0], points[q, 1]) + half)
+    return CoveredEnd(True, t_end(tb, line, at_end) + half, t_far)
 
 
 @numba.njit(cache=True, nogil=True)
 def at_depth(tb, line, plate, depth, s0, s1):
     """The point of ``line`` at ``depth`` behind ``plate``, kept within the stretch s0..s1
-    (coordinates along the line)."""
-    g = tb[0]
-    ny, nz = -g[plate, 3], g[plate, 2]
-    if not g[plate, 0] * ny + g[plate, 1] * nz > 0:
+    (coordinates along the line; a :class:`~seamtrack.features._v_search.Point`)."""
+    g = tb.geo
+    ny, nz = -g[plate, UZ], g[plate, UY]
+    if not g[plate, CY] * ny + g[plate, CZ] * nz > 0:
         ny, nz = -ny, -nz
-    rate = g[line, 2] * ny + g[line, 3] * nz
+    rate = g[line, UY] * ny + g[line, UZ] * nz
     lo, hi = pmin(s0, s1), pmax(s0, s1)
     if abs(rate) < 1e-6:
         return point(tb, line, s0)
-    t = (depth - plate_depth(tb, plate, g[line, 0], g[line, 1])) / rate
+    t = (depth - plate_depth(tb, plate, g[line, CY], g[line, CZ])) / rate
     return point(tb, line, pmin(pmax(t, lo), hi))
 
 
 @numba.njit(cache=True, nogil=True)
-def level(tb, left, right, lx, ly, rx, ry, plate_l, plate_r, gap, tol):
-    """Whether the bevels' lower ends (lx, ly), (rx, ry) lie at one depth (below their own
-    plates, else along the V's bisector): within 3 tolerances or a quarter of the gap."""
+def level(tb, bevels, ends, plate_l, plate_r, gap, tol):
+    """Whether the bevels' lower ends lie at one depth (below their own plates, else along
+    the V's bisector): within 3 tolerances or a quarter of the gap."""
+    left, right = bevels.left, bevels.right
+    lx, ly, rx, ry = ends
     if plate_l != NONE and abs(dot_dir(tb, plate_l, left)) > COS_LEVEL:
         plate_l = NONE  # a piece of the bevel, no plate
     if plate_r != NONE and abs(dot_dir(tb, plate_r, right)) > COS_LEVEL:
@@ -217,8 +262,8 @@ def level(tb, left, right, lx, ly, rx, ry, plate_l, plate_r, gap, tol):
     if plate_l != NONE and plate_r != NONE:
         d_l, d_r = plate_depth(tb, plate_l, lx, ly), plate_depth(tb, plate_r, rx, ry)
     else:
-        g = tb[0]
-        uy, uz = -(g[left, 2] + g[right, 2]), -(g[left, 3] + g[right, 3])
+        g = tb.geo
+        uy, uz = -(g[left, UY] + g[right, UY]), -(g[left, UZ] + g[right, UZ])
         if uz > 0:
             uy, uz = -uy, -uz
         norm = max(math.hypot(uy, uz), 1e-300)
@@ -233,16 +278,14 @@ def _inert(tb, k, left, right, plate, min_points):
     if _flat_dot(tb, k, plate) <= COS_WALL:
         return True
     return (
-        tb[1][k, 1] >= 2 * min_points
+        tb.span[k, COUNT] >= 2 * min_points
         and abs(dot_dir(tb, k, left)) < COS_ARM
         and abs(dot_dir(tb, k, right)) < COS_ARM
     )
 
 
 @numba.njit(cache=True, nogil=True)
-def tip_filled(
-    points, surface, tb, n, left, right, lx, lz, rx, rz, ax, az, plate, min_points, tol, spacing
-):
+def tip_filled(points, surface, tb, n, bevels, ends, plate, min_points, tol, spacing):
     """Whether surface points fill the V's tip below the bevels' lower ends: the triangle of
     the two lower ends and the apex (grown by a tolerance), away from the lower ends (root
     faces start there). Under a gap the tip is open air; there the bevels go on (cut up by
@@ -250,6 +293,8 @@ def tip_filled(
     pieces that are no part of a bevel (a reflection, a backing) do not count. Only read
     when the apex lies more than three tolerances below the lower ends (else noise fills
     any tip)."""
+    left, right, ax, az = bevels
+    lx, lz, rx, rz = ends
     cy, cz = rx - lx, rz - lz
     length = math.hypot(cy, cz)
     if length <= 0:
@@ -260,13 +305,13 @@ def tip_filled(
     keep = np.empty(surface.shape[0], dtype=np.bool_)
     for i in range(keep.shape[0]):
         keep[i] = surface[i]
-    span, pool = tb[1], tb[2]
+    span, pool = tb.span, tb.index
     for k in range(n):
         if _inert(tb, k, left, right, plate, min_points):
-            for q in range(span[k, 0], span[k, 0] + span[k, 1]):
+            for q in range(span[k, START], span[k, START] + span[k, COUNT]):
                 keep[pool[q]] = False
     for r in (left, right):
-        for q in range(span[r, 0], span[r, 0] + span[r, 1]):
+        for q in range(span[r, START], span[r, START] + span[r, COUNT]):
             keep[pool[q]] = False
     ty, tz, my, mz = np.empty(3), np.empty(3), np.empty(3), np.empty(3)
     ty[0], ty[1], ty[2], tz[0], tz[1], tz[2] = lx, rx, ax, lz, rz, az
@@ -305,7 +350,7 @@ def covered_between(points, columns, runs, tb, n, left, right, plate, min_points
     if width <= 0:
         return 0.0
     keep = np.ones(hi - lo - 1, dtype=np.bool_)
-    span, pool = tb[1], tb[2]
+    span, pool = tb.span, tb.index
     starts = runs[:-1]
     for k in range(n):
         fst, lst = first(tb, k), last(tb, k)
@@ -316,7 +361,7 @@ def covered_between(points, columns, runs, tb, n, left, right, plate, min_points
             j += 1
         cut_off = 0 <= j < starts.shape[0] and fst - starts[j] <= 3 and runs[j + 1] - 1 - lst <= 3
         if cut_off or _inert(tb, k, left, right, plate, min_points):
-            for q in range(span[k, 0], span[k, 0] + span[k, 1]):
+            for q in range(span[k, START], span[k, START] + span[k, COUNT]):
                 if lo < pool[q] < hi:
                     keep[pool[q] - lo - 1] = False
     hit = np.zeros(width, dtype=np.bool_)
@@ -335,12 +380,13 @@ def covered_between(points, columns, runs, tb, n, left, right, plate, min_points
 
 
 @numba.njit(cache=True, nogil=True)
-def bridged(tb, n, left, right, lx, lz, rx, rz, plate, min_points, tol, spacing):
+def bridged(tb, n, bevels, ends, plate, min_points, tol, spacing):
     """Whether a piece between the bevels that is no wall (steep on ``plate``) runs from one
     root end to the other: the "gap" between them is a surface."""
-    lo, hi = last(tb, left), first(tb, right)
+    lx, lz, rx, rz = ends
+    lo, hi = last(tb, bevels.left), first(tb, bevels.right)
     for k in range(n):
-        if tb[1][k, 1] < min_points or first(tb, k) <= lo or last(tb, k) >= hi:
+        if tb.span[k, COUNT] < min_points or first(tb, k) <= lo or last(tb, k) >= hi:
             continue
         if _flat_dot(tb, k, plate) <= COS_WALL:
             continue
@@ -361,14 +407,8 @@ def gap_seen(
     runs,
     tb,
     n,
-    left,
-    right,
-    lx,
-    lz,
-    rx,
-    rz,
-    ax,
-    az,
+    bevels,
+    ends,
     plate_l,
     plate_r,
     gap,
@@ -382,9 +422,9 @@ def gap_seen(
     other), no detour lies between them (a surface continuing across spikes), the V's tip
     below them is empty and the columns between them are open (the laser falls through the
     gap). Otherwise the bevels end where spikes, dropouts or a fill take over."""
-    if not covered and not level(tb, left, right, lx, lz, rx, rz, plate_l, plate_r, gap, tol):
+    if not covered and not level(tb, bevels, ends, plate_l, plate_r, gap, tol):
         return False
-    lo, hi = last(tb, left), first(tb, right)
+    lo, hi = last(tb, bevels.left), first(tb, bevels.right)
     m = points.shape[0]
     if stray.shape[0] == m:
         detour = 0
@@ -392,23 +432,7 @@ def gap_seen(
             detour += stray[i]
         if detour >= 3:
             return False  # a detour between them: a surface goes on across it, no gap
-    if tip_filled(
-        points,
-        surface,
-        tb,
-        n,
-        left,
-        right,
-        lx,
-        lz,
-        rx,
-        rz,
-        ax,
-        az,
-        plate_l,
-        min_points,
-        tol,
-        spacing,
-    ):
+    if tip_filled(points, surface, tb, n, bevels, ends, plate_l, min_points, tol, spacing):
         return False
+    left, right = bevels.left, bevels.right
     return covered_between(points, columns, runs, tb, n, left, right, plate_l, min_points) < 0.5

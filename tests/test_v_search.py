@@ -1,4 +1,4 @@
-"""The V search's compiled line table (seamtrack.features.vkernels) against the Python geometry
+"""The V search's compiled line table (seamtrack.features._v_search) against the Python geometry
 it replaces in the V extractors (seamtrack.features.lines: collinear_groups, corner_with,
 Line.step and Line.end), on synthetic profiles of every joint with noise, outliers, dropouts,
 false reflections and tacks."""
@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from seamtrack.features import vkernels
+from seamtrack.features import _v_search as vs
 from seamtrack.features.lines import Line, Segments, collinear_groups, corner_with, segment_profile
 from seamtrack.features.synthetic import Imperfections, synthetic_profile
 from seamtrack.sensing.sensor import preset
@@ -31,14 +31,19 @@ def _segments(joint: str, seed: int) -> Segments:
     return seg
 
 
-def _table(seg: Segments) -> tuple[np.ndarray, ...]:
-    return vkernels.new_table(*vkernels.flat_lines(seg.lines))
+def _table(seg: Segments) -> vs.LineTable:
+    return vs.new_table(vs.flat_lines(seg.lines))
 
 
-def _line(tb: tuple[np.ndarray, ...], r: int) -> Line:
-    geo, span, pool_index, pool_t, _ = tb
-    a, c = span[r]
-    return Line(pool_index[a : a + c], geo[r, 0:2], geo[r, 2:4], pool_t[a : a + c], geo[r, 4])
+def _line(tb: vs.LineTable, r: int) -> Line:
+    a, c = tb.span[r, vs.START], tb.span[r, vs.COUNT]
+    return Line(
+        tb.index[a : a + c],
+        tb.geo[r, vs.CY : vs.CZ + 1],
+        tb.geo[r, vs.UY : vs.UZ + 1],
+        tb.along[a : a + c],
+        tb.geo[r, vs.RMS],
+    )
 
 
 @pytest.mark.parametrize("joint", _JOINTS)
@@ -49,7 +54,7 @@ def test_groups_equal_collinear_groups(joint: str, seed: int) -> None:
     seg = _segments(joint, seed)
     expected = [g for g in collinear_groups(seg) if g.count >= 8 and g.extent >= 0.5]
     tb = _table(seg)
-    records = vkernels.groups_of(seg.points, tb, len(seg.lines), seg.tol, 8, 0.5)
+    records = vs.groups_of(seg.points, tb, len(seg.lines), seg.tol, 8, 0.5)
     assert len(records) == len(expected)
     for r, g in zip(records, expected, strict=True):
         line = _line(tb, int(r))
@@ -70,7 +75,7 @@ def test_corner_with_equals_lines_corner_with(joint: str, seed: int) -> None:
     for k, line in enumerate(seg.lines):
         for at_end in (False, True):
             point, met = corner_with(line, at_end, seg.lines, seg)
-            y, z, r = vkernels.corner_with(tb, k, at_end, others, seg.spacing, seg.tol)
-            assert r == next((i for i, ln in enumerate(seg.lines) if ln is met), -1)
-            np.testing.assert_allclose([y, z], point, rtol=0, atol=1e-12)
-            np.testing.assert_allclose(vkernels.end(tb, k, at_end), line.end(at_end), atol=1e-12)
+            corner = vs.corner_with(tb, k, at_end, others, seg.spacing, seg.tol)
+            assert corner.line == next((i for i, ln in enumerate(seg.lines) if ln is met), -1)
+            np.testing.assert_allclose([corner.y, corner.z], point, rtol=0, atol=1e-12)
+            np.testing.assert_allclose(vs.end(tb, k, at_end), line.end(at_end), atol=1e-12)

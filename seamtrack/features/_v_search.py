@@ -1,17 +1,15 @@
-"""Compiled line geometry of the V searches: a profile's pieces as a table of flat arrays, their
-collinear groups, the V (or ridge) pair search and the corners where lines meet.
+"""The V search, compiled: a profile's pieces as a table of lines (:class:`LineTable`), their
+collinear groups (:func:`groups_of`), the best pair of lines forming a V or a ridge
+(:func:`best_pair`), and the corners where lines meet (:func:`corner_with`); :func:`search`
+runs the search's steps in order, for the corner extractors (``_Base._arms``) and the V-groove
+model (:mod:`seamtrack.features._v_groove_model`).
 
 The family extractors' Python formulation made a handful of numpy calls on 2-vectors per line
 and per pair, where each call costs more than the arithmetic; here the same tests run on
 scalars, in the same order and with the same floating-point operations, so results do not
 change. Every line (a piece of :func:`~seamtrack.features.lines.segment_profile`, a group
-refitted on the union of its pieces, an arm cut short at its apex) is a record of a table:
-
-- ``geo[r]``: centroid y, z, unit direction y, z and rms residual;
-- ``span[r]``: where its inliers start in the pool and how many there are;
-- ``pool_index``, ``pool_t``: the inliers' positions in the kept points and their coordinates
-  along the line, record after record;
-- ``state``: records and pool entries in use.
+refitted on the union of its pieces, an arm cut short at its apex) is a record of a
+:class:`LineTable`.
 
 Records ``0..n-1`` are the profile's pieces in column order; a record's number is its identity
 (a single piece's group is the piece itself, as in the Python code).
@@ -22,14 +20,23 @@ Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groov
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, NamedTuple
 
 import numba
 import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.features.counts import explained_share, support
-from seamtrack.features.kernels import fit_line
+from seamtrack.features.kernels import (
+    FIT_CY,
+    FIT_CZ,
+    FIT_RMS,
+    FIT_UY,
+    FIT_UZ,
+    PieceTable,
+    fit_line,
+)
+from seamtrack.features.select import sort_small
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -41,18 +48,87 @@ COS_GROUP = math.cos(math.radians(30.0))
 COS_CORNER = math.cos(math.radians(20.0))
 #: A record that is no line.
 NONE = -1
+#: The columns of :attr:`LineTable.geo`.
+CY, CZ, UY, UZ, RMS = range(5)
+#: The columns of :attr:`LineTable.span`.
+START, COUNT = range(2)
+
+
+class LineTable(NamedTuple):
+    """The lines of a V search, one record each (a record's number is its identity).
+
+    ``geo[r]``: centroid y, z, unit direction y, z and rms residual (columns :data:`CY` ..
+    :data:`RMS`); ``span[r]``: where its inliers start in ``index``/``along`` and how many
+    there are (:data:`START`, :data:`COUNT`); ``index``, ``along``: the inliers' positions
+    in the kept points and their coordinates along the line, record after record;
+    ``used``: records and pool entries in use.
+    """
+
+    geo: FloatArray
+    span: IntArray
+    index: IntArray  # type: ignore[assignment]  # a field, over tuple.index
+    along: FloatArray
+    used: IntArray
+
+
+class Point(NamedTuple):
+    """A point of the laser plane (y, z; mm)."""
+
+    y: float
+    z: float
+
+
+class Corner(NamedTuple):
+    """Where a line ends (y, z) and the record it meets there (:data:`NONE`: none)."""
+
+    y: float
+    z: float
+    line: int
+
+
+class VPair(NamedTuple):
+    """The best pair of lines forming a V or a ridge: the left and right arms (records, cut
+    short at the apex; :data:`NONE`: no pair), the apex (y, z) and the pair's support."""
+
+    left: int
+    right: int
+    apex_y: float
+    apex_z: float
+    score: float
+
+
+class SearchParams(NamedTuple):
+    """What the V search looks for: ``sign`` -1 a V opening towards the sensor, +1 a ridge;
+    the included angle's range (deg); the farthest an arm may stop short of the apex (mm);
+    pieces in no group as arms too; the fewest inliers and the shortest extent (mm) of an
+    arm."""
+
+    sign: float
+    min_deg: float
+    max_deg: float
+    max_reach: float
+    pieces_too: bool
+    min_points: int
+    min_arm: float
+
+
+class Search(NamedTuple):
+    """The V search on a profile's pieces (:func:`search`): its table of lines (the pieces
+    ``0..n-1``, then the groups and the arms cut short), the groups (records), each kept
+    point's piece (-1: none), the surface points (not in a detour) and the best pair."""
+
+    table: LineTable
+    groups: IntArray
+    owner: IntArray
+    surface: NDArray[np.bool_]
+    pair: VPair
 
 
 @numba.njit(cache=True, nogil=True)
-def new_table(
-    index: IntArray,
-    along: FloatArray,
-    centroids: FloatArray,
-    directions: FloatArray,
-    fits: FloatArray,
-) -> tuple[FloatArray, IntArray, IntArray, FloatArray, IntArray]:
-    """The table of a profile's ``n`` pieces (see :func:`flat_lines`), with room for ``n``
-    groups and two arms cut short."""
+def new_table(pieces: PieceTable) -> LineTable:
+    """The table of a profile's ``n`` pieces, with room for ``n`` groups and two arms cut
+    short."""
+    index, along, fits, bounds = pieces
     n = fits.shape[0]
     total = index.shape[0]
     cap = 2 * n + 4
@@ -65,14 +141,14 @@ def new_table(
         pool_t[k] = along[k]
     at = 0
     for k in range(n):
-        geo[k, 0], geo[k, 1] = centroids[2 * k], centroids[2 * k + 1]
-        geo[k, 2], geo[k, 3] = directions[2 * k], directions[2 * k + 1]
-        geo[k, 4] = fits[k, 0]
-        span[k, 0], span[k, 1] = at, int(fits[k, 1])
-        at += span[k, 1]
-    state = np.zeros(2, dtype=np.int64)
-    state[0], state[1] = n, total
-    return geo, span, pool_index, pool_t, state
+        geo[k, CY], geo[k, CZ] = fits[k, FIT_CY], fits[k, FIT_CZ]
+        geo[k, UY], geo[k, UZ] = fits[k, FIT_UY], fits[k, FIT_UZ]
+        geo[k, RMS] = fits[k, FIT_RMS]
+        span[k, START], span[k, COUNT] = at, bounds[k + 1] - bounds[k]
+        at += span[k, COUNT]
+    used = np.zeros(2, dtype=np.int64)
+    used[0], used[1] = n, total
+    return LineTable(geo, span, pool_index, pool_t, used)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -95,73 +171,60 @@ def explained_of(
 
 
 @numba.njit(cache=True, nogil=True)
-def owners(owner, span, pool, n):
+def owners(owner, tb, n):
     """Each kept point's piece (-1: none) into ``owner``."""
+    span, pool = tb.span, tb.index
     for i in range(owner.shape[0]):
         owner[i] = -1
     for k in range(n):
-        for q in range(span[k, 0], span[k, 0] + span[k, 1]):
+        for q in range(span[k, START], span[k, START] + span[k, COUNT]):
             owner[pool[q]] = k
-
-
-@numba.njit(cache=True, nogil=True)
-def sort_small(x):
-    """Sort ``x`` in place by insertion (stable; few values, or runs already in order: the
-    generic sorts cost seconds of compile time for nothing here)."""
-    for i in range(1, x.shape[0]):
-        v = x[i]
-        j = i - 1
-        while j >= 0 and x[j] > v:
-            x[j + 1] = x[j]
-            j -= 1
-        x[j + 1] = v
-    return x
 
 
 @numba.njit(cache=True, nogil=True)
 def add_fit(points, tb, sel):
     """A new record: the total-least-squares line through ``points[sel]`` (as
     :func:`~seamtrack.features.lines._fit`)."""
-    geo, span, pool_index, pool_t, state = tb
-    r, a, n = state[0], state[1], sel.shape[0]
-    cy, cz, uy, uz, rms, t = fit_line(points, sel)
-    geo[r, 0], geo[r, 1], geo[r, 2], geo[r, 3], geo[r, 4] = cy, cz, uy, uz, rms
-    span[r, 0], span[r, 1] = a, n
+    geo, span, index, along, used = tb
+    r, a, n = used[0], used[1], sel.shape[0]
+    f = fit_line(points, sel)
+    geo[r, CY], geo[r, CZ], geo[r, UY], geo[r, UZ], geo[r, RMS] = f.cy, f.cz, f.uy, f.uz, f.rms
+    span[r, START], span[r, COUNT] = a, n
     for k in range(n):
-        pool_index[a + k] = sel[k]
-        pool_t[a + k] = t[k]
-    state[0] = r + 1
-    state[1] = a + n
+        index[a + k] = sel[k]
+        along[a + k] = f.along[k]
+    used[0] = r + 1
+    used[1] = a + n
     return r
 
 
 @numba.njit(cache=True, nogil=True)
 def first(tb, r):
     """Position of record ``r``'s first inlier."""
-    return tb[2][tb[1][r, 0]]
+    return tb.index[tb.span[r, START]]
 
 
 @numba.njit(cache=True, nogil=True)
 def last(tb, r):
     """Position of record ``r``'s last inlier."""
-    return tb[2][tb[1][r, 0] + tb[1][r, 1] - 1]
+    return tb.index[tb.span[r, START] + tb.span[r, COUNT] - 1]
 
 
 @numba.njit(cache=True, nogil=True)
 def t_end(tb, r, at_end):
     """Coordinate of record ``r``'s last (``at_end``) or first inlier along it."""
-    a, c = tb[1][r, 0], tb[1][r, 1]
-    return tb[3][a + c - 1] if at_end else tb[3][a]
+    a, c = tb.span[r, START], tb.span[r, COUNT]
+    return tb.along[a + c - 1] if at_end else tb.along[a]
 
 
 @numba.njit(cache=True, nogil=True)
 def step(tb, r, at_end):
     """As ``Line.step``: mean spacing of the last (first) ten inliers along the line."""
-    a, c = tb[1][r, 0], tb[1][r, 1]
+    a, c = tb.span[r, START], tb.span[r, COUNT]
     k = min(10, c - 1)
     if k < 1:
         return 0.0
-    t = tb[3]
+    t = tb.along
     if at_end:
         return abs(t[a + c - 1] - t[a + c - 1 - k]) / k
     return abs(t[a + k] - t[a]) / k
@@ -170,8 +233,8 @@ def step(tb, r, at_end):
 @numba.njit(cache=True, nogil=True)
 def point(tb, r, t):
     """As ``Line.point``: the point at coordinate ``t`` along record ``r``."""
-    g = tb[0]
-    return g[r, 0] + t * g[r, 2], g[r, 1] + t * g[r, 3]
+    g = tb.geo
+    return Point(g[r, CY] + t * g[r, UY], g[r, CZ] + t * g[r, UZ])
 
 
 @numba.njit(cache=True, nogil=True)
@@ -185,8 +248,8 @@ def end(tb, r, at_end):
 @numba.njit(cache=True, nogil=True)
 def dot_dir(tb, r, s):
     """``r.direction @ s.direction``."""
-    g = tb[0]
-    return g[r, 2] * g[s, 2] + g[r, 3] * g[s, 3]
+    g = tb.geo
+    return g[r, UY] * g[s, UY] + g[r, UZ] * g[s, UZ]
 
 
 @numba.njit(cache=True, nogil=True)
@@ -204,15 +267,15 @@ def pmin(a, b):
 @numba.njit(cache=True, nogil=True)
 def contains(tb, r, i):
     """Whether kept point ``i`` is an inlier of record ``r`` (sorted inliers)."""
-    pool = tb[2]
-    lo, hi = tb[1][r, 0], tb[1][r, 0] + tb[1][r, 1]
+    pool = tb.index
+    lo, hi = tb.span[r, START], tb.span[r, START] + tb.span[r, COUNT]
     while lo < hi:  # np.searchsorted (left)
         mid = (lo + hi) // 2
         if pool[mid] < i:
             lo = mid + 1
         else:
             hi = mid
-    return lo < tb[1][r, 0] + tb[1][r, 1] and pool[lo] == i
+    return lo < tb.span[r, START] + tb.span[r, COUNT] and pool[lo] == i
 
 
 @numba.njit(cache=True, nogil=True)
@@ -220,11 +283,11 @@ def groups_of(points, tb, n, tol, min_points, min_arm):
     """The collinear groups (as :func:`~seamtrack.features.lines.collinear_groups`, refitted
     on the union
     of their pieces) with at least ``min_points`` inliers over ``min_arm`` (mm), as records."""
-    geo, span = tb[0], tb[1]
+    geo, span = tb.geo, tb.span
     order = np.empty(n, dtype=np.int64)  # by count, largest first, stable (as sorted())
     for i in range(n):
         j = i - 1
-        while j >= 0 and span[order[j], 1] < span[i, 1]:
+        while j >= 0 and span[order[j], 1] < span[i, COUNT]:
             order[j + 1] = order[j]
             j -= 1
         order[j + 1] = i
@@ -233,13 +296,13 @@ def groups_of(points, tb, n, tol, min_points, min_arm):
     member = np.empty(n, dtype=np.int64)
     groups = 0
     for i in order:
-        cy, cz, dy, dz = geo[i, 0], geo[i, 1], geo[i, 2], geo[i, 3]
+        cy, cz, dy, dz = geo[i, CY], geo[i, CZ], geo[i, UY], geo[i, UZ]
         t0, t1 = t_end(tb, i, False), t_end(tb, i, True)
         e0y, e0z, e1y, e1z = cy + t0 * dy, cz + t0 * dz, cy + t1 * dy, cz + t1 * dz
         joined = -1
         for k in range(groups):
             a = anchor[k]
-            ay, az, ady, adz = geo[a, 0], geo[a, 1], geo[a, 2], geo[a, 3]
+            ay, az, ady, adz = geo[a, CY], geo[a, CZ], geo[a, UY], geo[a, UZ]
             if (
                 abs(ady * dy + adz * dz) >= COS_GROUP
                 and abs((e0y - ay) * -adz + (e0z - az) * ady) <= tol
@@ -262,17 +325,17 @@ def groups_of(points, tb, n, tol, min_points, min_arm):
             total = 0
             for i in range(n):
                 if member[i] == k:
-                    total += span[i, 1]
+                    total += span[i, COUNT]
             sel = np.empty(total, dtype=np.int64)
             at = 0
             for i in range(n):
                 if member[i] == k:
-                    a, c = span[i, 0], span[i, 1]
+                    a, c = span[i, START], span[i, COUNT]
                     for q in range(c):
-                        sel[at + q] = tb[2][a + q]
+                        sel[at + q] = tb.index[a + q]
                     at += c
             r = add_fit(points, tb, sort_small(sel))  # pieces in column order: sorted
-        c = span[r, 1]
+        c = span[r, COUNT]
         extent = t_end(tb, r, True) - t_end(tb, r, False) if c else 0.0
         if c >= min_points and extent >= min_arm:
             out[kept] = r
@@ -287,8 +350,8 @@ def _reach(points, tb, g, xy, xz, vy, vz, tol, owner, mark):
     or a bevel's own piece rounding into the root, but none by more than three tolerances
     when its piece also lies ahead (a piece that runs on through the apex crosses the other
     arm: no V there, -inf). ``mark``: (n + 1,) False, scratch, left False."""
-    a, c = tb[1][g, 0], tb[1][g, 1]
-    pool = tb[2]
+    a, c = tb.span[g, START], tb.span[g, COUNT]
+    pool = tb.index
     over = 0
     t_min, t_ahead = np.inf, np.inf
     for k in range(a, a + c):
@@ -320,14 +383,14 @@ def _reach(points, tb, g, xy, xz, vy, vz, tol, owner, mark):
 def _short_of(points, tb, r, xy, xz, tol):
     """Record ``r`` without the inliers that lie past the apex (more than a tolerance): the
     arm of a V ends at its apex (a new record, refitted; ``r`` when none or all but one)."""
-    geo, span = tb[0], tb[1]
-    vy, vz = geo[r, 0] - xy, geo[r, 1] - xz
+    geo, span = tb.geo, tb.span
+    vy, vz = geo[r, CY] - xy, geo[r, CZ] - xz
     floor = -tol * math.hypot(vy, vz)
-    a, c = span[r, 0], span[r, 1]
+    a, c = span[r, START], span[r, COUNT]
     keep = np.empty(c, dtype=np.bool_)
     kept = 0
     for k in range(c):
-        i = tb[2][a + k]
+        i = tb.index[a + k]
         keep[k] = (points[i, 0] - xy) * vy + (points[i, 1] - xz) * vz >= floor
         kept += keep[k]
     if kept == c or kept < 2:
@@ -336,32 +399,24 @@ def _short_of(points, tb, r, xy, xz, tol):
     kept = 0
     for k in range(c):
         if keep[k]:
-            sel[kept] = tb[2][a + k]
+            sel[kept] = tb.index[a + k]
             kept += 1
     return add_fit(points, tb, sel)
 
 
 @numba.njit(cache=True, nogil=True)
-def arms(
-    points,
-    surface,
-    owner,
-    tb,
-    groups,
-    n,
-    sign,
-    min_deg,
-    max_deg,
-    max_reach,
-    tol,
-    pieces_too,
-    min_points,
-    min_arm,
-):
-    """``_Base._arms``: the best pair of records forming a V (``sign`` -1: opening towards the
-    sensor) or a ridge (+1): (left, right, apex y, z, score), the arms cut short at the apex;
-    left -1 when no pair does."""
-    geo = tb[0]
+def best_pair(points, surface, owner, tb, groups, n, tol, params):
+    """``_Base._arms``: the best pair of records forming a V (``params.sign`` -1: opening
+    towards the sensor) or a ridge (+1), the arms cut short at the apex (:class:`VPair`;
+    left :data:`NONE` when no pair does)."""
+    sign, min_deg, max_deg, max_reach = (
+        params.sign,
+        params.min_deg,
+        params.max_deg,
+        params.max_reach,
+    )
+    pieces_too, min_points, min_arm = params.pieces_too, params.min_points, params.min_arm
+    geo = tb.geo
     cand = groups
     if pieces_too:
         extra = np.empty(n, dtype=np.int64)
@@ -370,7 +425,7 @@ def arms(
             grouped = False
             for r in groups:
                 grouped = grouped or r == k
-            c = tb[1][k, 1]
+            c = tb.span[k, COUNT]
             if grouped:
                 continue
             if c >= min_points and t_end(tb, k, True) - t_end(tb, k, False) >= min_arm:
@@ -387,10 +442,10 @@ def arms(
     g = cand.shape[0]
     for i in range(g):
         a = cand[i]
-        ay, az, ady, adz = geo[a, 0], geo[a, 1], geo[a, 2], geo[a, 3]
+        ay, az, ady, adz = geo[a, CY], geo[a, CZ], geo[a, UY], geo[a, UZ]
         for j in range(i + 1, g):
             b = cand[j]
-            by, bz, bdy, bdz = geo[b, 0], geo[b, 1], geo[b, 2], geo[b, 3]
+            by, bz, bdy, bdz = geo[b, CY], geo[b, CZ], geo[b, UY], geo[b, UZ]
             d = ady * bdz - adz * bdy
             if abs(d) < 1e-9:
                 continue  # parallel: no apex
@@ -419,26 +474,27 @@ def arms(
                 continue
             score = 0.0
             for r, vy, vz in ((ga, uy, uz), (gb, wy, wz)):
-                gy, gz, gdy, gdz = geo[r, 0], geo[r, 1], geo[r, 2], geo[r, 3]
+                gy, gz, gdy, gdz = geo[r, CY], geo[r, CZ], geo[r, UY], geo[r, UZ]
                 side = 1.0 if vy * gdy + vz * gdz > 0 else -1.0
                 x_u = xy * gdy + xz * gdz
                 score += support(points, surface, gy, gz, gdy, gdz, band, x_u, side, tol)
             if best_a == NONE or score > best_score:
                 best_a, best_b, best_y, best_z, best_score = ga, gb, xy, xz, score
     if best_a == NONE:
-        return NONE, NONE, 0.0, 0.0, 0.0
+        return VPair(NONE, NONE, 0.0, 0.0, 0.0)
     left = _short_of(points, tb, best_a, best_y, best_z, tol)
     right = _short_of(points, tb, best_b, best_y, best_z, tol)
-    return left, right, best_y, best_z, best_score
+    return VPair(left, right, best_y, best_z, best_score)
 
 
 @numba.njit(cache=True, nogil=True)
 def corner_with(tb, line, at_end, others, spacing, tol):
     """As :func:`~seamtrack.features.lines.corner_with`: where record ``line`` ends and the
     record of ``others`` it meets
-    there (y, z, record; -1: none, the end half a spacing beyond the last inlier)."""
-    geo = tb[0]
-    cy, cz, dy, dz = geo[line, 0], geo[line, 1], geo[line, 2], geo[line, 3]
+    there (:class:`Corner`; :data:`NONE`: none, the end half a spacing beyond the last
+    inlier)."""
+    geo = tb.geo
+    cy, cz, dy, dz = geo[line, CY], geo[line, CZ], geo[line, UY], geo[line, UZ]
     t_tip = t_end(tb, line, at_end)
     tip_y, tip_z = cy + t_tip * dy, cz + t_tip * dz
     reach = 3.0 * pmax(step(tb, line, at_end), spacing) + tol
@@ -446,7 +502,7 @@ def corner_with(tb, line, at_end, others, spacing, tol):
     for other in others:
         if other == line:
             continue
-        ocy, ocz, ody, odz = geo[other, 0], geo[other, 1], geo[other, 2], geo[other, 3]
+        ocy, ocz, ody, odz = geo[other, CY], geo[other, CZ], geo[other, UY], geo[other, UZ]
         if abs(dy * ody + dz * odz) > COS_CORNER:
             continue  # within 20 deg: no corner
         det = dy * odz - dz * ody
@@ -467,79 +523,48 @@ def corner_with(tb, line, at_end, others, spacing, tol):
             best, best_d, best_y, best_z = other, d, xy, xz
     if best == NONE:
         best_y, best_z = end(tb, line, at_end)
-    return best_y, best_z, best
+    return Corner(best_y, best_z, best)
 
 
 @numba.njit(cache=True, nogil=True)
-def arm_pair(points, stray, tol, index, along, centroids, directions, fits, params):
-    """``_Base._arms`` on the profile's pieces (:func:`flat_lines`: ``index`` .. ``fits``):
-    the groups, then the best pair (left, right, apex y, z, score; left -1: none) and the
-    table of lines that holds them. ``params``: sign (-1: a V, 1: a ridge), min and max
-    included angle (deg), max reach (mm), pieces as arms (0/1), min points, min arm (mm)."""
-    sign, min_deg, max_deg, max_reach = params[0], params[1], params[2], params[3]
-    pieces_too, min_points, min_arm = params[4] != 0, int(params[5]), params[6]
-    tb = new_table(index, along, centroids, directions, fits)
-    n = fits.shape[0]
+def search(points, stray, tol, pieces, params):
+    """The V search on a profile's pieces (:class:`~seamtrack.features.kernels.PieceTable`),
+    in its steps: the table of lines, each point's piece, the collinear groups, the best
+    pair (:class:`Search`)."""
+    tb = new_table(pieces)
+    n = pieces.fits.shape[0]
     m = points.shape[0]
     surface = surface_of(stray, m)
     owner = np.empty(m, dtype=np.int64)  # each point's piece
-    span, pool = tb[1], tb[2]
-    owners(owner, span, pool, n)
-    groups = groups_of(points, tb, n, tol, min_points, min_arm)
-    left, right, y, z, score = arms(
-        points,
-        surface,
-        owner,
-        tb,
-        groups,
-        n,
-        sign,
-        min_deg,
-        max_deg,
-        max_reach,
-        tol,
-        pieces_too,
-        min_points,
-        min_arm,
+    owners(owner, tb, n)
+    groups = groups_of(points, tb, n, tol, params.min_points, params.min_arm)
+    pair = best_pair(points, surface, owner, tb, groups, n, tol, params)
+    return Search(tb, groups, owner, surface, pair)
+
+
+def pieces_of(seg: Any) -> PieceTable:
+    """The :class:`~seamtrack.features.kernels.PieceTable` of a
+    :class:`~seamtrack.features.lines.Segments`: the one segmentation left (``seg.table``),
+    else built from its lines."""
+    if seg.table is not None:
+        return seg.table
+    return flat_lines(seg.lines)
+
+
+def flat_lines(lines: list[Any]) -> PieceTable:
+    """A profile's pieces (:class:`~seamtrack.features.lines.Line`, at least one) as a
+    :class:`~seamtrack.features.kernels.PieceTable`."""
+    counts = [len(ln.index) for ln in lines]
+    fits = np.array(
+        [
+            (*ln.centroid.tolist(), *ln.direction.tolist(), ln.rms, ln.t[0], ln.t[-1])
+            for ln in lines
+        ],
+        dtype=np.float64,
     )
-    return left, right, y, z, score, tb
-
-
-def pieces_of(seg: Any) -> tuple[IntArray, FloatArray, FloatArray, FloatArray, FloatArray]:
-    """:func:`flat_lines` of a :class:`~seamtrack.features.lines.Segments`' pieces, from the
-    arrays segmentation left (``seg.table``) when it has them."""
-    if seg.table is None:
-        return flat_lines(seg.lines)
-    index, along, fits, bounds = seg.table
-    counts = np.diff(bounds)
-    return (
-        index,
-        along,
-        fits[:, 0:2].ravel(),
-        fits[:, 2:4].ravel(),
-        np.column_stack((fits[:, 4], counts)),
-    )
-
-
-def flat_lines(
-    lines: list[Any],
-) -> tuple[IntArray, FloatArray, FloatArray, FloatArray, FloatArray]:
-    """A profile's pieces (:class:`~seamtrack.features.lines.Line`, at least one) as flat
-    arrays: inliers' positions and coordinates, piece after piece; centroids and directions
-    (y, z per piece); rms residual and inlier count per piece."""
-    index, along, centroids, directions, fits = [], [], [], [], []
-    for ln in lines:
-        index.append(ln.index)
-        along.append(ln.t)
-        centroids.append(ln.centroid)
-        directions.append(ln.direction)
-        fits.append((ln.rms, len(ln.index)))
-    geo = np.concatenate(centroids + directions)  # one call for both
-    n = 2 * len(lines)
-    return (
-        np.concatenate(index),
-        np.concatenate(along),
-        geo[:n],
-        geo[n:],
-        np.array(fits, dtype=np.float64),
+    return PieceTable(
+        np.concatenate([ln.index for ln in lines]).astype(np.intp),
+        np.concatenate([ln.t for ln in lines]),
+        fits.reshape(-1, 7),
+        np.concatenate([[0], np.cumsum(counts)]).astype(np.intp),
     )

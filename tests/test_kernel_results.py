@@ -1,0 +1,208 @@
+"""The compiled kernels of the segmentation and the V-groove side of seamtrack.features return
+named results and are read by name (issue 24): a kernel that returns several values returns a
+numba named tuple, never a bare tuple or an array of mixed results (``out[12]``); no caller
+reads a kernel's result by position or compares a code with a bare number.
+
+Two independent checks: the kernels' source (every return of every ``numba.njit`` function,
+and every read of a kernel's result in these modules), and the compiled dispatchers' return
+types once the extractors have run.
+"""
+
+from __future__ import annotations
+
+import ast
+import importlib
+import inspect
+from pathlib import Path
+
+import numba
+import numpy as np
+import pytest
+from numba.core import types
+
+from seamtrack.features.extractors import BUILTIN, extractor
+from seamtrack.features.synthetic import Imperfections, synthetic_profile
+from seamtrack.sensing.sensor import preset
+
+#: The modules whose kernels this file holds to the rule (the two-plate side's join when
+#: they are converted: pkernels, psheets, plates, generic).
+MODULES = (
+    "seamtrack.features.select",
+    "seamtrack.features.counts",
+    "seamtrack.features.robust",
+    "seamtrack.features.kernels",
+    "seamtrack.features.lines",
+    "seamtrack.features._v_search",
+    "seamtrack.features._v_root",
+    "seamtrack.features._v_groove_model",
+    "seamtrack.features.vgroove",
+    "seamtrack.features.base",
+    "seamtrack.features.extractors",
+    "seamtrack.features.classify",
+)
+
+
+def _tree(name: str) -> ast.Module:
+    module = importlib.import_module(name)
+    return ast.parse(Path(inspect.getfile(module)).read_text())
+
+
+def _is_njit(fn: ast.FunctionDef) -> bool:
+    return any("njit" in ast.unparse(d) for d in fn.decorator_list)
+
+
+def _kernels(tree: ast.Module) -> list[ast.FunctionDef]:
+    return [n for n in tree.body if isinstance(n, ast.FunctionDef) and _is_njit(n)]
+
+
+def _bare(value: ast.expr | None) -> bool:
+    """A bare tuple display, in either branch of a conditional expression."""
+    if isinstance(value, ast.Tuple):
+        return True
+    if isinstance(value, ast.IfExp):
+        return _bare(value.body) or _bare(value.orelse)
+    return False
+
+
+def _mixed_arrays(fn: ast.FunctionDef) -> set[str]:
+    """Names written at two or more distinct constant positions (``out[0] = ...``,
+    ``out[12] = ...``): an array of mixed results."""
+    writes: dict[str, set[object]] = {}
+    for node in ast.walk(fn):
+        targets: list[ast.expr] = []
+        if isinstance(node, ast.Assign):
+            for t in node.targets:
+                targets += t.elts if isinstance(t, ast.Tuple) else [t]
+        for t in targets:
+            if (
+                isinstance(t, ast.Subscript)
+                and isinstance(t.value, ast.Name)
+                and isinstance(t.slice, ast.Constant)
+                and isinstance(t.slice.value, int)
+            ):
+                writes.setdefault(t.value.id, set()).add(t.slice.value)
+    return {k for k, v in writes.items() if len(v) >= 2}
+
+
+@pytest.mark.parametrize("name", MODULES)
+def test_kernels_return_named_results(name: str) -> None:
+    """No compiled kernel returns a bare tuple or an array written at fixed positions."""
+    bad = []
+    for fn in _kernels(_tree(name)):
+        mixed = _mixed_arrays(fn)
+        for node in ast.walk(fn):
+            if isinstance(node, ast.Return):
+                if _bare(node.value):
+                    bad.append(f"{fn.name}: returns a bare tuple at line {node.lineno}")
+                if isinstance(node.value, ast.Name) and node.value.id in mixed:
+                    bad.append(f"{fn.name}: returns the mixed array {node.value.id!r}")
+    assert not bad, "\n".join(bad)
+
+
+def _kernel_names(name: str) -> set[str]:
+    """The names under which module ``name`` holds compiled kernels."""
+    module = importlib.import_module(name)
+    return {
+        attr
+        for attr, value in vars(module).items()
+        if isinstance(value, numba.core.registry.CPUDispatcher)
+    }
+
+
+def _fixed(index: ast.expr) -> bool:
+    """A position fixed in the source: a number, or a slice between numbers."""
+    if isinstance(index, ast.Constant):
+        return isinstance(index.value, int)
+    if isinstance(index, ast.Slice):
+        return any(isinstance(b, ast.Constant) for b in (index.lower, index.upper))
+    return False
+
+
+@pytest.mark.parametrize("name", MODULES)
+def test_kernel_results_are_read_by_name(name: str) -> None:
+    """A kernel's result is never indexed by a number (``out[12]``, ``out[1:3]``), and no
+    code is compared with a bare number (``code == 4``): named fields and constants."""
+    kernels = _kernel_names(name)
+    bad = []
+    for fn in ast.walk(_tree(name)):
+        if not isinstance(fn, ast.FunctionDef):
+            continue
+        results = set()  # names bound to a kernel's whole result
+        for node in ast.walk(fn):
+            if (
+                isinstance(node, ast.Assign)
+                and len(node.targets) == 1
+                and isinstance(node.targets[0], ast.Name)
+                and isinstance(node.value, ast.Call)
+                and isinstance(node.value.func, ast.Name)
+                and node.value.func.id in kernels
+            ):
+                results.add(node.targets[0].id)
+        for node in ast.walk(fn):
+            if isinstance(node, ast.Subscript) and _fixed(node.slice):
+                direct = isinstance(node.value, ast.Call) and (
+                    isinstance(node.value.func, ast.Name) and node.value.func.id in kernels
+                )
+                named = isinstance(node.value, ast.Name) and node.value.id in results
+                if direct or named:
+                    bad.append(f"{fn.name}: {ast.unparse(node)} (line {node.lineno})")
+            if isinstance(node, ast.Compare):
+                left = ast.unparse(node.left)
+                numbers = [
+                    c
+                    for c in node.comparators
+                    if isinstance(c, ast.Constant) and type(c.value) is int and c.value != 0
+                ]
+                if left.split(".")[-1] == "code" and numbers:
+                    bad.append(f"{fn.name}: {ast.unparse(node)} (line {node.lineno})")
+    assert not bad, "\n".join(bad)
+
+
+def test_the_check_catches_a_mixed_array() -> None:
+    """The source check flags what it is meant to flag."""
+    src = """
+@numba.njit
+def k(x):
+    out = np.empty(3)
+    out[0], out[2] = 1, x
+    return out
+
+@numba.njit
+def t(x):
+    return (x, 1) if x else (0, 0)
+"""
+    fns = _kernels(ast.parse(src))
+    assert _mixed_arrays(fns[0]) == {"out"}
+    assert _bare(next(n for n in ast.walk(fns[1]) if isinstance(n, ast.Return)).value)
+    assert _fixed(ast.parse("out[12]").body[0].value.slice)  # type: ignore[attr-defined]
+    assert _fixed(ast.parse("out[1:3]").body[0].value.slice)  # type: ignore[attr-defined]
+    assert not _fixed(ast.parse("out[k]").body[0].value.slice)  # type: ignore[attr-defined]
+
+
+def test_compiled_kernels_return_named_tuples() -> None:
+    """After every built-in extractor has run, every compiled overload of these modules'
+    kernels returns a scalar, a homogeneous array or a named tuple: no anonymous tuple."""
+    rng = np.random.default_rng(3)
+    for joint in ("v-groove", "fillet", "outside-corner", "flat"):
+        profile, _ = synthetic_profile(
+            joint, preset("paper"), rng=rng, imperfections=Imperfections(noise_mm=0.05)
+        )
+        for name in BUILTIN:
+            extractor(name)(profile)
+    seen = set()
+    bad = []
+    for name in MODULES:
+        module = importlib.import_module(name)
+        for attr, value in vars(module).items():
+            if not isinstance(value, numba.core.registry.CPUDispatcher):
+                continue
+            if value.__module__ != name:
+                continue  # imported from another module: checked there
+            for sig in value.nopython_signatures:
+                seen.add(f"{name.rsplit('.', 1)[1]}.{attr}")
+                ret = sig.return_type
+                if isinstance(ret, types.BaseTuple) and not isinstance(ret, types.BaseNamedTuple):
+                    bad.append(f"{name}.{attr} -> {ret}")
+    # the extractors' entry kernels ran (the kernels they call run inside them, compiled)
+    assert {"kernels.segment", "_v_search.search", "_v_groove_model.v_groove"} <= seen
+    assert not bad, "\n".join(bad)
