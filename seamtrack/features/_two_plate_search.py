@@ -1,0 +1,571 @@
+"""The two-plate search, compiled: the plates of a profile and the pair of runs the two-plate
+extractors (:mod:`seamtrack.features.plates`) read.
+
+:func:`two_plates` finds the plates (plate lines, runs, the square butt's test for an open
+gap between pieces of one plate line), their neighbours and the extractors' choice of the
+pair of runs in one call, on the profile's pieces held as a table of arrays (:class:`Pieces`):
+as Python on ``Line`` objects it was some hundreds of small operations per profile, most of an
+extractor's time once the segmentation is compiled. The plate lines' groups are
+:func:`seamtrack.features.lines.collinear_members`' and the runs' refits
+:func:`seamtrack.features.kernels.fit_line`'s, computed the same way; what lies between two
+runs is :func:`seamtrack.features._between_plates.hole`'s.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+from seamtrack.features._between_plates import NO_HOLE, Hole, Scale, hole
+from seamtrack.features._two_lines import (
+    Line,
+    PieceLines,
+    PieceSpans,
+    Point,
+    RunEnd,
+    line_end,
+    median,
+    piece_line,
+    share,
+    steps,
+)
+from seamtrack.features.kernels import fit_line
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+#: Kinds of run (:class:`Run`): one piece as it is, a refit of its pieces' inliers, or its
+#: pieces' inliers measured on their plate's line (a stub).
+PIECE, FIT, ON = 0, 1, 2
+
+
+class Pieces(NamedTuple):
+    """The profile's pieces as segmentation left them: ``index`` and ``along`` concatenate
+    their inliers' positions (in the kept points) and coordinates along their lines,
+    ``counts`` are their numbers of inliers, ``lines`` their lines."""
+
+    index: IntArray
+    along: FloatArray
+    counts: IntArray
+    lines: PieceLines
+
+
+class PlateLimits(NamedTuple):
+    """What the search asks of plates and pairs (the extractor's parameters): pieces of
+    ``min_points`` within ``max_tilt_deg`` of the y axis, plates spanning
+    ``min_plate_mm``, facing ends within ``max_gap_mm``; a square butt (``butt``) wants an
+    opening of ``min_opening`` and an open gap of ``min_open_mm`` (a bottom
+    ``min_bottom_mm`` behind the plates is open), a lap a step of ``min_step_mm``."""
+
+    min_points: int
+    min_plate_mm: float
+    max_tilt_deg: float
+    max_gap_mm: float
+    butt: bool
+    min_opening: float
+    min_open_mm: float
+    min_bottom_mm: float
+    min_step_mm: float
+
+
+class RunLine(NamedTuple):
+    """A run's line (:func:`_run_line`): its kind (:data:`PIECE`, :data:`FIT`, :data:`ON`),
+    the line, its rms (FIT only, else 0), its inliers and their coordinates along it."""
+
+    kind: int
+    line: Line
+    rms: float
+    inliers: IntArray
+    t: FloatArray
+
+
+class Run(NamedTuple):
+    """One of the pair of runs chosen: its kind (:data:`PIECE`, :data:`FIT`, :data:`ON`),
+    its first piece, its plate line's anchor piece, its number of inliers, its line, its rms
+    (FIT only), and where it ends facing the other run (a visible corner, else half a step
+    beyond its end inlier)."""
+
+    kind: int
+    first_piece: int
+    anchor: int
+    count: int
+    line: Line
+    rms: float
+    end: Point
+
+
+class PlatePair(NamedTuple):
+    """The pair of runs a two-plate extractor reads (``found``: a pair qualifies), ``left``
+    before ``right`` in column order; whether what lies between them is an open gap (square
+    butt only), what lies between them (:class:`~seamtrack.features._between_plates.Hole`),
+    the step from ``left`` down to ``right`` (lap only; > 0: ``right`` is deeper), and the
+    share of the surface points the two-plate model explains (each plate running on to the
+    profile's end, what lies between them left out;
+    :func:`seamtrack.features.base.explained`)."""
+
+    found: bool
+    left: Run
+    right: Run
+    is_open: bool
+    hole: Hole
+    step: float
+    share: float
+
+
+_NO_RUN = Run(-1, -1, -1, 0, Line(0.0, 0.0, 0.0, 0.0), 0.0, Point(0.0, 0.0))
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _order(keys: IntArray) -> IntArray:
+    """Stable ascending order of a few keys (an insertion sort: small code, where numba's
+    sorts made the kernel slow to compile)."""
+    n = keys.shape[0]
+    o = np.arange(n)
+    for i in range(1, n):
+        x = o[i]
+        j = i
+        while j > 0 and keys[o[j - 1]] > keys[x]:
+            o[j] = o[j - 1]
+            j -= 1
+        o[j] = x
+    return o
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _span(
+    lines: PieceLines, t_first: FloatArray, t_last: FloatArray, on: int, members: IntArray
+) -> float:
+    """Extent along piece ``on``'s line of the pieces ``members`` (from their ends)."""
+    ly, lz, ldy, ldz = piece_line(lines, on)
+    lo = math.inf
+    hi = -math.inf
+    for p in members:
+        c = (lines.cy[p] - ly) * ldy + (lines.cz[p] - lz) * ldz
+        d = lines.dy[p] * ldy + lines.dz[p] * ldz
+        for x in (c + d * t_first[p], c + d * t_last[p]):
+            lo = min(lo, x)
+            hi = max(hi, x)
+    return hi - lo
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _along(points: FloatArray, idx: IntArray, line: Line) -> FloatArray:
+    """Coordinates of ``points[idx]`` along a line (:func:`seamtrack.features.lines._on`)."""
+    cy, cz, dy, dz = line
+    t = np.empty(idx.shape[0])
+    for i in range(idx.shape[0]):
+        t[i] = (points[idx[i], 0] - cy) * dy + (points[idx[i], 1] - cz) * dz
+    return t
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _run_line(
+    points: FloatArray,
+    pieces: Pieces,
+    offsets: IntArray,
+    t_first: FloatArray,
+    t_last: FloatArray,
+    members: IntArray,
+    anchor: int,
+    min_plate_mm: float,
+) -> RunLine:
+    """A run's line from its pieces ``members`` (of the plate line whose anchor is
+    ``anchor``): a long piece as it is (:data:`PIECE`), else a refit of the pieces' inliers
+    when they span ``min_plate_mm`` (:data:`FIT`), else those inliers measured on the
+    anchor's line (:data:`ON`, a stub)."""
+    p0 = members[0]
+    if members.shape[0] == 1 and t_last[p0] - t_first[p0] >= min_plate_mm:
+        a, b = offsets[p0], offsets[p0 + 1]
+        own = piece_line(pieces.lines, p0)
+        return RunLine(PIECE, own, 0.0, pieces.index[a:b].copy(), pieces.along[a:b].copy())
+    total = 0
+    for q in members:
+        total += offsets[q + 1] - offsets[q]
+    idx = np.empty(total, dtype=np.int64)
+    c = 0
+    for q in members:
+        for k in range(offsets[q], offsets[q + 1]):
+            idx[c] = pieces.index[k]
+            c += 1
+    if _span(pieces.lines, t_first, t_last, anchor, members) >= min_plate_mm:
+        cy, cz, dy, dz, rms, t = fit_line(points, idx)
+        return RunLine(FIT, Line(cy, cz, dy, dz), rms, idx, t)
+    on = piece_line(pieces.lines, anchor)
+    return RunLine(ON, on, 0.0, idx, _along(points, idx, on))
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _two_plates(
+    points: FloatArray,
+    pieces: Pieces,
+    stray: NDArray[np.bool_],
+    limits: PlateLimits,
+    scale: Scale,
+) -> PlatePair:
+    """The two plates of a square butt (``limits.butt``) or a lap, as the extractors choose
+    them, from the profile's kept ``points`` and its ``pieces``; ``stray``: the
+    segmentation's detour points (left out of the explained share)."""
+    (min_points, min_plate_mm, max_tilt_deg, max_gap_mm, butt, min_opening, min_open_mm,
+     min_bottom_mm, min_step_mm) = limits  # fmt: skip
+    tol, spacing = scale.tol, scale.spacing
+    lines = pieces.lines
+    nl = lines.cy.shape[0]
+    offsets = np.zeros(nl + 1, dtype=np.int64)
+    for j in range(nl):
+        offsets[j + 1] = offsets[j] + pieces.counts[j]
+    m = points.shape[0]
+    owner = np.full(m, -1, dtype=np.int64)
+    count = np.empty(nl, dtype=np.int64)
+    t_first = np.empty(nl)
+    t_last = np.empty(nl)
+    first = np.empty(nl, dtype=np.int64)
+    for j in range(nl):
+        a, b = offsets[j], offsets[j + 1]
+        count[j] = b - a
+        t_first[j], t_last[j] = pieces.along[a], pieces.along[b - 1]
+        first[j] = pieces.index[a]
+        for k in range(a, b):
+            owner[pieces.index[k]] = j
+    # Flat pieces, grouped by the line they lie on (collinear_members: best supported first,
+    # each joins the earliest group whose anchor holds both its ends).
+    tilt = math.radians(max_tilt_deg)
+    flat = np.empty(nl, dtype=np.int64)
+    nf = 0
+    for j in range(nl):
+        if count[j] >= min_points and abs(math.atan2(lines.dz[j], lines.dy[j])) <= tilt:
+            flat[nf] = j
+            nf += 1
+    flat = flat[:nf]
+    minus = np.empty(nf, dtype=np.int64)
+    for o in range(nf):
+        minus[o] = -count[flat[o]]
+    order = _order(minus)
+    cos_max = math.cos(math.radians(30.0))
+    group = np.empty(nf, dtype=np.int64)  # each flat piece's group (position in flat)
+    anchors = np.empty(nf, dtype=np.int64)  # each group's anchor (a piece)
+    ng = 0
+    for o in order:
+        i = flat[o]
+        cy, cz, dy, dz = piece_line(lines, i)
+        e0y, e0z = cy + t_first[i] * dy, cz + t_first[i] * dz
+        e1y, e1z = cy + t_last[i] * dy, cz + t_last[i] * dz
+        joined = -1
+        for k in range(ng):
+            ay, az, ady, adz = piece_line(lines, anchors[k])
+            if (
+                abs(ady * dy + adz * dz) >= cos_max
+                and abs((e0y - ay) * -adz + (e0z - az) * ady) <= tol
+                and abs((e1y - ay) * -adz + (e1z - az) * ady) <= tol
+            ):
+                joined = k
+                break
+        if joined < 0:
+            anchors[ng] = i
+            joined = ng
+            ng += 1
+        group[o] = joined
+    # Plate lines span min_plate_mm; their pieces in column order.
+    plate_of = np.full(ng, -1, dtype=np.int64)  # collinear group -> plate line
+    plate_anchor = np.empty(ng, dtype=np.int64)
+    npl = 0
+    for k in range(ng):
+        members = np.empty(nf, dtype=np.int64)
+        c = 0
+        for o in range(nf):
+            if group[o] == k:
+                members[c] = flat[o]
+                c += 1
+        members = members[:c]
+        if _span(lines, t_first, t_last, anchors[k], members) >= min_plate_mm:
+            plate_of[k] = npl
+            plate_anchor[npl] = anchors[k]
+            npl += 1
+    pg = np.empty(nf, dtype=np.int64)  # in column order: each plate piece's plate line
+    pl = np.empty(nf, dtype=np.int64)  # and the piece
+    n = 0
+    for o in range(nf):
+        if plate_of[group[o]] >= 0:
+            pg[n], pl[n] = plate_of[group[o]], flat[o]
+            n += 1
+    starts = np.empty(n, dtype=np.int64)
+    for o in range(n):
+        starts[o] = first[pl[o]]
+    srt = _order(starts)
+    pg0, pl0 = pg.copy(), pl.copy()
+    for o in range(n):
+        pg[o], pl[o] = pg0[srt[o]], pl0[srt[o]]
+    # A plate line showing briefly between two stretches of another, tilted to it, far
+    # behind it or too short, is no plate there; of competing blocks the smallest goes.
+    ten = math.radians(10.0)
+    while True:
+        best_c, bi, bj = 0, -1, -1
+        i = 1
+        while i < n - 1:
+            j = i
+            while j < n and pg[j] == pg[i]:
+                j += 1
+            if j < n and pg[i - 1] == pg[j]:
+                host = plate_anchor[pg[j]]
+                b0 = pl[i]
+                c = abs(lines.dy[b0] * lines.dy[host] + lines.dz[b0] * lines.dz[host])
+                tilted = math.acos(min(1.0, c)) > ten
+                hy, hz, hdy, hdz = piece_line(lines, host)
+                flip = not hy * -hdz + hz * hdy < 0
+                heights = np.empty(j - i)
+                for r in range(i, j):
+                    h = (lines.cy[pl[r]] - hy) * -hdz + (lines.cz[pl[r]] - hz) * hdy
+                    heights[r - i] = -h if flip else h
+                behind = -median(heights) >= min_bottom_mm if butt else False
+                short = _span(lines, t_first, t_last, plate_anchor[pg[i]], pl[i:j]) < min_plate_mm
+                if tilted or behind or short:
+                    cnt = 0
+                    for r in range(i, j):
+                        cnt += count[pl[r]]
+                    if bi < 0 or cnt < best_c:
+                        best_c, bi, bj = cnt, i, j
+            i = j
+        if bi < 0:
+            break
+        for o in range(bj, n):
+            pg[o - (bj - bi)], pl[o - (bj - bi)] = pg[o], pl[o]
+        n -= bj - bi
+    # Runs: consecutive pieces of one plate line, unless (square butt) an open gap lies
+    # between them. Holes found on the way are kept for the pair chosen below.
+    run_lo = np.empty(n + 1, dtype=np.int64)
+    run_hi = np.empty(n + 1, dtype=np.int64)
+    nr = 0
+    hole_lo = np.empty(n + 1, dtype=np.int64)  # the holes found: their ends (kept points)
+    hole_hi = np.empty(n + 1, dtype=np.int64)
+    holes = []
+    for p in range(n):
+        if nr > 0 and pg[run_lo[nr - 1]] == pg[p]:
+            join = True
+            if butt:
+                on = piece_line(lines, plate_anchor[pg[p]])
+                left = pl[p - 1]
+                right = pl[p]
+                li = pieces.index[max(offsets[left], offsets[left + 1] - 11) : offsets[left + 1]]
+                ri = pieces.index[offsets[right] : min(offsets[right + 1], offsets[right] + 11)]
+                tl = _along(points, li, on)
+                tr = _along(points, ri, on)
+                step_l = steps(tl).last
+                step_r = steps(tr).first
+                t_l, t_r = tl[-1], tr[0]
+                el, er = t_l + 0.5 * step_l, t_r - 0.5 * step_r
+                cy, cz, dy, dz = on
+                gap = (cy + er * dy - (cy + el * dy)) * dy + (cz + er * dz - (cz + el * dz)) * dz
+                if not gap < min_opening:
+                    lo, hi = li[-1], ri[0]
+                    between = hole(
+                        points,
+                        owner,
+                        lines,
+                        RunEnd(on, t_l, step_l),
+                        RunEnd(on, t_r, step_r),
+                        lo,
+                        hi,
+                        scale,
+                        min_bottom_mm,
+                        butt,
+                    )
+                    hole_lo[len(holes)], hole_hi[len(holes)] = lo, hi
+                    holes.append(between)
+                    join = not between.open_mm >= min_open_mm
+            if join:
+                run_hi[nr - 1] = p + 1
+                continue
+        run_lo[nr], run_hi[nr] = p, p + 1
+        nr += 1
+    # Each run's line: a long piece as it is, else a refit of its pieces (long enough) or
+    # its pieces measured on their plate's line.
+    kind = np.empty(nr, dtype=np.int64)
+    rms = np.empty(nr)  # the refits' (FIT only)
+    run_lines = PieceLines(np.empty(nr), np.empty(nr), np.empty(nr), np.empty(nr))
+    runs = PieceSpans(
+        np.empty(nr, dtype=np.int64), np.empty(nr), np.empty(nr), np.empty(nr), np.empty(nr)
+    )
+    first_inlier = np.empty(nr, dtype=np.int64)
+    last_inlier = np.empty(nr, dtype=np.int64)
+    for r in range(nr):
+        lo, hi = run_lo[r], run_hi[r]
+        anchor = plate_anchor[pg[lo]]
+        run = _run_line(points, pieces, offsets, t_first, t_last, pl[lo:hi], anchor, min_plate_mm)
+        kind[r], rms[r] = run.kind, run.rms
+        run_lines.cy[r], run_lines.cz[r], run_lines.dy[r], run_lines.dz[r] = run.line
+        at = steps(run.t)
+        runs.t_first[r], runs.t_last[r] = run.t[0], run.t[-1]
+        runs.step_first[r], runs.step_last[r] = at.first, at.last
+        first_inlier[r], last_inlier[r] = run.inliers[0], run.inliers[-1]
+        runs.count[r] = run.inliers.shape[0]
+    # Neighbouring runs near parallel, their facing ends near; the best pair.
+    best_a, best_b = -1, -1
+    best_hole = NO_HOLE
+    best_step = 0.0
+    best_open = False
+    best_key = 0.0
+    for a in range(nr - 1):
+        b = a + 1
+        la, lb = piece_line(run_lines, a), piece_line(run_lines, b)
+        acy, acz, ady, adz = la
+        bcy, bcz, bdy, bdz = lb
+        if not math.acos(min(1.0, abs(ady * bdy + adz * bdz))) <= ten:
+            continue
+        ta, tb = runs.t_last[a], runs.t_first[b]
+        if (
+            not math.hypot(bcy + tb * bdy - (acy + ta * ady), bcz + tb * bdz - (acz + ta * adz))
+            <= max_gap_mm
+        ):
+            continue
+        if butt:
+            ea, eb = ta + 0.5 * runs.step_last[a], tb - 0.5 * runs.step_first[b]
+            opening = math.hypot(
+                bcy + eb * bdy - (acy + ea * ady), bcz + eb * bdz - (acz + ea * adz)
+            )
+            if opening < min_opening:
+                continue
+            lo, hi = last_inlier[a], first_inlier[b]
+            hit = -1
+            for k in range(len(holes)):
+                if hole_lo[k] == lo and hole_hi[k] == hi:
+                    hit = k
+            if hit >= 0:
+                between = holes[hit]
+            else:
+                between = hole(
+                    points,
+                    owner,
+                    lines,
+                    RunEnd(la, ta, runs.step_last[a]),
+                    RunEnd(lb, tb, runs.step_first[b]),
+                    lo,
+                    hi,
+                    scale,
+                    min_bottom_mm,
+                    butt,
+                )
+            is_open = between.open_mm >= min_open_mm
+            if not is_open and not between.left.hidden and not between.right.hidden:
+                continue
+            if (is_open and not best_open) or (is_open == best_open and opening > best_key):
+                best_open, best_key = is_open, opening
+                best_a, best_b, best_hole = a, b, between
+        else:
+            step = (bcy - acy) * -adz + (bcz - acz) * ady  # > 0: b is deeper
+            if pg[run_lo[a]] == pg[run_lo[b]] or abs(step) < max(min_step_mm, 3 * tol):
+                continue
+            score = float(runs.count[a] + runs.count[b])
+            if score > best_key:
+                best_key = score
+                best_a, best_b, best_step = a, b, step
+    if best_a < 0:
+        return PlatePair(False, _NO_RUN, _NO_RUN, False, best_hole, 0.0, 0.0)
+    a, b = best_a, best_b
+    la, lb = piece_line(run_lines, a), piece_line(run_lines, b)
+    at_a = RunEnd(la, runs.t_last[a], runs.step_last[a])  # a at its last inlier
+    at_b = RunEnd(lb, runs.t_first[b], runs.step_first[b])  # b at its first
+    if not butt:
+        best_hole = hole(
+            points, owner, lines, at_a, at_b, last_inlier[a], first_inlier[b], scale, math.inf,
+            butt,
+        )  # fmt: skip
+    # The runs' ends (a visible corner or half a step beyond the last inlier), the share of
+    # the profile the model (each plate running on to the profile's end) explains.
+    # Runtime flags: a literal True or False would compile a copy of the callee each.
+    at_end, at_start = butt | True, butt & False
+    piece_a = pl[run_lo[a]] if kind[a] == PIECE else -1
+    piece_b = pl[run_lo[b]] if kind[b] == PIECE else -1
+    step_first = np.empty(nl)
+    step_last = np.empty(nl)
+    for j in range(nl):
+        step_first[j], step_last[j] = steps(pieces.along[offsets[j] : offsets[j + 1]])
+    spans = PieceSpans(count, t_first, t_last, step_first, step_last)
+    end_a = line_end(la, at_a, at_end, piece_a, lines, spans, min_points, spacing, tol)
+    start_b = line_end(lb, at_b, at_start, piece_b, lines, spans, min_points, spacing, tol)
+    explained = share(points, stray, last_inlier[a] + 1, first_inlier[b], la, lb, 3.0 * tol)
+    left = Run(
+        kind[a], pl[run_lo[a]], plate_anchor[pg[run_lo[a]]], runs.count[a], la, rms[a], end_a
+    )
+    right = Run(
+        kind[b], pl[run_lo[b]], plate_anchor[pg[run_lo[b]]], runs.count[b], lb, rms[b], start_b
+    )
+    return PlatePair(True, left, right, best_open, best_hole, best_step, explained)
+
+
+class PairReading(NamedTuple):
+    """:class:`PlatePair` for a caller in Python, its fields flattened (``left_line`` ->
+    ``left_cy``, ...): numba boxes every named tuple of a result by a Python call, some
+    microseconds for the dozen nested in a :class:`PlatePair`."""
+
+    found: bool
+    is_open: bool
+    step: float
+    share: float
+    open_mm: float
+    left_hidden: bool
+    left_hidden_y: float
+    left_hidden_z: float
+    right_hidden: bool
+    right_hidden_y: float
+    right_hidden_z: float
+    left_kind: int
+    left_piece: int
+    left_anchor: int
+    left_count: int
+    left_cy: float
+    left_cz: float
+    left_dy: float
+    left_dz: float
+    left_rms: float
+    left_end_y: float
+    left_end_z: float
+    right_kind: int
+    right_piece: int
+    right_anchor: int
+    right_count: int
+    right_cy: float
+    right_cz: float
+    right_dy: float
+    right_dz: float
+    right_rms: float
+    right_end_y: float
+    right_end_z: float
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def two_plates(
+    points: FloatArray,
+    index: IntArray,
+    along: FloatArray,
+    counts: IntArray,
+    cy: FloatArray,
+    cz: FloatArray,
+    dy: FloatArray,
+    dz: FloatArray,
+    stray: NDArray[np.bool_],
+    limits: tuple[int, float, float, float, bool, float, float, float, float],
+    scale: tuple[float, float, float],
+) -> PairReading:
+    """The two plates of a square butt or a lap, as the extractors choose them
+    (:func:`_two_plates`), for a caller in Python: the pieces' table as its columns
+    (:class:`Pieces`, :class:`~seamtrack.features._two_lines.PieceLines`), ``limits`` and
+    ``scale`` as plain tuples of :class:`PlateLimits`' and
+    :class:`~seamtrack.features._between_plates.Scale`'s fields (numba types a named tuple
+    argument in Python on every call, some microseconds; plain ones and arrays it types at
+    once), the result flattened (:class:`PairReading`)."""
+    pieces = Pieces(index, along, counts, PieceLines(cy, cz, dy, dz))
+    pair = _two_plates(points, pieces, stray, PlateLimits(*limits), Scale(*scale))
+    left, right, between = pair.left, pair.right, pair.hole
+    return PairReading(
+        pair.found, pair.is_open, pair.step, pair.share, between.open_mm,
+        between.left.hidden, between.left.at.y, between.left.at.z,
+        between.right.hidden, between.right.at.y, between.right.at.z,
+        left.kind, left.first_piece, left.anchor, left.count,
+        left.line.cy, left.line.cz, left.line.dy, left.line.dz, left.rms, left.end.y, left.end.z,
+        right.kind, right.first_piece, right.anchor, right.count,
+        right.line.cy, right.line.cz, right.line.dy, right.line.dz, right.rms,
+        right.end.y, right.end.z,
+    )  # fmt: skip
