@@ -4,6 +4,7 @@ mixed results read by position)."""
 
 from __future__ import annotations
 
+import dataclasses
 import types
 import typing
 from typing import Any
@@ -17,6 +18,7 @@ from seamtrack.features import _between_plates, _slope_turns, _two_lines, _two_p
 from seamtrack.features._two_lines import kept, median
 from seamtrack.features._two_plate_search import _order
 from seamtrack.features.extractors import extractor
+from seamtrack.features.plates import _pair
 from seamtrack.features.synthetic import Imperfections, synthetic_profile
 from seamtrack.sensing.sensor import preset
 
@@ -176,3 +178,26 @@ def test_the_inspection_fails_on_a_mixed_array() -> None:
         kernel(1.0)
         assert _documented_problem(kernel.py_func.__name__, kernel) is not None
         assert _compiled_problem(kernel.py_func.__name__, kernel) is not None
+
+
+@pytest.mark.parametrize("joint", ["square-butt", "lap"])
+def test_pieces_from_lines_read_as_the_table(joint: str) -> None:
+    """Segments that kept only ``Line`` objects (no table) give the two-plate search the
+    same pieces: the same pairs, lines, ends and holes as the segmentation's table."""
+    sensor = preset("paper")
+    rng = np.random.default_rng(11)
+    level = Imperfections(noise_mm=0.05, outlier_fraction=0.05, reflection_probability=1.0)
+    ex = extractor(joint)
+    butt = joint == "square-butt"
+    found = 0
+    for _ in range(8):
+        profile, _ = synthetic_profile(joint, sensor, rng=rng, imperfections=level)
+        seg = ex.segments(profile)
+        assert not isinstance(seg, str)
+        assert seg.table is not None
+        from_lines = dataclasses.replace(seg, pieces=list(seg.lines), table=None)
+        min_opening = max(ex.min_gap_mm, 3 * seg.tol) if butt else 0.0
+        a, b = _pair(seg, ex, butt, min_opening), _pair(from_lines, ex, butt, min_opening)
+        assert a == b
+        found += a is not None
+    assert found >= 6

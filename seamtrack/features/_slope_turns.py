@@ -134,22 +134,28 @@ def window_turns(p: FloatArray, k: int, jump_mm: float) -> Turns:
         gaps[i] = math.hypot(p[i + 1, 0] - p[i, 0], p[i + 1, 1] - p[i, 1])
         jumps[i + 1] = jumps[i] + (1 if gaps[i] > jump_mm else 0)
     cy, cz = p[m // 2, 0], p[m // 2, 1]
-    cs = np.zeros((m + 1, 5))
+    # Prefix sums of y, z, y^2, z^2 and yz (about the middle point): window sums by
+    # subtraction.
+    sum_y = np.zeros(m + 1)
+    sum_z = np.zeros(m + 1)
+    sum_yy = np.zeros(m + 1)
+    sum_zz = np.zeros(m + 1)
+    sum_yz = np.zeros(m + 1)
     for i in range(m):
         y, z = p[i, 0] - cy, p[i, 1] - cz
-        cs[i + 1, 0] = cs[i, 0] + y
-        cs[i + 1, 1] = cs[i, 1] + z
-        cs[i + 1, 2] = cs[i, 2] + y * y
-        cs[i + 1, 3] = cs[i, 3] + z * z
-        cs[i + 1, 4] = cs[i, 4] + y * z
+        sum_y[i + 1] = sum_y[i] + y
+        sum_z[i + 1] = sum_z[i] + z
+        sum_yy[i + 1] = sum_yy[i] + y * y
+        sum_zz[i + 1] = sum_zz[i] + z * z
+        sum_yz[i + 1] = sum_yz[i] + y * z
     n_win = m - k + 1
     theta = np.empty(n_win)
     for i in range(n_win):
-        sy = cs[i + k, 0] - cs[i, 0]
-        sz = cs[i + k, 1] - cs[i, 1]
-        cyy = cs[i + k, 2] - cs[i, 2] - sy * sy / k
-        czz = cs[i + k, 3] - cs[i, 3] - sz * sz / k
-        cyz = cs[i + k, 4] - cs[i, 4] - sy * sz / k
+        sy = sum_y[i + k] - sum_y[i]
+        sz = sum_z[i + k] - sum_z[i]
+        cyy = sum_yy[i + k] - sum_yy[i] - sy * sy / k
+        czz = sum_zz[i + k] - sum_zz[i] - sz * sz / k
+        cyz = sum_yz[i + k] - sum_yz[i] - sy * sz / k
         t = 0.5 * math.atan2(2.0 * cyz, cyy - czz)
         chord_y = p[i + k - 1, 0] - p[i, 0]
         chord_z = p[i + k - 1, 1] - p[i, 1]

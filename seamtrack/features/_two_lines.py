@@ -50,11 +50,11 @@ class PieceLines(NamedTuple):
 
 
 class PieceSpans(NamedTuple):
-    """Where each piece's inliers lie along its line: their number, the first's and the
-    last's coordinates, and the mean spacing of the first and of the last ten
-    (:meth:`~seamtrack.features.lines.Line.step`)."""
+    """Where each piece's inliers lie along its line: their number (``n_inliers``), the
+    first's and the last's coordinates, and the mean spacing of the first and of the last
+    ten (:meth:`~seamtrack.features.lines.Line.step`)."""
 
-    count: IntArray
+    n_inliers: IntArray
     t_first: FloatArray
     t_last: FloatArray
     step_first: FloatArray
@@ -174,7 +174,7 @@ def line_end(
     best_y = best_z = 0.0
     best_d = math.inf
     for j in range(pieces.cy.shape[0]):
-        if spans.count[j] < min_points or j == skip:
+        if spans.n_inliers[j] < min_points or j == skip:
             continue
         ocy, ocz, ody, odz = piece_line(pieces, j)
         if abs(dy * ody + dz * odz) > cos_min:
@@ -203,20 +203,23 @@ def line_end(
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def share(
+def two_lines_share(
     points: FloatArray,
     stray: NDArray[np.bool_],
     lo: int,
     hi: int,
-    a: Line,
-    b: Line,
+    a: Line | tuple[float, float, float, float],
+    b: Line | tuple[float, float, float, float],
     band: float,
 ) -> float:
     """Share of the surface points (``stray`` left out when it flags each point) within
     ``band`` of their line when line ``a`` runs from the profile's start to kept point
     ``lo`` and line ``b`` from ``hi`` to its end, what lies between them left out:
     :func:`seamtrack.features.base.explained` of a two-plate or two-face model
-    (:func:`seamtrack.features.counts.explained_share`)."""
+    (:func:`seamtrack.features.counts.explained_share`). The lines: :class:`Line` or, from
+    Python, plain tuples of its fields (numba types a named tuple argument in Python on every
+    call, some microseconds; a plain one at once)."""
+    a, b = Line(*a), Line(*b)
     m = points.shape[0]
     zones = np.empty((3, 3), dtype=np.int64)
     zones[0, 0], zones[0, 1], zones[0, 2] = 0, lo, 1
@@ -227,19 +230,3 @@ def share(
     fits[2, 0, 0], fits[2, 0, 1], fits[2, 0, 2], fits[2, 0, 3] = b.cy, b.cz, -b.dz, b.dy
     surface = ~stray if stray.shape[0] == m else np.ones(m, dtype=np.bool_)
     return explained_share(points, surface, zones, fits, band)
-
-
-@numba.njit(cache=True, nogil=True, error_model="numpy")
-def two_lines_share(
-    points: FloatArray,
-    stray: NDArray[np.bool_],
-    lo: int,
-    hi: int,
-    a: tuple[float, float, float, float],
-    b: tuple[float, float, float, float],
-    band: float,
-) -> float:
-    """:func:`share` for a caller in Python: the lines as plain tuples of :class:`Line`'s
-    fields (numba types a named tuple argument in Python on every call, some microseconds;
-    a plain one at once)."""
-    return share(points, stray, lo, hi, Line(*a), Line(*b), band)

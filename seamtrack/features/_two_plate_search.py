@@ -30,13 +30,18 @@ from seamtrack.features._two_lines import (
     line_end,
     median,
     piece_line,
-    share,
     steps,
+    two_lines_share,
 )
 from seamtrack.features.kernels import fit_line
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
+
+#: :class:`PlateLimits` and :class:`~seamtrack.features._between_plates.Scale` as plain
+#: tuples (what :func:`two_plates` takes from Python).
+PlainLimits = tuple[int, float, float, float, bool, float, float, float, float]
+PlainScale = tuple[float, float, float]
 
 #: Kinds of run (:class:`Run`): one piece as it is, a refit of its pieces' inliers, or its
 #: pieces' inliers measured on their plate's line (a stub).
@@ -44,11 +49,11 @@ PIECE, FIT, ON = 0, 1, 2
 
 
 class Pieces(NamedTuple):
-    """The profile's pieces as segmentation left them: ``index`` and ``along`` concatenate
+    """The profile's pieces as segmentation left them: ``members`` and ``along`` concatenate
     their inliers' positions (in the kept points) and coordinates along their lines,
     ``counts`` are their numbers of inliers, ``lines`` their lines."""
 
-    index: IntArray
+    members: IntArray
     along: FloatArray
     counts: IntArray
     lines: PieceLines
@@ -92,7 +97,7 @@ class Run(NamedTuple):
     kind: int
     first_piece: int
     anchor: int
-    count: int
+    n_inliers: int
     line: Line
     rms: float
     end: Point
@@ -181,7 +186,7 @@ def _run_line(
     if members.shape[0] == 1 and t_last[p0] - t_first[p0] >= min_plate_mm:
         a, b = offsets[p0], offsets[p0 + 1]
         own = piece_line(pieces.lines, p0)
-        return RunLine(PIECE, own, 0.0, pieces.index[a:b].copy(), pieces.along[a:b].copy())
+        return RunLine(PIECE, own, 0.0, pieces.members[a:b].copy(), pieces.along[a:b].copy())
     total = 0
     for q in members:
         total += offsets[q + 1] - offsets[q]
@@ -189,7 +194,7 @@ def _run_line(
     c = 0
     for q in members:
         for k in range(offsets[q], offsets[q + 1]):
-            idx[c] = pieces.index[k]
+            idx[c] = pieces.members[k]
             c += 1
     if _span(pieces.lines, t_first, t_last, anchor, members) >= min_plate_mm:
         cy, cz, dy, dz, rms, t = fit_line(points, idx)
@@ -227,9 +232,9 @@ def _two_plates(
         a, b = offsets[j], offsets[j + 1]
         count[j] = b - a
         t_first[j], t_last[j] = pieces.along[a], pieces.along[b - 1]
-        first[j] = pieces.index[a]
+        first[j] = pieces.members[a]
         for k in range(a, b):
-            owner[pieces.index[k]] = j
+            owner[pieces.members[k]] = j
     # Flat pieces, grouped by the line they lie on (collinear_members: best supported first,
     # each joins the earliest group whose anchor holds both its ends).
     tilt = math.radians(max_tilt_deg)
@@ -340,7 +345,7 @@ def _two_plates(
     nr = 0
     hole_lo = np.empty(n + 1, dtype=np.int64)  # the holes found: their ends (kept points)
     hole_hi = np.empty(n + 1, dtype=np.int64)
-    holes = []
+    holes: list[Hole] = []
     for p in range(n):
         if nr > 0 and pg[run_lo[nr - 1]] == pg[p]:
             join = True
@@ -348,8 +353,8 @@ def _two_plates(
                 on = piece_line(lines, plate_anchor[pg[p]])
                 left = pl[p - 1]
                 right = pl[p]
-                li = pieces.index[max(offsets[left], offsets[left + 1] - 11) : offsets[left + 1]]
-                ri = pieces.index[offsets[right] : min(offsets[right + 1], offsets[right] + 11)]
+                li = pieces.members[max(offsets[left], offsets[left + 1] - 11) : offsets[left + 1]]
+                ri = pieces.members[offsets[right] : min(offsets[right + 1], offsets[right] + 11)]
                 tl = _along(points, li, on)
                 tr = _along(points, ri, on)
                 step_l = steps(tl).last
@@ -400,7 +405,7 @@ def _two_plates(
         runs.t_first[r], runs.t_last[r] = run.t[0], run.t[-1]
         runs.step_first[r], runs.step_last[r] = at.first, at.last
         first_inlier[r], last_inlier[r] = run.inliers[0], run.inliers[-1]
-        runs.count[r] = run.inliers.shape[0]
+        runs.n_inliers[r] = run.inliers.shape[0]
     # Neighbouring runs near parallel, their facing ends near; the best pair.
     best_a, best_b = -1, -1
     best_hole = NO_HOLE
@@ -457,7 +462,7 @@ def _two_plates(
             step = (bcy - acy) * -adz + (bcz - acz) * ady  # > 0: b is deeper
             if pg[run_lo[a]] == pg[run_lo[b]] or abs(step) < max(min_step_mm, 3 * tol):
                 continue
-            score = float(runs.count[a] + runs.count[b])
+            score = float(runs.n_inliers[a] + runs.n_inliers[b])
             if score > best_key:
                 best_key = score
                 best_a, best_b, best_step = a, b, step
@@ -485,12 +490,14 @@ def _two_plates(
     spans = PieceSpans(count, t_first, t_last, step_first, step_last)
     end_a = line_end(la, at_a, at_end, piece_a, lines, spans, min_points, spacing, tol)
     start_b = line_end(lb, at_b, at_start, piece_b, lines, spans, min_points, spacing, tol)
-    explained = share(points, stray, last_inlier[a] + 1, first_inlier[b], la, lb, 3.0 * tol)
+    explained = two_lines_share(
+        points, stray, last_inlier[a] + 1, first_inlier[b], la, lb, 3.0 * tol
+    )
     left = Run(
-        kind[a], pl[run_lo[a]], plate_anchor[pg[run_lo[a]]], runs.count[a], la, rms[a], end_a
+        kind[a], pl[run_lo[a]], plate_anchor[pg[run_lo[a]]], runs.n_inliers[a], la, rms[a], end_a
     )
     right = Run(
-        kind[b], pl[run_lo[b]], plate_anchor[pg[run_lo[b]]], runs.count[b], lb, rms[b], start_b
+        kind[b], pl[run_lo[b]], plate_anchor[pg[run_lo[b]]], runs.n_inliers[b], lb, rms[b], start_b
     )
     return PlatePair(True, left, right, best_open, best_hole, best_step, explained)
 
@@ -540,32 +547,37 @@ def two_plates(
     points: FloatArray,
     index: IntArray,
     along: FloatArray,
-    counts: IntArray,
-    cy: FloatArray,
-    cz: FloatArray,
-    dy: FloatArray,
-    dz: FloatArray,
+    fits: FloatArray,
+    bounds: IntArray,
     stray: NDArray[np.bool_],
-    limits: tuple[int, float, float, float, bool, float, float, float, float],
-    scale: tuple[float, float, float],
+    limits: PlainLimits,
+    scale: PlainScale,
 ) -> PairReading:
     """The two plates of a square butt or a lap, as the extractors choose them
-    (:func:`_two_plates`), for a caller in Python: the pieces' table as its columns
-    (:class:`Pieces`, :class:`~seamtrack.features._two_lines.PieceLines`), ``limits`` and
-    ``scale`` as plain tuples of :class:`PlateLimits`' and
+    (:func:`_two_plates`), for a caller in Python: the pieces as the segmentation's table
+    (:attr:`seamtrack.features.lines.Segments.table`: ``index``, ``along``, ``fits`` a row
+    per piece (centroid y, z, direction y, z, rms, first and last coordinate), ``bounds``),
+    ``limits`` and ``scale`` as plain tuples of :class:`PlateLimits`' and
     :class:`~seamtrack.features._between_plates.Scale`'s fields (numba types a named tuple
-    argument in Python on every call, some microseconds; plain ones and arrays it types at
-    once), the result flattened (:class:`PairReading`)."""
-    pieces = Pieces(index, along, counts, PieceLines(cy, cz, dy, dz))
+    argument in Python on every call, some microseconds; plain ones and arrays at once), the
+    result flattened (:class:`PairReading`)."""
+    n = bounds.shape[0] - 1
+    counts = np.empty(n, dtype=np.int64)
+    lines = PieceLines(np.empty(n), np.empty(n), np.empty(n), np.empty(n))
+    for j in range(n):
+        counts[j] = bounds[j + 1] - bounds[j]
+        cy, cz, dy, dz, _rms, _t_first, _t_last = fits[j]
+        lines.cy[j], lines.cz[j], lines.dy[j], lines.dz[j] = cy, cz, dy, dz
+    pieces = Pieces(index, along, counts, lines)
     pair = _two_plates(points, pieces, stray, PlateLimits(*limits), Scale(*scale))
     left, right, between = pair.left, pair.right, pair.hole
     return PairReading(
         pair.found, pair.is_open, pair.step, pair.share, between.open_mm,
         between.left.hidden, between.left.at.y, between.left.at.z,
         between.right.hidden, between.right.at.y, between.right.at.z,
-        left.kind, left.first_piece, left.anchor, left.count,
+        left.kind, left.first_piece, left.anchor, left.n_inliers,
         left.line.cy, left.line.cz, left.line.dy, left.line.dz, left.rms, left.end.y, left.end.z,
-        right.kind, right.first_piece, right.anchor, right.count,
+        right.kind, right.first_piece, right.anchor, right.n_inliers,
         right.line.cy, right.line.cz, right.line.dy, right.line.dz, right.rms,
         right.end.y, right.end.z,
     )  # fmt: skip

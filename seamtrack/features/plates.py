@@ -14,16 +14,18 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.features._between_plates import Scale
-from seamtrack.features._two_lines import Line, PieceLines, Point
+from seamtrack.features._two_lines import Line, Point
 from seamtrack.features._two_plate_search import (
     FIT,
     PIECE,
-    Pieces,
+    PlainLimits,
+    PlainScale,
     PlateLimits,
     two_plates,
 )
@@ -32,6 +34,7 @@ from seamtrack.features.lines import Segments
 from seamtrack.sensing.profiles import Feature, Profile
 
 FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
 
 
 @dataclass(frozen=True)
@@ -72,20 +75,23 @@ class _Pair:
     share: float
 
 
-def _pieces(seg: Segments) -> Pieces:
-    """The segmentation's pieces as the two-plate search reads them, each column contiguous."""
-    if seg.table is not None:  # the arrays segmentation left
+def _table(seg: Segments) -> tuple[IntArray, FloatArray, FloatArray, IntArray]:
+    """The segmentation's table of pieces (:attr:`~seamtrack.features.lines.Segments.table`),
+    built from its ``Line`` objects when it kept none."""
+    if seg.table is not None:
         index, along, fits, bounds = seg.table
-        cy, cz, dy, dz, _rms, _t_first, _t_last = np.ascontiguousarray(fits.T)
-        return Pieces(index, along, np.diff(bounds), PieceLines(cy, cz, dy, dz))
+        return index, along, fits, bounds
     pieces = seg.lines
-    geometry = [(*ln.centroid, *ln.direction) for ln in pieces]
-    cy, cz, dy, dz = np.ascontiguousarray(np.array(geometry, dtype=np.float64).reshape(-1, 4).T)
-    return Pieces(
+    fits = np.array(
+        [(*ln.centroid, *ln.direction, ln.rms, ln.t[0], ln.t[-1]) for ln in pieces],
+        dtype=np.float64,
+    ).reshape(-1, 7)
+    counts = [len(ln.index) for ln in pieces]
+    return (
         np.concatenate([ln.index for ln in pieces]).astype(np.int64),
         np.concatenate([ln.t for ln in pieces]).astype(np.float64),
-        np.array([len(ln.index) for ln in pieces], dtype=np.int64),
-        PieceLines(cy, cz, dy, dz),
+        fits,
+        np.concatenate([[0], np.cumsum(counts)]).astype(np.int64),
     )
 
 
@@ -131,11 +137,12 @@ def _pair(
         min_step_mm=float(getattr(ex, "min_step_mm", 0.0)),
     )
     scale = Scale(float(seg.tol), float(seg.spacing), float(seg.sigma))
-    index, along, counts, (cy, cz, dy, dz) = _pieces(seg)
-    # Plain tuples and columns: numba types them at once (named tuples in Python, slowly).
+    index, along, fits, bounds = _table(seg)
+    # Plain tuples and arrays: numba types them at once (named tuples in Python, slowly).
     r = two_plates(
-        seg.points, index, along, counts, cy, cz, dy, dz, seg.stray, tuple(limits), tuple(scale)
-    )
+        seg.points, index, along, fits, bounds, seg.stray, cast(PlainLimits, tuple(limits)),
+        cast(PlainScale, tuple(scale)),
+    )  # fmt: skip
     if not r.found:
         return None
     hole = _Hole(
