@@ -121,6 +121,16 @@ class PlatePair(NamedTuple):
     share: float
 
 
+class PlatePieces(NamedTuple):
+    """The pieces on plates in column order (:func:`_plate_pieces`): each one's plate line
+    (``plate``) and the piece (``piece``), and each plate line's anchor piece
+    (``anchor``)."""
+
+    plate: IntArray
+    piece: IntArray
+    anchor: IntArray
+
+
 _NO_RUN = Run(-1, -1, -1, 0, Line(0.0, 0.0, 0.0, 0.0), 0.0, Point(0.0, 0.0))
 
 
@@ -204,37 +214,27 @@ def _run_line(
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _two_plates(
-    points: FloatArray,
-    pieces: Pieces,
-    stray: NDArray[np.bool_],
+def _plate_pieces(
+    lines: PieceLines,
+    count: IntArray,
+    t_first: FloatArray,
+    t_last: FloatArray,
+    first: IntArray,
     limits: PlateLimits,
-    scale: Scale,
-) -> PlatePair:
-    """The two plates of a square butt (``limits.butt``) or a lap, as the extractors choose
-    them, from the profile's kept ``points`` and its ``pieces``; ``stray``: the
-    segmentation's detour points (left out of the explained share)."""
-    (min_points, min_plate_mm, max_tilt_deg, max_gap_mm, butt, min_opening, min_open_mm,
-     min_bottom_mm, min_step_mm) = limits  # fmt: skip
-    tol, spacing = scale.tol, scale.spacing
-    lines = pieces.lines
+    tol: float,
+) -> PlatePieces:
+    """The pieces that lie on plates, in column order (``first``: each piece's first
+    inlier): flat pieces (``limits.min_points``, within ``limits.max_tilt_deg`` of the y
+    axis) grouped by the line they lie on, the lines spanning ``limits.min_plate_mm``
+    plates; a plate line showing only briefly between two stretches of another is no plate
+    there."""
+    min_points, min_plate_mm, min_bottom_mm = (
+        limits.min_points,
+        limits.min_plate_mm,
+        limits.min_bottom_mm,
+    )
+    max_tilt_deg, butt = limits.max_tilt_deg, limits.butt
     nl = lines.cy.shape[0]
-    offsets = np.zeros(nl + 1, dtype=np.int64)
-    for j in range(nl):
-        offsets[j + 1] = offsets[j] + pieces.counts[j]
-    m = points.shape[0]
-    owner = np.full(m, -1, dtype=np.int64)
-    count = np.empty(nl, dtype=np.int64)
-    t_first = np.empty(nl)
-    t_last = np.empty(nl)
-    first = np.empty(nl, dtype=np.int64)
-    for j in range(nl):
-        a, b = offsets[j], offsets[j + 1]
-        count[j] = b - a
-        t_first[j], t_last[j] = pieces.along[a], pieces.along[b - 1]
-        first[j] = pieces.members[a]
-        for k in range(a, b):
-            owner[pieces.members[k]] = j
     # Flat pieces, grouped by the line they lie on (collinear_members: best supported first,
     # each joins the earliest group whose anchor holds both its ends).
     tilt = math.radians(max_tilt_deg)
@@ -338,6 +338,45 @@ def _two_plates(
         for o in range(bj, n):
             pg[o - (bj - bi)], pl[o - (bj - bi)] = pg[o], pl[o]
         n -= bj - bi
+    return PlatePieces(pg[:n], pl[:n], plate_anchor)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _two_plates(
+    points: FloatArray,
+    pieces: Pieces,
+    stray: NDArray[np.bool_],
+    limits: PlateLimits,
+    scale: Scale,
+) -> PlatePair:
+    """The two plates of a square butt (``limits.butt``) or a lap, as the extractors choose
+    them, from the profile's kept ``points`` and its ``pieces``; ``stray``: the
+    segmentation's detour points (left out of the explained share)."""
+    (min_points, min_plate_mm, _, max_gap_mm, butt, min_opening, min_open_mm, min_bottom_mm,
+     min_step_mm) = limits  # fmt: skip
+    tol, spacing = scale.tol, scale.spacing
+    lines = pieces.lines
+    nl = lines.cy.shape[0]
+    offsets = np.zeros(nl + 1, dtype=np.int64)
+    for j in range(nl):
+        offsets[j + 1] = offsets[j] + pieces.counts[j]
+    m = points.shape[0]
+    owner = np.full(m, -1, dtype=np.int64)
+    count = np.empty(nl, dtype=np.int64)
+    t_first = np.empty(nl)
+    t_last = np.empty(nl)
+    first = np.empty(nl, dtype=np.int64)
+    for j in range(nl):
+        a, b = offsets[j], offsets[j + 1]
+        count[j] = b - a
+        t_first[j], t_last[j] = pieces.along[a], pieces.along[b - 1]
+        first[j] = pieces.members[a]
+        for k in range(a, b):
+            owner[pieces.members[k]] = j
+    plated = _plate_pieces(lines, count, t_first, t_last, first, limits, tol)
+    pg, pl, plate_anchor = plated.plate, plated.piece, plated.anchor
+    n = pg.shape[0]
+    ten = math.radians(10.0)
     # Runs: consecutive pieces of one plate line, unless (square butt) an open gap lies
     # between them. Holes found on the way are kept for the pair chosen below.
     run_lo = np.empty(n + 1, dtype=np.int64)
