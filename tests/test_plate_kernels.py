@@ -14,16 +14,22 @@ import numpy as np
 import pytest
 from numba.core import types as nbtypes
 
-from seamtrack.features import _between_plates, _slope_turns, _two_lines, _two_plate_search
+from seamtrack.features import (
+    _between_plates,
+    _plate_lines,
+    _slope_turns,
+    _two_lines,
+    _two_plate_search,
+)
+from seamtrack.features._plate_lines import _order
 from seamtrack.features._two_lines import kept, median
-from seamtrack.features._two_plate_search import _order
 from seamtrack.features.extractors import extractor
 from seamtrack.features.plates import _pair
 from seamtrack.features.synthetic import Imperfections, synthetic_profile
 from seamtrack.sensing.sensor import preset
 
 #: The compiled modules of the two-plate and generic extractors.
-MODULES = (_two_lines, _between_plates, _two_plate_search, _slope_turns)
+MODULES = (_two_lines, _between_plates, _plate_lines, _two_plate_search, _slope_turns)
 
 #: Kernels that return one array holding one quantity (each element the same kind of
 #: thing), not a record of mixed results: what the elements are.

@@ -20,13 +20,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.features._between_plates import Scale
+from seamtrack.features._plate_lines import PlateLimits
 from seamtrack.features._two_lines import Line, Point
 from seamtrack.features._two_plate_search import (
     FIT,
     PIECE,
     PlainLimits,
     PlainScale,
-    PlateLimits,
     two_plates,
 )
 from seamtrack.features.base import _Base
