@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import importlib
 import importlib.metadata
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
@@ -42,16 +41,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.errors import PluginError
+from seamtrack.features._two_lines import two_lines_share
 from seamtrack.features.base import _Base, _confidence, included
 from seamtrack.features.expect import Expect
+from seamtrack.features.generic import GenericExtractor
 from seamtrack.features.lines import (
-    DATA_ERRORS,
     Line,
     Segments,
 )
-from seamtrack.features.pkernels import two_lines_share
 from seamtrack.features.plates import LapExtractor, SquareButtExtractor
-from seamtrack.features.robust import CONSTANT, TOO_FEW_POINTS
 from seamtrack.features.vgroove import VGrooveExtractor
 from seamtrack.sensing.profiles import Feature, Profile
 
@@ -113,98 +111,18 @@ def _two_faces(
     """A corner's feature from its faces (left, right, apex, score), and the share of the
     profile the model of a corner explains: each face runs on to the profile's end; the
     corner between the faces' last points is left out (:func:`~.base.explained`, here in one
-    compiled call, :func:`seamtrack.features.pkernels.two_lines_share`)."""
+    compiled call, :func:`seamtrack.features._two_lines.two_lines_share`)."""
     left, right, apex, _ = found
     if isinstance(ex.expect, Expect):  # the included angle matters only against an expectation
         wrong = ex._implausible(angle=included(left, right, apex))
         if wrong is not None:
             return wrong
     feature = ex._found(profile, apex, confidence=_confidence([left, right], seg))
-    (ay, az), (ady, adz) = left.centroid.tolist(), left.direction.tolist()
-    (by, bz), (bdy, bdz) = right.centroid.tolist(), right.direction.tolist()
+    a = (*left.centroid.tolist(), *left.direction.tolist())  # cy, cz, dy, dz
+    b = (*right.centroid.tolist(), *right.direction.tolist())
     lo, hi = int(left.index[-1]) + 1, int(right.index[0])
-    share = two_lines_share(
-        seg.points, seg.stray, lo, hi, ay, az, ady, adz, by, bz, bdy, bdz, 3.0 * seg.tol
-    )
+    share = two_lines_share(seg.points, seg.stray, lo, hi, a, b, 3.0 * seg.tol)
     return feature, share
-
-
-@dataclass(frozen=True)
-class GenericExtractor:
-    """Slope / curvature: the sharpest concave turn of the profile (sliding-window slopes),
-    refined by intersecting two local line fits; else the widest interior gap or step; else
-    the sharpest convex turn. No segmentation, no joint model: the fastest built-in."""
-
-    name: str = "generic"
-    window_mm: float = 1.0
-    min_turn_deg: float = 25.0
-    min_jump_mm: float = 0.3
-    min_points: int = 8
-
-    def __call__(self, profile: Profile) -> Feature:
-        try:
-            with np.errstate(all="ignore"):
-                return self._extract(profile)
-        except DATA_ERRORS as exc:  # never raise on data
-            return Feature.failed(f"generic: unusable profile ({exc})", joint=self.name)
-
-    def _extract(self, profile: Profile) -> Feature:
-        from seamtrack.features.generic import front_end, window_turns
-
-        points = np.ascontiguousarray(profile.points_laser, dtype=np.float64).reshape(-1, 2)
-        valid = np.asarray(profile.valid, dtype=bool).reshape(-1)
-        if valid.shape != (len(points),):
-            return Feature.failed("valid does not match the points", joint=self.name)
-        code, p, spacing, sigma = front_end(points, valid, _MAX_ABS_MM, 4 * self.min_points)
-        if code == TOO_FEW_POINTS:
-            return Feature.failed(f"too few valid points ({len(p)})", joint=self.name)
-        if code == CONSTANT:
-            return Feature.failed("the valid points do not spread out", joint=self.name)
-        m = len(p)
-        k = min(max(round(max(self.window_mm, 20 * sigma) / spacing), 4), max(4, m // 4))
-        if m < 2 * k + 2:
-            return Feature.failed("too few points for the slope window", joint=self.name)
-        jump_mm = max(6 * spacing, 8 * sigma, 0.1)
-        # Total-least-squares direction of each k-point window (from window sums), and the
-        # turn between windows k apart where no jump lies between them.
-        gaps, turn = window_turns(p, k, jump_mm)
-        min_turn = math.radians(self.min_turn_deg)
-        i = int(np.argmin(turn))
-        if turn[i] <= -min_turn:
-            return self._corner(profile, p, i + k, k, -float(turn[i]))
-        interior = np.flatnonzero(gaps > max(self.min_jump_mm, jump_mm))
-        if interior.size:
-            j = int(interior[np.argmax(gaps[interior])])
-            a, b = p[j], p[j + 1]
-            dy, dz = abs(b[0] - a[0]), abs(b[1] - a[1])
-            if dz > 2 * dy:  # a step: the corner at the foot of the higher side
-                hi, lo = (a, b) if a[1] < b[1] else (b, a)
-                seam = np.array([hi[0], lo[1]])
-            else:
-                seam = 0.5 * (a + b)
-            return Feature.found(
-                seam,
-                profile.T_world_sensor,
-                joint=self.name,
-                confidence=0.5,
-                edges_laser=np.array([a, b]),
-                gap_mm=float(dy),
-            )
-        i = int(np.argmax(turn))
-        if turn[i] >= min_turn:
-            return self._corner(profile, p, i + k, k, float(turn[i]))
-        return Feature.failed("no turn, gap or step in the profile", joint=self.name)
-
-    def _corner(self, profile: Profile, p: FloatArray, c: int, k: int, turn: float) -> Feature:
-        from seamtrack.features.generic import corner_point
-
-        code, y, z = corner_point(p, c, k)
-        if code:
-            return Feature.failed("the corner is too near the profile's end", joint=self.name)
-        conf = float(np.clip(turn / math.radians(90), 0.0, 1.0))
-        return Feature.found(
-            np.array([y, z]), profile.T_world_sensor, joint=self.name, confidence=conf
-        )
 
 
 # ----------------------------------------------------------------- registry

@@ -1,174 +1,110 @@
-"""Compiled inner loops of the generic (slope/curvature) extractor.
+"""The generic (slope / curvature) extractor: no segmentation, no joint model.
 
-The generic extractor is the fastest built-in: its work is a handful of passes over the profile
-(valid points, spacing, noise, a running median, window sums, turning angles), which numpy does
-as some forty small array operations. Fused into two loops here they cost a fraction of that.
-Medians are selections (``np.partition``), not sorts: sorting ~1,000 fresh values is mostly
-branch mispredictions (a benchmark repeating one profile hides that, the CPU learns it).
-The arithmetic is the same as the numpy formulation in :mod:`seamtrack.features.lines` (upper
-medians,
-the median-of-5 network, total-least-squares window directions).
+Its steps, each one compiled call of :mod:`seamtrack.features._slope_turns`: clean the
+profile's points up (valid, bounded, isolated outliers against a running median of 5 left
+out; :func:`~seamtrack.features._slope_turns.clean_points`), the turn between sliding
+windows' directions (:func:`~seamtrack.features._slope_turns.window_turns`), and where the
+sharpest turn lies, the crossing of two local fits
+(:func:`~seamtrack.features._slope_turns.corner_point`). Registered in
+:mod:`seamtrack.features.extractors` as ``"generic"``.
+
+Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groove).
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
-import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features.kernels import fit_range
+from seamtrack.features._slope_turns import (
+    NO_SPREAD,
+    TOO_FEW,
+    clean_points,
+    corner_point,
+    window_turns,
+)
+from seamtrack.features.lines import DATA_ERRORS
+from seamtrack.features.robust import _MAX_ABS_MM
+from seamtrack.sensing.profiles import Feature, Profile
 
 FloatArray = NDArray[np.float64]
 
-_SIGMA_FROM_SECOND_DIFF = 1.4826 / math.sqrt(6.0)
 
+@dataclass(frozen=True)
+class GenericExtractor:
+    """Slope / curvature: the sharpest concave turn of the profile (sliding-window slopes),
+    refined by intersecting two local line fits; else the widest interior gap or step; else
+    the sharpest convex turn. No segmentation, no joint model: the fastest built-in."""
 
-@numba.njit(cache=True, nogil=True)
-def front_end(
-    points: FloatArray, valid: NDArray[np.bool_], max_abs: float, min_kept: int
-) -> tuple[int, FloatArray, float, float]:
-    """Valid bounded points, their spacing and noise, and the points left after dropping
-    isolated outliers against a running median of 5.
+    name: str = "generic"
+    window_mm: float = 1.0
+    min_turn_deg: float = 25.0
+    min_jump_mm: float = 0.3
+    min_points: int = 8
 
-    Returns
-    -------
-    code : int
-        0 ok; 1 too few valid points; 2 the points do not spread out.
-    kept : (m, 2) float
-    spacing, sigma : float
-        Median lateral step (else median step) and the noise estimate
-        1.4826 / sqrt(6) median |second difference of z|, as in :mod:`seamtrack.features.lines`.
-    """
-    n = points.shape[0]
-    m = 0
-    for i in range(n):
-        if valid[i] and abs(points[i, 0]) < max_abs and abs(points[i, 1]) < max_abs:
-            m += 1
-    p = np.empty((m, 2))
-    j = 0
-    for i in range(n):
-        if valid[i] and abs(points[i, 0]) < max_abs and abs(points[i, 1]) < max_abs:
-            p[j, 0] = points[i, 0]
-            p[j, 1] = points[i, 1]
-            j += 1
-    if m < max(min_kept, 5):
-        return 1, p, 0.0, 0.0
-    steps = np.empty(m - 1)
-    for i in range(m - 1):
-        steps[i] = abs(p[i + 1, 0] - p[i, 0])
-    spacing = np.partition(steps, (m - 1) // 2)[(m - 1) // 2]
-    if not spacing > 0.0:
-        for i in range(m - 1):
-            steps[i] = math.hypot(p[i + 1, 0] - p[i, 0], p[i + 1, 1] - p[i, 1])
-        spacing = np.partition(steps, (m - 1) // 2)[(m - 1) // 2]
-    if not spacing > 0.0:
-        return 2, p, 0.0, 0.0
-    second = np.empty(m - 2)
-    for i in range(m - 2):
-        second[i] = abs(p[i + 2, 1] - 2.0 * p[i + 1, 1] + p[i, 1])
-    sigma = _SIGMA_FROM_SECOND_DIFF * np.partition(second, (m - 2) // 2)[(m - 2) // 2]
-    # Running median of 5 by the min/max network; the two points at each end take the
-    # nearest full window's median.
-    med = np.empty(m)
-    for i in range(m - 4):
-        a, b, c, d, e = p[i, 1], p[i + 1, 1], p[i + 2, 1], p[i + 3, 1], p[i + 4, 1]
-        f = max(min(a, b), min(c, d))
-        g = min(max(a, b), max(c, d))
-        med[i + 2] = max(min(e, f), min(max(e, f), g))
-    med[0] = med[1] = med[2]
-    med[m - 1] = med[m - 2] = med[m - 3]
-    limit = max(6.0 * sigma, 0.12, 4.0 * spacing)
-    count = 0
-    for i in range(m):
-        if abs(p[i, 1] - med[i]) <= limit:
-            count += 1
-    kept = np.empty((count, 2))
-    j = 0
-    for i in range(m):
-        if abs(p[i, 1] - med[i]) <= limit:
-            kept[j, 0] = p[i, 0]
-            kept[j, 1] = p[i, 1]
-            j += 1
-    return 0, kept, spacing, sigma
+    def __call__(self, profile: Profile) -> Feature:
+        try:
+            with np.errstate(all="ignore"):
+                return self._extract(profile)
+        except DATA_ERRORS as exc:  # never raise on data
+            return Feature.failed(f"generic: unusable profile ({exc})", joint=self.name)
 
+    def _extract(self, profile: Profile) -> Feature:
+        points = np.ascontiguousarray(profile.points_laser, dtype=np.float64).reshape(-1, 2)
+        valid = np.asarray(profile.valid, dtype=bool).reshape(-1)
+        if valid.shape != (len(points),):
+            return Feature.failed("valid does not match the points", joint=self.name)
+        cleaned = clean_points(points, valid, _MAX_ABS_MM, 4 * self.min_points)
+        p, spacing, sigma = cleaned.kept, cleaned.spacing, cleaned.sigma
+        if cleaned.status == TOO_FEW:
+            return Feature.failed(f"too few valid points ({len(p)})", joint=self.name)
+        if cleaned.status == NO_SPREAD:
+            return Feature.failed("the valid points do not spread out", joint=self.name)
+        m = len(p)
+        k = min(max(round(max(self.window_mm, 20 * sigma) / spacing), 4), max(4, m // 4))
+        if m < 2 * k + 2:
+            return Feature.failed("too few points for the slope window", joint=self.name)
+        jump_mm = max(6 * spacing, 8 * sigma, 0.1)
+        # Total-least-squares direction of each k-point window (from window sums), and the
+        # turn between windows k apart where no jump lies between them.
+        turns = window_turns(p, k, jump_mm)
+        gaps, turn = turns.gaps, turns.turn
+        min_turn = math.radians(self.min_turn_deg)
+        i = int(np.argmin(turn))
+        if turn[i] <= -min_turn:
+            return self._corner(profile, p, i + k, k, -float(turn[i]))
+        interior = np.flatnonzero(gaps > max(self.min_jump_mm, jump_mm))
+        if interior.size:
+            j = int(interior[np.argmax(gaps[interior])])
+            a, b = p[j], p[j + 1]
+            dy, dz = abs(b[0] - a[0]), abs(b[1] - a[1])
+            if dz > 2 * dy:  # a step: the corner at the foot of the higher side
+                hi, lo = (a, b) if a[1] < b[1] else (b, a)
+                seam = np.array([hi[0], lo[1]])
+            else:
+                seam = 0.5 * (a + b)
+            return Feature.found(
+                seam,
+                profile.T_world_sensor,
+                joint=self.name,
+                confidence=0.5,
+                edges_laser=np.array([a, b]),
+                gap_mm=float(dy),
+            )
+        i = int(np.argmax(turn))
+        if turn[i] >= min_turn:
+            return self._corner(profile, p, i + k, k, float(turn[i]))
+        return Feature.failed("no turn, gap or step in the profile", joint=self.name)
 
-@numba.njit(cache=True, nogil=True)
-def window_turns(p: FloatArray, k: int, jump_mm: float) -> tuple[FloatArray, FloatArray]:
-    """Gaps between neighbours, and the turn between the total-least-squares directions of
-    the k-point windows ending at i + k - 1 and i + 2k - 1 (0 where a window pair spans a
-    jump; the corner is at i + k).
-
-    Returns
-    -------
-    gaps : (m - 1,) float
-    turn : (m - 2k + 1,) float, radians, in (-pi, pi]
-    """
-    m = p.shape[0]
-    gaps = np.empty(m - 1)
-    jumps = np.zeros(m, dtype=np.int64)  # jumps[i]: gaps > jump_mm among the first i gaps
-    for i in range(m - 1):
-        gaps[i] = math.hypot(p[i + 1, 0] - p[i, 0], p[i + 1, 1] - p[i, 1])
-        jumps[i + 1] = jumps[i] + (1 if gaps[i] > jump_mm else 0)
-    cy, cz = p[m // 2, 0], p[m // 2, 1]
-    cs = np.zeros((m + 1, 5))
-    for i in range(m):
-        y, z = p[i, 0] - cy, p[i, 1] - cz
-        cs[i + 1, 0] = cs[i, 0] + y
-        cs[i + 1, 1] = cs[i, 1] + z
-        cs[i + 1, 2] = cs[i, 2] + y * y
-        cs[i + 1, 3] = cs[i, 3] + z * z
-        cs[i + 1, 4] = cs[i, 4] + y * z
-    n_win = m - k + 1
-    theta = np.empty(n_win)
-    for i in range(n_win):
-        sy = cs[i + k, 0] - cs[i, 0]
-        sz = cs[i + k, 1] - cs[i, 1]
-        cyy = cs[i + k, 2] - cs[i, 2] - sy * sy / k
-        czz = cs[i + k, 3] - cs[i, 3] - sz * sz / k
-        cyz = cs[i + k, 4] - cs[i, 4] - sy * sz / k
-        t = 0.5 * math.atan2(2.0 * cyz, cyy - czz)
-        chord_y = p[i + k - 1, 0] - p[i, 0]
-        chord_z = p[i + k - 1, 1] - p[i, 1]
-        if math.cos(t) * chord_y + math.sin(t) * chord_z < 0.0:
-            t += math.pi
-        theta[i] = t
-    n_turn = n_win - k
-    turn = np.empty(n_turn)
-    for i in range(n_turn):
-        if jumps[i + 2 * k - 1] == jumps[i]:
-            turn[i] = (theta[i + k] - theta[i] + math.pi) % (2.0 * math.pi) - math.pi
-        else:
-            turn[i] = 0.0
-    return gaps, turn
-
-
-@numba.njit(cache=True, nogil=True)
-def corner_point(p: FloatArray, c: int, k: int) -> tuple[int, float, float]:
-    """The corner at point c: the crossing of the lines fitted 2k points to each side (a guard
-    of k/2 points left out), or point c itself when the crossing is implausibly far.
-
-    Returns (code, y, z): code 1 when a side has fewer than 3 points (too near an end).
-    """
-    m = p.shape[0]
-    guard = max(1, k // 2)
-    llo, lhi = max(0, c - guard - 2 * k), max(1, c - guard)
-    rlo, rhi = c + guard, min(c + guard + 2 * k, m)
-    if lhi - llo < 3 or rhi - rlo < 3:
-        return 1, 0.0, 0.0
-    ay, az, ady, adz = fit_range(p, llo, lhi)
-    by, bz, bdy, bdz = fit_range(p, rlo, rhi)
-    # Spacing along the left line over its last ten points, as Line.step(True).
-    kk = min(10, lhi - llo - 1)
-    t_last = (p[lhi - 1, 0] - ay) * ady + (p[lhi - 1, 1] - az) * adz
-    t_prev = (p[lhi - 1 - kk, 0] - ay) * ady + (p[lhi - 1 - kk, 1] - az) * adz
-    step = abs(t_last - t_prev) / kk
-    d = ady * bdz - adz * bdy
-    if abs(d) >= 1e-9:
-        wy, wz = by - ay, bz - az
-        s = (wy * bdz - wz * bdy) / d
-        y, z = ay + s * ady, az + s * adz
-        if math.hypot(y - p[c, 0], z - p[c, 1]) <= 2 * k * (step + 1e-9) + 1.0:
-            return 0, y, z
-    return 0, p[c, 0], p[c, 1]
+    def _corner(self, profile: Profile, p: FloatArray, c: int, k: int, turn: float) -> Feature:
+        corner = corner_point(p, c, k)
+        if corner.too_near_end:
+            return Feature.failed("the corner is too near the profile's end", joint=self.name)
+        conf = float(np.clip(turn / math.radians(90), 0.0, 1.0))
+        return Feature.found(
+            np.array([corner.y, corner.z]), profile.T_world_sensor, joint=self.name,
+            confidence=conf,
+        )  # fmt: skip

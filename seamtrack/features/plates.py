@@ -14,26 +14,33 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import cast
 
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.features._between_plates import Scale
+from seamtrack.features._plate_lines import PlateLimits
+from seamtrack.features._two_lines import Line, Point
+from seamtrack.features._two_plate_search import (
+    FIT,
+    PIECE,
+    PlainLimits,
+    PlainScale,
+    two_plates,
+)
 from seamtrack.features.base import _Base
 from seamtrack.features.lines import Segments
-from seamtrack.features.psheets import FIT, PIECE, two_plates
 from seamtrack.sensing.profiles import Feature, Profile
 
 FloatArray = NDArray[np.float64]
-#: A point or a direction (y, z), as floats.
-_Vec = tuple[float, float]
-#: A line: centroid (y, z) and unit direction (y, z), as floats.
-_Ln = tuple[float, float, float, float]
+IntArray = NDArray[np.int64]
 
 
 @dataclass(frozen=True)
 class _Hole:
     """What lies between two consecutive plate runs
-    (:func:`seamtrack.features.pkernels.hole`).
+    (:func:`seamtrack.features._between_plates.hole`).
 
     ``open_mm``: how much of the stretch between their ends (along the left run's line)
     nothing covers: columns with no point (the laser fell through a gap or into a shadow), a
@@ -43,8 +50,8 @@ class _Hole:
     """
 
     open_mm: float
-    left: _Vec | None
-    right: _Vec | None
+    left: Point | None
+    right: Point | None
 
 
 @dataclass(frozen=True)
@@ -57,15 +64,43 @@ class _Pair:
     of a two-plate joint explains (each plate running on to the profile's end; what lies
     between them left out)."""
 
-    a: _Ln
-    b: _Ln
-    end_a: _Vec
-    start_b: _Vec
+    a: Line
+    b: Line
+    end_a: Point
+    start_b: Point
     hole: _Hole
     is_open: bool
     step: float
     confidence: float
     share: float
+
+
+def _table(seg: Segments) -> tuple[IntArray, FloatArray, FloatArray, IntArray]:
+    """The segmentation's table of pieces (:attr:`~seamtrack.features.lines.Segments.table`),
+    built from its ``Line`` objects when it kept none."""
+    if seg.table is not None:
+        index, along, fits, bounds = seg.table
+        return index, along, fits, bounds
+    pieces = seg.lines
+    fits = np.array(
+        [(*ln.centroid, *ln.direction, ln.rms, ln.t[0], ln.t[-1]) for ln in pieces],
+        dtype=np.float64,
+    ).reshape(-1, 7)
+    counts = [len(ln.index) for ln in pieces]
+    return (
+        np.concatenate([ln.index for ln in pieces]).astype(np.int64),
+        np.concatenate([ln.t for ln in pieces]).astype(np.float64),
+        fits,
+        np.concatenate([[0], np.cumsum(counts)]).astype(np.int64),
+    )
+
+
+def _rms(seg: Segments, kind: int, piece: int, anchor: int, refit_rms: float) -> float:
+    """A run's rms: its piece's, its refit's, or (a stub measured on its plate's line) the
+    plate line's anchor's."""
+    if kind == PIECE:
+        return seg.line(piece).rms
+    return refit_rms if kind == FIT else seg.line(anchor).rms
 
 
 def _pair(
@@ -75,8 +110,8 @@ def _pair(
     min_opening: float = 0.0,
 ) -> _Pair | None:
     """The plates of a profile and the pair of consecutive runs the extractor reads (None:
-    no pair qualifies): :func:`seamtrack.features.psheets.two_plates` on the pieces as flat
-    arrays.
+    no pair qualifies): :func:`seamtrack.features._two_plate_search.two_plates` on the
+    pieces as a table of arrays.
 
     Flat pieces (within ``max_tilt_deg`` of the y axis) that lie on one line form a plate
     line, however short each piece is (a stub cut off a plate by a reflection stays on its
@@ -90,63 +125,59 @@ def _pair(
     ``max_gap_mm``, a square butt takes the widest opening (an open gap before one a stray
     line covers), a lap the best supported pair with a step.
     """
-    if seg.table is not None:  # the arrays segmentation left
-        index, along, fits, bounds = seg.table
-        counts, geo = np.diff(bounds), fits[:, 0:4].ravel()
-    else:
-        lines = seg.lines
-        counts = np.array([len(ln.index) for ln in lines], dtype=np.int64)
-        index = np.concatenate([ln.index for ln in lines])
-        along = np.concatenate([ln.t for ln in lines])
-        geo = np.concatenate([x for ln in lines for x in (ln.centroid, ln.direction)])
-    ints, out = two_plates(
-        seg.points, index, along, counts, geo, seg.stray, int(ex.min_points),
-        float(ex.min_plate_mm), float(ex.max_tilt_deg), float(ex.max_gap_mm), float(seg.tol),
-        float(seg.spacing), float(seg.sigma), butt, float(min_opening),
-        float(getattr(ex, "min_open_mm", 0.0)), float(getattr(ex, "min_bottom_mm", math.inf)),
-        float(getattr(ex, "min_step_mm", 0.0)),
+    limits = PlateLimits(
+        min_points=int(ex.min_points),
+        min_plate_mm=float(ex.min_plate_mm),
+        max_tilt_deg=float(ex.max_tilt_deg),
+        max_gap_mm=float(ex.max_gap_mm),
+        butt=butt,
+        min_opening=float(min_opening),
+        min_open_mm=float(getattr(ex, "min_open_mm", 0.0)),
+        min_bottom_mm=float(getattr(ex, "min_bottom_mm", math.inf)),
+        min_step_mm=float(getattr(ex, "min_step_mm", 0.0)),
+    )
+    scale = Scale(float(seg.tol), float(seg.spacing), float(seg.sigma))
+    index, along, fits, bounds = _table(seg)
+    # Plain tuples and arrays: numba types them at once (named tuples in Python, slowly).
+    r = two_plates(
+        seg.points, index, along, fits, bounds, seg.stray, cast(PlainLimits, tuple(limits)),
+        cast(PlainScale, tuple(scale)),
     )  # fmt: skip
-    (ra, _, kind_a, kind_b, piece_a, piece_b, anchor_a, anchor_b, count_a, count_b,
-     is_open, left, right) = ints.tolist()  # fmt: skip
-    if ra < 0:
+    if not r.found:
         return None
-    f = out.tolist()
-    hole = _Hole(f[0], (f[1], f[2]) if left else None, (f[3], f[4]) if right else None)
-    # The runs' rms: a piece's, a refit's, or (a stub measured on its plate's line) the
-    # plate line's anchor's.
-    rms_a = (
-        seg.line(piece_a).rms
-        if kind_a == PIECE
-        else f[10]
-        if kind_a == FIT
-        else seg.line(anchor_a).rms
+    hole = _Hole(
+        r.open_mm,
+        Point(r.left_hidden_y, r.left_hidden_z) if r.left_hidden else None,
+        Point(r.right_hidden_y, r.right_hidden_z) if r.right_hidden else None,
     )
-    rms_b = (
-        seg.line(piece_b).rms
-        if kind_b == PIECE
-        else f[15]
-        if kind_b == FIT
-        else seg.line(anchor_b).rms
-    )
+    rms_left = _rms(seg, r.left_kind, r.left_piece, r.left_anchor, r.left_rms)
+    rms_right = _rms(seg, r.right_kind, r.right_piece, r.right_anchor, r.right_rms)
     # As base._confidence of the two runs' lines.
-    explained = (0 + count_a + count_b) / max(len(seg.points), 1)
-    fit = max(0.0, 1.0 - max(rms_a, rms_b) / seg.tol)
+    explained = (0 + r.left_count + r.right_count) / max(len(seg.points), 1)
+    fit = max(0.0, 1.0 - max(rms_left, rms_right) / seg.tol)
     conf = min(max(float(0.5 * explained + 0.5 * fit), 0.0), 1.0)  # NaN stays NaN
     return _Pair(
-        (f[6], f[7], f[8], f[9]), (f[11], f[12], f[13], f[14]), (f[16], f[17]), (f[18], f[19]),
-        hole, bool(is_open), f[5], conf, f[20],
-    )  # fmt: skip
+        Line(r.left_cy, r.left_cz, r.left_dy, r.left_dz),
+        Line(r.right_cy, r.right_cz, r.right_dy, r.right_dz),
+        Point(r.left_end_y, r.left_end_z),
+        Point(r.right_end_y, r.right_end_z),
+        hole,
+        r.is_open,
+        r.step,
+        conf,
+        r.share,
+    )
 
 
-def _foot(point: _Vec, line: _Ln) -> _Vec:
+def _foot(point: Point, line: Line) -> Point:
     """``point`` projected normally onto ``line``."""
     py, pz = point
     cy, cz, dy, dz = line
     h = (py - cy) * -dz + (pz - cz) * dy
-    return py - h * -dz, pz - h * dy
+    return Point(py - h * -dz, pz - h * dy)
 
 
-def _ray_hit(point: _Vec, line: _Ln) -> _Vec | None:
+def _ray_hit(point: Point, line: Line) -> Point | None:
     """Where the ray from the emitter (the origin) through ``point`` crosses ``line``, or
     None when (nearly) parallel (:func:`seamtrack.features.lines.intersect` of the ray and
     the line)."""
@@ -158,7 +189,7 @@ def _ray_hit(point: _Vec, line: _Ln) -> _Vec | None:
     if abs(d) < 1e-9:
         return None
     s = ((by - 0.0) * bdz - (bz - 0.0) * bdy) / d
-    return 0.0 + s * uy, 0.0 + s * uz
+    return Point(0.0 + s * uy, 0.0 + s * uz)
 
 
 @dataclass(frozen=True)
@@ -250,7 +281,7 @@ class LapExtractor(_Base):
         )
         top_hidden, lower_hidden = (hole.left, hole.right) if at_end else (hole.right, hole.left)
         # Away from the top sheet, along the lower one.
-        away_y, away_z = (lower[2], lower[3]) if at_end else (-lower[2], -lower[3])
+        away_y, away_z = (lower.dy, lower.dz) if at_end else (-lower.dy, -lower.dz)
         if top_hidden is None:
             edge = top_seen
             foot = _foot(edge, lower)
@@ -261,7 +292,7 @@ class LapExtractor(_Base):
             shadow = _ray_hit(edge, lower)
             if lower_hidden is not None or (
                 shadow is not None
-                and (shadow[0] - foot[0]) * away_y + (shadow[1] - foot[1]) * away_z > 0.0
+                and (shadow.y - foot.y) * away_y + (shadow.z - foot.z) * away_z > 0.0
             ):
                 seam = foot
             else:
@@ -275,7 +306,7 @@ class LapExtractor(_Base):
             edge = _foot(top_hidden, top)
             if over is not None:
                 landing = _foot(over, lower)
-                if (landing[0] - end[0]) * away_y + (landing[1] - end[1]) * away_z < 0.0:
+                if (landing.y - end.y) * away_y + (landing.z - end.z) * away_z < 0.0:
                     edge, seam = over, landing
         else:
             edge = _foot(top_hidden, top)
