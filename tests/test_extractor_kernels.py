@@ -1,4 +1,4 @@
-"""The extractors' compiled kernels (seamtrack.features.kernels, robust.front) against
+"""The extractors' compiled kernels (seamtrack.features._segmentation, robust.front) against
 independent references: numpy's SVD for line fits, brute-force two-line splits, sorting for
 medians, and the numpy formulation of the robust front end (seamtrack.features.robust's
 helpers)."""
@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from seamtrack.features import kernels
+from seamtrack.features import _segmentation as kernels
 from seamtrack.features.lines import segment_profile
 from seamtrack.features.robust import (
     DEFAULT_RESOLUTION_MM,

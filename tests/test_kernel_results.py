@@ -24,13 +24,13 @@ from seamtrack.features.extractors import BUILTIN, extractor
 from seamtrack.features.synthetic import Imperfections, synthetic_profile
 from seamtrack.sensing.sensor import preset
 
-#: The modules whose kernels this file holds to the rule (the two-plate side's join when
-#: they are converted: pkernels, psheets, plates, generic).
+#: The modules whose kernels this file holds to the rule (the two-plate side's are held to
+#: it by tests/test_plate_kernels.py as well).
 MODULES = (
     "seamtrack.features.select",
     "seamtrack.features.counts",
     "seamtrack.features.robust",
-    "seamtrack.features.kernels",
+    "seamtrack.features._segmentation",
     "seamtrack.features.lines",
     "seamtrack.features._v_search",
     "seamtrack.features._v_root",
@@ -39,6 +39,13 @@ MODULES = (
     "seamtrack.features.base",
     "seamtrack.features.extractors",
     "seamtrack.features.classify",
+    "seamtrack.features._two_lines",
+    "seamtrack.features._between_plates",
+    "seamtrack.features._plate_lines",
+    "seamtrack.features._two_plate_search",
+    "seamtrack.features._slope_turns",
+    "seamtrack.features.plates",
+    "seamtrack.features.generic",
 )
 
 
@@ -99,13 +106,19 @@ def test_kernels_return_named_results(name: str) -> None:
     assert not bad, "\n".join(bad)
 
 
+#: Kernels whose result is one quantity, an array of like values (indices of the kept
+#: points, an order, positions along a line): indexing it by position is reading that array,
+#: not a slot of a mixed result.
+ONE_QUANTITY = {"kept", "_order", "_along"}
+
+
 def _kernel_names(name: str) -> set[str]:
-    """The names under which module ``name`` holds compiled kernels."""
+    """The names under which module ``name`` holds compiled kernels of several results."""
     module = importlib.import_module(name)
     return {
         attr
         for attr, value in vars(module).items()
-        if isinstance(value, numba.core.registry.CPUDispatcher)
+        if isinstance(value, numba.core.registry.CPUDispatcher) and attr not in ONE_QUANTITY
     }
 
 
@@ -204,5 +217,5 @@ def test_compiled_kernels_return_named_tuples() -> None:
                 if isinstance(ret, types.BaseTuple) and not isinstance(ret, types.BaseNamedTuple):
                     bad.append(f"{name}.{attr} -> {ret}")
     # the extractors' entry kernels ran (the kernels they call run inside them, compiled)
-    assert {"kernels.segment", "_v_search.search", "_v_groove_model.v_groove"} <= seen
+    assert {"_segmentation.segment", "_v_search.search", "_v_groove_model.v_groove"} <= seen
     assert not bad, "\n".join(bad)

@@ -18,6 +18,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.features._segmentation import _fit as _fit_tls
 from seamtrack.features._two_lines import (
     PieceLines,
     Point,
@@ -27,7 +28,6 @@ from seamtrack.features._two_lines import (
     median,
     towards,
 )
-from seamtrack.features.kernels import _fit as _fit_tls
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]

@@ -20,7 +20,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features.kernels import fit_range
+from seamtrack.features._segmentation import fit_range
 
 FloatArray = NDArray[np.float64]
 

@@ -7,7 +7,7 @@ pair of runs in one call, on the profile's pieces held as a table of arrays (:cl
 as Python on ``Line`` objects it was some hundreds of small operations per profile, most of an
 extractor's time once the segmentation is compiled. The plate lines' groups are
 :func:`seamtrack.features.lines.collinear_members`' and the runs' refits
-:func:`seamtrack.features.kernels.fit_line`'s, computed the same way; what lies between two
+:func:`seamtrack.features._segmentation.fit_line`'s, computed the same way; what lies between two
 runs is :func:`seamtrack.features._between_plates.hole`'s.
 """
 
@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 
 from seamtrack.features._between_plates import NO_HOLE, Hole, Scale, hole
 from seamtrack.features._plate_lines import PlateLimits, plate_pieces, span
+from seamtrack.features._segmentation import fit_line
 from seamtrack.features._two_lines import (
     Line,
     PieceLines,
@@ -33,7 +34,6 @@ from seamtrack.features._two_lines import (
     steps,
     two_lines_share,
 )
-from seamtrack.features.kernels import fit_line
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]

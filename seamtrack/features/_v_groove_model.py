@@ -282,7 +282,7 @@ def _explained(points, surface, tb, bevels, outer_l, outer_r, tol):
 @numba.njit(cache=True, nogil=True)
 def v_groove(points, stray, columns, runs, tol, sigma, spacing, pieces, params):
     """:meth:`VGrooveExtractor._extract` after segmentation, on the profile's pieces
-    (:class:`~seamtrack.features.kernels.PieceTable`), with the extractor's
+    (:class:`~seamtrack.features._segmentation.PieceTable`), with the extractor's
     :class:`GrooveParams`; a :class:`VGrooveResult`.
 
     The model of a groove, in its steps: the V (:func:`~._v_search.search`); its root ends

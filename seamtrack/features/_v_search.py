@@ -26,8 +26,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features.counts import explained_share, support
-from seamtrack.features.kernels import (
+from seamtrack.features._segmentation import (
     FIT_CY,
     FIT_CZ,
     FIT_RMS,
@@ -36,6 +35,7 @@ from seamtrack.features.kernels import (
     PieceTable,
     fit_line,
 )
+from seamtrack.features.counts import explained_share, support
 from seamtrack.features.select import sort_small
 
 FloatArray = NDArray[np.float64]
@@ -528,7 +528,7 @@ def corner_with(tb, line, at_end, others, spacing, tol):
 
 @numba.njit(cache=True, nogil=True)
 def search(points, stray, tol, pieces, params):
-    """The V search on a profile's pieces (:class:`~seamtrack.features.kernels.PieceTable`),
+    """The V search on a profile's pieces (:class:`~seamtrack.features._segmentation.PieceTable`),
     in its steps: the table of lines, each point's piece, the collinear groups, the best
     pair (:class:`Search`)."""
     tb = new_table(pieces)
@@ -543,7 +543,7 @@ def search(points, stray, tol, pieces, params):
 
 
 def pieces_of(seg: Any) -> PieceTable:
-    """The :class:`~seamtrack.features.kernels.PieceTable` of a
+    """The :class:`~seamtrack.features._segmentation.PieceTable` of a
     :class:`~seamtrack.features.lines.Segments`: the one segmentation left (``seg.table``),
     else built from its lines."""
     if seg.table is not None:
@@ -553,7 +553,7 @@ def pieces_of(seg: Any) -> PieceTable:
 
 def flat_lines(lines: list[Any]) -> PieceTable:
     """A profile's pieces (:class:`~seamtrack.features.lines.Line`, at least one) as a
-    :class:`~seamtrack.features.kernels.PieceTable`."""
+    :class:`~seamtrack.features._segmentation.PieceTable`."""
     counts = [len(ln.index) for ln in lines]
     fits = np.array(
         [

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features.kernels import (
+from seamtrack.features._segmentation import (
     NO_PIECE,
     SEGMENTED,
     TOO_MANY_PIECES,
@@ -95,7 +95,7 @@ class Line:
 
 def _fit(points: FloatArray, index: NDArray[np.intp]) -> Line:
     """Total-least-squares line through ``points[index]`` (column order kept); compiled
-    (:func:`seamtrack.features.kernels.fit_line`): numpy's per-call overhead on a few hundred
+    (:func:`seamtrack.features._segmentation.fit_line`): numpy's per-call overhead on a few hundred
     points was most of its cost."""
     if len(index) == 0:
         raise ValueError("no points to fit a line to")
@@ -123,7 +123,7 @@ class Segments:
     quantum: float = 0.0
     resolution: float = DEFAULT_RESOLUTION_MM
     #: The pieces as :func:`segment_profile`'s compiled call left them, for the compiled joint
-    #: models (:class:`~seamtrack.features.kernels.PieceTable`: ``index, along, fits,
+    #: models (:class:`~seamtrack.features._segmentation.PieceTable`: ``index, along, fits,
     #: bounds``). None: build them from ``lines``.
     table: PieceTable | None = None
 
@@ -190,7 +190,7 @@ def segment_profile(
     if valid.shape != (n,):
         return "too few valid points (0)"
     max_lines = int(max_lines)
-    # The compiled call writes into these (see :func:`seamtrack.features.kernels.segment`).
+    # The compiled call writes into these (see :func:`seamtrack.features._segmentation.segment`).
     at = buffer_layout(n, max_lines)
     floats = np.empty(at.floats)
     ints = np.empty(at.ints, dtype=np.intp)
