@@ -48,7 +48,8 @@ class Findings:
     """What the search met on its way, for the error when no seam is left."""
 
     overlapping: list[tuple[int, int]] = field(default_factory=list)
-    filled: list[tuple[int, int, int]] = field(default_factory=list)  # a, b, the filling body
+    #: a, b, and the body that fills their gap (None: bodies stand in it along every seam)
+    filled: list[tuple[int, int, int | None]] = field(default_factory=list)
     short_mm: list[float] = field(default_factory=list)  # longest pieces dropped as too short
 
 
@@ -138,9 +139,10 @@ def no_seam_error(
         )
     if findings.filled:
         a, b, k = findings.filled[0]
+        what = "another body" if k is None else names[k]
         return WorkpieceError(
-            f"{source}: {names[a]} and {names[b]} face each other only across "
-            f"{names[k]}, which fills the gap between them, so no seam was found",
+            f"{source}: {names[a]} and {names[b]} face each other only across a gap that "
+            f"{what} stands in (no line of sight between their faces), so no seam was found",
             field=field_name,
             fix="seams are found between faces that touch, or face each other across free space",
         )

@@ -390,7 +390,7 @@ def seams_of_bodies(
                     (solids[i], solids[j]), (i, j), tolerance_mm, spacing_mm
                 )
             for piece in pieces:
-                for candidate in _candidates(piece, space, thin, min_length_mm, met.short_mm):
+                for candidate in _candidates(piece, space, thin, min_length_mm, met):
                     raw.append(((i, j), candidate))
     if not raw:
         if nearest[0] > max_gap_mm:
@@ -422,11 +422,11 @@ def _candidates(
     space: Any,
     thin: list[tuple[FloatArray, float, float]],
     min_length_mm: float,
-    short: list[float],
+    met: Any,
 ) -> list[dict[str, Any]]:
     """The welds along one boundary piece: classified, flush ends and covered stretches out
-    (a third body on the torch side, or standing in the gap); the lengths of stretches too
-    short to keep go to ``short``."""
+    (a third body on the torch side, or standing in the gap); what was dropped goes to ``met``
+    (:class:`~seamtrack.workpiece.clearance.Findings`)."""
     from seamtrack.workpiece.clearance import gap_blocked
     from seamtrack.workpiece.contacts import opening_angles
 
@@ -448,6 +448,8 @@ def _candidates(
         return piece.inward is not None and gap_blocked(piece, point, piece.inward[k], space)
 
     covered = np.array([hidden(p, k) for k, p in enumerate(piece.points)])
+    if covered.all() and piece.gap_mm > 0:
+        met.filled.append((*piece.bodies, None))
     out = []
     for first, last in _runs(covered):
         lo, hi = max(first - 1, 0), min(last + 1, len(covered) - 1)
@@ -466,7 +468,7 @@ def _candidates(
         points, index = points[keep], index[keep]
         length = float(np.sum(np.linalg.norm(np.diff(points, axis=0), axis=1)))
         if length < min_length_mm or len(points) < 2:
-            short.append(length)
+            met.short_mm.append(length)
             continue
         out.append(
             {
