@@ -11,6 +11,7 @@ the groove part's own parameters, on ``seamtrack run weldx-v-groove``.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
@@ -20,7 +21,7 @@ from seamtrack.bench.failure_kit import Entry, _run, _set
 FILES: dict[str, bytes] = {}
 
 
-def _assembly(path: Path, boxes: dict[str, tuple[float, ...]], rod: bool = False) -> None:
+def _assembly(path: Path, boxes: Mapping[str, tuple[float, ...]], rod: bool = False) -> None:
     """A STEP assembly of named boxes (x, y, z, dx, dy, dz); ``rod``: and a 1 mm rod along y
     at x = 1.5, z = 0.5, 4 mm long."""
     import cadquery as cq

@@ -147,7 +147,7 @@ def _defaults(cls: Any) -> dict[str, float]:
     """A groove class's default parameters that have a value, in mm and deg by weldx name."""
     out = {}
     for f in dataclasses.fields(cls):
-        value = f.default
+        value: Any = f.default
         if f.init and hasattr(value, "to") and hasattr(value, "magnitude"):
             out[f.name] = float(value.to(_unit(f.name)).magnitude)
     return out
