@@ -164,7 +164,11 @@ GROOVES: tuple[Entry, ...] = (
     _table(
         f"{_DU}, R2_mm=30".replace("R2_mm=6, ", ""), "R2_mm", "DUGroove R2_mm=30 deeper than its U"
     ),
-    _table(_DU.replace("t_mm=40", "t_mm=2"), "c_mm", "DUGroove default c_mm=3 in t_mm=2"),
+    _table(
+        _DU.replace("t_mm=40", "t_mm=2").replace("R_mm=6, R2_mm=6", "R_mm=0.5, R2_mm=0.5"),
+        "c_mm",
+        "DUGroove default c_mm=3 in t_mm=2",
+    ),
     _table(f"{_DHU}, c_mm=50", "c_mm", "DHUGroove c_mm=50 in t_mm=40"),
     _table(
         f"{_DHU}, beta_1_deg=90".replace("beta_1_deg=8, ", ""),
