@@ -87,6 +87,11 @@ WELDMENTS: tuple[Entry, ...] = (
     _seams("seams, three 0.1 mm cubes in a row", "tiny_row.step"),
     _seams("seams, plates facing across a rod", "rod_in_gap.step"),
     Entry(
+        "weldment scene, two coincident boxes",
+        ("run", "weld.toml", *_set('workpiece.step="coincident.step"'), "--out", "OUT"),
+        field="workpiece.step",
+    ),
+    Entry(
         "seams --min-length-mm 0",
         ("seams", "tiny_pair.step", "--min-length-mm", "0"),
         field="--min-length-mm",

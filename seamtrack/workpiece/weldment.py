@@ -27,7 +27,9 @@ faces decide where a weld is and what kind. Here:
 5. Not welds: a boundary across the end of a contact strip where both bodies end flush (opening
    180 deg: the side of a butt joint, the flush end of a web), and stretches whose torch side is
    filled by a third body (a gusset sitting on a fillet line splits it in two; the corner where
-   a gusset meets both plates is no seam). Pieces shorter than ``min_length_mm`` are dropped.
+   a gusset meets both plates is no seam), and across a gap, stretches where a third body
+   stands in it (``clearance``: no line of sight between the faces). Pieces shorter than
+   ``min_length_mm`` are dropped.
 6. Reachability: the torch direction must be free of material for ``torch_length_mm``
    (a ray from every sampled point, against all bodies).
 
