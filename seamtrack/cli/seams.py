@@ -33,6 +33,12 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
         help="free length the torch direction needs to count as reachable (default 100)",
     )
     p.add_argument(
+        "--min-length-mm",
+        type=float,
+        default=1.0,
+        help="shorter seams are dropped (default 1)",
+    )
+    p.add_argument(
         "--param",
         action="append",
         metavar="KEY=VALUE",
@@ -84,7 +90,7 @@ def cmd_seams(args: argparse.Namespace) -> int:
     from seamtrack.workpiece.weldment import find_seams
 
     params = _params(args.param)
-    for name in ("max_gap_mm", "torch_length_mm"):
+    for name in ("max_gap_mm", "torch_length_mm", "min_length_mm"):
         value = getattr(args, name)
         if not (math.isfinite(value) and value > 0):
             raise SeamtrackError(
@@ -99,6 +105,7 @@ def cmd_seams(args: argparse.Namespace) -> int:
         args.part,
         max_gap_mm=args.max_gap_mm,
         torch_length_mm=args.torch_length_mm,
+        min_length_mm=args.min_length_mm,
         field="PART",
         **params,
     )

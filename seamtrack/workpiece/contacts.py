@@ -97,6 +97,11 @@ class Piece:
     region_extent_mm : float
         Extent of the contact region across the seam (from the seam into the region).
     length_mm : float
+    inward : (n, 3) float or None
+        Unit directions from each point into the region, in its plane (None: no region).
+    plane_a : (3,) float or None
+        A point of A's contact plane (None: no region); with ``contact_normal`` and
+        ``gap_mm`` it spans the gap a seam across it must see through.
     """
 
     bodies: tuple[int, int]
@@ -109,6 +114,8 @@ class Piece:
     gap_mm: float
     region_extent_mm: float
     length_mm: float
+    inward: FloatArray | None = None
+    plane_a: FloatArray | None = None
 
 
 # ----------------------------------------------------------------------------- helpers
@@ -218,10 +225,15 @@ def thin_axis(solid: TopoDS_Shape) -> tuple[FloatArray, float, float]:
 
 # ----------------------------------------------------------------------------- regions
 def facing_regions(
-    solid_a: TopoDS_Shape, solid_b: TopoDS_Shape, max_gap_mm: float
+    solid_a: TopoDS_Shape,
+    solid_b: TopoDS_Shape,
+    max_gap_mm: float,
+    min_area_mm2: float = MIN_REGION_AREA_MM2,
+    small: list[float] | None = None,
 ) -> list[tuple[PlanarFace, PlanarFace, float, TopoDS_Face]]:
     """(face of A, face of B, gap, region) for every pair of planar faces that face each other
-    within ``max_gap_mm``; the region lies in B's face plane."""
+    within ``max_gap_mm``; the region lies in B's face plane. Regions under ``min_area_mm2``
+    are touches, not joints: the square root of each such area goes to ``small``."""
     box_b = bounds(solid_b)
     faces_a = [f for f in planar_faces(solid_a) if boxes_meet((f.lo, f.hi), box_b, max_gap_mm)]
     box_a = bounds(solid_a)
@@ -243,14 +255,20 @@ def facing_regions(
             if not common.IsDone():
                 continue
             for region in faces(common.Shape()):
-                if area(region) >= MIN_REGION_AREA_MM2:
+                size = area(region)
+                if size >= min_area_mm2:
                     out.append((fa, fb, gap, region))
+                elif small is not None and size > 0:
+                    small.append(math.sqrt(size))
     return out
 
 
 def _edge_under(face: TopoDS_Face, points: FloatArray) -> TopoDS_Edge | None:
     """The edge of ``face`` on which all ``points`` lie, or None."""
     for edge in edges(face):
+        lo, hi = bounds(edge)
+        if np.any(points < lo - ON_TOL_MM) or np.any(points > hi + ON_TOL_MM):
+            continue  # off the edge's box: off the edge
         if all(_point_to_shape(p, edge) <= ON_TOL_MM for p in points):
             return edge
     return None
@@ -278,10 +296,16 @@ def _inside_face(face: TopoDS_Face, point: FloatArray) -> bool:
     return state in (TopAbs_IN, TopAbs_ON)
 
 
-def _side(face: TopoDS_Face, point: FloatArray, normal: FloatArray, tangent: FloatArray) -> float:
+def _side(
+    face: TopoDS_Face,
+    point: FloatArray,
+    normal: FloatArray,
+    tangent: FloatArray,
+    step_mm: float = SIDE_STEP_MM,
+) -> float:
     """+1 if the face lies on the ``normal x tangent`` side of the point, else -1."""
     direction = _unit(np.cross(normal, tangent))
-    inside = _inside_face(face, point + SIDE_STEP_MM * direction)
+    inside = _inside_face(face, point + step_mm * direction)
     return 1.0 if inside else -1.0
 
 
@@ -442,7 +466,10 @@ def _piece(
     ends = (walls[0] is not None, walls[1] is not None)
     mid = len(points) // 2
     p_mid, t_mid = points[mid], tangents[mid]
-    s_in = _side(region, p_mid, n_a, t_mid) * _unit(np.cross(n_a, t_mid))
+    # Step less than the region's width into it (parts far under a millimetre).
+    lo, hi = bounds(region)
+    step = min(SIDE_STEP_MM, 0.1 * float(np.sort(hi - lo)[1]))
+    s_in = _side(region, p_mid, n_a, t_mid, step) * _unit(np.cross(n_a, t_mid))
     n = len(points)
     normals = np.empty((n, 2, 3))
     along = np.empty((n, 2, 3))
@@ -454,7 +481,7 @@ def _piece(
             continue
         at = points + offsets[k]
         normals[:, k] = [face_normal(wall, p) for p in at]
-        sign = _side(wall, at[mid], normals[mid, k], t_mid)
+        sign = _side(wall, at[mid], normals[mid, k], t_mid, step)
         along[:, k] = sign * _unit_rows(np.cross(normals[:, k], tangents))
     if ends == (True, False):
         seam = points  # on B's face, under A's wall
@@ -464,7 +491,8 @@ def _piece(
         seam = points - 0.5 * gap * n_a  # both end: the middle of the gap
     length = float(np.sum(np.linalg.norm(np.diff(seam, axis=0), axis=1)))
     extent = float(np.max((region_pts - p_mid) @ s_in))
-    return seam, tangents, normals, along, ends, n_a, float(gap), extent, length
+    inward = s_in_all(tangents, n_a, s_in, t_mid)
+    return seam, tangents, normals, along, ends, n_a, float(gap), extent, length, inward, fa.point
 
 
 def s_in_all(tangents: FloatArray, normal: FloatArray, s_mid: FloatArray, t_mid: FloatArray):
@@ -491,27 +519,55 @@ class FreeSpace:
     def __init__(self, solids: Sequence[TopoDS_Shape]):
         self.solids = list(solids)
         self.boxes = [bounds(s) for s in self.solids]
+        self._lo = np.array([lo for lo, _ in self.boxes]).reshape(-1, 3) - ON_TOL_MM
+        self._hi = np.array([hi for _, hi in self.boxes]).reshape(-1, 3) + ON_TOL_MM
         self._rays = []
         for solid in self.solids:
             intersector = IntCurvesFace_ShapeIntersector()
             intersector.Load(solid, ON_TOL_MM)
             self._rays.append(intersector)
 
+    def near(self, lo: FloatArray, hi: FloatArray, skip: Sequence[int] = ()) -> list[int]:
+        """Indices of the bodies whose boxes meet the box (lo, hi), but those in ``skip``."""
+        meet = np.all(self._lo <= hi, axis=1) & np.all(self._hi >= lo, axis=1)
+        return [int(i) for i in np.flatnonzero(meet) if int(i) not in skip]
+
     def inside(self, point: FloatArray, skip: Sequence[int] = ()) -> int | None:
         """Index of the body that holds ``point`` in its interior, or None."""
-        for i, (solid, (lo, hi)) in enumerate(zip(self.solids, self.boxes, strict=True)):
-            if i in skip or np.any(point < lo - ON_TOL_MM) or np.any(point > hi + ON_TOL_MM):
-                continue
-            classifier = BRepClass3d_SolidClassifier(solid, gp_Pnt(*point), CLASSIFY_TOL_MM)
+        for i in self.near(point, point, skip):
+            classifier = BRepClass3d_SolidClassifier(
+                self.solids[i], gp_Pnt(*point), CLASSIFY_TOL_MM
+            )
             if classifier.State() == TopAbs_IN:
                 return i
         return None
 
-    def blocked(self, start: FloatArray, direction: FloatArray, length_mm: float) -> bool:
-        """Whether the segment from ``start`` along ``direction`` hits any body."""
+    def blocked(
+        self,
+        start: FloatArray,
+        direction: FloatArray,
+        length_mm: float,
+        skip: Sequence[int] = (),
+        first_mm: float = 0.0,
+    ) -> bool:
+        """Whether the segment from ``start`` along ``direction``, between ``first_mm`` and
+        ``length_mm``, crosses the surface of a body (but those in ``skip``)."""
+        end = start + length_mm * np.asarray(direction)
         line = gp_Lin(gp_Pnt(*start), gp_Dir(*direction))
-        for intersector in self._rays:
-            intersector.Perform(line, 0.0, length_mm)
+        for i in self.near(np.minimum(start, end), np.maximum(start, end), skip):
+            intersector = self._rays[i]
+            intersector.Perform(line, first_mm, length_mm)
             if intersector.IsDone() and intersector.NbPnt() > 0:
                 return True
         return False
+
+    def sight_blocked(
+        self, start: FloatArray, direction: FloatArray, length_mm: float, skip: Sequence[int]
+    ) -> bool:
+        """Whether a body (but those in ``skip``) stands in the open segment from ``start``
+        along ``direction`` for ``length_mm``: its surface crosses the segment, or (crossing
+        nothing) the segment's middle lies inside it. Exact for any solids."""
+        margin = min(ON_TOL_MM, 0.25 * length_mm)
+        if self.blocked(start, direction, length_mm - margin, skip, first_mm=margin):
+            return True
+        return self.inside(start + 0.5 * length_mm * np.asarray(direction), skip) is not None

@@ -29,6 +29,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.errors import WorkpieceError
+from seamtrack.workpiece.groove_rules import (
+    check_groove,
+    check_number,
+    check_path_params,
+    check_plate_width,
+)
 
 FloatArray = NDArray[np.float64]
 
@@ -79,13 +85,15 @@ def _fields(cls: Any) -> dict[str, bool]:
 
 
 def groove_spec(groove: dict[str, Any]) -> dict[str, Any]:
-    """Check a groove table against weldx and return it normalized (floats, sorted keys).
+    """Check a groove table against weldx and ISO 9692-1 and return it normalized (floats,
+    sorted keys).
 
     Raises
     ------
     WorkpieceError
         weldx missing, a type weldx does not define, a parameter it does not take, one it
-        needs that is missing, or a value that is not a finite number.
+        needs that is missing, a value that is not a finite number, or one outside what
+        ISO 9692-1 means by it (:mod:`seamtrack.workpiece.groove_rules`).
     """
     if not isinstance(groove, dict) or not isinstance(groove.get("type"), str):
         raise WorkpieceError(
@@ -95,6 +103,14 @@ def groove_spec(groove: dict[str, Any]) -> dict[str, Any]:
         )
     classes = groove_classes()
     kind = groove["type"]
+    if kind == "FFGroove":
+        raise WorkpieceError(
+            "FFGroove is weldx's frame (fillet and flange) groove, not a butt groove of two "
+            "plates that seamtrack builds",
+            field=f"{FIELD}.type",
+            fix=f"use one of {', '.join(sorted(classes))}; for a fillet joint use a joint "
+            "script (cad/fillet_t.py)",
+        )
     if kind not in classes:
         raise WorkpieceError(
             f"weldx defines no groove {kind!r}",
@@ -113,17 +129,7 @@ def groove_spec(groove: dict[str, Any]) -> dict[str, Any]:
                 field=f"{FIELD}.{key}",
                 fix=f"{kind} takes {', '.join(keys)}",
             )
-        if (
-            isinstance(value, bool)
-            or not isinstance(value, int | float)
-            or not math.isfinite(value)
-        ):
-            raise WorkpieceError(
-                f"{key} must be a finite number, got {value!r}",
-                field=f"{FIELD}.{key}",
-                fix="give a number in the unit of the key's suffix",
-            )
-        spec[key] = float(value)
+        spec[key] = check_number(value, f"{FIELD}.{key}")
     missing = [k for k, name in keys.items() if fields[name] and k not in spec]
     if missing:
         raise WorkpieceError(
@@ -131,7 +137,20 @@ def groove_spec(groove: dict[str, Any]) -> dict[str, Any]:
             field=f"{FIELD}.{missing[0]}",
             fix=f"add {', '.join(missing)} (weldx's {kind} parameters, unit in the suffix)",
         )
+    values = _defaults(classes[kind])  # weldx's defaults (DUGroove: a 3 mm root face)
+    values.update({keys[k]: v for k, v in spec.items() if k != "type"})
+    check_groove(kind, values, given={keys[k] for k in spec if k != "type"})
     return dict(sorted(spec.items()))
+
+
+def _defaults(cls: Any) -> dict[str, float]:
+    """A groove class's default parameters that have a value, in mm and deg by weldx name."""
+    out = {}
+    for f in dataclasses.fields(cls):
+        value: Any = f.default
+        if f.init and hasattr(value, "to") and hasattr(value, "magnitude"):
+            out[f.name] = float(value.to(_unit(f.name)).magnitude)
+    return out
 
 
 def groove_object(spec: dict[str, Any]) -> Any:
@@ -243,13 +262,8 @@ def build_groove(
                 field=f"workpiece.params.{key}",
                 fix=f"give {', '.join((*PATH_PARAMS, *PLATE_DEFAULTS))}",
             )
-    width = float(params.get("plate_width_mm", PLATE_DEFAULTS["plate_width_mm"]))
-    if not width > 0:
-        raise WorkpieceError(
-            f"plate_width_mm must be > 0, got {width}",
-            field="workpiece.params.plate_width_mm",
-            fix="give e.g. 50",
-        )
+    width = check_plate_width(params.get("plate_width_mm", PLATE_DEFAULTS["plate_width_mm"]))
+    check_path_params(params)
     plates, walls, normals = plate_profiles(spec, width, tolerance_mm)
     path_args = {
         "path": params.get("path", "straight"),

@@ -27,7 +27,9 @@ faces decide where a weld is and what kind. Here:
 5. Not welds: a boundary across the end of a contact strip where both bodies end flush (opening
    180 deg: the side of a butt joint, the flush end of a web), and stretches whose torch side is
    filled by a third body (a gusset sitting on a fillet line splits it in two; the corner where
-   a gusset meets both plates is no seam). Pieces shorter than ``min_length_mm`` are dropped.
+   a gusset meets both plates is no seam), and across a gap, stretches where a third body
+   stands in it (``clearance``: no line of sight between the faces). Pieces shorter than
+   ``min_length_mm`` are dropped.
 6. Reachability: the torch direction must be free of material for ``torch_length_mm``
    (a ray from every sampled point, against all bodies).
 
@@ -337,13 +339,14 @@ def seams_of_bodies(
     field: str = "workpiece.step",
 ) -> list[FoundSeam]:
     """Every candidate weld between the given (name, solid) bodies; see :func:`find_seams`."""
-    from seamtrack.workpiece import contacts, crossings
+    from seamtrack.workpiece import clearance, contacts, crossings
 
     for name, value in (
         ("max_gap_mm", max_gap_mm),
         ("torch_length_mm", torch_length_mm),
         ("tolerance_mm", tolerance_mm),
         ("spacing_mm", spacing_mm),
+        ("min_length_mm", min_length_mm),
     ):
         if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
             raise WorkpieceError(f"{name} must be > 0, got {value!r}", field=name, fix="e.g. 1")
@@ -360,6 +363,9 @@ def seams_of_bodies(
     thin = [contacts.thin_axis(s) for s in solids]
     nearest = (math.inf, 0, 1)
     raw: list[tuple[tuple[int, int], dict[str, Any]]] = []
+    met = clearance.Findings()
+    # Tiny regions are slivers of the booleans, unless the seams wanted are tiny too.
+    min_area = contacts.MIN_REGION_AREA_MM2 * min(1.0, min_length_mm) ** 2
     for i in range(len(solids)):
         for j in range(i + 1, len(solids)):
             if not contacts.boxes_meet(space.boxes[i], space.boxes[j], max_gap_mm):
@@ -368,19 +374,25 @@ def seams_of_bodies(
             nearest = min(nearest, (d, i, j))
             if d > max_gap_mm:
                 continue
-            pieces = [
-                piece
-                for fa, fb, gap, region in contacts.facing_regions(solids[i], solids[j], max_gap_mm)
-                for piece in contacts.region_pieces(
+            pieces = []
+            for fa, fb, gap, region in contacts.facing_regions(
+                solids[i], solids[j], max_gap_mm, min_area, met.short_mm
+            ):
+                if gap > contacts.ON_TOL_MM:  # facing across a gap: is it free?
+                    filler = clearance.gap_filled(region, fa.normal, gap, space, (i, j))
+                    if filler is not None:
+                        met.filled.append((i, j, filler))
+                        continue
+                pieces += contacts.region_pieces(
                     (solids[i], solids[j]), (i, j), fa, fb, gap, region, tolerance_mm, spacing_mm
                 )
-            ]
             if d <= contacts.ON_TOL_MM and crossings.overlap(solids[i], solids[j]):
+                met.overlapping.append((i, j))
                 pieces += crossings.crossing_pieces(
                     (solids[i], solids[j]), (i, j), tolerance_mm, spacing_mm
                 )
             for piece in pieces:
-                for candidate in _candidates(piece, space, thin, min_length_mm):
+                for candidate in _candidates(piece, space, thin, min_length_mm, met):
                     raw.append(((i, j), candidate))
     if not raw:
         if nearest[0] > max_gap_mm:
@@ -400,20 +412,24 @@ def seams_of_bodies(
                 field=field,
                 fix="check the bodies' placement and units, or raise max_gap_mm",
             )
-        raise WorkpieceError(
-            f"{source}: the bodies touch, but nowhere along planar faces or crossing "
-            "surfaces (only at points, lines or curved faces), so no seam was found",
-            field=field,
-            fix="seams are found between planar faces that touch or face each other",
+        raise clearance.no_seam_error(
+            met, solids, names, source=source, field_name=field, min_length_mm=min_length_mm
         )
     seams = [_finish(pair, c, names, space, torch_length_mm) for pair, c in raw]
     return _number(seams)
 
 
 def _candidates(
-    piece: Any, space: Any, thin: list[tuple[FloatArray, float, float]], min_length_mm: float
+    piece: Any,
+    space: Any,
+    thin: list[tuple[FloatArray, float, float]],
+    min_length_mm: float,
+    met: Any,
 ) -> list[dict[str, Any]]:
-    """The welds along one boundary piece: classified, flush ends and covered stretches out."""
+    """The welds along one boundary piece: classified, flush ends and covered stretches out
+    (a third body on the torch side, or standing in the gap); what was dropped goes to ``met``
+    (:class:`~seamtrack.workpiece.clearance.Findings`)."""
+    from seamtrack.workpiece.clearance import gap_blocked
     from seamtrack.workpiece.contacts import opening_angles
 
     opening = opening_angles(piece)
@@ -427,21 +443,24 @@ def _candidates(
     )
     joint = classify(piece.ends, lying, median)  # type: ignore[arg-type]
     torch = torch_directions(piece.face_normals, piece.tangents)
-    covered = np.array(
-        [
-            space.inside(p + COVER_STEP_MM * b, skip=piece.bodies) is not None
-            for p, b in zip(piece.points, torch, strict=True)
-        ]
-    )
+
+    def hidden(point: FloatArray, k: int) -> bool:
+        if space.inside(point + COVER_STEP_MM * torch[k], skip=piece.bodies) is not None:
+            return True
+        return piece.inward is not None and gap_blocked(piece, point, piece.inward[k], space)
+
+    covered = np.array([hidden(p, k) for k, p in enumerate(piece.points)])
+    if covered.all() and piece.gap_mm > 0:
+        met.filled.append((*piece.bodies, None))
     out = []
     for first, last in _runs(covered):
         lo, hi = max(first - 1, 0), min(last + 1, len(covered) - 1)
         points = piece.points[lo : hi + 1].copy()
         # Move an end that lies inside a covering body back to where the cover begins.
         if lo < first:
-            points[0] = _edge_of_cover(space, piece, torch, first, first - 1)
+            points[0] = _edge_of_cover(hidden, piece, first, first - 1)
         if hi > last:
-            points[-1] = _edge_of_cover(space, piece, torch, last, last + 1)
+            points[-1] = _edge_of_cover(hidden, piece, last, last + 1)
         index = np.arange(lo, hi + 1)
         # A sample that lies where the cover begins duplicates the refined end: drop it.
         step = np.linalg.norm(np.diff(points, axis=0), axis=1)
@@ -451,6 +470,7 @@ def _candidates(
         points, index = points[keep], index[keep]
         length = float(np.sum(np.linalg.norm(np.diff(points, axis=0), axis=1)))
         if length < min_length_mm or len(points) < 2:
+            met.short_mm.append(length)
             continue
         out.append(
             {
@@ -468,13 +488,13 @@ def _candidates(
     return out
 
 
-def _edge_of_cover(space: Any, piece: Any, torch: FloatArray, free: int, covered: int):
-    """The point between a free and a covered sample where the cover begins (bisection)."""
+def _edge_of_cover(hidden: Any, piece: Any, free: int, covered: int) -> FloatArray:
+    """The point between a free and a covered sample where the cover begins (bisection;
+    ``hidden(point, k)`` tests a point with the directions of sample ``k``)."""
     a, b = piece.points[free], piece.points[covered]
-    n = torch[free]
     for _ in range(40):
         mid = 0.5 * (a + b)
-        if space.inside(mid + COVER_STEP_MM * n, skip=piece.bodies) is None:
+        if not hidden(mid, free):
             a = mid
         else:
             b = mid
