@@ -30,8 +30,7 @@ faces decide where a weld is and what kind. Here:
    a gusset meets both plates is no seam), and across a gap, stretches where a third body
    stands in it (``clearance``: no line of sight between the faces). Pieces shorter than
    ``min_length_mm`` are dropped.
-6. Reachability: the torch direction must be free of material for ``torch_length_mm``
-   (a ray from every sampled point, against all bodies).
+6. Reachability: the torch direction is free of material for ``torch_length_mm`` (rays).
 
 Ids are ``s1``, ``s2``... in order of the seams' start points (x, then y, then z); names are
 ``body_a/body_b/k`` (bodies in file order, k counting that pair's seams in the same order).
