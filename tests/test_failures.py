@@ -201,3 +201,59 @@ def test_compare_labels_trackers_as_given(capsys: pytest.CaptureFixture[str]) ->
     assert code == 0
     rows = [line.split("|")[1].strip() for line in out.splitlines()[2:]]
     assert rows == ["I", "convergence-radius"]
+
+
+def test_the_catalogue_holds_every_reproducer_of_the_robustness_issue(tmp_path) -> None:
+    """Issue 23's reproducers are in the catalogue: found by what an entry runs (its command
+    line and the files it reads), not by its name."""
+    from seamtrack.bench.failure_inputs import workspace
+
+    root = workspace(tmp_path)
+    files = {
+        str(p.relative_to(root)): p.read_bytes().decode("utf-8", "replace")
+        for p in root.rglob("*")
+        if p.is_file() and p.stat().st_size < 1_000_000
+    }
+
+    def runs(*needles: str) -> bool:
+        """Some entry's command line, with the text of the files it names, holds every needle."""
+        for entry in CATALOGUE:
+            text = " ".join(entry.args)
+            text += " ".join(body for name, body in files.items() if name in text)
+            if all(n in text for n in needles):
+                return True
+        return False
+
+    camera = (
+        "f_number=1e9",
+        "focal_length_mm=1e-9",
+        "exposure=1e300",
+        "full_well_e=1e300",
+        "ambient=1e300",
+        "full_well_e=1e-300",
+        "read_noise_e=1e300",
+        "f_number=1e4",
+    )
+    for value in camera:
+        assert runs(f"sensor.camera.{value}"), value
+    assert runs("render", "v-groove-camera", "sensor.camera.f_number=1e9")
+    assert runs("dataset", "--images")
+    assert runs("rows=20000", "columns=20000")
+    assert runs("rows=4096", "columns=8192", "supersample=8")
+    assert runs("joint_acceleration_max_deg_s2=[1,2]", 'robot.model="ur10e"')
+    assert runs("joint_acceleration_max_deg_s2=[]")
+    assert runs("robot.tool.sensor_xyz_mm=[1e300,0,0]")
+    assert runs('robot.urdf="/dev/zero"')
+    assert runs("robot.urdf", 'name="chain300"') and runs("robot.urdf", 'name="chain600"')
+    for urdf in ('axis xyz="nan 0 1"', 'link name="stray"'):
+        assert runs("robot.urdf", urdf), urdf
+    assert runs('workpiece.params.plate_width_mm="abc"')
+    assert runs("workpiece.params.plate_width_mm=true")
+    assert runs("DVGroove", "alpha_1_deg=-30")
+    assert runs("alpha_deg=1e300")
+    assert runs("UGroove", "R_mm=50", "t_mm=10")
+    assert runs("c_mm=12", "t_mm=10")
+    assert runs("alpha_deg=180")
+    assert runs("standoff_offset_mm = [-1000.0, 1000.0]", "lateral_offset_mm = [-1000.0, 1000.0]")
+    for step in ("inside.step", "coincident.step", "tiny_pair.step"):
+        assert runs("seams", step), step
