@@ -272,13 +272,12 @@ def _mesh(shape: Any, tolerance_mm: float, angular_rad: float) -> tuple[Any, flo
 
     from seamtrack.cad import _occ
 
-    vertices, faces, deviation, spent = _occ.mesh(shape, tolerance_mm, angular_rad)
+    vertices, faces, deviation, spent, counts = _occ.mesh(shape, tolerance_mm, angular_rad)
     solids = shape.Solids()
     if len(solids) == 1:
         return trimesh.Trimesh(vertices, faces, process=True), deviation, spent
     # Faces come solid by solid: weld each solid's nodes on their own, so that shells that
     # touch stay separate closed surfaces.
-    counts = _occ.face_triangle_counts(shape)
     per_solid = [len(s.Faces()) for s in solids]
     shells, first = [], 0
     bounds = np.concatenate([[0], np.cumsum(counts)])
