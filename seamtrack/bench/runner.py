@@ -140,7 +140,17 @@ def _bench_mesh(out: Path, quick: bool) -> Any:
     from seamtrack.workpiece.loader import mesh_tradeoff
 
     tolerances = (1.0, 0.1, 0.01) if quick else (1.0, 0.1, 0.01, 0.001)
-    rows = mesh_tradeoff(tolerances=tolerances)
+    mesh_tradeoff(tolerances=(1.0,), paths=("arc",))  # imports CadQuery and OCP, unmeasured
+    rows = []
+    for path in ("arc", "paper"):
+        for tol in tolerances:
+            before = _reset_peak_rss()
+            (row,) = mesh_tradeoff(tolerances=(tol,), paths=(path,))
+            peak = _peak_rss()
+            row["peak_rss_mb"] = peak / 2**20
+            # what meshing and measuring this part added at its peak, a triangle
+            row["peak_bytes_per_triangle"] = (peak - before) / max(row["triangles"], 1)
+            rows.append(row)
     out.mkdir(parents=True, exist_ok=True)
     (out / "mesh.json").write_text(
         json.dumps({"machine": machine_info(), "rows": rows}, indent=2, default=float)
@@ -155,6 +165,28 @@ def _bench_mesh(out: Path, quick: bool) -> Any:
     ]
     (out / "mesh.md").write_text("\n".join(lines) + "\n")
     return rows
+
+
+def _reset_peak_rss() -> int:
+    """Reset this process's peak resident size to its current size (Linux); return it (bytes)."""
+    try:
+        Path("/proc/self/clear_refs").write_text("5")
+    except OSError:  # not Linux: the peak is the process's so far
+        pass
+    return _peak_rss(field="VmRSS")
+
+
+def _peak_rss(field: str = "VmHWM") -> int:
+    """This process's peak (or, with ``field="VmRSS"``, current) resident size in bytes."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith(field + ":"):
+                return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    import resource
+
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
 
 
 def bench_loop(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]:
