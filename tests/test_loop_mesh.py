@@ -67,10 +67,16 @@ def mesh_budget_mm(scene: st.Scene) -> float:
 @pytest.mark.parametrize("name", [n for n in MESH_SCENES if n not in OWN_TESTS])
 def test_every_mesh_scene_completes_with_the_trajectory_tracker(name: str) -> None:
     scene = load_scene(name)
-    s = st.simulate(scene).summary
+    parts = build_parts(scene)
+    s = run(parts, seed=scene.config.simulation.seed).summary
     assert s["status"] == "completed", s
     assert s["completed_fraction"] > 0.99
-    assert s["mean_speed_mm_s"] == pytest.approx(s["welding_speed_mm_s"], rel=0.05)
+    # The torch starts from rest and stops at the seam's end (not past it): at the axes'
+    # acceleration a each ramp costs v / (2 a) against constant speed (a trapezoid profile).
+    v, welded = s["welding_speed_mm_s"], s["welded_length_mm"]
+    a = float(np.min(parts.robot.acceleration_max_mm_s2))
+    assert s["mean_speed_mm_s"] <= 1.05 * v
+    assert s["mean_speed_mm_s"] >= 0.95 * welded / (welded / v + v / a)
     # Straight joints within the paper's target plus what mesh mode adds (0.14 mm at 1024
     # rays on 0.01 mm meshes; 0.23 mm through the 512-row camera); the mitred corners, above.
     assert s["max_error_mm"] <= CORNER_SCENES_MM.get(name, mesh_budget_mm(scene))

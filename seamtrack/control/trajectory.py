@@ -26,7 +26,9 @@ the part) is not enough where the program's end is still ahead: a clamp over the
 the whole stripe in just that way, and the part goes on beyond it; with no program end known
 it ends the seam (``end_of_part``). :attr:`stop_cause` names the end: ``"end_of_part"`` when
 the stripe left the part there, ``"seam_end"`` when the seam vanished from a stripe still on
-the part; ``""`` while the tracker follows the seam.
+the part (a wall at the seam's end hides its last millimetres: the torch then finishes along
+the path to the program's end, as a robot program would); ``""`` while the tracker follows the
+seam.
 
 On a robot that turns its tool, the tracker also commands the tool's orientation from the robot
 program (:class:`~seamtrack.control.orientation.ToolProgram`): the scene's work and travel
@@ -228,13 +230,22 @@ class TrajectoryTracker:
         x, y, z = self._buffer.raw[-1].tolist()
         ex, ey, ez = self._seam_end
         if math.sqrt((x - ex) ** 2 + (y - ey) ** 2 + (z - ez) ** 2) <= self.end_zone_mm:
-            self._end("end_of_part" if off_part else "seam_end")
+            # Where the seam vanishes short of the program's end from a stripe still on the
+            # part (a wall at the seam's end hides its last millimetres), the torch finishes
+            # to the program's end along the path; where the stripe left the part, there.
+            ahead = 0.0
+            if not off_part:
+                dx, dy, dz = pk.end_direction(self._path, self._s, self.direction_fit_mm)
+                px, py, pz = self._path[-1].tolist()
+                ahead = (ex - px) * dx + (ey - py) * dy + (ez - pz) * dz
+            self._end("end_of_part" if off_part else "seam_end", ahead)
 
-    def _end(self, cause: str) -> None:
-        """Stop at the last seen seam point: no bridge, points held back dropped."""
+    def _end(self, cause: str, ahead_mm: float = 0.0) -> None:
+        """Stop ``ahead_mm`` (at most ``end_zone_mm``) past the last seen seam point: no more
+        bridge, points held back dropped, later frames ignored."""
         self.stop_cause = cause
         self._held = []
-        self._sp[pk.BRIDGE] = 0.0
+        self._sp[pk.BRIDGE] = min(max(ahead_mm, 0.0), self.end_zone_mm)
         self._lost = True
 
     def _store(self, point: FloatArray, step: float | None = None) -> None:
