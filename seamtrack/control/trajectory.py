@@ -24,11 +24,11 @@ program's end of an open seam (the CAD seam's end, which the scene knows). An em
 alone (:attr:`~seamtrack.control.tracking.Measurement.stripe_points` 0: the stripe has left
 the part) is not enough where the program's end is still ahead: a clamp over the seam hides
 the whole stripe in just that way, and the part goes on beyond it; with no program end known
-it ends the seam (``end_of_part``). :attr:`stop_cause` names the end: ``"end_of_part"`` when
-the stripe left the part there, ``"seam_end"`` when the seam vanished from a stripe still on
-the part (a wall at the seam's end hides its last millimetres: the torch then finishes along
-the path to the program's end, as a robot program would); ``""`` while the tracker follows the
-seam.
+it ends the seam (``end_of_part``). Its ``stop_cause`` attribute names the end:
+``"end_of_part"`` when the stripe left the part there, ``"seam_end"`` when the seam vanished
+from a stripe still on the part (a wall at the seam's end hides its last millimetres: the
+torch then finishes along the path to the program's end, as a robot program would); ``""``
+while the tracker follows the seam.
 
 On a robot that turns its tool, the tracker also commands the tool's orientation from the robot
 program (:class:`~seamtrack.control.orientation.ToolProgram`): the scene's work and travel

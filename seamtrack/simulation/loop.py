@@ -14,7 +14,7 @@ to the end of the run. Every error statistic is over the welding portion only.
 End of the run: the torch waits at rest, with the last frame showing no seam, for longer than
 a frame period plus the latency (nothing new can come): ``completed`` when it got within
 ``end_tolerance_mm`` of the seam's end, else ``lost_seam``; ``stop_cause`` in the summary says
-why it stopped (:func:`_stop_cause`: the tracker's ``stop_cause`` when it has one). No
+why it stopped (the tracker's own ``stop_cause`` when it has one). No
 progress along the seam for ``stall_time_s`` (or the time or wall-clock limit) is ``stalled``;
 a commanded target outside the axis travel is ``limit_violation``.
 """
