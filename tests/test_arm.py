@@ -204,9 +204,18 @@ def test_arm_tracks_the_paper_curve_and_keeps_the_torch_on_the_normal() -> None:
     ).summary
     assert s["status"] == "completed"
     assert s["max_error_mm"] < 0.1
-    # The gantry's vertical torch leans by the curve's slope (up to 9 deg); the arm's does not.
-    assert gantry["max_travel_angle_error_deg"] > 5.0
+    # The gantry's vertical torch leans by the curve's slope (up to 9 deg): its fixed angle, not
+    # an error; the arm's does not lean.
+    assert gantry["max_fixed_torch_travel_angle_deg"] > 5.0
     assert s["max_travel_angle_error_deg"] < 1.0
+    # A gantry commands no orientation: no orientation *error* keys, the fixed torch's angles;
+    # the arm keeps its errors.
+    assert not [k for k in gantry if "angle_error" in k]
+    for stat in ("max", "rms", "p95"):
+        for angle in ("work_angle", "travel_angle"):
+            assert f"{stat}_fixed_torch_{angle}_deg" in gantry
+            assert f"{stat}_{angle}_error_deg" in s
+            assert f"{stat}_fixed_torch_{angle}_deg" not in s
     assert s["joint_limited_ticks"] == 0
     assert s["min_wrist_angle_deg"] > 5.0
 

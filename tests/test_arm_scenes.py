@@ -59,5 +59,8 @@ def test_80_deg_corner_completes_on_the_arm_where_the_gantry_loses_it() -> None:
     ).summary
     assert arm["status"] == "completed"
     assert arm["completed_fraction"] == pytest.approx(1.0, abs=0.01)
+    # The seam ends at the part's end: the arm stops there, not a bridge (10 mm) later.
+    assert arm["stop_cause"] == "end_of_part"
+    assert arm["overrun_mm"] <= 1.0
     assert gantry["status"] == "lost_seam"
     assert gantry["completed_fraction"] < 0.8

@@ -36,6 +36,10 @@ class Delegating:
     def command(self, t_s: float, tcp_world: Any, tcp_velocity_world: Any) -> Any:
         return self.inner.command(t_s, tcp_world, tcp_velocity_world)
 
+    @property
+    def stop_cause(self) -> str:
+        return str(self.inner.stop_cause)
+
 
 def _both(overrides: dict[str, Any], monkeypatch: pytest.MonkeyPatch) -> tuple[Any, Any]:
     parts = build_parts(load_scene("paper-verification", {**SHORT, **overrides}))
@@ -54,8 +58,9 @@ def _both(overrides: dict[str, Any], monkeypatch: pytest.MonkeyPatch) -> tuple[A
         {},
         {"robot.servo_gain_1_s": 40.0, "robot.interpolation_period_s": 0.004},
         {"sensor.latency_s": 0.03, "tracker.params.use_capture_pose": False},
-        # The set-point bridges past the seam's end into the x end stop: a limit violation.
-        {"robot.position_max_mm": [126.0, 150.0, 150.0]},
+        # The set-point bridges past the seam's end (the program's end ignored) into the x end
+        # stop: a limit violation.
+        {"robot.position_max_mm": [126.0, 150.0, 150.0], "tracker.params.end_zone_mm": 0.0},
     ],
     ids=["ideal-axes", "servo", "latency-naive-pose", "end-stop"],
 )

@@ -85,6 +85,12 @@ class Measurement:
         """(3,) seam point in the world frame (empty when none was found)."""
         return self.feature.point_world
 
+    @property
+    def stripe_points(self) -> int:
+        """Valid points in the profile of a frame without a seam point (0: the stripe is off
+        the part, or hidden whole); -1 when not counted (seam mode, a found seam point)."""
+        return int(getattr(self.feature, "stripe_points", -1))
+
 
 @dataclass(frozen=True)
 class TrackerContext:

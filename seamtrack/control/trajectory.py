@@ -14,6 +14,22 @@ detection at a shadow's edge) is held back until points agreeing with it span
 path along the chord of its last ``direction_fit_mm`` for ``bridge_mm``; beyond that the
 set-point stops and the simulation reports the seam lost.
 
+The end of the seam is not a gap in it. A tack or a clamp interrupts the seam with the part
+going on beyond, and is bridged; at the part's end there is nothing to bridge to, and a torch
+driven on for ``bridge_mm`` welds air. The sensor sees the end a look-ahead before the torch
+gets there, so the stop is planned, as a welding engineer would, at the last seen seam point:
+no bridge, the set-point brakes to a stop there, and later frames are ignored. The seam has
+ended when it is lost with the last seen seam point within ``end_zone_mm`` of the robot
+program's end of an open seam (the CAD seam's end, which the scene knows). An empty profile
+alone (:attr:`~seamtrack.control.tracking.Measurement.stripe_points` 0: the stripe has left
+the part) is not enough where the program's end is still ahead: a clamp over the seam hides
+the whole stripe in just that way, and the part goes on beyond it; with no program end known
+it ends the seam (``end_of_part``). Its ``stop_cause`` attribute names the end:
+``"end_of_part"`` when the stripe left the part there, ``"seam_end"`` when the seam vanished
+from a stripe still on the part (a wall at the seam's end hides its last millimetres: the
+torch then finishes along the path to the program's end, as a robot program would); ``""``
+while the tracker follows the seam.
+
 On a robot that turns its tool, the tracker also commands the tool's orientation from the robot
 program (:class:`~seamtrack.control.orientation.ToolProgram`): the scene's work and travel
 angles in the nominal seam frame at the set-point, and the heading that keeps the laser line
@@ -23,6 +39,8 @@ goal on at that rate between refreshes).
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 from numpy.typing import NDArray
@@ -87,6 +105,14 @@ class TrajectoryTracker:
         axes then turn the torch without cutting the corner. 0 switches it off.
     curvature_window_mm : float
         Arc length over which the turning of the stored path is measured.
+    end_zone_mm : float
+        The seam lost with the last seen seam point within this distance of the robot
+        program's end of an open seam is the seam's end (a stop there, no bridge); 0 ignores
+        the program's end. Wider than the part's placement error, narrower than the distance
+        from the end to the last gap in the seam.
+    end_of_part : bool
+        With no program end known, take a frame whose profile has no valid point at all (the
+        stripe has left the part) as the seam's end.
     """
 
     name = "trajectory"
@@ -106,6 +132,8 @@ class TrajectoryTracker:
         curvature_window_mm: Positive = 3.0,
         direction_fit_mm: Positive = 5.0,
         orientation_period_s: Positive = 0.01,
+        end_zone_mm: NonNegative = 3.0,
+        end_of_part: bool = True,
     ):
         self.buffer_mm = buffer_mm
         self.smoothing_mm = smoothing_mm
@@ -120,6 +148,8 @@ class TrajectoryTracker:
         self.curvature_window_mm = curvature_window_mm
         self.direction_fit_mm = direction_fit_mm
         self.orientation_period_s = orientation_period_s
+        self.end_zone_mm = end_zone_mm
+        self.end_of_part = end_of_part
 
     # ----------------------------------------------------------------- protocol
     def reset(self, context: TrackerContext) -> None:
@@ -139,6 +169,13 @@ class TrajectoryTracker:
         self._buffer = PathBuffer(start)
         self._seen_seam = False
         self._held: list[FloatArray] = []
+        self.stop_cause = ""
+        # The robot program's end of an open seam (the CAD seam's end), as floats; None: none.
+        self._seam_end: tuple[float, float, float] | None = None
+        nominal = context.tool_program
+        if nominal is not None and self.end_zone_mm > 0 and not nominal.closed:
+            x, y, z = np.asarray(nominal.seam.points[-1], dtype=float).tolist()
+            self._seam_end = (x, y, z)
         sp[pk.TCP_X : pk.TCP_Z + 1] = start
         program = context.tool_program if context.turns_tool else None
         self._program = program
@@ -151,8 +188,14 @@ class TrajectoryTracker:
             self._rotation, self._s_program = program.rotation_near(start, 0.0)
 
     def update(self, measurement: Measurement) -> None:
+        if self.stop_cause:  # the seam has ended: nothing more to follow
+            if self.stop_cause == "seam_end" and measurement.stripe_points == 0:
+                self.stop_cause = "end_of_part"  # the stripe then left the part
+            return
         if not measurement:
             self._lost = self._seen_seam
+            if self._seen_seam:
+                self._check_end(measurement)
             return
         point = np.asarray(measurement.point_world, dtype=float)
         if not self.use_capture_pose:
@@ -176,6 +219,34 @@ class TrajectoryTracker:
         self._lost = False
         self._seen_seam = True
         self._store(point, step)
+
+    def _check_end(self, measurement: Measurement) -> None:
+        """A frame without a seam point after the seam was seen: is it the seam's end?"""
+        off_part = getattr(measurement, "stripe_points", -1) == 0
+        if self._seam_end is None:
+            if self.end_of_part and off_part:
+                self._end("end_of_part")
+            return
+        x, y, z = self._buffer.raw[-1].tolist()
+        ex, ey, ez = self._seam_end
+        if math.sqrt((x - ex) ** 2 + (y - ey) ** 2 + (z - ez) ** 2) <= self.end_zone_mm:
+            # Where the seam vanishes short of the program's end from a stripe still on the
+            # part (a wall at the seam's end hides its last millimetres), the torch finishes
+            # to the program's end along the path; where the stripe left the part, there.
+            ahead = 0.0
+            if not off_part:
+                dx, dy, dz = pk.end_direction(self._path, self._s, self.direction_fit_mm)
+                px, py, pz = self._path[-1].tolist()
+                ahead = (ex - px) * dx + (ey - py) * dy + (ez - pz) * dz
+            self._end("end_of_part" if off_part else "seam_end", ahead)
+
+    def _end(self, cause: str, ahead_mm: float = 0.0) -> None:
+        """Stop ``ahead_mm`` (at most ``end_zone_mm``) past the last seen seam point: no more
+        bridge, points held back dropped, later frames ignored."""
+        self.stop_cause = cause
+        self._held = []
+        self._sp[pk.BRIDGE] = min(max(ahead_mm, 0.0), self.end_zone_mm)
+        self._lost = True
 
     def _store(self, point: FloatArray, step: float | None = None) -> None:
         if step is None:

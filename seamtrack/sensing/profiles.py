@@ -152,6 +152,9 @@ class Feature:
         Joint type the extractor assumed.
     reason : str
         Why nothing was found ("" when found).
+    stripe_points : int
+        Valid points in the profile of a frame without a seam point, when the scan counted
+        them (0: the stripe is off the part, or hidden whole); -1 when not counted.
     """
 
     point_laser: FloatArray = field(default_factory=lambda: np.empty(0))
@@ -161,6 +164,7 @@ class Feature:
     gap_mm: float = float("nan")
     joint: str = ""
     reason: str = ""
+    stripe_points: int = -1
 
     def __bool__(self) -> bool:
         return self.point_laser.shape == (2,) and not self.reason

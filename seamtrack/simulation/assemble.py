@@ -242,6 +242,12 @@ def _mesh_scan(scene: Scene, sensor: LaserLineSensor, rng: np.random.Generator) 
                 field="extractor.name",
                 fix="return a finite (y_L, z_L) point, or a falsy Feature with a reason",
             )
+        if not feature and feature.stripe_points < 0:
+            # A frame without a seam point says whether the stripe was on the part at all: none
+            # of it is where the laser line has left the part (or something hides it whole).
+            assert profile.valid is not None
+            stripe = int(np.count_nonzero(profile.valid))
+            feature = dataclasses.replace(feature, stripe_points=stripe)
         if feature and offset.any():
             # The torch target relative to the feature (a TCP calibration): e.g. the root of a
             # square butt joint, a plate thickness below the gap the stripe shows.

@@ -13,9 +13,10 @@ to the end of the run. Every error statistic is over the welding portion only.
 
 End of the run: the torch waits at rest, with the last frame showing no seam, for longer than
 a frame period plus the latency (nothing new can come): ``completed`` when it got within
-``end_tolerance_mm`` of the seam's end, else ``lost_seam``. No progress along the seam for
-``stall_time_s`` (or the time or wall-clock limit) is ``stalled``; a commanded target outside
-the axis travel is ``limit_violation``.
+``end_tolerance_mm`` of the seam's end, else ``lost_seam``; ``stop_cause`` in the summary says
+why it stopped (the tracker's own ``stop_cause`` when it has one). No
+progress along the seam for ``stall_time_s`` (or the time or wall-clock limit) is ``stalled``;
+a commanded target outside the axis travel is ``limit_violation``.
 """
 
 from __future__ import annotations
@@ -403,8 +404,24 @@ def run(
     summary = _summary(trace, seam, status, cfg, clock() - wall_start)
     summary.update(orientation_summary(trace, robot, cfg, state))
     summary["stop_reason"] = stop_reason
+    summary["stop_cause"] = _stop_cause(status, closed, getattr(tracker, "stop_cause", ""))
     summary["sense_wall_time_s"] = sense_time
     return Result(summary=summary, trace=trace)
+
+
+def _stop_cause(status: str, closed: bool, tracker_cause: Any) -> str:
+    """Why the torch stopped: ``stalled`` and ``limit_violation`` as the status; else the
+    tracker's own word (its ``stop_cause``: ``end_of_part``, ``seam_end``), ``closed_seam`` for
+    a girth seam back at its start, ``seam_lost_at_end`` for a tracker that gives no cause and
+    stopped at the seam's end once frames showed no seam (``overrun_mm`` says how far past it
+    bridged), or ``lost_seam``."""
+    if status in ("stalled", "limit_violation"):
+        return status
+    if closed and status == "completed":
+        return "closed_seam"
+    if isinstance(tracker_cause, str) and tracker_cause:
+        return tracker_cause
+    return "seam_lost_at_end" if status == "completed" else "lost_seam"
 
 
 def _to_move(robot: Any, cmd: Command) -> MoveCommand:

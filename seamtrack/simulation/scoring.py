@@ -1,10 +1,13 @@
 """Scoring the torch's orientation and an arm's joint space.
 
-Orientation, for every robot: the work- and travel-angle errors of the torch axis in the seam
-frame at the closest true seam point (:mod:`seamtrack.geometry.torch`), over the welding
-portion: max (of the absolute value), RMS and 95th percentile, in degrees (summary keys
-``*_work_angle_error_deg``, ``*_travel_angle_error_deg``). The gantry's torch is world +Z (its
-base's z) on every tick.
+Orientation: the torch axis's work and travel angles in the seam frame at the closest true
+seam point (:mod:`seamtrack.geometry.torch`), over the welding portion: max (of the absolute
+value), RMS and 95th percentile, in degrees. A robot that commands the tool's orientation (an
+arm) is scored on its *errors*, the angles less the scene's ``torch`` angles (summary keys
+``*_work_angle_error_deg``, ``*_travel_angle_error_deg``). A 3-axis gantry cannot turn its
+torch (it is its base's z on every tick), so it has no orientation error to report: its keys
+give the fixed torch's angles against the seam instead (``*_fixed_torch_work_angle_deg``,
+``*_fixed_torch_travel_angle_deg``), a property of the part's shape, not a tracking fault.
 
 Joint space, for an arm: the fastest joint speed used (deg/s, and as a fraction of that joint's
 limit), the closest approach to a joint limit (deg), to the wrist singularity (the angle between
@@ -53,6 +56,10 @@ def _stats(name: str, values_rad: FloatArray) -> dict[str, float]:
     }
 
 
+def _wrap(angle: FloatArray) -> FloatArray:
+    return (angle + np.pi) % (2 * np.pi) - np.pi
+
+
 def orientation_summary(trace: Any, robot: Any, cfg: Any, state: Any) -> dict[str, Any]:
     """Summary keys for the torch orientation and (an arm's) joint space."""
     weld = trace.welding
@@ -60,9 +67,15 @@ def orientation_summary(trace: Any, robot: Any, cfg: Any, state: Any) -> dict[st
         "robot": getattr(getattr(robot, "kinematics", None), "name", "cartesian"),
         "work_angle_deg": math.degrees(cfg.work_angle_rad),
         "travel_angle_deg": math.degrees(cfg.travel_angle_rad),
-        **_stats("work_angle_error", trace.work_angle_error_rad[weld]),
-        **_stats("travel_angle_error", trace.travel_angle_error_rad[weld]),
     }
+    if robot.turns_tool:
+        out.update(_stats("work_angle_error", trace.work_angle_error_rad[weld]))
+        out.update(_stats("travel_angle_error", trace.travel_angle_error_rad[weld]))
+    else:  # the torch's fixed angles against the seam: the error plus the scene's angle
+        work = _wrap(trace.work_angle_error_rad[weld] + cfg.work_angle_rad)
+        travel = _wrap(trace.travel_angle_error_rad[weld] + cfg.travel_angle_rad)
+        out.update(_stats("fixed_torch_work_angle", work))
+        out.update(_stats("fixed_torch_travel_angle", travel))
     if robot.turns_tool:
         out.update(joint_figures(robot, trace, cfg.trace_period_s))
         out["joint_limited_ticks"] = int(state.limited_ticks)
