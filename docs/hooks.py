@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import importlib.util
+import re
 from pathlib import Path
 from typing import Any
 
@@ -13,7 +14,12 @@ figures = importlib.util.module_from_spec(_spec)
 _spec.loader.exec_module(figures)
 
 
+_INCLUDE = re.compile(r"^<!-- include (bench/[\w/.-]+\.md) -->$", re.MULTILINE)
+
+
 def on_page_markdown(markdown: str, page: Any, **kwargs: Any) -> str:
     if page.file.src_uri == "figures.md":
         return figures.figures_page()
-    return markdown
+    # a bench's own table where a page names it, so prose pages quote no figure by hand
+    here = Path(__file__).parent
+    return _INCLUDE.sub(lambda m: (here / m.group(1)).read_text(), markdown)

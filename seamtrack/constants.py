@@ -47,9 +47,9 @@ MIN_MESH_TOLERANCE_MM = 1e-4
 #: is built (the paper's part at 1e-3 mm, 2.4e-6 of its size, meshes into 1.7e6 triangles).
 MIN_MESH_TOLERANCE_RATIO = 1e-6
 
-#: Most triangles a part may mesh into. Meshing and measuring the deviation peak at about 5 KB
-#: a triangle (8.1 GB for the paper groove's 1.66 million at 1e-3 mm, measured): this keeps a
-#: load under about 10 GB of the 24 GB machine.
+#: Most triangles a part may mesh into. Meshing and measuring the deviation peak at about 2 KB
+#: a triangle over what the process held before (`seamtrack bench mesh`: 0.4 GB more for the
+#: paper groove's 190,314 at 1e-3 mm): this keeps a load under about 5 GB.
 MAX_MESH_TRIANGLES = 2_000_000
 
 #: Seams run from their lexicographically smallest end (x, then y, then z); coordinates closer
