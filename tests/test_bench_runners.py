@@ -106,7 +106,12 @@ def test_extractor_bench(tmp_path: Path) -> None:
     from seamtrack.bench.extractors import FAMILIES, bench_extractors
 
     rows = bench_extractors(tmp_path, quick=True, progress=False)
-    _written(tmp_path, "extractors.csv", "extractors.md")
+    written = _written(
+        tmp_path, "extractors.csv", "extractors.md", "extractors.json", "extractors_angles.md"
+    )
+    # The included-angle sweep (tests/test_extractors_angles.py checks its numbers).
+    sweep = written["extractors.json"]["angle_sweep"]
+    assert sweep and all(r["n"] == 20 for r in sweep)
     with open(tmp_path / "extractors.csv") as fh:
         assert len(list(csv.DictReader(fh))) == len(rows)
     levels = {r["level"] for r in rows}

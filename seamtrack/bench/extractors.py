@@ -24,14 +24,12 @@ from typing import Any
 
 import numpy as np
 
+from seamtrack.bench.extractors_angles import DETECTED_MM, angle_sweep, angle_table
 from seamtrack.errors import SeamtrackError
 from seamtrack.features.extractors import BUILTIN, extractor
 from seamtrack.features.synthetic import Imperfections, synthetic_profile
 from seamtrack.sensing.profiles import Profile
 from seamtrack.sensing.sensor import LaserLineSensor, preset
-
-#: A seam point this close to the truth (mm) counts as detected.
-DETECTED_MM = 0.5
 
 #: Imperfection levels, in bench order; ``noise-*`` levels make the error-vs-noise plot.
 LEVELS: dict[str, Imperfections] = {
@@ -62,6 +60,9 @@ ACCURACY_COLUMNS = (
 TIMING_COLUMNS = ("us_per_profile", "median_us", "p95_us")
 #: Calls timed per profile; the fastest counts (extractors are deterministic: the same answer).
 TIMING_REPEATS = 3
+#: Profiles per cell of the included-angle sweep (:mod:`seamtrack.bench.extractors_angles`);
+#: ``quick``: 20.
+ANGLE_PROFILES = 300
 
 
 def _profiles(
@@ -98,7 +99,8 @@ def bench_extractors(
     Parameters
     ----------
     out_dir : str or Path
-        Receives ``extractors.csv``, ``extractors.md`` and ``extractors_error_vs_noise.png``.
+        Receives ``extractors.csv``, ``extractors.md``, ``extractors.json``,
+        ``extractors_angles.md`` and ``extractors_error_vs_noise.png``.
     seed : int
         Seeds every profile; two runs give the same accuracy columns.
     n_profiles : int
@@ -109,6 +111,10 @@ def bench_extractors(
         Columns per profile (1024: the speed target's profile size).
     sensor : LaserLineSensor, optional
         Default ``preset("paper")``.
+
+    The V-groove extractor's included-angle sweep on real-sensor artefact profiles
+    (:func:`~seamtrack.bench.extractors_angles.angle_sweep`, :data:`ANGLE_PROFILES` profiles
+    per cell) goes to ``extractors_angles.md`` and under ``angle_sweep`` in the JSON.
 
     Returns
     -------
@@ -190,14 +196,20 @@ def bench_extractors(
             pooled.setdefault(name, []).extend(took)
             bar.update(1)
     bar.close()
+    sweep = angle_sweep(20 if quick else ANGLE_PROFILES, seed=seed)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    _write(out, rows, pooled)
+    _write(out, rows, pooled, sweep)
     _plot(out / "extractors_error_vs_noise.png", rows)
     return rows
 
 
-def _write(out: Path, rows: list[dict[str, Any]], pooled: dict[str, list[int]]) -> None:
+def _write(
+    out: Path,
+    rows: list[dict[str, Any]],
+    pooled: dict[str, list[int]],
+    sweep: list[dict[str, Any]] | None = None,
+) -> None:
     columns = (*ACCURACY_COLUMNS, *TIMING_COLUMNS)
     with open(out / "extractors.csv", "w", newline="") as fh:
         writer = csv.DictWriter(fh, fieldnames=columns)
@@ -205,7 +217,11 @@ def _write(out: Path, rows: list[dict[str, Any]], pooled: dict[str, list[int]]) 
         writer.writerows(rows)
     (out / "extractors.md").write_text(markdown_table(rows, pooled))
     timing = {k: [1e-3 * t for t in v] for k, v in pooled.items()}
-    write_json(out / "extractors.json", rows, timing_summary(timing))
+    if sweep is None:
+        write_json(out / "extractors.json", rows, timing_summary(timing))
+        return
+    (out / "extractors_angles.md").write_text(angle_table(sweep))
+    write_json(out / "extractors.json", rows, timing_summary(timing), angle_sweep=sweep)
 
 
 def timing_summary(timing: dict[str, list[float]]) -> dict[str, dict[str, float]]:
@@ -227,10 +243,14 @@ def _json_value(value: Any) -> Any:
 
 
 def write_json(
-    path: Path, rows: list[dict[str, Any]], timing: dict[str, dict[str, float]] | None = None
+    path: Path,
+    rows: list[dict[str, Any]],
+    timing: dict[str, dict[str, float]] | None = None,
+    **tables: list[dict[str, Any]],
 ) -> None:
-    """The bench's rows (and per-extractor timing, if any) as JSON, the machine beside them;
-    NaN (no seam point found) is written as null."""
+    """The bench's rows (and per-extractor timing, if any; further ``tables`` of rows under
+    their own keys) as JSON, the machine beside them; NaN (no seam point found) is written
+    as null."""
     from seamtrack.bench.common import machine_info
 
     data: dict[str, Any] = {
@@ -239,6 +259,8 @@ def write_json(
     }
     if timing is not None:
         data["timing"] = timing
+    for key, table in tables.items():
+        data[key] = [{k: _json_value(v) for k, v in r.items()} for r in table]
     path.write_text(json.dumps(data, indent=2) + "\n")
 
 

@@ -103,7 +103,12 @@ def cmd_extractors(args: argparse.Namespace) -> int:
     with new_dir(args.out) as out:
         bench_extractors(out, quick=args.quick, progress=_progress_wanted(args))
     print((out / "extractors.md").read_text(), end="")
-    print(f"wrote {out}/extractors.csv, .md, .json, extractors_error_vs_noise.png")
+    print("\nv-groove against its included angle (real-sensor artefacts):")
+    print((out / "extractors_angles.md").read_text(), end="")
+    print(
+        f"wrote {out}/extractors.csv, .md, .json, extractors_angles.md, "
+        "extractors_error_vs_noise.png"
+    )
     return 0
 
 
