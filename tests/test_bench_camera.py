@@ -22,6 +22,14 @@ def test_bench_camera_quick_writes_its_tables_and_meets_the_must_shows(tmp_path)
     assert max(r["rms_px"] for r in result["plane"]) < 0.05
     for row in result["speckle"]:
         assert row["centroid_ratio"] == pytest.approx(1.0, abs=0.3)
+    # The sweep (issue 27 item 2): every quick case rendered; where the stripe spans several
+    # pixels (512 x 1024, f/5.6 and slower) one column follows the line's speckle formula
+    assert "Sweep over pixel pitch" in text
+    sweep = result["speckle_sweep"]
+    assert {(tuple(r["image_px"]), r["f_number"]) for r in sweep} >= {((512, 1024), 5.6)}
+    for r in sweep:
+        if r["image_px"] == [512, 1024] and r["f_number"] >= 5.6:
+            assert r["vs_line_formula"] == pytest.approx(1.0, abs=0.3)
     assert all(r["max_error_mm"] <= 0.01 for r in result["false_stripe"])
     joints = {r["joint"] for r in result["extractors"]}
     assert joints == {"square-butt", "v-groove", "fillet", "lap", "outside-corner"}

@@ -6,7 +6,9 @@ measured from pixels, and what image mode costs.
 2. **Speckle only** (no shot/read noise, no quantization), matte plate across the laser: range
    noise of the thresholded centroid against Dorsch, Haeusler and Herrmann (1994),
    dz = C lambda / (2 pi sin u_obs sin theta), C = 1, at three f-numbers; and how it grows with
-   the line's thickness.
+   the line's thickness. Then the sweep over line width, f-number and pixel pitch
+   (:mod:`seamtrack.bench.camera_speckle`): one column's centroid against Dorsch and against
+   the line's own speckle formula, a square patch of the line against Dorsch's spot.
 3. **Bright V-groove**: the false stripe's centroid against mirror geometry solved on the bevels'
    planes (:func:`mirror_oracle`), in mm in the laser plane.
 4. **Extractors on image-mode profiles**: each joint family's built-in scene at 20 poses along its
@@ -34,6 +36,13 @@ from typing import Any
 import numpy as np
 
 from seamtrack.bench.camera_sets import ImageSet, bench_image_sets, markdown_rows
+from seamtrack.bench.camera_speckle import (
+    dorsch_mm,
+    down,
+    plate,
+    speckle_sweep,
+    speckle_sweep_table,
+)
 from seamtrack.bench.common import machine_info
 from seamtrack.geometry import frames
 from seamtrack.sensing.camera import Camera, StripeImage
@@ -61,22 +70,6 @@ _SET_META = {
 
 
 # --------------------------------------------------------------------------- parts and oracles
-def plate(roll_deg: float = 0.0, pitch_deg: float = 0.0, size: float = 300.0) -> Any:
-    """A square plate through the world origin, turned about world x then y."""
-    import trimesh
-
-    corners = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], float) * 0.5 * size
-    mesh = trimesh.Trimesh(corners, [[0, 1, 2], [0, 2, 3]], process=False)
-    mesh.apply_transform(frames.from_xyz_rpy_deg([0, 0, 0], [roll_deg, pitch_deg, 0]))
-    return mesh
-
-
-def down(range_mm: float | None = None) -> np.ndarray:
-    """The laser pointing down at the world origin from ``range_mm`` (default range centre)."""
-    z = SENSOR.range_center_mm if range_mm is None else range_mm
-    return frames.from_xyz_rpy_deg([0.0, 0.0, z], [180.0, 0.0, 0.0])
-
-
 def plane_rows(image: StripeImage, normal_world: np.ndarray) -> np.ndarray:
     """Per column, the row of the laser plane's line on the plane through the world origin with
     this normal: closed form from Eq. 2-3 and the plane equation."""
@@ -222,14 +215,6 @@ def _plane_accuracy(quick: bool) -> list[dict[str, Any]]:
                 }
             )
     return rows
-
-
-def dorsch_mm(f_number: float, wavelength_nm: float = 660.0) -> float:
-    """dz = lambda / (2 pi sin u_obs sin theta) at the range centre (C = 1); the pupil is
-    lambda_camera / N across, seen from b / sin(theta)."""
-    distance = SENSOR.baseline_mm / math.sin(SENSOR.angle_rad)
-    sin_u = 0.5 * SENSOR.focal_length_mm / f_number / distance
-    return wavelength_nm * 1e-6 / (2 * math.pi * sin_u * math.sin(SENSOR.angle_rad))
 
 
 def _speckle_noise(f_number: float, thickness_mm: float, seeds: int) -> dict[str, Any]:
@@ -428,6 +413,7 @@ def bench_camera(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]:
             _speckle_noise(8.0, w, max(2, seeds - 1))
             for w in ((0.05, 0.5) if quick else (0.05, 0.1, 0.2, 0.5, 1.0))
         ],
+        "speckle_sweep": speckle_sweep(quick),
         "false_stripe": _false_stripe(quick),
     }
     result["extractors"], sets = _extractor_rows(quick)
@@ -501,6 +487,7 @@ def markdown(result: dict[str, Any]) -> str:
         ],
         rows,
     )
+    lines += speckle_sweep_table(result.get("speckle_sweep", []), _table)
     lines += [
         "",
         "**3. False stripe on a bright aluminium V-groove** against mirror geometry "
