@@ -214,6 +214,7 @@ def _mesh_scan(scene: Scene, sensor: LaserLineSensor, rng: np.random.Generator) 
         params["expect"] = dict(scene.config.extractor.expect)
     find = extractor(extractor_name, **params)
     hinted = takes_hint(find)  # once, at set-up: a user's extractor may have no ``hint``
+    find_hinted: Any = find  # called with ``hint=`` only when it takes one
     offset = np.asarray(scene.config.extractor.offset_mm, dtype=float)
     s = scene.config.sensor
     noise = _stripe_noise(s.stripe_noise)
@@ -237,7 +238,10 @@ def _mesh_scan(scene: Scene, sensor: LaserLineSensor, rng: np.random.Generator) 
     ) -> tuple[Profile, Feature]:
         profile = measure(T_world_sensor, t_s)
         try:
-            feature = find(profile, hint=hint) if hinted and hint is not None else find(profile)
+            if hinted and hint is not None:
+                feature = find_hinted(profile, hint=hint)
+            else:
+                feature = find(profile)
         except Exception as exc:  # the user's extractor may fail in any way
             raise plugin_failed("extractor.name", extractor_name, "__call__", t_s, exc) from exc
         if not isinstance(feature, Feature):
