@@ -49,6 +49,8 @@ from seamtrack.control import path_kernels as pk
 from seamtrack.control.path_kernels import PathBuffer, off_line, smooth_tail
 from seamtrack.control.tracking import Command, Measurement, TrackerContext
 from seamtrack.params import Fraction, NonNegative, Positive
+from seamtrack.sensing.profiles import SeamHint, hint_from_path
+from seamtrack.sensing.scan import laser_plane_crossings
 
 FloatArray = NDArray[np.float64]
 
@@ -219,6 +221,43 @@ class TrajectoryTracker:
         self._lost = False
         self._seen_seam = True
         self._store(point, step)
+
+    def hint(self, T_world_sensor: FloatArray) -> SeamHint | None:
+        """Where this tracker expects the seam in the frame about to be taken at
+        ``T_world_sensor`` (a :class:`~seamtrack.sensing.profiles.SeamHint` for the extractor).
+
+        With a robot program (a robot that turns its tool), the program's seam where the laser
+        plane crosses it, shifted by how far the measured seam lies from the program (the median
+        over the last ``direction_fit_mm`` of measured points: a few false points do not move
+        it); of several crossings, the one nearest the newest measured point carried straight
+        on along the stored path (:func:`~seamtrack.sensing.profiles.hint_from_path`). The
+        program knows a corner is coming; a path carried straight on does not, and misses a
+        turning seam sideways, so without a program (a gantry) no hint (on `v-groove-corner`
+        it made the max error 0.67 -> 0.74 mm). None before the seam is seen and after its
+        end, or when the program's seam does not cross the laser plane; while frames are
+        bridged (a tack, a clamp, refused frames) the program still says where the seam is."""
+        if self._program is None:
+            return None
+        if not self._seen_seam or self.stop_cause:
+            return None
+        raw = self._buffer.raw
+        straight = hint_from_path(T_world_sensor, raw[-1], self._end_direction())
+        if straight is None:
+            return None
+        nominal = self._program.seam
+        crossings = laser_plane_crossings(nominal, T_world_sensor)
+        if not len(crossings):
+            return None
+        i = max(_left(self._s, self._s[-1] - self.direction_fit_mm), 1)
+        window = raw[i:] if len(raw) > i else raw[-1:]
+        offset = np.median(window - nominal.closest(window).points, axis=0)
+        R = np.asarray(T_world_sensor, dtype=float)[:3, :3]
+        shift = R.T @ offset  # the measured seam's offset from the program, sensor frame
+        expected = crossings + shift[1:]
+        sy, sz = straight.point_laser
+        k = int(np.argmin(np.hypot(expected[:, 0] - sy, expected[:, 1] - sz)))
+        y, z = expected[k].tolist()
+        return SeamHint((y, z), straight.direction, straight.tolerance_mm)
 
     def _check_end(self, measurement: Measurement) -> None:
         """A frame without a seam point after the seam was seen: is it the seam's end?"""

@@ -74,7 +74,9 @@ GROOVE, NO_V, NO_PLATE, SIDE_ALONG_PLATE, WIDE_ROOT = range(5)
 class GrooveParams(NamedTuple):
     """The V-groove extractor's parameters as the model reads them: the fewest inliers and
     the shortest extent (mm) of a bevel, the included angle's range (deg), the widest and
-    narrowest root gap (mm), pieces in no group as bevels too, no gap expected."""
+    narrowest root gap (mm), pieces in no group as bevels too, no gap expected; the expected
+    seam point (y, z; a tracker's hint) and its tolerance across and in range (mm; 0: no
+    hint)."""
 
     min_points: int
     min_arm: float
@@ -84,6 +86,10 @@ class GrooveParams(NamedTuple):
     min_gap: float
     pieces_too: bool
     gapless: bool
+    hint_y: float = math.nan
+    hint_z: float = math.nan
+    tol_y: float = 0.0
+    tol_z: float = 0.0
 
 
 class VGrooveResult(NamedTuple):
@@ -311,6 +317,10 @@ def v_groove(points, stray, columns, runs, tol, sigma, spacing, pieces, params):
             params.pieces_too,
             params.min_points,
             params.min_arm,
+            params.hint_y,
+            params.hint_z,
+            params.tol_y,
+            params.tol_z,
         ),
     )
     tb, groups, surface, pair = found.table, found.groups, found.surface, found.pair

@@ -101,7 +101,9 @@ class SearchParams(NamedTuple):
     """What the V search looks for: ``sign`` -1 a V opening towards the sensor, +1 a ridge;
     the included angle's range (deg); the farthest an arm may stop short of the apex (mm);
     pieces in no group as arms too; the fewest inliers and the shortest extent (mm) of an
-    arm."""
+    arm; the expected apex (y, z; a tracker's hint) and how far from it a pair's apex may lie
+    across (y) and in range (z) and still be preferred (mm; 0 or NaN: no hint, the
+    best-supported pair)."""
 
     sign: float
     min_deg: float
@@ -110,6 +112,10 @@ class SearchParams(NamedTuple):
     pieces_too: bool
     min_points: int
     min_arm: float
+    hint_y: float = math.nan
+    hint_z: float = math.nan
+    tol_y: float = 0.0
+    tol_z: float = 0.0
 
 
 class Search(NamedTuple):
@@ -408,7 +414,10 @@ def _short_of(points, tb, r, xy, xz, tol):
 def best_pair(points, surface, owner, tb, groups, n, tol, params):
     """``_Base._arms``: the best pair of records forming a V (``params.sign`` -1: opening
     towards the sensor) or a ridge (+1), the arms cut short at the apex (:class:`VPair`;
-    left :data:`NONE` when no pair does)."""
+    left :data:`NONE` when no pair does). With a hint (``params.tol_y``, ``tol_z`` > 0), of
+    the pairs whose apex lies within the tolerance ellipse about the expected point the
+    nearest (in tolerances) is taken; when none does, the best-supported pair, as without a
+    hint."""
     sign, min_deg, max_deg, max_reach = (
         params.sign,
         params.min_deg,
@@ -439,6 +448,9 @@ def best_pair(points, surface, owner, tb, groups, n, tol, params):
     band = 2.0 * tol
     mark = np.zeros(n + 1, dtype=np.bool_)
     best_a, best_b, best_y, best_z, best_score = NONE, NONE, 0.0, 0.0, 0.0
+    hy, hz, tol_y, tol_z = params.hint_y, params.hint_z, params.tol_y, params.tol_z
+    hinted = tol_y > 0.0 and tol_z > 0.0 and math.isfinite(hy) and math.isfinite(hz)
+    near_a, near_b, near_y, near_z, near_score, near_d = NONE, NONE, 0.0, 0.0, 0.0, 1.0
     g = cand.shape[0]
     for i in range(g):
         a = cand[i]
@@ -480,6 +492,13 @@ def best_pair(points, surface, owner, tb, groups, n, tol, params):
                 score += support(points, surface, gy, gz, gdy, gdz, band, x_u, side, tol)
             if best_a == NONE or score > best_score:
                 best_a, best_b, best_y, best_z, best_score = ga, gb, xy, xz, score
+            if hinted:
+                d_hint = math.hypot((xy - hy) / tol_y, (xz - hz) / tol_z)
+                if d_hint <= near_d:
+                    near_a, near_b, near_y, near_z, near_score = ga, gb, xy, xz, score
+                    near_d = d_hint
+    if near_a != NONE:
+        best_a, best_b, best_y, best_z, best_score = near_a, near_b, near_y, near_z, near_score
     if best_a == NONE:
         return VPair(NONE, NONE, 0.0, 0.0, 0.0)
     left = _short_of(points, tb, best_a, best_y, best_z, tol)

@@ -36,7 +36,7 @@ from seamtrack.features.lines import (
     Segments,
     segment_profile,
 )
-from seamtrack.sensing.profiles import Feature, Profile
+from seamtrack.sensing.profiles import Feature, Profile, SeamHint
 
 FloatArray = NDArray[np.float64]
 #: A stretch of kept points ``points[lo:hi]`` and the line(s) a joint's model puts there
@@ -77,8 +77,11 @@ class _Base:
         why = self.expect.check(**measured)
         return Feature.failed(f"{self.name}: {why}", joint=self.name) if why else None
 
-    def __call__(self, profile: Profile) -> Feature:
-        return self.scored(profile)[0]
+    def __call__(self, profile: Profile, hint: SeamHint | None = None) -> Feature:
+        """The seam point of ``profile``; ``hint``: the tracker's prior on it
+        (:class:`~seamtrack.sensing.profiles.SeamHint`), used by the extractors that choose
+        among candidates (the v-groove's V's), ignored by the others."""
+        return self.scored(profile, hint=hint)[0]
 
     def segments(self, profile: Profile) -> Segments | str:
         """The profile's straight pieces with this extractor's front-end parameters."""
@@ -89,17 +92,25 @@ class _Base:
             min_points=self.min_points,
         )
 
-    def scored(self, profile: Profile, seg: Segments | str | None = None) -> tuple[Feature, float]:
+    def scored(
+        self,
+        profile: Profile,
+        seg: Segments | str | None = None,
+        hint: SeamHint | None = None,
+    ) -> tuple[Feature, float]:
         """The feature and the share of the profile's surface points its joint model explains
-        (0 when not found); ``seg``: the profile's pieces when already segmented. Never
-        raises on data."""
+        (0 when not found); ``seg``: the profile's pieces when already segmented; ``hint``:
+        the tracker's prior (:meth:`_extract_hinted`). Never raises on data."""
         try:
             with np.errstate(all="ignore"):
                 if seg is None:
                     seg = self.segments(profile)
                 if isinstance(seg, str):
                     return Feature.failed(seg, joint=self.name), 0.0
-                found = self._extract(profile, seg)
+                if hint is None:
+                    found = self._extract(profile, seg)
+                else:
+                    found = self._extract_hinted(profile, seg, hint)
                 if isinstance(found, Feature):
                     return found, 0.0
                 feature, share = found
@@ -116,6 +127,13 @@ class _Base:
     def _extract(self, profile: Profile, seg: Segments) -> Feature | tuple[Feature, float]:
         """A failure, or the feature and the share of the profile its model explains."""
         raise NotImplementedError
+
+    def _extract_hinted(
+        self, profile: Profile, seg: Segments, hint: SeamHint
+    ) -> Feature | tuple[Feature, float]:
+        """As :meth:`_extract`, with the tracker's prior; the families that have no choice to
+        make ignore it."""
+        return self._extract(profile, seg)
 
     def _found(self, profile: Profile, point: FloatArray, **kw: Any) -> Feature:
         return Feature.found(point, profile.T_world_sensor, joint=self.name, **kw)

@@ -61,7 +61,9 @@ _MAX_ABS_MM = 1e6
 
 @runtime_checkable
 class FeatureExtractor(Protocol):
-    """Finds the seam point in a profile. ``name`` labels results and benches."""
+    """Finds the seam point in a profile. ``name`` labels results and benches. An extractor
+    may also take the tracker's prior, ``__call__(profile, hint=None)`` (a
+    :class:`~seamtrack.sensing.profiles.SeamHint`); one without it is called as before."""
 
     @property
     def name(self) -> str: ...

@@ -24,7 +24,7 @@ from seamtrack.features._v_search import pieces_of
 from seamtrack.features.base import _Base
 from seamtrack.features.expect import Expect
 from seamtrack.features.lines import Segments
-from seamtrack.sensing.profiles import Feature, Profile
+from seamtrack.sensing.profiles import Feature, Profile, SeamHint
 
 FloatArray = NDArray[np.float64]
 #: Why a V is no groove, by the code of :func:`seamtrack.features._v_groove_model.v_groove`.
@@ -56,6 +56,12 @@ class VGrooveExtractor(_Base):
     joins the two root ends: there is no gap between them (a false V where the laser plane
     crosses a mitred corner, a tack weld over the root).
 
+    With a ``hint`` (:class:`~seamtrack.sensing.profiles.SeamHint`, the tracker's expected seam
+    point), of the V's the profile shows the one whose apex lies nearest the expected point
+    within ``hint.tolerance_mm`` is taken (the V that continues the seam, not the false V where
+    the laser plane crosses both grooves of a mitred corner: its apex lies deeper than the
+    root); when none lies within the tolerance, the best-supported V, as without a hint.
+
     Refused with a reason when the profile shows no groove (two
     faces alone, a side along the other's plate, a wide root, or less than
     ``min_explained`` of the profile on the model's lines) or when ``expect`` says the
@@ -73,7 +79,9 @@ class VGrooveExtractor(_Base):
     max_gap_mm: float = 6.0
     min_gap_mm: float = 0.05
 
-    def _extract(self, profile: Profile, seg: Segments) -> Feature | tuple[Feature, float]:
+    def _extract(
+        self, profile: Profile, seg: Segments, hint: SeamHint | None = None
+    ) -> Feature | tuple[Feature, float]:
         if not seg.n_lines:
             return Feature.failed(_REFUSALS[NO_V], joint=self.name)
         lo, hi = self._angles(self.min_angle_deg, self.max_angle_deg)
@@ -88,6 +96,12 @@ class VGrooveExtractor(_Base):
             pieces_too=bool(self.arms_from_pieces),
             gapless=bool(expect is not None and expect.gapless),
         )
+        if hint is not None:  # prefer the V nearest the expected seam point, within the gate
+            hy, hz = hint.point_laser
+            ty, tz = hint.tolerance_mm
+            params = params._replace(
+                hint_y=float(hy), hint_z=float(hz), tol_y=float(ty), tol_z=float(tz)
+            )
         groove = v_groove(
             np.ascontiguousarray(seg.points, dtype=np.float64),
             np.asarray(seg.stray, dtype=np.bool_),
@@ -115,3 +129,8 @@ class VGrooveExtractor(_Base):
             gap_mm=groove.gap,
         )
         return feature, groove.explained
+
+    def _extract_hinted(
+        self, profile: Profile, seg: Segments, hint: SeamHint
+    ) -> Feature | tuple[Feature, float]:
+        return self._extract(profile, seg, hint)

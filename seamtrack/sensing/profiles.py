@@ -132,6 +132,59 @@ def laser_to_world(T_world_sensor: ArrayLike, points_laser: ArrayLike) -> FloatA
 _EMPTY2 = np.empty((0, 2))
 
 
+#: How far from the expected seam point a candidate may lie and still be preferred (mm), across
+#: the seam (y_L) and in range (z_L): a path extrapolated straight misses a turning seam
+#: sideways (a mitre's 80 deg turn: 0.9 mm, 10 mm ahead of the torch), while the root's depth
+#: changes little from one frame to the next (a false V's apex lies 0.5 mm or more deeper).
+HINT_TOLERANCE_MM = (1.5, 0.4)
+
+
+@dataclass(frozen=True)
+class SeamHint:
+    """A prior on the seam in a frame, from the tracker's path: where the seam is expected in
+    the laser plane (``point_laser``: y_L, z_L; mm), the direction it is heading (``direction``:
+    a unit vector in the sensor frame, x_S across the laser plane) and how far from the
+    expected point a candidate may lie across the seam and in range and still be preferred
+    (``tolerance_mm``: y_L, z_L; an ellipse about the point).
+
+    An extractor that takes a ``hint`` keyword (``extractor(profile, hint=...)``) may use it to
+    choose among candidates (the V that continues the seam where the laser plane crosses two
+    grooves at a mitred corner); it never makes a seam point that the profile does not show.
+    """
+
+    point_laser: tuple[float, float]
+    direction: tuple[float, float, float] = (1.0, 0.0, 0.0)
+    tolerance_mm: tuple[float, float] = HINT_TOLERANCE_MM
+
+
+def hint_from_path(
+    T_world_sensor: ArrayLike,
+    point_world: ArrayLike,
+    direction_world: ArrayLike,
+    tolerance_mm: tuple[float, float] = HINT_TOLERANCE_MM,
+) -> SeamHint | None:
+    """The :class:`SeamHint` of a path through ``point_world`` heading ``direction_world``
+    (world frame): where the straight line crosses the laser plane (x_S = 0), or None when
+    it runs along the plane."""
+    T = np.asarray(T_world_sensor, dtype=np.float64)
+    R, t = T[:3, :3], T[:3, 3]
+    p = R.T @ (np.asarray(point_world, dtype=np.float64) - t)
+    d = R.T @ np.asarray(direction_world, dtype=np.float64)
+    norm = float(np.linalg.norm(d))
+    if not norm > 1e-12 or abs(d[0]) < 1e-6 * norm:
+        return None
+    d = d / norm
+    at = p - (p[0] / d[0]) * d
+    if not np.isfinite(at).all():
+        return None
+    sign = 1.0 if d[0] > 0 else -1.0
+    return SeamHint(
+        (float(at[1]), float(at[2])),
+        (float(sign * d[0]), float(sign * d[1]), float(sign * d[2])),
+        (float(tolerance_mm[0]), float(tolerance_mm[1])),
+    )
+
+
 @dataclass(frozen=True, eq=False)
 class Feature:
     """A seam point found in a profile, or a falsy failure with a reason.

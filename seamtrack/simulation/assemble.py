@@ -7,6 +7,7 @@ a CAD workpiece (CadQuery, on a cache miss), an Embree scene and a feature extra
 from __future__ import annotations
 
 import dataclasses
+import inspect
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -20,7 +21,7 @@ from seamtrack.control.tracking import Tracker
 from seamtrack.errors import PluginRuntimeError, SceneError, plugin_failed
 from seamtrack.geometry import frames
 from seamtrack.geometry.seam import Seam
-from seamtrack.sensing.profiles import Feature, Profile, laser_to_world
+from seamtrack.sensing.profiles import Feature, Profile, SeamHint, laser_to_world
 from seamtrack.sensing.scan import SeamNoise, sense_seam
 from seamtrack.sensing.sensor import LaserLineSensor
 from seamtrack.simulation.checks import check_expect, check_ticks, default_time_limit_s
@@ -41,8 +42,8 @@ from seamtrack.simulation.scene import (
 )
 
 FloatArray = NDArray[np.float64]
-SenseFn = Callable[[FloatArray, float], Feature]
-ScanFn = Callable[[FloatArray, float], "tuple[Profile, Feature]"]
+SenseFn = Callable[..., Feature]  # (T_world_sensor, t_s, hint=None)
+ScanFn = Callable[..., "tuple[Profile, Feature]"]  # (T_world_sensor, t_s, hint=None)
 
 
 @dataclass(frozen=True)
@@ -159,6 +160,16 @@ class MeshScan:
     extract: Any = None  # the extractor instance ``scan`` calls
 
 
+def takes_hint(find: Callable[..., Any]) -> bool:
+    """Whether an extractor takes the tracker's prior (a ``hint`` keyword, or ``**kwargs``):
+    extractors written before the hint (``extractor(profile)``) are called without it."""
+    try:
+        params = inspect.signature(find).parameters
+    except (TypeError, ValueError):  # a builtin without a signature: call it as it was
+        return False
+    return "hint" in params or any(p.kind is p.VAR_KEYWORD for p in params.values())
+
+
 def _mesh_scan(scene: Scene, sensor: LaserLineSensor, rng: np.random.Generator) -> MeshScan:
     """The workpiece's CAD seam (world frame) and the per-frame scan: ray-cast stripe, then the
     scene's feature extractor (by default the one the seam's joint type calls for)."""
@@ -202,6 +213,8 @@ def _mesh_scan(scene: Scene, sensor: LaserLineSensor, rng: np.random.Generator) 
             check_expect(extractor_name, scene.config.extractor.expect)
         params["expect"] = dict(scene.config.extractor.expect)
     find = extractor(extractor_name, **params)
+    hinted = takes_hint(find)  # once, at set-up: a user's extractor may have no ``hint``
+    find_hinted: Any = find  # called with ``hint=`` only when it takes one
     offset = np.asarray(scene.config.extractor.offset_mm, dtype=float)
     s = scene.config.sensor
     noise = _stripe_noise(s.stripe_noise)
@@ -220,10 +233,15 @@ def _mesh_scan(scene: Scene, sensor: LaserLineSensor, rng: np.random.Generator) 
             return image.profile(detector.method, threshold=detector.threshold,
                                  choose=detector.choose)  # fmt: skip
 
-    def scan(T_world_sensor: FloatArray, t_s: float) -> tuple[Profile, Feature]:
+    def scan(
+        T_world_sensor: FloatArray, t_s: float, hint: SeamHint | None = None
+    ) -> tuple[Profile, Feature]:
         profile = measure(T_world_sensor, t_s)
         try:
-            feature = find(profile)
+            if hinted and hint is not None:
+                feature = find_hinted(profile, hint=hint)
+            else:
+                feature = find(profile)
         except Exception as exc:  # the user's extractor may fail in any way
             raise plugin_failed("extractor.name", extractor_name, "__call__", t_s, exc) from exc
         if not isinstance(feature, Feature):
@@ -293,14 +311,14 @@ def build_parts(scene: Scene, rng: np.random.Generator | None = None) -> Parts:
             seam = make_seam(scene)  # a nominal seam to score against (e.g. a robot program)
         mesh_scan = scan
 
-        def sense(T_world_sensor: FloatArray, t_s: float) -> Feature:
-            return mesh_scan(T_world_sensor, t_s)[1]
+        def sense(T_world_sensor: FloatArray, t_s: float, hint: SeamHint | None = None) -> Feature:
+            return mesh_scan(T_world_sensor, t_s, hint)[1]
     else:
         seam = make_seam(scene) if loaded is None else loaded.seam
         noise = SeamNoise(c.sensor.noise_range_mm, c.sensor.noise_lateral_mm)
         sensed = seam
 
-        def sense(T_world_sensor: FloatArray, t_s: float) -> Feature:
+        def sense(T_world_sensor: FloatArray, t_s: float, hint: SeamHint | None = None) -> Feature:
             return sense_seam(sensed, T_world_sensor, sensor, noise=noise, rng=rng)
 
     mount = sensor_mount(

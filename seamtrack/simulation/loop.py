@@ -279,6 +279,10 @@ def run(
     fast = unrotated and type(tracker) is TrajectoryTracker and type(robot) is CartesianRobot
     fast = fast and bool(robot._unrotated)
     ticks = GantryTicks(robot, (p0x, p0y, p0z)) if fast else None
+    # A tracker that knows where the seam is heading tells the extractor (``hint``): where the
+    # laser plane crosses two grooves (a mitre) the extractor takes the V that continues it.
+    tracker_hint = getattr(tracker, "hint", None)
+    tracker_hint = tracker_hint if callable(tracker_hint) else None
     tcp: Any = None
     tick = -1
     while tick < max_ticks:
@@ -299,7 +303,8 @@ def run(
             next_capture += cfg.frame_period_s
             T_ws = robot.sensor_pose(state)
             sense_start = clock()
-            feature = parts.sense(T_ws, t)
+            hint = tracker_hint(T_ws) if tracker_hint is not None else None
+            feature = parts.sense(T_ws, t, hint) if hint is not None else parts.sense(T_ws, t)
             sense_time += clock() - sense_start
             if fast:
                 tcp = np.array(tcp_list)
