@@ -47,7 +47,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from seamtrack import constants
 from seamtrack.sensing import formation
-from seamtrack.sensing.camera import BLOCK_COLUMNS, Camera, StripeImage
+from seamtrack.sensing.camera import BLOCK_COLUMNS, RANGES, Camera, StripeImage
 from seamtrack.sensing.materials import DEFAULT_MATERIAL, Material, material
 from seamtrack.sensing.profiles import Reason
 from seamtrack.sensing.scan import laser_fan, ray_caster, stripe_hits
@@ -162,8 +162,14 @@ def _read_out(
 ) -> tuple[NDArray[np.float32], FloatArray | None]:
     """The chip's readout at the camera's exposure, or (``multi``) at each exposure of its set,
     merged: each column from the longest exposure whose pixels stay below full scale there, the
-    shortest where every one saturates; and then the exposure of each column."""
-    factors = cam.exposure_set if cam.exposure_mode == "multi" else (1.0,)
+    shortest that shows the column where every one saturates; and the exposure of each column.
+    An exposure of the set below the shutter's shortest (:data:`RANGES`) is taken at that."""
+    factors: tuple[float, ...] = (1.0,)
+    if cam.exposure_mode == "multi":  # the shutter's shortest exposure bounds the set
+        shortest = RANGES["exposure"].lo / cam.exposure
+        factors = tuple(
+            sorted({max(f, min(1.0, shortest)) for f in cam.exposure_set}, reverse=True)
+        )
     chosen: NDArray[np.float32] | None = None
     exposure = np.full(electrons.shape[1], cam.exposure)
     open_ = np.ones(electrons.shape[1], dtype=bool)  # columns still saturated in every exposure
@@ -176,8 +182,10 @@ def _read_out(
         if chosen is None:
             chosen = frame
         else:
-            chosen[:, open_] = frame[:, open_]
-            exposure[open_] = cam.exposure * factor
+            # A column keeps the longer exposure where this one shows nothing (a 1-bit chip).
+            take = open_ & (frame.max(axis=0) > 0.0)
+            chosen[:, take] = frame[:, take]
+            exposure[take] = cam.exposure * factor
         if i + 1 < len(factors):
             open_ &= frame.max(axis=0) >= 1.0
             if not open_.any():
