@@ -8,8 +8,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from seamtrack.bench.camera import (
-    GRID,
+from seamtrack.bench.camera import GRID
+from seamtrack.bench.camera_exposure import (
     SENSOR,
     down,
     exposure_tilt,

@@ -40,6 +40,13 @@ from typing import Any
 
 import numpy as np
 
+from seamtrack.bench.camera_exposure import (
+    down,
+    exposure_markdown,
+    exposure_sweep,
+    plane_rows,
+    plate,
+)
 from seamtrack.bench.camera_sets import ImageSet, bench_image_sets, markdown_rows
 from seamtrack.bench.common import machine_info
 from seamtrack.geometry import frames
@@ -68,38 +75,6 @@ _SET_META = {
 
 
 # --------------------------------------------------------------------------- parts and oracles
-def plate(roll_deg: float = 0.0, pitch_deg: float = 0.0, size: float = 300.0) -> Any:
-    """A square plate through the world origin, turned about world x then y."""
-    import trimesh
-
-    corners = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], float) * 0.5 * size
-    mesh = trimesh.Trimesh(corners, [[0, 1, 2], [0, 2, 3]], process=False)
-    mesh.apply_transform(frames.from_xyz_rpy_deg([0, 0, 0], [roll_deg, pitch_deg, 0]))
-    return mesh
-
-
-def down(range_mm: float | None = None) -> np.ndarray:
-    """The laser pointing down at the world origin from ``range_mm`` (default range centre)."""
-    z = SENSOR.range_center_mm if range_mm is None else range_mm
-    return frames.from_xyz_rpy_deg([0.0, 0.0, z], [180.0, 0.0, 0.0])
-
-
-def plane_rows(image: StripeImage, normal_world: np.ndarray) -> np.ndarray:
-    """Per column, the row of the laser plane's line on the plane through the world origin with
-    this normal: closed form from Eq. 2-3 and the plane equation."""
-    sensor, T = image.sensor, image.T_world_sensor
-    assert T is not None
-    n = np.asarray(normal_world) @ T[:3, :3]
-    k = float(n @ (T[:3, :3].T @ -T[:3, 3]))
-    _, z_c = image.chip_coordinates(np.zeros(image.shape[1]), np.arange(image.shape[1]))
-    b, lam = sensor.baseline_mm, sensor.focal_length_mm
-    s, c = math.sin(sensor.angle_rad), math.cos(sensor.angle_rad)
-    z = (k - n[1] * z_c * b * s / lam) / (n[1] * z_c * c / lam + n[2])
-    y = z_c * (z * c + b * s) / lam
-    x_c, _ = sensor.project(y, z)
-    return (x_c + 0.5 * sensor.chip_h_mm) / sensor.pixel_pitch_mm[0] - 0.5 - image.window[0]
-
-
 def v_groove() -> Any:
     """A 60 deg V-groove along world x, apex at (y, z) = (0, -DEPTH), plates at z = 0."""
     import trimesh
@@ -199,63 +174,6 @@ def false_stripe_rows(image: StripeImage, threshold: float) -> np.ndarray:
 
 
 # --------------------------------------------------------------------------- the sections
-#: The old detector's absolute threshold (before issue 27.1), kept for the comparison.
-OLD_THRESHOLD = 0.1
-
-
-def stripe_errors(image: StripeImage, rows: np.ndarray, normal_world: np.ndarray) -> np.ndarray:
-    """Per column of the stripe (where the ideal stripe images), the distance in mm in the laser
-    plane between the point of ``rows`` and the analytic plane section's; NaN where not found."""
-    cols = np.isfinite(image.truth_row)
-    found = image.triangulate_rows(rows)[cols]
-    expected = image.triangulate_rows(plane_rows(image, normal_world))[cols]
-    return np.asarray(np.linalg.norm(found - expected, axis=1))
-
-
-def exposure_tilt(axis: str, tilt_deg: float, surface: str, seed: int = 0) -> dict[str, Any]:
-    """One row of section 7: the default camera and detector on a plate tilted ``tilt_deg``
-    about world ``axis`` ("roll": x, along the stripe's columns; "pitch": y, in the
-    triangulation plane), against a fixed exposure with the old threshold."""
-    roll, pitch = (tilt_deg, 0.0) if axis == "roll" else (0.0, tilt_deg)
-    normal = frames.from_xyz_rpy_deg([0, 0, 0], [roll, pitch, 0])[:3, 2]
-    part = plate(roll, pitch)
-    image = SENSOR.render(part, down(), camera=Camera(), material=surface, seed=seed)
-    cols = np.isfinite(image.truth_row)
-    error = stripe_errors(image, detect(image.pixels), normal)
-    fixed = SENSOR.render(part, down(), camera=Camera(exposure_mode="fixed"), material=surface,
-                          seed=seed)  # fmt: skip
-    old = stripe_errors(fixed, detect(fixed.pixels, threshold=OLD_THRESHOLD), normal)
-    assert image.column_exposure is not None
-    return {
-        "axis": axis,
-        "tilt_deg": tilt_deg,
-        "material": surface,
-        "columns": int(cols.sum()),
-        "found": float(np.mean(np.isfinite(error))),
-        "p95_error_mm": (
-            float(np.nanpercentile(error, 95)) if np.isfinite(error).any() else math.nan
-        ),
-        "saturated": float(np.mean(image.pixels.max(axis=0)[cols] >= 1.0)),
-        "shortest_exposure": float(image.column_exposure[cols].min()),
-        "fixed_peak": float(fixed.pixels.max(axis=0)[cols].max()),
-        "fixed_saturated": float(np.mean(fixed.pixels.max(axis=0)[cols] >= 1.0)),
-        "fixed_found_old_threshold": float(np.mean(np.isfinite(old))),
-    }
-
-
-def mirror_tilt_deg() -> float:
-    """The pitch that turns a plate's mirror reflection of the laser into the camera: half the
-    triangulation angle."""
-    return round(0.5 * math.degrees(SENSOR.angle_rad), 2)
-
-
-def _exposure_sweep(quick: bool) -> list[dict[str, Any]]:
-    tilts = (0.0, 35.0, 70.0) if quick else (0.0, 10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0)
-    poses = [(axis, t) for axis in ("roll", "pitch") for t in tilts]
-    poses.insert(len(tilts) + 1, ("pitch", mirror_tilt_deg()))
-    return [exposure_tilt(axis, t, m) for m in MATERIALS for axis, t in poses]
-
-
 def _plane_accuracy(quick: bool) -> list[dict[str, Any]]:
     tilts = (
         [(0, 0), (30, 0), (60, 0), (0, 60)]
@@ -497,7 +415,7 @@ def bench_camera(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]:
     result["extractors"], sets = _extractor_rows(quick)
     result["image_sets"] = bench_image_sets(sets, _SET_META)
     result["throughput"] = _throughput(quick)
-    result["exposure"] = _exposure_sweep(quick)
+    result["exposure"] = exposure_sweep(quick)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     (out / "camera.json").write_text(json.dumps(result, indent=2, default=float) + "\n")
@@ -648,23 +566,5 @@ def markdown(result: dict[str, Any]) -> str:
         ],
     )
     lines += markdown_rows(result.get("image_sets", []), _table)
-    lines += [
-        "",
-        "**7. Exposure: the default camera and detector on tilted plates** (the paper's sensor, "
-        "its full chip, `Camera()`: multi-exposure merge; the default detector: each column's "
-        "threshold relative to its peak and the noise): columns of the stripe found, range "
-        "error against the analytic plane, stripe columns saturated; then a fixed exposure "
-        f"(0.5) with the old absolute threshold {OLD_THRESHOLD}.",
-        "",
-    ]
-    lines += _table(
-        ["material", "tilt axis", "tilt deg", "found", "p95 error mm", "saturated",
-         "shortest exposure", "fixed: peak", "fixed: saturated", "fixed, threshold 0.1: found"],
-        [
-            [r["material"], r["axis"], r["tilt_deg"], r["found"], r["p95_error_mm"],
-             r["saturated"], r["shortest_exposure"], r["fixed_peak"], r["fixed_saturated"],
-             r["fixed_found_old_threshold"]]
-            for r in result.get("exposure", [])
-        ],
-    )  # fmt: skip
+    lines += exposure_markdown(result.get("exposure", []), _table)
     return "\n".join(lines) + "\n"
