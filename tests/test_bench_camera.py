@@ -17,7 +17,7 @@ def test_bench_camera_quick_writes_its_tables_and_meets_the_must_shows(tmp_path)
     assert json.loads((tmp_path / "camera.json").read_text())["quick"] is True
     text = (tmp_path / "camera.md").read_text()
     for heading in ("Ideal camera", "Speckle only", "False stripe", "Extractors", "Throughput",
-                    "real-data bench"):  # fmt: skip
+                    "real-data bench", "Exposure"):  # fmt: skip
         assert heading in text
     assert max(r["rms_px"] for r in result["plane"]) < 0.05
     for row in result["speckle"]:
@@ -55,3 +55,11 @@ def test_bench_camera_quick_writes_its_tables_and_meets_the_must_shows(tmp_path)
                 assert a["median_error_mm"] == pytest.approx(b["median_error_mm"], abs=2e-3)
     for row in result["image_sets"]:
         assert 0.0 <= row["false_joint_rate"] <= 1.0 and 0.0 <= row["classified_rate"] <= 1.0
+
+    # Section 7 (issue 27.1): the default camera and detector find the stripe at every tilt,
+    # within the speckle's error of the analytic plane, and keep aluminium below saturation.
+    tilts = {(r["material"], r["axis"], r["tilt_deg"]) for r in result["exposure"]}
+    assert {("mill-scale steel", "roll", 70.0), ("bright aluminium", "pitch", 70.0)} <= tilts
+    for row in result["exposure"]:
+        assert row["found"] >= 0.99 and row["p95_error_mm"] <= 0.5
+        assert row["saturated"] <= 0.05

@@ -177,9 +177,13 @@ def test_reflectance_follows_lambert_and_the_lobe_and_light_falls_with_range() -
 
 def test_saturation_and_quantization() -> None:
     cam = Camera(exposure=4.0, bit_depth=8, speckle=False, shot_noise=False, read_noise_e=0,
-                 **SMALL)  # fmt: skip
+                 exposure_mode="fixed", **SMALL)  # fmt: skip
     image = SENSOR.render(plate(), T_DOWN, camera=cam, material="white matte", seed=0)
     assert image.pixels.max() == 1.0
+    # The multiple exposure (the default) takes the saturated columns from a shorter exposure.
+    merged = SENSOR.render(plate(), T_DOWN, camera=dataclasses.replace(cam, exposure_mode="multi"),
+                           material="white matte", seed=0)  # fmt: skip
+    assert merged.pixels.max() < 1.0 and (merged.column_exposure < cam.exposure).all()
     levels = image.pixels * 255
     np.testing.assert_allclose(levels, np.round(levels), atol=1e-4)
     # A saturated plateau: the Gaussian fit falls back to the centroid and stays on the stripe.

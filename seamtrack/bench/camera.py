@@ -17,6 +17,13 @@ measured from pixels, and what image mode costs.
 5. **Throughput**: 1024 x 512 images per second on one core, and an image-mode frame against a
    geometry-mode frame on the same part and poses. Times are the process's CPU time (one thread
    does all the work), so other load on the machine does not inflate them.
+7. **Exposure: the default camera and detector on tilted plates** (issue 27.1): the paper's
+   sensor's full chip, ``Camera()`` (multi-exposure merge) and the default detector (a threshold
+   relative to each column's peak and the noise), a matte and a bright aluminium plate tilted
+   0-70 deg about both axes and at the aluminium's mirror angle (half the triangulation angle):
+   columns found, the range error against the analytic plane (p95, mm), the share of the
+   stripe's columns saturated; and, for comparison, a fixed exposure with the old absolute
+   threshold 0.1.
 6. **Image-mode sets through the real-data bench**: section 4's image-mode profiles, labelled
    with the CAD seam's crossing of the laser plane, as sets of the real-data extractor bench
    (:mod:`seamtrack.bench.camera_sets`): detection, error, false joints, classification.
@@ -35,22 +42,16 @@ from typing import Any
 
 import numpy as np
 
+from seamtrack.bench.camera_exposure import exposure_markdown, exposure_sweep
+from seamtrack.bench.camera_parts import SENSOR, down, plane_rows, plate
 from seamtrack.bench.camera_sets import ImageSet, bench_image_sets, markdown_rows
-from seamtrack.bench.camera_speckle import (
-    dorsch_mm,
-    down,
-    plate,
-    speckle_sweep,
-    speckle_sweep_table,
-)
+from seamtrack.bench.camera_speckle import dorsch_mm, speckle_sweep, speckle_sweep_table
 from seamtrack.bench.common import machine_info
 from seamtrack.geometry import frames
 from seamtrack.sensing.camera import Camera, StripeImage
 from seamtrack.sensing.materials import material
 from seamtrack.sensing.peaks import detect, find_peaks
-from seamtrack.sensing.sensor import preset
 
-SENSOR = preset("paper")
 ROWS, COLUMNS = 512, 1024
 GRID: dict[str, Any] = {"rows": ROWS, "columns": COLUMNS}
 HALF_WIDTH, DEPTH, LENGTH, PLATE = 5.0, 5.0 * math.tan(math.radians(60.0)), 120.0, 40.0
@@ -70,22 +71,6 @@ _SET_META = {
 
 
 # --------------------------------------------------------------------------- parts and oracles
-def plane_rows(image: StripeImage, normal_world: np.ndarray) -> np.ndarray:
-    """Per column, the row of the laser plane's line on the plane through the world origin with
-    this normal: closed form from Eq. 2-3 and the plane equation."""
-    sensor, T = image.sensor, image.T_world_sensor
-    assert T is not None
-    n = np.asarray(normal_world) @ T[:3, :3]
-    k = float(n @ (T[:3, :3].T @ -T[:3, 3]))
-    _, z_c = image.chip_coordinates(np.zeros(image.shape[1]), np.arange(image.shape[1]))
-    b, lam = sensor.baseline_mm, sensor.focal_length_mm
-    s, c = math.sin(sensor.angle_rad), math.cos(sensor.angle_rad)
-    z = (k - n[1] * z_c * b * s / lam) / (n[1] * z_c * c / lam + n[2])
-    y = z_c * (z * c + b * s) / lam
-    x_c, _ = sensor.project(y, z)
-    return (x_c + 0.5 * sensor.chip_h_mm) / sensor.pixel_pitch_mm[0] - 0.5 - image.window[0]
-
-
 def v_groove() -> Any:
     """A 60 deg V-groove along world x, apex at (y, z) = (0, -DEPTH), plates at z = 0."""
     import trimesh
@@ -419,6 +404,7 @@ def bench_camera(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]:
     result["extractors"], sets = _extractor_rows(quick)
     result["image_sets"] = bench_image_sets(sets, _SET_META)
     result["throughput"] = _throughput(quick)
+    result["exposure"] = exposure_sweep(quick)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     (out / "camera.json").write_text(json.dumps(result, indent=2, default=float) + "\n")
@@ -570,4 +556,5 @@ def markdown(result: dict[str, Any]) -> str:
         ],
     )
     lines += markdown_rows(result.get("image_sets", []), _table)
+    lines += exposure_markdown(result.get("exposure", []), _table)
     return "\n".join(lines) + "\n"

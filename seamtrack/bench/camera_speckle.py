@@ -17,31 +17,13 @@ from typing import Any
 
 import numpy as np
 
-from seamtrack.geometry import frames
+from seamtrack.bench.camera_parts import SENSOR, down, plate
 from seamtrack.sensing.camera import Camera
-from seamtrack.sensing.sensor import preset
 
-SENSOR = preset("paper")
 GRID: dict[str, Any] = {"rows": 512, "columns": 1024}
 
 
 # --------------------------------------------------------------------------- the plate
-def plate(roll_deg: float = 0.0, pitch_deg: float = 0.0, size: float = 300.0) -> Any:
-    """A square plate through the world origin, turned about world x then y."""
-    import trimesh
-
-    corners = np.array([[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], float) * 0.5 * size
-    mesh = trimesh.Trimesh(corners, [[0, 1, 2], [0, 2, 3]], process=False)
-    mesh.apply_transform(frames.from_xyz_rpy_deg([0, 0, 0], [roll_deg, pitch_deg, 0]))
-    return mesh
-
-
-def down(range_mm: float | None = None) -> np.ndarray:
-    """The laser pointing down at the world origin from ``range_mm`` (default range centre)."""
-    z = SENSOR.range_center_mm if range_mm is None else range_mm
-    return frames.from_xyz_rpy_deg([0.0, 0.0, z], [180.0, 0.0, 0.0])
-
-
 def dorsch_mm(f_number: float, wavelength_nm: float = 660.0) -> float:
     """dz = lambda / (2 pi sin u_obs sin theta) at the range centre (C = 1); the pupil is
     lambda_camera / N across, seen from b / sin(theta)."""

@@ -102,6 +102,28 @@ ENTRIES: tuple[Entry, ...] = (
     Entry("camera bit depth -1", _check(f"{F}bit_depth=-1"), field=f"{F}bit_depth"),
     Entry("camera wavelength nan", _render(f"{F}wavelength_nm=nan"), field=f"{F}wavelength_nm"),
     Entry("camera rows 2.5", _check(f"{F}rows=2.5"), field=f"{F}rows"),
+    # --- issue 27.1: exposure control and the detector's relative threshold
+    Entry("camera exposure mode hdr", _check(f'{F}exposure_mode="hdr"'), field="exposure_mode"),
+    Entry("camera target peak 1.5", _render(f"{F}target_peak=1.5"), field=f"{F}target_peak"),
+    Entry("camera target peak 0", _check(f"{F}target_peak=0"), field=f"{F}target_peak"),
+    Entry(
+        "camera exposure set rising",
+        _check(f"{F}exposure_set=[1.0, 2.0]"),
+        field=f"{F}exposure_set",
+    ),
+    Entry(
+        "camera exposure set not from 1",
+        _render(f"{F}exposure_set=[0.5, 0.1]"),
+        field=f"{F}exposure_set",
+    ),
+    Entry("camera exposure set empty", _check(f"{F}exposure_set=[]"), field=f"{F}exposure_set"),
+    Entry(
+        "camera exposure set 1e-9",
+        _image_run(f"{F}exposure_set=[1.0, 1e-9]"),
+        field=f"{F}exposure_set",
+    ),
+    Entry("detector relative 1", _check(f"{F}relative=1.0"), field=f"{F}relative"),
+    Entry("detector noise sigmas -1", _check(f"{F}noise_sigmas=-1.0"), field="noise_sigmas"),
     # --- issue 23.2: chip size x supersampling within the memory a run may take
     Entry(
         "camera chip 20000 x 20000",

@@ -16,6 +16,7 @@ lambda / f_number.
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -25,6 +26,7 @@ from numpy.typing import NDArray
 
 from seamtrack.errors import SensorGeometryError
 from seamtrack.sensing.materials import Material
+from seamtrack.sensing.peaks import NOISE_SIGMAS, RELATIVE_THRESHOLD
 from seamtrack.sensing.profiles import Profile
 
 if TYPE_CHECKING:  # annotations only: the sensor module imports the renderer, which imports this
@@ -116,7 +118,23 @@ RANGES: dict[str, Bound] = {
     "supersample": Bound(
         1, MAX_SUPERSAMPLE, "", "sub-pixels per pixel and axis, or leave it out (from the optics)"
     ),
+    # Auto-exposure aims the stripe's brightest pixel below saturation and well above the noise
+    # (profilers aim at 50-90 % of full scale).
+    "target_peak": Bound(
+        0.05, 0.98, "", "auto-exposure's aim for the brightest pixel, a fraction of full scale"
+    ),
+    # Multiple exposure (Gocator, Keyence HDR): 2-5 exposures, each a factor of `exposure`
+    # down to 1e-4 (the shutter's span), the longest first.
+    "exposure_factor": Bound(
+        1e-4, 1.0, "", "each exposure of the set as a factor of `exposure` (1: the longest)"
+    ),
+    "exposure_count": Bound(1, 8, "exposures", "multiple-exposure modes merge 2-5 exposures"),
 }
+
+#: Exposure control (:attr:`Camera.exposure_mode`): ``fixed`` (``exposure`` every frame),
+#: ``auto`` (each frame's exposure from the previous frame's peak, :meth:`Camera.next_exposure`),
+#: ``multi`` (every frame taken at each exposure of ``exposure_set``, merged column by column).
+EXPOSURE_MODES = ("fixed", "auto", "multi")
 
 
 #: Pixel columns per block of the renderer's band processing (:mod:`seamtrack.sensing.render`).
@@ -201,6 +219,19 @@ class Camera:
     supersample : int, optional
         Sub-pixels per pixel and axis for the speckle field; default from lambda N and the
         pixel pitch (2 per speckle grain, at most :data:`MAX_SUPERSAMPLE`).
+    exposure_mode : {"multi", "auto", "fixed"}
+        Exposure control (:data:`EXPOSURE_MODES`). ``fixed``: every frame at ``exposure``.
+        ``auto``: a frame at ``exposure`` first, then each frame's exposure set so that the
+        previous frame's brightest pixel lands at ``target_peak`` (the run keeps that state).
+        ``multi`` (default): every frame taken at ``exposure`` times each factor of
+        ``exposure_set`` (one speckle pattern, independent noise) and merged column by column:
+        each column from the longest exposure that does not saturate it (the shortest where all
+        do), as the multiple-exposure (HDR) modes of Gocator and Keyence profilers.
+    target_peak : float
+        Auto-exposure's aim for the brightest pixel, a fraction of full scale.
+    exposure_set : tuple of float
+        The multiple exposure's factors of ``exposure``, the longest (1.0) first, decreasing;
+        an exposure below the shortest (:data:`RANGES`) is taken at the shortest.
     """
 
     rows: int | None = None
@@ -220,6 +251,9 @@ class Camera:
     speckle: bool = True
     shot_noise: bool = True
     supersample: int | None = None
+    exposure_mode: str = "multi"
+    target_peak: float = 0.7
+    exposure_set: tuple[float, ...] = (1.0, 1 / 8, 1 / 64, 1 / 512)
 
     def __post_init__(self) -> None:
         for key in ("rows", "columns", "supersample", "bit_depth"):
@@ -254,6 +288,23 @@ class Camera:
                     "roi", f"{list(self.roi)} is empty or negative",
                     "give [row0, row1, col0, col1] with row1 >= row0 + 3 and col1 > col0",
                 )  # fmt: skip
+        if self.exposure_mode not in EXPOSURE_MODES:
+            raise _fail("exposure_mode", f"{self.exposure_mode!r} is not an exposure mode",
+                        f"give one of {', '.join(repr(m) for m in EXPOSURE_MODES)}")  # fmt: skip
+        if error := range_error("target_peak", self.target_peak):
+            raise error
+        factors = tuple(self.exposure_set)
+        if error := range_error("exposure_count", len(factors), "sensor.camera.exposure_set"):
+            raise error
+        for factor in factors:
+            if isinstance(factor, bool) or not isinstance(factor, (int, float)):
+                raise _fail("exposure_set", f"{factor!r} is not a number",
+                            RANGES["exposure_factor"].real)  # fmt: skip
+            if error := range_error("exposure_factor", factor, "sensor.camera.exposure_set"):
+                raise error
+        if factors[0] != 1.0 or any(b >= a for a, b in itertools.pairwise(factors)):
+            raise _fail("exposure_set", f"{list(factors)} does not start at 1 and decrease",
+                        "give the factors longest first, e.g. [1, 0.125, 0.015625]")  # fmt: skip
 
     # ------------------------------------------------------------------ variants
     @classmethod
@@ -332,6 +383,18 @@ class Camera:
             return 1
         pitch = max(imaging.pixel_pitch_mm)
         return int(min(MAX_SUPERSAMPLE, max(1, math.ceil(2.0 * pitch / self.speckle_size_mm))))
+
+    def next_exposure(self, exposure: float, peak: float) -> float:
+        """Auto-exposure: the exposure of the next frame, from this frame's ``exposure`` and its
+        brightest pixel ``peak`` (fraction of full scale). The signal is linear in exposure, so
+        exposure * target_peak / peak lands the peak on target; a saturated frame (whose peak
+        understates the light) steps down 8 times; nothing seen opens up 4 times; a step is at
+        most 16 times; within :data:`RANGES`' exposure range."""
+        bound = RANGES["exposure"]
+        if not math.isfinite(peak) or peak <= 0.0:
+            return float(min(bound.hi, 4.0 * exposure))  # nothing seen: open up
+        factor = 0.125 if peak >= 1.0 else min(max(self.target_peak / peak, 1.0 / 16.0), 16.0)
+        return float(min(bound.hi, max(bound.lo, exposure * factor)))
 
     def check(self, sensor: LaserLineSensor) -> None:
         """Refuse what cannot work with this sensor: a region of interest off the chip, a laser
@@ -425,6 +488,10 @@ class StripeImage:
     T_world_sensor : (4, 4) float or None
     t_s : float
         Capture time.
+    exposure : float
+        The exposure this frame was taken at (multiple exposure: the longest of the set).
+    column_exposure : (columns,) float or None
+        Multiple exposure: the exposure each column's pixels come from; None otherwise.
     """
 
     pixels: NDArray[np.float32]
@@ -437,6 +504,13 @@ class StripeImage:
     reflection_row: FloatArray
     T_world_sensor: FloatArray | None = None
     t_s: float = float("nan")
+    exposure: float = float("nan")
+    column_exposure: FloatArray | None = None
+
+    @property
+    def peak(self) -> float:
+        """The brightest pixel, a fraction of full scale (what auto-exposure reads)."""
+        return float(self.pixels.max()) if self.pixels.size else 0.0
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -468,9 +542,11 @@ class StripeImage:
         self,
         method: str = "centroid",
         *,
-        threshold: float = 0.1,
+        threshold: float | None = None,
         choose: str = "strongest",
         sigma_px: float | None = None,
+        relative: float = RELATIVE_THRESHOLD,
+        noise_sigmas: float = NOISE_SIGMAS,
     ) -> Profile:
         """The stripe profile measured from the pixels, as ``scan()`` gives it.
 
@@ -479,8 +555,10 @@ class StripeImage:
         method : {"centroid", "gaussian", "steger"}
             Sub-pixel peak in each column: the thresholded centroid, the 3-point Gaussian fit
             on the brightest pixel, or Steger's line detector (Gaussian-smoothed derivatives).
-        threshold : float
-            Pixels above this fraction of full scale form the candidate peaks.
+        threshold : float, optional
+            Pixels above this fraction of full scale form the candidate peaks. Default (None):
+            relative to each column, max(``noise_sigmas`` * noise sigma, ``relative`` * the
+            column's peak) above the background (:func:`seamtrack.sensing.peaks.detect`).
         choose : {"strongest", "first", "widest"}
             Among several peaks in one column: the brightest, the first along the range (the
             nearest to the sensor) or the widest.
@@ -496,7 +574,7 @@ class StripeImage:
         from seamtrack.sensing.peaks import detect
 
         rows = detect(self.pixels, method=method, threshold=threshold, choose=choose,
-                      sigma_px=sigma_px)  # fmt: skip
+                      sigma_px=sigma_px, relative=relative, noise_sigmas=noise_sigmas)  # fmt: skip
         return self.profile_from_rows(rows)
 
     def profile_from_rows(self, rows: FloatArray) -> Profile:

@@ -1,9 +1,13 @@
 """Peak detectors: the sub-pixel row of the laser stripe in each image column, as a sensor's
 firmware finds it.
 
-A column's candidates are its runs of pixels above a threshold (a peak each). One is chosen per
-column (the brightest, the first along the range, or the widest) and located to a fraction of
-a pixel by
+A column's candidates are its runs of pixels above a threshold (a peak each). The default
+threshold is each column's own (:func:`column_thresholds`): the background plus
+max(NOISE_SIGMAS * the noise sigma, RELATIVE_THRESHOLD * the column's peak above it), so a dim
+stripe (a matte plate at grazing incidence) is found as well as a bright one, and a column of
+noise alone has none; an absolute threshold (a fraction of full scale) may be given instead.
+One is chosen per column (the brightest, the first along the range, or the widest) and located
+to a fraction of a pixel by
 
 - ``centroid``: the centroid of (I - threshold) over the run;
 - ``gaussian``: the 3-point Gaussian fit on the brightest pixel and its neighbours,
@@ -34,6 +38,10 @@ IntArray = NDArray[np.int64]
 
 METHODS = ("centroid", "gaussian", "steger")
 CHOICES = ("strongest", "first", "widest")
+#: The default threshold's share of each column's peak (above the background): half maximum.
+RELATIVE_THRESHOLD = 0.5
+#: ... and its floor in noise sigmas (the image's robust sigma): no false peak in a dark column.
+NOISE_SIGMAS = 6.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -68,7 +76,7 @@ class Peaks:
 
 
 @numba.njit(cache=True, nogil=True)
-def _runs(image_t: NDArray[np.float32], threshold: float) -> tuple[
+def _runs(image_t: NDArray[np.float32], thresholds: FloatArray) -> tuple[
     IntArray, IntArray, IntArray, FloatArray, IntArray, FloatArray
 ]:  # fmt: skip
     """Runs above the threshold of a (columns, rows) image: two passes, count then fill."""
@@ -76,6 +84,7 @@ def _runs(image_t: NDArray[np.float32], threshold: float) -> tuple[
     count = 0
     for c in range(n_cols):
         inside = False
+        threshold = thresholds[c]
         for r in range(n_rows):
             above = image_t[c, r] > threshold
             if above and not inside:
@@ -92,6 +101,7 @@ def _runs(image_t: NDArray[np.float32], threshold: float) -> tuple[
         inside = False
         total = 0.0
         moment = 0.0
+        threshold = thresholds[c]
         for r in range(n_rows + 1):
             value = image_t[c, r] - threshold if r < n_rows else 0.0
             if value > 0:
@@ -115,10 +125,30 @@ def _runs(image_t: NDArray[np.float32], threshold: float) -> tuple[
     return column, start, stop, peak, argmax, centroid
 
 
-def find_peaks(pixels: NDArray[np.floating], threshold: float) -> Peaks:
-    """All candidate peaks of an image (rows, columns); ``threshold`` in pixel units."""
+def find_peaks(pixels: NDArray[np.floating], threshold: float | FloatArray) -> Peaks:
+    """All candidate peaks of an image (rows, columns); ``threshold`` in pixel units, one for
+    the image or one per column."""
     image_t = np.ascontiguousarray(np.asarray(pixels, dtype=np.float32).T)
-    return Peaks(*_runs(image_t, float(threshold)))
+    levels = np.broadcast_to(np.asarray(threshold, dtype=np.float64), image_t.shape[:1])
+    return Peaks(*_runs(image_t, np.ascontiguousarray(levels)))
+
+
+def column_thresholds(
+    pixels: NDArray[np.floating],
+    relative: float = RELATIVE_THRESHOLD,
+    noise_sigmas: float = NOISE_SIGMAS,
+) -> FloatArray:
+    """Each column's threshold: background + max(noise_sigmas * sigma, relative * (column peak
+    - background)). The background is the image's median and sigma its robust spread (1.4826
+    times the median absolute deviation): the stripe covers a few rows of each column, so both
+    are the dark pixels'. A column whose peak is within the noise floor gets none above it."""
+    image = np.asarray(pixels, dtype=np.float32)
+    if image.size == 0:
+        return np.zeros(image.shape[1] if image.ndim == 2 else 0)
+    background = float(np.median(image))
+    sigma = 1.4826 * float(np.median(np.abs(image - np.float32(background))))
+    peak = image.max(axis=0).astype(np.float64) - background
+    return np.asarray(background + np.maximum(noise_sigmas * sigma, relative * peak))
 
 
 def choose_peaks(peaks: Peaks, columns: int, choose: str) -> IntArray:
@@ -141,9 +171,11 @@ def detect(
     pixels: NDArray[np.floating],
     *,
     method: str = "centroid",
-    threshold: float = 0.1,
+    threshold: float | None = None,
     choose: str = "strongest",
     sigma_px: float | None = None,
+    relative: float = RELATIVE_THRESHOLD,
+    noise_sigmas: float = NOISE_SIGMAS,
 ) -> FloatArray:
     """Sub-pixel stripe row per column (see the module docstring); NaN where none.
 
@@ -151,13 +183,17 @@ def detect(
     ----------
     pixels : (rows, columns) float
     method : {"centroid", "gaussian", "steger"}
-    threshold : float
-        In pixel units (a fraction of full scale for a :class:`StripeImage`).
+    threshold : float, optional
+        An absolute threshold in pixel units (a fraction of full scale for a
+        :class:`StripeImage`); default (None) each column's own, :func:`column_thresholds`.
     choose : {"strongest", "first", "widest"}
         "first" is the first along the range: the peak nearest the sensor (largest row).
     sigma_px : float, optional
         Steger's smoothing scale; default the median run width / (2 sqrt 3) (Steger's bound
         for a bar-shaped line), at least 0.8.
+    relative, noise_sigmas : float
+        The default threshold's share of each column's peak (0-1) and its floor in noise
+        sigmas (>= 0).
 
     Returns
     -------
@@ -165,11 +201,16 @@ def detect(
     """
     if method not in METHODS:
         raise ValueError(f"method must be one of {METHODS}, got {method!r}")
-    if not (math.isfinite(threshold) and threshold >= 0):
+    if threshold is not None and not (math.isfinite(threshold) and threshold >= 0):
         raise ValueError(f"threshold must be >= 0, got {threshold}")
+    if not (math.isfinite(relative) and 0 <= relative < 1):
+        raise ValueError(f"relative must be in [0, 1), got {relative}")
+    if not (math.isfinite(noise_sigmas) and noise_sigmas >= 0):
+        raise ValueError(f"noise_sigmas must be >= 0, got {noise_sigmas}")
     image = np.asarray(pixels, dtype=np.float32)
     n_cols = image.shape[1]
-    peaks = find_peaks(image, threshold)
+    level = column_thresholds(image, relative, noise_sigmas) if threshold is None else threshold
+    peaks = find_peaks(image, level)
     chosen = choose_peaks(peaks, n_cols, choose)
     rows = np.full(n_cols, np.nan)
     cols = np.flatnonzero(chosen >= 0)

@@ -29,10 +29,16 @@ camera's pupil, onto the chip.
    (overlap-save along the columns).
 5. **The chip.** Ambient light, shot noise (Poisson), read noise, saturation at the full well,
    quantization to the bit depth; every draw from the one seeded Generator.
+6. **Exposure** (:attr:`Camera.exposure_mode`): the signal is linear in the exposure, so a frame
+   is rendered once and read out at its exposure (``fixed``; ``auto``: the exposure the run's
+   loop passes in, :meth:`Camera.next_exposure`), or at each exposure of the set (``multi``:
+   the same speckle, independent noise), merged column by column from the longest exposure
+   that does not saturate the column.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import TYPE_CHECKING, Any
 
@@ -41,7 +47,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from seamtrack import constants
 from seamtrack.sensing import formation
-from seamtrack.sensing.camera import BLOCK_COLUMNS, Camera, StripeImage
+from seamtrack.sensing.camera import BLOCK_COLUMNS, RANGES, Camera, StripeImage
 from seamtrack.sensing.materials import DEFAULT_MATERIAL, Material, material
 from seamtrack.sensing.profiles import Reason
 from seamtrack.sensing.scan import laser_fan, ray_caster, stripe_hits
@@ -72,6 +78,7 @@ def render_image(
     material_name: str | Material | None = None,
     seed: int | np.random.Generator | None = None,
     t_s: float = float("nan"),
+    exposure: float | None = None,
 ) -> StripeImage:
     """The camera image of the stripe on a part at a pose (see the module docstring).
 
@@ -89,12 +96,17 @@ def render_image(
         Every random draw (speckle, shot and read noise) comes from it.
     t_s : float
         Capture time.
+    exposure : float, optional
+        This frame's exposure (auto-exposure's state, kept by the caller); default the
+        camera's ``exposure``.
 
     Returns
     -------
     StripeImage
     """
     cam = camera if camera is not None else Camera()
+    if exposure is not None and exposure != cam.exposure:
+        cam = dataclasses.replace(cam, exposure=exposure)  # checks its range
     mat = material(material_name or getattr(part, "material", None) or DEFAULT_MATERIAL)
     cam.check(sensor)
     rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
@@ -137,15 +149,49 @@ def render_image(
     )
     reflection = bounce_total > REFLECTION_LEVEL * optics.column_reference
     reflection_row = np.where(reflection, reflection_row, np.nan)
-    pixels = formation.chip_readout(
-        electrons, rng, full_well_e=cam.full_well_e, ambient=cam.ambient,
-        shot_noise=cam.shot_noise, read_noise_e=cam.read_noise_e, bit_depth=cam.bit_depth,
-    )  # fmt: skip
+    pixels, column_exposure = _read_out(electrons, cam, rng)
     return StripeImage(
         pixels=pixels, camera=cam, sensor=imaging, material=mat, window=window,
         truth_row=truth, reflection=reflection, reflection_row=reflection_row,
-        T_world_sensor=T, t_s=t_s,
+        T_world_sensor=T, t_s=t_s, exposure=cam.exposure, column_exposure=column_exposure,
     )  # fmt: skip
+
+
+def _read_out(
+    electrons: FloatArray, cam: Camera, rng: np.random.Generator
+) -> tuple[NDArray[np.float32], FloatArray | None]:
+    """The chip's readout at the camera's exposure, or (``multi``) at each exposure of its set,
+    merged: each column from the longest exposure whose pixels stay below full scale there, the
+    shortest that shows the column where every one saturates; and the exposure of each column.
+    An exposure of the set below the shutter's shortest (:data:`RANGES`) is taken at that."""
+    factors: tuple[float, ...] = (1.0,)
+    if cam.exposure_mode == "multi":  # the shutter's shortest exposure bounds the set
+        shortest = RANGES["exposure"].lo / cam.exposure
+        factors = tuple(
+            sorted({max(f, min(1.0, shortest)) for f in cam.exposure_set}, reverse=True)
+        )
+    chosen: NDArray[np.float32] | None = None
+    exposure = np.full(electrons.shape[1], cam.exposure)
+    open_ = np.ones(electrons.shape[1], dtype=bool)  # columns still saturated in every exposure
+    for i, factor in enumerate(factors):
+        frame = formation.chip_readout(
+            electrons * factor if factor != 1.0 else electrons, rng, full_well_e=cam.full_well_e,
+            ambient=cam.ambient, shot_noise=cam.shot_noise, read_noise_e=cam.read_noise_e,
+            bit_depth=cam.bit_depth,
+        )  # fmt: skip
+        if chosen is None:
+            chosen = frame
+        else:
+            # A column keeps the longer exposure where this one shows nothing (a 1-bit chip).
+            take = open_ & (frame.max(axis=0) > 0.0)
+            chosen[:, take] = frame[:, take]
+            exposure[take] = cam.exposure * factor
+        if i + 1 < len(factors):
+            open_ &= frame.max(axis=0) >= 1.0
+            if not open_.any():
+                break
+    assert chosen is not None
+    return chosen, (exposure if cam.exposure_mode == "multi" else None)
 
 
 # --------------------------------------------------------------------------- geometry

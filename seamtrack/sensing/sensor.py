@@ -386,19 +386,21 @@ class LaserLineSensor:
         seed: Any = None,
         material: Any = None,
         t_s: float = float("nan"),
+        exposure: float | None = None,
     ) -> Any:
         """The camera image of the stripe on a mesh at a pose (a :class:`StripeImage`).
 
         A thin delegate to :func:`seamtrack.sensing.render.render_image`: ``camera`` a
         :class:`~seamtrack.sensing.camera.Camera` (default ``Camera()``), ``seed`` an int or a
         numpy Generator, ``material`` a name (``"bright aluminium"``) or a
-        :class:`~seamtrack.sensing.materials.Material`. ``image.profile(method=...)`` measures
-        the profile from its pixels.
+        :class:`~seamtrack.sensing.materials.Material`, ``exposure`` this frame's (auto-exposure's
+        state; default the camera's). ``image.profile(method=...)`` measures the profile from
+        its pixels.
         """
         from seamtrack.sensing.render import render_image
 
         return render_image(self, part, T_world_sensor, camera=camera, material_name=material,
-                            seed=seed, t_s=t_s)  # fmt: skip
+                            seed=seed, t_s=t_s, exposure=exposure)  # fmt: skip
 
 
 def _whole_pixels(count: float) -> int:

@@ -227,11 +227,18 @@ def _mesh_scan(scene: Scene, sensor: LaserLineSensor, rng: np.random.Generator) 
         camera, detector = make_camera(s.camera, s.preset), s.camera or CameraConfig()
         surface = w.material or "mill-scale steel"
 
+        # Auto-exposure's state lives in the run: each frame's exposure from the previous
+        # frame's peak (deterministic: the images are drawn from the run's seeded Generator).
+        exposure = [camera.exposure]
+
         def measure(T_world_sensor: FloatArray, t_s: float) -> Profile:
             image = sensor.render(caster, T_world_sensor, camera=camera, seed=rng,
-                                  material=surface, t_s=t_s)  # fmt: skip
+                                  material=surface, t_s=t_s, exposure=exposure[0])  # fmt: skip
+            if camera.exposure_mode == "auto":
+                exposure[0] = camera.next_exposure(image.exposure, image.peak)
             return image.profile(detector.method, threshold=detector.threshold,
-                                 choose=detector.choose)  # fmt: skip
+                                 choose=detector.choose, relative=detector.relative,
+                                 noise_sigmas=detector.noise_sigmas)  # fmt: skip
 
     def scan(
         T_world_sensor: FloatArray, t_s: float, hint: SeamHint | None = None

@@ -73,8 +73,14 @@ class CameraConfig(_Section):
     shot_noise: Flag = True
     supersample: Annotated[int, Field(strict=True)] | None = None
     ideal: Flag = False  # every noise source off (Camera.ideal)
+    exposure_mode: Literal["multi", "auto", "fixed"] = "multi"
+    target_peak: Finite = 0.7
+    exposure_set: list[Finite] = [1.0, 0.125, 0.015625, 0.001953125]
     method: Literal["centroid", "gaussian", "steger"] = "centroid"
-    threshold: Annotated[float, Field(ge=0, le=1, allow_inf_nan=False, strict=True)] = 0.1
+    # None: each column's own threshold, max(noise_sigmas * noise, relative * column peak).
+    threshold: Annotated[float, Field(ge=0, le=1, allow_inf_nan=False, strict=True)] | None = None
+    relative: Annotated[float, Field(ge=0, lt=1, allow_inf_nan=False, strict=True)] = 0.5
+    noise_sigmas: Annotated[float, Field(ge=0, le=100, allow_inf_nan=False, strict=True)] = 6.0
     choose: Literal["strongest", "first", "widest"] = "strongest"
 
 

@@ -339,10 +339,12 @@ def make_camera(cfg: CameraConfig | None, sensor_preset: str = "paper") -> Camer
     wavelength = c.wavelength_nm or (sheet.wavelength_nm if sheet else None) or 660.0
     same = ("rows", "columns", "roi", "focal_length_mm", "f_number",
             "line_thickness_mm", "waist_range_mm", "exposure", "full_well_e", "read_noise_e",
-            "ambient", "speckle", "shot_noise", "supersample")  # fmt: skip
+            "ambient", "speckle", "shot_noise", "supersample", "exposure_mode",
+            "target_peak")  # fmt: skip
     divergence = None if c.line_divergence_mrad is None else 1e-3 * c.line_divergence_mrad
     camera = Camera(**{k: getattr(c, k) for k in same}, bit_depth=c.bit_depth or None,
-                    line_divergence_rad=divergence, wavelength_nm=wavelength)  # fmt: skip
+                    line_divergence_rad=divergence, wavelength_nm=wavelength,
+                    exposure_set=tuple(c.exposure_set))  # fmt: skip
     return camera.without_noise() if c.ideal else camera
 
 

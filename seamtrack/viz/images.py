@@ -127,7 +127,11 @@ def render_command(
     image = parts.sensor.render(parts.mesh, T_world_sensor, camera=camera,
                                 seed=c.simulation.seed, material=c.workpiece.material)  # fmt: skip
     rows = detect(image.pixels, method=detector.method, threshold=detector.threshold,
-                  choose=detector.choose)  # fmt: skip
+                  choose=detector.choose, relative=detector.relative,
+                  noise_sigmas=detector.noise_sigmas)  # fmt: skip
+    level = (f"threshold {detector.threshold:g}" if detector.threshold is not None else
+             f"threshold {detector.relative:g} of each column's peak, >= "
+             f"{detector.noise_sigmas:g} noise sigmas")  # fmt: skip
     profile = image.profile_from_rows(rows)
     feature = parts.extract(profile)
     with new_dir(folder):
@@ -140,7 +144,7 @@ def render_command(
     lines = [
         f"image: {image.shape[0]} x {image.shape[1]} px, material {image.material.name!r}, "
         f"peak {float(image.pixels.max()):.3f} of full scale",
-        f"profile ({detector.method}, threshold {detector.threshold:g}, {detector.choose}): "
+        f"profile ({detector.method}, {level}, {detector.choose}): "
         f"{int(profile.valid.sum())} of {len(profile)} columns; against the ideal stripe RMS "
         f"{rms:.4f} mm, max {worst:.4f} mm; false stripe in {int(image.reflection.sum())} columns",
     ]
