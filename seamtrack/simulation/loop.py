@@ -430,17 +430,11 @@ def _stop_cause(status: str, closed: bool, tracker_cause: Any) -> str:
 
 
 def _to_move(robot: Any, cmd: Command) -> MoveCommand:
+    args = (cmd.target_world, cmd.speed_mm_s, cmd.velocity_ff_world, cmd.stop_at_target)
     if cmd.rotation_world is None:
-        return robot.command_in_base(
-            cmd.target_world, cmd.speed_mm_s, cmd.velocity_ff_world, cmd.stop_at_target
-        )
+        return robot.command_in_base(*args)
     return robot.command_in_base(
-        cmd.target_world,
-        cmd.speed_mm_s,
-        cmd.velocity_ff_world,
-        cmd.stop_at_target,
-        rotation_world=cmd.rotation_world,
-        angular_velocity_world=cmd.angular_velocity_world,
+        *args, rotation_world=cmd.rotation_world, angular_velocity_world=cmd.angular_velocity_world
     )
 
 
