@@ -47,7 +47,9 @@ class VGrooveExtractor(_Base):
     Seam: the root centre, midpoint of the bevels' lower ends, when a root gap shows between
     them (the ends level, the V's tip below them empty, the columns between them open);
     else the bevels' intersection (confidence halved unless they meet: the bottom is cut up
-    by spikes and dropouts, or filled). Edges: the top edges.
+    by spikes and dropouts, or filled). Edges: the top edges. It accepts a measured opening of
+    ``min_angle_deg``-``max_angle_deg`` (20-150 deg) and is claimed for V's of 40-145 deg
+    (>= 90 % found, p95 <= 0.5 mm on real-sensor artefacts: the extractor bench's angle sweep).
 
     Where a stray line (a false reflection) covers a bevel's root end, the end is hidden:
     it is put at the depth of the other root end below the plates (both root corners lie
