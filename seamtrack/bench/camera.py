@@ -45,7 +45,11 @@ import numpy as np
 from seamtrack.bench.camera_exposure import exposure_markdown, exposure_sweep
 from seamtrack.bench.camera_parts import SENSOR, down, plane_rows, plate
 from seamtrack.bench.camera_sets import ImageSet, bench_image_sets, markdown_rows
-from seamtrack.bench.camera_speckle import dorsch_mm, speckle_sweep, speckle_sweep_table
+from seamtrack.bench.camera_speckle import (
+    speckle_noise,
+    speckle_sweep,
+    speckle_sweep_table,
+)
 from seamtrack.bench.common import machine_info
 from seamtrack.geometry import frames
 from seamtrack.sensing.camera import Camera, StripeImage
@@ -200,31 +204,6 @@ def _plane_accuracy(quick: bool) -> list[dict[str, Any]]:
                 }
             )
     return rows
-
-
-def _speckle_noise(f_number: float, thickness_mm: float, seeds: int) -> dict[str, Any]:
-    cam = Camera.ideal(
-        speckle=True, f_number=f_number, line_thickness_mm=thickness_mm, exposure=0.1, **GRID
-    )
-    errors: dict[str, list[np.ndarray]] = {"centroid": [], "gaussian": [], "steger": []}
-    for seed in range(seeds):
-        image = SENSOR.render(plate(), down(), camera=cam, material="white matte", seed=seed)
-        truth = image.truth_laser[:, 1]
-        for method, store in errors.items():
-            profile = image.profile(method=method, threshold=0.0)
-            ok = profile.valid & np.isfinite(truth)
-            store.append(profile.points_laser[ok, 1] - truth[ok])
-    predicted = dorsch_mm(f_number)
-    row: dict[str, Any] = {
-        "f_number": f_number,
-        "line_thickness_mm": thickness_mm,
-        "seeds": seeds,
-        "dorsch_mm": predicted,
-    }
-    for method, store in errors.items():
-        sigma = float(np.sqrt(np.mean(np.concatenate(store) ** 2)))
-        row[f"{method}_mm"], row[f"{method}_ratio"] = sigma, sigma / predicted
-    return row
 
 
 def _false_stripe(quick: bool) -> list[dict[str, Any]]:
@@ -393,9 +372,9 @@ def bench_camera(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]:
         "sensor": "paper",
         "image_px": [GRID["rows"], GRID["columns"]],
         "plane": _plane_accuracy(quick),
-        "speckle": [_speckle_noise(n, 0.1, seeds) for n in (4.0, 8.0, 16.0)],
+        "speckle": [speckle_noise(n, 0.1, seeds, GRID) for n in (4.0, 8.0, 16.0)],
         "speckle_vs_thickness": [
-            _speckle_noise(8.0, w, max(2, seeds - 1))
+            speckle_noise(8.0, w, max(2, seeds - 1), GRID)
             for w in ((0.05, 0.5) if quick else (0.05, 0.1, 0.2, 0.5, 1.0))
         ],
         "speckle_sweep": speckle_sweep(quick),
