@@ -31,6 +31,8 @@ STAGES = [
     ("viz", {"seamtrack.viz"}),
     ("batch", {"seamtrack.batch"}),
     ("datasets", {"seamtrack.datasets"}),  # draws on sensing and features, uses io and batch
+    ("bridge", {"seamtrack.bridge"}),  # other processes: ROS 2 messages, MCAP, lockstep serve
+    ("gym", {"seamtrack.gym"}),  # the Gymnasium environment
     ("bench", {"seamtrack.bench"}),
     ("cli", {"seamtrack.cli"}),
     ("package", {"seamtrack"}),  # the lazy public names of `import seamtrack as st`
