@@ -208,6 +208,9 @@ class Feature:
     stripe_points : int
         Valid points in the profile of a frame without a seam point, when the scan counted
         them (0: the stripe is off the part, or hidden whole); -1 when not counted.
+    area_mm2 : float
+        A groove's remaining cross-section (mm^2) between its fill surface and the line joining
+        its top corners (the ``groove`` extractor's); NaN when not measured.
     """
 
     point_laser: FloatArray = field(default_factory=lambda: np.empty(0))
@@ -218,6 +221,7 @@ class Feature:
     joint: str = ""
     reason: str = ""
     stripe_points: int = -1
+    area_mm2: float = float("nan")
 
     def __bool__(self) -> bool:
         return self.point_laser.shape == (2,) and not self.reason
