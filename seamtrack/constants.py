@@ -47,9 +47,11 @@ MIN_MESH_TOLERANCE_MM = 1e-4
 #: is built (the paper's part at 1e-3 mm, 2.4e-6 of its size, meshes into 1.7e6 triangles).
 MIN_MESH_TOLERANCE_RATIO = 1e-6
 
-#: Most triangles a part may mesh into. Meshing and measuring the deviation peak at about 2 KB
-#: a triangle over what the process held before (`seamtrack bench mesh`: 0.4 GB more for the
-#: paper groove's 190,314 at 1e-3 mm): this keeps a load under about 5 GB.
+#: Most triangles a part may mesh into. Meshing and measuring the deviation peak at about 200-300
+#: bytes a triangle over what the process held before (`seamtrack bench mesh`; cad/_mesh.py
+#: meshes coarse inside and refines in numpy), and a whole mesh-mode scan adds about 270 bytes a
+#: triangle over the 0.7 GB the libraries take (`seamtrack scan paper-v-groove --set
+#: workpiece.tolerance_mm=0.0005`: 782 MB; 0.1 mm: 710 MB): 2 million keep a run under 2 GB.
 MAX_MESH_TRIANGLES = 2_000_000
 
 #: Seams run from their lexicographically smallest end (x, then y, then z); coordinates closer

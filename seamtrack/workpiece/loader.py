@@ -270,9 +270,9 @@ def _mesh(shape: Any, tolerance_mm: float, angular_rad: float) -> tuple[Any, flo
     """The mesh (one welded, watertight shell per solid), its measured deviation and time."""
     import trimesh
 
-    from seamtrack.cad import _occ
+    from seamtrack.cad import _mesh
 
-    vertices, faces, deviation, spent, counts = _occ.mesh(shape, tolerance_mm, angular_rad)
+    vertices, faces, deviation, spent, counts = _mesh.mesh(shape, tolerance_mm, angular_rad)
     solids = shape.Solids()
     if len(solids) == 1:
         return trimesh.Trimesh(vertices, faces, process=True), deviation, spent
