@@ -549,6 +549,7 @@ class FillState:
 
         Triangles between consecutive stations over the covered grid nodes, one node wider on
         each side (those nodes sunk :data:`SEAL_DEPTH_MM` into the part). Empty without beads.
+        ``vertex_attributes["pass"]`` holds each vertex's top pass (-1: none).
         """
         import trimesh
 
@@ -575,7 +576,16 @@ class FillState:
         T = self.T_world_station[rows]
         local = np.column_stack([self.y_mm[cols], z[rows, cols]])
         verts = T[:, :3, 3] + T[:, :3, 1] * local[:, :1] + T[:, :3, 2] * local[:, 1:]
-        return trimesh.Trimesh(verts, remap[faces], process=False)
+        out = trimesh.Trimesh(verts, remap[faces], process=False)
+        out.vertex_attributes["pass"] = self.top_pass()[rows, cols]
+        return out
+
+    def top_pass(self) -> IntArray:
+        """(m, K) the index of the pass whose bead forms the surface at each node (-1: none)."""
+        top = np.full(self.surface_z.shape, -1, dtype=np.intp)
+        for p, bead in enumerate(self.beads):
+            top = np.where(bead.z_after - bead.z_before > COVERED_MM, p, top)
+        return top
 
 
 def _fill_gaps(env: FloatArray, field_name: str) -> FloatArray:
