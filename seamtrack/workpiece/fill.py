@@ -56,6 +56,8 @@ CORNER_DROP_MM = 0.05
 WALL_MIN_SLOPE_RAD = math.radians(40.0)
 #: Fill nodes next to a bead are sunk this far into the part (mm) to seal the mesh seam.
 SEAL_DEPTH_MM = 0.02
+#: The fill mesh keeps a grid node where a surface bends by more than this (mm, 2nd difference).
+MESH_KINK_MM = 1e-3
 #: Lateral margin (mm) of the station grid beyond the groove's top corners.
 GRID_MARGIN_MM = 8.0
 #: A surface node counts as covered where it lies this far (mm) above the empty groove.
@@ -544,21 +546,35 @@ class FillState:
         return np.where(out < 1e-6, np.minimum(out, 0.0), out)
 
     # ------------------------------------------------------------------ mesh
-    def mesh(self) -> trimesh.Trimesh:
+    def mesh(self, stride: int = 4) -> trimesh.Trimesh:
         """The fill's top surface where beads lie (world frame), to join to the part's mesh.
 
         Triangles between consecutive stations over the covered grid nodes, one node wider on
-        each side (those nodes sunk :data:`SEAL_DEPTH_MM` into the part). Empty without beads.
-        ``vertex_attributes["pass"]`` holds each vertex's top pass (-1: none).
+        each side (those nodes sunk :data:`SEAL_DEPTH_MM` into the part). Laterally every
+        ``stride``-th grid node is kept, plus every node where some station's surface bends by
+        more than :data:`MESH_KINK_MM` (toes, wall contacts, bead valleys), so the mesh stays
+        within about that of the state's surface with a fraction of the triangles. Empty without
+        beads. ``vertex_attributes["pass"]`` holds each vertex's top pass (-1: none).
         """
         import trimesh
 
-        m, k = self.surface_z.shape
-        covered = self.surface_z - self.base_z > COVERED_MM
-        grown = covered.copy()
-        grown[:, 1:] |= covered[:, :-1]
-        grown[:, :-1] |= covered[:, 1:]
-        z = np.where(covered, self.surface_z, self.base_z - SEAL_DEPTH_MM)
+        m, k_full = self.surface_z.shape
+        covered_full = self.surface_z - self.base_z > COVERED_MM
+        bend = np.abs(np.diff(self.surface_z, n=2, axis=1)) > MESH_KINK_MM
+        keep = np.zeros(k_full, dtype=bool)
+        keep[:: max(int(stride), 1)] = True
+        keep[[0, -1]] = True
+        keep[1:-1] |= bend.any(axis=0)
+        cols_kept = np.flatnonzero(keep)
+        # A kept node is next to the fill if any node up to its kept neighbours is covered.
+        run = np.concatenate([np.zeros((m, 1), np.intp), np.cumsum(covered_full, axis=1)], 1)
+        left = np.concatenate([[0], cols_kept[:-1]])
+        right = np.concatenate([cols_kept[1:] + 1, [k_full]])
+        near = (run[:, right] - run[:, left]) > 0
+        covered = covered_full[:, cols_kept]
+        k = len(cols_kept)
+        grown = covered | near
+        z = np.where(covered_full, self.surface_z, self.base_z - SEAL_DEPTH_MM)[:, cols_kept]
         cell = grown[:-1, :-1] & grown[:-1, 1:] & grown[1:, :-1] & grown[1:, 1:]
         cell &= covered[:-1, :-1] | covered[:-1, 1:] | covered[1:, :-1] | covered[1:, 1:]
         if not np.any(cell):
@@ -574,10 +590,10 @@ class FillState:
         remap[used] = np.arange(len(used))
         rows, cols = np.divmod(used, k)
         T = self.T_world_station[rows]
-        local = np.column_stack([self.y_mm[cols], z[rows, cols]])
+        local = np.column_stack([self.y_mm[cols_kept[cols]], z[rows, cols]])
         verts = T[:, :3, 3] + T[:, :3, 1] * local[:, :1] + T[:, :3, 2] * local[:, 1:]
         out = trimesh.Trimesh(verts, remap[faces], process=False)
-        out.vertex_attributes["pass"] = self.top_pass()[rows, cols]
+        out.vertex_attributes["pass"] = self.top_pass()[rows, cols_kept[cols]]
         return out
 
     def top_pass(self) -> IntArray:
