@@ -202,3 +202,22 @@ def test_new_cad_grooves_have_their_designed_sections(script, params, check) -> 
         np.testing.assert_allclose(width, gap + 2 * bevel, atol=0.06)
         np.testing.assert_allclose(state.remaining_area_mm2(), gap * 20 + bevel * 19, rtol=3e-3)
         assert width.max() - width.min() == pytest.approx(4.0, abs=0.1)
+
+
+def test_groove_points_of_a_partly_filled_v() -> None:
+    state = analytic_state()
+    path = straight_path()
+    state = state.deposit(path, np.full(len(path), 30.0), BeadShape())
+    every = state.all_groove_points()
+    assert every.shape == (state.n_stations, 7, 2)
+    np.testing.assert_allclose(every[7], state.groove_points(7))
+    pts = every[7]
+    # The bottom corners lie on the walls (z = (|y| - 1) / tan 30) where the bead's toes are,
+    # the bottom points on the bead (above the root), all in order left to right.
+    for corner in (pts[1], pts[5]):
+        assert corner[1] == pytest.approx((abs(corner[0]) - 1.0) / TAN30, abs=0.1)
+    assert np.all(np.diff(pts[:, 0]) >= 0)
+    assert np.all(pts[2:5, 1] > 1.0)
+    toes = state.beads[0].toes[7]
+    assert pts[1, 0] == pytest.approx(toes[0, 0], abs=0.06)
+    assert pts[5, 0] == pytest.approx(toes[1, 0], abs=0.06)

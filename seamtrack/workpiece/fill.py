@@ -397,17 +397,30 @@ class FillState:
 
         Left top corner, left bottom corner (the foot of the uncovered left wall, where it meets
         the fill or the root), the fill surface (or root) at 1/4, 1/2 and 3/4 of the way between
-        the bottom corners, right bottom corner, right top corner.
+        the bottom corners, right bottom corner, right top corner. Bottom points are grid nodes
+        (within ``lateral_step_mm`` of the true corner).
         """
-        i = int(i)
-        z = self.surface_z[i]
-        bottom = _bottom_corners(self.y_mm, z[None], self.base_z[i][None], self.top_index[i][None])
-        left = np.array([self.y_mm[bottom[0, 0]], z[bottom[0, 0]]])
-        right = np.array([self.y_mm[bottom[0, 1]], z[bottom[0, 1]]])
-        ys = left[0] + (right[0] - left[0]) * np.array([0.25, 0.5, 0.75])
-        middle = np.column_stack([ys, np.interp(ys, self.y_mm, z)])
-        corners = self.top_corners[i]
-        return np.vstack([corners[0], left, middle, right, corners[1]])
+        return self.all_groove_points(np.array([int(i)]))[0]
+
+    def all_groove_points(self, stations: ArrayLike | None = None) -> FloatArray:
+        """(m', 7, 2) :meth:`groove_points` at several stations at once (default all)."""
+        idx = np.arange(self.n_stations) if stations is None else np.asarray(stations, np.intp)
+        z = self.surface_z[idx]
+        bottom = _bottom_corners(self.y_mm, z, self.base_z[idx], self.top_index[idx])
+        rows = np.arange(len(idx))
+        y_left, y_right = self.y_mm[bottom[:, 0]], self.y_mm[bottom[:, 1]]
+        frac = np.array([0.0, 0.25, 0.5, 0.75, 1.0])
+        ys = y_left[:, None] + (y_right - y_left)[:, None] * frac
+        # Piecewise-linear surface at ys (rows differ): interpolate on the shared grid.
+        j = np.clip(np.searchsorted(self.y_mm, ys) - 1, 0, len(self.y_mm) - 2)
+        y0, y1 = self.y_mm[j], self.y_mm[j + 1]
+        t = (ys - y0) / (y1 - y0)
+        zs = z[rows[:, None], j] * (1 - t) + z[rows[:, None], j + 1] * t
+        zs[:, 0], zs[:, -1] = z[rows, bottom[:, 0]], z[rows, bottom[:, 1]]
+        out = np.empty((len(idx), 7, 2))
+        out[:, 0], out[:, 6] = self.top_corners[idx, 0], self.top_corners[idx, 1]
+        out[:, 1:6, 0], out[:, 1:6, 1] = ys, zs
+        return out
 
     def _top_line(self) -> tuple[FloatArray, NDArray[np.bool_]]:
         """z of the line joining the top corners on the grid (m, K), and the nodes between."""
