@@ -221,3 +221,27 @@ def test_groove_points_of_a_partly_filled_v() -> None:
     toes = state.beads[0].toes[7]
     assert pts[1, 0] == pytest.approx(toes[0, 0], abs=0.06)
     assert pts[5, 0] == pytest.approx(toes[1, 0], abs=0.06)
+
+
+def test_sections_of_a_curved_v_groove_keep_its_shape() -> None:
+    from seamtrack.workpiece.loader import load_workpiece
+
+    part = load_workpiece(
+        "cad/v_groove.py",
+        tolerance_mm=0.02,
+        plate_thickness_mm=20.0,
+        root_gap_mm=2.0,
+        path="arc",
+        arc_radius_mm=150.0,
+        seam_length_mm=60.0,
+    )
+    state = FillState.from_mesh(part.mesh, part.seam)
+    bevel = 19.0 * TAN30
+    np.testing.assert_allclose(state.top_corners[:, 0, 0], -1 - bevel, atol=0.03)
+    np.testing.assert_allclose(state.top_corners[:, 1, 0], 1 + bevel, atol=0.03)
+    np.testing.assert_allclose(state.remaining_area_mm2(), 2 * 20 + bevel * 19, rtol=5e-3)
+    path = part.seam.interpolate(np.linspace(0, part.seam.length_mm, 300)) + [0, 0, 15.0]
+    state = state.deposit(path, np.full(300, 24.0), BeadShape())
+    laid = laid_areas(state, 0)
+    assert laid == pytest.approx(24.0, rel=1e-6)
+    np.testing.assert_allclose(state.beads[0].y_centre_mm, 0.0, atol=0.01)

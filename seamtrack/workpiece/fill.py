@@ -207,6 +207,7 @@ def _top_corners(y: FloatArray, z: FloatArray) -> tuple[FloatArray, FloatArray, 
     j_right = k - 1 - np.argmax(low_right[:, ::-1], axis=1)  # last node below the right plate
     corners = np.empty((m, 2, 2))
     rows = np.arange(m)
+    j_left, j_right = np.clip(j_left, 2, k - 3), np.clip(j_right, 2, k - 3)
     for side, j, step in ((0, j_left, 1), (1, j_right, -1)):
         j1 = np.clip(j + step, 0, k - 1)
         zj, zj1 = z[rows, j], z[rows, j1]
@@ -345,24 +346,18 @@ class FillState:
         length = seam.length_mm
         n = max(2, math.ceil(length / spacing_mm) + 1)
         s = np.linspace(0.0, length, n)
-        # Keep the end stations a hair inside the part: its end faces lie in their planes.
-        s[0], s[-1] = min(1e-3, length / 4), max(length - 1e-3, 3 * length / 4)
+        # Keep the end stations inside the part: its end faces lie in their planes, and a
+        # polyline seam's end tangent (a chord's) tilts the plane out of a curved part's end.
+        inset = min(spacing_mm / 2, length / 4)
+        s[0], s[-1] = inset, length - inset
         frames = _station_frames(seam, s)
         tri = np.asarray(mesh.triangles, dtype=np.float64)
         if half_width_mm is None:
             probe_y = np.arange(-60.0, 60.0 + 1e-9, 0.25)
-            probes = frames[np.unique(np.linspace(0, n - 1, 7).astype(int))]
-            env = section_envelopes(tri, probes, probe_y, 90.0)
-            finite = np.isfinite(env)
-            if not np.all(finite.any(axis=1)):
-                _fill_gaps(env, "workpiece")  # raises
-            # Keep the span where every probe finds material at both ends (the plates).
-            first = np.argmax(finite, axis=1).max()
-            last = len(probe_y) - 1 - np.argmax(finite[:, ::-1], axis=1).max()
-            span = slice(first, last + 1)
-            _, corners, _ = _top_corners(probe_y[span], _fill_gaps(env[:, span], "workpiece"))
-            reach = min(-probe_y[first], probe_y[last])
-            half_width_mm = min(float(np.abs(corners[:, :, 0]).max()) + GRID_MARGIN_MM, reach)
+            probes = frames[np.unique(np.linspace(0, n - 1, 9).astype(int))[1:-1]]
+            env = _fill_gaps(section_envelopes(tri, probes, probe_y, 90.0), "workpiece")
+            _, corners, _ = _top_corners(probe_y, env)
+            half_width_mm = float(np.abs(corners[:, :, 0]).max()) + GRID_MARGIN_MM
         half = float(half_width_mm)
         steps = math.ceil(half / lateral_step_mm)
         y = np.linspace(-steps * lateral_step_mm, steps * lateral_step_mm, 2 * steps + 1)
@@ -618,12 +613,21 @@ class FillState:
 
 
 def _fill_gaps(env: FloatArray, field_name: str) -> FloatArray:
-    """Fill a section's NaN nodes (no material under them) with the section's lowest z."""
-    if np.all(np.isnan(env), axis=1).any():
+    """Fill a section's NaN nodes: beyond the material's ends with the nearest end's z (the plate
+    goes on), between with the section's lowest z (a gap with nothing under it)."""
+    finite = np.isfinite(env)
+    if not np.all(finite.any(axis=1)):
         raise WorkpieceError(
             "a station's plane misses the part",
             field=field_name,
             fix="check the seam lies on the part (its normals point out of the groove)",
         )
+    k = env.shape[1]
+    rows = np.arange(len(env))
+    first = np.argmax(finite, axis=1)
+    last = k - 1 - np.argmax(finite[:, ::-1], axis=1)
+    idx = np.arange(k)
+    out = np.where(idx < first[:, None], env[rows, first][:, None], env)
+    out = np.where(idx > last[:, None], env[rows, last][:, None], out)
     low = np.nanmin(env, axis=1, keepdims=True)
-    return np.where(np.isnan(env), low, env)
+    return np.where(np.isnan(out), low, out)
