@@ -540,17 +540,32 @@ class FillState:
 
     def _margins(self, toes: FloatArray) -> FloatArray:
         """(m, 2) each toe's lateral distance from the empty groove's wall at the toe's height."""
-        m = self.n_stations
+        y, base = self.y_mm, self.base_z
+        m, k = base.shape
+        rows = np.arange(m)
+        idx = np.arange(k)
         out = np.full((m, 2), np.nan)
-        for i in np.flatnonzero(np.isfinite(toes[:, 0, 0])):
-            top_l, top_r = self.top_index[i]
-            bot_l, bot_r = self.base_bottom[i]
-            zb = self.base_z[i]
-            # Left wall: nodes top_l..bot_l, z falling as y rises; interp wants z ascending.
-            wy, wz = self.y_mm[top_l : bot_l + 1][::-1], zb[top_l : bot_l + 1][::-1]
-            out[i, 0] = toes[i, 0, 0] - np.interp(toes[i, 0, 1], wz, wy)
-            wy, wz = self.y_mm[bot_r : top_r + 1], zb[bot_r : top_r + 1]
-            out[i, 1] = np.interp(toes[i, 1, 1], wz, wy) - toes[i, 1, 0]
+        laid = np.isfinite(toes[:, 0, 0])
+        for side in (0, 1):
+            top, foot = self.top_index[:, side], self.base_bottom[:, side]
+            z_toe = np.where(laid, toes[:, side, 1], 0.0)
+            # Walk down the wall from the top corner: the first node at or below the toe's height.
+            if side == 0:
+                on_wall = (idx >= top[:, None]) & (idx <= foot[:, None])
+                below = on_wall & (base <= z_toe[:, None])
+                j = np.where(below.any(axis=1), np.argmax(below, axis=1), foot)
+                j_prev = np.clip(j - 1, 0, k - 1)
+            else:
+                on_wall = (idx <= top[:, None]) & (idx >= foot[:, None])
+                below = on_wall & (base <= z_toe[:, None])
+                j = np.where(below.any(axis=1), k - 1 - np.argmax(below[:, ::-1], axis=1), foot)
+                j_prev = np.clip(j + 1, 0, k - 1)
+            z_j, z_p = base[rows, j], base[rows, j_prev]
+            drop = z_p - z_j
+            t = np.where(drop > 0, np.clip((z_p - z_toe) / np.where(drop > 0, drop, 1), 0, 1), 1)
+            y_wall = y[j_prev] + t * (y[j] - y[j_prev])
+            gap = toes[:, side, 0] - y_wall if side == 0 else y_wall - toes[:, side, 0]
+            out[:, side] = np.where(laid, gap, np.nan)
         return np.where(out < 1e-6, np.minimum(out, 0.0), out)
 
     # ------------------------------------------------------------------ mesh
