@@ -245,3 +245,50 @@ def test_sections_of_a_curved_v_groove_keep_its_shape() -> None:
     laid = laid_areas(state, 0)
     assert laid == pytest.approx(24.0, rel=1e-6)
     np.testing.assert_allclose(state.beads[0].y_centre_mm, 0.0, atol=0.01)
+
+
+def _sheet(state: FillState):
+    """The empty groove's top surface as a triangle sheet (a stand-in for the part's mesh)."""
+    import trimesh
+
+    m, k = state.base_z.shape
+    T = state.T_world_station
+    verts = (
+        T[:, None, :3, 3]
+        + T[:, None, :3, 1] * state.y_mm[None, :, None]
+        + T[:, None, :3, 2] * state.base_z[:, :, None]
+    ).reshape(-1, 3)
+    ii, kk = np.meshgrid(np.arange(m - 1), np.arange(k - 1), indexing="ij")
+    a = (ii * k + kk).ravel()
+    faces = np.concatenate(
+        [np.column_stack([a, a + k, a + 1]), np.column_stack([a + 1, a + k, a + k + 1])]
+    )
+    return trimesh.Trimesh(verts, faces, process=False)
+
+
+def test_sensor_rays_see_the_notch_a_bead_away_from_the_wall_leaves() -> None:
+    import trimesh
+
+    from seamtrack.sensing.raycast import RayCaster
+
+    s = np.arange(0.0, 10.0 + 1e-9, 0.5)
+    frames = np.tile(np.eye(4), (len(s), 1, 1))
+    frames[:, 0, 3] = s
+    y = np.arange(-15.0, 15.0 + 1e-9, 0.05)
+    z = np.clip((np.abs(y) - 6.0) / math.tan(math.radians(4)), 0.0, 25.0)
+    state = FillState.from_profiles(s, frames, y, np.repeat(z[None], len(s), 0))
+    path = straight_path(10.0)
+    state = state.deposit(path, np.full(len(path), 18.0), BeadShape(), offset_mm=0.0)
+    caster = RayCaster.from_mesh(trimesh.util.concatenate([_sheet(state), state.mesh()]))
+    i = 10
+    T = state.T_world_station[i]
+    ys = np.linspace(-7.5, 7.5, 151)
+    origins = T[:3, 3] + np.outer(ys, T[:3, 1]) + 40.0 * T[:3, 2]
+    hits = caster.first_hit(origins, np.repeat(-T[None, :3, 2], len(ys), axis=0))
+    z_hit = (hits.points - T[:3, 3]) @ T[:3, 2]
+    np.testing.assert_allclose(z_hit, np.interp(ys, y, state.surface_z[i]), atol=0.02)
+    toe = state.beads[0].toes[i, 0, 0]
+    notch = (ys > -6.0 + 0.1) & (ys < toe - 0.1)
+    assert notch.sum() >= 5
+    np.testing.assert_allclose(z_hit[notch], 0.0, atol=1e-3)  # the floor shows between wall and toe
+    assert z_hit[np.argmin(np.abs(ys))] > 2.0  # the bead's crown
