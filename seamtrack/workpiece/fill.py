@@ -63,7 +63,7 @@ SEAL_DEPTH_MM = 0.02
 #: The fill mesh keeps a grid node where a surface bends by more than this (mm, 2nd difference).
 MESH_KINK_MM = 1e-3
 #: Lateral margin (mm) of the station grid beyond the groove's top corners.
-GRID_MARGIN_MM = 8.0
+GRID_MARGIN_MM = 12.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -193,7 +193,8 @@ class FillState:
         spacing_mm : float
             Station spacing, in (0, 0.5] (the last station sits at the seam's end).
         half_width_mm : float, optional
-            Half the lateral grid's width; default the groove's top half-width + 8 mm.
+            Half the lateral grid's width; default the groove's top half-width plus
+            :data:`GRID_MARGIN_MM` (room for cap beads spreading onto the plates).
         lateral_step_mm : float
             The lateral grid's step (mm).
         """
