@@ -99,6 +99,12 @@ TOPICS = {
         FRAMES["sensor"],
         "the seam point the extractor found (frames with a seam point only)",
     ),
+    "seam_truth": Topic(
+        "/seamtrack/seam_truth",
+        "geometry_msgs/msg/PointStamped",
+        FRAMES["sensor"],
+        "where the laser plane crosses the true seam in the field of view (the label)",
+    ),
     "image": Topic(
         "/seamtrack/image",
         "sensor_msgs/msg/Image",
