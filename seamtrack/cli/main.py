@@ -15,6 +15,11 @@ from typing import Any
 from seamtrack._version import __version__
 from seamtrack.cli import seams as seams_command
 from seamtrack.cli.dataset import add_dataset_parser
+from seamtrack.cli.recording import (
+    EXTRACTORS_ACTIONS,
+    add_record_argument,
+    add_recording_arguments,
+)
 from seamtrack.cli.tables import print_table
 from seamtrack.errors import OutputError, PluginRuntimeError, SceneError, SeamtrackError
 
@@ -47,15 +52,12 @@ def cmd_run(args: argparse.Namespace) -> int:
 
         check_weldx_target(args.weldx)
     if args.record:  # the ros extra, imported only for a recording
-        from seamtrack.bridge.extra import require_ros
+        from seamtrack.cli.recording import check_record, recorded_run
 
-        require_ros("--record")
-        from seamtrack.bridge.record import check_record_target
-
-        check_record_target(args.record)
+        check_record(args.record)
     parts = build_parts(scene)
     if args.record:
-        result = _recorded_run(args, scene, parts)
+        result = recorded_run(args.record, scene, parts, _progress_wanted(args))
     else:
         result = run(parts, progress=_progress_wanted(args))
     write_run(
@@ -84,27 +86,6 @@ def cmd_run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _recorded_run(args: argparse.Namespace, scene: Any, parts: Any) -> Any:
-    """Run ``parts`` recording every frame into ``args.record`` (an MCAP file): whole when
-    the run ends (any status), up to the stop on Ctrl-C, nothing when the run fails."""
-    from seamtrack.bridge.frames import observe
-    from seamtrack.bridge.record import Recorder
-    from seamtrack.simulation.loop import run
-
-    recorder = Recorder(args.record, parts, scene)
-    try:
-        result = run(observe(parts, recorder), progress=_progress_wanted(args))
-    except KeyboardInterrupt:
-        recorder.finish(None)
-        print(f"seamtrack: stopped; wrote {args.record} up to the stop", file=sys.stderr)
-        raise
-    except BaseException:
-        recorder.discard()
-        raise
-    recorder.finish(result, scene.config.simulation.trace_period_s)
-    return result
-
-
 def cmd_view(args: argparse.Namespace) -> int:
     from seamtrack.viz.run import view_command
 
@@ -123,18 +104,10 @@ def cmd_extractors(args: argparse.Namespace) -> int:
     from seamtrack.bench.extractors import bench_extractors
     from seamtrack.io.output import new_dir
 
-    recording = {"topic": args.topic, "labels": args.labels, "joint": args.joint}
-    if args.action == "import":
-        return _import_scans(args, recording)
-    if args.real is not None:
-        from seamtrack.bench.extractors import bench_real, load_real_sets
+    if args.real is not None or args.action == "import":  # real scans: sets or recordings
+        from seamtrack.cli.recording import extractors_real
 
-        load_real_sets(args.real, **recording)  # a bad input is refused before any writing
-        with new_dir(args.out) as out:
-            bench_real(args.real, out, progress=_progress_wanted(args), **recording)
-        print((out / "extractors_real.md").read_text(), end="")
-        print(f"wrote {out}/extractors_real.csv, extractors_real.md, extractors_real.json")
-        return 0
+        return extractors_real(args, _progress_wanted(args))
     with new_dir(args.out) as out:
         bench_extractors(out, quick=args.quick, progress=_progress_wanted(args))
     print((out / "extractors.md").read_text(), end="")
@@ -144,27 +117,6 @@ def cmd_extractors(args: argparse.Namespace) -> int:
         f"wrote {out}/extractors.csv, .md, .json, extractors_angles.md, "
         "extractors_error_vs_noise.png"
     )
-    return 0
-
-
-def _import_scans(args: argparse.Namespace, recording: dict[str, Any]) -> int:
-    """``seamtrack extractors import --real RECORDING --out DIR``: a recording's profiles in
-    the real-data layout (set.json, profiles.npz, labels.csv)."""
-    from seamtrack.bench.extractors import load_real_sets
-    from seamtrack.io.output import check_writable
-
-    if args.real is None:
-        raise SeamtrackError(
-            "import needs a recording", field="--real", fix="give --real run.mcap (or a bag)"
-        )
-    out = check_writable(args.out)
-    (found,) = load_real_sets(args.real, **recording)  # refused before anything is written
-    from seamtrack.bridge.importer import read_scans, write_real_set
-
-    scans = read_scans(args.real, args.topic, args.labels, joint=found.joint)
-    write_real_set(scans, out, joint=found.joint)
-    labelled = "with labels" if found.labels is not None else "without labels"
-    print(f"wrote {out}/set.json, profiles.npz: {len(found.profiles)} profiles, {labelled}")
     return 0
 
 
@@ -475,12 +427,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", help="output folder (default: runs/<scene name>)")
     p.add_argument("--no-plot", action="store_true", help="skip error.png")
     p.add_argument("--weldx", metavar="FILE", help="also write the run as a weldx file (.wx)")
-    p.add_argument(
-        "--record",
-        metavar="FILE",
-        help="also record every frame as ROS 2 messages in an MCAP file (Foxglove opens it; "
-        "needs pip install 'seamtrack[ros]')",
-    )
+    add_record_argument(p)
     p.add_argument(
         "--render", action="store_true", help="also write scene.png and run.gif (3D views, PyVista)"
     )
@@ -580,11 +527,7 @@ def build_parser() -> argparse.ArgumentParser:
         "feature extractors: list them, or score them on synthetic profiles (bench)",
         scene=False,
     )
-    p.add_argument(
-        "action",
-        choices=["bench", "list", "import"],
-        help="list them, run the bench, or import a recording's profiles (--real) into --out",
-    )
+    p.add_argument("action", choices=["bench", "list", "import"], help=EXTRACTORS_ACTIONS)
     p.add_argument(
         "--out",
         default="bench-results/extractors",
@@ -595,20 +538,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--real",
         metavar="DIR",
         help="bench on real profiles instead: a set folder (set.json, profiles.npz, "
-        "labels.csv) or a folder of them; or the PointCloud2 profiles of an MCAP file or a "
-        "ROS bag (needs pip install 'seamtrack[ros]'); see docs/extractors.md",
+        "labels.csv) or a folder of them, or a recording (MCAP, ROS bag); docs/extractors.md",
     )
-    p.add_argument("--topic", help="a recording's PointCloud2 profile topic (default: the one)")
-    p.add_argument(
-        "--labels",
-        metavar="TOPIC",
-        help="a recording's PointStamped label topic (default /seamtrack/seam_truth, or the "
-        "only one)",
-    )
-    p.add_argument(
-        "--joint",
-        help="the joint family of a recording's profiles (default: the recording's extractor)",
-    )
+    add_recording_arguments(p)
     p.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)
 
     add_dataset_parser(add)
