@@ -149,8 +149,8 @@ def test_importer_reads_back_what_the_recorder_wrote(recorded, tmp_path: Path) -
     for a, b in zip(rs.profiles, scans.profiles, strict=True):
         np.testing.assert_array_equal(a.valid, b.valid)
         np.testing.assert_array_equal(a.valid_points, b.valid_points)
-    # and straight from the recording, without labels: a joint set scored without labels
-    (direct,) = load_real_sets(tmp / "run.mcap", labels=None, joint="v-groove")
+    # and straight from the recording, as the bench reads it (the joint given)
+    (direct,) = load_real_sets(tmp / "run.mcap", joint="v-groove")
     assert direct.labels is not None and len(direct.profiles) == len(kept)
 
 
