@@ -154,10 +154,11 @@ def read_scans(
     try:
         with AnyReader([p], default_typestore=msgs.typestore()) as reader:
             found = {c.topic: _normal(c.msgtype) for c in reader.connections}
-            cloud_topic = _choose(found, topic, CLOUD, "profile", p, field_name,
+            where = field_name if topic is None else "--topic"
+            cloud_topic = _choose(found, topic, CLOUD, "profile", p, where,
                                   preferred=(msgs.TOPICS["profile"].name,))  # fmt: skip
             label_topic = _choose(
-                found, labels, POINT, "label", p, field_name,
+                found, labels, POINT, "label", p, field_name if labels is None else "--labels",
                 preferred=("/seamtrack/seam_truth",), skip=(msgs.TOPICS["seam_point"].name,),
                 required=False,
             )  # fmt: skip
