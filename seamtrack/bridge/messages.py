@@ -236,7 +236,13 @@ def _nested(ts: Typestore, typename: str) -> Any:
 
 # --------------------------------------------------------------------------- time, poses
 def stamp(t_s: float, distro: str = DISTRO) -> Any:
-    """Simulated seconds as ``builtin_interfaces/Time`` (rounded to the nanosecond)."""
+    """Simulated seconds as ``builtin_interfaces/Time`` (rounded to the nanosecond). The
+    messages of one frame share one object (do not change it)."""
+    return _stamp(float(t_s), distro)
+
+
+@functools.lru_cache(maxsize=16)
+def _stamp(t_s: float, distro: str) -> Any:
     ns = round(t_s * 1e9)
     return _cached_types(distro).Time(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
 
@@ -256,8 +262,10 @@ def header(t_s: float, frame_id: str, distro: str = DISTRO) -> Any:
 
 
 def quaternion(R: ArrayLike) -> tuple[float, float, float, float]:
-    """A rotation matrix to a unit quaternion (x, y, z, w), w >= 0 (Shepperd's method)."""
-    (a, b, c), (d, e, f), (g, h, i) = np.asarray(R, dtype=np.float64).tolist()
+    """A rotation matrix (or a pose: its rotation) to a unit quaternion (x, y, z, w), w >= 0
+    (Shepperd's method)."""
+    rows = R.tolist() if isinstance(R, np.ndarray) else np.asarray(R, dtype=np.float64).tolist()
+    (a, b, c), (d, e, f), (g, h, i) = (row[:3] for row in rows[:3])
     trace = a + e + i
     if trace > 0:
         s = 2.0 * math.sqrt(1.0 + trace)
@@ -295,9 +303,9 @@ def transform_stamped(
 ) -> Any:
     """A pose (4, 4, mm) as ``geometry_msgs/TransformStamped`` (m): the child in the parent."""
     ty = _cached_types(distro)
-    T = np.asarray(T_parent_child, dtype=np.float64)
-    tx, tyy, tz = (T[:3, 3] / MM_PER_M).tolist()
-    qx, qy, qz, qw = quaternion(T[:3, :3])
+    rows = np.asarray(T_parent_child, dtype=np.float64).tolist()
+    tx, tyy, tz = rows[0][3] / MM_PER_M, rows[1][3] / MM_PER_M, rows[2][3] / MM_PER_M
+    qx, qy, qz, qw = quaternion(rows)
     return ty.TransformStamped(
         header=header(t_s, parent, distro),
         child_frame_id=child,
@@ -353,6 +361,12 @@ _FIELDS = (("x", 0, 8), ("y", 8, 8), ("z", 16, 8), ("reason", 24, 2))  # name, o
 FIELD_TYPES = {1: "i1", 2: "u1", 3: "i2", 4: "u2", 5: "i4", 6: "u4", 7: "f4", 8: "f8"}
 
 
+@functools.cache
+def _point_fields(distro: str) -> list[Any]:
+    ty = _cached_types(distro)
+    return [ty.PointField(name=nm, offset=off, datatype=dt, count=1) for nm, off, dt in _FIELDS]
+
+
 def profile_cloud(
     profile: Profile, t_s: float | None = None, frame_id: str = FRAMES["sensor"],
     distro: str = DISTRO,
@@ -368,9 +382,7 @@ def profile_cloud(
     data["z"] = profile.points_laser[:, 1] / MM_PER_M
     assert profile.reason is not None and profile.valid is not None
     data["reason"] = profile.reason
-    fields = [
-        ty.PointField(name=name, offset=off, datatype=dt, count=1) for name, off, dt in _FIELDS
-    ]
+    fields = _point_fields(distro)  # shared by every cloud, never changed
     return ty.PointCloud2(
         header=header(t_s, frame_id, distro),
         height=1,
