@@ -541,6 +541,14 @@ def image_message(
     )
 
 
+def stripe_image_message(image: Any, t_s: float | None = None, distro: str = DISTRO) -> Any:
+    """A :class:`~seamtrack.sensing.camera.StripeImage` as ``sensor_msgs/Image`` (its pixels,
+    its camera's bit depth; stamped with ``t_s``, default the image's capture time)."""
+    if t_s is None:
+        t_s = image.t_s if math.isfinite(image.t_s) else 0.0
+    return image_message(image.pixels, t_s, image.camera.bit_depth, distro=distro)
+
+
 def image_pixels(image: Any) -> NDArray[np.float32]:
     """A ``mono8``/``mono16`` ``sensor_msgs/Image`` back to (rows, columns) fractions of full
     scale."""
@@ -552,3 +560,33 @@ def image_pixels(image: Any) -> NDArray[np.float32]:
     rows = raw.reshape(image.height, image.step)[:, : image.width * dtype.itemsize]
     values = np.ascontiguousarray(rows).view(dtype)
     return (values / (65535.0 if wide else 255.0)).astype(np.float32)
+
+
+# --------------------------------------------------------------------------- one frame
+def frame_messages(
+    t_s: float,
+    profile: Profile,
+    feature: Feature,
+    chain: Iterable[tuple[str, str, ArrayLike]],
+    truth: ArrayLike | None = None,
+    image: Any = None,
+    distro: str = DISTRO,
+) -> list[tuple[str, Any]]:
+    """The (topic, message) pairs of one sensor frame, in the order they are sent: ``/clock``,
+    ``/tf`` (the (parent, child, T_parent_child) ``chain``), the profile, the seam point (when
+    the feature has one), the true seam crossing ``truth`` ((y_L, z_L) mm, when given) and the
+    camera image (a StripeImage, when given). :mod:`seamtrack.bridge.record` records these."""
+    out = [
+        (TOPICS["clock"].name, clock(t_s, distro)),
+        (TOPICS["tf"].name, tf_message(chain, t_s, distro)),
+        (TOPICS["profile"].name, profile_cloud(profile, t_s, distro=distro)),
+    ]
+    point = seam_point(feature, t_s, distro=distro)
+    if point is not None:
+        out.append((TOPICS["seam_point"].name, point))
+    if truth is not None:
+        label = seam_point(Feature.found(truth), t_s, distro=distro)
+        out.append((TOPICS["seam_truth"].name, label))
+    if image is not None:
+        out.append((TOPICS["image"].name, stripe_image_message(image, t_s, distro)))
+    return out
