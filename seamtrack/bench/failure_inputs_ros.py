@@ -46,12 +46,20 @@ def _recording(topics: tuple[str, ...], clouds: int) -> Callable[[Path], None]:
     return write
 
 
+def _truncated(path: Path) -> None:
+    """A recording cut short in its middle (a copy that stopped)."""
+    _recording(("/scanner/cloud",), 40)(path)
+    data = path.read_bytes()
+    path.write_bytes(data[: len(data) // 2])
+
+
 #: Files made when the workspace is (name -> a function of the path).
 GENERATED: dict[str, Callable[[Path], None]] = {
     "a_folder.mcap": _folder,
     "clock_only.mcap": _recording((), 3),
     "two_clouds.mcap": _recording(("/left/cloud", "/right/cloud"), 2),
     "one_cloud.mcap": _recording(("/scanner/cloud",), 2),
+    "truncated.mcap": _truncated,
 }
 
 
@@ -82,6 +90,7 @@ ENTRIES: tuple[Entry, ...] = (
         field="--joint",
     ),
     Entry("bench a missing recording", _bench("nowhere.mcap"), field="--real"),
+    Entry("bench a recording cut short", _bench("truncated.mcap"), field="--real"),
     Entry(
         "import a folder that is no recording",
         ("extractors", "import", "--real", "a_folder.mcap", "--out", "OUT"),

@@ -144,7 +144,7 @@ def read_scans(
         Not a readable recording, no (or several) profile topics, a label topic that is not
         there, clouds that are not line profiles (field ``field_name``, with a fix).
     """
-    from rosbags.highlevel import AnyReader, AnyReaderError
+    from rosbags.highlevel import AnyReader
 
     p = Path(path)
     if not p.exists():
@@ -170,10 +170,13 @@ def read_scans(
                     clouds.append((ns, message))
                 else:
                     points[ns] = message
-    except (AnyReaderError, OSError, ValueError, KeyError, AssertionError) as exc:
+    except SeamtrackError:
+        raise
+    except Exception as exc:  # a damaged or foreign file may fail anywhere in the reader
         raise _error(
             f"not a readable recording ({exc})", p,
-            "give an MCAP file or a ROS bag of sensor_msgs/PointCloud2 profiles", field_name,
+            "give an MCAP file or a ROS bag of PointCloud2 profiles (one cut short: mend it "
+            "with the MCAP CLI, mcap recover)", field_name,
         ) from None  # fmt: skip
     if not clouds:
         raise _error(f"no messages on {cloud_topic}", p, "record the profiles", field_name)
