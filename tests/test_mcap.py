@@ -304,3 +304,16 @@ def test_a_run_without_record_imports_no_ros_library(tmp_path: Path) -> None:
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
     assert json.loads((tmp_path / "out" / "summary.json").read_text())["frames"] > 0
+
+
+def test_importer_refuses_more_points_than_memory_allows(
+    recorded, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from seamtrack.bridge import importer
+    from seamtrack.errors import SeamtrackError
+
+    tmp = recorded[0]
+    monkeypatch.setattr(importer, "MAX_POINTS", 3 * 512)
+    with pytest.raises(SeamtrackError, match="more than 1,536 profile points") as info:
+        read_scans(tmp / "run.mcap")
+    assert info.value.field == "--real"
