@@ -222,7 +222,8 @@ def test_image_mode_records_the_camera_images(tmp_path: Path) -> None:
 
 def test_a_stopped_run_keeps_its_recording(tmp_path: Path) -> None:
     """A run that stops on its time limit is written whole; one interrupted (Ctrl-C) after
-    five frames keeps those five frames; one that fails leaves nothing."""
+    two frames keeps those two frames; one that fails leaves nothing (not even the folders
+    made for the file)."""
     scene = load_scene("paper-verification", {"simulation.time_limit_s": 3.0})
     path = tmp_path / "stalled.mcap"
     result = recorded_run(str(path), scene, build_parts(scene), False)
@@ -248,7 +249,7 @@ def test_a_stopped_run_keeps_its_recording(tmp_path: Path) -> None:
     with pytest.raises(KeyboardInterrupt):
         recorded_run(str(path), scene, interrupting(2, KeyboardInterrupt()), False)
     assert len(_read(path)["/clock"]) == 2
-    path = tmp_path / "failed.mcap"
+    path = tmp_path / "new" / "folders" / "failed.mcap"
     with pytest.raises(RuntimeError):
         recorded_run(str(path), scene, interrupting(2, RuntimeError("boom")), False)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["stalled.mcap", "stopped.mcap"]

@@ -68,6 +68,11 @@ class McapOut:
     def __init__(self, path: str | Path, compression: str = "zstd") -> None:
         self.target = Path(path)
         folder = self.target.parent if str(self.target.parent) else Path(".")
+        self._created: list[Path] = []  # folders made for the file, innermost first
+        probe = folder.absolute()
+        while not probe.exists():
+            self._created.append(probe)
+            probe = probe.parent
         folder.mkdir(parents=True, exist_ok=True)
         handle, tmp = tempfile.mkstemp(prefix=".partial-", suffix=".mcap", dir=folder)
         self._tmp = Path(tmp)
@@ -138,6 +143,11 @@ class McapOut:
             self._file.close()
         if self._tmp.exists():
             self._tmp.unlink()
+        for created in self._created:
+            try:
+                created.rmdir()  # only if empty
+            except OSError:
+                break
 
 
 class Recorder:
