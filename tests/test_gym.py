@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import subprocess
 import sys
-import threading
 
 import numpy as np
 import pytest
@@ -34,8 +33,10 @@ def make(**kwargs: object) -> gymnasium.Env:
     return gymnasium.make(ID, scene="paper-v-groove", overrides=SHORT, **kwargs)
 
 
-def loop_threads() -> list[threading.Thread]:
-    return [t for t in threading.enumerate() if t.name == "seamtrack-gym-loop" and t.is_alive()]
+def running(env: gymnasium.Env) -> bool:
+    """Whether the environment holds a run of the loop that has not ended."""
+    run = env.unwrapped._run
+    return run is not None and run.alive
 
 
 def episode(env: gymnasium.Env, policy: object, seed: int) -> dict:
@@ -69,7 +70,7 @@ def test_check_env_passes() -> None:
         check_env(env.unwrapped)
     finally:
         env.close()
-    assert loop_threads() == []
+    assert not running(env)
 
 
 def test_spaces_follow_the_scene() -> None:
@@ -142,6 +143,7 @@ def test_losing_the_seam_terminates_with_the_documented_penalty() -> None:
     try:
         run = episode(env, lambda obs: np.array([1.0, 0.0], dtype=np.float32), seed=0)
         base = env.unwrapped
+        assert not running(env)  # ended with the episode, before close()
     finally:
         env.close()
     last = run["infos"][-1]
@@ -151,13 +153,13 @@ def test_losing_the_seam_terminates_with_the_documented_penalty() -> None:
         base.speed_mm_s * base.frame_period_s
     )
     assert run["rewards"][-1] == pytest.approx(-last["error_mm"] - base.lost_mm * frames_left)
-    assert loop_threads() == []
 
 
 def test_time_limit_truncates() -> None:
     env = make(max_time_s=0.25)
     try:
         run = episode(env, zero, seed=0)
+        assert not running(env)
         with pytest.raises(RuntimeError, match="reset"):
             env.step(np.zeros(2, dtype=np.float32))
     finally:
@@ -167,21 +169,22 @@ def test_time_limit_truncates() -> None:
     period = env.unwrapped.frame_period_s
     assert 0.25 <= last["t_s"] < 0.25 + period + 1e-9
     assert len(run["rewards"]) == round(last["t_s"] / period)
-    assert loop_threads() == []
 
 
-def test_reset_and_close_mid_episode_leave_no_thread() -> None:
+def test_reset_and_close_mid_episode_end_the_run() -> None:
     env = make()
     env.reset(seed=0)
     for _ in range(3):
         env.step(np.zeros(2, dtype=np.float32))
-    assert len(loop_threads()) == 1
+    first = env.unwrapped._run
+    assert first.alive
     env.reset(seed=1)  # ends the running episode first
-    assert len(loop_threads()) == 1
+    assert not first.alive and running(env)
     env.step(np.zeros(2, dtype=np.float32))
+    second = env.unwrapped._run
     env.close()
     env.close()  # twice is fine
-    assert loop_threads() == []
+    assert not second.alive and not running(env)
 
 
 def test_async_vector_env_gives_the_trajectories_of_single_envs() -> None:

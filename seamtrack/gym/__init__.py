@@ -15,14 +15,18 @@ from seamtrack.errors import SeamtrackError
 
 
 class GymnasiumMissing(SeamtrackError, ImportError):
-    """``gymnasium`` is not installed (an ``ImportError`` too)."""
+    """The ``gym`` extra (``gymnasium``, ``greenlet``) is not installed (an ``ImportError``
+    too)."""
 
 
 try:
+    import greenlet  # noqa: F401  (the loop's coroutine: seamtrack.gym.lockstep)
     import gymnasium
-except ImportError:
+except ImportError as exc:
     raise GymnasiumMissing(
-        "gymnasium is not installed", field="seamtrack.gym", fix="pip install 'seamtrack[gym]'"
+        f"{exc.name or 'gymnasium'} is not installed",
+        field="seamtrack.gym",
+        fix="pip install 'seamtrack[gym]'",
     ) from None
 
 from seamtrack.gym.env import TORCH_STATE, SeamTrackEnv, split_observation  # noqa: E402

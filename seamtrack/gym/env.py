@@ -31,7 +31,6 @@ from __future__ import annotations
 
 import bisect
 import math
-import weakref
 from pathlib import Path
 from typing import Any
 
@@ -217,7 +216,6 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         self.max_correction_mm = bound = float(max_correction_mm)
         self.action_space = spaces.Box(-bound, bound, shape=(2,), dtype=np.float32)
         self._run: LockstepRun | None = None
-        self._finalizer: Any = None
         self._correction = np.zeros(2)
         self._s_nominal = 0.0
         self._s_true = 0.0
@@ -244,7 +242,6 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._s_nominal = 0.0
         self._s_true = 0.0
         self._run = run = LockstepRun(parts, loop_seed)
-        self._finalizer = weakref.finalize(self, run.stop)
         frame = run.next_frame(first=True)
         if isinstance(frame, Ended):
             self._stop()
@@ -288,10 +285,9 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
 
     # ----------------------------------------------------------------- internals
     def _stop(self) -> None:
-        if self._finalizer is not None:
-            self._finalizer()  # run.stop(), once
-            self._finalizer = None
-        self._run = None
+        if self._run is not None:
+            self._run.stop()
+            self._run = None
 
     def _command(self) -> Command:
         """Aim ``lead_mm`` ahead of the torch along the nominal path, shifted by the

@@ -1,11 +1,14 @@
-"""The closed loop turned inside out: :func:`seamtrack.simulation.loop.run` in a thread of its
-own, paused at every sensor frame until the environment's ``step()`` hands it the next command.
+"""The closed loop turned inside out: :func:`seamtrack.simulation.loop.run` in a greenlet of
+its own, paused at every sensor frame until the environment's ``step()`` hands it the next
+command.
 
 The loop stays the one the rest of seamtrack runs (the same robot servo, frame timing, latency
-and sensing); only its tracker is a stand-in, :class:`LockstepTracker`, that passes each frame
-out and the next command in through two queues. The two threads never run at once: the
-environment waits on the frame queue while the loop runs, and the loop waits on the command
-queue while the environment (and the agent) run.
+and sensing); only its tracker is a stand-in, :class:`LockstepTracker`, that switches to the
+environment with each frame and gets the next command back. A greenlet is a coroutine with its
+own C stack in the same OS thread: a switch costs about a microsecond (an OS thread's hand-over
+costs tens, and on a busy machine a wait for a core), nothing runs concurrently, and a run that
+is dropped unfinished is ended by the garbage collector (``GreenletExit`` inside it). The
+environment must be stepped in the thread that reset it.
 
 A frame is handed out at the first control tick after it *arrives* (capture time plus the
 sensor's latency), with the torch's position and velocity at that tick; the command that
@@ -16,12 +19,10 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import queue
-import threading
 from collections import deque
 from dataclasses import dataclass
-from typing import Any
 
+import greenlet
 import numpy as np
 from numpy.typing import NDArray
 
@@ -33,12 +34,10 @@ from seamtrack.simulation.loop import Result, run
 
 FloatArray = NDArray[np.float64]
 
-#: How long ``close()`` waits for the loop thread to end (s); it ends within a control tick.
-JOIN_TIMEOUT_S = 10.0
-
 
 class _Stop(Exception):
-    """Raised inside the loop's thread to end the run (the episode ended, or the env closed)."""
+    """Raised inside the loop's greenlet to end the run (the episode ended, or the env
+    closed)."""
 
 
 _STOP = object()  # the command that ends the run
@@ -79,17 +78,16 @@ class Ended:
 
 
 class LockstepTracker:
-    """A :class:`~seamtrack.control.tracking.Tracker` that asks another thread for each command.
+    """A :class:`~seamtrack.control.tracking.Tracker` that asks the environment for each command.
 
-    ``update`` keeps the arriving measurement; the next ``command`` puts the frame (with the
-    torch's state at that tick) on ``frames`` and waits on ``commands`` for the move to hold
-    until the next frame. ``profiles`` is filled by the sensing wrapper in capture order (the
-    loop delivers measurements in the same order).
+    ``update`` keeps the arriving measurement; the next ``command`` switches to the environment
+    (``parent``, the greenlet that started the run) with the frame and the torch's state at
+    that tick, and gets back the move to hold until the next frame. ``profiles`` is filled by
+    the sensing wrapper in capture order (the loop delivers measurements in the same order).
     """
 
-    def __init__(self) -> None:
-        self.frames: queue.SimpleQueue[Frame | Ended] = queue.SimpleQueue()
-        self.commands: queue.SimpleQueue[Any] = queue.SimpleQueue()
+    def __init__(self, parent: greenlet.greenlet) -> None:
+        self.parent = parent
         self.profiles: deque[Profile] = deque()
         self._arrived: Measurement | None = None
         self._command: Command | None = None
@@ -108,11 +106,10 @@ class LockstepTracker:
         if measurement is not None:
             self._arrived = None
             profile = self.profiles.popleft()
-            self.frames.put(
+            reply = self.parent.switch(
                 Frame(profile, measurement.feature, measurement, t_s, tcp_world,
                       tcp_velocity_world)
             )  # fmt: skip
-            reply = self.commands.get()
             if reply is _STOP:
                 raise _Stop
             self._command = reply
@@ -120,7 +117,7 @@ class LockstepTracker:
 
 
 class LockstepRun:
-    """One run of the loop in a daemon thread, stepped frame by frame.
+    """One run of the loop in a greenlet, stepped frame by frame from the caller's.
 
     Parameters
     ----------
@@ -133,7 +130,7 @@ class LockstepRun:
 
     def __init__(self, parts: Parts, seed: int) -> None:
         assert parts.scan is not None
-        self.tracker = LockstepTracker()
+        self.tracker = LockstepTracker(greenlet.getcurrent())
         scan = parts.scan
         profiles = self.tracker.profiles
 
@@ -143,47 +140,41 @@ class LockstepRun:
             return feature
 
         self.parts = dataclasses.replace(parts, tracker=self.tracker, sense=sense)
+        self.seed = seed
         self.ended: Ended | None = None
-        self._thread = threading.Thread(
-            target=self._run, args=(seed,), name="seamtrack-gym-loop", daemon=True
-        )
-        self._thread.start()
+        self._greenlet = greenlet.greenlet(self._run)
 
-    def _run(self, seed: int) -> None:
-        frames = self.tracker.frames
+    def _run(self) -> Ended:
         try:
-            result = run(self.parts, seed=seed)
+            result = run(self.parts, seed=self.seed)
         except PluginRuntimeError as exc:
-            stopped = isinstance(exc.error, _Stop)
-            frames.put(Ended() if stopped else Ended(error=exc))
-        except BaseException as exc:  # handed to the environment's thread, raised there
-            frames.put(Ended(error=exc))
-        else:
-            frames.put(Ended(result=result))
+            return Ended() if isinstance(exc.error, _Stop) else Ended(error=exc)
+        except greenlet.GreenletExit:  # dropped unfinished: the collector ends it
+            raise
+        except BaseException as exc:  # handed to the environment, raised there
+            return Ended(error=exc)
+        return Ended(result=result)
 
     def next_frame(self, command: Command | None = None, first: bool = False) -> Frame | Ended:
         """Send the command that holds until the next frame (none for the first frame), then
-        wait for that frame, or for the end of the run."""
+        run the loop to that frame, or to the end of the run."""
         if self.ended is not None:
             return self.ended
-        if not first:
-            self.tracker.commands.put(command)
-        item = self.tracker.frames.get()
+        item = self._greenlet.switch() if first else self._greenlet.switch(command)
         if isinstance(item, Ended):
             self.ended = item
-            self._thread.join(JOIN_TIMEOUT_S)
         return item
 
     def stop(self) -> None:
-        """End the run and its thread (the loop is waiting for a command, or has ended)."""
-        if self._thread.is_alive() and self.ended is None:
-            self.tracker.commands.put(_STOP)
-            self.ended = Ended()
-        self._thread.join(JOIN_TIMEOUT_S)
+        """End the run (the loop is waiting for a command, has ended, or never started)."""
+        if self.ended is None and self._greenlet:  # started and not dead: waiting in command()
+            self.ended = self._greenlet.switch(_STOP)
+        self.ended = self.ended or Ended()
 
     @property
     def alive(self) -> bool:
-        return self._thread.is_alive()
+        """Whether the loop is running (started and waiting for a command)."""
+        return bool(self._greenlet)
 
 
 def unlimited_wall_time(parts: Parts) -> Parts:
