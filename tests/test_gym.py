@@ -223,18 +223,30 @@ def test_a_seam_mode_scene_is_refused_in_one_line() -> None:
     assert "\n" not in str(info.value) and "mesh" in str(info.value)
 
 
-BLOCK_GYMNASIUM = "import sys; sys.modules['gymnasium'] = None; "
+def blocking(module: str) -> str:
+    """Python code that makes ``import module`` fail, as when it is not installed."""
+    return f"import sys; sys.modules[{module!r}] = None; "
 
 
-def test_missing_gymnasium_names_the_extra(tmp_path) -> None:
-    code = BLOCK_GYMNASIUM + "import seamtrack.gym"
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+@pytest.mark.parametrize("module", ["gymnasium", "greenlet"])
+def test_a_missing_extra_names_the_pip_install(module: str) -> None:
+    done = subprocess.run(
+        [sys.executable, "-c", blocking(module) + "import seamtrack.gym"],
+        capture_output=True,
+        text=True,
+    )
     assert done.returncode != 0
     last = done.stderr.strip().splitlines()[-1]
-    assert "GymnasiumMissing" in last and "pip install 'seamtrack[gym]'" in last
+    assert last.endswith(
+        f"GymnasiumMissing: seamtrack.gym: {module} is not installed; "
+        "fix: pip install 'seamtrack[gym]'"
+    )
+
+
+def test_bench_gym_without_gymnasium_is_one_line_and_writes_nothing(tmp_path) -> None:
     out = tmp_path / "bench"
     code = (
-        BLOCK_GYMNASIUM
+        blocking("gymnasium")
         + "from seamtrack.cli import main; "
         + f"sys.exit(main(['bench', 'gym', '--quick', '--out', {str(out)!r}]))"
     )
