@@ -223,6 +223,23 @@ def test_a_seam_mode_scene_is_refused_in_one_line() -> None:
     assert "\n" not in str(info.value) and "mesh" in str(info.value)
 
 
+@pytest.mark.parametrize(
+    ("kwargs", "field"),
+    [
+        ({"nominal": "spline"}, "nominal"),
+        ({"max_correction_mm": 0.0}, "max_correction_mm"),
+        ({"max_correction_mm": float("nan")}, "max_correction_mm"),
+        ({"start_jitter_mm": -1.0}, "start_jitter_mm"),
+        ({"lost_mm": "5"}, "lost_mm"),
+        ({"max_time_s": -2.0}, "max_time_s"),
+    ],
+)
+def test_bad_arguments_are_refused_in_one_line(kwargs: dict, field: str) -> None:
+    with pytest.raises(SceneError) as info:
+        make(**kwargs)
+    assert info.value.field == field and "\n" not in str(info.value)
+
+
 def blocking(module: str) -> str:
     """Python code that makes ``import module`` fail, as when it is not installed."""
     return f"import sys; sys.modules[{module!r}] = None; "

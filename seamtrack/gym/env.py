@@ -182,10 +182,11 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
                 field="sensor.mode",
                 fix='use a mesh-mode scene (sensor.mode = "mesh"), e.g. paper-v-groove',
             )
-        for name, value in (("max_correction_mm", max_correction_mm),
-                            ("start_jitter_mm", start_jitter_mm)):  # fmt: skip
-            if not (math.isfinite(value) and value >= 0) or (name[0] == "m" and value == 0):
-                raise SceneError(f"{value!r} is not usable", field=name, fix="give a number > 0")
+        _check_number("max_correction_mm", max_correction_mm)
+        _check_number("start_jitter_mm", start_jitter_mm, zero=True)
+        for name, value in (("lost_mm", lost_mm), ("max_time_s", max_time_s), ("lead_mm", lead_mm)):
+            if value is not None:
+                _check_number(name, value)
         self.scene = loaded
         self._rng = np.random.default_rng(loaded.config.simulation.seed)  # the scan's noise
         self._rebuild = loaded.config.sensor.source == "image"  # auto-exposure state per run
@@ -365,6 +366,15 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         profile, _ = parts.scan(robot.sensor_pose(state), 0.0)
         self._rng.bit_generator.state = saved
         return len(profile.points_laser)
+
+
+def _check_number(name: str, value: Any, zero: bool = False) -> None:
+    """Refuse what is not a finite number > 0 (>= 0 with ``zero``), naming the argument."""
+    ok = isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+    if not ok or value < 0 or (value == 0 and not zero):
+        raise SceneError(
+            f"{value!r} is not usable", field=name, fix=f"give a number {'>=' if zero else '>'} 0"
+        )
 
 
 def _with_start(parts: Parts, start: FloatArray) -> Parts:
