@@ -48,6 +48,7 @@ from seamtrack.simulation.progress import ProgressTracker
 from seamtrack.simulation.scene import Scene, load_scene
 
 FloatArray = NDArray[np.float64]
+Vec = tuple[float, float, float]
 
 #: The torch state's entries, after the profile and its validity.
 TORCH_STATE = (
@@ -86,8 +87,8 @@ class _Polyline:
 
     def __init__(self, seam: Seam) -> None:
         self.progress = ProgressTracker(seam)
-        self.points = seam.points
-        self.normals = seam.normals
+        self.points = [tuple(p) for p in seam.points.tolist()]
+        self.normals = [tuple(n) for n in seam.normals.tolist()]
         self.knots = seam.arc_length_mm.tolist()
         self.length_mm = float(seam.length_mm)
 
@@ -95,19 +96,36 @@ class _Polyline:
         return self.progress.closest_near(point, hint_mm)
 
     def frame(self, s_mm: float) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
-        """Point, unit tangent, lateral (tangent x normal) and torch normal at ``s_mm``."""
+        """Point, unit tangent, lateral (tangent x normal) and torch normal at ``s_mm``, (3,)
+        arrays each."""
+        point, tangent, lateral, normal = self.frame_floats(s_mm)
+        return np.array(point), np.array(tangent), np.array(lateral), np.array(normal)
+
+    def frame_floats(self, s_mm: float) -> tuple[Vec, Vec, Vec, Vec]:
+        """:meth:`frame` as tuples of floats (a few microseconds, where numpy takes tens)."""
         knots = self.knots
         s = min(max(s_mm, 0.0), self.length_mm)
         i = min(max(bisect.bisect_right(knots, s) - 1, 0), len(knots) - 2)
-        w = (s - knots[i]) / (knots[i + 1] - knots[i])
-        a, b = self.points[i], self.points[i + 1]
-        tangent = (b - a) / (knots[i + 1] - knots[i])
-        normal = (1.0 - w) * self.normals[i] + w * self.normals[i + 1]
-        normal = normal - normal.dot(tangent) * tangent
-        normal /= math.sqrt(normal.dot(normal))
-        (tx, ty, tz), (nx, ny, nz) = tangent.tolist(), normal.tolist()
-        lateral = np.array((ty * nz - tz * ny, tz * nx - tx * nz, tx * ny - ty * nx))
-        return a + w * (b - a), tangent, lateral, normal
+        step = knots[i + 1] - knots[i]
+        w = (s - knots[i]) / step
+        (ax, ay, az), (bx, by, bz) = self.points[i], self.points[i + 1]
+        tx, ty, tz = (bx - ax) / step, (by - ay) / step, (bz - az) / step
+        (mx, my, mz), (px, py, pz) = self.normals[i], self.normals[i + 1]
+        nx, ny, nz = (1.0 - w) * mx + w * px, (1.0 - w) * my + w * py, (1.0 - w) * mz + w * pz
+        along = nx * tx + ny * ty + nz * tz
+        nx, ny, nz = nx - along * tx, ny - along * ty, nz - along * tz
+        size = math.sqrt(nx * nx + ny * ny + nz * nz)
+        nx, ny, nz = nx / size, ny / size, nz / size
+        return (
+            (ax + w * (bx - ax), ay + w * (by - ay), az + w * (bz - az)),
+            (tx, ty, tz),
+            (ty * nz - tz * ny, tz * nx - tx * nz, tx * ny - ty * nx),
+            (nx, ny, nz),
+        )
+
+
+def _dot(a: Vec, b: Vec) -> float:
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 
 
 def nominal_path(seam: Seam, nominal: str) -> Seam:
@@ -294,17 +312,22 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         """Aim ``lead_mm`` ahead of the torch along the nominal path, shifted by the
         correction; the last stretch arrives at rest at the path's end."""
         s = min(self._s_nominal + self.lead_mm, self.nominal.length_mm)
-        point, _, lateral, normal = self.nominal.frame(s)
-        target = point + self._correction[0] * lateral + self._correction[1] * normal
+        point, _, lateral, normal = self.nominal.frame_floats(s)
+        c_lat, c_vert = self._correction.tolist()
+        target = np.array(
+            [p + c_lat * a + c_vert * b for p, a, b in zip(point, lateral, normal, strict=True)]
+        )
         return Command(target, self.speed_mm_s, None, s >= self.nominal.length_mm)
 
     def _observe(self, frame: Frame) -> tuple[NDArray[np.float32], dict[str, Any]]:
         tcp = np.asarray(frame.tcp_world, dtype=np.float64)
-        velocity = np.asarray(frame.velocity_world, dtype=np.float64)
+        x, y, z = tcp.tolist()
+        vx, vy, vz = np.asarray(frame.velocity_world, dtype=np.float64).tolist()
+        velocity = (vx, vy, vz)
         self._s_nominal = s_nom = self.nominal.locate(tcp, self._s_nominal)
-        point, tangent, lateral, normal = self.nominal.frame(s_nom)
+        (px, py, pz), tangent, lateral, normal = self.nominal.frame_floats(s_nom)
+        off = (x - px, y - py, z - pz)
         self._s_true = s_true = self.truth.locate(tcp, self._s_true)
-        off = tcp - point
         n = self.rays
         obs = np.zeros(3 * n + len(TORCH_STATE), dtype=np.float32)
         profile = frame.profile
@@ -312,15 +335,15 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         assert valid is not None
         np.copyto(obs[: 2 * n].reshape(n, 2), profile.points_laser, where=valid[:, None])
         obs[2 * n : 3 * n] = valid
+        c_lat, c_vert = self._correction.tolist()
         obs[3 * n :] = (
-            off.dot(lateral), off.dot(normal),
-            velocity.dot(lateral), velocity.dot(normal), velocity.dot(tangent),
-            self._correction[0], self._correction[1],
-            frame.t_s, s_nom / self.nominal.length_mm,
+            _dot(off, lateral), _dot(off, normal),
+            _dot(velocity, lateral), _dot(velocity, normal), _dot(velocity, tangent),
+            c_lat, c_vert, frame.t_s, s_nom / self.nominal.length_mm,
         )  # fmt: skip
         np.clip(obs, -OBSERVATION_LIMIT, OBSERVATION_LIMIT, out=obs)
-        seam_point = self.truth.frame(s_true)[0]
-        error = float(np.linalg.norm(tcp - seam_point))
+        seam_point = self.truth.frame_floats(s_true)[0]
+        error = math.dist((x, y, z), seam_point)
         self._last_obs = obs
         info = {
             "t_s": frame.t_s,
