@@ -26,9 +26,10 @@ import greenlet
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.bridge.frames import observe
 from seamtrack.control.tracking import Command, Measurement, TrackerContext
 from seamtrack.errors import PluginRuntimeError
-from seamtrack.sensing.profiles import Feature, Profile, SeamHint
+from seamtrack.sensing.profiles import Feature, Profile
 from seamtrack.simulation.assemble import Parts
 from seamtrack.simulation.loop import Result, run
 
@@ -82,8 +83,9 @@ class LockstepTracker:
 
     ``update`` keeps the arriving measurement; the next ``command`` switches to the environment
     (``parent``, the greenlet that started the run) with the frame and the torch's state at
-    that tick, and gets back the move to hold until the next frame. ``profiles`` is filled by
-    the sensing wrapper in capture order (the loop delivers measurements in the same order).
+    that tick, and gets back the move to hold until the next frame. ``profiles`` is filled in
+    capture order by :func:`seamtrack.bridge.frames.observe` (the loop delivers measurements
+    in the same order).
     """
 
     def __init__(self, parent: greenlet.greenlet) -> None:
@@ -131,15 +133,9 @@ class LockstepRun:
     def __init__(self, parts: Parts, seed: int) -> None:
         assert parts.scan is not None
         self.tracker = LockstepTracker(greenlet.getcurrent())
-        scan = parts.scan
         profiles = self.tracker.profiles
-
-        def sense(T_world_sensor: FloatArray, t_s: float, hint: SeamHint | None = None) -> Feature:
-            profile, feature = scan(T_world_sensor, t_s, hint)
-            profiles.append(profile)
-            return feature
-
-        self.parts = dataclasses.replace(parts, tracker=self.tracker, sense=sense)
+        observed = observe(parts, lambda frame: profiles.append(frame.profile))
+        self.parts = dataclasses.replace(observed, tracker=self.tracker)
         self.seed = seed
         self.ended: Ended | None = None
         self._greenlet = greenlet.greenlet(self._run)
