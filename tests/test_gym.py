@@ -171,6 +171,24 @@ def test_time_limit_truncates() -> None:
     assert len(run["rewards"]) == round(last["t_s"] / period)
 
 
+def test_a_frame_is_observed_when_it_arrives() -> None:
+    """With a sensor latency, each observation is the frame taken that long before the step."""
+    latency = 0.03
+    env = gymnasium.make(
+        ID, scene="paper-v-groove", overrides={**SHORT, "sensor.latency_s": latency},
+        max_time_s=0.2,
+    )  # fmt: skip
+    try:
+        run = episode(env, zero, seed=0)
+        period = env.unwrapped.frame_period_s
+    finally:
+        env.close()
+    captured = np.array([i["t_capture_s"] for i in run["infos"]])
+    arrived = np.array([i["t_s"] for i in run["infos"]])
+    np.testing.assert_allclose(arrived - captured, latency, atol=1e-9)
+    np.testing.assert_allclose(np.diff(captured), period, atol=1e-9)
+
+
 def test_reset_and_close_mid_episode_end_the_run() -> None:
     env = make()
     env.reset(seed=0)

@@ -347,6 +347,7 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._last_obs = obs
         info = {
             "t_s": frame.t_s,
+            "t_capture_s": frame.measurement.t_capture_s,
             "error_mm": error,
             "arc_length_mm": s_true,
             "seam_found": bool(frame.feature),
