@@ -205,6 +205,16 @@ def test_reset_and_close_mid_episode_end_the_run() -> None:
     assert not second.alive and not running(env)
 
 
+def test_a_non_finite_action_is_refused() -> None:
+    env = make()
+    try:
+        env.reset(seed=0)
+        with pytest.raises(ValueError, match="not finite"):
+            env.step(np.array([np.nan, 0.0], dtype=np.float32))
+    finally:
+        env.close()
+
+
 def test_async_vector_env_gives_the_trajectories_of_single_envs() -> None:
     seeds = [3, 4]
     actions = np.random.default_rng(0).uniform(-0.05, 0.05, size=(40, 2, 2)).astype(np.float32)

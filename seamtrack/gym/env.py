@@ -277,6 +277,8 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         if run is None:
             raise RuntimeError("call reset() before step() (and after an episode ends)")
         a = np.asarray(action, dtype=np.float64).reshape(2)
+        if not np.isfinite(a).all():
+            raise ValueError(f"the action {a.tolist()} is not finite (a policy gave NaN or inf)")
         bound = self.max_correction_mm
         reach = 2.0 * self.lost_mm  # farther is lost anyway; keeps the aim inside the travel
         self._correction = np.clip(self._correction + np.clip(a, -bound, bound), -reach, reach)
