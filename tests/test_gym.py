@@ -244,6 +244,31 @@ def test_async_vector_env_gives_the_trajectories_of_single_envs() -> None:
         env.close()
 
 
+def test_the_scene_may_be_a_name_a_path_or_a_scene(tmp_path) -> None:
+    """The same scene three ways gives the same first observation."""
+    from importlib.resources import files
+
+    from seamtrack.simulation.scene import load_scene
+
+    path = tmp_path / "groove.toml"
+    path.write_text(files("seamtrack.scenes").joinpath("paper-v-groove.toml").read_text())
+    first = []
+    for scene, overrides in (
+        ("paper-v-groove", SHORT),
+        (path, SHORT),
+        (load_scene("paper-v-groove", SHORT), None),
+    ):
+        env = gymnasium.make(ID, scene=scene, overrides=overrides)
+        try:
+            first.append(env.reset(seed=2)[0])
+        finally:
+            env.close()
+    assert first[0].tobytes() == first[1].tobytes() == first[2].tobytes()
+    with pytest.raises(SceneError, match="loaded scene") as info:
+        gymnasium.make(ID, scene=load_scene("paper-v-groove"), overrides=SHORT)
+    assert info.value.field == "overrides"
+
+
 def test_a_seam_mode_scene_is_refused_in_one_line() -> None:
     with pytest.raises(SceneError) as info:
         gymnasium.make(ID, scene="paper-verification")
