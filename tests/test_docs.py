@@ -23,7 +23,7 @@ DOCS = Path(__file__).resolve().parents[1] / "docs"
 #: Pages whose Python blocks run here (in order, one namespace per page). Left out: cad.md
 #: (reads a STEP file of the user's), sweeps.md (starts a Dask cluster), views.md (renders with
 #: PyVista): their commands are covered by tests/test_cad.py, test_sweep.py and test_viz.py.
-RUN = ("mesh-mode.md", "camera.md", "weldments.md", "datasets.md", "extractors.md")
+RUN = ("mesh-mode.md", "camera.md", "weldments.md", "datasets.md", "extractors.md", "gym.md")
 
 
 def python_blocks(path: Path) -> list[str]:
