@@ -30,6 +30,7 @@ RUN = (
     "datasets.md",
     "extractors.md",
     "multipass-geometry.md",
+    "gym.md",
 )
 
 

@@ -242,6 +242,12 @@ def _bench_dataset(out: Path, quick: bool) -> Any:
     return bench_dataset(out, quick=quick)
 
 
+def _bench_gym(out: Path, quick: bool) -> Any:
+    from seamtrack.bench.gym import bench_gym
+
+    return bench_gym(out, quick=quick)
+
+
 BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "raycast": lambda out, quick: bench_raycast(out, quick=quick),
     "extractors": _bench_extractors,
@@ -253,6 +259,7 @@ BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "failures": _bench_failures,
     "camera": _bench_camera,
     "dataset": _bench_dataset,
+    "gym": _bench_gym,
 }
 
 
