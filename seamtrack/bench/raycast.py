@@ -26,6 +26,13 @@ from seamtrack.bench.common import best_rate, machine_info
 from seamtrack.geometry import frames
 
 RAYS = 1024
+#: Rays passing within this distance (mm) of a triangle edge that the laser plane crosses (a
+#: section segment's end) at or before their hit are *edge rays*: there Embree's float32
+#: traversal may take the neighbouring triangle, or miss a silhouette the exact ray grazes.
+#: 1e-4 mm is about 7 float32 ulps at 200 mm from the local origin.
+EDGE_MM = 1e-4
+#: The agreement asked of the plane-section fan and the refined Embree hits (mm).
+AGREE_MM = 1e-9
 
 
 def v_groove_plate_mesh(
@@ -332,3 +339,74 @@ def raycast_markdown(result: dict) -> str:
     for key, why in result["skipped"].items():
         lines.append(f"Skipped {key}: {why}")
     return "\n".join(lines) + "\n"
+
+
+def fan_agreement(
+    sensor: Any, caster: Any, poses: list[np.ndarray], *, rays: int = RAYS,
+    edge_mm: float = EDGE_MM,
+) -> dict[str, Any]:  # fmt: skip
+    """The plane-section fan against the float64-refined Embree fan on the same rays.
+
+    Every ray counts once per pose. An *edge ray* passes within ``edge_mm`` of a section
+    segment's end (a crossed triangle edge; silhouettes included) no farther than its hit plus
+    ``edge_mm``; a ray *disagrees* when the two fans differ in hit or miss, in reason, or in hit
+    distance by more than :data:`AGREE_MM`. Returns the counts, the largest distance difference
+    off the edges and on them (mm), how many Embree hits were not refined (kept in float32: no
+    neighbouring triangle contained the float64 point), and on how many rays the two fans lit
+    different triangles (at the same point: a shared edge).
+    """
+    from seamtrack.sensing import section
+    from seamtrack.sensing.scan import laser_fan, stripe_hits
+
+    fan = laser_fan(sensor, rays)
+    tans = fan.directions[:, 1] / fan.directions[:, 2]
+    tan_max = float(np.abs(tans).max()) * (1 + 1e-9) + 1e-9
+    index = caster.section
+    out: dict[str, Any] = dict.fromkeys(
+        ("rays", "edge_rays", "disagree", "disagree_edge", "hit_mismatch", "reason_mismatch",
+         "embree_unrefined", "other_face"), 0)  # fmt: skip
+    out.update(poses=len(poses), max_dt_mm=0.0, max_dt_edge_mm=0.0, edge_mm=edge_mm,
+               agree_mm=AGREE_MM)  # fmt: skip
+    for T in poses:
+        a = stripe_hits(sensor, caster, T, rays, fan="section")
+        b = stripe_hits(sensor, caster, T, rays, fan="embree")
+        refined = caster.first_hit(T[:3, 3], a.directions_local).refined
+        origin = np.asarray(T[:3, 3] - caster.local_origin, dtype=np.float64)
+        segs, _ = section.section_segments(
+            index.lo, index.hi, index.child, index.count, index.order, caster.vertices_local,
+            caster.faces, origin, np.ascontiguousarray(T[:3, :3]), tan_max,
+        )  # fmt: skip
+        ends = np.concatenate([segs[:, :2], segs[:, 2:]])  # (e, 2) = (y_L, z_L)
+        d = fan.directions[:, 1:]  # (n, 2)
+        along = d @ ends.T  # (n, e): distance along each ray to each end's foot
+        off = np.abs(d[:, :1] * ends[None, :, 1] - d[:, 1:] * ends[None, :, 0])
+        reach = np.where(np.isfinite(a.distance_mm), a.distance_mm, np.inf)
+        near = (off < edge_mm) & (along > 0) & (along <= reach[:, None] + edge_mm)
+        # A ray on an edge that lies in the laser plane (the triangles on both sides give the
+        # same segment) is an edge ray too.
+        x_axis = T[:3, 0]
+        lit = np.flatnonzero(a.face >= 0)
+        x_l = (caster.vertices_local[caster.faces[a.face[lit]]] - origin) @ x_axis
+        in_plane = np.zeros(len(a.face), dtype=bool)
+        in_plane[lit] = (np.abs(x_l) < edge_mm).sum(axis=1) >= 2
+        edge = near.any(axis=1) | in_plane
+        hit_a, hit_b = a.face >= 0, b.face >= 0
+        both = hit_a & hit_b
+        dt = np.zeros(len(hit_a))
+        dt[both] = np.abs(a.distance_mm[both] - b.distance_mm[both])
+        hit_diff = hit_a != hit_b
+        reason_diff = a.reason != b.reason
+        bad = hit_diff | reason_diff | (dt > AGREE_MM)
+        out["rays"] += len(hit_a)
+        out["edge_rays"] += int(edge.sum())
+        out["disagree"] += int((bad & ~edge).sum())
+        out["disagree_edge"] += int((bad & edge).sum())
+        out["hit_mismatch"] += int((hit_diff & ~edge).sum())
+        out["reason_mismatch"] += int((reason_diff & ~edge).sum())
+        out["embree_unrefined"] += int((hit_b & ~refined).sum())
+        out["other_face"] += int((both & (a.face != b.face)).sum())
+        if (both & ~edge).any():
+            out["max_dt_mm"] = max(out["max_dt_mm"], float(dt[both & ~edge].max()))
+        if (both & edge).any():
+            out["max_dt_edge_mm"] = max(out["max_dt_edge_mm"], float(dt[both & edge].max()))
+    return out
