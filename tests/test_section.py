@@ -19,7 +19,7 @@ from seamtrack.errors import SceneError
 from seamtrack.geometry import frames
 from seamtrack.sensing import section
 from seamtrack.sensing.raycast import RayCaster
-from seamtrack.sensing.scan import laser_fan, scan_mesh, stripe_hits
+from seamtrack.sensing.scan import auto_fan, laser_fan, scan_mesh, stripe_hits
 from seamtrack.sensing.sensor import preset
 from seamtrack.simulation.scene import load_scene
 
@@ -171,14 +171,20 @@ def test_the_embreex_fallback_casts_the_same_section_stripe() -> None:
     np.testing.assert_array_equal(a.points_laser, b.points_laser)
 
 
-def test_auto_is_the_section_when_refining_and_embree_in_float32() -> None:
+def test_auto_is_the_section_when_refining_with_enough_rays_and_embree_otherwise() -> None:
     mesh = v_groove_plate_mesh(triangles=8_000)
     caster = RayCaster.from_mesh(mesh)
     T = _plate_poses()[2]
-    for refine, fan in ((True, "section"), (False, "embree")):
-        auto = stripe_hits(SENSOR, caster, T, 256, refine=refine)
-        chosen = stripe_hits(SENSOR, caster, T, 256, refine=refine, fan=fan)
+    # 8k triangles: the section from 90 rays up (sqrt(8000) = 89.4).
+    for rays, refine, fan in ((256, True, "section"), (256, False, "embree"),
+                              (64, True, "embree")):  # fmt: skip
+        assert auto_fan(rays, caster.n_faces, refine) == fan
+        auto = stripe_hits(SENSOR, caster, T, rays, refine=refine)
+        chosen = stripe_hits(SENSOR, caster, T, rays, refine=refine, fan=fan)
+        exact = stripe_hits(SENSOR, caster, T, rays, fan="section")
         np.testing.assert_array_equal(auto.distance_mm, chosen.distance_mm)
+        # Float32 Embree hits differ from the section's exact ones; refined ones agree.
+        assert (np.nanmax(np.abs(auto.distance_mm - exact.distance_mm)) <= AGREE_MM) == refine
     with pytest.raises(ValueError, match="fan must be one of"):
         stripe_hits(SENSOR, caster, T, 256, fan="optix")
 

@@ -39,9 +39,22 @@ FloatArray = NDArray[np.float64]
 
 #: How a mesh-mode fan is cast (``sensor.fan``): ``"embree"`` (Embree's float32 hits, refined in
 #: float64 unless ``refine=False``), ``"section"`` (the laser plane's section of the mesh, exact
-#: in float64: :mod:`seamtrack.sensing.section`), ``"auto"`` (the section when refining, which
-#: is faster on every part measured; Embree when float32 hits are asked for).
+#: in float64: :mod:`seamtrack.sensing.section`), ``"auto"`` (:func:`auto_fan`).
 FANS = ("embree", "section", "auto")
+
+
+def auto_fan(rays: int, n_faces: int, refine: bool = True) -> str:
+    """The fan ``"auto"`` casts: the plane section where it is the faster, else Embree.
+
+    The section's cost per profile grows with the triangles the plane crosses (about the
+    square root of the mesh's count on a part meshed evenly) and little with the rays; the
+    Embree fan's grows with the rays. Measured (``docs/mesh-mode.md``): the section is faster
+    from about sqrt(triangles) rays up (1024 rays: every part up to ~1M triangles; 256 rays:
+    up to ~60k; 64 rays: Embree). ``refine=False`` asks for Embree's float32 hits: Embree.
+    """
+    if not refine:
+        return "embree"
+    return "section" if rays * rays >= n_faces else "embree"
 
 
 @dataclass(frozen=True)
@@ -300,7 +313,7 @@ def stripe_hits(
 
     The first hits come from Embree refined in float64 (``fan="embree"``) or from the laser
     plane's section of the mesh (``fan="section"``, exact in float64; ``"auto"`` chooses, see
-    :data:`FANS`). The clips are tested in order (a point gets the first reason that applies):
+    :func:`auto_fan`). The clips are tested in order (a point gets the first reason that applies):
     MISS, OUT_OF_RANGE (trapezoid and depth of field), INCIDENCE, OCCLUDED (the camera is behind
     the lit face or a shadow ray to the camera centre meets the part). Shadow rays (on Embree)
     are cast only for points that passed the cheaper clips.
@@ -314,7 +327,9 @@ def stripe_hits(
     rotation = np.ascontiguousarray(T[:3, :3])
     origin = T[:3, 3] - caster.local_origin
     do_quantize = bool(sensor.quantize if quantize is None else quantize)
-    if fan == "section" or (fan == "auto" and refine):
+    if fan == "auto":
+        fan = auto_fan(rays, caster.n_faces, refine)
+    if fan == "section":
         return _section_stripe(caster, laser, rotation, origin, do_quantize)
     packets = caster.packets
     if packets is not None:  # one numba call does it all
@@ -409,7 +424,7 @@ def scan_mesh(
         Capture time stamped on the profile.
     fan : {"auto", "section", "embree"}
         How the fan's first hits are found (:data:`FANS`): the laser plane's section of the
-        mesh, exact in float64 (``"auto"`` when ``refine``), or Embree (``"auto"`` when not).
+        mesh, exact in float64, or Embree; ``"auto"``: the faster (:func:`auto_fan`).
 
     Returns
     -------
