@@ -302,8 +302,8 @@ def _ray_range(
             t_lo, t_hi = -np.inf, np.inf
     margin_lo = 1e-9 * (1.0 + abs(t_lo)) if np.isfinite(t_lo) else 0.0
     margin_hi = 1e-9 * (1.0 + abs(t_hi)) if np.isfinite(t_hi) else 0.0
-    first = np.searchsorted(tans, t_lo - margin_lo)
-    last = np.searchsorted(tans, t_hi + margin_hi, side="right")
+    first = int(np.searchsorted(tans, t_lo - margin_lo))
+    last = int(np.searchsorted(tans, t_hi + margin_hi, side="right"))
     return max(first - 1, 0), min(last + 1, n)
 
 
