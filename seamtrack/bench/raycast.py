@@ -213,7 +213,7 @@ def _case(name: str, mesh: Any, poses: list[np.ndarray], calls: int, repeats: in
         "scene_build_s": build_s,
         "section_build_s": section_build_s,
         "section_index_mb": index.nbytes / 1e6,
-        "agreement": fan_agreement(sensor, caster, poses),
+        "agreement": fan_agreement(sensor, caster, agreement_poses(poses)),
         "rays": RAYS,
         "poses": len(poses),
         "shadow_rays": int(np.mean(shadow)),
@@ -386,6 +386,24 @@ def raycast_markdown(result: dict) -> str:
     for key, why in result["skipped"].items():
         lines.append(f"Skipped {key}: {why}")
     return "\n".join(lines) + "\n"
+
+
+def agreement_poses(poses: list[np.ndarray]) -> list[np.ndarray]:
+    """The poses the agreement is measured at: a case's own, and when it has one pose, that
+    pose moved 0.37 and -7.1 mm along the laser plane's normal and turned 0.2 rad about the
+    laser axis (off the grid lines a pose may sit on)."""
+    if len(poses) > 1:
+        return poses
+    T = poses[0]
+    turned = T.copy()
+    c, s = np.cos(0.2), np.sin(0.2)
+    turned[:3, :3] = T[:3, :3] @ np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    shifted = []
+    for step in (0.37, -7.1):
+        moved = T.copy()
+        moved[:3, 3] += step * T[:3, 0]
+        shifted.append(moved)
+    return [T, *shifted, turned]
 
 
 def fan_agreement(
