@@ -189,7 +189,7 @@ def bench_loop(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]:
         parts.robot.T_world_sensor(parts.robot.q_from_world(p)) for p in parts.seam.interpolate(arc)
     ]
     # The scene's fan, and the other on the same poses for comparison.
-    fan_used = scene.config.sensor.fan
+    fan_used: str = scene.config.sensor.fan
     if fan_used == "auto":
         fan_used = auto_fan(1024, len(parts.mesh.faces), scene.config.sensor.refine_float64)
     find(scan_mesh(parts.sensor, parts.mesh, poses[0], rays=1024, fan=fan_used))  # set-up
