@@ -214,3 +214,31 @@ def test_a_mesh_scene_run_both_ways_has_the_same_error() -> None:
     assert runs["embree"]["status"] == runs["section"]["status"] == "completed"
     delta = abs(runs["embree"]["max_error_mm"] - runs["section"]["max_error_mm"])
     assert delta < 0.1 * SENSOR.depth_resolution_mm
+
+
+def test_a_closed_box_agrees_with_refined_embree() -> None:
+    """A closed solid (front and back faces, the plane through its diagonals' crossings): the
+    section lights the near faces only, as Embree does."""
+    import trimesh
+
+    box = trimesh.creation.box(extents=[40.0, 30.0, 12.0])
+    box.apply_translation([0.0, 0.0, -6.0])
+    result = fan_agreement(SENSOR, RayCaster.from_mesh(box), _plate_poses())
+    assert result["rays"] == 4 * 1024
+    assert result["disagree"] == 0, result
+    assert result["max_dt_mm"] <= AGREE_MM
+
+
+def test_a_triangle_lying_in_the_laser_plane_is_grazed_not_hit() -> None:
+    """A wall lying exactly in the laser plane, standing on a plate: the fan runs along it and
+    lights the plate, as if the wall were not there (no ray crosses it)."""
+    import trimesh
+
+    plate = extruded_mesh(SECTIONS["flat"], np.eye(4), n_along=2, n_per_segment=1)
+    wall = trimesh.Trimesh([[0.0, -20.0, 0.0], [0.0, 20.0, 0.0], [0.0, 0.0, 30.0]], [[0, 1, 2]])
+    both = trimesh.util.concatenate([plate, wall])
+    T = frames.make(LOOK_DOWN, [0.0, 0.0, 91.0])
+    with_wall = stripe_hits(IDEAL, RayCaster.from_mesh(both), T, 257, fan="section")
+    without = stripe_hits(IDEAL, RayCaster.from_mesh(plate), T, 257, fan="section")
+    np.testing.assert_array_equal(with_wall.distance_mm, without.distance_mm)
+    np.testing.assert_array_equal(with_wall.reason, without.reason)
