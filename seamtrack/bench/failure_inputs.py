@@ -162,6 +162,12 @@ CATALOGUE: tuple[Entry, ...] = (
     Entry("unknown built-in scene", ("run", "paper-verifcation", "--out", "OUT"), field="SCENE"),
     # --- sizes that would not fit in memory
     Entry("1e8 rays", _run(*_set("sensor.rays=100000000")), field="sensor.rays"),
+    Entry("unknown laser fan", _run(*_set('sensor.fan="optix"')), field="sensor.fan"),
+    Entry(
+        "plane-section fan in float32",
+        _run(*_set('sensor.fan="section"', "sensor.refine_float64=false")),
+        field="sensor.fan",
+    ),
     Entry("seam step 1e-6 mm", _run(*_set("seam.step_mm=1e-6")), field="seam.step_mm"),
     Entry("seam length 1e9 mm", _run(*_set("seam.length_mm=1e9")), field="seam.step_mm"),
     Entry("control period 1e-8 s", _run(*_set("robot.control_period_s=1e-8")), field="control"),

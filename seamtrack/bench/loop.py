@@ -143,7 +143,7 @@ def bench_loop(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]:
     test, not a measurement).
     """
     from seamtrack.features.extractors import extractor
-    from seamtrack.sensing.scan import scan_mesh
+    from seamtrack.sensing.scan import auto_fan, scan_mesh
     from seamtrack.simulation.assemble import build_parts
     from seamtrack.simulation.loop import run
     from seamtrack.simulation.scene import load_scene
@@ -188,10 +188,20 @@ def bench_loop(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]:
     poses = [
         parts.robot.T_world_sensor(parts.robot.q_from_world(p)) for p in parts.seam.interpolate(arc)
     ]
-    find(scan_mesh(parts.sensor, parts.mesh, poses[0], rays=1024))  # set-up, untimed
+    # The scene's fan, and the other on the same poses for comparison.
+    fan_used: str = scene.config.sensor.fan
+    if fan_used == "auto":
+        fan_used = auto_fan(1024, len(parts.mesh.faces), scene.config.sensor.refine_float64)
+    find(scan_mesh(parts.sensor, parts.mesh, poses[0], rays=1024, fan=fan_used))  # set-up
+    other = "embree" if fan_used == "section" else "section"
+    scan_mesh(parts.sensor, parts.mesh, poses[0], rays=1024, fan=other)
     start = time.process_time()
-    profiles = [scan_mesh(parts.sensor, parts.mesh, T, rays=1024) for T in poses]
+    profiles = [scan_mesh(parts.sensor, parts.mesh, T, rays=1024, fan=fan_used) for T in poses]
     scan_s = (time.process_time() - start) / len(poses)
+    start = time.process_time()
+    for T in poses:
+        scan_mesh(parts.sensor, parts.mesh, T, rays=1024, fan=other)
+    scan_other_s = (time.process_time() - start) / len(poses)
     start = time.process_time()
     for profile in profiles:
         find(profile)
@@ -213,7 +223,11 @@ def bench_loop(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]:
         "sim_s_per_cpu_s": simulated / wall,
         "sim_s_per_wall_s": simulated / wall_clock,
         "loop_overhead_fraction": (wall - sensing) / wall,
+        "fan": scene.config.sensor.fan,
+        "fan_used": fan_used,
         "scan_ms_per_frame": 1e3 * scan_s,
+        "other_fan": other,
+        "scan_other_fan_ms_per_frame": 1e3 * scan_other_s,
         "extract_ms_per_frame": 1e3 * extract_s,
         "control_us_per_tick": 1e6 * control_s / ticks,
         "tracker_update_ms_per_frame": 1e3 * replay["update"] / frames,
@@ -268,6 +282,11 @@ def _markdown(result: dict[str, Any]) -> str:
             "excluded), less the tracker's per-frame update and the scoring after the run, per "
             f"control tick. Tracker update {row['tracker_update_ms_per_frame']:.3f} ms per frame; "
             f"scoring {row['scoring_s']:.2f} s.",
+            "",
+            f'Ray casting with the scene\'s fan (`sensor.fan = "{row["fan"]}"`, here the '
+            f"{row['fan_used']} fan): {row['scan_ms_per_frame']:.3f} ms per frame; with the "
+            f"{row['other_fan']} fan on the same poses: "
+            f"{row['scan_other_fan_ms_per_frame']:.3f} ms.",
             "",
             f"**Projected** (not measured): with extraction at its target "
             f"({result['extract_target_ms']} ms per frame) and everything else as measured, "

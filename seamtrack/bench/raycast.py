@@ -1,14 +1,15 @@
 """Benchmarks: what a stripe profile costs, and what our code adds to bare Embree.
 
 ``bench_raycast`` times one laser profile (a fan of 1024 rays and the shadow rays of its lit
-points) on a ~100k-triangle V-groove plate and, when CadQuery is available, on the CAD V-groove,
-on the same rays: :func:`seamtrack.sensing.scan.scan_mesh` (a ``Profile``) with float64 refinement
-on
-and off, :func:`seamtrack.sensing.scan.stripe_hits` (the arrays, no ``Profile``) on the default
-backend
-(Embree packets, :mod:`seamtrack.sensing.embree`) and on the embreex fallback, bare ``embreex``
-``scene.run`` calls on pre-built float32 arrays, and trimesh's ``mesh.ray`` methods
-(``intersects_location``, then ``intersects_any``). One thread, best of ``repeats`` runs.
+points) on a ~100k-triangle V-groove plate and, when CadQuery is available, on the CAD V-groove
+and the paper part, on the same rays: :func:`seamtrack.sensing.scan.scan_mesh` (a ``Profile``)
+with the plane-section fan (:mod:`seamtrack.sensing.section`) and with the Embree fan, float64
+refinement on and off; :func:`seamtrack.sensing.scan.stripe_hits` (the arrays, no ``Profile``)
+likewise, on Embree packets (:mod:`seamtrack.sensing.embree`) and on the embreex fallback; bare
+``embreex`` ``scene.run`` calls on pre-built float32 arrays; and trimesh's ``mesh.ray`` methods
+(``intersects_location``, then ``intersects_any``). One thread, best of ``repeats`` runs. Each
+case also reports the plane-section fan's agreement with the refined Embree fan
+(:func:`fan_agreement`).
 """
 
 from __future__ import annotations
@@ -26,6 +27,13 @@ from seamtrack.bench.common import best_rate, machine_info
 from seamtrack.geometry import frames
 
 RAYS = 1024
+#: Rays passing within this distance (mm) of a triangle edge that the laser plane crosses (a
+#: section segment's end) at or before their hit are *edge rays*: there Embree's float32
+#: traversal may take the neighbouring triangle, or miss a silhouette the exact ray grazes.
+#: 1e-4 mm is about 7 float32 ulps at 200 mm from the local origin.
+EDGE_MM = 1e-4
+#: The agreement asked of the plane-section fan and the refined Embree hits (mm).
+AGREE_MM = 1e-9
 
 
 def v_groove_plate_mesh(
@@ -99,8 +107,8 @@ def _case(name: str, mesh: Any, poses: list[np.ndarray], calls: int, repeats: in
     """Time every method on one mesh: each call casts one profile at every pose in turn."""
     import trimesh
 
-    from seamtrack.sensing import raycast
-    from seamtrack.sensing.scan import ray_caster, scan_mesh, stripe_hits
+    from seamtrack.sensing import raycast, section
+    from seamtrack.sensing.scan import laser_fan, ray_caster, scan_mesh, stripe_hits
     from seamtrack.sensing.sensor import preset
 
     sensor = preset("paper")
@@ -108,6 +116,10 @@ def _case(name: str, mesh: Any, poses: list[np.ndarray], calls: int, repeats: in
     raycast.RayCaster.from_mesh(mesh)
     build_s = time.perf_counter() - build_start
     caster = ray_caster(mesh)  # the cached one that scan_mesh uses
+    section.build(caster.vertices_local, caster.faces)  # compiled and warm before it is timed
+    build_start = time.perf_counter()
+    section.build(caster.vertices_local, caster.faces)
+    section_build_s = time.perf_counter() - build_start
     # embreex's own scene (the fallback backend): the bare calls and the pipeline on it.
     embreex_caster = raycast.RayCaster.from_mesh(mesh, backend="embreex")
     rays = [_bare_rays(sensor, caster, T) for T in poses]
@@ -147,24 +159,42 @@ def _case(name: str, mesh: Any, poses: list[np.ndarray], calls: int, repeats: in
 
         return run
 
+    index = caster.section  # built once per mesh, like the Embree scene (timed below)
+    origins = [T[:3, 3] - caster.local_origin for T in poses]
+    rotations = [np.ascontiguousarray(T[:3, :3]) for T in poses]
+    fan = laser_fan(sensor, RAYS).directions
+    tree = (index.lo, index.hi, index.child, index.count, index.order, caster.vertices_local,
+            caster.faces)  # fmt: skip
+
+    def section_fan() -> None:
+        for origin, rotation in zip(origins, rotations, strict=True):
+            section.section_hits(*tree, origin, rotation, fan)
+
     methods: dict[str, Callable[[], object]] = {
-        "scan_mesh (Profile), float64 refinement": every_pose(
-            lambda T: scan_mesh(sensor, mesh, T, rays=RAYS)
+        "scan_mesh (Profile), plane-section fan": every_pose(
+            lambda T: scan_mesh(sensor, mesh, T, rays=RAYS, fan="section")
         ),
-        "scan_mesh (Profile), float32 only": every_pose(
+        "scan_mesh (Profile), Embree fan, float64 refinement": every_pose(
+            lambda T: scan_mesh(sensor, mesh, T, rays=RAYS, fan="embree")
+        ),
+        "scan_mesh (Profile), Embree fan, float32 only": every_pose(
             lambda T: scan_mesh(sensor, mesh, T, rays=RAYS, refine=False)
         ),
-        "stripe_hits (arrays), float64 refinement": every_pose(
-            lambda T: stripe_hits(sensor, caster, T, RAYS)
+        "stripe_hits (arrays), plane-section fan": every_pose(
+            lambda T: stripe_hits(sensor, caster, T, RAYS, fan="section")
         ),
-        "stripe_hits (arrays), float32 only": every_pose(
+        "stripe_hits (arrays), Embree fan, float64 refinement": every_pose(
+            lambda T: stripe_hits(sensor, caster, T, RAYS, fan="embree")
+        ),
+        "stripe_hits (arrays), Embree fan, float32 only": every_pose(
             lambda T: stripe_hits(sensor, caster, T, RAYS, refine=False)
         ),
-        "stripe_hits (arrays), embreex backend": every_pose(
-            lambda T: stripe_hits(sensor, embreex_caster, T, RAYS)
+        "stripe_hits (arrays), Embree fan, embreex backend": every_pose(
+            lambda T: stripe_hits(sensor, embreex_caster, T, RAYS, fan="embree")
         ),
         "bare embreex scene.run (same rays)": bare,
         "trimesh mesh.ray (same rays)": via_trimesh,
+        "part: plane-section fan only (float64 hits)": section_fan,
         "part: Embree packets, fan only": packets_fan,
         "part: Embree packets, shadow rays only": packets_shadow,
         "part: bare embreex, fan only": bare_fan,
@@ -181,6 +211,9 @@ def _case(name: str, mesh: Any, poses: list[np.ndarray], calls: int, repeats: in
         "triangles": len(mesh.faces),
         "backend": caster.backend,
         "scene_build_s": build_s,
+        "section_build_s": section_build_s,
+        "section_index_mb": index.nbytes / 1e6,
+        "agreement": fan_agreement(sensor, caster, agreement_poses(poses)),
         "rays": RAYS,
         "poses": len(poses),
         "shadow_rays": int(np.mean(shadow)),
@@ -272,18 +305,24 @@ def bench_raycast(out_dir: str | Path, *, repeats: int = 30, quick: bool = False
         skipped["paper-v-groove"] = f"{type(error).__name__}: {error}"
     for case in cases:
         r = case["profiles_per_s"]
+        section_scan = r["scan_mesh (Profile), plane-section fan"]
+        embree_scan = r["scan_mesh (Profile), Embree fan, float64 refinement"]
+        embree_hits = r["stripe_hits (arrays), Embree fan, float64 refinement"]
+        bare = r["bare embreex scene.run (same rays)"]
         case["ratios"] = {
-            "scan_mesh / bare embreex": r["scan_mesh (Profile), float64 refinement"]
-            / r["bare embreex scene.run (same rays)"],
-            "stripe_hits / bare embreex": r["stripe_hits (arrays), float64 refinement"]
-            / r["bare embreex scene.run (same rays)"],
-            "scan_mesh / trimesh": r["scan_mesh (Profile), float64 refinement"]
-            / r["trimesh mesh.ray (same rays)"],
-            "refinement cost (scan_mesh)": r["scan_mesh (Profile), float32 only"]
-            / r["scan_mesh (Profile), float64 refinement"]
-            - 1.0,
-            "refinement cost (stripe_hits)": r["stripe_hits (arrays), float32 only"]
-            / r["stripe_hits (arrays), float64 refinement"]
+            "scan_mesh, plane-section / Embree fan": section_scan / embree_scan,
+            "fan only, plane-section / Embree packets": r[
+                "part: plane-section fan only (float64 hits)"
+            ]
+            / r["part: Embree packets, fan only"],
+            "scan_mesh (plane-section) / bare embreex": section_scan / bare,
+            "scan_mesh (Embree fan) / bare embreex": embree_scan / bare,
+            "stripe_hits (Embree fan) / bare embreex": embree_hits / bare,
+            "scan_mesh (plane-section) / trimesh": section_scan / r["trimesh mesh.ray (same rays)"],
+            "refinement cost (scan_mesh, Embree fan)": r[
+                "scan_mesh (Profile), Embree fan, float32 only"
+            ]
+            / embree_scan
             - 1.0,
         }
     result = {
@@ -314,7 +353,9 @@ def raycast_markdown(result: dict) -> str:
         lines += [
             f"**{case['mesh']}** ({case['triangles']} triangles, {case['shadow_rays']} shadow "
             f"rays, {case['valid_points']} valid points; `{case['backend']}` backend, scene "
-            f"built in {case['scene_build_s'] * 1e3:.0f} ms; trimesh intersector "
+            f"built in {case['scene_build_s'] * 1e3:.0f} ms, the plane section's hierarchy in "
+            f"{case['section_build_s'] * 1e3:.0f} ms ({case['section_index_mb']:.1f} MB); "
+            "trimesh intersector "
             f"`{case['trimesh_intersector']}`, embree "
             f"{'available' if case['trimesh_has_embree'] else 'NOT available'})",
             "",
@@ -328,7 +369,109 @@ def raycast_markdown(result: dict) -> str:
         for key, value in case["ratios"].items():
             text = f"{value * 100:+.1f} %" if "cost" in key else f"{value:.2f}x"
             lines.append(f"| {key} | {text} |")
-        lines.append("")
+        a = case["agreement"]
+        lines += [
+            "",
+            f"Plane-section fan against the float64-refined Embree fan on the same "
+            f"{a['rays']} rays ({a['poses']} poses): {a['disagree']} rays disagree off the "
+            f"edges (hit or miss {a['hit_mismatch']}, reason {a['reason_mismatch']}, distance "
+            f"> {a['agree_mm']:g} mm), largest distance difference {a['max_dt_mm']:.1e} mm; "
+            f"{a['edge_rays']} edge rays (within {a['edge_mm']:g} mm of a crossed triangle "
+            f"edge, or on an edge in the laser plane), of which {a['disagree_edge']} disagree "
+            f"(largest distance difference {a['max_dt_edge_mm']:.1e} mm); "
+            f"{a['other_face']} rays lit a different triangle at the same point; "
+            f"{a['embree_unrefined']} Embree hits left in float32.",
+            "",
+        ]
     for key, why in result["skipped"].items():
         lines.append(f"Skipped {key}: {why}")
     return "\n".join(lines) + "\n"
+
+
+def agreement_poses(poses: list[np.ndarray]) -> list[np.ndarray]:
+    """The poses the agreement is measured at: a case's own, and when it has one pose, that
+    pose moved 0.37 and -7.1 mm along the laser plane's normal and turned 0.2 rad about the
+    laser axis (off the grid lines a pose may sit on)."""
+    if len(poses) > 1:
+        return poses
+    T = poses[0]
+    turned = T.copy()
+    c, s = np.cos(0.2), np.sin(0.2)
+    turned[:3, :3] = T[:3, :3] @ np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    shifted = []
+    for step in (0.37, -7.1):
+        moved = T.copy()
+        moved[:3, 3] += step * T[:3, 0]
+        shifted.append(moved)
+    return [T, *shifted, turned]
+
+
+def fan_agreement(
+    sensor: Any, caster: Any, poses: list[np.ndarray], *, rays: int = RAYS,
+    edge_mm: float = EDGE_MM,
+) -> dict[str, Any]:  # fmt: skip
+    """The plane-section fan against the float64-refined Embree fan on the same rays.
+
+    Every ray counts once per pose. An *edge ray* passes within ``edge_mm`` of a section
+    segment's end (a crossed triangle edge; silhouettes included) no farther than its hit plus
+    ``edge_mm``; a ray *disagrees* when the two fans differ in hit or miss, in reason, or in hit
+    distance by more than :data:`AGREE_MM`. Returns the counts, the largest distance difference
+    off the edges and on them (mm), how many Embree hits were not refined (kept in float32: no
+    neighbouring triangle contained the float64 point), and on how many rays the two fans lit
+    different triangles (at the same point: a shared edge).
+    """
+    from seamtrack.sensing import section
+    from seamtrack.sensing.scan import laser_fan, stripe_hits
+
+    fan = laser_fan(sensor, rays)
+    tans = fan.directions[:, 1] / fan.directions[:, 2]
+    tan_max = float(np.abs(tans).max()) * (1 + 1e-9) + 1e-9
+    index = caster.section
+    out: dict[str, Any] = dict.fromkeys(
+        ("rays", "edge_rays", "disagree", "disagree_edge", "hit_mismatch", "reason_mismatch",
+         "embree_unrefined", "other_face"), 0)  # fmt: skip
+    out.update(poses=len(poses), max_dt_mm=0.0, max_dt_edge_mm=0.0, edge_mm=edge_mm,
+               agree_mm=AGREE_MM)  # fmt: skip
+    for T in poses:
+        a = stripe_hits(sensor, caster, T, rays, fan="section")
+        b = stripe_hits(sensor, caster, T, rays, fan="embree")
+        refined = caster.first_hit(T[:3, 3], a.directions_local).refined
+        origin = np.asarray(T[:3, 3] - caster.local_origin, dtype=np.float64)
+        segs, _ = section.section_segments(
+            index.lo, index.hi, index.child, index.count, index.order, caster.vertices_local,
+            caster.faces, origin, np.ascontiguousarray(T[:3, :3]), tan_max,
+        )  # fmt: skip
+        ends = np.concatenate([segs[:, :2], segs[:, 2:]])  # (e, 2) = (y_L, z_L)
+        d = fan.directions[:, 1:]  # (n, 2)
+        along = d @ ends.T  # (n, e): distance along each ray to each end's foot
+        off = np.abs(d[:, :1] * ends[None, :, 1] - d[:, 1:] * ends[None, :, 0])
+        reach = np.where(np.isfinite(a.distance_mm), a.distance_mm, np.inf)
+        near = (off < edge_mm) & (along > 0) & (along <= reach[:, None] + edge_mm)
+        # A ray on an edge that lies in the laser plane (the triangles on both sides give the
+        # same segment) is an edge ray too.
+        x_axis = T[:3, 0]
+        lit = np.flatnonzero(a.face >= 0)
+        x_l = (caster.vertices_local[caster.faces[a.face[lit]]] - origin) @ x_axis
+        in_plane = np.zeros(len(a.face), dtype=bool)
+        in_plane[lit] = (np.abs(x_l) < edge_mm).sum(axis=1) >= 2
+        edge = near.any(axis=1) | in_plane
+        hit_a, hit_b = a.face >= 0, b.face >= 0
+        both = hit_a & hit_b
+        dt = np.zeros(len(hit_a))
+        dt[both] = np.abs(a.distance_mm[both] - b.distance_mm[both])
+        hit_diff = hit_a != hit_b
+        reason_diff = a.reason != b.reason
+        bad = hit_diff | reason_diff | (dt > AGREE_MM)
+        out["rays"] += len(hit_a)
+        out["edge_rays"] += int(edge.sum())
+        out["disagree"] += int((bad & ~edge).sum())
+        out["disagree_edge"] += int((bad & edge).sum())
+        out["hit_mismatch"] += int((hit_diff & ~edge).sum())
+        out["reason_mismatch"] += int((reason_diff & ~edge).sum())
+        out["embree_unrefined"] += int((hit_b & ~refined).sum())
+        out["other_face"] += int((both & (a.face != b.face)).sum())
+        if (both & ~edge).any():
+            out["max_dt_mm"] = max(out["max_dt_mm"], float(dt[both & ~edge].max()))
+        if (both & edge).any():
+            out["max_dt_edge_mm"] = max(out["max_dt_edge_mm"], float(dt[both & edge].max()))
+    return out

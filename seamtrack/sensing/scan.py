@@ -37,6 +37,25 @@ if TYPE_CHECKING:  # annotations only: the sensor module imports this one
 
 FloatArray = NDArray[np.float64]
 
+#: How a mesh-mode fan is cast (``sensor.fan``): ``"embree"`` (Embree's float32 hits, refined in
+#: float64 unless ``refine=False``), ``"section"`` (the laser plane's section of the mesh, exact
+#: in float64: :mod:`seamtrack.sensing.section`), ``"auto"`` (:func:`auto_fan`).
+FANS = ("embree", "section", "auto")
+
+
+def auto_fan(rays: int, n_faces: int, refine: bool = True) -> str:
+    """The fan ``"auto"`` casts: the plane section where it is the faster, else Embree.
+
+    The section's cost per profile grows with the triangles the plane crosses (about the
+    square root of the mesh's count on a part meshed evenly) and little with the rays; the
+    Embree fan's grows with the rays. Measured (``docs/mesh-mode.md``): the section is faster
+    from about sqrt(triangles) rays up (1024 rays: every part up to ~1M triangles; 256 rays:
+    up to ~60k; 64 rays: Embree). ``refine=False`` asks for Embree's float32 hits: Embree.
+    """
+    if not refine:
+        return "embree"
+    return "section" if rays * rays >= n_faces else "embree"
+
 
 @dataclass(frozen=True)
 class SeamNoise:
@@ -288,45 +307,85 @@ def stripe_hits(
     *,
     refine: bool = True,
     quantize: bool | None = None,
+    fan: str = "auto",
 ) -> StripeHits:
-    """The noiseless stripe: fan -> Embree -> float64 -> clips -> shadow rays -> pixels.
+    """The noiseless stripe: fan -> first hits in float64 -> clips -> shadow rays -> pixels.
 
-    The clips are tested in order (a point gets the first reason that applies): MISS,
-    OUT_OF_RANGE (trapezoid and depth of field), INCIDENCE, OCCLUDED (the camera is behind the
-    lit face or a shadow ray to the camera centre meets the part). Shadow rays are cast only
-    for points that passed the cheaper clips.
+    The first hits come from Embree refined in float64 (``fan="embree"``) or from the laser
+    plane's section of the mesh (``fan="section"``, exact in float64; ``"auto"`` chooses, see
+    :func:`auto_fan`). The clips are tested in order (a point gets the first reason that applies):
+    MISS, OUT_OF_RANGE (trapezoid and depth of field), INCIDENCE, OCCLUDED (the camera is behind
+    the lit face or a shadow ray to the camera centre meets the part). Shadow rays (on Embree)
+    are cast only for points that passed the cheaper clips.
     """
     from seamtrack.sensing import kernels
 
-    fan = laser_fan(sensor, rays)
+    if fan not in FANS:
+        raise ValueError(f"fan must be one of {FANS}, got {fan!r}")
+    laser = laser_fan(sensor, rays)
     T = np.asarray(T_world_sensor, dtype=np.float64)
     rotation = np.ascontiguousarray(T[:3, :3])
     origin = T[:3, 3] - caster.local_origin
     do_quantize = bool(sensor.quantize if quantize is None else quantize)
+    if fan == "auto":
+        fan = auto_fan(rays, caster.n_faces, refine)
+    if fan == "section":
+        return _section_stripe(caster, laser, rotation, origin, do_quantize)
     packets = caster.packets
     if packets is not None:  # one numba call does it all
         points, reason, t, face, cos_incidence, directions = kernels.fan_stripe_packets(
             packets.lib.intersect8, packets.lib.occluded8, packets.handle, origin, rotation,
-            fan.directions, caster.vertices_local, caster.faces, caster.weld, caster.ring_ptr,
+            laser.directions, caster.vertices_local, caster.faces, caster.weld, caster.ring_ptr,
             caster.ring_faces, caster.face_normals, bool(refine), constants.BARYCENTRIC_TOL,
-            fan.sensor_params, constants.SHADOW_RAY_OFFSET_MM, do_quantize,
+            laser.sensor_params, constants.SHADOW_RAY_OFFSET_MM, do_quantize,
         )  # fmt: skip
         return StripeHits(points_laser=points, reason=reason, distance_mm=t, face=face,
                           cos_incidence=cos_incidence, directions_local=directions,
                           origin_local=origin)  # fmt: skip
-    directions = fan.directions @ rotation.T
+    directions = laser.directions @ rotation.T
     prim, tfar = caster.cast_local(origin[None], directions)
     points, reason, t, face, cos_incidence, chip, shadow_o, shadow_d, shadow_far, shadow_index = (
         kernels.fan_stripe_hits(
-            origin, rotation, fan.directions, directions, prim, tfar, caster.vertices_local,
+            origin, rotation, laser.directions, directions, prim, tfar, caster.vertices_local,
             caster.faces, caster.weld, caster.ring_ptr, caster.ring_faces, caster.face_normals,
-            bool(refine), constants.BARYCENTRIC_TOL, fan.sensor_params,
+            bool(refine), constants.BARYCENTRIC_TOL, laser.sensor_params,
             constants.SHADOW_RAY_OFFSET_MM,
         )
     )  # fmt: skip
     blocked = caster.occluded_local(shadow_o, shadow_d, shadow_far)
-    kernels.fan_stripe_finish(points, reason, chip, blocked, shadow_index, fan.sensor_params,
+    kernels.fan_stripe_finish(points, reason, chip, blocked, shadow_index, laser.sensor_params,
                               do_quantize)  # fmt: skip
+    return StripeHits(points_laser=points, reason=reason, distance_mm=t, face=face,
+                      cos_incidence=cos_incidence, directions_local=directions,
+                      origin_local=origin)  # fmt: skip
+
+
+def _section_stripe(
+    caster: RayCaster,
+    fan: FanRays,
+    rotation: NDArray[np.float64],
+    origin: NDArray[np.float64],
+    quantize: bool,
+) -> StripeHits:
+    """:func:`stripe_hits` through the plane section (:mod:`seamtrack.sensing.section`)."""
+    from seamtrack.sensing import section
+    from seamtrack.sensing.kernels import fan_stripe_finish
+
+    index = caster.section
+    tree = (index.lo, index.hi, index.child, index.count, index.order, caster.vertices_local,
+            caster.faces, caster.face_normals, origin, rotation, fan.directions,
+            fan.sensor_params, constants.SHADOW_RAY_OFFSET_MM)  # fmt: skip
+    packets = caster.packets
+    if packets is not None:  # one numba call does it all
+        points, reason, t, face, cos_incidence, directions = section.fan_stripe_section_packets(
+            packets.lib.occluded8, packets.handle, *tree, quantize
+        )
+    else:
+        points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index, directions = (
+            section.fan_stripe_section(*tree)
+        )
+        blocked = caster.occluded_local(s_o, s_d, s_far)
+        fan_stripe_finish(points, reason, chip, blocked, s_index, fan.sensor_params, quantize)
     return StripeHits(points_laser=points, reason=reason, distance_mm=t, face=face,
                       cos_incidence=cos_incidence, directions_local=directions,
                       origin_local=origin)  # fmt: skip
@@ -342,6 +401,7 @@ def scan_mesh(
     noise: StripeNoise | None = None,
     rng: np.random.Generator | None = None,
     t_s: float = float("nan"),
+    fan: str = "auto",
 ) -> Profile:
     """One stripe profile of a meshed part, as the posed sensor reports it.
 
@@ -362,6 +422,9 @@ def scan_mesh(
     rng : numpy.random.Generator, optional
     t_s : float
         Capture time stamped on the profile.
+    fan : {"auto", "section", "embree"}
+        How the fan's first hits are found (:data:`FANS`): the laser plane's section of the
+        mesh, exact in float64, or Embree; ``"auto"``: the faster (:func:`auto_fan`).
 
     Returns
     -------
@@ -377,7 +440,8 @@ def scan_mesh(
         raise ValueError(f"T_world_sensor must be (4, 4), got {T.shape}")
     n = sensor.pixels_v if rays is None else int(rays)
     noisy = bool(noise)
-    hits = stripe_hits(sensor, caster, T, n, refine=refine, quantize=False if noisy else None)
+    hits = stripe_hits(sensor, caster, T, n, refine=refine, quantize=False if noisy else None,
+                       fan=fan)  # fmt: skip
     points, reason = hits.points_laser, hits.reason
     if noisy:
         assert noise is not None and rng is not None

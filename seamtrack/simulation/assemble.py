@@ -225,7 +225,7 @@ def _mesh_scan(scene: Scene, sensor: LaserLineSensor, rng: np.random.Generator) 
 
     def measure(T_world_sensor: FloatArray, t_s: float) -> Profile:
         return scan_mesh(sensor, caster, T_world_sensor, rays=s.rays, refine=s.refine_float64,
-                         noise=noise, rng=rng, t_s=t_s)  # fmt: skip
+                         noise=noise, rng=rng, t_s=t_s, fan=s.fan)  # fmt: skip
 
     if s.source == "image":  # every frame rendered by the camera and measured from its pixels
         camera, detector = make_camera(s.camera, s.preset), s.camera or CameraConfig()

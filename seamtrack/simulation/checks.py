@@ -75,6 +75,14 @@ def check_sizes(c: SceneConfig) -> None:
             field="sensor.rays",
             fix=f"use at most {constants.MAX_RAYS} (a real sensor has 1024-4096 points)",
         )
+    if c.sensor.fan == "section" and not c.sensor.refine_float64:
+        raise SceneError(
+            "the plane-section fan's hits are exact float64: it has no float32 stage to keep, "
+            "so refine_float64 = false cannot apply to it",
+            field="sensor.fan",
+            fix='set sensor.fan = "auto" or "embree" to keep Embree\'s float32 hits, or '
+            "sensor.refine_float64 = true",
+        )
     if c.simulation.trace_period_s < c.robot.control_period_s:
         raise SceneError(
             f"trace period {c.simulation.trace_period_s:.3g} s is shorter than the control "

@@ -99,6 +99,8 @@ class SensorConfig(_Section):
     noise_lateral_mm: NonNegative = 0.0
     rays: Annotated[int, Field(ge=2, strict=True)] | None = None
     refine_float64: Flag = True
+    # How the laser fan is cast in mesh mode (seamtrack.sensing.scan.FANS).
+    fan: Literal["embree", "section", "auto"] = "auto"
     max_incidence_deg: Annotated[float, Field(gt=0, le=90, strict=True)] = 80.0
     depth_of_field_mm: Positive | None = None
     fov_near_mm: Positive | None = None

@@ -1,0 +1,486 @@
+"""The laser fan as one plane section of the mesh: exact float64 first hits, no Embree.
+
+Every ray of the fan starts at the emitter and lies in the laser plane x_L = 0, so the stripe is
+the visible part of one plane section of the part. A :class:`SectionIndex` (a bounding-volume
+hierarchy over the triangles, built once per mesh in numba) finds the triangles the plane
+crosses inside the fan's wedge; each is cut to a 2-D segment (y_L, z_L) in float64 straight
+from the float64 vertices; and the fan's rays are cast against the segments in 2-D: each
+segment covers a run of consecutive rays (the fan is sorted by tan(phi) = y_L / z_L), found by
+binary search on its end points' angles, and each of those rays keeps its nearest crossing.
+
+The hit is the exact intersection of the float64 ray with the float64 triangle's plane (to a few
+ulp), the same point that :mod:`seamtrack.sensing.raycast` refines Embree's float32 hit to; what
+follows (field of view, incidence, the camera on the lit side, the shadow rays and the pixels)
+is the mesh-mode stripe's own kernels (:mod:`seamtrack.sensing.kernels`), so the reasons are the
+same. The shadow rays from the lit points to the camera do not lie in the laser plane: they stay
+on Embree (occlusion queries; ``RayCaster.occluded_local``).
+
+Rays through a segment's end (a triangle edge crossing the plane) hit the segment whose
+parameter is within :data:`END_SLACK` of [0, 1]: never neither. A triangle lying in the laser
+plane is grazed, not hit (as the float64 refinement treats it), and a triangle that touches the
+plane at one vertex only is skipped.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+from seamtrack.sensing import embree
+from seamtrack.sensing.kernels import fan_stripe_finish, fan_stripe_hits
+
+#: Triangles per leaf of the hierarchy.
+LEAF_SIZE = 4
+#: A crossing at a segment's end counts for the segment within this fraction of its length.
+END_SLACK = 1e-12
+#: Boxes within this distance (mm) of the plane or of the fan's wedge are opened (conservative).
+BOX_SLACK_MM = 1e-6
+#: The ray parameter of "no crossing".
+NO_HIT = np.inf
+
+
+@dataclass(frozen=True, eq=False)
+class SectionIndex:
+    """A bounding-volume hierarchy over a mesh's triangles (arrays, built by :func:`build`).
+
+    Attributes
+    ----------
+    lo, hi : (m, 3) float
+        Each node's box.
+    child : (m,) int64
+        An inner node's first child (the second follows it); a leaf's first entry in ``order``.
+    count : (m,) int64
+        A leaf's number of triangles; 0 for an inner node.
+    order : (f,) int64
+        Triangle indices, leaf by leaf.
+    """
+
+    lo: NDArray[np.float64]
+    hi: NDArray[np.float64]
+    child: NDArray[np.int64]
+    count: NDArray[np.int64]
+    order: NDArray[np.int64]
+
+    @property
+    def nbytes(self) -> int:
+        """Memory held by the index."""
+        return sum(a.nbytes for a in (self.lo, self.hi, self.child, self.count, self.order))
+
+
+def build(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> SectionIndex:
+    """The hierarchy of a mesh: each node's triangles split in halves at the median of their
+    boxes' centres along the longest axis (quickselect), down to :data:`LEAF_SIZE`; each node's
+    box the union of its children's. O(n log n).
+
+    Memory: 56 bytes a triangle (the boxes in float64 and the order), plus 24 bytes a triangle
+    (the centres) while it is built.
+    """
+    v = np.ascontiguousarray(vertices, dtype=np.float64)
+    f = np.ascontiguousarray(faces, dtype=np.int64)
+    lo, hi, child, count, order = _build(v, f, LEAF_SIZE, _nodes(len(f)))
+    return SectionIndex(lo=lo, hi=hi, child=child, count=count, order=order)
+
+
+def _nodes(n: int) -> int:
+    """How many nodes :func:`_build` makes for n triangles (halving until a leaf)."""
+    memo: dict[int, int] = {}
+
+    def count(m: int) -> int:
+        if m <= LEAF_SIZE:
+            return 1
+        if m not in memo:
+            memo[m] = 1 + count(m // 2) + count(m - m // 2)
+        return memo[m]
+
+    return count(n)
+
+
+@numba.njit(cache=True, nogil=True)
+def _select(
+    order: NDArray[np.int64], centre: NDArray[np.float64], axis: int, start: int, end: int,
+    kth: int,
+) -> None:  # fmt: skip
+    """Reorder ``order[start:end]`` so that the entry at ``kth`` has the centre it would have
+    sorted along ``axis``, none greater before it and none smaller after (quickselect)."""
+    left, right = start, end - 1
+    while right > left:
+        mid = (left + right) // 2
+        a, b, c = centre[order[left], axis], centre[order[mid], axis], centre[order[right], axis]
+        pivot = max(min(a, b), min(max(a, b), c))  # the median of the three
+        i, j = left, right
+        while i <= j:
+            while centre[order[i], axis] < pivot:
+                i += 1
+            while centre[order[j], axis] > pivot:
+                j -= 1
+            if i <= j:
+                order[i], order[j] = order[j], order[i]
+                i += 1
+                j -= 1
+        if kth <= j:
+            right = j
+        elif kth >= i:
+            left = i
+        else:
+            return
+
+
+@numba.njit(cache=True, nogil=True)
+def _build(
+    vertices: NDArray[np.float64], faces: NDArray[np.int64], leaf: int, nodes: int
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64], NDArray[np.int64],
+           NDArray[np.int64]]:  # fmt: skip
+    f = faces.shape[0]
+    order = np.arange(f)
+    centre = np.empty((f, 3))
+    for k in range(f):
+        for a in range(3):
+            p, q, r = vertices[faces[k, 0], a], vertices[faces[k, 1], a], vertices[faces[k, 2], a]
+            centre[k, a] = 0.5 * (min(p, q, r) + max(p, q, r))
+    cmin = np.empty(3)
+    cmax = np.empty(3)
+    lo = np.empty((nodes, 3))
+    hi = np.empty((nodes, 3))
+    child = np.zeros(nodes, dtype=np.int64)
+    count = np.zeros(nodes, dtype=np.int64)
+    # The topology: each range of ``order`` split at its median along the longest axis of its
+    # centres' box, depth first; children allocated in pairs, so a child's index is always
+    # larger than its parent's.
+    stack_node = np.empty(256, dtype=np.int64)
+    stack_start = np.empty(256, dtype=np.int64)
+    stack_end = np.empty(256, dtype=np.int64)
+    stack_node[0], stack_start[0], stack_end[0] = 0, 0, f
+    top = 1
+    used = 1
+    while top > 0:
+        top -= 1
+        node, start, end = stack_node[top], stack_start[top], stack_end[top]
+        if end - start <= leaf:
+            child[node] = start
+            count[node] = end - start
+            continue
+        for a in range(3):
+            cmin[a] = np.inf
+            cmax[a] = -np.inf
+        for j in range(start, end):
+            for a in range(3):
+                cmin[a] = min(cmin[a], centre[order[j], a])
+                cmax[a] = max(cmax[a], centre[order[j], a])
+        axis = 0
+        for a in range(1, 3):
+            if cmax[a] - cmin[a] > cmax[axis] - cmin[axis]:
+                axis = a
+        mid = (start + end) // 2
+        _select(order, centre, axis, start, end, mid)
+        child[node] = used
+        stack_node[top], stack_start[top], stack_end[top] = used, start, mid
+        stack_node[top + 1], stack_start[top + 1], stack_end[top + 1] = used + 1, mid, end
+        top += 2
+        used += 2
+    # The boxes, children before parents.
+    for node in range(used - 1, -1, -1):
+        if count[node] > 0:
+            for a in range(3):
+                lo[node, a] = np.inf
+                hi[node, a] = -np.inf
+            for j in range(child[node], child[node] + count[node]):
+                k = order[j]
+                for a in range(3):
+                    for c in range(3):
+                        lo[node, a] = min(lo[node, a], vertices[faces[k, c], a])
+                        hi[node, a] = max(hi[node, a], vertices[faces[k, c], a])
+        else:
+            first = child[node]
+            for a in range(3):
+                lo[node, a] = min(lo[first, a], lo[first + 1, a])
+                hi[node, a] = max(hi[first, a], hi[first + 1, a])
+    return lo, hi, child, count, order
+
+
+# --------------------------------------------------------------------------- the section
+@numba.njit(cache=True, nogil=True, inline="always")
+def _box_outside(
+    lo: NDArray[np.float64], hi: NDArray[np.float64], node: int, o: NDArray[np.float64],
+    m0: float, m1: float, m2: float,
+) -> float:  # fmt: skip
+    """min over the box of m . (p - o): > 0 means the whole box is on the positive side."""
+    c0 = 0.5 * (lo[node, 0] + hi[node, 0]) - o[0]
+    c1 = 0.5 * (lo[node, 1] + hi[node, 1]) - o[1]
+    c2 = 0.5 * (lo[node, 2] + hi[node, 2]) - o[2]
+    h0 = 0.5 * (hi[node, 0] - lo[node, 0])
+    h1 = 0.5 * (hi[node, 1] - lo[node, 1])
+    h2 = 0.5 * (hi[node, 2] - lo[node, 2])
+    return m0 * c0 + m1 * c1 + m2 * c2 - (abs(m0) * h0 + abs(m1) * h1 + abs(m2) * h2)
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _edge_point(
+    xa: float, ya: float, za: float, xb: float, yb: float, zb: float
+) -> tuple[float, float]:  # fmt: skip
+    """Where the edge a-b (x of opposite signs) crosses x_L = 0."""
+    s = xa / (xa - xb)
+    return ya + s * (yb - ya), za + s * (zb - za)
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _cut(
+    vertices: NDArray[np.float64], faces: NDArray[np.int64], k: int, o: NDArray[np.float64],
+    r: NDArray[np.float64],
+) -> tuple[bool, float, float, float, float]:  # fmt: skip
+    """Triangle k cut by the plane x_L = 0: (crossed, y0, z0, y1, z1) in the laser frame."""
+    a, b, c = faces[k, 0], faces[k, 1], faces[k, 2]
+    ax, ay, az = vertices[a, 0] - o[0], vertices[a, 1] - o[1], vertices[a, 2] - o[2]
+    bx, by, bz = vertices[b, 0] - o[0], vertices[b, 1] - o[1], vertices[b, 2] - o[2]
+    cx, cy, cz = vertices[c, 0] - o[0], vertices[c, 1] - o[1], vertices[c, 2] - o[2]
+    xa = r[0, 0] * ax + r[1, 0] * ay + r[2, 0] * az
+    xb = r[0, 0] * bx + r[1, 0] * by + r[2, 0] * bz
+    xc = r[0, 0] * cx + r[1, 0] * cy + r[2, 0] * cz
+    positive = (xa > 0.0) + (xb > 0.0) + (xc > 0.0)
+    negative = (xa < 0.0) + (xb < 0.0) + (xc < 0.0)
+    zero = 3 - positive - negative
+    # Wholly on one side; in the plane (grazed); touching it at one vertex only.
+    if positive == 3 or negative == 3 or zero == 3 or (zero == 1 and positive != 1):
+        return False, 0.0, 0.0, 0.0, 0.0
+    ya = r[0, 1] * ax + r[1, 1] * ay + r[2, 1] * az
+    yb = r[0, 1] * bx + r[1, 1] * by + r[2, 1] * bz
+    yc = r[0, 1] * cx + r[1, 1] * cy + r[2, 1] * cz
+    za = r[0, 2] * ax + r[1, 2] * ay + r[2, 2] * az
+    zb = r[0, 2] * bx + r[1, 2] * by + r[2, 2] * bz
+    zc = r[0, 2] * cx + r[1, 2] * cy + r[2, 2] * cz
+    # The two points where the boundary meets the plane: vertices on it, edges across it.
+    found = 0
+    p0y = p0z = p1y = p1z = 0.0
+    for j in range(3):
+        if j == 0:
+            x0, y0, z0, x1, y1, z1 = xa, ya, za, xb, yb, zb
+        elif j == 1:
+            x0, y0, z0, x1, y1, z1 = xb, yb, zb, xc, yc, zc
+        else:
+            x0, y0, z0, x1, y1, z1 = xc, yc, zc, xa, ya, za
+        if x0 == 0.0:
+            py, pz = y0, z0
+        elif (x0 > 0.0 and x1 < 0.0) or (x0 < 0.0 and x1 > 0.0):
+            py, pz = _edge_point(x0, y0, z0, x1, y1, z1)
+        else:
+            continue
+        if found == 0:
+            p0y, p0z = py, pz
+        else:
+            p1y, p1z = py, pz
+        found += 1
+    if found != 2:
+        return False, 0.0, 0.0, 0.0, 0.0
+    return True, p0y, p0z, p1y, p1z
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _ray_range(
+    tans: NDArray[np.float64], y0: float, z0: float, y1: float, z1: float
+) -> tuple[int, int]:  # fmt: skip
+    """The rays [first, last) whose angle lies within the segment's (with a margin)."""
+    n = tans.shape[0]
+    if z0 <= 0.0 and z1 <= 0.0:
+        return 0, 0
+    if z0 > 0.0 and z1 > 0.0:
+        ta, tb = y0 / z0, y1 / z1
+        t_lo, t_hi = min(ta, tb), max(ta, tb)
+    else:  # one end behind the emitter's line z_L = 0: the rest spans to one side's infinity
+        if z0 > 0.0:
+            t_pos = y0 / z0
+        else:
+            t_pos = y1 / z1
+        y_cross = y0 + (0.0 - z0) / (z1 - z0) * (y1 - y0)
+        if y_cross > 0.0:
+            t_lo, t_hi = t_pos, np.inf
+        elif y_cross < 0.0:
+            t_lo, t_hi = -np.inf, t_pos
+        else:
+            t_lo, t_hi = -np.inf, np.inf
+    margin_lo = 1e-9 * (1.0 + abs(t_lo)) if np.isfinite(t_lo) else 0.0
+    margin_hi = 1e-9 * (1.0 + abs(t_hi)) if np.isfinite(t_hi) else 0.0
+    first = int(np.searchsorted(tans, t_lo - margin_lo))
+    last = int(np.searchsorted(tans, t_hi + margin_hi, side="right"))
+    return max(first - 1, 0), min(last + 1, n)
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _sweep(
+    fan: NDArray[np.float64], first: int, last: int, y0: float, z0: float, y1: float,
+    z1: float, k: int, best_t: NDArray[np.float64], best_f: NDArray[np.int64],
+) -> None:  # fmt: skip
+    """Rays first..last-1 from the emitter against the segment: keep each ray's nearest."""
+    ey, ez = y1 - y0, z1 - z0
+    for i in range(first, last):
+        dy, dz = fan[i, 1], fan[i, 2]
+        det = ey * dz - dy * ez
+        if det == 0.0:
+            continue  # the ray runs along the segment: grazing
+        sign = 1.0 if det > 0.0 else -1.0
+        a_det = det * sign
+        t_det = (ey * z0 - y0 * ez) * sign
+        s_det = (dy * z0 - dz * y0) * sign
+        if s_det < -END_SLACK * a_det or s_det > (1.0 + END_SLACK) * a_det:
+            continue
+        t = t_det / a_det
+        if t > 0.0 and t < best_t[i]:
+            best_t[i] = t
+            best_f[i] = k
+
+
+@numba.njit(cache=True, nogil=True)
+def _visit(
+    lo: NDArray[np.float64], hi: NDArray[np.float64], child: NDArray[np.int64],
+    count: NDArray[np.int64], order: NDArray[np.int64], o: NDArray[np.float64],
+    rotation: NDArray[np.float64], tan_max: float,
+) -> tuple[NDArray[np.int64], int]:  # fmt: skip
+    """The leaves whose box meets the laser plane inside the fan's wedge: (leaves, how many)."""
+    n0, n1, n2 = rotation[0, 0], rotation[1, 0], rotation[2, 0]
+    # The wedge |y_L| <= tan_max z_L as two half-spaces m . (p - o) <= 0.
+    a0 = rotation[0, 1] - tan_max * rotation[0, 2]
+    a1 = rotation[1, 1] - tan_max * rotation[1, 2]
+    a2 = rotation[2, 1] - tan_max * rotation[2, 2]
+    b0 = -rotation[0, 1] - tan_max * rotation[0, 2]
+    b1 = -rotation[1, 1] - tan_max * rotation[1, 2]
+    b2 = -rotation[2, 1] - tan_max * rotation[2, 2]
+    leaves = np.empty(1024, dtype=np.int64)
+    stack = np.empty(128, dtype=np.int64)
+    stack[0] = 0
+    top = 1
+    found = 0
+    while top > 0:
+        top -= 1
+        node = stack[top]
+        if _box_outside(lo, hi, node, o, n0, n1, n2) > BOX_SLACK_MM:
+            continue
+        if _box_outside(lo, hi, node, o, -n0, -n1, -n2) > BOX_SLACK_MM:
+            continue
+        if _box_outside(lo, hi, node, o, a0, a1, a2) > BOX_SLACK_MM:
+            continue
+        if _box_outside(lo, hi, node, o, b0, b1, b2) > BOX_SLACK_MM:
+            continue
+        if count[node] > 0:
+            if found == leaves.shape[0]:
+                grown = np.empty(2 * leaves.shape[0], dtype=np.int64)
+                grown[:found] = leaves[:found]
+                leaves = grown
+            leaves[found] = node
+            found += 1
+        else:
+            stack[top] = child[node]
+            stack[top + 1] = child[node] + 1
+            top += 2
+    return leaves, found
+
+
+@numba.njit(cache=True, nogil=True)
+def section_hits(
+    lo: NDArray[np.float64], hi: NDArray[np.float64], child: NDArray[np.int64],
+    count: NDArray[np.int64], order: NDArray[np.int64], vertices: NDArray[np.float64],
+    faces: NDArray[np.int64], origin: NDArray[np.float64], rotation: NDArray[np.float64],
+    fan: NDArray[np.float64],
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:  # fmt: skip
+    """First hit of each fan ray: (t (n,), triangle (n,)); (inf, -1) where none.
+
+    ``origin`` (3,) is the emitter and ``vertices`` the mesh in the same (local) frame;
+    ``rotation`` (3, 3) the laser frame's axes; ``fan`` (n, 3) unit directions in the laser
+    frame, x_L = 0, sorted by y_L / z_L, all with z_L > 0.
+    """
+    n = fan.shape[0]
+    best_t = np.full(n, NO_HIT)
+    best_f = np.full(n, -1, dtype=np.int64)
+    tans = np.empty(n)
+    tan_max = 0.0
+    for i in range(n):
+        tans[i] = fan[i, 1] / fan[i, 2]
+        tan_max = max(tan_max, abs(tans[i]))
+    tan_max = tan_max * (1.0 + 1e-9) + 1e-9
+    leaves, found = _visit(lo, hi, child, count, order, origin, rotation, tan_max)
+    for j in range(found):
+        node = leaves[j]
+        for m in range(child[node], child[node] + count[node]):
+            k = order[m]
+            crossed, y0, z0, y1, z1 = _cut(vertices, faces, k, origin, rotation)
+            if not crossed:
+                continue
+            first, last = _ray_range(tans, y0, z0, y1, z1)
+            _sweep(fan, first, last, y0, z0, y1, z1, k, best_t, best_f)
+    return best_t, best_f
+
+
+@numba.njit(cache=True, nogil=True)
+def section_segments(
+    lo: NDArray[np.float64], hi: NDArray[np.float64], child: NDArray[np.int64],
+    count: NDArray[np.int64], order: NDArray[np.int64], vertices: NDArray[np.float64],
+    faces: NDArray[np.int64], origin: NDArray[np.float64], rotation: NDArray[np.float64],
+    tan_max: float,
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:  # fmt: skip
+    """The plane section inside the wedge |y_L| <= tan_max z_L (and maybe a little more):
+    segments (k, 4) = (y0, z0, y1, z1) in the laser frame and their triangles (k,)."""
+    leaves, found = _visit(lo, hi, child, count, order, origin, rotation, tan_max)
+    segs = np.empty((found * 4, 4))
+    tri = np.empty(found * 4, dtype=np.int64)
+    k_out = 0
+    for j in range(found):
+        node = leaves[j]
+        for m in range(child[node], child[node] + count[node]):
+            k = order[m]
+            crossed, y0, z0, y1, z1 = _cut(vertices, faces, k, origin, rotation)
+            if crossed:
+                segs[k_out, 0], segs[k_out, 1], segs[k_out, 2], segs[k_out, 3] = y0, z0, y1, z1
+                tri[k_out] = k
+                k_out += 1
+    return segs[:k_out].copy(), tri[:k_out].copy()
+
+
+# --------------------------------------------------------------------------- the stripe
+@numba.njit(cache=True, nogil=True)
+def fan_stripe_section(
+    lo: NDArray[np.float64], hi: NDArray[np.float64], child: NDArray[np.int64],
+    count: NDArray[np.int64], order: NDArray[np.int64], vertices: NDArray[np.float64],
+    faces: NDArray[np.int64], face_normals: NDArray[np.float64], origin: NDArray[np.float64],
+    rotation: NDArray[np.float64], fan: NDArray[np.float64], sp: NDArray[np.float64],
+    offset: float,
+) -> tuple[NDArray[np.float64], NDArray[np.uint8], NDArray[np.float64], NDArray[np.int64],
+           NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64],
+           NDArray[np.float64], NDArray[np.int64], NDArray[np.float64]]:  # fmt: skip
+    """The section's hits through the stripe's clips (``fan_stripe_hits``); returns its ten
+    arrays and the rays' directions in the local frame. The shadow rays are the caller's."""
+    n = fan.shape[0]
+    directions = np.empty((n, 3))
+    for i in range(n):
+        for a in range(3):
+            directions[i, a] = (rotation[a, 0] * fan[i, 0] + rotation[a, 1] * fan[i, 1]
+                                + rotation[a, 2] * fan[i, 2])  # fmt: skip
+    t, face = section_hits(lo, hi, child, count, order, vertices, faces, origin, rotation, fan)
+    none = np.empty(0, dtype=np.int64)
+    points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index = fan_stripe_hits(
+        origin, rotation, fan, directions, face, t, vertices, faces,  # type: ignore[arg-type]
+        none, none, none, face_normals, False, 0.0, sp, offset,
+    )  # fmt: skip
+    return points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index, directions
+
+
+@numba.njit(cache=True, nogil=True)
+def fan_stripe_section_packets(
+    occluded8: Any, scene: int, lo: NDArray[np.float64], hi: NDArray[np.float64],
+    child: NDArray[np.int64], count: NDArray[np.int64], order: NDArray[np.int64],
+    vertices: NDArray[np.float64], faces: NDArray[np.int64], face_normals: NDArray[np.float64],
+    origin: NDArray[np.float64], rotation: NDArray[np.float64], fan: NDArray[np.float64],
+    sp: NDArray[np.float64], offset: float, quantize: bool,
+) -> tuple[NDArray[np.float64], NDArray[np.uint8], NDArray[np.float64], NDArray[np.int64],
+           NDArray[np.float64], NDArray[np.float64]]:  # fmt: skip
+    """The whole noiseless stripe in one call: the section's hits, the clips, the shadow rays
+    on Embree packets (``rtcOccluded8``) and the pixels. Returns (points, reason, t, face,
+    cos_incidence, directions), as ``kernels.fan_stripe_packets``."""
+    points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index, directions = (
+        fan_stripe_section(lo, hi, child, count, order, vertices, faces, face_normals, origin,
+                           rotation, fan, sp, offset)
+    )  # fmt: skip
+    blocked = np.empty(s_index.shape[0], dtype=np.bool_)
+    embree.occluded(occluded8, scene, s_o, s_d, s_far, 0.0, blocked)
+    fan_stripe_finish(points, reason, chip, blocked, s_index, sp, quantize)
+    return points, reason, t, face, cos_incidence, directions
