@@ -14,6 +14,7 @@ from typing import Any
 
 from seamtrack._version import __version__
 from seamtrack.cli import seams as seams_command
+from seamtrack.cli import serve as serve_command
 from seamtrack.cli.dataset import add_dataset_parser
 from seamtrack.cli.tables import print_table
 from seamtrack.errors import OutputError, PluginRuntimeError, SceneError, SeamtrackError
@@ -481,6 +482,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", help="CSV file (a PNG plot is written beside it in mesh mode)")
 
     seams_command.add_parser(sub)
+    serve_command.add_parser(sub)
 
     p = add(
         "render",

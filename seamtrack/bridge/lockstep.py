@@ -1,0 +1,282 @@
+"""The lockstep bridge: the closed loop with its tracker in another process.
+
+:class:`BridgeTracker` stands in the loop for the external tracker (the loop itself is
+unchanged: :func:`seamtrack.simulation.loop.run`). At each step it hands a :class:`Step` to a
+transport (:mod:`seamtrack.bridge.zmq_transport`, :mod:`seamtrack.bridge.zenoh_transport`)
+and blocks until the tracker's command comes back; only then does the loop simulate on.
+
+Steps: with ``lockstep = "tick"`` every control tick is a step (the loop asks its tracker for a
+command at every tick, so an external tracker reproduces any in-process one exactly, the
+paper's algorithm II included); with ``lockstep = "frame"`` only the ticks at which a sensor
+frame reaches the tracker are steps, and the command received then holds until the next one.
+A step carries the frames that arrived at it (profile, seam point, the sensor's pose) and the
+torch's position and velocity at that tick.
+
+A client that disconnects, sends what is not a command, or misses the deadline ends the run:
+the tracker brakes to rest, the loop's wall-clock guard (:data:`seamtrack.simulation.loop.
+WALL_CHECK_TICKS` ticks later at most) stops it as ``stalled``, and ``stop_reason`` names the
+cause (:func:`serve`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+from numpy.typing import NDArray
+
+from seamtrack.control.tracking import Command, Measurement, TrackerContext
+from seamtrack.errors import SeamtrackError
+from seamtrack.sensing.profiles import Feature, Profile
+from seamtrack.simulation.assemble import Parts
+from seamtrack.simulation.loop import Result, run
+
+FloatArray = NDArray[np.float64]
+
+LOCKSTEPS = ("tick", "frame")
+
+
+class BridgeFailure(SeamtrackError):
+    """The external tracker failed the protocol (or the transport could not start): ``field``
+    says where (``client``, ``--timeout-s``, ``--endpoint``), the message what, ``fix`` what
+    to do."""
+
+    def __init__(self, message: str, field: str = "client", fix: str = "") -> None:
+        super().__init__(
+            message, field=field, fix=fix or "check the tracker process against docs/bridge.md"
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class Frame:
+    """One sensor frame as the external tracker receives it (world frame, mm)."""
+
+    t_capture_s: float
+    t_arrival_s: float
+    feature: Feature
+    T_world_sensor: FloatArray
+    tcp_world: FloatArray
+    profile: Profile | None  # the stripe (mesh mode); None in seam mode
+
+
+@dataclass(frozen=True, eq=False)
+class Step:
+    """What the external tracker is sent before it answers: ``seq`` counts steps from 0."""
+
+    seq: int
+    t_s: float
+    tcp_world: FloatArray
+    tcp_velocity_world: FloatArray
+    frames: list[Frame] = field(default_factory=list)
+
+
+class Transport(Protocol):
+    """How steps go out and commands come in (one tracker process at a time)."""
+
+    def start(self, context: TrackerContext, chain: TfChain, lockstep: str) -> None:
+        """Wait for the tracker process and give it the run's context."""
+
+    def exchange(self, step: Step) -> Command | None:
+        """Send ``step``; return the tracker's answer (None: brake to rest and wait).
+        Raises :class:`BridgeFailure`."""
+
+    def finish(self, summary: dict[str, Any]) -> None:
+        """Tell the tracker the run is over (best effort)."""
+
+    def close(self) -> None: ...
+
+
+@dataclass(frozen=True)
+class TfChain:
+    """The robot's fixed transforms: ``T_world_base``, ``T_tcp_sensor`` and, on an arm,
+    ``T_flange_tcp``; the moving part is the torch's pose at each frame."""
+
+    T_world_base: FloatArray
+    T_tcp_sensor: FloatArray
+    T_flange_tcp: FloatArray | None = None
+
+    def transforms(self, T_world_sensor: FloatArray) -> list[tuple[str, str, FloatArray]]:
+        """(parent, child, T_parent_child) from ``world`` down to ``sensor`` at one frame."""
+        T_world_tcp = T_world_sensor @ np.linalg.inv(self.T_tcp_sensor)
+        T_base_tcp = np.linalg.inv(self.T_world_base) @ T_world_tcp
+        chain = [("world", "base", self.T_world_base)]
+        if self.T_flange_tcp is None:
+            chain.append(("base", "tcp", T_base_tcp))
+        else:
+            T_base_flange = T_base_tcp @ np.linalg.inv(self.T_flange_tcp)
+            chain += [("base", "flange", T_base_flange), ("flange", "tcp", self.T_flange_tcp)]
+        chain.append(("tcp", "sensor", self.T_tcp_sensor))
+        return chain
+
+
+def tf_chain(parts: Parts) -> TfChain:
+    robot = parts.robot
+    kin = getattr(robot, "kinematics", None)
+    flange = getattr(kin, "T_flange_tcp", None)
+    return TfChain(
+        np.asarray(robot.T_world_base, dtype=float),
+        np.asarray(robot.T_tcp_sensor, dtype=float),
+        None if flange is None else np.asarray(flange, dtype=float),
+    )
+
+
+class BridgeTracker:
+    """A :class:`~seamtrack.control.tracking.Tracker` whose decisions come from another
+    process through ``transport`` (see the module docstring)."""
+
+    name = "bridge"
+
+    def __init__(
+        self,
+        transport: Transport,
+        chain: TfChain,
+        lockstep: str = "tick",
+        profiles: dict[float, Profile] | None = None,
+    ) -> None:
+        self.transport = transport
+        self.chain = chain
+        self.lockstep = lockstep
+        self.profiles = profiles if profiles is not None else {}
+        self.failure: BridgeFailure | None = None
+        self.steps = 0
+        self.exchange_time_s = 0.0
+        self._frames: list[Frame] = []
+        self._last: Command | None = None
+
+    def reset(self, context: TrackerContext) -> None:
+        try:
+            self.transport.start(context, self.chain, self.lockstep)
+        except BridgeFailure as exc:
+            self.failure = exc
+
+    def update(self, measurement: Measurement) -> None:
+        profile = self.profiles.pop(measurement.t_capture_s, None)
+        self._frames.append(
+            Frame(
+                measurement.t_capture_s,
+                measurement.t_arrival_s,
+                measurement.feature,
+                measurement.T_world_sensor,
+                np.asarray(measurement.tcp_world, dtype=float),
+                profile,
+            )
+        )
+
+    def command(
+        self, t_s: float, tcp_world: FloatArray, tcp_velocity_world: FloatArray
+    ) -> Command | None:
+        if self.failure is not None:
+            return None
+        if self.lockstep == "frame" and not self._frames:
+            return self._last
+        step = Step(self.steps, t_s, tcp_world, tcp_velocity_world, self._frames)
+        self._frames = []
+        start = time.perf_counter()
+        try:
+            received = self.transport.exchange(step)
+        except BridgeFailure as exc:
+            self.failure = exc
+            return None
+        self.exchange_time_s += time.perf_counter() - start
+        self.steps += 1
+        if not _same(received, self._last):  # the loop re-plans only on a new command object
+            self._last = received
+        return self._last
+
+
+def _same(a: Command | None, b: Command | None) -> bool:
+    if a is None or b is None:
+        return a is b
+    return (
+        a.speed_mm_s == b.speed_mm_s
+        and a.stop_at_target == b.stop_at_target
+        and _equal(a.target_world, b.target_world)
+        and _equal(a.velocity_ff_world, b.velocity_ff_world)
+        and _equal(a.rotation_world, b.rotation_world)
+        and _equal(a.angular_velocity_world, b.angular_velocity_world)
+    )
+
+
+def _equal(a: Any, b: Any) -> bool:
+    if a is None or b is None:
+        return a is b
+    return bool(np.array_equal(a, b))
+
+
+class _FailClock:
+    """The loop's wall clock; it jumps past the wall-clock limit once the bridge has failed,
+    so that the loop stops at its next guard check and writes the run as any stopped run."""
+
+    def __init__(self, tracker: BridgeTracker) -> None:
+        self.tracker = tracker
+
+    def __call__(self) -> float:
+        now = time.perf_counter()
+        return now + 1e12 if self.tracker.failure is not None else now
+
+
+def bridged_parts(parts: Parts, tracker: BridgeTracker) -> Parts:
+    """``parts`` with the bridge as its tracker, and its sensing wrapped so that a mesh-mode
+    frame's stripe profile goes out with the frame (``Parts.scan`` gives profile and feature
+    at once; the feature is the one ``Parts.sense`` would give)."""
+    scan = parts.scan
+    if scan is None:
+        return dataclasses.replace(parts, tracker=tracker, tracker_name="bridge")
+    profiles = tracker.profiles
+
+    def sense(T_world_sensor: FloatArray, t_s: float, hint: Any = None) -> Feature:
+        profile, feature = scan(T_world_sensor, t_s, hint)
+        profiles[t_s] = profile
+        return feature
+
+    return dataclasses.replace(parts, tracker=tracker, tracker_name="bridge", sense=sense)
+
+
+def serve(
+    parts: Parts,
+    transport: Transport,
+    lockstep: str = "tick",
+    seed: int | None = None,
+    clock: Callable[[], float] | None = None,
+) -> tuple[Result, BridgeTracker]:
+    """Run ``parts`` with the tracker behind ``transport``. The result's summary is the
+    loop's; a failed bridge stops the run as ``stalled`` with ``stop_reason`` naming the cause
+    (``tracker.failure`` holds it), and ``bridge_steps`` / ``bridge_exchange_s`` count the
+    round trips and their wall time."""
+    if lockstep not in LOCKSTEPS:
+        raise ValueError(f"lockstep must be one of {LOCKSTEPS}, got {lockstep!r}")
+    tracker = BridgeTracker(transport, tf_chain(parts), lockstep)
+    bridged = bridged_parts(parts, tracker)
+    start = time.perf_counter()
+    try:
+        result = run(bridged, seed=seed, clock=clock or _FailClock(tracker))
+        summary = result.summary
+        if tracker.failure is not None:
+            summary["status"] = "stalled"
+            summary["stop_reason"] = f"bridge: {tracker.failure.message}"
+            summary["stop_cause"] = "stalled"
+            summary["wall_time_s"] = time.perf_counter() - start
+        summary["bridge_steps"] = tracker.steps
+        summary["bridge_exchange_s"] = tracker.exchange_time_s
+        if tracker.failure is None:
+            transport.finish(summary)
+    finally:
+        transport.close()
+    return result, tracker
+
+
+def finite_vector(value: Any, n: int) -> list[float] | None:
+    """``value`` as n finite floats, or None when it is not that."""
+    if not isinstance(value, list | tuple) or len(value) != n:
+        return None
+    out = []
+    for v in value:
+        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+            return None
+        out.append(float(v))
+    return out
