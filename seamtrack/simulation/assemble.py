@@ -84,6 +84,9 @@ class Parts:
     extractor_name: str = "v-groove"  # the scene's, or the one the seam's joint type calls for
     mount: Mount | None = None  # where the sensor sits on the torch, and why
     extract: Any = None  # mesh mode: the extractor instance the scan calls
+    # Image mode: the camera image of the last frame scanned (a StripeImage), for observers
+    # (seamtrack.bridge.frames); None in other modes.
+    last_image: Callable[[], Any] | None = None
 
 
 def make_seam(scene: Scene) -> Seam:
@@ -158,6 +161,7 @@ class MeshScan:
     extractor_name: str
     view: FloatArray | None = None  # where a sensor looks from, when not the torch direction
     extract: Any = None  # the extractor instance ``scan`` calls
+    last_image: Callable[[], Any] | None = None  # image mode: the last frame's camera image
 
 
 def takes_hint(find: Callable[..., Any]) -> bool:
@@ -230,12 +234,14 @@ def _mesh_scan(scene: Scene, sensor: LaserLineSensor, rng: np.random.Generator) 
         # Auto-exposure's state lives in the run: each frame's exposure from the previous
         # frame's peak (deterministic: the images are drawn from the run's seeded Generator).
         exposure = [camera.exposure]
+        images: list[Any] = [None]  # the last frame's image, for an observer
 
         def measure(T_world_sensor: FloatArray, t_s: float) -> Profile:
             image = sensor.render(caster, T_world_sensor, camera=camera, seed=rng,
                                   material=surface, t_s=t_s, exposure=exposure[0])  # fmt: skip
             if camera.exposure_mode == "auto":
                 exposure[0] = camera.next_exposure(image.exposure, image.peak)
+            images[0] = image
             return image.profile(detector.method, threshold=detector.threshold,
                                  choose=detector.choose, relative=detector.relative,
                                  noise_sigmas=detector.noise_sigmas)  # fmt: skip
@@ -283,7 +289,8 @@ def _mesh_scan(scene: Scene, sensor: LaserLineSensor, rng: np.random.Generator) 
         return profile, feature
 
     view = None if part.view_normal is None else T_world_part[:3, :3] @ part.view_normal
-    return MeshScan(seam, scan, mesh, caster, extractor_name, view, find)
+    last_image = (lambda: images[0]) if s.source == "image" else None
+    return MeshScan(seam, scan, mesh, caster, extractor_name, view, find, last_image)
 
 
 def _stripe_noise(params: dict[str, Any]) -> Any:
@@ -399,6 +406,7 @@ def build_parts(scene: Scene, rng: np.random.Generator | None = None) -> Parts:
         ),
         mount=mount,
         extract=None if loaded is None else loaded.extract,
+        last_image=loaded.last_image if scan is not None and loaded is not None else None,
     )
 
 
