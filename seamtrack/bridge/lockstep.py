@@ -21,6 +21,7 @@ cause (:func:`serve`).
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import time
 from collections.abc import Callable
@@ -30,6 +31,8 @@ from typing import Any, Protocol
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.bridge.frames import Frame as ObservedFrame
+from seamtrack.bridge.frames import frame_chain, observe
 from seamtrack.control.tracking import Command, Measurement, TrackerContext
 from seamtrack.errors import SeamtrackError
 from seamtrack.sensing.profiles import Feature, Profile
@@ -61,7 +64,7 @@ class Frame:
     feature: Feature
     T_world_sensor: FloatArray
     tcp_world: FloatArray
-    profile: Profile | None  # the stripe (mesh mode); None in seam mode
+    profile: Profile | None  # the stripe (mesh mode), the seam point alone (seam mode)
 
 
 @dataclass(frozen=True, eq=False)
@@ -91,38 +94,13 @@ class Transport(Protocol):
     def close(self) -> None: ...
 
 
-@dataclass(frozen=True)
-class TfChain:
-    """The robot's fixed transforms: ``T_world_base``, ``T_tcp_sensor`` and, on an arm,
-    ``T_flange_tcp``; the moving part is the torch's pose at each frame."""
-
-    T_world_base: FloatArray
-    T_tcp_sensor: FloatArray
-    T_flange_tcp: FloatArray | None = None
-
-    def transforms(self, T_world_sensor: FloatArray) -> list[tuple[str, str, FloatArray]]:
-        """(parent, child, T_parent_child) from ``world`` down to ``sensor`` at one frame."""
-        T_world_tcp = T_world_sensor @ np.linalg.inv(self.T_tcp_sensor)
-        T_base_tcp = np.linalg.inv(self.T_world_base) @ T_world_tcp
-        chain = [("world", "base", self.T_world_base)]
-        if self.T_flange_tcp is None:
-            chain.append(("base", "tcp", T_base_tcp))
-        else:
-            T_base_flange = T_base_tcp @ np.linalg.inv(self.T_flange_tcp)
-            chain += [("base", "flange", T_base_flange), ("flange", "tcp", self.T_flange_tcp)]
-        chain.append(("tcp", "sensor", self.T_tcp_sensor))
-        return chain
+#: The robot's frames at a sensor pose: (parent, child, T_parent_child) links, mm.
+TfChain = Callable[[FloatArray], "list[tuple[str, str, FloatArray]]"]
 
 
 def tf_chain(parts: Parts) -> TfChain:
-    robot = parts.robot
-    kin = getattr(robot, "kinematics", None)
-    flange = getattr(kin, "T_flange_tcp", None)
-    return TfChain(
-        np.asarray(robot.T_world_base, dtype=float),
-        np.asarray(robot.T_tcp_sensor, dtype=float),
-        None if flange is None else np.asarray(flange, dtype=float),
-    )
+    """The TF chain of ``parts``' robot (:func:`seamtrack.bridge.frames.frame_chain`)."""
+    return functools.partial(frame_chain, parts.robot)
 
 
 class BridgeTracker:
@@ -221,20 +199,16 @@ class _FailClock:
 
 
 def bridged_parts(parts: Parts, tracker: BridgeTracker) -> Parts:
-    """``parts`` with the bridge as its tracker, and its sensing wrapped so that a mesh-mode
-    frame's stripe profile goes out with the frame (``Parts.scan`` gives profile and feature
-    at once; the feature is the one ``Parts.sense`` would give)."""
-    scan = parts.scan
-    if scan is None:
-        return dataclasses.replace(parts, tracker=tracker, tracker_name="bridge")
+    """``parts`` with the bridge as its tracker; every frame's profile (the stripe in mesh
+    mode, the seam point alone in seam mode: :func:`seamtrack.bridge.frames.observe`) goes
+    out with the frame."""
     profiles = tracker.profiles
 
-    def sense(T_world_sensor: FloatArray, t_s: float, hint: Any = None) -> Feature:
-        profile, feature = scan(T_world_sensor, t_s, hint)
-        profiles[t_s] = profile
-        return feature
+    def keep(frame: ObservedFrame) -> None:
+        profiles[frame.t_s] = frame.profile
 
-    return dataclasses.replace(parts, tracker=tracker, tracker_name="bridge", sense=sense)
+    observed = observe(parts, keep)
+    return dataclasses.replace(observed, tracker=tracker, tracker_name="bridge")
 
 
 def serve(

@@ -1,6 +1,6 @@
 """ROS 2 on Zenoh without ROS: rmw_zenoh's key expressions, liveliness tokens and attachments
 (as its design document, ros2/rmw_zenoh docs/design.md, gives them), and the bridge's messages
-as ROS 2 CDR (``rosbags``; SI units: m, m/s, rad).
+as ROS 2 CDR (:mod:`seamtrack.bridge.messages`; SI units: m, m/s, rad).
 
 * A topic's key expression: ``<domain_id>/<fully_qualified_name>/<type_name>/<type_hash>``,
   e.g. ``0/chatter/std_msgs::msg::dds_::String_/RIHS01_df66...``; the fully qualified name
@@ -26,6 +26,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.bridge import messages
+
 FloatArray = NDArray[np.float64]
 
 #: QoS of every entity the bridge declares, in rmw_zenoh's compact form: reliable, volatile,
@@ -41,13 +43,6 @@ TWIST_STAMPED = "geometry_msgs/msg/TwistStamped"
 STRING = "std_msgs/msg/String"
 
 
-@functools.cache
-def typestore() -> Any:
-    from rosbags.typesys import Stores, get_typestore
-
-    return get_typestore(Stores.ROS2_JAZZY)
-
-
 def dds_type_name(msgtype: str) -> str:
     """``sensor_msgs/msg/PointCloud2`` -> ``sensor_msgs::msg::dds_::PointCloud2_``."""
     package, kind, name = msgtype.split("/")
@@ -57,7 +52,7 @@ def dds_type_name(msgtype: str) -> str:
 @functools.cache
 def type_hash(msgtype: str) -> str:
     """REP-2016's type hash, ``RIHS01_<sha256 hex>``."""
-    return str(typestore().hash_rihs01(msgtype))
+    return str(messages.typestore().hash_rihs01(msgtype))
 
 
 def mangle(name: str) -> str:
@@ -114,132 +109,54 @@ def attachment(seq: int, stamp_ns: int, gid16: bytes) -> bytes:
 
 
 # --------------------------------------------------------------------------- messages
-def _time(t_s: float) -> Any:
-    Time = typestore().types["builtin_interfaces/msg/Time"]
-    ns = int(round(t_s * 1e9))
-    return Time(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
+def encode_clock(t_s: float) -> bytes:
+    return messages.encode(messages.clock(t_s))
+
+
+def encode_string(text: str) -> bytes:
+    return messages.encode(messages.typestore().types[STRING](data=text))
+
+
+def encode_point(t_s: float, frame_id: str, point_mm: Any) -> bytes:
+    """``geometry_msgs/PointStamped`` of a point in mm."""
+    types = messages.typestore().types
+    x, y, z = (float(c) / messages.MM_PER_M for c in point_mm)
+    point = types["geometry_msgs/msg/Point"](x=x, y=y, z=z)
+    return messages.encode(types[POINT_STAMPED](header=messages.header(t_s, frame_id), point=point))
+
+
+def encode_pose(t_s: float, frame_id: str, position_mm: Any, R: FloatArray | None) -> bytes:
+    """``geometry_msgs/PoseStamped``: a position (mm) and orientation (identity when None)."""
+    types = messages.typestore().types
+    x, y, z = (float(c) / messages.MM_PER_M for c in position_mm)
+    qx, qy, qz, qw = (0.0, 0.0, 0.0, 1.0) if R is None else messages.quaternion(R)
+    pose = types["geometry_msgs/msg/Pose"](
+        position=types["geometry_msgs/msg/Point"](x=x, y=y, z=z),
+        orientation=types["geometry_msgs/msg/Quaternion"](x=qx, y=qy, z=qz, w=qw),
+    )
+    return messages.encode(types[POSE_STAMPED](header=messages.header(t_s, frame_id), pose=pose))
+
+
+def encode_twist(t_s: float, frame_id: str, linear: Any, angular: Any) -> bytes:
+    """``geometry_msgs/TwistStamped`` of a linear (m/s) and angular (rad/s) velocity."""
+    types = messages.typestore().types
+    V = types["geometry_msgs/msg/Vector3"]
+    lx, ly, lz = (float(c) for c in linear)
+    ax, ay, az = (float(c) for c in angular)
+    twist = types["geometry_msgs/msg/Twist"](
+        linear=V(x=lx, y=ly, z=lz), angular=V(x=ax, y=ay, z=az)
+    )
+    return messages.encode(types[TWIST_STAMPED](header=messages.header(t_s, frame_id), twist=twist))
 
 
 def stamp_ns(stamp: Any) -> int:
     return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
 
 
-def _header(t_s: float, frame_id: str) -> Any:
-    return typestore().types["std_msgs/msg/Header"](stamp=_time(t_s), frame_id=frame_id)
-
-
-def _vector(v: Any) -> Any:
-    x, y, z = (float(c) for c in v)
-    return typestore().types["geometry_msgs/msg/Vector3"](x=x, y=y, z=z)
-
-
-def quaternion(R: FloatArray) -> tuple[float, float, float, float]:
-    """(x, y, z, w) of a rotation matrix."""
-    from scipy.spatial.transform import Rotation
-
-    x, y, z, w = Rotation.from_matrix(R).as_quat()
-    return float(x), float(y), float(z), float(w)
-
-
-def serialize(msg: Any, msgtype: str) -> bytes:
-    return bytes(typestore().serialize_cdr(msg, msgtype))
-
-
-def clock(t_s: float) -> bytes:
-    return serialize(typestore().types[CLOCK](clock=_time(t_s)), CLOCK)
-
-
-def string(text: str) -> bytes:
-    return serialize(typestore().types[STRING](data=text), STRING)
-
-
-def point_stamped(t_s: float, frame_id: str, point_mm: Any) -> bytes:
-    x, y, z = (float(c) / 1000.0 for c in point_mm)
-    types = typestore().types
-    point = types["geometry_msgs/msg/Point"](x=x, y=y, z=z)
-    msg = types[POINT_STAMPED](header=_header(t_s, frame_id), point=point)
-    return serialize(msg, POINT_STAMPED)
-
-
-def pose_stamped(t_s: float, frame_id: str, position_mm: Any, R: FloatArray | None) -> bytes:
-    types = typestore().types
-    x, y, z = (float(c) / 1000.0 for c in position_mm)
-    qx, qy, qz, qw = (0.0, 0.0, 0.0, 1.0) if R is None else quaternion(R)
-    pose = types["geometry_msgs/msg/Pose"](
-        position=types["geometry_msgs/msg/Point"](x=x, y=y, z=z),
-        orientation=types["geometry_msgs/msg/Quaternion"](x=qx, y=qy, z=qz, w=qw),
-    )
-    return serialize(types[POSE_STAMPED](header=_header(t_s, frame_id), pose=pose), POSE_STAMPED)
-
-
-def twist_stamped(t_s: float, frame_id: str, linear: Any, angular: Any) -> bytes:
-    types = typestore().types
-    twist = types["geometry_msgs/msg/Twist"](linear=_vector(linear), angular=_vector(angular))
-    msg = types[TWIST_STAMPED](header=_header(t_s, frame_id), twist=twist)
-    return serialize(msg, TWIST_STAMPED)
-
-
-def tf_message(t_s: float, chain: list[tuple[str, str, FloatArray]]) -> bytes:
-    """The transforms ``(parent, child, T_parent_child)`` (mm) as one ``TFMessage``."""
-    types = typestore().types
-    transforms = []
-    for parent, child, T in chain:
-        qx, qy, qz, qw = quaternion(T[:3, :3])
-        transform = types["geometry_msgs/msg/Transform"](
-            translation=_vector(np.asarray(T[:3, 3]) / 1000.0),
-            rotation=types["geometry_msgs/msg/Quaternion"](x=qx, y=qy, z=qz, w=qw),
-        )
-        transforms.append(
-            types["geometry_msgs/msg/TransformStamped"](
-                header=_header(t_s, parent), child_frame_id=child, transform=transform
-            )
-        )
-    return serialize(types[TFMESSAGE](transforms=transforms), TFMESSAGE)
-
-
-def pointcloud2(t_s: float, frame_id: str, points_laser: FloatArray | None, reason: Any) -> bytes:
-    """A stripe profile as ``PointCloud2`` in the sensor frame: x = 0 (the laser plane),
-    y, z from the profile (m, float64, NaN where invalid), and ``reason`` (uint8, the
-    :class:`~seamtrack.sensing.profiles.Reason` code); one row, in column order."""
-    types = typestore().types
-    PointField = types["sensor_msgs/msg/PointField"]
-    n = 0 if points_laser is None else len(points_laser)
-    record = np.dtype(
-        {"names": ["x", "y", "z", "reason"], "formats": ["<f8", "<f8", "<f8", "u1"],
-         "offsets": [0, 8, 16, 24], "itemsize": 32}
-    )  # fmt: skip
-    data = np.zeros(n, dtype=record)
-    if points_laser is not None and n:
-        data["y"] = points_laser[:, 0] / 1000.0
-        data["z"] = points_laser[:, 1] / 1000.0
-        data["reason"] = reason
-    fields = [
-        PointField(name=name, offset=off, datatype=kind, count=1)
-        for name, off, kind in (
-            ("x", 0, PointField.FLOAT64),
-            ("y", 8, PointField.FLOAT64),
-            ("z", 16, PointField.FLOAT64),
-            ("reason", 24, PointField.UINT8),
-        )
-    ]
-    msg = types[POINTCLOUD2](
-        header=_header(t_s, frame_id),
-        height=1,
-        width=n,
-        fields=fields,
-        is_bigendian=False,
-        point_step=32,
-        row_step=32 * n,
-        data=data.view(np.uint8),
-        is_dense=False,
-    )
-    return serialize(msg, POINTCLOUD2)
-
-
 def deserialize(raw: bytes, msgtype: str) -> Any:
     """CDR bytes decoded into ``msgtype`` (raises ValueError on anything else)."""
     try:
-        return typestore().deserialize_cdr(raw, msgtype)
+        return messages.decode(raw, msgtype)
     except Exception as exc:  # rosbags raises struct, index, unicode and its own errors
         raise ValueError(f"not a {msgtype} ({exc.__class__.__name__})") from None
 

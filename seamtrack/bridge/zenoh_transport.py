@@ -26,10 +26,12 @@ from typing import Any
 
 import numpy as np
 
-from seamtrack.bridge import rmw
+from seamtrack.bridge import messages, rmw
 from seamtrack.bridge.lockstep import BridgeFailure, Step, TfChain
 from seamtrack.bridge.wire import MAX_MESSAGE_BYTES, context_json, make_command
 from seamtrack.control.tracking import Command, TrackerContext
+
+encode = messages.encode
 
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
 NODE = "seamtrack"
@@ -40,6 +42,7 @@ PUBLISHES = {
     "/clock": rmw.CLOCK,
     "/seamtrack/profile": rmw.POINTCLOUD2,
     "/seamtrack/seam_point": rmw.POINT_STAMPED,
+    "/seamtrack/seam_point_world": rmw.POINT_STAMPED,
     "/seamtrack/tcp_velocity": rmw.TWIST_STAMPED,
     "/seamtrack/tcp": rmw.POSE_STAMPED,
     "/seamtrack/context": rmw.STRING,
@@ -151,24 +154,24 @@ class ZenohTransport:
         # give the declarations time to settle before the first message goes out.
         time.sleep(SETTLE_S)
         message = {"lockstep": lockstep, "context": context_json(context)}
-        self._put("/seamtrack/context", rmw.string(json.dumps(message)), 0.0)
+        self._put("/seamtrack/context", rmw.encode_string(json.dumps(message)))
 
     def exchange(self, step: Step) -> Command | None:
         for f in step.frames:
             t = f.t_capture_s
-            self._put("/tf", rmw.tf_message(t, self._chain.transforms(f.T_world_sensor)), t)
-            profile = f.profile
-            points = None if profile is None else profile.points_laser
-            reason = None if profile is None else profile.reason
-            self._put("/seamtrack/profile", rmw.pointcloud2(t, "sensor", points, reason), t)
-            if f.feature:
-                point = rmw.point_stamped(t, "world", f.feature.point_world)
-                self._put("/seamtrack/seam_point", point, t)
+            self._put("/tf", encode(messages.tf_message(self._chain(f.T_world_sensor), t)))
+            if f.profile is not None:
+                self._put("/seamtrack/profile", encode(messages.profile_cloud(f.profile, t)))
+            seam_point = messages.seam_point(f.feature, t)
+            if seam_point is not None:
+                self._put("/seamtrack/seam_point", encode(seam_point))
+                world = rmw.encode_point(t, "world", f.feature.point_world)
+                self._put("/seamtrack/seam_point_world", world)
         t = step.t_s
-        velocity = np.asarray(step.tcp_velocity_world, dtype=float) / 1000.0
-        self._put("/clock", rmw.clock(t), t)
-        self._put("/seamtrack/tcp_velocity", rmw.twist_stamped(t, "world", velocity, (0, 0, 0)), t)
-        self._put("/seamtrack/tcp", rmw.pose_stamped(t, "world", step.tcp_world, None), t)
+        velocity = np.asarray(step.tcp_velocity_world, dtype=float) / messages.MM_PER_M
+        self._put("/clock", rmw.encode_clock(t))
+        self._put("/seamtrack/tcp_velocity", rmw.encode_twist(t, "world", velocity, (0, 0, 0)))
+        self._put("/seamtrack/tcp", rmw.encode_pose(t, "world", step.tcp_world, None))
         return self._command(t, step.seq)
 
     _chain: TfChain
@@ -177,7 +180,7 @@ class ZenohTransport:
         from seamtrack.io.output import json_safe
 
         text = json.dumps({"status": summary.get("status"), "summary": json_safe(summary)})
-        self._put("/seamtrack/status", rmw.string(text), float(summary.get("sim_time_s", 0.0)))
+        self._put("/seamtrack/status", rmw.encode_string(text))
 
     def close(self) -> None:
         for token in self._tokens:
@@ -185,7 +188,7 @@ class ZenohTransport:
         self.session.close()
 
     # ------------------------------------------------------------------ internals
-    def _put(self, topic: str, payload: bytes, t_s: float) -> None:
+    def _put(self, topic: str, payload: bytes) -> None:
         self.seq += 1
         stamp = time.time_ns()
         self.pubs[topic].put(payload, attachment=rmw.attachment(self.seq, stamp, self.gids[topic]))
@@ -272,9 +275,7 @@ def command_from_ros(pose_msg: Any, speed_msg: Any) -> Command | None:
     if norm != 0.0:
         if abs(norm - 1.0) > 1e-6:
             raise BridgeFailure("cmd_pose's quaternion is not a unit one", fix=_FIX_TYPES)
-        from scipy.spatial.transform import Rotation
-
-        rotation = Rotation.from_quat([q.x, q.y, q.z, q.w]).as_matrix().ravel().tolist()
+        rotation = messages.rotation((q.x, q.y, q.z, q.w)).ravel().tolist()
     omega = None if (w.x, w.y, w.z) == (0.0, 0.0, 0.0) else [w.x, w.y, w.z]
     target = [p.x * 1000.0, p.y * 1000.0, p.z * 1000.0]
     return make_command(target, v.x * 1000.0, v.y == 1.0, None, rotation, omega)

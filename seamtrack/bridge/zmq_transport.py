@@ -82,10 +82,6 @@ class ZmqTransport:
             "protocol": wire.PROTOCOL,
             "lockstep": lockstep,
             "context": wire.context_json(context),
-            "tf": {
-                "T_world_base": chain.T_world_base.tolist(),
-                "T_tcp_sensor": chain.T_tcp_sensor.tolist(),
-            },
             "max_message_bytes": wire.MAX_MESSAGE_BYTES,
         }
         self.sock.send(json.dumps(reset).encode())

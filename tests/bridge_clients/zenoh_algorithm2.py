@@ -109,7 +109,7 @@ def main() -> int:
     subs = {
         "/seamtrack/context": "std_msgs/msg/String",
         "/seamtrack/status": "std_msgs/msg/String",
-        "/seamtrack/seam_point": "geometry_msgs/msg/PointStamped",
+        "/seamtrack/seam_point_world": "geometry_msgs/msg/PointStamped",
         "/seamtrack/tcp": "geometry_msgs/msg/PoseStamped",
     }
     pubs = {
@@ -149,7 +149,7 @@ def main() -> int:
         elif topic == "/seamtrack/status":
             print(TS.deserialize_cdr(raw, subs[topic]).data)
             break
-        elif topic == "/seamtrack/seam_point":
+        elif topic == "/seamtrack/seam_point_world":
             p = TS.deserialize_cdr(raw, subs[topic]).point
             tracker.update((p.x, p.y, p.z))
         elif topic == "/seamtrack/tcp":
