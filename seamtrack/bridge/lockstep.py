@@ -123,14 +123,17 @@ class BridgeTracker:
         self.failure: BridgeFailure | None = None
         self.steps = 0
         self.exchange_time_s = 0.0
+        self.wait_time_s = 0.0
         self._frames: list[Frame] = []
         self._last: Command | None = None
 
     def reset(self, context: TrackerContext) -> None:
+        start = time.perf_counter()
         try:
             self.transport.start(context, self.chain, self.lockstep)
         except BridgeFailure as exc:
             self.failure = exc
+        self.wait_time_s = time.perf_counter() - start
 
     def update(self, measurement: Measurement) -> None:
         profile = self.profiles.pop(measurement.t_capture_s, None)
@@ -220,8 +223,8 @@ def serve(
 ) -> tuple[Result, BridgeTracker]:
     """Run ``parts`` with the tracker behind ``transport``. The result's summary is the
     loop's; a failed bridge stops the run as ``stalled`` with ``stop_reason`` naming the cause
-    (``tracker.failure`` holds it), and ``bridge_steps`` / ``bridge_exchange_s`` count the
-    round trips and their wall time."""
+    (``tracker.failure`` holds it); ``bridge_steps`` and ``bridge_exchange_s`` count the round
+    trips and their wall time, ``bridge_wait_s`` the wait for the tracker (in ``wall_time_s``)."""
     if lockstep not in LOCKSTEPS:
         raise ValueError(f"lockstep must be one of {LOCKSTEPS}, got {lockstep!r}")
     tracker = BridgeTracker(transport, tf_chain(parts), lockstep)
@@ -237,6 +240,7 @@ def serve(
             summary["wall_time_s"] = time.perf_counter() - start
         summary["bridge_steps"] = tracker.steps
         summary["bridge_exchange_s"] = tracker.exchange_time_s
+        summary["bridge_wait_s"] = tracker.wait_time_s
         if tracker.failure is None:
             transport.finish(summary)
     finally:

@@ -11,6 +11,7 @@ checked field by field, never evaluated or unpickled.
 from __future__ import annotations
 
 import json
+import math
 import time
 from typing import Any
 
@@ -123,7 +124,7 @@ class ZmqTransport:
                     field=field,
                     fix="start the tracker process, or raise " + field,
                 )
-            ready = dict(self.poller.poll(left * 1000.0))
+            ready = dict(self.poller.poll(max(1, math.ceil(left * 1000.0))))
             if self.sock in ready:
                 return bytes(self.sock.recv(copy=True))
             if self.monitor in ready:
