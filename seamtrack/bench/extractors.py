@@ -428,9 +428,21 @@ def load_real_set(path: str | Path) -> RealSet:
     return RealSet(d.name, str(joint), profiles, labels, meta)
 
 
-def load_real_sets(path: str | Path) -> list[RealSet]:
-    """The set at ``path`` (a folder with ``set.json``), or every set in its sub-folders."""
+def load_real_sets(
+    path: str | Path,
+    topic: str | None = None,
+    labels: str | None = None,
+    joint: str | None = None,
+) -> list[RealSet]:
+    """The set at ``path`` (a folder with ``set.json``), or every set in its sub-folders; or
+    the PointCloud2 profiles of a recording (an MCAP file or a ROS bag: ``topic``, ``labels``
+    and ``joint`` as :func:`seamtrack.bridge.importer.read_scans` takes them)."""
     d = Path(path)
+    from seamtrack.bridge.extra import is_recording, require_ros
+
+    if is_recording(d):
+        require_ros("--real")
+        return [_recorded_set(d, topic, labels, joint)]
     if (d / "set.json").is_file():
         return [load_real_set(d)]
     sets = sorted(p for p in d.glob("*/set.json")) if d.is_dir() else []
@@ -441,6 +453,23 @@ def load_real_sets(path: str | Path) -> list[RealSet]:
             "point --real at a set folder or a folder of sets (docs/extractors.md, 'Real data')",
         )
     return [load_real_set(p.parent) for p in sets]
+
+
+def _recorded_set(path: Path, topic: str | None, labels: str | None, joint: str | None) -> RealSet:
+    """A recording's profiles as a set (the joint: ``joint``, else the recording's, else
+    ``"none"`` when it has no labels)."""
+    from seamtrack.bridge.importer import read_scans
+
+    scans = read_scans(path, topic, labels, joint=joint)
+    kind = scans.joint or ("none" if scans.labels is None else None)
+    if kind not in (*REAL_FAMILIES, "none"):
+        raise _real_error(
+            f"the joint of its profiles is {'not known' if kind is None else repr(kind)}",
+            path,
+            f"name it: --joint with one of {', '.join(REAL_FAMILIES)} or none",
+        )
+    return RealSet(scans.name, str(kind), scans.profiles,
+                   None if kind == "none" else scans.labels, scans.meta)  # fmt: skip
 
 
 def _timed(ex: Any, profiles: list[Profile]) -> tuple[list[Any], float]:
@@ -455,7 +484,7 @@ def _timed(ex: Any, profiles: list[Profile]) -> tuple[list[Any], float]:
 
 
 def bench_real(
-    real_dir: str | Path, out_dir: str | Path, *, progress: bool = True
+    real_dir: str | Path, out_dir: str | Path, *, progress: bool = True, **recording: Any
 ) -> list[dict[str, Any]]:
     """The family extractors and the classifier on real profiles, one row per set.
 
@@ -468,13 +497,14 @@ def bench_real(
     set's extractor (on ``"none"`` sets, the families' mean), ``classify_us``: the
     classifier's. Writes
     ``extractors_real.csv``, ``extractors_real.md`` and ``extractors_real.json`` into
-    ``out_dir``.
+    ``out_dir``. ``recording``: ``topic``, ``labels``, ``joint`` for a recording
+    (:func:`load_real_sets`).
     """
     from tqdm import tqdm
 
     from seamtrack.features.classify import classify
 
-    sets = load_real_sets(real_dir)
+    sets = load_real_sets(real_dir, **recording)
     exs = {name: extractor(name) for name in REAL_FAMILIES}
     rows: list[dict[str, Any]] = []
     for rs in tqdm(sets, disable=not progress, desc="real sets", unit="set"):

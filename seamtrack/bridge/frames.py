@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 
 from seamtrack.geometry.frames import invert
 from seamtrack.sensing.profiles import Feature, Profile, Reason, SeamHint
+from seamtrack.sensing.scan import laser_plane_crossings
 from seamtrack.simulation.assemble import Parts
 
 FloatArray = NDArray[np.float64]
@@ -118,6 +119,19 @@ class FrameLog:
 
     def __call__(self, frame: Frame) -> None:
         self.frames.append(frame)
+
+
+def true_seam_point(seam: Any, sensor: Any, T_world_sensor: FloatArray) -> FloatArray | None:
+    """Where the laser plane crosses the true seam inside the sensor's field of view, as
+    (y_L, z_L) mm (the crossing nearest the stripe's centre when there are several), or None:
+    the label of a frame."""
+    crossings = laser_plane_crossings(seam, T_world_sensor)
+    if not len(crossings):
+        return None
+    inside = np.flatnonzero(sensor.in_field_of_view(crossings[:, 0], crossings[:, 1]))
+    if not len(inside):
+        return None
+    return np.asarray(crossings[inside[np.argmin(np.abs(crossings[inside, 0]))]], dtype=float)
 
 
 def frame_chain(robot: Any, T_world_sensor: FloatArray) -> list[tuple[str, str, FloatArray]]:

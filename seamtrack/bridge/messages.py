@@ -99,6 +99,12 @@ TOPICS = {
         FRAMES["sensor"],
         "the seam point the extractor found (frames with a seam point only)",
     ),
+    "seam_truth": Topic(
+        "/seamtrack/seam_truth",
+        "geometry_msgs/msg/PointStamped",
+        FRAMES["sensor"],
+        "where the laser plane crosses the true seam in the field of view (the label)",
+    ),
     "image": Topic(
         "/seamtrack/image",
         "sensor_msgs/msg/Image",
@@ -378,6 +384,13 @@ def profile_cloud(
     )
 
 
+def _uint8(data: Any) -> NDArray[np.uint8]:
+    """A ``uint8[]`` field as an array (rosbags gives arrays, other decoders bytes)."""
+    if isinstance(data, (bytes, bytearray, memoryview)):
+        return np.frombuffer(data, dtype=np.uint8)
+    return np.asarray(data, dtype=np.uint8)
+
+
 def cloud_fields(cloud: Any) -> dict[str, NDArray[Any]]:
     """Every scalar field of a ``sensor_msgs/PointCloud2`` as a flat array (row-major over
     height x width), in its own type; any layout, either byte order."""
@@ -393,7 +406,7 @@ def cloud_fields(cloud: Any) -> dict[str, NDArray[Any]]:
         {"names": names, "formats": formats, "offsets": offsets, "itemsize": cloud.point_step}
     )
     n = cloud.height * cloud.width
-    raw = np.asarray(cloud.data, dtype=np.uint8)
+    raw = _uint8(cloud.data)
     if cloud.height > 1 and cloud.row_step != cloud.width * cloud.point_step:
         rows = raw[: cloud.height * cloud.row_step].reshape(cloud.height, cloud.row_step)
         raw = np.ascontiguousarray(rows[:, : cloud.width * cloud.point_step]).ravel()
@@ -523,7 +536,7 @@ def image_pixels(image: Any) -> NDArray[np.float32]:
         raise ValueError(f"image encoding {image.encoding!r}; expected mono8 or mono16")
     wide = image.encoding in ("mono16", "16UC1")
     dtype = np.dtype(">u2" if image.is_bigendian else "<u2") if wide else np.dtype("u1")
-    raw = np.asarray(image.data, dtype=np.uint8)[: image.height * image.step]
+    raw = _uint8(image.data)[: image.height * image.step]
     rows = raw.reshape(image.height, image.step)[:, : image.width * dtype.itemsize]
     values = np.ascontiguousarray(rows).view(dtype)
     return (values / (65535.0 if wide else 255.0)).astype(np.float32)

@@ -16,6 +16,11 @@ from seamtrack._version import __version__
 from seamtrack.cli import seams as seams_command
 from seamtrack.cli import serve as serve_command
 from seamtrack.cli.dataset import add_dataset_parser
+from seamtrack.cli.recording import (
+    EXTRACTORS_ACTIONS,
+    add_record_argument,
+    add_recording_arguments,
+)
 from seamtrack.cli.tables import print_table
 from seamtrack.errors import OutputError, PluginRuntimeError, SceneError, SeamtrackError
 
@@ -47,8 +52,15 @@ def cmd_run(args: argparse.Namespace) -> int:
         from seamtrack.io.weldx_file import check_weldx_target, write_weldx
 
         check_weldx_target(args.weldx)
+    if args.record:  # the ros extra, imported only for a recording
+        from seamtrack.cli.recording import check_record, recorded_run
+
+        check_record(args.record)
     parts = build_parts(scene)
-    result = run(parts, progress=_progress_wanted(args))
+    if args.record:
+        result = recorded_run(args.record, scene, parts, _progress_wanted(args))
+    else:
+        result = run(parts, progress=_progress_wanted(args))
     write_run(
         result,
         out,
@@ -64,6 +76,7 @@ def cmd_run(args: argparse.Namespace) -> int:
             f"wrote {out}/summary.json, trace.csv, frames.csv, scene.toml"
             + ("" if args.no_plot else ", error.png")
             + (f"; and {args.weldx}" if args.weldx else "")
+            + (f"; and {args.record}" if args.record else "")
         )
     if args.render:
         from seamtrack.viz.run import render_run
@@ -92,15 +105,10 @@ def cmd_extractors(args: argparse.Namespace) -> int:
     from seamtrack.bench.extractors import bench_extractors
     from seamtrack.io.output import new_dir
 
-    if args.real is not None:
-        from seamtrack.bench.extractors import bench_real, load_real_sets
+    if args.real is not None or args.action == "import":  # real scans: sets or recordings
+        from seamtrack.cli.recording import extractors_real
 
-        load_real_sets(args.real)  # a bad folder is refused before anything is written
-        with new_dir(args.out) as out:
-            bench_real(args.real, out, progress=_progress_wanted(args))
-        print((out / "extractors_real.md").read_text(), end="")
-        print(f"wrote {out}/extractors_real.csv, extractors_real.md, extractors_real.json")
-        return 0
+        return extractors_real(args, _progress_wanted(args))
     with new_dir(args.out) as out:
         bench_extractors(out, quick=args.quick, progress=_progress_wanted(args))
     print((out / "extractors.md").read_text(), end="")
@@ -420,6 +428,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", help="output folder (default: runs/<scene name>)")
     p.add_argument("--no-plot", action="store_true", help="skip error.png")
     p.add_argument("--weldx", metavar="FILE", help="also write the run as a weldx file (.wx)")
+    add_record_argument(p)
     p.add_argument(
         "--render", action="store_true", help="also write scene.png and run.gif (3D views, PyVista)"
     )
@@ -520,7 +529,7 @@ def build_parser() -> argparse.ArgumentParser:
         "feature extractors: list them, or score them on synthetic profiles (bench)",
         scene=False,
     )
-    p.add_argument("action", choices=["bench", "list"], help="list them, or run the bench")
+    p.add_argument("action", choices=["bench", "list", "import"], help=EXTRACTORS_ACTIONS)
     p.add_argument(
         "--out",
         default="bench-results/extractors",
@@ -531,8 +540,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--real",
         metavar="DIR",
         help="bench on real profiles instead: a set folder (set.json, profiles.npz, "
-        "labels.csv) or a folder of them; see docs/extractors.md",
+        "labels.csv) or a folder of them, or a recording (MCAP, ROS bag); docs/extractors.md",
     )
+    add_recording_arguments(p)
     p.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)
 
     add_dataset_parser(add)

@@ -1,0 +1,107 @@
+"""The CLI's ROS 2 parts: ``run --record run.mcap``, and real scans from a recording
+(``extractors bench --real run.mcap``, ``extractors import``). The ``ros`` extra's libraries are
+imported only when one of these is asked for."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+from seamtrack.errors import SeamtrackError
+
+EXTRACTORS_ACTIONS = "list them, run the bench, or import a recording's profiles (--real) to --out"
+
+
+def add_record_argument(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--record",
+        metavar="FILE",
+        help="also record every frame as ROS 2 messages in an MCAP file (Foxglove opens it; "
+        "needs pip install 'seamtrack[ros]')",
+    )
+
+
+def add_recording_arguments(p: argparse.ArgumentParser) -> None:
+    """``extractors``' options for a recording given as ``--real``."""
+    p.add_argument("--topic", help="a recording's PointCloud2 profile topic (default: the one)")
+    p.add_argument(
+        "--labels",
+        metavar="TOPIC",
+        help="a recording's PointStamped label topic (default /seamtrack/seam_truth, or the "
+        "only one)",
+    )
+    p.add_argument(
+        "--joint",
+        help="the joint family of a recording's profiles (default: the recording's extractor)",
+    )
+
+
+def check_record(path: str) -> None:
+    """Refuse, before the run, a missing extra or a bad target (nothing is written)."""
+    from seamtrack.bridge.extra import require_ros
+
+    require_ros("--record")
+    from seamtrack.bridge.record import check_record_target
+
+    check_record_target(path)
+
+
+def recorded_run(path: str, scene: Any, parts: Any, progress: bool) -> Any:
+    """Run ``parts`` recording every frame into ``path`` (an MCAP file): whole when the run
+    ends (any status), up to the stop on Ctrl-C, nothing when the run fails."""
+    from seamtrack.bridge.frames import observe
+    from seamtrack.bridge.record import Recorder
+    from seamtrack.simulation.loop import run
+
+    recorder = Recorder(path, parts, scene)
+    try:
+        result = run(observe(parts, recorder), progress=progress)
+    except KeyboardInterrupt:
+        recorder.finish(None)
+        print(f"seamtrack: stopped; wrote {path} up to the stop", file=sys.stderr)
+        raise
+    except BaseException:
+        recorder.discard()
+        raise
+    recorder.finish(result, scene.config.simulation.trace_period_s)
+    return result
+
+
+def extractors_real(args: argparse.Namespace, progress: bool) -> int:
+    """``extractors bench --real SETS_OR_RECORDING`` and ``extractors import --real RECORDING
+    --out DIR`` (a recording's profiles in the real-data layout)."""
+    from seamtrack.bench.extractors import bench_real, load_real_sets
+    from seamtrack.io.output import check_writable, new_dir
+
+    recording = {"topic": args.topic, "labels": args.labels, "joint": args.joint}
+    if args.real is None:
+        raise SeamtrackError(
+            "import needs a recording", field="--real", fix="give --real run.mcap (or a bag)"
+        )
+    if args.action == "import":
+        from seamtrack.bridge.extra import is_recording
+
+        if not is_recording(args.real):
+            raise SeamtrackError(
+                f"{args.real!r} is not a recording", field="--real",
+                fix="give an .mcap file or a ROS bag (a set folder needs no import)",
+            )  # fmt: skip
+        out = check_writable(args.out)
+        (found,) = load_real_sets(args.real, **recording)  # refused before anything is written
+        from seamtrack.bridge.importer import read_scans, write_real_set
+
+        scans = read_scans(args.real, args.topic, args.labels, joint=found.joint)
+        write_real_set(scans, out, joint=found.joint)
+        labelled = "with labels" if found.labels is not None else "without labels"
+        print(
+            f"wrote {Path(out)}/set.json, profiles.npz: {len(found.profiles)} profiles, {labelled}"
+        )
+        return 0
+    load_real_sets(args.real, **recording)  # a bad input is refused before any writing
+    with new_dir(args.out) as out:
+        bench_real(args.real, out, progress=progress, **recording)
+    print((out / "extractors_real.md").read_text(), end="")
+    print(f"wrote {out}/extractors_real.csv, extractors_real.md, extractors_real.json")
+    return 0
