@@ -45,9 +45,7 @@ _IGNORE.add("bridge_wait_s")
 
 def client_scripts() -> Path:
     """tests/bridge_clients of the source checkout seamtrack runs from."""
-    import seamtrack
-
-    folder = Path(seamtrack.__file__).resolve().parents[1] / "tests" / "bridge_clients"
+    folder = Path(__file__).resolve().parents[2] / "tests" / "bridge_clients"
     if not folder.is_dir():
         from seamtrack.errors import SeamtrackError
 

@@ -73,16 +73,17 @@ class ZenohTransport:
         self.timeout_s = timeout_s
         self.wait_s = wait_s
         self.domain = domain_id
-        config = zenoh.Config()
-        config.insert_json5("mode", '"router"')
-        config.insert_json5("listen/endpoints", json.dumps([endpoint]))
-        config.insert_json5("scouting/multicast/enabled", "false")
-        config.insert_json5("transport/link/rx/max_message_size", str(HARD_LIMIT_BYTES))
         try:
+            config = zenoh.Config()
+            config.insert_json5("mode", '"router"')
+            config.insert_json5("listen/endpoints", json.dumps([endpoint]))
+            config.insert_json5("scouting/multicast/enabled", "false")
+            config.insert_json5("transport/link/rx/max_message_size", str(HARD_LIMIT_BYTES))
             self.session = zenoh.open(config)
         except Exception as exc:  # zenoh.ZError: the port is taken, the locator is wrong
+            why = str(exc).split(" at /")[0][:200]  # zenoh's message, not its source path
             raise BridgeFailure(
-                f"cannot listen on {endpoint!r}: {exc}",
+                f"cannot listen on {endpoint!r}: {why}",
                 field="--endpoint",
                 fix="give a free zenoh locator, e.g. tcp/127.0.0.1:7448",
             ) from None

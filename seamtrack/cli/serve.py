@@ -53,7 +53,8 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
     return p
 
 
-def make_transport(args: argparse.Namespace) -> Any:
+def check_flags(args: argparse.Namespace) -> None:
+    """The command's own numbers, checked before anything is loaded."""
     from seamtrack.errors import SeamtrackError
 
     for name in ("timeout_s", "wait_s"):
@@ -63,6 +64,16 @@ def make_transport(args: argparse.Namespace) -> Any:
             raise SeamtrackError(
                 f"must be > 0 s, got {value:g}", field=flag, fix=f"give {flag} in seconds, e.g. 5"
             )
+    if not 0 <= args.domain_id <= 232:  # ROS 2's domain ids
+        raise SeamtrackError(
+            f"must be 0 to 232, got {args.domain_id}",
+            field="--domain-id",
+            fix="give the ROS_DOMAIN_ID of your ROS 2 nodes (0 by default)",
+        )
+
+
+def make_transport(args: argparse.Namespace) -> Any:
+    check_flags(args)
     if args.transport == "zenoh":
         from seamtrack.bridge.zenoh_transport import DEFAULT_ENDPOINT, ZenohTransport
 
@@ -86,6 +97,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
     from seamtrack.simulation.scene import load_scene
     from seamtrack.viz.plots import plot_run
 
+    check_flags(args)
     scene = load_scene(args.scene, list(args.set or []))
     out = Path(args.out) if args.out else Path("runs") / scene.name
     check_writable(out)
