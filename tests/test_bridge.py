@@ -60,12 +60,18 @@ def _endpoint(transport: str) -> str:
 
 
 def _serve(
-    scene: str, transport: str, out: Path, misbehave: str = "", timeout_s: float = 10.0
+    scene: str,
+    transport: str,
+    out: Path,
+    misbehave: str = "",
+    timeout_s: float = 10.0,
+    lockstep: str = "tick",
 ) -> tuple[subprocess.CompletedProcess, subprocess.CompletedProcess]:
     endpoint = _endpoint(transport)
     server = subprocess.Popen(
         [sys.executable, "-m", "seamtrack.cli", "serve", scene, *_sets(scene)]
         + ["--transport", transport, "--endpoint", endpoint, "--out", str(out)]
+        + ["--lockstep", lockstep]
         + ["--no-plot", "-q", "--timeout-s", str(timeout_s), "--wait-s", "60"],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
@@ -133,6 +139,23 @@ def test_external_algorithm2_equals_in_process(
     if scene == "paper-corner":  # the corner is turned and welded to the end
         assert summary["status"] == "completed"
         assert math.isfinite(summary["max_error_mm"])
+
+
+@pytest.mark.parametrize("transport", ["zmq", "zenoh"])
+def test_frame_lockstep_with_ask_within_is_exact_too(
+    transport: str, in_process: dict[str, Path], tmp_path: Path
+) -> None:
+    """With one step per frame, plus a step whenever the torch comes within the client's
+    ``ask_within`` (its radius) of the target, algorithm II still switches on the very tick:
+    the same run, in a fraction of the round trips."""
+    out = tmp_path / "run"
+    server, client = _serve("paper-corner", transport, out, lockstep="frame")
+    assert server.returncode == 0, server.stderr
+    assert client.returncode == 0, client.stderr
+    _same_run(in_process["paper-corner"], out)
+    summary = json.loads((out / "summary.json").read_text())
+    ticks = round(summary["sim_time_s"] / 0.001) + 1
+    assert summary["frames"] <= summary["bridge_steps"] < ticks / 10
 
 
 CAUSES = {

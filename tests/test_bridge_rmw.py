@@ -80,11 +80,13 @@ def _command(body: object, seq: int = 3) -> bytes:
 
 def test_a_json_command_is_read_exactly() -> None:
     body = {"target_mm": [1.5, -2.25, 0.1], "speed_mm_s": 5, "stop_at_target": True}
-    cmd = wire.command_from_json(wire.parse(_command(body)), 3)
-    assert cmd is not None
+    cmd, within = wire.command_from_json(wire.parse(_command(body)), 3)
+    assert cmd is not None and within == 0.0
     assert cmd.target_world.tolist() == [1.5, -2.25, 0.1] and cmd.speed_mm_s == 5.0
     assert cmd.stop_at_target and cmd.rotation_world is None
-    assert wire.command_from_json(wire.parse(_command(None)), 3) is None
+    assert wire.command_from_json(wire.parse(_command(None)), 3) == (None, 0.0)
+    body["ask_within_mm"] = 1.0
+    assert wire.command_from_json(wire.parse(_command(body)), 3)[1] == 1.0
 
 
 @pytest.mark.parametrize(
@@ -96,6 +98,7 @@ def test_a_json_command_is_read_exactly() -> None:
         (_command({"target_mm": [0, 0], "speed_mm_s": 1}), "'target_mm'"),
         (_command({"target_mm": [0, 0, 0], "speed_mm_s": 0}), "'speed_mm_s'"),
         (_command({"target_mm": [0, 0, 0], "speed_mm_s": 1, "exec": "x"}), "unknown"),
+        (_command({"target_mm": [0, 0, 0], "speed_mm_s": 1, "ask_within_mm": -1}), "negative"),
         (_command({"target_mm": [0, 0, 0], "speed_mm_s": 1}, seq=2), "step 2 where step 3"),
         (_command({"target_mm": [0, 0, 0], "speed_mm_s": 1, "rotation": [[2, 0, 0]] * 3}), "rot"),
         (json.dumps({"op": "command", "seq": 3, "pad": "x" * 5000}).encode(), "4096-byte"),
@@ -107,14 +110,16 @@ def test_bad_json_commands_are_refused(raw: bytes, why: str) -> None:
 
 
 # --------------------------------------------------------------------------- CDR commands
-def _pair(frame: str = "world", q=(0.0, 0.0, 0.0, 0.0), linear=(0.005, 1.0, 0.0)):
+def _pair(frame: str = "world", q=(0.0, 0.0, 0.0, 0.0), linear=(0.005, 1.0, 0.001)):
     from seamtrack.bridge.zenoh_transport import command_from_ros
 
     pose = messages.decode(rmw.encode_pose(1.0, frame, (10.0, 20.0, 30.0), None), rmw.POSE_STAMPED)
     pose.pose.orientation.x, pose.pose.orientation.y = q[0], q[1]
     pose.pose.orientation.z, pose.pose.orientation.w = q[2], q[3]
     speed = messages.decode(rmw.encode_twist(1.0, "world", linear, (0, 0, 0)), rmw.TWIST_STAMPED)
-    return command_from_ros(pose, speed)
+    command, within = command_from_ros(pose, speed)
+    assert within == (0.0 if command is None else 1.0)
+    return command
 
 
 def test_a_ros_command_pair_is_read() -> None:
@@ -138,6 +143,7 @@ def test_a_ros_command_pair_is_read() -> None:
         ({"q": (0.0, 0.0, 0.0, 2.0)}, "unit"),
         ({"linear": (0.0, 0.0, 0.0)}, "speed > 0"),
         ({"linear": (0.005, 0.5, 0.0)}, "stop 0 or 1"),
+        ({"linear": (0.005, 1.0, -0.001)}, "ask within >= 0"),
         ({"linear": (float("nan"), 0.0, 0.0)}, "not finite"),
     ],
 )

@@ -6,9 +6,11 @@ transport (:mod:`seamtrack.bridge.zmq_transport`, :mod:`seamtrack.bridge.zenoh_t
 and blocks until the tracker's command comes back; only then does the loop simulate on.
 
 Steps: with ``lockstep = "tick"`` every control tick is a step (the loop asks its tracker for a
-command at every tick, so an external tracker reproduces any in-process one exactly, the
-paper's algorithm II included); with ``lockstep = "frame"`` only the ticks at which a sensor
-frame reaches the tracker are steps, and the command received then holds until the next one.
+command at every tick, so an external tracker reproduces any in-process one exactly); with
+``lockstep = "frame"`` the steps are the ticks at which a sensor frame reaches the tracker,
+and the ticks at which the torch comes within the tracker's ``ask_within_mm`` of its target
+(the moment the paper's algorithm II switches to its next point: with it, algorithm II is
+exact in frame lockstep too); in between, the last command holds.
 A step carries the frames that arrived at it (profile, seam point, the sensor's pose) and the
 torch's position and velocity at that tick.
 
@@ -78,15 +80,24 @@ class Step:
     frames: list[Frame] = field(default_factory=list)
 
 
+#: A tracker's answer: the command, and the distance from its target within which the tracker
+#: wants to be asked again before the next frame (frame lockstep; 0: not before the frame).
+Reply = tuple["Command | None", float]
+
+#: Asked within ``ask_within_mm`` a little early rather than a tick late (a spare round trip
+#: changes nothing: the tracker answers the same).
+_ASK_MARGIN = 1e-9
+
+
 class Transport(Protocol):
     """How steps go out and commands come in (one tracker process at a time)."""
 
     def start(self, context: TrackerContext, chain: TfChain, lockstep: str) -> None:
         """Wait for the tracker process and give it the run's context."""
 
-    def exchange(self, step: Step) -> Command | None:
-        """Send ``step``; return the tracker's answer (None: brake to rest and wait).
-        Raises :class:`BridgeFailure`."""
+    def exchange(self, step: Step) -> Reply:
+        """Send ``step``; return the tracker's answer (None: brake to rest and wait) and its
+        ``ask_within_mm`` (0: none). Raises :class:`BridgeFailure`."""
 
     def finish(self, summary: dict[str, Any]) -> None:
         """Tell the tracker the run is over (best effort)."""
@@ -126,6 +137,7 @@ class BridgeTracker:
         self.wait_time_s = 0.0
         self._frames: list[Frame] = []
         self._last: Command | None = None
+        self._within = 0.0
 
     def reset(self, context: TrackerContext) -> None:
         start = time.perf_counter()
@@ -153,13 +165,13 @@ class BridgeTracker:
     ) -> Command | None:
         if self.failure is not None:
             return None
-        if self.lockstep == "frame" and not self._frames:
+        if self.lockstep == "frame" and not self._frames and not self._asks(tcp_world):
             return self._last
         step = Step(self.steps, t_s, tcp_world, tcp_velocity_world, self._frames)
         self._frames = []
         start = time.perf_counter()
         try:
-            received = self.transport.exchange(step)
+            received, self._within = self.transport.exchange(step)
         except BridgeFailure as exc:
             self.failure = exc
             return None
@@ -168,6 +180,14 @@ class BridgeTracker:
         if not _same(received, self._last):  # the loop re-plans only on a new command object
             self._last = received
         return self._last
+
+    def _asks(self, tcp_world: FloatArray) -> bool:
+        """Frame lockstep between frames: is the torch within the tracker's ``ask_within_mm``
+        of its target?"""
+        if self._within <= 0.0 or self._last is None:
+            return False
+        d = np.asarray(tcp_world, dtype=float) - self._last.target_world
+        return math.sqrt(float(d @ d)) <= self._within * (1.0 + _ASK_MARGIN) + _ASK_MARGIN
 
 
 def _same(a: Command | None, b: Command | None) -> bool:

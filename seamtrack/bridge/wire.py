@@ -10,7 +10,9 @@ Client -> server:
   ``target_mm`` (x, y, z, required), ``speed_mm_s`` (> 0, required), and optionally
   ``stop_at_target`` (bool, arrive at rest), ``velocity_ff_mm_s`` (x, y, z),
   ``rotation`` (3 x 3 rows, the tool orientation goal ``R_world_tcp``) and
-  ``angular_velocity_rad_s`` (x, y, z). ``null`` brakes to rest and waits. No other key.
+  ``angular_velocity_rad_s`` (x, y, z), and ``ask_within_mm`` (with frame lockstep: ask
+  again as soon as the torch is within this distance of the target, not only at the next
+  frame). ``null`` brakes to rest and waits. No other key.
 
 Server -> client:
 
@@ -30,7 +32,7 @@ from typing import Any
 
 import numpy as np
 
-from seamtrack.bridge.lockstep import BridgeFailure, Step, finite_vector
+from seamtrack.bridge.lockstep import BridgeFailure, Reply, Step, finite_vector
 from seamtrack.control.tracking import Command, TrackerContext
 
 PROTOCOL = 1
@@ -39,6 +41,7 @@ PROTOCOL = 1
 MAX_MESSAGE_BYTES = 4096
 
 _COMMAND_KEYS = {
+    "ask_within_mm",
     "target_mm",
     "speed_mm_s",
     "stop_at_target",
@@ -136,8 +139,9 @@ def expect(message: dict[str, Any], op: str) -> None:
         )
 
 
-def command_from_json(message: dict[str, Any], seq: int) -> Command | None:
-    """The command answering step ``seq``; every field checked, nothing evaluated."""
+def command_from_json(message: dict[str, Any], seq: int) -> Reply:
+    """The command answering step ``seq`` and its ``ask_within_mm`` (0 when not given);
+    every field checked, nothing evaluated."""
     expect(message, "command")
     if set(message) - {"op", "seq", "command"}:
         raise _bad("has keys other than op, seq, command")
@@ -146,7 +150,7 @@ def command_from_json(message: dict[str, Any], seq: int) -> Command | None:
         raise _bad(f"answers step {str(got)[:20]} where step {seq} was due", "echo the step's seq")
     body = message.get("command")
     if body is None:
-        return None
+        return None, 0.0
     if not isinstance(body, dict):
         raise _bad("'command' is neither null nor an object")
     unknown = set(body) - _COMMAND_KEYS
@@ -161,7 +165,10 @@ def command_from_json(message: dict[str, Any], seq: int) -> Command | None:
     stop = body.get("stop_at_target", False)
     if not isinstance(stop, bool):
         raise _bad("'stop_at_target' is not true or false")
-    return make_command(
+    within = _optional(body, "ask_within_mm", 1)
+    if within is not None and within[0] < 0:
+        raise _bad("'ask_within_mm' is negative")
+    command = make_command(
         target,
         float(speed),
         stop,
@@ -169,6 +176,7 @@ def command_from_json(message: dict[str, Any], seq: int) -> Command | None:
         _optional(body, "rotation", 9),
         _optional(body, "angular_velocity_rad_s", 3),
     )
+    return command, 0.0 if within is None else within[0]
 
 
 def make_command(
@@ -198,6 +206,8 @@ def _optional(body: dict[str, Any], key: str, n: int) -> list[float] | None:
     value = body.get(key)
     if value is None:
         return None
+    if n == 1:
+        value = [value]
     if key == "rotation" and isinstance(value, list) and all(isinstance(r, list) for r in value):
         value = [v for row in value for v in row] if len(value) == 3 else None
     checked = finite_vector(value, n)

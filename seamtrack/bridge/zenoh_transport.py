@@ -27,9 +27,9 @@ from typing import Any
 import numpy as np
 
 from seamtrack.bridge import messages, rmw
-from seamtrack.bridge.lockstep import BridgeFailure, Step, TfChain
+from seamtrack.bridge.lockstep import BridgeFailure, Reply, Step, TfChain
 from seamtrack.bridge.wire import MAX_MESSAGE_BYTES, context_json, make_command
-from seamtrack.control.tracking import Command, TrackerContext
+from seamtrack.control.tracking import TrackerContext
 
 encode = messages.encode
 
@@ -157,7 +157,7 @@ class ZenohTransport:
         message = {"lockstep": lockstep, "context": context_json(context)}
         self._put("/seamtrack/context", rmw.encode_string(json.dumps(message)))
 
-    def exchange(self, step: Step) -> Command | None:
+    def exchange(self, step: Step) -> Reply:
         for f in step.frames:
             t = f.t_capture_s
             self._put("/tf", encode(messages.tf_message(self._chain(f.T_world_sensor), t)))
@@ -208,7 +208,7 @@ class ZenohTransport:
                 fix="start the tracker node (RMW_IMPLEMENTATION=rmw_zenoh_cpp), or raise " + field,
             ) from None
 
-    def _command(self, t_s: float, seq: int) -> Command | None:
+    def _command(self, t_s: float, seq: int) -> Reply:
         want = int(round(t_s * 1e9))
         got: dict[str, Any] = {}
         deadline = time.monotonic() + self.timeout_s
@@ -246,15 +246,16 @@ _KEEP_RUNNING = "keep the tracker node running until /seamtrack/status says the 
 _FIX_TYPES = "publish geometry_msgs/msg/PoseStamped and TwistStamped as docs/bridge.md gives them"
 
 
-def command_from_ros(pose_msg: Any, speed_msg: Any) -> Command | None:
-    """The command pair as a :class:`Command` (see docs/bridge.md): ``cmd_pose`` in ``world``
-    (m; an all-zero quaternion keeps the tool's orientation; an empty ``frame_id`` brakes to
-    rest and waits), ``cmd_speed``: ``linear.x`` the path speed (m/s, > 0), ``linear.y`` 1 to
-    arrive at rest on the target (else 0), ``angular`` the turn rate of the orientation goal
-    (rad/s, world axes)."""
+def command_from_ros(pose_msg: Any, speed_msg: Any) -> Reply:
+    """The command pair as a :class:`Command` and its ``ask_within_mm`` (docs/ros.md):
+    ``cmd_pose`` in ``world`` (m; an all-zero quaternion keeps the tool's orientation; an
+    empty ``frame_id`` brakes to rest and waits), ``cmd_speed``: ``linear.x`` the path speed
+    (m/s, > 0), ``linear.y`` 1 to arrive at rest on the target (else 0), ``linear.z`` the
+    distance from the target within which to ask again (m, frame lockstep; 0: at the next
+    frame), ``angular`` the turn rate of the orientation goal (rad/s, world axes)."""
     frame = pose_msg.header.frame_id
     if frame == "":
-        return None
+        return None, 0.0
     if frame != "world":
         raise BridgeFailure(
             f"cmd_pose is in frame {frame[:40]!r}", fix="give the target in 'world' (or '' to stop)"
@@ -266,10 +267,11 @@ def command_from_ros(pose_msg: Any, speed_msg: Any) -> Command | None:
     values = (p.x, p.y, p.z, q.x, q.y, q.z, q.w, v.x, v.y, v.z, w.x, w.y, w.z)
     if not rmw.is_finite(*values):
         raise BridgeFailure("sent a command that is not finite", fix=_FIX_TYPES)
-    if not v.x > 0 or v.y not in (0.0, 1.0) or v.z != 0.0:
+    if not v.x > 0 or v.y not in (0.0, 1.0) or v.z < 0.0:
         raise BridgeFailure(
-            "cmd_speed is not (speed > 0, stop 0 or 1, 0)",
-            fix="linear.x: the path speed in m/s; linear.y: 1 to arrive at rest; linear.z: 0",
+            "cmd_speed is not (speed > 0, stop 0 or 1, ask within >= 0)",
+            fix="linear.x: the path speed in m/s; linear.y: 1 to arrive at rest; linear.z: "
+            "the distance to ask again within, m (0: at the next frame)",
         )
     rotation = None
     norm = float(np.sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w))
@@ -279,4 +281,5 @@ def command_from_ros(pose_msg: Any, speed_msg: Any) -> Command | None:
         rotation = messages.rotation((q.x, q.y, q.z, q.w)).ravel().tolist()
     omega = None if (w.x, w.y, w.z) == (0.0, 0.0, 0.0) else [w.x, w.y, w.z]
     target = [p.x * 1000.0, p.y * 1000.0, p.z * 1000.0]
-    return make_command(target, v.x * 1000.0, v.y == 1.0, None, rotation, omega)
+    command = make_command(target, v.x * 1000.0, v.y == 1.0, None, rotation, omega)
+    return command, v.z * 1000.0

@@ -16,8 +16,8 @@ import time
 from typing import Any
 
 from seamtrack.bridge import wire
-from seamtrack.bridge.lockstep import BridgeFailure, Step, TfChain
-from seamtrack.control.tracking import Command, TrackerContext
+from seamtrack.bridge.lockstep import BridgeFailure, Reply, Step, TfChain
+from seamtrack.control.tracking import TrackerContext
 
 DEFAULT_ENDPOINT = "tcp://127.0.0.1:5555"
 
@@ -88,7 +88,7 @@ class ZmqTransport:
         self.sock.send(json.dumps(reset).encode())
         wire.expect(wire.parse(self._recv(self.timeout_s, "--timeout-s", "answer")), "ready")
 
-    def exchange(self, step: Step) -> Command | None:
+    def exchange(self, step: Step) -> Reply:
         self.sock.send(wire.step_json(step, self.with_profile))
         raw = self._recv(self.timeout_s, "--timeout-s", f"answer step {step.seq}")
         return wire.command_from_json(wire.parse(raw), step.seq)

@@ -36,9 +36,9 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
     p.add_argument(
         "--lockstep",
         choices=["tick", "frame"],
-        default="tick",
-        help="tick: a command every control tick (exact for any tracker); frame: one per "
-        "sensor frame, held until the next (default tick)",
+        default="frame",
+        help="frame (default): a step per sensor frame, and when the torch comes within the "
+        "tracker's ask_within of its target; tick: a step every control tick",
     )
     p.add_argument(
         "--timeout-s", type=float, default=5.0, help="deadline for each answer (default 5 s)"

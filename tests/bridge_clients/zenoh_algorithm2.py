@@ -176,12 +176,14 @@ def main() -> int:
                 header = T["std_msgs/msg/Header"](stamp=msg.header.stamp, frame_id="")
             else:
                 target, stop, speed_x = cmd[0], 1.0 if cmd[1] else 0.0, tracker.speed
+            # Ask again within the radius (frame lockstep): that is where the switch comes.
+            within = 0.0 if cmd is None or cmd[1] else tracker.radius
             pose = T["geometry_msgs/msg/Pose"](
                 position=T["geometry_msgs/msg/Point"](x=target[0], y=target[1], z=target[2]),
                 orientation=T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=0.0),
             )
             twist = T["geometry_msgs/msg/Twist"](
-                linear=T["geometry_msgs/msg/Vector3"](x=speed_x, y=stop, z=0.0), angular=zero
+                linear=T["geometry_msgs/msg/Vector3"](x=speed_x, y=stop, z=within), angular=zero
             )
             publish(
                 "/seamtrack/cmd_pose", T["geometry_msgs/msg/PoseStamped"](header=header, pose=pose)

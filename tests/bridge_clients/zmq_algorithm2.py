@@ -50,6 +50,8 @@ class ConvergenceRadius:
                 "speed_mm_s": self.speed,
                 "stop_at_target": last,
             }
+            if not last:  # the switch comes within the radius: be asked then (frame lockstep)
+                self.command["ask_within_mm"] = self.radius
         return self.command
 
 
