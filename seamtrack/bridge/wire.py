@@ -66,10 +66,6 @@ def context_json(context: TrackerContext) -> dict[str, Any]:
     }
 
 
-def _nan_to_none(values: np.ndarray) -> list[Any]:
-    return [None if not math.isfinite(v) else v for v in values.tolist()]
-
-
 def step_json(step: Step, with_profile: bool) -> bytes:
     frames = []
     for f in step.frames:
@@ -79,8 +75,8 @@ def step_json(step: Step, with_profile: bool) -> bytes:
             pts = f.profile.points_laser
             assert f.profile.reason is not None
             profile = {
-                "y_mm": _nan_to_none(pts[:, 0]),
-                "z_mm": _nan_to_none(pts[:, 1]),
+                "y_mm": pts[:, 0].tolist(),
+                "z_mm": pts[:, 1].tolist(),
                 "reason": f.profile.reason.tolist(),
             }
         frames.append(
@@ -102,7 +98,9 @@ def step_json(step: Step, with_profile: bool) -> bytes:
         "tcp_velocity_mm_s": np.asarray(step.tcp_velocity_world, dtype=float).tolist(),
         "frames": frames,
     }
-    return json.dumps(message, allow_nan=False).encode()
+    # NaN (an invalid profile point) as null: the only NaN tokens in the text are numbers (no
+    # key or string holds "NaN"); one pass over the text costs far less than one per float.
+    return json.dumps(message).replace("NaN", "null").encode()
 
 
 def parse(raw: bytes, limit: int = MAX_MESSAGE_BYTES) -> dict[str, Any]:
