@@ -77,7 +77,8 @@ class ZenohTransport:
             config = zenoh.Config()
             config.insert_json5("mode", '"router"')
             config.insert_json5("listen/endpoints", json.dumps([endpoint]))
-            config.insert_json5("scouting/multicast/enabled", "false")
+            config.insert_json5("scouting/multicast/enabled", "false")  # listen, don't announce
+            config.insert_json5("adminspace/enabled", "false")  # no router admin queries
             config.insert_json5("transport/link/rx/max_message_size", str(HARD_LIMIT_BYTES))
             self.session = zenoh.open(config)
         except Exception as exc:  # zenoh.ZError: the port is taken, the locator is wrong
