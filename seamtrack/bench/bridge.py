@@ -94,10 +94,13 @@ def _bridged(transport: str, lockstep: str, sim_s: float, clients: Path) -> dict
     )
     try:
         result, tracker = serve(parts, server, lockstep, seed=scene.config.simulation.seed)
-        client.wait(timeout=60)
+        client.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        pass  # the run is over; a client still waiting for the end is ended below
     finally:
         if client.poll() is None:
             client.kill()
+            client.wait()
     if tracker.failure is not None:
         raise RuntimeError(f"bench bridge {transport}/{lockstep}: {tracker.failure}")
     return dict(result.summary)

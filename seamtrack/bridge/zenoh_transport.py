@@ -183,6 +183,7 @@ class ZenohTransport:
 
         text = json.dumps({"status": summary.get("status"), "summary": json_safe(summary)})
         self._put("/seamtrack/status", rmw.encode_string(text))
+        time.sleep(SETTLE_S)  # let it leave before the session closes
 
     def close(self) -> None:
         for token in self._tokens:
