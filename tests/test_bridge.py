@@ -66,6 +66,7 @@ def _serve(
     misbehave: str = "",
     timeout_s: float = 10.0,
     lockstep: str = "tick",
+    client_args: tuple[str, ...] = (),
 ) -> tuple[subprocess.CompletedProcess, subprocess.CompletedProcess]:
     endpoint = _endpoint(transport)
     server = subprocess.Popen(
@@ -78,9 +79,8 @@ def _serve(
         text=True,
     )
     script = CLIENTS / f"{transport}_algorithm2.py"
-    args = [sys.executable, str(script), endpoint] + (
-        ["--misbehave", misbehave] if misbehave else []
-    )
+    args = [sys.executable, str(script), endpoint, *client_args]
+    args += ["--misbehave", misbehave] if misbehave else []
     client = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         s_out, s_err = server.communicate(timeout=240)
@@ -156,6 +156,31 @@ def test_frame_lockstep_with_ask_within_is_exact_too(
     summary = json.loads((out / "summary.json").read_text())
     ticks = round(summary["sim_time_s"] / 0.001) + 1
     assert summary["frames"] <= summary["bridge_steps"] < ticks / 10
+
+
+def test_every_frame_brings_its_profile_tf_and_clock_over_zenoh(
+    in_process: dict[str, Path], tmp_path: Path
+) -> None:
+    """A ROS 2 subscriber gets, per sensor frame, one PointCloud2 stamped with the capture time
+    (one point per ray: 256 here), one TFMessage with the chain world -> base -> tcp -> sensor,
+    and a Clock at every step."""
+    import numpy as np
+
+    out = tmp_path / "run"
+    server, client = _serve(
+        "paper-v-groove", "zenoh", out, lockstep="frame", client_args=("--check-frames",)
+    )
+    assert server.returncode == 0, server.stderr
+    _same_run(in_process["paper-v-groove"], out)
+    seen = json.loads(client.stdout.strip().splitlines()[-1])
+    frames = np.loadtxt(out / "frames.csv", delimiter=",", skiprows=1, ndmin=2)
+    stamps = [sec + ns * 1e-9 for sec, ns, _ in seen["/seamtrack/profile"]]
+    assert np.allclose(stamps, frames[:, 0], rtol=0, atol=1e-9)
+    assert {width for *_, width in seen["/seamtrack/profile"]} == {256}
+    chain = [["world", "base"], ["base", "tcp"], ["tcp", "sensor"]]
+    assert seen["/tf"] == [chain] * len(frames)
+    summary = json.loads((out / "summary.json").read_text())
+    assert len(seen["/clock"]) == summary["bridge_steps"]
 
 
 CAUSES = {

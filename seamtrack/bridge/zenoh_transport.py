@@ -98,7 +98,10 @@ class ZenohTransport:
         entity = 1
         for topic, msgtype in PUBLISHES.items():
             key = rmw.topic_key(domain_id, topic, msgtype)
-            self.pubs[topic] = self.session.declare_publisher(key)
+            # Reliable and blocking: in lockstep no message may be dropped, nor overtaken.
+            self.pubs[topic] = self.session.declare_publisher(
+                key, congestion_control=zenoh.CongestionControl.BLOCK
+            )
             self.gids[topic] = rmw.gid(f"{sid}/{topic}")
             token = rmw.entity_token(domain_id, sid, 0, entity, "MP", NODE, "", topic, msgtype)
             self._tokens.append(live.declare_token(token))
@@ -153,7 +156,13 @@ class ZenohTransport:
                 if need <= have:
                     self.client = fields["session"]
         # Zenoh routes a new subscription to our publishers a little after its token shows:
-        # give the declarations time to settle before the first message goes out.
+        # wait until every topic the tracker subscribes to reaches it (matching status).
+        client = self.client
+        wanted = [t for kind, t in seen[client] if kind == "MS" and t in self.pubs]
+        while not all(self.pubs[t].matching_status.matching for t in wanted):
+            if time.monotonic() > deadline:
+                self._next(deadline, "--wait-s", "receive from its subscriptions")
+            time.sleep(0.01)
         time.sleep(SETTLE_S)
         message = {"lockstep": lockstep, "context": context_json(context)}
         self._put("/seamtrack/context", rmw.encode_string(json.dumps(message)))

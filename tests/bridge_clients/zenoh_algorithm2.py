@@ -86,6 +86,7 @@ def main() -> int:
     ap.add_argument("locator")
     ap.add_argument("--radius-mm", type=float, default=1.0)
     ap.add_argument("--misbehave", default="")
+    ap.add_argument("--check-frames", action="store_true")
     args = ap.parse_args()
     config = zenoh.Config()
     config.insert_json5("mode", '"client"')
@@ -112,6 +113,11 @@ def main() -> int:
         "/seamtrack/seam_point_world": "geometry_msgs/msg/PointStamped",
         "/seamtrack/tcp": "geometry_msgs/msg/PoseStamped",
     }
+    if args.check_frames:  # what a frame brings besides the seam point, counted and stamped
+        subs["/seamtrack/profile"] = "sensor_msgs/msg/PointCloud2"
+        subs["/tf"] = "tf2_msgs/msg/TFMessage"
+        subs["/clock"] = "rosgraph_msgs/msg/Clock"
+    seen: dict[str, list] = {"/seamtrack/profile": [], "/tf": [], "/clock": []}
     pubs = {
         "/seamtrack/cmd_pose": "geometry_msgs/msg/PoseStamped",
         "/seamtrack/cmd_speed": "geometry_msgs/msg/TwistStamped",
@@ -127,7 +133,9 @@ def main() -> int:
     publishers = {}
     gids = {}
     for topic, msgtype in pubs.items():
-        publishers[topic] = session.declare_publisher(key(topic, msgtype))
+        publishers[topic] = session.declare_publisher(
+            key(topic, msgtype), congestion_control=zenoh.CongestionControl.BLOCK
+        )
         gids[topic] = hashlib.sha256(f"{sid}{topic}".encode()).digest()[:16]
         tokens.append(live.declare_token(token(sid, entity, "MP", topic, msgtype)))
         entity += 1
@@ -146,8 +154,18 @@ def main() -> int:
             context = json.loads(TS.deserialize_cdr(raw, subs[topic]).data)["context"]
             speed = context["welding_speed_mm_s"] / 1000.0
             tracker = ConvergenceRadius(speed, args.radius_mm / 1000.0)
+        elif topic in seen:
+            msg = TS.deserialize_cdr(raw, subs[topic])
+            if topic == "/seamtrack/profile":
+                seen[topic].append([msg.header.stamp.sec, msg.header.stamp.nanosec, msg.width])
+            elif topic == "/tf":
+                seen[topic].append([[t.header.frame_id, t.child_frame_id] for t in msg.transforms])
+            else:
+                seen[topic].append([msg.clock.sec, msg.clock.nanosec])
         elif topic == "/seamtrack/status":
             print(TS.deserialize_cdr(raw, subs[topic]).data)
+            if args.check_frames:
+                print(json.dumps(seen))
             break
         elif topic == "/seamtrack/seam_point_world":
             p = TS.deserialize_cdr(raw, subs[topic]).point
