@@ -9,7 +9,8 @@ algorithm II, cut to :data:`SIM_S` simulated seconds. Runs:
 2. for each transport (ZeroMQ with JSON, Zenoh with ROS 2 CDR) and lockstep (a command every
    control tick, or one per frame): the loop served in this process, the tracker an external
    process that imports nothing of seamtrack (tests/bridge_clients/, the scripts the tests
-   run; they need a source checkout).
+   run; they need a source checkout); and ZeroMQ per frame without the profiles (JSON costs
+   milliseconds for 1024 points; the client does not need them).
 
 Per run: wall time of the loop (the wait for the tracker to connect left out), x real time
 (simulated / wall), the bridge's cost per frame ((bridged - in-process wall) / frames) and per
@@ -71,7 +72,9 @@ def _parts(sim_s: float) -> tuple[Any, Any]:
     return scene, build_parts(scene)
 
 
-def _bridged(transport: str, lockstep: str, sim_s: float, clients: Path) -> dict[str, Any]:
+def _bridged(
+    transport: str, lockstep: str, sim_s: float, clients: Path, profile: bool = True
+) -> dict[str, Any]:
     from seamtrack.bridge.lockstep import serve
 
     scene, parts = _parts(sim_s)
@@ -88,7 +91,7 @@ def _bridged(transport: str, lockstep: str, sim_s: float, clients: Path) -> dict
         server = ZenohTransport(endpoint, timeout_s=30.0, wait_s=120.0)
     script = clients / f"{transport}_algorithm2.py"
     client = subprocess.Popen(
-        [sys.executable, str(script), endpoint],
+        [sys.executable, str(script), endpoint, *([] if profile else ["--no-profile"])],
         stdout=subprocess.DEVNULL,
         stderr=subprocess.PIPE,
     )
@@ -157,6 +160,9 @@ def bench_bridge(out_dir: str | Path, quick: bool = False) -> dict[str, Any]:
         for lockstep in ("tick", "frame"):
             summary = _bridged(transport, lockstep, sim_s, clients)
             rows.append(_row(f"{transport} / {lockstep}", summary, base))
+    # JSON is slow for a 1024-point profile: the same without it (the client does not use it).
+    summary = _bridged("zmq", "frame", sim_s, clients, profile=False)
+    rows.append(_row("zmq / frame, no profile", summary, base))
     report = {
         "machine": machine_info(),
         "scene": SCENE,
