@@ -222,7 +222,8 @@ def test_image_mode_records_the_camera_images(tmp_path: Path) -> None:
 
 def test_a_stopped_run_keeps_its_recording(tmp_path: Path) -> None:
     """A run that stops on its time limit is written whole; one interrupted (Ctrl-C) after
-    five frames keeps those five frames; one that fails leaves nothing."""
+    two frames keeps those two frames; one that fails leaves nothing (not even the folders
+    made for the file)."""
     scene = load_scene("paper-verification", {"simulation.time_limit_s": 3.0})
     path = tmp_path / "stalled.mcap"
     result = recorded_run(str(path), scene, build_parts(scene), False)
@@ -248,7 +249,7 @@ def test_a_stopped_run_keeps_its_recording(tmp_path: Path) -> None:
     with pytest.raises(KeyboardInterrupt):
         recorded_run(str(path), scene, interrupting(2, KeyboardInterrupt()), False)
     assert len(_read(path)["/clock"]) == 2
-    path = tmp_path / "failed.mcap"
+    path = tmp_path / "new" / "folders" / "failed.mcap"
     with pytest.raises(RuntimeError):
         recorded_run(str(path), scene, interrupting(2, RuntimeError("boom")), False)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["stalled.mcap", "stopped.mcap"]
@@ -304,3 +305,16 @@ def test_a_run_without_record_imports_no_ros_library(tmp_path: Path) -> None:
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[]"
     assert json.loads((tmp_path / "out" / "summary.json").read_text())["frames"] > 0
+
+
+def test_importer_refuses_more_points_than_memory_allows(
+    recorded, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from seamtrack.bridge import importer
+    from seamtrack.errors import SeamtrackError
+
+    tmp = recorded[0]
+    monkeypatch.setattr(importer, "MAX_POINTS", 3 * 512)
+    with pytest.raises(SeamtrackError, match="more than 1,536 profile points") as info:
+        read_scans(tmp / "run.mcap")
+    assert info.value.field == "--real"

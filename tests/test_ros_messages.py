@@ -198,3 +198,30 @@ def test_observer_sees_every_frame_and_changes_nothing() -> None:
             frames.compose(*(T for _, _, T in chain)), frame.T_world_sensor, atol=1e-9
         )
     assert math.isfinite(seen.summary["max_error_mm"])
+
+
+def test_an_arms_chain_has_its_flange() -> None:
+    """On a UR10e the chain is world -> base -> flange -> tcp -> sensor; the torch on the
+    flange is the arm's tool, and the links compose to the sensor pose of every frame."""
+    pytest.importorskip("pinocchio")
+    arm = {"robot.model": "ur10e", "tracker.name": "trajectory",
+           "robot.base_origin_mm": [200.0, -700.0, 0.0], "seam.length_mm": 20.0}  # fmt: skip
+    scene = st.load_scene("paper-verification", overrides=arm)
+    from seamtrack.simulation.assemble import build_parts
+    from seamtrack.simulation.loop import run
+
+    log = fr.FrameLog()
+    parts = fr.observe(build_parts(scene), log)
+    run(parts)
+    assert len(log.frames) > 3
+    for frame in log.frames:
+        chain = fr.frame_chain(parts.robot, frame.T_world_sensor)
+        assert [c for _, c, _ in chain] == ["base", "flange", "tcp", "sensor"]
+        np.testing.assert_array_equal(chain[2][2], parts.robot.kinematics.T_flange_tcp)
+        np.testing.assert_allclose(
+            frames.compose(*(T for _, _, T in chain)), frame.T_world_sensor, atol=1e-9
+        )
+        back = m.tf_chain(m.decode(m.encode(m.tf_message(chain, frame.t_s)), m.TOPICS["tf"].type))
+        np.testing.assert_allclose(
+            frames.compose(*(T for _, _, T in back)), frame.T_world_sensor, atol=1e-9
+        )

@@ -463,10 +463,10 @@ def _recorded_set(path: Path, topic: str | None, labels: str | None, joint: str 
     scans = read_scans(path, topic, labels, joint=joint)
     kind = scans.joint or ("none" if scans.labels is None else None)
     if kind not in (*REAL_FAMILIES, "none"):
-        raise _real_error(
-            f"the joint of its profiles is {'not known' if kind is None else repr(kind)}",
-            path,
-            f"name it: --joint with one of {', '.join(REAL_FAMILIES)} or none",
+        raise SeamtrackError(
+            f"{path}: the joint of its profiles is {'not known' if kind is None else repr(kind)}",
+            field="--joint",
+            fix=f"name it: --joint with one of {', '.join(REAL_FAMILIES)} or none",
         )
     return RealSet(scans.name, str(kind), scans.profiles,
                    None if kind == "none" else scans.labels, scans.meta)  # fmt: skip

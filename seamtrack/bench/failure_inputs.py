@@ -13,6 +13,7 @@ from seamtrack.bench import (
     failure_inputs_bridge,
     failure_inputs_camera,
     failure_inputs_parts,
+    failure_inputs_ros,
 )
 from seamtrack.bench.failure_kit import (
     ARM,
@@ -489,9 +490,16 @@ CATALOGUE: tuple[Entry, ...] = (
     *failure_inputs_arms.ENTRIES,
     *failure_inputs_parts.ENTRIES,
     *failure_inputs_bridge.ENTRIES,
+    *failure_inputs_ros.ENTRIES,
 )
 
-_AREAS = (failure_inputs_camera, failure_inputs_arms, failure_inputs_parts, failure_inputs_bridge)
+_AREAS = (
+    failure_inputs_camera,
+    failure_inputs_arms,
+    failure_inputs_parts,
+    failure_inputs_bridge,
+    failure_inputs_ros,
+)
 
 
 def workspace(root: Path) -> Path:

@@ -20,7 +20,8 @@ marks the valid points, else every finite point is valid.
 ``/seamtrack/profile``. The labels: ``labels``, else ``/seamtrack/seam_truth`` (seamtrack's
 truth), else the only PointStamped topic other than ``/seamtrack/seam_point`` (that one is the
 recorded extractor's own answer, no label), else none. With labels, only the profiles that have
-one are kept.
+one are kept. A recording of more than :data:`MAX_POINTS` profile points is refused (a run
+stays under 2 GB): bench a part of it.
 """
 
 from __future__ import annotations
@@ -41,6 +42,9 @@ FloatArray = NDArray[np.float64]
 
 CLOUD = "sensor_msgs/msg/PointCloud2"
 POINT = "geometry_msgs/msg/PointStamped"
+#: The most profile points a recording may give (about 0.9 GB as profiles): a run stays under
+#: 2 GB.
+MAX_POINTS = 50_000_000
 #: The extractor families a recording's ``seamtrack`` metadata may name as its joint.
 FAMILIES = ("v-groove", "square-butt", "fillet", "lap", "outside-corner")
 
@@ -144,20 +148,22 @@ def read_scans(
         Not a readable recording, no (or several) profile topics, a label topic that is not
         there, clouds that are not line profiles (field ``field_name``, with a fix).
     """
-    from rosbags.highlevel import AnyReader, AnyReaderError
+    from rosbags.highlevel import AnyReader
 
     p = Path(path)
     if not p.exists():
         raise _error("no such file or folder", p, "give an .mcap file or a bag folder", field_name)
-    clouds: list[tuple[int, Any]] = []
-    points: dict[int, Any] = {}
+    clouds: list[tuple[int, Profile, tuple[str, str]]] = []
+    points: dict[int, tuple[float, float, float]] = {}
+    total = 0
     try:
         with AnyReader([p], default_typestore=msgs.typestore()) as reader:
             found = {c.topic: _normal(c.msgtype) for c in reader.connections}
-            cloud_topic = _choose(found, topic, CLOUD, "profile", p, field_name,
+            where = field_name if topic is None else "--topic"
+            cloud_topic = _choose(found, topic, CLOUD, "profile", p, where,
                                   preferred=(msgs.TOPICS["profile"].name,))  # fmt: skip
             label_topic = _choose(
-                found, labels, POINT, "label", p, field_name,
+                found, labels, POINT, "label", p, field_name if labels is None else "--labels",
                 preferred=("/seamtrack/seam_truth",), skip=(msgs.TOPICS["seam_point"].name,),
                 required=False,
             )  # fmt: skip
@@ -165,31 +171,37 @@ def read_scans(
             for connection, _, raw in reader.messages(connections=wanted):
                 message: Any = reader.deserialize(raw, connection.msgtype)
                 ns = message.header.stamp.sec * 1_000_000_000 + message.header.stamp.nanosec
-                if connection.topic == cloud_topic:
-                    clouds.append((ns, message))
-                else:
-                    points[ns] = message
-    except (AnyReaderError, OSError, ValueError, KeyError, AssertionError) as exc:
+                if connection.topic != cloud_topic:
+                    q = message.point
+                    points[ns] = (q.x, q.y, q.z)
+                    continue
+                profile, use = _profile(message, axes, scale, p, field_name)
+                total += len(profile)
+                if total > MAX_POINTS:
+                    raise _error(
+                        f"more than {MAX_POINTS:,} profile points on {cloud_topic}", p,
+                        "bench a part of it (e.g. mcap filter --start-secs/--end-secs)",
+                        field_name,
+                    )  # fmt: skip
+                clouds.append((ns, profile, use))
+    except SeamtrackError:
+        raise
+    except Exception as exc:  # a damaged or foreign file may fail anywhere in the reader
         raise _error(
             f"not a readable recording ({exc})", p,
-            "give an MCAP file or a ROS bag of sensor_msgs/PointCloud2 profiles", field_name,
+            "give an MCAP file or a ROS bag of PointCloud2 profiles (one cut short: mend it "
+            "with the MCAP CLI, mcap recover)", field_name,
         ) from None  # fmt: skip
     if not clouds:
         raise _error(f"no messages on {cloud_topic}", p, "record the profiles", field_name)
     profiles, label_rows = [], []
-    try:
-        for ns, cloud in clouds:
-            if label_topic is not None and ns not in points:
+    for ns, profile, use in clouds:
+        if label_topic is not None:
+            if ns not in points:
                 continue
-            use = axes if axes is not None else _axes(msgs.cloud_fields(cloud))
-            profiles.append(msgs.cloud_profile(cloud, axes=use, scale=scale))
-            if label_topic is not None:
-                point = points[ns].point
-                label = {"x": point.x, "y": point.y, "z": point.z}
-                label_rows.append((label[use[0]] * scale, label[use[1]] * scale))
-    except ValueError as exc:
-        fix = "give the fields that hold y_L and z_L (axes)"
-        raise _error(str(exc), p, fix, field_name) from None
+            label = dict(zip("xyz", points[ns], strict=True))
+            label_rows.append((label[use[0]] * scale, label[use[1]] * scale))
+        profiles.append(profile)
     if not profiles:
         raise _error(
             f"no profile on {cloud_topic} has a label on {label_topic}", p,
@@ -205,6 +217,17 @@ def read_scans(
     name = p.stem if p.is_file() else p.name
     table = np.array(label_rows, dtype=np.float64).reshape(-1, 2) if label_topic else None
     return Scans(name, profiles, table, joint, meta)
+
+
+def _profile(
+    cloud: Any, axes: tuple[str, str] | None, scale: float, path: Path, field_name: str
+) -> tuple[Profile, tuple[str, str]]:
+    try:
+        use = axes if axes is not None else _axes(msgs.cloud_fields(cloud))
+        return msgs.cloud_profile(cloud, axes=use, scale=scale), use
+    except ValueError as exc:
+        fix = "give the fields that hold y_L and z_L (axes)"
+        raise _error(str(exc), path, fix, field_name) from None
 
 
 def write_real_set(scans: Scans, folder: str | Path, joint: str | None = None) -> Path:

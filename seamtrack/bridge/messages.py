@@ -236,7 +236,13 @@ def _nested(ts: Typestore, typename: str) -> Any:
 
 # --------------------------------------------------------------------------- time, poses
 def stamp(t_s: float, distro: str = DISTRO) -> Any:
-    """Simulated seconds as ``builtin_interfaces/Time`` (rounded to the nanosecond)."""
+    """Simulated seconds as ``builtin_interfaces/Time`` (rounded to the nanosecond). The
+    messages of one frame share one object (do not change it)."""
+    return _stamp(float(t_s), distro)
+
+
+@functools.lru_cache(maxsize=16)
+def _stamp(t_s: float, distro: str) -> Any:
     ns = round(t_s * 1e9)
     return _cached_types(distro).Time(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
 
@@ -256,8 +262,10 @@ def header(t_s: float, frame_id: str, distro: str = DISTRO) -> Any:
 
 
 def quaternion(R: ArrayLike) -> tuple[float, float, float, float]:
-    """A rotation matrix to a unit quaternion (x, y, z, w), w >= 0 (Shepperd's method)."""
-    (a, b, c), (d, e, f), (g, h, i) = np.asarray(R, dtype=np.float64).tolist()
+    """A rotation matrix (or a pose: its rotation) to a unit quaternion (x, y, z, w), w >= 0
+    (Shepperd's method)."""
+    rows = R.tolist() if isinstance(R, np.ndarray) else np.asarray(R, dtype=np.float64).tolist()
+    (a, b, c), (d, e, f), (g, h, i) = (row[:3] for row in rows[:3])
     trace = a + e + i
     if trace > 0:
         s = 2.0 * math.sqrt(1.0 + trace)
@@ -295,9 +303,9 @@ def transform_stamped(
 ) -> Any:
     """A pose (4, 4, mm) as ``geometry_msgs/TransformStamped`` (m): the child in the parent."""
     ty = _cached_types(distro)
-    T = np.asarray(T_parent_child, dtype=np.float64)
-    tx, tyy, tz = (T[:3, 3] / MM_PER_M).tolist()
-    qx, qy, qz, qw = quaternion(T[:3, :3])
+    rows = np.asarray(T_parent_child, dtype=np.float64).tolist()
+    tx, tyy, tz = rows[0][3] / MM_PER_M, rows[1][3] / MM_PER_M, rows[2][3] / MM_PER_M
+    qx, qy, qz, qw = quaternion(rows)
     return ty.TransformStamped(
         header=header(t_s, parent, distro),
         child_frame_id=child,
@@ -353,6 +361,12 @@ _FIELDS = (("x", 0, 8), ("y", 8, 8), ("z", 16, 8), ("reason", 24, 2))  # name, o
 FIELD_TYPES = {1: "i1", 2: "u1", 3: "i2", 4: "u2", 5: "i4", 6: "u4", 7: "f4", 8: "f8"}
 
 
+@functools.cache
+def _point_fields(distro: str) -> list[Any]:
+    ty = _cached_types(distro)
+    return [ty.PointField(name=nm, offset=off, datatype=dt, count=1) for nm, off, dt in _FIELDS]
+
+
 def profile_cloud(
     profile: Profile, t_s: float | None = None, frame_id: str = FRAMES["sensor"],
     distro: str = DISTRO,
@@ -368,9 +382,7 @@ def profile_cloud(
     data["z"] = profile.points_laser[:, 1] / MM_PER_M
     assert profile.reason is not None and profile.valid is not None
     data["reason"] = profile.reason
-    fields = [
-        ty.PointField(name=name, offset=off, datatype=dt, count=1) for name, off, dt in _FIELDS
-    ]
+    fields = _point_fields(distro)  # shared by every cloud, never changed
     return ty.PointCloud2(
         header=header(t_s, frame_id, distro),
         height=1,
@@ -529,6 +541,14 @@ def image_message(
     )
 
 
+def stripe_image_message(image: Any, t_s: float | None = None, distro: str = DISTRO) -> Any:
+    """A :class:`~seamtrack.sensing.camera.StripeImage` as ``sensor_msgs/Image`` (its pixels,
+    its camera's bit depth; stamped with ``t_s``, default the image's capture time)."""
+    if t_s is None:
+        t_s = image.t_s if math.isfinite(image.t_s) else 0.0
+    return image_message(image.pixels, t_s, image.camera.bit_depth, distro=distro)
+
+
 def image_pixels(image: Any) -> NDArray[np.float32]:
     """A ``mono8``/``mono16`` ``sensor_msgs/Image`` back to (rows, columns) fractions of full
     scale."""
@@ -540,3 +560,33 @@ def image_pixels(image: Any) -> NDArray[np.float32]:
     rows = raw.reshape(image.height, image.step)[:, : image.width * dtype.itemsize]
     values = np.ascontiguousarray(rows).view(dtype)
     return (values / (65535.0 if wide else 255.0)).astype(np.float32)
+
+
+# --------------------------------------------------------------------------- one frame
+def frame_messages(
+    t_s: float,
+    profile: Profile,
+    feature: Feature,
+    chain: Iterable[tuple[str, str, ArrayLike]],
+    truth: ArrayLike | None = None,
+    image: Any = None,
+    distro: str = DISTRO,
+) -> list[tuple[str, Any]]:
+    """The (topic, message) pairs of one sensor frame, in the order they are sent: ``/clock``,
+    ``/tf`` (the (parent, child, T_parent_child) ``chain``), the profile, the seam point (when
+    the feature has one), the true seam crossing ``truth`` ((y_L, z_L) mm, when given) and the
+    camera image (a StripeImage, when given). :mod:`seamtrack.bridge.record` records these."""
+    out = [
+        (TOPICS["clock"].name, clock(t_s, distro)),
+        (TOPICS["tf"].name, tf_message(chain, t_s, distro)),
+        (TOPICS["profile"].name, profile_cloud(profile, t_s, distro=distro)),
+    ]
+    point = seam_point(feature, t_s, distro=distro)
+    if point is not None:
+        out.append((TOPICS["seam_point"].name, point))
+    if truth is not None:
+        label = seam_point(Feature.found(truth), t_s, distro=distro)
+        out.append((TOPICS["seam_truth"].name, label))
+    if image is not None:
+        out.append((TOPICS["image"].name, stripe_image_message(image, t_s, distro)))
+    return out

@@ -36,7 +36,6 @@ from seamtrack.bridge import messages as msgs
 from seamtrack.bridge.frames import Frame, frame_chain, true_seam_point
 from seamtrack.errors import OutputError
 from seamtrack.io.output import check_writable
-from seamtrack.sensing.profiles import Feature
 
 #: rosbag2's QoS of a latched (transient-local) topic, as MCAP channel metadata.
 LATCHED_QOS = (
@@ -69,6 +68,11 @@ class McapOut:
     def __init__(self, path: str | Path, compression: str = "zstd") -> None:
         self.target = Path(path)
         folder = self.target.parent if str(self.target.parent) else Path(".")
+        self._created: list[Path] = []  # folders made for the file, innermost first
+        probe = folder.absolute()
+        while not probe.exists():
+            self._created.append(probe)
+            probe = probe.parent
         folder.mkdir(parents=True, exist_ok=True)
         handle, tmp = tempfile.mkstemp(prefix=".partial-", suffix=".mcap", dir=folder)
         self._tmp = Path(tmp)
@@ -139,6 +143,11 @@ class McapOut:
             self._file.close()
         if self._tmp.exists():
             self._tmp.unlink()
+        for created in self._created:
+            try:
+                created.rmdir()  # only if empty
+            except OSError:
+                break
 
 
 class Recorder:
@@ -159,22 +168,14 @@ class Recorder:
         self.out.write(topic, msgs.seam_marker(parts.seam.points), 0.0, latched=True)
 
     def __call__(self, frame: Frame) -> None:
-        out, t = self.out, frame.t_s
-        out.write(msgs.TOPICS["clock"].name, msgs.clock(t), t)
+        t = frame.t_s
         chain = frame_chain(self.robot, frame.T_world_sensor)
-        out.write(msgs.TOPICS["tf"].name, msgs.tf_message(chain, t), t)
-        out.write(msgs.TOPICS["profile"].name, msgs.profile_cloud(frame.profile, t), t)
-        point = msgs.seam_point(frame.feature, t)
-        if point is not None:
-            out.write(msgs.TOPICS["seam_point"].name, point, t)
         sensor = self.sensor
         truth = None if sensor is None else true_seam_point(self.seam, sensor, frame.T_world_sensor)
-        if truth is not None:
-            out.write(msgs.TOPICS["seam_truth"].name, msgs.seam_point(Feature.found(truth), t), t)
-        if frame.image is not None:
-            bits = frame.image.camera.bit_depth  # mono8 up to 8 bits, else mono16
-            image = msgs.image_message(frame.image.pixels, t, bit_depth=bits)
-            out.write(msgs.TOPICS["image"].name, image, t)
+        for topic, message in msgs.frame_messages(
+            t, frame.profile, frame.feature, chain, truth, frame.image
+        ):
+            self.out.write(topic, message, t)
         self.frames += 1
 
     def finish(self, result: Any = None, trace_period_s: float = 0.01) -> Path:

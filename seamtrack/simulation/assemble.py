@@ -237,6 +237,7 @@ def _mesh_scan(scene: Scene, sensor: LaserLineSensor, rng: np.random.Generator) 
         images: list[Any] = [None]  # the last frame's image, for an observer
 
         def measure(T_world_sensor: FloatArray, t_s: float) -> Profile:
+            images[0] = None  # let the last image go before the next is rendered (peak memory)
             image = sensor.render(caster, T_world_sensor, camera=camera, seed=rng,
                                   material=surface, t_s=t_s, exposure=exposure[0])  # fmt: skip
             if camera.exposure_mode == "auto":
