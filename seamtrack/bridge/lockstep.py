@@ -67,6 +67,7 @@ class Frame:
     T_world_sensor: FloatArray
     tcp_world: FloatArray
     profile: Profile | None  # the stripe (mesh mode), the seam point alone (seam mode)
+    image: Any = None  # image mode: the camera image (a StripeImage)
 
 
 @dataclass(frozen=True, eq=False)
@@ -125,7 +126,7 @@ class BridgeTracker:
         transport: Transport,
         chain: TfChain,
         lockstep: str = "tick",
-        profiles: dict[float, Profile] | None = None,
+        profiles: dict[float, tuple[Profile, Any]] | None = None,
     ) -> None:
         self.transport = transport
         self.chain = chain
@@ -148,7 +149,7 @@ class BridgeTracker:
         self.wait_time_s = time.perf_counter() - start
 
     def update(self, measurement: Measurement) -> None:
-        profile = self.profiles.pop(measurement.t_capture_s, None)
+        profile, image = self.profiles.pop(measurement.t_capture_s, (None, None))
         self._frames.append(
             Frame(
                 measurement.t_capture_s,
@@ -157,6 +158,7 @@ class BridgeTracker:
                 measurement.T_world_sensor,
                 np.asarray(measurement.tcp_world, dtype=float),
                 profile,
+                image,
             )
         )
 
@@ -228,7 +230,7 @@ def bridged_parts(parts: Parts, tracker: BridgeTracker) -> Parts:
     profiles = tracker.profiles
 
     def keep(frame: ObservedFrame) -> None:
-        profiles[frame.t_s] = frame.profile
+        profiles[frame.t_s] = (frame.profile, frame.image)
 
     observed = observe(parts, keep)
     return dataclasses.replace(observed, tracker=tracker, tracker_name="bridge")

@@ -5,8 +5,9 @@ gives the formats; docs/bridge.md the topics).
 The bridge is a node ``/seamtrack`` in a Zenoh session in router mode, listening on loopback
 (rmw_zenoh's router port 7447 by default, so a ROS node connects to it as to ``rmw_zenohd``).
 Per step it publishes, for each frame that arrived: ``/tf`` (world -> base -> [flange ->] tcp
--> sensor at capture), ``/seamtrack/profile`` (PointCloud2 in ``sensor``), and when a seam
-point was found ``/seamtrack/seam_point`` (PointStamped in ``world``); then ``/clock``,
+-> sensor at capture), ``/seamtrack/profile`` (PointCloud2 in ``sensor``), when a seam
+point was found ``/seamtrack/seam_point`` (PointStamped), and in image mode
+``/seamtrack/image`` (:func:`seamtrack.bridge.messages.frame_messages`); then ``/clock``,
 ``/seamtrack/tcp_velocity`` (TwistStamped) and, last, ``/seamtrack/tcp`` (PoseStamped, the
 torch tip in ``world``): the step's trigger. The tracker answers with the pair
 ``/seamtrack/cmd_pose`` (PoseStamped) and ``/seamtrack/cmd_speed`` (TwistStamped), both
@@ -41,6 +42,7 @@ PUBLISHES = {
     "/tf": rmw.TFMESSAGE,
     "/clock": rmw.CLOCK,
     "/seamtrack/profile": rmw.POINTCLOUD2,
+    "/seamtrack/image": "sensor_msgs/msg/Image",
     "/seamtrack/seam_point": rmw.POINT_STAMPED,
     "/seamtrack/seam_point_world": rmw.POINT_STAMPED,
     "/seamtrack/tcp_velocity": rmw.TWIST_STAMPED,
@@ -170,12 +172,15 @@ class ZenohTransport:
     def exchange(self, step: Step) -> Reply:
         for f in step.frames:
             t = f.t_capture_s
-            self._put("/tf", encode(messages.tf_message(self._chain(f.T_world_sensor), t)))
-            if f.profile is not None:
-                self._put("/seamtrack/profile", encode(messages.profile_cloud(f.profile, t)))
-            seam_point = messages.seam_point(f.feature, t)
-            if seam_point is not None:
-                self._put("/seamtrack/seam_point", encode(seam_point))
+            if f.profile is None:
+                continue
+            chain = self._chain(f.T_world_sensor)
+            for topic, message in messages.frame_messages(
+                t, f.profile, f.feature, chain, image=f.image
+            ):
+                if topic != "/clock":  # the step's own clock follows
+                    self._put(topic, encode(message))
+            if f.feature:
                 world = rmw.encode_point(t, "world", f.feature.point_world)
                 self._put("/seamtrack/seam_point_world", world)
         t = step.t_s
