@@ -10,6 +10,7 @@ from typing import Any
 from seamtrack._version import __version__
 from seamtrack.bench import (
     failure_inputs_arms,
+    failure_inputs_bridge,
     failure_inputs_camera,
     failure_inputs_parts,
     failure_inputs_ros,
@@ -494,10 +495,17 @@ CATALOGUE: tuple[Entry, ...] = (
     *failure_inputs_camera.ENTRIES,
     *failure_inputs_arms.ENTRIES,
     *failure_inputs_parts.ENTRIES,
+    *failure_inputs_bridge.ENTRIES,
     *failure_inputs_ros.ENTRIES,
 )
 
-_AREAS = (failure_inputs_camera, failure_inputs_arms, failure_inputs_parts, failure_inputs_ros)
+_AREAS = (
+    failure_inputs_camera,
+    failure_inputs_arms,
+    failure_inputs_parts,
+    failure_inputs_bridge,
+    failure_inputs_ros,
+)
 
 
 def workspace(root: Path) -> Path:

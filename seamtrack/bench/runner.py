@@ -248,6 +248,12 @@ def _bench_gym(out: Path, quick: bool) -> Any:
     return bench_gym(out, quick=quick)
 
 
+def _bench_bridge(out: Path, quick: bool) -> Any:
+    from seamtrack.bench.bridge import bench_bridge
+
+    return bench_bridge(out, quick=quick)
+
+
 BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "raycast": lambda out, quick: bench_raycast(out, quick=quick),
     "extractors": _bench_extractors,
@@ -260,6 +266,7 @@ BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "camera": _bench_camera,
     "dataset": _bench_dataset,
     "gym": _bench_gym,
+    "bridge": _bench_bridge,
 }
 
 

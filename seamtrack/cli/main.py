@@ -14,6 +14,7 @@ from typing import Any
 
 from seamtrack._version import __version__
 from seamtrack.cli import seams as seams_command
+from seamtrack.cli import serve as serve_command
 from seamtrack.cli.dataset import add_dataset_parser
 from seamtrack.cli.recording import (
     EXTRACTORS_ACTIONS,
@@ -490,6 +491,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--out", help="CSV file (a PNG plot is written beside it in mesh mode)")
 
     seams_command.add_parser(sub)
+    serve_command.add_parser(sub)
 
     p = add(
         "render",
@@ -565,7 +567,7 @@ def build_parser() -> argparse.ArgumentParser:
         nargs="?",
         default="all",
         help="raycast, extractors, mesh, loop, tradeoff, sweep, scaling, failures, camera, "
-        "dataset, gym, or all",
+        "dataset, gym, bridge, or all",
     )
     p.add_argument("--out", default="bench-results", help="folder for the results")
     p.add_argument("--quick", action="store_true", help="fewer repeats (a smoke run)")

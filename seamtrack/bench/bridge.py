@@ -1,0 +1,209 @@
+"""``seamtrack bench bridge``: what the lockstep bridge costs per sensor frame, over each
+transport, against the same tracker in-process; and how many times real time the bridged loop
+runs on ``paper-v-groove``.
+
+The scene is ``paper-v-groove`` (100 frames/s of 1024 rays, 1 kHz control) with the paper's
+algorithm II, cut to :data:`SIM_S` simulated seconds. Runs:
+
+1. in-process: seamtrack's own algorithm II;
+2. for each transport (ZeroMQ with JSON, Zenoh with ROS 2 CDR) and lockstep (a command every
+   control tick, or one per frame): the loop served in this process, the tracker an external
+   process that imports nothing of seamtrack (tests/bridge_clients/, the scripts the tests
+   run; they need a source checkout); and ZeroMQ per frame without the profiles (JSON costs
+   milliseconds for 1024 points; the client does not need them).
+
+Per run: wall time of the loop (the wait for the tracker to connect left out), x real time
+(simulated / wall), the bridge's cost per frame ((bridged - in-process wall) / frames) and per
+round trip, and whether the summary equals the in-process one (it must, in both modes).
+Writes ``bridge.json`` and ``bridge.md``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import socket
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any
+
+from seamtrack.bench.common import machine_info
+
+SCENE = "paper-v-groove"
+OVERRIDES = ["tracker.name=convergence-radius", "tracker.params={}"]
+SIM_S = 10.0
+QUICK_SIM_S = 1.0
+
+#: The issue's target: the bridged loop at least this many times real time.
+TARGET_X_REAL_TIME = 10.0
+
+_IGNORE = {"wall_time_s", "sense_wall_time_s", "bridge_steps", "bridge_exchange_s"}
+_IGNORE.add("bridge_wait_s")
+
+
+def client_scripts() -> Path:
+    """tests/bridge_clients of the source checkout seamtrack runs from."""
+    folder = Path(__file__).resolve().parents[2] / "tests" / "bridge_clients"
+    if not folder.is_dir():
+        from seamtrack.errors import SeamtrackError
+
+        raise SeamtrackError(
+            f"no {folder}",
+            field="bench bridge",
+            fix="run it from a source checkout (the tracker processes are tests/bridge_clients)",
+        )
+    return folder
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def _parts(sim_s: float) -> tuple[Any, Any]:
+    from seamtrack.simulation.assemble import build_parts
+    from seamtrack.simulation.scene import load_scene
+
+    scene = load_scene(SCENE, [*OVERRIDES, f"simulation.time_limit_s={sim_s:g}"])
+    return scene, build_parts(scene)
+
+
+def _bridged(
+    transport: str, lockstep: str, sim_s: float, clients: Path, profile: bool = True
+) -> dict[str, Any]:
+    from seamtrack.bridge.lockstep import serve
+
+    scene, parts = _parts(sim_s)
+    port = _free_port()
+    if transport == "zmq":
+        from seamtrack.bridge.zmq_transport import ZmqTransport
+
+        endpoint = f"tcp://127.0.0.1:{port}"
+        server: Any = ZmqTransport(endpoint, timeout_s=30.0, wait_s=120.0)
+    else:
+        from seamtrack.bridge.zenoh_transport import ZenohTransport
+
+        endpoint = f"tcp/127.0.0.1:{port}"
+        server = ZenohTransport(endpoint, timeout_s=30.0, wait_s=120.0)
+    script = clients / f"{transport}_algorithm2.py"
+    client = subprocess.Popen(
+        [sys.executable, str(script), endpoint, *([] if profile else ["--no-profile"])],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+    )
+    try:
+        result, tracker = serve(parts, server, lockstep, seed=scene.config.simulation.seed)
+        client.wait(timeout=10)
+    except subprocess.TimeoutExpired:
+        pass  # the run is over; a client still waiting for the end is ended below
+    finally:
+        if client.poll() is None:
+            client.kill()
+            client.wait()
+    if tracker.failure is not None:
+        raise RuntimeError(f"bench bridge {transport}/{lockstep}: {tracker.failure}")
+    return dict(result.summary)
+
+
+def _row(name: str, summary: dict[str, Any], base: dict[str, Any] | None) -> dict[str, Any]:
+    wall = summary["wall_time_s"] - summary.get("bridge_wait_s", 0.0)
+    frames = summary["frames"]
+    row = {
+        "run": name,
+        "sim_time_s": summary["sim_time_s"],
+        "frames": frames,
+        "wall_time_s": wall,
+        "x_real_time": summary["sim_time_s"] / wall if wall > 0 else math.inf,
+        "sense_wall_time_s": summary["sense_wall_time_s"],
+    }
+    if base is not None:
+        base_wall = base["wall_time_s"]
+        steps = summary["bridge_steps"]
+        row.update(
+            cost_per_frame_ms=1e3 * (wall - base_wall) / max(frames, 1),
+            round_trips=steps,
+            round_trip_us=1e6 * summary["bridge_exchange_s"] / max(steps, 1),
+            same_as_in_process=all(
+                _same(summary.get(k), v) for k, v in base["summary"].items() if k not in _IGNORE
+            ),
+        )
+    return row
+
+
+def _same(a: Any, b: Any) -> bool:
+    if isinstance(a, float) and isinstance(b, float):
+        return (math.isnan(a) and math.isnan(b)) or abs(a - b) <= 1e-9
+    return bool(a == b)
+
+
+def bench_bridge(out_dir: str | Path, quick: bool = False) -> dict[str, Any]:
+    """Run the bench (module docstring); ``quick``: :data:`QUICK_SIM_S` simulated seconds."""
+    from seamtrack.simulation.loop import run
+
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    sim_s = QUICK_SIM_S if quick else SIM_S
+    clients = client_scripts()
+    load_before = os.getloadavg()[0]
+    scene, parts = _parts(sim_s)
+    run(parts, seed=scene.config.simulation.seed)  # warm the kernels and the caches
+    scene, parts = _parts(sim_s)
+    start = time.perf_counter()
+    base_result = run(parts, seed=scene.config.simulation.seed)
+    base = {"wall_time_s": time.perf_counter() - start, "summary": base_result.summary}
+    rows = [_row("in-process", {**base_result.summary, "wall_time_s": base["wall_time_s"]}, None)]
+    for transport in ("zmq", "zenoh"):
+        for lockstep in ("tick", "frame"):
+            summary = _bridged(transport, lockstep, sim_s, clients)
+            rows.append(_row(f"{transport} / {lockstep}", summary, base))
+    # JSON is slow for a 1024-point profile: the same without it (the client does not use it).
+    summary = _bridged("zmq", "frame", sim_s, clients, profile=False)
+    rows.append(_row("zmq / frame, no profile", summary, base))
+    report = {
+        "machine": machine_info(),
+        "scene": SCENE,
+        "overrides": OVERRIDES,
+        "sim_s": sim_s,
+        "quick": quick,
+        "load_average_before": load_before,
+        "load_average_after": os.getloadavg()[0],
+        "runs": rows,
+        "target_x_real_time": TARGET_X_REAL_TIME,
+    }
+    (out / "bridge.json").write_text(json.dumps(report, indent=2) + "\n")
+    (out / "bridge.md").write_text(_markdown(report))
+    print(_markdown(report))
+    return report
+
+
+def _markdown(report: dict[str, Any]) -> str:
+    lines = [
+        f"# bench bridge: {report['scene']} with algorithm II, {report['sim_s']:g} s simulated",
+        "",
+        f"Load average before/after: {report['load_average_before']:.2f} / "
+        f"{report['load_average_after']:.2f} (2 cores shared means slower round trips).",
+        "",
+        "| run | wall s | x real time | cost per frame ms | round trips | per round trip us "
+        "| same as in-process |",
+        "|---|---|---|---|---|---|---|",
+    ]
+    for r in report["runs"]:
+        same = r.get("same_as_in_process")
+        lines.append(
+            f"| {r['run']} | {r['wall_time_s']:.2f} | {r['x_real_time']:.1f} | "
+            f"{r.get('cost_per_frame_ms', 0.0):.3f} | {r.get('round_trips', '-')} | "
+            f"{r.get('round_trip_us', 0.0):.0f} | "
+            f"{'-' if same is None else ('yes' if same else 'NO')} |"
+        )
+    lines += [
+        "",
+        f"Target: the bridged loop >= {report['target_x_real_time']:g}x real time.",
+        "Both lockstep modes must equal the in-process run: the clients ask to be asked again "
+        "within their radius of convergence (ask_within), where algorithm II switches.",
+        "",
+    ]
+    return "\n".join(lines)

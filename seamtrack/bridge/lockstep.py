@@ -1,0 +1,282 @@
+"""The lockstep bridge: the closed loop with its tracker in another process.
+
+:class:`BridgeTracker` stands in the loop for the external tracker (the loop itself is
+unchanged: :func:`seamtrack.simulation.loop.run`). At each step it hands a :class:`Step` to a
+transport (:mod:`seamtrack.bridge.zmq_transport`, :mod:`seamtrack.bridge.zenoh_transport`)
+and blocks until the tracker's command comes back; only then does the loop simulate on.
+
+Steps: with ``lockstep = "tick"`` every control tick is a step (the loop asks its tracker for a
+command at every tick, so an external tracker reproduces any in-process one exactly); with
+``lockstep = "frame"`` the steps are the ticks at which a sensor frame reaches the tracker,
+and the ticks at which the torch comes within the tracker's ``ask_within_mm`` of its target
+(the moment the paper's algorithm II switches to its next point: with it, algorithm II is
+exact in frame lockstep too); in between, the last command holds.
+A step carries the frames that arrived at it (profile, seam point, the sensor's pose) and the
+torch's position and velocity at that tick.
+
+A client that disconnects, sends what is not a command, or misses the deadline ends the run:
+the tracker brakes to rest, the loop's wall-clock guard (:data:`seamtrack.simulation.loop.
+WALL_CHECK_TICKS` ticks later at most) stops it as ``stalled``, and ``stop_reason`` names the
+cause (:func:`serve`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import math
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any, Protocol
+
+import numpy as np
+from numpy.typing import NDArray
+
+from seamtrack.bridge.frames import Frame as ObservedFrame
+from seamtrack.bridge.frames import frame_chain, observe
+from seamtrack.control.tracking import Command, Measurement, TrackerContext
+from seamtrack.errors import SeamtrackError
+from seamtrack.sensing.profiles import Feature, Profile
+from seamtrack.simulation.assemble import Parts
+from seamtrack.simulation.loop import Result, run
+
+FloatArray = NDArray[np.float64]
+
+LOCKSTEPS = ("tick", "frame")
+
+
+class BridgeFailure(SeamtrackError):
+    """The external tracker failed the protocol (or the transport could not start): ``field``
+    says where (``client``, ``--timeout-s``, ``--endpoint``), the message what, ``fix`` what
+    to do."""
+
+    def __init__(self, message: str, field: str = "client", fix: str = "") -> None:
+        super().__init__(
+            message, field=field, fix=fix or "check the tracker process against docs/bridge.md"
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class Frame:
+    """One sensor frame as the external tracker receives it (world frame, mm)."""
+
+    t_capture_s: float
+    t_arrival_s: float
+    feature: Feature
+    T_world_sensor: FloatArray
+    tcp_world: FloatArray
+    profile: Profile | None  # the stripe (mesh mode), the seam point alone (seam mode)
+    image: Any = None  # image mode: the camera image (a StripeImage)
+
+
+@dataclass(frozen=True, eq=False)
+class Step:
+    """What the external tracker is sent before it answers: ``seq`` counts steps from 0."""
+
+    seq: int
+    t_s: float
+    tcp_world: FloatArray
+    tcp_velocity_world: FloatArray
+    frames: list[Frame] = field(default_factory=list)
+
+
+#: A tracker's answer: the command, and the distance from its target within which the tracker
+#: wants to be asked again before the next frame (frame lockstep; 0: not before the frame).
+Reply = tuple["Command | None", float]
+
+#: Asked within ``ask_within_mm`` a little early rather than a tick late (a spare round trip
+#: changes nothing: the tracker answers the same).
+_ASK_MARGIN = 1e-9
+
+
+class Transport(Protocol):
+    """How steps go out and commands come in (one tracker process at a time)."""
+
+    def start(self, context: TrackerContext, chain: TfChain, lockstep: str) -> None:
+        """Wait for the tracker process and give it the run's context."""
+
+    def exchange(self, step: Step) -> Reply:
+        """Send ``step``; return the tracker's answer (None: brake to rest and wait) and its
+        ``ask_within_mm`` (0: none). Raises :class:`BridgeFailure`."""
+
+    def finish(self, summary: dict[str, Any]) -> None:
+        """Tell the tracker the run is over (best effort)."""
+
+    def close(self) -> None: ...
+
+
+#: The robot's frames at a sensor pose: (parent, child, T_parent_child) links, mm.
+TfChain = Callable[[FloatArray], "list[tuple[str, str, FloatArray]]"]
+
+
+def tf_chain(parts: Parts) -> TfChain:
+    """The TF chain of ``parts``' robot (:func:`seamtrack.bridge.frames.frame_chain`)."""
+    return functools.partial(frame_chain, parts.robot)
+
+
+class BridgeTracker:
+    """A :class:`~seamtrack.control.tracking.Tracker` whose decisions come from another
+    process through ``transport`` (see the module docstring)."""
+
+    name = "bridge"
+
+    def __init__(
+        self,
+        transport: Transport,
+        chain: TfChain,
+        lockstep: str = "tick",
+        profiles: dict[float, tuple[Profile, Any]] | None = None,
+    ) -> None:
+        self.transport = transport
+        self.chain = chain
+        self.lockstep = lockstep
+        self.profiles = profiles if profiles is not None else {}
+        self.failure: BridgeFailure | None = None
+        self.steps = 0
+        self.exchange_time_s = 0.0
+        self.wait_time_s = 0.0
+        self._frames: list[Frame] = []
+        self._last: Command | None = None
+        self._within = 0.0
+
+    def reset(self, context: TrackerContext) -> None:
+        start = time.perf_counter()
+        try:
+            self.transport.start(context, self.chain, self.lockstep)
+        except BridgeFailure as exc:
+            self.failure = exc
+        self.wait_time_s = time.perf_counter() - start
+
+    def update(self, measurement: Measurement) -> None:
+        profile, image = self.profiles.pop(measurement.t_capture_s, (None, None))
+        self._frames.append(
+            Frame(
+                measurement.t_capture_s,
+                measurement.t_arrival_s,
+                measurement.feature,
+                measurement.T_world_sensor,
+                np.asarray(measurement.tcp_world, dtype=float),
+                profile,
+                image,
+            )
+        )
+
+    def command(
+        self, t_s: float, tcp_world: FloatArray, tcp_velocity_world: FloatArray
+    ) -> Command | None:
+        if self.failure is not None:
+            return None
+        if self.lockstep == "frame" and not self._frames and not self._asks(tcp_world):
+            return self._last
+        step = Step(self.steps, t_s, tcp_world, tcp_velocity_world, self._frames)
+        self._frames = []
+        start = time.perf_counter()
+        try:
+            received, self._within = self.transport.exchange(step)
+        except BridgeFailure as exc:
+            self.failure = exc
+            return None
+        self.exchange_time_s += time.perf_counter() - start
+        self.steps += 1
+        if not _same(received, self._last):  # the loop re-plans only on a new command object
+            self._last = received
+        return self._last
+
+    def _asks(self, tcp_world: FloatArray) -> bool:
+        """Frame lockstep between frames: is the torch within the tracker's ``ask_within_mm``
+        of its target?"""
+        if self._within <= 0.0 or self._last is None:
+            return False
+        d = np.asarray(tcp_world, dtype=float) - self._last.target_world
+        return math.sqrt(float(d @ d)) <= self._within * (1.0 + _ASK_MARGIN) + _ASK_MARGIN
+
+
+def _same(a: Command | None, b: Command | None) -> bool:
+    if a is None or b is None:
+        return a is b
+    return (
+        a.speed_mm_s == b.speed_mm_s
+        and a.stop_at_target == b.stop_at_target
+        and _equal(a.target_world, b.target_world)
+        and _equal(a.velocity_ff_world, b.velocity_ff_world)
+        and _equal(a.rotation_world, b.rotation_world)
+        and _equal(a.angular_velocity_world, b.angular_velocity_world)
+    )
+
+
+def _equal(a: Any, b: Any) -> bool:
+    if a is None or b is None:
+        return a is b
+    return bool(np.array_equal(a, b))
+
+
+class _FailClock:
+    """The loop's wall clock; it jumps past the wall-clock limit once the bridge has failed,
+    so that the loop stops at its next guard check and writes the run as any stopped run."""
+
+    def __init__(self, tracker: BridgeTracker) -> None:
+        self.tracker = tracker
+
+    def __call__(self) -> float:
+        now = time.perf_counter()
+        return now + 1e12 if self.tracker.failure is not None else now
+
+
+def bridged_parts(parts: Parts, tracker: BridgeTracker) -> Parts:
+    """``parts`` with the bridge as its tracker; every frame's profile (the stripe in mesh
+    mode, the seam point alone in seam mode: :func:`seamtrack.bridge.frames.observe`) goes
+    out with the frame."""
+    profiles = tracker.profiles
+
+    def keep(frame: ObservedFrame) -> None:
+        profiles[frame.t_s] = (frame.profile, frame.image)
+
+    observed = observe(parts, keep)
+    return dataclasses.replace(observed, tracker=tracker, tracker_name="bridge")
+
+
+def serve(
+    parts: Parts,
+    transport: Transport,
+    lockstep: str = "tick",
+    seed: int | None = None,
+    clock: Callable[[], float] | None = None,
+) -> tuple[Result, BridgeTracker]:
+    """Run ``parts`` with the tracker behind ``transport``. The result's summary is the
+    loop's; a failed bridge stops the run as ``stalled`` with ``stop_reason`` naming the cause
+    (``tracker.failure`` holds it); ``bridge_steps`` and ``bridge_exchange_s`` count the round
+    trips and their wall time, ``bridge_wait_s`` the wait for the tracker (in ``wall_time_s``)."""
+    if lockstep not in LOCKSTEPS:
+        raise ValueError(f"lockstep must be one of {LOCKSTEPS}, got {lockstep!r}")
+    tracker = BridgeTracker(transport, tf_chain(parts), lockstep)
+    bridged = bridged_parts(parts, tracker)
+    start = time.perf_counter()
+    try:
+        result = run(bridged, seed=seed, clock=clock or _FailClock(tracker))
+        summary = result.summary
+        if tracker.failure is not None:
+            summary["status"] = "stalled"
+            summary["stop_reason"] = f"bridge: {tracker.failure.message}"
+            summary["stop_cause"] = "stalled"
+            summary["wall_time_s"] = time.perf_counter() - start
+        summary["bridge_steps"] = tracker.steps
+        summary["bridge_exchange_s"] = tracker.exchange_time_s
+        summary["bridge_wait_s"] = tracker.wait_time_s
+        if tracker.failure is None:
+            transport.finish(summary)
+    finally:
+        transport.close()
+    return result, tracker
+
+
+def finite_vector(value: Any, n: int) -> list[float] | None:
+    """``value`` as n finite floats, or None when it is not that."""
+    if not isinstance(value, list | tuple) or len(value) != n:
+        return None
+    out = []
+    for v in value:
+        if isinstance(v, bool) or not isinstance(v, int | float) or not math.isfinite(v):
+            return None
+        out.append(float(v))
+    return out

@@ -1,0 +1,165 @@
+"""ROS 2 on Zenoh without ROS: rmw_zenoh's key expressions, liveliness tokens and attachments
+(as its design document, ros2/rmw_zenoh docs/design.md, gives them), and the bridge's messages
+as ROS 2 CDR (:mod:`seamtrack.bridge.messages`; SI units: m, m/s, rad).
+
+* A topic's key expression: ``<domain_id>/<fully_qualified_name>/<type_name>/<type_hash>``,
+  e.g. ``0/chatter/std_msgs::msg::dds_::String_/RIHS01_df66...``; the fully qualified name
+  without its leading ``/``, the type name as DDS declares it, the type hash REP-2016's
+  ``RIHS01_`` + SHA-256 of the type description.
+* A liveliness token: ``@ros2_lv/<domain_id>/<session_id>/<node_id>/<node_id>/NN/<enclave>/
+  <namespace>/<node_name>`` for a node, and for a publisher (``MP``) or subscription (``MS``)
+  ``@ros2_lv/<domain_id>/<session_id>/<node_id>/<entity_id>/<kind>/<enclave>/<namespace>/
+  <node_name>/<mangled_qualified_name>/<type_name>/<type_hash>/<qos>``, names mangled by
+  ``/`` -> ``%`` (``%`` alone when empty).
+* Each ``put`` carries an attachment: the sequence number (int64 LE), the source timestamp
+  (ns since the epoch, int64 LE), the GID's length (one byte, 16) and the 16-byte GID.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import math
+import struct
+from typing import Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from seamtrack.bridge import messages
+
+FloatArray = NDArray[np.float64]
+
+#: QoS of every entity the bridge declares, in rmw_zenoh's compact form: reliable, volatile,
+#: keep last 10 (its default profile, as in the design document's examples).
+DEFAULT_QOS = "::,10:,:,:,,"
+
+POINTCLOUD2 = "sensor_msgs/msg/PointCloud2"
+TFMESSAGE = "tf2_msgs/msg/TFMessage"
+CLOCK = "rosgraph_msgs/msg/Clock"
+POINT_STAMPED = "geometry_msgs/msg/PointStamped"
+POSE_STAMPED = "geometry_msgs/msg/PoseStamped"
+TWIST_STAMPED = "geometry_msgs/msg/TwistStamped"
+STRING = "std_msgs/msg/String"
+
+
+def dds_type_name(msgtype: str) -> str:
+    """``sensor_msgs/msg/PointCloud2`` -> ``sensor_msgs::msg::dds_::PointCloud2_``."""
+    package, kind, name = msgtype.split("/")
+    return f"{package}::{kind}::dds_::{name}_"
+
+
+@functools.cache
+def type_hash(msgtype: str) -> str:
+    """REP-2016's type hash, ``RIHS01_<sha256 hex>``."""
+    return str(messages.typestore().hash_rihs01(msgtype))
+
+
+def mangle(name: str) -> str:
+    return name.replace("/", "%") or "%"
+
+
+def topic_key(domain_id: int, topic: str, msgtype: str) -> str:
+    """The key expression rmw_zenoh publishes ``topic`` (fully qualified) on."""
+    return f"{domain_id}/{topic.strip('/')}/{dds_type_name(msgtype)}/{type_hash(msgtype)}"
+
+
+def node_token(domain_id: int, session_id: str, node_id: int, node: str, namespace: str) -> str:
+    return f"@ros2_lv/{domain_id}/{session_id}/{node_id}/{node_id}/NN/%/{mangle(namespace)}/{node}"
+
+
+def entity_token(
+    domain_id: int,
+    session_id: str,
+    node_id: int,
+    entity_id: int,
+    kind: str,
+    node: str,
+    namespace: str,
+    topic: str,
+    msgtype: str,
+    qos: str = DEFAULT_QOS,
+) -> str:
+    """A publisher's (``MP``) or subscription's (``MS``) liveliness token."""
+    return (
+        f"@ros2_lv/{domain_id}/{session_id}/{node_id}/{entity_id}/{kind}/%/{mangle(namespace)}/"
+        f"{node}/{mangle(topic)}/{dds_type_name(msgtype)}/{type_hash(msgtype)}/{qos}"
+    )
+
+
+def parse_token(key: str) -> dict[str, str] | None:
+    """The fields of a liveliness token (None when it is not one)."""
+    parts = key.split("/")
+    if len(parts) < 9 or parts[0] != "@ros2_lv":
+        return None
+    names = ["domain", "session", "node_id", "entity_id", "kind", "enclave", "namespace", "node"]
+    out = dict(zip(names, parts[1:9], strict=True))
+    if len(parts) >= 13:
+        out.update(topic=parts[9].replace("%", "/"), type=parts[10], hash=parts[11])
+    return out
+
+
+def gid(seed: str) -> bytes:
+    """A 16-byte GID for an entity (stable for its name and session)."""
+    return hashlib.sha256(seed.encode()).digest()[:16]
+
+
+def attachment(seq: int, stamp_ns: int, gid16: bytes) -> bytes:
+    return struct.pack("<qqB", seq, stamp_ns, 16) + gid16
+
+
+# --------------------------------------------------------------------------- messages
+def encode_clock(t_s: float) -> bytes:
+    return messages.encode(messages.clock(t_s))
+
+
+def encode_string(text: str) -> bytes:
+    return messages.encode(messages.typestore().types[STRING](data=text))
+
+
+def encode_point(t_s: float, frame_id: str, point_mm: Any) -> bytes:
+    """``geometry_msgs/PointStamped`` of a point in mm."""
+    types = messages.typestore().types
+    x, y, z = (float(c) / messages.MM_PER_M for c in point_mm)
+    point = types["geometry_msgs/msg/Point"](x=x, y=y, z=z)
+    return messages.encode(types[POINT_STAMPED](header=messages.header(t_s, frame_id), point=point))
+
+
+def encode_pose(t_s: float, frame_id: str, position_mm: Any, R: FloatArray | None) -> bytes:
+    """``geometry_msgs/PoseStamped``: a position (mm) and orientation (identity when None)."""
+    types = messages.typestore().types
+    x, y, z = (float(c) / messages.MM_PER_M for c in position_mm)
+    qx, qy, qz, qw = (0.0, 0.0, 0.0, 1.0) if R is None else messages.quaternion(R)
+    pose = types["geometry_msgs/msg/Pose"](
+        position=types["geometry_msgs/msg/Point"](x=x, y=y, z=z),
+        orientation=types["geometry_msgs/msg/Quaternion"](x=qx, y=qy, z=qz, w=qw),
+    )
+    return messages.encode(types[POSE_STAMPED](header=messages.header(t_s, frame_id), pose=pose))
+
+
+def encode_twist(t_s: float, frame_id: str, linear: Any, angular: Any) -> bytes:
+    """``geometry_msgs/TwistStamped`` of a linear (m/s) and angular (rad/s) velocity."""
+    types = messages.typestore().types
+    V = types["geometry_msgs/msg/Vector3"]
+    lx, ly, lz = (float(c) for c in linear)
+    ax, ay, az = (float(c) for c in angular)
+    twist = types["geometry_msgs/msg/Twist"](
+        linear=V(x=lx, y=ly, z=lz), angular=V(x=ax, y=ay, z=az)
+    )
+    return messages.encode(types[TWIST_STAMPED](header=messages.header(t_s, frame_id), twist=twist))
+
+
+def stamp_ns(stamp: Any) -> int:
+    return int(stamp.sec) * 1_000_000_000 + int(stamp.nanosec)
+
+
+def deserialize(raw: bytes, msgtype: str) -> Any:
+    """CDR bytes decoded into ``msgtype`` (raises ValueError on anything else)."""
+    try:
+        return messages.decode(raw, msgtype)
+    except Exception as exc:  # rosbags raises struct, index, unicode and its own errors
+        raise ValueError(f"not a {msgtype} ({exc.__class__.__name__})") from None
+
+
+def is_finite(*values: float) -> bool:
+    return all(math.isfinite(v) for v in values)

@@ -1,0 +1,218 @@
+"""The bridge's JSON messages (the ZeroMQ transport), and the command check both transports
+share. Units are the simulator's: mm, s, rad; poses are row-major 4 x 4 lists; NaN (an
+invalid profile point) is ``null``.
+
+Client -> server:
+
+* ``{"op": "hello", "protocol": 1, "profile": true}`` (``profile``: send the stripe profiles);
+* ``{"op": "ready"}`` after the ``reset``;
+* ``{"op": "command", "seq": k, "command": null | {...}}`` answering step ``k``. A command holds
+  ``target_mm`` (x, y, z, required), ``speed_mm_s`` (> 0, required), and optionally
+  ``stop_at_target`` (bool, arrive at rest), ``velocity_ff_mm_s`` (x, y, z),
+  ``rotation`` (3 x 3 rows, the tool orientation goal ``R_world_tcp``) and
+  ``angular_velocity_rad_s`` (x, y, z), and ``ask_within_mm`` (with frame lockstep: ask
+  again as soon as the torch is within this distance of the target, not only at the next
+  frame). ``null`` brakes to rest and waits. No other key.
+
+Server -> client:
+
+* ``{"op": "reset", "protocol": 1, "lockstep": "tick" | "frame", "context": {...},
+  "max_message_bytes": n}``;
+* ``{"op": "step", "seq": k, "t_s": t, "tcp_mm": [...], "tcp_velocity_mm_s": [...],
+  "frames": [...]}``, each frame ``{"t_capture_s", "t_arrival_s", "found", "point_mm" (or
+  null), "T_world_sensor", "tcp_mm", "profile": {"y_mm", "z_mm", "reason"} or null}``;
+* ``{"op": "end", "summary": {...}}`` once the run is over (no answer expected).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from typing import Any
+
+import numpy as np
+
+from seamtrack.bridge.lockstep import BridgeFailure, Reply, Step, finite_vector
+from seamtrack.control.tracking import Command, TrackerContext
+
+PROTOCOL = 1
+
+#: The largest message a client may send: a command is a few hundred bytes.
+MAX_MESSAGE_BYTES = 4096
+
+_COMMAND_KEYS = {
+    "ask_within_mm",
+    "target_mm",
+    "speed_mm_s",
+    "stop_at_target",
+    "velocity_ff_mm_s",
+    "rotation",
+    "angular_velocity_rad_s",
+}
+
+
+def context_json(context: TrackerContext) -> dict[str, Any]:
+    return {
+        "welding_speed_mm_s": context.welding_speed_mm_s,
+        "control_period_s": context.control_period_s,
+        "frame_period_s": context.frame_period_s,
+        "latency_s": context.latency_s,
+        "look_ahead_mm": context.look_ahead_mm,
+        "sensor_resolution_mm": context.sensor_resolution_mm,
+        "tcp_start_mm": np.asarray(context.tcp_start_world, dtype=float).tolist(),
+        "velocity_max_mm_s": np.asarray(context.velocity_max_world, dtype=float).tolist(),
+        "acceleration_max_mm_s2": np.asarray(context.acceleration_max_world, dtype=float).tolist(),
+        "turns_tool": bool(context.turns_tool),
+    }
+
+
+def step_json(step: Step, with_profile: bool) -> bytes:
+    frames = []
+    for f in step.frames:
+        found = bool(f.feature)
+        profile = None
+        if with_profile and f.profile is not None:
+            pts = f.profile.points_laser
+            assert f.profile.reason is not None
+            profile = {
+                "y_mm": pts[:, 0].tolist(),
+                "z_mm": pts[:, 1].tolist(),
+                "reason": f.profile.reason.tolist(),
+            }
+        frames.append(
+            {
+                "t_capture_s": f.t_capture_s,
+                "t_arrival_s": f.t_arrival_s,
+                "found": found,
+                "point_mm": np.asarray(f.feature.point_world).tolist() if found else None,
+                "T_world_sensor": np.asarray(f.T_world_sensor).tolist(),
+                "tcp_mm": f.tcp_world.tolist(),
+                "profile": profile,
+            }
+        )
+    message = {
+        "op": "step",
+        "seq": step.seq,
+        "t_s": step.t_s,
+        "tcp_mm": np.asarray(step.tcp_world, dtype=float).tolist(),
+        "tcp_velocity_mm_s": np.asarray(step.tcp_velocity_world, dtype=float).tolist(),
+        "frames": frames,
+    }
+    # NaN (an invalid profile point) as null: the only NaN tokens in the text are numbers (no
+    # key or string holds "NaN"); one pass over the text costs far less than one per float.
+    return json.dumps(message).replace("NaN", "null").encode()
+
+
+def parse(raw: bytes, limit: int = MAX_MESSAGE_BYTES) -> dict[str, Any]:
+    """A client message as a JSON object, refused when oversized or not JSON."""
+    if len(raw) > limit:
+        raise BridgeFailure(
+            f"a message of {len(raw)} bytes is over the {limit}-byte limit",
+            fix="send one command per step (a few hundred bytes)",
+        )
+    try:
+        message = json.loads(raw.decode("utf-8"), parse_constant=_no_constant)
+    except (UnicodeDecodeError, ValueError) as exc:
+        raise BridgeFailure(
+            f"sent what is not JSON ({exc.__class__.__name__})",
+            fix="send UTF-8 JSON objects as docs/bridge.md gives them",
+        ) from None
+    if not isinstance(message, dict) or not isinstance(message.get("op"), str):
+        raise BridgeFailure(
+            "sent JSON that is not an object with an 'op'",
+            fix="send {'op': 'command', 'seq': k, 'command': ...}",
+        )
+    return message
+
+
+def _no_constant(name: str) -> Any:
+    raise ValueError(f"{name} is not allowed")
+
+
+def expect(message: dict[str, Any], op: str) -> None:
+    if message["op"] != op:
+        raise BridgeFailure(
+            f"sent op {str(message['op'])[:40]!r} where {op!r} was due",
+            fix=f"answer with {op!r} (docs/bridge.md gives the order)",
+        )
+
+
+def command_from_json(message: dict[str, Any], seq: int) -> Reply:
+    """The command answering step ``seq`` and its ``ask_within_mm`` (0 when not given);
+    every field checked, nothing evaluated."""
+    expect(message, "command")
+    if set(message) - {"op", "seq", "command"}:
+        raise _bad("has keys other than op, seq, command")
+    got = message.get("seq")
+    if isinstance(got, bool) or not isinstance(got, int) or got != seq:
+        raise _bad(f"answers step {str(got)[:20]} where step {seq} was due", "echo the step's seq")
+    body = message.get("command")
+    if body is None:
+        return None, 0.0
+    if not isinstance(body, dict):
+        raise _bad("'command' is neither null nor an object")
+    unknown = set(body) - _COMMAND_KEYS
+    if unknown:
+        raise _bad(f"unknown command key {sorted(unknown)[0][:40]!r}")
+    target = finite_vector(body.get("target_mm"), 3)
+    if target is None:
+        raise _bad("'target_mm' is not 3 finite numbers")
+    speed = body.get("speed_mm_s")
+    if isinstance(speed, bool) or not isinstance(speed, int | float) or not 0 < speed < math.inf:
+        raise _bad("'speed_mm_s' is not a finite number > 0", "send null to stop instead")
+    stop = body.get("stop_at_target", False)
+    if not isinstance(stop, bool):
+        raise _bad("'stop_at_target' is not true or false")
+    within = _optional(body, "ask_within_mm", 1)
+    if within is not None and within[0] < 0:
+        raise _bad("'ask_within_mm' is negative")
+    command = make_command(
+        target,
+        float(speed),
+        stop,
+        _optional(body, "velocity_ff_mm_s", 3),
+        _optional(body, "rotation", 9),
+        _optional(body, "angular_velocity_rad_s", 3),
+    )
+    return command, 0.0 if within is None else within[0]
+
+
+def make_command(
+    target: list[float],
+    speed: float,
+    stop: bool,
+    ff: list[float] | None,
+    rotation: list[float] | None,
+    omega: list[float] | None,
+) -> Command:
+    rot = None
+    if rotation is not None:
+        rot = np.array(rotation, dtype=float).reshape(3, 3)
+        if not np.allclose(rot.T @ rot, np.eye(3), atol=1e-6) or np.linalg.det(rot) < 0:
+            raise _bad("'rotation' is not a rotation matrix")
+    return Command(
+        np.array(target, dtype=float),
+        speed,
+        None if ff is None else np.array(ff, dtype=float),
+        stop,
+        rot,
+        None if omega is None else np.array(omega, dtype=float),
+    )
+
+
+def _optional(body: dict[str, Any], key: str, n: int) -> list[float] | None:
+    value = body.get(key)
+    if value is None:
+        return None
+    if n == 1:
+        value = [value]
+    if key == "rotation" and isinstance(value, list) and all(isinstance(r, list) for r in value):
+        value = [v for row in value for v in row] if len(value) == 3 else None
+    checked = finite_vector(value, n)
+    if checked is None:
+        raise _bad(f"{key!r} is not {n} finite numbers")
+    return checked
+
+
+def _bad(what: str, fix: str = "see the command's fields in docs/bridge.md") -> BridgeFailure:
+    return BridgeFailure(f"sent a bad command: {what}", fix=fix)

@@ -1,0 +1,301 @@
+"""The Zenoh transport: ROS 2 messages (CDR) on rmw_zenoh's key expressions, so that a ROS 2
+node under ``RMW_IMPLEMENTATION=rmw_zenoh_cpp`` can be the tracker (:mod:`seamtrack.bridge.rmw`
+gives the formats; docs/bridge.md the topics).
+
+The bridge is a node ``/seamtrack`` in a Zenoh session in router mode, listening on loopback
+(rmw_zenoh's router port 7447 by default, so a ROS node connects to it as to ``rmw_zenohd``).
+Per step it publishes, for each frame that arrived: ``/tf`` (world -> base -> [flange ->] tcp
+-> sensor at capture), ``/seamtrack/profile`` (PointCloud2 in ``sensor``), when a seam
+point was found ``/seamtrack/seam_point`` (PointStamped), and in image mode
+``/seamtrack/image`` (:func:`seamtrack.bridge.messages.frame_messages`); then ``/clock``,
+``/seamtrack/tcp_velocity`` (TwistStamped) and, last, ``/seamtrack/tcp`` (PoseStamped, the
+torch tip in ``world``): the step's trigger. The tracker answers with the pair
+``/seamtrack/cmd_pose`` (PoseStamped) and ``/seamtrack/cmd_speed`` (TwistStamped), both
+stamped with the step's time.
+
+The run starts once a node has declared a subscription to ``/seamtrack/tcp`` and publishers
+of both command topics (their liveliness tokens); ``/seamtrack/context`` (String, JSON) then
+gives it the run's context. When that node's tokens go, the run ends (disconnected).
+"""
+
+from __future__ import annotations
+
+import json
+import queue
+import time
+from typing import Any
+
+import numpy as np
+
+from seamtrack.bridge import messages, rmw
+from seamtrack.bridge.lockstep import BridgeFailure, Reply, Step, TfChain
+from seamtrack.bridge.wire import MAX_MESSAGE_BYTES, context_json, make_command
+from seamtrack.control.tracking import TrackerContext
+
+encode = messages.encode
+
+DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
+NODE = "seamtrack"
+
+#: Topic -> message type of what the bridge publishes, and of the command pair it takes.
+PUBLISHES = {
+    "/tf": rmw.TFMESSAGE,
+    "/clock": rmw.CLOCK,
+    "/seamtrack/profile": rmw.POINTCLOUD2,
+    "/seamtrack/image": "sensor_msgs/msg/Image",
+    "/seamtrack/seam_point": rmw.POINT_STAMPED,
+    "/seamtrack/seam_point_world": rmw.POINT_STAMPED,
+    "/seamtrack/tcp_velocity": rmw.TWIST_STAMPED,
+    "/seamtrack/tcp": rmw.POSE_STAMPED,
+    "/seamtrack/context": rmw.STRING,
+    "/seamtrack/status": rmw.STRING,
+}
+SUBSCRIBES = {"/seamtrack/cmd_pose": rmw.POSE_STAMPED, "/seamtrack/cmd_speed": rmw.TWIST_STAMPED}
+
+#: The wait between seeing the tracker's tokens and publishing to it.
+SETTLE_S = 0.3
+
+#: Zenoh drops a received message over this (transport/link/rx/max_message_size).
+HARD_LIMIT_BYTES = 65536
+
+
+class ZenohTransport:
+    """Serve one ROS 2 tracker node over Zenoh (see the module docstring)."""
+
+    def __init__(
+        self,
+        endpoint: str = DEFAULT_ENDPOINT,
+        timeout_s: float = 5.0,
+        wait_s: float = 60.0,
+        domain_id: int = 0,
+    ) -> None:
+        import zenoh
+
+        self.endpoint = endpoint
+        self.timeout_s = timeout_s
+        self.wait_s = wait_s
+        self.domain = domain_id
+        try:
+            config = zenoh.Config()
+            config.insert_json5("mode", '"router"')
+            config.insert_json5("listen/endpoints", json.dumps([endpoint]))
+            config.insert_json5("scouting/multicast/enabled", "false")  # listen, don't announce
+            config.insert_json5("adminspace/enabled", "false")  # no router admin queries
+            config.insert_json5("transport/link/rx/max_message_size", str(HARD_LIMIT_BYTES))
+            self.session = zenoh.open(config)
+        except Exception as exc:  # zenoh.ZError: the port is taken, the locator is wrong
+            why = str(exc).split(" at /")[0][:200]  # zenoh's message, not its source path
+            raise BridgeFailure(
+                f"cannot listen on {endpoint!r}: {why}",
+                field="--endpoint",
+                fix="give a free zenoh locator, e.g. tcp/127.0.0.1:7448",
+            ) from None
+        self.events: queue.Queue[tuple[str, Any, Any]] = queue.Queue()
+        sid = str(self.session.zid())
+        self.session_id = sid
+        live = self.session.liveliness()
+        self._tokens = [live.declare_token(rmw.node_token(domain_id, sid, 0, NODE, ""))]
+        self.pubs: dict[str, Any] = {}
+        self.gids: dict[str, bytes] = {}
+        entity = 1
+        for topic, msgtype in PUBLISHES.items():
+            key = rmw.topic_key(domain_id, topic, msgtype)
+            # Reliable and blocking: in lockstep no message may be dropped, nor overtaken.
+            self.pubs[topic] = self.session.declare_publisher(
+                key, congestion_control=zenoh.CongestionControl.BLOCK
+            )
+            self.gids[topic] = rmw.gid(f"{sid}/{topic}")
+            token = rmw.entity_token(domain_id, sid, 0, entity, "MP", NODE, "", topic, msgtype)
+            self._tokens.append(live.declare_token(token))
+            entity += 1
+        self.subs = []
+        for topic, msgtype in SUBSCRIBES.items():
+            key = rmw.topic_key(domain_id, topic, msgtype)
+            self.subs.append(self.session.declare_subscriber(key, self._on_sample(topic)))
+            token = rmw.entity_token(domain_id, sid, 0, entity, "MS", NODE, "", topic, msgtype)
+            self._tokens.append(live.declare_token(token))
+            entity += 1
+        self.watch = live.declare_subscriber(
+            f"@ros2_lv/{domain_id}/**", self._on_token, history=True
+        )
+        self.seq = 0
+        self.client: str | None = None
+        self.with_profile = True
+
+    # ------------------------------------------------------------------ callbacks
+    def _on_sample(self, topic: str) -> Any:
+        def put(sample: Any) -> None:
+            payload = sample.payload
+            size = len(payload)
+            data = payload.to_bytes() if size <= MAX_MESSAGE_BYTES else None
+            self.events.put((topic, size, data))
+
+        return put
+
+    def _on_token(self, sample: Any) -> None:
+        self.events.put(("token", str(sample.kind), str(sample.key_expr)))
+
+    # ------------------------------------------------------------------ protocol
+    def start(self, context: TrackerContext, chain: TfChain, lockstep: str) -> None:
+        self._chain = chain
+        need = {
+            ("MS", "/seamtrack/tcp"),
+            ("MP", "/seamtrack/cmd_pose"),
+            ("MP", "/seamtrack/cmd_speed"),
+        }
+        seen: dict[str, set[tuple[str, str]]] = {}
+        deadline = time.monotonic() + self.wait_s
+        while self.client is None:
+            kind, a, b = self._next(deadline, "--wait-s", "declare its tracker topics")
+            if kind != "token":
+                continue
+            fields = rmw.parse_token(b)
+            if fields is None or fields["session"] == self.session_id or "topic" not in fields:
+                continue
+            if a.endswith("PUT"):
+                have = seen.setdefault(fields["session"], set())
+                have.add((fields["kind"], fields["topic"]))
+                if need <= have:
+                    self.client = fields["session"]
+        # Zenoh routes a new subscription to our publishers a little after its token shows:
+        # wait until every topic the tracker subscribes to reaches it (matching status).
+        client = self.client
+        wanted = [t for kind, t in seen[client] if kind == "MS" and t in self.pubs]
+        while not all(self.pubs[t].matching_status.matching for t in wanted):
+            if time.monotonic() > deadline:
+                self._next(deadline, "--wait-s", "receive from its subscriptions")
+            time.sleep(0.01)
+        time.sleep(SETTLE_S)
+        message = {"lockstep": lockstep, "context": context_json(context)}
+        self._put("/seamtrack/context", rmw.encode_string(json.dumps(message)))
+
+    def exchange(self, step: Step) -> Reply:
+        for f in step.frames:
+            t = f.t_capture_s
+            if f.profile is None:
+                continue
+            chain = self._chain(f.T_world_sensor)
+            for topic, message in messages.frame_messages(
+                t, f.profile, f.feature, chain, image=f.image
+            ):
+                if topic != "/clock":  # the step's own clock follows
+                    self._put(topic, encode(message))
+            if f.feature:
+                world = rmw.encode_point(t, "world", f.feature.point_world)
+                self._put("/seamtrack/seam_point_world", world)
+        t = step.t_s
+        velocity = np.asarray(step.tcp_velocity_world, dtype=float) / messages.MM_PER_M
+        self._put("/clock", rmw.encode_clock(t))
+        self._put("/seamtrack/tcp_velocity", rmw.encode_twist(t, "world", velocity, (0, 0, 0)))
+        self._put("/seamtrack/tcp", rmw.encode_pose(t, "world", step.tcp_world, None))
+        return self._command(t, step.seq)
+
+    _chain: TfChain
+
+    def finish(self, summary: dict[str, Any]) -> None:
+        from seamtrack.io.output import json_safe
+
+        text = json.dumps({"status": summary.get("status"), "summary": json_safe(summary)})
+        self._put("/seamtrack/status", rmw.encode_string(text))
+        time.sleep(SETTLE_S)  # let it leave before the session closes
+
+    def close(self) -> None:
+        for token in self._tokens:
+            token.undeclare()
+        self.session.close()
+
+    # ------------------------------------------------------------------ internals
+    def _put(self, topic: str, payload: bytes) -> None:
+        self.seq += 1
+        stamp = time.time_ns()
+        self.pubs[topic].put(payload, attachment=rmw.attachment(self.seq, stamp, self.gids[topic]))
+
+    def _next(self, deadline: float, field: str, what: str) -> tuple[str, Any, Any]:
+        left = deadline - time.monotonic()
+        try:
+            if left <= 0:
+                raise queue.Empty
+            return self.events.get(timeout=left)
+        except queue.Empty:
+            timeout = self.wait_s if field == "--wait-s" else self.timeout_s
+            raise BridgeFailure(
+                f"the tracker node did not {what} within {timeout:g} s",
+                field=field,
+                fix="start the tracker node (RMW_IMPLEMENTATION=rmw_zenoh_cpp), or raise " + field,
+            ) from None
+
+    def _command(self, t_s: float, seq: int) -> Reply:
+        want = int(round(t_s * 1e9))
+        got: dict[str, Any] = {}
+        deadline = time.monotonic() + self.timeout_s
+        while len(got) < 2:
+            kind, size, data = self._next(deadline, "--timeout-s", f"answer step {seq}")
+            if kind == "token":
+                fields = rmw.parse_token(data)
+                if size.endswith("DELETE") and fields and fields["session"] == self.client:
+                    raise BridgeFailure("the tracker node disconnected", fix=_KEEP_RUNNING)
+                continue
+            if data is None:
+                raise BridgeFailure(
+                    f"a message of {size} bytes on {kind} is over the "
+                    f"{MAX_MESSAGE_BYTES}-byte limit",
+                    fix="publish one PoseStamped and one TwistStamped per step",
+                )
+            try:
+                msg = rmw.deserialize(data, SUBSCRIBES[kind])
+            except ValueError as exc:
+                raise BridgeFailure(f"sent garbage on {kind}: {exc}", fix=_FIX_TYPES) from None
+            stamp = rmw.stamp_ns(msg.header.stamp)
+            if stamp != want:
+                raise BridgeFailure(
+                    f"answered on {kind} for t = {stamp * 1e-9:.9g} s where t = "
+                    f"{want * 1e-9:.9g} s was due",
+                    fix="stamp both command messages with the /seamtrack/tcp message's stamp",
+                )
+            if kind in got:
+                raise BridgeFailure(f"sent two messages on {kind} in one step", fix=_FIX_TYPES)
+            got[kind] = msg
+        return command_from_ros(got["/seamtrack/cmd_pose"], got["/seamtrack/cmd_speed"])
+
+
+_KEEP_RUNNING = "keep the tracker node running until /seamtrack/status says the run is over"
+_FIX_TYPES = "publish geometry_msgs/msg/PoseStamped and TwistStamped as docs/bridge.md gives them"
+
+
+def command_from_ros(pose_msg: Any, speed_msg: Any) -> Reply:
+    """The command pair as a :class:`Command` and its ``ask_within_mm`` (docs/ros.md):
+    ``cmd_pose`` in ``world`` (m; an all-zero quaternion keeps the tool's orientation; an
+    empty ``frame_id`` brakes to rest and waits), ``cmd_speed``: ``linear.x`` the path speed
+    (m/s, > 0), ``linear.y`` 1 to arrive at rest on the target (else 0), ``linear.z`` the
+    distance from the target within which to ask again (m, frame lockstep; 0: at the next
+    frame), ``angular`` the turn rate of the orientation goal (rad/s, world axes)."""
+    frame = pose_msg.header.frame_id
+    if frame == "":
+        return None, 0.0
+    if frame != "world":
+        raise BridgeFailure(
+            f"cmd_pose is in frame {frame[:40]!r}", fix="give the target in 'world' (or '' to stop)"
+        )
+    p = pose_msg.pose.position
+    q = pose_msg.pose.orientation
+    v = speed_msg.twist.linear
+    w = speed_msg.twist.angular
+    values = (p.x, p.y, p.z, q.x, q.y, q.z, q.w, v.x, v.y, v.z, w.x, w.y, w.z)
+    if not rmw.is_finite(*values):
+        raise BridgeFailure("sent a command that is not finite", fix=_FIX_TYPES)
+    if not v.x > 0 or v.y not in (0.0, 1.0) or v.z < 0.0:
+        raise BridgeFailure(
+            "cmd_speed is not (speed > 0, stop 0 or 1, ask within >= 0)",
+            fix="linear.x: the path speed in m/s; linear.y: 1 to arrive at rest; linear.z: "
+            "the distance to ask again within, m (0: at the next frame)",
+        )
+    rotation = None
+    norm = float(np.sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w))
+    if norm != 0.0:
+        if abs(norm - 1.0) > 1e-6:
+            raise BridgeFailure("cmd_pose's quaternion is not a unit one", fix=_FIX_TYPES)
+        rotation = messages.rotation((q.x, q.y, q.z, q.w)).ravel().tolist()
+    omega = None if (w.x, w.y, w.z) == (0.0, 0.0, 0.0) else [w.x, w.y, w.z]
+    target = [p.x * 1000.0, p.y * 1000.0, p.z * 1000.0]
+    command = make_command(target, v.x * 1000.0, v.y == 1.0, None, rotation, omega)
+    return command, v.z * 1000.0

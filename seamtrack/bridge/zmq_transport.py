@@ -1,0 +1,137 @@
+"""The ZeroMQ transport: a REP socket (the server) and one REQ client, JSON messages
+(:mod:`seamtrack.bridge.wire`). The client speaks first: ``hello`` -> ``reset``, ``ready`` ->
+step 0, ``command`` -> step 1, ... -> ``end``.
+
+Safety: the socket binds to loopback unless told otherwise; ZeroMQ drops a peer whose message
+is over :data:`HARD_LIMIT_BYTES` (no allocation for it), and a message over
+:data:`~seamtrack.bridge.wire.MAX_MESSAGE_BYTES` is refused; messages are parsed as JSON and
+checked field by field, never evaluated or unpickled.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from typing import Any
+
+from seamtrack.bridge import wire
+from seamtrack.bridge.lockstep import BridgeFailure, Reply, Step, TfChain
+from seamtrack.control.tracking import TrackerContext
+
+DEFAULT_ENDPOINT = "tcp://127.0.0.1:5555"
+
+#: ZeroMQ disconnects a peer that sends more than this in one message.
+HARD_LIMIT_BYTES = 65536
+
+
+class ZmqTransport:
+    """Serve one tracker process on ``endpoint`` (see the module docstring).
+
+    Parameters
+    ----------
+    endpoint : str
+        A ZeroMQ endpoint to bind (``tcp://127.0.0.1:5555``, ``ipc:///tmp/seamtrack``).
+    timeout_s : float
+        How long the client may take to answer one step.
+    wait_s : float
+        How long to wait for the client's ``hello``.
+    """
+
+    def __init__(
+        self, endpoint: str = DEFAULT_ENDPOINT, timeout_s: float = 5.0, wait_s: float = 60.0
+    ):
+        import zmq
+
+        self._zmq = zmq
+        self.endpoint = endpoint
+        self.timeout_s = timeout_s
+        self.wait_s = wait_s
+        self.ctx = zmq.Context()
+        self.sock = self.ctx.socket(zmq.REP)
+        self.sock.setsockopt(zmq.LINGER, 0)
+        self.sock.setsockopt(zmq.MAXMSGSIZE, HARD_LIMIT_BYTES)
+        self.monitor = self.sock.get_monitor_socket(zmq.EVENT_DISCONNECTED)
+        try:
+            self.sock.bind(endpoint)
+        except zmq.ZMQError as exc:
+            self.close()
+            raise BridgeFailure(
+                f"cannot listen on {endpoint!r}: {exc}",
+                field="--endpoint",
+                fix="give a free tcp://HOST:PORT or ipc://PATH",
+            ) from None
+        self.poller = zmq.Poller()
+        self.poller.register(self.sock, zmq.POLLIN)
+        self.poller.register(self.monitor, zmq.POLLIN)
+        self.with_profile = True
+        self._connected = False
+
+    # ------------------------------------------------------------------ protocol
+    def start(self, context: TrackerContext, chain: TfChain, lockstep: str) -> None:
+        hello = wire.parse(self._recv(self.wait_s, "--wait-s", "say hello"))
+        wire.expect(hello, "hello")
+        if hello.get("protocol") != wire.PROTOCOL:
+            raise BridgeFailure(
+                f"speaks protocol {str(hello.get('protocol'))[:20]}, not {wire.PROTOCOL}",
+                fix=f"send 'protocol': {wire.PROTOCOL}",
+            )
+        self.with_profile = hello.get("profile", True) is not False
+        self._connected = True
+        reset = {
+            "op": "reset",
+            "protocol": wire.PROTOCOL,
+            "lockstep": lockstep,
+            "context": wire.context_json(context),
+            "max_message_bytes": wire.MAX_MESSAGE_BYTES,
+        }
+        self.sock.send(json.dumps(reset).encode())
+        wire.expect(wire.parse(self._recv(self.timeout_s, "--timeout-s", "answer")), "ready")
+
+    def exchange(self, step: Step) -> Reply:
+        self.sock.send(wire.step_json(step, self.with_profile))
+        raw = self._recv(self.timeout_s, "--timeout-s", f"answer step {step.seq}")
+        return wire.command_from_json(wire.parse(raw), step.seq)
+
+    def finish(self, summary: dict[str, Any]) -> None:
+        from seamtrack.io.output import json_safe
+
+        try:
+            end = {"op": "end", "summary": json_safe(summary)}
+            self.sock.send(json.dumps(end).encode(), self._zmq.NOBLOCK)
+        except self._zmq.ZMQError:
+            pass
+
+    def close(self) -> None:
+        try:
+            self.sock.disable_monitor()
+        except Exception:  # already closed, or never bound
+            pass
+        self.monitor.close(0)
+        self.sock.close(0)
+        self.ctx.term()
+
+    # ------------------------------------------------------------------ receiving
+    def _recv(self, timeout_s: float, field: str, what: str) -> bytes:
+        from zmq.utils.monitor import recv_monitor_message
+
+        deadline = time.monotonic() + timeout_s
+        while True:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                raise BridgeFailure(
+                    f"the client did not {what} within {timeout_s:g} s",
+                    field=field,
+                    fix="start the tracker process, or raise " + field,
+                )
+            ready = dict(self.poller.poll(max(1, math.ceil(left * 1000.0))))
+            if self.sock in ready:
+                return bytes(self.sock.recv(copy=True))
+            if self.monitor in ready:
+                recv_monitor_message(self.monitor)
+                if self._connected:
+                    raise BridgeFailure(
+                        "the client disconnected (or sent a message over "
+                        f"{HARD_LIMIT_BYTES} bytes)",
+                        fix="keep the tracker process running until the 'end' message",
+                    )

@@ -1,0 +1,220 @@
+"""The paper's algorithm II (convergence radius, Sec. 4.3) as a ROS 2 tracker node on Zenoh,
+speaking what rmw_zenoh_cpp speaks: CDR payloads (rosbags) on ``<domain>/<topic>/<dds type>/
+<RIHS01 hash>`` key expressions, with liveliness tokens for the node and its entities. Only
+``zenoh`` and ``rosbags`` (and the standard library): nothing of seamtrack.
+
+Usage: python zenoh_algorithm2.py LOCATOR [--radius-mm 1.0] [--misbehave KIND]
+
+Works in SI units as a ROS node does (m, m/s). ``--misbehave`` is for the tests: ``garbage``
+(bytes that are not CDR), ``oversized`` (a 10 kB payload), ``silent`` (no answer to step 5),
+``vanish`` (exit at step 5).
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import math
+import queue
+import struct
+import sys
+import time
+
+import zenoh
+from rosbags.typesys import Stores, get_typestore
+
+TS = get_typestore(Stores.ROS2_JAZZY)
+T = TS.types
+DOMAIN = 0
+QOS = "::,10:,:,:,,"
+
+
+def dds(msgtype: str) -> str:
+    package, kind, name = msgtype.split("/")
+    return f"{package}::{kind}::dds_::{name}_"
+
+
+def key(topic: str, msgtype: str) -> str:
+    return f"{DOMAIN}/{topic.strip('/')}/{dds(msgtype)}/{TS.hash_rihs01(msgtype)}"
+
+
+def token(session: str, entity: int, kind: str, topic: str, msgtype: str) -> str:
+    return (
+        f"@ros2_lv/{DOMAIN}/{session}/0/{entity}/{kind}/%/%/tracker/{topic.replace('/', '%')}/"
+        f"{dds(msgtype)}/{TS.hash_rihs01(msgtype)}/{QOS}"
+    )
+
+
+class ConvergenceRadius:
+    """Go to the oldest unreached seam point at the welding speed; take the next one as soon as
+    the torch is within the radius; arrive at rest on the last one known (all in m)."""
+
+    def __init__(self, speed: float, radius: float, min_spacing: float = 0.05e-3):
+        self.speed, self.radius, self.min_spacing = speed, radius, min_spacing
+        self.points: list[tuple[float, float, float]] = []
+        self.last_pushed: tuple[float, float, float] | None = None
+        self.command: tuple[tuple[float, float, float], bool] | None = None
+
+    def update(self, point: tuple[float, float, float]) -> None:
+        if self.last_pushed is not None and dist(point, self.last_pushed) < self.min_spacing:
+            return
+        self.points.append(point)
+        self.last_pushed = point
+
+    def step(
+        self, tcp: tuple[float, float, float]
+    ) -> tuple[tuple[float, float, float], bool] | None:
+        while len(self.points) > 1 and dist(tcp, self.points[0]) <= self.radius:
+            self.points.pop(0)
+            self.command = None
+        if not self.points:
+            return None
+        last = len(self.points) == 1
+        if self.command is None or last != self.command[1]:
+            self.command = (self.points[0], last)
+        return self.command
+
+
+def dist(a, b) -> float:
+    dx, dy, dz = a[0] - b[0], a[1] - b[1], a[2] - b[2]
+    return math.sqrt(dx * dx + dy * dy + dz * dz)
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("locator")
+    ap.add_argument("--radius-mm", type=float, default=1.0)
+    ap.add_argument("--misbehave", default="")
+    ap.add_argument("--check-frames", action="store_true")
+    args = ap.parse_args()
+    config = zenoh.Config()
+    config.insert_json5("mode", '"client"')
+    config.insert_json5("connect/endpoints", json.dumps([args.locator]))
+    config.insert_json5("scouting/multicast/enabled", "false")
+    deadline = time.monotonic() + 60.0
+    while True:  # the server may still be loading its scene
+        try:
+            session = zenoh.open(config)
+            break
+        except zenoh.ZError:
+            if time.monotonic() > deadline:
+                raise
+            time.sleep(0.2)
+    sid = str(session.zid())
+    events: queue.Queue = queue.Queue()
+
+    def on(topic):
+        return lambda sample: events.put((topic, sample.payload.to_bytes()))
+
+    subs = {
+        "/seamtrack/context": "std_msgs/msg/String",
+        "/seamtrack/status": "std_msgs/msg/String",
+        "/seamtrack/seam_point_world": "geometry_msgs/msg/PointStamped",
+        "/seamtrack/tcp": "geometry_msgs/msg/PoseStamped",
+    }
+    if args.check_frames:  # what a frame brings besides the seam point, counted and stamped
+        subs["/seamtrack/profile"] = "sensor_msgs/msg/PointCloud2"
+        subs["/tf"] = "tf2_msgs/msg/TFMessage"
+        subs["/clock"] = "rosgraph_msgs/msg/Clock"
+    seen: dict[str, list] = {"/seamtrack/profile": [], "/tf": [], "/clock": []}
+    pubs = {
+        "/seamtrack/cmd_pose": "geometry_msgs/msg/PoseStamped",
+        "/seamtrack/cmd_speed": "geometry_msgs/msg/TwistStamped",
+    }
+    live = session.liveliness()
+    tokens = [live.declare_token(f"@ros2_lv/{DOMAIN}/{sid}/0/0/NN/%/%/tracker")]
+    handles = []
+    entity = 1
+    for topic, msgtype in subs.items():
+        handles.append(session.declare_subscriber(key(topic, msgtype), on(topic)))
+        tokens.append(live.declare_token(token(sid, entity, "MS", topic, msgtype)))
+        entity += 1
+    publishers = {}
+    gids = {}
+    for topic, msgtype in pubs.items():
+        publishers[topic] = session.declare_publisher(
+            key(topic, msgtype), congestion_control=zenoh.CongestionControl.BLOCK
+        )
+        gids[topic] = hashlib.sha256(f"{sid}{topic}".encode()).digest()[:16]
+        tokens.append(live.declare_token(token(sid, entity, "MP", topic, msgtype)))
+        entity += 1
+    seq = [0]
+
+    def publish(topic, msg):
+        seq[0] += 1
+        attachment = struct.pack("<qqB", seq[0], time.time_ns(), 16) + gids[topic]
+        publishers[topic].put(bytes(TS.serialize_cdr(msg, pubs[topic])), attachment=attachment)
+
+    tracker = None
+    steps = 0
+    while True:
+        topic, raw = events.get(timeout=120)
+        if topic == "/seamtrack/context":
+            context = json.loads(TS.deserialize_cdr(raw, subs[topic]).data)["context"]
+            speed = context["welding_speed_mm_s"] / 1000.0
+            tracker = ConvergenceRadius(speed, args.radius_mm / 1000.0)
+        elif topic in seen:
+            msg = TS.deserialize_cdr(raw, subs[topic])
+            if topic == "/seamtrack/profile":
+                seen[topic].append([msg.header.stamp.sec, msg.header.stamp.nanosec, msg.width])
+            elif topic == "/tf":
+                seen[topic].append([[t.header.frame_id, t.child_frame_id] for t in msg.transforms])
+            else:
+                seen[topic].append([msg.clock.sec, msg.clock.nanosec])
+        elif topic == "/seamtrack/status":
+            print(TS.deserialize_cdr(raw, subs[topic]).data)
+            if args.check_frames:
+                print(json.dumps(seen))
+            break
+        elif topic == "/seamtrack/seam_point_world":
+            p = TS.deserialize_cdr(raw, subs[topic]).point
+            tracker.update((p.x, p.y, p.z))
+        elif topic == "/seamtrack/tcp":
+            msg = TS.deserialize_cdr(raw, subs[topic])
+            p = msg.pose.position
+            cmd = tracker.step((p.x, p.y, p.z))
+            header = T["std_msgs/msg/Header"](stamp=msg.header.stamp, frame_id="world")
+            if steps == 5 and args.misbehave:
+                if args.misbehave == "garbage":
+                    publishers["/seamtrack/cmd_pose"].put(b"\x00\x01garbage")
+                elif args.misbehave == "oversized":
+                    publishers["/seamtrack/cmd_pose"].put(b"\x00" * 10000)
+                elif args.misbehave == "vanish":
+                    for t in tokens:
+                        t.undeclare()
+                    session.close()
+                    return 0
+                time.sleep(30)
+                return 0
+            steps += 1
+            zero = T["geometry_msgs/msg/Vector3"](x=0.0, y=0.0, z=0.0)
+            if cmd is None:
+                target, stop, speed_x = (0.0, 0.0, 0.0), 0.0, tracker.speed
+                header = T["std_msgs/msg/Header"](stamp=msg.header.stamp, frame_id="")
+            else:
+                target, stop, speed_x = cmd[0], 1.0 if cmd[1] else 0.0, tracker.speed
+            # Ask again within the radius (frame lockstep): that is where the switch comes.
+            within = 0.0 if cmd is None or cmd[1] else tracker.radius
+            pose = T["geometry_msgs/msg/Pose"](
+                position=T["geometry_msgs/msg/Point"](x=target[0], y=target[1], z=target[2]),
+                orientation=T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=0.0),
+            )
+            twist = T["geometry_msgs/msg/Twist"](
+                linear=T["geometry_msgs/msg/Vector3"](x=speed_x, y=stop, z=within), angular=zero
+            )
+            publish(
+                "/seamtrack/cmd_pose", T["geometry_msgs/msg/PoseStamped"](header=header, pose=pose)
+            )
+            publish(
+                "/seamtrack/cmd_speed",
+                T["geometry_msgs/msg/TwistStamped"](header=header, twist=twist),
+            )
+    for t in tokens:
+        t.undeclare()
+    session.close()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,107 @@
+"""The paper's algorithm II (convergence radius, Sec. 4.3) as an external tracker for
+``seamtrack serve --transport zmq``: pyzmq and the standard library only, nothing of seamtrack.
+
+Usage: python zmq_algorithm2.py ENDPOINT [--radius-mm 1.0] [--misbehave KIND]
+
+It says hello, then answers every step with its command. ``--misbehave`` is for the tests:
+``garbage`` (bytes that are not JSON), ``oversized`` (a 10 kB message), ``silent`` (no answer
+to step 5), ``vanish`` (exit at step 5), ``bad-command`` (a NaN target).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+
+import zmq
+
+
+class ConvergenceRadius:
+    """Go to the oldest unreached seam point at the welding speed; take the next one as soon as
+    the torch is within the radius; arrive at rest on the last one known."""
+
+    def __init__(self, speed_mm_s: float, radius_mm: float = 1.0, min_spacing_mm: float = 0.05):
+        self.speed = speed_mm_s
+        self.radius = radius_mm
+        self.min_spacing = min_spacing_mm
+        self.points: list[list[float]] = []
+        self.last_pushed: list[float] | None = None
+        self.command: dict | None = None
+
+    def update(self, point: list[float]) -> None:
+        if self.last_pushed is not None and _dist(point, self.last_pushed) < self.min_spacing:
+            return
+        self.points.append(point)
+        self.last_pushed = point
+
+    def step(self, tcp: list[float]) -> dict | None:
+        while len(self.points) > 1 and _dist(tcp, self.points[0]) <= self.radius:
+            self.points.pop(0)
+            self.command = None
+        if not self.points:
+            return None
+        last = len(self.points) == 1
+        if self.command is None or last != self.command["stop_at_target"]:
+            self.command = {
+                "target_mm": self.points[0],
+                "speed_mm_s": self.speed,
+                "stop_at_target": last,
+            }
+            if not last:  # the switch comes within the radius: be asked then (frame lockstep)
+                self.command["ask_within_mm"] = self.radius
+        return self.command
+
+
+def _dist(a: list[float], b: list[float]) -> float:
+    dx, dy, dz = a[0] - b[0], a[1] - b[1], a[2] - b[2]
+    return math.sqrt(dx * dx + dy * dy + dz * dz)
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("endpoint")
+    ap.add_argument("--radius-mm", type=float, default=1.0)
+    ap.add_argument("--misbehave", default="")
+    ap.add_argument("--no-profile", action="store_true")
+    args = ap.parse_args()
+    ctx = zmq.Context()
+    sock = ctx.socket(zmq.REQ)
+    sock.setsockopt(zmq.LINGER, 0)
+    sock.connect(args.endpoint)
+    sock.send_json({"op": "hello", "protocol": 1, "profile": not args.no_profile})
+    reset = sock.recv_json()
+    tracker = ConvergenceRadius(reset["context"]["welding_speed_mm_s"], args.radius_mm)
+    sock.send_json({"op": "ready"})
+    while True:
+        msg = json.loads(sock.recv())
+        if msg["op"] == "end":
+            print(json.dumps(msg["summary"]))
+            return 0
+        for frame in msg["frames"]:
+            if frame["found"]:
+                tracker.update(frame["point_mm"])
+        cmd = tracker.step(msg["tcp_mm"])
+        if msg["seq"] == 5 and args.misbehave:
+            if args.misbehave == "garbage":
+                sock.send(b"\x80\x04garbage")
+            elif args.misbehave == "oversized":
+                sock.send_json({"op": "command", "seq": 5, "command": None, "pad": "x" * 10000})
+            elif args.misbehave == "bad-command":
+                bad = {"target_mm": [0.0, "nan", 0.0], "speed_mm_s": 5.0}
+                sock.send_json({"op": "command", "seq": 5, "command": bad})
+            elif args.misbehave == "vanish":
+                sock.close(0)
+                ctx.term()
+                return 0
+            elif args.misbehave == "silent":
+                time.sleep(30)  # connected, but no answer (until the test ends us)
+            sock.recv()
+            return 0
+        sock.send(json.dumps({"op": "command", "seq": msg["seq"], "command": cmd}).encode())
+
+
+if __name__ == "__main__":
+    sys.exit(main())

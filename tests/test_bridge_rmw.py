@@ -1,0 +1,157 @@
+"""rmw_zenoh's formats as its design document (ros2/rmw_zenoh docs/design.md, "Topic and
+Service name mapping to Zenoh key expressions" and "Graph Cache") gives them: the examples
+there are the oracle. And the bridge's checks of what a client sends (JSON and CDR)."""
+
+from __future__ import annotations
+
+import json
+import struct
+
+import numpy as np
+import pytest
+
+pytest.importorskip("rosbags")
+
+from seamtrack.bridge import messages, rmw, wire
+from seamtrack.bridge.lockstep import BridgeFailure
+
+STRING_HASH = "RIHS01_df668c740482bbd48fb39d76a70dfd4bd59db1288021743503259e948f6b1a18"
+
+
+def test_topic_keys_are_the_design_documents() -> None:
+    assert rmw.type_hash("std_msgs/msg/String") == STRING_HASH
+    assert (
+        rmw.topic_key(0, "/chatter", "std_msgs/msg/String")
+        == f"0/chatter/std_msgs::msg::dds_::String_/{STRING_HASH}"
+    )
+    assert (
+        rmw.topic_key(0, "/robot1/chatter", "std_msgs/msg/String")
+        == f"0/robot1/chatter/std_msgs::msg::dds_::String_/{STRING_HASH}"
+    )
+
+
+def test_liveliness_tokens_are_the_design_documents() -> None:
+    assert (
+        rmw.node_token(2, "aac3178e146ba6f1fc6e6a4085e77f21", 0, "listener", "")
+        == "@ros2_lv/2/aac3178e146ba6f1fc6e6a4085e77f21/0/0/NN/%/%/listener"
+    )
+    sub = rmw.entity_token(
+        2, "aac3178e146ba6f1fc6e6a4085e77f21", 0, 10, "MS", "listener", "", "/chatter",
+        "std_msgs/msg/String",
+    )  # fmt: skip
+    assert sub == (
+        "@ros2_lv/2/aac3178e146ba6f1fc6e6a4085e77f21/0/10/MS/%/%/listener/%chatter/"
+        f"std_msgs::msg::dds_::String_/{STRING_HASH}/::,10:,:,:,,"
+    )
+    fields = rmw.parse_token(sub)
+    assert fields is not None
+    assert (fields["kind"], fields["topic"], fields["hash"]) == ("MS", "/chatter", STRING_HASH)
+
+
+def test_every_bridge_topic_has_a_rihs01_hash_of_its_type() -> None:
+    from seamtrack.bridge.zenoh_transport import PUBLISHES, SUBSCRIBES
+
+    for topic, msgtype in {**PUBLISHES, **SUBSCRIBES}.items():
+        key = rmw.topic_key(0, topic, msgtype)
+        domain, *_, dds, digest = key.split("/")
+        assert domain == "0" and dds == rmw.dds_type_name(msgtype)
+        assert digest.startswith("RIHS01_") and len(digest) == 7 + 64
+        int(digest[7:], 16)  # hex
+
+
+def test_attachment_layout() -> None:
+    gid = bytes(range(16))
+    raw = rmw.attachment(7, 123456789, gid)
+    assert len(raw) == 33
+    assert struct.unpack("<qqB", raw[:17]) == (7, 123456789, 16) and raw[17:] == gid
+
+
+def test_loopback_by_default() -> None:
+    from seamtrack.bridge import zenoh_transport, zmq_transport
+
+    assert zmq_transport.DEFAULT_ENDPOINT.startswith("tcp://127.0.0.1:")
+    assert zenoh_transport.DEFAULT_ENDPOINT.startswith("tcp/127.0.0.1:")
+
+
+# --------------------------------------------------------------------------- JSON commands
+def _command(body: object, seq: int = 3) -> bytes:
+    return json.dumps({"op": "command", "seq": seq, "command": body}).encode()
+
+
+def test_a_json_command_is_read_exactly() -> None:
+    body = {"target_mm": [1.5, -2.25, 0.1], "speed_mm_s": 5, "stop_at_target": True}
+    cmd, within = wire.command_from_json(wire.parse(_command(body)), 3)
+    assert cmd is not None and within == 0.0
+    assert cmd.target_world.tolist() == [1.5, -2.25, 0.1] and cmd.speed_mm_s == 5.0
+    assert cmd.stop_at_target and cmd.rotation_world is None
+    assert wire.command_from_json(wire.parse(_command(None)), 3) == (None, 0.0)
+    body["ask_within_mm"] = 1.0
+    assert wire.command_from_json(wire.parse(_command(body)), 3)[1] == 1.0
+
+
+@pytest.mark.parametrize(
+    ("raw", "why"),
+    [
+        (b"\x80\x04\x95pickle", "not JSON"),
+        (b"[1, 2]", "not an object"),
+        (b'{"op": "command", "seq": 3, "command": {"target_mm": [NaN, 0, 0]}}', "not JSON"),
+        (_command({"target_mm": [0, 0], "speed_mm_s": 1}), "'target_mm'"),
+        (_command({"target_mm": [0, 0, 0], "speed_mm_s": 0}), "'speed_mm_s'"),
+        (_command({"target_mm": [0, 0, 0], "speed_mm_s": 1, "exec": "x"}), "unknown"),
+        (_command({"target_mm": [0, 0, 0], "speed_mm_s": 1, "ask_within_mm": -1}), "negative"),
+        (_command({"target_mm": [0, 0, 0], "speed_mm_s": 1}, seq=2), "step 2 where step 3"),
+        (_command({"target_mm": [0, 0, 0], "speed_mm_s": 1, "rotation": [[2, 0, 0]] * 3}), "rot"),
+        (json.dumps({"op": "command", "seq": 3, "pad": "x" * 5000}).encode(), "4096-byte"),
+    ],
+)
+def test_bad_json_commands_are_refused(raw: bytes, why: str) -> None:
+    with pytest.raises(BridgeFailure, match=why):
+        wire.command_from_json(wire.parse(raw), 3)
+
+
+# --------------------------------------------------------------------------- CDR commands
+def _pair(frame: str = "world", q=(0.0, 0.0, 0.0, 0.0), linear=(0.005, 1.0, 0.001)):
+    from seamtrack.bridge.zenoh_transport import command_from_ros
+
+    pose = messages.decode(rmw.encode_pose(1.0, frame, (10.0, 20.0, 30.0), None), rmw.POSE_STAMPED)
+    pose.pose.orientation.x, pose.pose.orientation.y = q[0], q[1]
+    pose.pose.orientation.z, pose.pose.orientation.w = q[2], q[3]
+    speed = messages.decode(rmw.encode_twist(1.0, "world", linear, (0, 0, 0)), rmw.TWIST_STAMPED)
+    command, within = command_from_ros(pose, speed)
+    assert within == (0.0 if command is None else 1.0)
+    return command
+
+
+def test_a_ros_command_pair_is_read() -> None:
+    cmd = _pair()
+    assert cmd is not None
+    assert np.allclose(cmd.target_world, (10.0, 20.0, 30.0), rtol=0, atol=1e-12)
+    assert cmd.speed_mm_s == pytest.approx(5.0) and cmd.stop_at_target
+    assert cmd.rotation_world is None
+    assert _pair(frame="") is None  # no target: brake to rest and wait
+    turned = _pair(q=(0.0, 0.0, np.sin(0.25), np.cos(0.25)))
+    assert turned is not None and turned.rotation_world is not None
+    assert np.allclose(
+        turned.rotation_world[:2, :2], [[np.cos(0.5), -np.sin(0.5)], [np.sin(0.5), np.cos(0.5)]]
+    )
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "why"),
+    [
+        ({"frame": "map"}, "frame"),
+        ({"q": (0.0, 0.0, 0.0, 2.0)}, "unit"),
+        ({"linear": (0.0, 0.0, 0.0)}, "speed > 0"),
+        ({"linear": (0.005, 0.5, 0.0)}, "stop 0 or 1"),
+        ({"linear": (0.005, 1.0, -0.001)}, "ask within >= 0"),
+        ({"linear": (float("nan"), 0.0, 0.0)}, "not finite"),
+    ],
+)
+def test_bad_ros_commands_are_refused(kwargs: dict, why: str) -> None:
+    with pytest.raises(BridgeFailure, match=why):
+        _pair(**kwargs)
+
+
+def test_cdr_garbage_is_refused() -> None:
+    with pytest.raises(ValueError, match="not a geometry_msgs/msg/PoseStamped"):
+        rmw.deserialize(b"\x00\x01garbage", rmw.POSE_STAMPED)
