@@ -34,6 +34,7 @@ naming the first such point, why, and the fix.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -227,6 +228,14 @@ class ArticulatedRobot:
         object.__setattr__(self, "_par", par)
         object.__setattr__(self, "_jl", jl)
         object.__setattr__(self, "_servo_table", table)
+
+    def with_iterative_ik(self) -> ArticulatedRobot:
+        """The same arm with the tick's inverse kinematics by Newton steps only (as before the
+        closed forms: one or two damped least-squares steps from the last set-point): the
+        reference that the closed form's runs are held to (``seamtrack bench loop``)."""
+        robot = dataclasses.replace(self)
+        robot._par[ak.P_SOLVER] = KIND_NONE
+        return robot
 
     # ----------------------------------------------------------------- poses
     def T_world_tcp_of(self, state: ArmState) -> FloatArray:

@@ -24,7 +24,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.control.closed_form import KIND_NONE, ik_branches
+from seamtrack.control.closed_form import KIND_NONE, ik_branches, mul
 from seamtrack.control.robot import axes_step
 from seamtrack.control.servo import loops_step
 
@@ -84,6 +84,16 @@ def exp3(w: FloatArray) -> FloatArray:
 
 
 @numba.njit(cache=True, nogil=True)
+def mul_t(A: FloatArray, B: FloatArray) -> FloatArray:
+    """A @ B.T for 3 x 3 matrices."""
+    out = np.empty((3, 3))
+    for i in range(3):
+        for j in range(3):
+            out[i, j] = A[i, 0] * B[j, 0] + A[i, 1] * B[j, 1] + A[i, 2] * B[j, 2]
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
 def log3(R: FloatArray) -> FloatArray:
     """(3,) rotation vector (axis times angle, rad) of a rotation matrix, accurate near 0 and
     near pi (Pinocchio's ``log3`` to rounding)."""
@@ -123,19 +133,18 @@ def chain_fk(
     ``index[k]``: which entry of ``q`` moves chain joint k."""
     m = axes.shape[0]
     T = np.eye(4)
-    step = np.eye(4)
+    R = np.empty((3, 3))
     for k in range(m):
-        T = T @ place[k]
+        T = mul(T, place[k])
         x = q[index[k]]
         if kinds[k] == REVOLUTE:
-            rotation_about(axes[k], x, step[:3, :3])
-            step[:3, 3] = 0.0
+            rotation_about(axes[k], x, R)
+            T[:3, :3] = mul(T[:3, :3], R)
         else:
-            step[:3, :3] = np.eye(3)
-            step[:3, 3] = axes[k] * x
-        T = T @ step
+            for i in range(3):
+                T[i, 3] += x * (T[i, 0] * axes[k, 0] + T[i, 1] * axes[k, 1] + T[i, 2] * axes[k, 2])
         frames[k] = T
-    frames[m] = T @ place[m]
+    frames[m] = mul(T, place[m])
 
 
 @numba.njit(cache=True, nogil=True)
@@ -151,7 +160,11 @@ def chain_jacobian(
     J[:, :] = 0.0
     p = frames[m, :3, 3]
     for k in range(m):
-        w = np.ascontiguousarray(frames[k, :3, :3]) @ axes[k]
+        F = frames[k]
+        a = axes[k]
+        w = np.empty(3)
+        for i in range(3):
+            w[i] = F[i, 0] * a[0] + F[i, 1] * a[1] + F[i, 2] * a[2]
         j = index[k]
         if kinds[k] == REVOLUTE:
             r = p - frames[k, :3, 3]
@@ -214,13 +227,13 @@ def newton_ik(
         worst = 0.0
         for i in range(3):
             e[i] = p_set[i] - T[i, 3]
-        e[3:] = log3(R_set @ np.ascontiguousarray(T[:3, :3].T))
+        e[3:] = log3(mul_t(R_set, T[:3, :3]))
         for i in range(6):
             worst = max(worst, abs(e[i]))
-        A = J @ np.ascontiguousarray(J.T)
+        A = mul(J, np.ascontiguousarray(J.T))
         for i in range(6):
             A[i, i] += damp2
-        q += np.ascontiguousarray(J.T) @ spd_solve(A, e)
+        q += mul(np.ascontiguousarray(J.T), spd_solve(A, e).reshape(6, 1))[:, 0]
         if worst < ONE_STEP_ERROR:
             break
     return q
@@ -289,8 +302,8 @@ def arm_step(
             R_goal[:, :] = cmd[M_ROT : M_ROT + 9].reshape(3, 3)
             cmd[M_NEW_GOAL] = 0.0
         elif cmd[M_HAS_W] > 0.0:
-            R_goal[:, :] = exp3(ff * dt) @ R_goal
-        err = log3(R_goal @ np.ascontiguousarray(R_set.T))
+            R_goal[:, :] = mul(exp3(ff * dt), R_goal)
+        err = log3(mul_t(R_goal, R_set))
         size = math.sqrt(err[0] ** 2 + err[1] ** 2 + err[2] ** 2)
         # Proportional, capped by the speed from which braking at the angular acceleration
         # limit stops on the goal (no overshoot), on top of the goal's own turning.
@@ -308,7 +321,7 @@ def arm_step(
         dw *= par[P_DW_MAX] / norm
     omega += dw
     if omega[0] != 0.0 or omega[1] != 0.0 or omega[2] != 0.0:
-        R_set[:, :] = exp3(omega * dt) @ R_set
+        R_set[:, :] = mul(exp3(omega * dt), R_set)
     # Inverse kinematics from the last joint set-point.
     p_set = cart[C_SQ] * 1e-3
     q_ref = jnt[S_REF]
@@ -362,3 +375,24 @@ def arm_step(
         cart[C_V, i] = (x - cart[C_Q, i]) / dt
         cart[C_Q, i] = x
     rot[2] = T[:3, :3]
+
+
+@numba.njit(cache=True, nogil=True)
+def chain_figures(
+    joints: FloatArray, place: FloatArray, axes: FloatArray, kinds: IntArray, index: IntArray,
+    a: int, b: int, wrist: FloatArray, jacobians: FloatArray,
+) -> None:  # fmt: skip
+    """For each row of ``joints``: the angle (rad, 0..pi/2) between the axes of chain joints
+    ``a`` and ``b`` (the wrist's 4 and 6) and the torch tip's Jacobian."""
+    m = axes.shape[0]
+    frames = np.empty((m + 1, 4, 4))
+    for r in range(joints.shape[0]):
+        chain_jacobian(joints[r], place, axes, kinds, index, frames, jacobians[r])
+        c = 0.0
+        for i in range(3):
+            wa = frames[a, i, 0] * axes[a, 0] + frames[a, i, 1] * axes[a, 1]
+            wa += frames[a, i, 2] * axes[a, 2]
+            wb = frames[b, i, 0] * axes[b, 0] + frames[b, i, 1] * axes[b, 1]
+            wb += frames[b, i, 2] * axes[b, 2]
+            c += wa * wb
+        wrist[r] = math.acos(min(abs(c), 1.0))

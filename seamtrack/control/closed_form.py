@@ -59,6 +59,19 @@ def _near(x: float, ref: float) -> float:
 
 
 @numba.njit(cache=True, nogil=True)
+def mul(A: FloatArray, B: FloatArray) -> FloatArray:
+    """A @ B for small matrices, in loops (no BLAS call: a 4 x 4 product in ~30 ns)."""
+    n, m, p = A.shape[0], A.shape[1], B.shape[1]
+    out = np.zeros((n, p))
+    for i in range(n):
+        for k in range(m):
+            a = A[i, k]
+            for j in range(p):
+                out[i, j] += a * B[k, j]
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
 def _rz(q: float) -> FloatArray:
     out = np.eye(4)
     c, s = math.cos(q), math.sin(q)
@@ -98,7 +111,7 @@ def _ur_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: FloatArr
     the rotation from frame 1 to joint 6 is (s_a4 s5 c6, -s_a4 s5 s6, -s_a4 s_a5 c5): joints
     5 and 6. What is left, Rz(q2) Tx(a2) Rz(q3) Tx(a3) Rz(q4), is a planar 3R chain."""
     P2i, P1i, P6i, P5i = _m4j(g, _U_P2I), _m4j(g, _U_P1I), _m4j(g, _U_P6I), _m4j(g, _U_P5I)
-    J6 = T @ _m4j(g, _U_TCP)  # the joint-6 frame (the torch's placement on it undone)
+    J6 = mul(T, _m4j(g, _U_TCP))  # the joint-6 frame (the torch's placement on it undone)
     a2, a3, dlat = g[_U_A2], g[_U_A3], g[_U_DLAT]
     s1, s4, s5a = g[_U_S1], g[_U_S4], g[_U_S5]
     px, py = J6[0, 3], J6[1, 3]
@@ -114,7 +127,7 @@ def _ur_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: FloatArr
         if abs(c5) > 1.0 + 1e-12:
             continue
         c5 = min(max(c5, -1.0), 1.0)
-        T01i = P2i @ _rz(-q1) @ P1i
+        T01i = mul(mul(P2i, _rz(-q1)), P1i)
         for q5 in (math.acos(c5), -math.acos(c5)):
             sn5 = math.sin(q5)
             if abs(sn5) < SINGULAR_SIN:
@@ -123,7 +136,7 @@ def _ur_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: FloatArr
                 zx = z1x * J6[0, 0] + z1y * J6[1, 0]
                 zy = z1x * J6[0, 1] + z1y * J6[1, 1]
                 q6 = math.atan2(-zy / (s4 * sn5), zx / (s4 * sn5))
-            A = T01i @ J6 @ _rz(-q6) @ P6i @ _rz(-q5) @ P5i
+            A = mul(mul(mul(mul(mul(T01i, J6), _rz(-q6)), P6i), _rz(-q5)), P5i)
             q234 = math.atan2(A[1, 0], A[0, 0])
             x, y = A[0, 3], A[1, 3]
             c3 = (x * x + y * y - a2 * a2 - a3 * a3) / (2.0 * a2 * a3)
@@ -156,7 +169,7 @@ def _wrist_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: Float
     (``a cos q1 + b sin q1 = h``), joints 2 and 3 are a planar 2R chain to it, and the wrist
     rotation left, in the basis (u4, u5, u4 x u5), is Rx(q4) Ry(q5) Rx(+-q6)."""
     RT = np.ascontiguousarray(T[:3, :3])
-    c = T[:3, 3] + RT @ g[_W_WT : _W_WT + 3]
+    c = T[:3, 3] + mul(RT, g[_W_WT : _W_WT + 3].reshape(3, 1))[:, 0]
     o1, u2, v = g[_W_O1 : _W_O1 + 3], g[_W_U2 : _W_U2 + 3], g[_W_V : _W_V + 3]
     d = c - o1
     a, b = d @ u2, d @ v
@@ -176,10 +189,10 @@ def _wrist_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: Float
     u1, u3 = g[_W_U1 : _W_U1 + 3], g[_W_U3 : _W_U3 + 3]
     B = g[_W_B : _W_B + 9].reshape(3, 3)
     Bt = np.ascontiguousarray(B.T)
-    R0 = g[_W_R0 : _W_R0 + 9].reshape(3, 3)
+    R0t = np.ascontiguousarray(g[_W_R0 : _W_R0 + 9].reshape(3, 3).T)
     count = 0
     for q1 in (beta + k, beta - k):
-        P = o1 + _rot(u1, -q1) @ d - o2
+        P = o1 + mul(_rot(u1, -q1), d.reshape(3, 1))[:, 0] - o2
         px, py = P @ e1, P @ e2
         kappa = (px * px + py * py - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
         if abs(kappa) > 1.0 + 1e-12:
@@ -190,8 +203,8 @@ def _wrist_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: Float
             vy = o3y + math.sin(phi3) * (w0x - o3x) + math.cos(phi3) * (w0y - o3y)
             q2 = math.atan2(py, px) - math.atan2(vy, vx)
             q3 = s3 * phi3
-            R3 = _rot(u1, q1) @ _rot(u2, q2) @ _rot(u3, q3)
-            N = Bt @ (np.ascontiguousarray(R3.T) @ RT @ np.ascontiguousarray(R0.T)) @ B
+            R3 = mul(mul(_rot(u1, q1), _rot(u2, q2)), _rot(u3, q3))
+            N = mul(mul(Bt, mul(mul(np.ascontiguousarray(R3.T), RT), R0t)), B)
             sb = math.hypot(N[0, 1], N[0, 2])
             for sign in (1.0, -1.0):
                 q5 = math.atan2(sign * sb, N[0, 0])

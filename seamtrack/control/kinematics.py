@@ -446,6 +446,25 @@ class ArmKinematics:
         c = abs(float(axes[0] @ axes[1]))
         return math.acos(min(c, 1.0))
 
+    def wrist_and_sigma(self, joints: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """:meth:`wrist_angle` and :meth:`sigma_min` of each row of ``joints`` (m, n), from the
+        compiled chain in one call (the same figures to rounding)."""
+        from seamtrack.control.arm_kernels import chain_figures
+
+        q = np.ascontiguousarray(joints, dtype=np.float64).reshape(-1, self.dof)
+        place, axes, kinds, index = self.chain
+        where = {int(i): k for k, i in enumerate(index)}
+        if 3 not in where or 5 not in where:  # joints 4 and 6 off the chain: one by one
+            data = self.new_data()
+            wrist = np.array([self.wrist_angle(x, data) for x in q])
+            return wrist, np.array([self.sigma_min(x, data) for x in q])
+        wrist = np.empty(len(q))
+        jacobians = np.empty((len(q), 6, self.dof))
+        chain_figures(q, place, axes, kinds, index, where[3], where[5], wrist, jacobians)
+        if not len(q):
+            return wrist, np.empty(0)
+        return wrist, np.linalg.svd(jacobians, compute_uv=False)[:, -1]
+
     def sigma_min(self, q: ArrayLike, data: Any = None) -> float:
         """Smallest singular value of the TCP Jacobian (linear rows in m/rad)."""
         data = self.new_data() if data is None else data

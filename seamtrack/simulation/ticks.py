@@ -20,9 +20,11 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.control.arm_kernels import C_Q, M_FF, M_HAS, M_SPEED, M_STOP, M_T, S_JOINTS, arm_step
 from seamtrack.control.path_kernels import setpoint_step
 from seamtrack.control.robot import CartesianRobot, RobotState, axes_step
 from seamtrack.control.servo import loops_step
+from seamtrack.simulation.progress import ProgressTracker
 
 FloatArray = NDArray[np.float64]
 
@@ -144,3 +146,155 @@ class GantryTicks:
             servo.held[:] = axes[4].tolist()
             servo.tick = int(self.ipo[1])
         return n, why
+
+
+#: :func:`arm_ticks` stopped where the tracker refreshes the tool orientation (in Python).
+ORIENT = 3
+
+
+@numba.njit(cache=True, nogil=True)
+def arm_ticks(
+    tick: int, max_ticks: int, dt: float, next_capture: float, next_arrival: float,
+    check_every: int, wall_every: int, k0: int, resume: bool, world: FloatArray,
+    base: FloatArray, reach: float, orient: NDArray[np.int64], par: FloatArray, lim: FloatArray,
+    jl: FloatArray, servo: FloatArray, geo: FloatArray, place: FloatArray, axes: FloatArray,
+    kinds: NDArray[np.int64], index: NDArray[np.int64], cart: FloatArray, rot: FloatArray,
+    omega: FloatArray, jnt: FloatArray, cnt: NDArray[np.int64], cmd: FloatArray,
+    sp: FloatArray, path: FloatArray, s: FloatArray, env_s: FloatArray, env_v: FloatArray,
+    seen: bool, tcp_out: FloatArray, target_out: FloatArray, axis_out: FloatArray,
+    joint_out: FloatArray, refused: FloatArray, pending: FloatArray,
+) -> tuple[int, int]:  # fmt: skip
+    """:func:`gantry_ticks` for an arm and the built-in tracker: per tick the torch tip in the
+    world (``world``: (3, 4) rotation and origin of the base), the tracker's set-point step,
+    the command in the base frame (``base``: the inverse), the reach check (``LIMIT``), the
+    traces (torch tip, target, torch axis, joints, rows from ``k0``) and the arm's compiled
+    tick (:func:`~seamtrack.control.arm_kernels.arm_step` on the state's arrays).
+
+    Every ``orient[0]``-th command of the tracker (its count in ``orient[1]``) refreshes the
+    tool orientation, which is Python's: the ticks stop there (``ORIENT``) with that tick's
+    set-point in ``pending``, and continue from it (``resume``) once the command's rotation is
+    in ``cmd``. Returns (ticks run, what stopped it).
+    """
+    first = tick
+    k = k0
+    while tick <= max_ticks:
+        t = tick * dt
+        if tick > first and (t + 1e-9 >= next_capture or next_arrival <= t + 1e-9):
+            break
+        q = cart[C_Q]
+        x = world[0, 0] * q[0] + world[0, 1] * q[1] + world[0, 2] * q[2] + world[0, 3]
+        y = world[1, 0] * q[0] + world[1, 1] * q[1] + world[1, 2] * q[2] + world[1, 3]
+        z = world[2, 0] * q[0] + world[2, 1] * q[1] + world[2, 2] * q[2] + world[2, 3]
+        tcp_out[k, 0], tcp_out[k, 1], tcp_out[k, 2] = x, y, z
+        if not seen:
+            sp[2], sp[3], sp[4] = x, y, z  # the tracker's view of the torch (naive poses)
+            target_out[k, :] = np.nan
+            cmd[M_HAS] = 0.0
+        else:
+            if resume and tick == first:
+                tx, ty, tz, speed, fx, fy, fz = pending[:7]
+                stop = pending[7] > 0.0
+            else:
+                tx, ty, tz, speed, fx, fy, fz, stop = setpoint_step(
+                    sp, path, s, env_s, env_v, x, y, z
+                )
+                if not (0.0 < speed < math.inf and math.isfinite(tx + ty + tz + fx + fy + fz)):
+                    refused[:] = (tx, ty, tz, speed, fx, fy, fz, 1.0 if stop else 0.0)
+                    return k - k0, REFUSED
+                orient[1] += 1
+                if orient[1] % orient[0] == 0:
+                    pending[:] = (tx, ty, tz, speed, fx, fy, fz, 1.0 if stop else 0.0)
+                    return k - k0, ORIENT
+            target_out[k, 0], target_out[k, 1], target_out[k, 2] = tx, ty, tz
+            cmd[M_HAS] = 1.0
+            for i in range(3):
+                cmd[M_T + i] = base[i, 0] * tx + base[i, 1] * ty + base[i, 2] * tz + base[i, 3]
+                cmd[M_FF + i] = base[i, 0] * fx + base[i, 1] * fy + base[i, 2] * fz
+            cmd[M_SPEED], cmd[M_STOP] = speed, 1.0 if stop else 0.0
+        R = rot[2]
+        for i in range(3):
+            axis_out[k, i] = world[i, 0] * R[0, 2] + world[i, 1] * R[1, 2] + world[i, 2] * R[2, 2]
+        joint_out[k] = jnt[S_JOINTS]
+        if cmd[M_HAS] > 0.0:
+            d = math.sqrt(cmd[M_T] ** 2 + cmd[M_T + 1] ** 2 + cmd[M_T + 2] ** 2)
+            if d > reach:
+                return k - k0 + 1, LIMIT
+        arm_step(
+            par, lim, jl, servo, geo, place, axes, kinds, index, cart, rot, omega, jnt, cnt, cmd
+        )
+        tick += 1
+        k += 1
+        if (tick - 1) % wall_every == 0 or (tick - 1) % check_every == 0:
+            break
+    return k - k0, EVENT
+
+
+class ArmTicks:
+    """The compiled ticks of an arm run with the built-in tracker (:func:`arm_ticks`);
+    :meth:`run` advances an :class:`~seamtrack.control.arm.ArmState` in place and refreshes the
+    tool orientation as :meth:`TrajectoryTracker.command_floats
+    <seamtrack.control.trajectory.TrajectoryTracker.command_floats>` does, the seam's closest
+    point found by :class:`~seamtrack.simulation.progress.ProgressTracker` (the same number as
+    :meth:`Seam.closest_near <seamtrack.geometry.seam.Seam.closest_near>`)."""
+
+    def __init__(self, robot: Any, tracker: Any) -> None:
+        self.robot = robot
+        self.dt = robot.control_period_s
+        T = robot.T_world_base
+        self.world = np.ascontiguousarray(T[:3, :4])
+        self.base = np.ascontiguousarray(robot._T_base_world[:3, :4])
+        self.program = tracker._program
+        self.closest = ProgressTracker(self.program.seam).closest_near
+        self.orient = np.array([tracker._orient_every, 0], dtype=np.int64)
+        n = robot.kinematics.dof
+        self.tcp = np.empty((1024, 3))
+        self.target = np.empty((1024, 3))
+        self.axis = np.empty((1024, 3))
+        self.joints = np.empty((1024, n))
+        self.refused = np.zeros(8)
+        self.pending = np.zeros(8)
+        self._turn: tuple[Any, Any] = (None, None)  # the last world rotation handed in
+
+    def _rotation(self, state: Any, tracker: Any) -> None:
+        """The tracker's commanded rotation into the state's command, converted once."""
+        rotation, omega = tracker._rotation, tracker._omega
+        if rotation is self._turn[0] and omega is self._turn[1]:
+            return
+        self._turn = (rotation, omega)
+        R = self.robot._T_base_world[:3, :3]  # as command_in_base converts it
+        rot_base = None if rotation is None else R @ np.asarray(rotation, dtype=float)
+        omega_base = None if omega is None else R @ np.asarray(omega, dtype=float)
+        self.robot._set_rotation(state, rot_base, omega_base)
+
+    def run(
+        self, state: Any, tick: int, max_ticks: int, next_capture: float, next_arrival: float,
+        check_every: int, wall_every: int, tracker: Any,
+    ) -> tuple[int, int]:  # fmt: skip
+        """Ticks from ``tick`` to the next event (see :func:`arm_ticks`); the ticks' torch
+        tips, targets, torch axes and joints are in ``self.tcp``, ``target``, ``axis`` and
+        ``joints``."""
+        robot = self.robot
+        place, axes, kinds, index = robot.kinematics.chain
+        path = tracker._buffer
+        self.orient[1] = tracker._tick
+        self._rotation(state, tracker)
+        done, resume = 0, False
+        while True:
+            n, why = arm_ticks(
+                tick + done, max_ticks, self.dt, next_capture, next_arrival, check_every,
+                wall_every, done, resume, self.world, self.base, robot._reach_mm, self.orient,
+                robot._par, robot._cart._limits, robot._jl, robot._servo_table,
+                robot.kinematics.geometry, place, axes, kinds, index, state.cart, state.rot,
+                state.omega, state.jnt, state.cnt, state.cmd, tracker._sp, path.path, path.s,
+                tracker._env_s, tracker._env_v, tracker._seen_seam, self.tcp, self.target,
+                self.axis, self.joints, self.refused, self.pending,
+            )  # fmt: skip
+            done += n
+            if why != ORIENT:
+                tracker._tick = int(self.orient[1])
+                return done, why
+            s = self.closest(self.pending[:3], tracker._s_program)
+            R, omega = self.program._turning(s, tracker._v_set)
+            tracker._rotation, tracker._omega, tracker._s_program = R, omega, s
+            self._rotation(state, tracker)
+            resume = True
