@@ -110,11 +110,11 @@ class ArmState:
 
     @property
     def q(self) -> list[float]:
-        return self.cart[ak.C_Q].tolist()  # type: ignore[no-any-return]
+        return self.cart[ak.C_Q].tolist()
 
     @property
     def v(self) -> list[float]:
-        return self.cart[ak.C_V].tolist()  # type: ignore[no-any-return]
+        return self.cart[ak.C_V].tolist()
 
     @property
     def R(self) -> FloatArray:

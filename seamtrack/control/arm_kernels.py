@@ -24,7 +24,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.control.closed_form import KIND_NONE, ik_branches, mul
+from seamtrack.control.closed_form import KIND_NONE, ik_branches, mul, mul_into
 from seamtrack.control.robot import axes_step
 from seamtrack.control.servo import loops_step
 
@@ -132,19 +132,29 @@ def chain_fk(
     joint k (after its motion), ``frames[m]`` the torch tip (``place[m]`` on the last joint).
     ``index[k]``: which entry of ``q`` moves chain joint k."""
     m = axes.shape[0]
-    T = np.eye(4)
-    R = np.empty((3, 3))
     for k in range(m):
-        T = mul(T, place[k])
+        F = frames[k]
+        if k == 0:
+            F[:, :] = place[0]
+        else:
+            mul_into(frames[k - 1], place[k], F)
         x = q[index[k]]
+        ax, ay, az = axes[k, 0], axes[k, 1], axes[k, 2]
         if kinds[k] == REVOLUTE:
-            rotation_about(axes[k], x, R)
-            T[:3, :3] = mul(T[:3, :3], R)
+            c, s = math.cos(x), math.sin(x)
+            t = 1.0 - c
+            r00, r01, r02 = c + t * ax * ax, t * ax * ay - s * az, t * ax * az + s * ay
+            r10, r11, r12 = t * ax * ay + s * az, c + t * ay * ay, t * ay * az - s * ax
+            r20, r21, r22 = t * ax * az - s * ay, t * ay * az + s * ax, c + t * az * az
+            for i in range(3):
+                f0, f1, f2 = F[i, 0], F[i, 1], F[i, 2]
+                F[i, 0] = f0 * r00 + f1 * r10 + f2 * r20
+                F[i, 1] = f0 * r01 + f1 * r11 + f2 * r21
+                F[i, 2] = f0 * r02 + f1 * r12 + f2 * r22
         else:
             for i in range(3):
-                T[i, 3] += x * (T[i, 0] * axes[k, 0] + T[i, 1] * axes[k, 1] + T[i, 2] * axes[k, 2])
-        frames[k] = T
-    frames[m] = mul(T, place[m])
+                F[i, 3] += x * (F[i, 0] * ax + F[i, 1] * ay + F[i, 2] * az)
+    mul_into(frames[m - 1], place[m], frames[m])
 
 
 @numba.njit(cache=True, nogil=True)

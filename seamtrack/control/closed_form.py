@@ -72,6 +72,58 @@ def mul(A: FloatArray, B: FloatArray) -> FloatArray:
 
 
 @numba.njit(cache=True, nogil=True)
+def mul_into(A: FloatArray, B: FloatArray, out: FloatArray) -> None:
+    """out = A @ B for small square matrices (no allocation; ``out`` not A or B)."""
+    n = A.shape[0]
+    for i in range(n):
+        for j in range(n):
+            x = 0.0
+            for k in range(n):
+                x += A[i, k] * B[k, j]
+            out[i, j] = x
+
+
+@numba.njit(cache=True, nogil=True)
+def _tmul_into(A: FloatArray, B: FloatArray, out: FloatArray) -> None:
+    """out = A.T @ B for 3 x 3 matrices."""
+    for i in range(3):
+        for j in range(3):
+            out[i, j] = A[0, i] * B[0, j] + A[1, i] * B[1, j] + A[2, i] * B[2, j]
+
+
+@numba.njit(cache=True, nogil=True)
+def _rz_left(q: float, A: FloatArray, out: FloatArray) -> None:
+    """out = Rz(q) @ A (4 x 4)."""
+    c, s = math.cos(q), math.sin(q)
+    for j in range(4):
+        a0, a1 = A[0, j], A[1, j]
+        out[0, j] = c * a0 - s * a1
+        out[1, j] = s * a0 + c * a1
+        out[2, j], out[3, j] = A[2, j], A[3, j]
+
+
+@numba.njit(cache=True, nogil=True)
+def _rz_right(A: FloatArray, q: float, out: FloatArray) -> None:
+    """out = A @ Rz(q) (4 x 4)."""
+    c, s = math.cos(q), math.sin(q)
+    for i in range(4):
+        a0, a1 = A[i, 0], A[i, 1]
+        out[i, 0] = a0 * c + a1 * s
+        out[i, 1] = -a0 * s + a1 * c
+        out[i, 2], out[i, 3] = A[i, 2], A[i, 3]
+
+
+@numba.njit(cache=True, nogil=True)
+def _rot_into(axis: FloatArray, angle: float, out: FloatArray) -> None:
+    x, y, z = axis[0], axis[1], axis[2]
+    c, s = math.cos(angle), math.sin(angle)
+    t = 1.0 - c
+    out[0, 0], out[0, 1], out[0, 2] = c + t * x * x, t * x * y - s * z, t * x * z + s * y
+    out[1, 0], out[1, 1], out[1, 2] = t * x * y + s * z, c + t * y * y, t * y * z - s * x
+    out[2, 0], out[2, 1], out[2, 2] = t * x * z - s * y, t * y * z + s * x, c + t * z * z
+
+
+@numba.njit(cache=True, nogil=True)
 def _rz(q: float) -> FloatArray:
     out = np.eye(4)
     c, s = math.cos(q), math.sin(q)
@@ -111,7 +163,10 @@ def _ur_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: FloatArr
     the rotation from frame 1 to joint 6 is (s_a4 s5 c6, -s_a4 s5 s6, -s_a4 s_a5 c5): joints
     5 and 6. What is left, Rz(q2) Tx(a2) Rz(q3) Tx(a3) Rz(q4), is a planar 3R chain."""
     P2i, P1i, P6i, P5i = _m4j(g, _U_P2I), _m4j(g, _U_P1I), _m4j(g, _U_P6I), _m4j(g, _U_P5I)
-    J6 = mul(T, _m4j(g, _U_TCP))  # the joint-6 frame (the torch's placement on it undone)
+    ws = np.empty((6, 4, 4))  # J6, P1i J6, T01^-1 J6, two scratch, A
+    J6 = ws[0]
+    mul_into(T, _m4j(g, _U_TCP), J6)  # the joint-6 frame (the torch's placement undone)
+    mul_into(P1i, J6, ws[1])
     a2, a3, dlat = g[_U_A2], g[_U_A3], g[_U_DLAT]
     s1, s4, s5a = g[_U_S1], g[_U_S4], g[_U_S5]
     px, py = J6[0, 3], J6[1, 3]
@@ -127,7 +182,8 @@ def _ur_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: FloatArr
         if abs(c5) > 1.0 + 1e-12:
             continue
         c5 = min(max(c5, -1.0), 1.0)
-        T01i = mul(mul(P2i, _rz(-q1)), P1i)
+        _rz_left(-q1, ws[1], ws[3])
+        mul_into(P2i, ws[3], ws[2])  # frame 1 to joint 6
         for q5 in (math.acos(c5), -math.acos(c5)):
             sn5 = math.sin(q5)
             if abs(sn5) < SINGULAR_SIN:
@@ -136,7 +192,11 @@ def _ur_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: FloatArr
                 zx = z1x * J6[0, 0] + z1y * J6[1, 0]
                 zy = z1x * J6[0, 1] + z1y * J6[1, 1]
                 q6 = math.atan2(-zy / (s4 * sn5), zx / (s4 * sn5))
-            A = mul(mul(mul(mul(mul(T01i, J6), _rz(-q6)), P6i), _rz(-q5)), P5i)
+            _rz_right(ws[2], -q6, ws[3])
+            mul_into(ws[3], P6i, ws[4])
+            _rz_right(ws[4], -q5, ws[3])
+            A = ws[5]
+            mul_into(ws[3], P5i, A)
             q234 = math.atan2(A[1, 0], A[0, 0])
             x, y = A[0, 3], A[1, 3]
             c3 = (x * x + y * y - a2 * a2 - a3 * a3) / (2.0 * a2 * a3)
@@ -168,11 +228,16 @@ def _wrist_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: Float
     with joints 1-3 only. Joint 1 turns axis 2 so that c lies in the plane of the arm
     (``a cos q1 + b sin q1 = h``), joints 2 and 3 are a planar 2R chain to it, and the wrist
     rotation left, in the basis (u4, u5, u4 x u5), is Rx(q4) Ry(q5) Rx(+-q6)."""
-    RT = np.ascontiguousarray(T[:3, :3])
-    c = T[:3, 3] + mul(RT, g[_W_WT : _W_WT + 3].reshape(3, 1))[:, 0]
+    ws = np.empty((7, 3, 3))  # R, its R0^T B, rotations, products
+    RT = ws[0]
+    RT[:, :] = T[:3, :3]
+    w = g[_W_WT : _W_WT + 3]
+    c = np.empty(3)
+    for i in range(3):
+        c[i] = T[i, 3] + RT[i, 0] * w[0] + RT[i, 1] * w[1] + RT[i, 2] * w[2]
     o1, u2, v = g[_W_O1 : _W_O1 + 3], g[_W_U2 : _W_U2 + 3], g[_W_V : _W_V + 3]
     d = c - o1
-    a, b = d @ u2, d @ v
+    a, b = d[0] * u2[0] + d[1] * u2[1] + d[2] * u2[2], d[0] * v[0] + d[1] * v[1] + d[2] * v[2]
     r = math.hypot(a, b)
     hp = g[_W_HP]
     if r < abs(hp) or r == 0.0:
@@ -188,12 +253,17 @@ def _wrist_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: Float
     s3, s6 = g[_W_S3], g[_W_S6]
     u1, u3 = g[_W_U1 : _W_U1 + 3], g[_W_U3 : _W_U3 + 3]
     B = g[_W_B : _W_B + 9].reshape(3, 3)
-    Bt = np.ascontiguousarray(B.T)
-    R0t = np.ascontiguousarray(g[_W_R0 : _W_R0 + 9].reshape(3, 3).T)
+    # R R0^T B, once: the wrist's rotation is B^T R3^T (R R0^T B) B^T ... in B's basis.
+    mul_into(RT, np.ascontiguousarray(g[_W_R0 : _W_R0 + 9].reshape(3, 3).T), ws[1])
+    mul_into(ws[1], B, ws[2])
     count = 0
     for q1 in (beta + k, beta - k):
-        P = o1 + mul(_rot(u1, -q1), d.reshape(3, 1))[:, 0] - o2
-        px, py = P @ e1, P @ e2
+        _rot_into(u1, -q1, ws[3])
+        P = np.empty(3)
+        for i in range(3):
+            P[i] = o1[i] - o2[i] + ws[3, i, 0] * d[0] + ws[3, i, 1] * d[1] + ws[3, i, 2] * d[2]
+        px = P[0] * e1[0] + P[1] * e1[1] + P[2] * e1[2]
+        py = P[0] * e2[0] + P[1] * e2[1] + P[2] * e2[2]
         kappa = (px * px + py * py - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
         if abs(kappa) > 1.0 + 1e-12:
             continue
@@ -203,8 +273,14 @@ def _wrist_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: Float
             vy = o3y + math.sin(phi3) * (w0x - o3x) + math.cos(phi3) * (w0y - o3y)
             q2 = math.atan2(py, px) - math.atan2(vy, vx)
             q3 = s3 * phi3
-            R3 = mul(mul(_rot(u1, q1), _rot(u2, q2)), _rot(u3, q3))
-            N = mul(mul(Bt, mul(mul(np.ascontiguousarray(R3.T), RT), R0t)), B)
+            _rot_into(u1, q1, ws[3])
+            _rot_into(u2, q2, ws[4])
+            mul_into(ws[3], ws[4], ws[5])
+            _rot_into(u3, q3, ws[3])
+            mul_into(ws[5], ws[3], ws[4])  # R3
+            _tmul_into(ws[4], ws[2], ws[5])  # R3^T R R0^T B
+            _tmul_into(B, ws[5], ws[6])  # N = B^T R3^T R R0^T B
+            N = ws[6]
             sb = math.hypot(N[0, 1], N[0, 2])
             for sign in (1.0, -1.0):
                 q5 = math.atan2(sign * sb, N[0, 0])

@@ -463,7 +463,8 @@ class ArmKinematics:
         chain_figures(q, place, axes, kinds, index, where[3], where[5], wrist, jacobians)
         if not len(q):
             return wrist, np.empty(0)
-        return wrist, np.linalg.svd(jacobians, compute_uv=False)[:, -1]
+        sigma = np.linalg.svd(jacobians, compute_uv=False)[:, -1]
+        return wrist, np.asarray(sigma, dtype=np.float64)
 
     def sigma_min(self, q: ArrayLike, data: Any = None) -> float:
         """Smallest singular value of the TCP Jacobian (linear rows in m/rad)."""

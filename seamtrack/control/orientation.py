@@ -223,7 +223,7 @@ class ToolProgram:
     def _turning(self, s: float, speed_mm_s: float) -> tuple[FloatArray, FloatArray]:
         """The rotation at s and the angular velocity there (compiled: :func:`turning_at`,
         :meth:`rotations`' formulas)."""
-        return turning_at(float(s), float(speed_mm_s), *self._arrays)  # type: ignore[no-any-return]
+        return turning_at(float(s), float(speed_mm_s), *self._arrays)
 
     def turning_near(
         self, point: ArrayLike, hint_mm: float, speed_mm_s: float
