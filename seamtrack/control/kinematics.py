@@ -5,6 +5,12 @@ Jacobians in compiled code (about 1 us each for a 6-axis arm); seamtrack adds th
 (``T_flange_tcp``), millimetres, and a damped least-squares inverse kinematics. Pinocchio
 speaks metres: positions are converted at this module's boundary and nowhere else.
 
+The chain Pinocchio reads (:attr:`ArmKinematics.chain`) also feeds the compiled control tick
+(:mod:`seamtrack.control.arm_kernels`) and, where the arm has one, the closed-form inverse
+kinematics (:mod:`seamtrack.control.closed_form`: the UR family, spherical-wrist arms;
+:meth:`ArmKinematics.ik_branches`), recognised from the URDF and proven on seeded poses when
+the arm is built.
+
 Named arms (:data:`ARM_MODELS`) are URDF files written from the makers' published
 Denavit-Hartenberg tables, dimensions and axis data (each number is cited in its file under
 ``seamtrack/control/arms/``); ``robot.urdf`` loads any other serial arm.

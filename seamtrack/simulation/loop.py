@@ -278,13 +278,11 @@ def run(
     # events compiled (seamtrack.simulation.ticks); the same arithmetic, so the same numbers.
     fast = unrotated and type(tracker) is TrajectoryTracker and type(robot) is CartesianRobot
     fast = fast and bool(robot._unrotated)
-    ticks: Any = GantryTicks(robot, (p0x, p0y, p0z)) if fast else None
-    # An arm with the built-in tracker: its ticks between events compiled too
-    # (seamtrack.simulation.ticks.ArmTicks), the tool orientation refreshed in Python.
+    # An arm with the built-in tracker and its program: its ticks compiled too (ArmTicks).
     arm_fast = turns_tool and type(tracker) is TrajectoryTracker and hasattr(robot, "_par")
     arm_fast = arm_fast and getattr(tracker, "_program", None) is not None
-    if arm_fast:
-        ticks = ArmTicks(robot, tracker)
+    ticks: Any = GantryTicks(robot, (p0x, p0y, p0z)) if fast else None
+    ticks = ArmTicks(robot, tracker) if arm_fast else ticks
     # A tracker that knows where the seam is heading tells the extractor (``hint``): where the
     # laser plane crosses two grooves (a mitre) the extractor takes the V that continues it.
     tracker_hint = getattr(tracker, "hint", None)
