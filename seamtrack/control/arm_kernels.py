@@ -84,6 +84,21 @@ def exp3(w: FloatArray) -> FloatArray:
 
 
 @numba.njit(cache=True, nogil=True)
+def _turn(wx: float, wy: float, wz: float, R: FloatArray, tmp: FloatArray) -> None:
+    """R = exp3(w) @ R in place (``tmp``: a 3 x 3 scratch)."""
+    angle = math.sqrt(wx * wx + wy * wy + wz * wz)
+    if angle < 1e-300:
+        return
+    axis = np.empty(3)
+    axis[0], axis[1], axis[2] = wx / angle, wy / angle, wz / angle
+    rotation_about(axis, angle, tmp)
+    for j in range(3):
+        a, b, c = R[0, j], R[1, j], R[2, j]
+        for i in range(3):
+            R[i, j] = tmp[i, 0] * a + tmp[i, 1] * b + tmp[i, 2] * c
+
+
+@numba.njit(cache=True, nogil=True)
 def mul_t(A: FloatArray, B: FloatArray) -> FloatArray:
     """A @ B.T for 3 x 3 matrices."""
     out = np.empty((3, 3))
@@ -305,33 +320,39 @@ def arm_step(
     )  # fmt: skip
     # Orientation set-point: towards the goal, which turns on at the feed-forward.
     R_set, R_goal = rot[0], rot[1]
-    want = np.zeros(3)
+    tmp = np.empty((3, 3))
+    wx = wy = wz = 0.0
     if has and cmd[M_HAS_ROT] > 0.0:
-        ff = cmd[M_W : M_W + 3]
+        fx, fy, fz = cmd[M_W], cmd[M_W + 1], cmd[M_W + 2]
         if cmd[M_NEW_GOAL] > 0.0:
             R_goal[:, :] = cmd[M_ROT : M_ROT + 9].reshape(3, 3)
             cmd[M_NEW_GOAL] = 0.0
         elif cmd[M_HAS_W] > 0.0:
-            R_goal[:, :] = mul(exp3(ff * dt), R_goal)
+            _turn(fx * dt, fy * dt, fz * dt, R_goal, tmp)
         err = log3(mul_t(R_goal, R_set))
         size = math.sqrt(err[0] ** 2 + err[1] ** 2 + err[2] ** 2)
         # Proportional, capped by the speed from which braking at the angular acceleration
         # limit stops on the goal (no overshoot), on top of the goal's own turning.
         speed = min(par[P_GAIN] * size, math.sqrt(2.0 * par[P_A_MAX] * size))
         if size > 0.0:
-            want = err * (speed / size)
+            k = speed / size
+            wx, wy, wz = err[0] * k, err[1] * k, err[2] * k
         if cmd[M_HAS_W] > 0.0:
-            want = want + ff
-        norm = math.sqrt(want[0] ** 2 + want[1] ** 2 + want[2] ** 2)
+            wx, wy, wz = wx + fx, wy + fy, wz + fz
+        norm = math.sqrt(wx * wx + wy * wy + wz * wz)
         if norm > par[P_W_MAX]:
-            want *= par[P_W_MAX] / norm
-    dw = want - omega
-    norm = math.sqrt(dw[0] ** 2 + dw[1] ** 2 + dw[2] ** 2)
+            k = par[P_W_MAX] / norm
+            wx, wy, wz = wx * k, wy * k, wz * k
+    dx, dy, dz = wx - omega[0], wy - omega[1], wz - omega[2]
+    norm = math.sqrt(dx * dx + dy * dy + dz * dz)
     if norm > par[P_DW_MAX]:
-        dw *= par[P_DW_MAX] / norm
-    omega += dw
+        k = par[P_DW_MAX] / norm
+        dx, dy, dz = dx * k, dy * k, dz * k
+    omega[0] += dx
+    omega[1] += dy
+    omega[2] += dz
     if omega[0] != 0.0 or omega[1] != 0.0 or omega[2] != 0.0:
-        R_set[:, :] = mul(exp3(omega * dt), R_set)
+        _turn(omega[0] * dt, omega[1] * dt, omega[2] * dt, R_set, tmp)
     # Inverse kinematics from the last joint set-point.
     p_set = cart[C_SQ] * 1e-3
     q_ref = jnt[S_REF]

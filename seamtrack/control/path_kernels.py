@@ -265,3 +265,12 @@ def setpoint_step(
     ex, ey, ez = tx - x, ty - y, tz - z
     error = math.sqrt(ex * ex + ey * ey + ez * ez)
     return tx, ty, tz, sp[GAIN] * error, dx * rate, dy * rate, dz * rate, not step > 0.0
+
+
+@numba.njit(cache=True, nogil=True)
+def column_medians(a: FloatArray) -> FloatArray:
+    """``np.median(a, axis=0)`` of an (m, 3) array (m >= 1), compiled."""
+    out = np.empty(a.shape[1])
+    for c in range(a.shape[1]):
+        out[c] = np.median(a[:, c])
+    return out

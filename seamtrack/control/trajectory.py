@@ -171,9 +171,8 @@ class TrajectoryTracker:
         self._buffer = PathBuffer(start)
         self._seen_seam = False
         self._held: list[FloatArray] = []
-        # The program seam's closest point to each stored raw point (the hint's offset): a
-        # point's closest point never changes, so each is found once.
-        self._on_program: dict[tuple[float, float, float], FloatArray] = {}
+        # The hint's window of raw points and their closest points on the program seam.
+        self._on_program: tuple[FloatArray, FloatArray] = (np.empty((0, 3)), np.empty((0, 3)))
         self.stop_cause = ""
         # The robot program's end of an open seam (the CAD seam's end), as floats; None: none.
         self._seam_end: tuple[float, float, float] | None = None
@@ -253,7 +252,7 @@ class TrajectoryTracker:
             return None
         i = max(_left(self._s, self._s[-1] - self.direction_fit_mm), 1)
         window = raw[i:] if len(raw) > i else raw[-1:]
-        offset = np.median(window - self._closest_on_program(window), axis=0)
+        offset = pk.column_medians(window - self._closest_on_program(window))
         R = np.asarray(T_world_sensor, dtype=float)[:3, :3]
         shift = R.T @ offset  # the measured seam's offset from the program, sensor frame
         expected = crossings + shift[1:]
@@ -265,27 +264,31 @@ class TrajectoryTracker:
     def _closest_on_program(self, points: FloatArray) -> FloatArray:
         """(m, 3) the program seam's closest points to ``points`` (the nearest of all its
         segments, the arithmetic of :meth:`Seam.closest
-        <seamtrack.geometry.seam.Seam.closest>`), each point's found once and kept while it is
-        in the hint's window."""
+        <seamtrack.geometry.seam.Seam.closest>`). The window is a tail of the stored raw
+        points, as the last one was: the rows they share are reused, the new ones found."""
         assert self._program is not None
-        known = self._on_program
-        keys = [(x, y, z) for x, y, z in points.tolist()]
-        new = [i for i, key in enumerate(keys) if key not in known]
-        if new:
+        last_points, last_near = self._on_program
+        near = np.empty_like(points)
+        k = 0
+        hit = np.flatnonzero((last_points == points[0]).all(axis=1)) if len(points) else []
+        if len(hit):
+            j = int(hit[0])
+            k = min(len(last_points) - j, len(points))
+            if np.array_equal(last_points[j : j + k], points[:k]):
+                near[:k] = last_near[j : j + k]
+            else:
+                k = 0
+        if k < len(points):
             from seamtrack.geometry.nearest import nearest_of  # compiled (numba)
 
             seam_points = self._program.seam.points
             a = seam_points[:-1]
             d = seam_points[1:] - a
-            every = np.broadcast_to(np.arange(len(a), dtype=np.int64), (len(new), len(a)))
-            seg, _, t = nearest_of(points[new], a, d, np.ascontiguousarray(every))
-            found = a[seg] + t[:, None] * d[seg]
-            for i, point in zip(new, found, strict=True):
-                known[keys[i]] = point
-        out = np.array([known[key] for key in keys])
-        if len(known) > 4 * len(keys):  # forget the points that left the window
-            self._on_program = {key: known[key] for key in keys}
-        return out
+            every = np.broadcast_to(np.arange(len(a), dtype=np.int64), (len(points) - k, len(a)))
+            seg, _, t = nearest_of(points[k:], a, d, np.ascontiguousarray(every))
+            near[k:] = a[seg] + t[:, None] * d[seg]
+        self._on_program = (points.copy(), near)
+        return near
 
     def _check_end(self, measurement: Measurement) -> None:
         """A frame without a seam point after the seam was seen: is it the seam's end?"""
