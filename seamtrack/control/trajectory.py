@@ -267,10 +267,12 @@ class TrajectoryTracker:
         <seamtrack.geometry.seam.Seam.closest>`). The window is a tail of the stored raw
         points, as the last one was: the rows they share are reused, the new ones found."""
         assert self._program is not None
+        if not len(points):
+            return np.empty((0, 3))
         last_points, last_near = self._on_program
         near = np.empty_like(points)
         k = 0
-        hit = np.flatnonzero((last_points == points[0]).all(axis=1)) if len(points) else []
+        hit = np.flatnonzero((last_points == points[:1]).all(axis=1))
         if len(hit):
             j = int(hit[0])
             k = min(len(last_points) - j, len(points))

@@ -304,7 +304,8 @@ class ArmTicks:
         self.world = np.ascontiguousarray(robot.T_world_base[:3, :4])
         self.base = np.ascontiguousarray(robot._T_base_world[:3, :4])
         program = tracker._program
-        self.program = (*program._arrays, np.ascontiguousarray(program.seam.points.T))
+        self.prog, self.knots, self.seg_len, self.normals, self.prog_par = program._arrays
+        self.columns = np.ascontiguousarray(program.seam.points.T)
         self.orient = np.array([tracker._orient_every, 0], dtype=np.int64)
         self.turn = np.zeros(13)
         n = robot.kinematics.dof
@@ -347,7 +348,8 @@ class ArmTicks:
             place, axes, kinds, index, state.cart, state.rot, state.omega, state.jnt, state.cnt,
             state.cmd, tracker._sp, path.path, path.s, tracker._env_s, tracker._env_v,
             tracker._seen_seam, self.tcp, self.target, self.axis, self.joints, self.refused,
-            *self.program, self.turn,
+            self.prog, self.knots, self.seg_len, self.normals, self.prog_par, self.columns,
+            self.turn,
         )  # fmt: skip
         if int(self.orient[1]) // self.orient[0] != tracker._tick // self.orient[0]:
             # Refreshed: the tracker's rotation, turning rate and arc length, as it keeps them.
