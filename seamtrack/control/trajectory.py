@@ -173,6 +173,7 @@ class TrajectoryTracker:
         self._held: list[FloatArray] = []
         # The hint's window of raw points and their closest points on the program seam.
         self._on_program: tuple[FloatArray, FloatArray] = (np.empty((0, 3)), np.empty((0, 3)))
+        self._segments: tuple[FloatArray, FloatArray, NDArray[np.int64]] | None = None
         self.stop_cause = ""
         # The robot program's end of an open seam (the CAD seam's end), as floats; None: none.
         self._seam_end: tuple[float, float, float] | None = None
@@ -283,11 +284,15 @@ class TrajectoryTracker:
         if k < len(points):
             from seamtrack.geometry.nearest import nearest_of  # compiled (numba)
 
-            seam_points = self._program.seam.points
-            a = seam_points[:-1]
-            d = seam_points[1:] - a
-            every = np.broadcast_to(np.arange(len(a), dtype=np.int64), (len(points) - k, len(a)))
-            seg, _, t = nearest_of(points[k:], a, d, np.ascontiguousarray(every))
+            if self._segments is None:  # the program's segments, once
+                seam_points = self._program.seam.points
+                a = np.ascontiguousarray(seam_points[:-1])
+                d = np.ascontiguousarray(seam_points[1:] - a)
+                self._segments = (a, d, np.arange(len(a), dtype=np.int64)[None, :])
+            a, d, every = self._segments
+            if len(points) - k > 1:
+                every = np.repeat(every, len(points) - k, axis=0)
+            seg, _, t = nearest_of(points[k:], a, d, every)
             near[k:] = a[seg] + t[:, None] * d[seg]
         self._on_program = (points.copy(), near)
         return near
