@@ -211,3 +211,32 @@ def test_the_closed_form_tick_keeps_the_newton_ticks_status_and_error(
     # The Newton tick's residual (<~1e-5 mm) is far below the depth resolution.
     moved = abs(exact["max_error_mm"] - newton["max_error_mm"])
     assert moved < 0.1 * parts.sensor_resolution_mm
+
+
+def test_the_hints_compiled_plane_crossings_and_medians_are_numpys() -> None:
+    from seamtrack.control.path_kernels import column_medians, plane_crossings
+    from seamtrack.geometry.seam import Seam
+    from seamtrack.sensing.scan import laser_plane_crossings
+
+    rng = np.random.default_rng(11)
+    # A helix (crosses a plane many times) with a vertex exactly on the plane at its end.
+    u = np.linspace(0.0, 6 * math.pi, 400)
+    points = np.column_stack([30 * np.cos(u), 30 * np.sin(u), 2.0 * u])
+    points[-1, 0] = 0.0
+    seam = Seam.from_points(points)
+    crossings = 0
+    for _ in range(100):
+        R = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+        R[:, 0] *= np.sign(np.linalg.det(R))
+        T = np.eye(4)
+        T[:3, :3], T[:3, 3] = R, rng.normal(size=3) * 20
+        a, b = laser_plane_crossings(seam, T), plane_crossings(seam.points, T)
+        assert a.shape == b.shape
+        assert np.allclose(a, b, atol=1e-12, rtol=0)
+        crossings += len(a)
+    T = np.eye(4)  # the laser plane x = 0 through the last vertex
+    assert np.allclose(laser_plane_crossings(seam, T), plane_crossings(seam.points, T), atol=1e-12)
+    assert crossings > 100
+    for m in (1, 2, 7, 100):
+        x = rng.normal(size=(m, 3))
+        assert np.array_equal(column_medians(x), np.median(x, axis=0))

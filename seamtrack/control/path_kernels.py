@@ -274,3 +274,31 @@ def column_medians(a: FloatArray) -> FloatArray:
     for c in range(a.shape[1]):
         out[c] = np.median(a[:, c])
     return out
+
+
+@numba.njit(cache=True, nogil=True)
+def plane_crossings(points: FloatArray, T_world_sensor: FloatArray) -> FloatArray:
+    """:func:`~seamtrack.sensing.scan.laser_plane_crossings` compiled (the same half-open
+    test and interpolation, equal to rounding): (k, 2) the (y_L, z_L) where the polyline
+    ``points`` (world) crosses the laser plane x_L = 0, in order."""
+    R = T_world_sensor[:3, :3]
+    t = T_world_sensor[:3, 3]
+    n = points.shape[0]
+    p = np.empty((n, 3))
+    for i in range(n):
+        d0, d1, d2 = points[i, 0] - t[0], points[i, 1] - t[1], points[i, 2] - t[2]
+        for c in range(3):
+            p[i, c] = R[0, c] * d0 + R[1, c] * d1 + R[2, c] * d2  # R^T (point - origin)
+    out = np.empty((n, 2))
+    k = 0
+    for i in range(n - 1):
+        x0, x1 = p[i, 0], p[i + 1, 0]
+        if (x0 <= 0 and x1 > 0) or (x0 >= 0 and x1 < 0):
+            w = x0 / (x0 - x1)
+            out[k, 0] = p[i, 1] + w * (p[i + 1, 1] - p[i, 1])
+            out[k, 1] = p[i, 2] + w * (p[i + 1, 2] - p[i, 2])
+            k += 1
+    if n and p[n - 1, 0] == 0:
+        out[k, 0], out[k, 1] = p[n - 1, 1], p[n - 1, 2]
+        k += 1
+    return out[:k].copy()

@@ -50,7 +50,6 @@ from seamtrack.control.path_kernels import PathBuffer, off_line, smooth_tail
 from seamtrack.control.tracking import Command, Measurement, TrackerContext
 from seamtrack.params import Fraction, NonNegative, Positive
 from seamtrack.sensing.profiles import SeamHint, hint_from_path
-from seamtrack.sensing.scan import laser_plane_crossings
 
 FloatArray = NDArray[np.float64]
 
@@ -248,7 +247,8 @@ class TrajectoryTracker:
         if straight is None:
             return None
         nominal = self._program.seam
-        crossings = laser_plane_crossings(nominal, T_world_sensor)
+        # laser_plane_crossings, compiled
+        crossings = pk.plane_crossings(nominal.points, np.asarray(T_world_sensor, dtype=float))
         if not len(crossings):
             return None
         i = max(_left(self._s, self._s[-1] - self.direction_fit_mm), 1)
