@@ -172,7 +172,7 @@ class TrajectoryTracker:
         self._held: list[FloatArray] = []
         # The hint's window of raw points and their closest points on the program seam.
         self._on_program: tuple[FloatArray, FloatArray] = (np.empty((0, 3)), np.empty((0, 3)))
-        self._segments: tuple[FloatArray, FloatArray, NDArray[np.int64]] | None = None
+        self._segments: tuple[FloatArray, FloatArray] | None = None
         self.stop_cause = ""
         # The robot program's end of an open seam (the CAD seam's end), as floats; None: none.
         self._seam_end: tuple[float, float, float] | None = None
@@ -266,34 +266,17 @@ class TrajectoryTracker:
         """(m, 3) the program seam's closest points to ``points`` (the nearest of all its
         segments, the arithmetic of :meth:`Seam.closest
         <seamtrack.geometry.seam.Seam.closest>`). The window is a tail of the stored raw
-        points, as the last one was: the rows they share are reused, the new ones found."""
+        points, as the last one was: the rows they share are reused, the new ones found
+        (compiled: :func:`~seamtrack.control.path_kernels.closest_on_polyline`)."""
         assert self._program is not None
         if not len(points):
             return np.empty((0, 3))
-        last_points, last_near = self._on_program
-        near = np.empty_like(points)
-        k = 0
-        hit = np.flatnonzero((last_points == points[:1]).all(axis=1))
-        if len(hit):
-            j = int(hit[0])
-            k = min(len(last_points) - j, len(points))
-            if np.array_equal(last_points[j : j + k], points[:k]):
-                near[:k] = last_near[j : j + k]
-            else:
-                k = 0
-        if k < len(points):
-            from seamtrack.geometry.nearest import nearest_of  # compiled (numba)
-
-            if self._segments is None:  # the program's segments, once
-                seam_points = self._program.seam.points
-                a = np.ascontiguousarray(seam_points[:-1])
-                d = np.ascontiguousarray(seam_points[1:] - a)
-                self._segments = (a, d, np.arange(len(a), dtype=np.int64)[None, :])
-            a, d, every = self._segments
-            if len(points) - k > 1:
-                every = np.repeat(every, len(points) - k, axis=0)
-            seg, _, t = nearest_of(points[k:], a, d, every)
-            near[k:] = a[seg] + t[:, None] * d[seg]
+        if self._segments is None:  # the program's segments, once
+            seam_points = self._program.seam.points
+            a = np.ascontiguousarray(seam_points[:-1])
+            self._segments = (a, np.ascontiguousarray(seam_points[1:] - a))
+        points = np.ascontiguousarray(points, dtype=np.float64)
+        near = pk.closest_on_polyline(points, *self._on_program, *self._segments)
         self._on_program = (points.copy(), near)
         return near
 
