@@ -55,9 +55,17 @@ def test_loop_bench(tmp_path: Path) -> None:
     # tolerance; the loop adds no lag on this smooth seam. The paper reports <= 0.1 mm
     # (its Fig. 12): that is the bound.
     assert 0.0 < row["max_error_mm"] <= 0.1
-    assert result["profile"] and [r["robot"] for r in result["tick_cost"]] == ["cartesian", "ur10e"]
+    robots = [r["robot"] for r in result["tick_cost"]]
+    assert result["profile"] and robots == ["cartesian", "ur10e", "kr16"]
     for r in result["tick_cost"]:
         assert _finite_positive(r["ticks"], r["wall_s"], r["us_per_tick"])
+    # One row per arm scene, held to its run with the tick's IK by Newton steps only.
+    scenes = [a["scene"] for a in result["arm_scenes"]]
+    assert scenes == ["pipe-saddle", "pipe-on-plate", "v-groove-corner-arm"]
+    for a in result["arm_scenes"]:
+        assert _finite_positive(a["simulated_s"], a["cpu_s"], a["sim_s_per_cpu_s"])
+        assert a["status"] == a["newton_status"]
+        assert a["max_error_moved_mm"] < a["depth_resolution_mm"] and a["agrees"]
 
 
 def test_sweep_bench_through_the_dispatcher(tmp_path: Path) -> None:

@@ -11,8 +11,10 @@ Every control tick (:meth:`ArticulatedRobot.step`), as an arm controller does:
    along a saddle or a girth) until the next command; the set-point turns at that rate plus a
    correction proportional to its rotation error (braking in time so as not to overshoot),
    capped by an angular speed and acceleration.
-3. **Inverse kinematics** of the set-point pose (damped least squares from the last joint
-   set-point: one or two Newton steps at 1 kHz, since the pose moves microns per tick).
+3. **Inverse kinematics** of the set-point pose: closed-form where the arm has one (the UR
+   family, spherical-wrist arms: :mod:`seamtrack.control.closed_form`), the branch nearest the
+   last joint set-point; otherwise damped least squares from the last joint set-point (one or
+   two Newton steps at 1 kHz, since the pose moves microns per tick).
 4. **Joint limits** on the joint set-point: its velocity is scaled down (as a whole, keeping the
    path) to every joint's velocity limit and its change to every acceleration limit; positions
    are clamped to the joint ranges. A tick on which a limit acted is counted; the torch then
@@ -20,6 +22,9 @@ Every control tick (:meth:`ArticulatedRobot.step`), as an arm controller does:
 5. **Servo** (optional, :mod:`seamtrack.control.servo`): each joint follows its set-point with
    a position-loop gain K_v; off, the joints are at their set-point.
 6. **Forward kinematics** of the joints give the torch pose that the loop measures.
+
+The whole tick is one compiled call (:func:`seamtrack.control.arm_kernels.arm_step`) on the
+arrays of an :class:`ArmState`.
 
 Before the run, :meth:`ArticulatedRobot.plan` walks the whole nominal seam with its tool
 orientations (:class:`~seamtrack.control.orientation.ToolProgram`) by inverse kinematics and
@@ -29,17 +34,19 @@ naming the first such point, why, and the fix.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.linalg.lapack import dposv as _dposv
 
-from seamtrack.control.kinematics import M_PER_MM, ArmKinematics, _pinocchio
+from seamtrack.control import arm_kernels as ak
+from seamtrack.control.closed_form import KIND_NONE
+from seamtrack.control.kinematics import M_PER_MM, ArmKinematics
 from seamtrack.control.robot import CartesianRobot, MoveCommand, RobotState
-from seamtrack.control.servo import Servo, ServoState
+from seamtrack.control.servo import Servo
 from seamtrack.errors import ReachError
 from seamtrack.geometry import frames
 
@@ -51,15 +58,14 @@ _NO_END_STOP_MM = 1e7
 #: Proportional gain (1/s) of the orientation set-point towards the commanded rotation.
 ORIENTATION_GAIN_1_S = 20.0
 
-#: Damping (m, rad) of the per-tick inverse kinematics: a Newton step where the arm is far from
-#: a singularity (smallest singular value ~0.1-0.3), a bounded one near it.
-TICK_DAMPING = 1e-3
-_DAMPING2 = TICK_DAMPING**2 * np.eye(6)
+#: Damping (m, rad) of the per-tick Newton steps (arms without a closed form): a Newton step
+#: where the arm is far from a singularity (smallest singular value ~0.1-0.3), a bounded one
+#: near it.
+TICK_DAMPING = ak.TICK_DAMPING
 
-#: A tick's pose error (m, rad) below which one Newton step is enough: its residual is of the
-#: order of the error squared, plus the damping's share (TICK_DAMPING / sigma_min)^2 of it,
-#: below 1e-5 mm; a larger error (a limit acted, or the start) gets up to two more steps.
-ONE_STEP_ERROR = 1e-4
+#: A tick's pose error (m, rad) below which one Newton step is enough (see
+#: :data:`seamtrack.control.arm_kernels.ONE_STEP_ERROR`).
+ONE_STEP_ERROR = ak.ONE_STEP_ERROR
 
 
 @dataclass(frozen=True)
@@ -76,32 +82,72 @@ class ArmMove(MoveCommand):
     angular_velocity: FloatArray | None = None
 
 
-@dataclass
 class ArmState:
-    """The arm's moving state (the loop owns it).
+    """The arm's moving state (the loop owns it), in the arrays the compiled tick
+    (:func:`~seamtrack.control.arm_kernels.arm_step`) works on.
 
     ``q`` and ``v`` are the torch tip's position and velocity in the base frame, as the
-    gantry's axis positions are (the loop reads them the same way); ``joints`` are the joint
-    positions (rad).
+    gantry's axis positions are (the loop reads them the same way); ``R`` the tool's rotation;
+    ``joints`` the measured joint positions (rad); ``q_ref``, ``qd_ref`` the joint set-point
+    and its velocity; ``R_set``, ``omega`` the orientation set-point and its angular velocity.
     """
 
-    q: list[float]
-    v: list[float]
-    R: FloatArray
-    joints: FloatArray
-    setpoint: RobotState
-    R_set: FloatArray
-    omega: FloatArray
-    q_ref: FloatArray
-    qd_ref: FloatArray
-    servo: ServoState | None
-    data: Any
-    R_goal: FloatArray = field(default_factory=lambda: np.eye(3))
-    goal_from: FloatArray | None = None
-    tcp_at_q_ref: tuple[FloatArray, FloatArray] | None = None  # (T_base_tcp in m, J) at q_ref
-    limited_ticks: int = 0
-    clamped_ticks: int = 0
-    worst_ik_mm: float = 0.0
+    def __init__(self, joints: FloatArray, T_base_tcp: FloatArray, servo: bool) -> None:
+        n = len(joints)
+        p, R = T_base_tcp[:3, 3], T_base_tcp[:3, :3]
+        self.cart = np.zeros((4, 3))  # rows: set-point q, v (mm), torch tip q, v
+        self.cart[ak.C_SQ] = self.cart[ak.C_Q] = p
+        self.rot = np.stack([R, np.eye(3), R])  # set-point, goal, measured
+        self.omega = np.zeros(3)
+        self.jnt = np.zeros((6, n))  # rows: set-point, its velocity, joints, servo q, v, held
+        for row in (ak.S_REF, ak.S_JOINTS, ak.S_SQ, ak.S_HELD):
+            self.jnt[row] = joints
+        self.cnt = np.zeros(4, dtype=np.int64)  # limited, clamped, servo tick, ipo ticks
+        self.cmd = np.zeros(ak.CMD_FIELDS)
+        #: The last goal rotation handed in (a tracker hands the same object for many ticks).
+        self.goal_from: Any = None
+        self.servo = servo
+
+    @property
+    def q(self) -> list[float]:
+        return self.cart[ak.C_Q].tolist()
+
+    @property
+    def v(self) -> list[float]:
+        return self.cart[ak.C_V].tolist()
+
+    @property
+    def R(self) -> FloatArray:
+        return self.rot[2].copy()
+
+    @property
+    def R_set(self) -> FloatArray:
+        return self.rot[0].copy()
+
+    @property
+    def joints(self) -> FloatArray:
+        return self.jnt[ak.S_JOINTS].copy()
+
+    @property
+    def q_ref(self) -> FloatArray:
+        return self.jnt[ak.S_REF].copy()
+
+    @property
+    def qd_ref(self) -> FloatArray:
+        return self.jnt[ak.S_QD].copy()
+
+    @property
+    def setpoint(self) -> RobotState:
+        """The Cartesian position set-point and its velocity (mm, base), a copy."""
+        return RobotState(q=self.cart[ak.C_SQ].tolist(), v=self.cart[ak.C_SV].tolist())
+
+    @property
+    def limited_ticks(self) -> int:
+        return int(self.cnt[ak.K_LIMITED])
+
+    @property
+    def clamped_ticks(self) -> int:
+        return int(self.cnt[ak.K_CLAMPED])
 
 
 @dataclass(frozen=True, eq=False)
@@ -143,8 +189,11 @@ class ArticulatedRobot:
     #: rotation for many ticks; converting it once keeps one object, which the tick then
     #: recognises by identity.
     _last_turn: list[Any] = field(init=False, repr=False, compare=False)
-    _inv_velocity_max: FloatArray = field(init=False, repr=False)
-    _inv_acceleration_max_dt: FloatArray = field(init=False, repr=False)
+    #: The compiled tick's tables (:func:`~seamtrack.control.arm_kernels.arm_step`):
+    #: parameters, joint limits, servo table.
+    _par: FloatArray = field(init=False, repr=False)
+    _jl: FloatArray = field(init=False, repr=False)
+    _servo_table: FloatArray = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "T_world_base", np.asarray(self.T_world_base, dtype=float))
@@ -165,9 +214,28 @@ class ArticulatedRobot:
         object.__setattr__(self, "_reach_mm", links / M_PER_MM + tool)
         object.__setattr__(self, "_last_turn", [None, None, None, None])
         kin = self.kinematics
-        object.__setattr__(self, "_inv_velocity_max", 1.0 / kin.velocity_max_rad_s)
-        accel_dt = kin.acceleration_max_rad_s2 * self.control_period_s
-        object.__setattr__(self, "_inv_acceleration_max_dt", 1.0 / accel_dt)
+        dt = self.control_period_s
+        par = np.zeros(ak.PAR_FIELDS)
+        par[ak.P_DT], par[ak.P_W_MAX] = dt, self.angular_velocity_max_rad_s
+        par[ak.P_DW_MAX] = self.angular_acceleration_max_rad_s2 * dt
+        par[ak.P_A_MAX] = self.angular_acceleration_max_rad_s2
+        par[ak.P_GAIN], par[ak.P_SOLVER] = ORIENTATION_GAIN_1_S, kin.solver
+        jl = np.array(
+            [kin.lower_rad, kin.upper_rad, 1.0 / kin.velocity_max_rad_s,
+             1.0 / (kin.acceleration_max_rad_s2 * dt)], dtype=np.float64,
+        )  # fmt: skip
+        table = self.servo._table if self.servo is not None else np.zeros((3, kin.dof))
+        object.__setattr__(self, "_par", par)
+        object.__setattr__(self, "_jl", jl)
+        object.__setattr__(self, "_servo_table", table)
+
+    def with_iterative_ik(self) -> ArticulatedRobot:
+        """The same arm with the tick's inverse kinematics by Newton steps only (as before the
+        closed forms: one or two damped least-squares steps from the last set-point): the
+        reference that the closed form's runs are held to (``seamtrack bench loop``)."""
+        robot = dataclasses.replace(self)
+        robot._par[ak.P_SOLVER] = KIND_NONE
+        return robot
 
     # ----------------------------------------------------------------- poses
     def T_world_tcp_of(self, state: ArmState) -> FloatArray:
@@ -244,126 +312,55 @@ class ArticulatedRobot:
     def state_at_joints(self, joints: ArrayLike) -> ArmState:
         """At rest at joint positions (rad)."""
         q = np.array(joints, dtype=np.float64)
-        data = self.kinematics.new_data()
-        T = self.kinematics.fk(q, data)
-        p = [float(x) for x in T[:3, 3]]
-        servo = self.servo.new_state(q.tolist()) if self.servo is not None else None
-        return ArmState(
-            q=p,
-            v=[0.0, 0.0, 0.0],
-            R=T[:3, :3].copy(),
-            joints=q.copy(),
-            setpoint=RobotState(q=list(p), v=[0.0, 0.0, 0.0]),
-            R_set=T[:3, :3].copy(),
-            omega=np.zeros(3),
-            q_ref=q.copy(),
-            qd_ref=np.zeros(len(q)),
-            servo=servo,
-            data=data,
-        )
+        state = ArmState(q, self.kinematics.fk(q), self.servo is not None)
+        if self.servo is not None:
+            state.cnt[ak.K_IPO] = self.servo.ipo_ticks
+        return state
 
     # ----------------------------------------------------------------- control tick
     def step(self, state: ArmState, command: MoveCommand | None) -> None:
-        """Advance ``state`` by one control period (None: brake to rest, keep orientation)."""
-        pin = _pinocchio()
-        kin = self.kinematics
-        dt = self.control_period_s
-        self._cart.step(state.setpoint, command)
-        # Orientation set-point.
-        omega = state.omega
-        if command is not None and command.rotation is not None:
-            ff = getattr(command, "angular_velocity", None)
-            rotation = command.rotation
-            # The same goal as the last tick's (command_in_base converts a rotation once, so
-            # it is the same object, or failing that equal): it turns on at the feed-forward.
-            if rotation is state.goal_from or (
-                state.goal_from is not None and np.array_equal(rotation, state.goal_from)
-            ):
-                if ff is not None:
-                    state.R_goal = pin.exp3(ff * dt) @ state.R_goal
-            else:
-                state.goal_from = rotation
-                state.R_goal = rotation
-            err = pin.log3(state.R_goal @ state.R_set.T)
-            size = math.sqrt(err @ err)
-            # Proportional, capped by the speed from which braking at the angular
-            # acceleration limit stops on the goal (no overshoot), on top of the goal's own
-            # turning; all capped by the angular speed.
-            speed = min(
-                ORIENTATION_GAIN_1_S * size,
-                math.sqrt(2.0 * self.angular_acceleration_max_rad_s2 * size),
-            )
-            want = err * (speed / size) if size > 0.0 else np.zeros(3)
-            if ff is not None:
-                want = want + ff
-            norm = math.sqrt(want @ want)
-            if norm > self.angular_velocity_max_rad_s:
-                want *= self.angular_velocity_max_rad_s / norm
+        """Advance ``state`` by one control period (None: brake to rest, keep orientation):
+        the command into the state's command array, then one compiled
+        :func:`~seamtrack.control.arm_kernels.arm_step`."""
+        cmd = state.cmd
+        if command is None:
+            cmd[ak.M_HAS] = 0.0
         else:
-            want = np.zeros(3)
-        dw = want - omega
-        norm = math.sqrt(dw @ dw)
-        dw_max = self.angular_acceleration_max_rad_s2 * dt
-        if norm > dw_max:
-            dw *= dw_max / norm
-        omega += dw
-        if omega.any():
-            state.R_set = pin.exp3(omega * dt) @ state.R_set
-        # Inverse kinematics from the last joint set-point, whose pose and Jacobian the last
-        # tick left (without a servo the joints are at their set-point). One Newton step
-        # follows a pose that moved microns since the last tick (ONE_STEP_ERROR).
-        p_set = np.array(state.setpoint.q) * M_PER_MM
-        q = state.q_ref
-        data = state.data
-        known = state.tcp_at_q_ref
-        e = np.empty(6)
-        for _ in range(3):
-            T, J = known if known is not None else kin.tcp_jacobian_m(q, data)
-            known = None
-            e[:3] = p_set - T[:3, 3]
-            e[3:] = pin.log3(state.R_set @ T[:3, :3].T)
-            A = J @ J.T + _DAMPING2
-            y, info = _spd_solve(A, e)
-            if info != 0:  # not positive definite: a NaN in the pose; let numpy say so
-                y = np.asarray(np.linalg.solve(A, e), dtype=np.float64)
-            q = q + J.T @ y
-            if abs(e).max() < ONE_STEP_ERROR:
-                break
-        # Joint limits on the set-point's motion.
-        qd = (q - state.q_ref) / dt
-        limited = False
-        over = float((np.abs(qd) * self._inv_velocity_max).max())
-        if over > 1.0:
-            qd /= over
-            limited = True
-        dqd = qd - state.qd_ref
-        over = float((np.abs(dqd) * self._inv_acceleration_max_dt).max())
-        if over > 1.0:
-            qd = state.qd_ref + dqd / over
-            limited = True
-        q_ref = state.q_ref + qd * dt
-        if (q_ref < kin.lower_rad).any() or (q_ref > kin.upper_rad).any():
-            clamped = np.clip(q_ref, kin.lower_rad, kin.upper_rad)
-            state.clamped_ticks += 1
-            qd = (clamped - state.q_ref) / dt
-            q_ref = clamped
-        state.limited_ticks += limited
-        state.q_ref = q_ref
-        state.qd_ref = qd
-        # Servo, then the measured pose.
-        if state.servo is not None and self.servo is not None:
-            self.servo.follow(state.servo, q_ref.tolist())
-            joints = np.clip(np.array(state.servo.q), kin.lower_rad, kin.upper_rad)
+            cmd[ak.M_HAS] = 1.0
+            cmd[ak.M_T : ak.M_T + 3] = command.target
+            cmd[ak.M_SPEED] = command.speed
+            cmd[ak.M_FF : ak.M_FF + 3] = command.feed_forward
+            cmd[ak.M_STOP] = 1.0 if command.stop_at_target else 0.0
+            self._set_rotation(state, command.rotation, getattr(command, "angular_velocity", None))
+        self._tick(state)
+
+    def _set_rotation(self, state: ArmState, rotation: Any, angular_velocity: Any) -> None:
+        """The command's orientation into the state's command array: a new goal when the
+        rotation is another one than the last (the same object, or failing that equal: the
+        goal turns on at the feed-forward ``angular_velocity``)."""
+        cmd = state.cmd
+        if rotation is None:
+            cmd[ak.M_HAS_ROT] = 0.0
+            return
+        cmd[ak.M_HAS_ROT] = 1.0
+        if angular_velocity is None:
+            cmd[ak.M_HAS_W] = 0.0
         else:
-            joints = q_ref
-        state.joints = joints
-        T, J = kin.tcp_jacobian_m(joints, data)
-        state.tcp_at_q_ref = (T, J) if joints is q_ref else None
-        old = state.q
-        new = (T[:3, 3] / M_PER_MM).tolist()
-        state.v = [(new[i] - old[i]) / dt for i in range(3)]
-        state.q = new
-        state.R = T[:3, :3]
+            cmd[ak.M_HAS_W] = 1.0
+            cmd[ak.M_W : ak.M_W + 3] = angular_velocity
+        last = state.goal_from
+        if rotation is not last and (last is None or not np.array_equal(rotation, last)):
+            state.goal_from = rotation
+            cmd[ak.M_NEW_GOAL] = 1.0
+            cmd[ak.M_ROT : ak.M_ROT + 9] = np.asarray(rotation, dtype=np.float64).ravel()
+
+    def _tick(self, state: ArmState) -> None:
+        place, axes, kinds, index = self.kinematics.chain
+        ak.arm_step(
+            self._par, self._cart._limits, self._jl, self._servo_table,
+            self.kinematics.geometry, place, axes, kinds, index, state.cart, state.rot,
+            state.omega, state.jnt, state.cnt, state.cmd,
+        )  # fmt: skip
 
     # ----------------------------------------------------------------- plan
     def plan(
@@ -403,20 +400,12 @@ class ArticulatedRobot:
         q = kin.home_rad.copy() if start is None else np.array(start, dtype=np.float64)
         for i, T_world in enumerate(T_world_tcp):
             T = self._T_base_world @ T_world
-            result = kin.ik(T, q, data, max_iterations=200 if i == 0 else 50)
             where = f"{what} {i} at world {np.round(T_world[:3, 3], 3).tolist()} mm"
-            if not result:
-                distance = float(np.linalg.norm(T[:3, 3]))
-                raise ReachError(
-                    f"{where}: the {kin.name} cannot put its torch there with the planned "
-                    f"orientation (no joint solution; closest {result.error_mm:.3g} mm, "
-                    f"{math.degrees(result.error_rad):.3g} deg away; {distance:.0f} mm from "
-                    "the base)",
-                    field=field_name,
-                    fix="move the part (workpiece.offset_mm / seam.offset_mm) or the robot "
-                    "base (robot.base_origin_mm) so the seam lies well inside the arm's reach",
-                )
-            q = _wrap_into_range(result.q, kin.lower_rad, kin.upper_rad)
+            closed = self._closed_form(T, q)
+            if closed is not None:
+                q = closed
+            else:
+                q = self._iterative(T, q, i, where, field_name, data)
             low = q < kin.lower_rad - 1e-9
             high = q > kin.upper_rad + 1e-9
             if low.any() or high.any():
@@ -443,13 +432,39 @@ class ArticulatedRobot:
             out[i] = q
         return out
 
+    def _closed_form(self, T_base_tcp: FloatArray, q_near: FloatArray) -> FloatArray | None:
+        """The closed-form branch nearest ``q_near`` (as the iterative solver from there
+        would find it), each joint then moved by whole turns into its range where that helps;
+        None where the arm has no closed form or the pose no solution."""
+        kin = self.kinematics
+        if kin.solver == KIND_NONE:
+            return None
+        branches = kin.ik_branches(T_base_tcp, q_near)
+        if not len(branches):
+            return None
+        best = branches[int(np.argmin(np.sum((branches - q_near) ** 2, axis=1)))]
+        return _wrap_into_range(best, kin.lower_rad, kin.upper_rad)
 
-def _spd_solve(A: FloatArray, b: FloatArray) -> tuple[FloatArray, int]:
-    """x with A x = b for a symmetric positive definite A (LAPACK's Cholesky ``dposv``: a
-    third of ``numpy.linalg.solve``'s call overhead on a 6 x 6 system), and LAPACK's info
-    (0: solved)."""
-    _, x, info = _dposv(A, b)
-    return x, int(info)
+    def _iterative(
+        self, T_base_tcp: FloatArray, q: FloatArray, i: int, where: str, field_name: str,
+        data: Any,
+    ) -> FloatArray:  # fmt: skip
+        """Damped least squares from ``q`` (Pinocchio), or the refusal of a pose out of
+        reach."""
+        kin = self.kinematics
+        result = kin.ik(T_base_tcp, q, data, max_iterations=200 if i == 0 else 50)
+        if not result:
+            distance = float(np.linalg.norm(T_base_tcp[:3, 3]))
+            raise ReachError(
+                f"{where}: the {kin.name} cannot put its torch there with the planned "
+                f"orientation (no joint solution; closest {result.error_mm:.3g} mm, "
+                f"{math.degrees(result.error_rad):.3g} deg away; {distance:.0f} mm from "
+                "the base)",
+                field=field_name,
+                fix="move the part (workpiece.offset_mm / seam.offset_mm) or the robot "
+                "base (robot.base_origin_mm) so the seam lies well inside the arm's reach",
+            )
+        return _wrap_into_range(result.q, kin.lower_rad, kin.upper_rad)
 
 
 def _wrap_into_range(q: FloatArray, lower: FloatArray, upper: FloatArray) -> FloatArray:

@@ -5,6 +5,12 @@ Jacobians in compiled code (about 1 us each for a 6-axis arm); seamtrack adds th
 (``T_flange_tcp``), millimetres, and a damped least-squares inverse kinematics. Pinocchio
 speaks metres: positions are converted at this module's boundary and nowhere else.
 
+The chain Pinocchio reads (:attr:`ArmKinematics.chain`) also feeds the compiled control tick
+(:mod:`seamtrack.control.arm_kernels`) and, where the arm has one, the closed-form inverse
+kinematics (:mod:`seamtrack.control.closed_form`: the UR family, spherical-wrist arms;
+:meth:`ArmKinematics.ik_branches`), recognised from the URDF and proven on seeded poses when
+the arm is built.
+
 Named arms (:data:`ARM_MODELS`) are URDF files written from the makers' published
 Denavit-Hartenberg tables, dimensions and axis data (each number is cited in its file under
 ``seamtrack/control/arms/``); ``robot.urdf`` loads any other serial arm.
@@ -21,6 +27,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from seamtrack.control.closed_form import KIND_NAMES, KIND_NONE, closed_form_of, ik_branches
 from seamtrack.control.urdf import check_urdf, quiet_c_stderr, read_urdf
 from seamtrack.errors import SceneError
 
@@ -137,6 +144,15 @@ class ArmKinematics:
         Joint limits.
     home_rad : (n,) float
         Start configuration of the inverse kinematics.
+    chain : tuple of arrays
+        The joints from the base to the torch tip, as the compiled kinematics
+        (:mod:`seamtrack.control.arm_kernels`) take them: each joint's fixed placement
+        (metres) and, last, the torch tip's on the last joint, (m + 1, 4, 4); the joints'
+        axes (m, 3) and kinds (m,: 0 revolute, 1 prismatic); which joint position moves each.
+    solver : int
+        The inverse kinematics' closed form (:mod:`seamtrack.control.closed_form`:
+        ``KIND_UR``, ``KIND_WRIST``) or ``KIND_NONE`` (iterative only); ``geometry`` its
+        parameters, read from the URDF.
     """
 
     name: str
@@ -149,6 +165,9 @@ class ArmKinematics:
     acceleration_max_rad_s2: FloatArray
     home_rad: FloatArray
     tcp_id: int = field(init=False, repr=False)
+    chain: tuple[Any, ...] = field(init=False, repr=False)
+    solver: int = field(init=False, repr=False)
+    geometry: FloatArray = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         pin = _pinocchio()
@@ -167,6 +186,12 @@ class ArmKinematics:
         )  # fmt: skip
         object.__setattr__(self, "model", model)
         object.__setattr__(self, "tcp_id", int(tcp_id))
+        object.__setattr__(self, "chain", _chain(model, int(tcp_id)))
+        lower = np.asarray(self.lower_rad, dtype=np.float64)
+        upper = np.asarray(self.upper_rad, dtype=np.float64)
+        solver, geometry = closed_form_of(self.chain, lower, upper, self.chain_fk)
+        object.__setattr__(self, "solver", solver)
+        object.__setattr__(self, "geometry", geometry)
 
     # ----------------------------------------------------------------- construction
     @classmethod
@@ -295,6 +320,35 @@ class ArmKinematics:
         pin.updateFramePlacement(self.model, data, self.tcp_id)
         return self._tcp_mm(data)
 
+    def chain_fk(self, q: ArrayLike, frames: bool = False) -> FloatArray:
+        """``T_base_tcp(q)`` in **metres** from the compiled chain (Pinocchio's to rounding);
+        ``frames``: every joint's frame too, (m + 1, 4, 4), the torch tip last."""
+        from seamtrack.control.arm_kernels import chain_fk
+
+        place, axes, kinds, index = self.chain
+        out = np.empty((len(axes) + 1, 4, 4))
+        chain_fk(np.asarray(q, dtype=np.float64), place, axes, kinds, index, out)
+        return out if frames else out[-1]
+
+    @property
+    def solver_name(self) -> str:
+        """How the inverse kinematics is solved: ``UR closed form``, ``spherical wrist`` or
+        ``iterative``."""
+        return KIND_NAMES[self.solver]
+
+    def ik_branches(self, T_base_tcp: ArrayLike, q_near: ArrayLike) -> FloatArray:
+        """(k, 6) every closed-form joint solution of the torch pose (mm), each joint turned
+        by whole turns to the nearest of ``q_near``; (0, n) where the pose has none or the
+        arm no closed form (see :attr:`solver`)."""
+        T = np.array(T_base_tcp, dtype=np.float64)
+        T[:3, 3] *= M_PER_MM
+        near = np.asarray(q_near, dtype=np.float64)
+        if self.solver == KIND_NONE:
+            return np.empty((0, self.dof))
+        out = np.empty((8, self.dof))
+        count = ik_branches(self.solver, self.geometry, T, near, out)
+        return out[:count].copy()
+
     def _tcp_mm(self, data: Any) -> FloatArray:
         T = data.oMf[self.tcp_id].homogeneous
         T[:3, 3] /= M_PER_MM
@@ -398,6 +452,26 @@ class ArmKinematics:
         c = abs(float(axes[0] @ axes[1]))
         return math.acos(min(c, 1.0))
 
+    def wrist_and_sigma(self, joints: ArrayLike) -> tuple[FloatArray, FloatArray]:
+        """:meth:`wrist_angle` and :meth:`sigma_min` of each row of ``joints`` (m, n), from the
+        compiled chain in one call (the same figures to rounding)."""
+        from seamtrack.control.arm_kernels import chain_figures
+
+        q = np.ascontiguousarray(joints, dtype=np.float64).reshape(-1, self.dof)
+        place, axes, kinds, index = self.chain
+        where = {int(i): k for k, i in enumerate(index)}
+        if 3 not in where or 5 not in where:  # joints 4 and 6 off the chain: one by one
+            data = self.new_data()
+            wrist = np.array([self.wrist_angle(x, data) for x in q])
+            return wrist, np.array([self.sigma_min(x, data) for x in q])
+        wrist = np.empty(len(q))
+        jacobians = np.empty((len(q), 6, self.dof))
+        chain_figures(q, place, axes, kinds, index, where[3], where[5], wrist, jacobians)
+        if not len(q):
+            return wrist, np.empty(0)
+        sigma = np.linalg.svd(jacobians, compute_uv=False)[:, -1]
+        return wrist, np.asarray(sigma, dtype=np.float64)
+
     def sigma_min(self, q: ArrayLike, data: Any = None) -> float:
         """Smallest singular value of the TCP Jacobian (linear rows in m/rad)."""
         data = self.new_data() if data is None else data
@@ -405,14 +479,33 @@ class ArmKinematics:
         return float(np.linalg.svd(J, compute_uv=False)[-1])
 
 
+def _chain(model: Any, tcp_id: int) -> tuple[Any, ...]:
+    """The joints supporting the torch tip as arrays (see :attr:`ArmKinematics.chain`)."""
+    frame = model.frames[tcp_id]
+    joints = [int(j) for j in model.supports[frame.parentJoint]][1:]  # 0 is the universe
+    place = np.empty((len(joints) + 1, 4, 4))
+    axes = np.empty((len(joints), 3))
+    kinds = np.zeros(len(joints), dtype=np.int64)
+    index = np.array([int(model.idx_qs[j]) for j in joints], dtype=np.int64)
+    for k, j in enumerate(joints):
+        joint = model.joints[j]
+        place[k] = model.jointPlacements[j].homogeneous
+        short = joint.shortname()
+        kinds[k] = 1 if "Prismatic" in short or short[-2:] in ("PX", "PY", "PZ") else 0
+        axes[k] = _joint_axis(joint)
+    place[-1] = frame.placement.homogeneous
+    return place, axes, kinds, index
+
+
 def _joint_axis(joint: Any) -> FloatArray:
-    """Unit axis of a revolute joint in its own frame (RX/RY/RZ or an arbitrary axis)."""
+    """Unit axis of a revolute or prismatic joint in its own frame (X/Y/Z or an arbitrary
+    axis)."""
     short = joint.shortname()
-    if short.endswith("RX"):
+    if short[-2:] in ("RX", "PX"):
         return np.array([1.0, 0.0, 0.0])
-    if short.endswith("RY"):
+    if short[-2:] in ("RY", "PY"):
         return np.array([0.0, 1.0, 0.0])
-    if short.endswith("RZ"):
+    if short[-2:] in ("RZ", "PZ"):
         return np.array([0.0, 0.0, 1.0])
     extracted = getattr(joint.extract(), "axis", None)
     if extracted is not None:

@@ -14,8 +14,10 @@ A closed seam (a pipe's girth) wraps around: the heading near its end points at 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, field
 
+import numba
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
@@ -41,6 +43,84 @@ def rotation_vector(R: ArrayLike) -> FloatArray:
     return v * (angle / np.sin(angle))
 
 
+@numba.njit(cache=True, nogil=True)
+def _point_at(s: float, knots: FloatArray, points: FloatArray, length: float) -> FloatArray:
+    """:meth:`Seam.interpolate` at one arc length."""
+    x = min(max(s, 0.0), length)
+    out = np.empty(3)
+    for k in range(3):
+        out[k] = np.interp(x, knots, points[:, k])
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _rotation_at(
+    s: float, points: FloatArray, knots: FloatArray, seg_len: FloatArray, normals: FloatArray,
+    par: FloatArray,
+) -> FloatArray:  # fmt: skip
+    """:meth:`ToolProgram.rotations` at one arc length, compiled (the same formulas; equal
+    to rounding). ``par``: tan(travel), tan(work), look-ahead, closed (0/1), length."""
+    tan_travel, tan_work, look, closed, length = par[0], par[1], par[2], par[3] > 0, par[4]
+    x = min(max(s, 0.0), length)
+    last = len(knots) - 2
+    seg = min(max(int(np.searchsorted(knots, x, side="right")) - 1, 0), last)
+    w = (x - knots[seg]) / seg_len[seg]
+    a, b = points[seg], points[seg + 1]
+    t = (b - a) / seg_len[seg]
+    n = (1 - w) * normals[seg] + w * normals[seg + 1]
+    n = n - (n @ t) * t
+    n = n / math.sqrt(n @ n)
+    point = a + w * (b - a)
+    lateral = np.cross(t, n)
+    axis = n - tan_travel * t + tan_work * lateral
+    axis = axis / math.sqrt(axis @ axis)
+    ahead = s + look
+    if closed:
+        p_ahead = _point_at(ahead % length, knots, points, length)
+    else:
+        end = points[last + 1] - points[last]
+        end = end / math.sqrt(end @ end)
+        p_ahead = _point_at(min(ahead, length), knots, points, length)
+        p_ahead = p_ahead + max(ahead - length, 0.0) * end
+    heading = p_ahead - point
+    heading = heading - (heading @ axis) * axis
+    norm = math.sqrt(heading @ heading)
+    if not norm > 1e-9:  # the chord along the torch axis (never on a real seam): the tangent
+        heading = t - (t @ axis) * axis
+        norm = math.sqrt(heading @ heading)
+    heading = heading / norm
+    out = np.empty((3, 3))
+    out[:, 0], out[:, 1], out[:, 2] = heading, np.cross(axis, heading), axis
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _rotation_vector(R: FloatArray) -> FloatArray:
+    """:func:`rotation_vector`, compiled."""
+    v = 0.5 * np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
+    angle = math.acos(min(max(0.5 * (R[0, 0] + R[1, 1] + R[2, 2] - 1.0), -1.0), 1.0))
+    if angle < 1e-8:
+        return v
+    return v * (angle / math.sin(angle))
+
+
+@numba.njit(cache=True, nogil=True)
+def turning_at(
+    s: float, speed: float, points: FloatArray, knots: FloatArray, seg_len: FloatArray,
+    normals: FloatArray, par: FloatArray,
+) -> tuple[FloatArray, FloatArray]:  # fmt: skip
+    """The tool rotation at arc length s and its angular velocity at ``speed`` (the central
+    difference of :meth:`ToolProgram.angular_velocity`), compiled."""
+    R = _rotation_at(s, points, knots, seg_len, normals, par)
+    lo = max(s - TURN_RATE_STEP_MM, 0.0)
+    hi = min(s + TURN_RATE_STEP_MM, par[4])
+    if hi <= lo:
+        return R, np.zeros(3)
+    R_lo = _rotation_at(lo, points, knots, seg_len, normals, par)
+    R_hi = _rotation_at(hi, points, knots, seg_len, normals, par)
+    return R, _rotation_vector(R_hi @ np.ascontiguousarray(R_lo.T)) * (speed / (hi - lo))
+
+
 def is_closed(seam: Seam) -> bool:
     """True when the seam ends where it starts."""
     return bool(np.linalg.norm(seam.points[-1] - seam.points[0]) <= CLOSED_TOL_MM)
@@ -64,6 +144,20 @@ class ToolProgram:
     work_rad: float = 0.0
     travel_rad: float = 0.0
     look_ahead_mm: float = 10.0
+    #: The seam's arrays and the parameters of the compiled :func:`turning_at`.
+    _arrays: tuple[FloatArray, ...] = field(init=False, repr=False, compare=False)
+
+    def __post_init__(self) -> None:
+        seam = self.seam
+        par = np.array(
+            [math.tan(self.travel_rad), math.tan(self.work_rad), self.look_ahead_mm,
+             1.0 if is_closed(seam) else 0.0, seam.length_mm],
+        )  # fmt: skip
+        arrays = tuple(
+            np.ascontiguousarray(a, dtype=np.float64)
+            for a in (seam.points, seam.arc_length_mm, seam.segment_lengths_mm, seam.normals)
+        )
+        object.__setattr__(self, "_arrays", (*arrays, par))
 
     @property
     def closed(self) -> bool:
@@ -127,14 +221,9 @@ class ToolProgram:
         return self._turning(arc_length_mm, speed_mm_s)[1]
 
     def _turning(self, s: float, speed_mm_s: float) -> tuple[FloatArray, FloatArray]:
-        """The rotation at s and the angular velocity there, from one call of
-        :meth:`rotations`."""
-        lo = max(s - TURN_RATE_STEP_MM, 0.0)
-        hi = min(s + TURN_RATE_STEP_MM, self.seam.length_mm)
-        R, R_lo, R_hi = self.rotations([s, lo, hi])
-        if hi <= lo:
-            return R, np.zeros(3)
-        return R, rotation_vector(R_hi @ R_lo.T) * (speed_mm_s / (hi - lo))
+        """The rotation at s and the angular velocity there (compiled: :func:`turning_at`,
+        :meth:`rotations`' formulas)."""
+        return turning_at(float(s), float(speed_mm_s), *self._arrays)
 
     def turning_near(
         self, point: ArrayLike, hint_mm: float, speed_mm_s: float

@@ -265,3 +265,85 @@ def setpoint_step(
     ex, ey, ez = tx - x, ty - y, tz - z
     error = math.sqrt(ex * ex + ey * ey + ez * ez)
     return tx, ty, tz, sp[GAIN] * error, dx * rate, dy * rate, dz * rate, not step > 0.0
+
+
+@numba.njit(cache=True, nogil=True)
+def column_medians(a: FloatArray) -> FloatArray:
+    """``np.median(a, axis=0)`` of an (m, 3) array (m >= 1), compiled."""
+    out = np.empty(a.shape[1])
+    for c in range(a.shape[1]):
+        out[c] = np.median(a[:, c])
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def plane_crossings(points: FloatArray, T_world_sensor: FloatArray) -> FloatArray:
+    """:func:`~seamtrack.sensing.scan.laser_plane_crossings` compiled (the same half-open
+    test and interpolation, equal to rounding): (k, 2) the (y_L, z_L) where the polyline
+    ``points`` (world) crosses the laser plane x_L = 0, in order."""
+    R = T_world_sensor[:3, :3]
+    t = T_world_sensor[:3, 3]
+    n = points.shape[0]
+    p = np.empty((n, 3))
+    for i in range(n):
+        d0, d1, d2 = points[i, 0] - t[0], points[i, 1] - t[1], points[i, 2] - t[2]
+        for c in range(3):
+            p[i, c] = R[0, c] * d0 + R[1, c] * d1 + R[2, c] * d2  # R^T (point - origin)
+    out = np.empty((n, 2))
+    k = 0
+    for i in range(n - 1):
+        x0, x1 = p[i, 0], p[i + 1, 0]
+        if (x0 <= 0 and x1 > 0) or (x0 >= 0 and x1 < 0):
+            w = x0 / (x0 - x1)
+            out[k, 0] = p[i, 1] + w * (p[i + 1, 1] - p[i, 1])
+            out[k, 1] = p[i, 2] + w * (p[i + 1, 2] - p[i, 2])
+            k += 1
+    if n and p[n - 1, 0] == 0:
+        out[k, 0], out[k, 1] = p[n - 1, 1], p[n - 1, 2]
+        k += 1
+    return out[:k].copy()
+
+
+@numba.njit(cache=True, nogil=True)
+def closest_on_polyline(
+    points: FloatArray,
+    last_points: FloatArray,
+    last_near: FloatArray,
+    a: FloatArray,
+    d: FloatArray,
+) -> FloatArray:
+    """(m, 3) the closest points to ``points`` on the segments ``a + t d`` (the nearest of all,
+    the first on a tie: :func:`~seamtrack.geometry.nearest.nearest_of`'s arithmetic), reusing
+    ``last_near`` for the rows ``points`` shares with ``last_points`` (a window sliding along
+    the same stored points: ``points`` starts inside ``last_points``)."""
+    m = points.shape[0]
+    near = np.empty((m, 3))
+    k = 0
+    for j in range(last_points.shape[0]):
+        if (last_points[j, 0] == points[0, 0] and last_points[j, 1] == points[0, 1]
+                and last_points[j, 2] == points[0, 2]):  # fmt: skip
+            k = min(last_points.shape[0] - j, m)
+            for r in range(k):
+                for c in range(3):
+                    if last_points[j + r, c] != points[r, c]:
+                        k = 0
+            for r in range(k):
+                near[r] = last_near[j + r]
+            break
+    for r in range(k, m):
+        best, bt, bs = np.inf, 0.0, 0
+        q0, q1, q2 = points[r, 0], points[r, 1], points[r, 2]
+        for c in range(a.shape[0]):
+            dd = max(d[c, 0] * d[c, 0] + d[c, 1] * d[c, 1] + d[c, 2] * d[c, 2], 1e-300)
+            num = (q0 - a[c, 0]) * d[c, 0] + (q1 - a[c, 1]) * d[c, 1]
+            num += (q2 - a[c, 2]) * d[c, 2]
+            t = min(max(num / dd, 0.0), 1.0)
+            e0 = q0 - (a[c, 0] + t * d[c, 0])
+            e1 = q1 - (a[c, 1] + t * d[c, 1])
+            e2 = q2 - (a[c, 2] + t * d[c, 2])
+            dist = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+            if dist < best:
+                best, bt, bs = dist, t, c
+        for c in range(3):
+            near[r, c] = a[bs, c] + bt * d[bs, c]
+    return near

@@ -50,7 +50,6 @@ from seamtrack.control.path_kernels import PathBuffer, off_line, smooth_tail
 from seamtrack.control.tracking import Command, Measurement, TrackerContext
 from seamtrack.params import Fraction, NonNegative, Positive
 from seamtrack.sensing.profiles import SeamHint, hint_from_path
-from seamtrack.sensing.scan import laser_plane_crossings
 
 FloatArray = NDArray[np.float64]
 
@@ -171,6 +170,9 @@ class TrajectoryTracker:
         self._buffer = PathBuffer(start)
         self._seen_seam = False
         self._held: list[FloatArray] = []
+        # The hint's window of raw points and their closest points on the program seam.
+        self._on_program: tuple[FloatArray, FloatArray] = (np.empty((0, 3)), np.empty((0, 3)))
+        self._segments: tuple[FloatArray, FloatArray] | None = None
         self.stop_cause = ""
         # The robot program's end of an open seam (the CAD seam's end), as floats; None: none.
         self._seam_end: tuple[float, float, float] | None = None
@@ -245,12 +247,13 @@ class TrajectoryTracker:
         if straight is None:
             return None
         nominal = self._program.seam
-        crossings = laser_plane_crossings(nominal, T_world_sensor)
+        # laser_plane_crossings, compiled
+        crossings = pk.plane_crossings(nominal.points, np.asarray(T_world_sensor, dtype=float))
         if not len(crossings):
             return None
         i = max(_left(self._s, self._s[-1] - self.direction_fit_mm), 1)
         window = raw[i:] if len(raw) > i else raw[-1:]
-        offset = np.median(window - nominal.closest(window).points, axis=0)
+        offset = pk.column_medians(window - self._closest_on_program(window))
         R = np.asarray(T_world_sensor, dtype=float)[:3, :3]
         shift = R.T @ offset  # the measured seam's offset from the program, sensor frame
         expected = crossings + shift[1:]
@@ -258,6 +261,24 @@ class TrajectoryTracker:
         k = int(np.argmin(np.hypot(expected[:, 0] - sy, expected[:, 1] - sz)))
         y, z = expected[k].tolist()
         return SeamHint((y, z), straight.direction, straight.tolerance_mm)
+
+    def _closest_on_program(self, points: FloatArray) -> FloatArray:
+        """(m, 3) the program seam's closest points to ``points`` (the nearest of all its
+        segments, the arithmetic of :meth:`Seam.closest
+        <seamtrack.geometry.seam.Seam.closest>`). The window is a tail of the stored raw
+        points, as the last one was: the rows they share are reused, the new ones found
+        (compiled: :func:`~seamtrack.control.path_kernels.closest_on_polyline`)."""
+        assert self._program is not None
+        if not len(points):
+            return np.empty((0, 3))
+        if self._segments is None:  # the program's segments, once
+            seam_points = self._program.seam.points
+            a = np.ascontiguousarray(seam_points[:-1])
+            self._segments = (a, np.ascontiguousarray(seam_points[1:] - a))
+        points = np.ascontiguousarray(points, dtype=np.float64)
+        near = pk.closest_on_polyline(points, *self._on_program, *self._segments)
+        self._on_program = (points.copy(), near)
+        return near
 
     def _check_end(self, measurement: Measurement) -> None:
         """A frame without a seam point after the seam was seen: is it the seam's end?"""

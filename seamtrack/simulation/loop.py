@@ -44,7 +44,7 @@ from seamtrack.simulation.assemble import LoopSettings, Parts, build_parts
 from seamtrack.simulation.progress import ProgressTracker
 from seamtrack.simulation.scene import Scene, load_scene
 from seamtrack.simulation.scoring import orientation_summary, torch_axes, with_joints
-from seamtrack.simulation.ticks import LIMIT, REFUSED, GantryTicks
+from seamtrack.simulation.ticks import LIMIT, REFUSED, ArmTicks, GantryTicks
 
 FloatArray = NDArray[np.float64]
 
@@ -278,7 +278,11 @@ def run(
     # events compiled (seamtrack.simulation.ticks); the same arithmetic, so the same numbers.
     fast = unrotated and type(tracker) is TrajectoryTracker and type(robot) is CartesianRobot
     fast = fast and bool(robot._unrotated)
-    ticks = GantryTicks(robot, (p0x, p0y, p0z)) if fast else None
+    # An arm with the built-in tracker and its program: its ticks compiled too (ArmTicks).
+    arm_fast = turns_tool and type(tracker) is TrajectoryTracker and hasattr(robot, "_par")
+    arm_fast = arm_fast and getattr(tracker, "_program", None) is not None
+    ticks: Any = GantryTicks(robot, (p0x, p0y, p0z)) if fast else None
+    ticks = ArmTicks(robot, tracker) if arm_fast else ticks
     # A tracker that knows where the seam is heading tells the extractor (``hint``): where the
     # laser plane crosses two grooves (a mitre) the extractor takes the V that continues it.
     tracker_hint = getattr(tracker, "hint", None)
@@ -339,6 +343,9 @@ def run(
                 )
             tcp_log.frombytes(ticks.tcp[:n].tobytes())
             target_log.frombytes(ticks.target[:n].tobytes())
+            if arm_fast:
+                axis_log.frombytes(ticks.axis[:n].tobytes())
+                joint_log.frombytes(ticks.joints[:n].tobytes())
             if why == LIMIT:
                 status = "limit_violation"
                 break

@@ -96,9 +96,7 @@ def joint_figures(robot: Any, trace: Any, period_s: float) -> dict[str, Any]:
     margin = np.minimum(joints - kin.lower_rad, kin.upper_rad - joints)
     closest = np.unravel_index(int(np.argmin(margin)), margin.shape)
     idx = trace.decimated(period_s)
-    data = kin.new_data()
-    wrist = np.array([kin.wrist_angle(joints[i], data) for i in idx])
-    sigma = np.array([kin.sigma_min(joints[i], data) for i in idx])
+    wrist, sigma = kin.wrist_and_sigma(joints[idx])
     return {
         "max_joint_speed_deg_s": float(np.degrees(speed.max())),
         "max_joint_speed_fraction": float(fraction[worst]),

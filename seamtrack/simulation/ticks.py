@@ -20,9 +20,26 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.control.path_kernels import setpoint_step
+from seamtrack.control.arm_kernels import (
+    C_Q,
+    M_FF,
+    M_HAS,
+    M_HAS_ROT,
+    M_HAS_W,
+    M_NEW_GOAL,
+    M_ROT,
+    M_SPEED,
+    M_STOP,
+    M_T,
+    M_W,
+    S_JOINTS,
+    arm_step,
+)  # fmt: skip
+from seamtrack.control.orientation import turning_at
+from seamtrack.control.path_kernels import V_SET, setpoint_step
 from seamtrack.control.robot import CartesianRobot, RobotState, axes_step
 from seamtrack.control.servo import loops_step
+from seamtrack.simulation.progress import _closest_in_window
 
 FloatArray = NDArray[np.float64]
 
@@ -143,4 +160,204 @@ class GantryTicks:
             state.setpoint.q[:], state.setpoint.v[:] = axes[2].tolist(), axes[3].tolist()
             servo.held[:] = axes[4].tolist()
             servo.tick = int(self.ipo[1])
+        return n, why
+
+
+@numba.njit(cache=True, nogil=True)
+def _closest_near(
+    points: FloatArray, knots: FloatArray, columns: FloatArray, q: FloatArray, hint: float
+) -> float:
+    """:meth:`ProgressTracker.closest_near <seamtrack.simulation.progress.ProgressTracker.
+    closest_near>` compiled (the chosen segment's length by a scalar sqrt: equal to an ulp)."""
+    length = knots[-1]
+    n_seg = len(points) - 1
+    window = 5.0
+    while True:
+        s0 = max(hint - window, 0.0)
+        s1 = min(hint + window, length)
+        i0 = min(max(int(np.searchsorted(knots, s0, side="right")) - 1, 0), n_seg - 1)
+        i1 = min(max(int(np.searchsorted(knots, s1, side="left")), i0 + 1), n_seg)
+        s_start, t, dx, dy, dz = _closest_in_window(points, knots, columns, q, s0, s1, i0, i1)
+        s = s_start + t * math.sqrt(dx * dx + dy * dy + dz * dz)
+        cut_low = s0 > 0.0 and s <= s0 + 1e-12
+        cut_high = s1 < length and s >= s1 - 1e-12
+        if not (cut_low or cut_high) or window >= length:
+            return s
+        window *= 2.0
+
+
+@numba.njit(cache=True, nogil=True)
+def _refresh_orientation(
+    x: float, y: float, z: float, sp: FloatArray, base: FloatArray, prog: FloatArray,
+    knots: FloatArray, seg_len: FloatArray, normals: FloatArray, prog_par: FloatArray,
+    columns: FloatArray, turn: FloatArray, cmd: FloatArray,
+) -> None:  # fmt: skip
+    """The tracker's tool-orientation refresh (:meth:`TrajectoryTracker.command_floats
+    <seamtrack.control.trajectory.TrajectoryTracker.command_floats>`: the program's rotation
+    and turning rate at the seam point closest to the set-point) and the command's rotation in
+    the base frame (``ArticulatedRobot.command_in_base``, ``_set_rotation``): ``turn`` holds
+    the world rotation (9), angular velocity (3) and arc length."""
+    q = np.array((x, y, z))
+    s = _closest_near(prog, knots, columns, q, turn[12])
+    R, w = turning_at(s, sp[V_SET], prog, knots, seg_len, normals, prog_par)
+    turn[:9] = R.ravel()
+    turn[9:12] = w
+    turn[12] = s
+    new = cmd[M_HAS_ROT] == 0.0
+    for i in range(3):
+        for j in range(3):
+            r = base[i, 0] * R[0, j] + base[i, 1] * R[1, j] + base[i, 2] * R[2, j]
+            new = new or r != cmd[M_ROT + 3 * i + j]
+            cmd[M_ROT + 3 * i + j] = r
+        cmd[M_W + i] = base[i, 0] * w[0] + base[i, 1] * w[1] + base[i, 2] * w[2]
+    cmd[M_HAS_ROT], cmd[M_HAS_W] = 1.0, 1.0
+    if new:
+        cmd[M_NEW_GOAL] = 1.0
+
+
+@numba.njit(cache=True, nogil=True)
+def arm_ticks(
+    tick: int, max_ticks: int, dt: float, next_capture: float, next_arrival: float,
+    check_every: int, wall_every: int, world: FloatArray,
+    base: FloatArray, reach: float, orient: NDArray[np.int64], par: FloatArray, lim: FloatArray,
+    jl: FloatArray, servo: FloatArray, geo: FloatArray, place: FloatArray, axes: FloatArray,
+    kinds: NDArray[np.int64], index: NDArray[np.int64], cart: FloatArray, rot: FloatArray,
+    omega: FloatArray, jnt: FloatArray, cnt: NDArray[np.int64], cmd: FloatArray,
+    sp: FloatArray, path: FloatArray, s: FloatArray, env_s: FloatArray, env_v: FloatArray,
+    seen: bool, tcp_out: FloatArray, target_out: FloatArray, axis_out: FloatArray,
+    joint_out: FloatArray, refused: FloatArray, prog: FloatArray,
+    knots: FloatArray, seg_len: FloatArray, normals: FloatArray, prog_par: FloatArray,
+    columns: FloatArray, turn: FloatArray,
+) -> tuple[int, int]:  # fmt: skip
+    """:func:`gantry_ticks` for an arm and the built-in tracker: per tick the torch tip in the
+    world (``world``: (3, 4) rotation and origin of the base), the tracker's set-point step,
+    the command in the base frame (``base``: the inverse), the reach check (``LIMIT``), the
+    traces (torch tip, target, torch axis, joints, rows from ``k0``) and the arm's compiled
+    tick (:func:`~seamtrack.control.arm_kernels.arm_step` on the state's arrays).
+
+    Every ``orient[0]``-th command of the tracker (its count in ``orient[1]``) refreshes the
+    tool orientation from the robot program (``prog``: the seam's points, arc lengths, segment
+    lengths, normals, the program's parameters, the points' columns; ``turn``: the rotation,
+    angular velocity and arc length, see :func:`_refresh_orientation`). Returns (ticks run,
+    what stopped it).
+    """
+    first = tick
+    k = 0
+    while tick <= max_ticks:
+        t = tick * dt
+        if tick > first and (t + 1e-9 >= next_capture or next_arrival <= t + 1e-9):
+            break
+        q = cart[C_Q]
+        x = world[0, 0] * q[0] + world[0, 1] * q[1] + world[0, 2] * q[2] + world[0, 3]
+        y = world[1, 0] * q[0] + world[1, 1] * q[1] + world[1, 2] * q[2] + world[1, 3]
+        z = world[2, 0] * q[0] + world[2, 1] * q[1] + world[2, 2] * q[2] + world[2, 3]
+        tcp_out[k, 0], tcp_out[k, 1], tcp_out[k, 2] = x, y, z
+        if not seen:
+            sp[2], sp[3], sp[4] = x, y, z  # the tracker's view of the torch (naive poses)
+            target_out[k, :] = np.nan
+            cmd[M_HAS] = 0.0
+        else:
+            tx, ty, tz, speed, fx, fy, fz, stop = setpoint_step(sp, path, s, env_s, env_v, x, y, z)
+            if not (0.0 < speed < math.inf and math.isfinite(tx + ty + tz + fx + fy + fz)):
+                refused[:] = (tx, ty, tz, speed, fx, fy, fz, 1.0 if stop else 0.0)
+                return k, REFUSED
+            orient[1] += 1
+            if orient[1] % orient[0] == 0:
+                _refresh_orientation(
+                    tx, ty, tz, sp, base, prog, knots, seg_len, normals, prog_par, columns, turn,
+                    cmd,
+                )  # fmt: skip
+            target_out[k, 0], target_out[k, 1], target_out[k, 2] = tx, ty, tz
+            cmd[M_HAS] = 1.0
+            for i in range(3):
+                cmd[M_T + i] = base[i, 0] * tx + base[i, 1] * ty + base[i, 2] * tz + base[i, 3]
+                cmd[M_FF + i] = base[i, 0] * fx + base[i, 1] * fy + base[i, 2] * fz
+            cmd[M_SPEED], cmd[M_STOP] = speed, 1.0 if stop else 0.0
+        R = rot[2]
+        for i in range(3):
+            axis_out[k, i] = world[i, 0] * R[0, 2] + world[i, 1] * R[1, 2] + world[i, 2] * R[2, 2]
+        joint_out[k] = jnt[S_JOINTS]
+        if cmd[M_HAS] > 0.0:
+            d = math.sqrt(cmd[M_T] ** 2 + cmd[M_T + 1] ** 2 + cmd[M_T + 2] ** 2)
+            if d > reach:
+                return k + 1, LIMIT
+        arm_step(
+            par, lim, jl, servo, geo, place, axes, kinds, index, cart, rot, omega, jnt, cnt, cmd
+        )
+        tick += 1
+        k += 1
+        if (tick - 1) % wall_every == 0 or (tick - 1) % check_every == 0:
+            break
+    return k, EVENT
+
+
+class ArmTicks:
+    """The compiled ticks of an arm run with the built-in tracker (:func:`arm_ticks`);
+    :meth:`run` advances an :class:`~seamtrack.control.arm.ArmState` in place, and the
+    tracker's tool orientation as :meth:`TrajectoryTracker.command_floats
+    <seamtrack.control.trajectory.TrajectoryTracker.command_floats>` does (compiled, the same
+    numbers to an ulp)."""
+
+    def __init__(self, robot: Any, tracker: Any) -> None:
+        self.robot = robot
+        self.dt = robot.control_period_s
+        self.world = np.ascontiguousarray(robot.T_world_base[:3, :4])
+        self.base = np.ascontiguousarray(robot._T_base_world[:3, :4])
+        program = tracker._program
+        self.prog, self.knots, self.seg_len, self.normals, self.prog_par = program._arrays
+        self.columns = np.ascontiguousarray(program.seam.points.T)
+        self.orient = np.array([tracker._orient_every, 0], dtype=np.int64)
+        self.turn = np.zeros(13)
+        n = robot.kinematics.dof
+        self.tcp = np.empty((1024, 3))
+        self.target = np.empty((1024, 3))
+        self.axis = np.empty((1024, 3))
+        self.joints = np.empty((1024, n))
+        self.refused = np.zeros(8)
+        self._turn: tuple[Any, Any] = (None, None)  # the last rotation handed to the state
+
+    def _rotation(self, state: Any, tracker: Any) -> None:
+        """The tracker's commanded rotation into the state's command, converted once (as
+        ``command_in_base`` converts it)."""
+        rotation, omega = tracker._rotation, tracker._omega
+        if rotation is self._turn[0] and omega is self._turn[1]:
+            return
+        self._turn = (rotation, omega)
+        R = self.robot._T_base_world[:3, :3]
+        rot_base = None if rotation is None else R @ np.asarray(rotation, dtype=float)
+        omega_base = None if omega is None else R @ np.asarray(omega, dtype=float)
+        self.robot._set_rotation(state, rot_base, omega_base)
+
+    def run(
+        self, state: Any, tick: int, max_ticks: int, next_capture: float, next_arrival: float,
+        check_every: int, wall_every: int, tracker: Any,
+    ) -> tuple[int, int]:  # fmt: skip
+        """Ticks from ``tick`` to the next event (see :func:`arm_ticks`); the ticks' torch
+        tips, targets, torch axes and joints are in ``self.tcp``, ``target``, ``axis`` and
+        ``joints``."""
+        robot = self.robot
+        place, axes, kinds, index = robot.kinematics.chain
+        path = tracker._buffer
+        self.orient[1] = tracker._tick
+        self.turn[12] = tracker._s_program
+        self._rotation(state, tracker)
+        n, why = arm_ticks(
+            tick, max_ticks, self.dt, next_capture, next_arrival, check_every, wall_every,
+            self.world, self.base, robot._reach_mm, self.orient, robot._par,
+            robot._cart._limits, robot._jl, robot._servo_table, robot.kinematics.geometry,
+            place, axes, kinds, index, state.cart, state.rot, state.omega, state.jnt, state.cnt,
+            state.cmd, tracker._sp, path.path, path.s, tracker._env_s, tracker._env_v,
+            tracker._seen_seam, self.tcp, self.target, self.axis, self.joints, self.refused,
+            self.prog, self.knots, self.seg_len, self.normals, self.prog_par, self.columns,
+            self.turn,
+        )  # fmt: skip
+        if int(self.orient[1]) // self.orient[0] != tracker._tick // self.orient[0]:
+            # Refreshed: the tracker's rotation, turning rate and arc length, as it keeps them.
+            rotation = self.turn[:9].reshape(3, 3).copy()
+            omega = self.turn[9:12].copy()
+            tracker._rotation, tracker._omega = rotation, omega
+            tracker._s_program = float(self.turn[12])
+            self._turn = (rotation, omega)
+            state.goal_from = None  # the goal is in the command (compiled)
+        tracker._tick = int(self.orient[1])
         return n, why
