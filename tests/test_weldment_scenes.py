@@ -141,7 +141,12 @@ def test_a_multi_solid_mesh_is_one_watertight_shell_per_body(tmp_path):
 def test_every_seam_of_the_bracket_is_tracked_in_one_sweep(tmp_path):
     from seamtrack.batch.sweep import run_sweep, summarize
 
-    fast = {"workpiece.params.length_mm": 40.0, "sensor.rays": 512}
+    # Embree's fan: at the end returns' start the laser plane lies flush with the gusset's end
+    # face, and the plane-section fan counts the rays along that face's in-plane edge as hits
+    # (where Embree lets them pass): edge rays, which the two fans may answer differently
+    # (docs/mesh-mode.md). Either way it is the degenerate pose, not the look-ahead, that
+    # decides whether these 10 mm seams start.
+    fast = {"workpiece.params.length_mm": 40.0, "sensor.rays": 512, "sensor.fan": "embree"}
     rows = summarize(run_sweep("weldment-bracket", "workpiece.seam", ["all"], overrides=fast))
     status = {r["value"]: r["status"] for r in rows}
     assert list(status) == [f"s{k}" for k in range(1, 14)]

@@ -99,6 +99,10 @@ def _nodes(n: int) -> int:
     return count(n)
 
 
+#: A vertex closer to the laser plane than this (mm) lies on it (rounding of the frame change
+#: is ~1e-13 mm at the parts' sizes).
+ON_PLANE_MM = 1e-9
+
 @numba.njit(cache=True, nogil=True)
 def _select(
     order: NDArray[np.int64], centre: NDArray[np.float64], axis: int, start: int, end: int,
@@ -239,11 +243,18 @@ def _cut(
     xa = r[0, 0] * ax + r[1, 0] * ay + r[2, 0] * az
     xb = r[0, 0] * bx + r[1, 0] * by + r[2, 0] * bz
     xc = r[0, 0] * cx + r[1, 0] * cy + r[2, 0] * cz
-    positive = (xa > 0.0) + (xb > 0.0) + (xc > 0.0)
-    negative = (xa < 0.0) + (xb < 0.0) + (xc < 0.0)
-    zero = 3 - positive - negative
-    # Wholly on one side; in the plane (grazed); touching it at one vertex only.
-    if positive == 3 or negative == 3 or zero == 3 or (zero == 1 and positive != 1):
+    # A vertex within rounding of the plane lies on it, and counts as in front of it (a
+    # symbolic perturbation, x -> x + eps): a face in the plane, or one touching it along an
+    # edge or at a vertex from the front, is grazed; a surface that continues across the
+    # plane along an edge is cut by exactly one of the edge's two triangles.
+    if abs(xa) <= ON_PLANE_MM:
+        xa = 0.0
+    if abs(xb) <= ON_PLANE_MM:
+        xb = 0.0
+    if abs(xc) <= ON_PLANE_MM:
+        xc = 0.0
+    behind = (xa < 0.0) + (xb < 0.0) + (xc < 0.0)
+    if behind == 0 or behind == 3:
         return False, 0.0, 0.0, 0.0, 0.0
     ya = r[0, 1] * ax + r[1, 1] * ay + r[2, 1] * az
     yb = r[0, 1] * bx + r[1, 1] * by + r[2, 1] * bz
@@ -251,7 +262,7 @@ def _cut(
     za = r[0, 2] * ax + r[1, 2] * ay + r[2, 2] * az
     zb = r[0, 2] * bx + r[1, 2] * by + r[2, 2] * bz
     zc = r[0, 2] * cx + r[1, 2] * cy + r[2, 2] * cz
-    # The two points where the boundary meets the plane: vertices on it, edges across it.
+    # The two edges from behind to in front: their crossings (a vertex on the plane itself).
     found = 0
     p0y = p0z = p1y = p1z = 0.0
     for j in range(3):
@@ -261,18 +272,20 @@ def _cut(
             x0, y0, z0, x1, y1, z1 = xb, yb, zb, xc, yc, zc
         else:
             x0, y0, z0, x1, y1, z1 = xc, yc, zc, xa, ya, za
+        if (x0 < 0.0) == (x1 < 0.0):
+            continue
         if x0 == 0.0:
             py, pz = y0, z0
-        elif (x0 > 0.0 and x1 < 0.0) or (x0 < 0.0 and x1 > 0.0):
-            py, pz = _edge_point(x0, y0, z0, x1, y1, z1)
+        elif x1 == 0.0:
+            py, pz = y1, z1
         else:
-            continue
+            py, pz = _edge_point(x0, y0, z0, x1, y1, z1)
         if found == 0:
             p0y, p0z = py, pz
         else:
             p1y, p1z = py, pz
         found += 1
-    if found != 2:
+    if found != 2 or (p0y == p1y and p0z == p1z):  # a vertex touched from behind: a point
         return False, 0.0, 0.0, 0.0, 0.0
     return True, p0y, p0z, p1y, p1z
 
