@@ -103,6 +103,7 @@ def _nodes(n: int) -> int:
 #: is ~1e-13 mm at the parts' sizes).
 ON_PLANE_MM = 1e-9
 
+
 @numba.njit(cache=True, nogil=True)
 def _select(
     order: NDArray[np.int64], centre: NDArray[np.float64], axis: int, start: int, end: int,

@@ -34,9 +34,8 @@ from numpy.typing import NDArray
 
 from seamtrack import constants
 from seamtrack.control.orientation import is_closed
-from seamtrack.control.robot import CartesianRobot, MoveCommand
+from seamtrack.control.robot import MoveCommand
 from seamtrack.control.tracking import Command, Measurement, TrackerContext
-from seamtrack.control.trajectory import TrajectoryTracker
 from seamtrack.errors import PluginRuntimeError, plugin_failed
 from seamtrack.geometry.seam import Seam
 from seamtrack.geometry.torch import torch_angles
@@ -44,7 +43,7 @@ from seamtrack.simulation.assemble import LoopSettings, Parts, build_parts
 from seamtrack.simulation.progress import ProgressTracker
 from seamtrack.simulation.scene import Scene, load_scene
 from seamtrack.simulation.scoring import orientation_summary, torch_axes, with_joints
-from seamtrack.simulation.ticks import LIMIT, REFUSED, ArmTicks, GantryTicks
+from seamtrack.simulation.ticks import LIMIT, REFUSED, ArmTicks, GantryTicks, compiled_ticks
 
 FloatArray = NDArray[np.float64]
 
@@ -274,15 +273,10 @@ def run(
     progress_near = ProgressTracker(seam).closest_near  # Seam.closest_near, the same numbers
     unrotated = bool(np.array_equal(R, np.eye(3))) and not turns_tool
     p0x, p0y, p0z = p0.tolist()
-    # The fast path: the built-in trajectory tracker on an unrotated gantry, its ticks between
-    # events compiled (seamtrack.simulation.ticks); the same arithmetic, so the same numbers.
-    fast = unrotated and type(tracker) is TrajectoryTracker and type(robot) is CartesianRobot
-    fast = fast and bool(robot._unrotated)
-    # An arm with the built-in tracker and its program: its ticks compiled too (ArmTicks).
-    arm_fast = turns_tool and type(tracker) is TrajectoryTracker and hasattr(robot, "_par")
-    arm_fast = arm_fast and getattr(tracker, "_program", None) is not None
-    ticks: Any = GantryTicks(robot, (p0x, p0y, p0z)) if fast else None
-    ticks = ArmTicks(robot, tracker) if arm_fast else ticks
+    # The fast paths: the built-in trajectory tracker's ticks between events compiled on an
+    # unrotated gantry and on an arm (seamtrack.simulation.ticks); the same arithmetic.
+    ticks = compiled_ticks(robot, tracker, (p0x, p0y, p0z), unrotated, turns_tool)
+    fast = isinstance(ticks, GantryTicks)
     # A tracker that knows where the seam is heading tells the extractor (``hint``): where the
     # laser plane crosses two grooves (a mitre) the extractor takes the V that continues it.
     tracker_hint = getattr(tracker, "hint", None)
@@ -343,7 +337,7 @@ def run(
                 )
             tcp_log.frombytes(ticks.tcp[:n].tobytes())
             target_log.frombytes(ticks.target[:n].tobytes())
-            if arm_fast:
+            if isinstance(ticks, ArmTicks):
                 axis_log.frombytes(ticks.axis[:n].tobytes())
                 joint_log.frombytes(ticks.joints[:n].tobytes())
             if why == LIMIT:

@@ -361,3 +361,19 @@ class ArmTicks:
             state.goal_from = None  # the goal is in the command (compiled)
         tracker._tick = int(self.orient[1])
         return n, why
+
+
+def compiled_ticks(
+    robot: Any, tracker: Any, origin: tuple[float, float, float], unrotated: bool, turns: bool
+) -> GantryTicks | ArmTicks | None:
+    """The compiled ticks for this robot and tracker, or None (the loop's Python ticks): the
+    built-in trajectory tracker on an unrotated gantry, or on an arm with its tool program."""
+    from seamtrack.control.trajectory import TrajectoryTracker
+
+    if type(tracker) is not TrajectoryTracker:
+        return None
+    if unrotated and type(robot) is CartesianRobot and bool(robot._unrotated):
+        return GantryTicks(robot, origin)
+    if turns and hasattr(robot, "_par") and getattr(tracker, "_program", None) is not None:
+        return ArmTicks(robot, tracker)
+    return None
