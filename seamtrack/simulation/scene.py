@@ -28,6 +28,7 @@ from seamtrack.simulation.config import (  # the types live there; imported by n
     SceneConfig,
     SensorConfig,
 )
+from seamtrack.simulation.passes import check_passes
 from seamtrack.simulation.robots import check_robot, is_arm
 
 
@@ -317,6 +318,7 @@ def check_consistency(scene: Scene) -> None:
         material(c.workpiece.material)
     check_plugin_params(c)
     check_sizes(c)
+    check_passes(c)
 
 
 _SPEC_KEYS = (
