@@ -149,20 +149,22 @@ def _ok_plan(**kw) -> PassPlan:
 
 
 @pytest.mark.parametrize(
-    ("plan", "field"),
+    "plan",
     [
-        ("garbage", "planner.name"),
-        (_ok_plan(reference="up"), "planner.name"),
-        (_ok_plan(travel_speed_mm_s=float("nan")), "planner.name"),
-        (_ok_plan(travel_speed_mm_s=-1.0), "planner.name"),
-        (_ok_plan(wire_feed_mm_s=0.0), "process.wire_feed_m_min"),
-        (_ok_plan(offset_mm=40.0), "passes.overrides.offset_mm"),
-        (_ok_plan(work_angle_rad=0.1), "passes.overrides.work_angle_deg"),
+        "garbage",
+        _ok_plan(reference="up"),
+        _ok_plan(travel_speed_mm_s=float("nan")),
+        _ok_plan(travel_speed_mm_s=-1.0),
+        _ok_plan(wire_feed_mm_s=0.0),
+        _ok_plan(offset_mm=40.0),
+        _ok_plan(work_angle_rad=0.1),
+        _ok_plan(speed_s_mm=np.arange(3.0), speed_profile_mm_s=np.array([1.0, -1.0, 2.0])),
     ],
 )
+@pytest.mark.parametrize("field", ["planner.name", "passes.overrides.1"])
 def test_checked_plan_refuses(plan, field: str) -> None:
     with pytest.raises(PluginRuntimeError) as info:
-        checked_plan(plan, "adaptive", 0, groove(np.full(2, 2.0)), gantry=True)
+        checked_plan(plan, "adaptive", 0, groove(np.full(2, 2.0)), gantry=True, field=field)
     assert info.value.field == field
     assert "\n" not in str(info.value)
 

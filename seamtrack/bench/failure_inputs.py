@@ -8,7 +8,12 @@ from pathlib import Path
 from typing import Any
 
 from seamtrack._version import __version__
-from seamtrack.bench import failure_inputs_arms, failure_inputs_camera, failure_inputs_parts
+from seamtrack.bench import (
+    failure_inputs_arms,
+    failure_inputs_camera,
+    failure_inputs_multipass,
+    failure_inputs_parts,
+)
 from seamtrack.bench.failure_kit import (
     ARM,
     CAMERA,
@@ -483,9 +488,15 @@ CATALOGUE: tuple[Entry, ...] = (
     *failure_inputs_camera.ENTRIES,
     *failure_inputs_arms.ENTRIES,
     *failure_inputs_parts.ENTRIES,
+    *failure_inputs_multipass.ENTRIES,
 )
 
-_AREAS = (failure_inputs_camera, failure_inputs_arms, failure_inputs_parts)
+_AREAS = (
+    failure_inputs_camera,
+    failure_inputs_arms,
+    failure_inputs_parts,
+    failure_inputs_multipass,
+)
 
 
 def workspace(root: Path) -> Path:

@@ -226,6 +226,12 @@ def _bench_dataset(out: Path, quick: bool) -> Any:
     return bench_dataset(out, quick=quick)
 
 
+def _bench_multipass(out: Path, quick: bool) -> dict:
+    from seamtrack.bench.multipass import bench_multipass
+
+    return bench_multipass(out, quick=quick)
+
+
 BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "raycast": lambda out, quick: bench_raycast(out, quick=quick),
     "extractors": _bench_extractors,
@@ -237,6 +243,7 @@ BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "failures": _bench_failures,
     "camera": _bench_camera,
     "dataset": _bench_dataset,
+    "multipass": _bench_multipass,
 }
 
 

@@ -451,13 +451,20 @@ def planner(name: str, **params: Any) -> Any:
         ) from None
 
 
-def checked_plan(plan: Any, name: str, pass_index: int, groove: MeasuredGroove,
-                 gantry: bool) -> PassPlan | None:  # fmt: skip
-    """A planner's answer, refused with a one-line error when it is not a usable pass."""
+def checked_plan(
+    plan: Any,
+    name: str,
+    pass_index: int,
+    groove: MeasuredGroove,
+    gantry: bool,
+    field: str = "planner.name",
+) -> PassPlan | None:
+    """A planner's answer, refused with a one-line error naming ``field`` (the planner, or the
+    scene's overrides that changed the plan) when it is not a usable pass."""
 
-    def refuse(what: str, fix: str, field_: str = "planner.name") -> PluginRuntimeError:
+    def refuse(what: str, fix: str) -> PluginRuntimeError:
         return PluginRuntimeError(f"{name!r} plan() for pass {pass_index + 1} {what}",
-                                  field=field_, fix=fix)  # fmt: skip
+                                  field=field, fix=fix)  # fmt: skip
 
     if plan is None:
         return None
@@ -479,8 +486,7 @@ def checked_plan(plan: Any, name: str, pass_index: int, groove: MeasuredGroove,
                      "give a travel speed > 0 mm/s")  # fmt: skip
     if plan.wire_feed_mm_s <= 0:
         raise refuse(f"returned wire_feed_mm_s = {plan.wire_feed_mm_s}",
-                     "give a wire feed > 0 (process.wire_feed_m_min)",
-                     "process.wire_feed_m_min")  # fmt: skip
+                     "give a wire feed > 0 mm/s")  # fmt: skip
     if plan.speed_profile_mm_s is not None:
         profile = np.asarray(plan.speed_profile_mm_s, dtype=float)
         s = np.asarray(plan.speed_s_mm if plan.speed_s_mm is not None else [], dtype=float)
@@ -491,19 +497,18 @@ def checked_plan(plan: Any, name: str, pass_index: int, groove: MeasuredGroove,
             )
         plan = replace(plan, speed_s_mm=s, speed_profile_mm_s=profile)
     if gantry and plan.work_angle_rad != 0.0:
-        raise refuse(
-            f"asks for a work angle of {math.degrees(plan.work_angle_rad):.3g} deg on "
-            "a gantry, which cannot tilt its torch",
-            "plan work_angle_rad = 0 on a gantry, or weld on an arm (robot.model)",
-            "passes.overrides.work_angle_deg",
-        )
+        raise refuse(f"asks for a work angle of {math.degrees(plan.work_angle_rad):.3g} deg on "
+                     "a gantry, which cannot tilt its torch", "plan work_angle_rad = 0 on a "
+                     "gantry, or weld on an arm (robot.model)")  # fmt: skip
     reference = {"left": LEFT_FOOT, "right": RIGHT_FOOT, "centre": MIDDLE}[plan.reference]
     foot_y = np.median(groove.points[:, reference, 0]) + plan.offset_mm
     lo = np.median(groove.points[:, LEFT_TOP, 0])
     hi = np.median(groove.points[:, RIGHT_TOP, 0])
     if not lo <= foot_y <= hi:
-        raise refuse(f"puts the bead at y = {foot_y:.3g} mm, outside the groove's top width "
-                     f"[{lo:.3g}, {hi:.3g}] mm (offset {plan.offset_mm:.3g} mm from "
-                     f"{plan.reference})", "give an offset that keeps the torch over the groove",
-                     "passes.overrides.offset_mm")  # fmt: skip
+        raise refuse(
+            f"puts the bead at y = {foot_y:.3g} mm, outside the groove's top width "
+            f"[{lo:.3g}, {hi:.3g}] mm (offset {plan.offset_mm:.3g} mm from "
+            f"{plan.reference})",
+            "give an offset that keeps the torch over the groove",
+        )
     return plan

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 # Strict: a number is never a boolean or a string, a boolean never "yes" or 1.
 Positive = Annotated[float, Field(gt=0, allow_inf_nan=False, strict=True)]
@@ -225,7 +225,7 @@ class BeadShapeConfig(_Section):
 
     model: Literal["arc", "parabola", "cosine"] = "parabola"
     width_to_height: Annotated[float, Field(gt=1, le=20, allow_inf_nan=False, strict=True)] = 3.0
-    wetting_angle_deg: Annotated[float, Field(gt=0, lt=180, allow_inf_nan=False, strict=True)] | (
+    wetting_angle_deg: Annotated[float, Field(gt=0, le=90, allow_inf_nan=False, strict=True)] | (
         None
     ) = None
 
@@ -271,11 +271,20 @@ class PassesConfig(_Section):
     fusion margin (how far the wall bead's toe reaches into the wall, mm) is below
     ``fusion_margin_min_mm`` are flagged."""
 
-    count: Annotated[int, Field(ge=1, le=200, strict=True)] | Literal["auto"] = "auto"
+    count: int | str = "auto"
     scan_first: Flag = True
     reinforcement_mm: Annotated[float, Field(ge=0, le=10, allow_inf_nan=False, strict=True)] = 1.5
     fusion_margin_min_mm: Finite = 0.0
     overrides: list[PassOverride] = Field(default_factory=list)
+
+    @field_validator("count", mode="before")
+    @classmethod
+    def _count(cls, value: Any) -> Any:
+        if value == "auto":
+            return value
+        if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= 200:
+            raise ValueError('give a number of passes from 1 to 200, or "auto"')
+        return value
 
 
 class PlannerConfig(_Section):

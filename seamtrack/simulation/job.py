@@ -146,7 +146,10 @@ def run_job(
         plan = _plan(plan_maker, name, groove, index, state, arm=is_arm(c))
         if plan is None:
             break
-        plan = overridden(plan, c.passes, index)
+        if c.passes.overrides:
+            plan = checked_plan(overridden(plan, c.passes, index), name, index, groove,
+                                gantry=not is_arm(c), field="passes.overrides")  # fmt: skip
+            assert plan is not None
         done = _pass(scene, plan, fill, cad_seam, rng, process, progress, f"pass_{index + 1:02d}")
         start = time.perf_counter()
         fill = fill.deposit(done.path_world, done.path_area_mm2, shape)
@@ -269,8 +272,8 @@ def _steered(
     set_speed = getattr(tracker, "set_speed", None)
 
     def steered(T_world_sensor: FloatArray, t_s: float, hint: Any = None) -> Feature:
-        feature = sense(T_world_sensor, t_s, hint) if hint is not None else sense(
-            T_world_sensor, t_s
+        feature = (
+            sense(T_world_sensor, t_s, hint) if hint is not None else sense(T_world_sensor, t_s)
         )
         frames.append((feature, T_world_sensor))
         if feature and offset:
@@ -366,8 +369,7 @@ def _check_bead_fits(fill: Any, process: Any, c: Any) -> None:
             f"the smallest bead the process lays ({smallest:.3g} mm^2 at "
             f"{process.speed_max_mm_s} mm/s) is larger than the groove ({area:.3g} mm^2)",
             field="process.wire_feed_m_min",
-            fix="lower the wire feed or the wire diameter, or raise "
-            "process.travel_speed_max_mm_s",
+            fix="lower the wire feed or the wire diameter, or raise process.travel_speed_max_mm_s",
         )
 
 

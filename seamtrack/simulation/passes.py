@@ -56,7 +56,7 @@ def check_passes(c: SceneConfig) -> None:
             raise SceneError(
                 "[planner] is given but the scene has no [passes]",
                 field="planner",
-                fix="add [passes] (count = \"auto\") for a multi-pass job, or remove [planner]",
+                fix='add [passes] (count = "auto") for a multi-pass job, or remove [planner]',
             )
         return
     if c.sensor.mode != "mesh" or c.workpiece is None:
@@ -102,7 +102,7 @@ def check_passes(c: SceneConfig) -> None:
             fix='set extractor.name = "groove"',
         )
     check_overrides(c.passes, arm=is_arm(c))
-    name = (c.planner.name if c.planner is not None else "adaptive")
+    name = c.planner.name if c.planner is not None else "adaptive"
     planner_class(name)  # an unknown or broken planner is refused before the run
 
 
