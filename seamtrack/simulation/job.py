@@ -56,6 +56,7 @@ from seamtrack.simulation.loop import Result, run
 from seamtrack.simulation.passes import heat_input_kj_mm, overridden, process_of
 from seamtrack.simulation.robots import is_arm, tool_program
 from seamtrack.simulation.scene import Scene, load_scene
+from seamtrack.workpiece.beads import bead_area_mm2
 
 FloatArray = NDArray[np.float64]
 
@@ -63,6 +64,9 @@ FloatArray = NDArray[np.float64]
 STATION_SPACING_MM = 0.5
 
 _POINT_INDEX = {"left": 1, "right": 5, "centre": 3}
+
+#: A bead that stops this close (mm) to the part's end is run off the edge (:func:`_to_the_ends`).
+RUN_OFF_MM = 3.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -107,7 +111,7 @@ def run_job(
     fill)`` is called after each pass (a notebook's or a bench's hook).
     """
     from seamtrack.workpiece.beads import BeadShape
-    from seamtrack.workpiece.fill import FillState
+    from seamtrack.workpiece.fill import FillState  # trimesh, scipy: a job's own imports
 
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
@@ -120,6 +124,7 @@ def run_job(
     base_parts = build_parts(scene, rng)
     cad_seam = base_parts.seam
     fill = FillState.from_mesh(base_parts.mesh, cad_seam, spacing_mm=STATION_SPACING_MM)
+    flip = _laser_flipped(base_parts, fill)
     process = process_of(c)
     shape = _bead_shape(c, BeadShape)
     name = c.planner.name if c.planner is not None else "adaptive"
@@ -134,7 +139,7 @@ def run_job(
 
     groove: MeasuredGroove | None = None
     if c.passes.scan_first:
-        scan = _pass(scene, None, fill, cad_seam, rng, process, progress, "pass_00_scan")
+        scan = _pass(scene, None, fill, cad_seam, rng, process, progress, "pass_00_scan", flip)
         records.append(scan.record)
         groove = scan.groove
     else:
@@ -150,9 +155,11 @@ def run_job(
             plan = checked_plan(overridden(plan, c.passes, index), name, index, groove,
                                 gantry=not is_arm(c), field="passes.overrides")  # fmt: skip
             assert plan is not None
-        done = _pass(scene, plan, fill, cad_seam, rng, process, progress, f"pass_{index + 1:02d}")
+        done = _pass(scene, plan, fill, cad_seam, rng, process, progress, f"pass_{index + 1:02d}",
+                     flip)  # fmt: skip
         start = time.perf_counter()
-        fill = fill.deposit(done.path_world, done.path_area_mm2, shape)
+        if len(done.path_world) >= 2:
+            fill = fill.deposit(done.path_world, done.path_area_mm2, shape)
         record = dataclasses.replace(done.record, deposit_s=time.perf_counter() - start)
         records.append(record)
         state.done.append(plan)
@@ -194,15 +201,21 @@ def _pass(
     process: Any,
     progress: bool,
     name: str,
+    flip: bool,
 ) -> _Done:
-    """One closed-loop pass (``plan`` None: the scan-only pass along the groove's middle)."""
+    """One closed-loop pass (``plan`` None: the scan-only pass along the groove's middle).
+    ``flip``: the laser's y_L runs against the stations' y (the extractor's left is the
+    stations' right)."""
     c = scene.config
     reference = "centre" if plan is None else plan.reference
+    laser_reference = (
+        {"left": "right", "right": "left"}.get(reference, reference) if flip else (reference)
+    )
     offset = 0.0 if plan is None else plan.offset_mm
     speed = c.simulation.welding_speed_mm_s if plan is None else plan.travel_speed_mm_s
     slowest = speed if plan is None else float(np.min(plan.speed_at(fill.s_mm)))
     overrides: dict[str, Any] = {
-        "extractor.params.reference": reference,
+        "extractor.params.reference": laser_reference,
         "simulation.welding_speed_mm_s": float(speed),
         "simulation.time_limit_s": default_time_limit_s(cad_seam.length_mm, min(slowest, speed)),
     }
@@ -226,14 +239,14 @@ def _pass(
     result = run(parts, progress=progress, seed=c.simulation.seed)
     run_s = time.perf_counter() - start
     groove = measured_groove(frames, fill, cad_seam)
-    trace = result.trace
-    welding = trace.welding
-    path = trace.tcp_world[welding]
-    t = trace.t_s[welding]
+    path, t, speeds = _arc_path(result, parts.settings.trace_period_s, process.speed_min_mm_s)
     arc_time = float(t[-1] - t[0]) if len(t) > 1 else 0.0
-    speeds = _path_speed(path, t, process.speed_min_mm_s)
     wire = process.wire_feed_mm_s if plan is None else plan.wire_feed_mm_s
-    area = process.bead_area_mm2(speeds, wire)
+    area = np.asarray(
+        bead_area_mm2(process.wire_diameter_mm, wire, speeds, process.deposition_efficiency),
+        dtype=float,
+    ).reshape(-1)
+    path, area = _to_the_ends(path, area, cad_seam)
     s_path = cad_seam.closest(path).arc_length_mm if len(path) else np.zeros(0)
     mean_speed = float(np.mean(speeds)) if len(speeds) else math.nan
     record = PassRecord(
@@ -290,6 +303,18 @@ def _steered(
     return dataclasses.replace(parts, sense=steered)
 
 
+def _laser_flipped(parts: Parts, fill: Any) -> bool:
+    """Whether the laser's y_L axis points against the stations' y at the start pose."""
+    from seamtrack.geometry.frames import make as make_pose
+
+    robot = parts.robot
+    joints = parts.start_joints
+    if joints is None:
+        joints = robot.joints_for_tool(make_pose(translation=parts.tcp_start_world))
+    T_world_sensor = np.asarray(robot.T_world_sensor(joints), dtype=float)
+    return bool(T_world_sensor[:3, 1] @ fill.T_world_station[0, :3, 1] < 0.0)
+
+
 def pass_path(fill: Any, reference: str, offset_mm: float) -> Seam:
     """A pass's true path in the world: at every station the reference point of the true fill
     surface (left or right wall's foot, or the middle), moved ``offset_mm`` across the seam."""
@@ -316,8 +341,11 @@ def measured_groove(
         s = float(cad_seam.closest(world[3][None]).arc_length_mm[0])
         i = min(int(round((s - fill.s_mm[0]) / STATION_SPACING_MM)), len(fill.s_mm) - 1)
         local = (np.linalg.inv(fill.T_world_station[i]) @ np.c_[world, np.ones(7)].T).T
+        yz = local[:, 1:3]
+        if yz[0, 0] > yz[6, 0]:  # the laser's left is the stations' right: y ascending
+            yz = yz[::-1]
         s_list.append(i)
-        pts_list.append(local[:, 1:3])
+        pts_list.append(yz)
         area_list.append(feature.area_mm2)
     if not s_list:
         raise PluginRuntimeError(
@@ -341,12 +369,41 @@ def _true_groove(fill: Any) -> MeasuredGroove:
     return MeasuredGroove(fill.s_mm, points, fill.remaining_area_mm2())
 
 
-def _path_speed(path: FloatArray, t: FloatArray, floor: float) -> FloatArray:
-    """The torch's speed along its path (central differences), at least ``floor``."""
-    if len(path) < 2:
-        return np.full(len(path), floor)
+def _arc_path(
+    result: Result, period_s: float, floor_mm_s: float
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """The torch's path while the arc burns, its times and speeds (decimated to
+    ``period_s``): from the first to the last tick at which the torch moves at least half the
+    slowest process speed (the approach to the first measured point included: the torch
+    starts on the groove at the seam's start); the speed bounded below by ``floor_mm_s``."""
+    trace = result.trace
+    idx = trace.decimated(period_s)
+    path, t = trace.tcp_world[idx], trace.t_s[idx]
+    if len(path) < 3:
+        return path, t, np.full(len(path), floor_mm_s)
     speed = np.linalg.norm(np.gradient(path, t, axis=0), axis=1)
-    return np.maximum(speed, floor)
+    moving = np.flatnonzero(speed >= 0.5 * floor_mm_s)
+    if len(moving) < 2:
+        return path[:0], t[:0], speed[:0]
+    keep = slice(moving[0], moving[-1] + 1)
+    return path[keep], t[keep], np.maximum(speed[keep], floor_mm_s)
+
+
+def _to_the_ends(path: FloatArray, area: FloatArray, seam: Seam) -> tuple[FloatArray, FloatArray]:
+    """The path carried on along the seam to the part's ends where it stops within
+    :data:`RUN_OFF_MM` of them (the torch stops at the last seam point its sensor saw, a
+    fraction of a mm before the plate's edge; a welder runs the bead off the edge), with the
+    area at its end."""
+    if len(path) < 2:
+        return path, area
+    s = seam.closest(path[[0, -1]]).arc_length_mm
+    ends = seam.interpolate([0.0, seam.length_mm])
+    head = [ends[0] + (path[0] - seam.interpolate([s[0]])[0])] if 0 < s[0] <= RUN_OFF_MM else []
+    gap = seam.length_mm - s[1]
+    tail = [ends[1] + (path[-1] - seam.interpolate([s[1]])[0])] if 0 < gap <= RUN_OFF_MM else []
+    path = np.vstack([*head, path, *tail])
+    area = np.concatenate([area[:1]] * len(head) + [area] + [area[-1:]] * len(tail))
+    return path, area
 
 
 def _plan(maker: Any, name: str, groove: MeasuredGroove, index: int, state: JobState,
@@ -474,13 +531,14 @@ def _pass_row(r: PassRecord) -> dict[str, Any]:
 
 
 def welded_range(welded: list[PassRecord], fill: Any) -> tuple[float, float]:
-    """The arc lengths every pass welded (the intersection of their welding portions)."""
-    lo, hi = float(fill.s_mm[0]), float(fill.s_mm[-1])
-    for r in welded:
-        s = r.result.trace.arc_length_mm[r.result.trace.welding]
-        if len(s):
-            lo, hi = max(lo, float(np.min(s))), min(hi, float(np.max(s)))
-    return lo, hi
+    """The arc lengths every pass laid its bead over (the stations all passes covered)."""
+    covered = np.ones(len(fill.s_mm), dtype=bool)
+    for bead in fill.beads:
+        covered &= np.isfinite(bead.y_centre_mm)
+    if not covered.any():
+        return float(fill.s_mm[0]), float(fill.s_mm[0])
+    s = fill.s_mm[covered]
+    return float(s[0]), float(s[-1])
 
 
 def fusion_margin_mm(fill: Any, welded: list[PassRecord]) -> FloatArray:
