@@ -82,27 +82,36 @@ def test_fill_order_is_corners_first() -> None:
     assert fill_order(4) == [0, 3, 1, 2]
 
 
-def test_passes_walls_first_then_middle_then_cap_side_to_side() -> None:
+@pytest.mark.parametrize("wall_reference", [False, True])
+def test_passes_walls_first_then_middle_then_cap_side_to_side(wall_reference: bool) -> None:
     g = groove(np.full(3, 2.0))
-    p = AdaptivePlanner()
-    state = JobState(PROCESS, count=14)
-    plans = [p.plan(g, i, state) for i in range(15)]
+    p = AdaptivePlanner(wall_reference=wall_reference)
+    state = JobState(PROCESS, count=16)
+    plans = [p.plan(g, i, state) for i in range(17)]
     assert plans[-1] is None
-    plans = plans[:-1]
-    assert all(isinstance(x, PassPlan) for x in plans)
     by_layer: dict[int, list[PassPlan]] = {}
-    for x in plans:
+    for x in plans[:-1]:
+        assert isinstance(x, PassPlan)
         by_layer.setdefault(x.layer, []).append(x)
+    point = {"left": 1, "right": 5, "centre": 3}
     last = max(by_layer)
+    assert any(len(b) >= 3 for k, b in by_layer.items() if k != last)
     for layer, beads in by_layer.items():
         assert [b.bead_in_layer for b in beads] == list(range(len(beads)))
-        if layer == last:  # the cap, side to side: offsets ascending, all cap
+        y = [g.points[0, point[b.reference], 0] + float(b.offset_at(g.s_mm[0])) for b in beads]
+        if layer == last:  # the cap, side to side across the top width
             assert all(b.cap for b in beads)
-            assert np.all(np.diff([b.offset_mm for b in beads]) > 0)
-        elif len(beads) >= 2:  # a bead against each wall first, towards the groove
-            assert (beads[0].reference, beads[1].reference) == ("left", "right")
-            assert beads[0].offset_mm > 0 > beads[1].offset_mm
-            assert all(b.reference == "centre" for b in beads[2:])
+            assert np.all(np.diff(y) > 0)
+            assert g.points[0, 0, 0] < y[0] and y[-1] < g.points[0, 6, 0]
+        elif len(beads) >= 2:  # a bead at each wall first, then the middle left to right
+            left, right = g.points[0, 1, 0], g.points[0, 5, 0]
+            assert left < y[0] < y[1] < right
+            assert y[0] - left == pytest.approx(right - y[1])
+            assert all(y[0] < v < y[1] for v in y[2:]) and np.all(np.diff(y[2:]) > 0)
+            if wall_reference:
+                assert (beads[0].reference, beads[1].reference) == ("left", "right")
+            else:
+                assert all(b.reference == "centre" for b in beads)
 
 
 def test_speed_follows_the_measured_area() -> None:

@@ -154,6 +154,8 @@ class PassPlan:
         Whether this is a cap bead.
     speed_s_mm, speed_profile_mm_s : (k,) float or None
         The travel speed along the seam (arc length, speed); None: constant.
+    offset_profile_mm : (k,) float or None
+        The lateral offset along the seam (on ``speed_s_mm``); None: ``offset_mm``.
     """
 
     reference: str
@@ -167,12 +169,20 @@ class PassPlan:
     cap: bool = False
     speed_s_mm: FloatArray | None = None
     speed_profile_mm_s: FloatArray | None = None
+    offset_profile_mm: FloatArray | None = None
 
     def speed_at(self, s_mm: Any) -> Any:
         """Travel speed at arc length(s) ``s_mm``."""
         if self.speed_s_mm is None or self.speed_profile_mm_s is None:
             return np.full(np.shape(s_mm), self.travel_speed_mm_s)[()]
         return np.interp(s_mm, self.speed_s_mm, self.speed_profile_mm_s)
+
+    def offset_at(self, s_mm: Any) -> Any:
+        """Lateral offset at arc length(s) ``s_mm`` (the profile on ``speed_s_mm``, else
+        ``offset_mm``)."""
+        if self.speed_s_mm is None or self.offset_profile_mm is None:
+            return np.full(np.shape(s_mm), self.offset_mm)[()]
+        return np.interp(s_mm, self.speed_s_mm, self.offset_profile_mm)
 
 
 @dataclass
@@ -305,11 +315,22 @@ class AdaptivePlanner:
     adapt_speed : bool
         Scale the travel speed along the seam to the measured groove (False: constant speed,
         the :class:`FixedPlanner`).
+    wall_reference : bool
+        Track a wall bead on the extractor's wall foot (``left``/``right``) with a constant
+        offset; by default every bead tracks the fill surface's middle (``centre``) with an
+        offset profile along the seam that puts it at its place from the walls as the last
+        pass measured them (a wall's foot, where a toe wets it, jumps along the wall from one
+        station to the next; the middle of the fill surface does not).
     """
 
     name = "adaptive"
 
-    def __init__(self, wall_offset_fraction: float = 0.45, adapt_speed: bool = True):
+    def __init__(
+        self,
+        wall_offset_fraction: float = 0.45,
+        adapt_speed: bool = True,
+        wall_reference: bool = False,
+    ):
         if not 0 < wall_offset_fraction <= 1:
             raise PluginError(
                 f"wall_offset_fraction must be in (0, 1], got {wall_offset_fraction}",
@@ -318,6 +339,7 @@ class AdaptivePlanner:
             )
         self.wall_offset_fraction = wall_offset_fraction
         self.adapt_speed = adapt_speed
+        self.wall_reference = wall_reference
         self.layout: Layout | None = None
         self._speed: float | None = None
 
@@ -332,7 +354,9 @@ class AdaptivePlanner:
         n = self.layout.beads_per_layer[layer]
         cap = layer == len(self.layout.beads_per_layer) - 1
         p = state.process
-        reference, offset = self._place(groove, n, slot_rank, cap)
+        reference, offsets = self._place(groove, n, slot_rank, cap)
+        offset = float(np.median(offsets))
+        profile_offsets = offsets if reference == "centre" else None
         remaining = np.asarray(groove.area_mm2, dtype=float)
         if state.last_bead_area_mm2 is not None:  # the groove was measured before the last bead
             remaining = remaining - np.asarray(state.last_bead_area_mm2, dtype=float)
@@ -349,36 +373,51 @@ class AdaptivePlanner:
         if self.adapt_speed:
             nominal = float(np.median(profile))
             return PassPlan(reference, offset, 0.0, nominal, p.wire_feed_mm_s, layer, slot_rank,
-                            n, cap, groove.s_mm.copy(), profile)  # fmt: skip
+                            n, cap, groove.s_mm.copy(), profile, profile_offsets)  # fmt: skip
         area = self.layout.cap_bead_area_mm2 if cap else self.layout.fill_bead_area_mm2
         speed = float(p.speed_for_area(area))
-        return PassPlan(reference, offset, 0.0, speed, p.wire_feed_mm_s, layer, slot_rank, n, cap)
+        return PassPlan(reference, offset, 0.0, speed, p.wire_feed_mm_s, layer, slot_rank, n, cap,
+                        groove.s_mm.copy(), np.full(len(groove), speed),
+                        profile_offsets)  # fmt: skip
 
     def adapt(self, groove_ahead: MeasuredGroove, plan: PassPlan) -> tuple[float, float] | None:
         """Keep the plan (the speed profile from the last measurement already follows the
         groove); a subclass may steer on the groove ahead."""
         return None
 
-    def _place(self, groove: MeasuredGroove, n: int, rank: int, cap: bool) -> tuple[str, float]:
-        """The reference and lateral offset of the ``rank``-th bead laid in a layer of n."""
-        if cap:  # side to side over the top width, relative to the middle point
-            top = float(np.median(groove.top_width_mm))
-            centre = float(np.median(0.5 * (groove.points[:, LEFT_TOP, 0]
-                                            + groove.points[:, RIGHT_TOP, 0])))  # fmt: skip
-            middle = float(np.median(groove.points[:, MIDDLE, 0]))
-            y = -0.5 * top + (rank + 0.5) * top / n + centre
-            return "centre", y - middle
+    def _place(
+        self, groove: MeasuredGroove, n: int, rank: int, cap: bool
+    ) -> tuple[str, FloatArray]:
+        """The reference and lateral offset (per measured station) of the ``rank``-th bead
+        laid in a layer of n: the cap side to side over the top width, a fill layer's beads
+        in n equal slots of the fill surface's width, the wall slots first."""
+        pts = groove.points
+        middle = _smooth(pts[:, MIDDLE, 0])
+        if cap:
+            left, width = _smooth(pts[:, LEFT_TOP, 0]), _smooth(groove.top_width_mm)
+            return "centre", left + (rank + 0.5) * width / n - middle
         if n == 1:
-            return "centre", 0.0
+            return "centre", np.zeros(len(groove))
         slot = fill_order(n)[rank]
-        width = float(np.median(groove.bottom_width_mm))
+        left, width = _smooth(pts[:, LEFT_FOOT, 0]), _smooth(groove.bottom_width_mm)
+        wall = self.wall_offset_fraction * width / n
+        if self.wall_reference and slot in (0, n - 1):
+            return ("left", wall) if slot == 0 else ("right", -wall)
         if slot == 0:
-            return "left", self.wall_offset_fraction * width / n
+            return "centre", left + wall - middle
         if slot == n - 1:
-            return "right", -self.wall_offset_fraction * width / n
-        left = float(np.median(groove.points[:, LEFT_FOOT, 0]))
-        middle = float(np.median(groove.points[:, MIDDLE, 0]))
+            return "centre", left + width - wall - middle
         return "centre", left + (slot + 0.5) * width / n - middle
+
+
+def _smooth(values: FloatArray, half_window: int = 4) -> FloatArray:
+    """A running median over 2 * half_window + 1 stations (the measured groove's jitter)."""
+    values = np.asarray(values, dtype=float)
+    if len(values) <= 2:
+        return values
+    padded = np.pad(values, half_window, mode="edge")
+    windows = np.lib.stride_tricks.sliding_window_view(padded, 2 * half_window + 1)
+    return np.asarray(np.median(windows, axis=1))
 
 
 class FixedPlanner(AdaptivePlanner):
@@ -496,19 +535,27 @@ def checked_plan(
                 "give speed_s_mm and speed_profile_mm_s of one length",
             )
         plan = replace(plan, speed_s_mm=s, speed_profile_mm_s=profile)
+    if plan.offset_profile_mm is not None:
+        offsets = np.asarray(plan.offset_profile_mm, dtype=float)
+        s_of = np.asarray(plan.speed_s_mm if plan.speed_s_mm is not None else [], dtype=float)
+        if offsets.shape != s_of.shape or not np.isfinite(offsets).all():
+            raise refuse(
+                "returned an offset profile that is not finite and as long as its arc lengths",
+                "give speed_s_mm and offset_profile_mm of one length",
+            )
+        plan = replace(plan, offset_profile_mm=offsets)
     if gantry and plan.work_angle_rad != 0.0:
         raise refuse(f"asks for a work angle of {math.degrees(plan.work_angle_rad):.3g} deg on "
                      "a gantry, which cannot tilt its torch", "plan work_angle_rad = 0 on a "
                      "gantry, or weld on an arm (robot.model)")  # fmt: skip
     reference = {"left": LEFT_FOOT, "right": RIGHT_FOOT, "centre": MIDDLE}[plan.reference]
-    foot_y = np.median(groove.points[:, reference, 0]) + plan.offset_mm
-    lo = np.median(groove.points[:, LEFT_TOP, 0])
-    hi = np.median(groove.points[:, RIGHT_TOP, 0])
-    if not lo <= foot_y <= hi:
-        raise refuse(
-            f"puts the bead at y = {foot_y:.3g} mm, outside the groove's top width "
-            f"[{lo:.3g}, {hi:.3g}] mm (offset {plan.offset_mm:.3g} mm from "
-            f"{plan.reference})",
-            "give an offset that keeps the torch over the groove",
-        )
+    y = groove.points[:, reference, 0] + plan.offset_at(groove.s_mm)
+    lo, hi = groove.points[:, LEFT_TOP, 0], groove.points[:, RIGHT_TOP, 0]
+    outside = np.flatnonzero((y < lo) | (y > hi))
+    if len(outside):
+        i = outside[0]
+        raise refuse(f"puts the bead at y = {y[i]:.3g} mm at s = {groove.s_mm[i]:.4g} mm, "
+                     f"outside the groove's top width [{lo[i]:.3g}, {hi[i]:.3g}] mm (offset "
+                     f"{plan.offset_at(groove.s_mm[i]):.3g} mm from {plan.reference})",
+                     "give an offset that keeps the torch over the groove")  # fmt: skip
     return plan

@@ -141,11 +141,19 @@ def run_job(
     if c.passes.scan_first:
         scan = _pass(scene, None, fill, cad_seam, rng, process, progress, "pass_00_scan", flip)
         records.append(scan.record)
+        if scan.groove is None:
+            raise PluginRuntimeError(
+                "the groove extractor measured the groove in no frame of the scan-only pass",
+                field="extractor.name",
+                fix="check the sensor sees the groove (seamtrack check) and the extractor is "
+                "groove",
+            )
         groove = scan.groove
     else:
         groove = _true_groove(fill)
     limit = count if count is not None else 200
     index = 0
+    stopped = ""
     while index < limit:
         assert groove is not None
         plan = _plan(plan_maker, name, groove, index, state, arm=is_arm(c))
@@ -163,14 +171,17 @@ def run_job(
         record = dataclasses.replace(done.record, deposit_s=time.perf_counter() - start)
         records.append(record)
         state.done.append(plan)
-        state.last_bead_area_mm2 = np.interp(done.groove.s_mm, done.path_s_mm,
-                                             done.path_area_mm2)  # fmt: skip
-        groove = done.groove
         if on_pass is not None:
             on_pass(record, fill)
         if job_bar is not None:
             job_bar.update(1)
         index += 1
+        if done.groove is None:
+            stopped = f"the groove extractor measured the groove in no frame of {record.name}"
+            break
+        state.last_bead_area_mm2 = np.interp(done.groove.s_mm, done.path_s_mm,
+                                             done.path_area_mm2)  # fmt: skip
+        groove = done.groove
     if job_bar is not None:
         job_bar.close()
     if index == 0:
@@ -179,14 +190,14 @@ def run_job(
             field="planner.name",
             fix="return a PassPlan for pass 1 (None only when the groove is full)",
         )
-    summary = job_summary(scene, records, fill, time.perf_counter() - wall_start)
+    summary = job_summary(scene, records, fill, time.perf_counter() - wall_start, stopped)
     return JobResult(summary, records, fill)
 
 
 @dataclass(frozen=True, eq=False)
 class _Done:
     record: PassRecord
-    groove: MeasuredGroove
+    groove: MeasuredGroove | None
     path_world: FloatArray
     path_s_mm: FloatArray
     path_area_mm2: FloatArray
@@ -211,7 +222,6 @@ def _pass(
     laser_reference = (
         {"left": "right", "right": "left"}.get(reference, reference) if flip else (reference)
     )
-    offset = 0.0 if plan is None else plan.offset_mm
     speed = c.simulation.welding_speed_mm_s if plan is None else plan.travel_speed_mm_s
     slowest = speed if plan is None else float(np.min(plan.speed_at(fill.s_mm)))
     overrides: dict[str, Any] = {
@@ -225,7 +235,7 @@ def _pass(
     start = time.perf_counter()
     beads = fill.mesh() if len(fill.beads) else None
     parts = build_parts(pass_scene, rng, extra_mesh=beads)
-    true_path = pass_path(fill, reference, offset)
+    true_path = pass_path(fill, reference, plan)
     parts = dataclasses.replace(
         parts,
         seam=true_path,
@@ -233,7 +243,7 @@ def _pass(
         tool_program=tool_program(pass_scene, true_path),
     )
     frames: list[tuple[Feature, FloatArray]] = []
-    parts = _steered(parts, fill, cad_seam, plan, offset, frames)
+    parts = _steered(parts, fill, cad_seam, plan, frames)
     build_s = time.perf_counter() - start
     start = time.perf_counter()
     result = run(parts, progress=progress, seed=c.simulation.seed)
@@ -242,6 +252,9 @@ def _pass(
     path, t, speeds = _arc_path(result, parts.settings.trace_period_s, process.speed_min_mm_s)
     arc_time = float(t[-1] - t[0]) if len(t) > 1 else 0.0
     wire = process.wire_feed_mm_s if plan is None else plan.wire_feed_mm_s
+    if plan is not None and len(path):
+        planned = plan.speed_at(cad_seam.closest(path).arc_length_mm)
+        speeds = _ramped(speeds, np.asarray(planned, dtype=float))
     area = np.asarray(
         bead_area_mm2(process.wire_diameter_mm, wire, speeds, process.deposition_efficiency),
         dtype=float,
@@ -270,31 +283,34 @@ def _steered(
     fill: Any,
     cad_seam: Seam,
     plan: PassPlan | None,
-    offset: float,
     frames: list[tuple[Feature, FloatArray]],
 ) -> Parts:
     """The parts with a sense function that records every frame's feature, moves the measured
-    point by the plan's lateral offset (station frame), and sets the tracker's speed along the
-    seam from the plan (and the planner's ``adapt``)."""
+    point by the plan's lateral offset there (station frame), and sets the tracker's speed
+    along the seam from the plan (and the planner's ``adapt``)."""
     sense = parts.sense
     tracker = parts.tracker
-    T_tcp_sensor = np.asarray(parts.robot.T_tcp_sensor, dtype=float)
-    T_sensor_tcp = np.linalg.inv(T_tcp_sensor)
+    T_sensor_tcp = np.linalg.inv(np.asarray(parts.robot.T_tcp_sensor, dtype=float))
     lateral = fill.T_world_station[:, :3, 1]
     s_stations = fill.s_mm
     set_speed = getattr(tracker, "set_speed", None)
 
     def steered(T_world_sensor: FloatArray, t_s: float, hint: Any = None) -> Feature:
-        feature = (
-            sense(T_world_sensor, t_s, hint) if hint is not None else sense(T_world_sensor, t_s)
-        )
+        if hint is not None:
+            feature = sense(T_world_sensor, t_s, hint)
+        else:
+            feature = sense(T_world_sensor, t_s)
         frames.append((feature, T_world_sensor))
-        if feature and offset:
-            s = cad_seam.closest(feature.point_world[None]).arc_length_mm[0]
-            i = min(int(np.searchsorted(s_stations, s)), len(s_stations) - 1)
-            point = feature.point_world + offset * lateral[i]
-            feature = dataclasses.replace(feature, point_world=point)
-        if plan is not None and set_speed is not None:
+        if plan is None:
+            return feature
+        if feature:
+            s = float(cad_seam.closest(feature.point_world[None]).arc_length_mm[0])
+            offset = float(plan.offset_at(s))
+            if offset:
+                i = min(int(np.searchsorted(s_stations, s)), len(s_stations) - 1)
+                point = feature.point_world + offset * lateral[i]
+                feature = dataclasses.replace(feature, point_world=point)
+        if set_speed is not None:
             tcp = (T_world_sensor @ T_sensor_tcp)[:3, 3]
             s_tcp = float(cad_seam.closest(tcp[None]).arc_length_mm[0])
             set_speed(float(plan.speed_at(s_tcp)))
@@ -315,23 +331,27 @@ def _laser_flipped(parts: Parts, fill: Any) -> bool:
     return bool(T_world_sensor[:3, 1] @ fill.T_world_station[0, :3, 1] < 0.0)
 
 
-def pass_path(fill: Any, reference: str, offset_mm: float) -> Seam:
+def pass_path(fill: Any, reference: str, plan: PassPlan | None, window: int = 4) -> Seam:
     """A pass's true path in the world: at every station the reference point of the true fill
-    surface (left or right wall's foot, or the middle), moved ``offset_mm`` across the seam."""
+    surface (left or right wall's foot, or the middle; a running median over ``2 window + 1``
+    stations, 2 mm: where a toe wets a wall the foot jumps along it from one station to the
+    next, faster than any torch follows), moved across the seam by the plan's offset there."""
     index = _POINT_INDEX[reference]
-    points = []
-    for i in range(len(fill.s_mm)):
-        y, z = fill.groove_points(i)[index]
-        points.append(fill.T_world_station[i] @ np.array([0.0, y + offset_mm, z, 1.0]))
-    return Seam.from_points(np.asarray(points)[:, :3], field="passes", name="pass path")
+    yz = np.stack([fill.groove_points(i)[index] for i in range(len(fill.s_mm))])
+    padded = np.pad(yz, ((window, window), (0, 0)), mode="edge")
+    yz = np.median(np.lib.stride_tricks.sliding_window_view(padded, 2 * window + 1, axis=0), -1)
+    offset = np.zeros(len(yz)) if plan is None else plan.offset_at(fill.s_mm)
+    local = np.column_stack([np.zeros(len(yz)), yz[:, 0] + offset, yz[:, 1], np.ones(len(yz))])
+    points = np.einsum("mij,mj->mi", fill.T_world_station, local)[:, :3]
+    return Seam.from_points(points, field="passes", name="pass path")
 
 
 def measured_groove(
     frames: list[tuple[Feature, FloatArray]], fill: Any, cad_seam: Seam
-) -> MeasuredGroove:
-    """The groove as the pass's sensor measured it: every frame's 7 points (the groove
-    extractor's ``edges_laser``) in the frame of the station nearest to them, the median per
-    station; stations no frame saw are left out."""
+) -> MeasuredGroove | None:
+    """The groove as the pass's sensor measured it (None: in no frame): every frame's 7
+    points (the groove extractor's ``edges_laser``) in the frame of the station nearest to
+    them, the median per station; stations no frame saw are left out."""
     s_list, pts_list, area_list = [], [], []
     for feature, T_world_sensor in frames:
         edges = np.asarray(feature.edges_laser, dtype=float)
@@ -348,11 +368,7 @@ def measured_groove(
         pts_list.append(yz)
         area_list.append(feature.area_mm2)
     if not s_list:
-        raise PluginRuntimeError(
-            "the groove extractor measured the groove in no frame of the pass",
-            field="extractor.name",
-            fix="check the sensor sees the groove (seamtrack check) and the extractor is groove",
-        )
+        return None
     stations = np.asarray(s_list)
     points = np.asarray(pts_list)
     areas = np.asarray(area_list, dtype=float)
@@ -387,6 +403,20 @@ def _arc_path(
         return path[:0], t[:0], speed[:0]
     keep = slice(moving[0], moving[-1] + 1)
     return path[keep], t[keep], np.maximum(speed[keep], floor_mm_s)
+
+
+def _ramped(speed: FloatArray, planned: FloatArray, fraction: float = 0.8) -> FloatArray:
+    """The speed that sets the bead's area: the actual one, except while the torch speeds up
+    from rest at the start and brakes to rest at the end (below ``fraction`` of the planned
+    speed there), where the wire feed follows the travel speed (a controller's synchronised
+    arc start and crater) and the bead has its planned area."""
+    out = speed.copy()
+    fast = np.flatnonzero(speed >= fraction * planned)
+    if not len(fast):
+        return planned.copy()
+    out[: fast[0]] = planned[: fast[0]]
+    out[fast[-1] + 1 :] = planned[fast[-1] + 1 :]
+    return out
 
 
 def _to_the_ends(path: FloatArray, area: FloatArray, seam: Seam) -> tuple[FloatArray, FloatArray]:
@@ -462,8 +492,11 @@ def _job_bar(enabled: bool, total: int | None) -> Any:
     return tqdm(total=total, unit="pass", desc="job", leave=True, position=1)
 
 
-def job_summary(scene: Scene, records: list[PassRecord], fill: Any, wall_s: float) -> dict:
-    """job.json: the passes, the layers, the final fill and its checks."""
+def job_summary(
+    scene: Scene, records: list[PassRecord], fill: Any, wall_s: float, stopped: str = ""
+) -> dict:
+    """job.json: the passes, the layers, the final fill and its checks; ``stopped``: why the
+    job stopped before its planner said it was done."""
     c = scene.config
     assert c.passes is not None
     welded = [r for r in records if r.plan is not None]
@@ -483,7 +516,12 @@ def job_summary(scene: Scene, records: list[PassRecord], fill: Any, wall_s: floa
     errors = [float(r.result.summary.get("max_error_mm", math.nan)) for r in welded]
     return {
         "scene": scene.name,
-        "status": "completed" if all(s == "completed" for s in statuses) else "incomplete",
+        "status": "stopped"
+        if stopped
+        else "completed"
+        if all(s == "completed" for s in statuses)
+        else "incomplete",
+        "stop_reason": stopped,
         "passes": len(welded),
         "scan_pass": len(records) > len(welded),
         "layers": len(layers),

@@ -137,14 +137,13 @@ def overridden(plan: PassPlan, passes: PassesConfig, pass_index: int) -> PassPla
             continue
         changes: dict[str, object] = {}
         if o.reference is not None:
-            changes["reference"] = o.reference
+            changes.update(reference=o.reference, offset_profile_mm=None)
         if o.offset_mm is not None:
-            changes["offset_mm"] = o.offset_mm
+            changes.update(offset_mm=o.offset_mm, offset_profile_mm=None)
         if o.work_angle_deg is not None:
             changes["work_angle_rad"] = math.radians(o.work_angle_deg)
         if o.travel_speed_mm_s is not None:
-            changes.update(travel_speed_mm_s=o.travel_speed_mm_s, speed_s_mm=None,
-                           speed_profile_mm_s=None)  # fmt: skip
+            changes.update(travel_speed_mm_s=o.travel_speed_mm_s, speed_profile_mm_s=None)
         if o.wire_feed_m_min is not None:
             changes["wire_feed_mm_s"] = wire_feed_mm_s(o.wire_feed_m_min)
         plan = dataclasses.replace(plan, **changes)  # type: ignore[arg-type]
