@@ -42,6 +42,7 @@ from numpy.typing import NDArray
 
 from seamtrack.control.planner import (
     JobState,
+    fill_order,
     MeasuredGroove,
     PassPlan,
     checked_plan,
@@ -581,10 +582,23 @@ def welded_range(welded: list[PassRecord], fill: Any) -> tuple[float, float]:
 
 def fusion_margin_mm(fill: Any, welded: list[PassRecord]) -> FloatArray:
     """(m,) per station, how far the wall beads' toes reach past the wall (the smallest over
-    the beads laid against a wall, > 0 fused, < 0 a gap; +inf where no bead meets a wall)."""
+    the beads laid against a wall, > 0 fused, < 0 a gap; +inf where no bead meets a wall).
+
+    A wall bead: a fill layer's bead in a wall slot (the first and last slot, corners first;
+    a layer's only bead), or one tracking a wall's foot."""
     margins = np.asarray(fill.sidewall_margin_mm())
     out = np.full(len(fill.s_mm), np.inf)
     for k, r in enumerate(welded):
-        if r.plan is not None and r.plan.reference in ("left", "right") and k < margins.shape[1]:
-            out = np.minimum(out, -margins[:, k])
+        if k < margins.shape[1] and r.plan is not None and is_wall_bead(r.plan):
+            out = np.fmin(out, -margins[:, k])
     return out
+
+
+def is_wall_bead(plan: PassPlan) -> bool:
+    """Whether a pass lays a bead against a groove wall (see :func:`fusion_margin_mm`)."""
+    if plan.reference in ("left", "right"):
+        return True
+    if plan.cap:
+        return False
+    n = plan.beads_in_layer
+    return n == 1 or fill_order(n)[min(plan.bead_in_layer, n - 1)] in (0, n - 1)

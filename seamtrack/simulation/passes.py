@@ -109,7 +109,7 @@ def check_passes(c: SceneConfig) -> None:
 def check_overrides(passes: PassesConfig, arm: bool) -> None:
     numbers = [o.number for o in passes.overrides]
     for i, o in enumerate(passes.overrides):
-        if numbers.count(o.number) > 1:
+        if o.number in numbers[:i]:
             raise SceneError(
                 f"pass {o.number} is overridden more than once",
                 field=f"passes.overrides.{i}.number",
