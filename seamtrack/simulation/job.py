@@ -42,10 +42,10 @@ from numpy.typing import NDArray
 
 from seamtrack.control.planner import (
     JobState,
-    fill_order,
     MeasuredGroove,
     PassPlan,
     checked_plan,
+    fill_order,
     planner,
 )
 from seamtrack.errors import PluginRuntimeError, SceneError, plugin_failed
