@@ -34,6 +34,8 @@ def test_there_is_a_mesh_scene_for_every_joint_family() -> None:
 # paper-v-groove and tacks-and-clamp have tests of their own below; the pipe scenes are run
 # whole, with their own bounds, by tests/test_arm_scenes.py.
 OWN_TESTS = ("paper-v-groove", "tacks-and-clamp", "pipe-on-plate", "pipe-saddle")
+# The multi-pass jobs run in tests/test_job_run.py.
+OWN_TESTS += tuple(n for n in MESH_SCENES if load_scene(n).config.passes is not None)
 
 
 #: The paper's accuracy target at its welding speed: a max error of 0.1 mm at 5 mm/s (Sec. 4;
