@@ -14,9 +14,9 @@ import pytest
 
 pytest.importorskip("seamtrack.features.groove")
 
-from seamtrack.cli.main import main  # noqa: E402
-from seamtrack.simulation.job import run_job  # noqa: E402
-from seamtrack.simulation.scene import load_scene  # noqa: E402
+from seamtrack.cli.main import main
+from seamtrack.simulation.job import run_job
+from seamtrack.simulation.scene import load_scene
 
 pytestmark = [pytest.mark.cad, pytest.mark.embree]
 
