@@ -167,10 +167,15 @@ def run_job(
         done = _pass(scene, plan, fill, cad_seam, rng, process, progress, f"pass_{index + 1:02d}",
                      flip)  # fmt: skip
         start = time.perf_counter()
-        if len(done.path_world) >= 2:
-            fill = fill.deposit(done.path_world, done.path_area_mm2, shape)
+        try:
+            if len(done.path_world) >= 2:
+                fill = fill.deposit(done.path_world, done.path_area_mm2, shape)
+        except SceneError as exc:  # the torch left the groove: the bead cannot be laid
+            stopped = f"the bead of pass {index + 1} could not be laid ({exc.message})"
         record = dataclasses.replace(done.record, deposit_s=time.perf_counter() - start)
         records.append(record)
+        if stopped:
+            break
         state.done.append(plan)
         if on_pass is not None:
             on_pass(record, fill)
