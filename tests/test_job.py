@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from seamtrack.control.planner import PassPlan
-from seamtrack.errors import PluginError, SceneError
+from seamtrack.errors import PluginError, PluginRuntimeError, SceneError
 from seamtrack.sensing.profiles import Feature
 from seamtrack.simulation import job
 from seamtrack.simulation.passes import (
@@ -210,3 +210,21 @@ def test_fusion_margin_counts_the_wall_beads_only() -> None:
     assert np.allclose(margin, expected)
     assert job.is_wall_bead(PassPlan("left", 1.0, 0.0, 5.0, 100.0, 0, 2, 3))
     assert job.is_wall_bead(PassPlan("centre", 0.0, 0.0, 5.0, 100.0, 0, 0, 1))
+
+
+def test_a_planners_adapt_is_checked() -> None:
+    plan = PassPlan("centre", 0.0, 0.0, 5.0, 100.0, 0, 0)
+    ahead = None
+    assert np.isnan(job._adapted(lambda g, p: None, ahead, plan, "p", 0.0)).all()
+    assert job._adapted(lambda g, p: (4.0, 0.5), ahead, plan, "p", 0.0) == (4.0, 0.5)
+    for garbage in [(0.0, 1.0), (4.0, float("nan")), "fast", (1.0,)]:
+        with pytest.raises(PluginRuntimeError) as info:
+            job._adapted(lambda g, p, answer=garbage: answer, ahead, plan, "p", 1.0)
+        assert info.value.field == "planner.name"
+
+    def raises(g, p):
+        raise ValueError("bug")
+
+    with pytest.raises(PluginRuntimeError) as info:
+        job._adapted(raises, ahead, plan, "p", 1.0)
+    assert info.value.field == "planner.name"

@@ -380,11 +380,6 @@ class AdaptivePlanner:
                         groove.s_mm.copy(), np.full(len(groove), speed),
                         profile_offsets)  # fmt: skip
 
-    def adapt(self, groove_ahead: MeasuredGroove, plan: PassPlan) -> tuple[float, float] | None:
-        """Keep the plan (the speed profile from the last measurement already follows the
-        groove); a subclass may steer on the groove ahead."""
-        return None
-
     def _place(
         self, groove: MeasuredGroove, n: int, rank: int, cap: bool
     ) -> tuple[str, FloatArray]:

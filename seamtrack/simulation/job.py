@@ -131,6 +131,8 @@ def run_job(
     name = c.planner.name if c.planner is not None else "adaptive"
     params = dict(c.planner.params) if c.planner is not None else {}
     plan_maker = planner_override if planner_override is not None else planner(name, **params)
+    adapt = getattr(plan_maker, "adapt", None)
+    adapt = adapt if callable(adapt) else None
     count = c.passes.count if isinstance(c.passes.count, int) else None
     state = JobState(process, count=count, reinforcement_mm=c.passes.reinforcement_mm)
     _check_bead_fits(fill, process, c)
@@ -165,7 +167,7 @@ def run_job(
                                 gantry=not is_arm(c), field="passes.overrides")  # fmt: skip
             assert plan is not None
         done = _pass(scene, plan, fill, cad_seam, rng, process, progress, f"pass_{index + 1:02d}",
-                     flip)  # fmt: skip
+                     flip, adapt, name)  # fmt: skip
         start = time.perf_counter()
         try:
             if len(done.path_world) >= 2:
@@ -219,6 +221,8 @@ def _pass(
     progress: bool,
     name: str,
     flip: bool,
+    adapt: Any = None,
+    planner_name: str = "planner",
 ) -> _Done:
     """One closed-loop pass (``plan`` None: the scan-only pass along the groove's middle).
     ``flip``: the laser's y_L runs against the stations' y (the extractor's left is the
@@ -249,7 +253,7 @@ def _pass(
         tool_program=tool_program(pass_scene, true_path),
     )
     frames: list[tuple[Feature, FloatArray]] = []
-    parts = _steered(parts, fill, cad_seam, plan, frames)
+    parts = _steered(parts, fill, cad_seam, plan, frames, adapt, planner_name)
     build_s = time.perf_counter() - start
     start = time.perf_counter()
     result = run(parts, progress=progress, seed=c.simulation.seed)
@@ -290,16 +294,24 @@ def _steered(
     cad_seam: Seam,
     plan: PassPlan | None,
     frames: list[tuple[Feature, FloatArray]],
+    adapt: Any = None,
+    planner_name: str = "planner",
 ) -> Parts:
     """The parts with a sense function that records every frame's feature, moves the measured
     point by the plan's lateral offset there (station frame), and sets the tracker's speed
-    along the seam from the plan (and the planner's ``adapt``)."""
+    along the seam from the plan; ``adapt(groove_ahead, plan)`` (a planner's, optional) may
+    replace the speed and offset at the station the sensor sees, for when the torch gets
+    there."""
     sense = parts.sense
     tracker = parts.tracker
     T_sensor_tcp = np.linalg.inv(np.asarray(parts.robot.T_tcp_sensor, dtype=float))
     lateral = fill.T_world_station[:, :3, 1]
     s_stations = fill.s_mm
     set_speed = getattr(tracker, "set_speed", None)
+    adapted = np.full((len(s_stations), 2), np.nan)  # speed, offset per station
+
+    def station(s: float) -> int:
+        return min(int(np.searchsorted(s_stations, s)), len(s_stations) - 1)
 
     def steered(T_world_sensor: FloatArray, t_s: float, hint: Any = None) -> Feature:
         if hint is not None:
@@ -311,18 +323,45 @@ def _steered(
             return feature
         if feature:
             s = float(cad_seam.closest(feature.point_world[None]).arc_length_mm[0])
-            offset = float(plan.offset_at(s))
+            i = station(s)
+            if adapt is not None:
+                ahead = measured_groove(frames[-1:], fill, cad_seam)
+                if ahead is not None:
+                    adapted[i] = _adapted(adapt, ahead, plan, planner_name, t_s)
+            offset = adapted[i, 1] if np.isfinite(adapted[i, 1]) else float(plan.offset_at(s))
             if offset:
-                i = min(int(np.searchsorted(s_stations, s)), len(s_stations) - 1)
                 point = feature.point_world + offset * lateral[i]
                 feature = dataclasses.replace(feature, point_world=point)
         if set_speed is not None:
             tcp = (T_world_sensor @ T_sensor_tcp)[:3, 3]
             s_tcp = float(cad_seam.closest(tcp[None]).arc_length_mm[0])
-            set_speed(float(plan.speed_at(s_tcp)))
+            speed = adapted[station(s_tcp), 0]
+            set_speed(float(speed) if np.isfinite(speed) else float(plan.speed_at(s_tcp)))
         return feature
 
     return dataclasses.replace(parts, sense=steered)
+
+
+def _adapted(adapt: Any, ahead: MeasuredGroove, plan: PassPlan, name: str,
+             t_s: float) -> tuple[float, float]:  # fmt: skip
+    """A planner's ``adapt`` answer checked: (speed, offset), NaN where it keeps the plan."""
+    try:
+        answer = adapt(ahead, plan)
+    except Exception as exc:  # the user's planner may fail in any way
+        raise plugin_failed("planner.name", name, "adapt", t_s, exc) from exc
+    if answer is None:
+        return math.nan, math.nan
+    try:
+        speed, offset = (float(v) for v in answer)
+    except (TypeError, ValueError):
+        speed, offset = math.nan, math.inf
+    if not (math.isfinite(offset) and math.isfinite(speed) and speed > 0):
+        raise PluginRuntimeError(
+            f"{name!r} adapt() returned {answer!r} at t = {t_s:.6g} s",
+            field="planner.name",
+            fix="return (speed_mm_s > 0, offset_mm), or None to keep the plan",
+        )
+    return speed, offset
 
 
 def _laser_flipped(parts: Parts, fill: Any) -> bool:
