@@ -544,8 +544,9 @@ def checked_plan(
                      "a gantry, which cannot tilt its torch", "plan work_angle_rad = 0 on a "
                      "gantry, or weld on an arm (robot.model)")  # fmt: skip
     reference = {"left": LEFT_FOOT, "right": RIGHT_FOOT, "centre": MIDDLE}[plan.reference]
-    y = groove.points[:, reference, 0] + plan.offset_at(groove.s_mm)
-    lo, hi = groove.points[:, LEFT_TOP, 0], groove.points[:, RIGHT_TOP, 0]
+    # on the groove as measured, smoothed along the seam (one frame's outlier is not the groove)
+    y = _smooth(groove.points[:, reference, 0]) + plan.offset_at(groove.s_mm)
+    lo, hi = _smooth(groove.points[:, LEFT_TOP, 0]), _smooth(groove.points[:, RIGHT_TOP, 0])
     outside = np.flatnonzero((y < lo) | (y > hi))
     if len(outside):
         i = outside[0]
