@@ -173,3 +173,34 @@ def test_lay_bead_refuses_bad_input() -> None:
         lay_bead(FLAT, 0.0, -1.0, shape)
     with pytest.raises(SceneError, match="surface_yz"):
         lay_bead(FLAT[::-1], 0.0, 1.0, shape)
+
+
+def test_bead_held_at_a_ridge_keeps_its_area() -> None:
+    # A floor, a low ridge, then a deep pocket: a rising cap overflows the ridge with a jump in
+    # area; a bead whose area falls in the jump stays on its side (dammed), exact in area.
+    surface = np.array(
+        [
+            [-12, 10],
+            [-10, 10],
+            [-9.9, 0],
+            [2, 0],
+            [2.5, 1.0],
+            [3, 0.9],
+            [3.2, -5],
+            [6, -5],
+            [6.1, 10],
+            [12, 10],
+        ],
+        float,
+    )
+    shape = BeadShape("parabola", 3.0)
+    y = np.arange(-12.0, 12.0, 0.05)
+    z = np.interp(y, surface[:, 0], surface[:, 1])
+    dammed = []
+    for area in (10.0, 20.0, 30.0):
+        new = lay_bead(surface, -1.0, area, shape)
+        assert polygon_area_mm2(bead_polygon(surface, new)) == pytest.approx(area, rel=1e-6)
+        grid = lay_beads_on_grid(y, z[None], [-1.0], [area], shape)
+        assert np.trapezoid(grid.z_new[0] - z, y) == pytest.approx(area, rel=1e-6)
+        dammed.append(bool(grid.dammed[0]))
+    assert dammed == [False, True, False]

@@ -23,7 +23,14 @@ DOCS = Path(__file__).resolve().parents[1] / "docs"
 #: Pages whose Python blocks run here (in order, one namespace per page). Left out: cad.md
 #: (reads a STEP file of the user's), sweeps.md (starts a Dask cluster), views.md (renders with
 #: PyVista): their commands are covered by tests/test_cad.py, test_sweep.py and test_viz.py.
-RUN = ("mesh-mode.md", "camera.md", "weldments.md", "datasets.md", "extractors.md")
+RUN = (
+    "mesh-mode.md",
+    "camera.md",
+    "weldments.md",
+    "datasets.md",
+    "extractors.md",
+    "multipass-geometry.md",
+)
 
 
 def python_blocks(path: Path) -> list[str]:
@@ -147,3 +154,10 @@ def test_make_test_builds_the_site_with_warnings_as_errors() -> None:
         assert recipe and "$(DOCS_BUILD)" in recipe.group(1), target
     assert "site_dir: build/site" in (DOCS.parent / "mkdocs.yml").read_text()  # git-ignored
     assert "build/" in (DOCS.parent / ".gitignore").read_text().splitlines()
+
+
+def test_multipass_geometry_example_lays_a_bead_of_its_area(tmp_path: Path) -> None:
+    from seamtrack.workpiece.beads import bead_polygon, polygon_area_mm2
+
+    ns = _run_page("multipass-geometry.md", tmp_path)
+    assert polygon_area_mm2(bead_polygon(ns["first"], ns["second"])) == pytest.approx(24.4)

@@ -202,3 +202,93 @@ def test_new_cad_grooves_have_their_designed_sections(script, params, check) -> 
         np.testing.assert_allclose(width, gap + 2 * bevel, atol=0.06)
         np.testing.assert_allclose(state.remaining_area_mm2(), gap * 20 + bevel * 19, rtol=3e-3)
         assert width.max() - width.min() == pytest.approx(4.0, abs=0.1)
+
+
+def test_groove_points_of_a_partly_filled_v() -> None:
+    state = analytic_state()
+    path = straight_path()
+    state = state.deposit(path, np.full(len(path), 30.0), BeadShape())
+    every = state.all_groove_points()
+    assert every.shape == (state.n_stations, 7, 2)
+    np.testing.assert_allclose(every[7], state.groove_points(7))
+    pts = every[7]
+    # The bottom corners lie on the walls (z = (|y| - 1) / tan 30) where the bead's toes are,
+    # the bottom points on the bead (above the root), all in order left to right.
+    for corner in (pts[1], pts[5]):
+        assert corner[1] == pytest.approx((abs(corner[0]) - 1.0) / TAN30, abs=0.1)
+    assert np.all(np.diff(pts[:, 0]) >= 0)
+    assert np.all(pts[2:5, 1] > 1.0)
+    toes = state.beads[0].toes[7]
+    assert pts[1, 0] == pytest.approx(toes[0, 0], abs=0.06)
+    assert pts[5, 0] == pytest.approx(toes[1, 0], abs=0.06)
+
+
+def test_sections_of_a_curved_v_groove_keep_its_shape() -> None:
+    from seamtrack.workpiece.loader import load_workpiece
+
+    part = load_workpiece(
+        "cad/v_groove.py",
+        tolerance_mm=0.02,
+        plate_thickness_mm=20.0,
+        root_gap_mm=2.0,
+        path="arc",
+        arc_radius_mm=150.0,
+        seam_length_mm=60.0,
+    )
+    state = FillState.from_mesh(part.mesh, part.seam)
+    bevel = 19.0 * TAN30
+    np.testing.assert_allclose(state.top_corners[:, 0, 0], -1 - bevel, atol=0.03)
+    np.testing.assert_allclose(state.top_corners[:, 1, 0], 1 + bevel, atol=0.03)
+    np.testing.assert_allclose(state.remaining_area_mm2(), 2 * 20 + bevel * 19, rtol=5e-3)
+    path = part.seam.interpolate(np.linspace(0, part.seam.length_mm, 300)) + [0, 0, 15.0]
+    state = state.deposit(path, np.full(300, 24.0), BeadShape())
+    laid = laid_areas(state, 0)
+    assert laid == pytest.approx(24.0, rel=1e-6)
+    np.testing.assert_allclose(state.beads[0].y_centre_mm, 0.0, atol=0.01)
+
+
+def _sheet(state: FillState):
+    """The empty groove's top surface as a triangle sheet (a stand-in for the part's mesh)."""
+    import trimesh
+
+    m, k = state.base_z.shape
+    T = state.T_world_station
+    verts = (
+        T[:, None, :3, 3]
+        + T[:, None, :3, 1] * state.y_mm[None, :, None]
+        + T[:, None, :3, 2] * state.base_z[:, :, None]
+    ).reshape(-1, 3)
+    ii, kk = np.meshgrid(np.arange(m - 1), np.arange(k - 1), indexing="ij")
+    a = (ii * k + kk).ravel()
+    faces = np.concatenate(
+        [np.column_stack([a, a + k, a + 1]), np.column_stack([a + 1, a + k, a + k + 1])]
+    )
+    return trimesh.Trimesh(verts, faces, process=False)
+
+
+def test_sensor_rays_see_the_notch_a_bead_away_from_the_wall_leaves() -> None:
+    import trimesh
+
+    from seamtrack.sensing.raycast import RayCaster
+
+    s = np.arange(0.0, 10.0 + 1e-9, 0.5)
+    frames = np.tile(np.eye(4), (len(s), 1, 1))
+    frames[:, 0, 3] = s
+    y = np.arange(-15.0, 15.0 + 1e-9, 0.05)
+    z = np.clip((np.abs(y) - 6.0) / math.tan(math.radians(4)), 0.0, 25.0)
+    state = FillState.from_profiles(s, frames, y, np.repeat(z[None], len(s), 0))
+    path = straight_path(10.0)
+    state = state.deposit(path, np.full(len(path), 18.0), BeadShape(), offset_mm=0.0)
+    caster = RayCaster.from_mesh(trimesh.util.concatenate([_sheet(state), state.mesh()]))
+    i = 10
+    T = state.T_world_station[i]
+    ys = np.linspace(-7.5, 7.5, 151)
+    origins = T[:3, 3] + np.outer(ys, T[:3, 1]) + 40.0 * T[:3, 2]
+    hits = caster.first_hit(origins, np.repeat(-T[None, :3, 2], len(ys), axis=0))
+    z_hit = (hits.points - T[:3, 3]) @ T[:3, 2]
+    np.testing.assert_allclose(z_hit, np.interp(ys, y, state.surface_z[i]), atol=0.02)
+    toe = state.beads[0].toes[i, 0, 0]
+    notch = (ys > -6.0 + 0.1) & (ys < toe - 0.1)
+    assert notch.sum() >= 5
+    np.testing.assert_allclose(z_hit[notch], 0.0, atol=1e-3)  # the floor shows between wall and toe
+    assert z_hit[np.argmin(np.abs(ys))] > 2.0  # the bead's crown

@@ -326,6 +326,40 @@ def _solve_level(
     return level, lo
 
 
+def _solve_window(
+    terrain: FloatArray,
+    y: FloatArray,
+    jc: IntArray,
+    target: FloatArray,
+    level_lo: FloatArray,
+    level_hi: FloatArray,
+    exact_toes: bool,
+    active: NDArray[np.bool_],
+) -> tuple[FloatArray, IntArray, IntArray, FloatArray, NDArray[np.bool_]]:
+    """The apex level of each row's bead on a window of columns: (level, lo, hi, area, dammed)."""
+    m, k = terrain.shape
+    dy = np.diff(y)
+    none = np.full(m, -1, dtype=np.intp)
+    tol = AREA_RTOL * np.maximum(target, 1e-12)
+    level, below = _solve_level(
+        terrain, dy, jc, target, level_lo, level_hi, exact_toes, (none, none), active
+    )
+    area, lo, hi, _ = _level_area(level[:, None] - terrain, dy, jc, exact_toes, (none, none))
+    dammed = active & (np.abs(area - target) > tol)
+    if np.any(dammed):
+        # The area jumped where the cap overflowed a ridge: keep the run just below the jump.
+        _, lo_d, hi_d, _ = _level_area(below[:, None] - terrain, dy, jc, exact_toes, (none, none))
+        fixed = (np.where(dammed, lo_d, -1), np.where(dammed, hi_d, -1))
+        width = np.maximum(y[np.clip(hi_d, 0, k - 1)] - y[np.clip(lo_d, 0, k - 1)], 1e-3)
+        top = np.maximum(level, below + target / width)
+        level_d, _ = _solve_level(
+            terrain, dy, jc, target, below, top + 1e-6, exact_toes, fixed, dammed
+        )
+        level = np.where(dammed, level_d, level)
+        area, lo, hi, _ = _level_area(level[:, None] - terrain, dy, jc, exact_toes, fixed)
+    return level, lo, hi, area, dammed
+
+
 def lay_beads_on_grid(
     y_mm: ArrayLike,
     z_mm: ArrayLike,
@@ -367,23 +401,28 @@ def lay_beads_on_grid(
     none = np.full(m, -1, dtype=np.intp)
     level_lo = terrain[rows, jc].copy()
     level_hi = terrain.max(axis=1) + target / (y[-1] - y[0]) + 1e-6
-    tol = AREA_RTOL * np.maximum(target, 1e-12)
-    level, below = _solve_level(
-        terrain, dy, jc, target, level_lo, level_hi, exact_toes, (none, none), active
+    # A first guess of the upper bracket (apex 4 flat heights above the surface at the centre)
+    # bounds the columns the bead can reach: the solve runs on those only.
+    guess = level_lo + 4.0 * h
+    a_guess, lo_g, hi_g, _ = _level_area(guess[:, None] - terrain, dy, jc, exact_toes, (none, none))
+    enough = active & (a_guess >= target)
+    level_hi = np.where(enough, guess, level_hi)
+    first, last = 0, k - 1
+    if np.any(active) and np.all(enough | ~active):
+        first = max(int(lo_g[enough].min()) - 1, 0)
+        last = min(int(hi_g[enough].max()) + 1, k - 1)
+    win = slice(first, last + 1)
+    level, lo, hi, area, dammed = _solve_window(
+        terrain[:, win],
+        y[win],
+        np.clip(jc - first, 0, last - first),
+        target,
+        level_lo,
+        level_hi,
+        exact_toes,
+        active,
     )
-    area, lo, hi, _ = _level_area(level[:, None] - terrain, dy, jc, exact_toes, (none, none))
-    dammed = active & (np.abs(area - target) > tol)
-    if np.any(dammed):
-        # The area jumped where the cap overflowed a ridge: keep the run just below the jump.
-        _, lo_d, hi_d, _ = _level_area(below[:, None] - terrain, dy, jc, exact_toes, (none, none))
-        fixed = (np.where(dammed, lo_d, -1), np.where(dammed, hi_d, -1))
-        width = np.maximum(y[np.clip(hi_d, 0, k - 1)] - y[np.clip(lo_d, 0, k - 1)], 1e-3)
-        top = np.maximum(level, below + target / width)
-        level_d, _ = _solve_level(
-            terrain, dy, jc, target, below, top + 1e-6, exact_toes, fixed, dammed
-        )
-        level = np.where(dammed, level_d, level)
-        area, lo, hi, _ = _level_area(level[:, None] - terrain, dy, jc, exact_toes, fixed)
+    lo, hi = lo + first, hi + first
     lo = np.where(active, lo, k)
     hi = np.where(active, hi, -1)
     r = level[:, None] - terrain

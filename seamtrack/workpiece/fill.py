@@ -41,6 +41,14 @@ from scipy.spatial import cKDTree
 from seamtrack.errors import SceneError, WorkpieceError
 from seamtrack.geometry.seam import Seam
 from seamtrack.workpiece.beads import BeadShape, lay_beads_on_grid
+from seamtrack.workpiece.sections import (
+    COVERED_MM,
+    bottom_corners,
+    fill_gaps,
+    section_envelopes,
+    station_frames,
+    top_corners,
+)
 
 if TYPE_CHECKING:
     import trimesh
@@ -50,16 +58,12 @@ __all__ = ["FillState", "PassBeads", "section_envelopes"]
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
 
-#: Height (mm) below the plate top at which the groove's edge (top corner) starts.
-CORNER_DROP_MM = 0.05
-#: A wall is steeper than this (rad from horizontal); below it the walk down a wall stops.
-WALL_MIN_SLOPE_RAD = math.radians(40.0)
 #: Fill nodes next to a bead are sunk this far into the part (mm) to seal the mesh seam.
 SEAL_DEPTH_MM = 0.02
+#: The fill mesh keeps a grid node where a surface bends by more than this (mm, 2nd difference).
+MESH_KINK_MM = 1e-3
 #: Lateral margin (mm) of the station grid beyond the groove's top corners.
-GRID_MARGIN_MM = 8.0
-#: A surface node counts as covered where it lies this far (mm) above the empty groove.
-COVERED_MM = 1e-9
+GRID_MARGIN_MM = 12.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -105,146 +109,6 @@ class PassBeads:
         top = np.column_stack([y_mm[a : b + 1], self.z_after[i, a : b + 1]])
         bottom = np.column_stack([y_mm[a : b + 1], self.z_before[i, a : b + 1]])[::-1]
         return np.concatenate([top, bottom])
-
-
-def _station_frames(seam: Seam, s_mm: FloatArray) -> FloatArray:
-    """(m, 4, 4) station frames: x tangent, z torch normal, y = z x x, origin on the seam."""
-    knots = seam.arc_length_mm
-    tangents = np.column_stack([np.interp(s_mm, knots, seam.tangents[:, k]) for k in range(3)])
-    tangents /= np.linalg.norm(tangents, axis=1, keepdims=True)
-    normals = np.column_stack([np.interp(s_mm, knots, seam.normals[:, k]) for k in range(3)])
-    normals -= np.sum(normals * tangents, axis=1, keepdims=True) * tangents
-    normals /= np.linalg.norm(normals, axis=1, keepdims=True)
-    lateral = np.cross(normals, tangents)
-    frames = np.tile(np.eye(4), (len(s_mm), 1, 1))
-    frames[:, :3, 0], frames[:, :3, 1], frames[:, :3, 2] = tangents, lateral, normals
-    frames[:, :3, 3] = seam.interpolate(s_mm)
-    return frames
-
-
-def section_envelopes(
-    triangles: ArrayLike, T_world_station: ArrayLike, y_mm: ArrayLike, reach_mm: float
-) -> FloatArray:
-    """Upper envelopes of a triangle soup's sections by each station's plane, on a lateral grid.
-
-    Parameters
-    ----------
-    triangles : (F, 3, 3) float
-        The part's triangles (world, mm).
-    T_world_station : (m, 4, 4) float
-    y_mm : (K,) float
-        Lateral grid (station y).
-    reach_mm : float
-        Section segments farther than this from the station's origin are ignored (another part
-        of a curved seam's workpiece cut by the same plane).
-
-    Returns
-    -------
-    (m, K) float
-        The highest z of the section at each y (NaN where the plane meets no material).
-    """
-    tri = np.asarray(triangles, dtype=np.float64)
-    frames = np.asarray(T_world_station, dtype=np.float64)
-    y = np.asarray(y_mm, dtype=np.float64)
-    out = np.full((len(frames), len(y)), np.nan)
-    centroids = tri.mean(axis=1)
-    radius = np.linalg.norm(tri - centroids[:, None, :], axis=2).max(axis=1)
-    for i, T in enumerate(frames):
-        origin, axis_x, axis_y, axis_z = T[:3, 3], T[:3, 0], T[:3, 1], T[:3, 2]
-        near = np.linalg.norm(centroids - origin, axis=1) <= reach_mm + radius
-        d_c = (centroids[near] - origin) @ axis_x
-        cand = tri[near][np.abs(d_c) <= radius[near]]
-        if len(cand) == 0:
-            continue
-        d = (cand - origin) @ axis_x  # (f, 3) signed distances; 0 counts as in front
-        side = d >= 0
-        points = []
-        for a, b in ((0, 1), (1, 2), (2, 0)):
-            cross = side[:, a] != side[:, b]
-            t = np.where(cross, d[:, a] / np.where(cross, d[:, a] - d[:, b], 1.0), 0.0)
-            p = cand[:, a] + t[:, None] * (cand[:, b] - cand[:, a])
-            points.append((cross, p))
-        crossing = np.stack([c for c, _ in points], axis=1)  # (f, 3)
-        has = crossing.sum(axis=1) == 2
-        if not np.any(has):
-            continue
-        pts = np.stack([p for _, p in points], axis=1)[has]  # (f', 3 edges, 3)
-        first = np.argmax(crossing[has], axis=1)
-        second = 2 - np.argmax(crossing[has][:, ::-1], axis=1)
-        rows = np.arange(len(pts))
-        seg = np.stack([pts[rows, first], pts[rows, second]], axis=1) - origin  # (f', 2, 3)
-        sy, sz = seg @ axis_y, seg @ axis_z
-        keep = np.hypot(sy, sz).min(axis=1) <= reach_mm
-        sy, sz = sy[keep], sz[keep]
-        order = np.argsort(sy, axis=1)
-        sy, sz = np.take_along_axis(sy, order, 1), np.take_along_axis(sz, order, 1)
-        width = sy[:, 1] - sy[:, 0]
-        ok = width > 1e-12
-        sy, sz, width = sy[ok], sz[ok], width[ok]
-        inside = (y[None, :] >= sy[:, :1]) & (y[None, :] <= sy[:, 1:])
-        zz = sz[:, :1] + (y[None, :] - sy[:, :1]) * ((sz[:, 1] - sz[:, 0]) / width)[:, None]
-        env = np.where(inside, zz, -np.inf).max(axis=0, initial=-np.inf)
-        out[i] = np.where(np.isfinite(env), env, np.nan)
-    return out
-
-
-def _top_corners(y: FloatArray, z: FloatArray) -> tuple[FloatArray, FloatArray, IntArray]:
-    """Plate tops (m, 2), the groove's top corners (m, 2, 2) and their node index (m, 2)."""
-    m, k = z.shape
-    edge = max(3, k // 40)
-    plate = np.column_stack([np.median(z[:, :edge], axis=1), np.median(z[:, -edge:], axis=1)])
-    low_left = z < plate[:, :1] - CORNER_DROP_MM
-    low_right = z < plate[:, 1:] - CORNER_DROP_MM
-    if not np.all(low_left.any(axis=1)):
-        raise WorkpieceError(
-            "a station's section has no groove below the plates' top",
-            field="workpiece",
-            fix="check the seam lies in a groove, or widen half_width_mm",
-        )
-    j_left = np.argmax(low_left, axis=1)  # first node below the left plate
-    j_right = k - 1 - np.argmax(low_right[:, ::-1], axis=1)  # last node below the right plate
-    corners = np.empty((m, 2, 2))
-    rows = np.arange(m)
-    for side, j, step in ((0, j_left, 1), (1, j_right, -1)):
-        j1 = np.clip(j + step, 0, k - 1)
-        zj, zj1 = z[rows, j], z[rows, j1]
-        # Extend the wall line (nodes j, j+step) up to the plate's top.
-        dz = np.where(np.abs(zj1 - zj) > 1e-12, zj1 - zj, np.nan)
-        yc = y[j] + (plate[:, side] - zj) * (y[j1] - y[j]) / dz
-        j2 = np.clip(j - 2 * step, 0, k - 1)
-        lo_y = np.minimum(y[j2], y[j])
-        hi_y = np.maximum(y[j2], y[j])
-        yc = np.where(np.isfinite(yc), np.clip(yc, lo_y, hi_y), y[j - step])
-        corners[:, side, 0] = yc
-        corners[:, side, 1] = plate[:, side]
-    return plate, corners, np.column_stack([j_left - 1, j_right + 1])
-
-
-def _bottom_corners(
-    y: FloatArray, surface: FloatArray, base: FloatArray, top_idx: IntArray
-) -> IntArray:
-    """(m, 2) node index of the left and right bottom corners: the foot of the uncovered wall.
-
-    Walk from each top corner down the wall while the surface is the empty groove's (no bead)
-    and descends steeply; the last node of the walk is the corner.
-    """
-    k = surface.shape[1]
-    dz = np.diff(surface, axis=1)
-    dy = np.diff(y)
-    steep = np.tan(WALL_MIN_SLOPE_RAD)
-    uncovered = surface - base <= COVERED_MM
-    idx = np.arange(k - 1)
-    # Left wall: cell c (nodes c, c+1) descends to the right.
-    ok_left = (dz < 0) & (-dz / dy >= steep) & uncovered[:, :-1] & uncovered[:, 1:]
-    stop_left = ~ok_left & (idx >= top_idx[:, :1])
-    first_stop = np.where(stop_left, idx, k - 1).min(axis=1)
-    left = np.maximum(first_stop, top_idx[:, 0])
-    ok_right = (dz > 0) & (dz / dy >= steep) & uncovered[:, :-1] & uncovered[:, 1:]
-    stop_right = ~ok_right & (idx + 1 <= top_idx[:, 1:])
-    last_stop = np.where(stop_right, idx + 1, 0).max(axis=1)
-    right = np.minimum(last_stop, top_idx[:, 1])
-    right = np.maximum(right, left)
-    return np.column_stack([left, right])
 
 
 @dataclass(frozen=True, eq=False)
@@ -305,8 +169,8 @@ class FillState:
             raise WorkpieceError(
                 "sections must be finite on a strictly increasing lateral grid", field="fill"
             )
-        plate, corners, top_idx = _top_corners(y, z)
-        bottom = _bottom_corners(y, z, z, top_idx)
+        plate, corners, top_idx = top_corners(y, z)
+        bottom = bottom_corners(y, z, z, top_idx)
         return cls(s, frames, y, z, z, (), plate, corners, top_idx, bottom)
 
     @classmethod
@@ -329,7 +193,8 @@ class FillState:
         spacing_mm : float
             Station spacing, in (0, 0.5] (the last station sits at the seam's end).
         half_width_mm : float, optional
-            Half the lateral grid's width; default the groove's top half-width + 8 mm.
+            Half the lateral grid's width; default the groove's top half-width plus
+            :data:`GRID_MARGIN_MM` (room for cap beads spreading onto the plates).
         lateral_step_mm : float
             The lateral grid's step (mm).
         """
@@ -343,29 +208,23 @@ class FillState:
         length = seam.length_mm
         n = max(2, math.ceil(length / spacing_mm) + 1)
         s = np.linspace(0.0, length, n)
-        # Keep the end stations a hair inside the part: its end faces lie in their planes.
-        s[0], s[-1] = min(1e-3, length / 4), max(length - 1e-3, 3 * length / 4)
-        frames = _station_frames(seam, s)
+        # Keep the end stations inside the part: its end faces lie in their planes, and a
+        # polyline seam's end tangent (a chord's) tilts the plane out of a curved part's end.
+        inset = min(spacing_mm / 2, length / 4)
+        s[0], s[-1] = inset, length - inset
+        frames = station_frames(seam, s)
         tri = np.asarray(mesh.triangles, dtype=np.float64)
         if half_width_mm is None:
             probe_y = np.arange(-60.0, 60.0 + 1e-9, 0.25)
-            probes = frames[np.unique(np.linspace(0, n - 1, 7).astype(int))]
-            env = section_envelopes(tri, probes, probe_y, 90.0)
-            finite = np.isfinite(env)
-            if not np.all(finite.any(axis=1)):
-                _fill_gaps(env, "workpiece")  # raises
-            # Keep the span where every probe finds material at both ends (the plates).
-            first = np.argmax(finite, axis=1).max()
-            last = len(probe_y) - 1 - np.argmax(finite[:, ::-1], axis=1).max()
-            span = slice(first, last + 1)
-            _, corners, _ = _top_corners(probe_y[span], _fill_gaps(env[:, span], "workpiece"))
-            reach = min(-probe_y[first], probe_y[last])
-            half_width_mm = min(float(np.abs(corners[:, :, 0]).max()) + GRID_MARGIN_MM, reach)
+            probes = frames[np.unique(np.linspace(0, n - 1, 9).astype(int))[1:-1]]
+            env = fill_gaps(section_envelopes(tri, probes, probe_y, 90.0), "workpiece")
+            _, corners, _ = top_corners(probe_y, env)
+            half_width_mm = float(np.abs(corners[:, :, 0]).max()) + GRID_MARGIN_MM
         half = float(half_width_mm)
         steps = math.ceil(half / lateral_step_mm)
         y = np.linspace(-steps * lateral_step_mm, steps * lateral_step_mm, 2 * steps + 1)
         env = section_envelopes(tri, frames, y, math.hypot(half, half) + 30.0)
-        return cls.from_profiles(s, frames, y, _fill_gaps(env, "workpiece"))
+        return cls.from_profiles(s, frames, y, fill_gaps(env, "workpiece"))
 
     # ------------------------------------------------------------------ views of the state
     @property
@@ -395,17 +254,30 @@ class FillState:
 
         Left top corner, left bottom corner (the foot of the uncovered left wall, where it meets
         the fill or the root), the fill surface (or root) at 1/4, 1/2 and 3/4 of the way between
-        the bottom corners, right bottom corner, right top corner.
+        the bottom corners, right bottom corner, right top corner. Bottom points are grid nodes
+        (within ``lateral_step_mm`` of the true corner).
         """
-        i = int(i)
-        z = self.surface_z[i]
-        bottom = _bottom_corners(self.y_mm, z[None], self.base_z[i][None], self.top_index[i][None])
-        left = np.array([self.y_mm[bottom[0, 0]], z[bottom[0, 0]]])
-        right = np.array([self.y_mm[bottom[0, 1]], z[bottom[0, 1]]])
-        ys = left[0] + (right[0] - left[0]) * np.array([0.25, 0.5, 0.75])
-        middle = np.column_stack([ys, np.interp(ys, self.y_mm, z)])
-        corners = self.top_corners[i]
-        return np.vstack([corners[0], left, middle, right, corners[1]])
+        return self.all_groove_points(np.array([int(i)]))[0]
+
+    def all_groove_points(self, stations: ArrayLike | None = None) -> FloatArray:
+        """(m', 7, 2) :meth:`groove_points` at several stations at once (default all)."""
+        idx = np.arange(self.n_stations) if stations is None else np.asarray(stations, np.intp)
+        z = self.surface_z[idx]
+        bottom = bottom_corners(self.y_mm, z, self.base_z[idx], self.top_index[idx])
+        rows = np.arange(len(idx))
+        y_left, y_right = self.y_mm[bottom[:, 0]], self.y_mm[bottom[:, 1]]
+        frac = np.array([0.0, 0.25, 0.5, 0.75, 1.0])
+        ys = y_left[:, None] + (y_right - y_left)[:, None] * frac
+        # Piecewise-linear surface at ys (rows differ): interpolate on the shared grid.
+        j = np.clip(np.searchsorted(self.y_mm, ys) - 1, 0, len(self.y_mm) - 2)
+        y0, y1 = self.y_mm[j], self.y_mm[j + 1]
+        t = (ys - y0) / (y1 - y0)
+        zs = z[rows[:, None], j] * (1 - t) + z[rows[:, None], j + 1] * t
+        zs[:, 0], zs[:, -1] = z[rows, bottom[:, 0]], z[rows, bottom[:, 1]]
+        out = np.empty((len(idx), 7, 2))
+        out[:, 0], out[:, 6] = self.top_corners[idx, 0], self.top_corners[idx, 1]
+        out[:, 1:6, 0], out[:, 1:6, 1] = ys, zs
+        return out
 
     def _top_line(self) -> tuple[FloatArray, NDArray[np.bool_]]:
         """z of the line joining the top corners on the grid (m, K), and the nodes between."""
@@ -530,34 +402,64 @@ class FillState:
 
     def _margins(self, toes: FloatArray) -> FloatArray:
         """(m, 2) each toe's lateral distance from the empty groove's wall at the toe's height."""
-        m = self.n_stations
+        y, base = self.y_mm, self.base_z
+        m, k = base.shape
+        rows = np.arange(m)
+        idx = np.arange(k)
         out = np.full((m, 2), np.nan)
-        for i in np.flatnonzero(np.isfinite(toes[:, 0, 0])):
-            top_l, top_r = self.top_index[i]
-            bot_l, bot_r = self.base_bottom[i]
-            zb = self.base_z[i]
-            # Left wall: nodes top_l..bot_l, z falling as y rises; interp wants z ascending.
-            wy, wz = self.y_mm[top_l : bot_l + 1][::-1], zb[top_l : bot_l + 1][::-1]
-            out[i, 0] = toes[i, 0, 0] - np.interp(toes[i, 0, 1], wz, wy)
-            wy, wz = self.y_mm[bot_r : top_r + 1], zb[bot_r : top_r + 1]
-            out[i, 1] = np.interp(toes[i, 1, 1], wz, wy) - toes[i, 1, 0]
+        laid = np.isfinite(toes[:, 0, 0])
+        for side in (0, 1):
+            top, foot = self.top_index[:, side], self.base_bottom[:, side]
+            z_toe = np.where(laid, toes[:, side, 1], 0.0)
+            # Walk down the wall from the top corner: the first node at or below the toe's height.
+            if side == 0:
+                on_wall = (idx >= top[:, None]) & (idx <= foot[:, None])
+                below = on_wall & (base <= z_toe[:, None])
+                j = np.where(below.any(axis=1), np.argmax(below, axis=1), foot)
+                j_prev = np.clip(j - 1, 0, k - 1)
+            else:
+                on_wall = (idx <= top[:, None]) & (idx >= foot[:, None])
+                below = on_wall & (base <= z_toe[:, None])
+                j = np.where(below.any(axis=1), k - 1 - np.argmax(below[:, ::-1], axis=1), foot)
+                j_prev = np.clip(j + 1, 0, k - 1)
+            z_j, z_p = base[rows, j], base[rows, j_prev]
+            drop = z_p - z_j
+            t = np.where(drop > 0, np.clip((z_p - z_toe) / np.where(drop > 0, drop, 1), 0, 1), 1)
+            y_wall = y[j_prev] + t * (y[j] - y[j_prev])
+            gap = toes[:, side, 0] - y_wall if side == 0 else y_wall - toes[:, side, 0]
+            out[:, side] = np.where(laid, gap, np.nan)
         return np.where(out < 1e-6, np.minimum(out, 0.0), out)
 
     # ------------------------------------------------------------------ mesh
-    def mesh(self) -> trimesh.Trimesh:
+    def mesh(self, stride: int = 4) -> trimesh.Trimesh:
         """The fill's top surface where beads lie (world frame), to join to the part's mesh.
 
         Triangles between consecutive stations over the covered grid nodes, one node wider on
-        each side (those nodes sunk :data:`SEAL_DEPTH_MM` into the part). Empty without beads.
+        each side (those nodes sunk :data:`SEAL_DEPTH_MM` into the part). Laterally every
+        ``stride``-th grid node is kept, plus every node where some station's surface bends by
+        more than :data:`MESH_KINK_MM` (toes, wall contacts, bead valleys), so the mesh stays
+        within about that of the state's surface with a fraction of the triangles. Empty without
+        beads. ``vertex_attributes["pass"]`` holds each vertex's top pass (-1: none).
         """
         import trimesh
 
-        m, k = self.surface_z.shape
-        covered = self.surface_z - self.base_z > COVERED_MM
-        grown = covered.copy()
-        grown[:, 1:] |= covered[:, :-1]
-        grown[:, :-1] |= covered[:, 1:]
-        z = np.where(covered, self.surface_z, self.base_z - SEAL_DEPTH_MM)
+        m, k_full = self.surface_z.shape
+        covered_full = self.surface_z - self.base_z > COVERED_MM
+        bend = np.abs(np.diff(self.surface_z, n=2, axis=1)) > MESH_KINK_MM
+        keep = np.zeros(k_full, dtype=bool)
+        keep[:: max(int(stride), 1)] = True
+        keep[[0, -1]] = True
+        keep[1:-1] |= bend.any(axis=0)
+        cols_kept = np.flatnonzero(keep)
+        # A kept node is next to the fill if any node up to its kept neighbours is covered.
+        run = np.concatenate([np.zeros((m, 1), np.intp), np.cumsum(covered_full, axis=1)], 1)
+        left = np.concatenate([[0], cols_kept[:-1]])
+        right = np.concatenate([cols_kept[1:] + 1, [k_full]])
+        near = (run[:, right] - run[:, left]) > 0
+        covered = covered_full[:, cols_kept]
+        k = len(cols_kept)
+        grown = covered | near
+        z = np.where(covered_full, self.surface_z, self.base_z - SEAL_DEPTH_MM)[:, cols_kept]
         cell = grown[:-1, :-1] & grown[:-1, 1:] & grown[1:, :-1] & grown[1:, 1:]
         cell &= covered[:-1, :-1] | covered[:-1, 1:] | covered[1:, :-1] | covered[1:, 1:]
         if not np.any(cell):
@@ -573,18 +475,15 @@ class FillState:
         remap[used] = np.arange(len(used))
         rows, cols = np.divmod(used, k)
         T = self.T_world_station[rows]
-        local = np.column_stack([self.y_mm[cols], z[rows, cols]])
+        local = np.column_stack([self.y_mm[cols_kept[cols]], z[rows, cols]])
         verts = T[:, :3, 3] + T[:, :3, 1] * local[:, :1] + T[:, :3, 2] * local[:, 1:]
-        return trimesh.Trimesh(verts, remap[faces], process=False)
+        out = trimesh.Trimesh(verts, remap[faces], process=False)
+        out.vertex_attributes["pass"] = self.top_pass()[rows, cols_kept[cols]]
+        return out
 
-
-def _fill_gaps(env: FloatArray, field_name: str) -> FloatArray:
-    """Fill a section's NaN nodes (no material under them) with the section's lowest z."""
-    if np.all(np.isnan(env), axis=1).any():
-        raise WorkpieceError(
-            "a station's plane misses the part",
-            field=field_name,
-            fix="check the seam lies on the part (its normals point out of the groove)",
-        )
-    low = np.nanmin(env, axis=1, keepdims=True)
-    return np.where(np.isnan(env), low, env)
+    def top_pass(self) -> IntArray:
+        """(m, K) the index of the pass whose bead forms the surface at each node (-1: none)."""
+        top = np.full(self.surface_z.shape, -1, dtype=np.intp)
+        for p, bead in enumerate(self.beads):
+            top = np.where(bead.z_after - bead.z_before > COVERED_MM, p, top)
+        return top

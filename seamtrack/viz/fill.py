@@ -1,0 +1,183 @@
+"""Views of a multi-pass fill: a cross-section of the beads, the filled part in 3D, a GIF.
+
+- :func:`draw_fill_section` / :func:`plot_fill_section`: the groove's cross-section at one
+  station, the parent metal in grey and each pass's bead as a polygon coloured by pass
+  (matplotlib, Agg backend, imported only when a plot is made).
+- :func:`fill_plotter` / :func:`render_fill_png`: the part with its fill in 3D (PyVista, off
+  screen when there is no display), the fill's top surface coloured by the pass that forms it.
+- :func:`animate_fill`: a GIF of the groove filling at one station, one frame per pass.
+
+Every view takes a :class:`seamtrack.workpiece.fill.FillState`; the beads of pass ``p`` are the
+state's ``beads[p]``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from seamtrack.viz.plots import _pyplot, _save
+from seamtrack.viz.run import _gif_writer
+from seamtrack.viz.sensor_view import _pyvista
+from seamtrack.viz.views import _off_screen
+from seamtrack.workpiece.fill import FillState
+
+__all__ = [
+    "animate_fill",
+    "draw_fill_section",
+    "fill_plotter",
+    "pass_colors",
+    "plot_fill_section",
+    "render_fill_png",
+]
+
+#: The parent metal's colour in the cross-section.
+PLATE_COLOR = "#b0b4b8"
+
+
+def pass_colors(n_passes: int) -> list[tuple[float, float, float, float]]:
+    """One RGBA colour per pass (matplotlib's ``viridis``, first pass dark)."""
+    plt = _pyplot()
+    cmap = plt.get_cmap("viridis")
+    return [cmap(x) for x in np.linspace(0.0, 0.95, max(n_passes, 1))][:n_passes]
+
+
+def draw_fill_section(
+    ax: Any, state: FillState, station: int, *, passes: int | None = None, legend: bool = True
+) -> list[Any]:
+    """Draw the cross-section at ``station``: the plates and the first ``passes`` beads.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+    state : FillState
+    station : int
+        Station index (``state.s_mm[station]`` is its arc length).
+    passes : int, optional
+        How many passes to draw (default all).
+
+    Returns
+    -------
+    list of matplotlib.patches.Polygon
+        One per pass drawn with a bead at this station, in pass order (their ``get_xy()`` is
+        the bead's polygon (y, z) in mm).
+    """
+    from matplotlib.patches import Polygon
+
+    i = int(station)
+    n = state.n_passes if passes is None else min(int(passes), state.n_passes)
+    y, base = state.y_mm, state.base_z[i]
+    floor = base.min() - 3.0
+    ax.fill_between(y, floor, base, color=PLATE_COLOR, lw=0, label="parent metal")
+    colors = pass_colors(state.n_passes)
+    patches = []
+    for p in range(n):
+        polygon = state.beads[p].polygon(y, i)
+        if len(polygon) == 0:
+            continue
+        patch = Polygon(polygon, closed=True, fc=colors[p], ec="k", lw=0.4, label=f"pass {p + 1}")
+        ax.add_patch(patch)
+        patches.append(patch)
+    top = state.beads[n - 1].z_after[i] if n else base
+    ax.plot(y, top, color="k", lw=0.8)
+    pts = state.groove_points(i) if n == state.n_passes else None
+    if pts is not None:
+        ax.plot(pts[:, 0], pts[:, 1], "o", ms=3, color="tab:red", label="7 groove points")
+    ax.set_aspect("equal")
+    ax.set_xlim(y[0], y[-1])
+    ax.set_ylim(floor, max(state.plate_top[i].max(), float(top.max())) + 2.0)
+    ax.set_xlabel("lateral y (mm)")
+    ax.set_ylabel("z (mm)")
+    ax.set_title(f"s = {state.s_mm[i]:.1f} mm, {n} pass(es)")
+    if legend and patches:
+        ax.legend(loc="upper right", fontsize=7, ncol=2)
+    return patches
+
+
+def plot_fill_section(
+    state: FillState, station: int, path: str | Path, *, passes: int | None = None
+) -> Path:
+    """PNG of :func:`draw_fill_section` at ``station``; returns the path written."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    draw_fill_section(ax, state, station, passes=passes)
+    fig.tight_layout()
+    return _save(fig, path)
+
+
+def animate_fill(state: FillState, station: int, path: str | Path, *, fps: float = 2.0) -> Path:
+    """GIF of the groove filling at ``station``: frame ``p`` shows passes 1..p+1.
+
+    One frame per pass (``state.n_passes`` frames; at least one, the empty groove, when no
+    pass was laid). Returns the path written (its folder is created).
+    """
+    plt = _pyplot()
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    append, finish = _gif_writer(out, fps)
+    fig, ax = plt.subplots(figsize=(6, 4))
+    try:
+        for p in range(1, state.n_passes + 1) if state.n_passes else [0]:
+            ax.clear()
+            draw_fill_section(ax, state, station, passes=p, legend=False)
+            fig.tight_layout()
+            fig.canvas.draw()
+            append(np.asarray(fig.canvas.buffer_rgba())[..., :3].copy())
+    finally:
+        plt.close(fig)
+    finish()
+    return out
+
+
+def fill_plotter(
+    state: FillState,
+    part_mesh: Any,
+    *,
+    off_screen: bool | None = None,
+    window_size: tuple[int, int] = (1000, 700),
+) -> Any:
+    """A PyVista plotter of the part (grey) and its fill coloured by pass.
+
+    The fill's mesh is ``state.mesh()`` (its ``pass`` vertex attribute the colour); the camera
+    looks down the groove from above its start.
+    """
+    pv = _pyvista()
+    plotter = pv.Plotter(off_screen=_off_screen(off_screen), window_size=list(window_size))
+    plotter.add_mesh(pv.wrap(part_mesh), color=PLATE_COLOR, name="part")
+    fill = state.mesh()
+    if len(fill.faces):
+        poly = pv.wrap(fill)
+        poly.point_data["pass"] = np.asarray(fill.vertex_attributes["pass"]) + 1
+        plotter.add_mesh(
+            poly,
+            scalars="pass",
+            cmap="viridis",
+            clim=[1, max(state.n_passes, 2)],
+            name="fill",
+            scalar_bar_args={"title": "pass"},
+        )
+    T0 = state.T_world_station[0]
+    centre = state.T_world_station[len(state.s_mm) // 2, :3, 3]
+    eye = T0[:3, 3] - 60.0 * T0[:3, 0] + 80.0 * T0[:3, 2] + 30.0 * T0[:3, 1]
+    plotter.camera_position = [tuple(eye), tuple(centre), tuple(T0[:3, 2])]
+    return plotter
+
+
+def render_fill_png(
+    state: FillState,
+    part_mesh: Any,
+    path: str | Path,
+    *,
+    window_size: tuple[int, int] = (1000, 700),
+) -> Path:
+    """Render :func:`fill_plotter` off screen to a PNG; returns the path written."""
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    plotter = fill_plotter(state, part_mesh, off_screen=True, window_size=window_size)
+    try:
+        plotter.screenshot(str(out))
+    finally:
+        plotter.close()
+    return out
