@@ -9,6 +9,8 @@ import numpy as np
 import pytest
 
 from seamtrack.control.planner import (
+    CAP_BAND_FRACTION,
+    CAP_OVERLAP_MM,
     AdaptivePlanner,
     FixedPlanner,
     JobState,
@@ -58,15 +60,25 @@ def test_layout_beads_per_layer_from_areas() -> None:
     plan = layout(g, state)
     fill_area, top = g.area_mm2[0], g.top_width_mm[0]
     bead = PROCESS.bead_area_mm2(5.0)
+    crown = cap_area_mm2(top, state.reinforcement_mm)
+    # the fill stops a fraction of a bead's height below the top; the cap fills the band and
+    # lays the crown, in beads that cover the width (plus the overlap) every 0.7 bead widths,
+    # none smaller than the fastest travel speed lays
+    band = CAP_BAND_FRACTION * PROCESS.bead_height_mm(bead) * top
     cap = plan.beads_per_layer[-1]
-    # the cap covers the top width with a bead every 0.7 bead widths
-    assert cap == math.ceil(top / (0.7 * PROCESS.bead_width_mm(bead)))
-    fill_total = fill_area + cap_area_mm2(top, state.reinforcement_mm) - cap * bead
+    assert plan.cap_bead_area_mm2 * cap == pytest.approx(band + crown)
+    covers = (top + 2 * CAP_OVERLAP_MM) / cap <= 0.7 * PROCESS.bead_width_mm(plan.cap_bead_area_mm2)
+    assert covers or plan.cap_bead_area_mm2 < 2 * PROCESS.bead_area_mm2(15.0)
+    assert plan.cap_bead_area_mm2 >= PROCESS.bead_area_mm2(15.0)
     layers = len(plan.beads_per_layer) - 1
+    assert layers == round((g.depth_mm[0] * (fill_area - band) / fill_area)
+                           / PROCESS.bead_height_mm(bead))  # fmt: skip
     for n in plan.beads_per_layer[:-1]:  # equal-area layers, round(layer / bead) >= 1
-        assert n == max(1, round(fill_total / layers / bead))
-    assert plan.fill_bead_area_mm2 * sum(plan.beads_per_layer[:-1]) == pytest.approx(fill_total)
-    assert 8 <= plan.passes <= 16  # a 20 mm, 60 deg V: about a dozen passes
+        assert n == max(1, round((fill_area - band) / layers / bead))
+    assert plan.fill_bead_area_mm2 * sum(plan.beads_per_layer[:-1]) == pytest.approx(
+        fill_area - band
+    )
+    assert 10 <= plan.passes <= 18  # a 20 mm plate, 60 deg: about a dozen passes or so
 
 
 @pytest.mark.parametrize("count", [1, 5, 12, 20])
@@ -86,8 +98,8 @@ def test_fill_order_is_corners_first() -> None:
 def test_passes_walls_first_then_middle_then_cap_side_to_side(wall_reference: bool) -> None:
     g = groove(np.full(3, 2.0))
     p = AdaptivePlanner(wall_reference=wall_reference)
-    state = JobState(PROCESS, count=16)
-    plans = [p.plan(g, i, state) for i in range(17)]
+    state = JobState(PROCESS, count=24)
+    plans = [p.plan(g, i, state) for i in range(25)]
     assert plans[-1] is None
     by_layer: dict[int, list[PassPlan]] = {}
     for x in plans[:-1]:

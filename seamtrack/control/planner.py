@@ -39,6 +39,13 @@ SHAPE_FILL = {"parabola": 2.0 / 3.0, "cosine": 2.0 / math.pi, "arc": 2.0 / 3.0}
 
 REFERENCES = ("left", "right", "centre")
 
+#: The cap's outer beads reach this far (mm) beyond the groove's top corners (a cap overlaps
+#: the plates' edges, so no notch is left at the corner).
+CAP_OVERLAP_MM = 1.0
+#: The fill stops this fraction of a bead's height below the plates' top line: the cap fills
+#: that band between its beads' overlaps and lays the crown.
+CAP_BAND_FRACTION = 0.3
+
 # Indices of the 7 groove points.
 LEFT_TOP, LEFT_FOOT, MIDDLE, RIGHT_FOOT, RIGHT_TOP = 0, 1, 3, 5, 6
 
@@ -259,13 +266,14 @@ def cap_area_mm2(top_width_mm: Any, reinforcement_mm: float) -> Any:
 def layout(groove: MeasuredGroove, state: JobState) -> Layout:
     """Equal-area fill layers and a cap, for the groove's median section.
 
-    The cap takes as many beads side to side as cover the top width with a bead every 0.7 bead
-    widths; what the cap beads do not hold of the groove plus the crown
-    (:func:`cap_area_mm2`) is the fill, split into as many equal-area layers as its depth holds
-    beads of the process's height, each with ``round(layer area / bead area)`` (>= 1) beads.
-    The bead area is the process's at its nominal speed, or, with ``state.count``, the one that
-    makes the plan hold that many passes (the largest remainder decides which layers take the
-    rounding).
+    The fill stops :data:`CAP_BAND_FRACTION` of a bead's height below the plates' top line;
+    that band and the crown (:func:`cap_area_mm2`) are the cap's, laid in equal beads side to
+    side, as many as cover the top width and :data:`CAP_OVERLAP_MM` beyond each corner with a
+    bead every 0.7 bead widths (none smaller than the fastest travel speed lays). The fill is
+    split into as many equal-area layers as its depth holds beads of the process's height,
+    each with ``round(layer area / bead area)`` (>= 1) beads. The bead area is the process's
+    at its nominal speed, or, with ``state.count``, the one that makes the plan hold that many
+    passes (the largest remainder decides which layers take the rounding).
     """
     p = state.process
     fill_area = float(np.median(groove.area_mm2))
@@ -282,10 +290,23 @@ def layout(groove: MeasuredGroove, state: JobState) -> Layout:
     bead = float(p.bead_area_mm2(p.nominal_speed_mm_s))
     if state.count is not None:
         bead = total / state.count
-    cap_beads = max(1, math.ceil(top / (0.7 * p.bead_width_mm(bead))))
+    cap_beads = max(1, math.ceil((top + 2 * CAP_OVERLAP_MM) / (0.7 * p.bead_width_mm(bead))))
     if state.count is not None:
         cap_beads = min(cap_beads, state.count)
-    fill_total = total - cap_beads * bead
+    # The fill stops CAP_BAND_FRACTION of a bead's height below the plates' top line; the cap
+    # fills that band and lays the crown.
+    band = min(CAP_BAND_FRACTION * p.bead_height_mm(bead) * top, fill_area)
+    fill_total = fill_area - band
+    cap_bead = (band + total - fill_area) / cap_beads
+    for _ in range(5):  # the cap's beads as many as cover the width at their own size
+        if state.count is not None:
+            break
+        n = max(1, math.ceil((top + 2 * CAP_OVERLAP_MM) / (0.7 * p.bead_width_mm(cap_bead))))
+        # no bead smaller than the fastest travel speed lays
+        n = min(n, max(1, int((band + total - fill_area) / p.bead_area_mm2(p.speed_max_mm_s))))
+        if n == cap_beads:
+            break
+        cap_beads, cap_bead = n, (band + total - fill_area) / n
     if fill_total < 0.5 * bead or (state.count is not None and cap_beads == state.count):
         n = state.count if state.count is not None else max(1, round(total / bead))
         return Layout((n,), 0.0, total / n)
@@ -301,7 +322,7 @@ def layout(groove: MeasuredGroove, state: JobState) -> Layout:
         counts = [int(n) for n in per_layer]
     else:
         counts = [max(1, round(fill_total / layers / bead))] * layers
-    return Layout((*counts, cap_beads), fill_total / sum(counts), bead)
+    return Layout((*counts, cap_beads), fill_total / sum(counts), cap_bead)
 
 
 class AdaptivePlanner:
@@ -341,12 +362,12 @@ class AdaptivePlanner:
         self.adapt_speed = adapt_speed
         self.wall_reference = wall_reference
         self.layout: Layout | None = None
-        self._speed: float | None = None
+        self._cap: tuple[FloatArray, FloatArray] | None = None  # (s, bead area) of the cap
 
     def plan(self, groove: MeasuredGroove, pass_index: int, state: JobState) -> PassPlan | None:
         if self.layout is None or pass_index == 0:
             self.layout = layout(groove, state)
-            self._speed = None
+            self._cap = None
         where = self.layout.locate(pass_index)
         if where is None:
             return None
@@ -362,8 +383,11 @@ class AdaptivePlanner:
             remaining = remaining - np.asarray(state.last_bead_area_mm2, dtype=float)
         left = self.layout.beads_after(pass_index, cap)
         crown = cap_area_mm2(groove.top_width_mm, state.reinforcement_mm)
-        if cap:  # the rest of the groove and the crown, over the cap beads left
-            target = (np.maximum(remaining, 0.0) + crown) / max(left, 1)
+        if cap:  # the groove left and the crown, in equal beads (set at the first cap bead)
+            if self._cap is None:
+                share = (np.maximum(remaining, 0.0) + crown) / max(left, 1)
+                self._cap = (groove.s_mm.copy(), share)
+            target = np.interp(groove.s_mm, *self._cap)
         else:  # what the cap will not hold, over the fill beads left
             cap_beads = self.layout.beads_per_layer[-1]
             band = cap_beads * self.layout.cap_bead_area_mm2 - crown
@@ -388,8 +412,9 @@ class AdaptivePlanner:
         in n equal slots of the fill surface's width, the wall slots first."""
         pts = groove.points
         middle = _smooth(pts[:, MIDDLE, 0])
-        if cap:
-            left, width = _smooth(pts[:, LEFT_TOP, 0]), _smooth(groove.top_width_mm)
+        if cap:  # over the top width and CAP_OVERLAP_MM beyond each top corner
+            left = _smooth(pts[:, LEFT_TOP, 0]) - CAP_OVERLAP_MM
+            width = _smooth(groove.top_width_mm) + 2 * CAP_OVERLAP_MM
             return "centre", left + (rank + 0.5) * width / n - middle
         if n == 1:
             return "centre", np.zeros(len(groove))

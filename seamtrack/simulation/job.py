@@ -202,6 +202,30 @@ def run_job(
     return JobResult(summary, records, fill)
 
 
+def dry_run(
+    fill: Any, plan_maker: Any, state: JobState, shape: Any, max_passes: int = 200
+) -> tuple[Any, list[PassPlan]]:
+    """The plan laid with perfect tracking and the true groove as the measurement: each bead
+    along its true pass path (:func:`pass_path`) at the planned speed there. What a planner
+    achieves by itself, without the sensor's and the tracker's errors (a planner's tests, and
+    a quick look at a plan before a job)."""
+    seam = Seam.from_points(fill.T_world_station[:, :3, 3], field="passes", name="stations")
+    plans: list[PassPlan] = []
+    for index in range(max_passes):
+        groove = _true_groove(fill)
+        plan = checked_plan(plan_maker.plan(groove, index, state), "planner", index, groove,
+                            gantry=False)  # fmt: skip
+        if plan is None:
+            break
+        path = pass_path(fill, plan.reference, plan)
+        s = seam.closest(path.points).arc_length_mm
+        area = state.process.bead_area_mm2(plan.speed_at(s), plan.wire_feed_mm_s)
+        fill = fill.deposit(path.points, np.asarray(area, dtype=float), shape)
+        plans.append(plan)
+        state.done.append(plan)
+    return fill, plans
+
+
 @dataclass(frozen=True, eq=False)
 class _Done:
     record: PassRecord
