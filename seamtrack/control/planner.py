@@ -212,7 +212,7 @@ class JobState:
 
     process: Process
     count: int | None = None
-    reinforcement_mm: float = 1.5
+    reinforcement_mm: float = 2.0
     done: list[PassPlan] = field(default_factory=list)
     last_bead_area_mm2: FloatArray | None = None
 

@@ -273,7 +273,7 @@ class PassesConfig(_Section):
 
     count: int | str = "auto"
     scan_first: Flag = True
-    reinforcement_mm: Annotated[float, Field(ge=0, le=10, allow_inf_nan=False, strict=True)] = 1.5
+    reinforcement_mm: Annotated[float, Field(ge=0, le=10, allow_inf_nan=False, strict=True)] = 2.0
     fusion_margin_min_mm: Finite = 0.0
     overrides: list[PassOverride] = Field(default_factory=list)
 
