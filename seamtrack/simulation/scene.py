@@ -316,9 +316,9 @@ def check_consistency(scene: Scene) -> None:
         make_camera(c.sensor.camera, c.sensor.preset).check(sensor)
     if c.workpiece is not None and c.workpiece.material is not None:
         material(c.workpiece.material)
+    check_passes(c)  # a job's sections, before the plugins they name are loaded
     check_plugin_params(c)
     check_sizes(c)
-    check_passes(c)
 
 
 _SPEC_KEYS = (
