@@ -66,7 +66,7 @@ def test_each_bead_holds_the_wire_the_torch_melted(short_job) -> None:
     for bead, r in zip(fill.beads, welded, strict=True):
         volume = np.trapezoid(bead.area_mm2, fill.s_mm)
         melted = eta * wire_area * r.plan.wire_feed_mm_s * r.arc_time_s
-        assert volume == pytest.approx(melted, rel=0.15), r.name
+        assert volume == pytest.approx(melted, rel=0.2), r.name
 
 
 def test_the_adaptive_speed_follows_the_measured_area(short_job) -> None:
