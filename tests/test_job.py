@@ -228,3 +228,23 @@ def test_a_planners_adapt_is_checked() -> None:
     with pytest.raises(PluginRuntimeError) as info:
         job._adapted(raises, ahead, plan, "p", 1.0)
     assert info.value.field == "planner.name"
+
+
+def test_a_frame_below_the_last_fill_is_no_groove() -> None:
+    """The fill only grows: a frame whose fill surface lies more than FILL_DROP_MM below what
+    the pass before measured there is a bogus answer (e.g. the backing seen under the beads)."""
+    fill = v_state()
+    seam = job.Seam.from_points(fill.T_world_station[:, :3, 3])
+    truth = fill.groove_points(4)
+    T = np.eye(4)
+    T[:3, :3] = np.diag([1.0, -1.0, -1.0])
+    T[:3, 3] = (2.0, 0.0, 100.0)
+    laser = np.column_stack([-truth[:, 0], 100.0 - truth[:, 1]])[::-1]
+    frame = (Feature(point_laser=laser[3], point_world=np.array([2.0, 0, 0.0]),
+                     edges_laser=laser, area_mm2=50.0), T)  # fmt: skip
+    previous = job.measured_groove([frame], fill, seam)
+    assert previous is not None
+    assert not job._below_the_fill(frame, fill, seam, previous)
+    higher = job.MeasuredGroove(previous.s_mm, previous.points + [0.0, job.FILL_DROP_MM + 0.1],
+                                previous.area_mm2)  # fmt: skip
+    assert job._below_the_fill(frame, fill, seam, higher)

@@ -45,7 +45,6 @@ from seamtrack.control.planner import (
     MeasuredGroove,
     PassPlan,
     checked_plan,
-    fill_order,
     planner,
 )
 from seamtrack.errors import PluginRuntimeError, SceneError, plugin_failed
@@ -53,6 +52,12 @@ from seamtrack.geometry.seam import Seam
 from seamtrack.sensing.profiles import Feature, laser_to_world
 from seamtrack.simulation.assemble import Parts, build_parts
 from seamtrack.simulation.checks import default_time_limit_s
+from seamtrack.simulation.job_summary import (  # noqa: F401 (the job's public names)
+    fusion_margin_mm,
+    is_wall_bead,
+    job_summary,
+    welded_range,
+)
 from seamtrack.simulation.loop import Result, run
 from seamtrack.simulation.passes import heat_input_kj_mm, overridden, process_of
 from seamtrack.simulation.robots import is_arm, tool_program
@@ -65,6 +70,9 @@ FloatArray = NDArray[np.float64]
 STATION_SPACING_MM = 0.5
 
 _POINT_INDEX = {"left": 1, "right": 5, "centre": 3}
+
+#: A frame whose fill surface lies this far (mm) below the pass before's is no groove.
+FILL_DROP_MM = 1.0
 
 #: A bead that stops this close (mm) to the part's end is run off the edge (:func:`_to_the_ends`).
 RUN_OFF_MM = 3.0
@@ -167,7 +175,7 @@ def run_job(
                                 gantry=not is_arm(c), field="passes.overrides")  # fmt: skip
             assert plan is not None
         done = _pass(scene, plan, fill, cad_seam, rng, process, progress, f"pass_{index + 1:02d}",
-                     flip, adapt, name)  # fmt: skip
+                     flip, adapt, name, groove)  # fmt: skip
         start = time.perf_counter()
         try:
             if len(done.path_world) >= 2:
@@ -247,6 +255,7 @@ def _pass(
     flip: bool,
     adapt: Any = None,
     planner_name: str = "planner",
+    previous: MeasuredGroove | None = None,
 ) -> _Done:
     """One closed-loop pass (``plan`` None: the scan-only pass along the groove's middle).
     ``flip``: the laser's y_L runs against the stations' y (the extractor's left is the
@@ -277,7 +286,7 @@ def _pass(
         tool_program=tool_program(pass_scene, true_path),
     )
     frames: list[tuple[Feature, FloatArray]] = []
-    parts = _steered(parts, fill, cad_seam, plan, frames, adapt, planner_name)
+    parts = _steered(parts, fill, cad_seam, plan, frames, adapt, planner_name, previous)
     build_s = time.perf_counter() - start
     start = time.perf_counter()
     result = run(parts, progress=progress, seed=c.simulation.seed)
@@ -320,12 +329,14 @@ def _steered(
     frames: list[tuple[Feature, FloatArray]],
     adapt: Any = None,
     planner_name: str = "planner",
+    previous: MeasuredGroove | None = None,
 ) -> Parts:
     """The parts with a sense function that records every frame's feature, moves the measured
     point by the plan's lateral offset there (station frame), and sets the tracker's speed
     along the seam from the plan; ``adapt(groove_ahead, plan)`` (a planner's, optional) may
     replace the speed and offset at the station the sensor sees, for when the torch gets
-    there."""
+    there. A frame whose fill surface lies more than :data:`FILL_DROP_MM` below the one the
+    pass before measured there (``previous``; the fill only grows) is taken as no groove."""
     sense = parts.sense
     tracker = parts.tracker
     T_sensor_tcp = np.linalg.inv(np.asarray(parts.robot.T_tcp_sensor, dtype=float))
@@ -345,6 +356,10 @@ def _steered(
         frames.append((feature, T_world_sensor))
         if plan is None:
             return feature
+        if feature and previous is not None and _below_the_fill(frames[-1], fill, cad_seam,
+                                                                previous):  # fmt: skip
+            feature = Feature.failed("below the fill the pass before measured", feature.joint)
+            frames[-1] = (feature, T_world_sensor)
         if feature:
             s = float(cad_seam.closest(feature.point_world[None]).arc_length_mm[0])
             i = station(s)
@@ -364,6 +379,18 @@ def _steered(
         return feature
 
     return dataclasses.replace(parts, sense=steered)
+
+
+def _below_the_fill(
+    frame: tuple[Feature, FloatArray], fill: Any, seam: Seam, previous: MeasuredGroove
+) -> bool:
+    """Whether a frame's fill surface (its middle bottom point) lies more than
+    :data:`FILL_DROP_MM` below the one measured there by the pass before."""
+    now = measured_groove([frame], fill, seam)
+    if now is None or not len(previous):
+        return False
+    before = float(np.interp(now.s_mm[0], previous.s_mm, previous.points[:, 3, 1]))
+    return bool(now.points[0, 3, 1] < before - FILL_DROP_MM)
 
 
 def _adapted(adapt: Any, ahead: MeasuredGroove, plan: PassPlan, name: str,
@@ -559,114 +586,3 @@ def _job_bar(enabled: bool, total: int | None) -> Any:
     from tqdm import tqdm
 
     return tqdm(total=total, unit="pass", desc="job", leave=True, position=1)
-
-
-def job_summary(
-    scene: Scene, records: list[PassRecord], fill: Any, wall_s: float, stopped: str = ""
-) -> dict:
-    """job.json: the passes, the layers, the final fill and its checks; ``stopped``: why the
-    job stopped before its planner said it was done."""
-    c = scene.config
-    assert c.passes is not None
-    welded = [r for r in records if r.plan is not None]
-    lo, hi = welded_range(welded, fill)
-    keep = (fill.s_mm >= lo) & (fill.s_mm <= hi)
-    reinf = np.asarray(fill.reinforcement_mm())[keep]
-    remaining = np.asarray(fill.remaining_area_mm2())[keep]
-    margin = fusion_margin_mm(fill, welded)[keep]
-    threshold = c.passes.fusion_margin_min_mm
-    flagged = fill.s_mm[keep][margin < threshold - 1e-9]
-    layers: dict[int, int] = {}
-    for r in welded:
-        assert r.plan is not None
-        layers[r.plan.layer] = layers.get(r.plan.layer, 0) + 1
-    crown = reinf[:, 1]
-    statuses = [r.result.status for r in records]
-    errors = [float(r.result.summary.get("max_error_mm", math.nan)) for r in welded]
-    return {
-        "scene": scene.name,
-        "status": "stopped"
-        if stopped
-        else "completed"
-        if all(s == "completed" for s in statuses)
-        else "incomplete",
-        "stop_reason": stopped,
-        "passes": len(welded),
-        "scan_pass": len(records) > len(welded),
-        "layers": len(layers),
-        "beads_per_layer": [layers[k] for k in sorted(layers)],
-        "stations": int(keep.sum()),
-        "stations_from_mm": lo,
-        "stations_to_mm": hi,
-        "reinforcement_min_mm": float(np.min(reinf[:, 0])),
-        "reinforcement_max_mm": float(np.max(reinf[:, 1])),
-        "reinforcement_spread_mm": float(np.ptp(crown)),
-        "underfilled_stations": int(np.count_nonzero(reinf[:, 0] < 0.0)),
-        "remaining_underfill_max_mm2": float(np.max(remaining)),
-        "fusion_margin_min_mm": float(np.min(margin)) if len(margin) else math.nan,
-        "fusion_margin_threshold_mm": threshold,
-        "fusion_flagged_stations": len(flagged),
-        "fusion_flagged_s_mm": [round(float(s), 2) for s in flagged[:50]],
-        "max_tracking_error_mm": float(np.nanmax(errors)) if errors else math.nan,
-        "arc_time_s": float(sum(r.arc_time_s for r in welded)),
-        "job_time_s": float(sum(float(r.result.trace.t_s[-1]) for r in records)),
-        "wall_time_s": wall_s,
-        "per_pass": [_pass_row(r) for r in records],
-    }
-
-
-def _pass_row(r: PassRecord) -> dict[str, Any]:
-    s = r.result.summary
-    row: dict[str, Any] = {
-        "name": r.name,
-        "status": s.get("status"),
-        "max_error_mm": s.get("max_error_mm"),
-        "rms_error_mm": s.get("rms_error_mm"),
-        "arc_time_s": r.arc_time_s,
-        "mean_speed_mm_s": r.mean_speed_mm_s,
-        "build_s": r.build_s,
-        "run_s": r.run_s,
-        "deposit_s": r.deposit_s,
-    }
-    if r.plan is not None:
-        p = r.plan
-        row.update(layer=p.layer + 1, bead_in_layer=p.bead_in_layer + 1, cap=p.cap,
-                   reference=p.reference, offset_mm=p.offset_mm,
-                   wire_feed_m_min=p.wire_feed_mm_s * 60e-3, bead_area_mm2=r.bead_area_mm2,
-                   heat_input_kj_mm=r.heat_input_kj_mm)  # fmt: skip
-    return row
-
-
-def welded_range(welded: list[PassRecord], fill: Any) -> tuple[float, float]:
-    """The arc lengths every pass laid its bead over (the stations all passes covered)."""
-    covered = np.ones(len(fill.s_mm), dtype=bool)
-    for bead in fill.beads:
-        covered &= np.isfinite(bead.y_centre_mm)
-    if not covered.any():
-        return float(fill.s_mm[0]), float(fill.s_mm[0])
-    s = fill.s_mm[covered]
-    return float(s[0]), float(s[-1])
-
-
-def fusion_margin_mm(fill: Any, welded: list[PassRecord]) -> FloatArray:
-    """(m,) per station, how far the wall beads' toes reach past the wall (the smallest over
-    the beads laid against a wall, > 0 fused, < 0 a gap; +inf where no bead meets a wall).
-
-    A wall bead: a fill layer's bead in a wall slot (the first and last slot, corners first;
-    a layer's only bead), or one tracking a wall's foot."""
-    margins = np.asarray(fill.sidewall_margin_mm())
-    out = np.full(len(fill.s_mm), np.inf)
-    for k, r in enumerate(welded):
-        if k < margins.shape[1] and r.plan is not None and is_wall_bead(r.plan):
-            out = np.fmin(out, -margins[:, k])
-    return out
-
-
-def is_wall_bead(plan: PassPlan) -> bool:
-    """Whether a pass lays a bead against a groove wall (see :func:`fusion_margin_mm`)."""
-    if plan.reference in ("left", "right"):
-        return True
-    if plan.cap:
-        return False
-    n = plan.beads_in_layer
-    return n == 1 or fill_order(n)[min(plan.bead_in_layer, n - 1)] in (0, n - 1)
