@@ -12,6 +12,7 @@ from seamtrack.bench import (
     failure_inputs_arms,
     failure_inputs_bridge,
     failure_inputs_camera,
+    failure_inputs_multipass,
     failure_inputs_parts,
     failure_inputs_ros,
 )
@@ -497,6 +498,7 @@ CATALOGUE: tuple[Entry, ...] = (
     *failure_inputs_parts.ENTRIES,
     *failure_inputs_bridge.ENTRIES,
     *failure_inputs_ros.ENTRIES,
+    *failure_inputs_multipass.ENTRIES,
 )
 
 _AREAS = (
@@ -505,6 +507,7 @@ _AREAS = (
     failure_inputs_parts,
     failure_inputs_bridge,
     failure_inputs_ros,
+    failure_inputs_multipass,
 )
 
 

@@ -254,6 +254,12 @@ def _bench_bridge(out: Path, quick: bool) -> Any:
     return bench_bridge(out, quick=quick)
 
 
+def _bench_multipass(out: Path, quick: bool) -> dict:
+    from seamtrack.bench.multipass import bench_multipass
+
+    return bench_multipass(out, quick=quick)
+
+
 BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "raycast": lambda out, quick: bench_raycast(out, quick=quick),
     "extractors": _bench_extractors,
@@ -267,6 +273,7 @@ BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "dataset": _bench_dataset,
     "gym": _bench_gym,
     "bridge": _bench_bridge,
+    "multipass": _bench_multipass,
 }
 
 

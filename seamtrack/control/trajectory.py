@@ -191,6 +191,12 @@ class TrajectoryTracker:
         if program is not None:
             self._rotation, self._s_program = program.rotation_near(start, 0.0)
 
+    def set_speed(self, speed_mm_s: float) -> None:
+        """Change the welding speed during the run (a multi-pass job's planner adapts it along
+        the seam); the set-point reaches it within its acceleration limit."""
+        self.speed = float(speed_mm_s)
+        self._sp[pk.SPEED] = self.speed
+
     def update(self, measurement: Measurement) -> None:
         if self.stop_cause:  # the seam has ended: nothing more to follow
             if self.stop_cause == "seam_end" and measurement.stripe_points == 0:

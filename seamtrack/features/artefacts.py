@@ -97,6 +97,7 @@ def real_sensor_profile(
     roll_deg: float = 0.0,
     lateral_offset_mm: float = 0.0,
     standoff_mm: float | None = None,
+    section: tuple[np.ndarray, np.ndarray, np.ndarray, float] | None = None,
     **joint_params: float,
 ) -> tuple[Profile, GroundTruth]:
     """A profile of ``joint`` as a real sensor with ``artefacts`` would give it.
@@ -113,7 +114,7 @@ def real_sensor_profile(
         quantizes instead).
     rays : int
         Columns (the LDS: 2048).
-    pitch_deg, roll_deg, lateral_offset_mm, standoff_mm, **joint_params
+    pitch_deg, roll_deg, lateral_offset_mm, standoff_mm, section, **joint_params
         As for :func:`~seamtrack.features.synthetic.synthetic_profile`.
     """
     base = dataclasses.replace(preset("paper"), quantize=False) if sensor is None else sensor
@@ -127,6 +128,7 @@ def real_sensor_profile(
         roll_deg=roll_deg,
         lateral_offset_mm=lateral_offset_mm,
         standoff_mm=standoff_mm,
+        section=section,
         **joint_params,
     )
     a = artefacts

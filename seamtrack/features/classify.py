@@ -20,11 +20,48 @@ import numpy as np
 
 from seamtrack.features.base import _Base
 from seamtrack.features.extractors import BUILTIN
+from seamtrack.features.groove import GrooveExtractor
 from seamtrack.features.lines import DATA_ERRORS, segment_profile
+from seamtrack.features.vgroove import VGrooveExtractor
 from seamtrack.sensing.profiles import Profile
 
-#: The joint families :func:`classify` tells apart (besides ``"none"``).
+#: The joint families :func:`classify` tells apart (besides ``"none"``), and ``"groove"``: an
+#: empty or partly filled groove (:data:`GROOVE`).
 FAMILIES = ("v-groove", "square-butt", "fillet", "lap", "outside-corner")
+#: A groove with at least one layer of beads in it (the v-groove extractor refuses it: a surface
+#: covers the bevels' meeting point), or one whose flat bottom is wider than the v-groove
+#: extractor's largest root gap (a narrow gap, a U), when no other family finds its joint.
+GROOVE = "groove"
+
+
+@lru_cache(maxsize=8)
+def _groove(resolution_mm: float | None) -> GrooveExtractor:
+    return GrooveExtractor(resolution_mm=resolution_mm)
+
+
+def _groove_share(
+    profile: Profile, resolution_mm: float | None, s: dict[str, float]
+) -> float | None:
+    """The share the groove model explains when :func:`classify` should name a groove (see
+    :data:`GROOVE`), else None."""
+    others = [k for k, v in s.items() if v > 0 and k != "v-groove"]
+    if others:
+        return None
+    try:
+        with np.errstate(all="ignore"):
+            seg = segment_profile(profile, resolution_mm=resolution_mm)
+            if isinstance(seg, str):
+                return None
+            feature, share = _groove(resolution_mm).scored(profile, seg)
+    except DATA_ERRORS:
+        return None
+    if not feature:
+        return None
+    if s.get("v-groove", 0.0) > 0:  # an empty V, unless its bottom is wider than a root gap
+        bottom = float(np.hypot(*(feature.edges_laser[5] - feature.edges_laser[1])))
+        if bottom <= VGrooveExtractor.max_gap_mm:
+            return None
+    return share
 
 
 @lru_cache(maxsize=8)
@@ -67,14 +104,18 @@ def classify(profile: Profile, *, resolution_mm: float | None = None) -> tuple[s
     Returns
     -------
     joint : str
-        One of :data:`FAMILIES`, or ``"none"`` when no family's extractor finds its joint (a
-        flat plate, a raised block, a profile too noisy or too short).
+        One of :data:`FAMILIES`, ``"groove"`` (:data:`GROOVE`: beads in a groove, or a flat
+        bottom wider than a V's root gap), or ``"none"`` when no family's extractor finds its
+        joint (a flat plate, a raised block, a profile too noisy or too short).
     confidence : float
         For a family: the share of the profile its model explains, less half the runner-up's
         (another family that also finds its joint). For ``"none"``: one less the largest
         share a refused family's model explained (how far the profile is from any joint).
     """
     s = scores(profile, resolution_mm=resolution_mm)
+    groove = _groove_share(profile, resolution_mm, s)
+    if groove is not None:
+        return GROOVE, float(np.clip(groove, 0.0, 1.0))
     found = sorted(((v, k) for k, v in s.items() if v > 0), reverse=True)
     if not found:
         return "none", float(np.clip(1.0 + min(s.values(), default=0.0), 0.0, 1.0))

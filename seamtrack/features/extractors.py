@@ -45,6 +45,7 @@ from seamtrack.features._two_lines import two_lines_share
 from seamtrack.features.base import _Base, _confidence, included
 from seamtrack.features.expect import Expect
 from seamtrack.features.generic import GenericExtractor
+from seamtrack.features.groove import GrooveExtractor
 from seamtrack.features.lines import (
     Line,
     Segments,
@@ -135,6 +136,7 @@ BUILTIN: dict[str, Callable[..., FeatureExtractor]] = {
     "lap": LapExtractor,
     "outside-corner": OutsideCornerExtractor,
     "generic": GenericExtractor,
+    "groove": GrooveExtractor,
 }
 
 
@@ -193,8 +195,9 @@ def extractor(name: str, **params: Any) -> FeatureExtractor:
     ----------
     name : str
         A built-in (``"v-groove"``, ``"square-butt"``, ``"fillet"``, ``"lap"``,
-        ``"outside-corner"``, ``"generic"``), ``"package.module:Class"``, or the name of an
-        entry point in the group ``seamtrack.extractors``. A class is called with
+        ``"outside-corner"``, ``"generic"``, ``"groove"``: the 7 points of an empty or
+        partly filled groove, :mod:`seamtrack.features.groove`), ``"package.module:Class"``,
+        or the name of an entry point in the group ``seamtrack.extractors``. A class is called with
         ``params``; an object that already is an extractor is used as is.
 
     Raises

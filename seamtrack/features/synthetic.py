@@ -384,6 +384,7 @@ def synthetic_profile(
     lateral_offset_mm: float = 0.0,
     rays: int | None = None,
     imperfections: Imperfections = Imperfections(),
+    section: tuple[FloatArray, FloatArray, FloatArray, float] | None = None,
     **joint_params: float,
 ) -> tuple[Profile, GroundTruth]:
     """A stripe profile of a joint as the sensor would measure it, and its ground truth.
@@ -407,6 +408,10 @@ def synthetic_profile(
     rays : int, optional
         Number of columns (rays); default ``sensor.pixels_v``.
     imperfections : Imperfections
+    section : (segments, seam, edges, gap_mm), optional
+        A cross-section of your own, as :func:`joint_section` returns it (e.g. a partly filled
+        groove of :mod:`seamtrack.features.synthetic_groove`); then ``joint`` only labels it
+        and takes no parameters.
     **joint_params : float
         The family's parameters (``gap_mm``, ``included_angle_deg``, ...; see ``_DEFAULTS``).
 
@@ -421,8 +426,12 @@ def synthetic_profile(
         raise ValueError(
             "synthetic_profile: these imperfections need a seeded numpy Generator (rng)"
         )
-    segs, seam, edges, gap = joint_section(joint, **joint_params)
-    params = MappingProxyType({**_DEFAULTS[joint], **joint_params})
+    if section is None:
+        segs, seam, edges, gap = joint_section(joint, **joint_params)
+        params = MappingProxyType({**_DEFAULTS[joint], **joint_params})
+    else:
+        segs, seam, edges, gap = section
+        params = MappingProxyType(dict(joint_params))
     standoff = sensor.range_center_mm if standoff_mm is None else float(standoff_mm)
     n = sensor.pixels_v if rays is None else int(rays)
     if n < 1:

@@ -18,6 +18,7 @@ from seamtrack.features._v_groove_model import (
     SIDE_ALONG_PLATE,
     WIDE_ROOT,
     GrooveParams,
+    VGrooveResult,
     v_groove,
 )
 from seamtrack.features._v_search import pieces_of
@@ -39,6 +40,31 @@ _REFUSALS = {
         "(a raised block between two plates?)"
     ),
 }
+
+
+def _fill_above(seg: Segments, groove: VGrooveResult) -> float | None:
+    """How far (mm) the surface over the seam lies above it, when a fill covers it: the median
+    of the points within half a millimetre of the seam across the groove (along the line
+    joining the top edges) lies more than max(1.5 mm, a tenth of the seam's depth) above the
+    seam; else None (an empty V, a root gap, a tack weld)."""
+    top_l = np.array([groove.top_left_y, groove.top_left_z])
+    top_r = np.array([groove.top_right_y, groove.top_right_z])
+    chord = top_r - top_l
+    length = float(np.hypot(*chord))
+    if not (np.isfinite(length) and length > 0):
+        return None
+    u = chord / length
+    v = np.array([-u[1], u[0]])
+    if v[1] < 0:
+        v = -v  # into the groove
+    seam = np.array([groove.seam_y, groove.seam_z])
+    q = seg.points[~seg.stray]
+    near = np.abs((q - seam) @ u) <= 0.5
+    if np.count_nonzero(near) < 3:
+        return None
+    depth = float((seam - top_l) @ v)
+    above = depth - float(np.median((q[near] - top_l) @ v))
+    return above if above > max(1.5, 0.1 * depth) else None
 
 
 @dataclass(frozen=True)
@@ -63,6 +89,10 @@ class VGrooveExtractor(_Base):
     within ``hint.tolerance_mm`` is taken (the V that continues the seam, not the false V where
     the laser plane crosses both grooves of a mitred corner: its apex lies deeper than the
     root); when none lies within the tolerance, the best-supported V, as without a hint.
+
+    Refused too when a fill covers the seam (the surface across the groove's middle lies
+    more than max(1.5 mm, a tenth of the depth) above the bevels' meeting point: beads in the
+    groove; the groove extractor reads those).
 
     Refused with a reason when the profile shows no groove (two
     faces alone, a side along the other's plate, a wide root, or less than
@@ -121,6 +151,13 @@ class VGrooveExtractor(_Base):
         wrong = self._implausible(angle=groove.angle, depth=groove.depth, gap=groove.gap)
         if wrong is not None:
             return wrong
+        fill = _fill_above(seg, groove)
+        if fill is not None:
+            return Feature.failed(
+                f"not a v-groove: a surface lies {fill:.1f} mm above the bevels' meeting point "
+                "across the groove's middle (a filled groove: use the groove extractor)",
+                joint=self.name,
+            )
         feature = self._found(
             profile,
             np.array([groove.seam_y, groove.seam_z]),

@@ -112,7 +112,10 @@ def staged(out_dir: str | Path) -> Iterator[Path]:
         try:
             yield stage
             for item in sorted(stage.iterdir()):
-                os.replace(item, out / item.name)
+                target = out / item.name
+                if item.is_dir() and target.is_dir():  # a job's pass folder from a run before
+                    shutil.rmtree(target)
+                os.replace(item, target)
         finally:
             shutil.rmtree(stage, ignore_errors=True)
 
@@ -184,4 +187,33 @@ def write_run(
             (stage / "scene.toml").write_text(scene_toml)
         if extra is not None:
             extra(stage)
+    return Path(out_dir)
+
+
+def write_job(
+    job: Any,
+    out_dir: str | Path,
+    scene_toml: str | None = None,
+    trace_period_s: float = 0.01,
+    extra: Callable[[Any, Path], object] | None = None,
+) -> Path:
+    """Write a multi-pass job (:class:`seamtrack.simulation.job.JobResult`) into ``out_dir``:
+    one folder a pass (``pass_00_scan``, ``pass_01``, ...: a run's summary.json, trace.csv,
+    frames.csv and scene.toml, plus what ``extra(record, folder)`` adds), ``job.json`` and the
+    job's scene.toml; all staged and moved into place at the end, so a failed or interrupted
+    job writes nothing."""
+    with staged(out_dir) as stage:
+        for record in job.passes:
+            folder = stage / record.name
+            folder.mkdir()
+            summary = json.dumps(json_safe(record.result.summary), indent=2)
+            (folder / "summary.json").write_text(summary + "\n")
+            write_trace_csv(record.result, folder / "trace.csv", trace_period_s)
+            write_frames_csv(record.result, folder / "frames.csv")
+            (folder / "scene.toml").write_text(record.scene.to_toml())
+            if extra is not None:
+                extra(record, folder)
+        (stage / "job.json").write_text(json.dumps(json_safe(job.summary), indent=2) + "\n")
+        if scene_toml is not None:
+            (stage / "scene.toml").write_text(scene_toml)
     return Path(out_dir)

@@ -174,9 +174,13 @@ def takes_hint(find: Callable[..., Any]) -> bool:
     return "hint" in params or any(p.kind is p.VAR_KEYWORD for p in params.values())
 
 
-def _mesh_scan(scene: Scene, sensor: LaserLineSensor, rng: np.random.Generator) -> MeshScan:
+def _mesh_scan(
+    scene: Scene, sensor: LaserLineSensor, rng: np.random.Generator, extra_mesh: Any = None
+) -> MeshScan:
     """The workpiece's CAD seam (world frame) and the per-frame scan: ray-cast stripe, then the
-    scene's feature extractor (by default the one the seam's joint type calls for)."""
+    scene's feature extractor (by default the one the seam's joint type calls for).
+    ``extra_mesh`` (world frame, e.g. the beads of a multi-pass job) is ray-cast with the part;
+    the seam is the part's."""
     from seamtrack.features.extractors import extractor
     from seamtrack.sensing.raycast import RayCaster
     from seamtrack.sensing.scan import scan_mesh
@@ -205,6 +209,10 @@ def _mesh_scan(scene: Scene, sensor: LaserLineSensor, rng: np.random.Generator) 
 
         boxes = [trimesh.creation.box(bounds=[b.min_mm, b.max_mm]) for b in w.obstacles]
         mesh = trimesh.util.concatenate([mesh, *boxes])  # type: ignore[assignment]
+    if extra_mesh is not None:
+        import trimesh
+
+        mesh = trimesh.util.concatenate([mesh, extra_mesh])  # type: ignore[assignment]
     caster = RayCaster.from_mesh(mesh)
     seam = part.seam.transformed(T_world_part)
     params = dict(scene.config.extractor.params)
@@ -309,8 +317,12 @@ def _stripe_noise(params: dict[str, Any]) -> Any:
         ) from None
 
 
-def build_parts(scene: Scene, rng: np.random.Generator | None = None) -> Parts:
-    """Everything :func:`seamtrack.simulation.loop.run` needs, validated against each other."""
+def build_parts(
+    scene: Scene, rng: np.random.Generator | None = None, extra_mesh: Any = None
+) -> Parts:
+    """Everything :func:`seamtrack.simulation.loop.run` needs, validated against each other.
+    ``extra_mesh``: a mesh in the world frame ray-cast with the workpiece (a multi-pass job's
+    beads, :mod:`seamtrack.simulation.job`); mesh mode only."""
     c = scene.config
     rng = rng if rng is not None else np.random.default_rng(c.simulation.seed)
     sensor = make_sensor(c.sensor)
@@ -318,7 +330,7 @@ def build_parts(scene: Scene, rng: np.random.Generator | None = None) -> Parts:
     mesh: Any = None
     loaded = None
     if c.sensor.mode == "mesh" or c.seam.source == "workpiece":
-        loaded = _mesh_scan(scene, sensor, rng)
+        loaded = _mesh_scan(scene, sensor, rng, extra_mesh)
     if c.sensor.mode == "mesh":
         assert loaded is not None
         seam, scan, mesh = loaded.seam, loaded.scan, loaded.mesh

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, field_validator
 
 # Strict: a number is never a boolean or a string, a boolean never "yes" or 1.
 Positive = Annotated[float, Field(gt=0, allow_inf_nan=False, strict=True)]
@@ -217,6 +217,87 @@ class WorkpieceConfig(_Section):
     material: str | None = None  # a name of seamtrack.sensing.materials.MATERIALS (image mode)
 
 
+Fraction = Annotated[float, Field(gt=0, le=1, allow_inf_nan=False, strict=True)]
+
+
+class BeadShapeConfig(_Section):
+    """``[process.bead]``: the bead's cross-section model (:class:`seamtrack.workpiece.beads.
+    BeadShape`): ``arc`` (circular segment), ``parabola`` or ``cosine`` (Ding et al. 2015), with
+    its width-to-height ratio on a flat plate, or (``arc`` only) its wetting angle."""
+
+    model: Literal["arc", "parabola", "cosine"] = "parabola"
+    width_to_height: Annotated[float, Field(gt=1, le=20, allow_inf_nan=False, strict=True)] = 3.0
+    wetting_angle_deg: Annotated[float, Field(gt=0, le=90, allow_inf_nan=False, strict=True)] | (
+        None
+    ) = None
+
+
+class ProcessConfig(_Section):
+    """``[process]``: the welding process (GMAW). The bead's area follows from mass
+    conservation, ``deposition_efficiency * pi * (d/2)^2 * v_wire / v_travel``, at the torch's
+    actual travel speed; heat input (kJ/mm) is ``thermal_efficiency * U * I / v_travel * 1e-3``.
+    The travel speed window bounds what a planner may command."""
+
+    wire_diameter_mm: Annotated[float, Field(gt=0, le=5, allow_inf_nan=False, strict=True)] = 1.2
+    wire_feed_m_min: Annotated[float, Field(gt=0, le=30, allow_inf_nan=False, strict=True)] = 8.0
+    deposition_efficiency: Fraction = 0.97
+    voltage_v: Annotated[float, Field(gt=0, le=100, allow_inf_nan=False, strict=True)] = 28.0
+    current_a: Annotated[float, Field(gt=0, le=2000, allow_inf_nan=False, strict=True)] = 250.0
+    thermal_efficiency: Fraction = 0.8  # MIG/MAG
+    ctwd_mm: Annotated[float, Field(gt=0, le=100, allow_inf_nan=False, strict=True)] = 15.0
+    travel_speed_min_mm_s: Positive = 2.0
+    travel_speed_max_mm_s: Positive = 15.0
+    bead: BeadShapeConfig = Field(default_factory=BeadShapeConfig)
+
+
+class PassOverride(_Section):
+    """One entry of ``[[passes.overrides]]``: values that replace the planner's for pass
+    ``number`` (1-based, the scan-only pass not counted)."""
+
+    number: Annotated[int, Field(ge=1, strict=True)]
+    reference: Literal["left", "right", "centre"] | None = None
+    offset_mm: Finite | None = None
+    work_angle_deg: Angle | None = None
+    travel_speed_mm_s: Positive | None = None
+    wire_feed_m_min: Annotated[float, Field(gt=0, le=30, allow_inf_nan=False, strict=True)] | (
+        None
+    ) = None
+
+
+class PassesConfig(_Section):
+    """``[passes]``: a multi-pass job (``seamtrack run`` runs every pass as a closed loop on the
+    part with the beads laid so far). ``count``: the number of passes, or ``"auto"`` (the
+    planner decides); ``scan_first``: a scan-only pass (torch off) measures the empty groove
+    before the first pass (else the first pass plans from the CAD groove's nominal area);
+    ``reinforcement_mm``: the cap's target height over the plates' top; stations whose sidewall
+    fusion margin (how far the wall bead's toe reaches into the wall, mm) is below
+    ``fusion_margin_min_mm`` are flagged."""
+
+    count: int | str = "auto"
+    scan_first: Flag = True
+    reinforcement_mm: Annotated[float, Field(ge=0, le=10, allow_inf_nan=False, strict=True)] = 2.0
+    fusion_margin_min_mm: Finite = 0.0
+    overrides: list[PassOverride] = Field(default_factory=list)
+
+    @field_validator("count", mode="before")
+    @classmethod
+    def _count(cls, value: Any) -> Any:
+        if value == "auto":
+            return value
+        if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= 200:
+            raise ValueError('give a number of passes from 1 to 200, or "auto"')
+        return value
+
+
+class PlannerConfig(_Section):
+    """``[planner]``: the fill planner of a multi-pass job: ``adaptive`` (equal-area layers,
+    speed scaled to the measured groove), ``fixed`` (the same beads at constant speed), or a
+    user's ``package.module:Class``; ``params`` go to its constructor."""
+
+    name: str = "adaptive"
+    params: dict[str, Any] = Field(default_factory=dict)
+
+
 class SceneConfig(_Section):
     name: str = ""
     description: str = ""
@@ -228,6 +309,9 @@ class SceneConfig(_Section):
     tracker: TrackerConfig = Field(default_factory=TrackerConfig)
     extractor: ExtractorConfig = Field(default_factory=ExtractorConfig)
     workpiece: WorkpieceConfig | None = None
+    process: ProcessConfig | None = None
+    passes: PassesConfig | None = None
+    planner: PlannerConfig | None = None
 
 
 @dataclass(frozen=True)

@@ -28,6 +28,7 @@ from seamtrack.simulation.config import (  # the types live there; imported by n
     SceneConfig,
     SensorConfig,
 )
+from seamtrack.simulation.passes import check_passes
 from seamtrack.simulation.robots import check_robot, is_arm
 
 
@@ -315,6 +316,7 @@ def check_consistency(scene: Scene) -> None:
         make_camera(c.sensor.camera, c.sensor.preset).check(sensor)
     if c.workpiece is not None and c.workpiece.material is not None:
         material(c.workpiece.material)
+    check_passes(c)  # a job's sections, before the plugins they name are loaded
     check_plugin_params(c)
     check_sizes(c)
 

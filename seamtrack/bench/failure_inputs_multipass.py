@@ -1,0 +1,79 @@
+"""Bad inputs for multi-pass jobs (``[process]``, ``[passes]``, ``[planner]``): entries of the
+catalogue in :mod:`seamtrack.bench.failure_inputs`, with the planner plugins they need.
+
+The job is ``multipass-v-groove`` cut to a 20 mm seam; a planner's failure shows after the
+scan-only pass (a few seconds), the scene's before anything runs; none writes a thing.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from seamtrack.bench.failure_kit import Entry, _run, _set
+
+_PLANNERS = '''\
+"""Planners that fail, for the bad-input catalogue."""
+
+
+class PlansNothing:
+    def plan(self, groove, pass_index, state):
+        return None
+
+
+class Raises:
+    def plan(self, groove, pass_index, state):
+        raise ValueError("planner bug")
+
+
+class ReturnsGarbage:
+    def plan(self, groove, pass_index, state):
+        return {"reference": "left"}
+
+
+class NoPlan:
+    pass
+'''
+
+#: Files written into the workspace (name -> bytes).
+FILES: dict[str, bytes] = {"bad_planners.py": _PLANNERS.encode()}
+
+#: Files made when the workspace is (none here).
+GENERATED: dict[str, Any] = {}
+
+JOB = ("multipass-v-groove", *_set("workpiece.params.seam_length_mm=20.0"))
+
+
+def _job(*pairs: str) -> tuple[str, ...]:
+    return _run(*JOB, *_set(*pairs))
+
+
+ENTRIES: tuple[Entry, ...] = (
+    Entry("multipass wire feed 0", _job("process.wire_feed_m_min=0"),
+          field="process.wire_feed_m_min"),
+    Entry("multipass wire feed -2", _job("process.wire_feed_m_min=-2.0"),
+          field="process.wire_feed_m_min"),
+    Entry("multipass bead larger than the groove",
+          _job("process.wire_feed_m_min=30.0", "process.wire_diameter_mm=4.0"),
+          field="process.wire_feed_m_min", quick=False),
+    Entry("multipass zero passes", _job("passes.count=0"), field="passes.count"),
+    Entry("multipass unknown planner", _job('planner.name="nope"'), field="planner.name"),
+    Entry("multipass planner without plan()", _job('planner.name="bad_planners:NoPlan"'),
+          field="planner.name"),
+    Entry("multipass planner plans no bead", _job('planner.name="bad_planners:PlansNothing"'),
+          field="planner.name", quick=False),
+    Entry("multipass planner raises", _job('planner.name="bad_planners:Raises"'),
+          field="planner.name", quick=False),
+    Entry("multipass planner returns garbage", _job('planner.name="bad_planners:ReturnsGarbage"'),
+          field="planner.name", quick=False),
+    Entry("multipass bead offset outside the groove",
+          _job("passes.overrides=[{number = 1, offset_mm = 40.0}]"),
+          field="passes.overrides", quick=False),
+    Entry("multipass work angle on the gantry",
+          _job("passes.overrides=[{number = 1, work_angle_deg = 10.0}]"),
+          field="passes.overrides.0.work_angle_deg"),
+    Entry("multipass speed window upside down",
+          _job("process.travel_speed_min_mm_s=20.0", "process.travel_speed_max_mm_s=10.0"),
+          field="process.travel_speed_min_mm_s"),
+    Entry("multipass wetting angle on a parabola", _job("process.bead.wetting_angle_deg=60.0"),
+          field="process.bead.wetting_angle_deg"),
+)  # fmt: skip

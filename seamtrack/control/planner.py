@@ -1,0 +1,582 @@
+"""Fill planners of a multi-pass job: which bead goes where, how fast, with how much wire.
+
+A planner is any class with ``plan(groove, pass_index, state) -> PassPlan | None`` (None: the
+job is done) and, optionally, ``adapt(groove_ahead, plan) -> (speed_mm_s, offset_mm) | None``
+called during a pass at every sensor frame with the groove the sensor measures ahead of the
+torch. It is named in the scene like a tracker: a built-in name (``adaptive``, ``fixed``) or
+``package.module:Class`` (:func:`planner`).
+
+Frames and units: a groove is measured in station frames (x along the seam, z out of the
+groove, y lateral), its 7 points ordered left top corner, left bottom corner, three bottom
+points, right bottom corner, right top corner, y ascending. mm, s, rad; wire feed in mm/s.
+
+The built-in :class:`AdaptivePlanner` fills equal-area layers (as many as the groove's depth
+holds beads of the process's height), puts ``round(layer area / bead area)`` (at least one)
+beads in each, corners first (a bead against each wall, then the middle from left to right),
+then a cap layer side to side, and scales the travel speed along the seam to the measured
+groove: the bead area at a station is the area left to fill there over the beads left, and the
+speed follows from mass conservation, bounded by the process window. :class:`FixedPlanner` lays
+the same beads at one constant speed (the one for the groove's median area).
+"""
+
+from __future__ import annotations
+
+import importlib
+import math
+from dataclasses import dataclass, field, replace
+from typing import Any, Protocol, runtime_checkable
+
+import numpy as np
+from numpy.typing import NDArray
+
+from seamtrack.errors import PluginError, PluginRuntimeError
+
+FloatArray = NDArray[np.float64]
+
+#: Cross-section area of a bead over width * height on a flat plate, per shape model
+#: (parabola 2/3, cosine 2/pi (Ding et al. 2015), circular arc ~ a parabola for w/h >= 2).
+SHAPE_FILL = {"parabola": 2.0 / 3.0, "cosine": 2.0 / math.pi, "arc": 2.0 / 3.0}
+
+REFERENCES = ("left", "right", "centre")
+
+#: The cap's outer beads reach this far (mm) beyond the groove's top corners (a cap overlaps
+#: the plates' edges, so no notch is left at the corner).
+CAP_OVERLAP_MM = 1.0
+#: The fill stops this fraction of a bead's height below the plates' top line: the cap fills
+#: that band between its beads' overlaps and lays the crown.
+CAP_BAND_FRACTION = 0.3
+
+# Indices of the 7 groove points.
+LEFT_TOP, LEFT_FOOT, MIDDLE, RIGHT_FOOT, RIGHT_TOP = 0, 1, 3, 5, 6
+
+
+@dataclass(frozen=True)
+class MeasuredGroove:
+    """The groove as the sensor measured it, station by station.
+
+    Attributes
+    ----------
+    s_mm : (m,) float
+        Arc length of each station along the seam, ascending.
+    points : (m, 7, 2) float
+        The 7 groove points (y, z) in each station's frame.
+    area_mm2 : (m,) float
+        The groove's remaining area below its top-corner line.
+    """
+
+    s_mm: FloatArray
+    points: FloatArray
+    area_mm2: FloatArray
+
+    def __post_init__(self) -> None:
+        s = np.asarray(self.s_mm, dtype=float).reshape(-1)
+        points = np.asarray(self.points, dtype=float).reshape(len(s), 7, 2)
+        area = np.asarray(self.area_mm2, dtype=float).reshape(len(s))
+        object.__setattr__(self, "s_mm", s)
+        object.__setattr__(self, "points", points)
+        object.__setattr__(self, "area_mm2", area)
+
+    def __len__(self) -> int:
+        return len(self.s_mm)
+
+    @property
+    def top_width_mm(self) -> FloatArray:
+        """(m,) distance between the top corners across the seam."""
+        return self.points[:, RIGHT_TOP, 0] - self.points[:, LEFT_TOP, 0]
+
+    @property
+    def bottom_width_mm(self) -> FloatArray:
+        """(m,) width of the fill surface (or root) between the walls' feet."""
+        return self.points[:, RIGHT_FOOT, 0] - self.points[:, LEFT_FOOT, 0]
+
+    @property
+    def depth_mm(self) -> FloatArray:
+        """(m,) the top-corner line's height over the middle bottom point."""
+        top = 0.5 * (self.points[:, LEFT_TOP, 1] + self.points[:, RIGHT_TOP, 1])
+        return top - self.points[:, MIDDLE, 1]
+
+    def at(self, s_mm: Any, values: FloatArray) -> FloatArray:
+        """``values`` (m,) interpolated at arc lengths ``s_mm`` (held beyond the ends)."""
+        return np.interp(np.asarray(s_mm, dtype=float), self.s_mm, values)
+
+
+@dataclass(frozen=True)
+class Process:
+    """What a planner knows of the welding process (from the scene's ``[process]``)."""
+
+    wire_diameter_mm: float = 1.2
+    wire_feed_mm_s: float = 8000.0 / 60.0
+    deposition_efficiency: float = 0.97
+    speed_min_mm_s: float = 2.0
+    speed_max_mm_s: float = 15.0
+    nominal_speed_mm_s: float = 5.0
+    bead_model: str = "parabola"
+    width_to_height: float = 3.0
+
+    def bead_area_mm2(self, speed_mm_s: Any, wire_feed_mm_s: float | None = None) -> Any:
+        """Mass conservation: ``efficiency * pi * (d/2)^2 * v_wire / v_travel`` (mm^2)."""
+        wire = self.wire_feed_mm_s if wire_feed_mm_s is None else wire_feed_mm_s
+        r = 0.5 * self.wire_diameter_mm
+        return self.deposition_efficiency * math.pi * r * r * wire / np.asarray(speed_mm_s)
+
+    def speed_for_area(self, area_mm2: Any, wire_feed_mm_s: float | None = None) -> Any:
+        """The travel speed that lays a bead of ``area_mm2``, within the speed window."""
+        wire = self.wire_feed_mm_s if wire_feed_mm_s is None else wire_feed_mm_s
+        r = 0.5 * self.wire_diameter_mm
+        area = np.maximum(np.asarray(area_mm2, dtype=float), 1e-9)
+        speed = self.deposition_efficiency * math.pi * r * r * wire / area
+        return np.clip(speed, self.speed_min_mm_s, self.speed_max_mm_s)
+
+    def bead_height_mm(self, area_mm2: float) -> float:
+        """A bead's height on a flat plate: area = fill * (w/h) * h^2."""
+        fill = SHAPE_FILL.get(self.bead_model, 2.0 / 3.0)
+        return math.sqrt(area_mm2 / (fill * self.width_to_height))
+
+    def bead_width_mm(self, area_mm2: float) -> float:
+        return self.width_to_height * self.bead_height_mm(area_mm2)
+
+
+@dataclass(frozen=True)
+class PassPlan:
+    """One pass as a planner wants it.
+
+    Attributes
+    ----------
+    reference : "left", "right" or "centre"
+        The groove point the tracker follows (the groove extractor's ``reference``): the left
+        or right wall's foot at the fill surface, or the fill surface's middle.
+    offset_mm : float
+        Lateral offset of the torch from the reference, in the station frame (+y).
+    work_angle_rad : float
+        Torch work angle (an arm only; a gantry refuses a non-zero one).
+    travel_speed_mm_s : float
+        The pass's nominal travel speed (the whole pass when no profile is given).
+    wire_feed_mm_s : float
+        Wire feed speed.
+    layer, bead_in_layer : int
+        0-based; the cap is the last layer.
+    beads_in_layer : int
+        How many beads the layer holds.
+    cap : bool
+        Whether this is a cap bead.
+    speed_s_mm, speed_profile_mm_s : (k,) float or None
+        The travel speed along the seam (arc length, speed); None: constant.
+    offset_profile_mm : (k,) float or None
+        The lateral offset along the seam (on ``speed_s_mm``); None: ``offset_mm``.
+    """
+
+    reference: str
+    offset_mm: float
+    work_angle_rad: float
+    travel_speed_mm_s: float
+    wire_feed_mm_s: float
+    layer: int
+    bead_in_layer: int
+    beads_in_layer: int = 1
+    cap: bool = False
+    speed_s_mm: FloatArray | None = None
+    speed_profile_mm_s: FloatArray | None = None
+    offset_profile_mm: FloatArray | None = None
+
+    def speed_at(self, s_mm: Any) -> Any:
+        """Travel speed at arc length(s) ``s_mm``."""
+        if self.speed_s_mm is None or self.speed_profile_mm_s is None:
+            return np.full(np.shape(s_mm), self.travel_speed_mm_s)[()]
+        return np.interp(s_mm, self.speed_s_mm, self.speed_profile_mm_s)
+
+    def offset_at(self, s_mm: Any) -> Any:
+        """Lateral offset at arc length(s) ``s_mm`` (the profile on ``speed_s_mm``, else
+        ``offset_mm``)."""
+        if self.speed_s_mm is None or self.offset_profile_mm is None:
+            return np.full(np.shape(s_mm), self.offset_mm)[()]
+        return np.interp(s_mm, self.speed_s_mm, self.offset_profile_mm)
+
+
+@dataclass
+class JobState:
+    """What the job tells a planner besides the measured groove.
+
+    Attributes
+    ----------
+    process : Process
+    count : int or None
+        The number of passes the scene asks for (None: the planner decides).
+    reinforcement_mm : float
+        The cap's target height over the plates' top line.
+    done : list of PassPlan
+        The passes laid so far, in order.
+    last_bead_area_mm2 : (m,) float or None
+        The area the last pass laid at the measured groove's stations (mass conservation at
+        the torch's actual speed); the measured groove was seen *before* that bead.
+    """
+
+    process: Process
+    count: int | None = None
+    reinforcement_mm: float = 2.0
+    done: list[PassPlan] = field(default_factory=list)
+    last_bead_area_mm2: FloatArray | None = None
+
+
+@runtime_checkable
+class Planner(Protocol):
+    def plan(self, groove: MeasuredGroove, pass_index: int, state: JobState) -> PassPlan | None: ...
+
+
+@dataclass(frozen=True)
+class Layout:
+    """The plan of the whole job: beads per layer (the last layer the cap)."""
+
+    beads_per_layer: tuple[int, ...]
+    fill_bead_area_mm2: float
+    cap_bead_area_mm2: float
+
+    @property
+    def passes(self) -> int:
+        return sum(self.beads_per_layer)
+
+    def locate(self, pass_index: int) -> tuple[int, int] | None:
+        """(layer, bead_in_layer) of the 0-based pass, or None past the end."""
+        for layer, n in enumerate(self.beads_per_layer):
+            if pass_index < n:
+                return layer, pass_index
+            pass_index -= n
+        return None
+
+    def beads_after(self, pass_index: int, cap: bool) -> int:
+        """Beads left in the fill (cap False) or the cap (True), this one included."""
+        fill = sum(self.beads_per_layer[:-1])
+        if cap:
+            return self.passes - max(pass_index, fill)
+        return max(fill - pass_index, 0)
+
+
+def fill_order(n: int) -> list[int]:
+    """Corners first: the order in which the n lateral slots of a fill layer (0 = left wall)
+    are laid: left wall, right wall, then the middle slots from left to right."""
+    if n <= 2:
+        return list(range(n))
+    return [0, n - 1, *range(1, n - 1)]
+
+
+def cap_area_mm2(top_width_mm: Any, reinforcement_mm: float) -> Any:
+    """The crown of a cap ``reinforcement_mm`` high over the top width (a parabola: 2/3 w h)."""
+    return (2.0 / 3.0) * np.asarray(top_width_mm) * reinforcement_mm
+
+
+def layout(groove: MeasuredGroove, state: JobState) -> Layout:
+    """Equal-area fill layers and a cap, for the groove's median section.
+
+    The fill stops :data:`CAP_BAND_FRACTION` of a bead's height below the plates' top line;
+    that band and the crown (:func:`cap_area_mm2`) are the cap's, laid in equal beads side to
+    side, as many as cover the top width and :data:`CAP_OVERLAP_MM` beyond each corner with a
+    bead every 0.7 bead widths (none smaller than the fastest travel speed lays). The fill is
+    split into as many equal-area layers as its depth holds beads of the process's height,
+    each with ``round(layer area / bead area)`` (>= 1) beads. The bead area is the process's
+    at its nominal speed, or, with ``state.count``, the one that makes the plan hold that many
+    passes (the largest remainder decides which layers take the rounding).
+    """
+    p = state.process
+    fill_area = float(np.median(groove.area_mm2))
+    depth = float(np.median(groove.depth_mm))
+    top = float(np.median(groove.top_width_mm))
+    if not (fill_area > 0 and depth > 0 and top > 0):
+        raise PluginRuntimeError(
+            f"the measured groove has no room to fill (area {fill_area:.3g} mm^2, depth "
+            f"{depth:.3g} mm, top width {top:.3g} mm)",
+            field="passes",
+            fix="check the workpiece is a groove and the extractor finds its 7 points",
+        )
+    total = fill_area + float(cap_area_mm2(top, state.reinforcement_mm))
+    bead = float(p.bead_area_mm2(p.nominal_speed_mm_s))
+    if state.count is not None:
+        bead = total / state.count
+    cap_beads = max(1, math.ceil((top + 2 * CAP_OVERLAP_MM) / (0.7 * p.bead_width_mm(bead))))
+    if state.count is not None:
+        cap_beads = min(cap_beads, state.count)
+    # The fill stops CAP_BAND_FRACTION of a bead's height below the plates' top line; the cap
+    # fills that band and lays the crown.
+    band = min(CAP_BAND_FRACTION * p.bead_height_mm(bead) * top, fill_area)
+    fill_total = fill_area - band
+    cap_bead = (band + total - fill_area) / cap_beads
+    for _ in range(5):  # the cap's beads as many as cover the width at their own size
+        if state.count is not None:
+            break
+        n = max(1, math.ceil((top + 2 * CAP_OVERLAP_MM) / (0.7 * p.bead_width_mm(cap_bead))))
+        # no bead smaller than the fastest travel speed lays
+        n = min(n, max(1, int((band + total - fill_area) / p.bead_area_mm2(p.speed_max_mm_s))))
+        if n == cap_beads:
+            break
+        cap_beads, cap_bead = n, (band + total - fill_area) / n
+    if fill_total < 0.5 * bead or (state.count is not None and cap_beads == state.count):
+        n = state.count if state.count is not None else max(1, round(total / bead))
+        return Layout((n,), 0.0, total / n)
+    fill_depth = depth * min(1.0, fill_total / fill_area)
+    layers = max(1, round(fill_depth / p.bead_height_mm(bead)))
+    if state.count is not None:
+        fill_beads = state.count - cap_beads
+        layers = min(layers, fill_beads)
+        share = np.full(layers, fill_beads / layers)
+        per_layer = np.floor(share).astype(int)
+        order = np.argsort(-(share - per_layer), kind="stable")[::-1]  # the upper layers first
+        per_layer[order[: fill_beads - int(per_layer.sum())]] += 1
+        counts = [int(n) for n in per_layer]
+    else:
+        counts = [max(1, round(fill_total / layers / bead))] * layers
+    return Layout((*counts, cap_beads), fill_total / sum(counts), cap_bead)
+
+
+class AdaptivePlanner:
+    """Equal-area layers, corners first, a cap side to side, speed scaled to the groove.
+
+    Parameters
+    ----------
+    wall_offset_fraction : float
+        Where a wall bead's centre lies, as a fraction of the layer's slot width from the wall
+        foot (0.5: the slot's middle; smaller pushes the bead into the corner).
+    adapt_speed : bool
+        Scale the travel speed along the seam to the measured groove (False: constant speed,
+        the :class:`FixedPlanner`).
+    wall_reference : bool
+        Track a wall bead on the extractor's wall foot (``left``/``right``) with a constant
+        offset; by default every bead tracks the fill surface's middle (``centre``) with an
+        offset profile along the seam that puts it at its place from the walls as the last
+        pass measured them (a wall's foot, where a toe wets it, jumps along the wall from one
+        station to the next; the middle of the fill surface does not).
+    """
+
+    name = "adaptive"
+
+    def __init__(
+        self,
+        wall_offset_fraction: float = 0.45,
+        adapt_speed: bool = True,
+        wall_reference: bool = False,
+    ):
+        if not 0 < wall_offset_fraction <= 1:
+            raise PluginError(
+                f"wall_offset_fraction must be in (0, 1], got {wall_offset_fraction}",
+                field="planner.params.wall_offset_fraction",
+                fix="give a fraction of the slot width, e.g. 0.45",
+            )
+        self.wall_offset_fraction = wall_offset_fraction
+        self.adapt_speed = adapt_speed
+        self.wall_reference = wall_reference
+        self.layout: Layout | None = None
+        self._cap: tuple[FloatArray, FloatArray] | None = None  # (s, bead area) of the cap
+
+    def plan(self, groove: MeasuredGroove, pass_index: int, state: JobState) -> PassPlan | None:
+        if self.layout is None or pass_index == 0:
+            self.layout = layout(groove, state)
+            self._cap = None
+        where = self.layout.locate(pass_index)
+        if where is None:
+            return None
+        layer, slot_rank = where
+        n = self.layout.beads_per_layer[layer]
+        cap = layer == len(self.layout.beads_per_layer) - 1
+        p = state.process
+        reference, offsets = self._place(groove, n, slot_rank, cap)
+        offset = float(np.median(offsets))
+        profile_offsets = offsets if reference == "centre" else None
+        remaining = np.asarray(groove.area_mm2, dtype=float)
+        if state.last_bead_area_mm2 is not None:  # the groove was measured before the last bead
+            remaining = remaining - np.asarray(state.last_bead_area_mm2, dtype=float)
+        left = self.layout.beads_after(pass_index, cap)
+        crown = cap_area_mm2(groove.top_width_mm, state.reinforcement_mm)
+        if cap:  # the groove left and the crown, in equal beads (set at the first cap bead)
+            if self._cap is None:
+                share = (np.maximum(remaining, 0.0) + crown) / max(left, 1)
+                self._cap = (groove.s_mm.copy(), share)
+            target = np.interp(groove.s_mm, *self._cap)
+        else:  # what the cap will not hold, over the fill beads left
+            cap_beads = self.layout.beads_per_layer[-1]
+            band = cap_beads * self.layout.cap_bead_area_mm2 - crown
+            target = np.maximum(remaining - band, 0.0) / max(left, 1)
+        target = np.maximum(target, 0.05 * self.layout.fill_bead_area_mm2)
+        profile = p.speed_for_area(target)
+        if self.adapt_speed:
+            nominal = float(np.median(profile))
+            return PassPlan(reference, offset, 0.0, nominal, p.wire_feed_mm_s, layer, slot_rank,
+                            n, cap, groove.s_mm.copy(), profile, profile_offsets)  # fmt: skip
+        area = self.layout.cap_bead_area_mm2 if cap else self.layout.fill_bead_area_mm2
+        speed = float(p.speed_for_area(area))
+        return PassPlan(reference, offset, 0.0, speed, p.wire_feed_mm_s, layer, slot_rank, n, cap,
+                        groove.s_mm.copy(), np.full(len(groove), speed),
+                        profile_offsets)  # fmt: skip
+
+    def _place(
+        self, groove: MeasuredGroove, n: int, rank: int, cap: bool
+    ) -> tuple[str, FloatArray]:
+        """The reference and lateral offset (per measured station) of the ``rank``-th bead
+        laid in a layer of n: the cap side to side over the top width, a fill layer's beads
+        in n equal slots of the fill surface's width, the wall slots first."""
+        pts = groove.points
+        middle = _smooth(pts[:, MIDDLE, 0])
+        if cap:  # over the top width and CAP_OVERLAP_MM beyond each top corner
+            left = _smooth(pts[:, LEFT_TOP, 0]) - CAP_OVERLAP_MM
+            width = _smooth(groove.top_width_mm) + 2 * CAP_OVERLAP_MM
+            return "centre", left + (rank + 0.5) * width / n - middle
+        if n == 1:
+            return "centre", np.zeros(len(groove))
+        slot = fill_order(n)[rank]
+        left, width = _smooth(pts[:, LEFT_FOOT, 0]), _smooth(groove.bottom_width_mm)
+        wall = self.wall_offset_fraction * width / n
+        if self.wall_reference and slot in (0, n - 1):
+            return ("left", wall) if slot == 0 else ("right", -wall)
+        if slot == 0:
+            return "centre", left + wall - middle
+        if slot == n - 1:
+            return "centre", left + width - wall - middle
+        return "centre", left + (slot + 0.5) * width / n - middle
+
+
+def _smooth(values: FloatArray, half_window: int = 4) -> FloatArray:
+    """A running median over 2 * half_window + 1 stations (the measured groove's jitter)."""
+    values = np.asarray(values, dtype=float)
+    if len(values) <= 2:
+        return values
+    padded = np.pad(values, half_window, mode="edge")
+    windows = np.lib.stride_tricks.sliding_window_view(padded, 2 * half_window + 1)
+    return np.asarray(np.median(windows, axis=1))
+
+
+class FixedPlanner(AdaptivePlanner):
+    """The same beads as :class:`AdaptivePlanner`, each layer at one constant speed."""
+
+    name = "fixed"
+
+    def __init__(self, wall_offset_fraction: float = 0.45):
+        super().__init__(wall_offset_fraction, adapt_speed=False)
+
+
+def _builtin() -> dict[str, type]:
+    return {"adaptive": AdaptivePlanner, "fixed": FixedPlanner}
+
+
+def planner_class(name: str) -> type:
+    """The class behind a planner name: a built-in or ``package.module:Class``."""
+    builtin = _builtin()
+    if name in builtin:
+        return builtin[name]
+    if ":" not in name:
+        raise PluginError(
+            f"unknown planner {name!r}",
+            field="planner.name",
+            fix=f"use one of {', '.join(builtin)}, or package.module:Class",
+        )
+    module_name, _, attr = name.partition(":")
+    try:
+        module = importlib.import_module(module_name)
+    except Exception as exc:  # the user's module may fail in any way on import
+        raise PluginError(
+            f"cannot import {module_name!r}: {exc}",
+            field="planner.name",
+            fix="check the module is on PYTHONPATH (or installed) and imports",
+        ) from None
+    cls = getattr(module, attr, None)
+    if cls is None:
+        raise PluginError(
+            f"module {module_name!r} has no {attr!r}",
+            field="planner.name",
+            fix="name the class as package.module:Class",
+        )
+    if not callable(getattr(cls, "plan", None)):
+        raise PluginError(
+            f"{name!r} lacks the planner method plan",
+            field="planner.name",
+            fix="implement plan(groove, pass_index, state) -> PassPlan | None",
+        )
+    return cls
+
+
+def planner(name: str, **params: Any) -> Any:
+    """Build a planner by name with its parameters."""
+    cls = planner_class(name)
+    try:
+        return cls(**params)
+    except PluginError:
+        raise
+    except TypeError as exc:
+        raise PluginError(
+            f"{name!r} could not be created: {exc}",
+            field="planner.params",
+            fix="give only the parameters the planner's constructor takes",
+        ) from None
+    except Exception as exc:
+        raise PluginError(
+            f"{name!r} could not be created: {exc}",
+            field="planner.name",
+            fix="check the planner's parameters",
+        ) from None
+
+
+def checked_plan(
+    plan: Any,
+    name: str,
+    pass_index: int,
+    groove: MeasuredGroove,
+    gantry: bool,
+    field: str = "planner.name",
+) -> PassPlan | None:
+    """A planner's answer, refused with a one-line error naming ``field`` (the planner, or the
+    scene's overrides that changed the plan) when it is not a usable pass."""
+
+    def refuse(what: str, fix: str) -> PluginRuntimeError:
+        return PluginRuntimeError(f"{name!r} plan() for pass {pass_index + 1} {what}",
+                                  field=field, fix=fix)  # fmt: skip
+
+    if plan is None:
+        return None
+    if not isinstance(plan, PassPlan):
+        raise refuse(f"returned {type(plan).__name__}", "return a PassPlan, or None when done")
+    if plan.reference not in REFERENCES:
+        raise refuse(f"returned the reference {plan.reference!r}",
+                     f"use one of {', '.join(REFERENCES)}")  # fmt: skip
+    for key in ("offset_mm", "work_angle_rad", "travel_speed_mm_s", "wire_feed_mm_s"):
+        value = getattr(plan, key)
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, int | float)
+            or not math.isfinite(value)
+        ):
+            raise refuse(f"returned {key} = {value!r}", f"give a finite number for {key}")
+    if plan.travel_speed_mm_s <= 0:
+        raise refuse(f"returned travel_speed_mm_s = {plan.travel_speed_mm_s}",
+                     "give a travel speed > 0 mm/s")  # fmt: skip
+    if plan.wire_feed_mm_s <= 0:
+        raise refuse(f"returned wire_feed_mm_s = {plan.wire_feed_mm_s}",
+                     "give a wire feed > 0 mm/s")  # fmt: skip
+    if plan.speed_profile_mm_s is not None:
+        profile = np.asarray(plan.speed_profile_mm_s, dtype=float)
+        s = np.asarray(plan.speed_s_mm if plan.speed_s_mm is not None else [], dtype=float)
+        if profile.shape != s.shape or not (np.isfinite(profile).all() and (profile > 0).all()):
+            raise refuse(
+                "returned a speed profile that is not finite, > 0 and as long as its arc lengths",
+                "give speed_s_mm and speed_profile_mm_s of one length",
+            )
+        plan = replace(plan, speed_s_mm=s, speed_profile_mm_s=profile)
+    if plan.offset_profile_mm is not None:
+        offsets = np.asarray(plan.offset_profile_mm, dtype=float)
+        s_of = np.asarray(plan.speed_s_mm if plan.speed_s_mm is not None else [], dtype=float)
+        if offsets.shape != s_of.shape or not np.isfinite(offsets).all():
+            raise refuse(
+                "returned an offset profile that is not finite and as long as its arc lengths",
+                "give speed_s_mm and offset_profile_mm of one length",
+            )
+        plan = replace(plan, offset_profile_mm=offsets)
+    if gantry and plan.work_angle_rad != 0.0:
+        raise refuse(f"asks for a work angle of {math.degrees(plan.work_angle_rad):.3g} deg on "
+                     "a gantry, which cannot tilt its torch", "plan work_angle_rad = 0 on a "
+                     "gantry, or weld on an arm (robot.model)")  # fmt: skip
+    reference = {"left": LEFT_FOOT, "right": RIGHT_FOOT, "centre": MIDDLE}[plan.reference]
+    # on the groove as measured, smoothed along the seam (one frame's outlier is not the groove)
+    y = _smooth(groove.points[:, reference, 0]) + plan.offset_at(groove.s_mm)
+    lo, hi = _smooth(groove.points[:, LEFT_TOP, 0]), _smooth(groove.points[:, RIGHT_TOP, 0])
+    outside = np.flatnonzero((y < lo) | (y > hi))
+    if len(outside):
+        i = outside[0]
+        raise refuse(f"puts the bead at y = {y[i]:.3g} mm at s = {groove.s_mm[i]:.4g} mm, "
+                     f"outside the groove's top width [{lo[i]:.3g}, {hi[i]:.3g}] mm (offset "
+                     f"{plan.offset_at(groove.s_mm[i]):.3g} mm from {plan.reference})",
+                     "give an offset that keeps the torch over the groove")  # fmt: skip
+    return plan

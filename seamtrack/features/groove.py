@@ -1,0 +1,472 @@
+"""The groove extractor: the 7 points of an empty or partly filled groove (issue 25).
+
+Multi-pass welding describes a groove by 7 points, in order: the left top corner, the left
+bottom corner, three bottom points (left, middle, right) on the fill surface, the right bottom
+corner and the right top corner. From the second pass on the sensor sees the beads of the passes
+before, and a torch aims at a wall's foot or at the middle of the fill surface, not at a root.
+
+The model, on the pieces of the shared front end (:func:`seamtrack.features.lines.segment_profile`:
+spikes and reflection streaks left out, straight pieces by split-and-merge):
+
+* **plates**: the outermost pieces at least ``min_plate_mm`` long, each with the pieces on its
+  line that follow it inwards, refitted as one line; the two must run within
+  ``max_plate_deg`` of each other. Their mean direction is the groove's width axis u (left to
+  right), its normal v points into the groove.
+* **walls**: of the pieces between the plates that go down into the groove at least
+  ``wall_deg`` off the plates and whose line passes within 1 mm of the plate's inner end, the
+  one whose line carries most points, refitted with the pieces on its line (a piece more than
+  3 mm below the corner must stand 75 deg off the plates and be 1 mm long: a bead's flank or a
+  spike streak pointing at the corner by chance is no wall). A wall nearly along the rays (a
+  narrow gap's) shows no points: then there is none.
+* **top corners**: a plate's line meets its wall's line; with no wall seen, the plate's end
+  (half a spacing beyond its last point).
+* **fill surface**: the groove's points inside the walls and off their lines, less what a
+  running median over 0.6 mm leaves out (spike runs), the largest stretch without a 1 mm break.
+* **bottom corners**: a line through the most surface points within 1.5 mm of the surface's
+  end (lines through pairs of points: spike scraps do not move it) crossed with the wall's
+  line, when that lies within 1.5 mm of the surface's outermost point on the line; else that
+  point (half a spacing beyond it). With no surface at all (an empty V without a gap), the
+  walls' intersection.
+* **bottom points**: the fill surface between the bottom corners at a quarter, half and three
+  quarters of the way across (along u), each a local robust line fit of the surface points
+  there, in v; where no surface shows there (an open root), on the line joining the corners.
+* **remaining area**: the polygon of the top corners, the bottom corners and the surface
+  between them, below the line joining the top corners (mm^2, ``Feature.area_mm2``).
+
+The seam point is chosen by ``reference``: ``"centre"`` the middle bottom point, ``"left"`` /
+``"right"`` that bottom corner (the wall's foot at the fill surface). ``edges_laser`` holds the
+7 points, (7, 2). Refused, with the reason, when no plate shows on a side, the plates are not
+parallel (a fillet, a corner), nothing lies ``min_depth_mm`` below the plates between them
+(a flat plate, a lap) or a raised part stands there (a block), or the model explains less than
+``min_explained`` of the profile.
+
+Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groove).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import NamedTuple
+
+import numpy as np
+from numpy.typing import NDArray
+
+from seamtrack.errors import PluginError
+from seamtrack.features._segmentation import fit_line
+from seamtrack.features.base import _Base
+from seamtrack.features.lines import Line, Segments, intersect
+from seamtrack.sensing.profiles import Feature, Profile
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.intp]
+REFERENCES = ("centre", "left", "right")
+
+
+class Plates(NamedTuple):
+    """The two plates' lines and the last (first) piece of each, by position in the pieces."""
+
+    left: Line
+    right: Line
+    left_last: int
+    right_first: int
+
+
+class Wall(NamedTuple):
+    """A wall: its line (None: no wall seen) and its first and last piece."""
+
+    line: Line | None
+    first: int
+    last: int
+
+
+class GroovePoints(NamedTuple):
+    """The model's answer: the 7 points (7, 2) in the laser frame, the remaining area (mm^2),
+    the share of the profile it explains, and the worst line fit (mm rms)."""
+
+    points: FloatArray
+    area_mm2: float
+    explained: float
+    rms: float
+
+
+def _fit(points: FloatArray, index: IntArray) -> Line:
+    f = fit_line(points, np.asarray(index, dtype=np.int64))
+    return Line(np.asarray(index), np.array([f.cy, f.cz]), np.array([f.uy, f.uz]), f.along, f.rms)
+
+
+def _angle_deg(a: FloatArray, b: FloatArray) -> float:
+    return math.degrees(math.acos(min(1.0, abs(float(a @ b)))))
+
+
+@dataclass(frozen=True)
+class GrooveExtractor(_Base):
+    """Groove (issue 25): the 7 points of an empty or partly filled groove (V, narrow gap,
+    U; 0..n layers of beads), the remaining area, and a seam point per ``reference``
+    (``"centre"``: the middle bottom point; ``"left"`` / ``"right"``: that wall's foot at the
+    fill surface). The model and its refusals: :mod:`seamtrack.features.groove`."""
+
+    name: str = "groove"
+    reference: str = "centre"
+    min_plate_mm: float = 1.0
+    max_plate_deg: float = 15.0
+    wall_deg: float = 35.0
+    min_depth_mm: float = 0.5
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.reference not in REFERENCES:
+            raise PluginError(
+                f"unknown groove reference {self.reference!r}",
+                field="extractor.reference",
+                fix=f"use one of {', '.join(REFERENCES)}",
+            )
+
+    def _extract(self, profile: Profile, seg: Segments) -> Feature | tuple[Feature, float]:
+        found = self.model(seg)
+        if isinstance(found, str):
+            return Feature.failed(found, joint=self.name)
+        pts = found.points
+        point = {"centre": pts[3], "left": pts[1], "right": pts[5]}[self.reference]
+        rms = max(0.0, 1.0 - found.rms / max(seg.tol, 1e-12))
+        feature = self._found(
+            profile,
+            point.copy(),
+            confidence=float(min(max(0.5 * found.explained + 0.5 * rms, 0.0), 1.0)),
+            edges_laser=pts,
+            area_mm2=found.area_mm2,
+            gap_mm=float(np.hypot(*(pts[5] - pts[1]))),
+        )
+        return feature, found.explained
+
+    # ------------------------------------------------------------------ the model
+    def model(self, seg: Segments) -> GroovePoints | str:
+        """The groove's 7 points, area and fit, or why the profile shows no groove."""
+        P = seg.points
+        plates = self._plates(seg)
+        if isinstance(plates, str):
+            return plates
+        pl, pr = plates.left, plates.right
+        u = pl.direction + pr.direction
+        u = u / math.hypot(*u)
+        v = np.array([-u[1], u[0]])
+        end_l = pl.end(True)
+        end_r = pr.end(False)
+        lo, hi = int(pl.index[-1]) + 1, int(pr.index[0])
+        inner = np.arange(lo, hi)
+        inner = inner[~seg.stray[inner]]
+        # Depth below the line joining the plates' ends (positive into the groove).
+        chord_u = (end_r - end_l) / max(math.hypot(*(end_r - end_l)), 1e-12)
+        chord_v = np.array([-chord_u[1], chord_u[0]])
+        depth = (P[inner] - end_l) @ chord_v
+        if np.count_nonzero(depth > self.min_depth_mm) < self.min_points:
+            return "not a groove: nothing lies below the plates between them"
+        if np.count_nonzero(depth < -self.min_depth_mm) > 0.2 * len(inner):
+            return "not a groove: a raised part stands between the plates"
+        groove = list(range(plates.left_last + 1, plates.right_first))
+        left = self._wall(seg, groove, v, True, end_l)
+        right = self._wall(seg, groove[::-1], v, False, end_r)
+        reach = 3.0 * seg.spacing + seg.tol
+        tl = self._top(pl, left.line, True, reach)
+        tr = self._top(pr, right.line, False, reach)
+        fu, fv = self._floor(seg, inner, (left, right), u, v)
+        if len(fu) < 3:
+            if left.line is None or right.line is None:
+                return "not a groove: no bottom between the walls"
+            x = intersect(left.line, right.line)  # an empty V: the walls meet
+            if x is None:
+                return "not a groove: no bottom between the walls"
+            bl = br = x
+        else:
+            bl = self._corner(seg, left.line, fu, fv, u, v, True)
+            br = self._corner(seg, right.line, fu, fv, u, v, False)
+        if (br - bl) @ u < -max(seg.tol, 2 * seg.spacing):
+            return "not a groove: its walls cross (a ridge?)"
+        bottom = self._bottom_points(seg, fu, fv, bl, br, u, v)
+        pts = np.vstack([tl, bl, bottom, br, tr])
+        area = _area(pts, P, inner, u)
+        rms = max(pl.rms, pr.rms, *(w.line.rms for w in (left, right) if w.line is not None))
+        explained = self._explained(seg, plates, (left, right), inner, bl, br, u)
+        return GroovePoints(pts, area, explained, rms)
+
+    def _plates(self, seg: Segments) -> Plates | str:
+        lines = seg.lines
+        long = [j for j, ln in enumerate(lines) if ln.extent >= self.min_plate_mm]
+        if len(long) < 2:
+            return "not a groove: no plate on both sides"
+        a, b = long[0], long[-1]
+        la, lb = self._grow(seg, a, +1, b), self._grow(seg, b, -1, a)
+        if la[1] >= lb[1]:
+            return "not a groove: no plate on both sides"
+        left, right = la[0], lb[0]
+        apart = _angle_deg(left.direction, right.direction)
+        if apart > self.max_plate_deg:
+            return (
+                f"not a groove: the plates beside it are {apart:.0f} deg apart "
+                f"(at most {self.max_plate_deg:.0f}: a fillet or a corner?)"
+            )
+        return Plates(left, right, la[1], lb[1])
+
+    def _grow(self, seg: Segments, j: int, step: int, stop: int) -> tuple[Line, int]:
+        """The plate starting at piece ``j``: the pieces on its line that follow it towards
+        ``stop`` (within 5 deg, their points within two tolerances), refitted."""
+        lines = seg.lines
+        base = lines[j]
+        index = [base.index]
+        k = j
+        while k + step != stop:
+            nxt = lines[k + step]
+            if _angle_deg(nxt.direction, base.direction) > 5.0:
+                break
+            off = np.abs((seg.points[nxt.index] - base.centroid) @ base.normal)
+            if np.median(off) > 2.0 * seg.tol:
+                break
+            index.append(nxt.index)
+            k += step
+        idx = np.sort(np.concatenate(index))
+        line = _fit(seg.points, idx) if len(index) > 1 else base
+        if line.direction[0] < 0:  # along increasing column (y)
+            line = Line(line.index, line.centroid, -line.direction, -line.t, line.rms)
+        return line, k
+
+    def _wall(
+        self, seg: Segments, groove: list[int], v: FloatArray, from_left: bool, top: FloatArray
+    ) -> Wall:
+        """A wall: of the pieces between the plates (``groove``, from this plate inwards) that
+        go down into the groove at least ``wall_deg`` off the plates and whose line passes
+        within a millimetre of the plate's inner end (``top``), the one whose line carries
+        most of the groove's points (a scrap at a rounded edge carries few); refitted on the
+        pieces on its line."""
+        lines = seg.lines
+        P = seg.points
+        if not groove:
+            return Wall(None, -1, -1)
+        lo = min(int(lines[groove[0]].index[0]), int(lines[groove[-1]].index[0]))
+        hi = max(int(lines[groove[0]].index[-1]), int(lines[groove[-1]].index[-1])) + 1
+        q = P[lo:hi][~seg.stray[lo:hi]]
+        best, support = None, self.min_points - 1
+        for j in groove:
+            ln = lines[j]
+            d = ln.direction if from_left else -ln.direction  # inwards from the plate
+            dv = float(d @ v)
+            off = math.degrees(math.asin(min(1.0, abs(dv))))
+            if not (dv > 0 and off >= self.wall_deg and ln.extent >= 0.3):
+                continue
+            if abs(float((top - ln.centroid) @ ln.normal)) > max(1.0, 3 * seg.tol):
+                continue
+            near_top = math.hypot(*(P[ln.index[0] if from_left else ln.index[-1]] - top))
+            if near_top > 3.0 and (off < 75.0 or ln.extent < 1.0):
+                continue  # a bead's flank or a streak pointing at the corner by chance
+            n = int(np.count_nonzero(np.abs((q - ln.centroid) @ ln.normal) <= 2.0 * seg.tol))
+            if n > support:
+                best, support = j, n
+        if best is None:
+            return Wall(None, -1, -1)
+        ref = lines[best]
+        on = [j for j in groove if _on_line(seg, ref, lines[j])]
+        index = [lines[j].index for j in on]
+        line = _fit(P, np.sort(np.concatenate(index))) if len(index) > 1 else ref
+        if line.direction[0] < 0:
+            line = Line(line.index, line.centroid, -line.direction, -line.t, line.rms)
+        return Wall(line, on[0], on[-1])
+
+    @staticmethod
+    def _top(plate: Line, wall: Line | None, left: bool, reach: float) -> FloatArray:
+        end = plate.end(left)
+        if wall is None:
+            return end
+        x = intersect(plate, wall)
+        if x is None or math.hypot(*(x - end)) > max(3.0, 10 * reach):
+            return end
+        return x
+
+    def _floor(
+        self, seg: Segments, inner: IntArray, walls: tuple[Wall, Wall], u: FloatArray, v: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
+        """The fill surface's points as (u, v), sorted by u: the groove's points inside the walls
+        and off their lines, less what a running median over 0.6 mm leaves out (spike runs)."""
+        q = seg.points[inner]
+        keep = np.ones(len(q), dtype=bool)
+        for w, left in zip(walls, (True, False), strict=True):
+            if w.line is None:
+                continue
+            n = w.line.normal if (w.line.normal @ u > 0) == left else -w.line.normal
+            keep &= (q - w.line.centroid) @ n > 2.0 * seg.tol
+        qu, qv = q[keep] @ u, q[keep] @ v
+        order = np.argsort(qu, kind="stable")
+        qu, qv = qu[order], qv[order]
+        k = int(min(101, max(5, round(0.6 / max(seg.spacing, 1e-9)))) | 1)
+        if len(qv) >= k:
+            inner_med = np.median(np.lib.stride_tricks.sliding_window_view(qv, k), axis=1)
+            med = np.pad(inner_med, k // 2, mode="edge")  # the ends: their whole window's
+            ok = np.abs(qv - med) <= max(3.0 * seg.tol, 0.2)
+            qu, qv = qu[ok], qv[ok]
+        if len(qu) > 1:  # the largest stretch without a break of 1 mm (scraps at the top edges)
+            cut = np.flatnonzero(np.diff(qu) > 1.0) + 1
+            bounds = np.r_[0, cut, len(qu)]
+            j = int(np.argmax(np.diff(bounds)))
+            qu, qv = qu[bounds[j] : bounds[j + 1]], qv[bounds[j] : bounds[j + 1]]
+        return qu, qv
+
+    def _corner(
+        self,
+        seg: Segments,
+        wall: Line | None,
+        fu: FloatArray,
+        fv: FloatArray,
+        u: FloatArray,
+        v: FloatArray,
+        left: bool,
+    ) -> FloatArray:
+        """Where the fill surface meets the wall: the wall's line crossed with a line fitted
+        to the surface's first millimetre from the wall; with no wall seen, or a crossing
+        farther than 1 mm from the surface's outermost point, that point (half a spacing
+        beyond it)."""
+        sign = 1.0 if left else -1.0
+        edge = float(fu[0] if left else fu[-1])
+        sel = sign * (fu - edge) <= 1.5
+        su, sv = fu[sel], fv[sel]
+        fit = _robust_uv_line(su, sv, seg.tol)
+        if fit is not None:  # the surface's outermost point on its line (not a spike's)
+            a, b = fit
+            on = np.abs(sv - (a + b * su)) <= 3.0 * seg.tol
+            k = int(np.argmin(sign * su[on]))
+            ou, ov = float(su[on][k]), float(sv[on][k])
+        else:
+            i = 0 if left else len(fu) - 1
+            ou, ov = float(fu[i]), float(fv[i])
+        if wall is not None and fit is not None:
+            cu, cv = float(wall.centroid @ u), float(wall.centroid @ v)
+            du, dv = float(wall.direction @ u), float(wall.direction @ v)
+            den = dv - b * du
+            if abs(den) > 1e-9:
+                t = (a + b * cu - cv) / den
+                xu, xv = cu + t * du, cv + t * dv
+                if math.hypot(xu - ou, xv - ov) <= 1.5:
+                    return np.asarray(xu * u + xv * v)
+        ou -= sign * 0.5 * seg.spacing
+        return np.asarray(ou * u + ov * v)
+
+    def _bottom_points(
+        self,
+        seg: Segments,
+        qu: FloatArray,
+        qv: FloatArray,
+        bl: FloatArray,
+        br: FloatArray,
+        u: FloatArray,
+        v: FloatArray,
+    ) -> FloatArray:
+        ul, ur = float(bl @ u), float(br @ u)
+        out = []
+        h = max(0.25, 5.0 * seg.spacing)
+        for t in (0.25, 0.5, 0.75):
+            chord = bl + t * (br - bl)
+            ut = float(chord @ u)
+            val = None
+            if ur - ul > 2 * h:
+                val = _local_v(qu, qv, ut, h, seg.tol)
+                if val is None:
+                    val = _local_v(qu, qv, ut, 4 * h, seg.tol)
+            if val is None:
+                out.append(chord)
+            else:
+                out.append(ut * u + val * v)
+        return np.array(out)
+
+    def _explained(
+        self,
+        seg: Segments,
+        plates: Plates,
+        walls: tuple[Wall, Wall],
+        inner: IntArray,
+        bl: FloatArray,
+        br: FloatArray,
+        u: FloatArray,
+    ) -> float:
+        P = seg.points
+        kept = np.flatnonzero(~seg.stray)
+        if not len(kept):
+            return 0.0
+        band = 3.0 * seg.tol
+        ok = np.zeros(len(P), dtype=bool)
+        lo, hi = int(plates.left.index[-1]), int(plates.right.index[0])
+        for line, sel in (
+            (plates.left, np.arange(0, lo + 1)),
+            (plates.right, np.arange(hi, len(P))),
+        ):
+            ok[sel] = np.abs((P[sel] - line.centroid) @ line.normal) <= band
+        for w in walls:
+            if w.line is not None:
+                ok[inner] |= np.abs((P[inner] - w.line.centroid) @ w.line.normal) <= band
+        qu = P[inner] @ u
+        ok[inner[(qu >= bl @ u - band) & (qu <= br @ u + band)]] = True
+        return float(np.count_nonzero(ok[kept]) / len(kept))
+
+
+def _on_line(seg: Segments, ref: Line, ln: Line, max_deg: float = 5.0) -> bool:
+    """Whether piece ``ln`` lies on the line of ``ref`` (within ``max_deg`` and two
+    tolerances)."""
+    if _angle_deg(ln.direction, ref.direction) > max_deg:
+        return False
+    off = np.abs((seg.points[ln.index] - ref.centroid) @ ref.normal)
+    return bool(np.median(off) <= 2.0 * seg.tol)
+
+
+def _robust_uv_line(qu: FloatArray, qv: FloatArray, tol: float) -> tuple[float, float] | None:
+    """v = a + b u through the most points within two tolerances, of the lines through pairs
+    of (at most 40, evenly picked) points at least a third of the stretch apart; refitted on
+    those points. Spike runs less than half the points do not move it."""
+    n = len(qu)
+    if n < 3:
+        return None
+    pick = np.unique(np.linspace(0, n - 1, min(n, 40)).round().astype(np.intp))
+    i, j = np.triu_indices(len(pick), k=max(1, len(pick) // 3))
+    i, j = pick[i], pick[j]
+    du = qu[j] - qu[i]
+    ok = np.abs(du) > 1e-9
+    if not np.any(ok):
+        return None
+    i, j = i[ok], j[ok]
+    b = (qv[j] - qv[i]) / (qu[j] - qu[i])
+    a = qv[i] - b * qu[i]
+    count = (np.abs(qv[None, :] - (a[:, None] + b[:, None] * qu[None, :])) <= 2.0 * tol).sum(1)
+    k = int(np.argmax(count))
+    keep = np.abs(qv - (a[k] + b[k] * qu)) <= 2.0 * tol
+    if np.count_nonzero(keep) < 3:
+        return None
+    A = np.column_stack([np.ones(np.count_nonzero(keep)), qu[keep]])
+    coef = np.linalg.lstsq(A, qv[keep], rcond=None)[0]
+    return float(coef[0]), float(coef[1])
+
+
+def _local_v(qu: FloatArray, qv: FloatArray, ut: float, h: float, tol: float) -> float | None:
+    """v of the surface at u = ut: a robust line fit of the points within h of it (None: fewer
+    than 3 there, or none on one side)."""
+    sel = np.abs(qu - ut) <= h
+    if np.count_nonzero(sel) < 3:
+        return None
+    a, b = qu[sel] - ut, qv[sel]
+    if not (np.any(a <= 0) and np.any(a >= 0)):
+        return None
+    keep = np.abs(b - np.median(b)) <= max(
+        5.0 * tol, 4.0 * float(np.median(np.abs(b - np.median(b))))
+    )
+    for _ in range(2):
+        if np.count_nonzero(keep) < 3:
+            return None
+        A = np.column_stack([np.ones(np.count_nonzero(keep)), a[keep]])
+        coef = np.linalg.lstsq(A, b[keep], rcond=None)[0]
+        r = b - (coef[0] + coef[1] * a)
+        keep = np.abs(r) <= 3.0 * tol
+    return float(coef[0])
+
+
+def _area(pts: FloatArray, P: FloatArray, inner: IntArray, u: FloatArray) -> float:
+    """The polygon of the top corners, the bottom corners and the surface between them, below
+    the line joining the top corners (mm^2)."""
+    qu = P[inner] @ u
+    zone = inner[(qu > pts[1] @ u) & (qu < pts[5] @ u)]
+    ring = np.vstack([pts[0], pts[1], P[zone], pts[5], pts[6]])
+    y, z = ring[:, 0], ring[:, 1]
+    return float(abs(0.5 * (np.dot(y, np.roll(z, -1)) - np.dot(z, np.roll(y, -1)))))

@@ -1,0 +1,171 @@
+"""The groove extractor (issue 25): the 7 points of empty and partly filled grooves, its seam
+reference, st.classify on filled grooves, and the other families refusing them.
+
+Oracle: the synthetic grooves' exact geometry (seamtrack.features.synthetic_groove: the empty
+groove's analytic corners, beads laid with seamtrack.workpiece.beads, the 7 points read off the
+polylines and carried into the laser plane by the profile's pose), profiles drawn with the
+real-sensor artefact model."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from seamtrack.errors import PluginError
+from seamtrack.features.classify import classify
+from seamtrack.features.extractors import extractor
+from seamtrack.features.synthetic import synthetic_profile
+from seamtrack.features.synthetic_groove import (
+    GROOVES,
+    fill,
+    groove,
+    groove_points,
+    groove_profile,
+    remaining_area_mm2,
+)
+from seamtrack.sensing.sensor import preset
+
+OTHERS = ("v-groove", "square-butt", "fillet", "lap", "outside-corner")
+
+
+def _profiles(kind, layers, n, seed):
+    g = groove(kind)
+    out = []
+    for i in range(n):
+        rng = np.random.default_rng([layers, i, seed])
+        s = fill(g, layers, bead_area_mm2=20.0, rng=rng, jitter_mm=0.5)[0] if layers else None
+        out.append(
+            groove_profile(
+                g,
+                s,
+                rng=rng,
+                roll_deg=rng.uniform(-5, 5),
+                pitch_deg=rng.uniform(-5, 5),
+                lateral_offset_mm=rng.uniform(-2, 2),
+            )
+        )
+    return out
+
+
+def _errors(kind, layers, n, seed):
+    ex = extractor("groove")
+    errs, found = [], 0
+    for profile, truth in _profiles(kind, layers, n, seed):
+        f = ex(profile)
+        if f:
+            found += 1
+            assert f.edges_laser.shape == (7, 2)
+            errs.append(np.hypot(*(f.edges_laser - truth.points_laser).T))
+    return found, np.array(errs)
+
+
+# ----------------------------------------------------------------- the synthetic truth
+def test_empty_grooves_have_their_analytic_points():
+    v = groove("v", angle_deg=60.0, gap_mm=2.0, thickness_mm=20.0)
+    w = 1.0 + 20.0 * math.tan(math.radians(30.0))
+    pts = groove_points(v)
+    assert pts[0] == pytest.approx([-w, 0.0]) and pts[6] == pytest.approx([w, 0.0])
+    assert pts[1] == pytest.approx([-1.0, -20.0]) and pts[5] == pytest.approx([1.0, -20.0])
+    assert pts[2:5, 1] == pytest.approx([-20.0] * 3)
+    assert v.area_mm2 == pytest.approx(0.5 * (2.0 + 2 * w) * 20.0)
+    ng = groove("narrow-gap")
+    assert groove_points(ng)[1] == pytest.approx([-6.0, -25.0])
+
+
+def test_each_bead_takes_its_area_from_the_groove():
+    """Mass conservation through lay_bead: the remaining area drops by the bead's area."""
+    for kind in GROOVES:
+        g = groove(kind)
+        _, history = fill(g, 2, bead_area_mm2=20.0)
+        before = g.area_mm2
+        for s in history:
+            after = remaining_area_mm2(s, g.top)
+            assert before - after == pytest.approx(20.0, rel=1e-6)
+            before = after
+
+
+# ----------------------------------------------------------------- accuracy
+@pytest.mark.parametrize("layers", range(7))
+def test_v_groove_points_within_0_2_mm_p95_at_every_fill_state(layers):
+    """60 deg V, 20 mm plate, 2 mm root gap on a backing, 0..6 layers of 20 mm^2 beads (the
+    last leaves about a third of the groove), real-sensor artefacts, tilts +-5 deg: every
+    profile found and the 7 points' errors pooled p95 <= 0.2 mm."""
+    found, e = _errors("v", layers, 20, 11)
+    assert found == 20
+    assert np.percentile(e, 95) <= 0.2
+
+
+@pytest.mark.parametrize("kind", ["narrow-gap", "u"])
+@pytest.mark.parametrize("layers", [0, 2, 5])
+def test_narrow_gap_and_u_points_are_found(kind, layers):
+    """Narrow gap (walls 4 deg off vertical, 25 mm deep) and U (10 deg walls, 3 mm root
+    radius): all found, median error <= 0.15 mm. Their p95 (0.2-1.8 mm) is not yet at the
+    issue's 0.2 mm: a wall nearly along the rays shows no points, spikes at its foot stand for
+    the corner; an empty U's round has no sharp foot (docs/extractors.md)."""
+    found, e = _errors(kind, layers, 12, 12)
+    assert found == 12
+    assert np.median(e) <= 0.15
+
+
+def test_remaining_area_is_measured():
+    """Noise-free: the area of the polygon the extractor reads is within 3 % of the truth."""
+    g = groove("v")
+    s = fill(g, 3, bead_area_mm2=20.0)[0]
+    profile, truth = groove_profile(g, s, rng=np.random.default_rng(0), artefacts=None)
+    f = extractor("groove")(profile)
+    assert f.area_mm2 == pytest.approx(truth.area_mm2, rel=0.03)
+
+
+# ----------------------------------------------------------------- reference
+@pytest.mark.parametrize(("reference", "row"), [("centre", 3), ("left", 1), ("right", 5)])
+def test_the_reference_picks_the_seam_point(reference, row):
+    profile, truth = _profiles("v", 2, 1, 5)[0]
+    f = extractor("groove", reference=reference)(profile)
+    assert f and f.joint == "groove"
+    assert f.point_laser == pytest.approx(f.edges_laser[row])
+    assert np.hypot(*(f.point_laser - truth.points_laser[row])) <= 0.3
+
+
+def test_an_unknown_reference_is_refused():
+    with pytest.raises(PluginError) as err:
+        extractor("groove", reference="middle")
+    assert err.value.field == "extractor.reference"
+
+
+# ----------------------------------------------------------------- which joint
+@pytest.mark.parametrize("kind", GROOVES)
+def test_classify_names_a_filled_groove_groove(kind):
+    profiles = [p for layers in (1, 3) for p, _ in _profiles(kind, layers, 5, 21)]
+    assert np.mean([classify(p)[0] == "groove" for p in profiles]) >= 0.9
+
+
+def test_classify_names_an_empty_v_v_groove_and_a_wide_flat_bottom_groove():
+    v = [p for p, _ in _profiles("v", 0, 5, 22)]
+    assert all(classify(p)[0] == "v-groove" for p in v)
+    ng = [p for p, _ in _profiles("narrow-gap", 0, 5, 22)]
+    assert all(classify(p)[0] == "groove" for p in ng)
+    assert all(extractor("groove")(p) for p in v)  # asked directly it answers on a V
+
+
+@pytest.mark.parametrize("kind", GROOVES)
+def test_other_families_refuse_a_filled_groove_with_a_reason(kind):
+    profiles = [p for layers in (1, 2, 4) for p, _ in _profiles(kind, layers, 6, 23)]
+    for name in OTHERS:
+        answers = [extractor(name)(p) for p in profiles]
+        assert np.mean([bool(f) for f in answers]) <= 0.06, name
+        assert all(f.reason for f in answers if not f)
+
+
+def test_v_groove_says_why_it_refuses_beads():
+    profile, _ = _profiles("v", 2, 1, 24)[0]
+    f = extractor("v-groove")(profile)
+    assert not f and "not a v-groove" in f.reason
+
+
+@pytest.mark.parametrize("shape", ["flat", "block", "fillet", "lap", "outside-corner"])
+def test_no_groove_where_there_is_none(shape):
+    profile, _ = synthetic_profile(shape, preset("paper"), roll_deg=4.0)
+    f = extractor("groove")(profile)
+    assert not f and f.reason

@@ -1,0 +1,250 @@
+"""The multi-pass job's pieces without a closed loop: the scene sections and their checks, the
+process formulas, the pass's true path, the measured groove from frames, the arc's start and
+end, and the fusion margin. The job itself runs in tests/test_job_run.py."""
+
+from __future__ import annotations
+
+import math
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from seamtrack.control.planner import PassPlan
+from seamtrack.errors import PluginError, PluginRuntimeError, SceneError
+from seamtrack.sensing.profiles import Feature
+from seamtrack.simulation import job
+from seamtrack.simulation.passes import (
+    arc_width_to_height,
+    check_passes,
+    heat_input_kj_mm,
+    overridden,
+    process_of,
+)
+from seamtrack.simulation.scene import SceneErrorList, validate
+from seamtrack.workpiece.beads import BeadShape, bead_area_mm2
+from seamtrack.workpiece.fill import FillState
+
+TAN30 = math.tan(math.radians(30))
+
+
+def v_state(length: float = 10.0, thickness: float = 20.0, gap: float = 2.0) -> FillState:
+    """A straight seam along +X (torch normal +Z) with an analytic V on a backing."""
+    s = np.arange(0.0, length + 1e-9, 0.5)
+    frames = np.tile(np.eye(4), (len(s), 1, 1))
+    frames[:, 0, 3] = s
+    y = np.arange(-25.0, 25.0 + 1e-9, 0.05)
+    z = np.clip((np.abs(y) - gap / 2) / TAN30, 0.0, thickness)
+    return FillState.from_profiles(s, frames, y, np.repeat(z[None, :], len(s), axis=0))
+
+
+def job_scene(**sections) -> dict:
+    data = {
+        "sensor": {"mode": "mesh"},
+        "workpiece": {"script": "v_groove"},
+        "tracker": {"name": "trajectory"},
+        "extractor": {"name": "groove"},
+        "passes": {"count": "auto"},
+    }
+    data.update(sections)
+    return data
+
+
+# --------------------------------------------------------------------------- the scene
+def test_process_edge_units_and_formulas() -> None:
+    c = validate(job_scene(process={"wire_feed_m_min": 9.0, "voltage_v": 30.0,
+                                    "current_a": 280.0}))  # fmt: skip
+    p = process_of(c)
+    assert p.wire_feed_mm_s == pytest.approx(150.0)  # 9 m/min
+    # mass conservation, the same in the planner and in the beads module
+    assert p.bead_area_mm2(6.0) == pytest.approx(bead_area_mm2(1.2, 150.0, 6.0, 0.97))
+    assert p.bead_area_mm2(6.0) == pytest.approx(0.97 * math.pi * 0.36 * 150.0 / 6.0)
+    # heat input k U I / v * 1e-3, k = 0.8 for MIG/MAG
+    assert heat_input_kj_mm(c, 6.0) == pytest.approx(0.8 * 30.0 * 280.0 / 6.0 * 1e-3)
+
+
+def test_arc_wetting_angle_sets_width_to_height() -> None:
+    c = validate(job_scene(process={"bead": {"model": "arc", "wetting_angle_deg": 60.0}}))
+    assert process_of(c).width_to_height == pytest.approx(
+        BeadShape("arc", wetting_angle_rad=math.radians(60.0)).ratio
+    )
+    assert arc_width_to_height(math.radians(90.0)) == pytest.approx(2.0)  # a half circle
+
+
+@pytest.mark.parametrize(
+    ("section", "field"),
+    [
+        ({"process": {"wire_feed_m_min": 0.0}}, "process.wire_feed_m_min"),
+        ({"process": {"wire_feed_m_min": -3.0}}, "process.wire_feed_m_min"),
+        ({"process": {"deposition_efficiency": 1.2}}, "process.deposition_efficiency"),
+        ({"process": {"bead": {"model": "gauss"}}}, "process.bead.model"),
+        ({"passes": {"count": 0}}, "passes.count"),
+        ({"passes": {"count": "many"}}, "passes.count"),
+        ({"passes": {"overrides": [{"offset_mm": 1.0}]}}, "passes.overrides.0.number"),
+        ({"planner": {"nme": "fixed"}}, "planner.nme"),
+    ],
+)
+def test_schema_refuses_in_one_line(section: dict, field: str) -> None:
+    with pytest.raises(SceneErrorList) as info:
+        validate(job_scene(**section))
+    assert info.value.fields == [field]
+    assert len(str(info.value).splitlines()) == 1
+
+
+@pytest.mark.parametrize(
+    ("section", "field"),
+    [
+        ({"passes": {"overrides": [{"number": 1, "work_angle_deg": 5.0}]}},
+         "passes.overrides.0.work_angle_deg"),
+        ({"passes": {"overrides": [{"number": 2}, {"number": 2}]}}, "passes.overrides.1.number"),
+        ({"passes": {"count": 3, "overrides": [{"number": 4}]}}, "passes.overrides.0.number"),
+        ({"process": {"travel_speed_min_mm_s": 9.0, "travel_speed_max_mm_s": 8.0}},
+         "process.travel_speed_min_mm_s"),
+        ({"simulation": {"welding_speed_mm_s": 20.0}}, "simulation.welding_speed_mm_s"),
+        ({"process": {"bead": {"wetting_angle_deg": 50.0}}}, "process.bead.wetting_angle_deg"),
+        ({"tracker": {"name": "convergence-radius"}}, "tracker.name"),
+        ({"extractor": {"name": "v-groove"}}, "extractor.name"),
+        ({"sensor": {"mode": "seam"}}, "passes"),
+        ({"planner": {"name": "no_such_planner"}}, "planner.name"),
+    ],
+)  # fmt: skip
+def test_job_checks_refuse(section: dict, field: str) -> None:
+    with pytest.raises((SceneError, PluginError)) as info:
+        check_passes(validate(job_scene(**section)))
+    assert info.value.field == field
+
+
+def test_a_planner_without_passes_is_refused() -> None:
+    data = job_scene(planner={"name": "fixed"})
+    del data["passes"]
+    with pytest.raises(SceneError) as info:
+        check_passes(validate(data))
+    assert info.value.field == "planner"
+
+
+def test_overrides_replace_the_plan() -> None:
+    c = validate(job_scene(passes={"overrides": [
+        {"number": 2, "reference": "left", "offset_mm": 1.5, "travel_speed_mm_s": 7.0,
+         "wire_feed_m_min": 6.0}]}))  # fmt: skip
+    plan = PassPlan("centre", 0.0, 0.0, 5.0, 100.0, 0, 1, 2, False, np.array([0.0, 10.0]),
+                    np.array([4.0, 6.0]), np.array([0.3, 0.4]))  # fmt: skip
+    assert overridden(plan, c.passes, 0) is plan  # pass 1: untouched
+    new = overridden(plan, c.passes, 1)
+    assert (new.reference, new.offset_mm, new.wire_feed_mm_s) == ("left", 1.5, 100.0)
+    assert new.speed_at(5.0) == 7.0 and new.offset_at(5.0) == 1.5
+
+
+# --------------------------------------------------------------------------- the pass
+def test_pass_path_is_the_reference_point_moved_by_the_offset() -> None:
+    fill = v_state()
+    s = fill.s_mm
+    plan = PassPlan("centre", 0.0, 0.0, 5.0, 100.0, 0, 0, 1, False, s, np.full(len(s), 5.0),
+                    0.1 * s)  # fmt: skip
+    path = job.pass_path(fill, "centre", plan)
+    # the empty V's middle bottom point: y = 0 on the backing (z = 0), the seam along +X
+    assert np.allclose(path.points[:, 0], s)
+    assert np.allclose(path.points[:, 1], 0.1 * s)
+    assert np.allclose(path.points[:, 2], 0.0)
+    left = job.pass_path(fill, "left", None)
+    assert np.allclose(left.points[:, 1], -1.0, atol=0.06)  # the wall's foot at the gap's edge
+
+
+def test_measured_groove_in_station_frames_left_to_right() -> None:
+    """Frames of a sensor above the seam, its laser y against the stations' y (a flipped
+    mount): the measured 7 points come back in station coordinates, y ascending."""
+    fill = v_state()
+    seam = job.Seam.from_points(fill.T_world_station[:, :3, 3])
+    truth = fill.groove_points(4)
+    frames = []
+    for x in (2.0, 2.1, 7.0):
+        T = np.eye(4)  # sensor frame: x along the seam, y_L = -y, z_L = -z (looking down)
+        T[:3, :3] = np.diag([1.0, -1.0, -1.0])
+        T[:3, 3] = (x, 0.0, 100.0)
+        laser = np.column_stack([-truth[:, 0], 100.0 - truth[:, 1]])[::-1]  # left = -y_L
+        frames.append((Feature(point_laser=laser[3], point_world=np.array([x, 0, 0.0]),
+                               edges_laser=laser, area_mm2=50.0), T))  # fmt: skip
+    frames.append((Feature.failed("nothing"), np.eye(4)))
+    groove = job.measured_groove(frames, fill, seam)
+    assert groove is not None
+    assert np.allclose(groove.s_mm, [2.0, 7.0])
+    assert np.allclose(groove.points, truth[None], atol=1e-9)
+    assert np.allclose(groove.area_mm2, 50.0)
+    assert job.measured_groove(frames[-1:], fill, seam) is None
+
+
+def test_ramped_start_and_crater_keep_the_planned_area() -> None:
+    planned = np.full(7, 5.0)
+    speed = np.array([0.5, 2.0, 5.0, 3.0, 5.0, 1.0, 0.2])
+    out = job._ramped(speed, planned)
+    # the slow middle (a tracking slowdown) stays: a fatter bead; the ramps take the plan's
+    assert out.tolist() == [5.0, 5.0, 5.0, 3.0, 5.0, 5.0, 5.0]
+
+
+def test_path_runs_off_the_ends_within_the_margin() -> None:
+    seam = job.Seam.from_points([[0.0, 0, 0], [30.0, 0, 0]])
+    path = np.column_stack([np.linspace(1.0, 28.5, 10), np.full(10, 0.2), np.zeros(10)])
+    area = np.arange(10.0)
+    out, a = job._to_the_ends(path, area, seam)
+    assert np.allclose(out[0], [0.0, 0.2, 0.0]) and np.allclose(out[-1], [30.0, 0.2, 0.0])
+    assert a[0] == 0.0 and a[-1] == 9.0 and len(a) == 12
+    far = path[2:-2]  # 4.1 mm from the start: beyond the margin, left as it is
+    out, a = job._to_the_ends(far, area[2:-2], seam)
+    assert len(out) == len(far)
+
+
+def test_fusion_margin_counts_the_wall_beads_only() -> None:
+    fill = v_state()
+    line = np.column_stack([np.linspace(-1, 11, 50), np.zeros(50), np.full(50, 10.0)])
+    area = np.full(50, 20.0)
+    shape = BeadShape()
+    fill = fill.deposit(line + [0, -1.4, 0], area, shape)  # beside the left wall's foot
+    fill = fill.deposit(line + [0, 0.0, 0], area, shape)  # in the middle
+
+    def rec(bead: int, n: int, cap: bool = False) -> SimpleNamespace:
+        return SimpleNamespace(plan=PassPlan("centre", 0.0, 0.0, 5.0, 100.0, 0, bead, n, cap))
+
+    # a cap bead, and the third of three (the middle, laid after both walls): no wall bead
+    assert np.all(np.isinf(job.fusion_margin_mm(fill, [rec(0, 3, cap=True), rec(2, 3)])))
+    margin = job.fusion_margin_mm(fill, [rec(0, 3), rec(2, 3)])
+    expected = -np.nanmin(fill.beads[0].margin_mm, axis=1)
+    assert np.allclose(margin, expected)
+    assert job.is_wall_bead(PassPlan("left", 1.0, 0.0, 5.0, 100.0, 0, 2, 3))
+    assert job.is_wall_bead(PassPlan("centre", 0.0, 0.0, 5.0, 100.0, 0, 0, 1))
+
+
+def test_a_planners_adapt_is_checked() -> None:
+    plan = PassPlan("centre", 0.0, 0.0, 5.0, 100.0, 0, 0)
+    ahead = None
+    assert np.isnan(job._adapted(lambda g, p: None, ahead, plan, "p", 0.0)).all()
+    assert job._adapted(lambda g, p: (4.0, 0.5), ahead, plan, "p", 0.0) == (4.0, 0.5)
+    for garbage in [(0.0, 1.0), (4.0, float("nan")), "fast", (1.0,)]:
+        with pytest.raises(PluginRuntimeError) as info:
+            job._adapted(lambda g, p, answer=garbage: answer, ahead, plan, "p", 1.0)
+        assert info.value.field == "planner.name"
+
+    def raises(g, p):
+        raise ValueError("bug")
+
+    with pytest.raises(PluginRuntimeError) as info:
+        job._adapted(raises, ahead, plan, "p", 1.0)
+    assert info.value.field == "planner.name"
+
+
+def test_a_frame_below_the_last_fill_is_no_groove() -> None:
+    """The fill only grows: a frame whose fill surface lies more than FILL_DROP_MM below what
+    the pass before measured there is a bogus answer (e.g. the backing seen under the beads)."""
+    fill = v_state()
+    seam = job.Seam.from_points(fill.T_world_station[:, :3, 3])
+    truth = fill.groove_points(4)
+    T = np.eye(4)
+    T[:3, :3] = np.diag([1.0, -1.0, -1.0])
+    T[:3, 3] = (2.0, 0.0, 100.0)
+    laser = np.column_stack([-truth[:, 0], 100.0 - truth[:, 1]])[::-1]
+    frame = (Feature(point_laser=laser[3], point_world=np.array([2.0, 0, 0.0]),
+                     edges_laser=laser, area_mm2=50.0), T)  # fmt: skip
+    previous = job.measured_groove([frame], fill, seam)
+    assert previous is not None
+    assert not job._below_the_fill(frame, fill, seam, previous)
+    higher = job.MeasuredGroove(previous.s_mm, previous.points + [0.0, job.FILL_DROP_MM + 0.1],
+                                previous.area_mm2)  # fmt: skip
+    assert job._below_the_fill(frame, fill, seam, higher)

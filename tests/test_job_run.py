@@ -1,0 +1,110 @@
+"""Multi-pass jobs run whole (short seams): every pass a closed loop on the part and the beads
+before it, tracked within 0.5 mm, the groove filled (reinforcement 0-3 mm at every station),
+and ``seamtrack run`` writing one folder a pass and job.json.
+
+Needs the groove extractor (``seamtrack.features.groove``, issue 25's ``groove`` branch)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+pytest.importorskip("seamtrack.features.groove")
+
+from seamtrack.cli.main import main
+from seamtrack.simulation.job import run_job
+from seamtrack.simulation.scene import load_scene
+
+pytestmark = [pytest.mark.cad, pytest.mark.embree]
+
+#: multipass-v-groove on a 12 mm plate and a 20 mm seam, 6 m/min of wire: a few passes.
+SHORT = {
+    "workpiece.params.seam_length_mm": 20.0,
+    "workpiece.params.plate_thickness_mm": 12.0,
+    "process.wire_feed_m_min": 6.0,
+}
+
+
+@pytest.fixture(scope="module")
+def short_job():
+    return run_job(load_scene("multipass-v-groove", SHORT))
+
+
+#: What keeps the closed-loop job from filling the groove today: on some frames the groove
+#: extractor answers a degenerate groove (its bottom points on the backing, under a fill) or
+#: refuses a crowned fill ("a raised part stands between the plates"), and the tracker follows
+#: the former; the plan alone fills it (tests/test_job_plan.py). Strict: remove when it passes.
+EXTRACTOR_ON_FILLS = pytest.mark.xfail(
+    strict=True, reason="groove extractor on crowned and nearly full grooves (issue 25)"
+)
+
+
+@EXTRACTOR_ON_FILLS
+def test_a_short_job_fills_the_groove(short_job) -> None:
+    s = short_job.summary
+    assert s["status"] == "completed", s["stop_reason"]
+    welded = [r for r in short_job.passes if r.plan is not None]
+    assert s["passes"] == len(welded) >= 2
+    assert sum(s["beads_per_layer"]) == s["passes"]
+    for r in welded:  # every pass tracked on its own reference
+        assert r.result.summary["status"] == "completed", r.name
+        assert r.result.summary["max_error_mm"] <= 0.5, r.name
+    # at every station every pass welded: neither under- nor overfilled
+    reinforcement = short_job.fill.reinforcement_mm()
+    keep = (short_job.fill.s_mm >= s["stations_from_mm"]) & (
+        short_job.fill.s_mm <= s["stations_to_mm"]
+    )
+    assert s["stations_to_mm"] - s["stations_from_mm"] >= 15.0
+    assert np.all(reinforcement[keep, 0] >= 0.0)
+    assert np.all(reinforcement[keep, 1] <= 3.0)
+    assert s["underfilled_stations"] == 0
+
+
+@EXTRACTOR_ON_FILLS
+def test_each_bead_holds_the_wire_the_torch_melted(short_job) -> None:
+    """Mass conservation over the whole pass: the metal laid (area integrated along the seam)
+    is the wire fed while the arc burned, times the deposition efficiency, within the ends
+    (run-off and the arc's synchronised start and crater)."""
+    scene = load_scene("multipass-v-groove", SHORT)
+    assert scene.config.process is not None
+    eta = scene.config.process.deposition_efficiency
+    wire_area = np.pi * (scene.config.process.wire_diameter_mm / 2) ** 2
+    fill = short_job.fill
+    welded = [r for r in short_job.passes if r.plan is not None]
+    for bead, r in zip(fill.beads, welded, strict=True):
+        volume = np.trapezoid(bead.area_mm2, fill.s_mm)
+        melted = eta * wire_area * r.plan.wire_feed_mm_s * r.arc_time_s
+        assert volume == pytest.approx(melted, rel=0.2), r.name
+
+
+def test_the_adaptive_speed_follows_the_measured_area(short_job) -> None:
+    """Where the groove holds more metal the torch goes slower: the pass's speed profile is
+    the mass-conservation speed for the area left there (within the process window)."""
+    for r in short_job.passes:
+        if r.plan is None or r.plan.speed_profile_mm_s is None:
+            continue
+        assert np.all(r.plan.speed_profile_mm_s >= 2.0 - 1e-9)
+        assert np.all(r.plan.speed_profile_mm_s <= 15.0 + 1e-9)
+
+
+def test_seamtrack_run_writes_a_folder_a_pass_and_the_job(tmp_path: Path, capsys) -> None:
+    out = tmp_path / "job"
+    args = ["run", "multipass-v-groove", "--out", str(out), "--no-plot", "--quiet"]
+    for key, value in SHORT.items():
+        args += ["--set", f"{key}={value}"]
+    args += ["--set", "passes.count=2"]
+    assert main(args) == 0
+    summary = json.loads((out / "job.json").read_text())
+    assert summary["passes"] == 2
+    names = sorted(p.name for p in out.iterdir() if p.is_dir())
+    assert names == ["pass_00_scan", "pass_01", "pass_02"]
+    for name in names:
+        assert {"summary.json", "trace.csv", "frames.csv", "scene.toml"} <= {
+            p.name for p in (out / name).iterdir()
+        }
+    assert [row["heat_input_kj_mm"] for row in summary["per_pass"][1:]] == pytest.approx(
+        [0.8 * 28.0 * 250.0 / row["mean_speed_mm_s"] * 1e-3 for row in summary["per_pass"][1:]]
+    )

@@ -1,0 +1,208 @@
+"""The fill planners on hand-made measured grooves (analytic V sections): beads per layer,
+corners first, the cap side to side, speed against the measured area, and the refusals."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from seamtrack.control.planner import (
+    CAP_BAND_FRACTION,
+    CAP_OVERLAP_MM,
+    AdaptivePlanner,
+    FixedPlanner,
+    JobState,
+    MeasuredGroove,
+    PassPlan,
+    Process,
+    cap_area_mm2,
+    checked_plan,
+    fill_order,
+    layout,
+    planner,
+)
+from seamtrack.errors import PluginError, PluginRuntimeError
+
+
+def v_section(t: float, angle_deg: float, gap: float, face: float) -> tuple[np.ndarray, float]:
+    """The 7 points of an empty V (y ascending) and its area below the top-corner line."""
+    h = t - face
+    half = 0.5 * gap + h * math.tan(math.radians(angle_deg / 2))
+    points = np.array([[-half, t], [-gap / 2, face], [-gap / 4, face], [0, face],
+                       [gap / 4, face], [gap / 2, face], [half, t]])  # fmt: skip
+    area = gap * t + h * h * math.tan(math.radians(angle_deg / 2))
+    return points, area
+
+
+def groove(gaps: np.ndarray, t: float = 20.0, angle: float = 60.0, face: float = 1.0):
+    s = np.linspace(0.0, 10.0 * (len(gaps) - 1), len(gaps))
+    sections = [v_section(t, angle, g, face) for g in gaps]
+    return MeasuredGroove(s, np.stack([p for p, _ in sections]), np.array([a for _, a in sections]))
+
+
+PROCESS = Process(nominal_speed_mm_s=5.0)
+
+
+def test_mass_conservation_and_window() -> None:
+    # 0.97 * pi * 0.6^2 * 8000/60 / 5 (mm^2)
+    expected = 0.97 * math.pi * 0.36 * (8000.0 / 60.0) / 5.0
+    assert PROCESS.bead_area_mm2(5.0) == pytest.approx(expected, rel=1e-12)
+    assert PROCESS.speed_for_area(expected) == pytest.approx(5.0)
+    assert PROCESS.speed_for_area(1e-3) == PROCESS.speed_max_mm_s
+    assert PROCESS.speed_for_area(1e6) == PROCESS.speed_min_mm_s
+
+
+def test_layout_beads_per_layer_from_areas() -> None:
+    g = groove(np.full(5, 2.0))
+    state = JobState(PROCESS)
+    plan = layout(g, state)
+    fill_area, top = g.area_mm2[0], g.top_width_mm[0]
+    bead = PROCESS.bead_area_mm2(5.0)
+    crown = cap_area_mm2(top, state.reinforcement_mm)
+    # the fill stops a fraction of a bead's height below the top; the cap fills the band and
+    # lays the crown, in beads that cover the width (plus the overlap) every 0.7 bead widths,
+    # none smaller than the fastest travel speed lays
+    band = CAP_BAND_FRACTION * PROCESS.bead_height_mm(bead) * top
+    cap = plan.beads_per_layer[-1]
+    assert plan.cap_bead_area_mm2 * cap == pytest.approx(band + crown)
+    covers = (top + 2 * CAP_OVERLAP_MM) / cap <= 0.7 * PROCESS.bead_width_mm(plan.cap_bead_area_mm2)
+    assert covers or plan.cap_bead_area_mm2 < 2 * PROCESS.bead_area_mm2(15.0)
+    assert plan.cap_bead_area_mm2 >= PROCESS.bead_area_mm2(15.0)
+    layers = len(plan.beads_per_layer) - 1
+    assert layers == round((g.depth_mm[0] * (fill_area - band) / fill_area)
+                           / PROCESS.bead_height_mm(bead))  # fmt: skip
+    for n in plan.beads_per_layer[:-1]:  # equal-area layers, round(layer / bead) >= 1
+        assert n == max(1, round((fill_area - band) / layers / bead))
+    assert plan.fill_bead_area_mm2 * sum(plan.beads_per_layer[:-1]) == pytest.approx(
+        fill_area - band
+    )
+    assert 10 <= plan.passes <= 18  # a 20 mm plate, 60 deg: about a dozen passes or so
+
+
+@pytest.mark.parametrize("count", [1, 5, 12, 20])
+def test_layout_with_a_count_holds_that_many_passes(count: int) -> None:
+    plan = layout(groove(np.full(3, 2.0)), JobState(PROCESS, count=count))
+    assert plan.passes == count
+    assert all(n >= 1 for n in plan.beads_per_layer)
+
+
+def test_fill_order_is_corners_first() -> None:
+    assert fill_order(1) == [0]
+    assert fill_order(2) == [0, 1]
+    assert fill_order(4) == [0, 3, 1, 2]
+
+
+@pytest.mark.parametrize("wall_reference", [False, True])
+def test_passes_walls_first_then_middle_then_cap_side_to_side(wall_reference: bool) -> None:
+    g = groove(np.full(3, 2.0))
+    p = AdaptivePlanner(wall_reference=wall_reference)
+    state = JobState(PROCESS, count=24)
+    plans = [p.plan(g, i, state) for i in range(25)]
+    assert plans[-1] is None
+    by_layer: dict[int, list[PassPlan]] = {}
+    for x in plans[:-1]:
+        assert isinstance(x, PassPlan)
+        by_layer.setdefault(x.layer, []).append(x)
+    point = {"left": 1, "right": 5, "centre": 3}
+    last = max(by_layer)
+    assert any(len(b) >= 3 for k, b in by_layer.items() if k != last)
+    for layer, beads in by_layer.items():
+        assert [b.bead_in_layer for b in beads] == list(range(len(beads)))
+        y = [g.points[0, point[b.reference], 0] + float(b.offset_at(g.s_mm[0])) for b in beads]
+        if layer == last:  # the cap, side to side across the top width
+            assert all(b.cap for b in beads)
+            assert np.all(np.diff(y) > 0)
+            assert g.points[0, 0, 0] < y[0] and y[-1] < g.points[0, 6, 0]
+        elif len(beads) >= 2:  # a bead at each wall first, then the middle left to right
+            left, right = g.points[0, 1, 0], g.points[0, 5, 0]
+            assert left < y[0] < y[1] < right
+            assert y[0] - left == pytest.approx(right - y[1])
+            assert all(y[0] < v < y[1] for v in y[2:]) and np.all(np.diff(y[2:]) > 0)
+            if wall_reference:
+                assert (beads[0].reference, beads[1].reference) == ("left", "right")
+            else:
+                assert all(b.reference == "centre" for b in beads)
+
+
+def test_speed_follows_the_measured_area() -> None:
+    # A gap varying along the seam: the adaptive speed is the mass-conservation speed for the
+    # local area over the beads left (within the window); the fixed one is constant.
+    gaps = np.array([1.0, 2.0, 3.0, 4.0])
+    g = groove(gaps)
+    state = JobState(PROCESS)
+    adaptive = AdaptivePlanner().plan(g, 0, state)
+    fixed = FixedPlanner().plan(g, 0, state)
+    assert adaptive is not None and fixed is not None
+    plan = layout(g, state)
+    band = plan.beads_per_layer[-1] * plan.cap_bead_area_mm2 - cap_area_mm2(
+        g.top_width_mm, state.reinforcement_mm
+    )
+    target = (g.area_mm2 - band) / sum(plan.beads_per_layer[:-1])
+    expected = np.clip(PROCESS.bead_area_mm2(1.0) / target, 2.0, 15.0)
+    assert adaptive.speed_at(g.s_mm) == pytest.approx(expected, rel=1e-9)
+    assert np.all(np.diff(adaptive.speed_at(g.s_mm)) < 0)  # wider: slower
+    assert np.ptp(fixed.speed_at(g.s_mm)) == 0.0
+
+
+def test_cap_speed_adapts_to_the_remaining_area() -> None:
+    g = groove(np.full(4, 2.0))
+    p = AdaptivePlanner()
+    state = JobState(PROCESS)
+    lay = layout(g, state)
+    first_cap = sum(lay.beads_per_layer[:-1])
+    p.plan(g, 0, state)
+    # a groove filled to its top line, except 10 mm^2 more at the last station
+    filled = MeasuredGroove(g.s_mm, g.points, np.array([0.0, 0.0, 0.0, 10.0]))
+    cap = p.plan(filled, first_cap, state)
+    assert cap is not None and cap.cap
+    crown = cap_area_mm2(g.top_width_mm, state.reinforcement_mm)
+    area = (filled.area_mm2 + crown) / lay.beads_per_layer[-1]
+    assert cap.speed_at(g.s_mm) == pytest.approx(PROCESS.speed_for_area(area), rel=1e-9)
+
+
+def _ok_plan(**kw) -> PassPlan:
+    base = dict(reference="left", offset_mm=0.5, work_angle_rad=0.0, travel_speed_mm_s=5.0,
+                wire_feed_mm_s=130.0, layer=0, bead_in_layer=0)  # fmt: skip
+    base.update(kw)
+    return PassPlan(**base)  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    "plan",
+    [
+        "garbage",
+        _ok_plan(reference="up"),
+        _ok_plan(travel_speed_mm_s=float("nan")),
+        _ok_plan(travel_speed_mm_s=-1.0),
+        _ok_plan(wire_feed_mm_s=0.0),
+        _ok_plan(offset_mm=40.0),
+        _ok_plan(work_angle_rad=0.1),
+        _ok_plan(speed_s_mm=np.arange(3.0), speed_profile_mm_s=np.array([1.0, -1.0, 2.0])),
+    ],
+)
+@pytest.mark.parametrize("field", ["planner.name", "passes.overrides.1"])
+def test_checked_plan_refuses(plan, field: str) -> None:
+    with pytest.raises(PluginRuntimeError) as info:
+        checked_plan(plan, "adaptive", 0, groove(np.full(2, 2.0)), gantry=True, field=field)
+    assert info.value.field == field
+    assert "\n" not in str(info.value)
+
+
+def test_checked_plan_passes_a_good_plan_and_the_end() -> None:
+    g = groove(np.full(2, 2.0))
+    assert checked_plan(None, "p", 3, g, gantry=True) is None
+    assert checked_plan(_ok_plan(work_angle_rad=0.1), "p", 0, g, gantry=False) is not None
+
+
+def test_planner_names() -> None:
+    assert isinstance(planner("adaptive"), AdaptivePlanner)
+    assert isinstance(planner("fixed"), FixedPlanner)
+    with pytest.raises(PluginError, match="unknown planner"):
+        planner("nope")
+    with pytest.raises(PluginError) as info:
+        planner("adaptive", speed=3)
+    assert info.value.field == "planner.params"
+    with pytest.raises(PluginError, match="cannot import"):
+        planner("no_such_module_xyz:Planner")
