@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from seamtrack.bench.extractors_angles import DETECTED_MM, angle_sweep, angle_table
+from seamtrack.bench.extractors_groove import GROOVE_COLUMNS, bench_real_groove, groove_table
 from seamtrack.errors import SeamtrackError
 from seamtrack.features.extractors import BUILTIN, extractor
 from seamtrack.features.synthetic import Imperfections, synthetic_profile
@@ -497,7 +498,9 @@ def bench_real(
     set's extractor (on ``"none"`` sets, the families' mean), ``classify_us``: the
     classifier's. Writes
     ``extractors_real.csv``, ``extractors_real.md`` and ``extractors_real.json`` into
-    ``out_dir``. ``recording``: ``topic``, ``labels``, ``joint`` for a recording
+    ``out_dir``, and for the V-groove sets the groove extractor's checks
+    (:mod:`seamtrack.bench.extractors_groove`) into ``extractors_real_groove.csv`` and
+    ``.md``. ``recording``: ``topic``, ``labels``, ``joint`` for a recording
     (:func:`load_real_sets`).
     """
     from tqdm import tqdm
@@ -550,6 +553,13 @@ def bench_real(
         writer.writerows(rows)
     (out / "extractors_real.md").write_text(real_table(rows))
     write_json(out / "extractors_real.json", rows)
+    groove = bench_real_groove(sets)  # the groove extractor's 7 points on the V-groove sets
+    if groove:
+        with open(out / "extractors_real_groove.csv", "w", newline="") as fh:
+            writer = csv.DictWriter(fh, fieldnames=GROOVE_COLUMNS)
+            writer.writeheader()
+            writer.writerows(groove)
+        (out / "extractors_real_groove.md").write_text(groove_table(groove))
     return rows
 
 

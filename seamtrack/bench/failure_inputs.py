@@ -412,6 +412,17 @@ CATALOGUE: tuple[Entry, ...] = (
         ),
         field="extractor.expect",
     ),
+    Entry(
+        "groove extractor with an unknown reference",
+        (
+            "run",
+            *MESH,
+            *_set('extractor.name="groove"', 'extractor.params={reference="middle"}'),
+            "--out",
+            "OUT",
+        ),
+        field="extractor.reference",
+    ),
     # --- weldments and weldx
     Entry(
         "seams of a STEP without solids",

@@ -26,6 +26,7 @@ from seamtrack.datasets import joints
 from seamtrack.datasets.kernel import stripe
 from seamtrack.datasets.noise import apply_noise
 from seamtrack.datasets.spec import FAMILIES, DatasetSpec
+from seamtrack.features import synthetic_groove
 from seamtrack.sensing.profiles import Reason
 from seamtrack.sensing.scan import StripeNoise, laser_fan
 from seamtrack.sensing.sensor import LaserLineSensor, preset
@@ -213,6 +214,9 @@ def empty_chunk(spec: DatasetSpec, count: int) -> dict[str, np.ndarray]:
         "T_world_seam": np.zeros((count, 4, 4)),
         "index": np.zeros(count, dtype=np.int64),
     }
+    if spec.joint.passes[1] > 0:
+        arrays["groove_points_laser"] = np.full((count, 7, 2), np.nan)
+        arrays["layers"] = np.zeros(count, dtype=np.uint8)
     if spec.images:
         from seamtrack.datasets.images import empty_images
 
@@ -239,6 +243,10 @@ def fill_sample(plan: Plan, index: int, out: dict[str, np.ndarray], row: int) ->
         web_angle_rad=v["web_angle_deg"] * deg,
         corner_angle_rad=v["corner_angle_deg"] * deg,
     )
+    groove7 = None
+    if d.family == "v-groove" and spec.joint.passes[1] > 0:
+        polylines, groove7, layers = _beads(spec, polylines, features, rng)
+        out["layers"][row] = layers
     tack = d.tack and seam is not None
     if tack:
         assert seam is not None
@@ -267,6 +275,9 @@ def fill_sample(plan: Plan, index: int, out: dict[str, np.ndarray], row: int) ->
         on_plane = lines_in_laser_plane(T, np.array(moved))
         out["seam_point_laser"][row] = on_plane[0]
         out["features_laser"][row, : len(features)] = on_plane[1:]
+        if groove7 is not None:
+            moved7 = [(y - sy, z - sz) for y, z in groove7]
+            out["groove_points_laser"][row] = lines_in_laser_plane(T, np.array(moved7))
     out["joint"][row] = FAMILIES.index(d.family)
     out["path"][row] = d.path
     out["material"][row] = d.material
@@ -289,6 +300,34 @@ def fill_sample(plan: Plan, index: int, out: dict[str, np.ndarray], row: int) ->
         from seamtrack.datasets.images import fill_image
 
         fill_image(spec, index, sensor, spec.part.materials[d.material], segs, T, out, row)
+
+
+def _beads(
+    spec: DatasetSpec,
+    polylines: list[list[tuple[float, float]]],
+    features: list[tuple[float, float]],
+    rng: np.random.Generator,
+) -> tuple[list[list[tuple[float, float]]], list[tuple[float, float]], int]:
+    """Lay a drawn number of layers of beads in a V-groove section (joint frame, z into the
+    part): the new section, the groove's 7 points and the layers. The root gap is closed by
+    the root pass (the two plates' chains joined at their bottoms)."""
+    lo, hi = spec.joint.passes
+    layers = int(rng.integers(int(math.ceil(lo)), int(math.floor(hi)) + 1))
+    area = float(rng.uniform(*spec.joint.bead_area_mm2))
+    left, right = polylines
+    station = np.array([(y, -z) for y, z in [*left, *right]])
+    top = np.array([(y, -z) for y, z in features[:2]])
+    foot = np.array([(y, -z) for y, z in features[2:4]])
+    if layers == 0:  # the empty groove: the bottom points span the root opening
+        g = synthetic_groove.Groove("v", station, top, foot, {})
+        s = np.array([(y, -z) for y, z in [*left[:-1], *right[1:]]])
+        pts = synthetic_groove.groove_points(g, s)
+        return polylines, [(float(y), float(-z)) for y, z in pts], 0
+    g = synthetic_groove.Groove("v", station, top, foot, {})
+    s = synthetic_groove.fill(g, layers, bead_area_mm2=area, rng=rng, jitter_mm=0.3)[0]
+    pts = synthetic_groove.groove_points(g, s)
+    section = [[(float(y), float(-z)) for y, z in s]]
+    return section, [(float(y), float(-z)) for y, z in pts], layers
 
 
 def generate(spec: DatasetSpec, start: int, count: int) -> dict[str, np.ndarray]:

@@ -53,6 +53,11 @@ class Dataset:
     family has no such parameter); ``T_seam_sensor`` and ``T_world_seam`` (4, 4); ``index``
     int64, the sample's number (its seed is ``SeedSequence(spec.seed).spawn(index + 1)[index]``).
 
+    With beads (``[joint] passes`` above 0): ``groove_points_laser`` (7, 2) mm, a V-groove's
+    7 points (left top corner, left bottom corner, three bottom points, right bottom corner,
+    right top corner; :mod:`seamtrack.features.synthetic_groove`; NaN for other families) and
+    ``layers`` uint8, the layers of beads laid in it.
+
     With images (``spec.images``), C camera columns and H rows: ``image`` (H, C) uint16 grey
     levels (full scale ``names["image_levels"]``); its truth ``image_truth_row`` (C,) float, the
     sub-pixel row of the ideal stripe per column (NaN where none) and ``image_truth_laser``
@@ -82,7 +87,7 @@ class Dataset:
                 field="DIR",
                 fix="read it with that version, or write it anew",
             ) from None
-        self.arrays = arrays_of(self.spec.images)
+        self.arrays = arrays_of(self.spec.images, self.spec.joint.passes[1] > 0)
         self.version = str(manifest.get("seamtrack_version", "?"))
         self._handles: dict[int, Any] = {}
         self._pid = os.getpid()

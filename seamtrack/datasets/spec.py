@@ -147,6 +147,10 @@ class JointSpec(_Section):
     tack_probability: FractionRange = (0.0, 0.0)
     tack_height_mm: PositiveRange = (0.5, 1.5)
     tack_width_mm: PositiveRange = (3.0, 6.0)
+    #: Layers of beads laid in a V-groove (issue 25): an integer drawn in [min, max]; (0, 0):
+    #: none, and no groove labels stored.
+    passes: NonNegativeRange = (0.0, 0.0)
+    bead_area_mm2: PositiveRange = (8.0, 20.0)
 
     @model_validator(mode="after")
     def _consistent(self) -> JointSpec:
@@ -157,6 +161,10 @@ class JointSpec(_Section):
                     f"unknown joint family {name!r}",
                     f"use one of {', '.join(FAMILIES)}",
                 )
+        if self.passes[1] > 12:
+            raise _FieldError(
+                "passes", f"up to {self.passes[1]:g} layers", "draw at most 12 layers of beads"
+            )
         if self.weights is not None and len(self.weights) != len(self.families):
             raise _FieldError(
                 "weights",
@@ -524,6 +532,8 @@ sheet_gap_mm = [0.0, 0.5]        # lap: between the sheets
 tack_probability = 0.0           # chance that the stripe crosses a tack weld over the seam
 tack_height_mm = [0.5, 1.5]      # the tack's mound (the seam label stays the true root)
 tack_width_mm = [3.0, 6.0]
+passes = [0, 0]                  # layers of beads in a V-groove (their 7 points are stored)
+bead_area_mm2 = [8.0, 20.0]      # each bead's cross-section
 
 [path]
 kinds = ["straight"]             # geometry mode extrudes the cross-section: straight seams

@@ -77,7 +77,7 @@ def write_chunk(out: Path, spec: DatasetSpec, k: int, arrays: dict[str, np.ndarr
     tmp = out / f".{path.name}.{os.getpid()}.tmp"
     try:
         with h5py.File(tmp, "w") as f:
-            for name in arrays_of(spec.images):
+            for name in arrays_of(spec.images, spec.joint.passes[1] > 0):
                 # One HDF5 chunk an image, compressed (mostly dark pixels).
                 filters = (
                     {"chunks": (1, *arrays[name].shape[1:]), **IMAGE_COMPRESSION}

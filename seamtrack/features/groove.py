@@ -55,7 +55,7 @@ from numpy.typing import NDArray
 from seamtrack.errors import PluginError
 from seamtrack.features._segmentation import fit_line
 from seamtrack.features.base import _Base
-from seamtrack.features.lines import Line, Segments, intersect
+from seamtrack.features.lines import Line, Segments, intersect, segment_profile
 from seamtrack.sensing.profiles import Feature, Profile
 
 FloatArray = NDArray[np.float64]
@@ -112,6 +112,7 @@ class GrooveExtractor(_Base):
     max_plate_deg: float = 15.0
     wall_deg: float = 35.0
     min_depth_mm: float = 0.5
+    max_lines: int = 256
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -121,6 +122,17 @@ class GrooveExtractor(_Base):
                 field="extractor.reference",
                 fix=f"use one of {', '.join(REFERENCES)}",
             )
+
+    def segments(self, profile: Profile) -> Segments | str:
+        """The front end's pieces, up to ``max_lines`` of them (beads are curved: a clean
+        profile of a few caps needs more pieces than the other families' joints)."""
+        return segment_profile(
+            profile,
+            min_tol_mm=self.min_tol_mm,
+            resolution_mm=self.resolution_mm,
+            min_points=self.min_points,
+            max_lines=self.max_lines,
+        )
 
     def _extract(self, profile: Profile, seg: Segments) -> Feature | tuple[Feature, float]:
         found = self.model(seg)
@@ -223,6 +235,8 @@ class GrooveExtractor(_Base):
                 break
             index.append(nxt.index)
             k += step
+            # The plate so far (a quantized plate at a tilt is a staircase of flat pieces).
+            base = _fit(seg.points, np.sort(np.concatenate(index)))
         idx = np.sort(np.concatenate(index))
         line = _fit(seg.points, idx) if len(index) > 1 else base
         if line.direction[0] < 0:  # along increasing column (y)

@@ -38,6 +38,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.workpiece import beads
+
 FloatArray = NDArray[np.float64]
 
 GROOVES = ("v", "narrow-gap", "u")
@@ -217,12 +219,6 @@ def flat_fill(g: Groove, height_mm: float) -> FloatArray:
     return np.asarray(p[keep])
 
 
-def _beads_module() -> Any:
-    from seamtrack.workpiece import beads
-
-    return beads
-
-
 def fill(
     g: Groove,
     layers: int,
@@ -238,7 +234,6 @@ def fill(
     each bead's lateral position moved by up to that (uniform, from ``rng``).
 
     Returns the final top surface and the surface after each bead."""
-    beads = _beads_module()
     shape = beads.BeadShape(kind=kind, width_to_height=width_to_height)
     h_bead = math.sqrt(bead_area_mm2 / (2 / 3 * width_to_height))  # a parabola's height
     w_bead = width_to_height * h_bead
