@@ -51,6 +51,9 @@ BENCHES: dict[str, tuple[tuple[str, ...], str, str]] = {
         "seamtrack bench failures",
         "every bad input of the catalogue through the command line",
     ),
+    "multipass": (("multipass.json",), "seamtrack bench multipass", "multi-pass jobs"),
+    "gym": (("gym.json",), "seamtrack bench gym", "the Gymnasium environment's steps"),
+    "bridge": (("bridge.json",), "seamtrack bench bridge", "the lockstep bridge's cost"),
 }
 
 
@@ -239,7 +242,40 @@ HEADLINE = (
     ("sweep", "sweeps on 2 cores", "seamtrack bench sweep"),
     ("dataset", "labelled datasets, one core", "seamtrack bench dataset"),
     ("failures", "bad input", "seamtrack bench failures"),
+    ("multipass", "multi-pass jobs (gantry, 1.2 mm wire)", "seamtrack bench multipass"),
+    ("gym", "Gymnasium environment, paper-v-groove", "seamtrack bench gym"),
+    ("bridge", "lockstep bridge, algorithm II in another process", "seamtrack bench bridge"),
 )
+
+
+def _multipass() -> str:
+    r = load("multipass")
+    t = r["twelve_pass"]
+    gap = {row["planner"]: row for row in r["varying_gap"]}
+    spread = ", ".join(f"{k} {v['reinforcement_spread_mm']:.2f} mm" for k, v in gap.items())
+    return (
+        f"{t['passes']} passes on {t['seam_mm']:.0f} mm, {t['status']}: max tracking error "
+        f"{t['max_tracking_error_mm']:.2f} mm, reinforcement {t['reinforcement_min_mm']:.2f} to "
+        f"{t['reinforcement_max_mm']:.2f} mm, {t['x_real_time']:.1f}x real time of arc time, "
+        f"peak {t['peak_rss_mb']:.0f} MB; varying gap, reinforcement spread: {spread}"
+    )
+
+
+def _gym() -> str:
+    rows = {row["row"]: row for row in load("gym")["rows"]}
+    single = next(v for k, v in rows.items() if k.startswith("1 env"))
+    vector = [v for k, v in rows.items() if k.startswith("AsyncVectorEnv")]
+    return (
+        f"{single['steps_per_s']:,.0f} steps/s in one process (load "
+        f"{single['load_average_before']:.1f}); AsyncVectorEnv "
+        + ", ".join(f"{v['steps_per_s']:,.0f} steps/s ({v['row'].split(', ')[1]})" for v in vector)
+    )
+
+
+def _bridge() -> str:
+    r = load("bridge")
+    runs = ", ".join(f"{x['run']} {x['x_real_time']:.1f}x" for x in r["runs"])
+    return f"x real time (load {r['load_average_before']:.1f}): {runs}"
 
 
 def headline() -> str:
@@ -258,6 +294,9 @@ def headline() -> str:
         "sweep": _sweep,
         "dataset": _dataset,
         "failures": _failures,
+        "multipass": _multipass,
+        "gym": _gym,
+        "bridge": _bridge,
     }
     rows = [_row(name, what, measured[name], command) for name, what, command in HEADLINE]
     head = ["| figure | measured | command |", "|---|---|---|"]

@@ -66,6 +66,8 @@ def test_the_python_tour_runs_and_its_comments_hold(tour: dict[str, Any]) -> Non
     feature = tour["feature"]
     assert feature  # the v-groove extractor found the seam in the scanned stripe
     assert tour["part"].seam.closest(feature.point_world).distance_mm[0] < 0.05
+    assert tour["env"].observation_space.contains(tour["obs"])  # the Gymnasium block
+    assert tour["reward"] <= 0.0 and not tour["truncated"]
 
 
 def test_the_headline_figures_are_the_benches_json() -> None:
