@@ -218,8 +218,15 @@ def test_a_non_finite_action_is_refused() -> None:
 def test_async_vector_env_gives_the_trajectories_of_single_envs() -> None:
     seeds = [3, 4]
     actions = np.random.default_rng(0).uniform(-0.05, 0.05, size=(40, 2, 2)).astype(np.float32)
+    # spawned workers: a forked one inherits the locks of this process's threads (numba's,
+    # zenoh's from other tests), which may be held at the fork: a hang
     vec = gymnasium.make_vec(
-        ID, num_envs=2, vectorization_mode="async", scene="paper-v-groove", overrides=SHORT
+        ID,
+        num_envs=2,
+        vectorization_mode="async",
+        vector_kwargs={"context": "spawn"},
+        scene="paper-v-groove",
+        overrides=SHORT,
     )
     try:
         obs, _ = vec.reset(seed=seeds)

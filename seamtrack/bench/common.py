@@ -47,3 +47,25 @@ def machine_info() -> dict[str, Any]:
         "trimesh": trimesh.__version__,
         "numba": numba.__version__,
     }
+
+
+def reset_peak_rss() -> int:
+    """Reset this process's peak resident size to its current size (Linux); return it (bytes)."""
+    try:
+        Path("/proc/self/clear_refs").write_text("5")
+    except OSError:  # not Linux: the peak is the process's so far
+        pass
+    return peak_rss(field="VmRSS")
+
+
+def peak_rss(field: str = "VmHWM") -> int:
+    """This process's peak (or, with ``field="VmRSS"``, current) resident size in bytes."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith(field + ":"):
+                return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    import resource
+
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024

@@ -127,6 +127,7 @@ def _vector(processes: int, steps: int) -> dict[str, Any]:
         "seamtrack/Scene-v0",
         num_envs=processes,
         vectorization_mode="async",
+        vector_kwargs={"context": "spawn"},  # a fork inherits other threads' held locks
         scene="paper-v-groove",
         overrides=OVERRIDES,
     )

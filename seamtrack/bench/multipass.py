@@ -27,7 +27,8 @@ SEAM_MM, QUICK_SEAM_MM = 300.0, 40.0
 
 
 def _job(scene_name: str, overrides: dict[str, Any]) -> tuple[Any, float, int]:
-    from seamtrack.bench.runner import _peak_rss, _reset_peak_rss
+    from seamtrack.bench.common import peak_rss as _peak_rss
+    from seamtrack.bench.common import reset_peak_rss as _reset_peak_rss
     from seamtrack.simulation.job import run_job
     from seamtrack.simulation.scene import load_scene
 

@@ -15,6 +15,8 @@ from typing import Any
 import numpy as np
 
 from seamtrack.bench.common import machine_info
+from seamtrack.bench.common import peak_rss as _peak_rss
+from seamtrack.bench.common import reset_peak_rss as _reset_peak_rss
 from seamtrack.bench.raycast import bench_raycast
 
 # --------------------------------------------------------------------------- sweep
@@ -181,28 +183,6 @@ def _bench_mesh(out: Path, quick: bool) -> Any:
     ]
     (out / "mesh.md").write_text("\n".join(lines) + "\n")
     return rows
-
-
-def _reset_peak_rss() -> int:
-    """Reset this process's peak resident size to its current size (Linux); return it (bytes)."""
-    try:
-        Path("/proc/self/clear_refs").write_text("5")
-    except OSError:  # not Linux: the peak is the process's so far
-        pass
-    return _peak_rss(field="VmRSS")
-
-
-def _peak_rss(field: str = "VmHWM") -> int:
-    """This process's peak (or, with ``field="VmRSS"``, current) resident size in bytes."""
-    try:
-        for line in Path("/proc/self/status").read_text().splitlines():
-            if line.startswith(field + ":"):
-                return int(line.split()[1]) * 1024
-    except OSError:
-        pass
-    import resource
-
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
 
 
 def bench_loop(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]:

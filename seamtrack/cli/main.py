@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from seamtrack._version import __version__
+from seamtrack.cli import jobs
 from seamtrack.cli import seams as seams_command
 from seamtrack.cli import serve as serve_command
 from seamtrack.cli.dataset import add_dataset_parser
@@ -33,8 +34,7 @@ def _overrides(args: argparse.Namespace) -> list[str]:
     return list(getattr(args, "set", None) or [])
 
 
-def _progress_wanted(args: argparse.Namespace) -> bool:
-    return not getattr(args, "quiet", False) and sys.stderr.isatty()
+_progress_wanted = jobs.progress_wanted
 
 
 # --------------------------------------------------------------------------- commands
@@ -49,7 +49,7 @@ def cmd_run(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out else Path("runs") / scene.name
     check_writable(out)  # fail before the run, not after it (and create nothing yet)
     if scene.config.passes is not None:
-        return _run_job(args, scene, out)
+        return jobs.run_job_command(args, scene, out)
     if args.weldx:
         from seamtrack.io.weldx_file import check_weldx_target, write_weldx
 
@@ -86,38 +86,6 @@ def cmd_run(args: argparse.Namespace) -> int:
         paths = render_run(scene, result, out, progress=_progress_wanted(args))
         if not args.quiet:
             print("wrote " + ", ".join(str(p) for p in paths))
-    return 0
-
-
-def _run_job(args: argparse.Namespace, scene: Any, out: Path) -> int:
-    """``seamtrack run`` of a scene with ``[passes]``: the multi-pass job."""
-    from seamtrack.io.output import write_job
-    from seamtrack.simulation.job import run_job
-    from seamtrack.viz.plots import plot_run
-
-    for flag, given in (("--weldx", args.weldx), ("--render", args.render)):
-        if given:
-            raise SceneError(
-                "a multi-pass job writes one folder a pass; it has no single run to export",
-                field=flag,
-                fix=f"drop {flag}, or run one pass's scene.toml from the job's folder",
-            )
-    job = run_job(scene, progress=_progress_wanted(args))
-    write_job(
-        job,
-        out,
-        scene.to_toml(),
-        scene.config.simulation.trace_period_s,
-        extra=None
-        if args.no_plot
-        else lambda record, folder: plot_run(record.result, folder / "error.png"),
-    )
-    if not args.quiet:
-        rows = [
-            (k, v) for k, v in job.summary.items() if k not in ("per_pass", "fusion_flagged_s_mm")
-        ]
-        print_table(rows, f"seamtrack run {scene.name} (multi-pass job)")
-        print(f"wrote {out}/job.json, scene.toml and {len(job.passes)} pass folders")
     return 0
 
 
@@ -255,28 +223,9 @@ def cmd_check(args: argparse.Namespace) -> int:
         ("sensor resolution (mm)", parts.sensor_resolution_mm),
     ]
     if c.passes is not None:
-        rows += _job_rows(c)
+        rows += jobs.check_rows(c)
     print_table(rows, f"{scene.name}: valid")
     return 0
-
-
-def _job_rows(c: Any) -> list[tuple[str, Any]]:
-    """``seamtrack check``'s rows for a multi-pass job: the process and the plan's frame."""
-    from seamtrack.simulation.passes import heat_input_kj_mm, process_of
-
-    p = process_of(c)
-    v = c.simulation.welding_speed_mm_s
-    assert c.passes is not None
-    return [
-        ("passes", c.passes.count),
-        ("planner", c.planner.name if c.planner is not None else "adaptive"),
-        ("scan-only pass first", c.passes.scan_first),
-        ("wire feed (mm/s)", p.wire_feed_mm_s),
-        ("bead area at the nominal speed (mm^2)", float(p.bead_area_mm2(v))),
-        ("bead shape", f"{p.bead_model}, w/h {p.width_to_height:.3g}"),
-        ("travel speed window (mm/s)", f"{p.speed_min_mm_s:g} .. {p.speed_max_mm_s:g}"),
-        ("heat input at the nominal speed (kJ/mm)", heat_input_kj_mm(c, v)),
-    ]
 
 
 def cmd_sensor(args: argparse.Namespace) -> int:

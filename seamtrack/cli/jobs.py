@@ -1,0 +1,67 @@
+"""``seamtrack run`` and ``seamtrack check`` of a multi-pass job (a scene with ``[passes]``)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+from seamtrack.cli.tables import print_table
+from seamtrack.errors import SceneError
+
+
+def progress_wanted(args: argparse.Namespace) -> bool:
+    """Progress bars unless ``--quiet``, and only on a terminal."""
+    return not getattr(args, "quiet", False) and sys.stderr.isatty()
+
+
+def run_job_command(args: argparse.Namespace, scene: Any, out: Path) -> int:
+    """``seamtrack run`` of a scene with ``[passes]``: the multi-pass job."""
+    from seamtrack.io.output import write_job
+    from seamtrack.simulation.job import run_job
+    from seamtrack.viz.plots import plot_run
+
+    for flag, given in (("--weldx", args.weldx), ("--render", args.render)):
+        if given:
+            raise SceneError(
+                "a multi-pass job writes one folder a pass; it has no single run to export",
+                field=flag,
+                fix=f"drop {flag}, or run one pass's scene.toml from the job's folder",
+            )
+    job = run_job(scene, progress=progress_wanted(args))
+    write_job(
+        job,
+        out,
+        scene.to_toml(),
+        scene.config.simulation.trace_period_s,
+        extra=None
+        if args.no_plot
+        else lambda record, folder: plot_run(record.result, folder / "error.png"),
+    )
+    if not args.quiet:
+        rows = [
+            (k, v) for k, v in job.summary.items() if k not in ("per_pass", "fusion_flagged_s_mm")
+        ]
+        print_table(rows, f"seamtrack run {scene.name} (multi-pass job)")
+        print(f"wrote {out}/job.json, scene.toml and {len(job.passes)} pass folders")
+    return 0
+
+
+def check_rows(c: Any) -> list[tuple[str, Any]]:
+    """``seamtrack check``'s rows for a multi-pass job: the process and the plan's frame."""
+    from seamtrack.simulation.passes import heat_input_kj_mm, process_of
+
+    p = process_of(c)
+    v = c.simulation.welding_speed_mm_s
+    assert c.passes is not None
+    return [
+        ("passes", c.passes.count),
+        ("planner", c.planner.name if c.planner is not None else "adaptive"),
+        ("scan-only pass first", c.passes.scan_first),
+        ("wire feed (mm/s)", p.wire_feed_mm_s),
+        ("bead area at the nominal speed (mm^2)", float(p.bead_area_mm2(v))),
+        ("bead shape", f"{p.bead_model}, w/h {p.width_to_height:.3g}"),
+        ("travel speed window (mm/s)", f"{p.speed_min_mm_s:g} .. {p.speed_max_mm_s:g}"),
+        ("heat input at the nominal speed (kJ/mm)", heat_input_kj_mm(c, v)),
+    ]
