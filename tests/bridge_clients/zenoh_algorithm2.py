@@ -104,9 +104,6 @@ def main() -> int:
     sid = str(session.zid())
     events: queue.Queue = queue.Queue()
 
-    def on(topic):
-        return lambda sample: events.put((topic, sample.payload.to_bytes()))
-
     subs = {
         "/seamtrack/context": "std_msgs/msg/String",
         "/seamtrack/status": "std_msgs/msg/String",
@@ -124,10 +121,19 @@ def main() -> int:
     }
     live = session.liveliness()
     tokens = [live.declare_token(f"@ros2_lv/{DOMAIN}/{sid}/0/0/NN/%/%/tracker")]
-    handles = []
+    # One subscriber for every topic: Zenoh calls each subscriber's callback on its own, so
+    # separate subscribers could hand a step's /seamtrack/tcp over before the frames sent
+    # ahead of it; one subscriber sees them in the order they were put.
+    topic_of = {key(topic, msgtype): topic for topic, msgtype in subs.items()}
+
+    def route(sample):
+        topic = topic_of.get(str(sample.key_expr))
+        if topic is not None:
+            events.put((topic, sample.payload.to_bytes()))
+
+    subscriber = session.declare_subscriber(f"{DOMAIN}/**", route)
     entity = 1
     for topic, msgtype in subs.items():
-        handles.append(session.declare_subscriber(key(topic, msgtype), on(topic)))
         tokens.append(live.declare_token(token(sid, entity, "MS", topic, msgtype)))
         entity += 1
     publishers = {}
@@ -210,6 +216,7 @@ def main() -> int:
                 "/seamtrack/cmd_speed",
                 T["geometry_msgs/msg/TwistStamped"](header=header, twist=twist),
             )
+    subscriber.undeclare()
     for t in tokens:
         t.undeclare()
     session.close()
