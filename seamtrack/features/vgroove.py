@@ -6,8 +6,10 @@ Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groov
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 from numpy.typing import NDArray
 
@@ -48,37 +50,60 @@ def _fill_above(seg: Segments, groove: VGrooveResult) -> float | None:
     joining the top edges) lies more than max(1.5 mm, a tenth of the seam's depth) above the
     seam, and the surface lies at that depth a quarter of the groove's width there to either
     side as well; else None (an empty V, a root gap, a tack weld, a reflection streak)."""
-    top_l = np.array([groove.top_left_y, groove.top_left_z])
-    top_r = np.array([groove.top_right_y, groove.top_right_z])
-    chord = top_r - top_l
-    length = float(np.hypot(*chord))
-    if not (np.isfinite(length) and length > 0):
-        return None
-    u = chord / length
-    v = np.array([-u[1], u[0]])
-    if v[1] < 0:
-        v = -v  # into the groove
-    seam = np.array([groove.seam_y, groove.seam_z])
-    q = seg.points[~seg.stray]
-    near = np.abs((q - seam) @ u) <= 0.5
-    if np.count_nonzero(near) < 8:
-        return None
-    depth = float((seam - top_l) @ v)
-    over = (q[near] - top_l) @ v
-    if float(np.median(np.abs(over - np.median(over)))) > 0.3:
-        return None  # no one surface over the seam (spikes, streaks)
-    above = depth - float(np.median(over))
+    n = len(seg.points)
+    stray = seg.stray if len(seg.stray) == n else np.zeros(n, dtype=np.bool_)
+    above = _fill_height(
+        seg.points, stray, groove.top_left_y, groove.top_left_z, groove.top_right_y,
+        groove.top_right_z, groove.seam_y, groove.seam_z,
+    )  # fmt: skip
+    return None if math.isnan(above) else above
+
+
+@numba.njit(cache=True, nogil=True)
+def _fill_height(
+    points: NDArray[np.float64], stray: NDArray[np.bool_], left_y: float, left_z: float,
+    right_y: float, right_z: float, seam_y: float, seam_z: float,
+) -> float:  # fmt: skip
+    """:func:`_fill_above`'s test, compiled (it runs on every V found): the height, or NaN."""
+    length = math.hypot(right_y - left_y, right_z - left_z)
+    if not (length > 0.0 and math.isfinite(length)):
+        return math.nan
+    uy, uz = (right_y - left_y) / length, (right_z - left_z) / length
+    vy, vz = -uz, uy
+    if vz < 0.0:
+        vy, vz = -vy, -vz  # into the groove
+    depth = (seam_y - left_y) * vy + (seam_z - left_z) * vz
+    n = points.shape[0]
+    over = np.empty(n)
+    k = 0
+    for i in range(n):
+        if not stray[i]:
+            if abs((points[i, 0] - seam_y) * uy + (points[i, 1] - seam_z) * uz) <= 0.5:
+                over[k] = (points[i, 0] - left_y) * vy + (points[i, 1] - left_z) * vz
+                k += 1
+    if k < 8:
+        return math.nan
+    middle = np.median(over[:k])
+    if np.median(np.abs(over[:k] - middle)) > 0.3:
+        return math.nan  # no one surface over the seam (spikes, streaks)
+    above = depth - middle
     if not above > max(1.5, 0.1 * depth):
-        return None
+        return math.nan
     # A fill spans the groove: the surface lies at that depth a quarter of the groove's width
     # at that depth to either side too (a reflection streak or a tack does not).
     level = depth - above
-    width = length * max(0.0, 1.0 - level / depth) if depth > 0 else 0.0
-    qu, qd = (q - seam) @ u, (q - top_l) @ v
+    width = length * max(0.0, 1.0 - level / depth) if depth > 0.0 else 0.0
+    near_level = max(1.0, 0.25 * above)
     for side in (-1.0, 1.0):
-        at = np.abs(qu - side * 0.25 * width) <= 0.3
-        if np.count_nonzero(at & (np.abs(qd - level) <= max(1.0, 0.25 * above))) < 3:
-            return None
+        count = 0
+        for i in range(n):
+            if not stray[i]:
+                qu = (points[i, 0] - seam_y) * uy + (points[i, 1] - seam_z) * uz
+                qd = (points[i, 0] - left_y) * vy + (points[i, 1] - left_z) * vz
+                if abs(qu - side * 0.25 * width) <= 0.3 and abs(qd - level) <= near_level:
+                    count += 1
+        if count < 3:
+            return math.nan
     return above
 
 
