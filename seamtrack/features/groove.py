@@ -31,14 +31,22 @@ spikes and reflection streaks left out, straight pieces by split-and-merge):
   quarters of the way across (along u), each a local robust line fit of the surface points
   there, in v; where no surface shows there (an open root), on the line joining the corners.
 * **remaining area**: the polygon of the top corners, the bottom corners and the surface
-  between them, below the line joining the top corners (mm^2, ``Feature.area_mm2``).
+  between them, below the line joining the top corners (mm^2, ``Feature.area_mm2``), signed:
+  metal above that line counts against it (about 0 for a nearly full groove, negative under a
+  cap).
+* **crowned and nearly full grooves**: where the fill rises above the line of the plates' ends
+  (a cap, or the last fill layer's crowns), the walls are buried: the top corners are where the
+  plates' lines end, the bottom corners the fill surface's outermost points there, and the
+  bottom points on the fill surface between them, however convex. Such a raised part is taken
+  for a fill when it stands at most ``max_crown_mm`` above the plates' ends and no piece of it
+  a millimetre long stands more than 80 deg off the plates; else it is a block.
 
 The seam point is chosen by ``reference``: ``"centre"`` the middle bottom point, ``"left"`` /
 ``"right"`` that bottom corner (the wall's foot at the fill surface). ``edges_laser`` holds the
 7 points, (7, 2). Refused, with the reason, when no plate shows on a side, the plates are not
 parallel (a fillet, a corner), nothing lies ``min_depth_mm`` below the plates between them
-(a flat plate, a lap) or a raised part stands there (a block), or the model explains less than
-``min_explained`` of the profile.
+(a flat plate, a lap) or a raised part that is no fill stands there (a block), or the model
+explains less than ``min_explained`` of the profile.
 
 Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groove).
 """
@@ -112,6 +120,7 @@ class GrooveExtractor(_Base):
     max_plate_deg: float = 15.0
     wall_deg: float = 35.0
     min_depth_mm: float = 0.5
+    max_crown_mm: float = 5.0
     max_lines: int = 256
 
     def __post_init__(self) -> None:
@@ -171,10 +180,14 @@ class GrooveExtractor(_Base):
         chord_u = (end_r - end_l) / max(math.hypot(*(end_r - end_l)), 1e-12)
         chord_v = np.array([-chord_u[1], chord_u[0]])
         depth = (P[inner] - end_l) @ chord_v
-        if np.count_nonzero(depth > self.min_depth_mm) < self.min_points:
+        below = np.count_nonzero(depth > self.min_depth_mm) >= self.min_points
+        raised = np.count_nonzero(depth < -self.min_depth_mm) > 0.2 * len(inner)
+        if not below and not raised:
             return "not a groove: nothing lies below the plates between them"
-        if np.count_nonzero(depth < -self.min_depth_mm) > 0.2 * len(inner):
-            return "not a groove: a raised part stands between the plates"
+        if raised:  # a crowned fill (a cap over the plates), or a block
+            why = self._raised(seg, plates, inner, depth, end_r - end_l)
+            if why:
+                return why
         groove = list(range(plates.left_last + 1, plates.right_first))
         left = self._wall(seg, groove, v, True, end_l)
         right = self._wall(seg, groove[::-1], v, False, end_r)
@@ -200,6 +213,28 @@ class GrooveExtractor(_Base):
         rms = max(pl.rms, pr.rms, *(w.line.rms for w in (left, right) if w.line is not None))
         explained = self._explained(seg, plates, (left, right), inner, bl, br, u)
         return GroovePoints(pts, area, explained, rms)
+
+    def _raised(
+        self, seg: Segments, plates: Plates, inner: IntArray, depth: FloatArray, chord: FloatArray
+    ) -> str:
+        """Why a part raised between the plates is no crowned fill ("" when it is one): a
+        fill's cap stands at most ``max_crown_mm`` above the line of the plates' ends (the
+        95th percentile of its points: spikes do not count), and no piece of it a millimetre
+        long stands more than 80 deg off the plates (a block's sides do)."""
+        why = "not a groove: a raised part stands between the plates"
+        if len(inner) < self.min_points or float(np.percentile(-depth, 95)) > self.max_crown_mm:
+            return why
+        P = seg.points
+        along = chord / max(math.hypot(*chord), 1e-12)
+        normal = np.array([-along[1], along[0]])
+        start = P[int(plates.left.index[-1])]
+        for j in range(plates.left_last + 1, plates.right_first):
+            ln = seg.lines[j]
+            if ln.extent < 1.0 or float((ln.centroid - start) @ normal) > -self.min_depth_mm:
+                continue
+            if _angle_deg(ln.direction, along) > 80.0:
+                return why
+        return ""
 
     def _plates(self, seg: Segments) -> Plates | str:
         lines = seg.lines
@@ -478,9 +513,11 @@ def _local_v(qu: FloatArray, qv: FloatArray, ut: float, h: float, tol: float) ->
 
 def _area(pts: FloatArray, P: FloatArray, inner: IntArray, u: FloatArray) -> float:
     """The polygon of the top corners, the bottom corners and the surface between them, below
-    the line joining the top corners (mm^2)."""
+    the line joining the top corners (mm^2), signed: a crowned fill's metal above that line
+    counts against it (a nearly full groove's area is about 0, a capped one's negative)."""
     qu = P[inner] @ u
     zone = inner[(qu > pts[1] @ u) & (qu < pts[5] @ u)]
     ring = np.vstack([pts[0], pts[1], P[zone], pts[5], pts[6]])
-    y, z = ring[:, 0], ring[:, 1]
-    return float(abs(0.5 * (np.dot(y, np.roll(z, -1)) - np.dot(z, np.roll(y, -1)))))
+    v = np.array([-u[1], u[0]])
+    a, b = ring @ u, ring @ v  # along the plates, into the groove
+    return float(-0.5 * (np.dot(a, np.roll(b, -1)) - np.dot(b, np.roll(a, -1))))
