@@ -310,7 +310,7 @@ class GrooveExtractor(_Base):
             if n > support:
                 best, support = j, n
         if best is None:
-            return Wall(None, -1, -1)
+            return self._bare_wall(seg, groove[0], v, from_left, top)
         ref = lines[best]
         on = [j for j in groove if _on_line(seg, ref, lines[j])]
         index = [lines[j].index for j in on]
@@ -318,6 +318,38 @@ class GrooveExtractor(_Base):
         if line.direction[0] < 0:
             line = Line(line.index, line.centroid, -line.direction, -line.t, line.rms)
         return Wall(line, on[0], on[-1])
+
+    def _bare_wall(
+        self, seg: Segments, first: int, v: FloatArray, from_left: bool, top: FloatArray
+    ) -> Wall:
+        """A wall no piece covers (a quantized wall's staircase, too jagged for the pieces'
+        tolerance): the points between the plate's last piece and the groove's first, when
+        they run at least a millimetre down into the groove ``wall_deg`` off the plates from
+        the plate's end (``top``)."""
+        lines = seg.lines
+        if from_left:
+            lo, hi = int(lines[first - 1].index[-1]) + 1, int(lines[first].index[0])
+        else:
+            lo, hi = int(lines[first].index[-1]) + 1, int(lines[first + 1].index[0])
+        index = np.arange(lo, hi)
+        index = index[~seg.stray[index]]
+        if len(index) < self.min_points:
+            return Wall(None, -1, -1)
+        line = _fit(seg.points, index)
+        if line.direction[0] < 0:
+            line = Line(line.index, line.centroid, -line.direction, -line.t, line.rms)
+        d = line.direction if from_left else -line.direction
+        off = math.degrees(math.asin(min(1.0, abs(float(d @ v)))))
+        near = abs(float((top - line.centroid) @ line.normal)) <= max(1.0, 3 * seg.tol)
+        if (
+            float(d @ v) <= 0
+            or off < self.wall_deg
+            or line.extent < 1.0
+            or not near
+            or line.rms > max(3.0 * seg.tol, 0.5 * seg.spacing)
+        ):
+            return Wall(None, -1, -1)
+        return Wall(line, first, first)
 
     @staticmethod
     def _top(plate: Line, wall: Line | None, left: bool, reach: float) -> FloatArray:
