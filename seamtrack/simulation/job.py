@@ -59,7 +59,13 @@ from seamtrack.simulation.job_summary import (  # noqa: F401 (the job's public n
     welded_range,
 )
 from seamtrack.simulation.loop import Result, run
-from seamtrack.simulation.passes import heat_input_kj_mm, overridden, process_of
+from seamtrack.simulation.passes import (
+    heat_input_kj_mm,
+    overridden,
+    planned_feature,
+    process_of,
+    wall_deg,
+)
 from seamtrack.simulation.robots import is_arm, tool_program
 from seamtrack.simulation.scene import Scene, load_scene
 from seamtrack.workpiece.beads import bead_area_mm2
@@ -160,6 +166,8 @@ def run_job(
                 "groove",
             )
         groove = scan.groove
+        if c.extractor.name == "groove" and "wall_deg" not in c.extractor.params:
+            scene = _with(scene, {"extractor.params.wall_deg": wall_deg(groove)})
     else:
         groove = _true_groove(fill)
     limit = count if count is not None else 200
@@ -344,6 +352,7 @@ def _steered(
     s_stations = fill.s_mm
     set_speed = getattr(tracker, "set_speed", None)
     adapted = np.full((len(s_stations), 2), np.nan)  # speed, offset per station
+    seen = [False]  # the pass's sensor has measured the groove
 
     def station(s: float) -> int:
         return min(int(np.searchsorted(s_stations, s)), len(s_stations) - 1)
@@ -360,6 +369,11 @@ def _steered(
                                                                 previous):  # fmt: skip
             feature = Feature.failed("below the fill the pass before measured", feature.joint)
             frames[-1] = (feature, T_world_sensor)
+        if feature:
+            seen[0] = True
+        elif not seen[0] and previous is not None:  # not yet seen: start on the plan
+            feature = planned_feature(feature, T_world_sensor, fill, plan, previous,
+                                      STATION_SPACING_MM, _POINT_INDEX)  # fmt: skip
         if feature:
             s = float(cad_seam.closest(feature.point_world[None]).arc_length_mm[0])
             i = station(s)

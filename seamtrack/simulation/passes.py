@@ -7,11 +7,18 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import Any
 
-from seamtrack.control.planner import PassPlan, Process, planner_class
+import numpy as np
+from numpy.typing import NDArray
+
+from seamtrack.control.planner import MeasuredGroove, PassPlan, Process, planner_class
 from seamtrack.errors import SceneError
+from seamtrack.sensing.profiles import Feature
 from seamtrack.simulation.config import PassesConfig, ProcessConfig, SceneConfig
 from seamtrack.simulation.robots import is_arm
+
+FloatArray = NDArray[np.float64]
 
 
 def wire_feed_mm_s(wire_feed_m_min: float) -> float:
@@ -148,3 +155,47 @@ def overridden(plan: PassPlan, passes: PassesConfig, pass_index: int) -> PassPla
             changes["wire_feed_mm_s"] = wire_feed_mm_s(o.wire_feed_m_min)
         plan = dataclasses.replace(plan, **changes)  # type: ignore[arg-type]
     return plan
+
+
+def planned_feature(
+    feature: Feature, T_world_sensor: FloatArray, fill: Any, plan: PassPlan,
+    previous: MeasuredGroove, spacing_mm: float, point_index: dict[str, int],
+) -> Feature:  # fmt: skip
+    """Until the pass's sensor first measures the groove, a frame that does not (a crowned
+    fill's first millimetres, a spatter, the arc's start) gives the planned point instead: the
+    plan's reference point as the pass before measured it where the laser plane crosses the
+    seam (the offset is added after, as to a measured point), so the tracker starts along the
+    plan rather than stopping. Frames off the part, or where the laser plane crosses no
+    station, stay failed (``spacing_mm``: the stations'; ``point_index``: the 7 points' row
+    of each reference)."""
+    if feature.stripe_points == 0 or not len(previous):
+        return feature
+    origin = fill.T_world_station[:, :3, 3]
+    across = np.abs((origin - T_world_sensor[:3, 3]) @ T_world_sensor[:3, 0])
+    i = int(np.argmin(across))
+    if across[i] > spacing_mm or not (
+        previous.s_mm[0] - spacing_mm <= fill.s_mm[i] <= previous.s_mm[-1] + spacing_mm
+    ):
+        return feature
+    k = point_index[plan.reference]
+    y = float(np.interp(fill.s_mm[i], previous.s_mm, previous.points[:, k, 0]))
+    z = float(np.interp(fill.s_mm[i], previous.s_mm, previous.points[:, k, 1]))
+    world = fill.T_world_station[i] @ np.array([0.0, y, z, 1.0])
+    laser = np.linalg.solve(T_world_sensor, world)[1:3]
+    return Feature.found(laser, T_world_sensor, confidence=0.0, joint=feature.joint or "groove")
+
+
+def wall_deg(groove: MeasuredGroove, margin_deg: float = 12.0) -> float:
+    """The groove extractor's ``wall_deg`` for the passes after the scan: the walls' angle
+    off the plates as the scan measured them, less ``margin_deg`` (at least 35 deg, its
+    default). A bead's flank by a buried wall, shallower than the bevel, is then no wall."""
+    p = groove.points
+    top = p[:, 6] - p[:, 0]
+    angles = []
+    for a, b in ((0, 1), (6, 5)):
+        wall = p[:, b] - p[:, a]
+        cos = np.abs(np.sum(wall * top, axis=1)) / np.maximum(
+            np.linalg.norm(wall, axis=1) * np.linalg.norm(top, axis=1), 1e-12
+        )
+        angles.append(np.degrees(np.arccos(np.clip(np.median(cos), 0.0, 1.0))))
+    return float(max(35.0, min(angles) - margin_deg))
