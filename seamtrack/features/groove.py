@@ -386,7 +386,18 @@ class GrooveExtractor(_Base):
             cut = np.flatnonzero(np.diff(qu) > 1.0) + 1
             bounds = np.r_[0, cut, len(qu)]
             j = int(np.argmax(np.diff(bounds)))
-            qu, qv = qu[bounds[j] : bounds[j + 1]], qv[bounds[j] : bounds[j + 1]]
+            a, b = j, j + 1
+            # Towards a side with no wall seen (buried under a crowned fill) a break of up to
+            # 2.5 mm is a shadow in the fill surface, not a scrap: the surface goes on.
+            while walls[0].line is None and a > 0 and qu[bounds[a]] - qu[bounds[a] - 1] <= 2.5:
+                a -= 1
+            while (
+                walls[1].line is None
+                and b < len(bounds) - 1
+                and qu[bounds[b]] - qu[bounds[b] - 1] <= 2.5
+            ):
+                b += 1
+            qu, qv = qu[bounds[a] : bounds[b]], qv[bounds[a] : bounds[b]]
         return qu, qv
 
     def _corner(

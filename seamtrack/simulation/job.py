@@ -61,6 +61,7 @@ from seamtrack.simulation.job_summary import (  # noqa: F401 (the job's public n
 from seamtrack.simulation.loop import Result, run
 from seamtrack.simulation.passes import (
     heat_input_kj_mm,
+    offset_point,
     overridden,
     planned_feature,
     process_of,
@@ -382,7 +383,13 @@ def _steered(
                 if ahead is not None:
                     adapted[i] = _adapted(adapt, ahead, plan, planner_name, t_s)
             offset = adapted[i, 1] if np.isfinite(adapted[i, 1]) else float(plan.offset_at(s))
-            if offset:
+            here = measured_groove(frames[-1:], fill, cad_seam) if offset else None
+            if here is not None:  # on the fill surface the frame measured, under the bead
+                k = min(int(np.searchsorted(s_stations, here.s_mm[0])), len(s_stations) - 1)
+                y, z = offset_point(here.points, _POINT_INDEX[plan.reference], offset)[0]
+                point = (fill.T_world_station[k] @ np.array([0.0, y, z, 1.0]))[:3]
+                feature = dataclasses.replace(feature, point_world=point)
+            elif offset:  # the planned point (no groove measured yet)
                 point = feature.point_world + offset * lateral[i]
                 feature = dataclasses.replace(feature, point_world=point)
         if set_speed is not None:
@@ -445,13 +452,15 @@ def pass_path(fill: Any, reference: str, plan: PassPlan | None, window: int = 4)
     """A pass's true path in the world: at every station the reference point of the true fill
     surface (left or right wall's foot, or the middle; a running median over ``2 window + 1``
     stations, 2 mm: where a toe wets a wall the foot jumps along it from one station to the
-    next, faster than any torch follows), moved across the seam by the plan's offset there."""
-    index = _POINT_INDEX[reference]
-    yz = np.stack([fill.groove_points(i)[index] for i in range(len(fill.s_mm))])
-    padded = np.pad(yz, ((window, window), (0, 0)), mode="edge")
-    yz = np.median(np.lib.stride_tricks.sliding_window_view(padded, 2 * window + 1, axis=0), -1)
-    offset = np.zeros(len(yz)) if plan is None else plan.offset_at(fill.s_mm)
-    local = np.column_stack([np.zeros(len(yz)), yz[:, 0] + offset, yz[:, 1], np.ones(len(yz))])
+    next, faster than any torch follows), moved across the seam by the plan's offset there,
+    onto the fill surface the bottom points describe (:func:`~seamtrack.simulation.passes.
+    offset_point`: where the bead aims, as the tracker does with the measured points)."""
+    pts = fill.all_groove_points()
+    padded = np.pad(pts, ((window, window), (0, 0), (0, 0)), mode="edge")
+    pts = np.median(np.lib.stride_tricks.sliding_window_view(padded, 2 * window + 1, axis=0), -1)
+    offset = np.zeros(len(pts)) if plan is None else plan.offset_at(fill.s_mm)
+    yz = offset_point(pts, _POINT_INDEX[reference], offset)
+    local = np.column_stack([np.zeros(len(yz)), yz[:, 0], yz[:, 1], np.ones(len(yz))])
     points = np.einsum("mij,mj->mi", fill.T_world_station, local)[:, :3]
     return Seam.from_points(points, field="passes", name="pass path")
 

@@ -165,16 +165,17 @@ def planned_feature(
     fill's first millimetres, a spatter, the arc's start) gives the planned point instead: the
     plan's reference point as the pass before measured it where the laser plane crosses the
     seam (the offset is added after, as to a measured point), so the tracker starts along the
-    plan rather than stopping. Frames off the part, or where the laser plane crosses no
-    station, stay failed (``spacing_mm``: the stations'; ``point_index``: the 7 points' row
-    of each reference)."""
+    plan rather than stopping (beyond the stations measured before, up to 10 mm, their end's
+    point). Frames off the part, or where the laser plane crosses no station, stay failed.
+    ``spacing_mm``: the stations'; ``point_index``: each reference's row of the 7 points."""
     if feature.stripe_points == 0 or not len(previous):
         return feature
     origin = fill.T_world_station[:, :3, 3]
     across = np.abs((origin - T_world_sensor[:3, 3]) @ T_world_sensor[:3, 0])
     i = int(np.argmin(across))
+    reach = 10.0  # mm: the plan held this far beyond the stations measured before
     if across[i] > spacing_mm or not (
-        previous.s_mm[0] - spacing_mm <= fill.s_mm[i] <= previous.s_mm[-1] + spacing_mm
+        previous.s_mm[0] - reach <= fill.s_mm[i] <= previous.s_mm[-1] + reach
     ):
         return feature
     k = point_index[plan.reference]
@@ -199,3 +200,16 @@ def wall_deg(groove: MeasuredGroove, margin_deg: float = 12.0) -> float:
         )
         angles.append(np.degrees(np.arccos(np.clip(np.median(cos), 0.0, 1.0))))
     return float(max(35.0, min(angles) - margin_deg))
+
+
+def offset_point(points: FloatArray, index: int, offset_mm: Any) -> FloatArray:
+    """(m, 2) the point ``offset_mm`` (m,) across the groove from row ``index`` of the 7
+    points ``points`` (m, 7, 2) (station frame, y ascending), on the fill surface the bottom
+    five points describe (piecewise linear between them; beyond the bottom corners, a corner's
+    height): where a bead laid off the reference aims. A bead beside the middle of a fill
+    surface that slopes there (a bead's flank) aims at the surface under it, not at the
+    middle's height."""
+    points = np.asarray(points, dtype=float).reshape(-1, 7, 2)
+    y = points[:, index, 0] + np.broadcast_to(np.asarray(offset_mm, dtype=float), len(points))
+    z = np.array([np.interp(yi, p[1:6, 0], p[1:6, 1]) for yi, p in zip(y, points, strict=True)])
+    return np.column_stack([y, z])
