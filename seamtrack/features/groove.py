@@ -416,6 +416,9 @@ class GrooveExtractor(_Base):
         beyond it)."""
         sign = 1.0 if left else -1.0
         edge = float(fu[0] if left else fu[-1])
+        if wall is None:  # a buried wall, or one no ray sees: the surface's outermost point
+            ou, ov = edge, float(fv[0] if left else fv[-1])
+            return np.asarray((ou - sign * 0.5 * seg.spacing) * u + ov * v)
         sel = sign * (fu - edge) <= 1.5
         su, sv = fu[sel], fv[sel]
         fit = _robust_uv_line(su, sv, seg.tol)

@@ -375,15 +375,16 @@ class FillState:
         local, station_area, covered = self._stations_on_path(path, area)
         y_centre = local[:, 1] + offset_mm
         laid_here = covered & (station_area > 0)
-        outside = laid_here & (
-            (y_centre < self.top_corners[:, 0, 0]) | (y_centre > self.top_corners[:, 1, 0])
-        )
+        # the groove's top width, or as far as a fill spilled over the plates reaches
+        seen = self.all_groove_points()
+        lo = np.minimum(self.top_corners[:, 0, 0], seen[:, 0, 0])
+        hi = np.maximum(self.top_corners[:, 1, 0], seen[:, 6, 0])
+        outside = laid_here & ((y_centre < lo) | (y_centre > hi))
         if np.any(outside):
             i = int(np.flatnonzero(outside)[0])
             raise SceneError(
                 f"the bead's centre {y_centre[i]:.2f} mm at s = {self.s_mm[i]:.1f} mm lies "
-                f"outside the groove ({self.top_corners[i, 0, 0]:.2f} .. "
-                f"{self.top_corners[i, 1, 0]:.2f} mm)",
+                f"outside the groove ({lo[i]:.2f} .. {hi[i]:.2f} mm)",
                 field="offset_mm",
                 fix="keep the bead's offset inside the groove's top width",
             )
