@@ -406,12 +406,24 @@ def _below_the_fill(
     frame: tuple[Feature, FloatArray], fill: Any, seam: Seam, previous: MeasuredGroove
 ) -> bool:
     """Whether a frame's fill surface (its middle bottom point) lies more than
-    :data:`FILL_DROP_MM` below the one measured there by the pass before."""
+    :data:`FILL_DROP_MM` below the one measured there by the pass before, or its bottom
+    corners lie more than twice that inside the pass before's (the fill surface only widens
+    up a V's walls; a frame that shows part of it, at the part's end, is no groove)."""
     now = measured_groove([frame], fill, seam)
     if now is None or not len(previous):
         return False
-    before = float(np.interp(now.s_mm[0], previous.s_mm, previous.points[:, 3, 1]))
-    return bool(now.points[0, 3, 1] < before - FILL_DROP_MM)
+    p = previous.points
+    before = [float(np.interp(now.s_mm[0], previous.s_mm, p[:, k, c])) for k, c in _PAST]
+    y_left, y_right, z_mid = now.points[0, 1, 0], now.points[0, 5, 0], now.points[0, 3, 1]
+    return bool(
+        z_mid < before[2] - FILL_DROP_MM
+        or y_left > before[0] + 2 * FILL_DROP_MM
+        or y_right < before[1] - 2 * FILL_DROP_MM
+    )
+
+
+#: The pass before's left foot's y, right foot's y, middle's z (row, column of the 7 points).
+_PAST = ((1, 0), (5, 0), (3, 1))
 
 
 def _adapted(adapt: Any, ahead: MeasuredGroove, plan: PassPlan, name: str,
