@@ -127,7 +127,7 @@ def test_a_crowned_fill_reports_its_area_signed():
 @pytest.mark.parametrize("layers", [0, 2, 5])
 def test_narrow_gap_and_u_points_are_found(kind, layers):
     """Narrow gap (walls 4 deg off vertical, 25 mm deep) and U (10 deg walls, 3 mm root
-    radius): all found, median error <= 0.15 mm. Their p95 (0.2-1.8 mm) is not yet at the
+    radius): all found, median error <= 0.15 mm. Their p95 (0.2-1.6 mm) is not yet at the
     issue's 0.2 mm: a wall nearly along the rays shows no points, spikes at its foot stand for
     the corner; an empty U's round has no sharp foot (docs/extractors.md)."""
     found, e = _errors(kind, layers, 12, 12)
@@ -185,9 +185,10 @@ def test_other_families_refuse_a_filled_groove_with_a_reason(kind):
 
 
 def test_v_groove_says_why_it_refuses_beads():
-    profile, _ = _profiles("v", 2, 1, 24)[0]
-    f = extractor("v-groove")(profile)
-    assert not f and "not a v-groove" in f.reason
+    answers = [extractor("v-groove")(p) for p, _ in _profiles("v", 2, 6, 24)]
+    refused = [f for f in answers if not f]
+    assert len(refused) >= 5
+    assert all("not a v-groove" in f.reason or "pair of lines" in f.reason for f in refused)
 
 
 @pytest.mark.parametrize("shape", ["flat", "block", "fillet", "lap", "outside-corner"])

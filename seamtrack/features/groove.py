@@ -382,8 +382,8 @@ class GrooveExtractor(_Base):
             med = np.pad(inner_med, k // 2, mode="edge")  # the ends: their whole window's
             ok = np.abs(qv - med) <= max(3.0 * seg.tol, 0.2)
             qu, qv = qu[ok], qv[ok]
-        if len(qu) > 1:  # the largest stretch without a break of 1 mm (scraps at the top edges)
-            cut = np.flatnonzero(np.diff(qu) > 1.0) + 1
+        if len(qu) > 1:  # the largest stretch without a break of 2 mm (scraps at the top edges)
+            cut = np.flatnonzero(np.diff(qu) > 2.0) + 1
             bounds = np.r_[0, cut, len(qu)]
             j = int(np.argmax(np.diff(bounds)))
             a, b = j, j + 1

@@ -46,7 +46,8 @@ def _fill_above(seg: Segments, groove: VGrooveResult) -> float | None:
     """How far (mm) the surface over the seam lies above it, when a fill covers it: the median
     of the points within half a millimetre of the seam across the groove (along the line
     joining the top edges) lies more than max(1.5 mm, a tenth of the seam's depth) above the
-    seam; else None (an empty V, a root gap, a tack weld)."""
+    seam, and the surface lies at that depth a quarter of the groove's width there to either
+    side as well; else None (an empty V, a root gap, a tack weld, a reflection streak)."""
     top_l = np.array([groove.top_left_y, groove.top_left_z])
     top_r = np.array([groove.top_right_y, groove.top_right_z])
     chord = top_r - top_l
@@ -60,11 +61,25 @@ def _fill_above(seg: Segments, groove: VGrooveResult) -> float | None:
     seam = np.array([groove.seam_y, groove.seam_z])
     q = seg.points[~seg.stray]
     near = np.abs((q - seam) @ u) <= 0.5
-    if np.count_nonzero(near) < 3:
+    if np.count_nonzero(near) < 8:
         return None
     depth = float((seam - top_l) @ v)
-    above = depth - float(np.median((q[near] - top_l) @ v))
-    return above if above > max(1.5, 0.1 * depth) else None
+    over = (q[near] - top_l) @ v
+    if float(np.median(np.abs(over - np.median(over)))) > 0.3:
+        return None  # no one surface over the seam (spikes, streaks)
+    above = depth - float(np.median(over))
+    if not above > max(1.5, 0.1 * depth):
+        return None
+    # A fill spans the groove: the surface lies at that depth a quarter of the groove's width
+    # at that depth to either side too (a reflection streak or a tack does not).
+    level = depth - above
+    width = length * max(0.0, 1.0 - level / depth) if depth > 0 else 0.0
+    qu, qd = (q - seam) @ u, (q - top_l) @ v
+    for side in (-1.0, 1.0):
+        at = np.abs(qu - side * 0.25 * width) <= 0.3
+        if np.count_nonzero(at & (np.abs(qd - level) <= max(1.0, 0.25 * above))) < 3:
+            return None
+    return above
 
 
 @dataclass(frozen=True)
