@@ -21,12 +21,15 @@ spikes and reflection streaks left out, straight pieces by split-and-merge):
 * **top corners**: a plate's line meets its wall's line; with no wall seen, the plate's end
   (half a spacing beyond its last point).
 * **fill surface**: the groove's points inside the walls and off their lines, less what a
-  running median over 0.6 mm leaves out (spike runs), the largest stretch without a 1 mm break.
+  running median over 0.6 mm leaves out (spike runs), the largest stretch without a 2 mm break
+  (2.5 mm towards a side with no wall seen: a shadow in a crowned fill).
 * **bottom corners**: a line through the most surface points within 1.5 mm of the surface's
   end (lines through pairs of points: spike scraps do not move it) crossed with the wall's
   line, when that lies within 1.5 mm of the surface's outermost point on the line; else that
-  point (half a spacing beyond it). With no surface at all (an empty V without a gap), the
-  walls' intersection.
+  point (half a spacing beyond it); with no wall seen on a side (buried, or along the rays),
+  the surface's outermost point. With no surface at all (an empty V without a gap), the
+  walls' intersection. A wall no piece covers (a quantized wall's staircase) is fitted to the
+  points between the plate's last piece and the groove's first.
 * **bottom points**: the fill surface between the bottom corners at a quarter, half and three
   quarters of the way across (along u), each a local robust line fit of the surface points
   there, in v; where no surface shows there (an open root), on the line joining the corners.

@@ -204,12 +204,19 @@ def wall_deg(groove: MeasuredGroove, margin_deg: float = 12.0) -> float:
 
 def offset_point(points: FloatArray, index: int, offset_mm: Any) -> FloatArray:
     """(m, 2) the point ``offset_mm`` (m,) across the groove from row ``index`` of the 7
-    points ``points`` (m, 7, 2) (station frame, y ascending), on the fill surface the bottom
-    five points describe (piecewise linear between them; beyond the bottom corners, a corner's
-    height): where a bead laid off the reference aims. A bead beside the middle of a fill
-    surface that slopes there (a bead's flank) aims at the surface under it, not at the
-    middle's height."""
+    points ``points`` (m, 7, 2) (station frame, y ascending), on the surface the 7 points
+    describe (piecewise linear: the walls from the top corners to the feet and the fill
+    surface between; the bottom five alone where a wall leans over its foot; beyond the top
+    corners, a top corner's height): where a bead laid off the reference aims. A bead beside
+    the middle of a fill surface that slopes there (a bead's flank) aims at the surface under
+    it, not at the middle's height."""
     points = np.asarray(points, dtype=float).reshape(-1, 7, 2)
     y = points[:, index, 0] + np.broadcast_to(np.asarray(offset_mm, dtype=float), len(points))
-    z = np.array([np.interp(yi, p[1:6, 0], p[1:6, 1]) for yi, p in zip(y, points, strict=True)])
+    z = np.array([np.interp(yi, *_profile(p)) for yi, p in zip(y, points, strict=True)])
     return np.column_stack([y, z])
+
+
+def _profile(p: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """The 7 points' y and z as a function of y (the bottom five where a wall leans over)."""
+    rows = p if np.all(np.diff(p[:, 0]) >= 0) else p[1:6]
+    return rows[:, 0], rows[:, 1]
