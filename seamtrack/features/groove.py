@@ -21,24 +21,35 @@ spikes and reflection streaks left out, straight pieces by split-and-merge):
 * **top corners**: a plate's line meets its wall's line; with no wall seen, the plate's end
   (half a spacing beyond its last point).
 * **fill surface**: the groove's points inside the walls and off their lines, less what a
-  running median over 0.6 mm leaves out (spike runs), the largest stretch without a 1 mm break.
+  running median over 0.6 mm leaves out (spike runs), the largest stretch without a 2 mm break
+  (2.5 mm towards a side with no wall seen: a shadow in a crowned fill).
 * **bottom corners**: a line through the most surface points within 1.5 mm of the surface's
   end (lines through pairs of points: spike scraps do not move it) crossed with the wall's
   line, when that lies within 1.5 mm of the surface's outermost point on the line; else that
-  point (half a spacing beyond it). With no surface at all (an empty V without a gap), the
-  walls' intersection.
+  point (half a spacing beyond it); with no wall seen on a side (buried, or along the rays),
+  the surface's outermost point. With no surface at all (an empty V without a gap), the
+  walls' intersection. A wall no piece covers (a quantized wall's staircase) is fitted to the
+  points between the plate's last piece and the groove's first.
 * **bottom points**: the fill surface between the bottom corners at a quarter, half and three
   quarters of the way across (along u), each a local robust line fit of the surface points
   there, in v; where no surface shows there (an open root), on the line joining the corners.
 * **remaining area**: the polygon of the top corners, the bottom corners and the surface
-  between them, below the line joining the top corners (mm^2, ``Feature.area_mm2``).
+  between them, below the line joining the top corners (mm^2, ``Feature.area_mm2``), signed:
+  metal above that line counts against it (about 0 for a nearly full groove, negative under a
+  cap).
+* **crowned and nearly full grooves**: where the fill rises above the line of the plates' ends
+  (a cap, or the last fill layer's crowns), the walls are buried: the top corners are where the
+  plates' lines end, the bottom corners the fill surface's outermost points there, and the
+  bottom points on the fill surface between them, however convex. Such a raised part is taken
+  for a fill when it stands at most ``max_crown_mm`` above the plates' ends and no piece of it
+  a millimetre long stands more than 80 deg off the plates; else it is a block.
 
 The seam point is chosen by ``reference``: ``"centre"`` the middle bottom point, ``"left"`` /
 ``"right"`` that bottom corner (the wall's foot at the fill surface). ``edges_laser`` holds the
 7 points, (7, 2). Refused, with the reason, when no plate shows on a side, the plates are not
 parallel (a fillet, a corner), nothing lies ``min_depth_mm`` below the plates between them
-(a flat plate, a lap) or a raised part stands there (a block), or the model explains less than
-``min_explained`` of the profile.
+(a flat plate, a lap) or a raised part that is no fill stands there (a block), or the model
+explains less than ``min_explained`` of the profile.
 
 Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groove).
 """
@@ -112,6 +123,7 @@ class GrooveExtractor(_Base):
     max_plate_deg: float = 15.0
     wall_deg: float = 35.0
     min_depth_mm: float = 0.5
+    max_crown_mm: float = 5.0
     max_lines: int = 256
 
     def __post_init__(self) -> None:
@@ -171,10 +183,14 @@ class GrooveExtractor(_Base):
         chord_u = (end_r - end_l) / max(math.hypot(*(end_r - end_l)), 1e-12)
         chord_v = np.array([-chord_u[1], chord_u[0]])
         depth = (P[inner] - end_l) @ chord_v
-        if np.count_nonzero(depth > self.min_depth_mm) < self.min_points:
+        below = np.count_nonzero(depth > self.min_depth_mm) >= self.min_points
+        raised = np.count_nonzero(depth < -self.min_depth_mm) > 0.2 * len(inner)
+        if not below and not raised:
             return "not a groove: nothing lies below the plates between them"
-        if np.count_nonzero(depth < -self.min_depth_mm) > 0.2 * len(inner):
-            return "not a groove: a raised part stands between the plates"
+        if raised:  # a crowned fill (a cap over the plates), or a block
+            why = self._raised(seg, plates, inner, depth, end_r - end_l)
+            if why:
+                return why
         groove = list(range(plates.left_last + 1, plates.right_first))
         left = self._wall(seg, groove, v, True, end_l)
         right = self._wall(seg, groove[::-1], v, False, end_r)
@@ -200,6 +216,28 @@ class GrooveExtractor(_Base):
         rms = max(pl.rms, pr.rms, *(w.line.rms for w in (left, right) if w.line is not None))
         explained = self._explained(seg, plates, (left, right), inner, bl, br, u)
         return GroovePoints(pts, area, explained, rms)
+
+    def _raised(
+        self, seg: Segments, plates: Plates, inner: IntArray, depth: FloatArray, chord: FloatArray
+    ) -> str:
+        """Why a part raised between the plates is no crowned fill ("" when it is one): a
+        fill's cap stands at most ``max_crown_mm`` above the line of the plates' ends (the
+        95th percentile of its points: spikes do not count), and no piece of it a millimetre
+        long stands more than 80 deg off the plates (a block's sides do)."""
+        why = "not a groove: a raised part stands between the plates"
+        if len(inner) < self.min_points or float(np.percentile(-depth, 95)) > self.max_crown_mm:
+            return why
+        P = seg.points
+        along = chord / max(math.hypot(*chord), 1e-12)
+        normal = np.array([-along[1], along[0]])
+        start = P[int(plates.left.index[-1])]
+        for j in range(plates.left_last + 1, plates.right_first):
+            ln = seg.lines[j]
+            if ln.extent < 1.0 or float((ln.centroid - start) @ normal) > -self.min_depth_mm:
+                continue
+            if _angle_deg(ln.direction, along) > 80.0:
+                return why
+        return ""
 
     def _plates(self, seg: Segments) -> Plates | str:
         lines = seg.lines
@@ -275,7 +313,7 @@ class GrooveExtractor(_Base):
             if n > support:
                 best, support = j, n
         if best is None:
-            return Wall(None, -1, -1)
+            return self._bare_wall(seg, groove[0], v, from_left, top)
         ref = lines[best]
         on = [j for j in groove if _on_line(seg, ref, lines[j])]
         index = [lines[j].index for j in on]
@@ -283,6 +321,38 @@ class GrooveExtractor(_Base):
         if line.direction[0] < 0:
             line = Line(line.index, line.centroid, -line.direction, -line.t, line.rms)
         return Wall(line, on[0], on[-1])
+
+    def _bare_wall(
+        self, seg: Segments, first: int, v: FloatArray, from_left: bool, top: FloatArray
+    ) -> Wall:
+        """A wall no piece covers (a quantized wall's staircase, too jagged for the pieces'
+        tolerance): the points between the plate's last piece and the groove's first, when
+        they run at least a millimetre down into the groove ``wall_deg`` off the plates from
+        the plate's end (``top``)."""
+        lines = seg.lines
+        if from_left:
+            lo, hi = int(lines[first - 1].index[-1]) + 1, int(lines[first].index[0])
+        else:
+            lo, hi = int(lines[first].index[-1]) + 1, int(lines[first + 1].index[0])
+        index = np.arange(lo, hi)
+        index = index[~seg.stray[index]]
+        if len(index) < self.min_points:
+            return Wall(None, -1, -1)
+        line = _fit(seg.points, index)
+        if line.direction[0] < 0:
+            line = Line(line.index, line.centroid, -line.direction, -line.t, line.rms)
+        d = line.direction if from_left else -line.direction
+        off = math.degrees(math.asin(min(1.0, abs(float(d @ v)))))
+        near = abs(float((top - line.centroid) @ line.normal)) <= max(1.0, 3 * seg.tol)
+        if (
+            float(d @ v) <= 0
+            or off < self.wall_deg
+            or line.extent < 1.0
+            or not near
+            or line.rms > max(3.0 * seg.tol, 0.5 * seg.spacing)
+        ):
+            return Wall(None, -1, -1)
+        return Wall(line, first, first)
 
     @staticmethod
     def _top(plate: Line, wall: Line | None, left: bool, reach: float) -> FloatArray:
@@ -319,7 +389,18 @@ class GrooveExtractor(_Base):
             cut = np.flatnonzero(np.diff(qu) > 2.0) + 1
             bounds = np.r_[0, cut, len(qu)]
             j = int(np.argmax(np.diff(bounds)))
-            qu, qv = qu[bounds[j] : bounds[j + 1]], qv[bounds[j] : bounds[j + 1]]
+            a, b = j, j + 1
+            # Towards a side with no wall seen (buried under a crowned fill) a break of up to
+            # 2.5 mm is a shadow in the fill surface, not a scrap: the surface goes on.
+            while walls[0].line is None and a > 0 and qu[bounds[a]] - qu[bounds[a] - 1] <= 2.5:
+                a -= 1
+            while (
+                walls[1].line is None
+                and b < len(bounds) - 1
+                and qu[bounds[b]] - qu[bounds[b] - 1] <= 2.5
+            ):
+                b += 1
+            qu, qv = qu[bounds[a] : bounds[b]], qv[bounds[a] : bounds[b]]
         return qu, qv
 
     def _corner(
@@ -338,6 +419,9 @@ class GrooveExtractor(_Base):
         beyond it)."""
         sign = 1.0 if left else -1.0
         edge = float(fu[0] if left else fu[-1])
+        if wall is None:  # a buried wall, or one no ray sees: the surface's outermost point
+            ou, ov = edge, float(fv[0] if left else fv[-1])
+            return np.asarray((ou - sign * 0.5 * seg.spacing) * u + ov * v)
         sel = sign * (fu - edge) <= 1.5
         su, sv = fu[sel], fv[sel]
         fit = _robust_uv_line(su, sv, seg.tol)
@@ -478,9 +562,11 @@ def _local_v(qu: FloatArray, qv: FloatArray, ut: float, h: float, tol: float) ->
 
 def _area(pts: FloatArray, P: FloatArray, inner: IntArray, u: FloatArray) -> float:
     """The polygon of the top corners, the bottom corners and the surface between them, below
-    the line joining the top corners (mm^2)."""
+    the line joining the top corners (mm^2), signed: a crowned fill's metal above that line
+    counts against it (a nearly full groove's area is about 0, a capped one's negative)."""
     qu = P[inner] @ u
     zone = inner[(qu > pts[1] @ u) & (qu < pts[5] @ u)]
     ring = np.vstack([pts[0], pts[1], P[zone], pts[5], pts[6]])
-    y, z = ring[:, 0], ring[:, 1]
-    return float(abs(0.5 * (np.dot(y, np.roll(z, -1)) - np.dot(z, np.roll(y, -1)))))
+    v = np.array([-u[1], u[0]])
+    a, b = ring @ u, ring @ v  # along the plates, into the groove
+    return float(-0.5 * (np.dot(a, np.roll(b, -1)) - np.dot(b, np.roll(a, -1))))

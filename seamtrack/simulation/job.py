@@ -59,7 +59,14 @@ from seamtrack.simulation.job_summary import (  # noqa: F401 (the job's public n
     welded_range,
 )
 from seamtrack.simulation.loop import Result, run
-from seamtrack.simulation.passes import heat_input_kj_mm, overridden, process_of
+from seamtrack.simulation.passes import (
+    heat_input_kj_mm,
+    offset_point,
+    overridden,
+    planned_feature,
+    process_of,
+    wall_deg,
+)
 from seamtrack.simulation.robots import is_arm, tool_program
 from seamtrack.simulation.scene import Scene, load_scene
 from seamtrack.workpiece.beads import bead_area_mm2
@@ -160,6 +167,8 @@ def run_job(
                 "groove",
             )
         groove = scan.groove
+        if c.extractor.name == "groove" and "wall_deg" not in c.extractor.params:
+            scene = _with(scene, {"extractor.params.wall_deg": wall_deg(groove)})
     else:
         groove = _true_groove(fill)
     limit = count if count is not None else 200
@@ -344,6 +353,7 @@ def _steered(
     s_stations = fill.s_mm
     set_speed = getattr(tracker, "set_speed", None)
     adapted = np.full((len(s_stations), 2), np.nan)  # speed, offset per station
+    seen = [False]  # the pass's sensor has measured the groove
 
     def station(s: float) -> int:
         return min(int(np.searchsorted(s_stations, s)), len(s_stations) - 1)
@@ -361,6 +371,11 @@ def _steered(
             feature = Feature.failed("below the fill the pass before measured", feature.joint)
             frames[-1] = (feature, T_world_sensor)
         if feature:
+            seen[0] = True
+        elif not seen[0] and previous is not None:  # not yet seen: start on the plan
+            feature = planned_feature(feature, T_world_sensor, fill, plan, previous,
+                                      STATION_SPACING_MM, _POINT_INDEX)  # fmt: skip
+        if feature:
             s = float(cad_seam.closest(feature.point_world[None]).arc_length_mm[0])
             i = station(s)
             if adapt is not None:
@@ -368,7 +383,13 @@ def _steered(
                 if ahead is not None:
                     adapted[i] = _adapted(adapt, ahead, plan, planner_name, t_s)
             offset = adapted[i, 1] if np.isfinite(adapted[i, 1]) else float(plan.offset_at(s))
-            if offset:
+            here = measured_groove(frames[-1:], fill, cad_seam) if offset else None
+            if here is not None:  # on the fill surface the frame measured, under the bead
+                k = min(int(np.searchsorted(s_stations, here.s_mm[0])), len(s_stations) - 1)
+                y, z = offset_point(here.points, _POINT_INDEX[plan.reference], offset)[0]
+                point = (fill.T_world_station[k] @ np.array([0.0, y, z, 1.0]))[:3]
+                feature = dataclasses.replace(feature, point_world=point)
+            elif offset:  # the planned point (no groove measured yet)
                 point = feature.point_world + offset * lateral[i]
                 feature = dataclasses.replace(feature, point_world=point)
         if set_speed is not None:
@@ -385,12 +406,24 @@ def _below_the_fill(
     frame: tuple[Feature, FloatArray], fill: Any, seam: Seam, previous: MeasuredGroove
 ) -> bool:
     """Whether a frame's fill surface (its middle bottom point) lies more than
-    :data:`FILL_DROP_MM` below the one measured there by the pass before."""
+    :data:`FILL_DROP_MM` below the one measured there by the pass before, or its bottom
+    corners lie more than twice that inside the pass before's (the fill surface only widens
+    up a V's walls; a frame that shows part of it, at the part's end, is no groove)."""
     now = measured_groove([frame], fill, seam)
     if now is None or not len(previous):
         return False
-    before = float(np.interp(now.s_mm[0], previous.s_mm, previous.points[:, 3, 1]))
-    return bool(now.points[0, 3, 1] < before - FILL_DROP_MM)
+    p = previous.points
+    before = [float(np.interp(now.s_mm[0], previous.s_mm, p[:, k, c])) for k, c in _PAST]
+    y_left, y_right, z_mid = now.points[0, 1, 0], now.points[0, 5, 0], now.points[0, 3, 1]
+    return bool(
+        z_mid < before[2] - FILL_DROP_MM
+        or y_left > before[0] + 2 * FILL_DROP_MM
+        or y_right < before[1] - 2 * FILL_DROP_MM
+    )
+
+
+#: The pass before's left foot's y, right foot's y, middle's z (row, column of the 7 points).
+_PAST = ((1, 0), (5, 0), (3, 1))
 
 
 def _adapted(adapt: Any, ahead: MeasuredGroove, plan: PassPlan, name: str,
@@ -431,13 +464,15 @@ def pass_path(fill: Any, reference: str, plan: PassPlan | None, window: int = 4)
     """A pass's true path in the world: at every station the reference point of the true fill
     surface (left or right wall's foot, or the middle; a running median over ``2 window + 1``
     stations, 2 mm: where a toe wets a wall the foot jumps along it from one station to the
-    next, faster than any torch follows), moved across the seam by the plan's offset there."""
-    index = _POINT_INDEX[reference]
-    yz = np.stack([fill.groove_points(i)[index] for i in range(len(fill.s_mm))])
-    padded = np.pad(yz, ((window, window), (0, 0)), mode="edge")
-    yz = np.median(np.lib.stride_tricks.sliding_window_view(padded, 2 * window + 1, axis=0), -1)
-    offset = np.zeros(len(yz)) if plan is None else plan.offset_at(fill.s_mm)
-    local = np.column_stack([np.zeros(len(yz)), yz[:, 0] + offset, yz[:, 1], np.ones(len(yz))])
+    next, faster than any torch follows), moved across the seam by the plan's offset there,
+    onto the fill surface the bottom points describe (:func:`~seamtrack.simulation.passes.
+    offset_point`: where the bead aims, as the tracker does with the measured points)."""
+    pts = fill.all_groove_points()
+    padded = np.pad(pts, ((window, window), (0, 0), (0, 0)), mode="edge")
+    pts = np.median(np.lib.stride_tricks.sliding_window_view(padded, 2 * window + 1, axis=0), -1)
+    offset = np.zeros(len(pts)) if plan is None else plan.offset_at(fill.s_mm)
+    yz = offset_point(pts, _POINT_INDEX[reference], offset)
+    local = np.column_stack([np.zeros(len(yz)), yz[:, 0], yz[:, 1], np.ones(len(yz))])
     points = np.einsum("mij,mj->mi", fill.T_world_station, local)[:, :3]
     return Seam.from_points(points, field="passes", name="pass path")
 

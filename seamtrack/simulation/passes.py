@@ -7,11 +7,18 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import Any
 
-from seamtrack.control.planner import PassPlan, Process, planner_class
+import numpy as np
+from numpy.typing import NDArray
+
+from seamtrack.control.planner import MeasuredGroove, PassPlan, Process, planner_class
 from seamtrack.errors import SceneError
+from seamtrack.sensing.profiles import Feature
 from seamtrack.simulation.config import PassesConfig, ProcessConfig, SceneConfig
 from seamtrack.simulation.robots import is_arm
+
+FloatArray = NDArray[np.float64]
 
 
 def wire_feed_mm_s(wire_feed_m_min: float) -> float:
@@ -148,3 +155,68 @@ def overridden(plan: PassPlan, passes: PassesConfig, pass_index: int) -> PassPla
             changes["wire_feed_mm_s"] = wire_feed_mm_s(o.wire_feed_m_min)
         plan = dataclasses.replace(plan, **changes)  # type: ignore[arg-type]
     return plan
+
+
+def planned_feature(
+    feature: Feature, T_world_sensor: FloatArray, fill: Any, plan: PassPlan,
+    previous: MeasuredGroove, spacing_mm: float, point_index: dict[str, int],
+) -> Feature:  # fmt: skip
+    """Until the pass's sensor first measures the groove, a frame that does not (a crowned
+    fill's first millimetres, a spatter, the arc's start) gives the planned point instead: the
+    plan's reference point as the pass before measured it where the laser plane crosses the
+    seam (the offset is added after, as to a measured point), so the tracker starts along the
+    plan rather than stopping (beyond the stations measured before, up to 10 mm, their end's
+    point). Frames off the part, or where the laser plane crosses no station, stay failed.
+    ``spacing_mm``: the stations'; ``point_index``: each reference's row of the 7 points."""
+    if feature.stripe_points == 0 or not len(previous):
+        return feature
+    origin = fill.T_world_station[:, :3, 3]
+    across = np.abs((origin - T_world_sensor[:3, 3]) @ T_world_sensor[:3, 0])
+    i = int(np.argmin(across))
+    reach = 10.0  # mm: the plan held this far beyond the stations measured before
+    if across[i] > spacing_mm or not (
+        previous.s_mm[0] - reach <= fill.s_mm[i] <= previous.s_mm[-1] + reach
+    ):
+        return feature
+    k = point_index[plan.reference]
+    y = float(np.interp(fill.s_mm[i], previous.s_mm, previous.points[:, k, 0]))
+    z = float(np.interp(fill.s_mm[i], previous.s_mm, previous.points[:, k, 1]))
+    world = fill.T_world_station[i] @ np.array([0.0, y, z, 1.0])
+    laser = np.linalg.solve(T_world_sensor, world)[1:3]
+    return Feature.found(laser, T_world_sensor, confidence=0.0, joint=feature.joint or "groove")
+
+
+def wall_deg(groove: MeasuredGroove, margin_deg: float = 12.0) -> float:
+    """The groove extractor's ``wall_deg`` for the passes after the scan: the walls' angle
+    off the plates as the scan measured them, less ``margin_deg`` (at least 35 deg, its
+    default). A bead's flank by a buried wall, shallower than the bevel, is then no wall."""
+    p = groove.points
+    top = p[:, 6] - p[:, 0]
+    angles = []
+    for a, b in ((0, 1), (6, 5)):
+        wall = p[:, b] - p[:, a]
+        cos = np.abs(np.sum(wall * top, axis=1)) / np.maximum(
+            np.linalg.norm(wall, axis=1) * np.linalg.norm(top, axis=1), 1e-12
+        )
+        angles.append(np.degrees(np.arccos(np.clip(np.median(cos), 0.0, 1.0))))
+    return float(max(35.0, min(angles) - margin_deg))
+
+
+def offset_point(points: FloatArray, index: int, offset_mm: Any) -> FloatArray:
+    """(m, 2) the point ``offset_mm`` (m,) across the groove from row ``index`` of the 7
+    points ``points`` (m, 7, 2) (station frame, y ascending), on the surface the 7 points
+    describe (piecewise linear: the walls from the top corners to the feet and the fill
+    surface between; the bottom five alone where a wall leans over its foot; beyond the top
+    corners, a top corner's height): where a bead laid off the reference aims. A bead beside
+    the middle of a fill surface that slopes there (a bead's flank) aims at the surface under
+    it, not at the middle's height."""
+    points = np.asarray(points, dtype=float).reshape(-1, 7, 2)
+    y = points[:, index, 0] + np.broadcast_to(np.asarray(offset_mm, dtype=float), len(points))
+    z = np.array([np.interp(yi, *_profile(p)) for yi, p in zip(y, points, strict=True)])
+    return np.column_stack([y, z])
+
+
+def _profile(p: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """The 7 points' y and z as a function of y (the bottom five where a wall leans over)."""
+    rows = p if np.all(np.diff(p[:, 0]) >= 0) else p[1:6]
+    return rows[:, 0], rows[:, 1]

@@ -255,7 +255,10 @@ class FillState:
         Left top corner, left bottom corner (the foot of the uncovered left wall, where it meets
         the fill or the root), the fill surface (or root) at 1/4, 1/2 and 3/4 of the way between
         the bottom corners, right bottom corner, right top corner. Bottom points are grid nodes
-        (within ``lateral_step_mm`` of the true corner).
+        (within ``lateral_step_mm`` of the true corner). Where the fill buries a wall and
+        spills over the plate beside it (a cap), that side's top and bottom corners are the
+        fill's toe on the plate, where a sensor sees the plate's line end (the corner under
+        the metal is seen by none); :attr:`top_corners` stay the groove's.
         """
         return self.all_groove_points(np.array([int(i)]))[0]
 
@@ -264,6 +267,8 @@ class FillState:
         idx = np.arange(self.n_stations) if stations is None else np.asarray(stations, np.intp)
         z = self.surface_z[idx]
         bottom = bottom_corners(self.y_mm, z, self.base_z[idx], self.top_index[idx])
+        bottom, top = _spilled(self.y_mm, z, self.base_z[idx], self.top_index[idx], bottom,
+                               self.top_corners[idx])  # fmt: skip
         rows = np.arange(len(idx))
         y_left, y_right = self.y_mm[bottom[:, 0]], self.y_mm[bottom[:, 1]]
         frac = np.array([0.0, 0.25, 0.5, 0.75, 1.0])
@@ -275,7 +280,7 @@ class FillState:
         zs = z[rows[:, None], j] * (1 - t) + z[rows[:, None], j + 1] * t
         zs[:, 0], zs[:, -1] = z[rows, bottom[:, 0]], z[rows, bottom[:, 1]]
         out = np.empty((len(idx), 7, 2))
-        out[:, 0], out[:, 6] = self.top_corners[idx, 0], self.top_corners[idx, 1]
+        out[:, 0], out[:, 6] = top[:, 0], top[:, 1]
         out[:, 1:6, 0], out[:, 1:6, 1] = ys, zs
         return out
 
@@ -370,15 +375,16 @@ class FillState:
         local, station_area, covered = self._stations_on_path(path, area)
         y_centre = local[:, 1] + offset_mm
         laid_here = covered & (station_area > 0)
-        outside = laid_here & (
-            (y_centre < self.top_corners[:, 0, 0]) | (y_centre > self.top_corners[:, 1, 0])
-        )
+        # the groove's top width, or as far as a fill spilled over the plates reaches
+        seen = self.all_groove_points()
+        lo = np.minimum(self.top_corners[:, 0, 0], seen[:, 0, 0])
+        hi = np.maximum(self.top_corners[:, 1, 0], seen[:, 6, 0])
+        outside = laid_here & ((y_centre < lo) | (y_centre > hi))
         if np.any(outside):
             i = int(np.flatnonzero(outside)[0])
             raise SceneError(
                 f"the bead's centre {y_centre[i]:.2f} mm at s = {self.s_mm[i]:.1f} mm lies "
-                f"outside the groove ({self.top_corners[i, 0, 0]:.2f} .. "
-                f"{self.top_corners[i, 1, 0]:.2f} mm)",
+                f"outside the groove ({lo[i]:.2f} .. {hi[i]:.2f} mm)",
                 field="offset_mm",
                 fix="keep the bead's offset inside the groove's top width",
             )
@@ -487,3 +493,25 @@ class FillState:
         for p, bead in enumerate(self.beads):
             top = np.where(bead.z_after - bead.z_before > COVERED_MM, p, top)
         return top
+
+
+def _spilled(
+    y: FloatArray, z: FloatArray, base: FloatArray, top_idx: IntArray, bottom: IntArray,
+    top: FloatArray,
+) -> tuple[IntArray, FloatArray]:  # fmt: skip
+    """The bottom corners' nodes (m, 2) and the top corners (m, 2, 2) where the fill buries a
+    wall (its foot at the top corner, metal there) and spills over the plate beside it: both
+    at the fill's toe, the outermost node, walking out from the top corner, under metal more
+    than ``COVERED_MM`` thick."""
+    bottom, top = bottom.copy(), np.array(top, dtype=float, copy=True)
+    covered = z - base > COVERED_MM
+    rows = np.arange(len(z))
+    for side, step in ((0, -1), (1, 1)):
+        t = top_idx[:, side]
+        for r in np.flatnonzero((bottom[:, side] == t) & covered[rows, t]):
+            k = int(t[r])
+            while 0 < k + step < z.shape[1] - 1 and covered[r, k + step]:
+                k += step
+            bottom[r, side] = k
+            top[r, side] = (y[k], z[r, k])
+    return bottom, top
