@@ -49,9 +49,19 @@ from seamtrack.control.planner import (
 )
 from seamtrack.errors import PluginRuntimeError, SceneError, plugin_failed
 from seamtrack.geometry.seam import Seam
-from seamtrack.sensing.profiles import Feature, laser_to_world
+from seamtrack.sensing.profiles import Feature
 from seamtrack.simulation.assemble import Parts, build_parts
 from seamtrack.simulation.checks import default_time_limit_s
+from seamtrack.simulation.job_paths import (
+    _POINT_INDEX,
+    STATION_SPACING_MM,
+    _arc_path,
+    _ramped,
+    _to_the_ends,
+    _true_groove,
+    measured_groove,
+    pass_path,
+)
 from seamtrack.simulation.job_summary import (  # noqa: F401 (the job's public names)
     fusion_margin_mm,
     is_wall_bead,
@@ -73,16 +83,8 @@ from seamtrack.workpiece.beads import bead_area_mm2
 
 FloatArray = NDArray[np.float64]
 
-#: Station spacing of the fill state (mm): the issue's "every <= 0.5 mm".
-STATION_SPACING_MM = 0.5
-
-_POINT_INDEX = {"left": 1, "right": 5, "centre": 3}
-
 #: A frame whose fill surface lies this far (mm) below the pass before's is no groove.
 FILL_DROP_MM = 1.0
-
-#: A bead that stops this close (mm) to the part's end is run off the edge (:func:`_to_the_ends`).
-RUN_OFF_MM = 3.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -458,113 +460,6 @@ def _laser_flipped(parts: Parts, fill: Any) -> bool:
         joints = robot.joints_for_tool(make_pose(translation=parts.tcp_start_world))
     T_world_sensor = np.asarray(robot.T_world_sensor(joints), dtype=float)
     return bool(T_world_sensor[:3, 1] @ fill.T_world_station[0, :3, 1] < 0.0)
-
-
-def pass_path(fill: Any, reference: str, plan: PassPlan | None, window: int = 4) -> Seam:
-    """A pass's true path in the world: at every station the reference point of the true fill
-    surface (left or right wall's foot, or the middle; a running median over ``2 window + 1``
-    stations, 2 mm: where a toe wets a wall the foot jumps along it from one station to the
-    next, faster than any torch follows), moved across the seam by the plan's offset there,
-    onto the fill surface the bottom points describe (:func:`~seamtrack.simulation.passes.
-    offset_point`: where the bead aims, as the tracker does with the measured points)."""
-    pts = fill.all_groove_points()
-    padded = np.pad(pts, ((window, window), (0, 0), (0, 0)), mode="edge")
-    pts = np.median(np.lib.stride_tricks.sliding_window_view(padded, 2 * window + 1, axis=0), -1)
-    offset = np.zeros(len(pts)) if plan is None else plan.offset_at(fill.s_mm)
-    yz = offset_point(pts, _POINT_INDEX[reference], offset)
-    local = np.column_stack([np.zeros(len(yz)), yz[:, 0], yz[:, 1], np.ones(len(yz))])
-    points = np.einsum("mij,mj->mi", fill.T_world_station, local)[:, :3]
-    return Seam.from_points(points, field="passes", name="pass path")
-
-
-def measured_groove(
-    frames: list[tuple[Feature, FloatArray]], fill: Any, cad_seam: Seam
-) -> MeasuredGroove | None:
-    """The groove as the pass's sensor measured it (None: in no frame): every frame's 7
-    points (the groove extractor's ``edges_laser``) in the frame of the station nearest to
-    them, the median per station; stations no frame saw are left out."""
-    s_list, pts_list, area_list = [], [], []
-    for feature, T_world_sensor in frames:
-        edges = np.asarray(feature.edges_laser, dtype=float)
-        if not feature or edges.shape != (7, 2) or not np.isfinite(edges).all():
-            continue
-        world = laser_to_world(T_world_sensor, edges)
-        s = float(cad_seam.closest(world[3][None]).arc_length_mm[0])
-        i = min(int(round((s - fill.s_mm[0]) / STATION_SPACING_MM)), len(fill.s_mm) - 1)
-        local = (np.linalg.inv(fill.T_world_station[i]) @ np.c_[world, np.ones(7)].T).T
-        yz = local[:, 1:3]
-        if yz[0, 0] > yz[6, 0]:  # the laser's left is the stations' right: y ascending
-            yz = yz[::-1]
-        s_list.append(i)
-        pts_list.append(yz)
-        area_list.append(feature.area_mm2)
-    if not s_list:
-        return None
-    stations = np.asarray(s_list)
-    points = np.asarray(pts_list)
-    areas = np.asarray(area_list, dtype=float)
-    keep = np.unique(stations)
-    med_pts = np.stack([np.median(points[stations == k], axis=0) for k in keep])
-    med_area = np.array([np.nanmedian(areas[stations == k]) for k in keep])
-    return MeasuredGroove(fill.s_mm[keep], med_pts, med_area)
-
-
-def _true_groove(fill: Any) -> MeasuredGroove:
-    """The CAD groove's 7 points and area (no scan-only pass: the first plan is the nominal
-    groove's; later ones are measured)."""
-    points = np.stack([fill.groove_points(i) for i in range(len(fill.s_mm))])
-    return MeasuredGroove(fill.s_mm, points, fill.remaining_area_mm2())
-
-
-def _arc_path(
-    result: Result, period_s: float, floor_mm_s: float
-) -> tuple[FloatArray, FloatArray, FloatArray]:
-    """The torch's path while the arc burns, its times and speeds (decimated to
-    ``period_s``): from the first to the last tick at which the torch moves at least half the
-    slowest process speed (the approach to the first measured point included: the torch
-    starts on the groove at the seam's start); the speed bounded below by ``floor_mm_s``."""
-    trace = result.trace
-    idx = trace.decimated(period_s)
-    path, t = trace.tcp_world[idx], trace.t_s[idx]
-    if len(path) < 3:
-        return path, t, np.full(len(path), floor_mm_s)
-    speed = np.linalg.norm(np.gradient(path, t, axis=0), axis=1)
-    moving = np.flatnonzero(speed >= 0.5 * floor_mm_s)
-    if len(moving) < 2:
-        return path[:0], t[:0], speed[:0]
-    keep = slice(moving[0], moving[-1] + 1)
-    return path[keep], t[keep], np.maximum(speed[keep], floor_mm_s)
-
-
-def _ramped(speed: FloatArray, planned: FloatArray, fraction: float = 0.8) -> FloatArray:
-    """The speed that sets the bead's area: the actual one, except while the torch speeds up
-    from rest at the start and brakes to rest at the end (below ``fraction`` of the planned
-    speed there), where the wire feed follows the travel speed (a controller's synchronised
-    arc start and crater) and the bead has its planned area."""
-    out = speed.copy()
-    fast = np.flatnonzero(speed >= fraction * planned)
-    if not len(fast):
-        return planned.copy()
-    out[: fast[0]] = planned[: fast[0]]
-    out[fast[-1] + 1 :] = planned[fast[-1] + 1 :]
-    return out
-
-
-def _to_the_ends(path: FloatArray, area: FloatArray, seam: Seam) -> tuple[FloatArray, FloatArray]:
-    """The path carried on along the seam to the part's ends where it stops within
-    :data:`RUN_OFF_MM` of them (the torch stops at the last seam point its sensor saw, a
-    fraction of a mm before the plate's edge; a welder runs the bead off the edge), with the
-    area at its end."""
-    if len(path) < 2:
-        return path, area
-    s = seam.closest(path[[0, -1]]).arc_length_mm
-    ends = seam.interpolate([0.0, seam.length_mm])
-    head = [ends[0] + (path[0] - seam.interpolate([s[0]])[0])] if 0 < s[0] <= RUN_OFF_MM else []
-    gap = seam.length_mm - s[1]
-    tail = [ends[1] + (path[-1] - seam.interpolate([s[1]])[0])] if 0 < gap <= RUN_OFF_MM else []
-    path = np.vstack([*head, path, *tail])
-    area = np.concatenate([area[:1]] * len(head) + [area] + [area[-1:]] * len(tail))
-    return path, area
 
 
 def _plan(maker: Any, name: str, groove: MeasuredGroove, index: int, state: JobState,
