@@ -33,12 +33,13 @@ def short_job():
     return run_job(load_scene("multipass-v-groove", SHORT))
 
 
-#: What keeps the closed-loop job from filling the groove today: on some frames the groove
-#: extractor answers a degenerate groove (its bottom points on the backing, under a fill) or
-#: refuses a crowned fill ("a raised part stands between the plates"), and the tracker follows
-#: the former; the plan alone fills it (tests/test_job_plan.py). Strict: remove when it passes.
+#: What keeps the closed-loop job from filling the groove today (issue 25, open): the cap
+#: layer's last bead is aimed from three points of a bumpy fill surface and strays 2.2 mm
+#: vertically where a wall is partly buried, and its reinforcement reaches 4.4 mm; the plan
+#: alone, under perfect tracking, fills it (tests/test_job_plan.py). Strict: remove when it
+#: passes.
 EXTRACTOR_ON_FILLS = pytest.mark.xfail(
-    strict=True, reason="groove extractor on crowned and nearly full grooves (issue 25)"
+    strict=True, reason="the cap layer's aim on a bumpy fill surface (issue 25, open)"
 )
 
 
