@@ -34,6 +34,11 @@ FAMILIES = ("v-groove", "square-butt", "fillet", "lap", "outside-corner")
 GROOVE = "groove"
 
 
+#: The least depth (mm) of a bottom corner below the top corners' line for :func:`classify` to
+#: name a groove.
+WALL_MM = 1.0
+
+
 @lru_cache(maxsize=8)
 def _groove(resolution_mm: float | None) -> GrooveExtractor:
     return GrooveExtractor(resolution_mm=resolution_mm)
@@ -56,6 +61,15 @@ def _groove_share(
     except DATA_ERRORS:
         return None
     if not feature:
+        return None
+    # A groove has walls: a bottom corner at least WALL_MM below the line of the top corners
+    # (a plate with a reflection streak or a spike cluster has none; a capped weld neither).
+    (ly, lz), (ry, rz) = feature.edges_laser[0], feature.edges_laser[6]
+    depth = max(
+        float(z - (lz + (rz - lz) * (y - ly) / (ry - ly))) if ry != ly else 0.0
+        for y, z in (feature.edges_laser[1], feature.edges_laser[5])
+    )
+    if not depth >= WALL_MM:
         return None
     if s.get("v-groove", 0.0) > 0:  # an empty V, unless its bottom is wider than a root gap
         bottom = float(np.hypot(*(feature.edges_laser[5] - feature.edges_laser[1])))
