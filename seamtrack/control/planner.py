@@ -21,7 +21,6 @@ the same beads at one constant speed (the one for the groove's median area).
 
 from __future__ import annotations
 
-import importlib
 import math
 from dataclasses import dataclass, field, replace
 from typing import Any, Protocol, runtime_checkable
@@ -29,6 +28,7 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.control.registry import load_class
 from seamtrack.errors import PluginError, PluginRuntimeError
 
 FloatArray = NDArray[np.float64]
@@ -464,22 +464,7 @@ def planner_class(name: str) -> type:
             field="planner.name",
             fix=f"use one of {', '.join(builtin)}, or package.module:Class",
         )
-    module_name, _, attr = name.partition(":")
-    try:
-        module = importlib.import_module(module_name)
-    except Exception as exc:  # the user's module may fail in any way on import
-        raise PluginError(
-            f"cannot import {module_name!r}: {exc}",
-            field="planner.name",
-            fix="check the module is on PYTHONPATH (or installed) and imports",
-        ) from None
-    cls = getattr(module, attr, None)
-    if cls is None:
-        raise PluginError(
-            f"module {module_name!r} has no {attr!r}",
-            field="planner.name",
-            fix="name the class as package.module:Class",
-        )
+    cls = load_class(name, "planner.name")
     if not callable(getattr(cls, "plan", None)):
         raise PluginError(
             f"{name!r} lacks the planner method plan",

@@ -35,6 +35,28 @@ ALIASES = {
 _PROTOCOL_METHODS = ("reset", "update", "command")
 
 
+def load_class(name: str, field: str) -> Any:
+    """The object ``package.module:Class`` names (a user's plugin), or a one-line error naming
+    ``field``."""
+    module_name, _, attr = name.partition(":")
+    try:
+        module = importlib.import_module(module_name)
+    except Exception as exc:  # the user's module may fail in any way on import
+        raise PluginError(
+            f"cannot import {module_name!r}: {exc}",
+            field=field,
+            fix="check the module is on PYTHONPATH (or installed) and imports",
+        ) from None
+    cls = getattr(module, attr, None)
+    if cls is None:
+        raise PluginError(
+            f"module {module_name!r} has no {attr!r}",
+            field=field,
+            fix="name the class as package.module:Class",
+        )
+    return cls
+
+
 def tracker_class(name: str) -> type:
     """The class behind a tracker name: a built-in, ``package.module:Class``, or an entry
     point in the group ``seamtrack.trackers``."""
@@ -43,22 +65,7 @@ def tracker_class(name: str) -> type:
     if name in builtin:
         return builtin[name]
     if ":" in name:
-        module_name, _, attr = name.partition(":")
-        try:
-            module = importlib.import_module(module_name)
-        except Exception as exc:  # the user's module may fail in any way on import
-            raise PluginError(
-                f"cannot import {module_name!r}: {exc}",
-                field="tracker.name",
-                fix="check the module is on PYTHONPATH (or installed) and imports",
-            ) from None
-        cls = getattr(module, attr, None)
-        if cls is None:
-            raise PluginError(
-                f"module {module_name!r} has no {attr!r}",
-                field="tracker.name",
-                fix="name the class as package.module:Class",
-            )
+        cls = load_class(name, "tracker.name")
     else:
         found = [ep for ep in entry_points(group="seamtrack.trackers") if ep.name == name]
         if not found:
