@@ -6,7 +6,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from seamtrack.control.path_kernels import PathBuffer, off_line, smooth_tail
+from seamtrack.control.path_kernels import (
+    PathBuffer,
+    corner_envelope,
+    off_line,
+    program_hint,
+    smooth_tail,
+)
 
 
 def _fit_rows(w: np.ndarray, ds: np.ndarray, raw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -88,3 +94,80 @@ def test_path_buffer_keeps_the_points_a_list_would() -> None:
     np.testing.assert_array_equal(buffer.raw, np.array(points))
     np.testing.assert_array_equal(buffer.path, np.array(points))
     np.testing.assert_array_equal(buffer.s, np.array(arcs))
+
+
+def _envelope_numpy(
+    p: np.ndarray, s: np.ndarray, w: float, a_lat: float, accel: float, speed: float
+) -> np.ndarray:
+    """The tracker's former vectorized corner envelope."""
+    back = np.searchsorted(s, s - w)
+    fwd = np.minimum(np.searchsorted(s, s + w), len(s) - 1)
+    d1, d2 = p - p[back], p[fwd] - p
+    n1, n2 = np.linalg.norm(d1, axis=1), np.linalg.norm(d2, axis=1)
+    ok = (n1 > 0.5 * w) & (n2 > 0.5 * w)
+    cos = np.sum(d1 * d2, axis=1) / np.where(ok, n1 * n2, 1.0)
+    turn = np.where(ok, np.arccos(np.clip(cos, -1.0, 1.0)), 0.0)
+    curvature = turn / np.where(ok, 0.5 * (n1 + n2), 1.0)
+    v_allow = np.sqrt(a_lat / np.maximum(curvature, 1e-12))
+    reach = np.minimum(v_allow, speed) ** 2 + 2.0 * accel * s
+    suffix = np.minimum.accumulate(reach[::-1])[::-1]
+    return np.sqrt(np.maximum(suffix - 2.0 * accel * s, 0.0))
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_corner_envelope_is_the_braking_suffix_minimum(seed: int) -> None:
+    """A path with a 90 deg corner and jitter: the compiled envelope equals the numpy one (to
+    an ulp of the arccos), slows at the corner and never exceeds the welding speed."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(0.0, 20.0, 0.2)
+    corner = np.column_stack([np.minimum(t, 10.0), np.maximum(t - 10.0, 0.0), 0 * t])
+    p = corner + rng.normal(0.0, 0.01, corner.shape)
+    s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(p, axis=0), axis=1))])
+    got = corner_envelope(p, s, 3.0, 20.0, 500.0, 10.0)
+    want = _envelope_numpy(p, s, 3.0, 20.0, 500.0, 10.0)
+    np.testing.assert_allclose(got, want, rtol=1e-12, atol=0.0)
+    at_corner = int(np.argmin(np.abs(s - s[50])))
+    assert got[at_corner] < 0.7 * 10.0 and got.max() <= 10.0 * (1 + 1e-12)
+
+
+def test_program_hint_is_the_straight_crossing_and_the_programs() -> None:
+    """The compiled hint against its parts in numpy: the straight path's crossing of the laser
+    plane (hint_from_path), the program's crossings (laser_plane_crossings) shifted by the
+    median offset of the measured window from the program (Seam.closest), the nearest."""
+    from seamtrack.geometry.seam import Seam
+    from seamtrack.sensing.profiles import hint_from_path
+    from seamtrack.sensing.scan import laser_plane_crossings
+
+    rng = np.random.default_rng(5)
+    # A program seam with a corner, and measured points 0.3 mm beside it with noise.
+    program = np.array([[0.0, 0.0, 0.0], [50.0, 0.0, 0.0], [50.0, 40.0, 0.0]])
+    seam = Seam.from_points(program)
+    x = np.arange(30.0, 45.0, 0.25)
+    window = np.column_stack([x, 0.3 + rng.normal(0, 0.02, len(x)), 0.1 + 0 * x])
+    direction = np.array([1.0, 0.0, 0.0])
+    # A sensor ahead, looking down, its laser plane x - y = 46 across both legs of the corner.
+    r = np.sqrt(0.5)
+    T = np.eye(4)
+    T[:3, :3] = np.column_stack([(r, -r, 0.0), (-r, -r, 0.0), (0.0, 0.0, -1.0)])
+    T[:3, 3] = (46.0, 0.0, 90.0)
+    a = np.ascontiguousarray(program[:-1])
+    d = np.ascontiguousarray(program[1:] - a)
+    found, y, z, dx, dy, dz, near = program_hint(
+        T, window[-1], direction, program, window, np.empty((0, 3)), np.empty((0, 3)), a, d
+    )
+    straight = hint_from_path(T, window[-1], direction)
+    assert straight is not None and found
+    offset = np.median(window - seam.closest(window).points, axis=0)
+    expected = laser_plane_crossings(seam, T) + (T[:3, :3].T @ offset)[1:]
+    k = int(np.argmin(np.hypot(*(expected - straight.point_laser).T)))
+    np.testing.assert_allclose((y, z), expected[k], atol=1e-12)
+    np.testing.assert_allclose((dx, dy, dz), straight.direction, atol=1e-15)
+    np.testing.assert_allclose(near, seam.closest(window).points, atol=1e-12)
+    assert len(expected) == 2  # both legs cross: the choice is real
+    # Reusing the window's closest points gives the same answer.
+    again = program_hint(T, window[-1], direction, program, window, window[:-3], near, a, d)
+    assert again[:6] == (found, y, z, dx, dy, dz)
+    # A path along the laser plane crosses it nowhere: no hint.
+    along = program_hint(T, window[-1], np.array([r, r, 0.0]), program, window,
+                         window, near, a, d)  # fmt: skip
+    assert not along[0]

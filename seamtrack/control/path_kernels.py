@@ -347,3 +347,88 @@ def closest_on_polyline(
         for c in range(3):
             near[r, c] = a[bs, c] + bt * d[bs, c]
     return near
+
+
+@numba.njit(cache=True, nogil=True)
+def program_hint(
+    T: FloatArray, last: FloatArray, direction: FloatArray, program: FloatArray,
+    window: FloatArray, last_window: FloatArray, last_near: FloatArray, a: FloatArray,
+    d: FloatArray,
+) -> tuple[bool, float, float, float, float, float, FloatArray]:  # fmt: skip
+    """The trajectory tracker's hint in one call (:meth:`TrajectoryTracker.hint
+    <seamtrack.control.trajectory.TrajectoryTracker.hint>`, its arithmetic): the straight
+    path's crossing of the laser plane (``hint_from_path``: through ``last`` heading
+    ``direction``, world), the program seam's crossings (:func:`plane_crossings`), shifted by
+    the median offset of the measured ``window`` from the program (its closest points by
+    :func:`closest_on_polyline`, reusing ``last_near``), the crossing nearest the straight one.
+
+    Returns (found, y_L, z_L, the direction in the sensor frame (3), the window's closest
+    points on the program, for the next call).
+    """
+    near = closest_on_polyline(window, last_window, last_near, a, d)
+    R = T[:3, :3]
+    p = np.empty(3)
+    v = np.empty(3)
+    for c in range(3):  # R^T (last - origin), R^T direction
+        p[c] = (R[0, c] * (last[0] - T[0, 3]) + R[1, c] * (last[1] - T[1, 3])
+                + R[2, c] * (last[2] - T[2, 3]))  # fmt: skip
+        v[c] = R[0, c] * direction[0] + R[1, c] * direction[1] + R[2, c] * direction[2]
+    norm = math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+    if not norm > 1e-12 or abs(v[0]) < 1e-6 * norm:
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0, near
+    v /= norm
+    k = p[0] / v[0]
+    sy, sz = p[1] - k * v[1], p[2] - k * v[2]
+    if not (math.isfinite(p[0] - k * v[0]) and math.isfinite(sy) and math.isfinite(sz)):
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0, near
+    sign = 1.0 if v[0] > 0 else -1.0
+    crossings = plane_crossings(program, T)
+    if crossings.shape[0] == 0:
+        return False, 0.0, 0.0, 0.0, 0.0, 0.0, near
+    offset = column_medians(window - near)
+    shift1 = R[0, 1] * offset[0] + R[1, 1] * offset[1] + R[2, 1] * offset[2]
+    shift2 = R[0, 2] * offset[0] + R[1, 2] * offset[1] + R[2, 2] * offset[2]
+    best, y, z = np.inf, 0.0, 0.0
+    for i in range(crossings.shape[0]):
+        ey, ez = crossings[i, 0] + shift1, crossings[i, 1] + shift2
+        dist = math.hypot(ey - sy, ez - sz)
+        if dist < best:
+            best, y, z = dist, ey, ez
+    return True, y, z, sign * v[0], sign * v[1], sign * v[2], near
+
+
+@numba.njit(cache=True, nogil=True)
+def corner_envelope(
+    path: FloatArray, s: FloatArray, w: float, a_lat: float, accel: float, speed: float
+) -> FloatArray:
+    """The speed allowed at each point of ``path`` (arc lengths ``s``, at least 3 points):
+    sqrt(a_lat / curvature), the curvature the turn between the chords to the points ``w``
+    behind and ahead over their mean length (0 where either chord is shorter than w / 2),
+    lowered so that braking at ``accel`` reaches every later limit in time (a suffix minimum
+    of v^2 + 2 accel s). The arithmetic of :meth:`TrajectoryTracker._corner_envelope
+    <seamtrack.control.trajectory.TrajectoryTracker._corner_envelope>`' numpy form, compiled."""
+    n = s.shape[0]
+    reach = np.empty(n)
+    for i in range(n):
+        back = np.searchsorted(s, s[i] - w)
+        fwd = min(np.searchsorted(s, s[i] + w), n - 1)
+        a0 = path[i, 0] - path[back, 0]
+        a1 = path[i, 1] - path[back, 1]
+        a2 = path[i, 2] - path[back, 2]
+        b0 = path[fwd, 0] - path[i, 0]
+        b1 = path[fwd, 1] - path[i, 1]
+        b2 = path[fwd, 2] - path[i, 2]
+        n1 = math.sqrt(a0 * a0 + a1 * a1 + a2 * a2)
+        n2 = math.sqrt(b0 * b0 + b1 * b1 + b2 * b2)
+        curvature = 0.0
+        if n1 > 0.5 * w and n2 > 0.5 * w:
+            cos = (a0 * b0 + a1 * b1 + a2 * b2) / (n1 * n2)
+            curvature = math.acos(min(max(cos, -1.0), 1.0)) / (0.5 * (n1 + n2))
+        v_allow = math.sqrt(a_lat / max(curvature, 1e-12))
+        reach[i] = min(v_allow, speed) ** 2 + 2.0 * accel * s[i]
+    v = np.empty(n)
+    low = np.inf
+    for i in range(n - 1, -1, -1):
+        low = min(low, reach[i])
+        v[i] = math.sqrt(max(low - 2.0 * accel * s[i], 0.0))
+    return v

@@ -49,7 +49,7 @@ from seamtrack.control import path_kernels as pk
 from seamtrack.control.path_kernels import PathBuffer, off_line, smooth_tail
 from seamtrack.control.tracking import Command, Measurement, TrackerContext
 from seamtrack.params import Fraction, NonNegative, Positive
-from seamtrack.sensing.profiles import SeamHint, hint_from_path
+from seamtrack.sensing.profiles import HINT_TOLERANCE_MM, SeamHint
 
 FloatArray = NDArray[np.float64]
 
@@ -173,6 +173,7 @@ class TrajectoryTracker:
         # The hint's window of raw points and their closest points on the program seam.
         self._on_program: tuple[FloatArray, FloatArray] = (np.empty((0, 3)), np.empty((0, 3)))
         self._segments: tuple[FloatArray, FloatArray] | None = None
+        self._program_points = np.empty((0, 3))  # the program seam's points, contiguous
         self.stop_cause = ""
         # The robot program's end of an open seam (the CAD seam's end), as floats; None: none.
         self._seam_end: tuple[float, float, float] | None = None
@@ -249,42 +250,24 @@ class TrajectoryTracker:
         if not self._seen_seam or self.stop_cause:
             return None
         raw = self._buffer.raw
-        straight = hint_from_path(T_world_sensor, raw[-1], self._end_direction())
-        if straight is None:
-            return None
-        nominal = self._program.seam
-        # laser_plane_crossings, compiled
-        crossings = pk.plane_crossings(nominal.points, np.asarray(T_world_sensor, dtype=float))
-        if not len(crossings):
-            return None
         i = max(_left(self._s, self._s[-1] - self.direction_fit_mm), 1)
         window = raw[i:] if len(raw) > i else raw[-1:]
-        offset = pk.column_medians(window - self._closest_on_program(window))
-        R = np.asarray(T_world_sensor, dtype=float)[:3, :3]
-        shift = R.T @ offset  # the measured seam's offset from the program, sensor frame
-        expected = crossings + shift[1:]
-        sy, sz = straight.point_laser
-        k = int(np.argmin(np.hypot(expected[:, 0] - sy, expected[:, 1] - sz)))
-        y, z = expected[k].tolist()
-        return SeamHint((y, z), straight.direction, straight.tolerance_mm)
-
-    def _closest_on_program(self, points: FloatArray) -> FloatArray:
-        """(m, 3) the program seam's closest points to ``points`` (the nearest of all its
-        segments, the arithmetic of :meth:`Seam.closest
-        <seamtrack.geometry.seam.Seam.closest>`). The window is a tail of the stored raw
-        points, as the last one was: the rows they share are reused, the new ones found
-        (compiled: :func:`~seamtrack.control.path_kernels.closest_on_polyline`)."""
-        assert self._program is not None
-        if not len(points):
-            return np.empty((0, 3))
         if self._segments is None:  # the program's segments, once
             seam_points = self._program.seam.points
             a = np.ascontiguousarray(seam_points[:-1])
             self._segments = (a, np.ascontiguousarray(seam_points[1:] - a))
-        points = np.ascontiguousarray(points, dtype=np.float64)
-        near = pk.closest_on_polyline(points, *self._on_program, *self._segments)
-        self._on_program = (points.copy(), near)
-        return near
+            self._program_points = np.ascontiguousarray(seam_points, dtype=np.float64)
+        buffer = self._buffer
+        direction = np.array(pk.end_direction(buffer.path, buffer.s, self.direction_fit_mm))
+        # hint_from_path, laser_plane_crossings, _closest_on_program and the choice, compiled
+        found, y, z, dx, dy, dz, near = pk.program_hint(
+            np.asarray(T_world_sensor, dtype=np.float64), raw[-1], direction,
+            self._program_points, window, *self._on_program, *self._segments,
+        )  # fmt: skip
+        self._on_program = (window.copy(), near)
+        if not found:
+            return None
+        return SeamHint((y, z), (dx, dy, dz), HINT_TOLERANCE_MM)
 
     def _check_end(self, measurement: Measurement) -> None:
         """A frame without a seam point after the seam was seen: is it the seam's end?"""
@@ -343,24 +326,8 @@ class TrajectoryTracker:
         if len(s) < 3:
             self._env_s, self._env_v = np.empty(0), np.empty(0)
             return
-        p = self._path[i0:settled]
-        back = np.searchsorted(s, s - w)
-        fwd = np.minimum(np.searchsorted(s, s + w), len(s) - 1)
-        d1 = p - p[back]
-        d2 = p[fwd] - p
-        n1 = np.linalg.norm(d1, axis=1)
-        n2 = np.linalg.norm(d2, axis=1)
-        ok = (n1 > 0.5 * w) & (n2 > 0.5 * w)
-        cos = np.sum(d1 * d2, axis=1) / np.where(ok, n1 * n2, 1.0)
-        turn = np.where(ok, np.arccos(np.clip(cos, -1.0, 1.0)), 0.0)
-        curvature = turn / np.where(ok, 0.5 * (n1 + n2), 1.0)
         a_lat = self.corner_accel_fraction * self.accel
-        v_allow = np.sqrt(a_lat / np.maximum(curvature, 1e-12))
-        # Braking backwards from every later limit: v(s_j)^2 = min over i >= j of
-        # v_allow_i^2 + 2 a (s_i - s_j), a suffix minimum.
-        reach = np.minimum(v_allow, self.speed) ** 2 + 2.0 * self.accel * s
-        suffix = np.minimum.accumulate(reach[::-1])[::-1]
-        v = np.sqrt(np.maximum(suffix - 2.0 * self.accel * s, 0.0))
+        v = pk.corner_envelope(self._path[i0:settled], s, w, a_lat, self.accel, self.speed)
         self._env_s, self._env_v = s, v
 
     def _reacquired(self) -> bool:

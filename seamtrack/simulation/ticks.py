@@ -315,6 +315,7 @@ class ArmTicks:
         self.joints = np.empty((1024, n))
         self.refused = np.zeros(8)
         self._turn: tuple[Any, Any] = (None, None)  # the last rotation handed to the state
+        self._args: tuple[Any, ...] = (None, None, (), ())  # state, tracker, _fixed's
 
     def _rotation(self, state: Any, tracker: Any) -> None:
         """The tracker's commanded rotation into the state's command, converted once (as
@@ -328,6 +329,24 @@ class ArmTicks:
         omega_base = None if omega is None else R @ np.asarray(omega, dtype=float)
         self.robot._set_rotation(state, rot_base, omega_base)
 
+    def _fixed(self, state: Any, tracker: Any) -> tuple[tuple[Any, ...], tuple[Any, ...]]:
+        """The arguments of :func:`arm_ticks` that stay the same objects through a run (the
+        robot's tables, the state's and the set-point's arrays, the outputs), gathered once:
+        before and after the stored path's (which grows and moves)."""
+        robot = self.robot
+        place, axes, kinds, index = robot.kinematics.chain
+        head = (
+            self.world, self.base, robot._reach_mm, self.orient, robot._par,
+            robot._cart._limits, robot._jl, robot._servo_table, robot.kinematics.geometry,
+            place, axes, kinds, index, state.cart, state.rot, state.omega, state.jnt, state.cnt,
+            state.cmd, tracker._sp,
+        )  # fmt: skip
+        tail = (
+            self.tcp, self.target, self.axis, self.joints, self.refused, self.prog, self.knots,
+            self.seg_len, self.normals, self.prog_par, self.columns, self.turn,
+        )  # fmt: skip
+        return head, tail
+
     def run(
         self, state: Any, tick: int, max_ticks: int, next_capture: float, next_arrival: float,
         check_every: int, wall_every: int, tracker: Any,
@@ -335,21 +354,16 @@ class ArmTicks:
         """Ticks from ``tick`` to the next event (see :func:`arm_ticks`); the ticks' torch
         tips, targets, torch axes and joints are in ``self.tcp``, ``target``, ``axis`` and
         ``joints``."""
-        robot = self.robot
-        place, axes, kinds, index = robot.kinematics.chain
         path = tracker._buffer
         self.orient[1] = tracker._tick
         self.turn[12] = tracker._s_program
         self._rotation(state, tracker)
+        if self._args[0] is not state or self._args[1] is not tracker:
+            self._args = (state, tracker, *self._fixed(state, tracker))
+        _, _, head, tail = self._args
         n, why = arm_ticks(
             tick, max_ticks, self.dt, next_capture, next_arrival, check_every, wall_every,
-            self.world, self.base, robot._reach_mm, self.orient, robot._par,
-            robot._cart._limits, robot._jl, robot._servo_table, robot.kinematics.geometry,
-            place, axes, kinds, index, state.cart, state.rot, state.omega, state.jnt, state.cnt,
-            state.cmd, tracker._sp, path.path, path.s, tracker._env_s, tracker._env_v,
-            tracker._seen_seam, self.tcp, self.target, self.axis, self.joints, self.refused,
-            self.prog, self.knots, self.seg_len, self.normals, self.prog_par, self.columns,
-            self.turn,
+            *head, path.path, path.s, tracker._env_s, tracker._env_v, tracker._seen_seam, *tail,
         )  # fmt: skip
         if int(self.orient[1]) // self.orient[0] != tracker._tick // self.orient[0]:
             # Refreshed: the tracker's rotation, turning rate and arc length, as it keeps them.
