@@ -40,10 +40,17 @@ from seamtrack.errors import PluginRuntimeError, plugin_failed
 from seamtrack.geometry.seam import Seam
 from seamtrack.geometry.torch import torch_angles
 from seamtrack.simulation.assemble import LoopSettings, Parts, build_parts
-from seamtrack.simulation.progress import ProgressTracker
+from seamtrack.simulation.progress import CHECKED, FOUND, GO_ON, LAST_SEEN, ProgressCheck
 from seamtrack.simulation.scene import Scene, load_scene
 from seamtrack.simulation.scoring import orientation_summary, torch_axes, with_joints
-from seamtrack.simulation.ticks import LIMIT, REFUSED, ArmTicks, GantryTicks, compiled_ticks
+from seamtrack.simulation.ticks import (
+    LIMIT,
+    REFUSED,
+    STOPPED,
+    ArmTicks,
+    GantryTicks,
+    compiled_ticks,
+)
 
 FloatArray = NDArray[np.float64]
 
@@ -257,12 +264,6 @@ def run(
     last_cmd: Command | None = None
     last_rot: tuple[Any, Any] = (None, None)  # the last command's rotation, angular velocity
     move: MoveCommand | None = None
-    last_seen = False
-    rest_since: float | None = None
-    s_best, t_progress = -math.inf, 0.0
-    s_now = 0.0  # the torch starts at the seam's start: follow the seam from there
-    check_t = array("d")
-    check_s = array("d")
     status = ""
     stop_reason = ""
     bar = _progress_bar(progress, cfg.time_limit_s, seam.length_mm)
@@ -270,12 +271,14 @@ def run(
     sense_time = 0.0
     tick = 0
     closed = is_closed(seam)
-    progress_near = ProgressTracker(seam).closest_near  # Seam.closest_near, the same numbers
+    # The torch starts at the seam's start: progress follows the seam from there.
+    done = seam.length_mm - cfg.end_tolerance_mm
+    checks = ProgressCheck(seam, closed, done, cfg.stall_time_s, rest_window)
     unrotated = bool(np.array_equal(R, np.eye(3))) and not turns_tool
     p0x, p0y, p0z = p0.tolist()
     # The fast paths: the built-in trajectory tracker's ticks between events compiled on an
     # unrotated gantry and on an arm (seamtrack.simulation.ticks); the same arithmetic.
-    ticks = compiled_ticks(robot, tracker, (p0x, p0y, p0z), unrotated, turns_tool)
+    ticks = compiled_ticks(robot, tracker, (p0x, p0y, p0z), unrotated, turns_tool, checks)
     fast = isinstance(ticks, GantryTicks)
     # A tracker that knows where the seam is heading tells the extractor (``hint``): where the
     # laser plane crosses two grooves (a mitre) the extractor takes the V that continues it.
@@ -312,7 +315,7 @@ def run(
             frame_points.extend(feature.point_world if feature else nan3)
         while pending and pending[0].t_arrival_s <= t + 1e-9:
             measurement = pending.popleft()
-            last_seen = bool(measurement)
+            checks.P[LAST_SEEN] = 1.0 if measurement else 0.0
             try:
                 tracker.update(measurement)
             except Exception as exc:
@@ -340,12 +343,16 @@ def run(
             if isinstance(ticks, ArmTicks):
                 axis_log.frombytes(ticks.axis[:n].tobytes())
                 joint_log.frombytes(ticks.joints[:n].tobytes())
+            checks.take()
             if why == LIMIT:
                 status = "limit_violation"
                 break
             tick += n - 1  # the last tick run: its checks follow
             t = tick * dt
             tcp_list = ticks.tcp[n - 1].tolist()
+            if why == STOPPED:  # its own progress check ended the run
+                status, stop_reason = checks.ended(int(checks.P[FOUND]))
+                break
         else:
             try:
                 cmd = tracker.command(t, tcp, vel)
@@ -373,26 +380,10 @@ def run(
             status, stop_reason = "stalled", f"wall-clock limit {cfg.wall_time_limit_s:g} s"
             break
 
-        if tick % check_every == 0:
-            at_rest = math.sqrt(sum(v * v for v in state.v)) <= constants.AT_REST_SPEED_MM_S
-            rest_since = (rest_since if rest_since is not None else t) if at_rest else None
-            s_now = progress_near(tcp_list, s_now)
-            check_t.append(t)
-            check_s.append(s_now)
-            if s_now > s_best + constants.PROGRESS_EPS_MM:
-                s_best, t_progress = s_now, t
-            if rest_since is not None and t - rest_since >= rest_window and not last_seen:
-                status = (
-                    "completed"
-                    if s_best >= seam.length_mm - cfg.end_tolerance_mm
-                    else ("lost_seam")
-                )
-                break
-            if closed and s_best >= seam.length_mm - cfg.end_tolerance_mm:
-                status = "completed"  # a girth seam ends where it began: the program stops
-                break
-            if t - t_progress >= cfg.stall_time_s:
-                status, stop_reason = "stalled", f"no progress for {cfg.stall_time_s:g} s"
+        if tick % check_every == 0 and tick != checks.P[CHECKED]:
+            found = checks.check(t, tcp_list, state.v)
+            if found != GO_ON:
+                status, stop_reason = checks.ended(found)
                 break
             if bar is not None and tick % (check_every * 100) == 0:
                 bar.update(t - bar.n)
@@ -403,7 +394,8 @@ def run(
 
     axis = torch_axes(robot, axis_log)
     trace = _trace(
-        seam, dt, tcp_log, target_log, frame_t, frame_found, frame_points, (check_t, check_s),
+        seam, dt, tcp_log, target_log, frame_t, frame_found, frame_points,
+        (checks.t_log, checks.s_log),
         axis, (cfg.work_angle_rad, cfg.travel_angle_rad),
     )  # fmt: skip
     trace = with_joints(trace, joint_log, robot)

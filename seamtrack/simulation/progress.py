@@ -12,13 +12,19 @@ from __future__ import annotations
 
 import bisect
 import math
+from array import array
 from typing import Any
 
 import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack import constants
+
 FloatArray = NDArray[np.float64]
+
+_AT_REST = constants.AT_REST_SPEED_MM_S
+_EPS = constants.PROGRESS_EPS_MM
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -124,3 +130,121 @@ class ProgressTracker:
             if not (cut_low or cut_high) or window_mm >= length:
                 return s
             window_mm *= 2.0
+
+
+@numba.njit(cache=True, nogil=True)
+def progress_near(
+    points: FloatArray, knots: FloatArray, columns: FloatArray, q: FloatArray, hint: float,
+    length: float,
+) -> float:  # fmt: skip
+    """:meth:`ProgressTracker.closest_near` compiled, the same number: the chosen segment's
+    length through ``np.dot``, which numba hands to the same BLAS ``ddot`` as numpy (a test
+    compares it with :meth:`Seam.closest_near <seamtrack.geometry.seam.Seam.closest_near>`);
+    ``length``: the seam's (``Seam.length_mm``, which may differ from ``knots[-1]`` in the last
+    bit)."""
+    n_seg = len(points) - 1
+    window = 5.0
+    d = np.empty(3)
+    while True:
+        s0 = max(hint - window, 0.0)
+        s1 = min(hint + window, length)
+        i0 = min(max(int(np.searchsorted(knots, s0, side="right")) - 1, 0), n_seg - 1)
+        i1 = min(max(int(np.searchsorted(knots, s1, side="left")), i0 + 1), n_seg)
+        s_start, t, d[0], d[1], d[2] = _closest_in_window(points, knots, columns, q, s0, s1, i0, i1)
+        s = s_start + t * math.sqrt(np.dot(d, d))
+        cut_low = s0 > 0.0 and s <= s0 + 1e-12
+        cut_high = s1 < length and s >= s1 - 1e-12
+        if not (cut_low or cut_high) or window >= length:
+            return s
+        window *= 2.0
+
+
+#: The progress check's state and settings (:func:`progress_check`), one float array: the arc
+#: length now, the best so far and when it was reached, since when the torch is at rest (NaN:
+#: moving), whether the last frame showed the seam, a closed seam, the arc length that
+#: completes it, the stall time, the rest window; the last tick checked by the compiled ticks.
+S_NOW, S_BEST, T_PROGRESS, REST_SINCE, LAST_SEEN, CLOSED, S_DONE, STALL_S, REST_S = range(9)
+CHECKED, FOUND = 9, 10  # the compiled ticks' last check: its tick, what it found
+LENGTH = 11  # the seam's length
+PROGRESS_FIELDS = 12
+#: What a check found: go on; at rest with no seam in sight (``completed`` or ``lost_seam``);
+#: a closed seam back where it began; no progress for the stall time.
+GO_ON, AT_REST_END, CLOSED_END, NO_PROGRESS = 0, 1, 2, 3
+
+
+@numba.njit(cache=True, nogil=True)
+def progress_check(
+    P: FloatArray, t: float, x: float, y: float, z: float, speed: float, points: FloatArray,
+    knots: FloatArray, columns: FloatArray,
+) -> int:  # fmt: skip
+    """One progress check of the loop at time ``t`` with the torch tip at (x, y, z) moving at
+    ``speed`` (``P``: its state, updated): the arc length along the seam followed from the
+    last, the best so far, the rest; returns what it found (``GO_ON`` or why the run ends)."""
+    if speed <= _AT_REST:
+        if math.isnan(P[REST_SINCE]):
+            P[REST_SINCE] = t
+    else:
+        P[REST_SINCE] = math.nan
+    q = np.empty(3)
+    q[0], q[1], q[2] = x, y, z
+    s_now = progress_near(points, knots, columns, q, P[S_NOW], P[LENGTH])
+    P[S_NOW] = s_now
+    if s_now > P[S_BEST] + _EPS:
+        P[S_BEST], P[T_PROGRESS] = s_now, t
+    rest_since = P[REST_SINCE]
+    if not math.isnan(rest_since) and t - rest_since >= P[REST_S] and P[LAST_SEEN] == 0.0:
+        return AT_REST_END
+    if P[CLOSED] != 0.0 and P[S_BEST] >= P[S_DONE]:
+        return CLOSED_END
+    if t - P[T_PROGRESS] >= P[STALL_S]:
+        return NO_PROGRESS
+    return GO_ON
+
+
+class ProgressCheck:
+    """The loop's progress checks of one run: their state (:func:`progress_check`'s array),
+    the seam's arrays and the log of (t, s) at every check, whether the loop checks
+    (:meth:`check`) or its compiled ticks do (``args``, then :meth:`take` their log).
+
+    ``done_mm``: the arc length that completes the seam; ``rest_s``: how long the torch rests
+    with no seam in sight before the run ends."""
+
+    def __init__(
+        self, seam: Any, closed: bool, done_mm: float, stall_s: float, rest_s: float
+    ) -> None:
+        near = ProgressTracker(seam)
+        self.P = P = np.zeros(PROGRESS_FIELDS)
+        P[S_BEST], P[REST_SINCE], P[CHECKED] = -math.inf, math.nan, -1.0
+        P[CLOSED], P[S_DONE], P[STALL_S], P[REST_S] = float(closed), done_mm, stall_s, rest_s
+        P[LENGTH] = near.length_mm
+        self.checks = np.zeros((1025, 2))  # the compiled ticks' checks; the count in [-1, 0]
+        self.args = (P, near.points, near.knots, near.columns, self.checks)
+        self.t_log, self.s_log = array("d"), array("d")
+
+    def check(self, t: float, tcp: list[float], v: list[float]) -> int:
+        """The check at time ``t``, the torch tip at ``tcp`` moving at ``v``: what it found."""
+        P, points, knots, columns, _ = self.args
+        x, y, z = tcp
+        speed = math.sqrt(sum(c * c for c in v))
+        found = int(progress_check(P, t, x, y, z, speed, points, knots, columns))
+        self.t_log.append(t)
+        self.s_log.append(float(P[S_NOW]))
+        return found
+
+    def take(self) -> None:
+        """The compiled ticks' checks into the log."""
+        checks = self.checks
+        m = int(checks[-1, 0])
+        if m:
+            self.t_log.frombytes(checks[:m, 0].tobytes())
+            self.s_log.frombytes(checks[:m, 1].tobytes())
+            checks[-1, 0] = 0.0
+
+    def ended(self, found: int) -> tuple[str, str]:
+        """The status and stop reason of a check that found the run's end."""
+        P = self.P
+        if found == AT_REST_END:  # at rest, and nothing new can come
+            return ("completed" if P[S_BEST] >= P[S_DONE] else "lost_seam"), ""
+        if found == CLOSED_END:  # a girth seam ends where it began: the program stops
+            return "completed", ""
+        return "stalled", f"no progress for {P[STALL_S]:g} s"

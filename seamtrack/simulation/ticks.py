@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 
 from seamtrack.control.arm_kernels import (
     C_Q,
+    C_V,
     M_FF,
     M_HAS,
     M_HAS_ROT,
@@ -39,14 +40,47 @@ from seamtrack.control.orientation import turning_at
 from seamtrack.control.path_kernels import V_SET, setpoint_step
 from seamtrack.control.robot import CartesianRobot, RobotState, axes_step
 from seamtrack.control.servo import loops_step
-from seamtrack.simulation.progress import _closest_in_window
+from seamtrack.simulation.progress import (
+    CHECKED,
+    FOUND,
+    GO_ON,
+    S_NOW,
+    ProgressCheck,
+    _closest_in_window,
+    progress_check,
+)
 
 FloatArray = NDArray[np.float64]
 
-#: What :func:`gantry_ticks` stopped on (besides an event tick).
-EVENT, LIMIT, REFUSED = 0, 1, 2
+#: What :func:`gantry_ticks` stopped on (besides an event tick); ``STOPPED``: its progress
+#: check ended the run (what it found in the check's ``FOUND``).
+EVENT, LIMIT, REFUSED, STOPPED = 0, 1, 2, 3
 #: Rows of the axis limits (:attr:`CartesianRobot._limits`): travel min and max.
 _LO, _HI = 2, 3
+
+
+@numba.njit(cache=True, nogil=True)
+def _checked(
+    tick: int, t: float, x: float, y: float, z: float, v: FloatArray, check_every: int,
+    wall_every: int, progress: FloatArray, seam: FloatArray, seam_s: FloatArray,
+    seam_columns: FloatArray, checks: FloatArray,
+) -> bool:  # fmt: skip
+    """After a tick: True when the ticks stop here. A wall-clock tick (and every hundredth
+    check, the progress bar's) is the loop's to check; any other check tick is checked here,
+    as the loop would (:func:`~seamtrack.simulation.progress.progress_check`, the torch tip
+    (x, y, z) at the tick's start, its speed after it), logged in ``checks`` (rows t, s; the
+    count in its last row's first column), and stops the ticks when the run ends there."""
+    if tick % wall_every == 0 or tick % (100 * check_every) == 0:
+        return True
+    if tick % check_every != 0:
+        return False
+    speed = math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+    found = progress_check(progress, t, x, y, z, speed, seam, seam_s, seam_columns)
+    m = int(checks[-1, 0])
+    checks[m, 0], checks[m, 1] = t, progress[S_NOW]
+    checks[-1, 0] = m + 1
+    progress[CHECKED], progress[FOUND] = tick, found
+    return found != GO_ON
 
 
 @numba.njit(cache=True, nogil=True)
@@ -55,7 +89,8 @@ def gantry_ticks(
     check_every: int, wall_every: int, offset: FloatArray, axes: FloatArray, lim: FloatArray,
     servo: FloatArray, ipo: NDArray[np.int64], sp: FloatArray, path: FloatArray, s: FloatArray,
     env_s: FloatArray, env_v: FloatArray, seen: bool, tcp_out: FloatArray,
-    target_out: FloatArray, refused: FloatArray,
+    target_out: FloatArray, refused: FloatArray, progress: FloatArray, seam: FloatArray,
+    seam_s: FloatArray, seam_columns: FloatArray, checks: FloatArray,
 ) -> tuple[int, int]:  # fmt: skip
     """Control ticks from ``tick`` on, until the next event: stops before a tick at which a
     frame is due (``next_capture``) or a measurement arrives (``next_arrival``), after a tick
@@ -109,8 +144,9 @@ def gantry_ticks(
         else:
             axes_step(q, v, lim, dt, has_target, tx, ty, tz, speed, fx, fy, fz, stop)
         tick += 1
-        if (tick - 1) % wall_every == 0 or (tick - 1) % check_every == 0:
-            break
+        if _checked(tick - 1, t, x, y, z, v, check_every, wall_every, progress, seam, seam_s,
+                    seam_columns, checks):  # fmt: skip
+            return tick - first, STOPPED if progress[FOUND] != GO_ON else EVENT
     return tick - first, EVENT
 
 
@@ -118,8 +154,11 @@ class GantryTicks:
     """The compiled ticks of one run: the robot's limits and state in arrays, the traces'
     scratch rows; :meth:`run` advances a :class:`RobotState` in place."""
 
-    def __init__(self, robot: CartesianRobot, tcp_offset: tuple[float, float, float]) -> None:
+    def __init__(
+        self, robot: CartesianRobot, tcp_offset: tuple[float, float, float], checks: ProgressCheck
+    ) -> None:
         self.robot = robot
+        self.checks = checks
         self.dt = robot.control_period_s
         self.lim = robot._limits
         self.offset = np.array([*tcp_offset, *robot._base_shift])
@@ -152,7 +191,7 @@ class GantryTicks:
             tick, max_ticks, self.dt, next_capture, next_arrival, check_every, wall_every,
             self.offset, axes, self.lim, self.servo, self.ipo, tracker._sp, path.path, path.s,
             tracker._env_s, tracker._env_v, tracker._seen_seam, self.tcp, self.target,
-            self.refused,
+            self.refused, *self.checks.args,
         )  # fmt: skip
         state.q[:], state.v[:] = axes[0].tolist(), axes[1].tolist()
         if servo is not None:
@@ -227,7 +266,8 @@ def arm_ticks(
     seen: bool, tcp_out: FloatArray, target_out: FloatArray, axis_out: FloatArray,
     joint_out: FloatArray, refused: FloatArray, prog: FloatArray,
     knots: FloatArray, seg_len: FloatArray, normals: FloatArray, prog_par: FloatArray,
-    columns: FloatArray, turn: FloatArray,
+    columns: FloatArray, turn: FloatArray, progress: FloatArray, seam: FloatArray,
+    seam_s: FloatArray, seam_columns: FloatArray, checks: FloatArray,
 ) -> tuple[int, int]:  # fmt: skip
     """:func:`gantry_ticks` for an arm and the built-in tracker: per tick the torch tip in the
     world (``world``: (3, 4) rotation and origin of the base), the tracker's set-point step,
@@ -286,8 +326,9 @@ def arm_ticks(
         )
         tick += 1
         k += 1
-        if (tick - 1) % wall_every == 0 or (tick - 1) % check_every == 0:
-            break
+        if _checked(tick - 1, t, x, y, z, cart[C_V], check_every, wall_every, progress, seam,
+                    seam_s, seam_columns, checks):  # fmt: skip
+            return k, STOPPED if progress[FOUND] != GO_ON else EVENT
     return k, EVENT
 
 
@@ -298,8 +339,9 @@ class ArmTicks:
     <seamtrack.control.trajectory.TrajectoryTracker.command_floats>` does (compiled, the same
     numbers to an ulp)."""
 
-    def __init__(self, robot: Any, tracker: Any) -> None:
+    def __init__(self, robot: Any, tracker: Any, checks: ProgressCheck) -> None:
         self.robot = robot
+        self.checks = checks
         self.dt = robot.control_period_s
         self.world = np.ascontiguousarray(robot.T_world_base[:3, :4])
         self.base = np.ascontiguousarray(robot._T_base_world[:3, :4])
@@ -344,6 +386,7 @@ class ArmTicks:
         tail = (
             self.tcp, self.target, self.axis, self.joints, self.refused, self.prog, self.knots,
             self.seg_len, self.normals, self.prog_par, self.columns, self.turn,
+            *self.checks.args,
         )  # fmt: skip
         return head, tail
 
@@ -378,16 +421,18 @@ class ArmTicks:
 
 
 def compiled_ticks(
-    robot: Any, tracker: Any, origin: tuple[float, float, float], unrotated: bool, turns: bool
-) -> GantryTicks | ArmTicks | None:
+    robot: Any, tracker: Any, origin: tuple[float, float, float], unrotated: bool, turns: bool,
+    checks: ProgressCheck,
+) -> GantryTicks | ArmTicks | None:  # fmt: skip
     """The compiled ticks for this robot and tracker, or None (the loop's Python ticks): the
-    built-in trajectory tracker on an unrotated gantry, or on an arm with its tool program."""
+    built-in trajectory tracker on an unrotated gantry, or on an arm with its tool program;
+    they make the run's progress checks between the loop's (``checks``)."""
     from seamtrack.control.trajectory import TrajectoryTracker
 
     if type(tracker) is not TrajectoryTracker:
         return None
     if unrotated and type(robot) is CartesianRobot and bool(robot._unrotated):
-        return GantryTicks(robot, origin)
+        return GantryTicks(robot, origin, checks)
     if turns and hasattr(robot, "_par") and getattr(tracker, "_program", None) is not None:
-        return ArmTicks(robot, tracker)
+        return ArmTicks(robot, tracker, checks)
     return None
