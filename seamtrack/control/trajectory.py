@@ -60,12 +60,18 @@ _MIN_INLIER_MM = 0.05
 
 def _left(a: FloatArray, x: float) -> int:
     """``bisect.bisect_left`` on a sorted array."""
-    return int(np.searchsorted(a, x))
+    return int(a.searchsorted(x))
+
+
+def _length(v: FloatArray) -> float:
+    """``np.linalg.norm`` of a vector, as it computes it (the same BLAS dot), without its
+    checks."""
+    return math.sqrt(v.dot(v))
 
 
 def _right(a: FloatArray, x: float) -> int:
     """``bisect.bisect_right`` on a sorted array."""
-    return int(np.searchsorted(a, x, side="right"))
+    return int(a.searchsorted(x, side="right"))
 
 
 class TrajectoryTracker:
@@ -212,7 +218,7 @@ class TrajectoryTracker:
         if not self.use_capture_pose:
             # Naive: pretend the frame was taken where the robot is now.
             point = point + (self._sp[pk.TCP_X : pk.TCP_Z + 1] - measurement.tcp_world)
-        step = float(np.linalg.norm(point - self._path[-1]))
+        step = _length(point - self._path[-1])
         if step < self.min_spacing_mm:
             self._lost = False
             return
@@ -224,7 +230,7 @@ class TrajectoryTracker:
             held, self._held = self._held[:-1], []
             for p in held:  # the seam moved: store what was held back, then this point
                 self._store(p)
-            step = float(np.linalg.norm(point - self._path[-1]))
+            step = _length(point - self._path[-1])
         else:
             self._held = []
         self._lost = False
@@ -299,7 +305,7 @@ class TrajectoryTracker:
 
     def _store(self, point: FloatArray, step: float | None = None) -> None:
         if step is None:
-            step = float(np.linalg.norm(point - self._path[-1]))
+            step = _length(point - self._path[-1])
         if step < self.min_spacing_mm:
             return
         self._buffer.append(point, float(self._s[-1]) + step)
