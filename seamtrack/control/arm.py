@@ -239,7 +239,10 @@ class ArticulatedRobot:
 
     # ----------------------------------------------------------------- poses
     def T_world_tcp_of(self, state: ArmState) -> FloatArray:
-        return self.T_world_base @ frames.make(state.R, state.q)
+        T = np.eye(4)  # frames.make(state.R, state.q), from the state's arrays (every frame)
+        T[:3, :3] = state.rot[2]
+        T[:3, 3] = state.cart[ak.C_Q]
+        return self.T_world_base @ T
 
     def sensor_pose(self, state: ArmState) -> FloatArray:
         """``T_world_sensor`` of the measured (actual) joint positions."""

@@ -303,8 +303,8 @@ def run(
         if t + 1e-9 >= next_capture:
             next_capture += cfg.frame_period_s
             T_ws = robot.sensor_pose(state)
+            hint = tracker_hint(T_ws) if tracker_hint is not None else None  # the tracker's
             sense_start = clock()
-            hint = tracker_hint(T_ws) if tracker_hint is not None else None
             feature = parts.sense(T_ws, t, hint) if hint is not None else parts.sense(T_ws, t)
             sense_time += clock() - sense_start
             if fast:
