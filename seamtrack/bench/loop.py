@@ -312,7 +312,8 @@ def _markdown(result: dict[str, Any]) -> str:
             f"{_met(row['loop_overhead_fraction'] <= TARGETS['loop_overhead_fraction'])} |",
             "",
             "Cost of one control tick on the seam-mode scene (CPU time outside sensing, scoring "
-            "included, / control ticks; the same scene, tracker and seam on each robot):",
+            "and the tracker's hint to the extractor included, / control ticks; the same scene, "
+            "tracker and seam on each robot):",
             "",
             "| robot | inverse kinematics | control ticks | CPU s | sensing s | us per tick | "
             f"<= {ARM_TARGETS['us_per_tick']:g} us (arms) | max error mm |",
