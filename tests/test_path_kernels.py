@@ -12,6 +12,7 @@ from seamtrack.control.path_kernels import (
     off_line,
     program_hint,
     smooth_tail,
+    store_tail,
 )
 
 
@@ -171,3 +172,46 @@ def test_program_hint_is_the_straight_crossing_and_the_programs() -> None:
     along = program_hint(T, window[-1], np.array([r, r, 0.0]), program, window,
                          window, near, a, d)  # fmt: skip
     assert not along[0]
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_store_tail_is_smoothing_trim_and_envelope(seed: int) -> None:
+    """The tracker's step after storing a point, in one call, against its three parts: the
+    numpy smoothing, the buffer's cut behind the set-point and the numpy envelope over the
+    settled path (rows the call names, after the cut)."""
+    from seamtrack.control import path_kernels as pk
+
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(30, 120))
+    s = np.concatenate([[0.0], np.cumsum(rng.uniform(0.05, 0.3, n - 1))])
+    turn = np.clip(s - s[n // 2], 0.0, None)
+    raw = np.column_stack([s - turn, turn, 0 * s]) + rng.normal(0, 0.01, (n, 3))
+    path = raw.copy()
+    sp = np.zeros(pk.SETPOINT_FIELDS)
+    sp[pk.S_SET] = float(rng.uniform(0.0, s[-1]))
+    par = np.zeros(pk.TAIL_FIELDS)
+    par[[pk.T_SMOOTH, pk.T_INLIER, pk.T_BUFFER, pk.T_CORNER, pk.T_WINDOW]] = (
+        1.0,
+        0.05,
+        3.0,
+        0.5,
+        2.0,
+    )
+    par[[pk.T_A_LAT, pk.T_ACCEL, pk.T_SPEED]] = 5.0, 10.0, 8.0
+    cut, what, i0, settled, v = store_tail(raw, path, s, sp, par, np.nan)
+    first = max(int(np.searchsorted(s, s[-1] - 2.0)), 1)
+    np.testing.assert_allclose(path, _smooth_numpy(raw, s, first, 1.0, 0.05), rtol=0, atol=1e-12)
+    assert cut == max(int(np.searchsorted(s, sp[pk.S_SET] - 3.0)) - 1, 0)
+    kept, points = s[cut:], path[cut:]
+    want_settled = int(np.searchsorted(kept, kept[-1] - 2.0, side="right"))
+    want_i0 = max(int(np.searchsorted(kept, sp[pk.S_SET] - 2.0)), 1)
+    if want_settled - want_i0 < 3:
+        assert what == 1
+        return
+    assert (what, i0, settled) == (2, want_i0, want_settled)
+    rows = slice(i0, settled)
+    want = _envelope_numpy(points[rows], kept[rows], 2.0, 5.0, 10.0, 8.0)
+    np.testing.assert_allclose(v, want, rtol=1e-12, atol=0.0)
+    # An envelope refreshed less than half a window ago is kept.
+    again = store_tail(raw, path.copy(), s, sp, par, float(kept[settled - 1]))
+    assert again[1] == 0

@@ -432,3 +432,50 @@ def corner_envelope(
         low = min(low, reach[i])
         v[i] = math.sqrt(max(low - 2.0 * accel * s[i], 0.0))
     return v
+
+
+#: Layout of :func:`store_tail`'s parameters: the smoothing half-width, the inlier floor, the
+#: stored length kept behind the set-point, the corner fraction, the curvature window, the
+#: lateral acceleration, the set-point's acceleration and the welding speed.
+T_SMOOTH, T_INLIER, T_BUFFER, T_CORNER, T_WINDOW, T_A_LAT, T_ACCEL, T_SPEED = range(8)
+TAIL_FIELDS = 8
+
+
+@numba.njit(cache=True, nogil=True)
+def store_tail(
+    raw: FloatArray, path: FloatArray, s: FloatArray, sp: FloatArray, par: FloatArray,
+    env_last: float,
+) -> tuple[int, int, int, int, FloatArray]:  # fmt: skip
+    """What the trajectory tracker does after storing a point, in one call: refit the tail
+    (:func:`smooth_tail` from the first point within two half-widths of the newest), the
+    count of points more than ``par[T_BUFFER]`` behind the set-point (``sp``) to drop, and the
+    corner envelope (:func:`corner_envelope`) over the points from the curvature window behind
+    the set-point to the *settled* path (the last two smoothing windows are still refitted as
+    points arrive: curvature read there would be transient; that tail lies a look-ahead ahead
+    of the torch, beyond any braking distance), refreshed once the settled path has grown by
+    half the curvature window past the envelope's last arc length ``env_last`` (NaN: none).
+
+    Returns (points to drop, what became of the envelope: 0 kept, 1 emptied, 2 new, and the
+    new one's rows [i0, settled) of the buffer after the drop, its speeds).
+    """
+    n = s.shape[0]
+    h = par[T_SMOOTH]
+    if h > 0 and n >= 3:
+        first = max(np.searchsorted(s, s[n - 1] - 2 * h), 1)  # 0: the start pose
+        smooth_tail(raw, path, s, first, h, par[T_INLIER])
+    cut = max(np.searchsorted(s, sp[S_SET] - par[T_BUFFER]) - 1, 0)
+    kept, points = s[cut:], path[cut:]
+    m = kept.shape[0]
+    none = np.empty(0)
+    if par[T_CORNER] <= 0 or m < 4:
+        return cut, 0, 0, 0, none
+    w = par[T_WINDOW]
+    settled = np.searchsorted(kept, kept[m - 1] - 2.0 * max(par[T_SMOOTH], 0.0), side="right")
+    if not math.isnan(env_last) and kept[settled - 1] - env_last < 0.5 * w:
+        return cut, 0, 0, 0, none
+    i0 = max(np.searchsorted(kept, sp[S_SET] - w), 1)
+    if settled - i0 < 3:
+        return cut, 1, 0, 0, none
+    v = corner_envelope(points[i0:settled], kept[i0:settled], w, par[T_A_LAT], par[T_ACCEL],
+                        par[T_SPEED])  # fmt: skip
+    return cut, 2, i0, settled, v

@@ -46,7 +46,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.control import path_kernels as pk
-from seamtrack.control.path_kernels import PathBuffer, off_line, smooth_tail
+from seamtrack.control.path_kernels import PathBuffer, off_line
 from seamtrack.control.tracking import Command, Measurement, TrackerContext
 from seamtrack.params import Fraction, NonNegative, Positive
 from seamtrack.sensing.profiles import HINT_TOLERANCE_MM, SeamHint
@@ -166,6 +166,13 @@ class TrajectoryTracker:
         self.accel = 0.9 * float(np.min(context.acceleration_max_world))
         # The set-point's state and parameters, in the array its compiled step works on.
         self._sp = sp = np.zeros(pk.SETPOINT_FIELDS)
+        # The parameters of what follows each stored point (path_kernels.store_tail).
+        self._tail = tail = np.zeros(pk.TAIL_FIELDS)
+        tail[pk.T_SMOOTH], tail[pk.T_INLIER] = self.smoothing_mm, _MIN_INLIER_MM
+        tail[pk.T_BUFFER], tail[pk.T_CORNER] = self.buffer_mm, self.corner_accel_fraction
+        tail[pk.T_WINDOW] = self.curvature_window_mm
+        tail[pk.T_A_LAT] = self.corner_accel_fraction * self.accel
+        tail[pk.T_ACCEL], tail[pk.T_SPEED] = self.accel, self.speed
         sp[pk.SPEED], sp[pk.ACCEL], sp[pk.DT] = self.speed, self.accel, self.dt
         sp[pk.END_MARGIN], sp[pk.BRIDGE] = self.end_margin_mm, self.bridge_mm
         sp[pk.GAIN], sp[pk.DIRECTION_FIT] = self.gain_1_s, self.direction_fit_mm
@@ -202,7 +209,7 @@ class TrajectoryTracker:
         """Change the welding speed during the run (a multi-pass job's planner adapts it along
         the seam); the set-point reaches it within its acceleration limit."""
         self.speed = float(speed_mm_s)
-        self._sp[pk.SPEED] = self.speed
+        self._sp[pk.SPEED] = self._tail[pk.T_SPEED] = self.speed
 
     def update(self, measurement: Measurement) -> None:
         if self.stop_cause:  # the seam has ended: nothing more to follow
@@ -308,33 +315,30 @@ class TrajectoryTracker:
             step = _length(point - self._path[-1])
         if step < self.min_spacing_mm:
             return
-        self._buffer.append(point, float(self._s[-1]) + step)
-        self._smooth_tail()
-        self._trim()
-        self._corner_envelope()
-
-    def _corner_envelope(self) -> None:
-        """The speed the set-point may have at each stored point ahead: sqrt(a / curvature)
-        where the path turns, lowered so that braking at ``accel`` reaches every later limit
-        in time (a backward pass over the points ahead, once per stored point)."""
-        if self.corner_accel_fraction <= 0 or len(self._s) < 4:
-            return
-        w = self.curvature_window_mm
-        # Only the settled path: the last two smoothing windows are still re-fitted as points
-        # arrive, and curvature read there would be transient. (That tail lies a look-ahead
-        # ahead of the torch, beyond any braking distance.) Refreshing each time the settled
-        # path has grown by half the curvature window keeps the envelope current cheaply.
-        settled = _right(self._s, self._s[-1] - 2.0 * max(self.smoothing_mm, 0.0))
-        if len(self._env_s) and self._s[settled - 1] - self._env_s[-1] < 0.5 * w:
-            return
-        i0 = max(_left(self._s, self._s_set - w), 1)
-        s = self._s[i0:settled].copy()  # kept as the envelope: not a view of the buffer
-        if len(s) < 3:
+        buffer = self._buffer
+        buffer.append(point, float(self._s[-1]) + step)
+        # One compiled call (path_kernels.store_tail): refit the stored points whose window
+        # the newest point entered (a robust line through the raw points within +-smoothing_mm
+        # of arc length, evaluated at the point: a first least-squares fit gives residuals,
+        # points farther than three times the window's median residual, at least
+        # _MIN_INLIER_MM, are dropped and the line refitted, so a few bogus detections do not
+        # bend the path while a real turn, which the majority of the window follows, does);
+        # drop the points more than buffer_mm behind the set-point; refresh the corner
+        # envelope, the speed the set-point may have at each stored point ahead: sqrt(a /
+        # curvature) where the path turns, lowered so that braking at accel reaches every
+        # later limit in time, over the settled path.
+        env = self._env_s
+        last = float(env[-1]) if len(env) else math.nan
+        cut, what, i0, settled, v = pk.store_tail(
+            buffer.raw, buffer.path, buffer.s, self._sp, self._tail, last
+        )
+        if cut > 0:
+            buffer.drop(cut)
+        if what == 1:
             self._env_s, self._env_v = np.empty(0), np.empty(0)
-            return
-        a_lat = self.corner_accel_fraction * self.accel
-        v = pk.corner_envelope(self._path[i0:settled], s, w, a_lat, self.accel, self.speed)
-        self._env_s, self._env_v = s, v
+        elif what == 2:
+            # kept as the envelope: not a view of the buffer
+            self._env_s, self._env_v = self._s[i0:settled].copy(), v
 
     def _reacquired(self) -> bool:
         """True when the newest held-back points span ``reacquire_mm`` and lie on one line;
@@ -455,25 +459,3 @@ class TrajectoryTracker:
         buffer = self._buffer
         at = pk.point_at(buffer.path, buffer.s, s, self.direction_fit_mm)
         return np.array(at[:3]), np.array(at[3:])
-
-    def _smooth_tail(self) -> None:
-        """Refit the stored points whose window the newest point entered: a robust line through
-        the raw points within +-smoothing_mm (arc length), evaluated at the point.
-
-        A first least-squares fit gives residuals; points farther than three times the window's
-        median residual (at least ``_MIN_INLIER_MM``) are dropped and the line is refitted, so a
-        few bogus detections (an extractor fooled at the edge of a shadow) do not bend the path,
-        while a real turn, which the majority of the window follows, does.
-        """
-        h = self.smoothing_mm
-        buffer = self._buffer
-        if h <= 0 or len(buffer) < 3:
-            return
-        first = max(_left(self._s, self._s[-1] - 2 * h), 1)  # 0: the start pose
-        smooth_tail(buffer.raw, buffer.path, buffer.s, first, h, _MIN_INLIER_MM)
-
-    def _trim(self) -> None:
-        """Drop stored points more than ``buffer_mm`` behind the set-point."""
-        cut = _left(self._s, self._s_set - self.buffer_mm) - 1
-        if cut > 0:
-            self._buffer.drop(cut)
