@@ -299,7 +299,9 @@ class CartesianRobot:
 
     def sensor_pose(self, state: RobotState) -> FloatArray:
         """``T_world_sensor`` at the state's (actual) axis positions."""
-        return self.T_world_sensor(state.q)
+        T = np.eye(4)  # T_base_tcp(state.q), without its conversions (every frame)
+        T[:3, 3] = state.q
+        return self.T_world_base @ T @ self.T_tcp_sensor
 
     def T_world_tcp_of(self, state: RobotState) -> FloatArray:
         return self.T_world_tcp(state.q)

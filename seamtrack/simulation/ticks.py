@@ -404,7 +404,7 @@ class ArmTicks:
         if self._args[0] is not state or self._args[1] is not tracker:
             self._args = (state, tracker, *self._fixed(state, tracker))
         _, _, head, tail = self._args
-        n, why = arm_ticks(
+        n, why = arm_ticks(  # type: ignore[call-arg]  # its arguments, gathered (_fixed)
             tick, max_ticks, self.dt, next_capture, next_arrival, check_every, wall_every,
             *head, path.path, path.s, tracker._env_s, tracker._env_v, tracker._seen_seam, *tail,
         )  # fmt: skip
