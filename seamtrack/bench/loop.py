@@ -49,8 +49,14 @@ _STAGES: tuple[tuple[str, tuple[str, ...]], ...] = (
         "scoring after the run",
         ("loop.py:_trace", "loop.py:_summary", "scoring.py:orientation_summary"),
     ),
-    ("control ticks between events (compiled: set-point, axes, trace)", ("ticks.py:run",)),
-    ("progress check", ("progress.py:closest_near",)),
+    (
+        "control ticks between events (compiled: set-point, axes, trace, progress checks)",
+        ("ticks.py:run",),
+    ),
+    (
+        "progress checks the loop makes (the others run in the compiled ticks)",
+        ("progress.py:check",),
+    ),
     ("sensor pose at each frame", ("robot.py:sensor_pose",)),
     (
         "trace and frame logs (array.extend, frombytes)",

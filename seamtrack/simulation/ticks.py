@@ -1,9 +1,11 @@
 """The loop's compiled control ticks: the built-in trajectory tracker on a gantry.
 
-Between two events (a frame captured, a measurement arriving, a progress or wall-clock check)
-every control tick does the same small arithmetic: the torch tip from the axes, the tracker's
-set-point step (:func:`seamtrack.control.path_kernels.setpoint_step`), the axis travel check,
-the axes' step (the interpolator, and the position loops when the robot has a servo), and the
+Between two events (a frame captured, a measurement arriving, a wall-clock check) every
+control tick does the same small arithmetic (and every 10 ms the loop's progress check, the
+same kernel the loop calls, :func:`~seamtrack.simulation.progress.progress_check`): the torch
+tip from the axes, the tracker's set-point step
+(:func:`seamtrack.control.path_kernels.setpoint_step`), the axis travel check, the axes' step
+(the interpolator, and the position loops when the robot has a servo), and the
 trace. In Python that costs ~10 us a tick, dozens of float operations each wrapped in an
 object; :func:`gantry_ticks` runs the whole stretch in one compiled call, calling the compiled
 steps the tracker and the robot use themselves (``setpoint_step``, ``axes_step``,
@@ -94,9 +96,11 @@ def gantry_ticks(
 ) -> tuple[int, int]:  # fmt: skip
     """Control ticks from ``tick`` on, until the next event: stops before a tick at which a
     frame is due (``next_capture``) or a measurement arrives (``next_arrival``), after a tick
-    at which progress (``check_every``) or the wall clock (``wall_every``) is checked, or at a
-    target outside the travel (``LIMIT``) or an unusable command (``REFUSED``: its target,
-    speed, feed-forward and stop in ``refused``).
+    at which the loop checks the wall clock (``wall_every``; see :func:`_checked`), or at a
+    target outside the travel (``LIMIT``), an unusable command (``REFUSED``: its target,
+    speed, feed-forward and stop in ``refused``) or a progress check (every ``check_every``
+    ticks, made here: ``progress``, ``seam``, ``seam_s``, ``seam_columns``, ``checks``, see
+    :class:`~seamtrack.simulation.progress.ProgressCheck`) that ends the run (``STOPPED``).
 
     ``offset``: (tcp from axes (3), world to base (3)); ``axes``: rows q, v (the servo's
     output), set-point q, v, held set-point; ``ipo``: (ticks per interpolation, servo tick;
