@@ -54,6 +54,7 @@ FloatArray = NDArray[np.float64]
 
 #: Travel of the Cartesian interpolator (mm): an arm's reach is limited by its joints instead.
 _NO_END_STOP_MM = 1e7
+_EYE4 = np.eye(4)  # the identity pose, copied (np.eye costs more)
 
 #: Proportional gain (1/s) of the orientation set-point towards the commanded rotation.
 ORIENTATION_GAIN_1_S = 20.0
@@ -239,7 +240,7 @@ class ArticulatedRobot:
 
     # ----------------------------------------------------------------- poses
     def T_world_tcp_of(self, state: ArmState) -> FloatArray:
-        T = np.eye(4)  # frames.make(state.R, state.q), from the state's arrays (every frame)
+        T = _EYE4.copy()  # frames.make(state.R, state.q), from the state's arrays (every frame)
         T[:3, :3] = state.rot[2]
         T[:3, 3] = state.cart[ak.C_Q]
         return self.T_world_base @ T

@@ -128,7 +128,9 @@ def smooth_tail(
             if w[j]:
                 ordered[k] = residual[j]
                 k += 1
-        median = np.sort(ordered[:k])[count // 2] if k else np.inf
+        # The window's median residual: its (count // 2)-th smallest, found by a partial sort
+        # (the same value a full sort puts there).
+        median = np.partition(ordered[:k], count // 2)[count // 2] if k else np.inf
         limit = max(3.0 * (median if math.isfinite(median) else 0.0), min_inlier)
         for j in range(m):
             w[j] = w[j] and residual[j] <= limit

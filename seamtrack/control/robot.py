@@ -36,6 +36,8 @@ PAPER_VELOCITY_MAX_MM_S = (20.0, 10.0, 10.0)
 PAPER_ACCELERATION_MAX_MM_S2 = (30.0, 15.0, 15.0)
 
 _NO_FEED_FORWARD = (0.0, 0.0, 0.0)
+#: The identity pose, copied where a pose is filled in every frame (np.eye costs more).
+_EYE4 = np.eye(4)
 
 
 @dataclass(frozen=True)
@@ -299,7 +301,7 @@ class CartesianRobot:
 
     def sensor_pose(self, state: RobotState) -> FloatArray:
         """``T_world_sensor`` at the state's (actual) axis positions."""
-        T = np.eye(4)  # T_base_tcp(state.q), without its conversions (every frame)
+        T = _EYE4.copy()  # T_base_tcp(state.q), without its conversions (every frame)
         T[:3, 3] = state.q
         return self.T_world_base @ T @ self.T_tcp_sensor
 
