@@ -109,6 +109,39 @@ def test_bad_json_commands_are_refused(raw: bytes, why: str) -> None:
         wire.command_from_json(wire.parse(raw), 3)
 
 
+def test_a_step_carries_its_profiles_as_described_binary_parts() -> None:
+    """The step's JSON header says where each profile is and how to read it; read so, the
+    parts give the profile's own points (NaN kept) and reasons; a part of the wrong size is
+    refused before it is read."""
+    from seamtrack.bridge.lockstep import Frame, Step
+    from seamtrack.sensing.profiles import Feature, Profile
+
+    rng = np.random.default_rng(2)
+    profiles = []
+    for n in (5, 3):
+        pts = rng.uniform(-30, 30, (n, 2))
+        pts[1] = np.nan
+        reason = rng.integers(0, 8, n).astype(np.uint8)
+        profiles.append(Profile(pts, valid=reason == 0, reason=reason))
+    frames = [
+        Frame(0.01 * i, 0.01 * i + 0.002, Feature.failed("no stripe"), np.eye(4), np.zeros(3), p, None)
+        for i, p in enumerate(profiles)
+    ]
+    step = Step(4, 0.03, np.zeros(3), np.zeros(3), frames)
+    parts = wire.step_parts(step, with_profile=True)
+    header = json.loads(parts[0])
+    assert len(parts) == 5 and header["seq"] == 4
+    for i, profile in enumerate(profiles):
+        got = wire.profile_arrays(header, parts, i)
+        assert got is not None
+        np.testing.assert_array_equal(got[0], profile.points_laser)
+        np.testing.assert_array_equal(got[1], profile.reason)
+    with pytest.raises(ValueError, match="bytes"):
+        wire.profile_arrays(header, [*parts[:2], parts[2][:-1], *parts[3:]], 0)
+    bare = wire.step_parts(step, with_profile=False)
+    assert len(bare) == 1 and json.loads(bare[0])["frames"][0]["profile"] is None
+
+
 # --------------------------------------------------------------------------- CDR commands
 def _pair(frame: str = "world", q=(0.0, 0.0, 0.0, 0.0), linear=(0.005, 1.0, 0.001)):
     from seamtrack.bridge.zenoh_transport import command_from_ros

@@ -21,18 +21,17 @@ gives it the run's context. When that node's tokens go, the run ends (disconnect
 from __future__ import annotations
 
 import json
+import math
 import queue
 import time
 from typing import Any
 
 import numpy as np
 
-from seamtrack.bridge import messages, rmw
+from seamtrack.bridge import cdr, messages, rmw
 from seamtrack.bridge.lockstep import BridgeFailure, Reply, Step, TfChain
 from seamtrack.bridge.wire import MAX_MESSAGE_BYTES, context_json, make_command
 from seamtrack.control.tracking import TrackerContext
-
-encode = messages.encode
 
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
 NODE = "seamtrack"
@@ -175,11 +174,10 @@ class ZenohTransport:
             if f.profile is None:
                 continue
             chain = self._chain(f.T_world_sensor)
-            for topic, message in messages.frame_messages(
-                t, f.profile, f.feature, chain, image=f.image
-            ):
-                if topic != "/clock":  # the step's own clock follows
-                    self._put(topic, encode(message))
+            # The bytes messages.frame_messages' objects give, written directly; the step's
+            # own /clock follows.
+            for topic, payload in cdr.frame_payloads(t, f.profile, f.feature, chain, f.image):
+                self._put(topic, payload)
             if f.feature:
                 world = rmw.encode_point(t, "world", f.feature.point_world)
                 self._put("/seamtrack/seam_point_world", world)
@@ -241,11 +239,10 @@ class ZenohTransport:
                     f"{MAX_MESSAGE_BYTES}-byte limit",
                     fix="publish one PoseStamped and one TwistStamped per step",
                 )
-            try:
-                msg = rmw.deserialize(data, SUBSCRIBES[kind])
+            try:  # the bytes rosbags would accept, read without building its objects
+                stamp, frame, values = cdr.read_stamped(data, SUBSCRIBES[kind])
             except ValueError as exc:
                 raise BridgeFailure(f"sent garbage on {kind}: {exc}", fix=_FIX_TYPES) from None
-            stamp = rmw.stamp_ns(msg.header.stamp)
             if stamp != want:
                 raise BridgeFailure(
                     f"answered on {kind} for t = {stamp * 1e-9:.9g} s where t = "
@@ -254,8 +251,9 @@ class ZenohTransport:
                 )
             if kind in got:
                 raise BridgeFailure(f"sent two messages on {kind} in one step", fix=_FIX_TYPES)
-            got[kind] = msg
-        return command_from_ros(got["/seamtrack/cmd_pose"], got["/seamtrack/cmd_speed"])
+            got[kind] = (frame, values)
+        (frame, pose), (_, speed) = got["/seamtrack/cmd_pose"], got["/seamtrack/cmd_speed"]
+        return command_from_values(frame, pose, speed)
 
 
 _KEEP_RUNNING = "keep the tracker node running until /seamtrack/status says the run is over"
@@ -269,33 +267,44 @@ def command_from_ros(pose_msg: Any, speed_msg: Any) -> Reply:
     (m/s, > 0), ``linear.y`` 1 to arrive at rest on the target (else 0), ``linear.z`` the
     distance from the target within which to ask again (m, frame lockstep; 0: at the next
     frame), ``angular`` the turn rate of the orientation goal (rad/s, world axes)."""
-    frame = pose_msg.header.frame_id
+    p = pose_msg.pose.position
+    q = pose_msg.pose.orientation
+    v = speed_msg.twist.linear
+    w = speed_msg.twist.angular
+    return command_from_values(
+        pose_msg.header.frame_id,
+        (p.x, p.y, p.z, q.x, q.y, q.z, q.w),
+        (v.x, v.y, v.z, w.x, w.y, w.z),
+    )
+
+
+def command_from_values(frame: str, pose: tuple[float, ...], speed: tuple[float, ...]) -> Reply:
+    """:func:`command_from_ros` of the pair's fields: ``cmd_pose``'s frame id, its position and
+    orientation (x, y, z, qx, qy, qz, qw), ``cmd_speed``'s linear and angular parts."""
     if frame == "":
         return None, 0.0
     if frame != "world":
         raise BridgeFailure(
             f"cmd_pose is in frame {frame[:40]!r}", fix="give the target in 'world' (or '' to stop)"
         )
-    p = pose_msg.pose.position
-    q = pose_msg.pose.orientation
-    v = speed_msg.twist.linear
-    w = speed_msg.twist.angular
-    values = (p.x, p.y, p.z, q.x, q.y, q.z, q.w, v.x, v.y, v.z, w.x, w.y, w.z)
+    values = (*pose, *speed)
     if not rmw.is_finite(*values):
         raise BridgeFailure("sent a command that is not finite", fix=_FIX_TYPES)
-    if not v.x > 0 or v.y not in (0.0, 1.0) or v.z < 0.0:
+    px, py, pz, qx, qy, qz, qw = pose
+    vx, vy, vz, wx, wy, wz = speed
+    if not vx > 0 or vy not in (0.0, 1.0) or vz < 0.0:
         raise BridgeFailure(
             "cmd_speed is not (speed > 0, stop 0 or 1, ask within >= 0)",
             fix="linear.x: the path speed in m/s; linear.y: 1 to arrive at rest; linear.z: "
             "the distance to ask again within, m (0: at the next frame)",
         )
     rotation = None
-    norm = float(np.sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w))
+    norm = math.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
     if norm != 0.0:
         if abs(norm - 1.0) > 1e-6:
             raise BridgeFailure("cmd_pose's quaternion is not a unit one", fix=_FIX_TYPES)
-        rotation = messages.rotation((q.x, q.y, q.z, q.w)).ravel().tolist()
-    omega = None if (w.x, w.y, w.z) == (0.0, 0.0, 0.0) else [w.x, w.y, w.z]
-    target = [p.x * 1000.0, p.y * 1000.0, p.z * 1000.0]
-    command = make_command(target, v.x * 1000.0, v.y == 1.0, None, rotation, omega)
-    return command, v.z * 1000.0
+        rotation = messages.rotation((qx, qy, qz, qw)).ravel().tolist()
+    omega = None if (wx, wy, wz) == (0.0, 0.0, 0.0) else [wx, wy, wz]
+    target = [px * 1000.0, py * 1000.0, pz * 1000.0]
+    command = make_command(target, vx * 1000.0, vy == 1.0, None, rotation, omega)
+    return command, vz * 1000.0

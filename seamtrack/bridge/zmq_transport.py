@@ -1,11 +1,13 @@
-"""The ZeroMQ transport: a REP socket (the server) and one REQ client, JSON messages
-(:mod:`seamtrack.bridge.wire`). The client speaks first: ``hello`` -> ``reset``, ``ready`` ->
-step 0, ``command`` -> step 1, ... -> ``end``.
+"""The ZeroMQ transport: a REP socket (the server) and one REQ client; JSON messages, the
+steps' profiles as raw arrays in further parts of a multipart message
+(:mod:`seamtrack.bridge.wire` gives the format). The client speaks first: ``hello`` ->
+``reset``, ``ready`` -> step 0, ``command`` -> step 1, ... -> ``end``.
 
 Safety: the socket binds to loopback unless told otherwise; ZeroMQ drops a peer whose message
 is over :data:`HARD_LIMIT_BYTES` (no allocation for it), and a message over
-:data:`~seamtrack.bridge.wire.MAX_MESSAGE_BYTES` is refused; messages are parsed as JSON and
-checked field by field, never evaluated or unpickled.
+:data:`~seamtrack.bridge.wire.MAX_MESSAGE_BYTES`, or of more than one part, is refused before
+it is decoded; messages are parsed as JSON and checked field by field, never evaluated or
+unpickled.
 """
 
 from __future__ import annotations
@@ -74,7 +76,7 @@ class ZmqTransport:
         if hello.get("protocol") != wire.PROTOCOL:
             raise BridgeFailure(
                 f"speaks protocol {str(hello.get('protocol'))[:20]}, not {wire.PROTOCOL}",
-                fix=f"send 'protocol': {wire.PROTOCOL}",
+                fix=f"send 'protocol': {wire.PROTOCOL} (docs/ros.md gives its messages)",
             )
         self.with_profile = hello.get("profile", True) is not False
         self._connected = True
@@ -89,7 +91,7 @@ class ZmqTransport:
         wire.expect(wire.parse(self._recv(self.timeout_s, "--timeout-s", "answer")), "ready")
 
     def exchange(self, step: Step) -> Reply:
-        self.sock.send(wire.step_json(step, self.with_profile))
+        self.sock.send_multipart(wire.step_parts(step, self.with_profile))
         raw = self._recv(self.timeout_s, "--timeout-s", f"answer step {step.seq}")
         return wire.command_from_json(wire.parse(raw), step.seq)
 
@@ -126,7 +128,13 @@ class ZmqTransport:
                 )
             ready = dict(self.poller.poll(max(1, math.ceil(left * 1000.0))))
             if self.sock in ready:
-                return bytes(self.sock.recv(copy=True))
+                parts = self.sock.recv_multipart(copy=True)
+                if len(parts) != 1:
+                    raise BridgeFailure(
+                        f"sent a message of {len(parts)} parts",
+                        fix="send each message as one part of UTF-8 JSON",
+                    )
+                return bytes(parts[0])
             if self.monitor in ready:
                 recv_monitor_message(self.monitor)
                 if self._connected:

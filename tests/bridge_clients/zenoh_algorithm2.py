@@ -16,7 +16,6 @@ import argparse
 import hashlib
 import json
 import math
-import queue
 import struct
 import sys
 import time
@@ -102,7 +101,6 @@ def main() -> int:
                 raise
             time.sleep(0.2)
     sid = str(session.zid())
-    events: queue.Queue = queue.Queue()
 
     subs = {
         "/seamtrack/context": "std_msgs/msg/String",
@@ -121,17 +119,20 @@ def main() -> int:
     }
     live = session.liveliness()
     tokens = [live.declare_token(f"@ros2_lv/{DOMAIN}/{sid}/0/0/NN/%/%/tracker")]
-    # One subscriber for every topic: Zenoh calls each subscriber's callback on its own, so
-    # separate subscribers could hand a step's /seamtrack/tcp over before the frames sent
-    # ahead of it; one subscriber sees them in the order they were put.
+    # One subscriber for every topic, its samples in a FIFO channel read by this thread: they
+    # come in the order they were put (a step's seam points before its /seamtrack/tcp), and
+    # the receive blocks in zenoh with no Python callback per sample (topics this node does
+    # not take, such as the profiles, are skipped by their key).
     topic_of = {key(topic, msgtype): topic for topic, msgtype in subs.items()}
+    subscriber = session.declare_subscriber(f"{DOMAIN}/**", zenoh.handlers.FifoChannel(256))
 
-    def route(sample):
-        topic = topic_of.get(str(sample.key_expr))
-        if topic is not None:
-            events.put((topic, sample.payload.to_bytes()))
+    def receive():
+        while True:
+            sample = subscriber.recv()
+            topic = topic_of.get(str(sample.key_expr))
+            if topic is not None:
+                return topic, sample.payload.to_bytes()
 
-    subscriber = session.declare_subscriber(f"{DOMAIN}/**", route)
     entity = 1
     for topic, msgtype in subs.items():
         tokens.append(live.declare_token(token(sid, entity, "MS", topic, msgtype)))
@@ -155,7 +156,7 @@ def main() -> int:
     tracker = None
     steps = 0
     while True:
-        topic, raw = events.get(timeout=120)
+        topic, raw = receive()
         if topic == "/seamtrack/context":
             context = json.loads(TS.deserialize_cdr(raw, subs[topic]).data)["context"]
             speed = context["welding_speed_mm_s"] / 1000.0
