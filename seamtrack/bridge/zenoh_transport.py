@@ -23,6 +23,7 @@ from __future__ import annotations
 import json
 import math
 import queue
+import threading
 import time
 from typing import Any
 
@@ -53,6 +54,12 @@ SUBSCRIBES = {"/seamtrack/cmd_pose": rmw.POSE_STAMPED, "/seamtrack/cmd_speed": r
 
 #: The wait between seeing the tracker's tokens and publishing to it.
 SETTLE_S = 0.3
+
+#: Samples the command inbox holds (two a step are due).
+INBOX = 64
+
+#: How often the watchdog looks at the deadline of the step the loop waits on (s).
+WATCH_S = 0.05
 
 #: Zenoh drops a received message over this (transport/link/rx/max_message_size).
 HARD_LIMIT_BYTES = 65536
@@ -107,13 +114,23 @@ class ZenohTransport:
             token = rmw.entity_token(domain_id, sid, 0, entity, "MP", NODE, "", topic, msgtype)
             self._tokens.append(live.declare_token(token))
             entity += 1
-        self.subs = []
+        # Both command topics (and the wake-up key) in one FIFO channel that the loop's thread
+        # reads: no Python callback per sample, and a step's pair wakes the loop once.
+        self.topic_of = {}
         for topic, msgtype in SUBSCRIBES.items():
-            key = rmw.topic_key(domain_id, topic, msgtype)
-            self.subs.append(self.session.declare_subscriber(key, self._on_sample(topic)))
+            self.topic_of[rmw.topic_key(domain_id, topic, msgtype)] = topic
             token = rmw.entity_token(domain_id, sid, 0, entity, "MS", NODE, "", topic, msgtype)
             self._tokens.append(live.declare_token(token))
             entity += 1
+        self.wake_key = f"{domain_id}/seamtrack/cmd_/wake"
+        self.inbox = self.session.declare_subscriber(
+            f"{domain_id}/seamtrack/cmd_$*/**", zenoh.handlers.FifoChannel(INBOX)
+        )
+        self._local = zenoh.Locality.SESSION_LOCAL
+        self._deadline: float | None = None
+        self._stop = threading.Event()
+        self._watchdog = threading.Thread(target=self._watch, daemon=True)
+        self._watchdog.start()
         self.watch = live.declare_subscriber(
             f"@ros2_lv/{domain_id}/**", self._on_token, history=True
         )
@@ -122,17 +139,21 @@ class ZenohTransport:
         self.with_profile = True
 
     # ------------------------------------------------------------------ callbacks
-    def _on_sample(self, topic: str) -> Any:
-        def put(sample: Any) -> None:
-            payload = sample.payload
-            size = len(payload)
-            data = payload.to_bytes() if size <= MAX_MESSAGE_BYTES else None
-            self.events.put((topic, size, data))
-
-        return put
-
     def _on_token(self, sample: Any) -> None:
         self.events.put(("token", str(sample.kind), str(sample.key_expr)))
+        if self._deadline is not None:  # the loop waits on the inbox: wake it to see this
+            self._wake()
+
+    def _wake(self) -> None:
+        """Put an empty sample in the inbox, from this process to itself only."""
+        self.session.put(self.wake_key, b"", allowed_destination=self._local)
+
+    def _watch(self) -> None:
+        """Wake the loop once its deadline has passed (the inbox's receive has no timeout)."""
+        while not self._stop.wait(WATCH_S):
+            deadline = self._deadline
+            if deadline is not None and time.monotonic() > deadline:
+                self._wake()
 
     # ------------------------------------------------------------------ protocol
     def start(self, context: TrackerContext, chain: TfChain, lockstep: str) -> None:
@@ -198,6 +219,8 @@ class ZenohTransport:
         time.sleep(SETTLE_S)  # let it leave before the session closes
 
     def close(self) -> None:
+        self._stop.set()
+        self._watchdog.join()
         for token in self._tokens:
             token.undeclare()
         self.session.close()
@@ -225,35 +248,66 @@ class ZenohTransport:
     def _command(self, t_s: float, seq: int) -> Reply:
         want = int(round(t_s * 1e9))
         got: dict[str, Any] = {}
-        deadline = time.monotonic() + self.timeout_s
-        while len(got) < 2:
-            kind, size, data = self._next(deadline, "--timeout-s", f"answer step {seq}")
-            if kind == "token":
-                fields = rmw.parse_token(data)
-                if size.endswith("DELETE") and fields and fields["session"] == self.client:
-                    raise BridgeFailure("the tracker node disconnected", fix=_KEEP_RUNNING)
-                continue
-            if data is None:
-                raise BridgeFailure(
-                    f"a message of {size} bytes on {kind} is over the "
-                    f"{MAX_MESSAGE_BYTES}-byte limit",
-                    fix="publish one PoseStamped and one TwistStamped per step",
-                )
-            try:  # the bytes rosbags would accept, read without building its objects
-                stamp, frame, values = cdr.read_stamped(data, SUBSCRIBES[kind])
-            except ValueError as exc:
-                raise BridgeFailure(f"sent garbage on {kind}: {exc}", fix=_FIX_TYPES) from None
-            if stamp != want:
-                raise BridgeFailure(
-                    f"answered on {kind} for t = {stamp * 1e-9:.9g} s where t = "
-                    f"{want * 1e-9:.9g} s was due",
-                    fix="stamp both command messages with the /seamtrack/tcp message's stamp",
-                )
-            if kind in got:
-                raise BridgeFailure(f"sent two messages on {kind} in one step", fix=_FIX_TYPES)
-            got[kind] = (frame, values)
+        self._deadline = time.monotonic() + self.timeout_s
+        try:
+            while len(got) < 2:
+                kind, size, data = self._receive(seq)
+                self._check(kind, size, data, want, got)
+        finally:
+            self._deadline = None
         (frame, pose), (_, speed) = got["/seamtrack/cmd_pose"], got["/seamtrack/cmd_speed"]
         return command_from_values(frame, pose, speed)
+
+    def _receive(self, seq: int) -> tuple[str, int, bytes | None]:
+        """The next command sample (topic, size, bytes or None when oversized), blocking; a
+        token event (the tracker gone) or the deadline ends the run."""
+        while True:
+            sample = self.inbox.recv()
+            key = str(sample.key_expr)
+            topic = self.topic_of.get(key)
+            if topic is not None:
+                payload = sample.payload
+                size = len(payload)
+                return topic, size, payload.to_bytes() if size <= MAX_MESSAGE_BYTES else None
+            if key != self.wake_key:
+                continue  # another type on a cmd_ topic: not the tracker's command
+            while not self.events.empty():
+                _, what, token = self.events.get_nowait()
+                fields = rmw.parse_token(token)
+                if what.endswith("DELETE") and fields and fields["session"] == self.client:
+                    raise BridgeFailure("the tracker node disconnected", fix=_KEEP_RUNNING)
+            deadline = self._deadline
+            if deadline is not None and time.monotonic() > deadline:
+                raise BridgeFailure(
+                    f"the tracker node did not answer step {seq} within {self.timeout_s:g} s",
+                    field="--timeout-s",
+                    fix="start the tracker node (RMW_IMPLEMENTATION=rmw_zenoh_cpp), or raise "
+                    "--timeout-s",
+                )
+
+    def _check(
+        self, kind: str, size: int, data: bytes | None, want: int, got: dict[str, Any]
+    ) -> None:
+        """One command message of the pair, checked and kept in ``got``."""
+        if data is None:
+            raise BridgeFailure(
+                f"a message of {size} bytes on {kind} is over the "
+                f"{MAX_MESSAGE_BYTES}-byte limit",
+                fix="publish one PoseStamped and one TwistStamped per step",
+            )
+        try:  # the bytes rosbags would accept, read without building its objects
+            stamp, frame, values = cdr.read_stamped(data, SUBSCRIBES[kind])
+        except ValueError as exc:
+            raise BridgeFailure(f"sent garbage on {kind}: {exc}", fix=_FIX_TYPES) from None
+        if stamp != want:
+            raise BridgeFailure(
+                f"answered on {kind} for t = {stamp * 1e-9:.9g} s where t = "
+                f"{want * 1e-9:.9g} s was due",
+                fix="stamp both command messages with the /seamtrack/tcp message's stamp",
+            )
+        if kind in got:
+            raise BridgeFailure(f"sent two messages on {kind} in one step", fix=_FIX_TYPES)
+        got[kind] = (frame, values)
 
 
 _KEEP_RUNNING = "keep the tracker node running until /seamtrack/status says the run is over"
