@@ -123,8 +123,9 @@ def test_a_step_carries_its_profiles_as_described_binary_parts() -> None:
         pts[1] = np.nan
         reason = rng.integers(0, 8, n).astype(np.uint8)
         profiles.append(Profile(pts, valid=reason == 0, reason=reason))
+    lost = Feature.failed("no stripe")
     frames = [
-        Frame(0.01 * i, 0.01 * i + 0.002, Feature.failed("no stripe"), np.eye(4), np.zeros(3), p, None)
+        Frame(0.01 * i, 0.01 * i + 0.002, lost, np.eye(4), np.zeros(3), p, None)
         for i, p in enumerate(profiles)
     ]
     step = Step(4, 0.03, np.zeros(3), np.zeros(3), frames)

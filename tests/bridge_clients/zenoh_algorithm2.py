@@ -45,6 +45,28 @@ def token(session: str, entity: int, kind: str, topic: str, msgtype: str) -> str
     )
 
 
+def warm_up() -> None:
+    """rosbags writes (and compiles) a type's serializer on its first use, which takes a good
+    part of a second: do it before the run starts, not on its first step."""
+    time_ = T["builtin_interfaces/msg/Time"](sec=0, nanosec=0)
+    header = T["std_msgs/msg/Header"](stamp=time_, frame_id="")
+    point = T["geometry_msgs/msg/Point"](x=0.0, y=0.0, z=0.0)
+    vector = T["geometry_msgs/msg/Vector3"](x=0.0, y=0.0, z=0.0)
+    q = T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0)
+    messages = [
+        T["geometry_msgs/msg/PoseStamped"](
+            header=header, pose=T["geometry_msgs/msg/Pose"](position=point, orientation=q)
+        ),
+        T["geometry_msgs/msg/TwistStamped"](
+            header=header, twist=T["geometry_msgs/msg/Twist"](linear=vector, angular=vector)
+        ),
+        T["geometry_msgs/msg/PointStamped"](header=header, point=point),
+        T["std_msgs/msg/String"](data=""),
+    ]
+    for msg in messages:
+        TS.deserialize_cdr(TS.serialize_cdr(msg, msg.__msgtype__), msg.__msgtype__)
+
+
 class ConvergenceRadius:
     """Go to the oldest unreached seam point at the welding speed; take the next one as soon as
     the torch is within the radius; arrive at rest on the last one known (all in m)."""
@@ -101,6 +123,7 @@ def main() -> int:
                 raise
             time.sleep(0.2)
     sid = str(session.zid())
+    warm_up()
 
     subs = {
         "/seamtrack/context": "std_msgs/msg/String",
