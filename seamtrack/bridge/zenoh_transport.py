@@ -15,7 +15,10 @@ stamped with the step's time.
 
 The run starts once a node has declared a subscription to ``/seamtrack/tcp`` and publishers
 of both command topics (their liveliness tokens); ``/seamtrack/context`` (String, JSON) then
-gives it the run's context. When that node's tokens go, the run ends (disconnected).
+gives it the run's context. When that node's tokens go, the run ends (disconnected). The
+context, and ``/seamtrack/status`` once the run is over, are latched: a subscriber that comes
+later gets the last one on request (a Zenoh get on the topic's key expression, answered by a
+queryable there as a publication cache answers it).
 """
 
 from __future__ import annotations
@@ -51,6 +54,9 @@ PUBLISHES = {
     "/seamtrack/status": rmw.STRING,
 }
 SUBSCRIBES = {"/seamtrack/cmd_pose": rmw.POSE_STAMPED, "/seamtrack/cmd_speed": rmw.TWIST_STAMPED}
+
+#: Topics sent once whose last message a late subscriber gets on request.
+LATCHED = ("/seamtrack/context", "/seamtrack/status")
 
 #: The wait between seeing the tracker's tokens and publishing to it.
 SETTLE_S = 0.3
@@ -131,6 +137,15 @@ class ZenohTransport:
         self._stop = threading.Event()
         self._watchdog = threading.Thread(target=self._watch, daemon=True)
         self._watchdog.start()
+        # Latched topics: a late subscriber gets the last message on request (a Zenoh get on
+        # the topic's key, as a publication cache answers it).
+        self.latched: dict[str, bytes] = {}
+        self.queryables = [
+            self.session.declare_queryable(
+                rmw.topic_key(domain_id, topic, PUBLISHES[topic]), self._on_query(topic)
+            )
+            for topic in LATCHED
+        ]
         self.watch = live.declare_subscriber(
             f"@ros2_lv/{domain_id}/**", self._on_token, history=True
         )
@@ -139,6 +154,15 @@ class ZenohTransport:
         self.with_profile = True
 
     # ------------------------------------------------------------------ callbacks
+    def _on_query(self, topic: str) -> Any:
+        def answer(query: Any) -> None:
+            payload = self.latched.get(topic)
+            if payload is not None:
+                att = rmw.attachment(self.seq, time.time_ns(), self.gids[topic])
+                query.reply(query.key_expr, payload, attachment=att)
+
+        return answer
+
     def _on_token(self, sample: Any) -> None:
         self.events.put(("token", str(sample.kind), str(sample.key_expr)))
         if self._deadline is not None:  # the loop waits on the inbox: wake it to see this
@@ -221,12 +245,16 @@ class ZenohTransport:
     def close(self) -> None:
         self._stop.set()
         self._watchdog.join()
+        for queryable in self.queryables:
+            queryable.undeclare()
         for token in self._tokens:
             token.undeclare()
         self.session.close()
 
     # ------------------------------------------------------------------ internals
     def _put(self, topic: str, payload: bytes) -> None:
+        if topic in LATCHED:
+            self.latched[topic] = payload
         self.seq += 1
         stamp = time.time_ns()
         self.pubs[topic].put(payload, attachment=rmw.attachment(self.seq, stamp, self.gids[topic]))
@@ -291,8 +319,7 @@ class ZenohTransport:
         """One command message of the pair, checked and kept in ``got``."""
         if data is None:
             raise BridgeFailure(
-                f"a message of {size} bytes on {kind} is over the "
-                f"{MAX_MESSAGE_BYTES}-byte limit",
+                f"a message of {size} bytes on {kind} is over the {MAX_MESSAGE_BYTES}-byte limit",
                 fix="publish one PoseStamped and one TwistStamped per step",
             )
         try:  # the bytes rosbags would accept, read without building its objects

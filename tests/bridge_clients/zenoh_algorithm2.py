@@ -182,6 +182,11 @@ def main() -> int:
         topic, raw = receive()
         if topic == "/seamtrack/context":
             context = json.loads(TS.deserialize_cdr(raw, subs[topic]).data)["context"]
+            if args.check_frames:  # latched: asked for again, as a late subscriber would
+                got = [
+                    r.ok.payload.to_bytes() for r in session.get(key(topic, subs[topic])) if r.ok
+                ]
+                seen["late_context"] = got == [raw]
             speed = context["welding_speed_mm_s"] / 1000.0
             tracker = ConvergenceRadius(speed, args.radius_mm / 1000.0)
         elif topic in seen:
