@@ -163,7 +163,8 @@ def test_every_frame_brings_its_profile_tf_and_clock_over_zenoh(
 ) -> None:
     """A ROS 2 subscriber gets, per sensor frame, one PointCloud2 stamped with the capture time
     (one point per ray: 256 here), one TFMessage with the chain world -> base -> tcp -> sensor,
-    and a Clock at every step; a get on the context's key answers with the context sent."""
+    and a Clock at every step; a get on the keys of /seamtrack/context and /tf_static (what a
+    late subscriber does) answers with the context sent and the links that do not move."""
     import numpy as np
 
     out = tmp_path / "run"
@@ -182,6 +183,7 @@ def test_every_frame_brings_its_profile_tf_and_clock_over_zenoh(
     summary = json.loads((out / "summary.json").read_text())
     assert len(seen["/clock"]) == summary["bridge_steps"]
     assert seen["late_context"]  # the context is latched: asked for later, it comes again
+    assert seen["late_tf_static"] == [[["world", "base"], ["tcp", "sensor"]]]
 
 
 CAUSES = {

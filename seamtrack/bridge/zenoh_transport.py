@@ -15,10 +15,12 @@ stamped with the step's time.
 
 The run starts once a node has declared a subscription to ``/seamtrack/tcp`` and publishers
 of both command topics (their liveliness tokens); ``/seamtrack/context`` (String, JSON) then
-gives it the run's context. When that node's tokens go, the run ends (disconnected). The
-context, and ``/seamtrack/status`` once the run is over, are latched: a subscriber that comes
-later gets the last one on request (a Zenoh get on the topic's key expression, answered by a
-queryable there as a publication cache answers it).
+gives it the run's context, after ``/tf_static`` (the links that do not move: world -> base,
+[flange -> tcp,] tcp -> sensor, stamped 0). When that node's tokens go, the run ends
+(disconnected). ``/tf_static``, the context, and ``/seamtrack/status`` once the run is over
+are latched (transient local): a subscriber that comes later gets the last one on request (a
+Zenoh get on the topic's key expression, answered by a queryable there as a publication cache
+answers it).
 """
 
 from __future__ import annotations
@@ -43,6 +45,7 @@ NODE = "seamtrack"
 #: Topic -> message type of what the bridge publishes, and of the command pair it takes.
 PUBLISHES = {
     "/tf": rmw.TFMESSAGE,
+    "/tf_static": rmw.TFMESSAGE,
     "/clock": rmw.CLOCK,
     "/seamtrack/profile": rmw.POINTCLOUD2,
     "/seamtrack/image": "sensor_msgs/msg/Image",
@@ -56,7 +59,13 @@ PUBLISHES = {
 SUBSCRIBES = {"/seamtrack/cmd_pose": rmw.POSE_STAMPED, "/seamtrack/cmd_speed": rmw.TWIST_STAMPED}
 
 #: Topics sent once whose last message a late subscriber gets on request.
-LATCHED = ("/seamtrack/context", "/seamtrack/status")
+LATCHED = ("/tf_static", "/seamtrack/context", "/seamtrack/status")
+
+#: Their QoS (rmw_zenoh's compact form): reliable, transient local, keep last 1.
+LATCHED_QOS = ":1:,1:,:,:,,"
+
+#: The links of the robot's chain that do not move (``/tf_static``, as (parent, child)).
+STATIC_LINKS = {("world", "base"), ("flange", "tcp"), ("tcp", "sensor")}
 
 #: The wait between seeing the tracker's tokens and publishing to it.
 SETTLE_S = 0.3
@@ -117,7 +126,8 @@ class ZenohTransport:
                 key, congestion_control=zenoh.CongestionControl.BLOCK
             )
             self.gids[topic] = rmw.gid(f"{sid}/{topic}")
-            token = rmw.entity_token(domain_id, sid, 0, entity, "MP", NODE, "", topic, msgtype)
+            qos = LATCHED_QOS if topic in LATCHED else rmw.DEFAULT_QOS
+            token = rmw.entity_token(domain_id, sid, 0, entity, "MP", NODE, "", topic, msgtype, qos)
             self._tokens.append(live.declare_token(token))
             entity += 1
         # Both command topics (and the wake-up key) in one FIFO channel that the loop's thread
@@ -210,6 +220,8 @@ class ZenohTransport:
                 self._next(deadline, "--wait-s", "receive from its subscriptions")
             time.sleep(0.01)
         time.sleep(SETTLE_S)
+        static = [link for link in chain(np.eye(4)) if link[:2] in STATIC_LINKS]
+        self._put("/tf_static", cdr.tf_message(static, 0.0))
         message = {"lockstep": lockstep, "context": context_json(context)}
         self._put("/seamtrack/context", rmw.encode_string(json.dumps(message)))
 

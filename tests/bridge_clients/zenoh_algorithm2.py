@@ -187,6 +187,12 @@ def main() -> int:
                     r.ok.payload.to_bytes() for r in session.get(key(topic, subs[topic])) if r.ok
                 ]
                 seen["late_context"] = got == [raw]
+                msgtype = "tf2_msgs/msg/TFMessage"
+                replies = session.get(key("/tf_static", msgtype))
+                static = [TS.deserialize_cdr(r.ok.payload.to_bytes(), msgtype) for r in replies]
+                seen["late_tf_static"] = [
+                    [[t.header.frame_id, t.child_frame_id] for t in m.transforms] for m in static
+                ]
             speed = context["welding_speed_mm_s"] / 1000.0
             tracker = ConvergenceRadius(speed, args.radius_mm / 1000.0)
         elif topic in seen:
