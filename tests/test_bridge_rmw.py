@@ -73,6 +73,33 @@ def test_loopback_by_default() -> None:
     assert zenoh_transport.DEFAULT_ENDPOINT.startswith("tcp/127.0.0.1:")
 
 
+def test_a_protocol_1_client_is_refused_naming_protocol_2() -> None:
+    """Protocol 1 sent the profiles as JSON: a client that says it speaks it is told which
+    protocol to speak instead, before anything is sent to it."""
+    zmq = pytest.importorskip("zmq")
+    import socket
+
+    from seamtrack.bridge.zmq_transport import ZmqTransport
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    server = ZmqTransport(f"tcp://127.0.0.1:{port}", timeout_s=2.0, wait_s=10.0)
+    ctx = zmq.Context()
+    client = ctx.socket(zmq.REQ)
+    client.setsockopt(zmq.LINGER, 0)
+    try:
+        client.connect(f"tcp://127.0.0.1:{port}")
+        client.send_json({"op": "hello", "protocol": 1, "profile": True})
+        with pytest.raises(BridgeFailure, match="protocol 1, not 2") as info:
+            server.start(None, None, "frame")  # type: ignore[arg-type]
+        assert "'protocol': 2" in info.value.fix
+    finally:
+        client.close(0)
+        ctx.term()
+        server.close()
+
+
 # --------------------------------------------------------------------------- JSON commands
 def _command(body: object, seq: int = 3) -> bytes:
     return json.dumps({"op": "command", "seq": seq, "command": body}).encode()
