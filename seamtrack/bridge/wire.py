@@ -1,6 +1,6 @@
-"""The bridge's JSON messages (the ZeroMQ transport), and the command check both transports
-share. Units are the simulator's: mm, s, rad; poses are row-major 4 x 4 lists; NaN (an
-invalid profile point) is ``null``.
+"""The bridge's messages over ZeroMQ (JSON, and the profiles as raw arrays), and the command
+check both transports share. Units are the simulator's: mm, s, rad; poses are row-major 4 x 4
+lists; in JSON a NaN is ``null``.
 
 Client -> server (each message one ZeroMQ frame of UTF-8 JSON, at most
 :data:`MAX_MESSAGE_BYTES`):
