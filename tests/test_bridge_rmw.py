@@ -170,6 +170,55 @@ def test_a_step_carries_its_profiles_as_described_binary_parts() -> None:
     assert len(bare) == 1 and json.loads(bare[0])["frames"][0]["profile"] is None
 
 
+def test_a_seam_hint_reaches_the_extractor_where_its_line_crosses_the_laser_plane() -> None:
+    """A client's ``seam_hint`` (a point and a heading, world) becomes each frame's SeamHint:
+    where that line crosses the laser plane, in the laser frame. Oracle, analytic: the sensor
+    at (10, 0, 100) looking down the world -z (x_S = x_W, y_S = -y_W, z_S = -z_W); the line
+    through (50, 3, 0) heading +x crosses x_S = 0 at world (10, 3, 0), i.e. y_L = -3, z_L = 100;
+    the heading is x_S."""
+    from seamtrack.bridge.lockstep import BridgeTracker
+
+    message = {
+        "op": "command",
+        "seq": 3,
+        "command": None,
+        "seam_hint": {"point_mm": [50, 3, 0], "direction": [2, 0, 0]},
+    }
+    line = wire.seam_hint_from_json(message)
+    assert line == ((50.0, 3.0, 0.0), (1.0, 0.0, 0.0), (1.5, 0.4))
+
+    class Client:
+        seam_hint = line
+
+    tracker = BridgeTracker(Client(), chain=None)  # type: ignore[arg-type]
+    T = np.diag([1.0, -1.0, -1.0, 1.0])
+    T[:3, 3] = (10.0, 0.0, 100.0)
+    hint = tracker.hint(T)
+    assert hint is not None
+    assert hint.point_laser == pytest.approx((-3.0, 100.0), abs=1e-12)
+    assert hint.direction == pytest.approx((1.0, 0.0, 0.0), abs=1e-12)
+    assert hint.tolerance_mm == (1.5, 0.4)
+    Client.seam_hint = None
+    assert tracker.hint(T) is None
+    assert wire.seam_hint_from_json({"op": "command", "seam_hint": None}) is None
+
+
+@pytest.mark.parametrize(
+    ("hint", "why"),
+    [
+        ({"point_mm": [0, 0, 0]}, "needs point_mm and direction"),
+        ({"point_mm": [0, 0, "nan"], "direction": [1, 0, 0]}, "needs point_mm"),
+        ({"point_mm": [0, 0, 0], "direction": [0, 0, 0]}, "zero direction"),
+        ({"point_mm": [0, 0, 0], "direction": [1, 0, 0], "tolerance_mm": [1, 0]}, "> 0"),
+        ({"point_mm": [0, 0, 0], "direction": [1, 0, 0], "exec": "x"}, "not an object"),
+        ([0, 0, 0], "not an object"),
+    ],
+)
+def test_bad_seam_hints_are_refused(hint: object, why: str) -> None:
+    with pytest.raises(BridgeFailure, match=why):
+        wire.seam_hint_from_json({"op": "command", "seq": 3, "command": None, "seam_hint": hint})
+
+
 # --------------------------------------------------------------------------- CDR commands
 def _pair(frame: str = "world", q=(0.0, 0.0, 0.0, 0.0), linear=(0.005, 1.0, 0.001)):
     from seamtrack.bridge.zenoh_transport import command_from_ros

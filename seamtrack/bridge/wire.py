@@ -13,7 +13,12 @@ Client -> server (each message one ZeroMQ frame of UTF-8 JSON, at most
   ``rotation`` (3 x 3 rows, the tool orientation goal ``R_world_tcp``) and
   ``angular_velocity_rad_s`` (x, y, z), and ``ask_within_mm`` (with frame lockstep: ask
   again as soon as the torch is within this distance of the target, not only at the next
-  frame). ``null`` brakes to rest and waits. No other key.
+  frame). ``null`` brakes to rest and waits. Optionally, beside ``command``, a
+  ``"seam_hint"``: ``{"point_mm": [x, y, z], "direction": [dx, dy, dz]}`` (world; and
+  ``"tolerance_mm": [across, range]``), where the tracker expects the seam and where it heads:
+  from then on each frame's extractor is told where that line crosses the laser plane (a
+  :class:`~seamtrack.sensing.profiles.SeamHint`, as an in-process tracker's ``hint`` gives
+  it), until a ``"seam_hint": null``. No other key.
 
 Server -> client:
 
@@ -44,6 +49,7 @@ import numpy as np
 
 from seamtrack.bridge.lockstep import BridgeFailure, Reply, Step, finite_vector
 from seamtrack.control.tracking import Command, TrackerContext
+from seamtrack.sensing.profiles import HINT_TOLERANCE_MM
 
 PROTOCOL = 2
 
@@ -177,8 +183,8 @@ def command_from_json(message: dict[str, Any], seq: int) -> Reply:
     """The command answering step ``seq`` and its ``ask_within_mm`` (0 when not given);
     every field checked, nothing evaluated."""
     expect(message, "command")
-    if set(message) - {"op", "seq", "command"}:
-        raise _bad("has keys other than op, seq, command")
+    if set(message) - {"op", "seq", "command", "seam_hint"}:
+        raise _bad("has keys other than op, seq, command, seam_hint")
     got = message.get("seq")
     if isinstance(got, bool) or not isinstance(got, int) or got != seq:
         raise _bad(f"answers step {str(got)[:20]} where step {seq} was due", "echo the step's seq")
@@ -211,6 +217,29 @@ def command_from_json(message: dict[str, Any], seq: int) -> Reply:
         _optional(body, "angular_velocity_rad_s", 3),
     )
     return command, 0.0 if within is None else within[0]
+
+
+def seam_hint_from_json(message: dict[str, Any]) -> tuple[Any, ...] | None:
+    """A command message's ``seam_hint`` as (point_mm, unit direction, tolerance_mm), None
+    when it has none (or ``null``); checked field by field."""
+    body = message.get("seam_hint")
+    if body is None:
+        return None
+    if not isinstance(body, dict) or set(body) - {"point_mm", "direction", "tolerance_mm"}:
+        raise _bad("'seam_hint' is not an object of point_mm, direction (and tolerance_mm)")
+    point = finite_vector(body.get("point_mm"), 3)
+    direction = finite_vector(body.get("direction"), 3)
+    if point is None or direction is None:
+        raise _bad("'seam_hint' needs point_mm and direction, 3 finite numbers each")
+    norm = math.sqrt(sum(d * d for d in direction))
+    if not norm > 1e-9:
+        raise _bad("'seam_hint' has a zero direction")
+    tolerance = body.get("tolerance_mm", list(HINT_TOLERANCE_MM))
+    checked = finite_vector(tolerance, 2)
+    if checked is None or min(checked) <= 0:
+        raise _bad("'seam_hint' tolerance_mm is not 2 numbers > 0")
+    unit = tuple(d / norm for d in direction)
+    return tuple(point), unit, tuple(checked)
 
 
 def make_command(

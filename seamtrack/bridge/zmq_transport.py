@@ -68,6 +68,8 @@ class ZmqTransport:
         self.poller.register(self.monitor, zmq.POLLIN)
         self.with_profile = True
         self._connected = False
+        #: The client's last seam hint (point_mm, direction, tolerance_mm), world frame.
+        self.seam_hint: tuple[Any, ...] | None = None
 
     # ------------------------------------------------------------------ protocol
     def start(self, context: TrackerContext, chain: TfChain, lockstep: str) -> None:
@@ -93,7 +95,11 @@ class ZmqTransport:
     def exchange(self, step: Step) -> Reply:
         self.sock.send_multipart(wire.step_parts(step, self.with_profile))
         raw = self._recv(self.timeout_s, "--timeout-s", f"answer step {step.seq}")
-        return wire.command_from_json(wire.parse(raw), step.seq)
+        message = wire.parse(raw)
+        reply = wire.command_from_json(message, step.seq)
+        if "seam_hint" in message:
+            self.seam_hint = wire.seam_hint_from_json(message)
+        return reply
 
     def finish(self, summary: dict[str, Any]) -> None:
         from seamtrack.io.output import json_safe
