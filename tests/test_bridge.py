@@ -163,7 +163,8 @@ def test_every_frame_brings_its_profile_tf_and_clock_over_zenoh(
 ) -> None:
     """A ROS 2 subscriber gets, per sensor frame, one PointCloud2 stamped with the capture time
     (one point per ray: 256 here), one TFMessage with the chain world -> base -> tcp -> sensor,
-    and a Clock at every step."""
+    and a Clock at every step; a get on the keys of /seamtrack/context and /tf_static (what a
+    late subscriber does) answers with the context sent and the links that do not move."""
     import numpy as np
 
     out = tmp_path / "run"
@@ -181,6 +182,8 @@ def test_every_frame_brings_its_profile_tf_and_clock_over_zenoh(
     assert seen["/tf"] == [chain] * len(frames)
     summary = json.loads((out / "summary.json").read_text())
     assert len(seen["/clock"]) == summary["bridge_steps"]
+    assert seen["late_context"]  # the context is latched: asked for later, it comes again
+    assert seen["late_tf_static"] == [[["world", "base"], ["tcp", "sensor"]]]
 
 
 CAUSES = {
@@ -189,6 +192,7 @@ CAUSES = {
     ("zmq", "bad-command"): "'target_mm' is not 3 finite numbers",
     ("zmq", "silent"): "did not answer step 5 within 2 s",
     ("zmq", "vanish"): "disconnected",
+    ("zmq", "multipart"): "sent a message of 2 parts",
     ("zenoh", "garbage"): "garbage on /seamtrack/cmd_pose",
     ("zenoh", "oversized"): "over the 4096-byte limit",
     ("zenoh", "silent"): "did not answer step 5 within 2 s",
@@ -210,3 +214,34 @@ def test_misbehaving_client_ends_the_run(transport: str, misbehave: str, tmp_pat
     assert CAUSES[transport, misbehave] in summary["stop_reason"]
     assert (out / "trace.csv").exists() and (out / "frames.csv").exists()
     assert not list(out.glob(".partial-*"))
+
+
+def test_every_frame_brings_its_profile_over_zmq(
+    in_process: dict[str, Path], tmp_path: Path
+) -> None:
+    """The profiles reach a pyzmq-only client as the binary parts the step's JSON header
+    describes, and read back (sizes checked, standard library only) they are the run's own
+    profiles, bit for bit: the oracle is the same scene run in-process with an observer."""
+    import numpy as np
+
+    from seamtrack.bridge import frames as fr
+    from seamtrack.simulation.assemble import build_parts
+    from seamtrack.simulation.loop import run
+    from seamtrack.simulation.scene import load_scene
+
+    out, dump = tmp_path / "run", tmp_path / "profiles.jsonl"
+    server, client = _serve(
+        "paper-v-groove", "zmq", out, lockstep="frame", client_args=("--dump-profiles", str(dump))
+    )
+    assert server.returncode == 0, server.stderr
+    assert client.returncode == 0, client.stderr
+    _same_run(in_process["paper-v-groove"], out)
+    log = fr.FrameLog()
+    run(fr.observe(build_parts(load_scene("paper-v-groove", SHORT["paper-v-groove"])), log))
+    rows = [json.loads(line) for line in dump.read_text().splitlines()]
+    assert len(rows) == len(log.frames) > 100
+    for row, frame in zip(rows, log.frames, strict=True):
+        assert row["t_capture_s"] == frame.t_s
+        got = np.array(row["points"], dtype=float)  # None (NaN) -> nan
+        np.testing.assert_array_equal(got, frame.profile.points_laser)
+        assert row["reason"] == frame.profile.reason.tolist()

@@ -73,6 +73,33 @@ def test_loopback_by_default() -> None:
     assert zenoh_transport.DEFAULT_ENDPOINT.startswith("tcp/127.0.0.1:")
 
 
+def test_a_protocol_1_client_is_refused_naming_protocol_2() -> None:
+    """Protocol 1 sent the profiles as JSON: a client that says it speaks it is told which
+    protocol to speak instead, before anything is sent to it."""
+    zmq = pytest.importorskip("zmq")
+    import socket
+
+    from seamtrack.bridge.zmq_transport import ZmqTransport
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    server = ZmqTransport(f"tcp://127.0.0.1:{port}", timeout_s=2.0, wait_s=10.0)
+    ctx = zmq.Context()
+    client = ctx.socket(zmq.REQ)
+    client.setsockopt(zmq.LINGER, 0)
+    try:
+        client.connect(f"tcp://127.0.0.1:{port}")
+        client.send_json({"op": "hello", "protocol": 1, "profile": True})
+        with pytest.raises(BridgeFailure, match="protocol 1, not 2") as info:
+            server.start(None, None, "frame")  # type: ignore[arg-type]
+        assert "'protocol': 2" in info.value.fix
+    finally:
+        client.close(0)
+        ctx.term()
+        server.close()
+
+
 # --------------------------------------------------------------------------- JSON commands
 def _command(body: object, seq: int = 3) -> bytes:
     return json.dumps({"op": "command", "seq": seq, "command": body}).encode()
@@ -107,6 +134,89 @@ def test_a_json_command_is_read_exactly() -> None:
 def test_bad_json_commands_are_refused(raw: bytes, why: str) -> None:
     with pytest.raises(BridgeFailure, match=why):
         wire.command_from_json(wire.parse(raw), 3)
+
+
+def test_a_step_carries_its_profiles_as_described_binary_parts() -> None:
+    """The step's JSON header says where each profile is and how to read it; read so, the
+    parts give the profile's own points (NaN kept) and reasons; a part of the wrong size is
+    refused before it is read."""
+    from seamtrack.bridge.lockstep import Frame, Step
+    from seamtrack.sensing.profiles import Feature, Profile
+
+    rng = np.random.default_rng(2)
+    profiles = []
+    for n in (5, 3):
+        pts = rng.uniform(-30, 30, (n, 2))
+        pts[1] = np.nan
+        reason = rng.integers(0, 8, n).astype(np.uint8)
+        profiles.append(Profile(pts, valid=reason == 0, reason=reason))
+    lost = Feature.failed("no stripe")
+    frames = [
+        Frame(0.01 * i, 0.01 * i + 0.002, lost, np.eye(4), np.zeros(3), p, None)
+        for i, p in enumerate(profiles)
+    ]
+    step = Step(4, 0.03, np.zeros(3), np.zeros(3), frames)
+    parts = wire.step_parts(step, with_profile=True)
+    header = json.loads(parts[0])
+    assert len(parts) == 5 and header["seq"] == 4
+    for i, profile in enumerate(profiles):
+        got = wire.profile_arrays(header, parts, i)
+        assert got is not None
+        np.testing.assert_array_equal(got[0], profile.points_laser)
+        np.testing.assert_array_equal(got[1], profile.reason)
+    with pytest.raises(ValueError, match="bytes"):
+        wire.profile_arrays(header, [*parts[:2], parts[2][:-1], *parts[3:]], 0)
+    bare = wire.step_parts(step, with_profile=False)
+    assert len(bare) == 1 and json.loads(bare[0])["frames"][0]["profile"] is None
+
+
+def test_a_seam_hint_reaches_the_extractor_where_its_line_crosses_the_laser_plane() -> None:
+    """A client's ``seam_hint`` (a point and a heading, world) becomes each frame's SeamHint:
+    where that line crosses the laser plane, in the laser frame. Oracle, analytic: the sensor
+    at (10, 0, 100) looking down the world -z (x_S = x_W, y_S = -y_W, z_S = -z_W); the line
+    through (50, 3, 0) heading +x crosses x_S = 0 at world (10, 3, 0), i.e. y_L = -3, z_L = 100;
+    the heading is x_S."""
+    from seamtrack.bridge.lockstep import BridgeTracker
+
+    message = {
+        "op": "command",
+        "seq": 3,
+        "command": None,
+        "seam_hint": {"point_mm": [50, 3, 0], "direction": [2, 0, 0]},
+    }
+    line = wire.seam_hint_from_json(message)
+    assert line == ((50.0, 3.0, 0.0), (1.0, 0.0, 0.0), (1.5, 0.4))
+
+    class Client:
+        seam_hint = line
+
+    tracker = BridgeTracker(Client(), chain=None)  # type: ignore[arg-type]
+    T = np.diag([1.0, -1.0, -1.0, 1.0])
+    T[:3, 3] = (10.0, 0.0, 100.0)
+    hint = tracker.hint(T)
+    assert hint is not None
+    assert hint.point_laser == pytest.approx((-3.0, 100.0), abs=1e-12)
+    assert hint.direction == pytest.approx((1.0, 0.0, 0.0), abs=1e-12)
+    assert hint.tolerance_mm == (1.5, 0.4)
+    Client.seam_hint = None
+    assert tracker.hint(T) is None
+    assert wire.seam_hint_from_json({"op": "command", "seam_hint": None}) is None
+
+
+@pytest.mark.parametrize(
+    ("hint", "why"),
+    [
+        ({"point_mm": [0, 0, 0]}, "needs point_mm and direction"),
+        ({"point_mm": [0, 0, "nan"], "direction": [1, 0, 0]}, "needs point_mm"),
+        ({"point_mm": [0, 0, 0], "direction": [0, 0, 0]}, "zero direction"),
+        ({"point_mm": [0, 0, 0], "direction": [1, 0, 0], "tolerance_mm": [1, 0]}, "> 0"),
+        ({"point_mm": [0, 0, 0], "direction": [1, 0, 0], "exec": "x"}, "not an object"),
+        ([0, 0, 0], "not an object"),
+    ],
+)
+def test_bad_seam_hints_are_refused(hint: object, why: str) -> None:
+    with pytest.raises(BridgeFailure, match=why):
+        wire.seam_hint_from_json({"op": "command", "seq": 3, "command": None, "seam_hint": hint})
 
 
 # --------------------------------------------------------------------------- CDR commands

@@ -6,15 +6,18 @@ The scene is ``paper-v-groove`` (100 frames/s of 1024 rays, 1 kHz control) with 
 algorithm II, cut to :data:`SIM_S` simulated seconds. Runs:
 
 1. in-process: seamtrack's own algorithm II;
-2. for each transport (ZeroMQ with JSON, Zenoh with ROS 2 CDR) and lockstep (a command every
-   control tick, or one per frame): the loop served in this process, the tracker an external
-   process that imports nothing of seamtrack (tests/bridge_clients/, the scripts the tests
-   run; they need a source checkout); and ZeroMQ per frame without the profiles (JSON costs
-   milliseconds for 1024 points; the client does not need them).
+2. for each transport (ZeroMQ: JSON and the profiles as raw arrays; Zenoh: ROS 2 CDR) and
+   lockstep (a command every control tick, or one per frame): the loop served in this process,
+   the tracker an external process that imports nothing of seamtrack (tests/bridge_clients/,
+   the scripts the tests run; they need a source checkout); and ZeroMQ per frame without the
+   profiles (what sending them costs).
 
 Per run: wall time of the loop (the wait for the tracker to connect left out), x real time
 (simulated / wall), the bridge's cost per frame ((bridged - in-process wall) / frames) and per
-round trip, and whether the summary equals the in-process one (it must, in both modes).
+round trip; where a round trip's time goes: the server's CPU in it (writing the step, reading
+the answer) and the tracker process's CPU per round trip (its whole life, start-up included:
+an upper bound), the rest being the wait for the two processes to be woken; and whether the
+summary equals the in-process one (it must, in both modes).
 Writes ``bridge.json`` and ``bridge.md``.
 """
 
@@ -23,6 +26,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import resource
 import socket
 import subprocess
 import sys
@@ -90,6 +94,8 @@ def _bridged(
         endpoint = f"tcp/127.0.0.1:{port}"
         server = ZenohTransport(endpoint, timeout_s=30.0, wait_s=120.0)
     script = clients / f"{transport}_algorithm2.py"
+    server = _CpuMeter(server)
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     client = subprocess.Popen(
         [sys.executable, str(script), endpoint, *([] if profile else ["--no-profile"])],
         stdout=subprocess.DEVNULL,
@@ -106,7 +112,33 @@ def _bridged(
             client.wait()
     if tracker.failure is not None:
         raise RuntimeError(f"bench bridge {transport}/{lockstep}: {tracker.failure}")
-    return dict(result.summary)
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    client_cpu = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
+    return {**result.summary, "server_cpu_s": server.cpu_s, "client_cpu_s": client_cpu}
+
+
+class _CpuMeter:
+    """A transport whose round trips' CPU time (this thread's) is counted in ``cpu_s``."""
+
+    def __init__(self, transport: Any) -> None:
+        self.transport = transport
+        self.cpu_s = 0.0
+
+    def start(self, *args: Any) -> None:
+        self.transport.start(*args)
+
+    def exchange(self, step: Any) -> Any:
+        start = time.thread_time()
+        try:
+            return self.transport.exchange(step)
+        finally:
+            self.cpu_s += time.thread_time() - start
+
+    def finish(self, summary: dict[str, Any]) -> None:
+        self.transport.finish(summary)
+
+    def close(self) -> None:
+        self.transport.close()
 
 
 def _row(name: str, summary: dict[str, Any], base: dict[str, Any] | None) -> dict[str, Any]:
@@ -127,6 +159,8 @@ def _row(name: str, summary: dict[str, Any], base: dict[str, Any] | None) -> dic
             cost_per_frame_ms=1e3 * (wall - base_wall) / max(frames, 1),
             round_trips=steps,
             round_trip_us=1e6 * summary["bridge_exchange_s"] / max(steps, 1),
+            server_cpu_us=1e6 * summary["server_cpu_s"] / max(steps, 1),
+            client_cpu_us=1e6 * summary["client_cpu_s"] / max(steps, 1),
             same_as_in_process=all(
                 _same(summary.get(k), v) for k, v in base["summary"].items() if k not in _IGNORE
             ),
@@ -160,7 +194,7 @@ def bench_bridge(out_dir: str | Path, quick: bool = False) -> dict[str, Any]:
         for lockstep in ("tick", "frame"):
             summary = _bridged(transport, lockstep, sim_s, clients)
             rows.append(_row(f"{transport} / {lockstep}", summary, base))
-    # JSON is slow for a 1024-point profile: the same without it (the client does not use it).
+    # What the profiles cost: the same without them (algorithm II does not use them).
     summary = _bridged("zmq", "frame", sim_s, clients, profile=False)
     rows.append(_row("zmq / frame, no profile", summary, base))
     report = {
@@ -188,15 +222,16 @@ def _markdown(report: dict[str, Any]) -> str:
         f"{report['load_average_after']:.2f} (2 cores shared means slower round trips).",
         "",
         "| run | wall s | x real time | cost per frame ms | round trips | per round trip us "
-        "| same as in-process |",
-        "|---|---|---|---|---|---|---|",
+        "| server CPU us | client CPU us | same as in-process |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for r in report["runs"]:
         same = r.get("same_as_in_process")
         lines.append(
             f"| {r['run']} | {r['wall_time_s']:.2f} | {r['x_real_time']:.1f} | "
             f"{r.get('cost_per_frame_ms', 0.0):.3f} | {r.get('round_trips', '-')} | "
-            f"{r.get('round_trip_us', 0.0):.0f} | "
+            f"{r.get('round_trip_us', 0.0):.0f} | {r.get('server_cpu_us', 0.0):.0f} | "
+            f"{r.get('client_cpu_us', 0.0):.0f} | "
             f"{'-' if same is None else ('yes' if same else 'NO')} |"
         )
     lines += [
@@ -204,6 +239,8 @@ def _markdown(report: dict[str, Any]) -> str:
         f"Target: the bridged loop >= {report['target_x_real_time']:g}x real time.",
         "Both lockstep modes must equal the in-process run: the clients ask to be asked again "
         "within their radius of convergence (ask_within), where algorithm II switches.",
+        "Per round trip: the server's CPU in it, and the tracker process's CPU (its start-up "
+        "included); the rest of a round trip is waiting for either process to be woken.",
         "",
     ]
     return "\n".join(lines)

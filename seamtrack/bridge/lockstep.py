@@ -37,7 +37,7 @@ from seamtrack.bridge.frames import Frame as ObservedFrame
 from seamtrack.bridge.frames import frame_chain, observe
 from seamtrack.control.tracking import Command, Measurement, TrackerContext
 from seamtrack.errors import SeamtrackError
-from seamtrack.sensing.profiles import Feature, Profile
+from seamtrack.sensing.profiles import Feature, Profile, SeamHint, hint_from_path
 from seamtrack.simulation.assemble import Parts
 from seamtrack.simulation.loop import Result, run
 
@@ -182,6 +182,16 @@ class BridgeTracker:
         if not _same(received, self._last):  # the loop re-plans only on a new command object
             self._last = received
         return self._last
+
+    def hint(self, T_world_sensor: FloatArray) -> SeamHint | None:
+        """The extractor's hint for the frame about to be taken: where the client's last
+        ``seam_hint`` line (a transport's ``seam_hint``: point, direction, tolerance; world)
+        crosses the laser plane; None without one."""
+        line = getattr(self.transport, "seam_hint", None)
+        if line is None or self.failure is not None:
+            return None
+        point, direction, tolerance = line
+        return hint_from_path(T_world_sensor, point, direction, tolerance)
 
     def _asks(self, tcp_world: FloatArray) -> bool:
         """Frame lockstep between frames: is the torch within the tracker's ``ask_within_mm``

@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.bridge import messages
+from seamtrack.bridge import cdr, messages
 
 FloatArray = NDArray[np.float64]
 
@@ -109,44 +109,30 @@ def attachment(seq: int, stamp_ns: int, gid16: bytes) -> bytes:
 
 
 # --------------------------------------------------------------------------- messages
+# Written straight to CDR (seamtrack.bridge.cdr: the bytes rosbags gives, checked in a test).
 def encode_clock(t_s: float) -> bytes:
-    return messages.encode(messages.clock(t_s))
+    return cdr.clock(t_s)
 
 
 def encode_string(text: str) -> bytes:
-    return messages.encode(messages.typestore().types[STRING](data=text))
+    return cdr.string(text)
 
 
 def encode_point(t_s: float, frame_id: str, point_mm: Any) -> bytes:
     """``geometry_msgs/PointStamped`` of a point in mm."""
-    types = messages.typestore().types
-    x, y, z = (float(c) / messages.MM_PER_M for c in point_mm)
-    point = types["geometry_msgs/msg/Point"](x=x, y=y, z=z)
-    return messages.encode(types[POINT_STAMPED](header=messages.header(t_s, frame_id), point=point))
+    return cdr.point_stamped(t_s, frame_id, [float(c) / messages.MM_PER_M for c in point_mm])
 
 
 def encode_pose(t_s: float, frame_id: str, position_mm: Any, R: FloatArray | None) -> bytes:
     """``geometry_msgs/PoseStamped``: a position (mm) and orientation (identity when None)."""
-    types = messages.typestore().types
-    x, y, z = (float(c) / messages.MM_PER_M for c in position_mm)
-    qx, qy, qz, qw = (0.0, 0.0, 0.0, 1.0) if R is None else messages.quaternion(R)
-    pose = types["geometry_msgs/msg/Pose"](
-        position=types["geometry_msgs/msg/Point"](x=x, y=y, z=z),
-        orientation=types["geometry_msgs/msg/Quaternion"](x=qx, y=qy, z=qz, w=qw),
-    )
-    return messages.encode(types[POSE_STAMPED](header=messages.header(t_s, frame_id), pose=pose))
+    position = [float(c) / messages.MM_PER_M for c in position_mm]
+    q = (0.0, 0.0, 0.0, 1.0) if R is None else messages.quaternion(R)
+    return cdr.pose_stamped(t_s, frame_id, position, q)
 
 
 def encode_twist(t_s: float, frame_id: str, linear: Any, angular: Any) -> bytes:
     """``geometry_msgs/TwistStamped`` of a linear (m/s) and angular (rad/s) velocity."""
-    types = messages.typestore().types
-    V = types["geometry_msgs/msg/Vector3"]
-    lx, ly, lz = (float(c) for c in linear)
-    ax, ay, az = (float(c) for c in angular)
-    twist = types["geometry_msgs/msg/Twist"](
-        linear=V(x=lx, y=ly, z=lz), angular=V(x=ax, y=ay, z=az)
-    )
-    return messages.encode(types[TWIST_STAMPED](header=messages.header(t_s, frame_id), twist=twist))
+    return cdr.twist_stamped(t_s, frame_id, [float(c) for c in linear], [float(c) for c in angular])
 
 
 def stamp_ns(stamp: Any) -> int:

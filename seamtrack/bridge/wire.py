@@ -1,10 +1,11 @@
-"""The bridge's JSON messages (the ZeroMQ transport), and the command check both transports
-share. Units are the simulator's: mm, s, rad; poses are row-major 4 x 4 lists; NaN (an
-invalid profile point) is ``null``.
+"""The bridge's messages over ZeroMQ (JSON, and the profiles as raw arrays), and the command
+check both transports share. Units are the simulator's: mm, s, rad; poses are row-major 4 x 4
+lists; in JSON a NaN is ``null``.
 
-Client -> server:
+Client -> server (each message one ZeroMQ frame of UTF-8 JSON, at most
+:data:`MAX_MESSAGE_BYTES`):
 
-* ``{"op": "hello", "protocol": 1, "profile": true}`` (``profile``: send the stripe profiles);
+* ``{"op": "hello", "protocol": 2, "profile": true}`` (``profile``: send the stripe profiles);
 * ``{"op": "ready"}`` after the ``reset``;
 * ``{"op": "command", "seq": k, "command": null | {...}}`` answering step ``k``. A command holds
   ``target_mm`` (x, y, z, required), ``speed_mm_s`` (> 0, required), and optionally
@@ -12,16 +13,30 @@ Client -> server:
   ``rotation`` (3 x 3 rows, the tool orientation goal ``R_world_tcp``) and
   ``angular_velocity_rad_s`` (x, y, z), and ``ask_within_mm`` (with frame lockstep: ask
   again as soon as the torch is within this distance of the target, not only at the next
-  frame). ``null`` brakes to rest and waits. No other key.
+  frame). ``null`` brakes to rest and waits. Optionally, beside ``command``, a
+  ``"seam_hint"``: ``{"point_mm": [x, y, z], "direction": [dx, dy, dz]}`` (world; and
+  ``"tolerance_mm": [across, range]``), where the tracker expects the seam and where it heads:
+  from then on each frame's extractor is told where that line crosses the laser plane (a
+  :class:`~seamtrack.sensing.profiles.SeamHint`, as an in-process tracker's ``hint`` gives
+  it), until a ``"seam_hint": null``. No other key.
 
 Server -> client:
 
-* ``{"op": "reset", "protocol": 1, "lockstep": "tick" | "frame", "context": {...},
+* ``{"op": "reset", "protocol": 2, "lockstep": "tick" | "frame", "context": {...},
   "max_message_bytes": n}``;
-* ``{"op": "step", "seq": k, "t_s": t, "tcp_mm": [...], "tcp_velocity_mm_s": [...],
-  "frames": [...]}``, each frame ``{"t_capture_s", "t_arrival_s", "found", "point_mm" (or
-  null), "T_world_sensor", "tcp_mm", "profile": {"y_mm", "z_mm", "reason"} or null}``;
+* a step: a multipart message. Part 0 is JSON ``{"op": "step", "seq": k, "t_s": t, "tcp_mm":
+  [...], "tcp_velocity_mm_s": [...], "frames": [...]}``, each frame ``{"t_capture_s",
+  "t_arrival_s", "found", "point_mm" (or null), "T_world_sensor", "tcp_mm", "profile"}``.
+  A frame's ``profile`` is null (none, or the client said ``"profile": false``) or
+  ``{"points": {"part": i, "dtype": "<f8", "shape": [n, 2]}, "reason": {"part": i + 1,
+  "dtype": "|u1", "shape": [n]}}``: part ``i`` holds the n points (y_L, z_L) in mm as raw
+  little-endian float64, row-major (NaN where a ray hit nothing), part ``i + 1`` the n
+  reason codes as uint8 (0: valid; :data:`seamtrack.bridge.messages.REASON_CODES`). A part's
+  length is the product of its shape times the dtype's size: check it before reading;
 * ``{"op": "end", "summary": {...}}`` once the run is over (no answer expected).
+
+Protocol 1 sent the profiles as JSON lists (some 50 kB and milliseconds a frame); a client
+saying protocol 1 is refused, the error naming protocol 2.
 """
 
 from __future__ import annotations
@@ -34,8 +49,9 @@ import numpy as np
 
 from seamtrack.bridge.lockstep import BridgeFailure, Reply, Step, finite_vector
 from seamtrack.control.tracking import Command, TrackerContext
+from seamtrack.sensing.profiles import HINT_TOLERANCE_MM
 
-PROTOCOL = 1
+PROTOCOL = 2
 
 #: The largest message a client may send: a command is a few hundred bytes.
 MAX_MESSAGE_BYTES = 4096
@@ -66,19 +82,24 @@ def context_json(context: TrackerContext) -> dict[str, Any]:
     }
 
 
-def step_json(step: Step, with_profile: bool) -> bytes:
+def step_parts(step: Step, with_profile: bool) -> list[bytes]:
+    """A step as the parts of one ZeroMQ multipart message (module docstring): the JSON
+    header, then each sent profile's points and reasons as raw little-endian arrays."""
     frames = []
+    parts: list[bytes] = [b""]
     for f in step.frames:
         found = bool(f.feature)
         profile = None
         if with_profile and f.profile is not None:
-            pts = f.profile.points_laser
             assert f.profile.reason is not None
+            points = np.ascontiguousarray(f.profile.points_laser, dtype="<f8")
+            n = len(points)
             profile = {
-                "y_mm": pts[:, 0].tolist(),
-                "z_mm": pts[:, 1].tolist(),
-                "reason": f.profile.reason.tolist(),
+                "points": {"part": len(parts), "dtype": "<f8", "shape": [n, 2]},
+                "reason": {"part": len(parts) + 1, "dtype": "|u1", "shape": [n]},
             }
+            parts.append(points.tobytes())
+            parts.append(np.ascontiguousarray(f.profile.reason, dtype=np.uint8).tobytes())
         frames.append(
             {
                 "t_capture_s": f.t_capture_s,
@@ -98,9 +119,30 @@ def step_json(step: Step, with_profile: bool) -> bytes:
         "tcp_velocity_mm_s": np.asarray(step.tcp_velocity_world, dtype=float).tolist(),
         "frames": frames,
     }
-    # NaN (an invalid profile point) as null: the only NaN tokens in the text are numbers (no
-    # key or string holds "NaN"); one pass over the text costs far less than one per float.
-    return json.dumps(message).replace("NaN", "null").encode()
+    # A NaN as null (no key or string holds "NaN"; the profiles, where NaN is, are binary).
+    parts[0] = json.dumps(message).replace("NaN", "null").encode()
+    return parts
+
+
+def profile_arrays(
+    header: dict[str, Any], parts: list[bytes], frame: int
+) -> tuple[Any, Any] | None:
+    """A step's frame's profile as ((n, 2) float64 points in mm, (n,) uint8 reasons), read
+    from the parts of its message as a client does (sizes checked first); None when the
+    frame has none: the format in code (tests/test_bridge_rmw.py reads steps with it)."""
+    profile = header["frames"][frame]["profile"]
+    if profile is None:
+        return None
+    out = []
+    for name in ("points", "reason"):
+        d = profile[name]
+        dtype = np.dtype(d["dtype"])
+        count = int(np.prod(d["shape"]))
+        raw = parts[d["part"]]
+        if len(raw) != count * dtype.itemsize:
+            raise ValueError(f"part {d['part']} holds {len(raw)} bytes, not {count} x {dtype}")
+        out.append(np.frombuffer(raw, dtype=dtype).reshape(d["shape"]))
+    return out[0], out[1]
 
 
 def parse(raw: bytes, limit: int = MAX_MESSAGE_BYTES) -> dict[str, Any]:
@@ -141,8 +183,8 @@ def command_from_json(message: dict[str, Any], seq: int) -> Reply:
     """The command answering step ``seq`` and its ``ask_within_mm`` (0 when not given);
     every field checked, nothing evaluated."""
     expect(message, "command")
-    if set(message) - {"op", "seq", "command"}:
-        raise _bad("has keys other than op, seq, command")
+    if set(message) - {"op", "seq", "command", "seam_hint"}:
+        raise _bad("has keys other than op, seq, command, seam_hint")
     got = message.get("seq")
     if isinstance(got, bool) or not isinstance(got, int) or got != seq:
         raise _bad(f"answers step {str(got)[:20]} where step {seq} was due", "echo the step's seq")
@@ -175,6 +217,29 @@ def command_from_json(message: dict[str, Any], seq: int) -> Reply:
         _optional(body, "angular_velocity_rad_s", 3),
     )
     return command, 0.0 if within is None else within[0]
+
+
+def seam_hint_from_json(message: dict[str, Any]) -> tuple[Any, ...] | None:
+    """A command message's ``seam_hint`` as (point_mm, unit direction, tolerance_mm), None
+    when it has none (or ``null``); checked field by field."""
+    body = message.get("seam_hint")
+    if body is None:
+        return None
+    if not isinstance(body, dict) or set(body) - {"point_mm", "direction", "tolerance_mm"}:
+        raise _bad("'seam_hint' is not an object of point_mm, direction (and tolerance_mm)")
+    point = finite_vector(body.get("point_mm"), 3)
+    direction = finite_vector(body.get("direction"), 3)
+    if point is None or direction is None:
+        raise _bad("'seam_hint' needs point_mm and direction, 3 finite numbers each")
+    norm = math.sqrt(sum(d * d for d in direction))
+    if not norm > 1e-9:
+        raise _bad("'seam_hint' has a zero direction")
+    tolerance = body.get("tolerance_mm", list(HINT_TOLERANCE_MM))
+    checked = finite_vector(tolerance, 2)
+    if checked is None or min(checked) <= 0:
+        raise _bad("'seam_hint' tolerance_mm is not 2 numbers > 0")
+    unit = tuple(d / norm for d in direction)
+    return tuple(point), unit, tuple(checked)
 
 
 def make_command(

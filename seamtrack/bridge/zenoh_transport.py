@@ -15,24 +15,29 @@ stamped with the step's time.
 
 The run starts once a node has declared a subscription to ``/seamtrack/tcp`` and publishers
 of both command topics (their liveliness tokens); ``/seamtrack/context`` (String, JSON) then
-gives it the run's context. When that node's tokens go, the run ends (disconnected).
+gives it the run's context, after ``/tf_static`` (the links that do not move: world -> base,
+[flange -> tcp,] tcp -> sensor, stamped 0). When that node's tokens go, the run ends
+(disconnected). ``/tf_static``, the context, and ``/seamtrack/status`` once the run is over
+are latched (transient local): a subscriber that comes later gets the last one on request (a
+Zenoh get on the topic's key expression, answered by a queryable there as a publication cache
+answers it).
 """
 
 from __future__ import annotations
 
 import json
+import math
 import queue
+import threading
 import time
 from typing import Any
 
 import numpy as np
 
-from seamtrack.bridge import messages, rmw
+from seamtrack.bridge import cdr, messages, rmw
 from seamtrack.bridge.lockstep import BridgeFailure, Reply, Step, TfChain
 from seamtrack.bridge.wire import MAX_MESSAGE_BYTES, context_json, make_command
 from seamtrack.control.tracking import TrackerContext
-
-encode = messages.encode
 
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
 NODE = "seamtrack"
@@ -40,6 +45,7 @@ NODE = "seamtrack"
 #: Topic -> message type of what the bridge publishes, and of the command pair it takes.
 PUBLISHES = {
     "/tf": rmw.TFMESSAGE,
+    "/tf_static": rmw.TFMESSAGE,
     "/clock": rmw.CLOCK,
     "/seamtrack/profile": rmw.POINTCLOUD2,
     "/seamtrack/image": "sensor_msgs/msg/Image",
@@ -52,8 +58,23 @@ PUBLISHES = {
 }
 SUBSCRIBES = {"/seamtrack/cmd_pose": rmw.POSE_STAMPED, "/seamtrack/cmd_speed": rmw.TWIST_STAMPED}
 
+#: Topics sent once whose last message a late subscriber gets on request.
+LATCHED = ("/tf_static", "/seamtrack/context", "/seamtrack/status")
+
+#: Their QoS (rmw_zenoh's compact form): reliable, transient local, keep last 1.
+LATCHED_QOS = ":1:,1:,:,:,,"
+
+#: The links of the robot's chain that do not move (``/tf_static``, as (parent, child)).
+STATIC_LINKS = {("world", "base"), ("flange", "tcp"), ("tcp", "sensor")}
+
 #: The wait between seeing the tracker's tokens and publishing to it.
 SETTLE_S = 0.3
+
+#: Samples the command inbox holds (two a step are due).
+INBOX = 64
+
+#: How often the watchdog looks at the deadline of the step the loop waits on (s).
+WATCH_S = 0.05
 
 #: Zenoh drops a received message over this (transport/link/rx/max_message_size).
 HARD_LIMIT_BYTES = 65536
@@ -105,16 +126,36 @@ class ZenohTransport:
                 key, congestion_control=zenoh.CongestionControl.BLOCK
             )
             self.gids[topic] = rmw.gid(f"{sid}/{topic}")
-            token = rmw.entity_token(domain_id, sid, 0, entity, "MP", NODE, "", topic, msgtype)
+            qos = LATCHED_QOS if topic in LATCHED else rmw.DEFAULT_QOS
+            token = rmw.entity_token(domain_id, sid, 0, entity, "MP", NODE, "", topic, msgtype, qos)
             self._tokens.append(live.declare_token(token))
             entity += 1
-        self.subs = []
+        # Both command topics (and the wake-up key) in one FIFO channel that the loop's thread
+        # reads: no Python callback per sample, and a step's pair wakes the loop once.
+        self.topic_of = {}
         for topic, msgtype in SUBSCRIBES.items():
-            key = rmw.topic_key(domain_id, topic, msgtype)
-            self.subs.append(self.session.declare_subscriber(key, self._on_sample(topic)))
+            self.topic_of[rmw.topic_key(domain_id, topic, msgtype)] = topic
             token = rmw.entity_token(domain_id, sid, 0, entity, "MS", NODE, "", topic, msgtype)
             self._tokens.append(live.declare_token(token))
             entity += 1
+        self.wake_key = f"{domain_id}/seamtrack/cmd_/wake"
+        self.inbox = self.session.declare_subscriber(
+            f"{domain_id}/seamtrack/cmd_$*/**", zenoh.handlers.FifoChannel(INBOX)
+        )
+        self._local = zenoh.Locality.SESSION_LOCAL
+        self._deadline: float | None = None
+        self._stop = threading.Event()
+        self._watchdog = threading.Thread(target=self._watch, daemon=True)
+        self._watchdog.start()
+        # Latched topics: a late subscriber gets the last message on request (a Zenoh get on
+        # the topic's key, as a publication cache answers it).
+        self.latched: dict[str, bytes] = {}
+        self.queryables = [
+            self.session.declare_queryable(
+                rmw.topic_key(domain_id, topic, PUBLISHES[topic]), self._on_query(topic)
+            )
+            for topic in LATCHED
+        ]
         self.watch = live.declare_subscriber(
             f"@ros2_lv/{domain_id}/**", self._on_token, history=True
         )
@@ -123,17 +164,30 @@ class ZenohTransport:
         self.with_profile = True
 
     # ------------------------------------------------------------------ callbacks
-    def _on_sample(self, topic: str) -> Any:
-        def put(sample: Any) -> None:
-            payload = sample.payload
-            size = len(payload)
-            data = payload.to_bytes() if size <= MAX_MESSAGE_BYTES else None
-            self.events.put((topic, size, data))
+    def _on_query(self, topic: str) -> Any:
+        def answer(query: Any) -> None:
+            payload = self.latched.get(topic)
+            if payload is not None:
+                att = rmw.attachment(self.seq, time.time_ns(), self.gids[topic])
+                query.reply(query.key_expr, payload, attachment=att)
 
-        return put
+        return answer
 
     def _on_token(self, sample: Any) -> None:
         self.events.put(("token", str(sample.kind), str(sample.key_expr)))
+        if self._deadline is not None:  # the loop waits on the inbox: wake it to see this
+            self._wake()
+
+    def _wake(self) -> None:
+        """Put an empty sample in the inbox, from this process to itself only."""
+        self.session.put(self.wake_key, b"", allowed_destination=self._local)
+
+    def _watch(self) -> None:
+        """Wake the loop once its deadline has passed (the inbox's receive has no timeout)."""
+        while not self._stop.wait(WATCH_S):
+            deadline = self._deadline
+            if deadline is not None and time.monotonic() > deadline:
+                self._wake()
 
     # ------------------------------------------------------------------ protocol
     def start(self, context: TrackerContext, chain: TfChain, lockstep: str) -> None:
@@ -166,6 +220,8 @@ class ZenohTransport:
                 self._next(deadline, "--wait-s", "receive from its subscriptions")
             time.sleep(0.01)
         time.sleep(SETTLE_S)
+        static = [link for link in chain(np.eye(4)) if link[:2] in STATIC_LINKS]
+        self._put("/tf_static", cdr.tf_message(static, 0.0))
         message = {"lockstep": lockstep, "context": context_json(context)}
         self._put("/seamtrack/context", rmw.encode_string(json.dumps(message)))
 
@@ -175,11 +231,10 @@ class ZenohTransport:
             if f.profile is None:
                 continue
             chain = self._chain(f.T_world_sensor)
-            for topic, message in messages.frame_messages(
-                t, f.profile, f.feature, chain, image=f.image
-            ):
-                if topic != "/clock":  # the step's own clock follows
-                    self._put(topic, encode(message))
+            # The bytes messages.frame_messages' objects give, written directly; the step's
+            # own /clock follows.
+            for topic, payload in cdr.frame_payloads(t, f.profile, f.feature, chain, f.image):
+                self._put(topic, payload)
             if f.feature:
                 world = rmw.encode_point(t, "world", f.feature.point_world)
                 self._put("/seamtrack/seam_point_world", world)
@@ -200,12 +255,18 @@ class ZenohTransport:
         time.sleep(SETTLE_S)  # let it leave before the session closes
 
     def close(self) -> None:
+        self._stop.set()
+        self._watchdog.join()
+        for queryable in self.queryables:
+            queryable.undeclare()
         for token in self._tokens:
             token.undeclare()
         self.session.close()
 
     # ------------------------------------------------------------------ internals
     def _put(self, topic: str, payload: bytes) -> None:
+        if topic in LATCHED:
+            self.latched[topic] = payload
         self.seq += 1
         stamp = time.time_ns()
         self.pubs[topic].put(payload, attachment=rmw.attachment(self.seq, stamp, self.gids[topic]))
@@ -227,35 +288,65 @@ class ZenohTransport:
     def _command(self, t_s: float, seq: int) -> Reply:
         want = int(round(t_s * 1e9))
         got: dict[str, Any] = {}
-        deadline = time.monotonic() + self.timeout_s
-        while len(got) < 2:
-            kind, size, data = self._next(deadline, "--timeout-s", f"answer step {seq}")
-            if kind == "token":
-                fields = rmw.parse_token(data)
-                if size.endswith("DELETE") and fields and fields["session"] == self.client:
+        self._deadline = time.monotonic() + self.timeout_s
+        try:
+            while len(got) < 2:
+                kind, size, data = self._receive(seq)
+                self._check(kind, size, data, want, got)
+        finally:
+            self._deadline = None
+        (frame, pose), (_, speed) = got["/seamtrack/cmd_pose"], got["/seamtrack/cmd_speed"]
+        return command_from_values(frame, pose, speed)
+
+    def _receive(self, seq: int) -> tuple[str, int, bytes | None]:
+        """The next command sample (topic, size, bytes or None when oversized), blocking; a
+        token event (the tracker gone) or the deadline ends the run."""
+        while True:
+            sample = self.inbox.recv()
+            key = str(sample.key_expr)
+            topic = self.topic_of.get(key)
+            if topic is not None:
+                payload = sample.payload
+                size = len(payload)
+                return topic, size, payload.to_bytes() if size <= MAX_MESSAGE_BYTES else None
+            if key != self.wake_key:
+                continue  # another type on a cmd_ topic: not the tracker's command
+            while not self.events.empty():
+                _, what, token = self.events.get_nowait()
+                fields = rmw.parse_token(token)
+                if what.endswith("DELETE") and fields and fields["session"] == self.client:
                     raise BridgeFailure("the tracker node disconnected", fix=_KEEP_RUNNING)
-                continue
-            if data is None:
+            deadline = self._deadline
+            if deadline is not None and time.monotonic() > deadline:
                 raise BridgeFailure(
-                    f"a message of {size} bytes on {kind} is over the "
-                    f"{MAX_MESSAGE_BYTES}-byte limit",
-                    fix="publish one PoseStamped and one TwistStamped per step",
+                    f"the tracker node did not answer step {seq} within {self.timeout_s:g} s",
+                    field="--timeout-s",
+                    fix="start the tracker node (RMW_IMPLEMENTATION=rmw_zenoh_cpp), or raise "
+                    "--timeout-s",
                 )
-            try:
-                msg = rmw.deserialize(data, SUBSCRIBES[kind])
-            except ValueError as exc:
-                raise BridgeFailure(f"sent garbage on {kind}: {exc}", fix=_FIX_TYPES) from None
-            stamp = rmw.stamp_ns(msg.header.stamp)
-            if stamp != want:
-                raise BridgeFailure(
-                    f"answered on {kind} for t = {stamp * 1e-9:.9g} s where t = "
-                    f"{want * 1e-9:.9g} s was due",
-                    fix="stamp both command messages with the /seamtrack/tcp message's stamp",
-                )
-            if kind in got:
-                raise BridgeFailure(f"sent two messages on {kind} in one step", fix=_FIX_TYPES)
-            got[kind] = msg
-        return command_from_ros(got["/seamtrack/cmd_pose"], got["/seamtrack/cmd_speed"])
+
+    def _check(
+        self, kind: str, size: int, data: bytes | None, want: int, got: dict[str, Any]
+    ) -> None:
+        """One command message of the pair, checked and kept in ``got``."""
+        if data is None:
+            raise BridgeFailure(
+                f"a message of {size} bytes on {kind} is over the {MAX_MESSAGE_BYTES}-byte limit",
+                fix="publish one PoseStamped and one TwistStamped per step",
+            )
+        try:  # the bytes rosbags would accept, read without building its objects
+            stamp, frame, values = cdr.read_stamped(data, SUBSCRIBES[kind])
+        except ValueError as exc:
+            raise BridgeFailure(f"sent garbage on {kind}: {exc}", fix=_FIX_TYPES) from None
+        if stamp != want:
+            raise BridgeFailure(
+                f"answered on {kind} for t = {stamp * 1e-9:.9g} s where t = "
+                f"{want * 1e-9:.9g} s was due",
+                fix="stamp both command messages with the /seamtrack/tcp message's stamp",
+            )
+        if kind in got:
+            raise BridgeFailure(f"sent two messages on {kind} in one step", fix=_FIX_TYPES)
+        got[kind] = (frame, values)
 
 
 _KEEP_RUNNING = "keep the tracker node running until /seamtrack/status says the run is over"
@@ -269,33 +360,44 @@ def command_from_ros(pose_msg: Any, speed_msg: Any) -> Reply:
     (m/s, > 0), ``linear.y`` 1 to arrive at rest on the target (else 0), ``linear.z`` the
     distance from the target within which to ask again (m, frame lockstep; 0: at the next
     frame), ``angular`` the turn rate of the orientation goal (rad/s, world axes)."""
-    frame = pose_msg.header.frame_id
+    p = pose_msg.pose.position
+    q = pose_msg.pose.orientation
+    v = speed_msg.twist.linear
+    w = speed_msg.twist.angular
+    return command_from_values(
+        pose_msg.header.frame_id,
+        (p.x, p.y, p.z, q.x, q.y, q.z, q.w),
+        (v.x, v.y, v.z, w.x, w.y, w.z),
+    )
+
+
+def command_from_values(frame: str, pose: tuple[float, ...], speed: tuple[float, ...]) -> Reply:
+    """:func:`command_from_ros` of the pair's fields: ``cmd_pose``'s frame id, its position and
+    orientation (x, y, z, qx, qy, qz, qw), ``cmd_speed``'s linear and angular parts."""
     if frame == "":
         return None, 0.0
     if frame != "world":
         raise BridgeFailure(
             f"cmd_pose is in frame {frame[:40]!r}", fix="give the target in 'world' (or '' to stop)"
         )
-    p = pose_msg.pose.position
-    q = pose_msg.pose.orientation
-    v = speed_msg.twist.linear
-    w = speed_msg.twist.angular
-    values = (p.x, p.y, p.z, q.x, q.y, q.z, q.w, v.x, v.y, v.z, w.x, w.y, w.z)
+    values = (*pose, *speed)
     if not rmw.is_finite(*values):
         raise BridgeFailure("sent a command that is not finite", fix=_FIX_TYPES)
-    if not v.x > 0 or v.y not in (0.0, 1.0) or v.z < 0.0:
+    px, py, pz, qx, qy, qz, qw = pose
+    vx, vy, vz, wx, wy, wz = speed
+    if not vx > 0 or vy not in (0.0, 1.0) or vz < 0.0:
         raise BridgeFailure(
             "cmd_speed is not (speed > 0, stop 0 or 1, ask within >= 0)",
             fix="linear.x: the path speed in m/s; linear.y: 1 to arrive at rest; linear.z: "
             "the distance to ask again within, m (0: at the next frame)",
         )
     rotation = None
-    norm = float(np.sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w))
+    norm = math.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
     if norm != 0.0:
         if abs(norm - 1.0) > 1e-6:
             raise BridgeFailure("cmd_pose's quaternion is not a unit one", fix=_FIX_TYPES)
-        rotation = messages.rotation((q.x, q.y, q.z, q.w)).ravel().tolist()
-    omega = None if (w.x, w.y, w.z) == (0.0, 0.0, 0.0) else [w.x, w.y, w.z]
-    target = [p.x * 1000.0, p.y * 1000.0, p.z * 1000.0]
-    command = make_command(target, v.x * 1000.0, v.y == 1.0, None, rotation, omega)
-    return command, v.z * 1000.0
+        rotation = messages.rotation((qx, qy, qz, qw)).ravel().tolist()
+    omega = None if (wx, wy, wz) == (0.0, 0.0, 0.0) else [wx, wy, wz]
+    target = [px * 1000.0, py * 1000.0, pz * 1000.0]
+    command = make_command(target, vx * 1000.0, vy == 1.0, None, rotation, omega)
+    return command, vz * 1000.0

@@ -1,11 +1,13 @@
-"""The ZeroMQ transport: a REP socket (the server) and one REQ client, JSON messages
-(:mod:`seamtrack.bridge.wire`). The client speaks first: ``hello`` -> ``reset``, ``ready`` ->
-step 0, ``command`` -> step 1, ... -> ``end``.
+"""The ZeroMQ transport: a REP socket (the server) and one REQ client; JSON messages, the
+steps' profiles as raw arrays in further parts of a multipart message
+(:mod:`seamtrack.bridge.wire` gives the format). The client speaks first: ``hello`` ->
+``reset``, ``ready`` -> step 0, ``command`` -> step 1, ... -> ``end``.
 
 Safety: the socket binds to loopback unless told otherwise; ZeroMQ drops a peer whose message
 is over :data:`HARD_LIMIT_BYTES` (no allocation for it), and a message over
-:data:`~seamtrack.bridge.wire.MAX_MESSAGE_BYTES` is refused; messages are parsed as JSON and
-checked field by field, never evaluated or unpickled.
+:data:`~seamtrack.bridge.wire.MAX_MESSAGE_BYTES`, or of more than one part, is refused before
+it is decoded; messages are parsed as JSON and checked field by field, never evaluated or
+unpickled.
 """
 
 from __future__ import annotations
@@ -66,6 +68,8 @@ class ZmqTransport:
         self.poller.register(self.monitor, zmq.POLLIN)
         self.with_profile = True
         self._connected = False
+        #: The client's last seam hint (point_mm, direction, tolerance_mm), world frame.
+        self.seam_hint: tuple[Any, ...] | None = None
 
     # ------------------------------------------------------------------ protocol
     def start(self, context: TrackerContext, chain: TfChain, lockstep: str) -> None:
@@ -74,7 +78,7 @@ class ZmqTransport:
         if hello.get("protocol") != wire.PROTOCOL:
             raise BridgeFailure(
                 f"speaks protocol {str(hello.get('protocol'))[:20]}, not {wire.PROTOCOL}",
-                fix=f"send 'protocol': {wire.PROTOCOL}",
+                fix=f"send 'protocol': {wire.PROTOCOL} (docs/ros.md gives its messages)",
             )
         self.with_profile = hello.get("profile", True) is not False
         self._connected = True
@@ -89,9 +93,13 @@ class ZmqTransport:
         wire.expect(wire.parse(self._recv(self.timeout_s, "--timeout-s", "answer")), "ready")
 
     def exchange(self, step: Step) -> Reply:
-        self.sock.send(wire.step_json(step, self.with_profile))
+        self.sock.send_multipart(wire.step_parts(step, self.with_profile))
         raw = self._recv(self.timeout_s, "--timeout-s", f"answer step {step.seq}")
-        return wire.command_from_json(wire.parse(raw), step.seq)
+        message = wire.parse(raw)
+        reply = wire.command_from_json(message, step.seq)
+        if "seam_hint" in message:
+            self.seam_hint = wire.seam_hint_from_json(message)
+        return reply
 
     def finish(self, summary: dict[str, Any]) -> None:
         from seamtrack.io.output import json_safe
@@ -126,7 +134,13 @@ class ZmqTransport:
                 )
             ready = dict(self.poller.poll(max(1, math.ceil(left * 1000.0))))
             if self.sock in ready:
-                return bytes(self.sock.recv(copy=True))
+                parts = self.sock.recv_multipart(copy=True)
+                if len(parts) != 1:
+                    raise BridgeFailure(
+                        f"sent a message of {len(parts)} parts",
+                        fix="send each message as one part of UTF-8 JSON",
+                    )
+                return bytes(parts[0])
             if self.monitor in ready:
                 recv_monitor_message(self.monitor)
                 if self._connected:

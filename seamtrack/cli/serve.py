@@ -26,7 +26,8 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
         "--transport",
         choices=["zmq", "zenoh"],
         default="zmq",
-        help="zmq: JSON over a ZeroMQ REP socket; zenoh: ROS 2 messages as rmw_zenoh puts them",
+        help="zmq: JSON and raw profile arrays over a ZeroMQ REP socket; zenoh: ROS 2 messages "
+        "as rmw_zenoh puts them",
     )
     p.add_argument(
         "--endpoint",

@@ -16,7 +16,6 @@ import argparse
 import hashlib
 import json
 import math
-import queue
 import struct
 import sys
 import time
@@ -44,6 +43,28 @@ def token(session: str, entity: int, kind: str, topic: str, msgtype: str) -> str
         f"@ros2_lv/{DOMAIN}/{session}/0/{entity}/{kind}/%/%/tracker/{topic.replace('/', '%')}/"
         f"{dds(msgtype)}/{TS.hash_rihs01(msgtype)}/{QOS}"
     )
+
+
+def warm_up() -> None:
+    """rosbags writes (and compiles) a type's serializer on its first use, which takes a good
+    part of a second: do it before the run starts, not on its first step."""
+    time_ = T["builtin_interfaces/msg/Time"](sec=0, nanosec=0)
+    header = T["std_msgs/msg/Header"](stamp=time_, frame_id="")
+    point = T["geometry_msgs/msg/Point"](x=0.0, y=0.0, z=0.0)
+    vector = T["geometry_msgs/msg/Vector3"](x=0.0, y=0.0, z=0.0)
+    q = T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=1.0)
+    messages = [
+        T["geometry_msgs/msg/PoseStamped"](
+            header=header, pose=T["geometry_msgs/msg/Pose"](position=point, orientation=q)
+        ),
+        T["geometry_msgs/msg/TwistStamped"](
+            header=header, twist=T["geometry_msgs/msg/Twist"](linear=vector, angular=vector)
+        ),
+        T["geometry_msgs/msg/PointStamped"](header=header, point=point),
+        T["std_msgs/msg/String"](data=""),
+    ]
+    for msg in messages:
+        TS.deserialize_cdr(TS.serialize_cdr(msg, msg.__msgtype__), msg.__msgtype__)
 
 
 class ConvergenceRadius:
@@ -102,7 +123,7 @@ def main() -> int:
                 raise
             time.sleep(0.2)
     sid = str(session.zid())
-    events: queue.Queue = queue.Queue()
+    warm_up()
 
     subs = {
         "/seamtrack/context": "std_msgs/msg/String",
@@ -121,17 +142,20 @@ def main() -> int:
     }
     live = session.liveliness()
     tokens = [live.declare_token(f"@ros2_lv/{DOMAIN}/{sid}/0/0/NN/%/%/tracker")]
-    # One subscriber for every topic: Zenoh calls each subscriber's callback on its own, so
-    # separate subscribers could hand a step's /seamtrack/tcp over before the frames sent
-    # ahead of it; one subscriber sees them in the order they were put.
+    # One subscriber for every topic, its samples in a FIFO channel read by this thread: they
+    # come in the order they were put (a step's seam points before its /seamtrack/tcp), and
+    # the receive blocks in zenoh with no Python callback per sample (topics this node does
+    # not take, such as the profiles, are skipped by their key).
     topic_of = {key(topic, msgtype): topic for topic, msgtype in subs.items()}
+    subscriber = session.declare_subscriber(f"{DOMAIN}/**", zenoh.handlers.FifoChannel(256))
 
-    def route(sample):
-        topic = topic_of.get(str(sample.key_expr))
-        if topic is not None:
-            events.put((topic, sample.payload.to_bytes()))
+    def receive():
+        while True:
+            sample = subscriber.recv()
+            topic = topic_of.get(str(sample.key_expr))
+            if topic is not None:
+                return topic, sample.payload.to_bytes()
 
-    subscriber = session.declare_subscriber(f"{DOMAIN}/**", route)
     entity = 1
     for topic, msgtype in subs.items():
         tokens.append(live.declare_token(token(sid, entity, "MS", topic, msgtype)))
@@ -155,9 +179,20 @@ def main() -> int:
     tracker = None
     steps = 0
     while True:
-        topic, raw = events.get(timeout=120)
+        topic, raw = receive()
         if topic == "/seamtrack/context":
             context = json.loads(TS.deserialize_cdr(raw, subs[topic]).data)["context"]
+            if args.check_frames:  # latched: asked for again, as a late subscriber would
+                got = [
+                    r.ok.payload.to_bytes() for r in session.get(key(topic, subs[topic])) if r.ok
+                ]
+                seen["late_context"] = got == [raw]
+                msgtype = "tf2_msgs/msg/TFMessage"
+                replies = session.get(key("/tf_static", msgtype))
+                static = [TS.deserialize_cdr(r.ok.payload.to_bytes(), msgtype) for r in replies]
+                seen["late_tf_static"] = [
+                    [[t.header.frame_id, t.child_frame_id] for t in m.transforms] for m in static
+                ]
             speed = context["welding_speed_mm_s"] / 1000.0
             tracker = ConvergenceRadius(speed, args.radius_mm / 1000.0)
         elif topic in seen:

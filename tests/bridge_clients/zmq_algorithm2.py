@@ -2,10 +2,16 @@
 ``seamtrack serve --transport zmq``: pyzmq and the standard library only, nothing of seamtrack.
 
 Usage: python zmq_algorithm2.py ENDPOINT [--radius-mm 1.0] [--misbehave KIND]
+       [--no-profile] [--dump-profiles FILE]
 
-It says hello, then answers every step with its command. ``--misbehave`` is for the tests:
-``garbage`` (bytes that are not JSON), ``oversized`` (a 10 kB message), ``silent`` (no answer
-to step 5), ``vanish`` (exit at step 5), ``bad-command`` (a NaN target).
+It says hello, then answers every step with its command. A step is a multipart message: a JSON
+header, then each frame's profile as raw little-endian arrays (float64 points, uint8 reasons)
+that the header describes; algorithm II needs only the seam points, ``--dump-profiles`` reads
+the profiles too (standard library only) and writes them as JSON lines.
+
+``--misbehave`` is for the tests: ``garbage`` (bytes that are not JSON), ``oversized`` (a 10 kB
+message), ``silent`` (no answer to step 5), ``vanish`` (exit at step 5), ``bad-command`` (a NaN
+target), ``multipart`` (a command in two parts).
 """
 
 from __future__ import annotations
@@ -13,6 +19,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import struct
 import sys
 import time
 
@@ -60,29 +67,57 @@ def _dist(a: list[float], b: list[float]) -> float:
     return math.sqrt(dx * dx + dy * dy + dz * dz)
 
 
+def read_profile(profile: dict, parts: list[bytes]) -> tuple[list, list]:
+    """A frame's profile: [(y_mm, z_mm), ...] (None for NaN) and the reason codes; every part's
+    size checked against its shape before it is read."""
+    out = []
+    for name, dtype, size in (("points", "<f8", 8), ("reason", "|u1", 1)):
+        d = profile[name]
+        if d["dtype"] != dtype:
+            raise ValueError(f"{name}: dtype {d['dtype']}, not {dtype}")
+        count = math.prod(d["shape"])
+        raw = parts[d["part"]]
+        if len(raw) != count * size:
+            raise ValueError(f"{name}: {len(raw)} bytes for shape {d['shape']}")
+        out.append(raw)
+    n = profile["reason"]["shape"][0]
+    values = struct.unpack(f"<{2 * n}d", out[0])  # little-endian on any machine
+    points = [[None if v != v else v for v in values[2 * i : 2 * i + 2]] for i in range(n)]
+    return points, list(out[1])
+
+
 def main() -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("endpoint")
     ap.add_argument("--radius-mm", type=float, default=1.0)
     ap.add_argument("--misbehave", default="")
     ap.add_argument("--no-profile", action="store_true")
+    ap.add_argument("--dump-profiles", default="")
     args = ap.parse_args()
+    dump = open(args.dump_profiles, "w") if args.dump_profiles else None
     ctx = zmq.Context()
     sock = ctx.socket(zmq.REQ)
     sock.setsockopt(zmq.LINGER, 0)
     sock.connect(args.endpoint)
-    sock.send_json({"op": "hello", "protocol": 1, "profile": not args.no_profile})
+    sock.send_json({"op": "hello", "protocol": 2, "profile": not args.no_profile})
     reset = sock.recv_json()
     tracker = ConvergenceRadius(reset["context"]["welding_speed_mm_s"], args.radius_mm)
     sock.send_json({"op": "ready"})
     while True:
-        msg = json.loads(sock.recv())
+        parts = sock.recv_multipart()  # blocks until the step is there: no polling
+        msg = json.loads(parts[0])
         if msg["op"] == "end":
             print(json.dumps(msg["summary"]))
+            if dump:
+                dump.close()
             return 0
         for frame in msg["frames"]:
             if frame["found"]:
                 tracker.update(frame["point_mm"])
+            if dump and frame["profile"] is not None:
+                points, reason = read_profile(frame["profile"], parts)
+                row = {"t_capture_s": frame["t_capture_s"], "points": points, "reason": reason}
+                dump.write(json.dumps(row) + "\n")
         cmd = tracker.step(msg["tcp_mm"])
         if msg["seq"] == 5 and args.misbehave:
             if args.misbehave == "garbage":
@@ -92,6 +127,8 @@ def main() -> int:
             elif args.misbehave == "bad-command":
                 bad = {"target_mm": [0.0, "nan", 0.0], "speed_mm_s": 5.0}
                 sock.send_json({"op": "command", "seq": 5, "command": bad})
+            elif args.misbehave == "multipart":
+                sock.send_multipart([b'{"op": "command", "seq": 5,', b' "command": null}'])
             elif args.misbehave == "vanish":
                 sock.close(0)
                 ctx.term()

@@ -1,0 +1,259 @@
+"""The bridge's per-frame ROS 2 messages written straight to CDR bytes, without building
+``rosbags`` message objects: the same bytes as ``rosbags``' serializer gives for the messages
+of :mod:`seamtrack.bridge.messages` (tests/test_bridge_cdr.py checks them byte for byte), at a
+fraction of the cost (the PointCloud2 of a 1024-point profile is one numpy copy).
+
+Little-endian CDR (XCDR1, as ROS 2 sends it): the 4-byte encapsulation header ``00 01 00 00``,
+then the fields in order, each aligned to its own size (at most 8) from the end of the header;
+a string is a uint32 length (with its NUL) then its bytes and a NUL; a sequence a uint32 count
+then its elements. Units as in :mod:`seamtrack.bridge.messages`: m, m/s, rad; the message
+holds seamtrack's mm / 1000.
+"""
+
+from __future__ import annotations
+
+import struct
+from collections.abc import Iterable
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from seamtrack.bridge import messages
+from seamtrack.sensing.profiles import Feature, Profile
+
+#: CDR little-endian encapsulation (representation identifier 0x0001, options 0).
+ENCAPSULATION = b"\x00\x01\x00\x00"
+
+_MM = messages.MM_PER_M
+_U32 = struct.Struct("<I")
+_STAMP = struct.Struct("<iI")
+_3D = struct.Struct("<3d")
+_4D = struct.Struct("<4d")
+_6D = struct.Struct("<6d")
+_7D = struct.Struct("<7d")
+
+
+class Writer:
+    """A CDR little-endian byte string under construction (alignment from the header's end)."""
+
+    __slots__ = ("buf",)
+
+    def __init__(self) -> None:
+        self.buf = bytearray(ENCAPSULATION)
+
+    def align(self, n: int) -> None:
+        pad = -(len(self.buf) - 4) % n
+        if pad:
+            self.buf += b"\x00" * pad
+
+    def u32(self, value: int) -> None:
+        self.align(4)
+        self.buf += _U32.pack(value)
+
+    def u8(self, value: int) -> None:
+        self.buf.append(value)
+
+    def string(self, text: str) -> None:
+        raw = text.encode()
+        self.u32(len(raw) + 1)
+        self.buf += raw
+        self.buf.append(0)
+
+    def stamp(self, t_s: float) -> None:
+        ns = round(t_s * 1e9)
+        self.align(4)
+        self.buf += _STAMP.pack(ns // 1_000_000_000, ns % 1_000_000_000)
+
+    def header(self, t_s: float, frame_id: str) -> None:
+        self.stamp(t_s)
+        self.string(frame_id)
+
+    def doubles(self, packer: struct.Struct, *values: float) -> None:
+        self.align(8)
+        self.buf += packer.pack(*values)
+
+    def octets(self, data: bytes | memoryview) -> None:
+        """A ``uint8[]`` sequence."""
+        self.u32(len(data))
+        self.buf += data
+
+    def bytes(self) -> bytes:
+        return bytes(self.buf)
+
+
+def clock(t_s: float) -> bytes:
+    """``rosgraph_msgs/Clock``."""
+    w = Writer()
+    w.stamp(t_s)
+    return w.bytes()
+
+
+def string(text: str) -> bytes:
+    """``std_msgs/String``."""
+    w = Writer()
+    w.string(text)
+    return w.bytes()
+
+
+def point_stamped(t_s: float, frame_id: str, point_m: Iterable[float]) -> bytes:
+    """``geometry_msgs/PointStamped`` of a point already in metres."""
+    w = Writer()
+    w.header(t_s, frame_id)
+    w.doubles(_3D, *point_m)
+    return w.bytes()
+
+
+def pose_stamped(
+    t_s: float, frame_id: str, position_m: Iterable[float], q: Iterable[float]
+) -> bytes:
+    """``geometry_msgs/PoseStamped``: a position (m) and a quaternion (x, y, z, w)."""
+    w = Writer()
+    w.header(t_s, frame_id)
+    w.doubles(_7D, *position_m, *q)
+    return w.bytes()
+
+
+def twist_stamped(
+    t_s: float, frame_id: str, linear: Iterable[float], angular: Iterable[float]
+) -> bytes:
+    """``geometry_msgs/TwistStamped`` (m/s, rad/s)."""
+    w = Writer()
+    w.header(t_s, frame_id)
+    w.doubles(_6D, *linear, *angular)
+    return w.bytes()
+
+
+def tf_message(chain: Iterable[tuple[str, str, ArrayLike]], t_s: float) -> bytes:
+    """``tf2_msgs/TFMessage`` of (parent, child, T_parent_child (mm)) links at ``t_s``
+    (as :func:`seamtrack.bridge.messages.tf_message`)."""
+    links = list(chain)
+    w = Writer()
+    w.u32(len(links))
+    for parent, child, T in links:
+        rows = T.tolist() if isinstance(T, np.ndarray) else np.asarray(T, dtype=float).tolist()
+        w.header(t_s, parent)
+        w.string(child)
+        q = messages.quaternion(rows)
+        w.doubles(_7D, rows[0][3] / _MM, rows[1][3] / _MM, rows[2][3] / _MM, *q)
+    return w.bytes()
+
+
+def _cloud_prefix() -> bytes:
+    """The PointCloud2 fields (PointField sequence), written once."""
+    w = Writer()
+    w.buf = bytearray()
+    fields = messages._FIELDS
+    w.buf += _U32.pack(len(fields))
+    for name, offset, datatype in fields:
+        raw = name.encode()
+        w.buf += _U32.pack(len(raw) + 1) + raw + b"\x00"
+        w.buf += b"\x00" * (-len(w.buf) % 4) + _U32.pack(offset)
+        w.buf += bytes([datatype]) + b"\x00" * 3 + _U32.pack(1)
+    return bytes(w.buf)
+
+
+def profile_cloud(profile: Profile, t_s: float, frame_id: str = messages.FRAMES["sensor"]) -> bytes:
+    """A profile as ``sensor_msgs/PointCloud2`` (:func:`seamtrack.bridge.messages.
+    profile_cloud`'s layout: x = 0, y, z float64 in m, the uint8 reason; 32 bytes a point)."""
+    assert profile.reason is not None and profile.valid is not None
+    n = len(profile)
+    data = np.zeros(n, dtype=messages.POINT_DTYPE)
+    data["y"] = profile.points_laser[:, 0] / _MM
+    data["z"] = profile.points_laser[:, 1] / _MM
+    data["reason"] = profile.reason
+    step = messages.POINT_DTYPE.itemsize
+    w = Writer()
+    w.header(t_s, frame_id)
+    w.u32(1)  # height
+    w.u32(n)  # width
+    # The fields sequence starts 4-aligned, and each PointField ends 4-aligned: the same bytes
+    # wherever the header's frame id leaves it.
+    w.buf += _FIELDS_CDR
+    w.u8(0)  # is_bigendian
+    w.u32(step)
+    w.u32(step * n)
+    w.octets(data.view(np.uint8).data)
+    w.u8(1 if bool(profile.valid.all()) else 0)
+    return w.bytes()
+
+
+_FIELDS_CDR = _cloud_prefix()
+
+
+def seam_point(feature: Feature, t_s: float, frame_id: str = messages.FRAMES["sensor"]) -> bytes:
+    """A found feature's seam point as ``geometry_msgs/PointStamped`` in the sensor frame."""
+    y, z = (feature.point_laser / _MM).tolist()
+    return point_stamped(t_s, frame_id, (0.0, y, z))
+
+
+def image(image: Any, t_s: float, frame_id: str = messages.FRAMES["sensor"]) -> bytes:
+    """A StripeImage as ``sensor_msgs/Image`` (:func:`seamtrack.bridge.messages.
+    stripe_image_message`'s encoding)."""
+    m = messages.stripe_image_message(image, t_s)
+    w = Writer()
+    w.header(t_s, frame_id)
+    w.u32(m.height)
+    w.u32(m.width)
+    w.string(m.encoding)
+    w.u8(m.is_bigendian)
+    w.u32(m.step)
+    w.octets(np.ascontiguousarray(m.data, dtype=np.uint8).data)
+    return w.bytes()
+
+
+def frame_payloads(
+    t_s: float,
+    profile: Profile,
+    feature: Feature,
+    chain: Iterable[tuple[str, str, ArrayLike]],
+    image_: Any = None,
+) -> list[tuple[str, bytes]]:
+    """The (topic, CDR bytes) of one sensor frame in :func:`seamtrack.bridge.messages.
+    frame_messages`' order, but without ``/clock`` (the bridge sends its step's own):
+    ``/tf``, the profile, the seam point (when found) and the image (when given)."""
+    topics = messages.TOPICS
+    out = [
+        (topics["tf"].name, tf_message(chain, t_s)),
+        (topics["profile"].name, profile_cloud(profile, t_s)),
+    ]
+    if feature:
+        out.append((topics["seam_point"].name, seam_point(feature, t_s)))
+    if image_ is not None:
+        out.append((topics["image"].name, image(image_, t_s)))
+    return out
+
+
+# --------------------------------------------------------------------------- reading
+_STAMPED_DOUBLES = {"geometry_msgs/msg/PoseStamped": 7, "geometry_msgs/msg/TwistStamped": 6}
+
+
+def read_stamped(raw: bytes, msgtype: str) -> tuple[int, str, tuple[float, ...]]:
+    """A ``geometry_msgs/PoseStamped`` (position, orientation: 7 doubles) or ``TwistStamped``
+    (linear, angular: 6) from CDR bytes, either byte order: (stamp in ns, frame id, the
+    doubles). Checked as ``rosbags`` checks it (the string inside the data and NUL-ended,
+    UTF-8; no more than 3 bytes of padding after the last field); raises ValueError on
+    anything else."""
+    n = _STAMPED_DOUBLES[msgtype]
+    try:
+        if len(raw) < 4 or raw[0] != 0 or raw[1] not in (0, 1):
+            raise ValueError("no CDR encapsulation header")
+        order = "<" if raw[1] == 1 else ">"
+        body = memoryview(raw)[4:]
+        sec, nanosec, length = struct.unpack_from(order + "iII", body, 0)
+        if length < 1 or 12 + length > len(body) or body[12 + length - 1] != 0:
+            raise ValueError("a string that does not fit")
+        frame_id = bytes(body[12 : 12 + length - 1]).decode()
+        pos = 12 + length
+        pos += -pos % 8
+        values = struct.unpack_from(f"{order}{n}d", body, pos)
+        pos += 8 * n
+        if pos + 3 < len(body):
+            raise ValueError("bytes after the message")
+    except struct.error:
+        raise ValueError(f"not a {msgtype} (too short)") from None
+    except UnicodeDecodeError:
+        raise ValueError(f"not a {msgtype} (a frame id that is not UTF-8)") from None
+    except ValueError as exc:
+        raise ValueError(f"not a {msgtype} ({exc})") from None
+    return sec * 1_000_000_000 + nanosec, frame_id, values
