@@ -64,6 +64,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.errors import PluginError
+from seamtrack.features._groove_fit import ray_reach, risen_level, trim_wall
 from seamtrack.features._segmentation import fit_line
 from seamtrack.features.base import _Base
 from seamtrack.features.lines import Line, Segments, intersect, segment_profile
@@ -206,8 +207,8 @@ class GrooveExtractor(_Base):
                 return "not a groove: no bottom between the walls"
             bl = br = x
         else:
-            bl = self._corner(seg, left.line, fu, fv, u, v, True)
-            br = self._corner(seg, right.line, fu, fv, u, v, False)
+            bl = self._corner(seg, left.line, fu, fv, u, v, True, P[lo:hi])
+            br = self._corner(seg, right.line, fu, fv, u, v, False, P[lo:hi])
         if (br - bl) @ u < -max(seg.tol, 2 * seg.spacing):
             return "not a groove: its walls cross (a ridge?)"
         bottom = self._bottom_points(seg, fu, fv, bl, br, u, v)
@@ -318,6 +319,7 @@ class GrooveExtractor(_Base):
         on = [j for j in groove if _on_line(seg, ref, lines[j])]
         index = [lines[j].index for j in on]
         line = _fit(P, np.sort(np.concatenate(index))) if len(index) > 1 else ref
+        line = trim_wall(P, line, seg.tol)  # a round at its foot, a spike's points: left out
         if line.direction[0] < 0:
             line = Line(line.index, line.centroid, -line.direction, -line.t, line.rms)
         return Wall(line, on[0], on[-1])
@@ -412,6 +414,7 @@ class GrooveExtractor(_Base):
         u: FloatArray,
         v: FloatArray,
         left: bool,
+        columns: FloatArray | None = None,
     ) -> FloatArray:
         """Where the fill surface meets the wall: the wall's line crossed with a line fitted
         to the surface's first millimetre from the wall; with no wall seen, or a crossing
@@ -419,7 +422,15 @@ class GrooveExtractor(_Base):
         beyond it)."""
         sign = 1.0 if left else -1.0
         edge = float(fu[0] if left else fu[-1])
-        if wall is None:  # a buried wall, or one no ray sees: the surface's outermost point
+        if wall is not None:
+            level = risen_level(fu, fv, left, seg.spacing, seg.tol)
+            if level is not None:  # a round into the wall: the wall's line at the fill's level
+                cu, cv = float(wall.centroid @ u), float(wall.centroid @ v)
+                du, dv = float(wall.direction @ u), float(wall.direction @ v)
+                if abs(dv) > 1e-9:
+                    t = (level - cv) / dv
+                    return np.asarray((cu + t * du) * u + level * v)
+        if wall is None and columns is None:  # the surface's outermost point
             ou, ov = edge, float(fv[0] if left else fv[-1])
             return np.asarray((ou - sign * 0.5 * seg.spacing) * u + ov * v)
         sel = sign * (fu - edge) <= 1.5
@@ -433,7 +444,12 @@ class GrooveExtractor(_Base):
         else:
             i = 0 if left else len(fu) - 1
             ou, ov = float(fu[i]), float(fv[i])
-        if wall is not None and fit is not None:
+        if wall is None:  # a buried wall, or one no ray sees: the surface's outermost point
+            if fit is not None and columns is not None:  # on its line, as far as its rays go
+                ou = ray_reach(columns, u, v, a, b, ou, left)
+                ov = a + b * ou
+            return np.asarray((ou - sign * 0.5 * seg.spacing) * u + ov * v)
+        if fit is not None:
             cu, cv = float(wall.centroid @ u), float(wall.centroid @ v)
             du, dv = float(wall.direction @ u), float(wall.direction @ v)
             den = dv - b * du
