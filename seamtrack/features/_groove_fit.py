@@ -75,7 +75,7 @@ def risen_level(
     smooth = _running_median(zv, k)
     j = int(np.argmax(smooth))
     end = float(np.median(smooth[zd <= max(0.3, 3 * spacing)]))
-    if zd[j] < 0.5 or smooth[j] - end < 0.3:
+    if zd[j] < 0.25 or smooth[j] - end < 0.3:
         return None
     deep = smooth >= smooth[j] - 2.0 * tol
     return float(np.mean(zv[deep]))
@@ -116,3 +116,111 @@ def ray_reach(
     if not len(cand):
         return out_u
     return float(cand.min() if left else cand.max())
+
+
+def drop_islands(
+    qu: FloatArray, qv: FloatArray, runs: NDArray[np.intp], spacing: float, tol: float
+) -> NDArray[np.bool_]:
+    """Which of the fill surface's points (sorted by u) to keep: all but its islands. The
+    points' ``runs`` (the front end's runs between jumps, in column order) are its stretches;
+    a stretch of at least 0.2 mm worth of points is a piece of surface. A stretch is an
+    island (a spike run, a streak standing where a dropout took the surface) when its middle
+    lies more than ``max(0.3, 6 tol)`` off the surface carried across it: the line joining
+    the facing ends of the pieces on both sides (by their middles' u), or at an end of the
+    surface the last piece's end carried on (its slope over 0.3 mm) - and it is no piece, or
+    a piece with fewer points than those around it (at an end: under half a millimetre
+    wide). A curved surface broken by a dropout stays: its pieces join across the gap."""
+    n = len(qu)
+    keep = np.ones(n, dtype=bool)
+    if n < 6:
+        return keep
+    labels, inv = np.unique(runs, return_inverse=True)
+    m = len(labels)
+    if m < 2:
+        return keep
+    members = [np.flatnonzero(inv == c) for c in range(m)]
+    mid_u = np.array([float(np.median(qu[k])) for k in members])
+    order = np.argsort(mid_u, kind="stable")
+    members = [members[c] for c in order]
+    mid_u = mid_u[order]
+    size = np.array([len(k) for k in members])
+    off_max = max(0.3, 6.0 * tol)
+    w = max(3, int(round(0.3 / max(spacing, 1e-9))))
+    big = size >= max(5, int(round(0.2 / max(spacing, 1e-9))))
+
+    def end(c: int, tail: bool) -> tuple[float, float, float]:
+        """(u, v) of piece ``c``'s end (its last point by u, or first) and its slope dv/du
+        over its last (first) ``w`` points."""
+        k = members[c]
+        k = k[-w:] if tail else k[:w]
+        uu, vv = qu[k], qv[k]
+        slope = 0.0
+        if len(uu) >= 3 and float(np.ptp(uu)) > 1e-9:
+            slope = float(np.polyfit(uu, vv, 1)[0])
+        e = k[-1] if tail else k[0]
+        return float(qu[e]), float(qv[e]), slope
+
+    pieces = np.flatnonzero(big)
+    for c in range(m):
+        k = members[c]
+        before = pieces[pieces < c]
+        after = pieces[pieces > c]
+        a = int(before[-1]) if len(before) else None
+        b = int(after[0]) if len(after) else None
+        if a is None and b is None:
+            continue
+        if big[c]:
+            if a is not None and b is not None:
+                if size[c] >= min(size[a], size[b]):
+                    continue
+            else:
+                nb = a if a is not None else b
+                assert nb is not None
+                if size[c] >= size[nb] or float(np.ptp(qu[k])) > 0.5:
+                    continue
+        mv = float(np.median(qv[k]))
+        if a is not None and b is not None:
+            au, av, _ = end(a, True)
+            bu, bv, _ = end(b, False)
+            if bu - au < 1e-9:
+                continue
+            line_v = av + (mid_u[c] - au) * (bv - av) / (bu - au)
+        else:
+            eu, ev, slope = end(a, True) if a is not None else end(b, False)  # type: ignore[arg-type]
+            line_v = ev + slope * (mid_u[c] - eu)
+        if abs(mv - line_v) > off_max:
+            keep[k] = False
+    return keep
+
+
+def mirrored_walls(
+    walls: tuple[Line | None, Line | None],
+    tops: tuple[FloatArray, FloatArray],
+    fu: FloatArray,
+    fv: FloatArray,
+    u: FloatArray,
+    v: FloatArray,
+) -> tuple[Line | None, Line | None]:
+    """The walls, a hidden one (no points: in the shadow of its plate's edge) stood in for by
+    the seen one mirrored across the groove (a groove's bevels are cut alike) through its
+    own top corner, when the fill surface there lies at least a millimetre below that corner
+    (the wall is not buried) and nowhere more than 0.3 mm outside the mirrored line (the
+    groove is not one-sided). Otherwise as they were."""
+    out = list(walls)
+    for side in (0, 1):
+        seen = walls[1 - side]
+        if walls[side] is not None or seen is None or len(fu) < 3:
+            continue
+        d = seen.direction - 2.0 * float(seen.direction @ u) * u
+        top = tops[side]
+        outer_v = float(fv[0] if side == 0 else fv[-1])
+        if outer_v - float(top @ v) < 1.0:
+            continue
+        n = np.array([-d[1], d[0]])
+        if (n @ u < 0) != (side == 0):
+            n = -n  # outwards, away from the groove
+        q = fu[:, None] * u + fv[:, None] * v
+        if np.count_nonzero((q - top) @ n > 0.3) > 2:
+            continue
+        out[side] = Line(np.zeros(0, dtype=np.intp), top.copy(), d, np.zeros(0), 0.0)
+    return out[0], out[1]

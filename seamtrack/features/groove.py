@@ -64,7 +64,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.errors import PluginError
-from seamtrack.features._groove_fit import ray_reach, risen_level, trim_wall
+from seamtrack.features._groove_fit import (
+    drop_islands,
+    mirrored_walls,
+    ray_reach,
+    risen_level,
+    trim_wall,
+)
 from seamtrack.features._segmentation import fit_line
 from seamtrack.features.base import _Base
 from seamtrack.features.lines import Line, Segments, intersect, segment_profile
@@ -207,8 +213,9 @@ class GrooveExtractor(_Base):
                 return "not a groove: no bottom between the walls"
             bl = br = x
         else:
-            bl = self._corner(seg, left.line, fu, fv, u, v, True, P[lo:hi])
-            br = self._corner(seg, right.line, fu, fv, u, v, False, P[lo:hi])
+            wl, wr = mirrored_walls((left.line, right.line), (tl, tr), fu, fv, u, v)
+            bl = self._corner(seg, wl, fu, fv, u, v, True, P[lo:hi])
+            br = self._corner(seg, wr, fu, fv, u, v, False, P[lo:hi])
         if (br - bl) @ u < -max(seg.tol, 2 * seg.spacing):
             return "not a groove: its walls cross (a ridge?)"
         bottom = self._bottom_points(seg, fu, fv, bl, br, u, v)
@@ -311,6 +318,8 @@ class GrooveExtractor(_Base):
             if near_top > 3.0 and (off < 75.0 or ln.extent < 1.0):
                 continue  # a bead's flank or a streak pointing at the corner by chance
             n = int(np.count_nonzero(np.abs((q - ln.centroid) @ ln.normal) <= 2.0 * seg.tol))
+            if near_top > 3.0 and _beyond(q, ln, v, from_left, seg.tol) > max(self.min_points, n):
+                continue  # the surface goes on beyond it: a streak in the groove, no wall
             if n > support:
                 best, support = j, n
         if best is None:
@@ -377,16 +386,28 @@ class GrooveExtractor(_Base):
             if w.line is None:
                 continue
             n = w.line.normal if (w.line.normal @ u > 0) == left else -w.line.normal
-            keep &= (q - w.line.centroid) @ n > 2.0 * seg.tol
+            # Off the wall, inwards; below where it was seen, on its line too (a round's
+            # upper part, at a U's foot), and more than 3 mm below, either side (a wall
+            # carried down from its top, a narrow gap's, cuts no surface short).
+            low = float(np.max(seg.points[w.line.index] @ v)) if len(w.line.index) else np.inf
+            off, qv_ = (q - w.line.centroid) @ n, q @ v
+            keep &= (
+                (off > 2.0 * seg.tol)
+                | ((qv_ > low + 2.0 * seg.tol) & (off > -2.0 * seg.tol))
+                | (qv_ > low + 3.0)
+            )
         qu, qv = q[keep] @ u, q[keep] @ v
+        run = (np.searchsorted(seg.runs, inner, side="right") - 1)[keep]
         order = np.argsort(qu, kind="stable")
-        qu, qv = qu[order], qv[order]
+        qu, qv, run = qu[order], qv[order], run[order]
         k = int(min(101, max(5, round(0.6 / max(seg.spacing, 1e-9)))) | 1)
         if len(qv) >= k:
             inner_med = np.median(np.lib.stride_tricks.sliding_window_view(qv, k), axis=1)
             med = np.pad(inner_med, k // 2, mode="edge")  # the ends: their whole window's
             ok = np.abs(qv - med) <= max(3.0 * seg.tol, 0.2)
-            qu, qv = qu[ok], qv[ok]
+            qu, qv, run = qu[ok], qv[ok], run[ok]
+        ok = drop_islands(qu, qv, run, seg.spacing, seg.tol)  # spike runs the median kept
+        qu, qv = qu[ok], qv[ok]
         if len(qu) > 1:  # the largest stretch without a break of 2 mm (scraps at the top edges)
             cut = np.flatnonzero(np.diff(qu) > 2.0) + 1
             bounds = np.r_[0, cut, len(qu)]
@@ -444,20 +465,31 @@ class GrooveExtractor(_Base):
         else:
             i = 0 if left else len(fu) - 1
             ou, ov = float(fu[i]), float(fv[i])
-        if wall is None:  # a buried wall, or one no ray sees: the surface's outermost point
-            if fit is not None and columns is not None:  # on its line, as far as its rays go
-                ou = ray_reach(columns, u, v, a, b, ou, left)
-                ov = a + b * ou
-            return np.asarray((ou - sign * 0.5 * seg.spacing) * u + ov * v)
-        if fit is not None:
+        cross = None
+        if wall is not None and fit is not None:
             cu, cv = float(wall.centroid @ u), float(wall.centroid @ v)
             du, dv = float(wall.direction @ u), float(wall.direction @ v)
             den = dv - b * du
             if abs(den) > 1e-9:
                 t = (a + b * cu - cv) / den
-                xu, xv = cu + t * du, cv + t * dv
-                if math.hypot(xu - ou, xv - ov) <= 1.5:
-                    return np.asarray(xu * u + xv * v)
+                cross = np.array([cu + t * du, cv + t * dv])
+        # A wall seen only far above the fill (more than 3 mm, and half its seen length) or a
+        # hidden one's mirror is carried too far down to place the corner: then it is the
+        # surface's, as for no wall seen.
+        if wall is not None and not len(wall.index):
+            wall = cross = None  # a mirror: the wall is hidden
+        elif wall is not None and cross is not None:
+            seen = seg.points[wall.index] @ np.column_stack([u, v])
+            gap = float(np.min(np.hypot(*(seen - cross).T)))
+            if gap > max(3.0, 0.5 * float(np.ptp(wall.t))):
+                cross, columns = None, None  # below a wall, rays may light it unseen
+        if wall is None or cross is None:  # the surface's outermost point
+            if fit is not None and columns is not None:  # on its line, as far as its rays go
+                ou = ray_reach(columns, u, v, a, b, ou, left)
+                ov = a + b * ou
+            return np.asarray((ou - sign * 0.5 * seg.spacing) * u + ov * v)
+        if cross is not None and math.hypot(cross[0] - ou, cross[1] - ov) <= 1.5:
+            return np.asarray(cross[0] * u + cross[1] * v)
         ou -= sign * 0.5 * seg.spacing
         return np.asarray(ou * u + ov * v)
 
@@ -525,6 +557,15 @@ def _on_line(seg: Segments, ref: Line, ln: Line, max_deg: float = 5.0) -> bool:
         return False
     off = np.abs((seg.points[ln.index] - ref.centroid) @ ref.normal)
     return bool(np.median(off) <= 2.0 * seg.tol)
+
+
+def _beyond(q: FloatArray, ln: Line, v: FloatArray, left: bool, tol: float) -> int:
+    """How many of the points ``q`` lie outwards of a wall piece ``ln`` (on the plate's side,
+    more than 3 tolerances off its line) and deeper than its upper end."""
+    n = ln.normal if (ln.normal @ np.array([v[1], -v[0]]) < 0) == left else -ln.normal
+    upper = float(min(ln.point(float(ln.t[0])) @ v, ln.point(float(ln.t[-1])) @ v))
+    out = ((q - ln.centroid) @ n > 3.0 * tol) & (q @ v > upper)
+    return int(np.count_nonzero(out))
 
 
 def _robust_uv_line(qu: FloatArray, qv: FloatArray, tol: float) -> tuple[float, float] | None:
