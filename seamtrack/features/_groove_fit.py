@@ -77,7 +77,7 @@ def risen_level(
     end = float(np.median(smooth[zd <= max(0.3, 3 * spacing)]))
     if zd[j] < 0.25 or smooth[j] - end < 0.3:
         return None
-    deep = smooth >= smooth[j] - 2.0 * tol
+    deep = smooth >= smooth[j] - min(2.0 * tol, 0.05)
     return float(np.mean(zv[deep]))
 
 
@@ -180,11 +180,14 @@ def drop_islands(
                     continue
         mv = float(np.median(qv[k]))
         if a is not None and b is not None:
-            au, av, _ = end(a, True)
-            bu, bv, _ = end(b, False)
+            au, av, sa = end(a, True)
+            bu, bv, sb = end(b, False)
             if bu - au < 1e-9:
                 continue
             line_v = av + (mid_u[c] - au) * (bv - av) / (bu - au)
+            lo = int(k[np.argmin(qu[k])])
+            if abs(float(qv[lo]) - (av + sa * (float(qu[lo]) - au))) <= off_max:
+                continue  # it carries on the piece before it (a flank, the piece after a spike)
         else:
             eu, ev, slope = end(a, True) if a is not None else end(b, False)  # type: ignore[arg-type]
             line_v = ev + slope * (mid_u[c] - eu)
