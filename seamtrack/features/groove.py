@@ -443,6 +443,7 @@ class GrooveExtractor(_Base):
         beyond it)."""
         sign = 1.0 if left else -1.0
         edge = float(fu[0] if left else fu[-1])
+        unseen = wall is None or not len(wall.index)  # no wall seen, or a hidden one's mirror
         if wall is not None:
             level = risen_level(fu, fv, left, seg.spacing, seg.tol)
             if level is not None:  # a round into the wall: the wall's line at the fill's level
@@ -484,6 +485,14 @@ class GrooveExtractor(_Base):
             if gap > max(3.0, 0.5 * float(np.ptp(wall.t))):
                 cross, columns = None, None  # below a wall, rays may light it unseen
         if wall is None or cross is None:  # the surface's outermost point
+            near = sign * (fu - edge) <= 0.6  # on its line there (a flank bends further in)
+            if unseen and (short := _robust_uv_line(fu[near], fv[near], seg.tol)) is not None:
+                fit = short
+                a, b = fit
+                on = np.abs(fv[near] - (a + b * fu[near])) <= 3.0 * seg.tol
+                if np.any(on):
+                    k = int(np.argmin(sign * fu[near][on]))
+                    ou, ov = float(fu[near][on][k]), float(fv[near][on][k])
             if fit is not None and columns is not None:  # on its line, as far as its rays go
                 ou = ray_reach(columns, u, v, a, b, ou, left)
                 ov = a + b * ou

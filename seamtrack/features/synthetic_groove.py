@@ -200,15 +200,9 @@ def groove_points(g: Groove, surface: FloatArray | None = None) -> FloatArray:
 
 
 def _round_below(g: Groove, s: FloatArray, side: int, lowest: FloatArray) -> bool:
-    """Whether the U's round, not a bead, lies just below the wall's lowest surface vertex."""
-    base = g.surface
-    return bool(np.any(np.all(np.isclose(base, lowest, atol=1e-9), axis=1))) and bool(
-        np.allclose(
-            _z_at(s, lowest[0] + (0.3 if side == 0 else -0.3)),
-            _z_at(base, lowest[0] + (0.3 if side == 0 else -0.3)),
-            atol=1e-9,
-        )
-    )
+    """Whether the wall's lowest surface vertex is the U's own (the round's tangent point on
+    the wall: the fill has not buried it, the round, bare or partly filled, lies below)."""
+    return bool(np.any(np.all(np.isclose(g.surface, lowest, atol=1e-9), axis=1)))
 
 
 def _fill_level(g: Groove, s: FloatArray, side: int, tangent: FloatArray) -> float:
