@@ -13,13 +13,20 @@ Points are (u, v): u across the groove (the plates' line, left to right), v into
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.features._segmentation import fit_line
-from seamtrack.features.lines import Line
+from seamtrack.features.lines import Line, Segments
 
 FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.intp]
+
+
+def _angle_deg(a: FloatArray, b: FloatArray) -> float:
+    return math.degrees(math.acos(min(1.0, abs(float(a @ b)))))
 
 
 def trim_wall(points: FloatArray, line: Line, tol: float, rounds: int = 3) -> Line:
@@ -55,11 +62,14 @@ def risen_level(
 ) -> float | None:
     """The level (v) of the fill surface's deepest part near a side, when the surface rises
     from there into the wall: its deepest point (a running median over 0.3 mm) lies at least
-    half a millimetre in from the surface's outer end, which stands at least 0.3 mm above
-    it (a round at a U's foot, bare or partly filled, or the notch between a bead and the
-    round). None when the surface comes down to the wall (a bead's toe on the wall: a
-    kink). The level is the mean of the deepest part's points (within two tolerances of
-    the deepest)."""
+    a quarter of a millimetre in from the surface's outer end, which stands at least 0.3 mm
+    above it and rises at least 0.45 times as much as it runs from the deepest part's
+    nearest point (a round at a U's foot, bare or partly filled, or the notch between a bead
+    and the round: 0.42-1.2 on the synthetic 3 mm round, bare, more beside a bead). None
+    when it rises more gently (a root bead's concave face, the fill's own: 0.13-0.43 on the
+    Keyence root-pass scans) or the surface comes down to the wall (a bead's toe on the
+    wall: a kink). The level is the mean of the deepest part's points (within 0.05 mm, or
+    two tolerances, of the deepest)."""
     if len(fu) < 5:
         return None
     sign = 1.0 if left else -1.0
@@ -78,6 +88,8 @@ def risen_level(
     if zd[j] < 0.25 or smooth[j] - end < 0.3:
         return None
     deep = smooth >= smooth[j] - min(2.0 * tol, 0.05)
+    if smooth[j] - end < 0.45 * float(np.min(zd[deep])):
+        return None  # a gentle rise (a root bead's concave face): the fill's own, no round
     return float(np.mean(zv[deep]))
 
 
@@ -138,8 +150,9 @@ def drop_islands(
     m = len(labels)
     if m < 2:
         return keep
-    members = [np.flatnonzero(inv == c) for c in range(m)]
-    mid_u = np.array([float(np.median(qu[k])) for k in members])
+    by = np.argsort(inv, kind="stable")  # each run's points, in u order
+    members = np.split(by, np.cumsum(np.bincount(inv, minlength=m))[:-1])
+    mid_u = np.array([float(qu[k[len(k) // 2]]) for k in members])
     order = np.argsort(mid_u, kind="stable")
     members = [members[c] for c in order]
     mid_u = mid_u[order]
@@ -155,8 +168,9 @@ def drop_islands(
         k = k[-w:] if tail else k[:w]
         uu, vv = qu[k], qv[k]
         slope = 0.0
-        if len(uu) >= 3 and float(np.ptp(uu)) > 1e-9:
-            slope = float(np.polyfit(uu, vv, 1)[0])
+        du = uu - uu.mean()
+        if len(uu) >= 3 and float(du @ du) > 1e-12:
+            slope = float(du @ (vv - vv.mean()) / (du @ du))
         e = k[-1] if tail else k[0]
         return float(qu[e]), float(qv[e]), slope
 
@@ -181,7 +195,7 @@ def drop_islands(
         mv = float(np.median(qv[k]))
         if a is not None and b is not None:
             au, av, sa = end(a, True)
-            bu, bv, sb = end(b, False)
+            bu, bv, _ = end(b, False)
             if bu - au < 1e-9:
                 continue
             line_v = av + (mid_u[c] - au) * (bv - av) / (bu - au)
@@ -227,3 +241,60 @@ def mirrored_walls(
             continue
         out[side] = Line(np.zeros(0, dtype=np.intp), top.copy(), d, np.zeros(0), 0.0)
     return out[0], out[1]
+
+
+def _on_line(seg: Segments, ref: Line, ln: Line, max_deg: float = 5.0) -> bool:
+    """Whether piece ``ln`` lies on the line of ``ref`` (within ``max_deg`` and two
+    tolerances)."""
+    if _angle_deg(ln.direction, ref.direction) > max_deg:
+        return False
+    off = np.abs((seg.points[ln.index] - ref.centroid) @ ref.normal)
+    return bool(np.median(off) <= 2.0 * seg.tol)
+
+
+def _beyond(q: FloatArray, ln: Line, v: FloatArray, left: bool, tol: float) -> int:
+    """How many of the points ``q`` lie outwards of a wall piece ``ln`` (on the plate's side,
+    more than 3 tolerances off its line) and deeper than its upper end."""
+    n = ln.normal if (ln.normal @ np.array([v[1], -v[0]]) < 0) == left else -ln.normal
+    upper = float(min(ln.point(float(ln.t[0])) @ v, ln.point(float(ln.t[-1])) @ v))
+    out = ((q - ln.centroid) @ n > 3.0 * tol) & (q @ v > upper)
+    return int(np.count_nonzero(out))
+
+
+def _robust_uv_line(qu: FloatArray, qv: FloatArray, tol: float) -> tuple[float, float] | None:
+    """v = a + b u through the most points within two tolerances, of the lines through pairs
+    of (at most 40, evenly picked) points at least a third of the stretch apart; refitted on
+    those points. Spike runs less than half the points do not move it."""
+    n = len(qu)
+    if n < 3:
+        return None
+    pick = np.unique(np.linspace(0, n - 1, min(n, 40)).round().astype(np.intp))
+    i, j = np.triu_indices(len(pick), k=max(1, len(pick) // 3))
+    i, j = pick[i], pick[j]
+    du = qu[j] - qu[i]
+    ok = np.abs(du) > 1e-9
+    if not np.any(ok):
+        return None
+    i, j = i[ok], j[ok]
+    b = (qv[j] - qv[i]) / (qu[j] - qu[i])
+    a = qv[i] - b * qu[i]
+    count = (np.abs(qv[None, :] - (a[:, None] + b[:, None] * qu[None, :])) <= 2.0 * tol).sum(1)
+    k = int(np.argmax(count))
+    keep = np.abs(qv - (a[k] + b[k] * qu)) <= 2.0 * tol
+    if np.count_nonzero(keep) < 3:
+        return None
+    A = np.column_stack([np.ones(np.count_nonzero(keep)), qu[keep]])
+    coef = np.linalg.lstsq(A, qv[keep], rcond=None)[0]
+    return float(coef[0]), float(coef[1])
+
+
+def _area(pts: FloatArray, P: FloatArray, inner: IntArray, u: FloatArray) -> float:
+    """The polygon of the top corners, the bottom corners and the surface between them, below
+    the line joining the top corners (mm^2), signed: a crowned fill's metal above that line
+    counts against it (a nearly full groove's area is about 0, a capped one's negative)."""
+    qu = P[inner] @ u
+    zone = inner[(qu > pts[1] @ u) & (qu < pts[5] @ u)]
+    ring = np.vstack([pts[0], pts[1], P[zone], pts[5], pts[6]])
+    v = np.array([-u[1], u[0]])
+    a, b = ring @ u, ring @ v  # along the plates, into the groove
+    return float(-0.5 * (np.dot(a, np.roll(b, -1)) - np.dot(b, np.roll(a, -1))))
