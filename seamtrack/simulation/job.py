@@ -375,7 +375,10 @@ def _steered(
             frames[-1] = (feature, T_world_sensor)
         if feature:
             seen[0] = True
-        elif not seen[0] and previous is not None:  # not yet seen: start on the plan
+        elif previous is not None and (not seen[0] or plan.reference in _FIXED):
+            # not yet seen: start on the plan; a top corner, which no bead moves: where the
+            # pass before measured it (a cap's edge bead puts the sensor so far off the
+            # groove's middle that the far plate leaves its stripe now and then)
             feature = planned_feature(feature, T_world_sensor, fill, plan, previous,
                                       STATION_SPACING_MM, _POINT_INDEX)  # fmt: skip
         if feature:
@@ -425,6 +428,10 @@ def _below_the_fill(
         or y_right < before[1] - 2 * FILL_DROP_MM
     )
 
+
+#: References no bead moves (the bevels' top edges): a frame that misses one takes it from the
+#: pass before's measurement.
+_FIXED = ("left_top", "right_top")
 
 #: The pass before's left foot's y, right foot's y, middle's z (row, column of the 7 points).
 _PAST = ((1, 0), (5, 0), (3, 1))
