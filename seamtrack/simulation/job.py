@@ -375,10 +375,11 @@ def _steered(
             frames[-1] = (feature, T_world_sensor)
         if feature:
             seen[0] = True
-        elif previous is not None and (not seen[0] or plan.reference in _FIXED):
-            # not yet seen: start on the plan; a top corner, which no bead moves: where the
-            # pass before measured it (a cap's edge bead puts the sensor so far off the
-            # groove's middle that the far plate leaves its stripe now and then)
+        elif previous is not None and (not seen[0] or (plan.cap and plan.reference in _FIXED)):
+            # not yet seen: start on the plan; a cap bead's top corner, which no bead moves,
+            # and whose height is the cap's aim: where the pass before measured it (a cap's
+            # edge bead puts the sensor so far off the groove's middle that the far plate
+            # leaves its stripe now and then)
             feature = planned_feature(feature, T_world_sensor, fill, plan, previous,
                                       STATION_SPACING_MM, _POINT_INDEX)  # fmt: skip
         if feature:
