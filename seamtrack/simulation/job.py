@@ -430,8 +430,8 @@ def _below_the_fill(
     )
 
 
-#: References no bead moves (the bevels' top edges): a frame that misses one takes it from the
-#: pass before's measurement.
+#: References no bead moves (the bevels' top edges): a cap bead's frame that misses one takes
+#: it from the pass before's measurement.
 _FIXED = ("left_top", "right_top")
 
 #: The pass before's left foot's y, right foot's y, middle's z (row, column of the 7 points).
