@@ -180,6 +180,21 @@ def test_ramped_start_and_crater_keep_the_planned_area() -> None:
     assert out.tolist() == [5.0, 5.0, 5.0, 3.0, 5.0, 5.0, 5.0]
 
 
+def test_the_braking_on_to_the_end_is_the_crater() -> None:
+    """At the seam's end the torch slows on to the last point its sensor saw at a fifth or so
+    under the plan, then to rest: all of that is the crater, where the wire follows the
+    travel speed and the bead keeps the planned area (mass conservation with a synchronised
+    feed: area * speed = efficiency * wire area * feed * speed / planned speed); a dip
+    between two stretches at the plan stays a fatter bead. Counted at its actual speed, the
+    braking laid a bead up to a third fatter at every pass's end, and the bumps grew."""
+    planned = np.full(9, 5.0)
+    speed = np.array([1.0, 5.0, 4.0, 5.0, 4.9, 4.1, 4.4, 4.0, 0.5])
+    out = job._ramped(speed, planned)
+    assert out.tolist() == [5.0, 5.0, 4.0, 5.0, 4.9, 5.0, 5.0, 5.0, 5.0]
+    area = bead_area_mm2(1.2, 100.0, out, 0.97)
+    assert np.allclose(area[5:], 0.97 * math.pi * 0.36 * 100.0 / 5.0)
+
+
 def test_path_runs_off_the_ends_within_the_margin() -> None:
     seam = job.Seam.from_points([[0.0, 0, 0], [30.0, 0, 0]])
     path = np.column_stack([np.linspace(1.0, 28.5, 10), np.full(10, 0.2), np.zeros(10)])

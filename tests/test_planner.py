@@ -105,7 +105,7 @@ def test_passes_walls_first_then_middle_then_cap_side_to_side(wall_reference: bo
     for x in plans[:-1]:
         assert isinstance(x, PassPlan)
         by_layer.setdefault(x.layer, []).append(x)
-    point = {"left": 1, "right": 5, "centre": 3}
+    point = {"left": 1, "right": 5, "centre": 3, "left_top": 0, "right_top": 6}
     last = max(by_layer)
     assert any(len(b) >= 3 for k, b in by_layer.items() if k != last)
     for layer, beads in by_layer.items():
@@ -115,6 +115,9 @@ def test_passes_walls_first_then_middle_then_cap_side_to_side(wall_reference: bo
             assert all(b.cap for b in beads)
             assert np.all(np.diff(y) > 0)
             assert g.points[0, 0, 0] < y[0] and y[-1] < g.points[0, 6, 0]
+            # the first from the left top corner, the rest from the right one, which no cap
+            # bead buries before the last
+            assert [b.reference for b in beads] == ["left_top"] + ["right_top"] * (len(y) - 1)
         elif len(beads) >= 2:  # a bead at each wall first, then the middle left to right
             left, right = g.points[0, 1, 0], g.points[0, 5, 0]
             assert left < y[0] < y[1] < right
@@ -122,8 +125,10 @@ def test_passes_walls_first_then_middle_then_cap_side_to_side(wall_reference: bo
             assert all(y[0] < v < y[1] for v in y[2:]) and np.all(np.diff(y[2:]) > 0)
             if wall_reference:
                 assert (beads[0].reference, beads[1].reference) == ("left", "right")
-            else:
-                assert all(b.reference == "centre" for b in beads)
+            else:  # from the nearer top corner, which no fill bead moves
+                mid = 0.5 * (g.points[0, 0, 0] + g.points[0, 6, 0])
+                side = ["left_top" if v < mid - 1e-6 else "right_top" for v in y]
+                assert [b.reference for b in beads] == side
 
 
 def test_speed_follows_the_measured_area() -> None:

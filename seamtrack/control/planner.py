@@ -13,7 +13,8 @@ points, right bottom corner, right top corner, y ascending. mm, s, rad; wire fee
 The built-in :class:`AdaptivePlanner` fills equal-area layers (as many as the groove's depth
 holds beads of the process's height), puts ``round(layer area / bead area)`` (at least one)
 beads in each, corners first (a bead against each wall, then the middle from left to right),
-then a cap layer side to side, and scales the travel speed along the seam to the measured
+then a cap layer side to side (each bead offset from a top corner, the bevel's edge, which the
+bead before it has not moved), and scales the travel speed along the seam to the measured
 groove: the bead area at a station is the area left to fill there over the beads left, and the
 speed follows from mass conservation, bounded by the process window. :class:`FixedPlanner` lays
 the same beads at one constant speed (the one for the groove's median area).
@@ -37,7 +38,7 @@ FloatArray = NDArray[np.float64]
 #: (parabola 2/3, cosine 2/pi (Ding et al. 2015), circular arc ~ a parabola for w/h >= 2).
 SHAPE_FILL = {"parabola": 2.0 / 3.0, "cosine": 2.0 / math.pi, "arc": 2.0 / 3.0}
 
-REFERENCES = ("left", "right", "centre")
+REFERENCES = ("left", "right", "centre", "left_top", "right_top")
 
 #: The cap's outer beads reach this far (mm) beyond the groove's top corners (a cap overlaps
 #: the plates' edges, so no notch is left at the corner).
@@ -48,6 +49,9 @@ CAP_BAND_FRACTION = 0.3
 
 # Indices of the 7 groove points.
 LEFT_TOP, LEFT_FOOT, MIDDLE, RIGHT_FOOT, RIGHT_TOP = 0, 1, 3, 5, 6
+#: Each reference's row of the 7 points.
+POINT_INDEX = {"left": LEFT_FOOT, "right": RIGHT_FOOT, "centre": MIDDLE, "left_top": LEFT_TOP,
+               "right_top": RIGHT_TOP}  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -142,9 +146,12 @@ class PassPlan:
 
     Attributes
     ----------
-    reference : "left", "right" or "centre"
-        The groove point the tracker follows (the groove extractor's ``reference``): the left
-        or right wall's foot at the fill surface, or the fill surface's middle.
+    reference : "left", "right", "centre", "left_top" or "right_top"
+        The groove point the tracker follows: the left or right wall's foot at the fill
+        surface, or the fill surface's middle (the groove extractor's ``reference``), or the
+        left or right top corner (the bevel's top edge, where the plate's line meets the wall's:
+        no fill bead moves it, so a bead placed from it lands where the plan put it whatever
+        the bead before did to the fill surface).
     offset_mm : float
         Lateral offset of the torch from the reference, in the station frame (+y).
     work_angle_rad : float
@@ -338,10 +345,12 @@ class AdaptivePlanner:
         the :class:`FixedPlanner`).
     wall_reference : bool
         Track a wall bead on the extractor's wall foot (``left``/``right``) with a constant
-        offset; by default every bead tracks the fill surface's middle (``centre``) with an
-        offset profile along the seam that puts it at its place from the walls as the last
-        pass measured them (a wall's foot, where a toe wets it, jumps along the wall from one
-        station to the next; the middle of the fill surface does not).
+        offset; by default a bead of a layer of several tracks the nearer top corner
+        (``left_top``/``right_top``, the bevel's top edge, which no fill bead moves) and a
+        layer's only bead the fill surface's middle (``centre``), with an offset profile
+        along the seam that puts it at its place from the walls as the last pass measured
+        them (a wall's foot, where a toe wets it, jumps along the wall from one station to
+        the next; the top corners do not). See :meth:`_place`.
     """
 
     name = "adaptive"
@@ -363,11 +372,12 @@ class AdaptivePlanner:
         self.wall_reference = wall_reference
         self.layout: Layout | None = None
         self._cap: tuple[FloatArray, FloatArray] | None = None  # (s, bead area) of the cap
+        self._cap_corners: tuple[FloatArray, FloatArray] | None = None  # (s, (m, 2) top y)
 
     def plan(self, groove: MeasuredGroove, pass_index: int, state: JobState) -> PassPlan | None:
         if self.layout is None or pass_index == 0:
             self.layout = layout(groove, state)
-            self._cap = None
+            self._cap = self._cap_corners = None
         where = self.layout.locate(pass_index)
         if where is None:
             return None
@@ -377,7 +387,7 @@ class AdaptivePlanner:
         p = state.process
         reference, offsets = self._place(groove, n, slot_rank, cap)
         offset = float(np.median(offsets))
-        profile_offsets = offsets if reference == "centre" else None
+        profile_offsets = None if reference in ("left", "right") else offsets
         remaining = np.asarray(groove.area_mm2, dtype=float)
         if state.last_bead_area_mm2 is not None:  # the groove was measured before the last bead
             remaining = remaining - np.asarray(state.last_bead_area_mm2, dtype=float)
@@ -409,13 +419,32 @@ class AdaptivePlanner:
     ) -> tuple[str, FloatArray]:
         """The reference and lateral offset (per measured station) of the ``rank``-th bead
         laid in a layer of n: the cap side to side over the top width, a fill layer's beads
-        in n equal slots of the fill surface's width, the wall slots first."""
+        in n equal slots of the fill surface's width, the wall slots first.
+
+        The place is worked out on the groove the pass before measured: the groove *before*
+        that pass's bead (its sensor looks ahead of its torch). A wall bead wets its wall and
+        lifts the wall's foot up it (a 60 deg V: about a millimetre out), moving the fill
+        surface's middle half as far, so a bead offset from the middle or a foot lands off
+        its place by as much, every pass. The top corners, the bevels' top edges, are the
+        one feature no fill bead moves: a bead of a layer of several is offset from the
+        nearer one, as a welder measures a bead's place from the bevel's edge, and lands
+        where the plan put it. A layer's only bead follows the surface's middle. The cap's
+        beads are placed over the top corners measured before the first cap bead (which
+        buries the left one and spills over the plate, moving the corner a sensor sees to
+        its toe): the first from the left corner, the others from the right one, which no
+        cap bead reaches before the last, laid against it.
+        """
         pts = groove.points
-        middle = _smooth(pts[:, MIDDLE, 0])
         if cap:  # over the top width and CAP_OVERLAP_MM beyond each top corner
-            left = _smooth(pts[:, LEFT_TOP, 0]) - CAP_OVERLAP_MM
-            width = _smooth(groove.top_width_mm) + 2 * CAP_OVERLAP_MM
-            return "centre", left + (rank + 0.5) * width / n - middle
+            if rank == 0 or self._cap_corners is None:
+                top = np.column_stack([_smooth(pts[:, LEFT_TOP, 0]),
+                                       _smooth(pts[:, RIGHT_TOP, 0])])  # fmt: skip
+                self._cap_corners = (groove.s_mm.copy(), top)
+            s_cap, top = self._cap_corners
+            left = np.interp(groove.s_mm, s_cap, top[:, 0])
+            right = np.interp(groove.s_mm, s_cap, top[:, 1])
+            target = left - CAP_OVERLAP_MM + (rank + 0.5) * (right - left + 2 * CAP_OVERLAP_MM) / n
+            return ("left_top", target - left) if rank == 0 else ("right_top", target - right)
         if n == 1:
             return "centre", np.zeros(len(groove))
         slot = fill_order(n)[rank]
@@ -424,10 +453,14 @@ class AdaptivePlanner:
         if self.wall_reference and slot in (0, n - 1):
             return ("left", wall) if slot == 0 else ("right", -wall)
         if slot == 0:
-            return "centre", left + wall - middle
-        if slot == n - 1:
-            return "centre", left + width - wall - middle
-        return "centre", left + (slot + 0.5) * width / n - middle
+            target = left + wall
+        elif slot == n - 1:
+            target = left + width - wall
+        else:
+            target = left + (slot + 0.5) * width / n
+        if 2 * slot + 1 < n:  # the left half: from the left top corner
+            return "left_top", target - _smooth(pts[:, LEFT_TOP, 0])
+        return "right_top", target - _smooth(pts[:, RIGHT_TOP, 0])
 
 
 def _smooth(values: FloatArray, half_window: int = 4) -> FloatArray:
@@ -553,7 +586,7 @@ def checked_plan(
         raise refuse(f"asks for a work angle of {math.degrees(plan.work_angle_rad):.3g} deg on "
                      "a gantry, which cannot tilt its torch", "plan work_angle_rad = 0 on a "
                      "gantry, or weld on an arm (robot.model)")  # fmt: skip
-    reference = {"left": LEFT_FOOT, "right": RIGHT_FOOT, "centre": MIDDLE}[plan.reference]
+    reference = POINT_INDEX[plan.reference]
     # on the groove as measured, smoothed along the seam (one frame's outlier is not the groove)
     y = _smooth(groove.points[:, reference, 0]) + plan.offset_at(groove.s_mm)
     lo, hi = _smooth(groove.points[:, LEFT_TOP, 0]), _smooth(groove.points[:, RIGHT_TOP, 0])

@@ -255,7 +255,7 @@ class PassOverride(_Section):
     ``number`` (1-based, the scan-only pass not counted)."""
 
     number: Annotated[int, Field(ge=1, strict=True)]
-    reference: Literal["left", "right", "centre"] | None = None
+    reference: Literal["left", "right", "centre", "left_top", "right_top"] | None = None
     offset_mm: Finite | None = None
     work_angle_deg: Angle | None = None
     travel_speed_mm_s: Positive | None = None

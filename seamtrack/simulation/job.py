@@ -7,8 +7,8 @@
    time counts in the job's time) that measures the groove.
 2. For each pass the planner (:mod:`seamtrack.control.planner`) gets the groove as the sensor
    measured it during the pass before (the groove extractor's 7 points and remaining area per
-   frame, binned per station) and returns the pass: reference (left wall, right wall, centre),
-   lateral offset, travel speed (a profile along the seam), wire feed. The scene's
+   frame, binned per station) and returns the pass: reference (a wall's foot, the middle, a
+   top corner), lateral offset, travel speed (a profile along the seam), wire feed. The scene's
    ``[[passes.overrides]]`` replace its values.
 3. The pass runs as :func:`seamtrack.simulation.loop.run` on parts built with the beads' mesh
    joined to the workpiece's (:func:`~seamtrack.simulation.assemble.build_parts`'s
@@ -70,8 +70,8 @@ from seamtrack.simulation.job_summary import (  # noqa: F401 (the job's public n
 )
 from seamtrack.simulation.loop import Result, run
 from seamtrack.simulation.passes import (
+    aim_point,
     heat_input_kj_mm,
-    offset_point,
     overridden,
     planned_feature,
     process_of,
@@ -273,9 +273,10 @@ def _pass(
     stations' right)."""
     c = scene.config
     reference = "centre" if plan is None else plan.reference
-    laser_reference = (
-        {"left": "right", "right": "left"}.get(reference, reference) if flip else (reference)
-    )
+    # the extractor knows the feet and the middle; from a top corner the job aims itself
+    laser_reference = reference if reference in ("left", "right") else "centre"
+    if flip:
+        laser_reference = {"left": "right", "right": "left"}.get(laser_reference, "centre")
     speed = c.simulation.welding_speed_mm_s if plan is None else plan.travel_speed_mm_s
     slowest = speed if plan is None else float(np.min(plan.speed_at(fill.s_mm)))
     overrides: dict[str, Any] = {
@@ -374,7 +375,11 @@ def _steered(
             frames[-1] = (feature, T_world_sensor)
         if feature:
             seen[0] = True
-        elif not seen[0] and previous is not None:  # not yet seen: start on the plan
+        elif previous is not None and (not seen[0] or (plan.cap and plan.reference in _FIXED)):
+            # not yet seen: start on the plan; a cap bead's top corner, which no bead moves,
+            # and whose height is the cap's aim: where the pass before measured it (a cap's
+            # edge bead puts the sensor so far off the groove's middle that the far plate
+            # leaves its stripe now and then)
             feature = planned_feature(feature, T_world_sensor, fill, plan, previous,
                                       STATION_SPACING_MM, _POINT_INDEX)  # fmt: skip
         if feature:
@@ -385,10 +390,11 @@ def _steered(
                 if ahead is not None:
                     adapted[i] = _adapted(adapt, ahead, plan, planner_name, t_s)
             offset = adapted[i, 1] if np.isfinite(adapted[i, 1]) else float(plan.offset_at(s))
-            here = measured_groove(frames[-1:], fill, cad_seam) if offset else None
+            own = offset or plan.cap or plan.reference not in ("left", "right", "centre")
+            here = measured_groove(frames[-1:], fill, cad_seam) if own else None
             if here is not None:  # on the fill surface the frame measured, under the bead
                 k = min(int(np.searchsorted(s_stations, here.s_mm[0])), len(s_stations) - 1)
-                y, z = offset_point(here.points, _POINT_INDEX[plan.reference], offset)[0]
+                y, z = aim_point(here.points, _POINT_INDEX[plan.reference], offset, plan.cap)[0]
                 point = (fill.T_world_station[k] @ np.array([0.0, y, z, 1.0]))[:3]
                 feature = dataclasses.replace(feature, point_world=point)
             elif offset:  # the planned point (no groove measured yet)
@@ -423,6 +429,10 @@ def _below_the_fill(
         or y_right < before[1] - 2 * FILL_DROP_MM
     )
 
+
+#: References no bead moves (the bevels' top edges): a cap bead's frame that misses one takes
+#: it from the pass before's measurement.
+_FIXED = ("left_top", "right_top")
 
 #: The pass before's left foot's y, right foot's y, middle's z (row, column of the 7 points).
 _PAST = ((1, 0), (5, 0), (3, 1))

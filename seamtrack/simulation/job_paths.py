@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.control.planner import (
+    POINT_INDEX,
     MeasuredGroove,
     PassPlan,
 )
@@ -23,7 +24,7 @@ from seamtrack.simulation.job_summary import (  # noqa: F401 (the job's public n
 )
 from seamtrack.simulation.loop import Result
 from seamtrack.simulation.passes import (
-    offset_point,
+    aim_point,
 )
 
 FloatArray = NDArray[np.float64]
@@ -31,7 +32,7 @@ FloatArray = NDArray[np.float64]
 #: Station spacing of the fill state (mm): the issue's "every <= 0.5 mm".
 STATION_SPACING_MM = 0.5
 
-_POINT_INDEX = {"left": 1, "right": 5, "centre": 3}
+_POINT_INDEX = POINT_INDEX
 
 #: A bead that stops this close (mm) to the part's end is run off the edge (:func:`_to_the_ends`).
 RUN_OFF_MM = 3.0
@@ -42,13 +43,14 @@ def pass_path(fill: Any, reference: str, plan: PassPlan | None, window: int = 4)
     surface (left or right wall's foot, or the middle; a running median over ``2 window + 1``
     stations, 2 mm: where a toe wets a wall the foot jumps along it from one station to the
     next, faster than any torch follows), moved across the seam by the plan's offset there,
-    onto the fill surface the bottom points describe (:func:`~seamtrack.simulation.passes.
-    offset_point`: where the bead aims, as the tracker does with the measured points)."""
+    onto the fill surface the bottom points describe, or a cap bead at the plates' top line
+    (:func:`~seamtrack.simulation.passes.aim_point`: where the bead aims, as the tracker does
+    with the measured points)."""
     pts = fill.all_groove_points()
     padded = np.pad(pts, ((window, window), (0, 0), (0, 0)), mode="edge")
     pts = np.median(np.lib.stride_tricks.sliding_window_view(padded, 2 * window + 1, axis=0), -1)
     offset = np.zeros(len(pts)) if plan is None else plan.offset_at(fill.s_mm)
-    yz = offset_point(pts, _POINT_INDEX[reference], offset)
+    yz = aim_point(pts, _POINT_INDEX[reference], offset, plan is not None and plan.cap)
     local = np.column_stack([np.zeros(len(yz)), yz[:, 0], yz[:, 1], np.ones(len(yz))])
     points = np.einsum("mij,mj->mi", fill.T_world_station, local)[:, :3]
     return Seam.from_points(points, field="passes", name="pass path")
@@ -113,11 +115,21 @@ def _arc_path(
     return path[keep], t[keep], np.maximum(speed[keep], floor_mm_s)
 
 
-def _ramped(speed: FloatArray, planned: FloatArray, fraction: float = 0.8) -> FloatArray:
+def _ramped(speed: FloatArray, planned: FloatArray, fraction: float = 0.95) -> FloatArray:
     """The speed that sets the bead's area: the actual one, except while the torch speeds up
-    from rest at the start and brakes to rest at the end (below ``fraction`` of the planned
-    speed there), where the wire feed follows the travel speed (a controller's synchronised
-    arc start and crater) and the bead has its planned area."""
+    from rest at the start and brakes to rest at the end (before it first reaches, and after
+    it last runs at, ``fraction`` of the planned speed there), where the wire feed follows the
+    travel speed (a controller's synchronised arc start and crater) and the bead has its
+    planned area.
+
+    The end's braking is not one clean ramp: the tracker slows on to the last point its
+    sensor saw, a millimetre or two before the plate's edge, at a fifth or so under the
+    plan, then to rest. Counted at the actual speed there (a threshold of 0.8 took it so),
+    that stretch laid a bead a third fatter than planned at every pass's end, the next pass's
+    sensor saw the bump and its torch rose over it, and the bumps piled up layer on layer
+    (a 2 mm crown over the last 5 mm of a 100 mm seam, the fill passes' trackers 0.5-1.2 mm
+    off the smoothed fill surface there). Within 5 % of the plan the torch is welding; below
+    it, at the ends, the crater is."""
     out = speed.copy()
     fast = np.flatnonzero(speed >= fraction * planned)
     if not len(fast):

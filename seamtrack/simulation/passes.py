@@ -216,6 +216,31 @@ def offset_point(points: FloatArray, index: int, offset_mm: Any) -> FloatArray:
     return np.column_stack([y, z])
 
 
+def aim_point(points: FloatArray, index: int, offset_mm: Any, cap: bool = False) -> FloatArray:
+    """(m, 2) where a bead ``offset_mm`` (m,) across the groove from row ``index`` of the 7
+    points ``points`` (m, 7, 2) aims: a fill bead at the fill surface under it
+    (:func:`offset_point`), a cap bead (``cap``) at the height of the plates' top line there
+    (the line through the top corners, rows 0 and 6).
+
+    Why a cap bead is aimed at the plates' line: the cap is laid on a fill surface left
+    between the last fill beads' crowns and the valleys between them, a millimetre or two
+    bumpy, partly buried walls, then the cap's own beads beside it; where the surface under
+    a bead lies depends on which piece of it the 7 points' straight lines happen to cross,
+    and a torch aimed there bobs by as much from one station to the next (2 mm on a bead's
+    flank by a half-buried wall). A welder sets the cap's torch height from the plates'
+    surfaces either side, which no bead changes, and leaves the arc's length (the
+    power source's voltage control) to take up the fill surface's few tenths under it; the
+    cap's crown is measured from that line too. Across the seam the cap bead still goes
+    where its reference and offset put it."""
+    yz = offset_point(points, index, offset_mm)
+    if cap:
+        p = np.asarray(points, dtype=float).reshape(-1, 7, 2)
+        (y0, z0), (y1, z1) = p[:, 0].T, p[:, 6].T
+        span = np.where(np.abs(y1 - y0) > 1e-9, y1 - y0, 1.0)
+        yz[:, 1] = z0 + (yz[:, 0] - y0) * (z1 - z0) / span
+    return yz
+
+
 def _profile(p: FloatArray) -> tuple[FloatArray, FloatArray]:
     """The 7 points' y and z as a function of y (the bottom five where a wall leans over)."""
     rows = p if np.all(np.diff(p[:, 0]) >= 0) else p[1:6]
