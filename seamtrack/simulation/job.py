@@ -368,10 +368,13 @@ def _steered(
         frames.append((feature, T_world_sensor))
         if plan is None:
             return feature
+        # The frame's 7 points at their station (measured once: the checks below share it).
+        now = measured_groove(frames[-1:], fill, cad_seam) if feature else None
         if feature and previous is not None and _below_the_fill(frames[-1], fill, cad_seam,
-                                                                previous):  # fmt: skip
+                                                                previous, now):  # fmt: skip
             feature = Feature.failed("below the fill the pass before measured", feature.joint)
             frames[-1] = (feature, T_world_sensor)
+            now = None
         if feature:
             seen[0] = True
         elif not seen[0] and previous is not None:  # not yet seen: start on the plan
@@ -380,12 +383,10 @@ def _steered(
         if feature:
             s = float(cad_seam.closest(feature.point_world[None]).arc_length_mm[0])
             i = station(s)
-            if adapt is not None:
-                ahead = measured_groove(frames[-1:], fill, cad_seam)
-                if ahead is not None:
-                    adapted[i] = _adapted(adapt, ahead, plan, planner_name, t_s)
+            if adapt is not None and now is not None:
+                adapted[i] = _adapted(adapt, now, plan, planner_name, t_s)
             offset = adapted[i, 1] if np.isfinite(adapted[i, 1]) else float(plan.offset_at(s))
-            here = measured_groove(frames[-1:], fill, cad_seam) if offset else None
+            here = now if offset else None
             if here is not None:  # on the fill surface the frame measured, under the bead
                 k = min(int(np.searchsorted(s_stations, here.s_mm[0])), len(s_stations) - 1)
                 y, z = offset_point(here.points, _POINT_INDEX[plan.reference], offset)[0]
@@ -405,13 +406,20 @@ def _steered(
 
 
 def _below_the_fill(
-    frame: tuple[Feature, FloatArray], fill: Any, seam: Seam, previous: MeasuredGroove
+    frame: tuple[Feature, FloatArray],
+    fill: Any,
+    seam: Seam,
+    previous: MeasuredGroove,
+    now: MeasuredGroove | bool | None = False,
 ) -> bool:
     """Whether a frame's fill surface (its middle bottom point) lies more than
     :data:`FILL_DROP_MM` below the one measured there by the pass before, or its bottom
     corners lie more than twice that inside the pass before's (the fill surface only widens
-    up a V's walls; a frame that shows part of it, at the part's end, is no groove)."""
-    now = measured_groove([frame], fill, seam)
+    up a V's walls; a frame that shows part of it, at the part's end, is no groove).
+    ``now``: the frame's :func:`measured_groove`, when the caller has it already."""
+    if now is False:
+        now = measured_groove([frame], fill, seam)
+    assert now is None or isinstance(now, MeasuredGroove)
     if now is None or not len(previous):
         return False
     p = previous.points
