@@ -56,6 +56,7 @@ Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groov
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 from typing import NamedTuple
@@ -64,6 +65,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.errors import PluginError
+from seamtrack.features._groove_kernels import local_v, robust_uv_line, running_median
 from seamtrack.features._segmentation import fit_line
 from seamtrack.features.base import _Base
 from seamtrack.features.lines import Line, Segments, intersect, segment_profile
@@ -381,10 +383,7 @@ class GrooveExtractor(_Base):
         qu, qv = qu[order], qv[order]
         k = int(min(101, max(5, round(0.6 / max(seg.spacing, 1e-9)))) | 1)
         if len(qv) >= k:
-            # k is odd: each window's median is its middle element (np.median's number).
-            windows = np.lib.stride_tricks.sliding_window_view(qv, k)
-            inner_med = np.partition(windows, k // 2, axis=1)[:, k // 2]
-            med = np.pad(inner_med, k // 2, mode="edge")  # the ends: their whole window's
+            med = running_median(_c(qv), k)  # the ends: their whole window's
             ok = np.abs(qv - med) <= max(3.0 * seg.tol, 0.2)
             qu, qv = qu[ok], qv[ok]
         if len(qu) > 1:  # the largest stretch without a break of 2 mm (scraps at the top edges)
@@ -529,49 +528,37 @@ def _on_line(seg: Segments, ref: Line, ln: Line, max_deg: float = 5.0) -> bool:
 def _robust_uv_line(qu: FloatArray, qv: FloatArray, tol: float) -> tuple[float, float] | None:
     """v = a + b u through the most points within two tolerances, of the lines through pairs
     of (at most 40, evenly picked) points at least a third of the stretch apart; refitted on
-    those points. Spike runs less than half the points do not move it."""
+    those points. Spike runs less than half the points do not move it (compiled:
+    :func:`seamtrack.features._groove_kernels.robust_uv_line`)."""
     n = len(qu)
     if n < 3:
         return None
+    i, j = _pairs(n)
+    a, b, found = robust_uv_line(_c(qu), _c(qv), float(tol), i, j)
+    return (a, b) if found else None
+
+
+@functools.lru_cache(maxsize=256)
+def _pairs(n: int) -> tuple[IntArray, IntArray]:
+    """The pairs of :func:`_robust_uv_line` among ``n`` points, in order (read-only)."""
     pick = np.unique(np.linspace(0, n - 1, min(n, 40)).round().astype(np.intp))
     i, j = np.triu_indices(len(pick), k=max(1, len(pick) // 3))
     i, j = pick[i], pick[j]
-    du = qu[j] - qu[i]
-    ok = np.abs(du) > 1e-9
-    if not np.any(ok):
-        return None
-    i, j = i[ok], j[ok]
-    b = (qv[j] - qv[i]) / (qu[j] - qu[i])
-    a = qv[i] - b * qu[i]
-    count = (np.abs(qv[None, :] - (a[:, None] + b[:, None] * qu[None, :])) <= 2.0 * tol).sum(1)
-    k = int(np.argmax(count))
-    keep = np.abs(qv - (a[k] + b[k] * qu)) <= 2.0 * tol
-    if np.count_nonzero(keep) < 3:
-        return None
-    A = np.column_stack([np.ones(np.count_nonzero(keep)), qu[keep]])
-    coef = np.linalg.lstsq(A, qv[keep], rcond=None)[0]
-    return float(coef[0]), float(coef[1])
+    i.setflags(write=False)
+    j.setflags(write=False)
+    return i, j
 
 
 def _local_v(qu: FloatArray, qv: FloatArray, ut: float, h: float, tol: float) -> float | None:
     """v of the surface at u = ut: a robust line fit of the points within h of it (None: fewer
-    than 3 there, or none on one side)."""
-    sel = np.abs(qu - ut) <= h
-    if np.count_nonzero(sel) < 3:
-        return None
-    a, b = qu[sel] - ut, qv[sel]
-    if not (np.any(a <= 0) and np.any(a >= 0)):
-        return None
-    mid = _median(b)
-    keep = np.abs(b - mid) <= max(5.0 * tol, 4.0 * _median(np.abs(b - mid)))
-    for _ in range(2):
-        if np.count_nonzero(keep) < 3:
-            return None
-        A = np.column_stack([np.ones(np.count_nonzero(keep)), a[keep]])
-        coef = np.linalg.lstsq(A, b[keep], rcond=None)[0]
-        r = b - (coef[0] + coef[1] * a)
-        keep = np.abs(r) <= 3.0 * tol
-    return float(coef[0])
+    than 3 there, or none on one side; compiled:
+    :func:`seamtrack.features._groove_kernels.local_v`)."""
+    val = local_v(_c(qu), _c(qv), float(ut), float(h), float(tol))
+    return None if math.isnan(val) else float(val)
+
+
+def _c(x: FloatArray) -> FloatArray:
+    return np.ascontiguousarray(x, dtype=np.float64)
 
 
 def _area(pts: FloatArray, P: FloatArray, inner: IntArray, u: FloatArray) -> float:
