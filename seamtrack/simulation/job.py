@@ -352,6 +352,7 @@ def _steered(
     tracker = parts.tracker
     T_sensor_tcp = np.linalg.inv(np.asarray(parts.robot.T_tcp_sensor, dtype=float))
     lateral = fill.T_world_station[:, :3, 1]
+    T_station_world = np.linalg.inv(fill.T_world_station)
     s_stations = fill.s_mm
     set_speed = getattr(tracker, "set_speed", None)
     adapted = np.full((len(s_stations), 2), np.nan)  # speed, offset per station
@@ -369,7 +370,7 @@ def _steered(
         if plan is None:
             return feature
         # The frame's 7 points at their station (measured once: the checks below share it).
-        now = measured_groove(frames[-1:], fill, cad_seam) if feature else None
+        now = measured_groove(frames[-1:], fill, cad_seam, T_station_world) if feature else None
         if feature and previous is not None and _below_the_fill(frames[-1], fill, cad_seam,
                                                                 previous, now):  # fmt: skip
             feature = Feature.failed("below the fill the pass before measured", feature.joint)
