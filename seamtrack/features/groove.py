@@ -388,7 +388,7 @@ class GrooveExtractor(_Base):
             qu, qv = qu[ok], qv[ok]
         if len(qu) > 1:  # the largest stretch without a break of 2 mm (scraps at the top edges)
             cut = np.flatnonzero(np.diff(qu) > 2.0) + 1
-            bounds = np.r_[0, cut, len(qu)]
+            bounds = np.concatenate(([0], cut, [len(qu)]))
             j = int(np.argmax(np.diff(bounds)))
             a, b = j, j + 1
             # Towards a side with no wall seen (buried under a crowned fill) a break of up to
@@ -570,4 +570,5 @@ def _area(pts: FloatArray, P: FloatArray, inner: IntArray, u: FloatArray) -> flo
     ring = np.vstack([pts[0], pts[1], P[zone], pts[5], pts[6]])
     v = np.array([-u[1], u[0]])
     a, b = ring @ u, ring @ v  # along the plates, into the groove
-    return float(-0.5 * (np.dot(a, np.roll(b, -1)) - np.dot(b, np.roll(a, -1))))
+    a_next, b_next = np.concatenate((a[1:], a[:1])), np.concatenate((b[1:], b[:1]))  # np.roll
+    return float(-0.5 * (np.dot(a, b_next) - np.dot(b, a_next)))
