@@ -32,6 +32,7 @@ scored over the part of the seam every pass welded (the torch strikes the arc wh
 from __future__ import annotations
 
 import dataclasses
+import gc
 import math
 import time
 from dataclasses import dataclass
@@ -160,6 +161,7 @@ def run_job(
     groove: MeasuredGroove | None = None
     if c.passes.scan_first:
         scan = _pass(scene, None, fill, cad_seam, rng, process, progress, "pass_00_scan", flip)
+        _release_pass()
         records.append(scan.record)
         if scan.groove is None:
             raise PluginRuntimeError(
@@ -187,6 +189,7 @@ def run_job(
             assert plan is not None
         done = _pass(scene, plan, fill, cad_seam, rng, process, progress, f"pass_{index + 1:02d}",
                      flip, adapt, name, groove)  # fmt: skip
+        _release_pass()
         start = time.perf_counter()
         try:
             if len(done.path_world) >= 2:
@@ -517,6 +520,14 @@ def _with(scene: Scene, overrides: dict[str, Any]) -> Scene:
         node[key] = value
     config = type(scene.config).model_validate(data)
     return dataclasses.replace(scene, config=config)
+
+
+def _release_pass() -> None:
+    """Free what the pass just run built: its meshes (the part with the beads joined) are held
+    by trimesh's own reference cycles, with their caches and ray-casting scenes, until Python's
+    next full collection; collected after each pass, a job's peak memory stays that of one
+    pass's parts, not of several. (A full collection costs about 0.1 s.)"""
+    gc.collect()
 
 
 def _job_bar(enabled: bool, total: int | None) -> Any:
