@@ -299,10 +299,12 @@ class GrooveExtractor(_Base):
         hi = max(int(lines[groove[0]].index[-1]), int(lines[groove[-1]].index[-1])) + 1
         q = P[lo:hi][~seg.stray[lo:hi]]
         best, support = None, self.min_points - 1
+        vy, vz = float(v[0]), float(v[1])
+        sign = 1.0 if from_left else -1.0  # inwards from the plate
         for j in groove:
             ln = lines[j]
-            d = ln.direction if from_left else -ln.direction  # inwards from the plate
-            dv = float(d @ v)
+            _, _, uy, uz, _, _ = ln.scalars  # floats: no numpy call a piece
+            dv = sign * (uy * vy + uz * vz)
             off = math.degrees(math.asin(min(1.0, abs(dv))))
             if not (dv > 0 and off >= self.wall_deg and ln.extent >= 0.3):
                 continue
@@ -490,10 +492,7 @@ class GrooveExtractor(_Base):
         band = 3.0 * seg.tol
         ok = np.zeros(len(P), dtype=bool)
         lo, hi = int(plates.left.index[-1]), int(plates.right.index[0])
-        for line, sel in (
-            (plates.left, np.arange(0, lo + 1)),
-            (plates.right, np.arange(hi, len(P))),
-        ):
+        for line, sel in ((plates.left, slice(0, lo + 1)), (plates.right, slice(hi, len(P)))):
             ok[sel] = np.abs((P[sel] - line.centroid) @ line.normal) <= band
         for w in walls:
             if w.line is not None:
