@@ -128,7 +128,25 @@ def run_job(
 
     ``planner_override``: a planner instance used instead of the scene's; ``on_pass(record,
     fill)`` is called after each pass (a notebook's or a bench's hook).
+
+    Memory: the objects that exist when the job starts are frozen out of Python's garbage
+    collections for its duration (:func:`gc.freeze`, unless the caller froze some already),
+    so the full collection after each pass scans only the job's own.
     """
+    frozen = gc.get_freeze_count() == 0
+    if frozen:
+        gc.collect()
+        gc.freeze()
+    try:
+        return _run_job(scene, progress, planner_override, on_pass, frozen)
+    finally:
+        if frozen:
+            gc.unfreeze()
+
+
+def _run_job(
+    scene: Scene | str, progress: bool, planner_override: Any, on_pass: Any, freeze: bool
+) -> JobResult:
     from seamtrack.workpiece.beads import BeadShape
     from seamtrack.workpiece.fill import FillState  # trimesh, scipy: a job's own imports
 
@@ -161,7 +179,7 @@ def run_job(
     groove: MeasuredGroove | None = None
     if c.passes.scan_first:
         scan = _pass(scene, None, fill, cad_seam, rng, process, progress, "pass_00_scan", flip)
-        _release_pass()
+        _release_pass(freeze)
         records.append(scan.record)
         if scan.groove is None:
             raise PluginRuntimeError(
@@ -189,7 +207,7 @@ def run_job(
             assert plan is not None
         done = _pass(scene, plan, fill, cad_seam, rng, process, progress, f"pass_{index + 1:02d}",
                      flip, adapt, name, groove)  # fmt: skip
-        _release_pass()
+        _release_pass(freeze)
         start = time.perf_counter()
         try:
             if len(done.path_world) >= 2:
@@ -522,12 +540,16 @@ def _with(scene: Scene, overrides: dict[str, Any]) -> Scene:
     return dataclasses.replace(scene, config=config)
 
 
-def _release_pass() -> None:
+def _release_pass(freeze: bool) -> None:
     """Free what the pass just run built: its meshes (the part with the beads joined) are held
     by trimesh's own reference cycles, with their caches and ray-casting scenes, until Python's
     next full collection; collected after each pass, a job's peak memory stays that of one
-    pass's parts, not of several. (A full collection costs about 0.1 s.)"""
+    pass's parts, not of several. ``freeze``: then what survives is frozen out of the next
+    collections (the job's imports, its records; :func:`run_job` unfreezes them at its end),
+    which then scan only what the next pass made."""
     gc.collect()
+    if freeze:
+        gc.freeze()
 
 
 def _job_bar(enabled: bool, total: int | None) -> Any:
