@@ -13,11 +13,13 @@ Points are (u, v): u across the groove (the plates' line, left to right), v into
 
 from __future__ import annotations
 
+import functools
 import math
 
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.features._groove_kernels import robust_uv_line
 from seamtrack.features._segmentation import fit_line
 from seamtrack.features.lines import Line, Segments
 
@@ -243,13 +245,26 @@ def mirrored_walls(
     return out[0], out[1]
 
 
+def _median(x: FloatArray) -> float:
+    """``np.median`` of a 1-d array, the same number without its per-call overhead (the
+    extractor takes thousands of small medians a second)."""
+    n = len(x)
+    if n == 0:
+        return math.nan
+    s = np.sort(x)
+    if math.isnan(s[-1]):  # NaN sorts last; np.median's answer then is NaN
+        return math.nan
+    h = n // 2
+    return float(s[h]) if n % 2 else float((s[h - 1] + s[h]) / 2)
+
+
 def _on_line(seg: Segments, ref: Line, ln: Line, max_deg: float = 5.0) -> bool:
     """Whether piece ``ln`` lies on the line of ``ref`` (within ``max_deg`` and two
     tolerances)."""
     if _angle_deg(ln.direction, ref.direction) > max_deg:
         return False
     off = np.abs((seg.points[ln.index] - ref.centroid) @ ref.normal)
-    return bool(np.median(off) <= 2.0 * seg.tol)
+    return bool(_median(off) <= 2.0 * seg.tol)
 
 
 def _beyond(q: FloatArray, ln: Line, v: FloatArray, left: bool, tol: float) -> int:
@@ -264,28 +279,29 @@ def _beyond(q: FloatArray, ln: Line, v: FloatArray, left: bool, tol: float) -> i
 def _robust_uv_line(qu: FloatArray, qv: FloatArray, tol: float) -> tuple[float, float] | None:
     """v = a + b u through the most points within two tolerances, of the lines through pairs
     of (at most 40, evenly picked) points at least a third of the stretch apart; refitted on
-    those points. Spike runs less than half the points do not move it."""
+    those points. Spike runs less than half the points do not move it (compiled:
+    :func:`seamtrack.features._groove_kernels.robust_uv_line`)."""
     n = len(qu)
     if n < 3:
         return None
+    i, j = _pairs(n)
+    a, b, found = robust_uv_line(_c(qu), _c(qv), float(tol), i, j)
+    return (a, b) if found else None
+
+
+@functools.lru_cache(maxsize=256)
+def _pairs(n: int) -> tuple[IntArray, IntArray]:
+    """The pairs of :func:`_robust_uv_line` among ``n`` points, in order (read-only)."""
     pick = np.unique(np.linspace(0, n - 1, min(n, 40)).round().astype(np.intp))
     i, j = np.triu_indices(len(pick), k=max(1, len(pick) // 3))
     i, j = pick[i], pick[j]
-    du = qu[j] - qu[i]
-    ok = np.abs(du) > 1e-9
-    if not np.any(ok):
-        return None
-    i, j = i[ok], j[ok]
-    b = (qv[j] - qv[i]) / (qu[j] - qu[i])
-    a = qv[i] - b * qu[i]
-    count = (np.abs(qv[None, :] - (a[:, None] + b[:, None] * qu[None, :])) <= 2.0 * tol).sum(1)
-    k = int(np.argmax(count))
-    keep = np.abs(qv - (a[k] + b[k] * qu)) <= 2.0 * tol
-    if np.count_nonzero(keep) < 3:
-        return None
-    A = np.column_stack([np.ones(np.count_nonzero(keep)), qu[keep]])
-    coef = np.linalg.lstsq(A, qv[keep], rcond=None)[0]
-    return float(coef[0]), float(coef[1])
+    i.setflags(write=False)
+    j.setflags(write=False)
+    return i, j
+
+
+def _c(x: FloatArray) -> FloatArray:
+    return np.ascontiguousarray(x, dtype=np.float64)
 
 
 def _area(pts: FloatArray, P: FloatArray, inner: IntArray, u: FloatArray) -> float:
@@ -297,4 +313,5 @@ def _area(pts: FloatArray, P: FloatArray, inner: IntArray, u: FloatArray) -> flo
     ring = np.vstack([pts[0], pts[1], P[zone], pts[5], pts[6]])
     v = np.array([-u[1], u[0]])
     a, b = ring @ u, ring @ v  # along the plates, into the groove
-    return float(-0.5 * (np.dot(a, np.roll(b, -1)) - np.dot(b, np.roll(a, -1))))
+    a_next, b_next = np.concatenate((a[1:], a[:1])), np.concatenate((b[1:], b[:1]))  # np.roll
+    return float(-0.5 * (np.dot(a, b_next) - np.dot(b, a_next)))

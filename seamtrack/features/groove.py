@@ -79,6 +79,8 @@ from seamtrack.features._groove_fit import (
     _angle_deg,
     _area,
     _beyond,
+    _c,
+    _median,
     _on_line,
     _robust_uv_line,
     drop_islands,
@@ -87,6 +89,7 @@ from seamtrack.features._groove_fit import (
     risen_level,
     trim_wall,
 )
+from seamtrack.features._groove_kernels import local_v, running_median
 from seamtrack.features._segmentation import fit_line
 from seamtrack.features.base import _Base
 from seamtrack.features.lines import Line, Segments, intersect, segment_profile
@@ -289,7 +292,7 @@ class GrooveExtractor(_Base):
             if _angle_deg(nxt.direction, base.direction) > 5.0:
                 break
             off = np.abs((seg.points[nxt.index] - base.centroid) @ base.normal)
-            if np.median(off) > 2.0 * seg.tol:
+            if _median(off) > 2.0 * seg.tol:
                 break
             index.append(nxt.index)
             k += step
@@ -317,10 +320,12 @@ class GrooveExtractor(_Base):
         hi = max(int(lines[groove[0]].index[-1]), int(lines[groove[-1]].index[-1])) + 1
         q = P[lo:hi][~seg.stray[lo:hi]]
         best, support = None, self.min_points - 1
+        vy, vz = float(v[0]), float(v[1])
+        sign = 1.0 if from_left else -1.0  # inwards from the plate
         for j in groove:
             ln = lines[j]
-            d = ln.direction if from_left else -ln.direction  # inwards from the plate
-            dv = float(d @ v)
+            _, _, uy, uz, _, _ = ln.scalars  # floats: no numpy call a piece
+            dv = sign * (uy * vy + uz * vz)
             off = math.degrees(math.asin(min(1.0, abs(dv))))
             if not (dv > 0 and off >= self.wall_deg and ln.extent >= 0.3):
                 continue
@@ -414,15 +419,14 @@ class GrooveExtractor(_Base):
         qu, qv, run = qu[order], qv[order], run[order]
         k = int(min(101, max(5, round(0.6 / max(seg.spacing, 1e-9)))) | 1)
         if len(qv) >= k:
-            inner_med = np.median(np.lib.stride_tricks.sliding_window_view(qv, k), axis=1)
-            med = np.pad(inner_med, k // 2, mode="edge")  # the ends: their whole window's
+            med = running_median(_c(qv), k)  # the ends: their whole window's
             ok = np.abs(qv - med) <= max(3.0 * seg.tol, 0.2)
             qu, qv, run = qu[ok], qv[ok], run[ok]
         ok = drop_islands(qu, qv, run, seg.spacing, seg.tol)  # spike runs the median kept
         qu, qv = qu[ok], qv[ok]
         if len(qu) > 1:  # the largest stretch without a break of 2 mm (scraps at the top edges)
             cut = np.flatnonzero(np.diff(qu) > 2.0) + 1
-            bounds = np.r_[0, cut, len(qu)]
+            bounds = np.concatenate(([0], cut, [len(qu)]))
             j = int(np.argmax(np.diff(bounds)))
             a, b = j, j + 1
             # Towards a side with no wall seen (buried under a crowned fill) a break of up to
@@ -560,10 +564,7 @@ class GrooveExtractor(_Base):
         band = 3.0 * seg.tol
         ok = np.zeros(len(P), dtype=bool)
         lo, hi = int(plates.left.index[-1]), int(plates.right.index[0])
-        for line, sel in (
-            (plates.left, np.arange(0, lo + 1)),
-            (plates.right, np.arange(hi, len(P))),
-        ):
+        for line, sel in ((plates.left, slice(0, lo + 1)), (plates.right, slice(hi, len(P)))):
             ok[sel] = np.abs((P[sel] - line.centroid) @ line.normal) <= band
         for w in walls:
             if w.line is not None:
@@ -575,21 +576,7 @@ class GrooveExtractor(_Base):
 
 def _local_v(qu: FloatArray, qv: FloatArray, ut: float, h: float, tol: float) -> float | None:
     """v of the surface at u = ut: a robust line fit of the points within h of it (None: fewer
-    than 3 there, or none on one side)."""
-    sel = np.abs(qu - ut) <= h
-    if np.count_nonzero(sel) < 3:
-        return None
-    a, b = qu[sel] - ut, qv[sel]
-    if not (np.any(a <= 0) and np.any(a >= 0)):
-        return None
-    keep = np.abs(b - np.median(b)) <= max(
-        5.0 * tol, 4.0 * float(np.median(np.abs(b - np.median(b))))
-    )
-    for _ in range(2):
-        if np.count_nonzero(keep) < 3:
-            return None
-        A = np.column_stack([np.ones(np.count_nonzero(keep)), a[keep]])
-        coef = np.linalg.lstsq(A, b[keep], rcond=None)[0]
-        r = b - (coef[0] + coef[1] * a)
-        keep = np.abs(r) <= 3.0 * tol
-    return float(coef[0])
+    than 3 there, or none on one side; compiled:
+    :func:`seamtrack.features._groove_kernels.local_v`)."""
+    val = local_v(_c(qu), _c(qv), float(ut), float(h), float(tol))
+    return None if math.isnan(val) else float(val)

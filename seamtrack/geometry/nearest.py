@@ -38,3 +38,31 @@ def nearest_of(
                 best, bt, bs = dist, t, c
         seg[i], best_dist[i], best_t[i] = bs, best, bt
     return seg, best_dist, best_t
+
+
+@numba.njit(cache=True, nogil=True)
+def nearest_all(
+    q: FloatArray, a: FloatArray, d: FloatArray
+) -> tuple[NDArray[np.int64], FloatArray, FloatArray]:
+    """:func:`nearest_of` with every segment a candidate, in their order (a few query points
+    on a short seam: no tree to ask)."""
+    m = len(q)
+    n = len(a)
+    seg = np.empty(m, dtype=np.int64)
+    best_dist = np.empty(m)
+    best_t = np.empty(m)
+    for i in range(m):
+        best, bt, bs = np.inf, 0.0, 0
+        for c in range(n):
+            dd = max(d[c, 0] * d[c, 0] + d[c, 1] * d[c, 1] + d[c, 2] * d[c, 2], 1e-300)
+            num = (q[i, 0] - a[c, 0]) * d[c, 0] + (q[i, 1] - a[c, 1]) * d[c, 1]
+            num += (q[i, 2] - a[c, 2]) * d[c, 2]
+            t = min(max(num / dd, 0.0), 1.0)
+            e0 = q[i, 0] - (a[c, 0] + t * d[c, 0])
+            e1 = q[i, 1] - (a[c, 1] + t * d[c, 1])
+            e2 = q[i, 2] - (a[c, 2] + t * d[c, 2])
+            dist = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+            if dist < best:
+                best, bt, bs = dist, t, c
+        seg[i], best_dist[i], best_t[i] = bs, best, bt
+    return seg, best_dist, best_t

@@ -27,6 +27,11 @@ _QUERY_BLOCK = 32_768
 
 _CANDIDATE_SEGMENTS = 16
 
+#: Up to this many (query point, segment) pairs :meth:`Seam.closest` tests them all, without
+#: its tree (a frame's point or two on a seam of a few hundred points: the tree's query costs
+#: more than the loop).
+_ALL_PAIRS = 4096
+
 #: A query point farther than this from the origin (mm) is searched for at this distance along
 #: its direction (:meth:`Seam.closest`): squared distances past ~1e154 mm overflow, and far
 #: before that the distances to different seam points agree to the last digit. At 1e12 mm they
@@ -351,6 +356,11 @@ class Seam:
         a = self.points[:-1]
         d = self.points[1:] - a
         n_seg = len(a)
+        if len(q) * n_seg <= _ALL_PAIRS:
+            from seamtrack.geometry.nearest import nearest_all  # compiled: imported when used
+
+            seg, best_dist, best_t = nearest_all(q, np.ascontiguousarray(a), d)
+            return self._closest_of(seg, best_dist, best_t, single)
         k = min(_CANDIDATE_SEGMENTS, n_seg)
         tree = self._midpoint_tree()
         mid_dist, cand = tree.query(q, k=k)
@@ -383,6 +393,13 @@ class Seam:
                 unsure = unsure[
                     (mid_dist[unsure, -1] <= best_dist[unsure] + half_longest) & (kk < n_seg)
                 ]
+        return self._closest_of(seg, best_dist, best_t, single)
+
+    def _closest_of(
+        self, seg: NDArray[np.int64], best_dist: FloatArray, best_t: FloatArray, single: bool
+    ) -> Closest:
+        a = self.points[:-1]
+        d = self.points[1:] - a
         points = a[seg] + best_t[:, None] * d[seg]
         s = self.arc_length_mm[seg] + best_t * self.segment_lengths_mm[seg]
         result = Closest(points=points, arc_length_mm=s, distance_mm=best_dist, segment=seg)

@@ -32,6 +32,7 @@ scored over the part of the seam every pass welded (the torch strikes the arc wh
 from __future__ import annotations
 
 import dataclasses
+import gc
 import math
 import time
 from dataclasses import dataclass
@@ -127,7 +128,25 @@ def run_job(
 
     ``planner_override``: a planner instance used instead of the scene's; ``on_pass(record,
     fill)`` is called after each pass (a notebook's or a bench's hook).
+
+    Memory: the objects that exist when the job starts are frozen out of Python's garbage
+    collections for its duration (:func:`gc.freeze`, unless the caller froze some already),
+    so the full collection after each pass scans only the job's own.
     """
+    frozen = gc.get_freeze_count() == 0
+    if frozen:
+        gc.collect()
+        gc.freeze()
+    try:
+        return _run_job(scene, progress, planner_override, on_pass, frozen)
+    finally:
+        if frozen:
+            gc.unfreeze()
+
+
+def _run_job(
+    scene: Scene | str, progress: bool, planner_override: Any, on_pass: Any, freeze: bool
+) -> JobResult:
     from seamtrack.workpiece.beads import BeadShape
     from seamtrack.workpiece.fill import FillState  # trimesh, scipy: a job's own imports
 
@@ -160,6 +179,7 @@ def run_job(
     groove: MeasuredGroove | None = None
     if c.passes.scan_first:
         scan = _pass(scene, None, fill, cad_seam, rng, process, progress, "pass_00_scan", flip)
+        _release_pass(freeze)
         records.append(scan.record)
         if scan.groove is None:
             raise PluginRuntimeError(
@@ -187,6 +207,7 @@ def run_job(
             assert plan is not None
         done = _pass(scene, plan, fill, cad_seam, rng, process, progress, f"pass_{index + 1:02d}",
                      flip, adapt, name, groove)  # fmt: skip
+        _release_pass(freeze)
         start = time.perf_counter()
         try:
             if len(done.path_world) >= 2:
@@ -353,6 +374,7 @@ def _steered(
     tracker = parts.tracker
     T_sensor_tcp = np.linalg.inv(np.asarray(parts.robot.T_tcp_sensor, dtype=float))
     lateral = fill.T_world_station[:, :3, 1]
+    T_station_world = np.linalg.inv(fill.T_world_station)
     s_stations = fill.s_mm
     set_speed = getattr(tracker, "set_speed", None)
     adapted = np.full((len(s_stations), 2), np.nan)  # speed, offset per station
@@ -369,10 +391,13 @@ def _steered(
         frames.append((feature, T_world_sensor))
         if plan is None:
             return feature
+        # The frame's 7 points at their station (measured once: the checks below share it).
+        now = measured_groove(frames[-1:], fill, cad_seam, T_station_world) if feature else None
         if feature and previous is not None and _below_the_fill(frames[-1], fill, cad_seam,
-                                                                previous):  # fmt: skip
+                                                                previous, now):  # fmt: skip
             feature = Feature.failed("below the fill the pass before measured", feature.joint)
             frames[-1] = (feature, T_world_sensor)
+            now = None
         if feature:
             seen[0] = True
         elif previous is not None and (not seen[0] or (plan.cap and plan.reference in _FIXED)):
@@ -385,13 +410,11 @@ def _steered(
         if feature:
             s = float(cad_seam.closest(feature.point_world[None]).arc_length_mm[0])
             i = station(s)
-            if adapt is not None:
-                ahead = measured_groove(frames[-1:], fill, cad_seam)
-                if ahead is not None:
-                    adapted[i] = _adapted(adapt, ahead, plan, planner_name, t_s)
+            if adapt is not None and now is not None:
+                adapted[i] = _adapted(adapt, now, plan, planner_name, t_s)
             offset = adapted[i, 1] if np.isfinite(adapted[i, 1]) else float(plan.offset_at(s))
             own = offset or plan.cap or plan.reference not in ("left", "right", "centre")
-            here = measured_groove(frames[-1:], fill, cad_seam) if own else None
+            here = now if own else None
             if here is not None:  # on the fill surface the frame measured, under the bead
                 k = min(int(np.searchsorted(s_stations, here.s_mm[0])), len(s_stations) - 1)
                 y, z = aim_point(here.points, _POINT_INDEX[plan.reference], offset, plan.cap)[0]
@@ -411,13 +434,20 @@ def _steered(
 
 
 def _below_the_fill(
-    frame: tuple[Feature, FloatArray], fill: Any, seam: Seam, previous: MeasuredGroove
+    frame: tuple[Feature, FloatArray],
+    fill: Any,
+    seam: Seam,
+    previous: MeasuredGroove,
+    now: MeasuredGroove | bool | None = False,
 ) -> bool:
     """Whether a frame's fill surface (its middle bottom point) lies more than
     :data:`FILL_DROP_MM` below the one measured there by the pass before, or its bottom
     corners lie more than twice that inside the pass before's (the fill surface only widens
-    up a V's walls; a frame that shows part of it, at the part's end, is no groove)."""
-    now = measured_groove([frame], fill, seam)
+    up a V's walls; a frame that shows part of it, at the part's end, is no groove).
+    ``now``: the frame's :func:`measured_groove`, when the caller has it already."""
+    if now is False:
+        now = measured_groove([frame], fill, seam)
+    assert now is None or isinstance(now, MeasuredGroove)
     if now is None or not len(previous):
         return False
     p = previous.points
@@ -518,6 +548,18 @@ def _with(scene: Scene, overrides: dict[str, Any]) -> Scene:
         node[key] = value
     config = type(scene.config).model_validate(data)
     return dataclasses.replace(scene, config=config)
+
+
+def _release_pass(freeze: bool) -> None:
+    """Free what the pass just run built: its meshes (the part with the beads joined) are held
+    by trimesh's own reference cycles, with their caches and ray-casting scenes, until Python's
+    next full collection; collected after each pass, a job's peak memory stays that of one
+    pass's parts, not of several. ``freeze``: then what survives is frozen out of the next
+    collections (the job's imports, its records; :func:`run_job` unfreezes them at its end),
+    which then scan only what the next pass made."""
+    gc.collect()
+    if freeze:
+        gc.freeze()
 
 
 def _job_bar(enabled: bool, total: int | None) -> Any:

@@ -57,26 +57,32 @@ def pass_path(fill: Any, reference: str, plan: PassPlan | None, window: int = 4)
 
 
 def measured_groove(
-    frames: list[tuple[Feature, FloatArray]], fill: Any, cad_seam: Seam
+    frames: list[tuple[Feature, FloatArray]],
+    fill: Any,
+    cad_seam: Seam,
+    T_station_world: FloatArray | None = None,
 ) -> MeasuredGroove | None:
     """The groove as the pass's sensor measured it (None: in no frame): every frame's 7
     points (the groove extractor's ``edges_laser``) in the frame of the station nearest to
-    them, the median per station; stations no frame saw are left out."""
+    them, the median per station; stations no frame saw are left out. ``T_station_world``:
+    the stations' inverse poses (``np.linalg.inv(fill.T_world_station)``), when the caller
+    keeps them (a pass asks this every frame)."""
+    if len(frames) == 1:  # one frame (a pass's sense function, every frame): no medians
+        one = _frame_groove(*frames[0], fill, cad_seam, T_station_world)
+        if one is None:
+            return None
+        i, yz, area = one
+        return MeasuredGroove(fill.s_mm[[i]], yz[None], np.array([area], dtype=float))
+    if T_station_world is None:
+        T_station_world = np.linalg.inv(fill.T_world_station)
     s_list, pts_list, area_list = [], [], []
     for feature, T_world_sensor in frames:
-        edges = np.asarray(feature.edges_laser, dtype=float)
-        if not feature or edges.shape != (7, 2) or not np.isfinite(edges).all():
+        one = _frame_groove(feature, T_world_sensor, fill, cad_seam, T_station_world)
+        if one is None:
             continue
-        world = laser_to_world(T_world_sensor, edges)
-        s = float(cad_seam.closest(world[3][None]).arc_length_mm[0])
-        i = min(int(round((s - fill.s_mm[0]) / STATION_SPACING_MM)), len(fill.s_mm) - 1)
-        local = (np.linalg.inv(fill.T_world_station[i]) @ np.c_[world, np.ones(7)].T).T
-        yz = local[:, 1:3]
-        if yz[0, 0] > yz[6, 0]:  # the laser's left is the stations' right: y ascending
-            yz = yz[::-1]
-        s_list.append(i)
-        pts_list.append(yz)
-        area_list.append(feature.area_mm2)
+        s_list.append(one[0])
+        pts_list.append(one[1])
+        area_list.append(one[2])
     if not s_list:
         return None
     stations = np.asarray(s_list)
@@ -86,6 +92,32 @@ def measured_groove(
     med_pts = np.stack([np.median(points[stations == k], axis=0) for k in keep])
     med_area = np.array([np.nanmedian(areas[stations == k]) for k in keep])
     return MeasuredGroove(fill.s_mm[keep], med_pts, med_area)
+
+
+def _frame_groove(
+    feature: Feature,
+    T_world_sensor: FloatArray,
+    fill: Any,
+    cad_seam: Seam,
+    T_station_world: FloatArray | None = None,
+) -> tuple[int, FloatArray, float] | None:
+    """One frame's 7 points in the frame of the station nearest to them (y ascending), that
+    station's index and the frame's area (None: no 7 points in the frame)."""
+    edges = np.asarray(feature.edges_laser, dtype=float)
+    if not feature or edges.shape != (7, 2) or not np.isfinite(edges).all():
+        return None
+    world = laser_to_world(T_world_sensor, edges)
+    s = float(cad_seam.closest(world[3][None]).arc_length_mm[0])
+    i = min(int(round((s - fill.s_mm[0]) / STATION_SPACING_MM)), len(fill.s_mm) - 1)
+    if T_station_world is None:
+        T_station_i = np.linalg.inv(fill.T_world_station[i])
+    else:  # the same numbers: numpy inverts a stack matrix by matrix
+        T_station_i = T_station_world[i]
+    local = (T_station_i @ np.column_stack((world, np.ones(7))).T).T
+    yz = local[:, 1:3]
+    if yz[0, 0] > yz[6, 0]:  # the laser's left is the stations' right: y ascending
+        yz = yz[::-1]
+    return i, yz, float(feature.area_mm2)
 
 
 def _true_groove(fill: Any) -> MeasuredGroove:
