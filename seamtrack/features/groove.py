@@ -96,6 +96,11 @@ from seamtrack.features.lines import Line, Segments, intersect, segment_profile
 from seamtrack.sensing.profiles import Feature, Profile
 
 FloatArray = NDArray[np.float64]
+
+#: A groove's bottom spread over at most this angle of the fan (rad) ...
+RAY_SPREAD_RAD = math.radians(0.2)
+#: ... and over more than this range (mm) lies along one ray: spikes, not a surface.
+RAY_DEPTH_MM = 1.0
 IntArray = NDArray[np.intp]
 REFERENCES = ("centre", "left", "right")
 
@@ -235,6 +240,8 @@ class GrooveExtractor(_Base):
             return "not a groove: its walls cross (a ridge?)"
         bottom = self._bottom_points(seg, fu, fv, bl, br, u, v)
         pts = np.vstack([tl, bl, bottom, br, tr])
+        if _along_a_ray(pts[1:6]):
+            return "not a groove: its bottom lies along one laser ray (a spike streak)"
         area = _area(pts, P, inner, u)
         rms = max(pl.rms, pr.rms, *(w.line.rms for w in (left, right) if w.line is not None))
         explained = self._explained(seg, plates, (left, right), inner, bl, br, u)
@@ -580,3 +587,14 @@ def _local_v(qu: FloatArray, qv: FloatArray, ut: float, h: float, tol: float) ->
     :func:`seamtrack.features._groove_kernels.local_v`)."""
     val = local_v(_c(qu), _c(qv), float(ut), float(h), float(tol))
     return None if math.isnan(val) else float(val)
+
+
+def _along_a_ray(bottom: FloatArray) -> bool:
+    """Whether the bottom corners and points lie along one ray of the fan (from the laser
+    frame's origin, within :data:`RAY_SPREAD_RAD`) over more than :data:`RAY_DEPTH_MM` of
+    depth: a streak of spikes (a reflection) does; a fill surface, which crosses the rays, and
+    an empty V's root, a point, do not."""
+    angle = np.arctan2(bottom[:, 0], bottom[:, 1])
+    rng = np.hypot(bottom[:, 0], bottom[:, 1])
+    spread, depth = float(np.ptp(angle)), float(np.ptp(rng))
+    return spread <= RAY_SPREAD_RAD and depth > RAY_DEPTH_MM
