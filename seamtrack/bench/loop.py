@@ -319,7 +319,7 @@ def _markdown(result: dict[str, Any]) -> str:
             "",
             "Cost of one control tick on the seam-mode scene (CPU time outside sensing, scoring "
             "and the tracker's hint to the extractor included, / control ticks; the same scene, "
-            "tracker and seam on each robot):",
+            f"tracker and seam on each robot; the fastest of {TICK_REPEATS} runs):",
             "",
             "| robot | inverse kinematics | control ticks | CPU s | sensing s | us per tick | "
             f"<= {ARM_TARGETS['us_per_tick']:g} us (arms) | max error mm |",
@@ -332,10 +332,11 @@ def _markdown(result: dict[str, Any]) -> str:
                 for t in result["tick_cost"]
             ),
             "",
-            "Arm scenes as a user runs them (CPU time of the one process; 1-minute load before "
-            "each). *Newton*: the same run with the tick's inverse kinematics by Newton steps "
-            "only (the tick before the closed forms); the max error must move by less than the "
-            "sensor's depth resolution, the status not at all:",
+            "Arm scenes as a user runs them (CPU time of the one process, the fastest of "
+            f"{SCENE_REPEATS} runs; 1-minute load before each). *Newton*: the same run with "
+            "the tick's inverse kinematics by Newton steps only (the tick before the closed "
+            "forms); the max error must move by less than the sensor's depth resolution, "
+            "the status not at all:",
             "",
             "| scene | robot | inverse kinematics | status | simulated s | CPU s | sim s / CPU s "
             f"| >= {ARM_TARGETS['sim_s_per_cpu_s']:g} | sensing ms/frame | us/tick outside "
@@ -405,6 +406,14 @@ ARM_SCENES = ("pipe-saddle", "pipe-on-plate", "v-groove-corner-arm")
 
 #: Target of issue 28: an arm tick (us) and an arm scene's simulated s per CPU s.
 ARM_TARGETS = {"us_per_tick": 10.0, "sim_s_per_cpu_s": 30.0}
+#: Runs per row of the tick table and of the arm scenes: each row is the fastest (a row lasts
+#: 0.2-2 CPU s, and another tenant's burst on a shared host moves one run by up to 50 %).
+TICK_REPEATS, SCENE_REPEATS = 5, 3
+
+
+def _fastest(summaries: list[dict[str, Any]]) -> dict[str, Any]:
+    """The run with the least CPU time outside sensing (the runs are the same but for time)."""
+    return min(summaries, key=lambda s: float(s["wall_time_s"]) - float(s["sense_wall_time_s"]))
 
 
 def tick_cost(quick: bool = False) -> list[dict[str, Any]]:
@@ -424,7 +433,7 @@ def tick_cost(quick: bool = False) -> list[dict[str, Any]]:
                 parts, settings=dataclasses.replace(parts.settings, time_limit_s=0.5)
             )
         )
-        s = run(parts, clock=time.process_time).summary
+        s = _fastest([run(parts, clock=time.process_time).summary for _ in range(TICK_REPEATS)])
         ticks = int(round(s["sim_time_s"] / parts.robot.control_period_s)) + 1
         wall, sense = float(s["wall_time_s"]), float(s["sense_wall_time_s"])
         rows.append(
@@ -463,7 +472,10 @@ def arm_scenes(quick: bool = False) -> list[dict[str, Any]]:
             )
         )
         load = os.getloadavg()[0]
-        s = run(parts, clock=time.process_time).summary
+        s = min(
+            (run(parts, clock=time.process_time).summary for _ in range(SCENE_REPEATS)),
+            key=lambda s: float(s["wall_time_s"]),
+        )
         reference = run(
             dataclasses.replace(parts, robot=parts.robot.with_iterative_ik()),
             clock=time.process_time,
