@@ -234,6 +234,7 @@ def _failures() -> str:
 HEADLINE = (
     ("scaling", "the paper's verification (Fig. 7), seam mode", "seamtrack run"),
     ("loop", "closed loop, mesh mode, 1024 rays at 100 Hz", "seamtrack bench loop"),
+    ("arms", "6-axis arms in the closed loop", "seamtrack bench loop"),
     ("raycast", "stripe profile, 1024 rays + shadow rays", "seamtrack bench raycast"),
     ("extractors", "joint-feature extractors", "seamtrack extractors bench"),
     ("angles", "the V-groove extractor against its opening", "seamtrack extractors bench"),
@@ -253,14 +254,16 @@ HEADLINE = (
 
 def _multipass() -> str:
     r = load("multipass")
-    t = r["twelve_pass"]
+    t, forced = r["jobs"][0], r["jobs"][1]
     gap = {row["planner"]: row for row in r["varying_gap"]}
     spread = ", ".join(f"{k} {v['reinforcement_spread_mm']:.2f} mm" for k, v in gap.items())
     return (
         f"{t['passes']} passes on {t['seam_mm']:.0f} mm, {t['status']}: max tracking error "
         f"{t['max_tracking_error_mm']:.2f} mm, reinforcement {t['reinforcement_min_mm']:.2f} to "
         f"{t['reinforcement_max_mm']:.2f} mm, {t['x_real_time']:.1f}x real time of arc time, "
-        f"peak {t['peak_rss_mb']:.0f} MB; varying gap, reinforcement spread: {spread}"
+        f"peak {t['peak_rss_mb']:.0f} MB; forced into {forced['passes']} passes: max tracking "
+        f"error {forced['max_tracking_error_mm']:.1f} mm; varying gap, reinforcement spread: "
+        f"{spread}"
     )
 
 
@@ -275,6 +278,18 @@ def _gym() -> str:
     )
 
 
+def _arms() -> str:
+    r = load("loop")
+    ticks = {t["robot"]: t for t in r["tick_cost"]}
+    scenes = ", ".join(f"{a['scene']} {a['sim_s_per_cpu_s']:.1f}x" for a in r["arm_scenes"])
+    return (
+        f"a control tick (closed-form IK, compiled) {ticks['ur10e']['us_per_tick']:.1f} us on "
+        f"the UR10e, {ticks['kr16']['us_per_tick']:.1f} us on the KR 16 "
+        f"({ticks['cartesian']['us_per_tick']:.1f} us on the gantry); arm scenes, simulated s "
+        f"per CPU s: {scenes}"
+    )
+
+
 def _bridge() -> str:
     r = load("bridge")
     runs = ", ".join(f"{x['run']} {x['x_real_time']:.1f}x" for x in r["runs"])
@@ -286,6 +301,7 @@ def headline() -> str:
     measured = {
         "scaling": _scaling,
         "loop": _loop,
+        "arms": _arms,
         "raycast": _raycast,
         "extractors": _extractors,
         "mesh": _mesh,
