@@ -11,6 +11,20 @@ from numpy.typing import NDArray
 FloatArray = NDArray[np.float64]
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _to_segment(q: FloatArray, i: int, a: FloatArray, d: FloatArray, c: int) -> tuple[float, float]:
+    """Distance from query point ``q[i]`` to segment ``c`` (from ``a[c]`` along ``d[c]``), and
+    the segment's parameter t in [0, 1] at the nearest point."""
+    dd = max(d[c, 0] * d[c, 0] + d[c, 1] * d[c, 1] + d[c, 2] * d[c, 2], 1e-300)
+    num = (q[i, 0] - a[c, 0]) * d[c, 0] + (q[i, 1] - a[c, 1]) * d[c, 1]
+    num += (q[i, 2] - a[c, 2]) * d[c, 2]
+    t = min(max(num / dd, 0.0), 1.0)
+    e0 = q[i, 0] - (a[c, 0] + t * d[c, 0])
+    e1 = q[i, 1] - (a[c, 1] + t * d[c, 1])
+    e2 = q[i, 2] - (a[c, 2] + t * d[c, 2])
+    return np.sqrt(e0 * e0 + e1 * e1 + e2 * e2), t
+
+
 @numba.njit(cache=True, nogil=True)
 def nearest_of(
     q: FloatArray, a: FloatArray, d: FloatArray, cand: NDArray[np.int64]
@@ -26,14 +40,7 @@ def nearest_of(
         best, bt, bs = np.inf, 0.0, cand[i, 0]
         for j in range(k):
             c = cand[i, j]
-            dd = max(d[c, 0] * d[c, 0] + d[c, 1] * d[c, 1] + d[c, 2] * d[c, 2], 1e-300)
-            num = (q[i, 0] - a[c, 0]) * d[c, 0] + (q[i, 1] - a[c, 1]) * d[c, 1]
-            num += (q[i, 2] - a[c, 2]) * d[c, 2]
-            t = min(max(num / dd, 0.0), 1.0)
-            e0 = q[i, 0] - (a[c, 0] + t * d[c, 0])
-            e1 = q[i, 1] - (a[c, 1] + t * d[c, 1])
-            e2 = q[i, 2] - (a[c, 2] + t * d[c, 2])
-            dist = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+            dist, t = _to_segment(q, i, a, d, c)
             if dist < best:
                 best, bt, bs = dist, t, c
         seg[i], best_dist[i], best_t[i] = bs, best, bt
@@ -54,14 +61,7 @@ def nearest_all(
     for i in range(m):
         best, bt, bs = np.inf, 0.0, 0
         for c in range(n):
-            dd = max(d[c, 0] * d[c, 0] + d[c, 1] * d[c, 1] + d[c, 2] * d[c, 2], 1e-300)
-            num = (q[i, 0] - a[c, 0]) * d[c, 0] + (q[i, 1] - a[c, 1]) * d[c, 1]
-            num += (q[i, 2] - a[c, 2]) * d[c, 2]
-            t = min(max(num / dd, 0.0), 1.0)
-            e0 = q[i, 0] - (a[c, 0] + t * d[c, 0])
-            e1 = q[i, 1] - (a[c, 1] + t * d[c, 1])
-            e2 = q[i, 2] - (a[c, 2] + t * d[c, 2])
-            dist = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+            dist, t = _to_segment(q, i, a, d, c)
             if dist < best:
                 best, bt, bs = dist, t, c
         seg[i], best_dist[i], best_t[i] = bs, best, bt
