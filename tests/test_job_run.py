@@ -138,3 +138,18 @@ def test_seamtrack_run_writes_a_folder_a_pass_and_the_job(tmp_path: Path, capsys
     assert [row["heat_input_kj_mm"] for row in summary["per_pass"][1:]] == pytest.approx(
         [0.8 * 28.0 * 250.0 / row["mean_speed_mm_s"] * 1e-3 for row in summary["per_pass"][1:]]
     )
+
+
+@pytest.mark.parametrize("flag", ["--weldx", "--render", "--record"])
+def test_a_job_refuses_a_single_run_export(tmp_path: Path, capsys, flag: str) -> None:
+    """A job writes one folder a pass: --weldx, --render and --record (one run's exports) are
+    refused with one line naming the flag, exit 2, before anything is run or written."""
+    out = tmp_path / "job"
+    target = {"--weldx": "run.wx", "--render": "", "--record": "run.mcap"}[flag]
+    args = ["run", "multipass-v-groove", "--out", str(out), "--no-plot", "--quiet", flag]
+    args += [str(tmp_path / target)] if target else []
+    assert main(args) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and flag in err and "fix:" in err
+    assert not out.exists()
+    assert not target or not (tmp_path / target).exists()

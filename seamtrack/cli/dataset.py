@@ -5,16 +5,12 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+from seamtrack.cli.jobs import progress_wanted as _progress_wanted
 from seamtrack.errors import OutputError
-
-
-def _progress_wanted(args: argparse.Namespace) -> bool:
-    return not getattr(args, "quiet", False) and sys.stderr.isatty()
 
 
 def cmd_dataset(args: argparse.Namespace) -> int:

@@ -22,7 +22,8 @@ def run_job_command(args: argparse.Namespace, scene: Any, out: Path) -> int:
     from seamtrack.simulation.job import run_job
     from seamtrack.viz.plots import plot_run
 
-    for flag, given in (("--weldx", args.weldx), ("--render", args.render)):
+    exports = (("--weldx", args.weldx), ("--render", args.render), ("--record", args.record))
+    for flag, given in exports:
         if given:
             raise SceneError(
                 "a multi-pass job writes one folder a pass; it has no single run to export",
