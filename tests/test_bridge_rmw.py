@@ -129,6 +129,11 @@ def test_a_json_command_is_read_exactly() -> None:
         (_command({"target_mm": [0, 0, 0], "speed_mm_s": 1}, seq=2), "step 2 where step 3"),
         (_command({"target_mm": [0, 0, 0], "speed_mm_s": 1, "rotation": [[2, 0, 0]] * 3}), "rot"),
         (json.dumps({"op": "command", "seq": 3, "pad": "x" * 5000}).encode(), "4096-byte"),
+        (_command({"target_mm": [0, 0, 0], "speed_mm_s": 1, "then": {}}), "'then'"),
+        (_command({"target_mm": [0, 0, 0], "speed_mm_s": 1, "then": [{}] * 17}), "at most 16"),
+        (_command({"target_mm": [0, 0, 0], "speed_mm_s": 1, "then": [[1]]}), "not a command"),
+        (_command({"target_mm": [0, 0, 0], "speed_mm_s": 1, "then": [{"then": []}]}), "own"),
+        (_command({"target_mm": [0, 0, 0], "speed_mm_s": 1, "then": [{"speed_mm_s": 1}]}), "'tar"),
     ],
 )
 def test_bad_json_commands_are_refused(raw: bytes, why: str) -> None:
@@ -168,6 +173,75 @@ def test_a_step_carries_its_profiles_as_described_binary_parts() -> None:
         wire.profile_arrays(header, [*parts[:2], parts[2][:-1], *parts[3:]], 0)
     bare = wire.step_parts(step, with_profile=False)
     assert len(bare) == 1 and json.loads(bare[0])["frames"][0]["profile"] is None
+
+
+def test_a_command_with_then_is_read_exactly() -> None:
+    then = [
+        {"target_mm": [2, 0, 0], "speed_mm_s": 4, "ask_within_mm": 0.5},
+        {"target_mm": [3, 0, 0], "speed_mm_s": 4, "stop_at_target": True},
+    ]
+    body = {"target_mm": [1, 0, 0], "speed_mm_s": 4, "ask_within_mm": 0.5, "then": then}
+    message = wire.parse(_command(body))
+    (cmd, within), rest = wire.commands_from_json(message, 3)
+    assert cmd is not None and cmd.target_world.tolist() == [1, 0, 0] and within == 0.5
+    assert [(c.target_world.tolist(), c.stop_at_target, w) for c, w in rest] == [
+        ([2, 0, 0], False, 0.5),
+        ([3, 0, 0], True, 0.0),
+    ]
+    assert wire.command_from_json(message, 3)[0].target_world.tolist() == [1, 0, 0]
+
+
+def test_then_takes_over_on_the_tick_the_torch_comes_within_reach() -> None:
+    """Frame lockstep between frames: the answer's ``then`` takes over, one after the other,
+    at the tick the torch is within ``ask_within_mm`` of the target (exactly: at a distance of
+    1 from a radius of 1), with no round trip; once the ``then`` is used up the tracker is
+    asked (at that tick), and the step says how many took over. Oracle: distances along x."""
+    from seamtrack.bridge.lockstep import BridgeTracker
+    from seamtrack.control.tracking import Measurement
+    from seamtrack.sensing.profiles import Feature
+
+    def go(x: float, within: float, stop: bool = False) -> tuple:
+        return wire.make_command([x, 0.0, 0.0], 5.0, stop, None, None, None), within
+
+    answers = [
+        (go(10, 1.0), [go(20, 1.0), go(30, 0.0, stop=True)]),
+        (go(40, 1.0), [go(50, 1.0)]),
+        (go(60, 0.0), []),
+    ]
+
+    class Client:
+        def __init__(self) -> None:
+            self.steps: list = []
+            self.then: list = []
+
+        def exchange(self, step: object) -> tuple:
+            self.steps.append(step)
+            reply, self.then = answers[len(self.steps) - 1]
+            return reply
+
+    client = Client()
+    tracker = BridgeTracker(client, chain=None, lockstep="frame")  # type: ignore[arg-type]
+    zero = np.zeros(3)
+
+    def at(x: float) -> float:
+        cmd = tracker.command(0.0, np.array([x, 0.0, 0.0]), zero)
+        assert cmd is not None
+        return float(cmd.target_world[0])
+
+    def frame() -> None:
+        tracker.update(Measurement(Feature.failed("none"), 0.0, 0.0, np.eye(4), zero))
+
+    frame()
+    assert at(0.0) == 10 and len(client.steps) == 1
+    assert at(8.999) == 10  # 1.001 away: holds
+    assert at(9.0) == 20  # 1 away: B takes over, on this tick
+    assert at(19.5) == 30 and at(29.5) == 30  # C: at rest there, nothing to ask
+    assert len(client.steps) == 1
+    frame()
+    assert at(29.6) == 40 and client.steps[-1].then_taken == 2
+    assert at(39.5) == 50 and len(client.steps) == 2
+    assert at(49.5) == 60  # the then used up and within reach: asked on this tick
+    assert len(client.steps) == 3 and client.steps[-1].then_taken == 1
 
 
 def test_a_seam_hint_reaches_the_extractor_where_its_line_crosses_the_laser_plane() -> None:

@@ -202,28 +202,6 @@ def image(image: Any, t_s: float, frame_id: str = messages.FRAMES["sensor"]) -> 
     return w.bytes()
 
 
-def frame_payloads(
-    t_s: float,
-    profile: Profile,
-    feature: Feature,
-    chain: Iterable[tuple[str, str, ArrayLike]],
-    image_: Any = None,
-) -> list[tuple[str, bytes]]:
-    """The (topic, CDR bytes) of one sensor frame in :func:`seamtrack.bridge.messages.
-    frame_messages`' order, but without ``/clock`` (the bridge sends its step's own):
-    ``/tf``, the profile, the seam point (when found) and the image (when given)."""
-    topics = messages.TOPICS
-    out = [
-        (topics["tf"].name, tf_message(chain, t_s)),
-        (topics["profile"].name, profile_cloud(profile, t_s)),
-    ]
-    if feature:
-        out.append((topics["seam_point"].name, seam_point(feature, t_s)))
-    if image_ is not None:
-        out.append((topics["image"].name, image(image_, t_s)))
-    return out
-
-
 # --------------------------------------------------------------------------- reading
 _STAMPED_DOUBLES = {"geometry_msgs/msg/PoseStamped": 7, "geometry_msgs/msg/TwistStamped": 6}
 

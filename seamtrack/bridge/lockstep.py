@@ -10,7 +10,11 @@ command at every tick, so an external tracker reproduces any in-process one exac
 ``lockstep = "frame"`` the steps are the ticks at which a sensor frame reaches the tracker,
 and the ticks at which the torch comes within the tracker's ``ask_within_mm`` of its target
 (the moment the paper's algorithm II switches to its next point: with it, algorithm II is
-exact in frame lockstep too); in between, the last command holds.
+exact in frame lockstep too); in between, the last command holds. A transport may hand on
+the commands that follow the answer (its ``then``: a list of replies, as the ZeroMQ client's
+``then`` gives them): at the tick the torch comes within ``ask_within_mm`` of the target, the
+next of them takes over without a round trip (the next step counts them, ``then_taken``), and
+only once they are used up is the tracker asked.
 A step carries the frames that arrived at it (profile, seam point, the sensor's pose) and the
 torch's position and velocity at that tick.
 
@@ -79,6 +83,7 @@ class Step:
     tcp_world: FloatArray
     tcp_velocity_world: FloatArray
     frames: list[Frame] = field(default_factory=list)
+    then_taken: int = 0  # how many of the last answer's ``then`` took over since
 
 
 #: A tracker's answer: the command, and the distance from its target within which the tracker
@@ -139,6 +144,9 @@ class BridgeTracker:
         self._frames: list[Frame] = []
         self._last: Command | None = None
         self._within = 0.0
+        self._target: list[float] = []  # the last command's target, as floats (for _asks)
+        self._then: list[Reply] = []  # what follows the last command, next first
+        self._taken = 0
 
     def reset(self, context: TrackerContext) -> None:
         start = time.perf_counter()
@@ -167,21 +175,46 @@ class BridgeTracker:
     ) -> Command | None:
         if self.failure is not None:
             return None
-        if self.lockstep == "frame" and not self._frames and not self._asks(tcp_world):
+        if self.lockstep == "frame" and not self._frames and self._within > 0.0:
+            tcp = np.asarray(tcp_world, dtype=float).tolist()  # Python floats: every tick
+            if self._then:
+                self._take_then(tcp)
+            if not self._asks(tcp):
+                return self._last
+        elif self.lockstep == "frame" and not self._frames:
             return self._last
-        step = Step(self.steps, t_s, tcp_world, tcp_velocity_world, self._frames)
+        step = Step(self.steps, t_s, tcp_world, tcp_velocity_world, self._frames, self._taken)
         self._frames = []
         start = time.perf_counter()
         try:
-            received, self._within = self.transport.exchange(step)
+            received, within = self.transport.exchange(step)
         except BridgeFailure as exc:
             self.failure = exc
             return None
         self.exchange_time_s += time.perf_counter() - start
         self.steps += 1
+        self._taken = 0
+        self._then = list(getattr(self.transport, "then", ()))[::-1]  # next last: pop() it
+        self._hold(received, within)
+        return self._last
+
+    def _hold(self, received: Command | None, within: float) -> None:
+        self._within = within
         if not _same(received, self._last):  # the loop re-plans only on a new command object
             self._last = received
-        return self._last
+            self._target = [] if received is None else received.target_world.tolist()
+
+    def _take_then(self, tcp: list[float]) -> None:
+        """Frame lockstep between frames: while the torch is within ``ask_within_mm`` of the
+        target (exactly: a tracker's own test, ``sqrt(dx² + dy² + dz²) <= r``), the next
+        command of the answer's ``then`` takes over."""
+        while self._then and self._last is not None and self._within > 0.0:
+            dx, dy, dz = (tcp[0] - self._target[0], tcp[1] - self._target[1],
+                          tcp[2] - self._target[2])  # fmt: skip
+            if not math.sqrt(dx * dx + dy * dy + dz * dz) <= self._within:
+                return
+            self._hold(*self._then.pop())
+            self._taken += 1
 
     def hint(self, T_world_sensor: FloatArray) -> SeamHint | None:
         """The extractor's hint for the frame about to be taken: where the client's last
@@ -193,13 +226,13 @@ class BridgeTracker:
         point, direction, tolerance = line
         return hint_from_path(T_world_sensor, point, direction, tolerance)
 
-    def _asks(self, tcp_world: FloatArray) -> bool:
+    def _asks(self, tcp: list[float]) -> bool:
         """Frame lockstep between frames: is the torch within the tracker's ``ask_within_mm``
         of its target?"""
         if self._within <= 0.0 or self._last is None:
             return False
-        d = np.asarray(tcp_world, dtype=float) - self._last.target_world
-        return math.sqrt(float(d @ d)) <= self._within * (1.0 + _ASK_MARGIN) + _ASK_MARGIN
+        d = math.dist(tcp, self._target)
+        return d <= self._within * (1.0 + _ASK_MARGIN) + _ASK_MARGIN
 
 
 def _same(a: Command | None, b: Command | None) -> bool:
@@ -208,7 +241,7 @@ def _same(a: Command | None, b: Command | None) -> bool:
     return (
         a.speed_mm_s == b.speed_mm_s
         and a.stop_at_target == b.stop_at_target
-        and _equal(a.target_world, b.target_world)
+        and a.target_world.tolist() == b.target_world.tolist()  # finite: as array_equal
         and _equal(a.velocity_ff_world, b.velocity_ff_world)
         and _equal(a.rotation_world, b.rotation_world)
         and _equal(a.angular_velocity_world, b.angular_velocity_world)

@@ -11,10 +11,14 @@ Client -> server (each message one ZeroMQ frame of UTF-8 JSON, at most
   ``target_mm`` (x, y, z, required), ``speed_mm_s`` (> 0, required), and optionally
   ``stop_at_target`` (bool, arrive at rest), ``velocity_ff_mm_s`` (x, y, z),
   ``rotation`` (3 x 3 rows, the tool orientation goal ``R_world_tcp``) and
-  ``angular_velocity_rad_s`` (x, y, z), and ``ask_within_mm`` (with frame lockstep: ask
-  again as soon as the torch is within this distance of the target, not only at the next
-  frame). ``null`` brakes to rest and waits. Optionally, beside ``command``, a
-  ``"seam_hint"``: ``{"point_mm": [x, y, z], "direction": [dx, dy, dz]}`` (world; and
+  ``angular_velocity_rad_s`` (x, y, z), ``ask_within_mm`` (with frame lockstep: ask again
+  as soon as the torch is within this distance of the target, not only at the next frame),
+  and ``then`` (with frame lockstep: the commands that follow, at most :data:`MAX_THEN`, each
+  of these keys but ``then``: when the torch comes within ``ask_within_mm`` of the target, the
+  next of them takes over at that tick without a round trip; the step after says how many
+  took over, ``then_taken``; once they are used up, ``ask_within_mm`` asks again). ``null``
+  brakes to rest and waits. Optionally, beside ``command``, a ``"seam_hint"``:
+  ``{"point_mm": [x, y, z], "direction": [dx, dy, dz]}`` (world; and
   ``"tolerance_mm": [across, range]``), where the tracker expects the seam and where it heads:
   from then on each frame's extractor is told where that line crosses the laser plane (a
   :class:`~seamtrack.sensing.profiles.SeamHint`, as an in-process tracker's ``hint`` gives
@@ -25,7 +29,8 @@ Server -> client:
 * ``{"op": "reset", "protocol": 2, "lockstep": "tick" | "frame", "context": {...},
   "max_message_bytes": n}``;
 * a step: a multipart message. Part 0 is JSON ``{"op": "step", "seq": k, "t_s": t, "tcp_mm":
-  [...], "tcp_velocity_mm_s": [...], "frames": [...]}``, each frame ``{"t_capture_s",
+  [...], "tcp_velocity_mm_s": [...], "then_taken": n, "frames": [...]}`` (``then_taken``: how
+  many of the last command's ``then`` took over since the last step), each frame ``{"t_capture_s",
   "t_arrival_s", "found", "point_mm" (or null), "T_world_sensor", "tcp_mm", "profile"}``.
   A frame's ``profile`` is null (none, or the client said ``"profile": false``) or
   ``{"points": {"part": i, "dtype": "<f8", "shape": [n, 2]}, "reason": {"part": i + 1,
@@ -56,6 +61,9 @@ PROTOCOL = 2
 #: The largest message a client may send: a command is a few hundred bytes.
 MAX_MESSAGE_BYTES = 4096
 
+#: The most commands a command's ``then`` holds.
+MAX_THEN = 16
+
 _COMMAND_KEYS = {
     "ask_within_mm",
     "target_mm",
@@ -84,44 +92,78 @@ def context_json(context: TrackerContext) -> dict[str, Any]:
 
 def step_parts(step: Step, with_profile: bool) -> list[bytes]:
     """A step as the parts of one ZeroMQ multipart message (module docstring): the JSON
-    header, then each sent profile's points and reasons as raw little-endian arrays."""
+    header, then each sent profile's points and reasons as raw little-endian arrays.
+
+    The header is written from a template (the bytes ``json.dumps`` gives, NaN as null): this
+    runs once a step, on the bridge's critical path."""
     frames = []
     parts: list[bytes] = [b""]
     for f in step.frames:
         found = bool(f.feature)
-        profile = None
+        profile = "null"
         if with_profile and f.profile is not None:
             assert f.profile.reason is not None
             points = np.ascontiguousarray(f.profile.points_laser, dtype="<f8")
             n = len(points)
-            profile = {
-                "points": {"part": len(parts), "dtype": "<f8", "shape": [n, 2]},
-                "reason": {"part": len(parts) + 1, "dtype": "|u1", "shape": [n]},
-            }
+            i = len(parts)
+            profile = _PROFILE % (i, n, i + 1, n)
             parts.append(points.tobytes())
             parts.append(np.ascontiguousarray(f.profile.reason, dtype=np.uint8).tobytes())
+        T = np.asarray(f.T_world_sensor, dtype=float).tolist()
         frames.append(
-            {
-                "t_capture_s": f.t_capture_s,
-                "t_arrival_s": f.t_arrival_s,
-                "found": found,
-                "point_mm": np.asarray(f.feature.point_world).tolist() if found else None,
-                "T_world_sensor": np.asarray(f.T_world_sensor).tolist(),
-                "tcp_mm": f.tcp_world.tolist(),
-                "profile": profile,
-            }
+            _FRAME
+            % (
+                _number(f.t_capture_s),
+                _number(f.t_arrival_s),
+                "true" if found else "false",
+                _list(np.asarray(f.feature.point_world).tolist()) if found else "null",
+                ", ".join(_list(row) for row in T),
+                _list(np.asarray(f.tcp_world, dtype=float).tolist()),
+                profile,
+            )
         )
-    message = {
-        "op": "step",
-        "seq": step.seq,
-        "t_s": step.t_s,
-        "tcp_mm": np.asarray(step.tcp_world, dtype=float).tolist(),
-        "tcp_velocity_mm_s": np.asarray(step.tcp_velocity_world, dtype=float).tolist(),
-        "frames": frames,
-    }
-    # A NaN as null (no key or string holds "NaN"; the profiles, where NaN is, are binary).
-    parts[0] = json.dumps(message).replace("NaN", "null").encode()
+    parts[0] = (
+        _STEP
+        % (
+            step.seq,
+            _number(step.t_s),
+            _list(np.asarray(step.tcp_world, dtype=float).tolist()),
+            _list(np.asarray(step.tcp_velocity_world, dtype=float).tolist()),
+            step.then_taken,
+            ", ".join(frames),
+        )
+    ).encode()
     return parts
+
+
+_STEP = (
+    '{"op": "step", "seq": %d, "t_s": %s, "tcp_mm": %s, "tcp_velocity_mm_s": %s, '
+    '"then_taken": %d, "frames": [%s]}'
+)
+_FRAME = (
+    '{"t_capture_s": %s, "t_arrival_s": %s, "found": %s, "point_mm": %s, '
+    '"T_world_sensor": [%s], "tcp_mm": %s, "profile": %s}'
+)
+_PROFILE = (
+    '{"points": {"part": %d, "dtype": "<f8", "shape": [%d, 2]}, '
+    '"reason": {"part": %d, "dtype": "|u1", "shape": [%d]}}'
+)
+
+
+def _number(value: float) -> str:
+    """A float as JSON writes it (``repr``), NaN as null."""
+    text = repr(float(value))
+    if "n" in text:  # a NaN or an infinity
+        return "null" if value != value else json.dumps(float(value))
+    return text
+
+
+def _list(values: list[float]) -> str:
+    """A list of floats as JSON writes it, NaN as null."""
+    text = ", ".join(map(repr, values))  # json.dumps's float form, for finite floats
+    if "n" in text:  # a NaN or an infinity
+        text = ", ".join(map(_number, values))
+    return "[" + text + "]"
 
 
 def profile_arrays(
@@ -182,6 +224,11 @@ def expect(message: dict[str, Any], op: str) -> None:
 def command_from_json(message: dict[str, Any], seq: int) -> Reply:
     """The command answering step ``seq`` and its ``ask_within_mm`` (0 when not given);
     every field checked, nothing evaluated."""
+    return commands_from_json(message, seq)[0]
+
+
+def commands_from_json(message: dict[str, Any], seq: int) -> tuple[Reply, list[Reply]]:
+    """:func:`command_from_json`, and the commands of its ``then`` (none when not given)."""
     expect(message, "command")
     if set(message) - {"op", "seq", "command", "seam_hint"}:
         raise _bad("has keys other than op, seq, command, seam_hint")
@@ -190,9 +237,21 @@ def command_from_json(message: dict[str, Any], seq: int) -> Reply:
         raise _bad(f"answers step {str(got)[:20]} where step {seq} was due", "echo the step's seq")
     body = message.get("command")
     if body is None:
-        return None, 0.0
+        return (None, 0.0), []
     if not isinstance(body, dict):
         raise _bad("'command' is neither null nor an object")
+    then = body.get("then", [])
+    if not isinstance(then, list) or len(then) > MAX_THEN:
+        raise _bad(f"'then' is not a list of at most {MAX_THEN} commands")
+    if any(not isinstance(c, dict) or "then" in c for c in then):
+        raise _bad("'then' holds what is not a command (or a command with its own 'then')")
+    return _command_body({k: v for k, v in body.items() if k != "then"}), [
+        _command_body(c) for c in then
+    ]
+
+
+def _command_body(body: dict[str, Any]) -> Reply:
+    """One command object (no ``then``) checked field by field."""
     unknown = set(body) - _COMMAND_KEYS
     if unknown:
         raise _bad(f"unknown command key {sorted(unknown)[0][:40]!r}")

@@ -159,6 +159,14 @@ class ZenohTransport:
         self.watch = live.declare_subscriber(
             f"@ros2_lv/{domain_id}/**", self._on_token, history=True
         )
+        # Who takes what (Zenoh's matching status, kept by a listener per publisher): a topic
+        # no subscriber matches is neither written nor put (a tracker that takes the seam
+        # points and the torch is not sent the profiles, the TF chain and the clock).
+        self.matched = {topic: False for topic in PUBLISHES}
+        self._listeners = [
+            pub.declare_matching_listener(self._on_matching(topic))
+            for topic, pub in self.pubs.items()
+        ]
         self.seq = 0
         self.client: str | None = None
         self.with_profile = True
@@ -172,6 +180,12 @@ class ZenohTransport:
                 query.reply(query.key_expr, payload, attachment=att)
 
         return answer
+
+    def _on_matching(self, topic: str) -> Any:
+        def update(status: Any) -> None:
+            self.matched[topic] = bool(status.matching)
+
+        return update
 
     def _on_token(self, sample: Any) -> None:
         self.events.put(("token", str(sample.kind), str(sample.key_expr)))
@@ -220,28 +234,39 @@ class ZenohTransport:
                 self._next(deadline, "--wait-s", "receive from its subscriptions")
             time.sleep(0.01)
         time.sleep(SETTLE_S)
+        for topic, pub in self.pubs.items():  # as of now; the listeners follow any change
+            self.matched[topic] = bool(pub.matching_status.matching)
         static = [link for link in chain(np.eye(4)) if link[:2] in STATIC_LINKS]
         self._put("/tf_static", cdr.tf_message(static, 0.0))
         message = {"lockstep": lockstep, "context": context_json(context)}
         self._put("/seamtrack/context", rmw.encode_string(json.dumps(message)))
 
     def exchange(self, step: Step) -> Reply:
+        on = self.matched
         for f in step.frames:
             t = f.t_capture_s
             if f.profile is None:
                 continue
-            chain = self._chain(f.T_world_sensor)
-            # The bytes messages.frame_messages' objects give, written directly; the step's
-            # own /clock follows.
-            for topic, payload in cdr.frame_payloads(t, f.profile, f.feature, chain, f.image):
-                self._put(topic, payload)
-            if f.feature:
+            # messages.frame_messages' bytes, written directly for the topics someone takes;
+            # the step's own /clock follows.
+            if on["/tf"]:
+                self._put("/tf", cdr.tf_message(self._chain(f.T_world_sensor), t))
+            if on["/seamtrack/profile"]:
+                self._put("/seamtrack/profile", cdr.profile_cloud(f.profile, t))
+            if f.feature and on["/seamtrack/seam_point"]:
+                self._put("/seamtrack/seam_point", cdr.seam_point(f.feature, t))
+            if f.image is not None and on["/seamtrack/image"]:
+                self._put("/seamtrack/image", cdr.image(f.image, t))
+            if f.feature and on["/seamtrack/seam_point_world"]:
                 world = rmw.encode_point(t, "world", f.feature.point_world)
                 self._put("/seamtrack/seam_point_world", world)
         t = step.t_s
-        velocity = np.asarray(step.tcp_velocity_world, dtype=float) / messages.MM_PER_M
-        self._put("/clock", rmw.encode_clock(t))
-        self._put("/seamtrack/tcp_velocity", rmw.encode_twist(t, "world", velocity, (0, 0, 0)))
+        if on["/clock"]:
+            self._put("/clock", rmw.encode_clock(t))
+        if on["/seamtrack/tcp_velocity"]:
+            velocity = np.asarray(step.tcp_velocity_world, dtype=float) / messages.MM_PER_M
+            self._put("/seamtrack/tcp_velocity", rmw.encode_twist(t, "world", velocity, (0, 0, 0)))
+        # The step's trigger, put whoever listens.
         self._put("/seamtrack/tcp", rmw.encode_pose(t, "world", step.tcp_world, None))
         return self._command(t, step.seq)
 
@@ -257,6 +282,8 @@ class ZenohTransport:
     def close(self) -> None:
         self._stop.set()
         self._watchdog.join()
+        for listener in self._listeners:
+            listener.undeclare()
         for queryable in self.queryables:
             queryable.undeclare()
         for token in self._tokens:

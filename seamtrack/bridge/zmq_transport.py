@@ -70,6 +70,8 @@ class ZmqTransport:
         self._connected = False
         #: The client's last seam hint (point_mm, direction, tolerance_mm), world frame.
         self.seam_hint: tuple[Any, ...] | None = None
+        #: The commands that follow the last answer (its ``then``), next first.
+        self.then: list[Reply] = []
 
     # ------------------------------------------------------------------ protocol
     def start(self, context: TrackerContext, chain: TfChain, lockstep: str) -> None:
@@ -96,7 +98,7 @@ class ZmqTransport:
         self.sock.send_multipart(wire.step_parts(step, self.with_profile))
         raw = self._recv(self.timeout_s, "--timeout-s", f"answer step {step.seq}")
         message = wire.parse(raw)
-        reply = wire.command_from_json(message, step.seq)
+        reply, self.then = wire.commands_from_json(message, step.seq)
         if "seam_hint" in message:
             self.seam_hint = wire.seam_hint_from_json(message)
         return reply

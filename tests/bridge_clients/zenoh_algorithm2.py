@@ -16,6 +16,7 @@ import argparse
 import hashlib
 import json
 import math
+import queue
 import struct
 import sys
 import time
@@ -142,19 +143,27 @@ def main() -> int:
     }
     live = session.liveliness()
     tokens = [live.declare_token(f"@ros2_lv/{DOMAIN}/{sid}/0/0/NN/%/%/tracker")]
-    # One subscriber for every topic, its samples in a FIFO channel read by this thread: they
-    # come in the order they were put (a step's seam points before its /seamtrack/tcp), and
-    # the receive blocks in zenoh with no Python callback per sample (topics this node does
-    # not take, such as the profiles, are skipped by their key).
-    topic_of = {key(topic, msgtype): topic for topic, msgtype in subs.items()}
-    subscriber = session.declare_subscriber(f"{DOMAIN}/**", zenoh.handlers.FifoChannel(256))
+    # One subscription per topic it takes, as a ROS node has (so the bridge, seeing no one
+    # take the profiles, the TF chain or the clock, sends none of them); their callbacks put
+    # the samples in one queue that this thread reads. The callbacks run on Zenoh's own
+    # thread (indirect=False), which calls them in the order the samples came on the one link:
+    # a step's seam points before its /seamtrack/tcp (the default, a Python thread per
+    # subscription, may call back for /seamtrack/tcp first).
+    inbox: queue.SimpleQueue = queue.SimpleQueue()
+
+    def keep(topic):
+        def put(sample):
+            inbox.put((topic, sample.payload.to_bytes()))
+
+        return zenoh.handlers.Callback(put, indirect=False)
+
+    subscribers = [
+        session.declare_subscriber(key(topic, msgtype), keep(topic))
+        for topic, msgtype in subs.items()
+    ]
 
     def receive():
-        while True:
-            sample = subscriber.recv()
-            topic = topic_of.get(str(sample.key_expr))
-            if topic is not None:
-                return topic, sample.payload.to_bytes()
+        return inbox.get()  # blocks until a sample is there: no polling
 
     entity = 1
     for topic, msgtype in subs.items():
@@ -251,7 +260,8 @@ def main() -> int:
                 "/seamtrack/cmd_speed",
                 T["geometry_msgs/msg/TwistStamped"](header=header, twist=twist),
             )
-    subscriber.undeclare()
+    for subscriber in subscribers:
+        subscriber.undeclare()
     for t in tokens:
         t.undeclare()
     session.close()
