@@ -5,7 +5,9 @@ there are the oracle. And the bridge's checks of what a client sends (JSON and C
 from __future__ import annotations
 
 import json
+import socket
 import struct
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -69,8 +71,28 @@ def test_attachment_layout() -> None:
 def test_loopback_by_default() -> None:
     from seamtrack.bridge import zenoh_transport, zmq_transport
 
-    assert zmq_transport.DEFAULT_ENDPOINT.startswith("tcp://127.0.0.1:")
+    assert zmq_transport.DEFAULT_ENDPOINT.startswith("ipc:///")  # a Unix socket: this machine
     assert zenoh_transport.DEFAULT_ENDPOINT.startswith("tcp/127.0.0.1:")
+
+
+def test_an_ipc_path_a_server_listens_on_is_refused(tmp_path: Path) -> None:
+    """ZeroMQ would take an ipc:// path over from the server on it: the second server is
+    refused instead; a socket file left by a server that is gone is taken."""
+    pytest.importorskip("zmq")
+    from seamtrack.bridge.zmq_transport import ZmqTransport
+
+    endpoint = f"ipc://{tmp_path / 'bridge'}"
+    first = ZmqTransport(endpoint)
+    try:
+        with pytest.raises(BridgeFailure, match="another server listens there") as info:
+            ZmqTransport(endpoint)
+        assert info.value.field == "--endpoint"
+    finally:
+        first.close()
+    stale = tmp_path / "stale"
+    with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as s:
+        s.bind(str(stale))  # a socket file nobody listens on
+    ZmqTransport(f"ipc://{stale}").close()
 
 
 def test_a_protocol_1_client_is_refused_naming_protocol_2() -> None:

@@ -6,11 +6,13 @@ The scene is ``paper-v-groove`` (100 frames/s of 1024 rays, 1 kHz control) with 
 algorithm II, cut to :data:`SIM_S` simulated seconds. Runs:
 
 1. in-process: seamtrack's own algorithm II;
-2. for each transport (ZeroMQ: JSON and the profiles as raw arrays; Zenoh: ROS 2 CDR) and
-   lockstep (a command every control tick, or one per frame): the loop served in this process,
-   the tracker an external process that imports nothing of seamtrack (tests/bridge_clients/,
-   the scripts the tests run; they need a source checkout); and ZeroMQ per frame without the
-   profiles (what sending them costs).
+2. for each transport (ZeroMQ on its default Unix socket: JSON and the profiles as raw arrays;
+   Zenoh: ROS 2 CDR) and lockstep (a command every control tick, or one per frame): the loop
+   served in this process, the tracker an external process that imports nothing of seamtrack
+   (tests/bridge_clients/, the scripts the tests run; they need a source checkout: over
+   ZeroMQ it sends the points that follow with each command, ``then``; over Zenoh it
+   subscribes to the seam points and the torch only); and ZeroMQ per frame without the
+   profiles (what sending them costs), and over TCP on loopback.
 
 Per run: wall time of the loop (the wait for the tracker to connect left out), x real time
 (simulated / wall), the bridge's cost per frame ((bridged - in-process wall) / frames) and per
@@ -77,16 +79,26 @@ def _parts(sim_s: float) -> tuple[Any, Any]:
 
 
 def _bridged(
-    transport: str, lockstep: str, sim_s: float, clients: Path, profile: bool = True
+    transport: str,
+    lockstep: str,
+    sim_s: float,
+    clients: Path,
+    profile: bool = True,
+    tcp: bool = False,
 ) -> dict[str, Any]:
+    import shutil
+    import tempfile
+
     from seamtrack.bridge.lockstep import serve
 
     scene, parts = _parts(sim_s)
     port = _free_port()
+    folder = tempfile.mkdtemp(prefix="seamtrack-bench-")  # the Unix socket's
     if transport == "zmq":
         from seamtrack.bridge.zmq_transport import ZmqTransport
 
-        endpoint = f"tcp://127.0.0.1:{port}"
+        # As served by default, a Unix socket (a path of its own); or TCP over loopback.
+        endpoint = f"tcp://127.0.0.1:{port}" if tcp else f"ipc://{folder}/bridge"
         server: Any = ZmqTransport(endpoint, timeout_s=30.0, wait_s=120.0)
     else:
         from seamtrack.bridge.zenoh_transport import ZenohTransport
@@ -110,6 +122,7 @@ def _bridged(
         if client.poll() is None:
             client.kill()
             client.wait()
+        shutil.rmtree(folder, ignore_errors=True)
     if tracker.failure is not None:
         raise RuntimeError(f"bench bridge {transport}/{lockstep}: {tracker.failure}")
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -197,9 +210,12 @@ def bench_bridge(out_dir: str | Path, quick: bool = False) -> dict[str, Any]:
         for lockstep in ("tick", "frame"):
             summary = _bridged(transport, lockstep, sim_s, clients)
             rows.append(_row(f"{transport} / {lockstep}", summary, base))
-    # What the profiles cost: the same without them (algorithm II does not use them).
+    # What the profiles cost: the same without them (algorithm II does not use them); and
+    # TCP over loopback (a tracker on another machine) instead of the Unix socket.
     summary = _bridged("zmq", "frame", sim_s, clients, profile=False)
     rows.append(_row("zmq / frame, no profile", summary, base))
+    summary = _bridged("zmq", "frame", sim_s, clients, tcp=True)
+    rows.append(_row("zmq / frame, tcp loopback", summary, base))
     report = {
         "machine": machine_info(),
         "scene": SCENE,

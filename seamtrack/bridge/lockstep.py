@@ -236,7 +236,7 @@ class BridgeTracker:
 
 
 def _same(a: Command | None, b: Command | None) -> bool:
-    if a is None or b is None:
+    if a is None or b is None or a is b:
         return a is b
     return (
         a.speed_mm_s == b.speed_mm_s

@@ -3,8 +3,12 @@ steps' profiles as raw arrays in further parts of a multipart message
 (:mod:`seamtrack.bridge.wire` gives the format). The client speaks first: ``hello`` ->
 ``reset``, ``ready`` -> step 0, ``command`` -> step 1, ... -> ``end``.
 
-Safety: the socket binds to loopback unless told otherwise; ZeroMQ drops a peer whose message
-is over :data:`HARD_LIMIT_BYTES` (no allocation for it), and a message over
+By default the socket is a Unix domain socket, :data:`DEFAULT_ENDPOINT` (``ipc://``: this
+machine only, and a shorter round trip than TCP over loopback); ``tcp://HOST:PORT`` serves a
+tracker on another machine (``tcp://127.0.0.1:PORT``: loopback).
+
+Safety: the socket listens on this machine only unless told otherwise; ZeroMQ drops a peer
+whose message is over :data:`HARD_LIMIT_BYTES` (no allocation for it), and a message over
 :data:`~seamtrack.bridge.wire.MAX_MESSAGE_BYTES`, or of more than one part, is refused before
 it is decoded; messages are parsed as JSON and checked field by field, never evaluated or
 unpickled.
@@ -14,6 +18,8 @@ from __future__ import annotations
 
 import json
 import math
+import os
+import socket
 import time
 from typing import Any
 
@@ -21,7 +27,8 @@ from seamtrack.bridge import wire
 from seamtrack.bridge.lockstep import BridgeFailure, Reply, Step, TfChain
 from seamtrack.control.tracking import TrackerContext
 
-DEFAULT_ENDPOINT = "tcp://127.0.0.1:5555"
+#: A Unix domain socket: a tracker on this machine connects to the same endpoint.
+DEFAULT_ENDPOINT = "ipc:///tmp/seamtrack-bridge"
 
 #: ZeroMQ disconnects a peer that sends more than this in one message.
 HARD_LIMIT_BYTES = 65536
@@ -33,7 +40,7 @@ class ZmqTransport:
     Parameters
     ----------
     endpoint : str
-        A ZeroMQ endpoint to bind (``tcp://127.0.0.1:5555``, ``ipc:///tmp/seamtrack``).
+        A ZeroMQ endpoint to bind (``ipc:///tmp/seamtrack-bridge``, ``tcp://127.0.0.1:5555``).
     timeout_s : float
         How long the client may take to answer one step.
     wait_s : float
@@ -55,13 +62,15 @@ class ZmqTransport:
         self.sock.setsockopt(zmq.MAXMSGSIZE, HARD_LIMIT_BYTES)
         self.monitor = self.sock.get_monitor_socket(zmq.EVENT_DISCONNECTED)
         try:
+            if _listened_on(endpoint):  # ZeroMQ would take the path over from its server
+                raise zmq.ZMQError(msg="another server listens there")
             self.sock.bind(endpoint)
         except zmq.ZMQError as exc:
             self.close()
             raise BridgeFailure(
                 f"cannot listen on {endpoint!r}: {exc}",
                 field="--endpoint",
-                fix="give a free tcp://HOST:PORT or ipc://PATH",
+                fix="give a free ipc://PATH or tcp://HOST:PORT",
             ) from None
         self.poller = zmq.Poller()
         self.poller.register(self.sock, zmq.POLLIN)
@@ -151,3 +160,19 @@ class ZmqTransport:
                         f"{HARD_LIMIT_BYTES} bytes)",
                         fix="keep the tracker process running until the 'end' message",
                     )
+
+
+def _listened_on(endpoint: str) -> bool:
+    """Does a server listen on this ``ipc://`` path already (a socket file that a connection
+    is accepted on; a file left by a server that is gone is not)?"""
+    if not endpoint.startswith("ipc://"):
+        return False
+    path = endpoint[len("ipc://") :]
+    if not os.path.exists(path):
+        return False
+    with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as probe:
+        try:
+            probe.connect(path)
+        except OSError:
+            return False
+    return True

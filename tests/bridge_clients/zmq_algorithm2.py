@@ -2,7 +2,7 @@
 ``seamtrack serve --transport zmq``: pyzmq and the standard library only, nothing of seamtrack.
 
 Usage: python zmq_algorithm2.py ENDPOINT [--radius-mm 1.0] [--misbehave KIND]
-       [--no-profile] [--dump-profiles FILE] [--then 4]
+       [--no-profile] [--dump-profiles FILE] [--then 2]
 
 It says hello, then answers every step with its command. A step is a multipart message: a JSON
 header, then each frame's profile as raw little-endian arrays (float64 points, uint8 reasons)
@@ -37,7 +37,7 @@ class ConvergenceRadius:
         speed_mm_s: float,
         radius_mm: float = 1.0,
         min_spacing_mm: float = 0.05,
-        then: int = 4,
+        then: int = 2,
     ):
         self.speed = speed_mm_s
         self.radius = radius_mm
@@ -109,7 +109,7 @@ def main() -> int:
     ap.add_argument("--radius-mm", type=float, default=1.0)
     ap.add_argument("--misbehave", default="")
     ap.add_argument("--no-profile", action="store_true")
-    ap.add_argument("--then", type=int, default=4, help="points sent ahead with each command")
+    ap.add_argument("--then", type=int, default=2, help="points sent ahead with each command")
     ap.add_argument("--dump-profiles", default="")
     args = ap.parse_args()
     dump = open(args.dump_profiles, "w") if args.dump_profiles else None
