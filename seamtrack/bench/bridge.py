@@ -257,7 +257,9 @@ def _markdown(report: dict[str, Any]) -> str:
         "",
         f"Target: the bridged loop >= {report['target_x_real_time']:g}x real time.",
         "Both lockstep modes must equal the in-process run: the clients ask to be asked again "
-        "within their radius of convergence (ask_within), where algorithm II switches.",
+        "within their radius of convergence (ask_within), where algorithm II switches; over "
+        "ZeroMQ they send the next points too (then), and the bridge switches to them itself "
+        "(one round trip a frame).",
         "Per round trip: the server's CPU in it, and the tracker process's CPU (its start-up "
         "included); the rest of a round trip is waiting for either process to be woken.",
         "",
