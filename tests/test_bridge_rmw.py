@@ -76,8 +76,9 @@ def test_loopback_by_default() -> None:
 
 
 def test_an_ipc_path_a_server_listens_on_is_refused(tmp_path: Path) -> None:
-    """ZeroMQ would take an ipc:// path over from the server on it: the second server is
-    refused instead; a socket file left by a server that is gone is taken."""
+    """ZeroMQ would take an ipc:// path over from the server on it (or remove a file there):
+    the second server is refused instead, and so is a path that holds a file; a socket file
+    left by a server that is gone is taken."""
     pytest.importorskip("zmq")
     from seamtrack.bridge.zmq_transport import ZmqTransport
 
@@ -89,6 +90,11 @@ def test_an_ipc_path_a_server_listens_on_is_refused(tmp_path: Path) -> None:
         assert info.value.field == "--endpoint"
     finally:
         first.close()
+    kept = tmp_path / "notes.txt"
+    kept.write_text("mine")
+    with pytest.raises(BridgeFailure, match="not a socket"):
+        ZmqTransport(f"ipc://{kept}")
+    assert kept.read_text() == "mine"
     stale = tmp_path / "stale"
     with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as s:
         s.bind(str(stale))  # a socket file nobody listens on

@@ -20,6 +20,7 @@ import json
 import math
 import os
 import socket
+import stat
 import time
 from typing import Any
 
@@ -62,8 +63,9 @@ class ZmqTransport:
         self.sock.setsockopt(zmq.MAXMSGSIZE, HARD_LIMIT_BYTES)
         self.monitor = self.sock.get_monitor_socket(zmq.EVENT_DISCONNECTED)
         try:
-            if _listened_on(endpoint):  # ZeroMQ would take the path over from its server
-                raise zmq.ZMQError(msg="another server listens there")
+            taken = _taken(endpoint)  # ZeroMQ would remove what is on the path
+            if taken:
+                raise zmq.ZMQError(msg=taken)
             self.sock.bind(endpoint)
         except zmq.ZMQError as exc:
             self.close()
@@ -162,17 +164,22 @@ class ZmqTransport:
                     )
 
 
-def _listened_on(endpoint: str) -> bool:
-    """Does a server listen on this ``ipc://`` path already (a socket file that a connection
-    is accepted on; a file left by a server that is gone is not)?"""
+def _taken(endpoint: str) -> str:
+    """Why an ``ipc://`` path is not free ("" when it is): ZeroMQ removes whatever is on the
+    path it binds, so a file that is not a socket, or a socket a server listens on, is refused
+    (a socket left by a server that is gone is taken)."""
     if not endpoint.startswith("ipc://"):
-        return False
+        return ""
     path = endpoint[len("ipc://") :]
-    if not os.path.exists(path):
-        return False
+    try:
+        mode = os.stat(path).st_mode
+    except OSError:
+        return ""
+    if not stat.S_ISSOCK(mode):
+        return "a file that is not a socket is there"
     with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as probe:
         try:
             probe.connect(path)
         except OSError:
-            return False
-    return True
+            return ""
+    return "another server listens there"
