@@ -147,14 +147,17 @@ def test_external_algorithm2_equals_in_process(
         assert math.isfinite(summary["max_error_mm"])
 
 
-@pytest.mark.parametrize(("transport", "then"), [("zmq", "2"), ("zmq", "0"), ("zenoh", "")])
+@pytest.mark.parametrize(
+    ("transport", "then"), [("zmq", "2"), ("zmq", "0"), ("zenoh", "2"), ("zenoh", "0")]
+)
 def test_frame_lockstep_with_ask_within_is_exact_too(
     transport: str, then: str, in_process: dict[str, Path], tmp_path: Path
 ) -> None:
     """With one step per frame, plus a step whenever the torch comes within the client's
     ``ask_within`` (its radius) of the target, algorithm II still switches on the very tick:
     the same run, in a fraction of the round trips; and so it does when the bridge switches
-    to the points the client sent ahead (ZeroMQ's ``then``; ``--then 0``: none sent)."""
+    to the points the client sent ahead (ZeroMQ's ``then``, Zenoh's ``cmd_then``; ``--then
+    0``: none sent)."""
     out = tmp_path / "run"
     args = ("--then", then) if then else ()
     server, client = _serve("paper-corner", transport, out, lockstep="frame", client_args=args)

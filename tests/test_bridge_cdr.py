@@ -122,3 +122,44 @@ def test_the_command_reader_reads_and_refuses_as_rosbags_does(
             except ValueError as exc:
                 assert not accepted, (bad, exc)
                 assert str(exc).startswith(f"not a {msgtype}")
+
+
+@pytest.mark.parametrize("n", [0, 1, 3])
+@pytest.mark.parametrize("little_endian", [True, False])
+def test_the_pose_array_reader_reads_and_refuses_as_rosbags_does(
+    n: int, little_endian: bool
+) -> None:
+    """``cmd_then`` (geometry_msgs/PoseArray): the poses rosbags decodes; of every truncation
+    and every few bytes appended, exactly what rosbags refuses is refused; more poses than
+    asked for are refused."""
+    ts = m.typestore()
+    msgtype = "geometry_msgs/msg/PoseArray"
+    rng = np.random.default_rng(n)
+    values = [tuple(rng.uniform(-2, 2, 7).tolist()) for _ in range(n)]
+    for frame_id in FRAME_IDS + ["wörld"]:
+        poses = []
+        for v in values:
+            pose = m.default("geometry_msgs/msg/Pose")
+            pose.position.x, pose.position.y, pose.position.z = v[:3]
+            q = pose.orientation
+            q.x, q.y, q.z, q.w = v[3:]
+            poses.append(pose)
+        msg = ts.types[msgtype](header=m.header(3.000000007, frame_id), poses=poses)
+        raw = bytes(ts.serialize_cdr(msg, msgtype, little_endian=little_endian))
+        assert cdr.read_pose_array(raw, 16) == (3_000_000_007, frame_id, values)
+        if n:
+            with pytest.raises(ValueError, match=f"{n} poses, more than {n - 1}"):
+                cdr.read_pose_array(raw, n - 1)
+        mutants = [raw[:k] for k in range(len(raw))] + [raw + b"\x00" * k for k in range(1, 9)]
+        for bad in mutants:
+            try:
+                ts.deserialize_cdr(bad, msgtype)
+                accepted = True
+            except Exception:
+                accepted = False
+            try:
+                cdr.read_pose_array(bad, 16)
+                assert accepted, bad
+            except ValueError as exc:
+                assert not accepted, (bad, exc)
+                assert str(exc).startswith(f"not a {msgtype}")

@@ -9,10 +9,10 @@ algorithm II, cut to :data:`SIM_S` simulated seconds. Runs:
 2. for each transport (ZeroMQ on its default Unix socket: JSON and the profiles as raw arrays;
    Zenoh: ROS 2 CDR) and lockstep (a command every control tick, or one per frame): the loop
    served in this process, the tracker an external process that imports nothing of seamtrack
-   (tests/bridge_clients/, the scripts the tests run; they need a source checkout: over
-   ZeroMQ it sends the points that follow with each command, ``then``; over Zenoh it
-   subscribes to the seam points and the torch only); and ZeroMQ per frame without the
-   profiles (what sending them costs), and over TCP on loopback.
+   (tests/bridge_clients/, the scripts the tests run; they need a source checkout: it sends
+   the points that follow with each command, ZeroMQ's ``then``, Zenoh's ``cmd_then``; over
+   Zenoh it subscribes to the seam points and the torch only); and ZeroMQ per frame without
+   the profiles (what sending them costs), and over TCP on loopback.
 
 Per run: wall time of the loop (the wait for the tracker to connect left out), x real time
 (simulated / wall), the bridge's cost per frame ((bridged - in-process wall) / frames) and per
@@ -257,8 +257,8 @@ def _markdown(report: dict[str, Any]) -> str:
         "",
         f"Target: the bridged loop >= {report['target_x_real_time']:g}x real time.",
         "Both lockstep modes must equal the in-process run: the clients ask to be asked again "
-        "within their radius of convergence (ask_within), where algorithm II switches; over "
-        "ZeroMQ they send the next points too (then), and the bridge switches to them itself "
+        "within their radius of convergence (ask_within), where algorithm II switches; they "
+        "send the next points too (then, cmd_then), and the bridge switches to them itself "
         "(one round trip a frame).",
         "Per round trip: the server's CPU in it, and the tracker process's CPU (its start-up "
         "included); the rest of a round trip is waiting for either process to be woken.",

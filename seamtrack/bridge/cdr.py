@@ -235,3 +235,40 @@ def read_stamped(raw: bytes, msgtype: str) -> tuple[int, str, tuple[float, ...]]
     except ValueError as exc:
         raise ValueError(f"not a {msgtype} ({exc})") from None
     return sec * 1_000_000_000 + nanosec, frame_id, values
+
+
+def read_pose_array(raw: bytes, most: int) -> tuple[int, str, list[tuple[float, ...]]]:
+    """A ``geometry_msgs/PoseArray`` from CDR bytes, either byte order: (stamp in ns, frame
+    id, each pose's position and orientation as 7 doubles), at most ``most`` poses; checked
+    as :func:`read_stamped` checks; raises ValueError on anything else."""
+    msgtype = "geometry_msgs/msg/PoseArray"
+    try:
+        if len(raw) < 4 or raw[0] != 0 or raw[1] not in (0, 1):
+            raise ValueError("no CDR encapsulation header")
+        order = "<" if raw[1] == 1 else ">"
+        body = memoryview(raw)[4:]
+        sec, nanosec, length = struct.unpack_from(order + "iII", body, 0)
+        if length < 1 or 12 + length > len(body) or body[12 + length - 1] != 0:
+            raise ValueError("a string that does not fit")
+        frame_id = bytes(body[12 : 12 + length - 1]).decode()
+        pos = 12 + length
+        pos += -pos % 4
+        (count,) = struct.unpack_from(order + "I", body, pos)
+        pos += 4
+        if count > most:
+            raise ValueError(f"{count} poses, more than {most}")
+        poses = []
+        if count:
+            pos += -pos % 8
+            for _ in range(count):
+                poses.append(struct.unpack_from(f"{order}7d", body, pos))
+                pos += 56
+        if pos + 3 < len(body):
+            raise ValueError("bytes after the message")
+    except struct.error:
+        raise ValueError(f"not a {msgtype} (too short)") from None
+    except UnicodeDecodeError:
+        raise ValueError(f"not a {msgtype} (a frame id that is not UTF-8)") from None
+    except ValueError as exc:
+        raise ValueError(f"not a {msgtype} ({exc})") from None
+    return sec * 1_000_000_000 + nanosec, frame_id, poses

@@ -41,6 +41,8 @@ POINT_STAMPED = "geometry_msgs/msg/PointStamped"
 POSE_STAMPED = "geometry_msgs/msg/PoseStamped"
 TWIST_STAMPED = "geometry_msgs/msg/TwistStamped"
 STRING = "std_msgs/msg/String"
+POSE_ARRAY = "geometry_msgs/msg/PoseArray"
+UINT32 = "std_msgs/msg/UInt32"
 
 
 def dds_type_name(msgtype: str) -> str:
@@ -116,6 +118,11 @@ def encode_clock(t_s: float) -> bytes:
 
 def encode_string(text: str) -> bytes:
     return cdr.string(text)
+
+
+def encode_uint32(value: int) -> bytes:
+    """``std_msgs/UInt32`` (little-endian CDR)."""
+    return struct.pack("<4sI", b"\x00\x01\x00\x00", value)
 
 
 def encode_point(t_s: float, frame_id: str, point_mm: Any) -> bytes:

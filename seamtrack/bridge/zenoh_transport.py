@@ -11,7 +11,11 @@ point was found ``/seamtrack/seam_point`` (PointStamped), and in image mode
 ``/seamtrack/tcp_velocity`` (TwistStamped) and, last, ``/seamtrack/tcp`` (PoseStamped, the
 torch tip in ``world``): the step's trigger. The tracker answers with the pair
 ``/seamtrack/cmd_pose`` (PoseStamped) and ``/seamtrack/cmd_speed`` (TwistStamped), both
-stamped with the step's time.
+stamped with the step's time; a tracker that publishes ``/seamtrack/cmd_then`` (PoseArray:
+the targets that follow, passed through at cmd_speed's speed and ask_within; the transport's
+``then``) adds it to each answer, and is told before each ``/seamtrack/tcp`` how many of them
+took over (``/seamtrack/then_taken``, UInt32). Only the topics a subscriber matches are
+written and put (``/seamtrack/tcp`` always).
 
 The run starts once a node has declared a subscription to ``/seamtrack/tcp`` and publishers
 of both command topics (their liveliness tokens); ``/seamtrack/context`` (String, JSON) then
@@ -36,7 +40,7 @@ import numpy as np
 
 from seamtrack.bridge import cdr, messages, rmw
 from seamtrack.bridge.lockstep import BridgeFailure, Reply, Step, TfChain
-from seamtrack.bridge.wire import MAX_MESSAGE_BYTES, context_json, make_command
+from seamtrack.bridge.wire import MAX_MESSAGE_BYTES, MAX_THEN, context_json, make_command
 from seamtrack.control.tracking import TrackerContext
 
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
@@ -52,11 +56,16 @@ PUBLISHES = {
     "/seamtrack/seam_point": rmw.POINT_STAMPED,
     "/seamtrack/seam_point_world": rmw.POINT_STAMPED,
     "/seamtrack/tcp_velocity": rmw.TWIST_STAMPED,
+    "/seamtrack/then_taken": rmw.UINT32,
     "/seamtrack/tcp": rmw.POSE_STAMPED,
     "/seamtrack/context": rmw.STRING,
     "/seamtrack/status": rmw.STRING,
 }
-SUBSCRIBES = {"/seamtrack/cmd_pose": rmw.POSE_STAMPED, "/seamtrack/cmd_speed": rmw.TWIST_STAMPED}
+SUBSCRIBES = {
+    "/seamtrack/cmd_pose": rmw.POSE_STAMPED,
+    "/seamtrack/cmd_speed": rmw.TWIST_STAMPED,
+    "/seamtrack/cmd_then": rmw.POSE_ARRAY,
+}
 
 #: Topics sent once whose last message a late subscriber gets on request.
 LATCHED = ("/tf_static", "/seamtrack/context", "/seamtrack/status")
@@ -168,6 +177,9 @@ class ZenohTransport:
             for topic, pub in self.pubs.items()
         ]
         self.seq = 0
+        #: The poses of the last answer's ``cmd_then`` as replies, next first.
+        self.then: list[Reply] = []
+        self.with_then = False  # the tracker node publishes cmd_then: three messages a step
         self.client: str | None = None
         self.with_profile = True
 
@@ -236,6 +248,14 @@ class ZenohTransport:
         time.sleep(SETTLE_S)
         for topic, pub in self.pubs.items():  # as of now; the listeners follow any change
             self.matched[topic] = bool(pub.matching_status.matching)
+        while not self.events.empty():  # the node's tokens that came after the three needed
+            _, what, token = self.events.get_nowait()
+            fields = rmw.parse_token(token)
+            if fields and fields["session"] == client and "topic" in fields:
+                if what.endswith("DELETE"):
+                    raise BridgeFailure("the tracker node disconnected", fix=_KEEP_RUNNING)
+                seen[client].add((fields["kind"], fields["topic"]))
+        self.with_then = ("MP", "/seamtrack/cmd_then") in seen[client]
         static = [link for link in chain(np.eye(4)) if link[:2] in STATIC_LINKS]
         self._put("/tf_static", cdr.tf_message(static, 0.0))
         message = {"lockstep": lockstep, "context": context_json(context)}
@@ -266,6 +286,8 @@ class ZenohTransport:
         if on["/seamtrack/tcp_velocity"]:
             velocity = np.asarray(step.tcp_velocity_world, dtype=float) / messages.MM_PER_M
             self._put("/seamtrack/tcp_velocity", rmw.encode_twist(t, "world", velocity, (0, 0, 0)))
+        if self.with_then:  # how many of the last cmd_then took over, before the trigger
+            self._put("/seamtrack/then_taken", rmw.encode_uint32(step.then_taken))
         # The step's trigger, put whoever listens.
         self._put("/seamtrack/tcp", rmw.encode_pose(t, "world", step.tcp_world, None))
         return self._command(t, step.seq)
@@ -317,13 +339,23 @@ class ZenohTransport:
         got: dict[str, Any] = {}
         self._deadline = time.monotonic() + self.timeout_s
         try:
-            while len(got) < 2:
+            while not (_THEN if self.with_then else _PAIR) <= got.keys():
                 kind, size, data = self._receive(seq)
                 self._check(kind, size, data, want, got)
         finally:
             self._deadline = None
         (frame, pose), (_, speed) = got["/seamtrack/cmd_pose"], got["/seamtrack/cmd_speed"]
-        return command_from_values(frame, pose, speed)
+        reply = command_from_values(frame, pose, speed)
+        self.then = []
+        if self.with_then and reply[0] is not None:
+            then_frame, poses = got["/seamtrack/cmd_then"]
+            if poses and then_frame != "world":
+                raise BridgeFailure(
+                    f"cmd_then is in frame {then_frame[:40]!r}", fix="give its poses in 'world'"
+                )
+            passing = (speed[0], 0.0, *speed[2:])  # each passes through its target
+            self.then = [command_from_values("world", p, passing) for p in poses]
+        return reply
 
     def _receive(self, seq: int) -> tuple[str, int, bytes | None]:
         """The next command sample (topic, size, bytes or None when oversized), blocking; a
@@ -362,7 +394,11 @@ class ZenohTransport:
                 fix="publish one PoseStamped and one TwistStamped per step",
             )
         try:  # the bytes rosbags would accept, read without building its objects
-            stamp, frame, values = cdr.read_stamped(data, SUBSCRIBES[kind])
+            values: Any
+            if kind == "/seamtrack/cmd_then":
+                stamp, frame, values = cdr.read_pose_array(data, MAX_THEN)
+            else:
+                stamp, frame, values = cdr.read_stamped(data, SUBSCRIBES[kind])
         except ValueError as exc:
             raise BridgeFailure(f"sent garbage on {kind}: {exc}", fix=_FIX_TYPES) from None
         if stamp != want:
@@ -376,6 +412,8 @@ class ZenohTransport:
         got[kind] = (frame, values)
 
 
+_PAIR = {"/seamtrack/cmd_pose", "/seamtrack/cmd_speed"}
+_THEN = _PAIR | {"/seamtrack/cmd_then"}
 _KEEP_RUNNING = "keep the tracker node running until /seamtrack/status says the run is over"
 _FIX_TYPES = "publish geometry_msgs/msg/PoseStamped and TwistStamped as docs/bridge.md gives them"
 

@@ -3,11 +3,15 @@ speaking what rmw_zenoh_cpp speaks: CDR payloads (rosbags) on ``<domain>/<topic>
 <RIHS01 hash>`` key expressions, with liveliness tokens for the node and its entities. Only
 ``zenoh`` and ``rosbags`` (and the standard library): nothing of seamtrack.
 
-Usage: python zenoh_algorithm2.py LOCATOR [--radius-mm 1.0] [--misbehave KIND]
+Usage: python zenoh_algorithm2.py LOCATOR [--radius-mm 1.0] [--misbehave KIND] [--then 2]
 
-Works in SI units as a ROS node does (m, m/s). ``--misbehave`` is for the tests: ``garbage``
-(bytes that are not CDR), ``oversized`` (a 10 kB payload), ``silent`` (no answer to step 5),
-``vanish`` (exit at step 5).
+Works in SI units as a ROS node does (m, m/s). With each command it publishes its next
+``--then`` points on ``/seamtrack/cmd_then`` (the bridge goes on to them itself when the torch
+comes within the radius, between frames, and says how many on ``/seamtrack/then_taken``);
+``--then 0``: no cmd_then, the bridge asks at each switch.
+
+``--misbehave`` is for the tests: ``garbage`` (bytes that are not CDR), ``oversized`` (a
+10 kB payload), ``silent`` (no answer to step 5), ``vanish`` (exit at step 5).
 """
 
 from __future__ import annotations
@@ -63,6 +67,10 @@ def warm_up() -> None:
         ),
         T["geometry_msgs/msg/PointStamped"](header=header, point=point),
         T["std_msgs/msg/String"](data=""),
+        T["std_msgs/msg/UInt32"](data=0),
+        T["geometry_msgs/msg/PoseArray"](
+            header=header, poses=[T["geometry_msgs/msg/Pose"](position=point, orientation=q)]
+        ),
     ]
     for msg in messages:
         TS.deserialize_cdr(TS.serialize_cdr(msg, msg.__msgtype__), msg.__msgtype__)
@@ -85,8 +93,13 @@ class ConvergenceRadius:
         self.last_pushed = point
 
     def step(
-        self, tcp: tuple[float, float, float]
+        self, tcp: tuple[float, float, float], taken: int = 0
     ) -> tuple[tuple[float, float, float], bool] | None:
+        # The bridge went on to `taken` of the points sent in the last cmd_then: the torch came
+        # within the radius of those before them, between the frames.
+        if taken:
+            del self.points[:taken]
+            self.command = None
         while len(self.points) > 1 and dist(tcp, self.points[0]) <= self.radius:
             self.points.pop(0)
             self.command = None
@@ -96,6 +109,11 @@ class ConvergenceRadius:
         if self.command is None or last != self.command[1]:
             self.command = (self.points[0], last)
         return self.command
+
+    def ahead(self, n: int) -> list[tuple[float, float, float]]:
+        """The next points to pass through (cmd_then), the last one known left out (the
+        torch arrives at rest there: a command of its own)."""
+        return self.points[1 : min(1 + n, len(self.points) - 1)]
 
 
 def dist(a, b) -> float:
@@ -109,6 +127,7 @@ def main() -> int:
     ap.add_argument("--radius-mm", type=float, default=1.0)
     ap.add_argument("--misbehave", default="")
     ap.add_argument("--check-frames", action="store_true")
+    ap.add_argument("--then", type=int, default=2, help="points sent ahead (cmd_then)")
     args = ap.parse_args()
     config = zenoh.Config()
     config.insert_json5("mode", '"client"')
@@ -141,6 +160,9 @@ def main() -> int:
         "/seamtrack/cmd_pose": "geometry_msgs/msg/PoseStamped",
         "/seamtrack/cmd_speed": "geometry_msgs/msg/TwistStamped",
     }
+    if args.then:  # the points that follow, and how many of them the bridge went on to
+        pubs["/seamtrack/cmd_then"] = "geometry_msgs/msg/PoseArray"
+        subs["/seamtrack/then_taken"] = "std_msgs/msg/UInt32"
     live = session.liveliness()
     tokens = [live.declare_token(f"@ros2_lv/{DOMAIN}/{sid}/0/0/NN/%/%/tracker")]
     # One subscription per topic it takes, as a ROS node has (so the bridge, seeing no one
@@ -187,6 +209,7 @@ def main() -> int:
 
     tracker = None
     steps = 0
+    taken = 0
     while True:
         topic, raw = receive()
         if topic == "/seamtrack/context":
@@ -217,13 +240,16 @@ def main() -> int:
             if args.check_frames:
                 print(json.dumps(seen))
             break
+        elif topic == "/seamtrack/then_taken":
+            taken = TS.deserialize_cdr(raw, subs[topic]).data
         elif topic == "/seamtrack/seam_point_world":
             p = TS.deserialize_cdr(raw, subs[topic]).point
             tracker.update((p.x, p.y, p.z))
         elif topic == "/seamtrack/tcp":
             msg = TS.deserialize_cdr(raw, subs[topic])
             p = msg.pose.position
-            cmd = tracker.step((p.x, p.y, p.z))
+            cmd = tracker.step((p.x, p.y, p.z), taken)
+            taken = 0
             header = T["std_msgs/msg/Header"](stamp=msg.header.stamp, frame_id="world")
             if steps == 5 and args.misbehave:
                 if args.misbehave == "garbage":
@@ -260,6 +286,20 @@ def main() -> int:
                 "/seamtrack/cmd_speed",
                 T["geometry_msgs/msg/TwistStamped"](header=header, twist=twist),
             )
+            if args.then:
+                ahead = [] if cmd is None or cmd[1] else tracker.ahead(args.then)
+                poses = [
+                    T["geometry_msgs/msg/Pose"](
+                        position=T["geometry_msgs/msg/Point"](x=a[0], y=a[1], z=a[2]),
+                        orientation=pose.orientation,
+                    )
+                    for a in ahead
+                ]
+                then_header = T["std_msgs/msg/Header"](stamp=msg.header.stamp, frame_id="world")
+                publish(
+                    "/seamtrack/cmd_then",
+                    T["geometry_msgs/msg/PoseArray"](header=then_header, poses=poses),
+                )
     for subscriber in subscribers:
         subscriber.undeclare()
     for t in tokens:
