@@ -57,7 +57,7 @@ def _sets(scene: str) -> list[str]:
 
 
 def _endpoint(transport: str) -> str:
-    """ZeroMQ: a Unix socket as by default, on a path of its own; Zenoh: a free port."""
+    """ZeroMQ: a Unix socket on a path of its own (no race for a free port); Zenoh: a free port."""
     if transport == "zmq":
         return f"ipc://{tempfile.mkdtemp(prefix='seamtrack-test-')}/bridge"
     return f"tcp/127.0.0.1:{_free_port()}"

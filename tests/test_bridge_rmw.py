@@ -71,7 +71,7 @@ def test_attachment_layout() -> None:
 def test_loopback_by_default() -> None:
     from seamtrack.bridge import zenoh_transport, zmq_transport
 
-    assert zmq_transport.DEFAULT_ENDPOINT.startswith("ipc:///")  # a Unix socket: this machine
+    assert zmq_transport.DEFAULT_ENDPOINT.startswith("tcp://127.0.0.1:")
     assert zenoh_transport.DEFAULT_ENDPOINT.startswith("tcp/127.0.0.1:")
 
 

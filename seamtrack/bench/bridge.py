@@ -6,13 +6,13 @@ The scene is ``paper-v-groove`` (100 frames/s of 1024 rays, 1 kHz control) with 
 algorithm II, cut to :data:`SIM_S` simulated seconds. Runs:
 
 1. in-process: seamtrack's own algorithm II;
-2. for each transport (ZeroMQ on its default Unix socket: JSON and the profiles as raw arrays;
-   Zenoh: ROS 2 CDR) and lockstep (a command every control tick, or one per frame): the loop
+2. for each transport (ZeroMQ over TCP on loopback, its default: JSON and the profiles as raw
+   arrays; Zenoh: ROS 2 CDR) and lockstep (a command every control tick, or one per frame): the loop
    served in this process, the tracker an external process that imports nothing of seamtrack
    (tests/bridge_clients/, the scripts the tests run; they need a source checkout: it sends
    the points that follow with each command, ZeroMQ's ``then``, Zenoh's ``cmd_then``; over
    Zenoh it subscribes to the seam points and the torch only); and ZeroMQ per frame without
-   the profiles (what sending them costs), and over TCP on loopback.
+   the profiles (what sending them costs), and over a Unix socket (``ipc://``).
 
 Per run: wall time of the loop (the wait for the tracker to connect left out), x real time
 (simulated / wall), the bridge's cost per frame ((bridged - in-process wall) / frames) and per
@@ -84,7 +84,7 @@ def _bridged(
     sim_s: float,
     clients: Path,
     profile: bool = True,
-    tcp: bool = False,
+    ipc: bool = False,
 ) -> dict[str, Any]:
     import shutil
     import tempfile
@@ -97,8 +97,8 @@ def _bridged(
     if transport == "zmq":
         from seamtrack.bridge.zmq_transport import ZmqTransport
 
-        # As served by default, a Unix socket (a path of its own); or TCP over loopback.
-        endpoint = f"tcp://127.0.0.1:{port}" if tcp else f"ipc://{folder}/bridge"
+        # As served by default, TCP over loopback; or a Unix socket (a path of its own).
+        endpoint = f"ipc://{folder}/bridge" if ipc else f"tcp://127.0.0.1:{port}"
         server: Any = ZmqTransport(endpoint, timeout_s=30.0, wait_s=120.0)
     else:
         from seamtrack.bridge.zenoh_transport import ZenohTransport
@@ -211,11 +211,11 @@ def bench_bridge(out_dir: str | Path, quick: bool = False) -> dict[str, Any]:
             summary = _bridged(transport, lockstep, sim_s, clients)
             rows.append(_row(f"{transport} / {lockstep}", summary, base))
     # What the profiles cost: the same without them (algorithm II does not use them); and
-    # TCP over loopback (a tracker on another machine) instead of the Unix socket.
+    # a Unix socket (ipc://, this machine only) instead of TCP over loopback.
     summary = _bridged("zmq", "frame", sim_s, clients, profile=False)
     rows.append(_row("zmq / frame, no profile", summary, base))
-    summary = _bridged("zmq", "frame", sim_s, clients, tcp=True)
-    rows.append(_row("zmq / frame, tcp loopback", summary, base))
+    summary = _bridged("zmq", "frame", sim_s, clients, ipc=True)
+    rows.append(_row("zmq / frame, Unix socket", summary, base))
     report = {
         "machine": machine_info(),
         "scene": SCENE,

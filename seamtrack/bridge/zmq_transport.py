@@ -3,9 +3,10 @@ steps' profiles as raw arrays in further parts of a multipart message
 (:mod:`seamtrack.bridge.wire` gives the format). The client speaks first: ``hello`` ->
 ``reset``, ``ready`` -> step 0, ``command`` -> step 1, ... -> ``end``.
 
-By default the socket is a Unix domain socket, :data:`DEFAULT_ENDPOINT` (``ipc://``: this
-machine only, and a shorter round trip than TCP over loopback); ``tcp://HOST:PORT`` serves a
-tracker on another machine (``tcp://127.0.0.1:PORT``: loopback).
+By default the socket listens on the loopback interface, :data:`DEFAULT_ENDPOINT`;
+``ipc:///PATH`` is a Unix domain socket (this machine only, and a shorter round trip than TCP
+over loopback: ``seamtrack bench bridge`` has both rows), and ``tcp://HOST:PORT`` with another
+interface serves a tracker on another machine.
 
 Safety: the socket listens on this machine only unless told otherwise; ZeroMQ drops a peer
 whose message is over :data:`HARD_LIMIT_BYTES` (no allocation for it), and a message over
@@ -28,8 +29,8 @@ from seamtrack.bridge import wire
 from seamtrack.bridge.lockstep import BridgeFailure, Reply, Step, TfChain
 from seamtrack.control.tracking import TrackerContext
 
-#: A Unix domain socket: a tracker on this machine connects to the same endpoint.
-DEFAULT_ENDPOINT = "ipc:///tmp/seamtrack-bridge"
+#: TCP on the loopback interface: a tracker on this machine connects to the same endpoint.
+DEFAULT_ENDPOINT = "tcp://127.0.0.1:5555"
 
 #: ZeroMQ disconnects a peer that sends more than this in one message.
 HARD_LIMIT_BYTES = 65536
@@ -41,7 +42,7 @@ class ZmqTransport:
     Parameters
     ----------
     endpoint : str
-        A ZeroMQ endpoint to bind (``ipc:///tmp/seamtrack-bridge``, ``tcp://127.0.0.1:5555``).
+        A ZeroMQ endpoint to bind (``tcp://127.0.0.1:5555``, ``ipc:///tmp/seamtrack-bridge``).
     timeout_s : float
         How long the client may take to answer one step.
     wait_s : float

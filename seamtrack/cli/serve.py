@@ -31,8 +31,9 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--endpoint",
-        help="where to listen: zmq default ipc:///tmp/seamtrack-bridge (this machine; "
-        "tcp://HOST:PORT for another); zenoh default tcp/127.0.0.1:7447 (rmw_zenoh's router "
+        help="where to listen: zmq default tcp://127.0.0.1:5555 (loopback; "
+        "ipc:///PATH: a Unix socket, faster; tcp://HOST:PORT for another machine); "
+        "zenoh default tcp/127.0.0.1:7447 (rmw_zenoh's router "
         "port); this machine only unless you say otherwise",
     )
     p.add_argument(
