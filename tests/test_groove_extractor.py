@@ -124,15 +124,38 @@ def test_a_crowned_fill_reports_its_area_signed():
 
 
 @pytest.mark.parametrize("kind", ["narrow-gap", "u"])
-@pytest.mark.parametrize("layers", [0, 2, 5])
-def test_narrow_gap_and_u_points_are_found(kind, layers):
-    """Narrow gap (walls 4 deg off vertical, 25 mm deep) and U (10 deg walls, 3 mm root
-    radius): all found, median error <= 0.15 mm. Their p95 (0.2-1.6 mm) is not yet at the
-    issue's 0.2 mm: a wall nearly along the rays shows no points, spikes at its foot stand for
-    the corner; an empty U's round has no sharp foot (docs/extractors.md)."""
-    found, e = _errors(kind, layers, 12, 12)
-    assert found == 12
-    assert np.median(e) <= 0.15
+@pytest.mark.parametrize("layers", range(7))
+def test_narrow_gap_and_u_points_at_every_fill_state(kind, layers):
+    """Narrow gap (walls 4 deg off vertical, 25 mm deep, 12 mm) and U (10 deg walls, 3 mm
+    root radius, 8 mm) with 0..6 layers, the V's draw (real-sensor artefacts, tilts +-5 deg,
+    offset +-2 mm): every profile found, the 7 points' errors pooled median <= 0.05 mm and
+    90th percentile <= 0.25 mm. The issue's 0.2 mm p95 holds on this draw (seed 11, the
+    table in docs/extractors.md; the U with one layer 0.203) but not on every draw: on seed
+    12 the p95 reaches 0.93 mm (an empty U: a few of 20 profiles with a corner or bottom
+    point 1-6 mm off, where spikes and a dropout stand at a wall's foot) while the median
+    and p90 hold (<= 0.04, <= 0.23 mm), so the test holds those."""
+    found, e = _errors(kind, layers, 20, 11)
+    assert found == 20
+    assert np.median(e) <= 0.05
+    assert np.percentile(e, 90) <= 0.25
+
+
+def test_a_u_grooves_bottom_corner_rides_its_wall_with_the_fill():
+    """The U's convention (seamtrack.features.synthetic_groove): the bottom corner is the wall's
+    line at the level where the fill meets the round, so the virtual sharp corner for the
+    empty groove and a point of the wall's line just above the bead's toe on the round; the
+    analytic wall line through the top corner and the virtual foot is the oracle."""
+    g = groove("u")
+    top, foot = g.top[0], g.foot[0]
+    assert groove_points(g)[1] == pytest.approx(foot)
+    s = fill(g, 1, bead_area_mm2=20.0)[0]
+    corner = groove_points(g, s)[1]
+    assert foot[1] < corner[1] < foot[1] + 3.0 * math.cos(math.radians(10.0))  # in the round
+    d = foot - top
+    off = (corner - top) @ np.array([-d[1], d[0]]) / math.hypot(*d)
+    assert abs(off) < 1e-9  # on the wall's line
+    y = np.linspace(corner[0], corner[0] + 1.0, 2001)
+    assert np.interp(y, s[:, 0], s[:, 1]).min() == pytest.approx(corner[1], abs=0.02)
 
 
 def test_remaining_area_is_measured():
