@@ -108,6 +108,48 @@ def test_nearly_full_and_crowned_v_grooves_within_0_2_mm_p95(layers):
     assert np.percentile(e, 95) <= 0.2
 
 
+# The quantized wide sensor with 800 rays, as on multipass-varying-gap: its pixel steps split a
+# plate or a wall into pieces. (root gap, lateral offset, roll, standoff); the first three put a
+# plate's last step between it and the wall (the plate ended 1.3 mm short of its corner, or its
+# short outer piece stood alone), the fourth split a wall 3.1 mm under its corner (the scan
+# pass of that job: its lower piece was taken for fill, the bottom 10 mm up the wall).
+QUANTIZED_V = [
+    (4.16, 1.643, 0.175, 91.116),
+    (4.481, -1.5, -0.604, 94.47),
+    (4.034, 2.873, 0.548, 89.0),
+    (5.419, 2.309, 0.328, 92.364),
+]
+
+
+def _quantized_v(gap, offset, roll, standoff):
+    g = groove("v", angle_deg=60.0, gap_mm=gap, thickness_mm=20.0)
+    return groove_profile(g, rng=np.random.default_rng(0), artefacts=None, sensor=preset("wide"),
+                          rays=800, lateral_offset_mm=offset, roll_deg=roll,
+                          standoff_mm=standoff)  # fmt: skip
+
+
+@pytest.mark.parametrize("case", QUANTIZED_V)
+def test_a_quantized_empty_vs_steps_are_plate_and_wall(case):
+    """An empty V with a 4-5.4 mm root gap, pixel-quantized (no other artefact): the 7
+    points within 0.1 mm of the analytic ones (a plate's step is plate, a wall's pieces one
+    wall)."""
+    profile, truth = _quantized_v(*case)
+    f = extractor("groove")(profile)
+    assert f and np.hypot(*(f.edges_laser - truth.points_laser).T).max() <= 0.1
+
+
+def test_quantized_empty_vs_at_random_poses():
+    """60 empty Vs, root gap 2-6 mm, offset +-3 mm, roll +-3 deg, standoff 85-95 mm, quantized:
+    every profile found, its 7 points within 0.1 mm."""
+    rng = np.random.default_rng(7)
+    for _ in range(60):
+        case = (rng.uniform(2, 6), rng.uniform(-3, 3), rng.uniform(-3, 3), rng.uniform(85, 95))
+        profile, truth = _quantized_v(*case)
+        f = extractor("groove")(profile)
+        assert f, case
+        assert np.hypot(*(f.edges_laser - truth.points_laser).T).max() <= 0.1, case
+
+
 def test_a_crowned_fill_reports_its_area_signed():
     """The crowned V (9 layers), real-sensor artefacts: the remaining area is the signed area
     between the top corners' line and the surface (metal above the line counts against it),

@@ -19,12 +19,17 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features._groove_kernels import robust_uv_line
+from seamtrack.features._groove_kernels import local_v, robust_uv_line
 from seamtrack.features._segmentation import fit_line
 from seamtrack.features.lines import Line, Segments
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
+
+#: A groove's bottom spread over at most this angle of the fan (rad) ...
+RAY_SPREAD_RAD = math.radians(0.2)
+#: ... and over more than this range (mm) lies along one ray: spikes, not a surface.
+RAY_DEPTH_MM = 1.0
 
 
 def _angle_deg(a: FloatArray, b: FloatArray) -> float:
@@ -315,3 +320,77 @@ def _area(pts: FloatArray, P: FloatArray, inner: IntArray, u: FloatArray) -> flo
     a, b = ring @ u, ring @ v  # along the plates, into the groove
     a_next, b_next = np.concatenate((a[1:], a[:1])), np.concatenate((b[1:], b[:1]))  # np.roll
     return float(-0.5 * (np.dot(a, b_next) - np.dot(b, a_next)))
+
+
+def _stretched(seg: Segments, plate: Line, stop: int, step: int) -> Line:
+    """``plate`` carried on over the points after its last piece (``step`` +1: rightwards) that
+    no piece took and that lie within two tolerances of its line, up to point ``stop`` (the
+    next piece's first): a quantized plate's last step, which split-and-merge leaves between
+    the plate and the wall, is plate; its end is the plate's inner end."""
+    P = seg.points
+    k = int(plate.index[-1] if step > 0 else plate.index[0])
+    n = plate.normal
+    add = []
+    while k + step != stop and 0 <= k + step < len(P):
+        k += step
+        if seg.stray[k]:
+            continue
+        if abs(float((P[k] - plate.centroid) @ n)) > 2.0 * seg.tol:
+            break
+        add.append(k)
+    if not add:
+        return plate
+    index = np.sort(np.concatenate([plate.index, np.asarray(add, dtype=np.intp)]))
+    f = fit_line(P, np.asarray(index, dtype=np.int64))
+    line = Line(index, np.array([f.cy, f.cz]), np.array([f.uy, f.uz]), f.along, f.rms)
+    if line.direction[0] < 0:
+        line = Line(line.index, line.centroid, -line.direction, -line.t, line.rms)
+    return line
+
+
+def _along_a_ray(bottom: FloatArray) -> bool:
+    """Whether the bottom corners and points lie along one ray of the fan (from the laser
+    frame's origin, within :data:`RAY_SPREAD_RAD`) over more than :data:`RAY_DEPTH_MM` of
+    depth: a streak of spikes (a reflection) does; a fill surface, which crosses the rays, and
+    an empty V's root, a point, do not."""
+    angle = np.arctan2(bottom[:, 0], bottom[:, 1])
+    rng = np.hypot(bottom[:, 0], bottom[:, 1])
+    spread, depth = float(np.ptp(angle)), float(np.ptp(rng))
+    return spread <= RAY_SPREAD_RAD and depth > RAY_DEPTH_MM
+
+
+def explained_share(
+    seg: Segments,
+    plates: tuple[Line, Line],
+    walls: tuple[Line | None, Line | None],
+    inner: IntArray,
+    bl: FloatArray,
+    br: FloatArray,
+    u: FloatArray,
+) -> float:
+    """The share of the profile's kept points the model explains: on a plate's line (outside
+    the groove), on a wall's line, or inside the groove between the bottom corners."""
+    P = seg.points
+    kept = np.flatnonzero(~seg.stray)
+    if not len(kept):
+        return 0.0
+    band = 3.0 * seg.tol
+    ok = np.zeros(len(P), dtype=bool)
+    left, right = plates
+    lo, hi = int(left.index[-1]), int(right.index[0])
+    for line, sel in ((left, slice(0, lo + 1)), (right, slice(hi, len(P)))):
+        ok[sel] = np.abs((P[sel] - line.centroid) @ line.normal) <= band
+    for w in walls:
+        if w is not None:
+            ok[inner] |= np.abs((P[inner] - w.centroid) @ w.normal) <= band
+    qu = P[inner] @ u
+    ok[inner[(qu >= bl @ u - band) & (qu <= br @ u + band)]] = True
+    return float(np.count_nonzero(ok[kept]) / len(kept))
+
+
+def _local_v(qu: FloatArray, qv: FloatArray, ut: float, h: float, tol: float) -> float | None:
+    """v of the surface at u = ut: a robust line fit of the points within h of it (None: fewer
+    than 3 there, or none on one side; compiled:
+    :func:`seamtrack.features._groove_kernels.local_v`)."""
+    val = local_v(_c(qu), _c(qv), float(ut), float(h), float(tol))
+    return None if math.isnan(val) else float(val)

@@ -9,16 +9,18 @@ The model, on the pieces of the shared front end (:func:`seamtrack.features.line
 spikes and reflection streaks left out, straight pieces by split-and-merge):
 
 * **plates**: the outermost pieces at least ``min_plate_mm`` long, each with the pieces on its
-  line that follow it inwards, refitted as one line; the two must run within
-  ``max_plate_deg`` of each other. Their mean direction is the groove's width axis u (left to
-  right), its normal v points into the groove.
+  line that follow it inwards (or on whose line it lies: a quantized plate's short outer
+  step) and the points no piece took on its line after them (its last step), refitted as one
+  line; the two must run within ``max_plate_deg`` of each other. Their mean direction is
+  the groove's width axis u (left to right), its normal v points into the groove.
 * **walls**: of the pieces between the plates that go down into the groove at least
   ``wall_deg`` off the plates and whose line passes within 1 mm of the plate's inner end, the
   one whose line carries most points, refitted with the pieces on its line and trimmed to the
   points within two tolerances of it (a root radius's round at its foot left out). A piece
-  more than 3 mm below the corner must stand 75 deg off the plates, be 1 mm long and have no
-  more points outwards of it than on it (a bead's flank or a spike streak pointing at the
-  corner by chance is no wall). A wall nearly along the rays (a narrow gap's), or in the
+  more than 3 mm below the corner, and not carrying on a run of wall pieces from it (a wall
+  split into pieces), must stand 75 deg off the plates, be 1 mm long and have no more points
+  outwards of it than on it (a bead's flank or a spike streak pointing at the corner by
+  chance is no wall). A wall nearly along the rays (a narrow gap's), or in the
   shadow of its plate's edge, shows no points: then there is none.
 * **top corners**: a plate's line meets its wall's line; with no wall seen, the plate's end
   (half a spacing beyond its last point).
@@ -75,21 +77,27 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.errors import PluginError
-from seamtrack.features._groove_fit import (
+from seamtrack.features._groove_fit import (  # noqa: F401 (RAY_*: the extractor's names)
+    RAY_DEPTH_MM,
+    RAY_SPREAD_RAD,
+    _along_a_ray,
     _angle_deg,
     _area,
     _beyond,
     _c,
+    _local_v,
     _median,
     _on_line,
     _robust_uv_line,
+    _stretched,
     drop_islands,
+    explained_share,
     mirrored_walls,
     ray_reach,
     risen_level,
     trim_wall,
 )
-from seamtrack.features._groove_kernels import local_v, running_median
+from seamtrack.features._groove_kernels import running_median
 from seamtrack.features._segmentation import fit_line
 from seamtrack.features.base import _Base
 from seamtrack.features.lines import Line, Segments, intersect, segment_profile
@@ -97,10 +105,6 @@ from seamtrack.sensing.profiles import Feature, Profile
 
 FloatArray = NDArray[np.float64]
 
-#: A groove's bottom spread over at most this angle of the fan (rad) ...
-RAY_SPREAD_RAD = math.radians(0.2)
-#: ... and over more than this range (mm) lies along one ray: spikes, not a surface.
-RAY_DEPTH_MM = 1.0
 IntArray = NDArray[np.intp]
 REFERENCES = ("centre", "left", "right")
 
@@ -244,7 +248,8 @@ class GrooveExtractor(_Base):
             return "not a groove: its bottom lies along one laser ray (a spike streak)"
         area = _area(pts, P, inner, u)
         rms = max(pl.rms, pr.rms, *(w.line.rms for w in (left, right) if w.line is not None))
-        explained = self._explained(seg, plates, (left, right), inner, bl, br, u)
+        walls = (left.line, right.line)
+        explained = explained_share(seg, (pl, pr), walls, inner, bl, br, u)
         return GroovePoints(pts, area, explained, rms)
 
     def _raised(
@@ -285,6 +290,8 @@ class GrooveExtractor(_Base):
                 f"not a groove: the plates beside it are {apart:.0f} deg apart "
                 f"(at most {self.max_plate_deg:.0f}: a fillet or a corner?)"
             )
+        left = _stretched(seg, left, seg.lines[la[1] + 1].index[0], +1)
+        right = _stretched(seg, right, seg.lines[lb[1] - 1].index[-1], -1)
         return Plates(left, right, la[1], lb[1])
 
     def _grow(self, seg: Segments, j: int, step: int, stop: int) -> tuple[Line, int]:
@@ -299,7 +306,10 @@ class GrooveExtractor(_Base):
             if _angle_deg(nxt.direction, base.direction) > 5.0:
                 break
             off = np.abs((seg.points[nxt.index] - base.centroid) @ base.normal)
-            if _median(off) > 2.0 * seg.tol:
+            # (or the plate so far on the next piece's line: a short outer piece, one step
+            # of a quantized plate at a tilt, is flatter than the plate)
+            back = np.abs((seg.points[base.index] - nxt.centroid) @ nxt.normal)
+            if _median(off) > 2.0 * seg.tol and _median(back) > 2.0 * seg.tol:
                 break
             index.append(nxt.index)
             k += step
@@ -329,16 +339,31 @@ class GrooveExtractor(_Base):
         best, support = None, self.min_points - 1
         vy, vz = float(v[0]), float(v[1])
         sign = 1.0 if from_left else -1.0  # inwards from the plate
+        # The run of wall pieces before j (a wall split into pieces, its top one short): how
+        # far its top lies from the corner, its lower end, its direction.
+        run_top, run_end, run_dir = math.inf, None, None
+        join = max(1.0, 5.0 * seg.spacing)
         for j in groove:
             ln = lines[j]
             _, _, uy, uz, _, _ = ln.scalars  # floats: no numpy call a piece
             dv = sign * (uy * vy + uz * vz)
             off = math.degrees(math.asin(min(1.0, abs(dv))))
             if not (dv > 0 and off >= self.wall_deg and ln.extent >= 0.3):
+                run_end = None
                 continue
+            upper = P[ln.index[0] if from_left else ln.index[-1]]
+            near_top = math.hypot(*(upper - top))
+            if (
+                run_end is not None
+                and run_dir is not None
+                and math.hypot(*(upper - run_end)) <= join
+                and _angle_deg(ln.direction, run_dir) <= 5.0
+            ):
+                near_top = min(near_top, run_top)  # it carries on a wall from the corner
+            run_top, run_dir = near_top, ln.direction
+            run_end = P[ln.index[-1] if from_left else ln.index[0]]
             if abs(float((top - ln.centroid) @ ln.normal)) > max(1.0, 3 * seg.tol):
                 continue
-            near_top = math.hypot(*(P[ln.index[0] if from_left else ln.index[-1]] - top))
             if near_top > 3.0 and (off < 75.0 or ln.extent < 1.0):
                 continue  # a bead's flank or a streak pointing at the corner by chance
             n = int(np.count_nonzero(np.abs((q - ln.centroid) @ ln.normal) <= 2.0 * seg.tol))
@@ -553,48 +578,3 @@ class GrooveExtractor(_Base):
             else:
                 out.append(ut * u + val * v)
         return np.array(out)
-
-    def _explained(
-        self,
-        seg: Segments,
-        plates: Plates,
-        walls: tuple[Wall, Wall],
-        inner: IntArray,
-        bl: FloatArray,
-        br: FloatArray,
-        u: FloatArray,
-    ) -> float:
-        P = seg.points
-        kept = np.flatnonzero(~seg.stray)
-        if not len(kept):
-            return 0.0
-        band = 3.0 * seg.tol
-        ok = np.zeros(len(P), dtype=bool)
-        lo, hi = int(plates.left.index[-1]), int(plates.right.index[0])
-        for line, sel in ((plates.left, slice(0, lo + 1)), (plates.right, slice(hi, len(P)))):
-            ok[sel] = np.abs((P[sel] - line.centroid) @ line.normal) <= band
-        for w in walls:
-            if w.line is not None:
-                ok[inner] |= np.abs((P[inner] - w.line.centroid) @ w.line.normal) <= band
-        qu = P[inner] @ u
-        ok[inner[(qu >= bl @ u - band) & (qu <= br @ u + band)]] = True
-        return float(np.count_nonzero(ok[kept]) / len(kept))
-
-
-def _local_v(qu: FloatArray, qv: FloatArray, ut: float, h: float, tol: float) -> float | None:
-    """v of the surface at u = ut: a robust line fit of the points within h of it (None: fewer
-    than 3 there, or none on one side; compiled:
-    :func:`seamtrack.features._groove_kernels.local_v`)."""
-    val = local_v(_c(qu), _c(qv), float(ut), float(h), float(tol))
-    return None if math.isnan(val) else float(val)
-
-
-def _along_a_ray(bottom: FloatArray) -> bool:
-    """Whether the bottom corners and points lie along one ray of the fan (from the laser
-    frame's origin, within :data:`RAY_SPREAD_RAD`) over more than :data:`RAY_DEPTH_MM` of
-    depth: a streak of spikes (a reflection) does; a fill surface, which crosses the rays, and
-    an empty V's root, a point, do not."""
-    angle = np.arctan2(bottom[:, 0], bottom[:, 1])
-    rng = np.hypot(bottom[:, 0], bottom[:, 1])
-    spread, depth = float(np.ptp(angle)), float(np.ptp(rng))
-    return spread <= RAY_SPREAD_RAD and depth > RAY_DEPTH_MM
