@@ -404,6 +404,9 @@ class GrooveExtractor(_Base):
         d = line.direction if from_left else -line.direction
         off = math.degrees(math.asin(min(1.0, abs(float(d @ v)))))
         near = abs(float((top - line.centroid) @ line.normal)) <= max(1.0, 3 * seg.tol)
+        # from the plate's end: a spike streak deep in a narrow gap, along a ray nearly as
+        # steep as its wall, is none
+        near &= float(np.min(np.hypot(*(seg.points[index] - top).T))) <= 3.0
         if (
             float(d @ v) <= 0
             or off < self.wall_deg
