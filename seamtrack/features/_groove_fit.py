@@ -58,25 +58,30 @@ def trim_wall(points: FloatArray, line: Line, tol: float, rounds: int = 3) -> Li
 
 
 def _running_median(v: FloatArray, k: int) -> FloatArray:
+    """The median over ``k`` points about each point; at the ends over those there are (a
+    window cut short: the end's own level, not its whole window's)."""
     if len(v) < k:
         return np.full(len(v), float(np.median(v)))
     med = np.median(np.lib.stride_tricks.sliding_window_view(v, k), axis=1)
-    return np.asarray(np.pad(med, k // 2, mode="edge"))
+    h = k // 2
+    head = [float(np.median(v[: i + h + 1])) for i in range(h)]
+    tail = [float(np.median(v[i - h :])) for i in range(len(v) - h, len(v))]
+    return np.concatenate([head, med, tail])
 
 
 def risen_level(
     fu: FloatArray, fv: FloatArray, left: bool, spacing: float, tol: float
 ) -> float | None:
     """The level (v) of the fill surface's deepest part near a side, when the surface rises
-    from there into the wall: its deepest point (a running median over 0.3 mm) lies at least
-    a quarter of a millimetre in from the surface's outer end, which stands at least 0.3 mm
-    above it and rises at least 0.45 times as much as it runs from the deepest part's
-    nearest point (a round at a U's foot, bare or partly filled, or the notch between a bead
-    and the round: 0.42-1.2 on the synthetic 3 mm round, bare, more beside a bead). None
-    when it rises more gently (a root bead's concave face, the fill's own: 0.13-0.43 on the
-    Keyence root-pass scans) or the surface comes down to the wall (a bead's toe on the
-    wall: a kink). The level is the mean of the deepest part's points (within 0.05 mm, or
-    two tolerances, of the deepest)."""
+    from there into the wall: its deepest point (a running median over 0.3 mm, cut short at
+    the ends) lies at least a quarter of a millimetre in from the surface's outer end (its
+    last 0.1 mm), which stands at least 0.3 mm above it and rises at least 0.45 times as
+    much as it runs from the deepest part's nearest point (a round at a U's foot, bare or
+    partly filled, or the notch between a bead and the round: 0.42-1.2 on the synthetic 3 mm
+    round, bare, more beside a bead). None when it rises more gently (a root bead's concave
+    face, the fill's own: 0.13-0.43 on the Keyence root-pass scans) or the surface comes
+    down to the wall (a bead's toe on the wall: a kink). The level is the mean of the
+    deepest part's points (within 0.05 mm, or two tolerances, of the deepest)."""
     if len(fu) < 5:
         return None
     sign = 1.0 if left else -1.0
@@ -91,7 +96,7 @@ def risen_level(
     k = int(min(51, max(3, round(0.3 / max(spacing, 1e-9)))) | 1)
     smooth = _running_median(zv, k)
     j = int(np.argmax(smooth))
-    end = float(np.median(smooth[zd <= max(0.3, 3 * spacing)]))
+    end = float(np.median(smooth[zd <= max(0.1, 3 * spacing)]))
     if zd[j] < 0.25 or smooth[j] - end < 0.3:
         return None
     deep = smooth >= smooth[j] - min(2.0 * tol, 0.05)
