@@ -34,9 +34,11 @@ spikes and reflection streaks left out, straight pieces by split-and-merge):
   corner of an empty U). Else a line through the most surface points within 1.5 mm of the
   surface's end (lines through pairs of points: spike scraps do not move it) crossed with
   the wall's line, when that lies within 1.5 mm of the surface's outermost point on the line
-  and within 3 mm (or half the wall's seen length) of the wall's points; else that point
-  (half a spacing beyond it). A wall hidden in its plate's shadow is the seen one mirrored
-  through its own top corner (bevels are cut alike), when the fill stays inside that line;
+  and within 3 mm (or half the wall's seen length) of the wall's points, or within 1 mm of
+  the wall's deepest point and not above it (a bead's toe lost in the notch at the wall);
+  else that point (half a spacing beyond it). A wall hidden in its plate's shadow is the
+  seen one mirrored through its own top corner (bevels are cut alike), when the fill stays
+  inside that line;
   with no wall seen on a side (buried, or along the rays) or a mirrored one, the surface's
   outermost point on its line over its last 0.6 mm, carried as far as the rays of the
   points near that line reach (a spike moves a point along its ray: its column still lit
@@ -552,6 +554,11 @@ class GrooveExtractor(_Base):
             return np.asarray((ou - sign * 0.5 * seg.spacing) * u + ov * v)
         if cross is not None and math.hypot(cross[0] - ou, cross[1] - ov) <= 1.5:
             return np.asarray(cross[0] * u + cross[1] * v)
+        if cross is not None and wall is not None:  # the surface's toe lost in a notch:
+            seen = seg.points[wall.index] @ np.column_stack([u, v])  # the wall's foot is on
+            foot = seen[int(np.argmax(seen[:, 1]))]  # its line, where its points end
+            if math.hypot(*(cross - foot)) <= 1.0 and cross[1] >= foot[1] - 0.5:
+                return np.asarray(cross[0] * u + cross[1] * v)
         ou -= sign * 0.5 * seg.spacing
         return np.asarray(ou * u + ov * v)
 
