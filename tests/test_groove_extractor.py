@@ -108,6 +108,82 @@ def test_nearly_full_and_crowned_v_grooves_within_0_2_mm_p95(layers):
     assert np.percentile(e, 95) <= 0.2
 
 
+# The quantized wide sensor with 800 rays, as on multipass-varying-gap: its pixel steps split a
+# plate or a wall into pieces. (root gap, lateral offset, roll, standoff); the first three put a
+# plate's last step between it and the wall (the plate ended 1.3 mm short of its corner, or its
+# short outer piece stood alone), the fourth split a wall 3.1 mm under its corner (the scan
+# pass of that job: its lower piece was taken for fill, the bottom 10 mm up the wall).
+QUANTIZED_V = [
+    (4.16, 1.643, 0.175, 91.116),
+    (4.481, -1.5, -0.604, 94.47),
+    (4.034, 2.873, 0.548, 89.0),
+    (5.419, 2.309, 0.328, 92.364),
+]
+
+
+def _quantized_v(gap, offset, roll, standoff):
+    g = groove("v", angle_deg=60.0, gap_mm=gap, thickness_mm=20.0)
+    return groove_profile(g, rng=np.random.default_rng(0), artefacts=None, sensor=preset("wide"),
+                          rays=800, lateral_offset_mm=offset, roll_deg=roll,
+                          standoff_mm=standoff)  # fmt: skip
+
+
+@pytest.mark.parametrize("case", QUANTIZED_V)
+def test_a_quantized_empty_vs_steps_are_plate_and_wall(case):
+    """An empty V with a 4-5.4 mm root gap, pixel-quantized (no other artefact): the 7
+    points within 0.1 mm of the analytic ones (a plate's step is plate, a wall's pieces one
+    wall)."""
+    profile, truth = _quantized_v(*case)
+    f = extractor("groove")(profile)
+    assert f and np.hypot(*(f.edges_laser - truth.points_laser).T).max() <= 0.1
+
+
+def test_quantized_empty_vs_at_random_poses():
+    """60 empty Vs, root gap 2-6 mm, offset +-3 mm, roll +-3 deg, standoff 85-95 mm, quantized:
+    every profile found, its 7 points within 0.1 mm."""
+    rng = np.random.default_rng(7)
+    for _ in range(60):
+        case = (rng.uniform(2, 6), rng.uniform(-3, 3), rng.uniform(-3, 3), rng.uniform(85, 95))
+        profile, truth = _quantized_v(*case)
+        f = extractor("groove")(profile)
+        assert f, case
+        assert np.hypot(*(f.edges_laser - truth.points_laser).T).max() <= 0.1, case
+
+
+def test_a_wide_layers_two_beads_leave_a_valley_not_a_wall_foot():
+    """The V filled 7 layers deep, then a wide layer's first two beads (16 mm^2, width 2x
+    height) against the walls: a 4 mm deep valley between them and a notch at each wall.
+    The valley is fill surface (the middle bottom point in it, within 0.3 mm on 18 of 20
+    profiles) and a bottom corner the wall's foot in its notch, on the wall's line (within
+    1 mm on 19 of 20; before, 3 profiles put it on the bead's flank, 1.7-2 mm off)."""
+    from seamtrack.workpiece import beads
+
+    g = groove("v")
+    s = fill(g, 7, bead_area_mm2=20.0)[0]
+    pts = groove_points(g, s)
+    shape = beads.BeadShape(kind="parabola", width_to_height=2.0)
+    width = 2.0 * math.sqrt(16.0 / (2 / 3 * 2.0))
+    for y in (pts[1][0] + 0.4 * width, pts[5][0] - 0.4 * width):
+        s = np.asarray(beads.lay_bead(s, float(y), 16.0, shape))
+    y = np.linspace(pts[1][0] + 0.4 * width, pts[5][0] - 0.4 * width, 400)
+    z = np.interp(y, s[:, 0], s[:, 1])
+    assert z.max() - z.min() > 3.5  # the valley
+    ex = extractor("groove")
+    middle, corners = [], []
+    for i in range(20):
+        rng = np.random.default_rng([i, 99])
+        profile, truth = groove_profile(g, s, rng=rng, roll_deg=rng.uniform(-5, 5),
+                                        pitch_deg=rng.uniform(-5, 5),
+                                        lateral_offset_mm=rng.uniform(-2, 2))  # fmt: skip
+        f = ex(profile)
+        assert f
+        e = np.hypot(*(f.edges_laser - truth.points_laser).T)
+        middle.append(e[3])
+        corners.append(max(e[1], e[5]))
+    assert np.sum(np.array(middle) <= 0.3) >= 18
+    assert np.sum(np.array(corners) <= 1.0) >= 19
+
+
 def test_a_crowned_fill_reports_its_area_signed():
     """The crowned V (9 layers), real-sensor artefacts: the remaining area is the signed area
     between the top corners' line and the surface (metal above the line counts against it),
@@ -124,15 +200,38 @@ def test_a_crowned_fill_reports_its_area_signed():
 
 
 @pytest.mark.parametrize("kind", ["narrow-gap", "u"])
-@pytest.mark.parametrize("layers", [0, 2, 5])
-def test_narrow_gap_and_u_points_are_found(kind, layers):
-    """Narrow gap (walls 4 deg off vertical, 25 mm deep) and U (10 deg walls, 3 mm root
-    radius): all found, median error <= 0.15 mm. Their p95 (0.2-1.6 mm) is not yet at the
-    issue's 0.2 mm: a wall nearly along the rays shows no points, spikes at its foot stand for
-    the corner; an empty U's round has no sharp foot (docs/extractors.md)."""
-    found, e = _errors(kind, layers, 12, 12)
-    assert found == 12
-    assert np.median(e) <= 0.15
+@pytest.mark.parametrize("layers", range(7))
+def test_narrow_gap_and_u_points_at_every_fill_state(kind, layers):
+    """Narrow gap (walls 4 deg off vertical, 25 mm deep, 12 mm) and U (10 deg walls, 3 mm
+    root radius, 8 mm) with 0..6 layers, the V's draw (real-sensor artefacts, tilts +-5 deg,
+    offset +-2 mm): every profile found, the 7 points' errors pooled median <= 0.05 mm and
+    90th percentile <= 0.25 mm. The issue's 0.2 mm p95 holds on this draw (seed 11, the
+    table in docs/extractors.md; the U with one layer 0.203) but not on every draw: seeds 12
+    and 13 give the narrow gap up to 0.24 mm and the U up to 0.45 mm (a corner under a wall
+    no ray lights, spikes and a dropout at a wall's foot), while the median and p90 hold,
+    so the test holds those."""
+    found, e = _errors(kind, layers, 20, 11)
+    assert found == 20
+    assert np.median(e) <= 0.05
+    assert np.percentile(e, 90) <= 0.25
+
+
+def test_a_u_grooves_bottom_corner_rides_its_wall_with_the_fill():
+    """The U's convention (seamtrack.features.synthetic_groove): the bottom corner is the wall's
+    line at the level where the fill meets the round, so the virtual sharp corner for the
+    empty groove and a point of the wall's line just above the bead's toe on the round; the
+    analytic wall line through the top corner and the virtual foot is the oracle."""
+    g = groove("u")
+    top, foot = g.top[0], g.foot[0]
+    assert groove_points(g)[1] == pytest.approx(foot)
+    s = fill(g, 1, bead_area_mm2=20.0)[0]
+    corner = groove_points(g, s)[1]
+    assert foot[1] < corner[1] < foot[1] + 3.0 * math.cos(math.radians(10.0))  # in the round
+    d = foot - top
+    off = (corner - top) @ np.array([-d[1], d[0]]) / math.hypot(*d)
+    assert abs(off) < 1e-9  # on the wall's line
+    y = np.linspace(corner[0], corner[0] + 1.0, 2001)
+    assert np.interp(y, s[:, 0], s[:, 1]).min() == pytest.approx(corner[1], abs=0.02)
 
 
 def test_remaining_area_is_measured():

@@ -135,3 +135,17 @@ def test_closest_without_the_tree_is_the_trees(
         assert np.array_equal(got.arc_length_mm, want.arc_length_mm)
         assert np.array_equal(got.points, want.points)
         assert np.array_equal(got.distance_mm, want.distance_mm)
+
+
+def test_a_bottom_along_one_laser_ray_is_a_spike_streak_not_a_surface() -> None:
+    """Points on one ray from the laser's origin over several mm of range are a reflection's
+    streak; a fill surface across the rays, an empty V's root (one point) and a narrow gap's
+    bottom 12 mm wide are not."""
+    ray = np.array([0.037, 1.0]) / np.hypot(0.037, 1.0)
+    streak = np.outer([104.0, 148.0, 192.0, 236.0, 280.0], ray)
+    assert groove._along_a_ray(streak)
+    assert not groove._along_a_ray(np.tile([[0.5, 98.0]], (5, 1)))  # a V's root
+    fill = np.column_stack([np.linspace(-6.0, 6.0, 5), np.full(5, 110.0)])
+    assert not groove._along_a_ray(fill)
+    tilted = streak + np.column_stack([np.linspace(0.0, 2.0, 5), np.zeros(5)])
+    assert not groove._along_a_ray(tilted)  # 2 mm across the rays: a surface

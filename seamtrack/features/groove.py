@@ -9,27 +9,42 @@ The model, on the pieces of the shared front end (:func:`seamtrack.features.line
 spikes and reflection streaks left out, straight pieces by split-and-merge):
 
 * **plates**: the outermost pieces at least ``min_plate_mm`` long, each with the pieces on its
-  line that follow it inwards, refitted as one line; the two must run within
-  ``max_plate_deg`` of each other. Their mean direction is the groove's width axis u (left to
-  right), its normal v points into the groove.
+  line that follow it inwards (or on whose line it lies: a quantized plate's short outer
+  step) and the points no piece took on its line after them (its last step), refitted as one
+  line; the two must run within ``max_plate_deg`` of each other. Their mean direction is
+  the groove's width axis u (left to right), its normal v points into the groove.
 * **walls**: of the pieces between the plates that go down into the groove at least
   ``wall_deg`` off the plates and whose line passes within 1 mm of the plate's inner end, the
-  one whose line carries most points, refitted with the pieces on its line (a piece more than
-  3 mm below the corner must stand 75 deg off the plates and be 1 mm long: a bead's flank or a
-  spike streak pointing at the corner by chance is no wall). A wall nearly along the rays (a
-  narrow gap's) shows no points: then there is none.
+  one whose line carries most points, refitted with the pieces on its line and trimmed to the
+  points within two tolerances of it (a root radius's round at its foot left out). A piece
+  more than 3 mm below the corner, and not carrying on a run of wall pieces from it (a wall
+  split into pieces), must stand 75 deg off the plates, be 1 mm long and have no more points
+  outwards of it than on it (a bead's flank or a spike streak pointing at the corner by
+  chance is no wall). A wall nearly along the rays (a narrow gap's), or in the
+  shadow of its plate's edge, shows no points: then there is none.
 * **top corners**: a plate's line meets its wall's line; with no wall seen, the plate's end
   (half a spacing beyond its last point).
-* **fill surface**: the groove's points inside the walls and off their lines, less what a
-  running median over 0.6 mm leaves out (spike runs), the largest stretch without a 2 mm break
-  (2.5 mm towards a side with no wall seen: a shadow in a crowned fill).
-* **bottom corners**: a line through the most surface points within 1.5 mm of the surface's
-  end (lines through pairs of points: spike scraps do not move it) crossed with the wall's
-  line, when that lies within 1.5 mm of the surface's outermost point on the line; else that
-  point (half a spacing beyond it); with no wall seen on a side (buried, or along the rays),
-  the surface's outermost point. With no surface at all (an empty V without a gap), the
-  walls' intersection. A wall no piece covers (a quantized wall's staircase) is fitted to the
-  points between the plate's last piece and the groove's first.
+* **fill surface**: the groove's points inside the walls and off their lines (below where a
+  wall was seen, on its line too; 3 mm below, either side), less what a running median over
+  0.6 mm leaves out and the islands (runs between jumps off the surface carried across them:
+  spike runs, streaks where a dropout took the surface), the largest stretch without a 2 mm
+  break (2.5 mm towards a side with no wall seen: a shadow in a crowned fill).
+* **bottom corners**: where the fill surface rises from its deepest part into the wall (a
+  U's round, bare or partly filled), the wall's line at that part's level (the virtual sharp
+  corner of an empty U). Else a line through the most surface points within 1.5 mm of the
+  surface's end (lines through pairs of points: spike scraps do not move it) crossed with
+  the wall's line, when that lies within 1.5 mm of the surface's outermost point on the line
+  and within 3 mm (or half the wall's seen length) of the wall's points, or within 1 mm of
+  the wall's deepest point and not above it (a bead's toe lost in the notch at the wall);
+  else that point (half a spacing beyond it). A wall hidden in its plate's shadow is the
+  seen one mirrored through its own top corner (bevels are cut alike), when the fill stays
+  inside that line;
+  with no wall seen on a side (buried, or along the rays) or a mirrored one, the surface's
+  outermost point on its line over its last 0.6 mm, carried as far as the rays of the
+  points near that line reach (a spike moves a point along its ray: its column still lit
+  the surface). With no surface at all (an empty V without a gap), the walls' intersection.
+  A wall no piece covers (a quantized wall's staircase) is fitted to the points between the
+  plate's last piece and the groove's first.
 * **bottom points**: the fill surface between the bottom corners at a quarter, half and three
   quarters of the way across (along u), each a local robust line fit of the surface points
   there, in v; where no surface shows there (an open root), on the line joining the corners.
@@ -56,7 +71,6 @@ Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groov
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass
 from typing import NamedTuple
@@ -65,13 +79,34 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.errors import PluginError
-from seamtrack.features._groove_kernels import local_v, robust_uv_line, running_median
+from seamtrack.features._groove_fit import (  # noqa: F401 (RAY_*: the extractor's names)
+    RAY_DEPTH_MM,
+    RAY_SPREAD_RAD,
+    _along_a_ray,
+    _angle_deg,
+    _area,
+    _beyond,
+    _c,
+    _local_v,
+    _median,
+    _on_line,
+    _robust_uv_line,
+    _stretched,
+    drop_islands,
+    explained_share,
+    mirrored_walls,
+    ray_reach,
+    risen_level,
+    trim_wall,
+)
+from seamtrack.features._groove_kernels import running_median
 from seamtrack.features._segmentation import fit_line
 from seamtrack.features.base import _Base
 from seamtrack.features.lines import Line, Segments, intersect, segment_profile
 from seamtrack.sensing.profiles import Feature, Profile
 
 FloatArray = NDArray[np.float64]
+
 IntArray = NDArray[np.intp]
 REFERENCES = ("centre", "left", "right")
 
@@ -106,10 +141,6 @@ class GroovePoints(NamedTuple):
 def _fit(points: FloatArray, index: IntArray) -> Line:
     f = fit_line(points, np.asarray(index, dtype=np.int64))
     return Line(np.asarray(index), np.array([f.cy, f.cz]), np.array([f.uy, f.uz]), f.along, f.rms)
-
-
-def _angle_deg(a: FloatArray, b: FloatArray) -> float:
-    return math.degrees(math.acos(min(1.0, abs(float(a @ b)))))
 
 
 @dataclass(frozen=True)
@@ -208,15 +239,19 @@ class GrooveExtractor(_Base):
                 return "not a groove: no bottom between the walls"
             bl = br = x
         else:
-            bl = self._corner(seg, left.line, fu, fv, u, v, True)
-            br = self._corner(seg, right.line, fu, fv, u, v, False)
+            wl, wr = mirrored_walls((left.line, right.line), (tl, tr), fu, fv, u, v)
+            bl = self._corner(seg, wl, fu, fv, u, v, True, P[lo:hi])
+            br = self._corner(seg, wr, fu, fv, u, v, False, P[lo:hi])
         if (br - bl) @ u < -max(seg.tol, 2 * seg.spacing):
             return "not a groove: its walls cross (a ridge?)"
         bottom = self._bottom_points(seg, fu, fv, bl, br, u, v)
         pts = np.vstack([tl, bl, bottom, br, tr])
+        if _along_a_ray(pts[1:6]):
+            return "not a groove: its bottom lies along one laser ray (a spike streak)"
         area = _area(pts, P, inner, u)
         rms = max(pl.rms, pr.rms, *(w.line.rms for w in (left, right) if w.line is not None))
-        explained = self._explained(seg, plates, (left, right), inner, bl, br, u)
+        walls = (left.line, right.line)
+        explained = explained_share(seg, (pl, pr), walls, inner, bl, br, u)
         return GroovePoints(pts, area, explained, rms)
 
     def _raised(
@@ -257,6 +292,8 @@ class GrooveExtractor(_Base):
                 f"not a groove: the plates beside it are {apart:.0f} deg apart "
                 f"(at most {self.max_plate_deg:.0f}: a fillet or a corner?)"
             )
+        left = _stretched(seg, left, seg.lines[la[1] + 1].index[0], +1)
+        right = _stretched(seg, right, seg.lines[lb[1] - 1].index[-1], -1)
         return Plates(left, right, la[1], lb[1])
 
     def _grow(self, seg: Segments, j: int, step: int, stop: int) -> tuple[Line, int]:
@@ -271,7 +308,10 @@ class GrooveExtractor(_Base):
             if _angle_deg(nxt.direction, base.direction) > 5.0:
                 break
             off = np.abs((seg.points[nxt.index] - base.centroid) @ base.normal)
-            if _median(off) > 2.0 * seg.tol:
+            # (or the plate so far on the next piece's line: a short outer piece, one step
+            # of a quantized plate at a tilt, is flatter than the plate)
+            back = np.abs((seg.points[base.index] - nxt.centroid) @ nxt.normal)
+            if _median(off) > 2.0 * seg.tol and _median(back) > 2.0 * seg.tol:
                 break
             index.append(nxt.index)
             k += step
@@ -301,19 +341,36 @@ class GrooveExtractor(_Base):
         best, support = None, self.min_points - 1
         vy, vz = float(v[0]), float(v[1])
         sign = 1.0 if from_left else -1.0  # inwards from the plate
+        # The run of wall pieces before j (a wall split into pieces, its top one short): how
+        # far its top lies from the corner, its lower end, its direction.
+        run_top, run_end, run_dir = math.inf, None, None
+        join = max(1.0, 5.0 * seg.spacing)
         for j in groove:
             ln = lines[j]
             _, _, uy, uz, _, _ = ln.scalars  # floats: no numpy call a piece
             dv = sign * (uy * vy + uz * vz)
             off = math.degrees(math.asin(min(1.0, abs(dv))))
             if not (dv > 0 and off >= self.wall_deg and ln.extent >= 0.3):
+                run_end = None
                 continue
+            upper = P[ln.index[0] if from_left else ln.index[-1]]
+            near_top = math.hypot(*(upper - top))
+            if (
+                run_end is not None
+                and run_dir is not None
+                and math.hypot(*(upper - run_end)) <= join
+                and _angle_deg(ln.direction, run_dir) <= 5.0
+            ):
+                near_top = min(near_top, run_top)  # it carries on a wall from the corner
+            run_top, run_dir = near_top, ln.direction
+            run_end = P[ln.index[-1] if from_left else ln.index[0]]
             if abs(float((top - ln.centroid) @ ln.normal)) > max(1.0, 3 * seg.tol):
                 continue
-            near_top = math.hypot(*(P[ln.index[0] if from_left else ln.index[-1]] - top))
             if near_top > 3.0 and (off < 75.0 or ln.extent < 1.0):
                 continue  # a bead's flank or a streak pointing at the corner by chance
             n = int(np.count_nonzero(np.abs((q - ln.centroid) @ ln.normal) <= 2.0 * seg.tol))
+            if near_top > 3.0 and _beyond(q, ln, v, from_left, seg.tol) > max(self.min_points, n):
+                continue  # the surface goes on beyond it: a streak in the groove, no wall
             if n > support:
                 best, support = j, n
         if best is None:
@@ -322,6 +379,7 @@ class GrooveExtractor(_Base):
         on = [j for j in groove if _on_line(seg, ref, lines[j])]
         index = [lines[j].index for j in on]
         line = _fit(P, np.sort(np.concatenate(index))) if len(index) > 1 else ref
+        line = trim_wall(P, line, seg.tol)  # a round at its foot, a spike's points: left out
         if line.direction[0] < 0:
             line = Line(line.index, line.centroid, -line.direction, -line.t, line.rms)
         return Wall(line, on[0], on[-1])
@@ -348,6 +406,9 @@ class GrooveExtractor(_Base):
         d = line.direction if from_left else -line.direction
         off = math.degrees(math.asin(min(1.0, abs(float(d @ v)))))
         near = abs(float((top - line.centroid) @ line.normal)) <= max(1.0, 3 * seg.tol)
+        # from the plate's end: a spike streak deep in a narrow gap, along a ray nearly as
+        # steep as its wall, is none
+        near &= float(np.min(np.hypot(*(seg.points[index] - top).T))) <= 3.0
         if (
             float(d @ v) <= 0
             or off < self.wall_deg
@@ -379,15 +440,27 @@ class GrooveExtractor(_Base):
             if w.line is None:
                 continue
             n = w.line.normal if (w.line.normal @ u > 0) == left else -w.line.normal
-            keep &= (q - w.line.centroid) @ n > 2.0 * seg.tol
+            # Off the wall, inwards; below where it was seen, on its line too (a round's
+            # upper part, at a U's foot), and more than 3 mm below, either side (a wall
+            # carried down from its top, a narrow gap's, cuts no surface short).
+            low = float(np.max(seg.points[w.line.index] @ v)) if len(w.line.index) else np.inf
+            off, qv_ = (q - w.line.centroid) @ n, q @ v
+            keep &= (
+                (off > 2.0 * seg.tol)
+                | ((qv_ > low + 2.0 * seg.tol) & (off > -2.0 * seg.tol))
+                | (qv_ > low + 3.0)
+            )
         qu, qv = q[keep] @ u, q[keep] @ v
+        run = (np.searchsorted(seg.runs, inner, side="right") - 1)[keep]
         order = np.argsort(qu, kind="stable")
-        qu, qv = qu[order], qv[order]
+        qu, qv, run = qu[order], qv[order], run[order]
         k = int(min(101, max(5, round(0.6 / max(seg.spacing, 1e-9)))) | 1)
         if len(qv) >= k:
             med = running_median(_c(qv), k)  # the ends: their whole window's
             ok = np.abs(qv - med) <= max(3.0 * seg.tol, 0.2)
-            qu, qv = qu[ok], qv[ok]
+            qu, qv, run = qu[ok], qv[ok], run[ok]
+        ok = drop_islands(qu, qv, run, seg.spacing, seg.tol)  # spike runs the median kept
+        qu, qv = qu[ok], qv[ok]
         if len(qu) > 1:  # the largest stretch without a break of 2 mm (scraps at the top edges)
             cut = np.flatnonzero(np.diff(qu) > 2.0) + 1
             bounds = np.concatenate(([0], cut, [len(qu)]))
@@ -415,14 +488,26 @@ class GrooveExtractor(_Base):
         u: FloatArray,
         v: FloatArray,
         left: bool,
+        columns: FloatArray | None = None,
     ) -> FloatArray:
-        """Where the fill surface meets the wall: the wall's line crossed with a line fitted
-        to the surface's first millimetre from the wall; with no wall seen, or a crossing
-        farther than 1 mm from the surface's outermost point, that point (half a spacing
+        """Where the fill surface meets the wall (the module docstring): the wall's line at
+        the level of a fill that rises into it; the wall's line crossed with a line fitted to
+        the surface's first 1.5 mm from the wall; with no wall seen (``columns``: the points
+        whose rays may carry the surface on), a crossing farther than 1.5 mm from the
+        surface's outermost point or a wall seen only far above, that point (half a spacing
         beyond it)."""
         sign = 1.0 if left else -1.0
         edge = float(fu[0] if left else fu[-1])
-        if wall is None:  # a buried wall, or one no ray sees: the surface's outermost point
+        unseen = wall is None or not len(wall.index)  # no wall seen, or a hidden one's mirror
+        if wall is not None:
+            level = risen_level(fu, fv, left, seg.spacing, seg.tol)
+            if level is not None:  # a round into the wall: the wall's line at the fill's level
+                cu, cv = float(wall.centroid @ u), float(wall.centroid @ v)
+                du, dv = float(wall.direction @ u), float(wall.direction @ v)
+                if abs(dv) > 1e-9:
+                    t = (level - cv) / dv
+                    return np.asarray((cu + t * du) * u + level * v)
+        if wall is None and columns is None:  # the surface's outermost point
             ou, ov = edge, float(fv[0] if left else fv[-1])
             return np.asarray((ou - sign * 0.5 * seg.spacing) * u + ov * v)
         sel = sign * (fu - edge) <= 1.5
@@ -436,15 +521,44 @@ class GrooveExtractor(_Base):
         else:
             i = 0 if left else len(fu) - 1
             ou, ov = float(fu[i]), float(fv[i])
+        cross = None
         if wall is not None and fit is not None:
             cu, cv = float(wall.centroid @ u), float(wall.centroid @ v)
             du, dv = float(wall.direction @ u), float(wall.direction @ v)
             den = dv - b * du
             if abs(den) > 1e-9:
                 t = (a + b * cu - cv) / den
-                xu, xv = cu + t * du, cv + t * dv
-                if math.hypot(xu - ou, xv - ov) <= 1.5:
-                    return np.asarray(xu * u + xv * v)
+                cross = np.array([cu + t * du, cv + t * dv])
+        # A wall seen only far above the fill (more than 3 mm, and half its seen length) or a
+        # hidden one's mirror is carried too far down to place the corner: then it is the
+        # surface's, as for no wall seen.
+        if wall is not None and not len(wall.index):
+            wall = cross = None  # a mirror: the wall is hidden
+        elif wall is not None and cross is not None:
+            seen = seg.points[wall.index] @ np.column_stack([u, v])
+            gap = float(np.min(np.hypot(*(seen - cross).T)))
+            if gap > max(3.0, 0.5 * float(np.ptp(wall.t))):
+                cross, columns = None, None  # below a wall, rays may light it unseen
+        if wall is None or cross is None:  # the surface's outermost point
+            near = sign * (fu - edge) <= 0.6  # on its line there (a flank bends further in)
+            if unseen and (short := _robust_uv_line(fu[near], fv[near], seg.tol)) is not None:
+                fit = short
+                a, b = fit
+                on = np.abs(fv[near] - (a + b * fu[near])) <= 3.0 * seg.tol
+                if np.any(on):
+                    k = int(np.argmin(sign * fu[near][on]))
+                    ou, ov = float(fu[near][on][k]), float(fv[near][on][k])
+            if fit is not None and columns is not None:  # on its line, as far as its rays go
+                ou = ray_reach(columns, u, v, a, b, ou, left)
+                ov = a + b * ou
+            return np.asarray((ou - sign * 0.5 * seg.spacing) * u + ov * v)
+        if cross is not None and math.hypot(cross[0] - ou, cross[1] - ov) <= 1.5:
+            return np.asarray(cross[0] * u + cross[1] * v)
+        if cross is not None and wall is not None:  # the surface's toe lost in a notch:
+            seen = seg.points[wall.index] @ np.column_stack([u, v])  # the wall's foot is on
+            foot = seen[int(np.argmax(seen[:, 1]))]  # its line, where its points end
+            if math.hypot(*(cross - foot)) <= 1.0 and cross[1] >= foot[1] - 0.5:
+                return np.asarray(cross[0] * u + cross[1] * v)
         ou -= sign * 0.5 * seg.spacing
         return np.asarray(ou * u + ov * v)
 
@@ -474,100 +588,3 @@ class GrooveExtractor(_Base):
             else:
                 out.append(ut * u + val * v)
         return np.array(out)
-
-    def _explained(
-        self,
-        seg: Segments,
-        plates: Plates,
-        walls: tuple[Wall, Wall],
-        inner: IntArray,
-        bl: FloatArray,
-        br: FloatArray,
-        u: FloatArray,
-    ) -> float:
-        P = seg.points
-        kept = np.flatnonzero(~seg.stray)
-        if not len(kept):
-            return 0.0
-        band = 3.0 * seg.tol
-        ok = np.zeros(len(P), dtype=bool)
-        lo, hi = int(plates.left.index[-1]), int(plates.right.index[0])
-        for line, sel in ((plates.left, slice(0, lo + 1)), (plates.right, slice(hi, len(P)))):
-            ok[sel] = np.abs((P[sel] - line.centroid) @ line.normal) <= band
-        for w in walls:
-            if w.line is not None:
-                ok[inner] |= np.abs((P[inner] - w.line.centroid) @ w.line.normal) <= band
-        qu = P[inner] @ u
-        ok[inner[(qu >= bl @ u - band) & (qu <= br @ u + band)]] = True
-        return float(np.count_nonzero(ok[kept]) / len(kept))
-
-
-def _median(x: FloatArray) -> float:
-    """``np.median`` of a 1-d array, the same number without its per-call overhead (the
-    extractor takes thousands of small medians a second)."""
-    n = len(x)
-    if n == 0:
-        return math.nan
-    s = np.sort(x)
-    if math.isnan(s[-1]):  # NaN sorts last; np.median's answer then is NaN
-        return math.nan
-    h = n // 2
-    return float(s[h]) if n % 2 else float((s[h - 1] + s[h]) / 2)
-
-
-def _on_line(seg: Segments, ref: Line, ln: Line, max_deg: float = 5.0) -> bool:
-    """Whether piece ``ln`` lies on the line of ``ref`` (within ``max_deg`` and two
-    tolerances)."""
-    if _angle_deg(ln.direction, ref.direction) > max_deg:
-        return False
-    off = np.abs((seg.points[ln.index] - ref.centroid) @ ref.normal)
-    return bool(_median(off) <= 2.0 * seg.tol)
-
-
-def _robust_uv_line(qu: FloatArray, qv: FloatArray, tol: float) -> tuple[float, float] | None:
-    """v = a + b u through the most points within two tolerances, of the lines through pairs
-    of (at most 40, evenly picked) points at least a third of the stretch apart; refitted on
-    those points. Spike runs less than half the points do not move it (compiled:
-    :func:`seamtrack.features._groove_kernels.robust_uv_line`)."""
-    n = len(qu)
-    if n < 3:
-        return None
-    i, j = _pairs(n)
-    a, b, found = robust_uv_line(_c(qu), _c(qv), float(tol), i, j)
-    return (a, b) if found else None
-
-
-@functools.lru_cache(maxsize=256)
-def _pairs(n: int) -> tuple[IntArray, IntArray]:
-    """The pairs of :func:`_robust_uv_line` among ``n`` points, in order (read-only)."""
-    pick = np.unique(np.linspace(0, n - 1, min(n, 40)).round().astype(np.intp))
-    i, j = np.triu_indices(len(pick), k=max(1, len(pick) // 3))
-    i, j = pick[i], pick[j]
-    i.setflags(write=False)
-    j.setflags(write=False)
-    return i, j
-
-
-def _local_v(qu: FloatArray, qv: FloatArray, ut: float, h: float, tol: float) -> float | None:
-    """v of the surface at u = ut: a robust line fit of the points within h of it (None: fewer
-    than 3 there, or none on one side; compiled:
-    :func:`seamtrack.features._groove_kernels.local_v`)."""
-    val = local_v(_c(qu), _c(qv), float(ut), float(h), float(tol))
-    return None if math.isnan(val) else float(val)
-
-
-def _c(x: FloatArray) -> FloatArray:
-    return np.ascontiguousarray(x, dtype=np.float64)
-
-
-def _area(pts: FloatArray, P: FloatArray, inner: IntArray, u: FloatArray) -> float:
-    """The polygon of the top corners, the bottom corners and the surface between them, below
-    the line joining the top corners (mm^2), signed: a crowned fill's metal above that line
-    counts against it (a nearly full groove's area is about 0, a capped one's negative)."""
-    qu = P[inner] @ u
-    zone = inner[(qu > pts[1] @ u) & (qu < pts[5] @ u)]
-    ring = np.vstack([pts[0], pts[1], P[zone], pts[5], pts[6]])
-    v = np.array([-u[1], u[0]])
-    a, b = ring @ u, ring @ v  # along the plates, into the groove
-    a_next, b_next = np.concatenate((a[1:], a[:1])), np.concatenate((b[1:], b[:1]))  # np.roll
-    return float(-0.5 * (np.dot(a, b_next) - np.dot(b, a_next)))

@@ -13,8 +13,14 @@ right bottom corner, right top corner. The bottom points lie on the fill surface
 half and three quarters of the way from the left to the right bottom corner, measured across
 the groove (along y, the plates' line); where the bottom is open (no surface between the
 corners: an empty V without a backing seen) they lie on the line joining the corners. Where a
-wall runs into the bottom through a round (an empty U groove's root radius) the bottom corner
-is the virtual sharp corner: the wall's line meets the bottom's line.
+wall runs into the fill through a round (a U groove's root radius, bare or partly filled) the
+bottom corner is the point of the wall's line at the level where the fill surface meets the
+round: for an empty U the virtual sharp corner (the wall's line meets the bottom's line), and
+as beads fill the round it moves up the wall's line with the fill, joining the fill's toe on
+the wall when the round is buried. (Before, a partly filled round kept the empty groove's
+virtual corner: a point buried under the first bead, that no sensor sees, and a jump of up to
+2.5 mm when the fill reached the wall. The groove's width at the fill level between the walls'
+lines is what a fill plan divides into beads.)
 
 Shapes (:data:`GROOVES`):
 
@@ -175,7 +181,10 @@ def groove_points(g: Groove, surface: FloatArray | None = None) -> FloatArray:
             continue
         lowest = s[wall[np.argmin(s[wall, 1])]]
         if g.kind == "u" and lowest[1] > foot[1] + 1e-9 and _round_below(g, s, side, lowest):
-            feet.append(foot.copy())  # the wall runs into the bottom through the round
+            # The wall runs into the fill (or the bottom) through the round: the wall's line
+            # at the level where the fill meets the round.
+            z = _fill_level(g, s, side, lowest)
+            feet.append(top + (z - top[1]) / (foot[1] - top[1]) * (foot - top))
         else:
             feet.append(lowest.copy())
     left, right = feet
@@ -191,15 +200,22 @@ def groove_points(g: Groove, surface: FloatArray | None = None) -> FloatArray:
 
 
 def _round_below(g: Groove, s: FloatArray, side: int, lowest: FloatArray) -> bool:
-    """Whether the U's round, not a bead, lies just below the wall's lowest surface vertex."""
-    base = g.surface
-    return bool(np.any(np.all(np.isclose(base, lowest, atol=1e-9), axis=1))) and bool(
-        np.allclose(
-            _z_at(s, lowest[0] + (0.3 if side == 0 else -0.3)),
-            _z_at(base, lowest[0] + (0.3 if side == 0 else -0.3)),
-            atol=1e-9,
-        )
-    )
+    """Whether the wall's lowest surface vertex is the U's own (the round's tangent point on
+    the wall: the fill has not buried it, the round, bare or partly filled, lies below)."""
+    return bool(np.any(np.all(np.isclose(g.surface, lowest, atol=1e-9), axis=1)))
+
+
+def _fill_level(g: Groove, s: FloatArray, side: int, tangent: FloatArray) -> float:
+    """z where the surface ``s`` leaves the U's round below the wall's tangent point (the
+    fill's toe on the round; the bottom's level where the round is bare), to 1 um."""
+    sign = 1.0 if side == 0 else -1.0
+    reach = abs(float(g.foot[side][0] - tangent[0])) * 2.0 + 1e-3
+    y = tangent[0] + sign * np.arange(0.0, reach, 1e-3)
+    off = np.abs(np.interp(y, s[:, 0], s[:, 1]) - np.interp(y, g.surface[:, 0], g.surface[:, 1]))
+    k = np.flatnonzero(off > 1e-9)
+    if not len(k):  # a bare round: the fill surface is the bottom
+        return float(g.foot[side][1])
+    return float(np.interp(y[k[0]], s[:, 0], s[:, 1]))
 
 
 def flat_fill(g: Groove, height_mm: float) -> FloatArray:

@@ -1,0 +1,401 @@
+"""Fits the groove extractor's corners rest on (:mod:`seamtrack.features.groove`).
+
+* :func:`trim_wall`: a wall's line refitted on the points that lie on it (a root radius's
+  round at the wall's foot, and the odd spike, left out);
+* :func:`risen_level`: the level of a fill surface that rises into the wall (a U groove's
+  round, bare or partly filled): the wall's foot is that wall's line at the level;
+* :func:`ray_reach`: with no wall seen, how far the fill surface reaches towards the side:
+  a spike moves a point along its ray, so the ray still says where the surface is across the
+  groove.
+
+Points are (u, v): u across the groove (the plates' line, left to right), v into it.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import numpy as np
+from numpy.typing import NDArray
+
+from seamtrack.features._groove_kernels import local_v, robust_uv_line
+from seamtrack.features._segmentation import fit_line
+from seamtrack.features.lines import Line, Segments
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.intp]
+
+#: A groove's bottom spread over at most this angle of the fan (rad) ...
+RAY_SPREAD_RAD = math.radians(0.2)
+#: ... and over more than this range (mm) lies along one ray: spikes, not a surface.
+RAY_DEPTH_MM = 1.0
+
+
+def _angle_deg(a: FloatArray, b: FloatArray) -> float:
+    return math.degrees(math.acos(min(1.0, abs(float(a @ b)))))
+
+
+def trim_wall(points: FloatArray, line: Line, tol: float, rounds: int = 3) -> Line:
+    """``line`` refitted (total least squares) on its points within two tolerances of it, a
+    few times over: a round at the wall's foot that leaves the line slowly, and points
+    of a spike that the pieces took in, stop pulling it. Unchanged when fewer than half its
+    points would stay."""
+    index = np.asarray(line.index)
+    keep = index
+    cur = line
+    for _ in range(rounds):
+        off = np.abs((points[index] - cur.centroid) @ cur.normal)
+        new = index[off <= 2.0 * tol]
+        if len(new) < max(3, len(index) // 2) or np.array_equal(new, keep):
+            break
+        keep = new
+        f = fit_line(points, np.asarray(keep, dtype=np.int64))
+        cur = Line(keep, np.array([f.cy, f.cz]), np.array([f.uy, f.uz]), f.along, f.rms)
+    if cur.direction[0] * line.direction[0] + cur.direction[1] * line.direction[1] < 0:
+        cur = Line(cur.index, cur.centroid, -cur.direction, -cur.t, cur.rms)
+    return cur
+
+
+def _running_median(v: FloatArray, k: int) -> FloatArray:
+    """The median over ``k`` points about each point; at the ends over those there are (a
+    window cut short: the end's own level, not its whole window's)."""
+    if len(v) < k:
+        return np.full(len(v), float(np.median(v)))
+    med = np.median(np.lib.stride_tricks.sliding_window_view(v, k), axis=1)
+    h = k // 2
+    head = [float(np.median(v[: i + h + 1])) for i in range(h)]
+    tail = [float(np.median(v[i - h :])) for i in range(len(v) - h, len(v))]
+    return np.concatenate([head, med, tail])
+
+
+def risen_level(
+    fu: FloatArray, fv: FloatArray, left: bool, spacing: float, tol: float
+) -> float | None:
+    """The level (v) of the fill surface's deepest part near a side, when the surface rises
+    from there into the wall: its deepest point (a running median over 0.3 mm, cut short at
+    the ends) lies at least a quarter of a millimetre in from the surface's outer end (its
+    last 0.1 mm), which stands at least 0.3 mm above it and rises at least 0.45 times as
+    much as it runs from the deepest part's nearest point (a round at a U's foot, bare or
+    partly filled, or the notch between a bead and the round: 0.42-1.2 on the synthetic 3 mm
+    round, bare, more beside a bead). None when it rises more gently (a root bead's concave
+    face, the fill's own: 0.13-0.43 on the Keyence root-pass scans) or the surface comes
+    down to the wall (a bead's toe on the wall: a kink). The level is the mean of the
+    deepest part's points (within 0.05 mm, or two tolerances, of the deepest)."""
+    if len(fu) < 5:
+        return None
+    sign = 1.0 if left else -1.0
+    edge = float(fu[0] if left else fu[-1])
+    d = sign * (fu - edge)
+    zone = d <= 4.0
+    zu, zv, zd = fu[zone], fv[zone], d[zone]
+    if len(zu) < 5:
+        return None
+    order = np.argsort(zd, kind="stable")
+    zv, zd = zv[order], zd[order]
+    k = int(min(51, max(3, round(0.3 / max(spacing, 1e-9)))) | 1)
+    smooth = _running_median(zv, k)
+    j = int(np.argmax(smooth))
+    end = float(np.median(smooth[zd <= max(0.1, 3 * spacing)]))
+    if zd[j] < 0.25 or smooth[j] - end < 0.3:
+        return None
+    deep = smooth >= smooth[j] - min(2.0 * tol, 0.05)
+    if smooth[j] - end < 0.45 * float(np.min(zd[deep])):
+        return None  # a gentle rise (a root bead's concave face): the fill's own, no round
+    return float(np.mean(zv[deep]))
+
+
+def ray_reach(
+    points: FloatArray,
+    u: FloatArray,
+    v: FloatArray,
+    a: float,
+    b: float,
+    out_u: float,
+    left: bool,
+    reach: float = 1.0,
+    band: float = 6.0,
+) -> float:
+    """How far (u) the surface v = a + b u reaches towards a side with no wall seen: each
+    point (spikes too) within ``band`` of the line whose ray (from the sensor's origin, the
+    laser frame's (0, 0)) meets the line at most ``reach`` beyond ``out_u`` (the surface's
+    outermost point on its line) stands for a column that lit the surface there; the
+    outermost of those crossings, or ``out_u``."""
+    sign = 1.0 if left else -1.0
+    pu, pv = points @ u, points @ v
+    near = np.abs(pv - (a + b * pu)) <= band
+    beyond = sign * (pu - out_u) < -reach - 2.0  # far out: not this surface's columns
+    sel = near & ~beyond
+    pu, pv = pu[sel], pv[sel]
+    if not len(pu):
+        return out_u
+    # The ray through (pu, pv) from the origin: (t pu, t pv); on the line: t pv = a + b t pu.
+    ou, ov = 0.0, 0.0  # the origin in (u, v): u, v are a rotation of the laser frame
+    den = pv - ov - b * (pu - ou)
+    ok = np.abs(den) > 1e-9
+    t = np.where(ok, (a + b * ou - ov) / np.where(ok, den, 1.0), np.nan)
+    xu = ou + t * (pu - ou)
+    xu = xu[ok & (t > 0)]
+    cand = xu[(sign * (out_u - xu) > 0) & (sign * (out_u - xu) <= reach)]
+    if not len(cand):
+        return out_u
+    return float(cand.min() if left else cand.max())
+
+
+def drop_islands(
+    qu: FloatArray, qv: FloatArray, runs: NDArray[np.intp], spacing: float, tol: float
+) -> NDArray[np.bool_]:
+    """Which of the fill surface's points (sorted by u) to keep: all but its islands. The
+    points' ``runs`` (the front end's runs between jumps, in column order) are its stretches;
+    a stretch of at least 0.2 mm worth of points is a piece of surface. A stretch is an
+    island (a spike run, a streak standing where a dropout took the surface) when its middle
+    lies more than ``max(0.3, 6 tol)`` off the surface carried across it: the line joining
+    the facing ends of the pieces on both sides (by their middles' u), or at an end of the
+    surface the last piece's end carried on (its slope over 0.3 mm) - and it is no piece, or
+    a piece with fewer points than those around it (at an end: under half a millimetre
+    wide). A curved surface broken by a dropout stays: its pieces join across the gap."""
+    n = len(qu)
+    keep = np.ones(n, dtype=bool)
+    if n < 6:
+        return keep
+    labels, inv = np.unique(runs, return_inverse=True)
+    m = len(labels)
+    if m < 2:
+        return keep
+    by = np.argsort(inv, kind="stable")  # each run's points, in u order
+    members = np.split(by, np.cumsum(np.bincount(inv, minlength=m))[:-1])
+    mid_u = np.array([float(qu[k[len(k) // 2]]) for k in members])
+    order = np.argsort(mid_u, kind="stable")
+    members = [members[c] for c in order]
+    mid_u = mid_u[order]
+    size = np.array([len(k) for k in members])
+    off_max = max(0.3, 6.0 * tol)
+    w = max(3, int(round(0.3 / max(spacing, 1e-9))))
+    big = size >= max(5, int(round(0.2 / max(spacing, 1e-9))))
+
+    def end(c: int, tail: bool) -> tuple[float, float, float]:
+        """(u, v) of piece ``c``'s end (its last point by u, or first) and its slope dv/du
+        over its last (first) ``w`` points."""
+        k = members[c]
+        k = k[-w:] if tail else k[:w]
+        uu, vv = qu[k], qv[k]
+        slope = 0.0
+        du = uu - uu.mean()
+        if len(uu) >= 3 and float(du @ du) > 1e-12:
+            slope = float(du @ (vv - vv.mean()) / (du @ du))
+        e = k[-1] if tail else k[0]
+        return float(qu[e]), float(qv[e]), slope
+
+    pieces = np.flatnonzero(big)
+    for c in range(m):
+        k = members[c]
+        before = pieces[pieces < c]
+        after = pieces[pieces > c]
+        a = int(before[-1]) if len(before) else None
+        b = int(after[0]) if len(after) else None
+        if a is None and b is None:
+            continue
+        if big[c]:
+            if a is not None and b is not None:
+                if size[c] >= min(size[a], size[b]):
+                    continue
+            else:
+                nb = a if a is not None else b
+                assert nb is not None
+                if size[c] >= size[nb] or float(np.ptp(qu[k])) > 0.5:
+                    continue
+        mv = float(np.median(qv[k]))
+        if a is not None and b is not None:
+            au, av, sa = end(a, True)
+            bu, bv, _ = end(b, False)
+            if bu - au < 1e-9:
+                continue
+            line_v = av + (mid_u[c] - au) * (bv - av) / (bu - au)
+            lo = int(k[np.argmin(qu[k])])
+            if abs(float(qv[lo]) - (av + sa * (float(qu[lo]) - au))) <= off_max:
+                continue  # it carries on the piece before it (a flank, the piece after a spike)
+        else:
+            eu, ev, slope = end(a, True) if a is not None else end(b, False)  # type: ignore[arg-type]
+            line_v = ev + slope * (mid_u[c] - eu)
+        if abs(mv - line_v) > off_max:
+            keep[k] = False
+    return keep
+
+
+def mirrored_walls(
+    walls: tuple[Line | None, Line | None],
+    tops: tuple[FloatArray, FloatArray],
+    fu: FloatArray,
+    fv: FloatArray,
+    u: FloatArray,
+    v: FloatArray,
+) -> tuple[Line | None, Line | None]:
+    """The walls, a hidden one (no points: in the shadow of its plate's edge) stood in for by
+    the seen one mirrored across the groove (a groove's bevels are cut alike) through its
+    own top corner, when the fill surface there lies at least a millimetre below that corner
+    (the wall is not buried) and nowhere more than 0.3 mm outside the mirrored line (the
+    groove is not one-sided). Otherwise as they were."""
+    out = list(walls)
+    for side in (0, 1):
+        seen = walls[1 - side]
+        if walls[side] is not None or seen is None or len(fu) < 3:
+            continue
+        d = seen.direction - 2.0 * float(seen.direction @ u) * u
+        top = tops[side]
+        outer_v = float(fv[0] if side == 0 else fv[-1])
+        if outer_v - float(top @ v) < 1.0:
+            continue
+        n = np.array([-d[1], d[0]])
+        if (n @ u < 0) != (side == 0):
+            n = -n  # outwards, away from the groove
+        q = fu[:, None] * u + fv[:, None] * v
+        if np.count_nonzero((q - top) @ n > 0.3) > 2:
+            continue
+        out[side] = Line(np.zeros(0, dtype=np.intp), top.copy(), d, np.zeros(0), 0.0)
+    return out[0], out[1]
+
+
+def _median(x: FloatArray) -> float:
+    """``np.median`` of a 1-d array, the same number without its per-call overhead (the
+    extractor takes thousands of small medians a second)."""
+    n = len(x)
+    if n == 0:
+        return math.nan
+    s = np.sort(x)
+    if math.isnan(s[-1]):  # NaN sorts last; np.median's answer then is NaN
+        return math.nan
+    h = n // 2
+    return float(s[h]) if n % 2 else float((s[h - 1] + s[h]) / 2)
+
+
+def _on_line(seg: Segments, ref: Line, ln: Line, max_deg: float = 5.0) -> bool:
+    """Whether piece ``ln`` lies on the line of ``ref`` (within ``max_deg`` and two
+    tolerances)."""
+    if _angle_deg(ln.direction, ref.direction) > max_deg:
+        return False
+    off = np.abs((seg.points[ln.index] - ref.centroid) @ ref.normal)
+    return bool(_median(off) <= 2.0 * seg.tol)
+
+
+def _beyond(q: FloatArray, ln: Line, v: FloatArray, left: bool, tol: float) -> int:
+    """How many of the points ``q`` lie outwards of a wall piece ``ln`` (on the plate's side,
+    more than 3 tolerances off its line) and deeper than its upper end."""
+    n = ln.normal if (ln.normal @ np.array([v[1], -v[0]]) < 0) == left else -ln.normal
+    upper = float(min(ln.point(float(ln.t[0])) @ v, ln.point(float(ln.t[-1])) @ v))
+    out = ((q - ln.centroid) @ n > 3.0 * tol) & (q @ v > upper)
+    return int(np.count_nonzero(out))
+
+
+def _robust_uv_line(qu: FloatArray, qv: FloatArray, tol: float) -> tuple[float, float] | None:
+    """v = a + b u through the most points within two tolerances, of the lines through pairs
+    of (at most 40, evenly picked) points at least a third of the stretch apart; refitted on
+    those points. Spike runs less than half the points do not move it (compiled:
+    :func:`seamtrack.features._groove_kernels.robust_uv_line`)."""
+    n = len(qu)
+    if n < 3:
+        return None
+    i, j = _pairs(n)
+    a, b, found = robust_uv_line(_c(qu), _c(qv), float(tol), i, j)
+    return (a, b) if found else None
+
+
+@functools.lru_cache(maxsize=256)
+def _pairs(n: int) -> tuple[IntArray, IntArray]:
+    """The pairs of :func:`_robust_uv_line` among ``n`` points, in order (read-only)."""
+    pick = np.unique(np.linspace(0, n - 1, min(n, 40)).round().astype(np.intp))
+    i, j = np.triu_indices(len(pick), k=max(1, len(pick) // 3))
+    i, j = pick[i], pick[j]
+    i.setflags(write=False)
+    j.setflags(write=False)
+    return i, j
+
+
+def _c(x: FloatArray) -> FloatArray:
+    return np.ascontiguousarray(x, dtype=np.float64)
+
+
+def _area(pts: FloatArray, P: FloatArray, inner: IntArray, u: FloatArray) -> float:
+    """The polygon of the top corners, the bottom corners and the surface between them, below
+    the line joining the top corners (mm^2), signed: a crowned fill's metal above that line
+    counts against it (a nearly full groove's area is about 0, a capped one's negative)."""
+    qu = P[inner] @ u
+    zone = inner[(qu > pts[1] @ u) & (qu < pts[5] @ u)]
+    ring = np.vstack([pts[0], pts[1], P[zone], pts[5], pts[6]])
+    v = np.array([-u[1], u[0]])
+    a, b = ring @ u, ring @ v  # along the plates, into the groove
+    a_next, b_next = np.concatenate((a[1:], a[:1])), np.concatenate((b[1:], b[:1]))  # np.roll
+    return float(-0.5 * (np.dot(a, b_next) - np.dot(b, a_next)))
+
+
+def _stretched(seg: Segments, plate: Line, stop: int, step: int) -> Line:
+    """``plate`` carried on over the points after its last piece (``step`` +1: rightwards) that
+    no piece took and that lie within two tolerances of its line, up to point ``stop`` (the
+    next piece's first): a quantized plate's last step, which split-and-merge leaves between
+    the plate and the wall, is plate; its end is the plate's inner end."""
+    P = seg.points
+    k = int(plate.index[-1] if step > 0 else plate.index[0])
+    n = plate.normal
+    add = []
+    while k + step != stop and 0 <= k + step < len(P):
+        k += step
+        if seg.stray[k]:
+            continue
+        if abs(float((P[k] - plate.centroid) @ n)) > 2.0 * seg.tol:
+            break
+        add.append(k)
+    if not add:
+        return plate
+    index = np.sort(np.concatenate([plate.index, np.asarray(add, dtype=np.intp)]))
+    f = fit_line(P, np.asarray(index, dtype=np.int64))
+    line = Line(index, np.array([f.cy, f.cz]), np.array([f.uy, f.uz]), f.along, f.rms)
+    if line.direction[0] < 0:
+        line = Line(line.index, line.centroid, -line.direction, -line.t, line.rms)
+    return line
+
+
+def _along_a_ray(bottom: FloatArray) -> bool:
+    """Whether the bottom corners and points lie along one ray of the fan (from the laser
+    frame's origin, within :data:`RAY_SPREAD_RAD`) over more than :data:`RAY_DEPTH_MM` of
+    depth: a streak of spikes (a reflection) does; a fill surface, which crosses the rays, and
+    an empty V's root, a point, do not."""
+    angle = np.arctan2(bottom[:, 0], bottom[:, 1])
+    rng = np.hypot(bottom[:, 0], bottom[:, 1])
+    spread, depth = float(np.ptp(angle)), float(np.ptp(rng))
+    return spread <= RAY_SPREAD_RAD and depth > RAY_DEPTH_MM
+
+
+def explained_share(
+    seg: Segments,
+    plates: tuple[Line, Line],
+    walls: tuple[Line | None, Line | None],
+    inner: IntArray,
+    bl: FloatArray,
+    br: FloatArray,
+    u: FloatArray,
+) -> float:
+    """The share of the profile's kept points the model explains: on a plate's line (outside
+    the groove), on a wall's line, or inside the groove between the bottom corners."""
+    P = seg.points
+    kept = np.flatnonzero(~seg.stray)
+    if not len(kept):
+        return 0.0
+    band = 3.0 * seg.tol
+    ok = np.zeros(len(P), dtype=bool)
+    left, right = plates
+    lo, hi = int(left.index[-1]), int(right.index[0])
+    for line, sel in ((left, slice(0, lo + 1)), (right, slice(hi, len(P)))):
+        ok[sel] = np.abs((P[sel] - line.centroid) @ line.normal) <= band
+    for w in walls:
+        if w is not None:
+            ok[inner] |= np.abs((P[inner] - w.centroid) @ w.normal) <= band
+    qu = P[inner] @ u
+    ok[inner[(qu >= bl @ u - band) & (qu <= br @ u + band)]] = True
+    return float(np.count_nonzero(ok[kept]) / len(kept))
+
+
+def _local_v(qu: FloatArray, qv: FloatArray, ut: float, h: float, tol: float) -> float | None:
+    """v of the surface at u = ut: a robust line fit of the points within h of it (None: fewer
+    than 3 there, or none on one side; compiled:
+    :func:`seamtrack.features._groove_kernels.local_v`)."""
+    val = local_v(_c(qu), _c(qv), float(ut), float(h), float(tol))
+    return None if math.isnan(val) else float(val)
