@@ -9,6 +9,7 @@ import pytest
 from seamtrack.control.path_kernels import (
     PathBuffer,
     corner_envelope,
+    kth_smallest,
     off_line,
     program_hint,
     smooth_tail,
@@ -65,6 +66,21 @@ def test_smooth_tail_is_the_robust_local_line_fit(seed: int) -> None:
     assert np.array_equal(
         path[: np.searchsorted(s, s[-1] - h)], raw[: np.searchsorted(s, s[-1] - h)]
     )
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_kth_smallest_is_the_sorted_arrays_kth(seed: int) -> None:
+    """Quickselect (the smoothing's median residual) against a full sort: the same value for
+    every k, with ties (values drawn from a few levels) and without."""
+    rng = np.random.default_rng(seed)
+    for n in (1, 2, 3, 7, 20, 41):
+        for values in (rng.random(n), rng.integers(0, 3, n).astype(float)):
+            for k in range(n):
+                scratch = np.concatenate([values, rng.random(5)])  # rows past n untouched
+                tail = scratch[n:].copy()
+                assert kth_smallest(scratch, n, k) == np.sort(values)[k]
+                assert np.array_equal(np.sort(scratch[:n]), np.sort(values))
+                assert np.array_equal(scratch[n:], tail)
 
 
 def test_off_line_is_the_distance_from_the_principal_axis() -> None:

@@ -73,24 +73,53 @@ def _fit(
     """Least-squares line p = a + b ds through the window points ``w`` (ds = s - at): ``out``
     gets a (0:3) and b (3:6); True when well posed (at least 3 points, not all at one ds)."""
     n = sx = sxx = 0.0
-    sy = np.zeros(3)
-    sxy = np.zeros(3)
+    sy0 = sy1 = sy2 = sxy0 = sxy1 = sxy2 = 0.0  # the sums per coordinate, in scalars
     for j in range(first, s.shape[0]):
         if w[j - first]:
             ds = s[j] - at
             n += 1.0
             sx += ds
             sxx += ds * ds
-            for c in range(3):
-                sy[c] += raw[j, c]
-                sxy[c] += ds * raw[j, c]
+            x, y, z = raw[j, 0], raw[j, 1], raw[j, 2]
+            sy0 += x
+            sxy0 += ds * x
+            sy1 += y
+            sxy1 += ds * y
+            sy2 += z
+            sxy2 += ds * z
     det = n * sxx - sx * sx
     ok = n >= 3 and det > 1e-12 * max(n * sxx, 1e-300)
     safe = det if ok else 1.0
-    for c in range(3):
-        out[c] = (sxx * sy[c] - sx * sxy[c]) / safe
-        out[3 + c] = (n * sxy[c] - sx * sy[c]) / safe
+    out[0], out[3] = (sxx * sy0 - sx * sxy0) / safe, (n * sxy0 - sx * sy0) / safe
+    out[1], out[4] = (sxx * sy1 - sx * sxy1) / safe, (n * sxy1 - sx * sy1) / safe
+    out[2], out[5] = (sxx * sy2 - sx * sxy2) / safe, (n * sxy2 - sx * sy2) / safe
     return ok
+
+
+@numba.njit(cache=True, nogil=True)
+def kth_smallest(a: FloatArray, n: int, k: int) -> float:
+    """The ``k``-th smallest (from 0) of ``a[:n]`` (no NaN), by quickselect in place (``a[:n]``
+    reordered): the value ``np.partition(a[:n], k)[k]`` gives, without its copy."""
+    lo, hi = 0, n - 1
+    while lo < hi:
+        pivot = a[(lo + hi) // 2]
+        i, j = lo, hi
+        while i <= j:
+            while a[i] < pivot:
+                i += 1
+            while a[j] > pivot:
+                j -= 1
+            if i <= j:
+                a[i], a[j] = a[j], a[i]
+                i += 1
+                j -= 1
+        if k <= j:
+            hi = j
+        elif k >= i:
+            lo = i
+        else:
+            return a[k]
+    return a[k]
 
 
 @numba.njit(cache=True, nogil=True)
@@ -128,9 +157,9 @@ def smooth_tail(
             if w[j]:
                 ordered[k] = residual[j]
                 k += 1
-        # The window's median residual: its (count // 2)-th smallest, found by a partial sort
+        # The window's median residual: its (count // 2)-th smallest, found by quickselect
         # (the same value a full sort puts there).
-        median = np.partition(ordered[:k], count // 2)[count // 2] if k else np.inf
+        median = kth_smallest(ordered, k, count // 2) if k else np.inf
         limit = max(3.0 * (median if math.isfinite(median) else 0.0), min_inlier)
         for j in range(m):
             w[j] = w[j] and residual[j] <= limit
@@ -286,24 +315,34 @@ def plane_crossings(points: FloatArray, T_world_sensor: FloatArray) -> FloatArra
     R = T_world_sensor[:3, :3]
     t = T_world_sensor[:3, 3]
     n = points.shape[0]
-    p = np.empty((n, 3))
+    # R^T (point - origin): its x_L for every point, its y_L, z_L only where the polyline
+    # crosses (the same sums where they are needed).
+    x = np.empty(n)
     for i in range(n):
         d0, d1, d2 = points[i, 0] - t[0], points[i, 1] - t[1], points[i, 2] - t[2]
-        for c in range(3):
-            p[i, c] = R[0, c] * d0 + R[1, c] * d1 + R[2, c] * d2  # R^T (point - origin)
+        x[i] = R[0, 0] * d0 + R[1, 0] * d1 + R[2, 0] * d2
     out = np.empty((n, 2))
     k = 0
     for i in range(n - 1):
-        x0, x1 = p[i, 0], p[i + 1, 0]
+        x0, x1 = x[i], x[i + 1]
         if (x0 <= 0 and x1 > 0) or (x0 >= 0 and x1 < 0):
+            y0, z0 = _in_plane(points[i], R, t)
+            y1, z1 = _in_plane(points[i + 1], R, t)
             w = x0 / (x0 - x1)
-            out[k, 0] = p[i, 1] + w * (p[i + 1, 1] - p[i, 1])
-            out[k, 1] = p[i, 2] + w * (p[i + 1, 2] - p[i, 2])
+            out[k, 0] = y0 + w * (y1 - y0)
+            out[k, 1] = z0 + w * (z1 - z0)
             k += 1
-    if n and p[n - 1, 0] == 0:
-        out[k, 0], out[k, 1] = p[n - 1, 1], p[n - 1, 2]
+    if n and x[n - 1] == 0:
+        out[k, 0], out[k, 1] = _in_plane(points[n - 1], R, t)
         k += 1
     return out[:k].copy()
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _in_plane(point: FloatArray, R: FloatArray, t: FloatArray) -> tuple[float, float]:
+    """(y_L, z_L) of a world point: rows 1 and 2 of R^T (point - origin)."""
+    d0, d1, d2 = point[0] - t[0], point[1] - t[1], point[2] - t[2]
+    return R[0, 1] * d0 + R[1, 1] * d1 + R[2, 1] * d2, R[0, 2] * d0 + R[1, 2] * d1 + R[2, 2] * d2
 
 
 @numba.njit(cache=True, nogil=True)
@@ -397,6 +436,28 @@ def program_hint(
         if dist < best:
             best, y, z = dist, ey, ez
     return True, y, z, sign * v[0], sign * v[1], sign * v[2], near
+
+
+@numba.njit(cache=True, nogil=True)
+def tracker_hint(
+    T: FloatArray, raw: FloatArray, path: FloatArray, s: FloatArray, fit_mm: float,
+    program: FloatArray, last_window: FloatArray, last_near: FloatArray, a: FloatArray,
+    d: FloatArray,
+) -> tuple[bool, float, float, float, float, float, FloatArray, FloatArray]:  # fmt: skip
+    """:func:`program_hint` on the tracker's stored path (``raw``, ``path``, ``s``): the
+    window of raw points of the last ``fit_mm`` (at least the newest) and the direction of
+    :func:`end_direction`, in the one call the tracker makes at each frame.
+
+    Returns :func:`program_hint`'s answer and the window (a copy, for the next call)."""
+    n = s.shape[0]
+    i = max(np.searchsorted(s, s[n - 1] - fit_mm), 1)
+    window = raw[i:].copy() if n > i else raw[n - 1 :].copy()
+    direction = np.empty(3)
+    direction[0], direction[1], direction[2] = end_direction(path, s, fit_mm)
+    found, y, z, dx, dy, dz, near = program_hint(
+        T, raw[n - 1], direction, program, window, last_window, last_near, a, d
+    )
+    return found, y, z, dx, dy, dz, near, window
 
 
 @numba.njit(cache=True, nogil=True)

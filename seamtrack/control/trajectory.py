@@ -262,22 +262,19 @@ class TrajectoryTracker:
             return None
         if not self._seen_seam or self.stop_cause:
             return None
-        raw = self._buffer.raw
-        i = max(_left(self._s, self._s[-1] - self.direction_fit_mm), 1)
-        window = raw[i:] if len(raw) > i else raw[-1:]
         if self._segments is None:  # the program's segments, once
             seam_points = self._program.seam.points
             a = np.ascontiguousarray(seam_points[:-1])
             self._segments = (a, np.ascontiguousarray(seam_points[1:] - a))
             self._program_points = np.ascontiguousarray(seam_points, dtype=np.float64)
         buffer = self._buffer
-        direction = np.array(pk.end_direction(buffer.path, buffer.s, self.direction_fit_mm))
-        # hint_from_path, laser_plane_crossings, _closest_on_program and the choice, compiled
-        found, y, z, dx, dy, dz, near = pk.program_hint(
-            np.asarray(T_world_sensor, dtype=np.float64), raw[-1], direction,
-            self._program_points, window, *self._on_program, *self._segments,
+        # The window of raw points, the direction, hint_from_path, laser_plane_crossings,
+        # _closest_on_program and the choice, compiled in one call
+        found, y, z, dx, dy, dz, near, window = pk.tracker_hint(
+            np.asarray(T_world_sensor, dtype=np.float64), buffer.raw, buffer.path, buffer.s,
+            self.direction_fit_mm, self._program_points, *self._on_program, *self._segments,
         )  # fmt: skip
-        self._on_program = (window.copy(), near)
+        self._on_program = (window, near)
         if not found:
             return None
         return SeamHint((y, z), (dx, dy, dz), HINT_TOLERANCE_MM)
