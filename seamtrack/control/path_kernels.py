@@ -47,18 +47,39 @@ class PathBuffer:
         return self._s[self._lo : self._lo + self._n]
 
     def append(self, point: FloatArray, s: float) -> None:
+        self.make_room()
         end = self._lo + self._n
-        if end == len(self._s):  # full: move the points to the front, and grow if need be
+        self._raw[end] = self._path[end] = point
+        self._s[end] = s
+        self._n += 1
+
+    def take(
+        self, point: FloatArray, min_spacing: float, max_jump: float, fit_mm: float,
+        sp: FloatArray, par: FloatArray, env_last: float,
+    ) -> tuple[int, float, int, int, int, int, FloatArray]:  # fmt: skip
+        """:func:`take_point` on these points (``point`` stored where it answers
+        :data:`STORED`)."""
+        self.make_room()
+        out = take_point(
+            self._raw, self._path, self._s, self._lo, self._n, point, min_spacing, max_jump,
+            fit_mm, sp, par, env_last,
+        )  # fmt: skip
+        if out[0] == STORED:
+            self._n += 1
+        return out
+
+    def make_room(self) -> None:
+        """Room for one more point after the newest: when full, the points move to the front
+        of new arrays (twice as long when more than half full)."""
+        end = self._lo + self._n
+        if end == len(self._s):
             size = len(self._s) * (2 if 2 * self._n > len(self._s) else 1)
             for name in ("_raw", "_path", "_s"):
                 old = getattr(self, name)
                 new = np.empty((size, *old.shape[1:]))
                 new[: self._n] = old[self._lo : end]
                 setattr(self, name, new)
-            self._lo, end = 0, self._n
-        self._raw[end] = self._path[end] = point
-        self._s[end] = s
-        self._n += 1
+            self._lo = 0
 
     def drop(self, count: int) -> None:
         """Forget the ``count`` oldest points."""
@@ -495,6 +516,49 @@ def corner_envelope(
         low = min(low, reach[i])
         v[i] = math.sqrt(max(low - 2.0 * accel * s[i], 0.0))
     return v
+
+
+#: What :func:`take_point` did with a measured point: nothing (closer than the minimum spacing
+#: to the newest stored point), nothing (off the line of the last stored points, or too few of
+#: them there to fit one: the tracker's to decide), stored it.
+TOO_CLOSE, OFF_PATH, FEW, STORED = 0, 1, 2, 3
+
+
+@numba.njit(cache=True, nogil=True)
+def take_point(
+    raw_all: FloatArray, path_all: FloatArray, s_all: FloatArray, lo: int, n: int,
+    point: FloatArray, min_spacing: float, max_jump: float, fit_mm: float, sp: FloatArray,
+    par: FloatArray, env_last: float,
+) -> tuple[int, float, int, int, int, int, FloatArray]:  # fmt: skip
+    """The trajectory tracker's update with a measured ``point``, in one call: its distance
+    from the newest of the ``n`` stored points (rows ``lo:`` of a :class:`PathBuffer`'s
+    arrays, with room for one more: ``np.linalg.norm``'s arithmetic, the same BLAS dot); where
+    it is not too close, its distance from the line through the raw points of the last
+    ``fit_mm`` (:func:`off_line`); where that is within ``max_jump``, the point stored after
+    the newest and :func:`store_tail` on the stored points.
+
+    Returns (what it did: :data:`TOO_CLOSE`, :data:`OFF_PATH`, :data:`FEW` or
+    :data:`STORED`, the distance, then :func:`store_tail`'s answer where stored).
+    """
+    none = np.empty(0)
+    d = point - path_all[lo + n - 1]
+    step = math.sqrt(np.dot(d, d))
+    if step < min_spacing:
+        return TOO_CLOSE, step, 0, 0, 0, 0, none
+    if n >= 3:
+        s = s_all[lo : lo + n]
+        i = max(np.searchsorted(s, s[n - 1] - fit_mm), 1)
+        if n - i < 3:
+            return FEW, step, 0, 0, 0, 0, none
+        if off_line(raw_all[lo + i : lo + n], point) > max_jump:
+            return OFF_PATH, step, 0, 0, 0, 0, none
+    end = lo + n
+    raw_all[end], path_all[end] = point, point
+    s_all[end] = s_all[end - 1] + step
+    cut, what, i0, settled, v = store_tail(
+        raw_all[lo : end + 1], path_all[lo : end + 1], s_all[lo : end + 1], sp, par, env_last
+    )
+    return STORED, step, cut, what, i0, settled, v
 
 
 #: Layout of :func:`store_tail`'s parameters: the smoothing half-width, the inlier floor, the

@@ -225,11 +225,23 @@ class TrajectoryTracker:
         if not self.use_capture_pose:
             # Naive: pretend the frame was taken where the robot is now.
             point = point + (self._sp[pk.TCP_X : pk.TCP_Z + 1] - measurement.tcp_world)
-        step = _length(point - self._path[-1])
-        if step < self.min_spacing_mm:
+        # The usual frame in one compiled call: the spacing, the outlier test, the point
+        # stored and store_tail (see _store); the tracker decides the rest.
+        env = self._env_s
+        what, step, *tail = self._buffer.take(
+            point, self.min_spacing_mm, self.max_jump_mm, self.direction_fit_mm, self._sp,
+            self._tail, float(env[-1]) if len(env) else math.nan,
+        )  # fmt: skip
+        if what == pk.STORED:
+            self._held = []
+            self._lost = False
+            self._seen_seam = True
+            self._stored(*tail)
+            return
+        if what == pk.TOO_CLOSE:
             self._lost = False
             return
-        if len(self._path) >= 3 and self._off_path(point) > self.max_jump_mm:
+        if what == pk.OFF_PATH or self._off_path(point) > self.max_jump_mm:
             self._held.append(point)
             if not self._reacquired():
                 self._lost = self._seen_seam  # bridge it, for now
@@ -326,9 +338,12 @@ class TrajectoryTracker:
         # later limit in time, over the settled path.
         env = self._env_s
         last = float(env[-1]) if len(env) else math.nan
-        cut, what, i0, settled, v = pk.store_tail(
-            buffer.raw, buffer.path, buffer.s, self._sp, self._tail, last
-        )
+        self._stored(*pk.store_tail(buffer.raw, buffer.path, buffer.s, self._sp, self._tail, last))
+
+    def _stored(self, cut: int, what: int, i0: int, settled: int, v: FloatArray) -> None:
+        """What follows :func:`~seamtrack.control.path_kernels.store_tail`: the points it
+        found behind the buffer dropped, the corner envelope kept or replaced."""
+        buffer = self._buffer
         if cut > 0:
             buffer.drop(cut)
         if what == 1:

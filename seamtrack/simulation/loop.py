@@ -303,8 +303,9 @@ def run(
                 tcp = ticks.tcp_now(state)
             pending.append(Measurement(feature, t, t + cfg.latency_s, T_ws, tcp))
             frame_t.append(t)
-            frame_found.append(1 if feature else 0)
-            frame_points.extend(feature.point_world if feature else nan3)
+            seen = bool(feature)
+            frame_found.append(1 if seen else 0)
+            frame_points.extend(feature.point_world if seen else nan3)
         while pending and pending[0].t_arrival_s <= t + 1e-9:
             measurement = pending.popleft()
             checks.P[LAST_SEEN] = 1.0 if measurement else 0.0

@@ -393,6 +393,7 @@ class ArmTicks(_Logs):
         self.dt = robot.control_period_s
         self.world = np.ascontiguousarray(robot.T_world_base[:3, :4])
         self.base = np.ascontiguousarray(robot._T_base_world[:3, :4])
+        self._R, self._p0 = robot.T_world_base[:3, :3], robot.T_world_base[:3, 3]
         program = tracker._program
         self.prog, self.knots, self.seg_len, self.normals, self.prog_par = program._arrays
         self.columns = np.ascontiguousarray(program.seam.points.T)
@@ -462,8 +463,7 @@ class ArmTicks(_Logs):
 
     def tcp_now(self, state: Any) -> FloatArray:
         """The torch tip (world) of ``state``, as the loop computes it."""
-        T = self.robot.T_world_base
-        return T[:3, :3] @ state.q + T[:3, 3]
+        return self._R @ state.cart[C_Q] + self._p0
 
     def finish(self, state: Any, tracker: Any) -> None:
         """After the run: the tool orientation back to the tracker, as it keeps it (its
