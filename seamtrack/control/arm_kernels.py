@@ -24,7 +24,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.control.closed_form import KIND_NONE, ik_branches, mul, mul_into
+from seamtrack.control.closed_form import KIND_NONE, ik_nearest, mul, mul_into
 from seamtrack.control.robot import axes_step
 from seamtrack.control.servo import loops_step
 
@@ -291,11 +291,9 @@ def solve_pose(
         T = np.eye(4)
         T[:3, :3] = R_set
         T[:3, 3] = p_set
-        branches = np.empty((8, q_near.shape[0]))
-        count = ik_branches(solver, geo, T, q_near, branches)
-        b = nearest_branch(branches, count, q_near)
-        if b >= 0:
-            return branches[b].copy()
+        row = np.empty(q_near.shape[0])
+        if ik_nearest(solver, geo, T, q_near, row):  # nearest_branch of ik_branches
+            return row
     return newton_ik(p_set, R_set, q_near, place, axes, kinds, index, 3)
 
 

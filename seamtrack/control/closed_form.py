@@ -214,6 +214,114 @@ def _ur_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: FloatArr
     return count
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _ur_q6(
+    q5: float, z1x: float, z1y: float, J6: FloatArray, s4: float, q_near: FloatArray,
+    t0: float,
+) -> tuple[float, float]:  # fmt: skip
+    """:func:`_ur_branches`' joint 6 for joint 5 at ``q5``, and the lower bound of a branch's
+    sum of squared differences from ``q_near`` with joints 1, 5 and 6 known (``t0``: joint
+    1's term)."""
+    sn5 = math.sin(q5)
+    if abs(sn5) < SINGULAR_SIN:
+        q6 = q_near[5]
+    else:
+        zx = z1x * J6[0, 0] + z1y * J6[1, 0]
+        zy = z1x * J6[0, 1] + z1y * J6[1, 1]
+        q6 = math.atan2(-zy / (s4 * sn5), zx / (s4 * sn5))
+    x4 = _near(q5, q_near[4]) - q_near[4]
+    x5 = _near(q6, q_near[5]) - q_near[5]
+    return q6, (t0 + x4 * x4) + x5 * x5
+
+
+@numba.njit(cache=True, nogil=True)
+def _ur_nearest(g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatArray) -> bool:
+    """The branch of :func:`_ur_branches` that :func:`~seamtrack.control.arm_kernels.
+    nearest_branch` picks (the least sum of squared differences from ``q_near``, the first
+    of a tie), into ``row``; False where there is none. The same arithmetic per branch, but a
+    branch is worked out only where it can still be the nearest: the one nearest in joint 1
+    first, then in joints 5 and 6, and a branch skipped once a lower bound of its sum (the
+    same sum with the joints not yet known left out: adding the rest can only raise it)
+    exceeds the best found. At 1 kHz the nearest branch is microradians away and the others
+    tenths of a radian: one branch of eight is worked out."""
+    P2i, P1i, P6i, P5i = _m4j(g, _U_P2I), _m4j(g, _U_P1I), _m4j(g, _U_P6I), _m4j(g, _U_P5I)
+    ws = np.empty((6, 4, 4))  # J6, P1i J6, T01^-1 J6, two scratch, A
+    J6 = ws[0]
+    mul_into(T, _m4j(g, _U_TCP), J6)
+    mul_into(P1i, J6, ws[1])
+    a2, a3, dlat = g[_U_A2], g[_U_A3], g[_U_DLAT]
+    s1, s4, s5a = g[_U_S1], g[_U_S4], g[_U_S5]
+    px, py = J6[0, 3], J6[1, 3]
+    r = math.hypot(px, py)
+    if r <= abs(dlat):
+        return False
+    psi = math.atan2(py, px)
+    k = math.asin(s1 * dlat / r)
+    best = math.inf
+    best_key = 8  # the branch's place in _ur_branches' order (i1, i5, i3): a tie's tiebreak
+    q1s = (psi + k, psi + math.pi - k)
+    x0 = _near(q1s[0], q_near[0]) - q_near[0]
+    x1 = _near(q1s[1], q_near[0]) - q_near[0]
+    first = 0 if not x1 * x1 < x0 * x0 else 1
+    for o1 in range(2):
+        i1 = first if o1 == 0 else 1 - first
+        q1 = q1s[i1]
+        r0 = _near(q1, q_near[0])
+        t0 = (r0 - q_near[0]) * (r0 - q_near[0])
+        if t0 > best:
+            continue
+        z1x, z1y = s1 * math.sin(q1), -s1 * math.cos(q1)
+        c5 = -(z1x * J6[0, 2] + z1y * J6[1, 2]) / (s4 * s5a)
+        if abs(c5) > 1.0 + 1e-12:
+            continue
+        c5 = min(max(c5, -1.0), 1.0)
+        _rz_left(-q1, ws[1], ws[3])
+        mul_into(P2i, ws[3], ws[2])
+        q5s = (math.acos(c5), -math.acos(c5))
+        q6a, bound_a = _ur_q6(q5s[0], z1x, z1y, J6, s4, q_near, t0)
+        q6b, bound_b = _ur_q6(q5s[1], z1x, z1y, J6, s4, q_near, t0)
+        first5 = 0 if not bound_b < bound_a else 1
+        for o5 in range(2):
+            i5 = first5 if o5 == 0 else 1 - first5
+            if (bound_a if i5 == 0 else bound_b) > best:
+                continue
+            q5, q6 = q5s[i5], (q6a if i5 == 0 else q6b)
+            _rz_right(ws[2], -q6, ws[3])
+            mul_into(ws[3], P6i, ws[4])
+            _rz_right(ws[4], -q5, ws[3])
+            A = ws[5]
+            mul_into(ws[3], P5i, A)
+            q234 = math.atan2(A[1, 0], A[0, 0])
+            x, y = A[0, 3], A[1, 3]
+            c3 = (x * x + y * y - a2 * a2 - a3 * a3) / (2.0 * a2 * a3)
+            if abs(c3) > 1.0 + 1e-12:
+                continue
+            c3 = min(max(c3, -1.0), 1.0)
+            for i3 in range(2):
+                q3 = math.acos(c3) if i3 == 0 else -math.acos(c3)
+                q2 = math.atan2(y, x) - math.atan2(a3 * math.sin(q3), a2 + a3 * math.cos(q3))
+                v0, v1, v2 = q1, q2, q3
+                v3, v4, v5 = q234 - q2 - q3, q5, q6
+                v0 = _near(v0, q_near[0])
+                v1 = _near(v1, q_near[1])
+                v2 = _near(v2, q_near[2])
+                v3 = _near(v3, q_near[3])
+                v4 = _near(v4, q_near[4])
+                v5 = _near(v5, q_near[5])
+                d = 0.0  # nearest_branch's sum, in its order
+                d += (v0 - q_near[0]) * (v0 - q_near[0])
+                d += (v1 - q_near[1]) * (v1 - q_near[1])
+                d += (v2 - q_near[2]) * (v2 - q_near[2])
+                d += (v3 - q_near[3]) * (v3 - q_near[3])
+                d += (v4 - q_near[4]) * (v4 - q_near[4])
+                d += (v5 - q_near[5]) * (v5 - q_near[5])
+                key = 4 * i1 + 2 * i5 + i3
+                if d < best or (d == best and key < best_key):
+                    best, best_key = d, key
+                    row[0], row[1], row[2], row[3], row[4], row[5] = v0, v1, v2, v3, v4, v5
+    return best_key < 8
+
+
 # Layout of the spherical-wrist parameters (base frame, zero pose, metres).
 _W_WT, _W_O1, _W_U2, _W_V, _W_HP, _W_O2, _W_E1, _W_E2 = 0, 3, 6, 9, 12, 13, 16, 19
 _W_O3, _W_W0, _W_S3, _W_U1, _W_U3, _W_B, _W_S6, _W_R0 = 22, 24, 26, 27, 30, 33, 42, 43
@@ -300,6 +408,32 @@ def _wrist_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: Float
                     row[j] = _near(row[j], q_near[j])
                 count += 1
     return count
+
+
+@numba.njit(cache=True, nogil=True)
+def ik_nearest(
+    kind: int, g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatArray
+) -> bool:
+    """The closed-form branch of the torch pose ``T`` nearest ``q_near`` into ``row`` (the
+    row of :func:`ik_branches` that :func:`~seamtrack.control.arm_kernels.nearest_branch`
+    picks, the same numbers); False where there is none. The UR family's by
+    :func:`_ur_nearest` (most branches not worked out), the others' from all branches."""
+    if kind == KIND_UR:
+        return _ur_nearest(g, T, q_near, row)
+    branches = np.empty((8, q_near.shape[0]))
+    count = ik_branches(kind, g, T, q_near, branches)
+    best, best_d = -1, math.inf
+    for b in range(count):
+        d = 0.0
+        for j in range(q_near.shape[0]):
+            x = branches[b, j] - q_near[j]
+            d += x * x
+        if d < best_d:
+            best, best_d = b, d
+    if best < 0:
+        return False
+    row[:] = branches[best]
+    return True
 
 
 @numba.njit(cache=True, nogil=True)
