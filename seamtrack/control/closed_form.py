@@ -411,15 +411,134 @@ def _wrist_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: Float
 
 
 @numba.njit(cache=True, nogil=True)
+def _wrist_nearest(g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatArray) -> bool:
+    """:func:`_ur_nearest` for the spherical wrist: :func:`_wrist_branches`' arithmetic per
+    branch, joint 1's nearer branch first, then the elbow nearer in joints 2 and 3 (its sum so
+    far exact), a branch skipped once its sum so far exceeds the best found."""
+    ws = np.empty((7, 3, 3))
+    RT = ws[0]
+    RT[:, :] = T[:3, :3]
+    w = g[_W_WT : _W_WT + 3]
+    c = np.empty(3)
+    for i in range(3):
+        c[i] = T[i, 3] + RT[i, 0] * w[0] + RT[i, 1] * w[1] + RT[i, 2] * w[2]
+    o1, u2, v = g[_W_O1 : _W_O1 + 3], g[_W_U2 : _W_U2 + 3], g[_W_V : _W_V + 3]
+    d = c - o1
+    a, b = d[0] * u2[0] + d[1] * u2[1] + d[2] * u2[2], d[0] * v[0] + d[1] * v[1] + d[2] * v[2]
+    r = math.hypot(a, b)
+    hp = g[_W_HP]
+    if r < abs(hp) or r == 0.0:
+        return False
+    beta = math.atan2(b, a)
+    k = math.acos(min(max(hp / r, -1.0), 1.0))
+    o2, e1, e2 = g[_W_O2 : _W_O2 + 3], g[_W_E1 : _W_E1 + 3], g[_W_E2 : _W_E2 + 3]
+    o3x, o3y = g[_W_O3], g[_W_O3 + 1]
+    w0x, w0y = g[_W_W0], g[_W_W0 + 1]
+    l2 = math.hypot(o3x, o3y)
+    l3 = math.hypot(w0x - o3x, w0y - o3y)
+    g2, g3 = math.atan2(o3y, o3x), math.atan2(w0y - o3y, w0x - o3x)
+    s3, s6 = g[_W_S3], g[_W_S6]
+    u1, u3 = g[_W_U1 : _W_U1 + 3], g[_W_U3 : _W_U3 + 3]
+    B = g[_W_B : _W_B + 9].reshape(3, 3)
+    mul_into(RT, np.ascontiguousarray(g[_W_R0 : _W_R0 + 9].reshape(3, 3).T), ws[1])
+    mul_into(ws[1], B, ws[2])
+    best = math.inf
+    best_key = 8  # the branch's place in _wrist_branches' order (i1, i3, i6)
+    q1s = (beta + k, beta - k)
+    x0 = _near(q1s[0], q_near[0]) - q_near[0]
+    x1 = _near(q1s[1], q_near[0]) - q_near[0]
+    first = 0 if not x1 * x1 < x0 * x0 else 1
+    P = np.empty(3)
+    for n1 in range(2):  # (o1 is the shoulder's origin)
+        i1 = first if n1 == 0 else 1 - first
+        q1 = q1s[i1]
+        v0 = _near(q1, q_near[0])
+        t0 = 0.0
+        t0 += (v0 - q_near[0]) * (v0 - q_near[0])
+        if t0 > best:
+            continue
+        _rot_into(u1, -q1, ws[3])
+        for i in range(3):
+            P[i] = o1[i] - o2[i] + ws[3, i, 0] * d[0] + ws[3, i, 1] * d[1] + ws[3, i, 2] * d[2]
+        px = P[0] * e1[0] + P[1] * e1[1] + P[2] * e1[2]
+        py = P[0] * e2[0] + P[1] * e2[1] + P[2] * e2[2]
+        kappa = (px * px + py * py - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
+        if abs(kappa) > 1.0 + 1e-12:
+            continue
+        kappa = min(max(kappa, -1.0), 1.0)
+        phis = (g2 - g3 + math.acos(kappa), g2 - g3 - math.acos(kappa))
+        q2a, q3a, ta = _wrist_elbow(phis[0], o3x, o3y, w0x, w0y, px, py, s3, q_near, t0)
+        q2b, q3b, tb = _wrist_elbow(phis[1], o3x, o3y, w0x, w0y, px, py, s3, q_near, t0)
+        first3 = 0 if not tb < ta else 1
+        for o3 in range(2):
+            i3 = first3 if o3 == 0 else 1 - first3
+            t12 = ta if i3 == 0 else tb
+            if t12 > best:
+                continue
+            q2, q3 = (q2a, q3a) if i3 == 0 else (q2b, q3b)
+            _rot_into(u1, q1, ws[3])
+            _rot_into(u2, q2, ws[4])
+            mul_into(ws[3], ws[4], ws[5])
+            _rot_into(u3, q3, ws[3])
+            mul_into(ws[5], ws[3], ws[4])  # R3
+            _tmul_into(ws[4], ws[2], ws[5])  # R3^T R R0^T B
+            _tmul_into(B, ws[5], ws[6])  # N = B^T R3^T R R0^T B
+            N = ws[6]
+            sb = math.hypot(N[0, 1], N[0, 2])
+            for i6 in range(2):
+                sign = 1.0 if i6 == 0 else -1.0
+                q5 = math.atan2(sign * sb, N[0, 0])
+                if sb < SINGULAR_SIN:
+                    q4 = q_near[3]
+                    if N[0, 0] > 0.0:
+                        c6 = math.atan2(N[2, 1], N[1, 1]) - q4
+                    else:
+                        c6 = q4 + math.atan2(-N[2, 1], N[1, 1])
+                else:
+                    q4 = math.atan2(sign * N[1, 0], -sign * N[2, 0])
+                    c6 = math.atan2(sign * N[0, 1], sign * N[0, 2])
+                v1, v2 = _near(q2, q_near[1]), _near(q3, q_near[2])
+                v3, v4, v5 = _near(q4, q_near[3]), _near(q5, q_near[4]), _near(s6 * c6, q_near[5])
+                dd = t12  # nearest_branch's sum, in its order (joints 1-3 in t12)
+                dd += (v3 - q_near[3]) * (v3 - q_near[3])
+                dd += (v4 - q_near[4]) * (v4 - q_near[4])
+                dd += (v5 - q_near[5]) * (v5 - q_near[5])
+                key = 4 * i1 + 2 * i3 + i6
+                if dd < best or (dd == best and key < best_key):
+                    best, best_key = dd, key
+                    row[0], row[1], row[2], row[3], row[4], row[5] = v0, v1, v2, v3, v4, v5
+    return best_key < 8
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _wrist_elbow(
+    phi3: float, o3x: float, o3y: float, w0x: float, w0y: float, px: float, py: float,
+    s3: float, q_near: FloatArray, t0: float,
+) -> tuple[float, float, float]:  # fmt: skip
+    """:func:`_wrist_branches`' joints 2 and 3 for the elbow at ``phi3``, and the sum of
+    squared differences from ``q_near`` over joints 1-3 (``t0``: joint 1's, in
+    nearest_branch's order)."""
+    vx = o3x + math.cos(phi3) * (w0x - o3x) - math.sin(phi3) * (w0y - o3y)
+    vy = o3y + math.sin(phi3) * (w0x - o3x) + math.cos(phi3) * (w0y - o3y)
+    q2 = math.atan2(py, px) - math.atan2(vy, vx)
+    q3 = s3 * phi3
+    x1 = _near(q2, q_near[1]) - q_near[1]
+    x2 = _near(q3, q_near[2]) - q_near[2]
+    return q2, q3, (t0 + x1 * x1) + x2 * x2
+
+
+@numba.njit(cache=True, nogil=True)
 def ik_nearest(
     kind: int, g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatArray
 ) -> bool:
     """The closed-form branch of the torch pose ``T`` nearest ``q_near`` into ``row`` (the
     row of :func:`ik_branches` that :func:`~seamtrack.control.arm_kernels.nearest_branch`
-    picks, the same numbers); False where there is none. The UR family's by
-    :func:`_ur_nearest` (most branches not worked out), the others' from all branches."""
+    picks, the same numbers); False where there is none: by :func:`_ur_nearest` and
+    :func:`_wrist_nearest` (most branches not worked out), else from all branches."""
     if kind == KIND_UR:
         return _ur_nearest(g, T, q_near, row)
+    if kind == KIND_WRIST:
+        return _wrist_nearest(g, T, q_near, row)
     branches = np.empty((8, q_near.shape[0]))
     count = ik_branches(kind, g, T, q_near, branches)
     best, best_d = -1, math.inf
