@@ -228,7 +228,7 @@ class TrajectoryTracker:
         # The usual frame in one compiled call: the spacing, the outlier test, the point
         # stored and store_tail (see _store); the tracker decides the rest.
         env = self._env_s
-        what, step, *tail = self._buffer.take(
+        what, step, cut, envelope, i0, settled, v = self._buffer.take(
             point, self.min_spacing_mm, self.max_jump_mm, self.direction_fit_mm, self._sp,
             self._tail, float(env[-1]) if len(env) else math.nan,
         )  # fmt: skip
@@ -236,7 +236,7 @@ class TrajectoryTracker:
             self._held = []
             self._lost = False
             self._seen_seam = True
-            self._stored(*tail)
+            self._stored(cut, envelope, i0, settled, v)
             return
         if what == pk.TOO_CLOSE:
             self._lost = False

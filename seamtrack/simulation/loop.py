@@ -440,12 +440,12 @@ def _progress_bar(enabled: bool, total_s: float, length_mm: float) -> Any:
 def _trace(
     seam: Seam,
     dt: float,
-    tcp_log: array,
-    target_log: array,
+    tcp_log: array | FloatArray,  # the loop's logs, or the compiled ticks' (rows)
+    target_log: array | FloatArray,
     frame_t: array,
     frame_found: array,
     frame_points: array,
-    progress: tuple[array, array],
+    progress: tuple[FloatArray, FloatArray],
     axis_world: FloatArray | None = None,
     angles_rad: tuple[float, float] = (0.0, 0.0),
 ) -> Trace:
