@@ -366,6 +366,102 @@ def _in_plane(point: FloatArray, R: FloatArray, t: FloatArray) -> tuple[float, f
     return R[0, 1] * d0 + R[1, 1] * d1 + R[2, 1] * d2, R[0, 2] * d0 + R[1, 2] * d1 + R[2, 2] * d2
 
 
+#: Segments per chunk of a polyline in :func:`polyline_chunks`.
+CHUNK_SEGMENTS = 16
+#: Margin (mm) of a chunk's lower bound: far above the rounding of a distance.
+_CHUNK_MARGIN_MM = 1e-6
+
+
+def polyline_chunks(a: FloatArray, d: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """Bounding spheres of the segments ``a + t d`` in chunks of :data:`CHUNK_SEGMENTS`:
+    centres (k, 3) and radii (k,), each sphere holding its segments' end points (so the whole
+    segments), for :func:`closest_on_polyline`'s pruning."""
+    n = len(a)
+    k = (n + CHUNK_SEGMENTS - 1) // CHUNK_SEGMENTS
+    centres, radii = np.empty((k, 3)), np.empty(k)
+    for c in range(k):
+        ends = np.concatenate([a[c * CHUNK_SEGMENTS : (c + 1) * CHUNK_SEGMENTS],
+                               (a + d)[c * CHUNK_SEGMENTS : (c + 1) * CHUNK_SEGMENTS]])  # fmt: skip
+        centres[c] = 0.5 * (ends.min(axis=0) + ends.max(axis=0))
+        radii[c] = float(np.max(np.linalg.norm(ends - centres[c], axis=1))) * (1 + 1e-9)
+    return centres, radii
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _nearer(
+    q0: float, q1: float, q2: float, a: FloatArray, d: FloatArray, c: int, best: float,
+    bt: float, bs: int,
+) -> tuple[float, float, int]:  # fmt: skip
+    """Segment ``c`` against the best so far (distance, t, segment): the nearer, the lower
+    segment on a tie (:func:`~seamtrack.geometry.nearest.nearest_of`'s arithmetic)."""
+    dd = max(d[c, 0] * d[c, 0] + d[c, 1] * d[c, 1] + d[c, 2] * d[c, 2], 1e-300)
+    num = (q0 - a[c, 0]) * d[c, 0] + (q1 - a[c, 1]) * d[c, 1]
+    num += (q2 - a[c, 2]) * d[c, 2]
+    t = min(max(num / dd, 0.0), 1.0)
+    e0 = q0 - (a[c, 0] + t * d[c, 0])
+    e1 = q1 - (a[c, 1] + t * d[c, 1])
+    e2 = q2 - (a[c, 2] + t * d[c, 2])
+    dist = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
+    if dist < best or (dist == best and c < bs):
+        return dist, t, c
+    return best, bt, bs
+
+
+@numba.njit(cache=True, nogil=True)
+def closest_on_polyline_chunked(
+    points: FloatArray,
+    last_points: FloatArray,
+    last_near: FloatArray,
+    a: FloatArray,
+    d: FloatArray,
+    centres: FloatArray,
+    radii: FloatArray,
+) -> FloatArray:
+    """:func:`closest_on_polyline` with the segments' bounding spheres of
+    :func:`polyline_chunks` (none: every segment): the chunk nearest a point first, then only
+    the chunks whose sphere comes nearer than the best found (a lower bound, with a margin far
+    above rounding). The same points: the nearest segment, the first on a tie, whatever the
+    order the segments are looked at in."""
+    m = points.shape[0]
+    near = np.empty((m, 3))
+    k = 0
+    for j in range(last_points.shape[0]):
+        if (last_points[j, 0] == points[0, 0] and last_points[j, 1] == points[0, 1]
+                and last_points[j, 2] == points[0, 2]):  # fmt: skip
+            k = min(last_points.shape[0] - j, m)
+            for r in range(k):
+                for c in range(3):
+                    if last_points[j + r, c] != points[r, c]:
+                        k = 0
+            for r in range(k):
+                near[r] = last_near[j + r]
+            break
+    n_seg, n_chunk = a.shape[0], radii.shape[0]
+    lower = np.empty(n_chunk)
+    for r in range(k, m):
+        best, bt, bs = np.inf, 0.0, 0
+        q0, q1, q2 = points[r, 0], points[r, 1], points[r, 2]
+        if n_chunk == 0:
+            for c in range(n_seg):
+                best, bt, bs = _nearer(q0, q1, q2, a, d, c, best, bt, bs)
+        else:
+            first = 0
+            for h in range(n_chunk):
+                e0, e1, e2 = q0 - centres[h, 0], q1 - centres[h, 1], q2 - centres[h, 2]
+                lower[h] = math.sqrt(e0 * e0 + e1 * e1 + e2 * e2) - radii[h]
+                if lower[h] < lower[first]:
+                    first = h
+            for o in range(n_chunk):
+                h = first if o == 0 else (o - 1 if o <= first else o)
+                if o > 0 and lower[h] > best + _CHUNK_MARGIN_MM:
+                    continue
+                for c in range(h * CHUNK_SEGMENTS, min((h + 1) * CHUNK_SEGMENTS, n_seg)):
+                    best, bt, bs = _nearer(q0, q1, q2, a, d, c, best, bt, bs)
+        for c in range(3):
+            near[r, c] = a[bs, c] + bt * d[bs, c]
+    return near
+
+
 @numba.njit(cache=True, nogil=True)
 def closest_on_polyline(
     points: FloatArray,
@@ -417,17 +513,31 @@ def program_hint(
     window: FloatArray, last_window: FloatArray, last_near: FloatArray, a: FloatArray,
     d: FloatArray,
 ) -> tuple[bool, float, float, float, float, float, FloatArray]:  # fmt: skip
+    """:func:`_program_hint` with every segment of the program looked at."""
+    return _program_hint(
+        T, last, direction, program, window, last_window, last_near, a, d, np.empty((0, 3)),
+        np.empty(0),
+    )  # fmt: skip
+
+
+@numba.njit(cache=True, nogil=True)
+def _program_hint(
+    T: FloatArray, last: FloatArray, direction: FloatArray, program: FloatArray,
+    window: FloatArray, last_window: FloatArray, last_near: FloatArray, a: FloatArray,
+    d: FloatArray, centres: FloatArray, radii: FloatArray,
+) -> tuple[bool, float, float, float, float, float, FloatArray]:  # fmt: skip
     """The trajectory tracker's hint in one call (:meth:`TrajectoryTracker.hint
     <seamtrack.control.trajectory.TrajectoryTracker.hint>`, its arithmetic): the straight
     path's crossing of the laser plane (``hint_from_path``: through ``last`` heading
     ``direction``, world), the program seam's crossings (:func:`plane_crossings`), shifted by
     the median offset of the measured ``window`` from the program (its closest points by
-    :func:`closest_on_polyline`, reusing ``last_near``), the crossing nearest the straight one.
+    :func:`closest_on_polyline_chunked` on the chunks ``centres``, ``radii``, reusing
+    ``last_near``), the crossing nearest the straight one.
 
     Returns (found, y_L, z_L, the direction in the sensor frame (3), the window's closest
     points on the program, for the next call).
     """
-    near = closest_on_polyline(window, last_window, last_near, a, d)
+    near = closest_on_polyline_chunked(window, last_window, last_near, a, d, centres, radii)
     R = T[:3, :3]
     p = np.empty(3)
     v = np.empty(3)
@@ -463,9 +573,10 @@ def program_hint(
 def tracker_hint(
     T: FloatArray, raw: FloatArray, path: FloatArray, s: FloatArray, fit_mm: float,
     program: FloatArray, last_window: FloatArray, last_near: FloatArray, a: FloatArray,
-    d: FloatArray,
+    d: FloatArray, centres: FloatArray, radii: FloatArray,
 ) -> tuple[bool, float, float, float, float, float, FloatArray, FloatArray]:  # fmt: skip
-    """:func:`program_hint` on the tracker's stored path (``raw``, ``path``, ``s``): the
+    """:func:`program_hint` (the program's segments in the chunks of :func:`polyline_chunks`)
+    on the tracker's stored path (``raw``, ``path``, ``s``): the
     window of raw points of the last ``fit_mm`` (at least the newest) and the direction of
     :func:`end_direction`, in the one call the tracker makes at each frame.
 
@@ -475,8 +586,8 @@ def tracker_hint(
     window = raw[i:].copy() if n > i else raw[n - 1 :].copy()
     direction = np.empty(3)
     direction[0], direction[1], direction[2] = end_direction(path, s, fit_mm)
-    found, y, z, dx, dy, dz, near = program_hint(
-        T, raw[n - 1], direction, program, window, last_window, last_near, a, d
+    found, y, z, dx, dy, dz, near = _program_hint(
+        T, raw[n - 1], direction, program, window, last_window, last_near, a, d, centres, radii
     )
     return found, y, z, dx, dy, dz, near, window
 

@@ -185,7 +185,7 @@ class TrajectoryTracker:
         self._held: list[FloatArray] = []
         # The hint's window of raw points and their closest points on the program seam.
         self._on_program: tuple[FloatArray, FloatArray] = (np.empty((0, 3)), np.empty((0, 3)))
-        self._segments: tuple[FloatArray, FloatArray] | None = None
+        self._segments: tuple[FloatArray, ...] | None = None  # a, d and polyline_chunks
         self._program_points = np.empty((0, 3))  # the program seam's points, contiguous
         self.stop_cause = ""
         # The robot program's end of an open seam (the CAD seam's end), as floats; None: none.
@@ -277,7 +277,8 @@ class TrajectoryTracker:
         if self._segments is None:  # the program's segments, once
             seam_points = self._program.seam.points
             a = np.ascontiguousarray(seam_points[:-1])
-            self._segments = (a, np.ascontiguousarray(seam_points[1:] - a))
+            d = np.ascontiguousarray(seam_points[1:] - a)
+            self._segments = (a, d, *pk.polyline_chunks(a, d))
             self._program_points = np.ascontiguousarray(seam_points, dtype=np.float64)
         buffer = self._buffer
         # The window of raw points, the direction, hint_from_path, laser_plane_crossings,
