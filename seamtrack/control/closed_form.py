@@ -235,7 +235,9 @@ def _ur_q6(
 
 
 @numba.njit(cache=True, nogil=True)
-def _ur_nearest(g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatArray) -> bool:
+def _ur_nearest(
+    g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatArray, ws: FloatArray
+) -> bool:
     """The branch of :func:`_ur_branches` that :func:`~seamtrack.control.arm_kernels.
     nearest_branch` picks (the least sum of squared differences from ``q_near``, the first
     of a tie), into ``row``; False where there is none. The same arithmetic per branch, but a
@@ -243,10 +245,9 @@ def _ur_nearest(g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatArra
     first, then in joints 5 and 6, and a branch skipped once a lower bound of its sum (the
     same sum with the joints not yet known left out: adding the rest can only raise it)
     exceeds the best found. At 1 kHz the nearest branch is microradians away and the others
-    tenths of a radian: one branch of eight is worked out."""
+    tenths of a radian: one branch of eight is worked out. ``ws``: a (6, 4, 4) scratch."""
     P2i, P1i, P6i, P5i = _m4j(g, _U_P2I), _m4j(g, _U_P1I), _m4j(g, _U_P6I), _m4j(g, _U_P5I)
-    ws = np.empty((6, 4, 4))  # J6, P1i J6, T01^-1 J6, two scratch, A
-    J6 = ws[0]
+    J6 = ws[0]  # J6, P1i J6, T01^-1 J6, two scratch, A
     mul_into(T, _m4j(g, _U_TCP), J6)
     mul_into(P1i, J6, ws[1])
     a2, a3, dlat = g[_U_A2], g[_U_A3], g[_U_DLAT]
@@ -535,8 +536,17 @@ def ik_nearest(
     row of :func:`ik_branches` that :func:`~seamtrack.control.arm_kernels.nearest_branch`
     picks, the same numbers); False where there is none: by :func:`_ur_nearest` and
     :func:`_wrist_nearest` (most branches not worked out), else from all branches."""
+    return ik_nearest_in(kind, g, T, q_near, row, np.empty((6, 4, 4)))
+
+
+@numba.njit(cache=True, nogil=True)
+def ik_nearest_in(
+    kind: int, g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatArray,
+    ws: FloatArray,
+) -> bool:  # fmt: skip
+    """:func:`ik_nearest` with a (6, 4, 4) scratch ``ws`` (the arm tick's)."""
     if kind == KIND_UR:
-        return _ur_nearest(g, T, q_near, row)
+        return _ur_nearest(g, T, q_near, row, ws)
     if kind == KIND_WRIST:
         return _wrist_nearest(g, T, q_near, row)
     branches = np.empty((8, q_near.shape[0]))

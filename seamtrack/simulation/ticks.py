@@ -306,7 +306,8 @@ def arm_ticks(
     jl: FloatArray, servo: FloatArray, geo: FloatArray, place: FloatArray, axes: FloatArray,
     kinds: NDArray[np.int64], index: NDArray[np.int64], cart: FloatArray, rot: FloatArray,
     omega: FloatArray, jnt: FloatArray, cnt: NDArray[np.int64], cmd: FloatArray,
-    sp: FloatArray, path: FloatArray, s: FloatArray, env_s: FloatArray, env_v: FloatArray,
+    work: FloatArray, sp: FloatArray, path: FloatArray, s: FloatArray, env_s: FloatArray,
+    env_v: FloatArray,
     seen: bool, tcp_out: FloatArray, target_out: FloatArray, axis_out: FloatArray,
     joint_out: FloatArray, k0: int, refused: FloatArray, prog: FloatArray,
     knots: FloatArray, seg_len: FloatArray, normals: FloatArray, prog_par: FloatArray,
@@ -367,8 +368,9 @@ def arm_ticks(
             if d > reach:
                 return k + 1, LIMIT
         arm_step(
-            par, lim, jl, servo, geo, place, axes, kinds, index, cart, rot, omega, jnt, cnt, cmd
-        )
+            par, lim, jl, servo, geo, place, axes, kinds, index, cart, rot, omega, jnt, cnt, cmd,
+            work,
+        )  # fmt: skip
         tick += 1
         k += 1
         if _checked(tick - 1, t, x, y, z, cart[C_V], check_every, wall_every, progress, seam,
@@ -423,7 +425,7 @@ class ArmTicks(_Logs):
             self.world, self.base, robot._reach_mm, self.orient, robot._par,
             robot._cart._limits, robot._jl, robot._servo_table, robot.kinematics.geometry,
             place, axes, kinds, index, state.cart, state.rot, state.omega, state.jnt, state.cnt,
-            state.cmd, tracker._sp,
+            state.cmd, state.work, tracker._sp,
         )  # fmt: skip
         logs = (self.tcp, self.target, self.axis, self.joints)
         tail = (
