@@ -6,14 +6,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from seamtrack.control.hint_kernels import closest_on_polyline_chunked, polyline_chunks
 from seamtrack.control.path_kernels import (
     PathBuffer,
     closest_on_polyline,
-    closest_on_polyline_chunked,
     corner_envelope,
     kth_smallest,
     off_line,
-    polyline_chunks,
     program_hint,
     smooth_tail,
     store_tail,

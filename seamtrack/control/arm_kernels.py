@@ -24,7 +24,8 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.control.closed_form import KIND_NONE, ik_nearest_in, mul, mul_into
+from seamtrack.control.closed_form import KIND_NONE, mul, mul_into
+from seamtrack.control.closed_form_nearest import ik_nearest_in
 from seamtrack.control.robot import axes_step
 from seamtrack.control.servo import loops_step
 

@@ -46,6 +46,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.control import path_kernels as pk
+from seamtrack.control.hint_kernels import polyline_chunks
 from seamtrack.control.path_kernels import PathBuffer, off_line
 from seamtrack.control.tracking import Command, Measurement, TrackerContext
 from seamtrack.params import Fraction, NonNegative, Positive
@@ -278,7 +279,7 @@ class TrajectoryTracker:
             seam_points = self._program.seam.points
             a = np.ascontiguousarray(seam_points[:-1])
             d = np.ascontiguousarray(seam_points[1:] - a)
-            self._segments = (a, d, *pk.polyline_chunks(a, d))
+            self._segments = (a, d, *polyline_chunks(a, d))
             self._program_points = np.ascontiguousarray(seam_points, dtype=np.float64)
         buffer = self._buffer
         # The window of raw points, the direction, hint_from_path, laser_plane_crossings,
