@@ -53,6 +53,37 @@ def test_every_branch_is_back_on_the_pose_by_pinocchio(name: str) -> None:
 
 
 @pytest.mark.parametrize("name", sorted(ARMS))
+def test_the_ticks_nearest_branch_is_the_nearest_of_all_branches(name: str) -> None:
+    """ik_nearest (the tick's IK: on the UR most branches are never worked out) against every
+    branch and nearest_branch's choice: the same joints to the last bit, near the pose (a
+    tick's set-point), far from it, at the wrist singularity (joint 5 at 0) and at a pose
+    drawn exactly (a tie of two branches is possible there)."""
+    from seamtrack.control.arm_kernels import nearest_branch
+    from seamtrack.control.closed_form import ik_branches
+    from seamtrack.control.closed_form_nearest import ik_nearest
+
+    kin = ArmKinematics.named(name, TOOL)
+    rng = np.random.default_rng(2028)
+    all_rows, row = np.empty((8, 6)), np.empty(6)
+    checked = 0
+    for i in range(300):
+        q = _random_joints(kin, rng)
+        if i % 10 == 0:
+            q[4] = 0.0  # wrist singular
+        T = kin.chain_fk(q)  # metres, the tick's units
+        for near in (q, q + rng.normal(0.0, 1e-6, 6), q + rng.normal(0.0, 0.5, 6),
+                     _random_joints(kin, rng)):  # fmt: skip
+            count = ik_branches(kin.solver, kin.geometry, T, near, all_rows)
+            b = nearest_branch(all_rows, count, near)
+            found = ik_nearest(kin.solver, kin.geometry, T, near, row)
+            assert found == (b >= 0)
+            if found:
+                assert np.array_equal(row, all_rows[b])
+                checked += 1
+    assert checked >= 1000
+
+
+@pytest.mark.parametrize("name", sorted(ARMS))
 def test_branches_are_distinct_configurations(name: str) -> None:
     kin = ArmKinematics.named(name, TOOL)
     q = np.radians([20.0, -70.0, 80.0, -40.0, 60.0, 30.0])

@@ -6,9 +6,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from seamtrack.control.hint_kernels import closest_on_polyline_chunked, polyline_chunks
 from seamtrack.control.path_kernels import (
     PathBuffer,
+    closest_on_polyline,
     corner_envelope,
+    kth_smallest,
     off_line,
     program_hint,
     smooth_tail,
@@ -65,6 +68,47 @@ def test_smooth_tail_is_the_robust_local_line_fit(seed: int) -> None:
     assert np.array_equal(
         path[: np.searchsorted(s, s[-1] - h)], raw[: np.searchsorted(s, s[-1] - h)]
     )
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_kth_smallest_is_the_sorted_arrays_kth(seed: int) -> None:
+    """Quickselect (the smoothing's median residual) against a full sort: the same value for
+    every k, with ties (values drawn from a few levels) and without."""
+    rng = np.random.default_rng(seed)
+    for n in (1, 2, 3, 7, 20, 41):
+        for values in (rng.random(n), rng.integers(0, 3, n).astype(float)):
+            for k in range(n):
+                scratch = np.concatenate([values, rng.random(5)])  # rows past n untouched
+                tail = scratch[n:].copy()
+                assert kth_smallest(scratch, n, k) == np.sort(values)[k]
+                assert np.array_equal(np.sort(scratch[:n]), np.sort(values))
+                assert np.array_equal(scratch[n:], tail)
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_chunked_closest_points_are_the_full_scans(seed: int) -> None:
+    """The hint's closest points with the chunks' bounding spheres (most segments never looked
+    at) against every segment looked at in order: the same points to the last bit, for
+    points near a winding polyline, far from it, and on its vertices (ties of two segments)."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(5, 200))
+    turn = np.cumsum(rng.normal(0.0, 0.3, n))
+    steps = np.column_stack([np.cos(turn), np.sin(turn), rng.normal(0.0, 0.2, n)])
+    program = np.cumsum(steps * rng.uniform(0.2, 2.0, (n, 1)), axis=0) + 100.0
+    a = np.ascontiguousarray(program[:-1])
+    d = np.ascontiguousarray(program[1:] - a)
+    centres, radii = polyline_chunks(a, d)
+    near = program[rng.integers(0, n, 40)] + rng.normal(0.0, 0.05, (40, 3))
+    far = rng.uniform(-50.0, 250.0, (20, 3))
+    points = np.concatenate([near, far, program[rng.integers(0, n, 10)]])
+    empty = np.empty((0, 3))
+    full = closest_on_polyline(points, empty, empty, a, d)
+    chunked = closest_on_polyline_chunked(points, empty, empty, a, d, centres, radii)
+    assert np.array_equal(chunked, full)
+    # Each sphere holds its segments.
+    for c, (centre, radius) in enumerate(zip(centres, radii, strict=True)):
+        ends = np.concatenate([a[16 * c : 16 * c + 16], (a + d)[16 * c : 16 * c + 16]])
+        assert np.linalg.norm(ends - centre, axis=1).max() <= radius
 
 
 def test_off_line_is_the_distance_from_the_principal_axis() -> None:

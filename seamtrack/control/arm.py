@@ -105,6 +105,7 @@ class ArmState:
             self.jnt[row] = joints
         self.cnt = np.zeros(4, dtype=np.int64)  # limited, clamped, servo tick, ipo ticks
         self.cmd = np.zeros(ak.CMD_FIELDS)
+        self.work = np.empty(ak.work_size(n))  # the compiled tick's scratch
         #: The last goal rotation handed in (a tracker hands the same object for many ticks).
         self.goal_from: Any = None
         self.servo = servo
@@ -363,7 +364,7 @@ class ArticulatedRobot:
         ak.arm_step(
             self._par, self._cart._limits, self._jl, self._servo_table,
             self.kinematics.geometry, place, axes, kinds, index, state.cart, state.rot,
-            state.omega, state.jnt, state.cnt, state.cmd,
+            state.omega, state.jnt, state.cnt, state.cmd, state.work,
         )  # fmt: skip
 
     # ----------------------------------------------------------------- plan

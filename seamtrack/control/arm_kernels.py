@@ -24,7 +24,8 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.control.closed_form import KIND_NONE, ik_branches, mul, mul_into
+from seamtrack.control.closed_form import KIND_NONE, mul, mul_into
+from seamtrack.control.closed_form_nearest import ik_nearest_in
 from seamtrack.control.robot import axes_step
 from seamtrack.control.servo import loops_step
 
@@ -61,10 +62,27 @@ CMD_FIELDS = 24
 K_LIMITED, K_CLAMPED, K_SERVO_TICK, K_IPO = 0, 1, 2, 3
 
 
+#: The tick's scratch (:func:`work_size`): offsets of a 3 x 3, a 3 x 3 product, a rotation
+#: vector, the position set-point (m), a 4 x 4 pose, the closed form's 6 x 4 x 4; then three
+#: joint vectors and the chain's frames.
+W_TMP, W_PROD, W_LOG, W_P, W_T, W_IK, W_JOINTS = 0, 9, 18, 21, 24, 40, 136
+
+
+def work_size(dof: int) -> int:
+    """Floats of :func:`arm_step`'s scratch for an arm of ``dof`` joints (the chain has at
+    most as many)."""
+    return W_JOINTS + 3 * dof + 16 * (dof + 1)
+
+
 @numba.njit(cache=True, nogil=True)
 def rotation_about(axis: FloatArray, angle: float, out: FloatArray) -> None:
     """``out`` (3, 3) = rotation by ``angle`` about the unit ``axis`` (Rodrigues)."""
-    x, y, z = axis[0], axis[1], axis[2]
+    _rotation_about(axis[0], axis[1], axis[2], angle, out)
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _rotation_about(x: float, y: float, z: float, angle: float, out: FloatArray) -> None:
+    """:func:`rotation_about` on the axis's coordinates."""
     c, s = math.cos(angle), math.sin(angle)
     t = 1.0 - c
     out[0, 0], out[0, 1], out[0, 2] = c + t * x * x, t * x * y - s * z, t * x * z + s * y
@@ -89,9 +107,7 @@ def _turn(wx: float, wy: float, wz: float, R: FloatArray, tmp: FloatArray) -> No
     angle = math.sqrt(wx * wx + wy * wy + wz * wz)
     if angle < 1e-300:
         return
-    axis = np.empty(3)
-    axis[0], axis[1], axis[2] = wx / angle, wy / angle, wz / angle
-    rotation_about(axis, angle, tmp)
+    _rotation_about(wx / angle, wy / angle, wz / angle, angle, tmp)
     for j in range(3):
         a, b, c = R[0, j], R[1, j], R[2, j]
         for i in range(3):
@@ -102,10 +118,32 @@ def _turn(wx: float, wy: float, wz: float, R: FloatArray, tmp: FloatArray) -> No
 def mul_t(A: FloatArray, B: FloatArray) -> FloatArray:
     """A @ B.T for 3 x 3 matrices."""
     out = np.empty((3, 3))
+    _mul_t_into(A, B, out)
+    return out
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _mul_t_into(A: FloatArray, B: FloatArray, out: FloatArray) -> None:
     for i in range(3):
         for j in range(3):
             out[i, j] = A[i, 0] * B[j, 0] + A[i, 1] * B[j, 1] + A[i, 2] * B[j, 2]
-    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _log3_into(R: FloatArray, out: FloatArray) -> None:
+    """``out`` = :func:`log3` of R (its arithmetic; near pi, its call)."""
+    tr = R[0, 0] + R[1, 1] + R[2, 2]
+    c = min(max(0.5 * (tr - 1.0), -1.0), 1.0)
+    v0, v1, v2 = R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]
+    angle = math.acos(c)
+    if angle < 1e-4:
+        k = 1.0 + angle * angle / 6.0
+        out[0], out[1], out[2] = 0.5 * v0 * k, 0.5 * v1 * k, 0.5 * v2 * k
+    elif angle < math.pi - 1e-4:
+        k = 0.5 * angle / math.sin(angle)
+        out[0], out[1], out[2] = v0 * k, v1 * k, v2 * k
+    else:
+        out[:] = log3(R)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -282,21 +320,20 @@ def nearest_branch(branches: FloatArray, count: int, q_near: FloatArray) -> int:
 @numba.njit(cache=True, nogil=True)
 def solve_pose(
     p_set: FloatArray, R_set: FloatArray, q_near: FloatArray, solver: int, geo: FloatArray,
-    place: FloatArray, axes: FloatArray, kinds: IntArray, index: IntArray,
-) -> FloatArray:  # fmt: skip
-    """Joint positions at the torch pose (``p_set`` in metres): the closed-form branch
-    nearest ``q_near`` where the arm has a closed form and the pose a solution, else Newton
-    steps from ``q_near``."""
+    place: FloatArray, axes: FloatArray, kinds: IntArray, index: IntArray, out: FloatArray,
+    T: FloatArray, ws: FloatArray,
+) -> None:  # fmt: skip
+    """Joint positions at the torch pose (``p_set`` in metres) into ``out``: the closed-form
+    branch nearest ``q_near`` where the arm has a closed form and the pose a solution, else
+    Newton steps from ``q_near`` (``T``: a 4 x 4 scratch, ``ws``: the closed form's)."""
     if solver != KIND_NONE:
-        T = np.eye(4)
+        T[:, :] = 0.0
+        T[3, 3] = 1.0
         T[:3, :3] = R_set
         T[:3, 3] = p_set
-        branches = np.empty((8, q_near.shape[0]))
-        count = ik_branches(solver, geo, T, q_near, branches)
-        b = nearest_branch(branches, count, q_near)
-        if b >= 0:
-            return branches[b].copy()
-    return newton_ik(p_set, R_set, q_near, place, axes, kinds, index, 3)
+        if ik_nearest_in(solver, geo, T, q_near, out, ws):  # nearest_branch of ik_branches
+            return
+    out[:] = newton_ik(p_set, R_set, q_near, place, axes, kinds, index, 3)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -304,13 +341,15 @@ def arm_step(
     par: FloatArray, lim: FloatArray, jl: FloatArray, servo: FloatArray, geo: FloatArray,
     place: FloatArray, axes: FloatArray, kinds: IntArray, index: IntArray, cart: FloatArray,
     rot: FloatArray, omega: FloatArray, jnt: FloatArray, cnt: IntArray, cmd: FloatArray,
+    work: FloatArray,
 ) -> None:  # fmt: skip
     """One control tick of an arm (every array updated in place; see the module's rows):
     the interpolator, the orientation set-point, the inverse kinematics, the joint limits, the
     servo and the forward kinematics of the measured joints.
 
     ``rot``: (3, 3, 3) the orientation set-point, its goal, the measured tool rotation;
-    ``omega``: the set-point's angular velocity (rad/s).
+    ``omega``: the set-point's angular velocity (rad/s); ``work``: the tick's scratch
+    (:func:`work_size`), so that it allocates nothing.
     """
     dt = par[P_DT]
     has = cmd[M_HAS] > 0.0
@@ -320,7 +359,7 @@ def arm_step(
     )  # fmt: skip
     # Orientation set-point: towards the goal, which turns on at the feed-forward.
     R_set, R_goal = rot[0], rot[1]
-    tmp = np.empty((3, 3))
+    tmp = work[W_TMP : W_TMP + 9].reshape(3, 3)
     wx = wy = wz = 0.0
     if has and cmd[M_HAS_ROT] > 0.0:
         fx, fy, fz = cmd[M_W], cmd[M_W + 1], cmd[M_W + 2]
@@ -329,7 +368,9 @@ def arm_step(
             cmd[M_NEW_GOAL] = 0.0
         elif cmd[M_HAS_W] > 0.0:
             _turn(fx * dt, fy * dt, fz * dt, R_goal, tmp)
-        err = log3(mul_t(R_goal, R_set))
+        prod, err = work[W_PROD : W_PROD + 9].reshape(3, 3), work[W_LOG : W_LOG + 3]
+        _mul_t_into(R_goal, R_set, prod)
+        _log3_into(prod, err)
         size = math.sqrt(err[0] ** 2 + err[1] ** 2 + err[2] ** 2)
         # Proportional, capped by the speed from which braking at the angular acceleration
         # limit stops on the goal (no overshoot), on top of the goal's own turning.
@@ -354,26 +395,38 @@ def arm_step(
     if omega[0] != 0.0 or omega[1] != 0.0 or omega[2] != 0.0:
         _turn(omega[0] * dt, omega[1] * dt, omega[2] * dt, R_set, tmp)
     # Inverse kinematics from the last joint set-point.
-    p_set = cart[C_SQ] * 1e-3
+    p_set = work[W_P : W_P + 3]
+    for i in range(3):
+        p_set[i] = cart[C_SQ, i] * 1e-3
     q_ref = jnt[S_REF]
-    q = solve_pose(p_set, R_set, q_ref, int(par[P_SOLVER]), geo, place, axes, kinds, index)
+    n = q_ref.shape[0]
+    q = work[W_JOINTS : W_JOINTS + n]
+    qd = work[W_JOINTS + n : W_JOINTS + 2 * n]
+    new_ref = work[W_JOINTS + 2 * n : W_JOINTS + 3 * n]
+    solve_pose(
+        p_set, R_set, q_ref, int(par[P_SOLVER]), geo, place, axes, kinds, index, q,
+        work[W_T : W_T + 16].reshape(4, 4), work[W_IK : W_IK + 96].reshape(6, 4, 4),
+    )  # fmt: skip
     # Joint limits on the set-point's motion.
-    n = q.shape[0]
-    qd = (q - q_ref) / dt
+    for j in range(n):
+        qd[j] = (q[j] - q_ref[j]) / dt
     limited = False
     over = 0.0
     for j in range(n):
         over = max(over, abs(qd[j]) * jl[J_INV_V, j])
     if over > 1.0:
-        qd /= over
+        for j in range(n):
+            qd[j] /= over
         limited = True
     over = 0.0
     for j in range(n):
         over = max(over, abs(qd[j] - jnt[S_QD, j]) * jl[J_INV_A, j])
     if over > 1.0:
-        qd = jnt[S_QD] + (qd - jnt[S_QD]) / over
+        for j in range(n):
+            qd[j] = jnt[S_QD, j] + (qd[j] - jnt[S_QD, j]) / over
         limited = True
-    new_ref = q_ref + qd * dt
+    for j in range(n):
+        new_ref[j] = q_ref[j] + qd[j] * dt
     out = False
     for j in range(n):
         if new_ref[j] < jl[J_LO, j] or new_ref[j] > jl[J_HI, j]:
@@ -382,7 +435,8 @@ def arm_step(
         for j in range(n):
             new_ref[j] = min(max(new_ref[j], jl[J_LO, j]), jl[J_HI, j])
         cnt[K_CLAMPED] += 1
-        qd = (new_ref - q_ref) / dt
+        for j in range(n):
+            qd[j] = (new_ref[j] - q_ref[j]) / dt
     if limited:
         cnt[K_LIMITED] += 1
     jnt[S_REF] = new_ref
@@ -398,7 +452,7 @@ def arm_step(
     else:
         jnt[S_JOINTS] = new_ref
     m = axes.shape[0]
-    frames = np.empty((m + 1, 4, 4))
+    frames = work[W_JOINTS + 3 * n : W_JOINTS + 3 * n + 16 * (m + 1)].reshape(m + 1, 4, 4)
     chain_fk(jnt[S_JOINTS], place, axes, kinds, index, frames)
     T = frames[m]
     for i in range(3):

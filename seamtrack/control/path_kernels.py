@@ -16,6 +16,12 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.control.hint_kernels import _program_hint
+from seamtrack.control.hint_kernels import closest_on_polyline as closest_on_polyline
+from seamtrack.control.hint_kernels import column_medians as column_medians
+from seamtrack.control.hint_kernels import plane_crossings as plane_crossings
+from seamtrack.control.hint_kernels import program_hint as program_hint
+
 FloatArray = NDArray[np.float64]
 
 
@@ -47,18 +53,39 @@ class PathBuffer:
         return self._s[self._lo : self._lo + self._n]
 
     def append(self, point: FloatArray, s: float) -> None:
+        self.make_room()
         end = self._lo + self._n
-        if end == len(self._s):  # full: move the points to the front, and grow if need be
+        self._raw[end] = self._path[end] = point
+        self._s[end] = s
+        self._n += 1
+
+    def take(
+        self, point: FloatArray, min_spacing: float, max_jump: float, fit_mm: float,
+        sp: FloatArray, par: FloatArray, env_last: float,
+    ) -> tuple[int, float, int, int, int, int, FloatArray]:  # fmt: skip
+        """:func:`take_point` on these points (``point`` stored where it answers
+        :data:`STORED`)."""
+        self.make_room()
+        out = take_point(
+            self._raw, self._path, self._s, self._lo, self._n, point, min_spacing, max_jump,
+            fit_mm, sp, par, env_last,
+        )  # fmt: skip
+        if out[0] == STORED:
+            self._n += 1
+        return out
+
+    def make_room(self) -> None:
+        """Room for one more point after the newest: when full, the points move to the front
+        of new arrays (twice as long when more than half full)."""
+        end = self._lo + self._n
+        if end == len(self._s):
             size = len(self._s) * (2 if 2 * self._n > len(self._s) else 1)
             for name in ("_raw", "_path", "_s"):
                 old = getattr(self, name)
                 new = np.empty((size, *old.shape[1:]))
                 new[: self._n] = old[self._lo : end]
                 setattr(self, name, new)
-            self._lo, end = 0, self._n
-        self._raw[end] = self._path[end] = point
-        self._s[end] = s
-        self._n += 1
+            self._lo = 0
 
     def drop(self, count: int) -> None:
         """Forget the ``count`` oldest points."""
@@ -73,24 +100,53 @@ def _fit(
     """Least-squares line p = a + b ds through the window points ``w`` (ds = s - at): ``out``
     gets a (0:3) and b (3:6); True when well posed (at least 3 points, not all at one ds)."""
     n = sx = sxx = 0.0
-    sy = np.zeros(3)
-    sxy = np.zeros(3)
+    sy0 = sy1 = sy2 = sxy0 = sxy1 = sxy2 = 0.0  # the sums per coordinate, in scalars
     for j in range(first, s.shape[0]):
         if w[j - first]:
             ds = s[j] - at
             n += 1.0
             sx += ds
             sxx += ds * ds
-            for c in range(3):
-                sy[c] += raw[j, c]
-                sxy[c] += ds * raw[j, c]
+            x, y, z = raw[j, 0], raw[j, 1], raw[j, 2]
+            sy0 += x
+            sxy0 += ds * x
+            sy1 += y
+            sxy1 += ds * y
+            sy2 += z
+            sxy2 += ds * z
     det = n * sxx - sx * sx
     ok = n >= 3 and det > 1e-12 * max(n * sxx, 1e-300)
     safe = det if ok else 1.0
-    for c in range(3):
-        out[c] = (sxx * sy[c] - sx * sxy[c]) / safe
-        out[3 + c] = (n * sxy[c] - sx * sy[c]) / safe
+    out[0], out[3] = (sxx * sy0 - sx * sxy0) / safe, (n * sxy0 - sx * sy0) / safe
+    out[1], out[4] = (sxx * sy1 - sx * sxy1) / safe, (n * sxy1 - sx * sy1) / safe
+    out[2], out[5] = (sxx * sy2 - sx * sxy2) / safe, (n * sxy2 - sx * sy2) / safe
     return ok
+
+
+@numba.njit(cache=True, nogil=True)
+def kth_smallest(a: FloatArray, n: int, k: int) -> float:
+    """The ``k``-th smallest (from 0) of ``a[:n]`` (no NaN), by quickselect in place (``a[:n]``
+    reordered): the value ``np.partition(a[:n], k)[k]`` gives, without its copy."""
+    lo, hi = 0, n - 1
+    while lo < hi:
+        pivot = a[(lo + hi) // 2]
+        i, j = lo, hi
+        while i <= j:
+            while a[i] < pivot:
+                i += 1
+            while a[j] > pivot:
+                j -= 1
+            if i <= j:
+                a[i], a[j] = a[j], a[i]
+                i += 1
+                j -= 1
+        if k <= j:
+            hi = j
+        elif k >= i:
+            lo = i
+        else:
+            return a[k]
+    return a[k]
 
 
 @numba.njit(cache=True, nogil=True)
@@ -128,9 +184,9 @@ def smooth_tail(
             if w[j]:
                 ordered[k] = residual[j]
                 k += 1
-        # The window's median residual: its (count // 2)-th smallest, found by a partial sort
+        # The window's median residual: its (count // 2)-th smallest, found by quickselect
         # (the same value a full sort puts there).
-        median = np.partition(ordered[:k], count // 2)[count // 2] if k else np.inf
+        median = kth_smallest(ordered, k, count // 2) if k else np.inf
         limit = max(3.0 * (median if math.isfinite(median) else 0.0), min_inlier)
         for j in range(m):
             w[j] = w[j] and residual[j] <= limit
@@ -270,133 +326,27 @@ def setpoint_step(
 
 
 @numba.njit(cache=True, nogil=True)
-def column_medians(a: FloatArray) -> FloatArray:
-    """``np.median(a, axis=0)`` of an (m, 3) array (m >= 1), compiled."""
-    out = np.empty(a.shape[1])
-    for c in range(a.shape[1]):
-        out[c] = np.median(a[:, c])
-    return out
+def tracker_hint(
+    T: FloatArray, raw: FloatArray, path: FloatArray, s: FloatArray, fit_mm: float,
+    program: FloatArray, last_window: FloatArray, last_near: FloatArray, a: FloatArray,
+    d: FloatArray, centres: FloatArray, radii: FloatArray,
+) -> tuple[bool, float, float, float, float, float, FloatArray, FloatArray]:  # fmt: skip
+    """:func:`~seamtrack.control.hint_kernels.program_hint` (the program's segments in the
+    chunks of :func:`~seamtrack.control.hint_kernels.polyline_chunks`)
+    on the tracker's stored path (``raw``, ``path``, ``s``): the
+    window of raw points of the last ``fit_mm`` (at least the newest) and the direction of
+    :func:`end_direction`, in the one call the tracker makes at each frame.
 
-
-@numba.njit(cache=True, nogil=True)
-def plane_crossings(points: FloatArray, T_world_sensor: FloatArray) -> FloatArray:
-    """:func:`~seamtrack.sensing.scan.laser_plane_crossings` compiled (the same half-open
-    test and interpolation, equal to rounding): (k, 2) the (y_L, z_L) where the polyline
-    ``points`` (world) crosses the laser plane x_L = 0, in order."""
-    R = T_world_sensor[:3, :3]
-    t = T_world_sensor[:3, 3]
-    n = points.shape[0]
-    p = np.empty((n, 3))
-    for i in range(n):
-        d0, d1, d2 = points[i, 0] - t[0], points[i, 1] - t[1], points[i, 2] - t[2]
-        for c in range(3):
-            p[i, c] = R[0, c] * d0 + R[1, c] * d1 + R[2, c] * d2  # R^T (point - origin)
-    out = np.empty((n, 2))
-    k = 0
-    for i in range(n - 1):
-        x0, x1 = p[i, 0], p[i + 1, 0]
-        if (x0 <= 0 and x1 > 0) or (x0 >= 0 and x1 < 0):
-            w = x0 / (x0 - x1)
-            out[k, 0] = p[i, 1] + w * (p[i + 1, 1] - p[i, 1])
-            out[k, 1] = p[i, 2] + w * (p[i + 1, 2] - p[i, 2])
-            k += 1
-    if n and p[n - 1, 0] == 0:
-        out[k, 0], out[k, 1] = p[n - 1, 1], p[n - 1, 2]
-        k += 1
-    return out[:k].copy()
-
-
-@numba.njit(cache=True, nogil=True)
-def closest_on_polyline(
-    points: FloatArray,
-    last_points: FloatArray,
-    last_near: FloatArray,
-    a: FloatArray,
-    d: FloatArray,
-) -> FloatArray:
-    """(m, 3) the closest points to ``points`` on the segments ``a + t d`` (the nearest of all,
-    the first on a tie: :func:`~seamtrack.geometry.nearest.nearest_of`'s arithmetic), reusing
-    ``last_near`` for the rows ``points`` shares with ``last_points`` (a window sliding along
-    the same stored points: ``points`` starts inside ``last_points``)."""
-    m = points.shape[0]
-    near = np.empty((m, 3))
-    k = 0
-    for j in range(last_points.shape[0]):
-        if (last_points[j, 0] == points[0, 0] and last_points[j, 1] == points[0, 1]
-                and last_points[j, 2] == points[0, 2]):  # fmt: skip
-            k = min(last_points.shape[0] - j, m)
-            for r in range(k):
-                for c in range(3):
-                    if last_points[j + r, c] != points[r, c]:
-                        k = 0
-            for r in range(k):
-                near[r] = last_near[j + r]
-            break
-    for r in range(k, m):
-        best, bt, bs = np.inf, 0.0, 0
-        q0, q1, q2 = points[r, 0], points[r, 1], points[r, 2]
-        for c in range(a.shape[0]):
-            dd = max(d[c, 0] * d[c, 0] + d[c, 1] * d[c, 1] + d[c, 2] * d[c, 2], 1e-300)
-            num = (q0 - a[c, 0]) * d[c, 0] + (q1 - a[c, 1]) * d[c, 1]
-            num += (q2 - a[c, 2]) * d[c, 2]
-            t = min(max(num / dd, 0.0), 1.0)
-            e0 = q0 - (a[c, 0] + t * d[c, 0])
-            e1 = q1 - (a[c, 1] + t * d[c, 1])
-            e2 = q2 - (a[c, 2] + t * d[c, 2])
-            dist = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
-            if dist < best:
-                best, bt, bs = dist, t, c
-        for c in range(3):
-            near[r, c] = a[bs, c] + bt * d[bs, c]
-    return near
-
-
-@numba.njit(cache=True, nogil=True)
-def program_hint(
-    T: FloatArray, last: FloatArray, direction: FloatArray, program: FloatArray,
-    window: FloatArray, last_window: FloatArray, last_near: FloatArray, a: FloatArray,
-    d: FloatArray,
-) -> tuple[bool, float, float, float, float, float, FloatArray]:  # fmt: skip
-    """The trajectory tracker's hint in one call (:meth:`TrajectoryTracker.hint
-    <seamtrack.control.trajectory.TrajectoryTracker.hint>`, its arithmetic): the straight
-    path's crossing of the laser plane (``hint_from_path``: through ``last`` heading
-    ``direction``, world), the program seam's crossings (:func:`plane_crossings`), shifted by
-    the median offset of the measured ``window`` from the program (its closest points by
-    :func:`closest_on_polyline`, reusing ``last_near``), the crossing nearest the straight one.
-
-    Returns (found, y_L, z_L, the direction in the sensor frame (3), the window's closest
-    points on the program, for the next call).
-    """
-    near = closest_on_polyline(window, last_window, last_near, a, d)
-    R = T[:3, :3]
-    p = np.empty(3)
-    v = np.empty(3)
-    for c in range(3):  # R^T (last - origin), R^T direction
-        p[c] = (R[0, c] * (last[0] - T[0, 3]) + R[1, c] * (last[1] - T[1, 3])
-                + R[2, c] * (last[2] - T[2, 3]))  # fmt: skip
-        v[c] = R[0, c] * direction[0] + R[1, c] * direction[1] + R[2, c] * direction[2]
-    norm = math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
-    if not norm > 1e-12 or abs(v[0]) < 1e-6 * norm:
-        return False, 0.0, 0.0, 0.0, 0.0, 0.0, near
-    v /= norm
-    k = p[0] / v[0]
-    sy, sz = p[1] - k * v[1], p[2] - k * v[2]
-    if not (math.isfinite(p[0] - k * v[0]) and math.isfinite(sy) and math.isfinite(sz)):
-        return False, 0.0, 0.0, 0.0, 0.0, 0.0, near
-    sign = 1.0 if v[0] > 0 else -1.0
-    crossings = plane_crossings(program, T)
-    if crossings.shape[0] == 0:
-        return False, 0.0, 0.0, 0.0, 0.0, 0.0, near
-    offset = column_medians(window - near)
-    shift1 = R[0, 1] * offset[0] + R[1, 1] * offset[1] + R[2, 1] * offset[2]
-    shift2 = R[0, 2] * offset[0] + R[1, 2] * offset[1] + R[2, 2] * offset[2]
-    best, y, z = np.inf, 0.0, 0.0
-    for i in range(crossings.shape[0]):
-        ey, ez = crossings[i, 0] + shift1, crossings[i, 1] + shift2
-        dist = math.hypot(ey - sy, ez - sz)
-        if dist < best:
-            best, y, z = dist, ey, ez
-    return True, y, z, sign * v[0], sign * v[1], sign * v[2], near
+    Returns :func:`program_hint`'s answer and the window (a copy, for the next call)."""
+    n = s.shape[0]
+    i = max(np.searchsorted(s, s[n - 1] - fit_mm), 1)
+    window = raw[i:].copy() if n > i else raw[n - 1 :].copy()
+    direction = np.empty(3)
+    direction[0], direction[1], direction[2] = end_direction(path, s, fit_mm)
+    found, y, z, dx, dy, dz, near = _program_hint(
+        T, raw[n - 1], direction, program, window, last_window, last_near, a, d, centres, radii
+    )
+    return found, y, z, dx, dy, dz, near, window
 
 
 @numba.njit(cache=True, nogil=True)
@@ -434,6 +384,49 @@ def corner_envelope(
         low = min(low, reach[i])
         v[i] = math.sqrt(max(low - 2.0 * accel * s[i], 0.0))
     return v
+
+
+#: What :func:`take_point` did with a measured point: nothing (closer than the minimum spacing
+#: to the newest stored point), nothing (off the line of the last stored points, or too few of
+#: them there to fit one: the tracker's to decide), stored it.
+TOO_CLOSE, OFF_PATH, FEW, STORED = 0, 1, 2, 3
+
+
+@numba.njit(cache=True, nogil=True)
+def take_point(
+    raw_all: FloatArray, path_all: FloatArray, s_all: FloatArray, lo: int, n: int,
+    point: FloatArray, min_spacing: float, max_jump: float, fit_mm: float, sp: FloatArray,
+    par: FloatArray, env_last: float,
+) -> tuple[int, float, int, int, int, int, FloatArray]:  # fmt: skip
+    """The trajectory tracker's update with a measured ``point``, in one call: its distance
+    from the newest of the ``n`` stored points (rows ``lo:`` of a :class:`PathBuffer`'s
+    arrays, with room for one more: ``np.linalg.norm``'s arithmetic, the same BLAS dot); where
+    it is not too close, its distance from the line through the raw points of the last
+    ``fit_mm`` (:func:`off_line`); where that is within ``max_jump``, the point stored after
+    the newest and :func:`store_tail` on the stored points.
+
+    Returns (what it did: :data:`TOO_CLOSE`, :data:`OFF_PATH`, :data:`FEW` or
+    :data:`STORED`, the distance, then :func:`store_tail`'s answer where stored).
+    """
+    none = np.empty(0)
+    d = point - path_all[lo + n - 1]
+    step = math.sqrt(np.dot(d, d))
+    if step < min_spacing:
+        return TOO_CLOSE, step, 0, 0, 0, 0, none
+    if n >= 3:
+        s = s_all[lo : lo + n]
+        i = max(np.searchsorted(s, s[n - 1] - fit_mm), 1)
+        if n - i < 3:
+            return FEW, step, 0, 0, 0, 0, none
+        if off_line(raw_all[lo + i : lo + n], point) > max_jump:
+            return OFF_PATH, step, 0, 0, 0, 0, none
+    end = lo + n
+    raw_all[end], path_all[end] = point, point
+    s_all[end] = s_all[end - 1] + step
+    cut, what, i0, settled, v = store_tail(
+        raw_all[lo : end + 1], path_all[lo : end + 1], s_all[lo : end + 1], sp, par, env_last
+    )
+    return STORED, step, cut, what, i0, settled, v
 
 
 #: Layout of :func:`store_tail`'s parameters: the smoothing half-width, the inlier floor, the

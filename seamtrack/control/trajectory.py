@@ -46,6 +46,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.control import path_kernels as pk
+from seamtrack.control.hint_kernels import polyline_chunks
 from seamtrack.control.path_kernels import PathBuffer, off_line
 from seamtrack.control.tracking import Command, Measurement, TrackerContext
 from seamtrack.params import Fraction, NonNegative, Positive
@@ -185,7 +186,7 @@ class TrajectoryTracker:
         self._held: list[FloatArray] = []
         # The hint's window of raw points and their closest points on the program seam.
         self._on_program: tuple[FloatArray, FloatArray] = (np.empty((0, 3)), np.empty((0, 3)))
-        self._segments: tuple[FloatArray, FloatArray] | None = None
+        self._segments: tuple[FloatArray, ...] | None = None  # a, d and polyline_chunks
         self._program_points = np.empty((0, 3))  # the program seam's points, contiguous
         self.stop_cause = ""
         # The robot program's end of an open seam (the CAD seam's end), as floats; None: none.
@@ -225,11 +226,23 @@ class TrajectoryTracker:
         if not self.use_capture_pose:
             # Naive: pretend the frame was taken where the robot is now.
             point = point + (self._sp[pk.TCP_X : pk.TCP_Z + 1] - measurement.tcp_world)
-        step = _length(point - self._path[-1])
-        if step < self.min_spacing_mm:
+        # The usual frame in one compiled call: the spacing, the outlier test, the point
+        # stored and store_tail (see _store); the tracker decides the rest.
+        env = self._env_s
+        what, step, cut, envelope, i0, settled, v = self._buffer.take(
+            point, self.min_spacing_mm, self.max_jump_mm, self.direction_fit_mm, self._sp,
+            self._tail, float(env[-1]) if len(env) else math.nan,
+        )  # fmt: skip
+        if what == pk.STORED:
+            self._held = []
+            self._lost = False
+            self._seen_seam = True
+            self._stored(cut, envelope, i0, settled, v)
+            return
+        if what == pk.TOO_CLOSE:
             self._lost = False
             return
-        if len(self._path) >= 3 and self._off_path(point) > self.max_jump_mm:
+        if what == pk.OFF_PATH or self._off_path(point) > self.max_jump_mm:
             self._held.append(point)
             if not self._reacquired():
                 self._lost = self._seen_seam  # bridge it, for now
@@ -262,22 +275,20 @@ class TrajectoryTracker:
             return None
         if not self._seen_seam or self.stop_cause:
             return None
-        raw = self._buffer.raw
-        i = max(_left(self._s, self._s[-1] - self.direction_fit_mm), 1)
-        window = raw[i:] if len(raw) > i else raw[-1:]
         if self._segments is None:  # the program's segments, once
             seam_points = self._program.seam.points
             a = np.ascontiguousarray(seam_points[:-1])
-            self._segments = (a, np.ascontiguousarray(seam_points[1:] - a))
+            d = np.ascontiguousarray(seam_points[1:] - a)
+            self._segments = (a, d, *polyline_chunks(a, d))
             self._program_points = np.ascontiguousarray(seam_points, dtype=np.float64)
         buffer = self._buffer
-        direction = np.array(pk.end_direction(buffer.path, buffer.s, self.direction_fit_mm))
-        # hint_from_path, laser_plane_crossings, _closest_on_program and the choice, compiled
-        found, y, z, dx, dy, dz, near = pk.program_hint(
-            np.asarray(T_world_sensor, dtype=np.float64), raw[-1], direction,
-            self._program_points, window, *self._on_program, *self._segments,
+        # The window of raw points, the direction, hint_from_path, laser_plane_crossings,
+        # _closest_on_program and the choice, compiled in one call
+        found, y, z, dx, dy, dz, near, window = pk.tracker_hint(
+            np.asarray(T_world_sensor, dtype=np.float64), buffer.raw, buffer.path, buffer.s,
+            self.direction_fit_mm, self._program_points, *self._on_program, *self._segments,
         )  # fmt: skip
-        self._on_program = (window.copy(), near)
+        self._on_program = (window, near)
         if not found:
             return None
         return SeamHint((y, z), (dx, dy, dz), HINT_TOLERANCE_MM)
@@ -329,9 +340,12 @@ class TrajectoryTracker:
         # later limit in time, over the settled path.
         env = self._env_s
         last = float(env[-1]) if len(env) else math.nan
-        cut, what, i0, settled, v = pk.store_tail(
-            buffer.raw, buffer.path, buffer.s, self._sp, self._tail, last
-        )
+        self._stored(*pk.store_tail(buffer.raw, buffer.path, buffer.s, self._sp, self._tail, last))
+
+    def _stored(self, cut: int, what: int, i0: int, settled: int, v: FloatArray) -> None:
+        """What follows :func:`~seamtrack.control.path_kernels.store_tail`: the points it
+        found behind the buffer dropped, the corner envelope kept or replaced."""
+        buffer = self._buffer
         if cut > 0:
             buffer.drop(cut)
         if what == 1:

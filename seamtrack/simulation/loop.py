@@ -43,14 +43,7 @@ from seamtrack.simulation.assemble import LoopSettings, Parts, build_parts
 from seamtrack.simulation.progress import CHECKED, FOUND, GO_ON, LAST_SEEN, ProgressCheck
 from seamtrack.simulation.scene import Scene, load_scene
 from seamtrack.simulation.scoring import orientation_summary, torch_axes, with_joints
-from seamtrack.simulation.ticks import (
-    LIMIT,
-    REFUSED,
-    STOPPED,
-    ArmTicks,
-    GantryTicks,
-    compiled_ticks,
-)
+from seamtrack.simulation.ticks import LIMIT, REFUSED, STOPPED, compiled_ticks
 
 FloatArray = NDArray[np.float64]
 
@@ -247,13 +240,13 @@ def run(
     except Exception as exc:  # the user's tracker may fail in any way
         raise plugin_failed("tracker.name", name, "reset", 0.0, exc) from exc
 
-    tcp_log = array("d")
-    target_log = array("d")
+    tcp_log: Any = array("d")  # or the compiled ticks' logs (ticks.tcp, ...)
+    target_log: Any = array("d")
     frame_t = array("d")
     frame_found = array("b")
     frame_points = array("d")
-    axis_log = array("d")  # an arm's torch axis (world) and joints, per tick
-    joint_log = array("d")
+    axis_log: Any = array("d")  # an arm's torch axis (world) and joints, per tick
+    joint_log: Any = array("d")
     pending: deque[Measurement] = deque()
     nan3 = (math.nan, math.nan, math.nan)
 
@@ -279,7 +272,6 @@ def run(
     # The fast paths: the built-in trajectory tracker's ticks between events compiled on an
     # unrotated gantry and on an arm (seamtrack.simulation.ticks); the same arithmetic.
     ticks = compiled_ticks(robot, tracker, (p0x, p0y, p0z), unrotated, turns_tool, checks)
-    fast = isinstance(ticks, GantryTicks)
     # A tracker that knows where the seam is heading tells the extractor (``hint``): where the
     # laser plane crosses two grooves (a mitre) the extractor takes the V that continues it.
     tracker_hint = getattr(tracker, "hint", None)
@@ -289,15 +281,15 @@ def run(
     while tick < max_ticks:
         tick += 1
         t = tick * dt
-        q = state.q
-        if fast:
-            tcp_list = [q[0] + p0x, q[1] + p0y, q[2] + p0z]
+        if ticks is not None:  # the compiled ticks log the torch tip (a frame takes it below)
+            pass
         elif unrotated:  # the usual robot: spare the matrix products on this hot path
+            q = state.q
             tcp_list = [q[0] + p0x, q[1] + p0y, q[2] + p0z]
             tcp = np.array(tcp_list)
             vel = np.array(state.v)
         else:
-            tcp = R @ q + p0
+            tcp = R @ state.q + p0
             tcp_list = tcp.tolist()
             vel = R @ state.v
         if t + 1e-9 >= next_capture:
@@ -307,12 +299,13 @@ def run(
             sense_start = clock()
             feature = parts.sense(T_ws, t, hint) if hint is not None else parts.sense(T_ws, t)
             sense_time += clock() - sense_start
-            if fast:
-                tcp = np.array(tcp_list)
+            if ticks is not None:
+                tcp = ticks.tcp_now(state)
             pending.append(Measurement(feature, t, t + cfg.latency_s, T_ws, tcp))
             frame_t.append(t)
-            frame_found.append(1 if feature else 0)
-            frame_points.extend(feature.point_world if feature else nan3)
+            seen = bool(feature)
+            frame_found.append(1 if seen else 0)
+            frame_points.extend(feature.point_world if seen else nan3)
         while pending and pending[0].t_arrival_s <= t + 1e-9:
             measurement = pending.popleft()
             checks.P[LAST_SEEN] = 1.0 if measurement else 0.0
@@ -338,18 +331,11 @@ def run(
                 _checked(
                     Command(np.array((tx, ty, tz)), speed, ff, stop > 0), name, (tick + n) * dt
                 )
-            tcp_log.frombytes(ticks.tcp[:n].tobytes())
-            target_log.frombytes(ticks.target[:n].tobytes())
-            if isinstance(ticks, ArmTicks):
-                axis_log.frombytes(ticks.axis[:n].tobytes())
-                joint_log.frombytes(ticks.joints[:n].tobytes())
-            checks.take()
             if why == LIMIT:
                 status = "limit_violation"
                 break
             tick += n - 1  # the last tick run: its checks follow
             t = tick * dt
-            tcp_list = ticks.tcp[n - 1].tolist()
             if why == STOPPED:  # its own progress check ended the run
                 status, stop_reason = checks.ended(int(checks.P[FOUND]))
                 break
@@ -381,6 +367,8 @@ def run(
             break
 
         if tick % check_every == 0 and tick != checks.P[CHECKED]:
+            if ticks is not None:
+                tcp_list = ticks.tcp[ticks.count - 1].tolist()
             found = checks.check(t, tcp_list, state.v)
             if found != GO_ON:
                 status, stop_reason = checks.ended(found)
@@ -391,6 +379,10 @@ def run(
         bar.close()
     if not status:
         status, stop_reason = "stalled", f"time limit {cfg.time_limit_s:g} s"
+    if ticks is not None:  # every tick ran compiled, and logged there
+        ticks.finish(state, tracker)
+        tcp_log, target_log = ticks.tcp[: ticks.count], ticks.target[: ticks.count]
+        axis_log, joint_log = ticks.axis[: ticks.count], ticks.joints[: ticks.count]
 
     axis = torch_axes(robot, axis_log)
     trace = _trace(
@@ -448,12 +440,12 @@ def _progress_bar(enabled: bool, total_s: float, length_mm: float) -> Any:
 def _trace(
     seam: Seam,
     dt: float,
-    tcp_log: array,
-    target_log: array,
+    tcp_log: array | FloatArray,  # the loop's logs, or the compiled ticks' (rows)
+    target_log: array | FloatArray,
     frame_t: array,
     frame_found: array,
     frame_points: array,
-    progress: tuple[array, array],
+    progress: tuple[FloatArray, FloatArray],
     axis_world: FloatArray | None = None,
     angles_rad: tuple[float, float] = (0.0, 0.0),
 ) -> Trace:

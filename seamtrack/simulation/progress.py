@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import bisect
 import math
-from array import array
 from typing import Any
 
 import numba
@@ -217,9 +216,37 @@ class ProgressCheck:
         P[S_BEST], P[REST_SINCE], P[CHECKED] = -math.inf, math.nan, -1.0
         P[CLOSED], P[S_DONE], P[STALL_S], P[REST_S] = float(closed), done_mm, stall_s, rest_s
         P[LENGTH] = near.length_mm
-        self.checks = np.zeros((1025, 2))  # the compiled ticks' checks; the count in [-1, 0]
-        self.args = (P, near.points, near.knots, near.columns, self.checks)
-        self.t_log, self.s_log = array("d"), array("d")
+        # The log of every check, (t, s) rows, the loop's and its compiled ticks' in the order
+        # made; the count in the last row's first column; grown by doubling (:meth:`room`).
+        self.checks = np.zeros((1025, 2))
+        self._seam = (near.points, near.knots, near.columns)
+        self.args = (P, *self._seam, self.checks)
+
+    def room(self, rows: int) -> bool:
+        """At least ``rows`` free rows in the log; True when it was replaced by a larger one
+        (and :attr:`args` with it)."""
+        checks = self.checks
+        m = int(checks[-1, 0])
+        size = len(checks) - 1
+        if m + rows <= size:
+            return False
+        while m + rows > size:
+            size *= 2
+        self.checks = np.zeros((size + 1, 2))
+        self.checks[:m] = checks[:m]
+        self.checks[-1, 0] = m
+        self.args = (self.P, *self._seam, self.checks)
+        return True
+
+    @property
+    def t_log(self) -> FloatArray:
+        """The times of the checks made, (m,)."""
+        return np.ascontiguousarray(self.checks[: int(self.checks[-1, 0]), 0])
+
+    @property
+    def s_log(self) -> FloatArray:
+        """The arc length at each check, (m,)."""
+        return np.ascontiguousarray(self.checks[: int(self.checks[-1, 0]), 1])
 
     def check(self, t: float, tcp: list[float], v: list[float]) -> int:
         """The check at time ``t``, the torch tip at ``tcp`` moving at ``v``: what it found."""
@@ -227,18 +254,12 @@ class ProgressCheck:
         x, y, z = tcp
         speed = math.sqrt(sum(c * c for c in v))
         found = int(progress_check(P, t, x, y, z, speed, points, knots, columns))
-        self.t_log.append(t)
-        self.s_log.append(float(P[S_NOW]))
-        return found
-
-    def take(self) -> None:
-        """The compiled ticks' checks into the log."""
+        self.room(1)
         checks = self.checks
         m = int(checks[-1, 0])
-        if m:
-            self.t_log.frombytes(checks[:m, 0].tobytes())
-            self.s_log.frombytes(checks[:m, 1].tobytes())
-            checks[-1, 0] = 0.0
+        checks[m, 0], checks[m, 1] = t, P[S_NOW]
+        checks[-1, 0] = m + 1
+        return found
 
     def ended(self, found: int) -> tuple[str, str]:
         """The status and stop reason of a check that found the run's end."""

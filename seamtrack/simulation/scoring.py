@@ -29,14 +29,14 @@ from numpy.typing import NDArray
 FloatArray = NDArray[np.float64]
 
 
-def torch_axes(robot: Any, axis_log: array) -> FloatArray:
+def torch_axes(robot: Any, axis_log: array | FloatArray) -> FloatArray:
     """(n, 3) torch axes of an arm's run, or the gantry's fixed (3,) axis."""
     if robot.turns_tool:
         return np.frombuffer(axis_log, dtype=np.float64).reshape(-1, 3).copy()
     return np.asarray(robot.T_world_base[:3, 2], dtype=np.float64)
 
 
-def with_joints(trace: Any, joint_log: array, robot: Any) -> Any:
+def with_joints(trace: Any, joint_log: array | FloatArray, robot: Any) -> Any:
     """The trace with an arm's joint positions (n, k); the gantry's trace keeps (n, 0)."""
     if not robot.turns_tool:
         return dataclasses.replace(trace, joints_rad=np.zeros((len(trace.t_s), 0)))

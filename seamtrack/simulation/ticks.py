@@ -91,8 +91,8 @@ def gantry_ticks(
     check_every: int, wall_every: int, offset: FloatArray, axes: FloatArray, lim: FloatArray,
     servo: FloatArray, ipo: NDArray[np.int64], sp: FloatArray, path: FloatArray, s: FloatArray,
     env_s: FloatArray, env_v: FloatArray, seen: bool, tcp_out: FloatArray,
-    target_out: FloatArray, refused: FloatArray, progress: FloatArray, seam: FloatArray,
-    seam_s: FloatArray, seam_columns: FloatArray, checks: FloatArray,
+    target_out: FloatArray, k0: int, refused: FloatArray, progress: FloatArray,
+    seam: FloatArray, seam_s: FloatArray, seam_columns: FloatArray, checks: FloatArray,
 ) -> tuple[int, int]:  # fmt: skip
     """Control ticks from ``tick`` on, until the next event: stops before a tick at which a
     frame is due (``next_capture``) or a measurement arrives (``next_arrival``), after a tick
@@ -105,7 +105,7 @@ def gantry_ticks(
     ``offset``: (tcp from axes (3), world to base (3)); ``axes``: rows q, v (the servo's
     output), set-point q, v, held set-point; ``ipo``: (ticks per interpolation, servo tick;
     -1: ideal axes). Writes the torch tip and the target of each tick into ``tcp_out`` and
-    ``target_out``. Returns (ticks run, what stopped it).
+    ``target_out``, rows from ``k0`` on. Returns (ticks run, what stopped it).
     """
     q, v, sq, sv, held = axes[0], axes[1], axes[2], axes[3], axes[4]
     has_servo = ipo[0] > 0
@@ -115,11 +115,12 @@ def gantry_ticks(
         if tick > first and (t + 1e-9 >= next_capture or next_arrival <= t + 1e-9):
             break
         k = tick - first
+        r = k0 + k
         x, y, z = q[0] + offset[0], q[1] + offset[1], q[2] + offset[2]
-        tcp_out[k, 0], tcp_out[k, 1], tcp_out[k, 2] = x, y, z
+        tcp_out[r, 0], tcp_out[r, 1], tcp_out[r, 2] = x, y, z
         if not seen:
             sp[2], sp[3], sp[4] = x, y, z  # the tracker's view of the torch (naive poses)
-            target_out[k, :] = np.nan
+            target_out[r, :] = np.nan
             has_target = False
             tx = ty = tz = speed = fx = fy = fz = 0.0
             stop = False
@@ -128,7 +129,7 @@ def gantry_ticks(
             if not (0.0 < speed < math.inf and math.isfinite(tx + ty + tz + fx + fy + fz)):
                 refused[:] = (tx, ty, tz, speed, fx, fy, fz, 1.0 if stop else 0.0)
                 return k, REFUSED
-            target_out[k, 0], target_out[k, 1], target_out[k, 2] = tx, ty, tz
+            target_out[r, 0], target_out[r, 1], target_out[r, 2] = tx, ty, tz
             tx, ty, tz = tx + offset[3], ty + offset[4], tz + offset[5]
             if not (
                 lim[_LO, 0] - 1e-9 <= tx <= lim[_HI, 0] + 1e-9
@@ -154,17 +155,47 @@ def gantry_ticks(
     return tick - first, EVENT
 
 
-class GantryTicks:
+class _Logs:
+    """The trace of a run's compiled ticks: the torch tip and the target of every tick (and an
+    arm's torch axis and joints), rows ``[0, count)`` of arrays that grow by doubling, which
+    the ticks write in place (the loop takes them at the end: nothing is copied per frame)."""
+
+    def __init__(self, dof: int) -> None:
+        self.count = 0
+        self.tcp = np.empty((4096, 3))
+        self.target = np.empty((4096, 3))
+        self.axis = np.empty((4096 if dof else 0, 3))
+        self.joints = np.empty((4096 if dof else 0, dof))
+
+    def room(self, rows: int) -> bool:
+        """At least ``rows`` rows free after ``count``; True when the arrays were replaced."""
+        size = len(self.tcp)
+        if self.count + rows <= size:
+            return False
+        while self.count + rows > size:
+            size *= 2
+        for name in ("tcp", "target", "axis", "joints"):
+            old = getattr(self, name)
+            if len(old):
+                new = np.empty((size, old.shape[1]))
+                new[: self.count] = old[: self.count]
+                setattr(self, name, new)
+        return True
+
+
+class GantryTicks(_Logs):
     """The compiled ticks of one run: the robot's limits and state in arrays, the traces'
-    scratch rows; :meth:`run` advances a :class:`RobotState` in place."""
+    rows (:class:`_Logs`); :meth:`run` advances a :class:`RobotState` in place."""
 
     def __init__(
         self, robot: CartesianRobot, tcp_offset: tuple[float, float, float], checks: ProgressCheck
     ) -> None:
+        super().__init__(0)
         self.robot = robot
         self.checks = checks
         self.dt = robot.control_period_s
         self.lim = robot._limits
+        self.origin = tcp_offset
         self.offset = np.array([*tcp_offset, *robot._base_shift])
         servo = robot.servo
         self.servo = np.zeros((3, 3))
@@ -173,8 +204,6 @@ class GantryTicks:
             self.servo = servo._table
             self.ipo[0] = servo.ipo_ticks
         self.axes = np.zeros((5, 3))
-        self.tcp = np.empty((1024, 3))
-        self.target = np.empty((1024, 3))
         self.refused = np.zeros(8)
 
     def run(
@@ -182,7 +211,9 @@ class GantryTicks:
         next_arrival: float, check_every: int, wall_every: int, tracker: Any,
     ) -> tuple[int, int]:  # fmt: skip
         """Ticks from ``tick`` to the next event, ``state`` advanced (see :func:`gantry_ticks`);
-        the ticks' torch tips and targets are in ``self.tcp`` and ``self.target``."""
+        the ticks' torch tips and targets are logged (:class:`_Logs`)."""
+        self.room(wall_every + 1)  # a stretch of ticks ends at a wall-clock tick
+        self.checks.room(wall_every // check_every + 2)
         axes = self.axes
         axes[0], axes[1] = state.q, state.v
         servo = state.servo
@@ -195,8 +226,9 @@ class GantryTicks:
             tick, max_ticks, self.dt, next_capture, next_arrival, check_every, wall_every,
             self.offset, axes, self.lim, self.servo, self.ipo, tracker._sp, path.path, path.s,
             tracker._env_s, tracker._env_v, tracker._seen_seam, self.tcp, self.target,
-            self.refused, *self.checks.args,
+            self.count, self.refused, *self.checks.args,
         )  # fmt: skip
+        self.count += n
         state.q[:], state.v[:] = axes[0].tolist(), axes[1].tolist()
         if servo is not None:
             assert state.setpoint is not None
@@ -204,6 +236,14 @@ class GantryTicks:
             servo.held[:] = axes[4].tolist()
             servo.tick = int(self.ipo[1])
         return n, why
+
+    def tcp_now(self, state: RobotState) -> FloatArray:
+        """The torch tip (world) of ``state``, as the loop computes it."""
+        q, (x, y, z) = state.q, self.origin
+        return np.array([q[0] + x, q[1] + y, q[2] + z])
+
+    def finish(self, state: Any, tracker: Any) -> None:
+        """After the run (nothing to hand back on a gantry)."""
 
 
 @numba.njit(cache=True, nogil=True)
@@ -266,9 +306,10 @@ def arm_ticks(
     jl: FloatArray, servo: FloatArray, geo: FloatArray, place: FloatArray, axes: FloatArray,
     kinds: NDArray[np.int64], index: NDArray[np.int64], cart: FloatArray, rot: FloatArray,
     omega: FloatArray, jnt: FloatArray, cnt: NDArray[np.int64], cmd: FloatArray,
-    sp: FloatArray, path: FloatArray, s: FloatArray, env_s: FloatArray, env_v: FloatArray,
+    work: FloatArray, sp: FloatArray, path: FloatArray, s: FloatArray, env_s: FloatArray,
+    env_v: FloatArray,
     seen: bool, tcp_out: FloatArray, target_out: FloatArray, axis_out: FloatArray,
-    joint_out: FloatArray, refused: FloatArray, prog: FloatArray,
+    joint_out: FloatArray, k0: int, refused: FloatArray, prog: FloatArray,
     knots: FloatArray, seg_len: FloatArray, normals: FloatArray, prog_par: FloatArray,
     columns: FloatArray, turn: FloatArray, progress: FloatArray, seam: FloatArray,
     seam_s: FloatArray, seam_columns: FloatArray, checks: FloatArray,
@@ -295,10 +336,11 @@ def arm_ticks(
         x = world[0, 0] * q[0] + world[0, 1] * q[1] + world[0, 2] * q[2] + world[0, 3]
         y = world[1, 0] * q[0] + world[1, 1] * q[1] + world[1, 2] * q[2] + world[1, 3]
         z = world[2, 0] * q[0] + world[2, 1] * q[1] + world[2, 2] * q[2] + world[2, 3]
-        tcp_out[k, 0], tcp_out[k, 1], tcp_out[k, 2] = x, y, z
+        r = k0 + k
+        tcp_out[r, 0], tcp_out[r, 1], tcp_out[r, 2] = x, y, z
         if not seen:
             sp[2], sp[3], sp[4] = x, y, z  # the tracker's view of the torch (naive poses)
-            target_out[k, :] = np.nan
+            target_out[r, :] = np.nan
             cmd[M_HAS] = 0.0
         else:
             tx, ty, tz, speed, fx, fy, fz, stop = setpoint_step(sp, path, s, env_s, env_v, x, y, z)
@@ -311,7 +353,7 @@ def arm_ticks(
                     tx, ty, tz, sp, base, prog, knots, seg_len, normals, prog_par, columns, turn,
                     cmd,
                 )  # fmt: skip
-            target_out[k, 0], target_out[k, 1], target_out[k, 2] = tx, ty, tz
+            target_out[r, 0], target_out[r, 1], target_out[r, 2] = tx, ty, tz
             cmd[M_HAS] = 1.0
             for i in range(3):
                 cmd[M_T + i] = base[i, 0] * tx + base[i, 1] * ty + base[i, 2] * tz + base[i, 3]
@@ -319,15 +361,16 @@ def arm_ticks(
             cmd[M_SPEED], cmd[M_STOP] = speed, 1.0 if stop else 0.0
         R = rot[2]
         for i in range(3):
-            axis_out[k, i] = world[i, 0] * R[0, 2] + world[i, 1] * R[1, 2] + world[i, 2] * R[2, 2]
-        joint_out[k] = jnt[S_JOINTS]
+            axis_out[r, i] = world[i, 0] * R[0, 2] + world[i, 1] * R[1, 2] + world[i, 2] * R[2, 2]
+        joint_out[r] = jnt[S_JOINTS]
         if cmd[M_HAS] > 0.0:
             d = math.sqrt(cmd[M_T] ** 2 + cmd[M_T + 1] ** 2 + cmd[M_T + 2] ** 2)
             if d > reach:
                 return k + 1, LIMIT
         arm_step(
-            par, lim, jl, servo, geo, place, axes, kinds, index, cart, rot, omega, jnt, cnt, cmd
-        )
+            par, lim, jl, servo, geo, place, axes, kinds, index, cart, rot, omega, jnt, cnt, cmd,
+            work,
+        )  # fmt: skip
         tick += 1
         k += 1
         if _checked(tick - 1, t, x, y, z, cart[C_V], check_every, wall_every, progress, seam,
@@ -336,92 +379,107 @@ def arm_ticks(
     return k, EVENT
 
 
-class ArmTicks:
+class ArmTicks(_Logs):
     """The compiled ticks of an arm run with the built-in tracker (:func:`arm_ticks`);
     :meth:`run` advances an :class:`~seamtrack.control.arm.ArmState` in place, and the
     tracker's tool orientation as :meth:`TrajectoryTracker.command_floats
     <seamtrack.control.trajectory.TrajectoryTracker.command_floats>` does (compiled, the same
-    numbers to an ulp)."""
+    numbers to an ulp). Through a run the ticks keep the orientation (its command count,
+    rotation, angular velocity and arc length) in their arrays, the only ones to change it
+    while every tick is compiled; :meth:`finish` hands it back to the tracker."""
 
     def __init__(self, robot: Any, tracker: Any, checks: ProgressCheck) -> None:
+        super().__init__(robot.kinematics.dof)
         self.robot = robot
         self.checks = checks
         self.dt = robot.control_period_s
         self.world = np.ascontiguousarray(robot.T_world_base[:3, :4])
         self.base = np.ascontiguousarray(robot._T_base_world[:3, :4])
+        self._R, self._p0 = robot.T_world_base[:3, :3], robot.T_world_base[:3, 3]
         program = tracker._program
         self.prog, self.knots, self.seg_len, self.normals, self.prog_par = program._arrays
         self.columns = np.ascontiguousarray(program.seam.points.T)
         self.orient = np.array([tracker._orient_every, 0], dtype=np.int64)
         self.turn = np.zeros(13)
-        n = robot.kinematics.dof
-        self.tcp = np.empty((1024, 3))
-        self.target = np.empty((1024, 3))
-        self.axis = np.empty((1024, 3))
-        self.joints = np.empty((1024, n))
         self.refused = np.zeros(8)
-        self._turn: tuple[Any, Any] = (None, None)  # the last rotation handed to the state
-        self._args: tuple[Any, ...] = (None, None, (), ())  # state, tracker, _fixed's
+        self._refreshed = -1  # the orientation refresh last handed to the tracker
+        self._args: tuple[Any, ...] = (None, None, (), (), ())  # state, tracker, _fixed's
 
     def _rotation(self, state: Any, tracker: Any) -> None:
-        """The tracker's commanded rotation into the state's command, converted once (as
-        ``command_in_base`` converts it)."""
+        """The tracker's commanded rotation into the state's command, converted as
+        ``command_in_base`` converts it."""
         rotation, omega = tracker._rotation, tracker._omega
-        if rotation is self._turn[0] and omega is self._turn[1]:
-            return
-        self._turn = (rotation, omega)
         R = self.robot._T_base_world[:3, :3]
         rot_base = None if rotation is None else R @ np.asarray(rotation, dtype=float)
         omega_base = None if omega is None else R @ np.asarray(omega, dtype=float)
         self.robot._set_rotation(state, rot_base, omega_base)
 
-    def _fixed(self, state: Any, tracker: Any) -> tuple[tuple[Any, ...], tuple[Any, ...]]:
-        """The arguments of :func:`arm_ticks` that stay the same objects through a run (the
-        robot's tables, the state's and the set-point's arrays, the outputs), gathered once:
-        before and after the stored path's (which grows and moves)."""
+    def _fixed(self, state: Any, tracker: Any) -> tuple[tuple[Any, ...], ...]:
+        """The arguments of :func:`arm_ticks` that stay the same objects while the logs and
+        the checks keep their arrays (the robot's tables, the state's and the set-point's
+        arrays, the outputs), gathered once: before the stored path's (which grows and
+        moves), the logs, and after the logs' row count."""
         robot = self.robot
         place, axes, kinds, index = robot.kinematics.chain
         head = (
             self.world, self.base, robot._reach_mm, self.orient, robot._par,
             robot._cart._limits, robot._jl, robot._servo_table, robot.kinematics.geometry,
             place, axes, kinds, index, state.cart, state.rot, state.omega, state.jnt, state.cnt,
-            state.cmd, tracker._sp,
+            state.cmd, state.work, tracker._sp,
         )  # fmt: skip
+        logs = (self.tcp, self.target, self.axis, self.joints)
         tail = (
-            self.tcp, self.target, self.axis, self.joints, self.refused, self.prog, self.knots,
-            self.seg_len, self.normals, self.prog_par, self.columns, self.turn,
-            *self.checks.args,
+            self.refused, self.prog, self.knots, self.seg_len, self.normals, self.prog_par,
+            self.columns, self.turn, *self.checks.args,
         )  # fmt: skip
-        return head, tail
+        return head, logs, tail
 
     def run(
         self, state: Any, tick: int, max_ticks: int, next_capture: float, next_arrival: float,
         check_every: int, wall_every: int, tracker: Any,
     ) -> tuple[int, int]:  # fmt: skip
         """Ticks from ``tick`` to the next event (see :func:`arm_ticks`); the ticks' torch
-        tips, targets, torch axes and joints are in ``self.tcp``, ``target``, ``axis`` and
-        ``joints``."""
-        path = tracker._buffer
-        self.orient[1] = tracker._tick
-        self.turn[12] = tracker._s_program
-        self._rotation(state, tracker)
+        tips, targets, torch axes and joints are logged (:class:`_Logs`)."""
+        grown = self.room(wall_every + 1)  # a stretch of ticks ends at a wall-clock tick
+        self.checks.room(wall_every // check_every + 2)
+        tail = self._args[4]
+        grown = grown or not tail or tail[-1] is not self.checks.checks  # its log replaced
         if self._args[0] is not state or self._args[1] is not tracker:
+            # The first stretch: the tracker's orientation, from here on the ticks'.
+            self.orient[1] = tracker._tick
+            self.turn[12] = tracker._s_program
+            self._refreshed = tracker._tick // tracker._orient_every
+            self._rotation(state, tracker)
+            grown = True
+        if grown:
             self._args = (state, tracker, *self._fixed(state, tracker))
-        _, _, head, tail = self._args
+        _, _, head, logs, tail = self._args
+        path = tracker._buffer
         n, why = arm_ticks(  # type: ignore[call-arg]  # its arguments, gathered (_fixed)
             tick, max_ticks, self.dt, next_capture, next_arrival, check_every, wall_every,
-            *head, path.path, path.s, tracker._env_s, tracker._env_v, tracker._seen_seam, *tail,
+            *head, path.path, path.s, tracker._env_s, tracker._env_v, tracker._seen_seam,
+            *logs, self.count, *tail,
         )  # fmt: skip
-        if int(self.orient[1]) // self.orient[0] != tracker._tick // self.orient[0]:
-            # Refreshed: the tracker's rotation, turning rate and arc length, as it keeps them.
-            rotation = self.turn[:9].reshape(3, 3).copy()
-            omega = self.turn[9:12].copy()
-            tracker._rotation, tracker._omega = rotation, omega
-            tracker._s_program = float(self.turn[12])
-            self._turn = (rotation, omega)
-            state.goal_from = None  # the goal is in the command (compiled)
-        tracker._tick = int(self.orient[1])
+        self.count += n
         return n, why
+
+    def tcp_now(self, state: Any) -> FloatArray:
+        """The torch tip (world) of ``state``, as the loop computes it."""
+        return self._R @ state.cart[C_Q] + self._p0
+
+    def finish(self, state: Any, tracker: Any) -> None:
+        """After the run: the tool orientation back to the tracker, as it keeps it (its
+        command count; where the ticks refreshed it, the rotation, the turning rate and the
+        arc length)."""
+        if self._args[1] is not tracker:
+            return
+        count = int(self.orient[1])
+        if count // self.orient[0] != self._refreshed:
+            tracker._rotation = self.turn[:9].reshape(3, 3).copy()
+            tracker._omega = self.turn[9:12].copy()
+            tracker._s_program = float(self.turn[12])
+            state.goal_from = None  # the goal is in the command (compiled)
+        tracker._tick = count
 
 
 def compiled_ticks(

@@ -1,0 +1,325 @@
+"""The closed forms' branch nearest a configuration, as the arm's control tick wants it: the
+branch of :func:`~seamtrack.control.closed_form.ik_branches` that
+:func:`~seamtrack.control.arm_kernels.nearest_branch` picks (the same numbers), with most
+branches never worked out (:func:`ik_nearest`).
+
+A branch's squared distance from the configuration is a sum of one non-negative term per joint;
+the same sum with the terms of joints not yet known left out is a lower bound of it (adding
+non-negative terms in floating point never lowers a sum). The branch search goes joint 1's
+nearer branch first, and skips a branch whose bound already exceeds the best sum found: at
+1 kHz the nearest branch is microradians away, the others tenths of a radian.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+from numpy.typing import NDArray
+
+from seamtrack.control.closed_form import (
+    _U_A2,
+    _U_A3,
+    _U_DLAT,
+    _U_P1I,
+    _U_P2I,
+    _U_P5I,
+    _U_P6I,
+    _U_S1,
+    _U_S4,
+    _U_S5,
+    _U_TCP,
+    _W_B,
+    _W_E1,
+    _W_E2,
+    _W_HP,
+    _W_O1,
+    _W_O2,
+    _W_O3,
+    _W_R0,
+    _W_S3,
+    _W_S6,
+    _W_U1,
+    _W_U2,
+    _W_U3,
+    _W_V,
+    _W_W0,
+    _W_WT,
+    KIND_UR,
+    KIND_WRIST,
+    SINGULAR_SIN,
+    _m4j,
+    _near,
+    _rot_into,
+    _rz_left,
+    _rz_right,
+    _tmul_into,
+    ik_branches,
+    mul_into,
+)  # fmt: skip
+
+FloatArray = NDArray[np.float64]
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _ur_q6(
+    q5: float, z1x: float, z1y: float, J6: FloatArray, s4: float, q_near: FloatArray,
+    t0: float,
+) -> tuple[float, float]:  # fmt: skip
+    """:func:`_ur_branches`' joint 6 for joint 5 at ``q5``, and the lower bound of a branch's
+    sum of squared differences from ``q_near`` with joints 1, 5 and 6 known (``t0``: joint
+    1's term)."""
+    sn5 = math.sin(q5)
+    if abs(sn5) < SINGULAR_SIN:
+        q6 = q_near[5]
+    else:
+        zx = z1x * J6[0, 0] + z1y * J6[1, 0]
+        zy = z1x * J6[0, 1] + z1y * J6[1, 1]
+        q6 = math.atan2(-zy / (s4 * sn5), zx / (s4 * sn5))
+    x4 = _near(q5, q_near[4]) - q_near[4]
+    x5 = _near(q6, q_near[5]) - q_near[5]
+    return q6, (t0 + x4 * x4) + x5 * x5
+
+
+@numba.njit(cache=True, nogil=True)
+def _ur_nearest(
+    g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatArray, ws: FloatArray
+) -> bool:
+    """The branch of :func:`_ur_branches` that :func:`~seamtrack.control.arm_kernels.
+    nearest_branch` picks (the least sum of squared differences from ``q_near``, the first
+    of a tie), into ``row``; False where there is none. The same arithmetic per branch, but a
+    branch is worked out only where it can still be the nearest: the one nearest in joint 1
+    first, then in joints 5 and 6, and a branch skipped once a lower bound of its sum (the
+    same sum with the joints not yet known left out: adding the rest can only raise it)
+    exceeds the best found. At 1 kHz the nearest branch is microradians away and the others
+    tenths of a radian: one branch of eight is worked out. ``ws``: a (6, 4, 4) scratch."""
+    P2i, P1i, P6i, P5i = _m4j(g, _U_P2I), _m4j(g, _U_P1I), _m4j(g, _U_P6I), _m4j(g, _U_P5I)
+    J6 = ws[0]  # J6, P1i J6, T01^-1 J6, two scratch, A
+    mul_into(T, _m4j(g, _U_TCP), J6)
+    mul_into(P1i, J6, ws[1])
+    a2, a3, dlat = g[_U_A2], g[_U_A3], g[_U_DLAT]
+    s1, s4, s5a = g[_U_S1], g[_U_S4], g[_U_S5]
+    px, py = J6[0, 3], J6[1, 3]
+    r = math.hypot(px, py)
+    if r <= abs(dlat):
+        return False
+    psi = math.atan2(py, px)
+    k = math.asin(s1 * dlat / r)
+    best = math.inf
+    best_key = 8  # the branch's place in _ur_branches' order (i1, i5, i3): a tie's tiebreak
+    q1s = (psi + k, psi + math.pi - k)
+    x0 = _near(q1s[0], q_near[0]) - q_near[0]
+    x1 = _near(q1s[1], q_near[0]) - q_near[0]
+    first = 0 if not x1 * x1 < x0 * x0 else 1
+    for o1 in range(2):
+        i1 = first if o1 == 0 else 1 - first
+        q1 = q1s[i1]
+        r0 = _near(q1, q_near[0])
+        t0 = (r0 - q_near[0]) * (r0 - q_near[0])
+        if t0 > best:
+            continue
+        z1x, z1y = s1 * math.sin(q1), -s1 * math.cos(q1)
+        c5 = -(z1x * J6[0, 2] + z1y * J6[1, 2]) / (s4 * s5a)
+        if abs(c5) > 1.0 + 1e-12:
+            continue
+        c5 = min(max(c5, -1.0), 1.0)
+        _rz_left(-q1, ws[1], ws[3])
+        mul_into(P2i, ws[3], ws[2])
+        q5s = (math.acos(c5), -math.acos(c5))
+        q6a, bound_a = _ur_q6(q5s[0], z1x, z1y, J6, s4, q_near, t0)
+        q6b, bound_b = _ur_q6(q5s[1], z1x, z1y, J6, s4, q_near, t0)
+        first5 = 0 if not bound_b < bound_a else 1
+        for o5 in range(2):
+            i5 = first5 if o5 == 0 else 1 - first5
+            if (bound_a if i5 == 0 else bound_b) > best:
+                continue
+            q5, q6 = q5s[i5], (q6a if i5 == 0 else q6b)
+            _rz_right(ws[2], -q6, ws[3])
+            mul_into(ws[3], P6i, ws[4])
+            _rz_right(ws[4], -q5, ws[3])
+            A = ws[5]
+            mul_into(ws[3], P5i, A)
+            q234 = math.atan2(A[1, 0], A[0, 0])
+            x, y = A[0, 3], A[1, 3]
+            c3 = (x * x + y * y - a2 * a2 - a3 * a3) / (2.0 * a2 * a3)
+            if abs(c3) > 1.0 + 1e-12:
+                continue
+            c3 = min(max(c3, -1.0), 1.0)
+            for i3 in range(2):
+                q3 = math.acos(c3) if i3 == 0 else -math.acos(c3)
+                q2 = math.atan2(y, x) - math.atan2(a3 * math.sin(q3), a2 + a3 * math.cos(q3))
+                v0, v1, v2 = q1, q2, q3
+                v3, v4, v5 = q234 - q2 - q3, q5, q6
+                v0 = _near(v0, q_near[0])
+                v1 = _near(v1, q_near[1])
+                v2 = _near(v2, q_near[2])
+                v3 = _near(v3, q_near[3])
+                v4 = _near(v4, q_near[4])
+                v5 = _near(v5, q_near[5])
+                d = 0.0  # nearest_branch's sum, in its order
+                d += (v0 - q_near[0]) * (v0 - q_near[0])
+                d += (v1 - q_near[1]) * (v1 - q_near[1])
+                d += (v2 - q_near[2]) * (v2 - q_near[2])
+                d += (v3 - q_near[3]) * (v3 - q_near[3])
+                d += (v4 - q_near[4]) * (v4 - q_near[4])
+                d += (v5 - q_near[5]) * (v5 - q_near[5])
+                key = 4 * i1 + 2 * i5 + i3
+                if d < best or (d == best and key < best_key):
+                    best, best_key = d, key
+                    row[0], row[1], row[2], row[3], row[4], row[5] = v0, v1, v2, v3, v4, v5
+    return best_key < 8
+
+
+@numba.njit(cache=True, nogil=True)
+def _wrist_nearest(g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatArray) -> bool:
+    """:func:`_ur_nearest` for the spherical wrist: :func:`_wrist_branches`' arithmetic per
+    branch, joint 1's nearer branch first, then the elbow nearer in joints 2 and 3 (its sum so
+    far exact), a branch skipped once its sum so far exceeds the best found."""
+    ws = np.empty((7, 3, 3))
+    RT = ws[0]
+    RT[:, :] = T[:3, :3]
+    w = g[_W_WT : _W_WT + 3]
+    c = np.empty(3)
+    for i in range(3):
+        c[i] = T[i, 3] + RT[i, 0] * w[0] + RT[i, 1] * w[1] + RT[i, 2] * w[2]
+    o1, u2, v = g[_W_O1 : _W_O1 + 3], g[_W_U2 : _W_U2 + 3], g[_W_V : _W_V + 3]
+    d = c - o1
+    a, b = d[0] * u2[0] + d[1] * u2[1] + d[2] * u2[2], d[0] * v[0] + d[1] * v[1] + d[2] * v[2]
+    r = math.hypot(a, b)
+    hp = g[_W_HP]
+    if r < abs(hp) or r == 0.0:
+        return False
+    beta = math.atan2(b, a)
+    k = math.acos(min(max(hp / r, -1.0), 1.0))
+    o2, e1, e2 = g[_W_O2 : _W_O2 + 3], g[_W_E1 : _W_E1 + 3], g[_W_E2 : _W_E2 + 3]
+    o3x, o3y = g[_W_O3], g[_W_O3 + 1]
+    w0x, w0y = g[_W_W0], g[_W_W0 + 1]
+    l2 = math.hypot(o3x, o3y)
+    l3 = math.hypot(w0x - o3x, w0y - o3y)
+    g2, g3 = math.atan2(o3y, o3x), math.atan2(w0y - o3y, w0x - o3x)
+    s3, s6 = g[_W_S3], g[_W_S6]
+    u1, u3 = g[_W_U1 : _W_U1 + 3], g[_W_U3 : _W_U3 + 3]
+    B = g[_W_B : _W_B + 9].reshape(3, 3)
+    mul_into(RT, np.ascontiguousarray(g[_W_R0 : _W_R0 + 9].reshape(3, 3).T), ws[1])
+    mul_into(ws[1], B, ws[2])
+    best = math.inf
+    best_key = 8  # the branch's place in _wrist_branches' order (i1, i3, i6)
+    q1s = (beta + k, beta - k)
+    x0 = _near(q1s[0], q_near[0]) - q_near[0]
+    x1 = _near(q1s[1], q_near[0]) - q_near[0]
+    first = 0 if not x1 * x1 < x0 * x0 else 1
+    P = np.empty(3)
+    for n1 in range(2):  # (o1 is the shoulder's origin)
+        i1 = first if n1 == 0 else 1 - first
+        q1 = q1s[i1]
+        v0 = _near(q1, q_near[0])
+        t0 = 0.0
+        t0 += (v0 - q_near[0]) * (v0 - q_near[0])
+        if t0 > best:
+            continue
+        _rot_into(u1, -q1, ws[3])
+        for i in range(3):
+            P[i] = o1[i] - o2[i] + ws[3, i, 0] * d[0] + ws[3, i, 1] * d[1] + ws[3, i, 2] * d[2]
+        px = P[0] * e1[0] + P[1] * e1[1] + P[2] * e1[2]
+        py = P[0] * e2[0] + P[1] * e2[1] + P[2] * e2[2]
+        kappa = (px * px + py * py - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
+        if abs(kappa) > 1.0 + 1e-12:
+            continue
+        kappa = min(max(kappa, -1.0), 1.0)
+        phis = (g2 - g3 + math.acos(kappa), g2 - g3 - math.acos(kappa))
+        q2a, q3a, ta = _wrist_elbow(phis[0], o3x, o3y, w0x, w0y, px, py, s3, q_near, t0)
+        q2b, q3b, tb = _wrist_elbow(phis[1], o3x, o3y, w0x, w0y, px, py, s3, q_near, t0)
+        first3 = 0 if not tb < ta else 1
+        for o3 in range(2):
+            i3 = first3 if o3 == 0 else 1 - first3
+            t12 = ta if i3 == 0 else tb
+            if t12 > best:
+                continue
+            q2, q3 = (q2a, q3a) if i3 == 0 else (q2b, q3b)
+            _rot_into(u1, q1, ws[3])
+            _rot_into(u2, q2, ws[4])
+            mul_into(ws[3], ws[4], ws[5])
+            _rot_into(u3, q3, ws[3])
+            mul_into(ws[5], ws[3], ws[4])  # R3
+            _tmul_into(ws[4], ws[2], ws[5])  # R3^T R R0^T B
+            _tmul_into(B, ws[5], ws[6])  # N = B^T R3^T R R0^T B
+            N = ws[6]
+            sb = math.hypot(N[0, 1], N[0, 2])
+            for i6 in range(2):
+                sign = 1.0 if i6 == 0 else -1.0
+                q5 = math.atan2(sign * sb, N[0, 0])
+                if sb < SINGULAR_SIN:
+                    q4 = q_near[3]
+                    if N[0, 0] > 0.0:
+                        c6 = math.atan2(N[2, 1], N[1, 1]) - q4
+                    else:
+                        c6 = q4 + math.atan2(-N[2, 1], N[1, 1])
+                else:
+                    q4 = math.atan2(sign * N[1, 0], -sign * N[2, 0])
+                    c6 = math.atan2(sign * N[0, 1], sign * N[0, 2])
+                v1, v2 = _near(q2, q_near[1]), _near(q3, q_near[2])
+                v3, v4, v5 = _near(q4, q_near[3]), _near(q5, q_near[4]), _near(s6 * c6, q_near[5])
+                dd = t12  # nearest_branch's sum, in its order (joints 1-3 in t12)
+                dd += (v3 - q_near[3]) * (v3 - q_near[3])
+                dd += (v4 - q_near[4]) * (v4 - q_near[4])
+                dd += (v5 - q_near[5]) * (v5 - q_near[5])
+                key = 4 * i1 + 2 * i3 + i6
+                if dd < best or (dd == best and key < best_key):
+                    best, best_key = dd, key
+                    row[0], row[1], row[2], row[3], row[4], row[5] = v0, v1, v2, v3, v4, v5
+    return best_key < 8
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _wrist_elbow(
+    phi3: float, o3x: float, o3y: float, w0x: float, w0y: float, px: float, py: float,
+    s3: float, q_near: FloatArray, t0: float,
+) -> tuple[float, float, float]:  # fmt: skip
+    """:func:`_wrist_branches`' joints 2 and 3 for the elbow at ``phi3``, and the sum of
+    squared differences from ``q_near`` over joints 1-3 (``t0``: joint 1's, in
+    nearest_branch's order)."""
+    vx = o3x + math.cos(phi3) * (w0x - o3x) - math.sin(phi3) * (w0y - o3y)
+    vy = o3y + math.sin(phi3) * (w0x - o3x) + math.cos(phi3) * (w0y - o3y)
+    q2 = math.atan2(py, px) - math.atan2(vy, vx)
+    q3 = s3 * phi3
+    x1 = _near(q2, q_near[1]) - q_near[1]
+    x2 = _near(q3, q_near[2]) - q_near[2]
+    return q2, q3, (t0 + x1 * x1) + x2 * x2
+
+
+@numba.njit(cache=True, nogil=True)
+def ik_nearest(
+    kind: int, g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatArray
+) -> bool:
+    """The closed-form branch of the torch pose ``T`` nearest ``q_near`` into ``row`` (the
+    row of :func:`ik_branches` that :func:`~seamtrack.control.arm_kernels.nearest_branch`
+    picks, the same numbers); False where there is none: by :func:`_ur_nearest` and
+    :func:`_wrist_nearest` (most branches not worked out), else from all branches."""
+    return ik_nearest_in(kind, g, T, q_near, row, np.empty((6, 4, 4)))
+
+
+@numba.njit(cache=True, nogil=True)
+def ik_nearest_in(
+    kind: int, g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatArray,
+    ws: FloatArray,
+) -> bool:  # fmt: skip
+    """:func:`ik_nearest` with a (6, 4, 4) scratch ``ws`` (the arm tick's)."""
+    if kind == KIND_UR:
+        return _ur_nearest(g, T, q_near, row, ws)
+    if kind == KIND_WRIST:
+        return _wrist_nearest(g, T, q_near, row)
+    branches = np.empty((8, q_near.shape[0]))
+    count = ik_branches(kind, g, T, q_near, branches)
+    best, best_d = -1, math.inf
+    for b in range(count):
+        d = 0.0
+        for j in range(q_near.shape[0]):
+            x = branches[b, j] - q_near[j]
+            d += x * x
+        if d < best_d:
+            best, best_d = b, d
+    if best < 0:
+        return False
+    row[:] = branches[best]
+    return True
