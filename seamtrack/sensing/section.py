@@ -293,9 +293,10 @@ def _cut(
 
 @numba.njit(cache=True, nogil=True, inline="always")
 def _ray_range(
-    tans: NDArray[np.float64], y0: float, z0: float, y1: float, z1: float
+    tans: NDArray[np.float64], step: float, y0: float, z0: float, y1: float, z1: float
 ) -> tuple[int, int]:  # fmt: skip
-    """The rays [first, last) whose angle lies within the segment's (with a margin)."""
+    """The rays [first, last) whose angle lies within the segment's (with a margin);
+    ``step`` the rays' even spacing in tan (:func:`_even_step`), 0 if uneven."""
     n = tans.shape[0]
     if z0 <= 0.0 and z1 <= 0.0:
         return 0, 0
@@ -316,9 +317,42 @@ def _ray_range(
             t_lo, t_hi = -np.inf, np.inf
     margin_lo = 1e-9 * (1.0 + abs(t_lo)) if np.isfinite(t_lo) else 0.0
     margin_hi = 1e-9 * (1.0 + abs(t_hi)) if np.isfinite(t_hi) else 0.0
+    if step > 0.0:
+        # Evenly spaced: the index from the angle, a ray wider on each side than the binary
+        # search's (its result +- 1 ray of rounding), so never fewer rays.
+        first = 0
+        if t_lo > -np.inf:
+            u = (t_lo - margin_lo - tans[0]) / step
+            first = int(max(min(np.floor(u), n), 0.0))
+        last = n
+        if t_hi < np.inf:
+            u = (t_hi + margin_hi - tans[0]) / step
+            last = int(max(min(np.floor(u) + 1.0, n), 0.0))
+        return max(first - 2, 0), min(last + 2, n)
     first = int(np.searchsorted(tans, t_lo - margin_lo))
     last = int(np.searchsorted(tans, t_hi + margin_hi, side="right"))
     return max(first - 1, 0), min(last + 1, n)
+
+
+#: A fan whose rays' tan(phi) lie within this fraction of their spacing of an even grid is
+#: evenly spaced (:func:`_even_step`): the rays a segment covers are then found by arithmetic.
+EVEN_RTOL = 1e-6
+
+
+@numba.njit(cache=True, nogil=True)
+def _even_step(tans: NDArray[np.float64]) -> float:
+    """The spacing of ``tans`` (sorted) when evenly spaced (within :data:`EVEN_RTOL` of it),
+    else 0: the laser fan (:func:`seamtrack.sensing.scan.laser_fan`, a ``linspace`` in tan)."""
+    n = tans.shape[0]
+    if n < 2:
+        return 0.0
+    step = (tans[n - 1] - tans[0]) / (n - 1)
+    if not step > 0.0:
+        return 0.0
+    for i in range(n):
+        if abs(tans[i] - (tans[0] + i * step)) > EVEN_RTOL * step:
+            return 0.0
+    return step
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -412,6 +446,7 @@ def section_hits(
         tans[i] = fan[i, 1] / fan[i, 2]
         tan_max = max(tan_max, abs(tans[i]))
     tan_max = tan_max * (1.0 + 1e-9) + 1e-9
+    step = _even_step(tans)
     leaves, found = _visit(lo, hi, child, count, order, origin, rotation, tan_max)
     for j in range(found):
         node = leaves[j]
@@ -420,7 +455,7 @@ def section_hits(
             crossed, y0, z0, y1, z1 = _cut(vertices, faces, k, origin, rotation)
             if not crossed:
                 continue
-            first, last = _ray_range(tans, y0, z0, y1, z1)
+            first, last = _ray_range(tans, step, y0, z0, y1, z1)
             _sweep(fan, first, last, y0, z0, y1, z1, k, best_t, best_f)
     return best_t, best_f
 
