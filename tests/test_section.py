@@ -11,6 +11,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+import trimesh
 from scipy.spatial.transform import Rotation
 from test_raycast import SECTIONS, analytic_first_hit, extruded_mesh, posed
 
@@ -261,12 +262,22 @@ def _all_rays_hits(caster: RayCaster, T: np.ndarray, fan: np.ndarray) -> tuple[n
     return best_t, best_f
 
 
-@pytest.mark.parametrize("even", [True, False])
-def test_the_rays_a_segment_covers_miss_no_hit(even: bool) -> None:
+def _pipe_mesh() -> trimesh.Trimesh:
+    """A thick-walled pipe across the fan (axis along x), finely faceted: the laser plane cuts
+    its outer and inner walls, near and far, so most of the section lies behind the hits."""
+    pipe = trimesh.creation.annulus(r_min=44.0, r_max=50.0, height=400.0, sections=900)
+    pipe.apply_transform(frames.make(Rotation.from_rotvec([0.0, np.pi / 2, 0.0]).as_matrix(),
+                                     [0.0, 0.0, -50.0]))  # fmt: skip
+    return pipe
+
+
+@pytest.mark.parametrize(("part", "even"), [("plate", True), ("plate", False), ("pipe", True)])
+def test_the_rays_a_segment_covers_miss_no_hit(part: str, even: bool) -> None:
     """The rays each segment is tested against (found by arithmetic on an evenly spaced fan,
-    by binary search otherwise) lose no hit: the hits equal those of every segment tested
-    against every ray, bit for bit."""
-    mesh = v_groove_plate_mesh(triangles=4_000, seed=3)
+    by binary search otherwise) and the nodes left closed behind the hits found (the pipe's
+    far and inner walls) lose no hit: the hits equal those of every segment tested against
+    every ray, bit for bit."""
+    mesh = v_groove_plate_mesh(triangles=4_000, seed=3) if part == "plate" else _pipe_mesh()
     caster = RayCaster.from_mesh(mesh)
     rng = np.random.default_rng(5)
     fan = np.array(laser_fan(IDEAL, 777).directions)
@@ -286,6 +297,8 @@ def test_the_rays_a_segment_covers_miss_no_hit(even: bool) -> None:
         )  # fmt: skip
         t_all, face_all = _all_rays_hits(caster, T, fan)
         assert (face >= 0).sum() > len(fan) // 2
+        if part == "pipe":  # the culling runs: more crossings than it waits for
+            assert len(_brute_force_segments(caster, T, 0.3)) > 2 * section.CULL_AFTER
         np.testing.assert_array_equal(face, face_all)
         np.testing.assert_array_equal(t, t_all)
 
