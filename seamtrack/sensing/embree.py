@@ -4,7 +4,7 @@ embreex's ``scene.run`` casts one ray at a time (``rtcIntersect1``) from Cython,
 output arrays per call and cannot start a shadow ray off the surface (``tnear`` is fixed at 0).
 Embree itself offers packets of 4, 8 or 16 rays, which trace a coherent bundle (a laser fan, the
 shadow rays of one stripe, all aimed at the same camera) together. This module calls
-``rtcIntersect8`` / ``rtcOccluded8`` from numba kernels through ctypes function pointers, on
+``rtcIntersect8`` / ``rtcOccluded8`` from numba kernels through their addresses, on
 Embree's own scene objects, built from the shared library inside the embreex wheel: no compiler,
 no second copy of Embree. :func:`library` returns ``None`` when that library cannot be found or is
 not Embree 4 (the ABI below); :class:`seamtrack.sensing.raycast.RayCaster` then falls back to
@@ -30,6 +30,9 @@ from typing import Any
 
 import numba
 import numpy as np
+from llvmlite import ir
+from numba.core import types
+from numba.extending import intrinsic
 from numpy.typing import NDArray
 
 W = 8  # rays per packet
@@ -51,7 +54,8 @@ _u64 = ctypes.c_uint64  # handles and pointers travel as integers (the x86-64/ar
 
 
 class Library:
-    """The Embree 4 entry points seamtrack calls (ctypes functions; numba calls two of them)."""
+    """The Embree 4 entry points seamtrack calls (ctypes functions; numba calls two of them,
+    ``intersect8`` and ``occluded8``, by address)."""
 
     def __init__(self, path: str) -> None:
         lib = ctypes.CDLL(path)
@@ -77,12 +81,43 @@ class Library:
         self.attach_geometry = bind("rtcAttachGeometry", ctypes.c_uint, _u64, _u64)
         self.release_geometry = bind("rtcReleaseGeometry", None, _u64)
         # (valid*, scene, rayhit*, args*): called from numba, so plain integer arguments.
-        self.intersect8 = bind("rtcIntersect8", None, _u64, _u64, _u64, _u64)
-        self.occluded8 = bind("rtcOccluded8", None, _u64, _u64, _u64, _u64)
+        # The two queries numba calls, as addresses (:func:`_call_query`): a ctypes function
+        # passed to a compiled function costs ~3 us of typing per call, an integer nothing.
+        self.intersect8_fn = bind("rtcIntersect8", None, _u64, _u64, _u64, _u64)
+        self.occluded8_fn = bind("rtcOccluded8", None, _u64, _u64, _u64, _u64)
+        self.intersect8 = _address(self.intersect8_fn)
+        self.occluded8 = _address(self.occluded8_fn)
         self.device = self.new_device(None)
         if not self.device:
             raise OSError(f"rtcNewDevice failed in {path}")
         self.version_major = int(self.device_property(self.device, _PROPERTY_VERSION_MAJOR))
+
+
+def _address(fn: Any) -> int:
+    """The address of a ctypes function."""
+    return int(ctypes.cast(fn, ctypes.c_void_p).value or 0)
+
+
+@intrinsic  # type: ignore[misc]
+def _call_query(
+    typingctx: Any, fn: Any, valid: Any, scene: Any, packet: Any, args: Any
+) -> tuple[Any, Any]:  # fmt: skip
+    """``fn(valid, scene, packet, args)`` for ``fn`` the address of ``rtcIntersect8`` or
+    ``rtcOccluded8`` (``void (const int*, RTCScene, RTCRayHit8* / RTCRay8*, args*)``), every
+    argument an integer passed as a 64-bit word."""
+    sig = types.void(fn, valid, scene, packet, args)
+
+    def codegen(context: Any, builder: Any, signature: Any, values: Any) -> Any:
+        word = ir.IntType(64)
+        words = [
+            context.cast(builder, v, t, types.uint64)
+            for v, t in zip(values, signature.args, strict=True)
+        ]
+        query = builder.inttoptr(words[0], ir.FunctionType(ir.VoidType(), [word] * 4).as_pointer())
+        builder.call(query, words[1:])
+        return context.get_dummy_value()
+
+    return sig, codegen
 
 
 def _candidates() -> list[str]:
@@ -215,7 +250,7 @@ def _trace(
                 i = start + j
                 length = far[i] if far.shape[0] > 1 else far[0]
                 _load_ray(f, u, j, origins, directions, i, tnear, length)
-        query8(mask, scene, packet, 0)
+        _call_query(query8, mask, scene, packet, 0)
         for j in range(lanes):
             hit = u[_GEOM * W + j] != _INVALID
             prim[start + j] = np.int32(u[_PRIM * W + j]) if hit else -1
