@@ -98,8 +98,7 @@ def _address(fn: Any) -> int:
     return int(ctypes.cast(fn, ctypes.c_void_p).value or 0)
 
 
-@intrinsic  # type: ignore[misc]
-def _call_query(
+def _query_typer(
     typingctx: Any, fn: Any, valid: Any, scene: Any, packet: Any, args: Any
 ) -> tuple[Any, Any]:  # fmt: skip
     """``fn(valid, scene, packet, args)`` for ``fn`` the address of ``rtcIntersect8`` or
@@ -118,6 +117,9 @@ def _call_query(
         return context.get_dummy_value()
 
     return sig, codegen
+
+
+_call_query: Any = intrinsic(_query_typer)
 
 
 def _candidates() -> list[str]:
