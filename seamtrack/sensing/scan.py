@@ -227,6 +227,14 @@ class FanRays:
     directions: NDArray[np.float64]
     sensor_params: NDArray[np.float64]
 
+    @functools.cached_property
+    def section_tans(self) -> tuple[NDArray[np.float64], float, float]:
+        """The fan as the plane section takes it (:func:`seamtrack.sensing.section.fan_tans`:
+        tan(phi) of each ray, the wedge's half-opening, the even spacing), computed once."""
+        from seamtrack.sensing.section import fan_tans
+
+        return fan_tans(self.directions)
+
 
 @functools.lru_cache(maxsize=32)
 def laser_fan(sensor: LaserLineSensor, rays: int) -> FanRays:
@@ -372,9 +380,10 @@ def _section_stripe(
     from seamtrack.sensing.kernels import fan_stripe_finish
 
     index = caster.section
+    tans, tan_max, step = fan.section_tans
     tree = (index.lo, index.hi, index.child, index.count, index.order, caster.vertices_local,
-            caster.faces, caster.face_normals, origin, rotation, fan.directions,
-            fan.sensor_params, constants.SHADOW_RAY_OFFSET_MM)  # fmt: skip
+            caster.faces, caster.face_normals, origin, rotation, fan.directions, tans, tan_max,
+            step, fan.sensor_params, constants.SHADOW_RAY_OFFSET_MM)  # fmt: skip
     packets = caster.packets
     if packets is not None:  # one numba call does it all
         points, reason, t, face, cos_incidence, directions = section.fan_stripe_section_packets(

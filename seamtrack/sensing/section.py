@@ -34,7 +34,7 @@ from seamtrack.sensing._section_tree import LEAF_SIZE, SectionIndex, build
 from seamtrack.sensing.kernels import fan_stripe_finish, fan_stripe_hits
 
 __all__ = ["LEAF_SIZE", "SectionIndex", "build", "fan_stripe_section", "fan_stripe_section_packets",
-           "section_hits", "section_segments"]  # fmt: skip
+           "fan_tans", "section_hits", "section_segments"]  # fmt: skip
 
 #: A crossing at a segment's end counts for the segment within this fraction of its length.
 END_SLACK = 1e-12
@@ -336,6 +336,20 @@ def _farthest(
 
 
 @numba.njit(cache=True, nogil=True)
+def fan_tans(fan: NDArray[np.float64]) -> tuple[NDArray[np.float64], float, float]:
+    """What :func:`section_hits` needs of a fan besides its directions, once per fan: each
+    ray's tan(phi) = y_L / z_L, the wedge's half-opening in tan (a margin added) and the rays'
+    even spacing in tan (:func:`_even_step`; 0: uneven)."""
+    n = fan.shape[0]
+    tans = np.empty(n)
+    tan_max = 0.0
+    for i in range(n):
+        tans[i] = fan[i, 1] / fan[i, 2]
+        tan_max = max(tan_max, abs(tans[i]))
+    return tans, tan_max * (1.0 + 1e-9) + 1e-9, _even_step(tans)
+
+
+@numba.njit(cache=True, nogil=True)
 def section_hits(
     lo: NDArray[np.float64], hi: NDArray[np.float64], child: NDArray[np.int64],
     count: NDArray[np.int64], order: NDArray[np.int64], vertices: NDArray[np.float64],
@@ -353,16 +367,22 @@ def section_hits(
     only be farther): behind the visible surface (a pipe's far wall, its inside) nothing is
     cut. Which crossings win does not depend on the order (:func:`_sweep`).
     """
+    tans, tan_max, step = fan_tans(fan)
+    return _section_hits(lo, hi, child, count, order, vertices, faces, origin, rotation, fan,
+                         tans, tan_max, step)  # fmt: skip
+
+
+@numba.njit(cache=True, nogil=True)
+def _section_hits(
+    lo: NDArray[np.float64], hi: NDArray[np.float64], child: NDArray[np.int64],
+    count: NDArray[np.int64], order: NDArray[np.int64], vertices: NDArray[np.float64],
+    faces: NDArray[np.int64], origin: NDArray[np.float64], rotation: NDArray[np.float64],
+    fan: NDArray[np.float64], tans: NDArray[np.float64], tan_max: float, step: float,
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:  # fmt: skip
+    """:func:`section_hits` with the fan's :func:`fan_tans` given."""
     n = fan.shape[0]
     best_t = np.full(n, NO_HIT)
     best_f = np.full(n, -1, dtype=np.int64)
-    tans = np.empty(n)
-    tan_max = 0.0
-    for i in range(n):
-        tans[i] = fan[i, 1] / fan[i, 2]
-        tan_max = max(tan_max, abs(tans[i]))
-    tan_max = tan_max * (1.0 + 1e-9) + 1e-9
-    step = _even_step(tans)
     blocks = (n + BLOCK - 1) // BLOCK
     block_max = np.full(blocks, NO_HIT)
     stale = np.zeros(blocks, dtype=np.bool_)
@@ -462,20 +482,22 @@ def fan_stripe_section(
     lo: NDArray[np.float64], hi: NDArray[np.float64], child: NDArray[np.int64],
     count: NDArray[np.int64], order: NDArray[np.int64], vertices: NDArray[np.float64],
     faces: NDArray[np.int64], face_normals: NDArray[np.float64], origin: NDArray[np.float64],
-    rotation: NDArray[np.float64], fan: NDArray[np.float64], sp: NDArray[np.float64],
-    offset: float,
+    rotation: NDArray[np.float64], fan: NDArray[np.float64], tans: NDArray[np.float64],
+    tan_max: float, step: float, sp: NDArray[np.float64], offset: float,
 ) -> tuple[NDArray[np.float64], NDArray[np.uint8], NDArray[np.float64], NDArray[np.int64],
            NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64],
            NDArray[np.float64], NDArray[np.int64], NDArray[np.float64]]:  # fmt: skip
     """The section's hits through the stripe's clips (``fan_stripe_hits``); returns its ten
-    arrays and the rays' directions in the local frame. The shadow rays are the caller's."""
+    arrays and the rays' directions in the local frame. The shadow rays are the caller's.
+    ``tans, tan_max, step``: the fan's :func:`fan_tans`."""
     n = fan.shape[0]
     directions = np.empty((n, 3))
     for i in range(n):
         for a in range(3):
             directions[i, a] = (rotation[a, 0] * fan[i, 0] + rotation[a, 1] * fan[i, 1]
                                 + rotation[a, 2] * fan[i, 2])  # fmt: skip
-    t, face = section_hits(lo, hi, child, count, order, vertices, faces, origin, rotation, fan)
+    t, face = _section_hits(lo, hi, child, count, order, vertices, faces, origin, rotation, fan,
+                            tans, tan_max, step)  # fmt: skip
     none = np.empty(0, dtype=np.int64)
     points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index = fan_stripe_hits(
         origin, rotation, fan, directions, face, t, vertices, faces,  # type: ignore[arg-type]
@@ -490,15 +512,17 @@ def fan_stripe_section_packets(
     child: NDArray[np.int64], count: NDArray[np.int64], order: NDArray[np.int64],
     vertices: NDArray[np.float64], faces: NDArray[np.int64], face_normals: NDArray[np.float64],
     origin: NDArray[np.float64], rotation: NDArray[np.float64], fan: NDArray[np.float64],
-    sp: NDArray[np.float64], offset: float, quantize: bool,
+    tans: NDArray[np.float64], tan_max: float, step: float, sp: NDArray[np.float64],
+    offset: float, quantize: bool,
 ) -> tuple[NDArray[np.float64], NDArray[np.uint8], NDArray[np.float64], NDArray[np.int64],
            NDArray[np.float64], NDArray[np.float64]]:  # fmt: skip
     """The whole noiseless stripe in one call: the section's hits, the clips, the shadow rays
-    on Embree packets (``rtcOccluded8``) and the pixels. Returns (points, reason, t, face,
-    cos_incidence, directions), as ``kernels.fan_stripe_packets``."""
+    on Embree packets (``rtcOccluded8``, its address) and the pixels. Returns (points, reason,
+    t, face, cos_incidence, directions), as ``kernels.fan_stripe_packets``. ``tans, tan_max,
+    step``: the fan's :func:`fan_tans`."""
     points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index, directions = (
         fan_stripe_section(lo, hi, child, count, order, vertices, faces, face_normals, origin,
-                           rotation, fan, sp, offset)
+                           rotation, fan, tans, tan_max, step, sp, offset)
     )  # fmt: skip
     blocked = np.empty(s_index.shape[0], dtype=np.bool_)
     embree.occluded(occluded8, scene, s_o, s_d, s_far, 0.0, blocked)
