@@ -342,7 +342,8 @@ def stripe_hits(
     packets = caster.packets
     if packets is not None:  # one numba call does it all
         points, reason, t, face, cos_incidence, directions = kernels.fan_stripe_packets(
-            packets.lib.intersect8, packets.lib.occluded8, packets.handle, origin, rotation,
+            packets.lib.intersect8, packets.lib.occluded_query, packets.lib.occluded_width,
+            packets.handle, origin, rotation,
             laser.directions, caster.vertices_local, caster.faces, caster.weld, caster.ring_ptr,
             caster.ring_faces, caster.face_normals, bool(refine), constants.BARYCENTRIC_TOL,
             laser.sensor_params, constants.SHADOW_RAY_OFFSET_MM, do_quantize,
@@ -387,7 +388,11 @@ def _section_stripe(
     packets = caster.packets
     if packets is not None:  # one numba call does it all
         points, reason, t, face, cos_incidence, directions = section.fan_stripe_section_packets(
-            packets.lib.occluded8, packets.handle, *tree, quantize
+            packets.lib.occluded_query,
+            packets.lib.occluded_width,
+            packets.handle,
+            *tree,
+            quantize,
         )
     else:
         points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index, directions = (

@@ -508,7 +508,7 @@ def fan_stripe_section(
 
 @numba.njit(cache=True, nogil=True)
 def fan_stripe_section_packets(
-    occluded8: Any, scene: int, lo: NDArray[np.float64], hi: NDArray[np.float64],
+    occluded: Any, width: int, scene: int, lo: NDArray[np.float64], hi: NDArray[np.float64],
     child: NDArray[np.int64], count: NDArray[np.int64], order: NDArray[np.int64],
     vertices: NDArray[np.float64], faces: NDArray[np.int64], face_normals: NDArray[np.float64],
     origin: NDArray[np.float64], rotation: NDArray[np.float64], fan: NDArray[np.float64],
@@ -517,14 +517,15 @@ def fan_stripe_section_packets(
 ) -> tuple[NDArray[np.float64], NDArray[np.uint8], NDArray[np.float64], NDArray[np.int64],
            NDArray[np.float64], NDArray[np.float64]]:  # fmt: skip
     """The whole noiseless stripe in one call: the section's hits, the clips, the shadow rays
-    on Embree packets (``rtcOccluded8``, its address) and the pixels. Returns (points, reason,
-    t, face, cos_incidence, directions), as ``kernels.fan_stripe_packets``. ``tans, tan_max,
-    step``: the fan's :func:`fan_tans`."""
+    on Embree packets (``occluded``, the address of the query of packets of ``width``:
+    ``Library.occluded_query``, ``Library.occluded_width``) and the pixels. Returns (points,
+    reason, t, face, cos_incidence, directions), as ``kernels.fan_stripe_packets``. ``tans,
+    tan_max, step``: the fan's :func:`fan_tans`."""
     points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index, directions = (
         fan_stripe_section(lo, hi, child, count, order, vertices, faces, face_normals, origin,
                            rotation, fan, tans, tan_max, step, sp, offset)
     )  # fmt: skip
     blocked = np.empty(s_index.shape[0], dtype=np.bool_)
-    embree.occluded(occluded8, scene, s_o, s_d, s_far, 0.0, blocked)
+    embree.occluded(occluded, width, scene, s_o, s_d, s_far, 0.0, blocked)
     fan_stripe_finish(points, reason, chip, blocked, s_index, sp, quantize)
     return points, reason, t, face, cos_incidence, directions
