@@ -229,8 +229,7 @@ class FanRays:
 
     @functools.cached_property
     def section_tans(self) -> tuple[NDArray[np.float64], float, float]:
-        """The fan as the plane section takes it (:func:`seamtrack.sensing.section.fan_tans`:
-        tan(phi) of each ray, the wedge's half-opening, the even spacing), computed once."""
+        """The fan as the plane section takes it, once (``section.fan_tans``)."""
         from seamtrack.sensing.section import fan_tans
 
         return fan_tans(self.directions)
@@ -343,10 +342,10 @@ def stripe_hits(
     if packets is not None:  # one numba call does it all
         points, reason, t, face, cos_incidence, directions = kernels.fan_stripe_packets(
             packets.lib.intersect8, packets.lib.occluded_query, packets.lib.occluded_width,
-            packets.handle, origin, rotation,
-            laser.directions, caster.vertices_local, caster.faces, caster.weld, caster.ring_ptr,
-            caster.ring_faces, caster.face_normals, bool(refine), constants.BARYCENTRIC_TOL,
-            laser.sensor_params, constants.SHADOW_RAY_OFFSET_MM, do_quantize,
+            packets.handle, origin, rotation, laser.directions, caster.vertices_local,
+            caster.faces, caster.weld, caster.ring_ptr, caster.ring_faces, caster.face_normals,
+            bool(refine), constants.BARYCENTRIC_TOL, laser.sensor_params,
+            constants.SHADOW_RAY_OFFSET_MM, do_quantize,
         )  # fmt: skip
         return StripeHits(points_laser=points, reason=reason, distance_mm=t, face=face,
                           cos_incidence=cos_incidence, directions_local=directions,
@@ -388,12 +387,8 @@ def _section_stripe(
     packets = caster.packets
     if packets is not None:  # one numba call does it all
         points, reason, t, face, cos_incidence, directions = section.fan_stripe_section_packets(
-            packets.lib.occluded_query,
-            packets.lib.occluded_width,
-            packets.handle,
-            *tree,
-            quantize,
-        )
+            packets.lib.occluded_query, packets.lib.occluded_width, packets.handle, *tree, quantize
+        )  # fmt: skip
     else:
         points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index, directions = (
             section.fan_stripe_section(*tree)
