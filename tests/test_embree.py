@@ -77,6 +77,31 @@ def test_packets_give_embreex_occlusion(plate) -> None:
 
 
 @needs_packets
+@pytest.mark.parametrize("n", [0, 1, 15, 16, 17, 2003])
+def test_occlusion_packets_of_16_and_of_8_agree(plate, n: int) -> None:
+    """The shadow rays give the same answers in packets of 16 (where the CPU traces them
+    natively, the default there) as in packets of 8, ray for ray, for any ray count."""
+    _, packets, _ = plate
+    lib = packets.packets.lib
+    rng = np.random.default_rng(n)
+    origins, directions = random_rays(n, seed=n + 1)
+    far = rng.uniform(5.0, 150.0, n)
+    o_local = origins - packets.local_origin
+    by_width = {}
+    for query, width in ((lib.occluded8, 8), (lib.occluded16, 16)):
+        blocked = np.empty(n, dtype=np.bool_)
+        embree.occluded(query, width, packets.packets.handle, o_local, directions, far, 0.0,
+                        blocked)  # fmt: skip
+        by_width[width] = blocked
+    np.testing.assert_array_equal(by_width[16], by_width[8])
+    if n > 100:
+        assert 0.05 < by_width[8].mean() < 0.95
+    native = lib.device_property(lib.device, embree._PROPERTY_NATIVE_RAY16) == 1
+    assert lib.occluded_width == (16 if native else 8)
+    assert lib.occluded_query == (lib.occluded16 if native else lib.occluded8)
+
+
+@needs_packets
 @pytest.mark.parametrize("refine", [True, False])
 def test_the_stripe_is_the_same_on_both_backends(plate, refine: bool) -> None:
     _, packets, fallback = plate

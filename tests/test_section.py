@@ -11,6 +11,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+import trimesh
 from scipy.spatial.transform import Rotation
 from test_raycast import SECTIONS, analytic_first_hit, extruded_mesh, posed
 
@@ -242,3 +243,79 @@ def test_a_triangle_lying_in_the_laser_plane_is_grazed_not_hit() -> None:
     without = stripe_hits(IDEAL, RayCaster.from_mesh(plate), T, 257, fan="section")
     np.testing.assert_array_equal(with_wall.distance_mm, without.distance_mm)
     np.testing.assert_array_equal(with_wall.reason, without.reason)
+
+
+# ----------------------------------------------------------------------------- ray ranges
+def _all_rays_hits(caster: RayCaster, T: np.ndarray, fan: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Each ray's nearest crossing, every segment tested against every ray (no ray range)."""
+    index = caster.section
+    tans = fan[:, 1] / fan[:, 2]
+    segs, tri = section.section_segments(
+        index.lo, index.hi, index.child, index.count, index.order, caster.vertices_local,
+        caster.faces, T[:3, 3] - caster.local_origin, np.ascontiguousarray(T[:3, :3]),
+        float(np.abs(tans).max()) * (1 + 1e-9) + 1e-9,
+    )  # fmt: skip
+    best_t = np.full(len(fan), np.inf)
+    best_f = np.full(len(fan), -1, dtype=np.int64)
+    for (y0, z0, y1, z1), k in zip(segs, tri, strict=True):
+        section._sweep(fan, 0, len(fan), y0, z0, y1, z1, int(k), best_t, best_f)
+    return best_t, best_f
+
+
+def _pipe_mesh() -> trimesh.Trimesh:
+    """A thick-walled pipe across the fan (axis along x), finely faceted: the laser plane cuts
+    its outer and inner walls, near and far, so most of the section lies behind the hits."""
+    pipe = trimesh.creation.annulus(r_min=44.0, r_max=50.0, height=400.0, sections=900)
+    pipe.apply_transform(frames.make(Rotation.from_rotvec([0.0, np.pi / 2, 0.0]).as_matrix(),
+                                     [0.0, 0.0, -50.0]))  # fmt: skip
+    return pipe
+
+
+@pytest.mark.parametrize(("part", "even"), [("plate", True), ("plate", False), ("pipe", True)])
+def test_the_rays_a_segment_covers_miss_no_hit(part: str, even: bool) -> None:
+    """The rays each segment is tested against (found by arithmetic on an evenly spaced fan,
+    by binary search otherwise) and the nodes left closed behind the hits found (the pipe's
+    far and inner walls) lose no hit: the hits equal those of every segment tested against
+    every ray, bit for bit."""
+    mesh = v_groove_plate_mesh(triangles=4_000, seed=3) if part == "plate" else _pipe_mesh()
+    caster = RayCaster.from_mesh(mesh)
+    rng = np.random.default_rng(5)
+    fan = np.array(laser_fan(IDEAL, 777).directions)
+    if not even:  # the same span, uneven
+        tans = np.sort(rng.uniform(-1.0, 1.0, len(fan))) * np.abs(fan[:, 1] / fan[:, 2]).max()
+        fan = np.column_stack([np.zeros(len(fan)), tans, np.ones(len(fan))])
+        fan /= np.linalg.norm(fan, axis=1, keepdims=True)
+    tans = fan[:, 1] / fan[:, 2]
+    assert (section._even_step(tans) > 0.0) == even
+    index = caster.section
+    for _ in range(6):
+        rotation = Rotation.from_rotvec(rng.normal(0.0, 0.15, 3)).as_matrix() @ LOOK_DOWN
+        T = frames.make(rotation, [rng.uniform(-10, 10), rng.uniform(-10, 10), 91.0])
+        t, face = section.section_hits(
+            index.lo, index.hi, index.child, index.count, index.order, caster.vertices_local,
+            caster.faces, T[:3, 3] - caster.local_origin, np.ascontiguousarray(T[:3, :3]), fan,
+        )  # fmt: skip
+        t_all, face_all = _all_rays_hits(caster, T, fan)
+        assert (face >= 0).sum() > len(fan) // 2
+        if part == "pipe":  # the culling runs: more crossings than it waits for
+            assert len(_brute_force_segments(caster, T, 0.3)) > 2 * section.CULL_AFTER
+        np.testing.assert_array_equal(face, face_all)
+        np.testing.assert_array_equal(t, t_all)
+
+
+def test_an_evenly_spaced_fan_covers_at_least_the_binary_searched_rays() -> None:
+    """On the laser fan (a linspace in tan), each segment's arithmetic ray range contains the
+    binary-searched one, and is at most two rays wider on each side."""
+    tans = np.array(laser_fan(IDEAL, 1024).directions)
+    tans = tans[:, 1] / tans[:, 2]
+    step = section._even_step(tans)
+    assert step == pytest.approx((tans[-1] - tans[0]) / 1023, rel=1e-12)
+    rng = np.random.default_rng(7)
+    for _ in range(2000):
+        y0, y1 = rng.uniform(-40.0, 40.0, 2)
+        z0, z1 = rng.uniform(-5.0, 120.0, 2)
+        a, b = section._ray_range(tans, step, y0, z0, y1, z1)
+        c, d = section._ray_range(tans, 0.0, y0, z0, y1, z1)
+        if c < d:
+            assert a <= c and b >= d
+            assert c - a <= 2 and b - d <= 2

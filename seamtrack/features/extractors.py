@@ -31,6 +31,7 @@ Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groov
 
 from __future__ import annotations
 
+import functools
 import importlib
 import importlib.metadata
 from collections.abc import Callable
@@ -42,6 +43,7 @@ from numpy.typing import NDArray
 
 from seamtrack.errors import PluginError
 from seamtrack.features._two_lines import two_lines_share
+from seamtrack.features._v_search import NONE, SearchParams, pieces_of, search
 from seamtrack.features.base import _Base, _confidence, included
 from seamtrack.features.expect import Expect
 from seamtrack.features.generic import GenericExtractor
@@ -85,6 +87,9 @@ class FilletExtractor(_Base):
 
     def _extract(self, profile: Profile, seg: Segments) -> Feature | tuple[Feature, float]:
         lo, hi = self._angles(self.min_angle_deg, self.max_angle_deg)
+        fast = _corner(self, profile, seg, False, lo, hi, self.max_gap_mm)
+        if fast is not None:
+            return fast
         found = self._arms(seg, False, lo, hi, self.max_gap_mm)
         if isinstance(found, str):
             return Feature.failed(found, joint=self.name)
@@ -102,10 +107,84 @@ class OutsideCornerExtractor(_Base):
 
     def _extract(self, profile: Profile, seg: Segments) -> Feature | tuple[Feature, float]:
         lo, hi = self._angles(self.min_angle_deg, self.max_angle_deg)
+        fast = _corner(self, profile, seg, True, lo, hi, self.max_gap_mm)
+        if fast is not None:
+            return fast
         found = self._arms(seg, True, lo, hi, self.max_gap_mm)
         if isinstance(found, str):
             return Feature.failed(found, joint=self.name)
         return _two_faces(self, profile, seg, found)
+
+
+def _corner(
+    ex: _Base,
+    profile: Profile,
+    seg: Segments,
+    opening_down: bool,
+    min_deg: float,
+    max_deg: float,
+    max_reach_mm: float,
+) -> Feature | tuple[Feature, float] | None:
+    """:meth:`~.base._Base._arms` and :func:`_two_faces` with the same answers, read off the
+    search's table as floats: no :class:`~seamtrack.features.lines.Line` built per face
+    (array copies), no numpy call on a 2-vector. None where the Python steps must run: an
+    expectation to check the included angle against, no pieces, a face without inliers."""
+    if isinstance(ex.expect, Expect) or not seg.n_lines:
+        return None
+    params = _search_params(
+        opening_down,
+        float(min_deg),
+        float(max_deg),
+        float(max_reach_mm),
+        bool(ex.arms_from_pieces),
+        int(ex.min_points),
+        float(ex.min_arm_mm),
+    )
+    points = np.ascontiguousarray(seg.points, dtype=np.float64)
+    stray = np.asarray(seg.stray, dtype=np.bool_)
+    found = search(points, stray, float(seg.tol), pieces_of(seg), params)
+    pair = found.pair
+    if pair.left == NONE:
+        return Feature.failed("no pair of lines forms the joint", joint=ex.name)
+    geo, span, index = found.table.geo, found.table.span, found.table.index
+    l_start, l_count = span[pair.left].tolist()
+    r_start, r_count = span[pair.right].tolist()
+    if not (l_count and r_count):
+        return None
+    lcy, lcz, ldy, ldz, l_rms = geo[pair.left].tolist()
+    rcy, rcz, rdy, rdz, r_rms = geo[pair.right].tolist()
+    # _confidence's arithmetic on the faces' counts and rms
+    explained = (l_count + r_count) / max(len(seg.points), 1)
+    fit = max(0.0, 1.0 - max(l_rms, r_rms) / seg.tol)
+    confidence = min(max(float(0.5 * explained + 0.5 * fit), 0.0), 1.0)  # NaN stays NaN
+    feature = ex._found(profile, np.array([pair.apex_y, pair.apex_z]), confidence=confidence)
+    lo, hi = int(index[l_start + l_count - 1]) + 1, int(index[r_start])
+    share = two_lines_share(
+        seg.points, seg.stray, lo, hi, (lcy, lcz, ldy, ldz), (rcy, rcz, rdy, rdz), 3.0 * seg.tol
+    )
+    return feature, share
+
+
+@functools.lru_cache(maxsize=64)
+def _search_params(
+    opening_down: bool,
+    min_deg: float,
+    max_deg: float,
+    max_reach: float,
+    pieces_too: bool,
+    min_points: int,
+    min_arm: float,
+) -> SearchParams:
+    """The V search's parameters, built once per set of values."""
+    return SearchParams(
+        sign=1.0 if opening_down else -1.0,
+        min_deg=min_deg,
+        max_deg=max_deg,
+        max_reach=max_reach,
+        pieces_too=pieces_too,
+        min_points=min_points,
+        min_arm=min_arm,
+    )
 
 
 def _two_faces(

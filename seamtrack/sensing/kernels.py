@@ -303,7 +303,7 @@ def fan_stripe_finish(
 
 @numba.njit(cache=True, nogil=True)
 def fan_stripe_packets(
-    intersect8: Any, occluded8: Any, scene: int,
+    intersect8: Any, occluded: Any, width: int, scene: int,
     origin: NDArray[np.float64], rotation: NDArray[np.float64], fan: NDArray[np.float64],
     vertices: NDArray[np.float64], faces: NDArray[np.int64], weld: NDArray[np.int64],
     ring_ptr: NDArray[np.int64], ring_faces: NDArray[np.int64],
@@ -312,7 +312,9 @@ def fan_stripe_packets(
 ) -> tuple[NDArray[np.float64], NDArray[np.uint8], NDArray[np.float64], NDArray[np.int64],
            NDArray[np.float64], NDArray[np.float64]]:  # fmt: skip
     """The whole noiseless stripe in one call on the packet backend
-    (:mod:`seamtrack.sensing.embree`).
+    (:mod:`seamtrack.sensing.embree`): ``intersect8`` the address of ``rtcIntersect8``,
+    ``occluded`` and ``width`` the occlusion query's and its packet's
+    (``Library.occluded_query``, ``Library.occluded_width``).
 
     The fan turned into the local frame, first hits, :func:`fan_stripe_hits`, shadow rays,
     :func:`fan_stripe_finish`. Returns (points, reason, t, face, cos_incidence, directions).
@@ -332,7 +334,7 @@ def fan_stripe_packets(
                         ring_ptr, ring_faces, face_normals, refine, tol, sp, offset)
     )  # fmt: skip
     blocked = np.empty(shadow_index.shape[0], dtype=np.bool_)
-    embree.occluded(occluded8, scene, shadow_o, shadow_d, shadow_far, 0.0, blocked)
+    embree.occluded(occluded, width, scene, shadow_o, shadow_d, shadow_far, 0.0, blocked)
     fan_stripe_finish(points, reason, chip, blocked, shadow_index, sp, quantize)
     return points, reason, t, face, cos_incidence, directions
 

@@ -227,6 +227,13 @@ class FanRays:
     directions: NDArray[np.float64]
     sensor_params: NDArray[np.float64]
 
+    @functools.cached_property
+    def section_tans(self) -> tuple[NDArray[np.float64], float, float]:
+        """The fan as the plane section takes it, once (``section.fan_tans``)."""
+        from seamtrack.sensing.section import fan_tans
+
+        return fan_tans(self.directions)
+
 
 @functools.lru_cache(maxsize=32)
 def laser_fan(sensor: LaserLineSensor, rays: int) -> FanRays:
@@ -334,10 +341,11 @@ def stripe_hits(
     packets = caster.packets
     if packets is not None:  # one numba call does it all
         points, reason, t, face, cos_incidence, directions = kernels.fan_stripe_packets(
-            packets.lib.intersect8, packets.lib.occluded8, packets.handle, origin, rotation,
-            laser.directions, caster.vertices_local, caster.faces, caster.weld, caster.ring_ptr,
-            caster.ring_faces, caster.face_normals, bool(refine), constants.BARYCENTRIC_TOL,
-            laser.sensor_params, constants.SHADOW_RAY_OFFSET_MM, do_quantize,
+            packets.lib.intersect8, packets.lib.occluded_query, packets.lib.occluded_width,
+            packets.handle, origin, rotation, laser.directions, caster.vertices_local,
+            caster.faces, caster.weld, caster.ring_ptr, caster.ring_faces, caster.face_normals,
+            bool(refine), constants.BARYCENTRIC_TOL, laser.sensor_params,
+            constants.SHADOW_RAY_OFFSET_MM, do_quantize,
         )  # fmt: skip
         return StripeHits(points_laser=points, reason=reason, distance_mm=t, face=face,
                           cos_incidence=cos_incidence, directions_local=directions,
@@ -372,14 +380,15 @@ def _section_stripe(
     from seamtrack.sensing.kernels import fan_stripe_finish
 
     index = caster.section
+    tans, tan_max, step = fan.section_tans
     tree = (index.lo, index.hi, index.child, index.count, index.order, caster.vertices_local,
-            caster.faces, caster.face_normals, origin, rotation, fan.directions,
-            fan.sensor_params, constants.SHADOW_RAY_OFFSET_MM)  # fmt: skip
+            caster.faces, caster.face_normals, origin, rotation, fan.directions, tans, tan_max,
+            step, fan.sensor_params, constants.SHADOW_RAY_OFFSET_MM)  # fmt: skip
     packets = caster.packets
     if packets is not None:  # one numba call does it all
         points, reason, t, face, cos_incidence, directions = section.fan_stripe_section_packets(
-            packets.lib.occluded8, packets.handle, *tree, quantize
-        )
+            packets.lib.occluded_query, packets.lib.occluded_width, packets.handle, *tree, quantize
+        )  # fmt: skip
     else:
         points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index, directions = (
             section.fan_stripe_section(*tree)

@@ -23,7 +23,6 @@ plane at one vertex only is skipped.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import Any
 
 import numba
@@ -31,179 +30,26 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.sensing import embree
+from seamtrack.sensing._section_tree import LEAF_SIZE, SectionIndex, build
 from seamtrack.sensing.kernels import fan_stripe_finish, fan_stripe_hits
 
-#: Triangles per leaf of the hierarchy.
-LEAF_SIZE = 4
+__all__ = ["LEAF_SIZE", "SectionIndex", "build", "fan_stripe_section", "fan_stripe_section_packets",
+           "fan_tans", "section_hits", "section_segments"]  # fmt: skip
+
 #: A crossing at a segment's end counts for the segment within this fraction of its length.
 END_SLACK = 1e-12
 #: Boxes within this distance (mm) of the plane or of the fan's wedge are opened (conservative).
 BOX_SLACK_MM = 1e-6
 #: The ray parameter of "no crossing".
 NO_HIT = np.inf
-
-
-@dataclass(frozen=True, eq=False)
-class SectionIndex:
-    """A bounding-volume hierarchy over a mesh's triangles (arrays, built by :func:`build`).
-
-    Attributes
-    ----------
-    lo, hi : (m, 3) float
-        Each node's box.
-    child : (m,) int64
-        An inner node's first child (the second follows it); a leaf's first entry in ``order``.
-    count : (m,) int64
-        A leaf's number of triangles; 0 for an inner node.
-    order : (f,) int64
-        Triangle indices, leaf by leaf.
-    """
-
-    lo: NDArray[np.float64]
-    hi: NDArray[np.float64]
-    child: NDArray[np.int64]
-    count: NDArray[np.int64]
-    order: NDArray[np.int64]
-
-    @property
-    def nbytes(self) -> int:
-        """Memory held by the index."""
-        return sum(a.nbytes for a in (self.lo, self.hi, self.child, self.count, self.order))
-
-
-def build(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> SectionIndex:
-    """The hierarchy of a mesh: each node's triangles split in halves at the median of their
-    boxes' centres along the longest axis (quickselect), down to :data:`LEAF_SIZE`; each node's
-    box the union of its children's. O(n log n).
-
-    Memory: 56 bytes a triangle (the boxes in float64 and the order), plus 24 bytes a triangle
-    (the centres) while it is built.
-    """
-    v = np.ascontiguousarray(vertices, dtype=np.float64)
-    f = np.ascontiguousarray(faces, dtype=np.int64)
-    lo, hi, child, count, order = _build(v, f, LEAF_SIZE, _nodes(len(f)))
-    return SectionIndex(lo=lo, hi=hi, child=child, count=count, order=order)
-
-
-def _nodes(n: int) -> int:
-    """How many nodes :func:`_build` makes for n triangles (halving until a leaf)."""
-    memo: dict[int, int] = {}
-
-    def count(m: int) -> int:
-        if m <= LEAF_SIZE:
-            return 1
-        if m not in memo:
-            memo[m] = 1 + count(m // 2) + count(m - m // 2)
-        return memo[m]
-
-    return count(n)
-
-
 #: A vertex closer to the laser plane than this (mm) lies on it (rounding of the frame change
 #: is ~1e-13 mm at the parts' sizes).
 ON_PLANE_MM = 1e-9
-
-
-@numba.njit(cache=True, nogil=True)
-def _select(
-    order: NDArray[np.int64], centre: NDArray[np.float64], axis: int, start: int, end: int,
-    kth: int,
-) -> None:  # fmt: skip
-    """Reorder ``order[start:end]`` so that the entry at ``kth`` has the centre it would have
-    sorted along ``axis``, none greater before it and none smaller after (quickselect)."""
-    left, right = start, end - 1
-    while right > left:
-        mid = (left + right) // 2
-        a, b, c = centre[order[left], axis], centre[order[mid], axis], centre[order[right], axis]
-        pivot = max(min(a, b), min(max(a, b), c))  # the median of the three
-        i, j = left, right
-        while i <= j:
-            while centre[order[i], axis] < pivot:
-                i += 1
-            while centre[order[j], axis] > pivot:
-                j -= 1
-            if i <= j:
-                order[i], order[j] = order[j], order[i]
-                i += 1
-                j -= 1
-        if kth <= j:
-            right = j
-        elif kth >= i:
-            left = i
-        else:
-            return
-
-
-@numba.njit(cache=True, nogil=True)
-def _build(
-    vertices: NDArray[np.float64], faces: NDArray[np.int64], leaf: int, nodes: int
-) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64], NDArray[np.int64],
-           NDArray[np.int64]]:  # fmt: skip
-    f = faces.shape[0]
-    order = np.arange(f)
-    centre = np.empty((f, 3))
-    for k in range(f):
-        for a in range(3):
-            p, q, r = vertices[faces[k, 0], a], vertices[faces[k, 1], a], vertices[faces[k, 2], a]
-            centre[k, a] = 0.5 * (min(p, q, r) + max(p, q, r))
-    cmin = np.empty(3)
-    cmax = np.empty(3)
-    lo = np.empty((nodes, 3))
-    hi = np.empty((nodes, 3))
-    child = np.zeros(nodes, dtype=np.int64)
-    count = np.zeros(nodes, dtype=np.int64)
-    # The topology: each range of ``order`` split at its median along the longest axis of its
-    # centres' box, depth first; children allocated in pairs, so a child's index is always
-    # larger than its parent's.
-    stack_node = np.empty(256, dtype=np.int64)
-    stack_start = np.empty(256, dtype=np.int64)
-    stack_end = np.empty(256, dtype=np.int64)
-    stack_node[0], stack_start[0], stack_end[0] = 0, 0, f
-    top = 1
-    used = 1
-    while top > 0:
-        top -= 1
-        node, start, end = stack_node[top], stack_start[top], stack_end[top]
-        if end - start <= leaf:
-            child[node] = start
-            count[node] = end - start
-            continue
-        for a in range(3):
-            cmin[a] = np.inf
-            cmax[a] = -np.inf
-        for j in range(start, end):
-            for a in range(3):
-                cmin[a] = min(cmin[a], centre[order[j], a])
-                cmax[a] = max(cmax[a], centre[order[j], a])
-        axis = 0
-        for a in range(1, 3):
-            if cmax[a] - cmin[a] > cmax[axis] - cmin[axis]:
-                axis = a
-        mid = (start + end) // 2
-        _select(order, centre, axis, start, end, mid)
-        child[node] = used
-        stack_node[top], stack_start[top], stack_end[top] = used, start, mid
-        stack_node[top + 1], stack_start[top + 1], stack_end[top + 1] = used + 1, mid, end
-        top += 2
-        used += 2
-    # The boxes, children before parents.
-    for node in range(used - 1, -1, -1):
-        if count[node] > 0:
-            for a in range(3):
-                lo[node, a] = np.inf
-                hi[node, a] = -np.inf
-            for j in range(child[node], child[node] + count[node]):
-                k = order[j]
-                for a in range(3):
-                    for c in range(3):
-                        lo[node, a] = min(lo[node, a], vertices[faces[k, c], a])
-                        hi[node, a] = max(hi[node, a], vertices[faces[k, c], a])
-        else:
-            first = child[node]
-            for a in range(3):
-                lo[node, a] = min(lo[first, a], lo[first + 1, a])
-                hi[node, a] = max(hi[first, a], hi[first + 1, a])
-    return lo, hi, child, count, order
+#: Rays per block of the running maxima of the hits (:func:`section_hits` culls against them).
+BLOCK = 32
+#: :func:`section_hits` starts culling nodes behind the hits found after cutting this many
+#: triangles (on a small section the tests cost more than they save).
+CULL_AFTER = 96
 
 
 # --------------------------------------------------------------------------- the section
@@ -293,10 +139,10 @@ def _cut(
 
 @numba.njit(cache=True, nogil=True, inline="always")
 def _ray_range(
-    tans: NDArray[np.float64], y0: float, z0: float, y1: float, z1: float
+    tans: NDArray[np.float64], step: float, y0: float, z0: float, y1: float, z1: float
 ) -> tuple[int, int]:  # fmt: skip
-    """The rays [first, last) whose angle lies within the segment's (with a margin)."""
-    n = tans.shape[0]
+    """The rays [first, last) whose angle lies within the segment's (with a margin);
+    ``step`` the rays' even spacing in tan (:func:`_even_step`), 0 if uneven."""
     if z0 <= 0.0 and z1 <= 0.0:
         return 0, 0
     if z0 > 0.0 and z1 > 0.0:
@@ -314,11 +160,53 @@ def _ray_range(
             t_lo, t_hi = -np.inf, t_pos
         else:
             t_lo, t_hi = -np.inf, np.inf
+    return _tan_range(tans, step, t_lo, t_hi)
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _tan_range(
+    tans: NDArray[np.float64], step: float, t_lo: float, t_hi: float
+) -> tuple[int, int]:  # fmt: skip
+    """The rays [first, last) whose tan(phi) lies within [t_lo, t_hi] (with a margin)."""
+    n = tans.shape[0]
     margin_lo = 1e-9 * (1.0 + abs(t_lo)) if np.isfinite(t_lo) else 0.0
     margin_hi = 1e-9 * (1.0 + abs(t_hi)) if np.isfinite(t_hi) else 0.0
+    if step > 0.0:
+        # Evenly spaced: the index from the angle, a ray wider on each side than the binary
+        # search's (its result +- 1 ray of rounding), so never fewer rays.
+        first = 0
+        if t_lo > -np.inf:
+            u = (t_lo - margin_lo - tans[0]) / step
+            first = int(max(min(np.floor(u), n), 0.0))
+        last = n
+        if t_hi < np.inf:
+            u = (t_hi + margin_hi - tans[0]) / step
+            last = int(max(min(np.floor(u) + 1.0, n), 0.0))
+        return max(first - 2, 0), min(last + 2, n)
     first = int(np.searchsorted(tans, t_lo - margin_lo))
     last = int(np.searchsorted(tans, t_hi + margin_hi, side="right"))
     return max(first - 1, 0), min(last + 1, n)
+
+
+#: A fan whose rays' tan(phi) lie within this fraction of their spacing of an even grid is
+#: evenly spaced (:func:`_even_step`): the rays a segment covers are then found by arithmetic.
+EVEN_RTOL = 1e-6
+
+
+@numba.njit(cache=True, nogil=True)
+def _even_step(tans: NDArray[np.float64]) -> float:
+    """The spacing of ``tans`` (sorted) when evenly spaced (within :data:`EVEN_RTOL` of it),
+    else 0: the laser fan (:func:`seamtrack.sensing.scan.laser_fan`, a ``linspace`` in tan)."""
+    n = tans.shape[0]
+    if n < 2:
+        return 0.0
+    step = (tans[n - 1] - tans[0]) / (n - 1)
+    if not step > 0.0:
+        return 0.0
+    for i in range(n):
+        if abs(tans[i] - (tans[0] + i * step)) > EVEN_RTOL * step:
+            return 0.0
+    return step
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -326,7 +214,9 @@ def _sweep(
     fan: NDArray[np.float64], first: int, last: int, y0: float, z0: float, y1: float,
     z1: float, k: int, best_t: NDArray[np.float64], best_f: NDArray[np.int64],
 ) -> None:  # fmt: skip
-    """Rays first..last-1 from the emitter against the segment: keep each ray's nearest."""
+    """Rays first..last-1 from the emitter against the segment: keep each ray's nearest (of
+    two at the same distance, the lower triangle index: the order segments come in does not
+    matter)."""
     ey, ez = y1 - y0, z1 - z0
     for i in range(first, last):
         dy, dz = fan[i, 1], fan[i, 2]
@@ -340,7 +230,7 @@ def _sweep(
         if s_det < -END_SLACK * a_det or s_det > (1.0 + END_SLACK) * a_det:
             continue
         t = t_det / a_det
-        if t > 0.0 and t < best_t[i]:
+        if t > 0.0 and (t < best_t[i] or (t == best_t[i] and k < best_f[i])):
             best_t[i] = t
             best_f[i] = k
 
@@ -390,6 +280,75 @@ def _visit(
     return leaves, found
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _box_distance2(
+    lo: NDArray[np.float64], hi: NDArray[np.float64], node: int, o: NDArray[np.float64]
+) -> float:  # fmt: skip
+    """The squared distance from ``o`` to the node's box (0 inside)."""
+    d2 = 0.0
+    for a in range(3):
+        d = max(lo[node, a] - o[a], 0.0, o[a] - hi[node, a])
+        d2 += d * d
+    return d2
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _box_rays(
+    lo: NDArray[np.float64], hi: NDArray[np.float64], node: int, o: NDArray[np.float64],
+    rotation: NDArray[np.float64], tans: NDArray[np.float64], step: float,
+) -> tuple[int, int]:  # fmt: skip
+    """The rays [first, last) that may meet the node's box: the box's (y_L, z_L) as intervals,
+    their angles' range (a superset)."""
+    cy = cz = hy = hz = 0.0
+    for a in range(3):
+        c = 0.5 * (lo[node, a] + hi[node, a]) - o[a]
+        h = 0.5 * (hi[node, a] - lo[node, a])
+        cy += rotation[a, 1] * c
+        cz += rotation[a, 2] * c
+        hy += abs(rotation[a, 1]) * h
+        hz += abs(rotation[a, 2]) * h
+    y_lo, y_hi, z_lo, z_hi = cy - hy, cy + hy, cz - hz, cz + hz
+    if not z_lo > 0.0:  # the box reaches the emitter's line z_L = 0: every ray may
+        return 0, tans.shape[0]
+    t_lo = min(y_lo / z_lo, y_lo / z_hi)
+    t_hi = max(y_hi / z_lo, y_hi / z_hi)
+    return _tan_range(tans, step, t_lo, t_hi)
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _farthest(
+    best_t: NDArray[np.float64], block_max: NDArray[np.float64], stale: NDArray[np.bool_],
+    first: int, last: int,
+) -> float:  # fmt: skip
+    """An upper bound of the nearest hits of rays [first, last): the maxima of their blocks
+    (a stale block's recomputed)."""
+    far = -np.inf
+    n = best_t.shape[0]
+    for b in range(first // BLOCK, (last - 1) // BLOCK + 1):
+        if stale[b]:
+            m = -np.inf
+            for i in range(b * BLOCK, min((b + 1) * BLOCK, n)):
+                m = max(m, best_t[i])
+            block_max[b] = m
+            stale[b] = False
+        far = max(far, block_max[b])
+    return far
+
+
+@numba.njit(cache=True, nogil=True)
+def fan_tans(fan: NDArray[np.float64]) -> tuple[NDArray[np.float64], float, float]:
+    """What :func:`section_hits` needs of a fan besides its directions, once per fan: each
+    ray's tan(phi) = y_L / z_L, the wedge's half-opening in tan (a margin added) and the rays'
+    even spacing in tan (:func:`_even_step`; 0: uneven)."""
+    n = fan.shape[0]
+    tans = np.empty(n)
+    tan_max = 0.0
+    for i in range(n):
+        tans[i] = fan[i, 1] / fan[i, 2]
+        tan_max = max(tan_max, abs(tans[i]))
+    return tans, tan_max * (1.0 + 1e-9) + 1e-9, _even_step(tans)
+
+
 @numba.njit(cache=True, nogil=True)
 def section_hits(
     lo: NDArray[np.float64], hi: NDArray[np.float64], child: NDArray[np.int64],
@@ -402,26 +361,93 @@ def section_hits(
     ``origin`` (3,) is the emitter and ``vertices`` the mesh in the same (local) frame;
     ``rotation`` (3, 3) the laser frame's axes; ``fan`` (n, 3) unit directions in the laser
     frame, x_L = 0, sorted by y_L / z_L, all with z_L > 0.
+
+    The hierarchy is walked nearer child first, and a node farther from the emitter than the
+    hits already found on every ray that may meet it is not opened (a crossing in it could
+    only be farther): behind the visible surface (a pipe's far wall, its inside) nothing is
+    cut. Which crossings win does not depend on the order (:func:`_sweep`).
     """
+    tans, tan_max, step = fan_tans(fan)
+    return _section_hits(lo, hi, child, count, order, vertices, faces, origin, rotation, fan,
+                         tans, tan_max, step)  # fmt: skip
+
+
+@numba.njit(cache=True, nogil=True)
+def _section_hits(
+    lo: NDArray[np.float64], hi: NDArray[np.float64], child: NDArray[np.int64],
+    count: NDArray[np.int64], order: NDArray[np.int64], vertices: NDArray[np.float64],
+    faces: NDArray[np.int64], origin: NDArray[np.float64], rotation: NDArray[np.float64],
+    fan: NDArray[np.float64], tans: NDArray[np.float64], tan_max: float, step: float,
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:  # fmt: skip
+    """:func:`section_hits` with the fan's :func:`fan_tans` given."""
     n = fan.shape[0]
     best_t = np.full(n, NO_HIT)
     best_f = np.full(n, -1, dtype=np.int64)
-    tans = np.empty(n)
-    tan_max = 0.0
-    for i in range(n):
-        tans[i] = fan[i, 1] / fan[i, 2]
-        tan_max = max(tan_max, abs(tans[i]))
-    tan_max = tan_max * (1.0 + 1e-9) + 1e-9
-    leaves, found = _visit(lo, hi, child, count, order, origin, rotation, tan_max)
-    for j in range(found):
-        node = leaves[j]
+    blocks = (n + BLOCK - 1) // BLOCK
+    block_max = np.full(blocks, NO_HIT)
+    stale = np.zeros(blocks, dtype=np.bool_)
+    r = rotation
+    n0, n1, n2 = r[0, 0], r[1, 0], r[2, 0]
+    # The wedge |y_L| <= tan_max z_L as two half-spaces m . (p - o) <= 0.
+    a0, a1, a2 = (
+        r[0, 1] - tan_max * r[0, 2],
+        r[1, 1] - tan_max * r[1, 2],
+        r[2, 1] - tan_max * r[2, 2],
+    )
+    b0, b1, b2 = (
+        -r[0, 1] - tan_max * r[0, 2],
+        -r[1, 1] - tan_max * r[1, 2],
+        -r[2, 1] - tan_max * r[2, 2],
+    )
+    stack = np.empty(128, dtype=np.int64)
+    stack[0] = 0
+    top = 1
+    cuts = 0
+    culling = False
+    while top > 0:
+        top -= 1
+        node = stack[top]
+        if (
+            _box_outside(lo, hi, node, origin, n0, n1, n2) > BOX_SLACK_MM
+            or _box_outside(lo, hi, node, origin, -n0, -n1, -n2) > BOX_SLACK_MM
+            or _box_outside(lo, hi, node, origin, a0, a1, a2) > BOX_SLACK_MM
+            or _box_outside(lo, hi, node, origin, b0, b1, b2) > BOX_SLACK_MM
+        ):
+            continue
+        if count[node] == 0:
+            if culling:
+                first, last = _box_rays(lo, hi, node, origin, rotation, tans, step)
+                if first >= last:
+                    continue
+                # A crossing in the box is at least its distance from the emitter (rounding of the
+                # hits' distances allowed for); the leaves are cut without this test.
+                far = _farthest(best_t, block_max, stale, first, last)
+                near2 = _box_distance2(lo, hi, node, origin)
+                if far < NO_HIT and near2 * (1.0 - 1e-9) > (far + 1e-9) * (far + 1e-9):
+                    continue
+            c = child[node]
+            if _box_distance2(lo, hi, c, origin) <= _box_distance2(lo, hi, c + 1, origin):
+                stack[top], stack[top + 1] = c + 1, c
+            else:
+                stack[top], stack[top + 1] = c, c + 1
+            top += 2
+            continue
+        cuts += count[node]
+        if not culling and cuts >= CULL_AFTER:
+            culling = True
+            stale[:] = True
         for m in range(child[node], child[node] + count[node]):
             k = order[m]
             crossed, y0, z0, y1, z1 = _cut(vertices, faces, k, origin, rotation)
             if not crossed:
                 continue
-            first, last = _ray_range(tans, y0, z0, y1, z1)
+            first, last = _ray_range(tans, step, y0, z0, y1, z1)
+            if first >= last:
+                continue
             _sweep(fan, first, last, y0, z0, y1, z1, k, best_t, best_f)
+            if culling:
+                for b in range(first // BLOCK, (last - 1) // BLOCK + 1):
+                    stale[b] = True
     return best_t, best_f
 
 
@@ -456,20 +482,22 @@ def fan_stripe_section(
     lo: NDArray[np.float64], hi: NDArray[np.float64], child: NDArray[np.int64],
     count: NDArray[np.int64], order: NDArray[np.int64], vertices: NDArray[np.float64],
     faces: NDArray[np.int64], face_normals: NDArray[np.float64], origin: NDArray[np.float64],
-    rotation: NDArray[np.float64], fan: NDArray[np.float64], sp: NDArray[np.float64],
-    offset: float,
+    rotation: NDArray[np.float64], fan: NDArray[np.float64], tans: NDArray[np.float64],
+    tan_max: float, step: float, sp: NDArray[np.float64], offset: float,
 ) -> tuple[NDArray[np.float64], NDArray[np.uint8], NDArray[np.float64], NDArray[np.int64],
            NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64],
            NDArray[np.float64], NDArray[np.int64], NDArray[np.float64]]:  # fmt: skip
     """The section's hits through the stripe's clips (``fan_stripe_hits``); returns its ten
-    arrays and the rays' directions in the local frame. The shadow rays are the caller's."""
+    arrays and the rays' directions in the local frame. The shadow rays are the caller's.
+    ``tans, tan_max, step``: the fan's :func:`fan_tans`."""
     n = fan.shape[0]
     directions = np.empty((n, 3))
     for i in range(n):
         for a in range(3):
             directions[i, a] = (rotation[a, 0] * fan[i, 0] + rotation[a, 1] * fan[i, 1]
                                 + rotation[a, 2] * fan[i, 2])  # fmt: skip
-    t, face = section_hits(lo, hi, child, count, order, vertices, faces, origin, rotation, fan)
+    t, face = _section_hits(lo, hi, child, count, order, vertices, faces, origin, rotation, fan,
+                            tans, tan_max, step)  # fmt: skip
     none = np.empty(0, dtype=np.int64)
     points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index = fan_stripe_hits(
         origin, rotation, fan, directions, face, t, vertices, faces,  # type: ignore[arg-type]
@@ -480,21 +508,24 @@ def fan_stripe_section(
 
 @numba.njit(cache=True, nogil=True)
 def fan_stripe_section_packets(
-    occluded8: Any, scene: int, lo: NDArray[np.float64], hi: NDArray[np.float64],
+    occluded: Any, width: int, scene: int, lo: NDArray[np.float64], hi: NDArray[np.float64],
     child: NDArray[np.int64], count: NDArray[np.int64], order: NDArray[np.int64],
     vertices: NDArray[np.float64], faces: NDArray[np.int64], face_normals: NDArray[np.float64],
     origin: NDArray[np.float64], rotation: NDArray[np.float64], fan: NDArray[np.float64],
-    sp: NDArray[np.float64], offset: float, quantize: bool,
+    tans: NDArray[np.float64], tan_max: float, step: float, sp: NDArray[np.float64],
+    offset: float, quantize: bool,
 ) -> tuple[NDArray[np.float64], NDArray[np.uint8], NDArray[np.float64], NDArray[np.int64],
            NDArray[np.float64], NDArray[np.float64]]:  # fmt: skip
     """The whole noiseless stripe in one call: the section's hits, the clips, the shadow rays
-    on Embree packets (``rtcOccluded8``) and the pixels. Returns (points, reason, t, face,
-    cos_incidence, directions), as ``kernels.fan_stripe_packets``."""
+    on Embree packets (``occluded``, the address of the query of packets of ``width``:
+    ``Library.occluded_query``, ``Library.occluded_width``) and the pixels. Returns (points,
+    reason, t, face, cos_incidence, directions), as ``kernels.fan_stripe_packets``. ``tans,
+    tan_max, step``: the fan's :func:`fan_tans`."""
     points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index, directions = (
         fan_stripe_section(lo, hi, child, count, order, vertices, faces, face_normals, origin,
-                           rotation, fan, sp, offset)
+                           rotation, fan, tans, tan_max, step, sp, offset)
     )  # fmt: skip
     blocked = np.empty(s_index.shape[0], dtype=np.bool_)
-    embree.occluded(occluded8, scene, s_o, s_d, s_far, 0.0, blocked)
+    embree.occluded(occluded, width, scene, s_o, s_d, s_far, 0.0, blocked)
     fan_stripe_finish(points, reason, chip, blocked, s_index, sp, quantize)
     return points, reason, t, face, cos_incidence, directions
