@@ -149,3 +149,15 @@ def test_a_bottom_along_one_laser_ray_is_a_spike_streak_not_a_surface() -> None:
     assert not groove._along_a_ray(fill)
     tilted = streak + np.column_stack([np.linspace(0.0, 2.0, 5), np.zeros(5)])
     assert not groove._along_a_ray(tilted)  # 2 mm across the rays: a surface
+
+
+@pytest.mark.parametrize("k", [3, 5, 11, 51])
+def test_running_median_cut_is_numpys_median_of_each_cut_window(k: int) -> None:
+    """Each point's median over the window about it, cut short at the ends (the fits' level
+    of a surface near a wall): the same numbers as ``np.median`` of each slice."""
+    rng = np.random.default_rng(k)
+    for n in (k, k + 1, 200):
+        v = np.round(rng.normal(size=n), 2)  # ties, as on a quantized profile
+        h = k // 2
+        want = np.array([np.median(v[max(0, i - h) : i + h + 1]) for i in range(n)])
+        assert np.array_equal(kern.running_median_cut(v, k), want)

@@ -19,6 +19,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.features import _groove_kernels as kern
 from seamtrack.features._groove_kernels import local_v, robust_uv_line
 from seamtrack.features._segmentation import fit_line
 from seamtrack.features.lines import Line, Segments
@@ -62,11 +63,7 @@ def _running_median(v: FloatArray, k: int) -> FloatArray:
     window cut short: the end's own level, not its whole window's)."""
     if len(v) < k:
         return np.full(len(v), float(np.median(v)))
-    med = np.median(np.lib.stride_tricks.sliding_window_view(v, k), axis=1)
-    h = k // 2
-    head = [float(np.median(v[: i + h + 1])) for i in range(h)]
-    tail = [float(np.median(v[i - h :])) for i in range(len(v) - h, len(v))]
-    return np.concatenate([head, med, tail])
+    return kern.running_median_cut(np.ascontiguousarray(v, dtype=np.float64), k)
 
 
 def risen_level(

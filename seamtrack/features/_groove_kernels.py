@@ -137,3 +137,16 @@ def running_median(v: FloatArray, k: int) -> FloatArray:
         out[c] = out[half]
         out[n - 1 - c] = out[n - 1 - half]
     return out
+
+
+@numba.njit(cache=True, nogil=True)
+def running_median_cut(v: FloatArray, k: int) -> FloatArray:
+    """The median over the ``k`` (odd) points about each point, the windows at the ends cut
+    short to the points there are (``np.median(v[max(0, i - k // 2) : i + k // 2 + 1])``);
+    ``len(v) >= k``."""
+    n = len(v)
+    half = k // 2
+    out = np.empty(n)
+    for c in range(n):
+        out[c] = _median_of(v[max(0, c - half) : min(n, c + half + 1)])
+    return out
