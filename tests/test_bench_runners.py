@@ -216,3 +216,24 @@ def test_failures_bench(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None
         assert _finite_positive(r["peak_mb_so_far"], r["wall_s"])
         assert r["peak_mb_so_far"] < 2048
     assert result["largest_run"] is None  # quick leaves the largest run out
+
+
+def test_bridge_bench(tmp_path: Path) -> None:
+    """Every bridged row equals the in-process run, and in frame lockstep the clients' next
+    points (then / cmd_then) hold the bridge to one round trip a frame (algorithm II switches
+    targets between frames: without them it asks again at each switch)."""
+    pytest.importorskip("zmq")
+    pytest.importorskip("zenoh")
+    from seamtrack.bench.bridge import bench_bridge
+
+    report = bench_bridge(tmp_path, quick=True)
+    _written(tmp_path, "bridge.json", "bridge.md")
+    rows = {r["run"]: r for r in report["runs"]}
+    assert rows.keys() >= {"in-process", "zmq / frame", "zenoh / frame", "zmq / tick"}
+    for name, row in rows.items():
+        assert _finite_positive(row["wall_time_s"], row["x_real_time"]), name
+        if name != "in-process":
+            assert row["same_as_in_process"], name
+        if "frame" in name:
+            assert row["round_trips"] <= row["frames"] + 1, name
+    assert rows["zmq / tick"]["round_trips"] > 5 * rows["zmq / frame"]["round_trips"]
