@@ -231,7 +231,7 @@ def test_bridge_bench(tmp_path: Path) -> None:
     rows = {r["run"]: r for r in report["runs"]}
     assert rows.keys() >= {"in-process", "zmq / frame", "zenoh / frame", "zmq / tick"}
     for name, row in rows.items():
-        assert _finite_positive(row["wall_time_s"], row["x_real_time"]), name
+        assert row["frames"] == rows["in-process"]["frames"] > 0, name
         if name != "in-process":
             assert row["same_as_in_process"], name
         if "frame" in name:
