@@ -131,3 +131,40 @@ def test_the_mitred_corner_within_half_a_millimetre_on_both_arms(robot) -> None:
     s = st.simulate(st.load_scene("v-groove-corner-arm", overrides=robot)).summary
     assert s["status"] == "completed"
     assert s["max_error_mm"] <= 0.5
+
+
+def test_the_tracker_is_asked_for_a_hint_only_for_an_extractor_that_uses_one() -> None:
+    """The v-groove chooses among V's with the hint; the fillet ignores it. On the fillet's
+    arm scene the loop does not ask the tracker for a hint, and the run is the same, byte for
+    byte, as one that asks and hands it on (the hint never reaches the answer)."""
+    import dataclasses
+
+    from seamtrack.features.extractors import extractor
+    from seamtrack.simulation.assemble import build_parts, uses_hint
+    from seamtrack.simulation.loop import run
+
+    assert uses_hint(extractor("v-groove")) and not uses_hint(extractor("fillet"))
+    assert uses_hint(lambda profile, hint=None: None)  # a user's: it may use it
+    parts = build_parts(st.load_scene("pipe-saddle", {"simulation.time_limit_s": 1.0}))
+    assert not parts.sense_uses_hint
+    asked = []
+    hint = parts.tracker.hint
+
+    def counting(T_world_sensor):
+        asked.append(1)
+        return hint(T_world_sensor)
+
+    object.__setattr__(parts.tracker, "hint", counting)
+    try:
+        plain = run(parts)
+        assert not asked
+        forced = run(dataclasses.replace(parts, sense_uses_hint=True))
+    finally:
+        del parts.tracker.hint
+    assert len(asked) == forced.summary["frames"]  # asked at every frame
+    for name in ("tcp_world", "target_world", "error_mm", "joints_rad"):
+        a, b = getattr(plain.trace, name), getattr(forced.trace, name)
+        assert a.tobytes() == b.tobytes(), name
+    assert plain.trace.frames.keys() == forced.trace.frames.keys()
+    for name, a in plain.trace.frames.items():
+        assert a.tobytes() == forced.trace.frames[name].tobytes(), name

@@ -77,6 +77,13 @@ class _Base:
         why = self.expect.check(**measured)
         return Feature.failed(f"{self.name}: {why}", joint=self.name) if why else None
 
+    @property
+    def uses_hint(self) -> bool:
+        """Whether the tracker's prior can change this extractor's answer: it overrides
+        :meth:`_extract_hinted` (the v-groove's choice among V's). The loop asks the tracker
+        for a hint only for an extractor that uses one (computing it costs ~10 us a frame)."""
+        return type(self)._extract_hinted is not _Base._extract_hinted
+
     def __call__(self, profile: Profile, hint: SeamHint | None = None) -> Feature:
         """The seam point of ``profile``; ``hint``: the tracker's prior on it
         (:class:`~seamtrack.sensing.profiles.SeamHint`), used by the extractors that choose

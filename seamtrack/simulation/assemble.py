@@ -87,6 +87,9 @@ class Parts:
     # Image mode: the camera image of the last frame scanned (a StripeImage), for observers
     # (seamtrack.bridge.frames); None in other modes.
     last_image: Callable[[], Any] | None = None
+    # Whether ``sense`` passes a hint on to its extractor: the loop asks the tracker for one
+    # only then (False: the seam model's sensing, an extractor that ignores hints).
+    sense_uses_hint: bool = True
 
 
 def make_seam(scene: Scene) -> Seam:
@@ -162,6 +165,14 @@ class MeshScan:
     view: FloatArray | None = None  # where a sensor looks from, when not the torch direction
     extract: Any = None  # the extractor instance ``scan`` calls
     last_image: Callable[[], Any] | None = None  # image mode: the last frame's camera image
+    hinted: bool = False  # ``scan`` passes the tracker's hint on to an extractor that uses it
+
+
+def uses_hint(find: Callable[..., Any]) -> bool:
+    """Whether the scan passes the tracker's hint to an extractor: it takes one
+    (:func:`takes_hint`) and does not say that its answer ignores it (``uses_hint`` False:
+    the built-in families but the v-groove). The loop asks the tracker for a hint only then."""
+    return takes_hint(find) and bool(getattr(find, "uses_hint", True))
 
 
 def takes_hint(find: Callable[..., Any]) -> bool:
@@ -225,7 +236,7 @@ def _mesh_scan(
             check_expect(extractor_name, scene.config.extractor.expect)
         params["expect"] = dict(scene.config.extractor.expect)
     find = extractor(extractor_name, **params)
-    hinted = takes_hint(find)  # once, at set-up: a user's extractor may have no ``hint``
+    hinted = uses_hint(find)  # once, at set-up: a user's extractor may have no ``hint``
     find_hinted: Any = find  # called with ``hint=`` only when it takes one
     offset = np.asarray(scene.config.extractor.offset_mm, dtype=float)
     s = scene.config.sensor
@@ -299,7 +310,7 @@ def _mesh_scan(
 
     view = None if part.view_normal is None else T_world_part[:3, :3] @ part.view_normal
     last_image = (lambda: images[0]) if s.source == "image" else None
-    return MeshScan(seam, scan, mesh, caster, extractor_name, view, find, last_image)
+    return MeshScan(seam, scan, mesh, caster, extractor_name, view, find, last_image, hinted)
 
 
 def _stripe_noise(params: dict[str, Any]) -> Any:
@@ -420,6 +431,7 @@ def build_parts(
         mount=mount,
         extract=None if loaded is None else loaded.extract,
         last_image=loaded.last_image if scan is not None and loaded is not None else None,
+        sense_uses_hint=scan is not None and loaded is not None and loaded.hinted,
     )
 
 

@@ -275,7 +275,7 @@ def run(
     # A tracker that knows where the seam is heading tells the extractor (``hint``): where the
     # laser plane crosses two grooves (a mitre) the extractor takes the V that continues it.
     tracker_hint = getattr(tracker, "hint", None)
-    tracker_hint = tracker_hint if callable(tracker_hint) else None
+    tracker_hint = tracker_hint if callable(tracker_hint) and parts.sense_uses_hint else None
     tcp: Any = None
     tick = -1
     while tick < max_ticks:
