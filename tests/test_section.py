@@ -276,7 +276,8 @@ def test_the_rays_a_segment_covers_miss_no_hit(part: str, even: bool) -> None:
     """The rays each segment is tested against (found by arithmetic on an evenly spaced fan,
     by binary search otherwise) and the nodes left closed behind the hits found (the pipe's
     far and inner walls) lose no hit: the hits equal those of every segment tested against
-    every ray, bit for bit."""
+    every ray, bit for bit; and so with seeds (cut first, then culled behind from the walk's
+    start): this pose's hit triangles, the last pose's, and any 50 of the mesh's."""
     mesh = v_groove_plate_mesh(triangles=4_000, seed=3) if part == "plate" else _pipe_mesh()
     caster = RayCaster.from_mesh(mesh)
     rng = np.random.default_rng(5)
@@ -288,6 +289,9 @@ def test_the_rays_a_segment_covers_miss_no_hit(part: str, even: bool) -> None:
     tans = fan[:, 1] / fan[:, 2]
     assert (section._even_step(tans) > 0.0) == even
     index = caster.section
+    tree = (index.lo, index.hi, index.child, index.count, index.order, caster.vertices_local,
+            caster.faces)  # fmt: skip
+    last = section.NO_SEEDS
     for _ in range(6):
         rotation = Rotation.from_rotvec(rng.normal(0.0, 0.15, 3)).as_matrix() @ LOOK_DOWN
         T = frames.make(rotation, [rng.uniform(-10, 10), rng.uniform(-10, 10), 91.0])
@@ -301,6 +305,15 @@ def test_the_rays_a_segment_covers_miss_no_hit(part: str, even: bool) -> None:
             assert len(_brute_force_segments(caster, T, 0.3)) > 2 * section.CULL_AFTER
         np.testing.assert_array_equal(face, face_all)
         np.testing.assert_array_equal(t, t_all)
+        seen = section.hit_faces(face_all)
+        assert set(seen.tolist()) == set(face_all[face_all >= 0].tolist())
+        o, r = T[:3, 3] - caster.local_origin, np.ascontiguousarray(T[:3, :3])
+        for seeds in (seen, last, rng.choice(len(caster.faces), 50)):
+            t_s, face_s = section._section_hits(*tree, o, r, fan, *section.fan_tans(fan),
+                                                seeds.astype(np.int64))  # fmt: skip
+            np.testing.assert_array_equal(face_s, face_all)
+            np.testing.assert_array_equal(t_s, t_all)
+        last = seen
 
 
 def test_an_evenly_spaced_fan_covers_at_least_the_binary_searched_rays() -> None:

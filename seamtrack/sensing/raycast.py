@@ -146,6 +146,9 @@ class RayCaster:
             )
         self.weld, self.ring_ptr, self.ring_faces = _vertex_rings(v, f)
         self._section: section.SectionIndex | None = None
+        # The triangles the last plane-section stripe hit (section.hit_faces): the next one's
+        # seeds. Only how much the next section cuts depends on them, not its hits.
+        self.section_seeds: NDArray[np.int64] = section.NO_SEEDS
         unit = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
         norm = np.linalg.norm(unit, axis=1, keepdims=True)
         with np.errstate(invalid="ignore", divide="ignore"):

@@ -385,14 +385,22 @@ def _section_stripe(
             caster.faces, caster.face_normals, origin, rotation, fan.directions, tans, tan_max,
             step, fan.sensor_params, constants.SHADOW_RAY_OFFSET_MM)  # fmt: skip
     packets = caster.packets
+    # The last stripe's triangles are cut first (at a frame rate, most of this one's): the
+    # walk of the hierarchy then culls behind them from its start. The same hits whatever the
+    # seeds (tests/test_section.py).
+    seeds = caster.section_seeds
     if packets is not None:  # one numba call does it all
-        points, reason, t, face, cos_incidence, directions = section.fan_stripe_section_packets(
-            packets.lib.occluded_query, packets.lib.occluded_width, packets.handle, *tree, quantize
+        points, reason, t, face, cos_incidence, directions, caster.section_seeds = (
+            section.fan_stripe_section_packets(
+                packets.lib.occluded_query, packets.lib.occluded_width, packets.handle, *tree,
+                quantize, seeds,
+            )
         )  # fmt: skip
     else:
         points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index, directions = (
-            section.fan_stripe_section(*tree)
+            section.fan_stripe_section(*tree, seeds)
         )
+        caster.section_seeds = section.hit_faces(face)
         blocked = caster.occluded_local(s_o, s_d, s_far)
         fan_stripe_finish(points, reason, chip, blocked, s_index, fan.sensor_params, quantize)
     return StripeHits(points_laser=points, reason=reason, distance_mm=t, face=face,

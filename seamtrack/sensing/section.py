@@ -34,7 +34,7 @@ from seamtrack.sensing._section_tree import LEAF_SIZE, SectionIndex, build
 from seamtrack.sensing.kernels import fan_stripe_finish, fan_stripe_hits
 
 __all__ = ["LEAF_SIZE", "SectionIndex", "build", "fan_stripe_section", "fan_stripe_section_packets",
-           "fan_tans", "section_hits", "section_segments"]  # fmt: skip
+           "fan_tans", "hit_faces", "section_hits", "section_segments"]  # fmt: skip
 
 #: A crossing at a segment's end counts for the segment within this fraction of its length.
 END_SLACK = 1e-12
@@ -48,7 +48,8 @@ ON_PLANE_MM = 1e-9
 #: Rays per block of the running maxima of the hits (:func:`section_hits` culls against them).
 BLOCK = 32
 #: :func:`section_hits` starts culling nodes behind the hits found after cutting this many
-#: triangles (on a small section the tests cost more than they save).
+#: triangles (on a small section the tests cost more than they save), or at once after the
+#: seeds (:func:`hit_faces` of the last frame: most of this frame's hits, found first).
 CULL_AFTER = 96
 
 
@@ -369,7 +370,43 @@ def section_hits(
     """
     tans, tan_max, step = fan_tans(fan)
     return _section_hits(lo, hi, child, count, order, vertices, faces, origin, rotation, fan,
-                         tans, tan_max, step)  # fmt: skip
+                         tans, tan_max, step, NO_SEEDS)  # fmt: skip
+
+
+#: No seeds (:func:`_section_hits`).
+NO_SEEDS = np.empty(0, dtype=np.int64)
+
+
+@numba.njit(cache=True, nogil=True)
+def hit_faces(face: NDArray[np.int64]) -> NDArray[np.int64]:
+    """The triangles a stripe's rays hit (``face``, -1: none), each run of rays on one
+    triangle once: the seeds of the next frame's :func:`_section_hits`."""
+    out = np.empty(face.shape[0], dtype=np.int64)
+    k = 0
+    last = -1
+    for f in face:
+        if f >= 0 and f != last:
+            out[k] = f
+            k += 1
+        last = f
+    return out[:k].copy()
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _cut_and_sweep(
+    vertices: NDArray[np.float64], faces: NDArray[np.int64], k: int, o: NDArray[np.float64],
+    rotation: NDArray[np.float64], fan: NDArray[np.float64], tans: NDArray[np.float64],
+    step: float, best_t: NDArray[np.float64], best_f: NDArray[np.int64],
+) -> tuple[int, int]:  # fmt: skip
+    """Triangle k cut and its segment swept by the rays it may meet: the rays [first, last)
+    (first >= last: none)."""
+    crossed, y0, z0, y1, z1 = _cut(vertices, faces, k, o, rotation)
+    if not crossed:
+        return 0, 0
+    first, last = _ray_range(tans, step, y0, z0, y1, z1)
+    if first < last:
+        _sweep(fan, first, last, y0, z0, y1, z1, k, best_t, best_f)
+    return first, last
 
 
 @numba.njit(cache=True, nogil=True)
@@ -378,14 +415,22 @@ def _section_hits(
     count: NDArray[np.int64], order: NDArray[np.int64], vertices: NDArray[np.float64],
     faces: NDArray[np.int64], origin: NDArray[np.float64], rotation: NDArray[np.float64],
     fan: NDArray[np.float64], tans: NDArray[np.float64], tan_max: float, step: float,
+    seeds: NDArray[np.int64],
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:  # fmt: skip
-    """:func:`section_hits` with the fan's :func:`fan_tans` given."""
+    """:func:`section_hits` with the fan's :func:`fan_tans` given, and ``seeds``: triangles
+    (of this mesh) cut first, before the hierarchy is walked (the last frame's
+    :func:`hit_faces`: at 100 Hz most of this frame's visible surface). Their crossings are
+    true crossings, so the walk culls behind them from its start; which crossings win does
+    not depend on the seeds (a seed met again in the walk changes nothing: the same t, the
+    same triangle), only how much is cut."""
     n = fan.shape[0]
     best_t = np.full(n, NO_HIT)
     best_f = np.full(n, -1, dtype=np.int64)
     blocks = (n + BLOCK - 1) // BLOCK
     block_max = np.full(blocks, NO_HIT)
-    stale = np.zeros(blocks, dtype=np.bool_)
+    stale = np.ones(blocks, dtype=np.bool_)
+    for k in seeds:
+        _cut_and_sweep(vertices, faces, k, origin, rotation, fan, tans, step, best_t, best_f)
     r = rotation
     n0, n1, n2 = r[0, 0], r[1, 0], r[2, 0]
     # The wedge |y_L| <= tan_max z_L as two half-spaces m . (p - o) <= 0.
@@ -403,7 +448,7 @@ def _section_hits(
     stack[0] = 0
     top = 1
     cuts = 0
-    culling = False
+    culling = seeds.shape[0] > 0
     while top > 0:
         top -= 1
         node = stack[top]
@@ -437,15 +482,9 @@ def _section_hits(
             culling = True
             stale[:] = True
         for m in range(child[node], child[node] + count[node]):
-            k = order[m]
-            crossed, y0, z0, y1, z1 = _cut(vertices, faces, k, origin, rotation)
-            if not crossed:
-                continue
-            first, last = _ray_range(tans, step, y0, z0, y1, z1)
-            if first >= last:
-                continue
-            _sweep(fan, first, last, y0, z0, y1, z1, k, best_t, best_f)
-            if culling:
+            first, last = _cut_and_sweep(vertices, faces, order[m], origin, rotation, fan, tans,
+                                         step, best_t, best_f)  # fmt: skip
+            if culling and first < last:
                 for b in range(first // BLOCK, (last - 1) // BLOCK + 1):
                     stale[b] = True
     return best_t, best_f
@@ -484,12 +523,13 @@ def fan_stripe_section(
     faces: NDArray[np.int64], face_normals: NDArray[np.float64], origin: NDArray[np.float64],
     rotation: NDArray[np.float64], fan: NDArray[np.float64], tans: NDArray[np.float64],
     tan_max: float, step: float, sp: NDArray[np.float64], offset: float,
+    seeds: NDArray[np.int64],
 ) -> tuple[NDArray[np.float64], NDArray[np.uint8], NDArray[np.float64], NDArray[np.int64],
            NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64],
            NDArray[np.float64], NDArray[np.int64], NDArray[np.float64]]:  # fmt: skip
     """The section's hits through the stripe's clips (``fan_stripe_hits``); returns its ten
     arrays and the rays' directions in the local frame. The shadow rays are the caller's.
-    ``tans, tan_max, step``: the fan's :func:`fan_tans`."""
+    ``tans, tan_max, step``: the fan's :func:`fan_tans`; ``seeds``: :func:`_section_hits`'."""
     n = fan.shape[0]
     directions = np.empty((n, 3))
     for i in range(n):
@@ -497,7 +537,7 @@ def fan_stripe_section(
             directions[i, a] = (rotation[a, 0] * fan[i, 0] + rotation[a, 1] * fan[i, 1]
                                 + rotation[a, 2] * fan[i, 2])  # fmt: skip
     t, face = _section_hits(lo, hi, child, count, order, vertices, faces, origin, rotation, fan,
-                            tans, tan_max, step)  # fmt: skip
+                            tans, tan_max, step, seeds)  # fmt: skip
     none = np.empty(0, dtype=np.int64)
     points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index = fan_stripe_hits(
         origin, rotation, fan, directions, face, t, vertices, faces,  # type: ignore[arg-type]
@@ -513,19 +553,20 @@ def fan_stripe_section_packets(
     vertices: NDArray[np.float64], faces: NDArray[np.int64], face_normals: NDArray[np.float64],
     origin: NDArray[np.float64], rotation: NDArray[np.float64], fan: NDArray[np.float64],
     tans: NDArray[np.float64], tan_max: float, step: float, sp: NDArray[np.float64],
-    offset: float, quantize: bool,
+    offset: float, quantize: bool, seeds: NDArray[np.int64],
 ) -> tuple[NDArray[np.float64], NDArray[np.uint8], NDArray[np.float64], NDArray[np.int64],
-           NDArray[np.float64], NDArray[np.float64]]:  # fmt: skip
+           NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:  # fmt: skip
     """The whole noiseless stripe in one call: the section's hits, the clips, the shadow rays
     on Embree packets (``occluded``, the address of the query of packets of ``width``:
     ``Library.occluded_query``, ``Library.occluded_width``) and the pixels. Returns (points,
-    reason, t, face, cos_incidence, directions), as ``kernels.fan_stripe_packets``. ``tans,
-    tan_max, step``: the fan's :func:`fan_tans`."""
+    reason, t, face, cos_incidence, directions), as ``kernels.fan_stripe_packets``, and the
+    next frame's seeds (:func:`hit_faces`). ``tans, tan_max, step``: the fan's
+    :func:`fan_tans`; ``seeds``: :func:`_section_hits`'."""
     points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index, directions = (
         fan_stripe_section(lo, hi, child, count, order, vertices, faces, face_normals, origin,
-                           rotation, fan, tans, tan_max, step, sp, offset)
+                           rotation, fan, tans, tan_max, step, sp, offset, seeds)
     )  # fmt: skip
     blocked = np.empty(s_index.shape[0], dtype=np.bool_)
     embree.occluded(occluded, width, scene, s_o, s_d, s_far, 0.0, blocked)
     fan_stripe_finish(points, reason, chip, blocked, s_index, sp, quantize)
-    return points, reason, t, face, cos_incidence, directions
+    return points, reason, t, face, cos_incidence, directions, hit_faces(face)
