@@ -38,12 +38,25 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, Protocol, runtime_checkable
 
+import numba
 import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.errors import PluginError
 from seamtrack.features._two_lines import two_lines_share
-from seamtrack.features._v_search import NONE, SearchParams, pieces_of, search
+from seamtrack.features._v_search import (
+    COUNT,
+    CY,
+    CZ,
+    NONE,
+    RMS,
+    START,
+    UY,
+    UZ,
+    SearchParams,
+    pieces_of,
+    search,
+)
 from seamtrack.features.base import _Base, _confidence, included
 from seamtrack.features.expect import Expect
 from seamtrack.features.generic import GenericExtractor
@@ -116,6 +129,32 @@ class OutsideCornerExtractor(_Base):
         return _two_faces(self, profile, seg, found)
 
 
+@numba.njit(cache=True, nogil=True)
+def _corner_search(
+    points: FloatArray, stray: NDArray[np.bool_], tol: float, pieces: Any, params: SearchParams
+) -> tuple[bool, float, float, int, int, float, float, float]:  # fmt: skip
+    """:func:`~seamtrack.features._v_search.search` and what :func:`_corner` reads of it, in
+    one call (boxing the search's tables for Python cost about as much as the search): (a
+    pair found, its apex y and z, each face's inlier count and rms, and the share of the
+    profile the two faces explain: NaN when a face has no inliers)."""
+    found = search(points, stray, tol, pieces, params)
+    left, right = found.pair.left, found.pair.right
+    if left == NONE:
+        return False, 0.0, 0.0, 0, 0, 0.0, 0.0, np.nan
+    geo, span, index = found.table.geo, found.table.span, found.table.index
+    l_start, l_count = span[left, START], span[left, COUNT]
+    r_start, r_count = span[right, START], span[right, COUNT]
+    share = np.nan
+    if l_count and r_count:
+        lo, hi = index[l_start + l_count - 1] + 1, index[r_start]
+        share = two_lines_share(
+            points, stray, lo, hi, (geo[left, CY], geo[left, CZ], geo[left, UY], geo[left, UZ]),
+            (geo[right, CY], geo[right, CZ], geo[right, UY], geo[right, UZ]), 3.0 * tol,
+        )  # fmt: skip
+    return (True, found.pair.apex_y, found.pair.apex_z, l_count, r_count, geo[left, RMS],
+            geo[right, RMS], share)  # fmt: skip
+
+
 def _corner(
     ex: _Base,
     profile: Profile,
@@ -142,27 +181,18 @@ def _corner(
     )
     points = np.ascontiguousarray(seg.points, dtype=np.float64)
     stray = np.asarray(seg.stray, dtype=np.bool_)
-    found = search(points, stray, float(seg.tol), pieces_of(seg), params)
-    pair = found.pair
-    if pair.left == NONE:
+    found, apex_y, apex_z, l_count, r_count, l_rms, r_rms, share = _corner_search(
+        points, stray, float(seg.tol), pieces_of(seg), params
+    )
+    if not found:
         return Feature.failed("no pair of lines forms the joint", joint=ex.name)
-    geo, span, index = found.table.geo, found.table.span, found.table.index
-    l_start, l_count = span[pair.left].tolist()
-    r_start, r_count = span[pair.right].tolist()
     if not (l_count and r_count):
         return None
-    lcy, lcz, ldy, ldz, l_rms = geo[pair.left].tolist()
-    rcy, rcz, rdy, rdz, r_rms = geo[pair.right].tolist()
     # _confidence's arithmetic on the faces' counts and rms
     explained = (l_count + r_count) / max(len(seg.points), 1)
     fit = max(0.0, 1.0 - max(l_rms, r_rms) / seg.tol)
     confidence = min(max(float(0.5 * explained + 0.5 * fit), 0.0), 1.0)  # NaN stays NaN
-    feature = ex._found(profile, np.array([pair.apex_y, pair.apex_z]), confidence=confidence)
-    lo, hi = int(index[l_start + l_count - 1]) + 1, int(index[r_start])
-    share = two_lines_share(
-        seg.points, seg.stray, lo, hi, (lcy, lcz, ldy, ldz), (rcy, rcz, rdy, rdz), 3.0 * seg.tol
-    )
-    return feature, share
+    return ex._found(profile, np.array([apex_y, apex_z]), confidence=confidence), share
 
 
 @functools.lru_cache(maxsize=64)
