@@ -168,3 +168,35 @@ def test_the_tracker_is_asked_for_a_hint_only_for_an_extractor_that_uses_one() -
     assert plain.trace.frames.keys() == forced.trace.frames.keys()
     for name, a in plain.trace.frames.items():
         assert a.tobytes() == forced.trace.frames[name].tobytes(), name
+
+
+NAN_POINT = """
+import numpy as np
+from seamtrack.sensing.profiles import Feature
+
+
+class NanPoint:
+    name = "nan-point"
+
+    def __call__(self, profile):
+        return Feature(point_laser=np.array([np.nan, 90.0]), confidence=1.0)
+"""
+
+
+def test_a_user_extractor_returning_a_nan_point_is_refused_by_name(tmp_path, monkeypatch):
+    """A seam point that is not finite stops the run with the extractor named (not a NaN
+    fed to the tracker)."""
+    from seamtrack.errors import PluginRuntimeError
+
+    (tmp_path / "nan_point_extractor.py").write_text(NAN_POINT)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    scene = st.load_scene(
+        "paper-v-groove",
+        overrides={
+            "extractor.name": "nan_point_extractor:NanPoint",
+            "workpiece.params.seam_length_mm": 20.0,
+        },
+    )
+    with pytest.raises(PluginRuntimeError, match="returned the seam point") as info:
+        st.simulate(scene)
+    assert info.value.field == "extractor.name"

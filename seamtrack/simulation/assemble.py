@@ -239,6 +239,7 @@ def _mesh_scan(
     hinted = uses_hint(find)  # once, at set-up: a user's extractor may have no ``hint``
     find_hinted: Any = find  # called with ``hint=`` only when it takes one
     offset = np.asarray(scene.config.extractor.offset_mm, dtype=float)
+    shift = bool(offset.any())
     s = scene.config.sensor
     noise = _stripe_noise(s.stripe_noise)
 
@@ -284,22 +285,22 @@ def _mesh_scan(
                 field="extractor.name",
                 fix="return seamtrack.Feature(...) (falsy with a reason when nothing is found)",
             )
-        if feature and not (
-            np.isfinite(feature.point_laser).all() and len(feature.point_laser) == 2
-        ):
+        found = bool(feature)
+        point = feature.point_laser
+        if found and not (len(point) == 2 and all(map(math.isfinite, point.tolist()))):
             raise PluginRuntimeError(
                 f"{extractor_name!r} returned the seam point {feature.point_laser.tolist()} at "
                 f"t = {t_s:.6g} s",
                 field="extractor.name",
                 fix="return a finite (y_L, z_L) point, or a falsy Feature with a reason",
             )
-        if not feature and feature.stripe_points < 0:
+        if not found and feature.stripe_points < 0:
             # A frame without a seam point says whether the stripe was on the part at all: none
             # of it is where the laser line has left the part (or something hides it whole).
             assert profile.valid is not None
             stripe = int(np.count_nonzero(profile.valid))
             feature = dataclasses.replace(feature, stripe_points=stripe)
-        if feature and offset.any():
+        if found and shift:
             # The torch target relative to the feature (a TCP calibration): e.g. the root of a
             # square butt joint, a plate thickness below the gap the stripe shows.
             point = feature.point_laser + offset
