@@ -1,6 +1,7 @@
 """The dataset's fast noise knobs are the mesh-mode model: the same result as
-:func:`seamtrack.sensing.scan._apply_stripe_noise` on the same stripe with the same generator,
-the mesh-mode function seeing the extruded section through a stand-in for its ray caster."""
+:func:`seamtrack.sensing.stripe.apply_stripe_noise` on the same stripe with the same
+generator, the mesh-mode function seeing the extruded section through a stand-in for its ray
+caster."""
 
 from __future__ import annotations
 
@@ -16,8 +17,9 @@ from seamtrack.datasets import joints
 from seamtrack.datasets.generate import pose
 from seamtrack.datasets.kernel import first_hits, stripe
 from seamtrack.datasets.noise import apply_noise
-from seamtrack.sensing.scan import StripeHits, StripeNoise, _apply_stripe_noise, laser_fan
+from seamtrack.sensing.scan import StripeHits, StripeNoise, laser_fan
 from seamtrack.sensing.sensor import preset
+from seamtrack.sensing.stripe import apply_stripe_noise
 
 FloatArray = NDArray[np.float64]
 
@@ -104,7 +106,7 @@ def test_fast_noise_is_the_mesh_mode_model(family: str, noise: StripeNoise, quan
     as_mesh = StripeHits(points_laser=p, reason=r, distance_mm=t, face=face,
                          cos_incidence=cos_incidence, directions_local=directions,
                          origin_local=T[:3, 3].copy())  # fmt: skip
-    ref_points, ref_reason = _apply_stripe_noise(sensor, ExtrudedSection(segs), T, as_mesh, noise,
+    ref_points, ref_reason = apply_stripe_noise(sensor, ExtrudedSection(segs), T, as_mesh, noise,
                                                  np.random.default_rng(7))  # fmt: skip
     same = reason == ref_reason
     assert same.mean() >= 0.998

@@ -161,8 +161,9 @@ def test_no_import_cycle(graph: dict[str, set[str]]) -> None:
 
 #: The one circle left through imports for annotations only. ``LaserLineSensor`` (sensor.py)
 #: offers ``sensor.scan(...)`` and ``sensor.render(...)``, thin delegates down to scan.py and
-#: render.py (public API: README, notebooks), while those modules and camera.py take the
-#: sensor as an argument and name its type. A protocol would have to list some twenty members
+#: render.py (public API: README, notebooks), while those modules, camera.py and stripe.py
+#: (the stripe's realism knobs, split out of scan.py) take the sensor as an argument and name
+#: its type. A protocol would have to list some twenty members
 #: of the triangulation model (no small protocol), and moving the type means splitting the
 #: sensor into a geometry base class below scan.py and a subclass adding the delegates: a class
 #: hierarchy made for the import checker. Listed exactly: a new circle fails, and so does
@@ -173,6 +174,7 @@ KNOWN_TYPE_ONLY_CIRCLES = [
         "seamtrack.sensing.render",
         "seamtrack.sensing.scan",
         "seamtrack.sensing.sensor",
+        "seamtrack.sensing.stripe",
     ]
 ]
 

@@ -1,7 +1,7 @@
-"""The stripe noise knobs (:class:`seamtrack.sensing.scan.StripeNoise`) on an extruded section,
+"""The stripe noise knobs (:class:`seamtrack.sensing.stripe.StripeNoise`) on an extruded section,
 fast: the same model, the same random draws in the same order, with the geometry in numba.
 
-The mesh-mode model (:func:`seamtrack.sensing.scan._apply_stripe_noise`) runs about 60 numpy
+The mesh-mode model (:func:`seamtrack.sensing.stripe.apply_stripe_noise`) runs about 60 numpy
 operations on 1,024-point arrays per profile, 0.4-0.9 ms: four times the noiseless profile.
 Here the random numbers are drawn by numpy exactly as there (so a sample's generator is used
 the same way), and the geometry between them (the specular secondary reflection with its
@@ -20,8 +20,9 @@ from numpy.typing import NDArray
 from seamtrack import constants
 from seamtrack.datasets.kernel import NO_HIT, T_MIN_MM, _crossings
 from seamtrack.sensing.profiles import Reason
-from seamtrack.sensing.scan import StripeNoise, chip_noise, dropout_probability
+from seamtrack.sensing.scan import StripeNoise
 from seamtrack.sensing.sensor import LaserLineSensor
+from seamtrack.sensing.stripe import chip_noise, dropout_probability
 
 FloatArray = NDArray[np.float64]
 
@@ -54,7 +55,7 @@ def secondary_points(
     origin: FloatArray, rotation: FloatArray, directions: FloatArray, t: FloatArray,
     face: NDArray[np.int64], segs: FloatArray, k: FloatArray, offset: float,
 ) -> tuple[FloatArray, NDArray[np.bool_]]:  # fmt: skip
-    """:func:`seamtrack.sensing.scan.secondary_reflection_points` on the extruded section.
+    """:func:`seamtrack.sensing.stripe.secondary_reflection_points` on the extruded section.
 
     Each lit ray reflects specularly, lights the first point Q of the section along the
     reflection; where the camera sees Q (its lit side faces the camera, the sight line is

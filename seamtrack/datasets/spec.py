@@ -281,7 +281,7 @@ def _inward(value: float, direction: int) -> float:
 
 
 class NoiseSpec(_Section):
-    """The knobs of :class:`seamtrack.sensing.scan.StripeNoise`, each a range."""
+    """The knobs of :class:`seamtrack.sensing.stripe.StripeNoise`, each a range."""
 
     range_sigma_mm: NonNegativeRange = (0.0, 0.01)
     speckle_sigma_mm: NonNegativeRange = (0.0, 0.01)
