@@ -149,6 +149,8 @@ class RayCaster:
         # The triangles the last plane-section stripe hit (section.hit_faces): the next one's
         # seeds. Only how much the next section cuts depends on them, not its hits.
         self.section_seeds: NDArray[np.int64] = section.NO_SEEDS
+        # What the section's kernels take of this mesh and a fan, per fan (scan._section_args).
+        self.section_args: dict[Any, tuple[tuple[Any, ...], ...]] = {}
         unit = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
         norm = np.linalg.norm(unit, axis=1, keepdims=True)
         with np.errstate(invalid="ignore", divide="ignore"):

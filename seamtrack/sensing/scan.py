@@ -284,6 +284,24 @@ def stripe_hits(
                       origin_local=origin)  # fmt: skip
 
 
+def _section_args(caster: RayCaster, fan: FanRays) -> tuple[tuple[Any, ...], ...]:
+    """What the section's kernels take of a caster and a fan that stays the same from frame
+    to frame (before and after the pose; the packets' query), gathered once per fan."""
+    args = caster.section_args.get(fan)
+    if args is None:
+        index = caster.section
+        head = (index.lo, index.hi, index.child, index.count, index.order, caster.vertices_local,
+                caster.faces, caster.face_normals)  # fmt: skip
+        tail = (fan.directions, *fan.section_tans, fan.sensor_params,
+                constants.SHADOW_RAY_OFFSET_MM)  # fmt: skip
+        packets = caster.packets
+        query = () if packets is None else (
+            packets.lib.occluded_query, packets.lib.occluded_width, packets.handle
+        )  # fmt: skip
+        args = caster.section_args[fan] = (head, tail, query)
+    return args
+
+
 def _section_stripe(
     caster: RayCaster,
     fan: FanRays,
@@ -293,29 +311,24 @@ def _section_stripe(
 ) -> StripeHits:
     """:func:`stripe_hits` through the plane section (:mod:`seamtrack.sensing.section`)."""
     from seamtrack.sensing import section
-    from seamtrack.sensing.kernels import fan_stripe_finish
 
-    index = caster.section
-    tans, tan_max, step = fan.section_tans
-    tree = (index.lo, index.hi, index.child, index.count, index.order, caster.vertices_local,
-            caster.faces, caster.face_normals, origin, rotation, fan.directions, tans, tan_max,
-            step, fan.sensor_params, constants.SHADOW_RAY_OFFSET_MM)  # fmt: skip
-    packets = caster.packets
+    head, tail, query = _section_args(caster, fan)
     # The last stripe's triangles are cut first (at a frame rate, most of this one's): the
     # walk of the hierarchy then culls behind them from its start. The same hits whatever the
     # seeds (tests/test_section.py).
     seeds = caster.section_seeds
-    if packets is not None:  # one numba call does it all
+    if query:  # one numba call does it all
         points, reason, t, face, cos_incidence, directions, caster.section_seeds = (
             section.fan_stripe_section_packets(
-                packets.lib.occluded_query, packets.lib.occluded_width, packets.handle, *tree,
-                quantize, seeds,
+                *query, *head, origin, rotation, *tail, quantize, seeds
             )
-        )  # fmt: skip
+        )
     else:
         points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index, directions = (
-            section.fan_stripe_section(*tree, seeds)
+            section.fan_stripe_section(*head, origin, rotation, *tail, seeds)
         )
+        from seamtrack.sensing.kernels import fan_stripe_finish
+
         caster.section_seeds = section.hit_faces(face)
         blocked = caster.occluded_local(s_o, s_d, s_far)
         fan_stripe_finish(points, reason, chip, blocked, s_index, fan.sensor_params, quantize)
