@@ -319,13 +319,13 @@ def _section_stripe(
     seeds = caster.section_seeds
     if query:  # one numba call does it all
         points, reason, t, face, cos_incidence, directions, caster.section_seeds = (
-            section.fan_stripe_section_packets(
+            section.fan_stripe_section_packets(  # type: ignore[call-arg]  # gathered args
                 *query, *head, origin, rotation, *tail, quantize, seeds
             )
         )
     else:
         points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index, directions = (
-            section.fan_stripe_section(*head, origin, rotation, *tail, seeds)
+            section.fan_stripe_section(*head, origin, rotation, *tail, seeds)  # type: ignore[call-arg]
         )
         from seamtrack.sensing.kernels import fan_stripe_finish
 
