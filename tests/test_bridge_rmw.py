@@ -15,7 +15,7 @@ import pytest
 pytest.importorskip("rosbags")
 
 from seamtrack.bridge import messages, rmw, wire
-from seamtrack.bridge.lockstep import BridgeFailure
+from seamtrack.bridge.lockstep import Answer, BridgeFailure
 
 STRING_HASH = "RIHS01_df668c740482bbd48fb39d76a70dfd4bd59db1288021743503259e948f6b1a18"
 
@@ -240,12 +240,11 @@ def test_then_takes_over_on_the_tick_the_torch_comes_within_reach() -> None:
     class Client:
         def __init__(self) -> None:
             self.steps: list = []
-            self.then: list = []
 
-        def exchange(self, step: object) -> tuple:
+        def exchange(self, step: object) -> Answer:
             self.steps.append(step)
-            reply, self.then = answers[len(self.steps) - 1]
-            return reply
+            (command, within), then = answers[len(self.steps) - 1]
+            return Answer(command, within, tuple(then))
 
     client = Client()
     tracker = BridgeTracker(client, chain=None, lockstep="frame")  # type: ignore[arg-type]
@@ -292,15 +291,22 @@ def test_a_seam_hint_reaches_the_extractor_where_its_line_crosses_the_laser_plan
     class Client:
         seam_hint = line
 
-    tracker = BridgeTracker(Client(), chain=None)  # type: ignore[arg-type]
+        def exchange(self, step: object) -> Answer:
+            return Answer(None, 0.0, (), self.seam_hint)
+
+    client = Client()
+    tracker = BridgeTracker(client, chain=None)  # type: ignore[arg-type]
     T = np.diag([1.0, -1.0, -1.0, 1.0])
     T[:3, 3] = (10.0, 0.0, 100.0)
+    assert tracker.hint(T) is None  # no answer yet
+    tracker.command(0.0, np.zeros(3), np.zeros(3))
     hint = tracker.hint(T)
     assert hint is not None
     assert hint.point_laser == pytest.approx((-3.0, 100.0), abs=1e-12)
     assert hint.direction == pytest.approx((1.0, 0.0, 0.0), abs=1e-12)
     assert hint.tolerance_mm == (1.5, 0.4)
-    Client.seam_hint = None
+    client.seam_hint = None
+    tracker.command(0.001, np.zeros(3), np.zeros(3))
     assert tracker.hint(T) is None
     assert wire.seam_hint_from_json({"op": "command", "seam_hint": None}) is None
 

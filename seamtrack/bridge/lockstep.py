@@ -32,7 +32,7 @@ import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Protocol
+from typing import Any, NamedTuple, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -86,9 +86,24 @@ class Step:
     then_taken: int = 0  # how many of the last answer's ``then`` took over since
 
 
-#: A tracker's answer: the command, and the distance from its target within which the tracker
-#: wants to be asked again before the next frame (frame lockstep; 0: not before the frame).
+#: A command and the distance from its target within which the tracker wants to be asked
+#: again before the next frame (frame lockstep; 0: not before the frame).
 Reply = tuple["Command | None", float]
+
+
+class Answer(NamedTuple):
+    """A tracker's whole answer to a step, as a transport reads it: the command (None: brake
+    to rest and wait) and its ``ask_within_mm``; the commands that follow it (``then``, each a
+    :data:`Reply`: frame lockstep takes them over one after the other at the tick the torch
+    comes within the last one's ``ask_within_mm`` of its target); and the client's seam line
+    for the extractor's hint (point, unit direction, tolerance; world, mm), as the client last
+    gave it (None: none)."""
+
+    command: Command | None
+    ask_within_mm: float = 0.0
+    then: tuple[Reply, ...] = ()
+    seam_hint: tuple[Any, ...] | None = None
+
 
 #: Asked within ``ask_within_mm`` a little early rather than a tick late (a spare round trip
 #: changes nothing: the tracker answers the same).
@@ -101,9 +116,9 @@ class Transport(Protocol):
     def start(self, context: TrackerContext, chain: TfChain, lockstep: str) -> None:
         """Wait for the tracker process and give it the run's context."""
 
-    def exchange(self, step: Step) -> Reply:
-        """Send ``step``; return the tracker's answer (None: brake to rest and wait) and its
-        ``ask_within_mm`` (0: none). Raises :class:`BridgeFailure`."""
+    def exchange(self, step: Step) -> Answer:
+        """Send ``step``; return the tracker's :class:`Answer`. Raises
+        :class:`BridgeFailure`."""
 
     def finish(self, summary: dict[str, Any]) -> None:
         """Tell the tracker the run is over (best effort)."""
@@ -145,8 +160,9 @@ class BridgeTracker:
         self._last: Command | None = None
         self._within = 0.0
         self._target: list[float] = []  # the last command's target, as floats (for _asks)
-        self._then: list[Reply] = []  # what follows the last command, next first
+        self._then: list[Reply] = []  # what follows the last command, next last (pop() it)
         self._taken = 0
+        self._seam_hint: tuple[Any, ...] | None = None  # the client's seam line, as last given
 
     def reset(self, context: TrackerContext) -> None:
         start = time.perf_counter()
@@ -187,15 +203,16 @@ class BridgeTracker:
         self._frames = []
         start = time.perf_counter()
         try:
-            received, within = self.transport.exchange(step)
+            answer = self.transport.exchange(step)
         except BridgeFailure as exc:
             self.failure = exc
             return None
         self.exchange_time_s += time.perf_counter() - start
         self.steps += 1
         self._taken = 0
-        self._then = list(getattr(self.transport, "then", ()))[::-1]  # next last: pop() it
-        self._hold(received, within)
+        self._then = list(answer.then)[::-1]
+        self._seam_hint = answer.seam_hint
+        self._hold(answer.command, answer.ask_within_mm)
         return self._last
 
     def _hold(self, received: Command | None, within: float) -> None:
@@ -218,9 +235,9 @@ class BridgeTracker:
 
     def hint(self, T_world_sensor: FloatArray) -> SeamHint | None:
         """The extractor's hint for the frame about to be taken: where the client's last
-        ``seam_hint`` line (a transport's ``seam_hint``: point, direction, tolerance; world)
+        ``seam_hint`` line (the last :class:`Answer`'s: point, direction, tolerance; world)
         crosses the laser plane; None without one."""
-        line = getattr(self.transport, "seam_hint", None)
+        line = self._seam_hint
         if line is None or self.failure is not None:
             return None
         point, direction, tolerance = line

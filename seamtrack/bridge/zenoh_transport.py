@@ -39,7 +39,7 @@ from typing import Any
 import numpy as np
 
 from seamtrack.bridge import cdr, messages, rmw
-from seamtrack.bridge.lockstep import BridgeFailure, Reply, Step, TfChain
+from seamtrack.bridge.lockstep import Answer, BridgeFailure, Reply, Step, TfChain
 from seamtrack.bridge.wire import MAX_MESSAGE_BYTES, MAX_THEN, context_json, make_command
 from seamtrack.control.tracking import TrackerContext
 
@@ -177,8 +177,6 @@ class ZenohTransport:
             for topic, pub in self.pubs.items()
         ]
         self.seq = 0
-        #: The poses of the last answer's ``cmd_then`` as replies, next first.
-        self.then: list[Reply] = []
         self.with_then = False  # the tracker node publishes cmd_then: three messages a step
         self.client: str | None = None
         self.with_profile = True
@@ -261,7 +259,7 @@ class ZenohTransport:
         message = {"lockstep": lockstep, "context": context_json(context)}
         self._put("/seamtrack/context", rmw.encode_string(json.dumps(message)))
 
-    def exchange(self, step: Step) -> Reply:
+    def exchange(self, step: Step) -> Answer:
         on = self.matched
         for f in step.frames:
             t = f.t_capture_s
@@ -334,7 +332,7 @@ class ZenohTransport:
                 fix="start the tracker node (RMW_IMPLEMENTATION=rmw_zenoh_cpp), or raise " + field,
             ) from None
 
-    def _command(self, t_s: float, seq: int) -> Reply:
+    def _command(self, t_s: float, seq: int) -> Answer:
         want = int(round(t_s * 1e9))
         got: dict[str, Any] = {}
         self._deadline = time.monotonic() + self.timeout_s
@@ -345,17 +343,17 @@ class ZenohTransport:
         finally:
             self._deadline = None
         (frame, pose), (_, speed) = got["/seamtrack/cmd_pose"], got["/seamtrack/cmd_speed"]
-        reply = command_from_values(frame, pose, speed)
-        self.then = []
-        if self.with_then and reply[0] is not None:
+        command, within = command_from_values(frame, pose, speed)
+        then: tuple[Reply, ...] = ()
+        if self.with_then and command is not None:
             then_frame, poses = got["/seamtrack/cmd_then"]
             if poses and then_frame != "world":
                 raise BridgeFailure(
                     f"cmd_then is in frame {then_frame[:40]!r}", fix="give its poses in 'world'"
                 )
             passing = (speed[0], 0.0, *speed[2:])  # each passes through its target
-            self.then = [command_from_values("world", p, passing) for p in poses]
-        return reply
+            then = tuple(command_from_values("world", p, passing) for p in poses)
+        return Answer(command, within, then)  # no seam_hint topic yet
 
     def _receive(self, seq: int) -> tuple[str, int, bytes | None]:
         """The next command sample (topic, size, bytes or None when oversized), blocking; a

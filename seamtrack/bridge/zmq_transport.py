@@ -26,7 +26,7 @@ import time
 from typing import Any
 
 from seamtrack.bridge import wire
-from seamtrack.bridge.lockstep import BridgeFailure, Reply, Step, TfChain
+from seamtrack.bridge.lockstep import Answer, BridgeFailure, Step, TfChain
 from seamtrack.control.tracking import TrackerContext
 
 #: TCP on the loopback interface: a tracker on this machine connects to the same endpoint.
@@ -82,8 +82,6 @@ class ZmqTransport:
         self._connected = False
         #: The client's last seam hint (point_mm, direction, tolerance_mm), world frame.
         self.seam_hint: tuple[Any, ...] | None = None
-        #: The commands that follow the last answer (its ``then``), next first.
-        self.then: list[Reply] = []
 
     # ------------------------------------------------------------------ protocol
     def start(self, context: TrackerContext, chain: TfChain, lockstep: str) -> None:
@@ -106,14 +104,14 @@ class ZmqTransport:
         self.sock.send(json.dumps(reset).encode())
         wire.expect(wire.parse(self._recv(self.timeout_s, "--timeout-s", "answer")), "ready")
 
-    def exchange(self, step: Step) -> Reply:
+    def exchange(self, step: Step) -> Answer:
         self.sock.send_multipart(wire.step_parts(step, self.with_profile))
         raw = self._recv(self.timeout_s, "--timeout-s", f"answer step {step.seq}")
         message = wire.parse(raw)
-        reply, self.then = wire.commands_from_json(message, step.seq)
-        if "seam_hint" in message:
+        (command, within), then = wire.commands_from_json(message, step.seq)
+        if "seam_hint" in message:  # it holds until the client says another (or null)
             self.seam_hint = wire.seam_hint_from_json(message)
-        return reply
+        return Answer(command, within, tuple(then), self.seam_hint)
 
     def finish(self, summary: dict[str, Any]) -> None:
         from seamtrack.io.output import json_safe
