@@ -154,6 +154,24 @@ def _m4j(g: FloatArray, at: int) -> FloatArray:
     return g[at : at + 16].reshape(4, 4)
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def ur_joint_1(g: FloatArray, T: FloatArray, ws: FloatArray) -> tuple[bool, float, float]:
+    """What every branch of the UR family's solution shares (:func:`_ur_branches`,
+    :func:`~seamtrack.control.closed_form_nearest.ik_nearest`): the joint-6 frame ``ws[0]``
+    (the torch's placement undone from ``T``) and ``ws[1]`` = P1^-1 of it, and joint 1's two
+    solutions psi + k and psi + pi - k; False where the wrist point lies inside the cylinder
+    of radius dlat about axis 1 (no solution)."""
+    J6 = ws[0]
+    mul_into(T, _m4j(g, _U_TCP), J6)
+    mul_into(_m4j(g, _U_P1I), J6, ws[1])
+    dlat, s1 = g[_U_DLAT], g[_U_S1]
+    px, py = J6[0, 3], J6[1, 3]
+    r = math.hypot(px, py)
+    if r <= abs(dlat):
+        return False, 0.0, 0.0
+    return True, math.atan2(py, px), math.asin(s1 * dlat / r)
+
+
 @numba.njit(cache=True, nogil=True)
 def _ur_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: FloatArray) -> int:
     """UR family: up to 8 joint solutions of the torch pose ``T`` (metres).
@@ -162,19 +180,14 @@ def _ur_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: FloatArr
     d3 + d4) along the parallel axes, whatever joints 2 to 6: that gives joint 1. The z row of
     the rotation from frame 1 to joint 6 is (s_a4 s5 c6, -s_a4 s5 s6, -s_a4 s_a5 c5): joints
     5 and 6. What is left, Rz(q2) Tx(a2) Rz(q3) Tx(a3) Rz(q4), is a planar 3R chain."""
-    P2i, P1i, P6i, P5i = _m4j(g, _U_P2I), _m4j(g, _U_P1I), _m4j(g, _U_P6I), _m4j(g, _U_P5I)
     ws = np.empty((6, 4, 4))  # J6, P1i J6, T01^-1 J6, two scratch, A
-    J6 = ws[0]
-    mul_into(T, _m4j(g, _U_TCP), J6)  # the joint-6 frame (the torch's placement undone)
-    mul_into(P1i, J6, ws[1])
-    a2, a3, dlat = g[_U_A2], g[_U_A3], g[_U_DLAT]
-    s1, s4, s5a = g[_U_S1], g[_U_S4], g[_U_S5]
-    px, py = J6[0, 3], J6[1, 3]
-    r = math.hypot(px, py)
-    if r <= abs(dlat):
+    reached, psi, k = ur_joint_1(g, T, ws)
+    if not reached:
         return 0  # the wrist point inside the cylinder of radius dlat about axis 1
-    psi = math.atan2(py, px)
-    k = math.asin(s1 * dlat / r)
+    P2i, P6i, P5i = _m4j(g, _U_P2I), _m4j(g, _U_P6I), _m4j(g, _U_P5I)
+    J6 = ws[0]
+    a2, a3 = g[_U_A2], g[_U_A3]
+    s1, s4, s5a = g[_U_S1], g[_U_S4], g[_U_S5]
     count = 0
     for q1 in (psi + k, psi + math.pi - k):
         z1x, z1y = s1 * math.sin(q1), -s1 * math.cos(q1)  # frame 1's z in the base
@@ -220,15 +233,15 @@ _W_O3, _W_W0, _W_S3, _W_U1, _W_U3, _W_B, _W_S6, _W_R0 = 22, 24, 26, 27, 30, 33, 
 WRIST_FIELDS = 52
 
 
-@numba.njit(cache=True, nogil=True)
-def _wrist_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: FloatArray) -> int:
-    """Spherical wrist: up to 8 joint solutions of the torch pose ``T`` (metres).
-
-    Product of exponentials about the zero pose's axes: the wrist centre c = p + R w_tcp moves
-    with joints 1-3 only. Joint 1 turns axis 2 so that c lies in the plane of the arm
-    (``a cos q1 + b sin q1 = h``), joints 2 and 3 are a planar 2R chain to it, and the wrist
-    rotation left, in the basis (u4, u5, u4 x u5), is Rx(q4) Ry(q5) Rx(+-q6)."""
-    ws = np.empty((7, 3, 3))  # R, its R0^T B, rotations, products
+@numba.njit(cache=True, nogil=True, inline="always")
+def wrist_joint_1(
+    g: FloatArray, T: FloatArray, ws: FloatArray
+) -> tuple[bool, float, float, FloatArray]:  # fmt: skip
+    """What every branch of the spherical wrist's solution shares (:func:`_wrist_branches`,
+    :func:`~seamtrack.control.closed_form_nearest.ik_nearest`): joint 1's two solutions
+    beta +- k (False: the wrist centre out of reach), the wrist centre from the shoulder's
+    origin (d), and ``ws[0]`` = R, ``ws[2]`` = R R0^T B (the wrist's rotation is
+    B^T R3^T (R R0^T B) B^T ... in B's basis)."""
     RT = ws[0]
     RT[:, :] = T[:3, :3]
     w = g[_W_WT : _W_WT + 3]
@@ -241,9 +254,25 @@ def _wrist_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: Float
     r = math.hypot(a, b)
     hp = g[_W_HP]
     if r < abs(hp) or r == 0.0:
+        return False, 0.0, 0.0, d
+    mul_into(RT, np.ascontiguousarray(g[_W_R0 : _W_R0 + 9].reshape(3, 3).T), ws[1])
+    mul_into(ws[1], g[_W_B : _W_B + 9].reshape(3, 3), ws[2])
+    return True, math.atan2(b, a), math.acos(min(max(hp / r, -1.0), 1.0)), d
+
+
+@numba.njit(cache=True, nogil=True)
+def _wrist_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: FloatArray) -> int:
+    """Spherical wrist: up to 8 joint solutions of the torch pose ``T`` (metres).
+
+    Product of exponentials about the zero pose's axes: the wrist centre c = p + R w_tcp moves
+    with joints 1-3 only. Joint 1 turns axis 2 so that c lies in the plane of the arm
+    (``a cos q1 + b sin q1 = h``), joints 2 and 3 are a planar 2R chain to it, and the wrist
+    rotation left, in the basis (u4, u5, u4 x u5), is Rx(q4) Ry(q5) Rx(+-q6)."""
+    ws = np.empty((7, 3, 3))  # R, its R0^T B, rotations, products
+    reached, beta, k, d = wrist_joint_1(g, T, ws)
+    if not reached:
         return 0
-    beta = math.atan2(b, a)
-    k = math.acos(min(max(hp / r, -1.0), 1.0))
+    o1, u2 = g[_W_O1 : _W_O1 + 3], g[_W_U2 : _W_U2 + 3]
     o2, e1, e2 = g[_W_O2 : _W_O2 + 3], g[_W_E1 : _W_E1 + 3], g[_W_E2 : _W_E2 + 3]
     o3x, o3y = g[_W_O3], g[_W_O3 + 1]
     w0x, w0y = g[_W_W0], g[_W_W0 + 1]
@@ -253,9 +282,6 @@ def _wrist_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: Float
     s3, s6 = g[_W_S3], g[_W_S6]
     u1, u3 = g[_W_U1 : _W_U1 + 3], g[_W_U3 : _W_U3 + 3]
     B = g[_W_B : _W_B + 9].reshape(3, 3)
-    # R R0^T B, once: the wrist's rotation is B^T R3^T (R R0^T B) B^T ... in B's basis.
-    mul_into(RT, np.ascontiguousarray(g[_W_R0 : _W_R0 + 9].reshape(3, 3).T), ws[1])
-    mul_into(ws[1], B, ws[2])
     count = 0
     for q1 in (beta + k, beta - k):
         _rot_into(u1, -q1, ws[3])

@@ -21,31 +21,24 @@ from numpy.typing import NDArray
 from seamtrack.control.closed_form import (
     _U_A2,
     _U_A3,
-    _U_DLAT,
-    _U_P1I,
     _U_P2I,
     _U_P5I,
     _U_P6I,
     _U_S1,
     _U_S4,
     _U_S5,
-    _U_TCP,
     _W_B,
     _W_E1,
     _W_E2,
-    _W_HP,
     _W_O1,
     _W_O2,
     _W_O3,
-    _W_R0,
     _W_S3,
     _W_S6,
     _W_U1,
     _W_U2,
     _W_U3,
-    _W_V,
     _W_W0,
-    _W_WT,
     KIND_UR,
     KIND_WRIST,
     SINGULAR_SIN,
@@ -57,6 +50,8 @@ from seamtrack.control.closed_form import (
     _tmul_into,
     ik_branches,
     mul_into,
+    ur_joint_1,
+    wrist_joint_1,
 )  # fmt: skip
 
 FloatArray = NDArray[np.float64]
@@ -94,18 +89,13 @@ def _ur_nearest(
     same sum with the joints not yet known left out: adding the rest can only raise it)
     exceeds the best found. At 1 kHz the nearest branch is microradians away and the others
     tenths of a radian: one branch of eight is worked out. ``ws``: a (6, 4, 4) scratch."""
-    P2i, P1i, P6i, P5i = _m4j(g, _U_P2I), _m4j(g, _U_P1I), _m4j(g, _U_P6I), _m4j(g, _U_P5I)
-    J6 = ws[0]  # J6, P1i J6, T01^-1 J6, two scratch, A
-    mul_into(T, _m4j(g, _U_TCP), J6)
-    mul_into(P1i, J6, ws[1])
-    a2, a3, dlat = g[_U_A2], g[_U_A3], g[_U_DLAT]
-    s1, s4, s5a = g[_U_S1], g[_U_S4], g[_U_S5]
-    px, py = J6[0, 3], J6[1, 3]
-    r = math.hypot(px, py)
-    if r <= abs(dlat):
+    reached, psi, k = ur_joint_1(g, T, ws)  # ws: J6, P1i J6, T01^-1 J6, two scratch, A
+    if not reached:
         return False
-    psi = math.atan2(py, px)
-    k = math.asin(s1 * dlat / r)
+    P2i, P6i, P5i = _m4j(g, _U_P2I), _m4j(g, _U_P6I), _m4j(g, _U_P5I)
+    J6 = ws[0]
+    a2, a3 = g[_U_A2], g[_U_A3]
+    s1, s4, s5a = g[_U_S1], g[_U_S4], g[_U_S5]
     best = math.inf
     best_key = 8  # the branch's place in _ur_branches' order (i1, i5, i3): a tie's tiebreak
     q1s = (psi + k, psi + math.pi - k)
@@ -177,21 +167,10 @@ def _wrist_nearest(g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatA
     branch, joint 1's nearer branch first, then the elbow nearer in joints 2 and 3 (its sum so
     far exact), a branch skipped once its sum so far exceeds the best found."""
     ws = np.empty((7, 3, 3))
-    RT = ws[0]
-    RT[:, :] = T[:3, :3]
-    w = g[_W_WT : _W_WT + 3]
-    c = np.empty(3)
-    for i in range(3):
-        c[i] = T[i, 3] + RT[i, 0] * w[0] + RT[i, 1] * w[1] + RT[i, 2] * w[2]
-    o1, u2, v = g[_W_O1 : _W_O1 + 3], g[_W_U2 : _W_U2 + 3], g[_W_V : _W_V + 3]
-    d = c - o1
-    a, b = d[0] * u2[0] + d[1] * u2[1] + d[2] * u2[2], d[0] * v[0] + d[1] * v[1] + d[2] * v[2]
-    r = math.hypot(a, b)
-    hp = g[_W_HP]
-    if r < abs(hp) or r == 0.0:
+    reached, beta, k, d = wrist_joint_1(g, T, ws)
+    if not reached:
         return False
-    beta = math.atan2(b, a)
-    k = math.acos(min(max(hp / r, -1.0), 1.0))
+    o1, u2 = g[_W_O1 : _W_O1 + 3], g[_W_U2 : _W_U2 + 3]
     o2, e1, e2 = g[_W_O2 : _W_O2 + 3], g[_W_E1 : _W_E1 + 3], g[_W_E2 : _W_E2 + 3]
     o3x, o3y = g[_W_O3], g[_W_O3 + 1]
     w0x, w0y = g[_W_W0], g[_W_W0 + 1]
@@ -201,8 +180,6 @@ def _wrist_nearest(g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatA
     s3, s6 = g[_W_S3], g[_W_S6]
     u1, u3 = g[_W_U1 : _W_U1 + 3], g[_W_U3 : _W_U3 + 3]
     B = g[_W_B : _W_B + 9].reshape(3, 3)
-    mul_into(RT, np.ascontiguousarray(g[_W_R0 : _W_R0 + 9].reshape(3, 3).T), ws[1])
-    mul_into(ws[1], B, ws[2])
     best = math.inf
     best_key = 8  # the branch's place in _wrist_branches' order (i1, i3, i6)
     q1s = (beta + k, beta - k)
