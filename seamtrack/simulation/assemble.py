@@ -166,6 +166,9 @@ class MeshScan:
     extract: Any = None  # the extractor instance ``scan`` calls
     last_image: Callable[[], Any] | None = None  # image mode: the last frame's camera image
     hinted: bool = False  # ``scan`` passes the tracker's hint on to an extractor that uses it
+    # The part and its obstacles without the extra mesh (a job's beads, an open surface of
+    # up to ~0.6 million triangles): the sensor-inside test's solid.
+    solid: Any = None
 
 
 def uses_hint(find: Callable[..., Any]) -> bool:
@@ -220,6 +223,7 @@ def _mesh_scan(
 
         boxes = [trimesh.creation.box(bounds=[b.min_mm, b.max_mm]) for b in w.obstacles]
         mesh = trimesh.util.concatenate([mesh, *boxes])  # type: ignore[assignment]
+    solid = mesh  # the part and its obstacles, closed solids: what the sensor must stay out of
     if extra_mesh is not None:
         import trimesh
 
@@ -311,7 +315,8 @@ def _mesh_scan(
 
     view = None if part.view_normal is None else T_world_part[:3, :3] @ part.view_normal
     last_image = (lambda: images[0]) if s.source == "image" else None
-    return MeshScan(seam, scan, mesh, caster, extractor_name, view, find, last_image, hinted)
+    return MeshScan(seam, scan, mesh, caster, extractor_name, view, find, last_image, hinted,
+                    solid)  # fmt: skip
 
 
 def _stripe_noise(params: dict[str, Any]) -> Any:
@@ -384,8 +389,9 @@ def build_parts(
     poses[:, :3, 3] = program.frame(check_s)[0]
     tool = c.robot.tool
     explicit = tool.sensor_xyz_mm is not None or tool.sensor_rpy_deg is not None
+    solid = None if mesh is None or loaded is None else loaded.solid
     check_sensor_outside(
-        poses, robot.T_tcp_sensor, sensor, seam, mesh, explicit, bool(robot.turns_tool)
+        poses, robot.T_tcp_sensor, sensor, seam, solid, explicit, bool(robot.turns_tool)
     )
     check_ticks(c, seam.length_mm)
     frame_period = 1.0 / c.sensor.frame_rate_hz
