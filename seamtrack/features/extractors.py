@@ -36,7 +36,7 @@ import importlib
 import importlib.metadata
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Protocol, runtime_checkable
+from typing import Any, NamedTuple, Protocol, runtime_checkable
 
 import numba
 import numpy as np
@@ -129,18 +129,31 @@ class OutsideCornerExtractor(_Base):
         return _two_faces(self, profile, seg, found)
 
 
+class CornerFound(NamedTuple):
+    """What :func:`_corner` reads of the V search (:func:`_corner_search`): a pair found, its
+    apex, each face's inlier count and rms residual, and the share of the profile the two
+    faces explain (NaN when a face has no inliers)."""
+
+    found: bool
+    apex_y: float
+    apex_z: float
+    left_count: int
+    right_count: int
+    left_rms: float
+    right_rms: float
+    share: float
+
+
 @numba.njit(cache=True, nogil=True)
 def _corner_search(
     points: FloatArray, stray: NDArray[np.bool_], tol: float, pieces: Any, params: SearchParams
-) -> tuple[bool, float, float, int, int, float, float, float]:  # fmt: skip
+) -> CornerFound:  # fmt: skip
     """:func:`~seamtrack.features._v_search.search` and what :func:`_corner` reads of it, in
-    one call (boxing the search's tables for Python cost about as much as the search): (a
-    pair found, its apex y and z, each face's inlier count and rms, and the share of the
-    profile the two faces explain: NaN when a face has no inliers)."""
+    one call (boxing the search's tables for Python cost about as much as the search)."""
     found = search(points, stray, tol, pieces, params)
     left, right = found.pair.left, found.pair.right
     if left == NONE:
-        return False, 0.0, 0.0, 0, 0, 0.0, 0.0, np.nan
+        return CornerFound(False, 0.0, 0.0, 0, 0, 0.0, 0.0, np.nan)
     geo, span, index = found.table.geo, found.table.span, found.table.index
     l_start, l_count = span[left, START], span[left, COUNT]
     r_start, r_count = span[right, START], span[right, COUNT]
@@ -151,8 +164,8 @@ def _corner_search(
             points, stray, lo, hi, (geo[left, CY], geo[left, CZ], geo[left, UY], geo[left, UZ]),
             (geo[right, CY], geo[right, CZ], geo[right, UY], geo[right, UZ]), 3.0 * tol,
         )  # fmt: skip
-    return (True, found.pair.apex_y, found.pair.apex_z, l_count, r_count, geo[left, RMS],
-            geo[right, RMS], share)  # fmt: skip
+    return CornerFound(True, found.pair.apex_y, found.pair.apex_z, l_count, r_count,
+                       geo[left, RMS], geo[right, RMS], share)  # fmt: skip
 
 
 def _corner(
