@@ -92,7 +92,12 @@ class Library:
         self.intersect8 = _address(self.intersect8_fn)
         self.occluded8 = _address(self.occluded8_fn)
         self.occluded16 = _address(self.occluded16_fn)
-        self.device = self.new_device(None)
+        # One build thread: a scene builds in the calling thread, so Embree's TBB never starts
+        # workers. Sweeps and datasets fork worker processes; a child forked while TBB workers
+        # of the parent were about (busy or spinning after a build) inherits a scheduler whose
+        # threads do not exist, and its next scene commit waits for them forever (a dataset
+        # test's worker hung so in rtcCommitScene). seamtrack runs one process a core anyway.
+        self.device = self.new_device(b"threads=1")
         if not self.device:
             raise OSError(f"rtcNewDevice failed in {path}")
         self.version_major = int(self.device_property(self.device, _PROPERTY_VERSION_MAJOR))
