@@ -7,6 +7,10 @@
 * :func:`ray_reach`: with no wall seen, how far the fill surface reaches towards the side:
   a spike moves a point along its ray, so the ray still says where the surface is across the
   groove.
+* :func:`short_walls`, :func:`mirrored_walls`: a wall seen as a scrap or not at all, stood
+  in for by the other one mirrored; :func:`cross_uv`: a wall's line crossed with the
+  surface's;
+* :func:`bottom_points`: the three bottom points on the fill surface.
 
 Points are (u, v): u across the groove (the plates' line, left to right), v into it.
 """
@@ -67,12 +71,19 @@ def _running_median(v: FloatArray, k: int) -> FloatArray:
 
 
 def risen_level(
-    fu: FloatArray, fv: FloatArray, left: bool, spacing: float, tol: float
+    fu: FloatArray,
+    fv: FloatArray,
+    left: bool,
+    spacing: float,
+    tol: float,
+    window: float = 0.3,
+    raw_end: bool = False,
 ) -> float | None:
     """The level (v) of the fill surface's deepest part near a side, when the surface rises
-    from there into the wall: its deepest point (a running median over 0.3 mm, cut short at
-    the ends) lies at least a quarter of a millimetre in from the surface's outer end (its
-    last 0.1 mm), which stands at least 0.3 mm above it and rises at least 0.45 times as
+    from there into the wall: its deepest point (a running median over ``window`` mm, cut
+    short at the ends) lies at least a quarter of a millimetre in from the surface's outer
+    end (its last 0.1 mm, of the running median or with ``raw_end`` of the points), which
+    stands at least 0.3 mm above it and rises at least 0.45 times as
     much as it runs from the deepest part's nearest point (a round at a U's foot, bare or
     partly filled, or the notch between a bead and the round: 0.42-1.2 on the synthetic 3 mm
     round, bare, more beside a bead). None when it rises more gently (a root bead's concave
@@ -90,10 +101,10 @@ def risen_level(
         return None
     order = np.argsort(zd, kind="stable")
     zv, zd = zv[order], zd[order]
-    k = int(min(51, max(3, round(0.3 / max(spacing, 1e-9)))) | 1)
+    k = int(min(51, max(3, round(window / max(spacing, 1e-9)))) | 1)
     smooth = _running_median(zv, k)
     j = int(np.argmax(smooth))
-    end = float(np.median(smooth[zd <= max(0.1, 3 * spacing)]))
+    end = float(np.median((zv if raw_end else smooth)[zd <= max(0.1, 3 * spacing)]))
     if zd[j] < 0.25 or smooth[j] - end < 0.3:
         return None
     deep = smooth >= smooth[j] - min(2.0 * tol, 0.05)
@@ -183,39 +194,47 @@ def drop_islands(
         e = k[-1] if tail else k[0]
         return float(qu[e]), float(qv[e]), slope
 
-    pieces = np.flatnonzero(big)
-    for c in range(m):
-        k = members[c]
-        before = pieces[pieces < c]
-        after = pieces[pieces > c]
-        a = int(before[-1]) if len(before) else None
-        b = int(after[0]) if len(after) else None
-        if a is None and b is None:
-            continue
-        if big[c]:
-            if a is not None and b is not None:
-                if size[c] >= min(size[a], size[b]):
-                    continue
-            else:
-                nb = a if a is not None else b
-                assert nb is not None
-                if size[c] >= size[nb] or float(np.ptp(qu[k])) > 0.5:
-                    continue
-        mv = float(np.median(qv[k]))
-        if a is not None and b is not None:
-            au, av, sa = end(a, True)
-            bu, bv, _ = end(b, False)
-            if bu - au < 1e-9:
+    alive = np.ones(m, dtype=bool)
+    for _ in range(3):  # again without the islands found: an island beside an island
+        pieces = np.flatnonzero(big & alive)
+        dropped = False
+        for c in np.flatnonzero(alive):
+            k = members[c]
+            before = pieces[pieces < c]
+            after = pieces[pieces > c]
+            a = int(before[-1]) if len(before) else None
+            b = int(after[0]) if len(after) else None
+            if a is None and b is None:
                 continue
-            line_v = av + (mid_u[c] - au) * (bv - av) / (bu - au)
-            lo = int(k[np.argmin(qu[k])])
-            if abs(float(qv[lo]) - (av + sa * (float(qu[lo]) - au))) <= off_max:
-                continue  # it carries on the piece before it (a flank, the piece after a spike)
-        else:
-            eu, ev, slope = end(a, True) if a is not None else end(b, False)  # type: ignore[arg-type]
-            line_v = ev + slope * (mid_u[c] - eu)
-        if abs(mv - line_v) > off_max:
-            keep[k] = False
+            if big[c]:
+                if a is not None and b is not None:
+                    if size[c] >= min(size[a], size[b]):
+                        continue
+                else:
+                    nb = a if a is not None else b
+                    assert nb is not None
+                    if size[c] >= size[nb] or float(np.ptp(qu[k])) > 0.5:
+                        continue
+            mv = float(np.median(qv[k]))
+            if a is not None and b is not None:
+                au, av, sa = end(a, True)
+                bu, bv, _ = end(b, False)
+                if bu - au < 1e-9:
+                    continue
+                line_v = av + (mid_u[c] - au) * (bv - av) / (bu - au)
+                lo = int(k[np.argmin(qu[k])])
+                if abs(float(qv[lo]) - (av + sa * (float(qu[lo]) - au))) <= off_max:
+                    continue  # it carries on the piece before it (a flank, the piece after a spike)
+            else:
+                eu, ev, slope = end(a, True) if a is not None else end(b, False)  # type: ignore[arg-type]
+                slope = min(max(slope, -1.0), 1.0)  # (a steep end carried far: a wall's)
+                line_v = ev + slope * (mid_u[c] - eu)
+            if abs(mv - line_v) > off_max:
+                keep[k] = False
+                alive[c] = False
+                dropped = True
+        if not dropped:
+            break
     return keep
 
 
@@ -252,6 +271,44 @@ def mirrored_walls(
     return out[0], out[1]
 
 
+def short_walls(
+    walls: tuple[Line | None, Line | None],
+    fv: FloatArray,
+    v: FloatArray,
+    max_mm: float = 3.0,
+    share: float = 0.25,
+    below_mm: float = 3.0,
+) -> tuple[Line | None, Line | None]:
+    """The walls, one seen over less than ``max_mm`` and less than ``share`` of the other's
+    seen length, ending more than ``below_mm`` above the fill surface's outer end on its side
+    (``fv``: the surface's v, sorted by u), taken for hidden (None): a scrap at its top edge,
+    the rest in the shadow of its plate, says little of its direction (a degree over 0.7 mm
+    moves its foot 0.3 mm 15 mm down); the mirror of the other stands in for it
+    (:func:`mirrored_walls`)."""
+    a, b = walls
+    if a is None or b is None or not len(a.t) or not len(b.t) or not len(fv):
+        return walls
+    la, lb = float(np.ptp(a.t)), float(np.ptp(b.t))
+    out: list[Line | None] = [a, b]
+    for side, (w, mine, other) in enumerate(((a, la, lb), (b, lb, la))):
+        low = max(float(w.point(float(w.t[0])) @ v), float(w.point(float(w.t[-1])) @ v))
+        edge = float(fv[0] if side == 0 else fv[-1])
+        if mine < min(max_mm, share * other) and edge - low > below_mm:
+            out[side] = None
+    return out[0], out[1]
+
+
+def cross_uv(wall: Line, a: float, b: float, u: FloatArray, v: FloatArray) -> FloatArray | None:
+    """(u, v) where ``wall``'s line crosses the line v = a + b u (None: parallel)."""
+    cu, cv = float(wall.centroid @ u), float(wall.centroid @ v)
+    du, dv = float(wall.direction @ u), float(wall.direction @ v)
+    den = dv - b * du
+    if abs(den) <= 1e-9:
+        return None
+    t = (a + b * cu - cv) / den
+    return np.array([cu + t * du, cv + t * dv])
+
+
 def _median(x: FloatArray) -> float:
     """``np.median`` of a 1-d array, the same number without its per-call overhead (the
     extractor takes thousands of small medians a second)."""
@@ -274,11 +331,14 @@ def _on_line(seg: Segments, ref: Line, ln: Line, max_deg: float = 5.0) -> bool:
     return bool(_median(off) <= 2.0 * seg.tol)
 
 
-def _beyond(q: FloatArray, ln: Line, v: FloatArray, left: bool, tol: float) -> int:
+def _beyond(
+    q: FloatArray, ln: Line, v: FloatArray, left: bool, tol: float, upper: float | None = None
+) -> int:
     """How many of the points ``q`` lie outwards of a wall piece ``ln`` (on the plate's side,
-    more than 3 tolerances off its line) and deeper than its upper end."""
+    more than 3 tolerances off its line) and deeper than its upper end (or ``upper``)."""
     n = ln.normal if (ln.normal @ np.array([v[1], -v[0]]) < 0) == left else -ln.normal
-    upper = float(min(ln.point(float(ln.t[0])) @ v, ln.point(float(ln.t[-1])) @ v))
+    if upper is None:
+        upper = float(min(ln.point(float(ln.t[0])) @ v, ln.point(float(ln.t[-1])) @ v))
     out = ((q - ln.centroid) @ n > 3.0 * tol) & (q @ v > upper)
     return int(np.count_nonzero(out))
 
@@ -396,3 +456,34 @@ def _local_v(qu: FloatArray, qv: FloatArray, ut: float, h: float, tol: float) ->
     :func:`seamtrack.features._groove_kernels.local_v`)."""
     val = local_v(_c(qu), _c(qv), float(ut), float(h), float(tol))
     return None if math.isnan(val) else float(val)
+
+
+def bottom_points(
+    seg: Segments,
+    qu: FloatArray,
+    qv: FloatArray,
+    bl: FloatArray,
+    br: FloatArray,
+    u: FloatArray,
+    v: FloatArray,
+) -> FloatArray:
+    """The three bottom points (3, 2): the fill surface (``qu``, ``qv``) at a quarter, half
+    and three quarters of the way from the bottom corner ``bl`` to ``br`` along u, each a
+    local robust line fit there (:func:`_local_v`, over 4 times the width where too few
+    points show); on the line joining the corners where none do (an open root)."""
+    ul, ur = float(bl @ u), float(br @ u)
+    out = []
+    h = max(0.25, 5.0 * seg.spacing)
+    for t in (0.25, 0.5, 0.75):
+        chord = bl + t * (br - bl)
+        ut = float(chord @ u)
+        val = None
+        if ur - ul > 2 * h:
+            val = _local_v(qu, qv, ut, h, seg.tol)
+            if val is None:
+                val = _local_v(qu, qv, ut, 4 * h, seg.tol)
+        if val is None:
+            out.append(chord)
+        else:
+            out.append(ut * u + val * v)
+    return np.array(out)

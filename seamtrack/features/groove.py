@@ -19,16 +19,20 @@ spikes and reflection streaks left out, straight pieces by split-and-merge):
   points within two tolerances of it (a root radius's round at its foot left out). A piece
   more than 3 mm below the corner, and not carrying on a run of wall pieces from it (a wall
   split into pieces), must stand 75 deg off the plates, be 1 mm long and have no more points
-  outwards of it than on it (a bead's flank or a spike streak pointing at the corner by
-  chance is no wall). A wall nearly along the rays (a narrow gap's), or in the
+  outwards of it, deeper than a millimetre below the corner, than on it (a bead's flank or a
+  spike streak pointing at the corner by chance, with the fill's flank outwards of it, is no
+  wall). A wall nearly along the rays (a narrow gap's), or in the
   shadow of its plate's edge, shows no points: then there is none.
 * **top corners**: a plate's line meets its wall's line; with no wall seen, the plate's end
   (half a spacing beyond its last point).
-* **fill surface**: the groove's points inside the walls and off their lines (below where a
-  wall was seen, on its line too; 3 mm below, either side), less what a running median over
-  0.6 mm leaves out and the islands (runs between jumps off the surface carried across them:
-  spike runs, streaks where a dropout took the surface), the largest stretch without a 2 mm
-  break (2.5 mm towards a side with no wall seen: a shadow in a crowned fill).
+* **fill surface**: the groove's points inside the walls and off their lines (by five times
+  the wall's rms, at least 0.06 mm and at most two tolerances: a bead's flank running down
+  into the notch at the wall stays surface; below where a wall was seen, on its line too;
+  3 mm below, either side), less what a running median over 0.6 mm leaves out and the
+  islands (runs between jumps off the surface carried across them, at an end at a slope of
+  at most 1, and again without the islands found: spike runs, streaks where a dropout took
+  the surface), the largest stretch without a 2 mm break (2.5 mm towards a side with no wall
+  seen: a shadow in a crowned fill).
 * **bottom corners**: where the fill surface rises from its deepest part into the wall (a
   U's round, bare or partly filled), the wall's line at that part's level (the virtual sharp
   corner of an empty U). Else a line through the most surface points within 1.5 mm of the
@@ -38,8 +42,14 @@ spikes and reflection streaks left out, straight pieces by split-and-merge):
   the wall's deepest point and not above it (a bead's toe lost in the notch at the wall);
   else that point (half a spacing beyond it). A wall hidden in its plate's shadow is the
   seen one mirrored through its own top corner (bevels are cut alike), when the fill stays
-  inside that line;
-  with no wall seen on a side (buried, or along the rays) or a mirrored one, the surface's
+  inside that line; so is one seen over less than 3 mm and a quarter of the other's seen
+  length, ending more than 3 mm above the fill (a scrap at its top edge says little of its
+  direction). A hidden wall's round is read finer (its rise over 0.2 mm, from the surface's
+  raw end: a bead's toe on the round is all there is of the wall's foot). With a hidden
+  wall, or one seen only far above the fill, the corner no ray lights is its line crossed
+  with the surface's line (over its last 0.6 mm; 1.5 mm under a wall seen far above) where
+  that lies at most 1 mm beyond the surface's outermost point on the line. Else, and with
+  no wall seen on a side (buried, or along the rays), the surface's
   outermost point on its line over its last 0.6 mm, carried as far as the rays of the
   points near that line reach (a spike moves a point along its ray: its column still lit
   the surface). With no surface at all (an empty V without a gap), the walls' intersection.
@@ -92,11 +102,14 @@ from seamtrack.features._groove_fit import (  # noqa: F401 (RAY_*: the extractor
     _on_line,
     _robust_uv_line,
     _stretched,
+    bottom_points,
+    cross_uv,
     drop_islands,
     explained_share,
     mirrored_walls,
     ray_reach,
     risen_level,
+    short_walls,
     trim_wall,
 )
 from seamtrack.features._groove_kernels import running_median
@@ -239,12 +252,15 @@ class GrooveExtractor(_Base):
                 return "not a groove: no bottom between the walls"
             bl = br = x
         else:
-            wl, wr = mirrored_walls((left.line, right.line), (tl, tr), fu, fv, u, v)
+            seen = short_walls((left.line, right.line), fv, v)
+            wl, wr = mirrored_walls(seen, (tl, tr), fu, fv, u, v)
+            wl = left.line if wl is None else wl
+            wr = right.line if wr is None else wr
             bl = self._corner(seg, wl, fu, fv, u, v, True, P[lo:hi])
             br = self._corner(seg, wr, fu, fv, u, v, False, P[lo:hi])
         if (br - bl) @ u < -max(seg.tol, 2 * seg.spacing):
             return "not a groove: its walls cross (a ridge?)"
-        bottom = self._bottom_points(seg, fu, fv, bl, br, u, v)
+        bottom = bottom_points(seg, fu, fv, bl, br, u, v)
         pts = np.vstack([tl, bl, bottom, br, tr])
         if _along_a_ray(pts[1:6]):
             return "not a groove: its bottom lies along one laser ray (a spike streak)"
@@ -369,7 +385,10 @@ class GrooveExtractor(_Base):
             if near_top > 3.0 and (off < 75.0 or ln.extent < 1.0):
                 continue  # a bead's flank or a streak pointing at the corner by chance
             n = int(np.count_nonzero(np.abs((q - ln.centroid) @ ln.normal) <= 2.0 * seg.tol))
-            if near_top > 3.0 and _beyond(q, ln, v, from_left, seg.tol) > max(self.min_points, n):
+            below = float(top @ v) + 1.0  # (a streak deep in the groove: fill outwards)
+            if near_top > 3.0 and _beyond(q, ln, v, from_left, seg.tol, below) > max(
+                self.min_points, n
+            ):
                 continue  # the surface goes on beyond it: a streak in the groove, no wall
             if n > support:
                 best, support = j, n
@@ -445,8 +464,9 @@ class GrooveExtractor(_Base):
             # carried down from its top, a narrow gap's, cuts no surface short).
             low = float(np.max(seg.points[w.line.index] @ v)) if len(w.line.index) else np.inf
             off, qv_ = (q - w.line.centroid) @ n, q @ v
+            band = min(2.0 * seg.tol, max(5.0 * w.line.rms, 0.06))
             keep &= (
-                (off > 2.0 * seg.tol)
+                (off > band)
                 | ((qv_ > low + 2.0 * seg.tol) & (off > -2.0 * seg.tol))
                 | (qv_ > low + 3.0)
             )
@@ -500,7 +520,9 @@ class GrooveExtractor(_Base):
         edge = float(fu[0] if left else fu[-1])
         unseen = wall is None or not len(wall.index)  # no wall seen, or a hidden one's mirror
         if wall is not None:
-            level = risen_level(fu, fv, left, seg.spacing, seg.tol)
+            # (a hidden wall: the round's rise is all there is of its foot, read finer)
+            fine = not len(wall.index)
+            level = risen_level(fu, fv, left, seg.spacing, seg.tol, *((0.2, True) if fine else ()))
             if level is not None:  # a round into the wall: the wall's line at the fill's level
                 cu, cv = float(wall.centroid @ u), float(wall.centroid @ v)
                 du, dv = float(wall.direction @ u), float(wall.direction @ v)
@@ -532,12 +554,15 @@ class GrooveExtractor(_Base):
         # A wall seen only far above the fill (more than 3 mm, and half its seen length) or a
         # hidden one's mirror is carried too far down to place the corner: then it is the
         # surface's, as for no wall seen.
+        mirror = far = None
         if wall is not None and not len(wall.index):
+            mirror = wall
             wall = cross = None  # a mirror: the wall is hidden
         elif wall is not None and cross is not None:
             seen = seg.points[wall.index] @ np.column_stack([u, v])
             gap = float(np.min(np.hypot(*(seen - cross).T)))
             if gap > max(3.0, 0.5 * float(np.ptp(wall.t))):
+                far = wall
                 cross, columns = None, None  # below a wall, rays may light it unseen
         if wall is None or cross is None:  # the surface's outermost point
             near = sign * (fu - edge) <= 0.6  # on its line there (a flank bends further in)
@@ -548,6 +573,14 @@ class GrooveExtractor(_Base):
                 if np.any(on):
                     k = int(np.argmin(sign * fu[near][on]))
                     ou, ov = float(fu[near][on][k]), float(fv[near][on][k])
+            # A wall's line (a hidden one's mirror, or one seen far above) crossing the
+            # surface's line just beyond its outermost point: the corner no ray lights.
+            line = far if far is not None else mirror
+            if line is not None and fit is not None:
+                x = cross_uv(line, fit[0], fit[1], u, v)
+                if x is not None and -0.05 <= sign * (ou - x[0]) <= 1.0:
+                    if math.hypot(x[0] - ou, x[1] - ov) <= 1.0:
+                        return np.asarray(x[0] * u + x[1] * v)
             if fit is not None and columns is not None:  # on its line, as far as its rays go
                 ou = ray_reach(columns, u, v, a, b, ou, left)
                 ov = a + b * ou
@@ -561,30 +594,3 @@ class GrooveExtractor(_Base):
                 return np.asarray(cross[0] * u + cross[1] * v)
         ou -= sign * 0.5 * seg.spacing
         return np.asarray(ou * u + ov * v)
-
-    def _bottom_points(
-        self,
-        seg: Segments,
-        qu: FloatArray,
-        qv: FloatArray,
-        bl: FloatArray,
-        br: FloatArray,
-        u: FloatArray,
-        v: FloatArray,
-    ) -> FloatArray:
-        ul, ur = float(bl @ u), float(br @ u)
-        out = []
-        h = max(0.25, 5.0 * seg.spacing)
-        for t in (0.25, 0.5, 0.75):
-            chord = bl + t * (br - bl)
-            ut = float(chord @ u)
-            val = None
-            if ur - ul > 2 * h:
-                val = _local_v(qu, qv, ut, h, seg.tol)
-                if val is None:
-                    val = _local_v(qu, qv, ut, 4 * h, seg.tol)
-            if val is None:
-                out.append(chord)
-            else:
-                out.append(ut * u + val * v)
-        return np.array(out)
