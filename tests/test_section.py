@@ -309,8 +309,8 @@ def test_the_rays_a_segment_covers_miss_no_hit(part: str, even: bool) -> None:
         assert set(seen.tolist()) == set(face_all[face_all >= 0].tolist())
         o, r = T[:3, 3] - caster.local_origin, np.ascontiguousarray(T[:3, :3])
         for seeds in (seen, last, rng.choice(len(caster.faces), 50)):
-            t_s, face_s = section._section_hits(*tree, o, r, fan, *section.fan_tans(fan),
-                                                seeds.astype(np.int64))  # fmt: skip
+            t_s, face_s, _ = section._section_hits(*tree, o, r, fan, *section.fan_tans(fan),
+                                                   seeds.astype(np.int64))  # fmt: skip
             np.testing.assert_array_equal(face_s, face_all)
             np.testing.assert_array_equal(t_s, t_all)
         last = seen

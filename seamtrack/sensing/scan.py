@@ -313,9 +313,9 @@ def _section_stripe(
     from seamtrack.sensing import section
 
     head, tail, query = _section_args(caster, fan)
-    # The last stripe's triangles are cut first (at a frame rate, most of this one's): the
-    # walk of the hierarchy then culls behind them from its start. The same hits whatever the
-    # seeds (tests/test_section.py).
+    # The last stripe's triangles are cut first (at a frame rate, most of this one's; only
+    # after a section large enough to cull): the hierarchy's walk culls behind their hits
+    # once it culls. The same hits whatever the seeds (tests/test_section.py).
     seeds = caster.section_seeds
     if query:  # one numba call does it all
         points, reason, t, face, cos_incidence, directions, caster.section_seeds = (
@@ -324,12 +324,12 @@ def _section_stripe(
             )
         )
     else:
-        points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index, directions = (
-            section.fan_stripe_section(*head, origin, rotation, *tail, seeds)  # type: ignore[call-arg]
-        )
         from seamtrack.sensing.kernels import fan_stripe_finish
 
-        caster.section_seeds = section.hit_faces(face)
+        (points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index, directions,
+         caster.section_seeds) = section.fan_stripe_section(  # type: ignore[call-arg]
+            *head, origin, rotation, *tail, seeds
+        )  # fmt: skip
         blocked = caster.occluded_local(s_o, s_d, s_far)
         fan_stripe_finish(points, reason, chip, blocked, s_index, fan.sensor_params, quantize)
     return StripeHits(points_laser=points, reason=reason, distance_mm=t, face=face,

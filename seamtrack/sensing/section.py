@@ -48,9 +48,13 @@ ON_PLANE_MM = 1e-9
 #: Rays per block of the running maxima of the hits (:func:`section_hits` culls against them).
 BLOCK = 32
 #: :func:`section_hits` starts culling nodes behind the hits found after cutting this many
-#: triangles (on a small section the tests cost more than they save), or at once after the
-#: seeds (:func:`hit_faces` of the last frame: most of this frame's hits, found first).
+#: triangles, seeds included (on a small section the tests cost more than they save; on a
+#: large one the seeds, the last frame's hit triangles, make the culling's bounds tight early).
 CULL_AFTER = 96
+#: A stripe that lights more triangles than this seeds nothing (a fine mesh: each seed would
+#: be cut twice, for culling that on its small triangles gains less: +13 us a profile on the
+#: raycast bench's 101k-triangle plate); pipe-saddle's stripe lights 10-17.
+MAX_SEEDS = 64
 
 
 # --------------------------------------------------------------------------- the section
@@ -369,8 +373,9 @@ def section_hits(
     cut. Which crossings win does not depend on the order (:func:`_sweep`).
     """
     tans, tan_max, step = fan_tans(fan)
-    return _section_hits(lo, hi, child, count, order, vertices, faces, origin, rotation, fan,
-                         tans, tan_max, step, NO_SEEDS)  # fmt: skip
+    t, face, _ = _section_hits(lo, hi, child, count, order, vertices, faces, origin, rotation,
+                               fan, tans, tan_max, step, NO_SEEDS)  # fmt: skip
+    return t, face
 
 
 #: No seeds (:func:`_section_hits`).
@@ -416,20 +421,21 @@ def _section_hits(
     faces: NDArray[np.int64], origin: NDArray[np.float64], rotation: NDArray[np.float64],
     fan: NDArray[np.float64], tans: NDArray[np.float64], tan_max: float, step: float,
     seeds: NDArray[np.int64],
-) -> tuple[NDArray[np.float64], NDArray[np.int64]]:  # fmt: skip
-    """:func:`section_hits` with the fan's :func:`fan_tans` given, and ``seeds``: triangles
-    (of this mesh) cut first, before the hierarchy is walked (the last frame's
-    :func:`hit_faces`: at 100 Hz most of this frame's visible surface). Their crossings are
-    true crossings, so the walk culls behind them from its start; which crossings win does
-    not depend on the seeds (a seed met again in the walk changes nothing: the same t, the
-    same triangle), only how much is cut."""
+) -> tuple[NDArray[np.float64], NDArray[np.int64], int]:  # fmt: skip
+    """:func:`section_hits` with the fan's :func:`fan_tans` given, and how many triangles it
+    cut; ``seeds``: triangles (of this mesh) cut first, before the hierarchy is walked (the
+    last frame's :func:`hit_faces`: at 100 Hz most of this frame's visible surface). They
+    count towards :data:`CULL_AFTER`, and their crossings are true crossings, so once the walk
+    culls, it culls behind them; which crossings win does not depend on the seeds (each is
+    cut once: met again in the walk it is skipped), only how much is cut."""
     n = fan.shape[0]
     best_t = np.full(n, NO_HIT)
     best_f = np.full(n, -1, dtype=np.int64)
     blocks = (n + BLOCK - 1) // BLOCK
     block_max = np.full(blocks, NO_HIT)
     stale = np.ones(blocks, dtype=np.bool_)
-    for k in seeds:
+    seeded = np.sort(seeds)  # met again in the walk, a seed is skipped (binary search)
+    for k in seeded:
         _cut_and_sweep(vertices, faces, k, origin, rotation, fan, tans, step, best_t, best_f)
     r = rotation
     n0, n1, n2 = r[0, 0], r[1, 0], r[2, 0]
@@ -447,8 +453,8 @@ def _section_hits(
     stack = np.empty(128, dtype=np.int64)
     stack[0] = 0
     top = 1
-    cuts = 0
-    culling = seeds.shape[0] > 0
+    cuts = seeds.shape[0]  # the seeds count towards CULL_AFTER: their hits bound the culling
+    culling = cuts >= CULL_AFTER
     while top > 0:
         top -= 1
         node = stack[top]
@@ -482,12 +488,17 @@ def _section_hits(
             culling = True
             stale[:] = True
         for m in range(child[node], child[node] + count[node]):
-            first, last = _cut_and_sweep(vertices, faces, order[m], origin, rotation, fan, tans,
-                                         step, best_t, best_f)  # fmt: skip
+            k = order[m]
+            if seeded.shape[0]:
+                j = np.searchsorted(seeded, k)
+                if j < seeded.shape[0] and seeded[j] == k:
+                    continue
+            first, last = _cut_and_sweep(vertices, faces, k, origin, rotation, fan, tans, step,
+                                         best_t, best_f)  # fmt: skip
             if culling and first < last:
                 for b in range(first // BLOCK, (last - 1) // BLOCK + 1):
                     stale[b] = True
-    return best_t, best_f
+    return best_t, best_f, cuts
 
 
 @numba.njit(cache=True, nogil=True)
@@ -526,24 +537,33 @@ def fan_stripe_section(
     seeds: NDArray[np.int64],
 ) -> tuple[NDArray[np.float64], NDArray[np.uint8], NDArray[np.float64], NDArray[np.int64],
            NDArray[np.float64], NDArray[np.float64], NDArray[np.float64], NDArray[np.float64],
-           NDArray[np.float64], NDArray[np.int64], NDArray[np.float64]]:  # fmt: skip
+           NDArray[np.float64], NDArray[np.int64], NDArray[np.float64],
+           NDArray[np.int64]]:  # fmt: skip
     """The section's hits through the stripe's clips (``fan_stripe_hits``); returns its ten
-    arrays and the rays' directions in the local frame. The shadow rays are the caller's.
-    ``tans, tan_max, step``: the fan's :func:`fan_tans`; ``seeds``: :func:`_section_hits`'."""
+    arrays, the rays' directions in the local frame and the next frame's seeds (the
+    triangles hit, :func:`hit_faces`, where the walk cut at least :data:`CULL_AFTER`: on a
+    smaller section culling never starts, and seeds would only be cut twice; and at most
+    :data:`MAX_SEEDS`). The shadow rays
+    are the caller's. ``tans, tan_max, step``: the fan's :func:`fan_tans`; ``seeds``:
+    :func:`_section_hits`'."""
     n = fan.shape[0]
     directions = np.empty((n, 3))
     for i in range(n):
         for a in range(3):
             directions[i, a] = (rotation[a, 0] * fan[i, 0] + rotation[a, 1] * fan[i, 1]
                                 + rotation[a, 2] * fan[i, 2])  # fmt: skip
-    t, face = _section_hits(lo, hi, child, count, order, vertices, faces, origin, rotation, fan,
-                            tans, tan_max, step, seeds)  # fmt: skip
+    t, face, cuts = _section_hits(lo, hi, child, count, order, vertices, faces, origin,
+                                  rotation, fan, tans, tan_max, step, seeds)  # fmt: skip
     none = np.empty(0, dtype=np.int64)
+    next_seeds = hit_faces(face) if cuts >= CULL_AFTER else none
+    if next_seeds.shape[0] > MAX_SEEDS:
+        next_seeds = none
     points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index = fan_stripe_hits(
         origin, rotation, fan, directions, face, t, vertices, faces,  # type: ignore[arg-type]
         none, none, none, face_normals, False, 0.0, sp, offset,
     )  # fmt: skip
-    return points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index, directions
+    return (points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index, directions,
+            next_seeds)  # fmt: skip
 
 
 @numba.njit(cache=True, nogil=True)
@@ -560,13 +580,13 @@ def fan_stripe_section_packets(
     on Embree packets (``occluded``, the address of the query of packets of ``width``:
     ``Library.occluded_query``, ``Library.occluded_width``) and the pixels. Returns (points,
     reason, t, face, cos_incidence, directions), as ``kernels.fan_stripe_packets``, and the
-    next frame's seeds (:func:`hit_faces`). ``tans, tan_max, step``: the fan's
+    next frame's seeds (:func:`fan_stripe_section`'s). ``tans, tan_max, step``: the fan's
     :func:`fan_tans`; ``seeds``: :func:`_section_hits`'."""
-    points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index, directions = (
+    points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index, directions, nxt = (
         fan_stripe_section(lo, hi, child, count, order, vertices, faces, face_normals, origin,
                            rotation, fan, tans, tan_max, step, sp, offset, seeds)
     )  # fmt: skip
     blocked = np.empty(s_index.shape[0], dtype=np.bool_)
     embree.occluded(occluded, width, scene, s_o, s_d, s_far, 0.0, blocked)
     fan_stripe_finish(points, reason, chip, blocked, s_index, sp, quantize)
-    return points, reason, t, face, cos_incidence, directions, hit_faces(face)
+    return points, reason, t, face, cos_incidence, directions, nxt
