@@ -276,8 +276,8 @@ def test_the_rays_a_segment_covers_miss_no_hit(part: str, even: bool) -> None:
     """The rays each segment is tested against (found by arithmetic on an evenly spaced fan,
     by binary search otherwise) and the nodes left closed behind the hits found (the pipe's
     far and inner walls) lose no hit: the hits equal those of every segment tested against
-    every ray, bit for bit; and so with seeds (cut first, then culled behind from the walk's
-    start): this pose's hit triangles, the last pose's, and any 50 of the mesh's."""
+    every ray, bit for bit; and so with seeds (cut first, each skipped where the walk meets
+    it again): this pose's hit triangles, the last pose's, and any 50 of the mesh's."""
     mesh = v_groove_plate_mesh(triangles=4_000, seed=3) if part == "plate" else _pipe_mesh()
     caster = RayCaster.from_mesh(mesh)
     rng = np.random.default_rng(5)
