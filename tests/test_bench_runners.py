@@ -1,8 +1,7 @@
 """The bench runners behind the documentation's measured figures run, in their quick mode, and
-write tables of the promised structure with sane numbers: every column present, counts
-finite and positive, times numbers (nothing is asserted of a time: its size, even its sign
-on a coarse clock, is the machine's), and the accuracy columns within what the physics
-allows.
+write tables of the promised structure with sane numbers: the files written, counts finite
+and positive, and the accuracy columns within what the physics allows. Nothing is asserted
+of a time or a rate: those are the machine's, and the benches' files quote them.
 
 Quick modes are smoke runs, not measurements: a few seconds to a minute each on a quiet
 machine, so they are marked slow (still part of ``make test``).
@@ -30,11 +29,6 @@ def _finite_positive(*values: Any) -> bool:
     return all(isinstance(v, int | float) and math.isfinite(v) and v > 0 for v in values)
 
 
-def _numbers(*values: Any) -> bool:
-    """Times and rates: present, and numbers (a time's value is not the test's business)."""
-    return all(isinstance(v, int | float) and not isinstance(v, bool) for v in values)
-
-
 def _written(out: Path, *names: str) -> dict[str, Any]:
     """The files a bench promises exist, are not empty, and its JSON parses."""
     for name in names:
@@ -53,9 +47,6 @@ def test_loop_bench(tmp_path: Path) -> None:
     (row,) = result["rows"]
     assert row["quick"] is True and row["status"] == "completed"
     assert _finite_positive(row["simulated_s"], row["frames"], row["control_ticks"])
-    for key in ("cpu_s", "wall_clock_s", "sensing_s", "scan_ms_per_frame", "extract_ms_per_frame",
-                "control_us_per_tick", "sim_s_per_cpu_s"):  # fmt: skip
-        assert _numbers(row[key]), key
     assert 0.0 <= row["loop_overhead_fraction"] <= 1.0
     # The paper's V-groove at 5 mm/s in mesh mode: the extractor's error on the stripe is a
     # few of the sensor's resolutions (0.01 mm lateral, 0.01 mm depth) plus the part's mesh
@@ -65,13 +56,12 @@ def test_loop_bench(tmp_path: Path) -> None:
     robots = [r["robot"] for r in result["tick_cost"]]
     assert result["profile"] and robots == ["cartesian", "ur10e", "kr16"]
     for r in result["tick_cost"]:
-        assert _finite_positive(r["ticks"]) and _numbers(r["wall_s"], r["us_per_tick"])
+        assert _finite_positive(r["ticks"])
     # One row per arm scene, held to its run with the tick's IK by Newton steps only.
     scenes = [a["scene"] for a in result["arm_scenes"]]
     assert scenes == ["pipe-saddle", "pipe-on-plate", "v-groove-corner-arm"]
     for a in result["arm_scenes"]:
         assert _finite_positive(a["simulated_s"], a["frames"])
-        assert _numbers(a["cpu_s"], a["sim_s_per_cpu_s"])
         assert a["status"] == a["newton_status"]
         assert a["max_error_moved_mm"] < a["depth_resolution_mm"] and a["agrees"]
 
@@ -83,11 +73,6 @@ def test_sweep_bench_through_the_dispatcher(tmp_path: Path) -> None:
     _written(tmp_path / "sweep", "sweep.json", "sweep.md")
     assert result["cases"] == 20 and result["same_numbers"] is True
     assert [r["workers"] for r in result["runs"]] == [1, 2]
-    for run in result["runs"]:
-        # the table's columns are there, as numbers (nothing asserted of a time)
-        assert _numbers(run["wall_time_s"], run["cases_per_s"], run["cpu_time_s"])
-        assert _numbers(run["ratio_to_1_worker"])
-    assert _numbers(result["case_time_s"])
 
 
 def test_the_dispatcher_refuses_an_unknown_bench(tmp_path: Path) -> None:
@@ -108,8 +93,7 @@ def test_mesh_bench_through_the_dispatcher(tmp_path: Path) -> None:
     assert rows and all(rows[0].keys() == r.keys() for r in rows)
     assert {r["tolerance_mm"] for r in rows} == {1.0, 0.1, 0.01}
     for r in rows:
-        assert all(math.isfinite(v) for v in r.values() if isinstance(v, float))
-        assert r["triangles"] > 0
+        assert math.isfinite(r["deviation_mm"]) and r["triangles"] > 0
     # Per part, a finer chordal tolerance takes at least as many triangles.
     for part in {(r["joint"], r["path"]) for r in rows}:
         mine = sorted((r for r in rows if (r["joint"], r["path"]) == part),
@@ -136,7 +120,6 @@ def test_extractor_bench(tmp_path: Path) -> None:
         assert r["n"] == 20
         assert 0.0 <= r["wrong_rate"] <= 1.0 - r["detection_rate"] + 1e-12
         assert 0.0 <= r["flat_false_rate"] <= 1.0
-        assert _numbers(r["us_per_profile"], r["median_us"], r["p95_us"])
         if r["detection_rate"] > 0:
             assert 0.0 <= r["median_error_mm"] <= r["p95_error_mm"]
     # Clean synthetic profiles of the paper sensor: each family's own extractor finds every
@@ -157,8 +140,7 @@ def test_raycast_bench(tmp_path: Path) -> None:
     _written(tmp_path, "raycast.json", "raycast.md")
     assert result["quick"] is True and result["cases"]
     for case in result["cases"]:
-        rates = case["profiles_per_s"]
-        assert len(rates) >= 4 and _numbers(*rates.values(), *case["ratios"].values())
+        assert len(case["profiles_per_s"]) >= 4 and case["ratios"]
 
 
 @pytest.mark.cad
@@ -174,7 +156,6 @@ def test_tradeoff_bench(tmp_path: Path) -> None:
     reference = rows[-1]
     assert reference["vs_reference_mm"] == 0.0
     for r in rows:
-        assert _numbers(r["wall_s"], r["total_s"])
         assert math.isfinite(r["max_error_mm"]) and 0.0 <= r["rms_error_mm"] <= r["max_error_mm"]
 
 
@@ -185,12 +166,11 @@ def test_scaling_bench(tmp_path: Path) -> None:
     result = bench_scaling(tmp_path, quick=True)
     _written(tmp_path, "scaling.json", "scaling.md")
     row = result["row"]
-    assert _numbers(row["cache_miss_s"], row["cache_hit_s"], row["cache_speedup"])
     assert row["dense_seam_points"] == int(100.0 / 0.004) + 1
-    assert _numbers(row["coarse_wall_s"], row["dense_wall_s"])
-    # The guarded run needs 1000 s of simulated time; the 1 s wall-clock guard stops it.
-    assert row["guard_status"] != "completed" and row["guard_limit_s"] == 1.0
-    assert row["guard_total_wall_s"] >= row["guard_limit_s"]
+    # The guarded run needs 1000 s of simulated time; the 1 s wall-clock guard stops it (its
+    # stop reason names the guard; how long it took is the machine's).
+    assert row["guard_status"] == "stalled" and row["guard_limit_s"] == 1.0
+    assert row["guard_stop_reason"] == "wall-clock limit 1 s"
 
 
 def test_dataset_bench(tmp_path: Path) -> None:
@@ -199,12 +179,9 @@ def test_dataset_bench(tmp_path: Path) -> None:
     result = bench_dataset(tmp_path, quick=True)
     _written(tmp_path, "dataset.json", "dataset.md")
     assert len(result["rates"]) == 4
-    for r in result["rates"]:
-        assert _numbers(r["per_cpu_s"], r["per_wall_s"]), r
-    assert _numbers(result["scene_build_ms"])
     assert result["identical_bytes"] is True  # 1 and 2 workers write the same chunks
     for run in result["workers"]:
-        assert _finite_positive(run["bytes"]) and _numbers(run["wall_s"], run["samples_per_wall_s"])
+        assert _finite_positive(run["bytes"])
 
 
 def test_failures_bench(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
@@ -220,7 +197,7 @@ def test_failures_bench(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None
     for r in result["rows"]:
         assert r["exit"] == 2 and r["problems"] == [], r
         assert r["first_line"].startswith("seamtrack: error: ")
-        assert _finite_positive(r["peak_mb_so_far"]) and _numbers(r["wall_s"])
+        assert _finite_positive(r["peak_mb_so_far"])
         assert r["peak_mb_so_far"] < 2048
     assert result["largest_run"] is None  # quick leaves the largest run out
 

@@ -172,6 +172,39 @@ def ur_joint_1(g: FloatArray, T: FloatArray, ws: FloatArray) -> tuple[bool, floa
     return True, math.atan2(py, px), math.asin(s1 * dlat / r)
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def ur_q6(
+    q5: float, z1x: float, z1y: float, J6: FloatArray, s4: float, q6_near: float
+) -> float:  # fmt: skip
+    """A UR branch's joint 6 for joint 5 at ``q5`` (``q6_near`` at the wrist singularity)."""
+    sn5 = math.sin(q5)
+    if abs(sn5) < SINGULAR_SIN:
+        return q6_near
+    zx = z1x * J6[0, 0] + z1y * J6[1, 0]
+    zy = z1x * J6[0, 1] + z1y * J6[1, 1]
+    return math.atan2(-zy / (s4 * sn5), zx / (s4 * sn5))
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def ur_planar(
+    ws: FloatArray, P6i: FloatArray, P5i: FloatArray, q5: float, q6: float, a2: float,
+    a3: float,
+) -> tuple[bool, float, float, float, float]:  # fmt: skip
+    """What is left of a UR branch once joints 1, 5 and 6 are known (``ws[2]``: frame 1 to
+    joint 6): the planar 3R chain's angle q234 and target (x, y), and joint 3's cosine; False
+    where the chain cannot reach."""
+    _rz_right(ws[2], -q6, ws[3])
+    mul_into(ws[3], P6i, ws[4])
+    _rz_right(ws[4], -q5, ws[3])
+    A = ws[5]
+    mul_into(ws[3], P5i, A)
+    x, y = A[0, 3], A[1, 3]
+    c3 = (x * x + y * y - a2 * a2 - a3 * a3) / (2.0 * a2 * a3)
+    if abs(c3) > 1.0 + 1e-12:
+        return False, 0.0, 0.0, 0.0, 0.0
+    return True, math.atan2(A[1, 0], A[0, 0]), x, y, min(max(c3, -1.0), 1.0)
+
+
 @numba.njit(cache=True, nogil=True)
 def _ur_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: FloatArray) -> int:
     """UR family: up to 8 joint solutions of the torch pose ``T`` (metres).
@@ -198,24 +231,10 @@ def _ur_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: FloatArr
         _rz_left(-q1, ws[1], ws[3])
         mul_into(P2i, ws[3], ws[2])  # frame 1 to joint 6
         for q5 in (math.acos(c5), -math.acos(c5)):
-            sn5 = math.sin(q5)
-            if abs(sn5) < SINGULAR_SIN:
-                q6 = q_near[5]
-            else:
-                zx = z1x * J6[0, 0] + z1y * J6[1, 0]
-                zy = z1x * J6[0, 1] + z1y * J6[1, 1]
-                q6 = math.atan2(-zy / (s4 * sn5), zx / (s4 * sn5))
-            _rz_right(ws[2], -q6, ws[3])
-            mul_into(ws[3], P6i, ws[4])
-            _rz_right(ws[4], -q5, ws[3])
-            A = ws[5]
-            mul_into(ws[3], P5i, A)
-            q234 = math.atan2(A[1, 0], A[0, 0])
-            x, y = A[0, 3], A[1, 3]
-            c3 = (x * x + y * y - a2 * a2 - a3 * a3) / (2.0 * a2 * a3)
-            if abs(c3) > 1.0 + 1e-12:
+            q6 = ur_q6(q5, z1x, z1y, J6, s4, q_near[5])
+            reached, q234, x, y, c3 = ur_planar(ws, P6i, P5i, q5, q6, a2, a3)
+            if not reached:
                 continue
-            c3 = min(max(c3, -1.0), 1.0)
             for q3 in (math.acos(c3), -math.acos(c3)):
                 q2 = math.atan2(y, x) - math.atan2(a3 * math.sin(q3), a2 + a3 * math.cos(q3))
                 row = out[count]

@@ -46,11 +46,12 @@ from seamtrack.control.closed_form import (
     _near,
     _rot_into,
     _rz_left,
-    _rz_right,
     _tmul_into,
     ik_branches,
     mul_into,
     ur_joint_1,
+    ur_planar,
+    ur_q6,
     wrist_joint_1,
 )  # fmt: skip
 
@@ -65,13 +66,7 @@ def _ur_q6(
     """:func:`_ur_branches`' joint 6 for joint 5 at ``q5``, and the lower bound of a branch's
     sum of squared differences from ``q_near`` with joints 1, 5 and 6 known (``t0``: joint
     1's term)."""
-    sn5 = math.sin(q5)
-    if abs(sn5) < SINGULAR_SIN:
-        q6 = q_near[5]
-    else:
-        zx = z1x * J6[0, 0] + z1y * J6[1, 0]
-        zy = z1x * J6[0, 1] + z1y * J6[1, 1]
-        q6 = math.atan2(-zy / (s4 * sn5), zx / (s4 * sn5))
+    q6 = ur_q6(q5, z1x, z1y, J6, s4, q_near[5])
     x4 = _near(q5, q_near[4]) - q_near[4]
     x5 = _near(q6, q_near[5]) - q_near[5]
     return q6, (t0 + x4 * x4) + x5 * x5
@@ -125,17 +120,9 @@ def _ur_nearest(
             if (bound_a if i5 == 0 else bound_b) > best:
                 continue
             q5, q6 = q5s[i5], (q6a if i5 == 0 else q6b)
-            _rz_right(ws[2], -q6, ws[3])
-            mul_into(ws[3], P6i, ws[4])
-            _rz_right(ws[4], -q5, ws[3])
-            A = ws[5]
-            mul_into(ws[3], P5i, A)
-            q234 = math.atan2(A[1, 0], A[0, 0])
-            x, y = A[0, 3], A[1, 3]
-            c3 = (x * x + y * y - a2 * a2 - a3 * a3) / (2.0 * a2 * a3)
-            if abs(c3) > 1.0 + 1e-12:
+            reached, q234, x, y, c3 = ur_planar(ws, P6i, P5i, q5, q6, a2, a3)
+            if not reached:
                 continue
-            c3 = min(max(c3, -1.0), 1.0)
             for i3 in range(2):
                 q3 = math.acos(c3) if i3 == 0 else -math.acos(c3)
                 q2 = math.atan2(y, x) - math.atan2(a3 * math.sin(q3), a2 + a3 * math.cos(q3))
