@@ -55,6 +55,8 @@ CULL_AFTER = 96
 #: be cut twice, for culling that on its small triangles gains less: +13 us a profile on the
 #: raycast bench's 101k-triangle plate); pipe-saddle's stripe lights 10-17.
 MAX_SEEDS = 64
+#: No seeds (:func:`_section_hits`).
+NO_SEEDS = np.empty(0, dtype=np.int64)
 
 
 # --------------------------------------------------------------------------- the section
@@ -376,10 +378,6 @@ def section_hits(
     t, face, _ = _section_hits(lo, hi, child, count, order, vertices, faces, origin, rotation,
                                fan, tans, tan_max, step, NO_SEEDS)  # fmt: skip
     return t, face
-
-
-#: No seeds (:func:`_section_hits`).
-NO_SEEDS = np.empty(0, dtype=np.int64)
 
 
 @numba.njit(cache=True, nogil=True)
