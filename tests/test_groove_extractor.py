@@ -87,24 +87,31 @@ def test_each_bead_takes_its_area_from_the_groove():
 
 
 # ----------------------------------------------------------------- accuracy
-@pytest.mark.parametrize("layers", range(7))
+#: The draws pooled for a p95: 3 seeds of 20 profiles a fill state (420 point errors). A p95
+#: of one seed's 20 profiles (7 of its 140 errors above it) moves with two bad profiles: on
+#: seeds 11-22 the narrow gap's and the U's single-seed p95 reach 0.35 and 0.49 mm at a state
+#: where every 3-seed pool stays within 0.18 mm (docs/extractors.md).
+SEEDS = (11, 12, 13)
+
+
+def _pooled(kind, layers):
+    found, errors = 0, []
+    for seed in SEEDS:
+        n, e = _errors(kind, layers, 20, seed)
+        found, errors = found + n, errors + list(e)
+    return found, np.concatenate(errors)
+
+
+@pytest.mark.parametrize("layers", range(10))
 def test_v_groove_points_within_0_2_mm_p95_at_every_fill_state(layers):
     """60 deg V, 20 mm plate, 2 mm root gap on a backing, 0..6 layers of 20 mm^2 beads (the
-    last leaves about a third of the groove), real-sensor artefacts, tilts +-5 deg: every
-    profile found and the 7 points' errors pooled p95 <= 0.2 mm."""
-    found, e = _errors("v", layers, 20, 11)
-    assert found == 20
-    assert np.percentile(e, 95) <= 0.2
-
-
-@pytest.mark.parametrize("layers", [7, 8, 9])
-def test_nearly_full_and_crowned_v_grooves_within_0_2_mm_p95(layers):
-    """The same V filled on: 7 and 8 layers leave 90 and 50 mm^2 (the last fill layers), 9
-    crowns it (the fill's middle 1.4 mm over the plates, a sliver left at a wall): no refusal
-    ("a raised part"), every profile found and the 7 points within 0.2 mm p95 (a buried
-    wall's foot is its top corner)."""
-    found, e = _errors("v", layers, 20, 11)
-    assert found == 20
+    last leaves about a third of the groove), 7 and 8 (90 and 50 mm^2 left: the last fill
+    layers) and 9 (crowned: the fill's middle 1.4 mm over the plates, a sliver left at a
+    wall; a buried wall's foot is its top corner), real-sensor artefacts, tilts +-5 deg:
+    every profile found (no crown refused as "a raised part": a spike streak standing out
+    of it is no block's side) and the 7 points' errors pooled p95 <= 0.2 mm."""
+    found, e = _pooled("v", layers)
+    assert found == 20 * len(SEEDS)
     assert np.percentile(e, 95) <= 0.2
 
 
@@ -199,36 +206,18 @@ def test_a_crowned_fill_reports_its_area_signed():
     assert f and f.area_mm2 == pytest.approx(signed, abs=2.0)
 
 
-@pytest.mark.parametrize(
-    ("kind", "seed"), [("narrow-gap", 11), ("narrow-gap", 12), ("u", 11), ("u", 13)]
-)
+@pytest.mark.parametrize("kind", ["narrow-gap", "u"])
 @pytest.mark.parametrize("layers", range(7))
-def test_narrow_gap_and_u_points_within_0_2_mm_p95_at_every_fill_state(kind, seed, layers):
+def test_narrow_gap_and_u_points_within_0_2_mm_p95_at_every_fill_state(kind, layers):
     """Narrow gap (walls 4 deg off vertical, 25 mm deep, 12 mm) and U (10 deg walls, 3 mm
     root radius, 8 mm) with 0..6 layers, the V's draw (real-sensor artefacts, tilts +-5 deg,
     offset +-2 mm): every profile found and the 7 points' errors pooled p95 <= 0.2 mm (the
     issue's bound). A corner no ray lights (under a hidden wall, in the notch between a
-    bead's flank and the wall) is where the wall's line and the surface's line meet.
-
-    The narrow gap holds it on seeds 11-18 (the table in docs/extractors.md); two seeds here.
-    The U holds it on seeds 11, 13 and 14, not on every draw: seed 12 gives 0.30 mm for the
-    empty U (a bare round seen only in its lower, gentle part, its wall's foot then a guess),
-    0.203 with one layer and 0.22 with six; with one layer (a bead's toe on the round beside
-    a wall seen above it) seeds 15-18 give 0.21-0.28. test_u_points_on_a_harder_draw holds
-    seed 12."""
-    found, e = _errors(kind, layers, 20, seed)
-    assert found == 20
+    bead's flank and the wall) is where the wall's line and the surface's line meet; a
+    bead's toe on the U's round, where the round's and the bead's flanks cross."""
+    found, e = _pooled(kind, layers)
+    assert found == 20 * len(SEEDS)
     assert np.percentile(e, 95) <= 0.2
-
-
-@pytest.mark.parametrize("layers", range(7))
-def test_u_points_on_a_harder_draw(layers):
-    """The U on seed 12 (module docstring of the test above): every profile found, the
-    pooled median <= 0.05 mm and p95 <= 0.3 mm at every fill state."""
-    found, e = _errors("u", layers, 20, 12)
-    assert found == 20
-    assert np.median(e) <= 0.05
-    assert np.percentile(e, 95) <= 0.3
 
 
 def test_a_u_grooves_bottom_corner_rides_its_wall_with_the_fill():

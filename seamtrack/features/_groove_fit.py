@@ -2,8 +2,6 @@
 
 * :func:`trim_wall`: a wall's line refitted on the points that lie on it (a root radius's
   round at the wall's foot, and the odd spike, left out);
-* :func:`risen_level`: the level of a fill surface that rises into the wall (a U groove's
-  round, bare or partly filled): the wall's foot is that wall's line at the level;
 * :func:`ray_reach`: with no wall seen, how far the fill surface reaches towards the side:
   a spike moves a point along its ray, so the ray still says where the surface is across the
   groove.
@@ -70,47 +68,10 @@ def _running_median(v: FloatArray, k: int) -> FloatArray:
     return kern.running_median_cut(np.ascontiguousarray(v, dtype=np.float64), k)
 
 
-def risen_level(
-    fu: FloatArray,
-    fv: FloatArray,
-    left: bool,
-    spacing: float,
-    tol: float,
-    window: float = 0.3,
-    raw_end: bool = False,
-) -> float | None:
-    """The level (v) of the fill surface's deepest part near a side, when the surface rises
-    from there into the wall: its deepest point (a running median over ``window`` mm, cut
-    short at the ends) lies at least a quarter of a millimetre in from the surface's outer
-    end (its last 0.1 mm, of the running median or with ``raw_end`` of the points), which
-    stands at least 0.3 mm above it and rises at least 0.45 times as
-    much as it runs from the deepest part's nearest point (a round at a U's foot, bare or
-    partly filled, or the notch between a bead and the round: 0.42-1.2 on the synthetic 3 mm
-    round, bare, more beside a bead). None when it rises more gently (a root bead's concave
-    face, the fill's own: 0.13-0.43 on the Keyence root-pass scans) or the surface comes
-    down to the wall (a bead's toe on the wall: a kink). The level is the mean of the
-    deepest part's points (within 0.05 mm, or two tolerances, of the deepest)."""
-    if len(fu) < 5:
-        return None
-    sign = 1.0 if left else -1.0
-    edge = float(fu[0] if left else fu[-1])
-    d = sign * (fu - edge)
-    zone = d <= 4.0
-    zu, zv, zd = fu[zone], fv[zone], d[zone]
-    if len(zu) < 5:
-        return None
-    order = np.argsort(zd, kind="stable")
-    zv, zd = zv[order], zd[order]
-    k = int(min(51, max(3, round(window / max(spacing, 1e-9)))) | 1)
-    smooth = _running_median(zv, k)
-    j = int(np.argmax(smooth))
-    end = float(np.median((zv if raw_end else smooth)[zd <= max(0.1, 3 * spacing)]))
-    if zd[j] < 0.25 or smooth[j] - end < 0.3:
-        return None
-    deep = smooth >= smooth[j] - min(2.0 * tol, 0.05)
-    if smooth[j] - end < 0.45 * float(np.min(zd[deep])):
-        return None  # a gentle rise (a root bead's concave face): the fill's own, no round
-    return float(np.mean(zv[deep]))
+#: Two walls more than MIRROR_DEG off each other's mirror: the one seen over less than
+#: MIRROR_SHARE of the other's length is no wall (:func:`short_walls`).
+MIRROR_DEG = 2.0
+MIRROR_SHARE = 0.75
 
 
 def ray_reach(
@@ -279,12 +240,18 @@ def short_walls(
     share: float = 0.25,
     below_mm: float = 3.0,
 ) -> tuple[Line | None, Line | None]:
-    """The walls, one seen over less than ``max_mm`` and less than ``share`` of the other's
-    seen length, ending more than ``below_mm`` above the fill surface's outer end on its side
-    (``fv``: the surface's v, sorted by u), taken for hidden (None): a scrap at its top edge,
-    the rest in the shadow of its plate, says little of its direction (a degree over 0.7 mm
-    moves its foot 0.3 mm 15 mm down); the mirror of the other stands in for it
-    (:func:`mirrored_walls`)."""
+    """The walls, one that says little of its direction taken for hidden (None; the mirror of
+    the other stands in for it, :func:`mirrored_walls`):
+
+    * one seen over less than ``max_mm`` and less than ``share`` of the other's seen length,
+      ending more than ``below_mm`` above the fill surface's outer end on its side (``fv``:
+      the surface's v, sorted by u): a scrap at its top edge, the rest in the shadow of its
+      plate (a degree over 0.7 mm moves its foot 0.3 mm 15 mm down);
+    * of two walls more than :data:`MIRROR_DEG` off each other's mirror (a groove's bevels
+      are cut alike), the one seen over less than :data:`MIRROR_SHARE` of the other's length:
+      a spike streak along the rays beside a wall in shadow (13 points over 5.3 mm, 4.9 deg
+      off), or a round's upper part taken for its wall. Of two walls seen alike, neither.
+    """
     a, b = walls
     if a is None or b is None or not len(a.t) or not len(b.t) or not len(fv):
         return walls
@@ -295,6 +262,15 @@ def short_walls(
         edge = float(fv[0] if side == 0 else fv[-1])
         if mine < min(max_mm, share * other) and edge - low > below_mm:
             out[side] = None
+    if out[0] is not None and out[1] is not None:
+        u = np.array([v[1], -v[0]])
+        mirror = b.direction - 2.0 * float(b.direction @ u) * u
+        apart = math.degrees(math.acos(min(1.0, abs(float(mirror @ a.direction)))))
+        if apart > MIRROR_DEG:
+            if la < MIRROR_SHARE * lb:
+                out[0] = None
+            elif lb < MIRROR_SHARE * la:
+                out[1] = None
     return out[0], out[1]
 
 

@@ -108,11 +108,11 @@ from seamtrack.features._groove_fit import (  # noqa: F401 (RAY_*: the extractor
     explained_share,
     mirrored_walls,
     ray_reach,
-    risen_level,
     short_walls,
     trim_wall,
 )
 from seamtrack.features._groove_kernels import running_median
+from seamtrack.features._groove_rise import a_step, risen_level
 from seamtrack.features._segmentation import fit_line
 from seamtrack.features.base import _Base
 from seamtrack.features.lines import Line, Segments, intersect, segment_profile
@@ -284,12 +284,17 @@ class GrooveExtractor(_Base):
         along = chord / max(math.hypot(*chord), 1e-12)
         normal = np.array([-along[1], along[0]])
         start = P[int(plates.left.index[-1])]
+        steep, mask = [], np.zeros(len(P), dtype=bool)  # (mask: pieces 60 deg off, no level)
         for j in range(plates.left_last + 1, plates.right_first):
             ln = seg.lines[j]
+            off = _angle_deg(ln.direction, along)
+            mask[ln.index] = off > 60.0
             if ln.extent < 1.0 or float((ln.centroid - start) @ normal) > -self.min_depth_mm:
                 continue
-            if _angle_deg(ln.direction, along) > 80.0:
-                return why
+            if off > 80.0:
+                steep.append(ln.index)
+        if any(a_step(P, index, normal, mask) for index in steep):
+            return why
         return ""
 
     def _plates(self, seg: Segments) -> Plates | str:
