@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features._groove_fit import _robust_uv_line, _running_median
+from seamtrack.features._groove_fit import _median, _robust_uv_line, _running_median
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
@@ -81,7 +81,7 @@ def risen_level(
     smooth = _running_median(nv, _odd(NOTCH_WINDOW_MM / max(spacing, 1e-9)))
     j = int(np.argmax(smooth))
     if level is None:
-        end = float(np.median(nv[nd <= max(0.05, 2 * spacing)]))
+        end = _median(nv[nd <= max(0.05, 2 * spacing)])
         rise, run = float(smooth[j]) - end, float(nd[j])
         lo, hi = NOTCH_SLOPE
         if not (run >= NOTCH_IN_MM and rise >= NOTCH_RISE_MM and lo * run <= rise <= hi * run):
@@ -102,7 +102,7 @@ def _round_level(
     (in from the outer end, ascending) and ``zv``."""
     smooth = _running_median(zv, _odd(window / max(spacing, 1e-9)))
     j = int(np.argmax(smooth))
-    end = float(np.median((zv if raw_end else smooth)[zd <= max(0.1, 3 * spacing)]))
+    end = _median((zv if raw_end else smooth)[zd <= max(0.1, 3 * spacing)])
     if zd[j] < 0.25 or smooth[j] - end < 0.3:
         return None
     deep = smooth >= smooth[j] - min(2.0 * tol, 0.05)
@@ -152,7 +152,7 @@ def a_step(
         k = k[np.abs((points[k] - edge) @ along) <= 2.0][:8]
         if len(k) < 3:
             return True
-        ends.append(float(np.median(level[k])))
+        ends.append(_median(level[k]))
     rise = level[index]
     overlap = min(float(rise.max()), max(ends)) - max(float(rise.min()), min(ends))
     return overlap >= 0.5 * float(np.ptp(rise))
