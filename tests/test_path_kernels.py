@@ -259,3 +259,28 @@ def test_store_tail_is_smoothing_trim_and_envelope(seed: int) -> None:
     # An envelope refreshed less than half a window ago is kept.
     again = store_tail(raw, path.copy(), s, sp, par, float(kept[settled - 1]))
     assert again[1] == 0
+
+
+def test_a_spot_measured_again_behind_the_newest_point_is_not_stored() -> None:
+    """While the robot starts, the sensor sees about one spot and its points scatter: one
+    0.18 mm behind the newest along the path (multipass-varying-gap's last cap bead) was
+    stored, the path doubled back, the set-point stepped back 0.27 mm and the torch slowed
+    to half speed, laying a bead 60 % fat. A point more than min_spacing behind, within
+    max_jump, is now too close; one beside the newest at the same x (a lateral step the
+    seam really makes), or ahead, is stored as before."""
+    from seamtrack.control import path_kernels as pk
+
+    def take(buf, point):
+        sp, par = np.zeros(pk.SETPOINT_FIELDS), np.zeros(pk.TAIL_FIELDS)
+        par[[pk.T_SMOOTH, pk.T_INLIER, pk.T_BUFFER, pk.T_WINDOW]] = 1.0, 0.05, 100.0, 3.0
+        par[[pk.T_ACCEL, pk.T_SPEED]] = 10.0, 8.0
+        return buf.take(np.asarray(point, float), 0.05, 0.5, 5.0, sp, par, np.nan)[0]
+
+    buf = PathBuffer(np.array([4.5, 11.81, 20.0]))
+    for x in np.arange(5.0, 10.0, 0.5):
+        buf.append(np.array([x, 11.81, 20.0]), float(buf.s[-1]) + 0.5)
+    assert take(buf, [10.231, 11.81, 20.0]) == pk.STORED
+    assert take(buf, [10.051, 11.811, 20.0]) == pk.TOO_CLOSE  # 0.18 mm behind
+    assert take(buf, [10.231, 12.11, 20.0]) == pk.STORED  # beside it: the seam steps
+    assert take(buf, [10.75, 11.81, 20.0]) == pk.STORED  # ahead
+    assert len(buf) == 14  # the start, 10 points, then 3 of the 4 offered

@@ -401,9 +401,12 @@ def take_point(
     """The trajectory tracker's update with a measured ``point``, in one call: its distance
     from the newest of the ``n`` stored points (rows ``lo:`` of a :class:`PathBuffer`'s
     arrays, with room for one more: ``np.linalg.norm``'s arithmetic, the same BLAS dot); where
-    it is not too close, its distance from the line through the raw points of the last
-    ``fit_mm`` (:func:`off_line`); where that is within ``max_jump``, the point stored after
-    the newest and :func:`store_tail` on the stored points.
+    it is not too close (nor, within ``max_jump``, more than ``min_spacing`` behind the newest
+    along the path's last step: a spot measured again, as while the robot starts, whose point
+    stored would double the path back and step the set-point back with it), its distance
+    from the line through the raw points of the last ``fit_mm`` (:func:`off_line`); where
+    that is within ``max_jump``, the point stored after the newest and :func:`store_tail` on
+    the stored points.
 
     Returns (what it did: :data:`TOO_CLOSE`, :data:`OFF_PATH`, :data:`FEW` or
     :data:`STORED`, the distance, then :func:`store_tail`'s answer where stored).
@@ -413,6 +416,10 @@ def take_point(
     step = math.sqrt(np.dot(d, d))
     if step < min_spacing:
         return TOO_CLOSE, step, 0, 0, 0, 0, none
+    if n >= 2 and step < max_jump:  # behind the newest by more than min_spacing: re-measured
+        e = path_all[lo + n - 1] - path_all[lo + n - 2]
+        if np.dot(d, e) < -min_spacing * math.sqrt(np.dot(e, e)):
+            return TOO_CLOSE, step, 0, 0, 0, 0, none
     if n >= 3:
         s = s_all[lo : lo + n]
         i = max(np.searchsorted(s, s[n - 1] - fit_mm), 1)
