@@ -263,3 +263,28 @@ def test_a_frame_below_the_last_fill_is_no_groove() -> None:
     higher = job.MeasuredGroove(previous.s_mm, previous.points + [0.0, job.FILL_DROP_MM + 0.1],
                                 previous.area_mm2)  # fmt: skip
     assert job._below_the_fill(frame, fill, seam, higher)
+
+
+def test_the_pass_befores_groove_is_settled_along_the_seam() -> None:
+    """At a part's end the last station's frames saw the stripe leave the part: a groove 0.8
+    mm wide at the root where the fill lies 7 mm up (multipass-v-groove in 12 passes). The
+    pass before's median there was as wrong, so the next pass's frame passed the fill check
+    and its torch dived 20 mm. Checked against the running median along the seam (cut short
+    at the ends), the last station keeps its neighbours' fill, which such a frame lies 13 mm
+    below (more than FILL_DROP_MM: refused)."""
+    from seamtrack.simulation.job_paths import settled
+
+    s = np.arange(20) * 0.5
+    points = np.tile(np.array([[-12.0, 20.0], [-7.0, 11.0], [-4.0, 13.0], [-1.0, 13.5],
+                               [2.0, 12.0], [5.0, 8.5], [12.0, 20.0]]), (20, 1, 1))  # fmt: skip
+    points = points + np.random.default_rng(3).normal(0.0, 0.02, points.shape)
+    points[-1] = [[-12.0, 20.0], [-0.41, 0.0], [-0.2, 0.0], [0.0, 0.0], [0.2, 0.0],
+                  [0.42, 0.0], [12.0, 20.0]]  # fmt: skip
+    groove = job.MeasuredGroove(s, points, np.full(20, 50.0))
+    floor = settled(groove)
+    assert floor.points[-1, 3, 1] == pytest.approx(13.5, abs=0.05)
+    assert floor.points[-1, 3, 1] - points[-1, 3, 1] > job.FILL_DROP_MM
+    for i in range(20):  # the median of the stations within 4 of it, as many as there are
+        window = points[max(i - 4, 0) : i + 5]
+        np.testing.assert_allclose(floor.points[i], np.median(window, axis=0), rtol=0, atol=1e-12)
+    assert floor.points.shape == points.shape

@@ -62,6 +62,7 @@ from seamtrack.simulation.job_paths import (
     _true_groove,
     measured_groove,
     pass_path,
+    settled,
 )
 from seamtrack.simulation.job_summary import (  # noqa: F401 (the job's public names)
     fusion_margin_mm,
@@ -369,7 +370,8 @@ def _steered(
     along the seam from the plan; ``adapt(groove_ahead, plan)`` (a planner's, optional) may
     replace the speed and offset at the station the sensor sees, for when the torch gets
     there. A frame whose fill surface lies more than :data:`FILL_DROP_MM` below the one the
-    pass before measured there (``previous``; the fill only grows) is taken as no groove."""
+    pass before measured there (``previous``, a running median along the seam: :func:`settled`;
+    the fill only grows) is taken as no groove."""
     sense = parts.sense
     tracker = parts.tracker
     T_sensor_tcp = np.linalg.inv(np.asarray(parts.robot.T_tcp_sensor, dtype=float))
@@ -377,6 +379,7 @@ def _steered(
     T_station_world = np.linalg.inv(fill.T_world_station)
     s_stations = fill.s_mm
     set_speed = getattr(tracker, "set_speed", None)
+    floor = None if previous is None else settled(previous)  # what a frame is checked against
     adapted = np.full((len(s_stations), 2), np.nan)  # speed, offset per station
     seen = [False]  # the pass's sensor has measured the groove
 
@@ -393,8 +396,8 @@ def _steered(
             return feature
         # The frame's 7 points at their station (measured once: the checks below share it).
         now = measured_groove(frames[-1:], fill, cad_seam, T_station_world) if feature else None
-        if feature and previous is not None and _below_the_fill(frames[-1], fill, cad_seam,
-                                                                previous, now):  # fmt: skip
+        if feature and floor is not None and _below_the_fill(frames[-1], fill, cad_seam,
+                                                             floor, now):  # fmt: skip
             feature = Feature.failed("below the fill the pass before measured", feature.joint)
             frames[-1] = (feature, T_world_sensor)
             now = None
