@@ -288,3 +288,34 @@ def test_the_pass_befores_groove_is_settled_along_the_seam() -> None:
         window = points[max(i - 4, 0) : i + 5]
         np.testing.assert_allclose(floor.points[i], np.median(window, axis=0), rtol=0, atol=1e-12)
     assert floor.points.shape == points.shape
+
+
+def test_a_planned_frame_aims_a_top_corner_bead_at_the_fill_under_it() -> None:
+    """Before a pass's sensor first measures the groove, a frame gives the plan's point from
+    the pass before's 7 points. It now carries all 7 (edges_laser), so a fill bead offset 9 mm
+    in from a top corner aims at the fill surface under that place (the 7 points' polyline
+    there), as from a measured frame, not at the corner's height, 9 mm higher on the 12-pass
+    plan. Oracle: the analytic V's 7 points at the station, carried through the frames."""
+    from seamtrack.control.planner import POINT_INDEX
+    from seamtrack.simulation.job_paths import measured_groove
+    from seamtrack.simulation.passes import aim_point, planned_feature
+
+    fill = v_state()
+    seam = job.Seam.from_points(fill.T_world_station[:, :3, 3])
+    truth = np.stack([fill.groove_points(i) for i in range(len(fill.s_mm))])
+    previous = job.MeasuredGroove(fill.s_mm, truth, np.full(len(fill.s_mm), 80.0))
+    T = np.eye(4)
+    T[:3, :3] = np.diag([1.0, -1.0, -1.0])
+    T[:3, 3] = (2.0, 0.0, 100.0)  # the laser plane through station 4 (s = 2 mm)
+    plan = PassPlan("right_top", -9.0, 0.0, 5.0, 100.0, 1, 1, 2, False)
+    failed = job.Feature(confidence=0.0, reason="below the fill", stripe_points=500)
+    planned = planned_feature(failed, T, fill, plan, previous, 0.5, POINT_INDEX)
+    assert planned and planned.edges_laser.shape == (7, 2)
+    np.testing.assert_allclose(planned.point_world, [2.0, *truth[4, 6]], atol=1e-9)
+    got = measured_groove([(planned, T)], fill, seam)
+    np.testing.assert_allclose(got.points[0], truth[4], atol=1e-9)
+    y, z = aim_point(got.points, POINT_INDEX["right_top"], -9.0)[0]
+    assert y == pytest.approx(truth[4, 6, 0] - 9.0)
+    z_fill = np.interp(y, truth[4, :, 0], truth[4, :, 1])
+    assert z == pytest.approx(z_fill, abs=1e-9)
+    assert truth[4, 6, 1] - z > 5.0  # the corner's height, which the torch aimed at before

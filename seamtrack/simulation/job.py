@@ -401,6 +401,7 @@ def _steered(
             feature = Feature.failed("below the fill the pass before measured", feature.joint)
             frames[-1] = (feature, T_world_sensor)
             now = None
+        planned = None  # the pass before's groove where this frame gives none (not yet seen)
         if feature:
             seen[0] = True
         elif previous is not None and (not seen[0] or (plan.cap and plan.reference in _FIXED)):
@@ -410,6 +411,8 @@ def _steered(
             # leaves its stripe now and then)
             feature = planned_feature(feature, T_world_sensor, fill, plan, previous,
                                       STATION_SPACING_MM, _POINT_INDEX)  # fmt: skip
+            planned = measured_groove([(feature, T_world_sensor)], fill, cad_seam,
+                                      T_station_world) if feature else None  # fmt: skip
         if feature:
             s = float(cad_seam.closest(feature.point_world[None]).arc_length_mm[0])
             i = station(s)
@@ -417,7 +420,7 @@ def _steered(
                 adapted[i] = _adapted(adapt, now, plan, planner_name, t_s)
             offset = adapted[i, 1] if np.isfinite(adapted[i, 1]) else float(plan.offset_at(s))
             own = offset or plan.cap or plan.reference not in ("left", "right", "centre")
-            here = now if own else None
+            here = (now if now is not None else planned) if own else None
             if here is not None:  # on the fill surface the frame measured, under the bead
                 k = min(int(np.searchsorted(s_stations, here.s_mm[0])), len(s_stations) - 1)
                 y, z = aim_point(here.points, _POINT_INDEX[plan.reference], offset, plan.cap)[0]

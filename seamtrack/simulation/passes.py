@@ -166,7 +166,10 @@ def planned_feature(
     plan's reference point as the pass before measured it where the laser plane crosses the
     seam (the offset is added after, as to a measured point), so the tracker starts along the
     plan rather than stopping (beyond the stations measured before, up to 10 mm, their end's
-    point). Frames off the part, or where the laser plane crosses no station, stay failed.
+    point). The feature carries the pass before's 7 points there (``edges_laser``), so a
+    bead offset from a top corner aims at the fill surface under it, as from a measured
+    frame, not at the corner's height (a torch of the 12-pass plan started 9 mm high).
+    Frames off the part, or where the laser plane crosses no station, stay failed.
     ``spacing_mm``: the stations'; ``point_index``: each reference's row of the 7 points."""
     if feature.stripe_points == 0 or not len(previous):
         return feature
@@ -178,12 +181,15 @@ def planned_feature(
         previous.s_mm[0] - reach <= fill.s_mm[i] <= previous.s_mm[-1] + reach
     ):
         return feature
-    k = point_index[plan.reference]
-    y = float(np.interp(fill.s_mm[i], previous.s_mm, previous.points[:, k, 0]))
-    z = float(np.interp(fill.s_mm[i], previous.s_mm, previous.points[:, k, 1]))
-    world = fill.T_world_station[i] @ np.array([0.0, y, z, 1.0])
-    laser = np.linalg.solve(T_world_sensor, world)[1:3]
-    return Feature.found(laser, T_world_sensor, confidence=0.0, joint=feature.joint or "groove")
+    s = fill.s_mm[i]
+    yz = np.array([[np.interp(s, previous.s_mm, previous.points[:, r, c]) for c in (0, 1)]
+                   for r in range(7)])  # fmt: skip
+    world = fill.T_world_station[i] @ np.column_stack([np.zeros(7), yz, np.ones(7)]).T
+    laser = np.linalg.solve(T_world_sensor, world)[1:3].T
+    area = float(np.interp(s, previous.s_mm, previous.area_mm2))
+    return Feature.found(laser[point_index[plan.reference]], T_world_sensor, confidence=0.0,
+                         joint=feature.joint or "groove", edges_laser=laser,
+                         area_mm2=area)  # fmt: skip
 
 
 def wall_deg(groove: MeasuredGroove, margin_deg: float = 12.0) -> float:
