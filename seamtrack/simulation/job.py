@@ -56,11 +56,14 @@ from seamtrack.simulation.checks import default_time_limit_s
 from seamtrack.simulation.job_paths import (
     _POINT_INDEX,
     STATION_SPACING_MM,
+    FrameGroove,
     _arc_path,
     _ramped,
     _to_the_ends,
     _true_groove,
+    frame_groove,
     measured_groove,
+    one_station,
     pass_path,
     settled,
 )
@@ -320,12 +323,13 @@ def _pass(
         tool_program=tool_program(pass_scene, true_path),
     )
     frames: list[tuple[Feature, FloatArray]] = []
-    parts = _steered(parts, fill, cad_seam, plan, frames, adapt, planner_name, previous)
+    each: list[FrameGroove | None] = []  # every frame's groove, as the sense function saw it
+    parts = _steered(parts, fill, cad_seam, plan, frames, adapt, planner_name, previous, each)
     build_s = time.perf_counter() - start
     start = time.perf_counter()
     result = run(parts, progress=progress, seed=c.simulation.seed)
     run_s = time.perf_counter() - start
-    groove = measured_groove(frames, fill, cad_seam)
+    groove = measured_groove(frames, fill, cad_seam, each=each)
     path, t, speeds = _arc_path(result, parts.settings.trace_period_s, process.speed_min_mm_s)
     arc_time = float(t[-1] - t[0]) if len(t) > 1 else 0.0
     wire = process.wire_feed_mm_s if plan is None else plan.wire_feed_mm_s
@@ -364,8 +368,10 @@ def _steered(
     adapt: Any = None,
     planner_name: str = "planner",
     previous: MeasuredGroove | None = None,
+    each: list[FrameGroove | None] | None = None,
 ) -> Parts:
-    """The parts with a sense function that records every frame's feature, moves the measured
+    """The parts with a sense function that records every frame's feature (and, in
+    ``each``, its groove: :func:`~seamtrack.simulation.job_paths.frame_groove`), moves the measured
     point by the plan's lateral offset there (station frame), and sets the tracker's speed
     along the seam from the plan; ``adapt(groove_ahead, plan)`` (a planner's, optional) may
     replace the speed and offset at the station the sensor sees, for when the torch gets
@@ -395,12 +401,15 @@ def _steered(
         if plan is None:
             return feature
         # The frame's 7 points at their station (measured once: the checks below share it).
-        now = measured_groove(frames[-1:], fill, cad_seam, T_station_world) if feature else None
+        one = frame_groove(feature, T_world_sensor, fill, cad_seam, T_station_world)
+        now = one_station(one, fill)
         if feature and floor is not None and _below_the_fill(frames[-1], fill, cad_seam,
                                                              floor, now):  # fmt: skip
             feature = Feature.failed("below the fill the pass before measured", feature.joint)
             frames[-1] = (feature, T_world_sensor)
-            now = None
+            one = now = None
+        if each is not None:
+            each.append(one)
         planned = None  # the pass before's groove where this frame gives none (not yet seen)
         if feature:
             seen[0] = True

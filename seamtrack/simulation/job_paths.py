@@ -56,51 +56,56 @@ def pass_path(fill: Any, reference: str, plan: PassPlan | None, window: int = 4)
     return Seam.from_points(points, field="passes", name="pass path")
 
 
+#: One frame's groove: its station's index, its 7 points (7, 2) there and its area.
+FrameGroove = tuple[int, FloatArray, float]
+
+
 def measured_groove(
     frames: list[tuple[Feature, FloatArray]],
     fill: Any,
     cad_seam: Seam,
     T_station_world: FloatArray | None = None,
+    each: list[FrameGroove | None] | None = None,
 ) -> MeasuredGroove | None:
     """The groove as the pass's sensor measured it (None: in no frame): every frame's 7
     points (the groove extractor's ``edges_laser``) in the frame of the station nearest to
     them, the median per station; stations no frame saw are left out. ``T_station_world``:
     the stations' inverse poses (``np.linalg.inv(fill.T_world_station)``), when the caller
-    keeps them (a pass asks this every frame)."""
-    if len(frames) == 1:  # one frame (a pass's sense function, every frame): no medians
-        one = _frame_groove(*frames[0], fill, cad_seam, T_station_world)
-        if one is None:
-            return None
-        i, yz, area = one
-        return MeasuredGroove(fill.s_mm[[i]], yz[None], np.array([area], dtype=float))
-    if T_station_world is None:
-        T_station_world = np.linalg.inv(fill.T_world_station)
-    s_list, pts_list, area_list = [], [], []
-    for feature, T_world_sensor in frames:
-        one = _frame_groove(feature, T_world_sensor, fill, cad_seam, T_station_world)
-        if one is None:
-            continue
-        s_list.append(one[0])
-        pts_list.append(one[1])
-        area_list.append(one[2])
-    if not s_list:
+    keeps them (a pass asks this every frame). ``each``: every frame's :func:`frame_groove`,
+    when the caller has them (a pass's sense function keeps them as it goes)."""
+    if each is None or len(each) != len(frames):
+        if len(frames) == 1:  # one frame (a pass's sense function, every frame): no medians
+            return one_station(frame_groove(*frames[0], fill, cad_seam, T_station_world), fill)
+        if T_station_world is None:
+            T_station_world = np.linalg.inv(fill.T_world_station)
+        each = [frame_groove(f, T, fill, cad_seam, T_station_world) for f, T in frames]
+    found = [one for one in each if one is not None]
+    if not found:
         return None
-    stations = np.asarray(s_list)
-    points = np.asarray(pts_list)
-    areas = np.asarray(area_list, dtype=float)
+    stations = np.asarray([one[0] for one in found])
+    points = np.asarray([one[1] for one in found])
+    areas = np.asarray([one[2] for one in found], dtype=float)
     keep = np.unique(stations)
     med_pts = np.stack([np.median(points[stations == k], axis=0) for k in keep])
     med_area = np.array([np.nanmedian(areas[stations == k]) for k in keep])
     return MeasuredGroove(fill.s_mm[keep], med_pts, med_area)
 
 
-def _frame_groove(
+def one_station(one: FrameGroove | None, fill: Any) -> MeasuredGroove | None:
+    """One frame's groove (:func:`frame_groove`) as a measured groove of one station."""
+    if one is None:
+        return None
+    i, yz, area = one
+    return MeasuredGroove(fill.s_mm[[i]], yz[None], np.array([area], dtype=float))
+
+
+def frame_groove(
     feature: Feature,
     T_world_sensor: FloatArray,
     fill: Any,
     cad_seam: Seam,
     T_station_world: FloatArray | None = None,
-) -> tuple[int, FloatArray, float] | None:
+) -> FrameGroove | None:
     """One frame's 7 points in the frame of the station nearest to them (y ascending), that
     station's index and the frame's area (None: no 7 points in the frame)."""
     edges = np.asarray(feature.edges_laser, dtype=float)
