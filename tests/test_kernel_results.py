@@ -216,6 +216,8 @@ def test_compiled_kernels_return_named_tuples() -> None:
                 ret = sig.return_type
                 if isinstance(ret, types.BaseTuple) and not isinstance(ret, types.BaseNamedTuple):
                     bad.append(f"{name}.{attr} -> {ret}")
-    # the extractors' entry kernels ran (the kernels they call run inside them, compiled)
-    assert {"_segmentation.segment", "_v_search.search", "_v_groove_model.v_groove"} <= seen
+    # the extractors' entry kernels ran (the kernels they call run inside them, compiled: one
+    # loaded with its callers from numba's cache, as _v_search.search is inside v_groove on a
+    # second run, has no signatures of its own; a fresh clone compiles and checks it)
+    assert {"_segmentation.segment", "_v_groove_model.v_groove"} <= seen
     assert not bad, "\n".join(bad)
