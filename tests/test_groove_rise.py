@@ -121,27 +121,3 @@ def test_a_short_wall_off_the_others_mirror_gives_way_to_it():
     near = math.radians(10.0 + 1.0)
     close = _wall((6.8, 0.0), (6.8 - 5.0 * math.sin(near), 5.0 * math.cos(near)))
     assert short_walls((left, close), fv, v) == (left, close)
-
-
-def test_a_notch_whose_outer_side_is_the_walls_is_no_round() -> None:
-    """A V's wall points that the wall band left in the surface beside a bead's toe rise as a
-    round's flank does; read as a notch they moved the aim of the overfilled fixed plan on
-    multipass-varying-gap by a millimetre from frame to frame. Given the wall's direction
-    (75 deg off the plates), a notch whose outer side runs 7 deg off it is the wall's (no
-    level); one 17 deg off it (a round) is still read, at its tip. Without the wall's
-    direction both are notches."""
-    tip, run = 10.0, 0.22
-    wall = (math.cos(math.radians(75.0)), math.sin(math.radians(75.0)))
-    for seed in range(4):
-        for steep_deg, found in ((68.0, False), (58.0, True)):
-            slope = math.tan(math.radians(steep_deg))
-
-            def v(d, slope=slope):
-                return np.where(d <= run, tip - slope * (run - d), tip - 0.6 * (d - run))
-
-            fu, fv = _side(v, seed=seed)
-            level = risen_level(fu, fv, True, SPACING, TOL, wall=wall)
-            assert (level is not None) == found, (seed, steep_deg)
-            if found:
-                assert abs(level - tip) <= 0.03
-            assert risen_level(fu, fv, True, SPACING, TOL) is not None

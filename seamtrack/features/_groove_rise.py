@@ -12,8 +12,6 @@ Points are (u, v): u across the groove (the plates' line, left to right), v into
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from numpy.typing import NDArray
 
@@ -30,8 +28,6 @@ NOTCH_WINDOW_MM = 0.1
 NOTCH_IN_MM = 0.08
 NOTCH_RISE_MM = 0.25
 NOTCH_SLOPE = (0.8, 4.0)
-#: ... and its outer side at least this far off the wall's slope (deg): else it is the wall's.
-WALL_APART_DEG = 10.0
 #: A notch's tip is where its flanks' lines cross: the outer one (from the outer end to the
 #: deepest point) and the inner one (FLANK_MM inwards of it), when the inner one rises inwards
 #: at least INNER_SLOPE times its run (a bead's flank; a flat bottom makes no notch).
@@ -47,7 +43,6 @@ def risen_level(
     tol: float,
     window: float = 0.3,
     raw_end: bool = False,
-    wall: tuple[float, float] | None = None,
 ) -> float | None:
     """The level (v) of the fill surface's deepest part near a side, when the surface rises
     from there into the wall (a U's round, bare or partly filled; None when it does not).
@@ -62,11 +57,7 @@ def risen_level(
       root bead's concave face, the fill's own, rises 0.13-0.43 times on the Keyence
       root-pass scans; a bead's toe on the wall comes down to it: a kink, no rise);
     * **a notch** (a bead's toe on the round, seen over its last tenths of a millimetre:
-      the wall band may leave little of the round): the constants ``NOTCH_*`` above, its
-      outer side more than :data:`WALL_APART_DEG` off the wall's direction ``wall`` ((du, dv),
-      when known): a V's wall points left in the surface beside a bead's toe rise as
-      steeply as a round's flank, and read as a notch they moved the overfilled fixed plan's
-      aim by a millimetre from frame to frame.
+      the wall band may leave little of the round): the constants ``NOTCH_*`` above.
 
     The level is the notch's tip where its flanks' lines cross (``FLANK_MM``,
     ``INNER_SLOPE``; a running median shaves a V's tip, 0.1-0.3 mm on a bead's toe), else the
@@ -95,25 +86,9 @@ def risen_level(
         lo, hi = NOTCH_SLOPE
         if not (run >= NOTCH_IN_MM and rise >= NOTCH_RISE_MM and lo * run <= rise <= hi * run):
             return None
-        if wall is not None and _along_the_wall(nd, nv, float(nd[j]), wall, tol):
-            return None
         level = float(smooth[j])
     tip = _flank_crossing(nd, nv, float(nd[j]), float(smooth[j]), tol)
     return level if tip is None else tip
-
-
-def _along_the_wall(
-    zd: FloatArray, zv: FloatArray, deepest: float, wall: tuple[float, float], tol: float
-) -> bool:
-    """Whether the notch's outer side (``zd`` up to ``deepest``) rises along the wall (its
-    direction (du, dv)): its line within :data:`WALL_APART_DEG` of the wall's (or too few
-    points for a line)."""
-    outer = zd <= deepest
-    fit = _robust_uv_line(zd[outer], zv[outer], tol) if np.count_nonzero(outer) >= 3 else None
-    if fit is None:
-        return True
-    steep = math.atan2(abs(wall[1]), abs(wall[0]))  # the wall's angle off the plates
-    return abs(math.degrees(math.atan(abs(fit[1])) - steep)) <= WALL_APART_DEG
 
 
 def _odd(n: float, lo: int = 3, hi: int = 51) -> int:
@@ -162,10 +137,9 @@ def a_step(
     """Whether the steep piece ``index`` of a raised part is a step: its rise (along
     ``normal``) lies at least half between the surface's levels beyond its ends (the median of
     the first 8 points beyond each end within 2 mm of it across the groove, less those of
-    any ``steep`` piece: more than 60 deg off the plates). A block's side joins two levels; a
-    spike streak over a crowned fill (12-15 points over 1.2-2.9 mm, 81 deg off the plates)
-    stands out of a surface that runs on across it. A side with fewer than 3 such points
-    counts as a step."""
+    any ``steep`` piece: more than 60 deg off the plates). A block's side joins two levels; a spike streak over a crowned fill
+    (12-15 points over 1.2-2.9 mm, 81 deg off the plates) stands out of a surface that runs
+    on across it. A side with fewer than 3 such points counts as a step."""
     lo, hi = int(index[0]), int(index[-1])
     level = points @ normal
     along = np.array([normal[1], -normal[0]])

@@ -289,8 +289,9 @@ class GrooveExtractor(_Base):
             ln = seg.lines[j]
             off = _angle_deg(ln.direction, along)
             mask[ln.index] = off > 60.0
-            raised = float((ln.centroid - start) @ normal) <= -self.min_depth_mm
-            if ln.extent >= 1.0 and raised and off > 80.0:
+            if ln.extent < 1.0 or float((ln.centroid - start) @ normal) > -self.min_depth_mm:
+                continue
+            if off > 80.0:
                 steep.append(ln.index)
         if any(a_step(P, index, normal, mask) for index in steep):
             return why
@@ -524,12 +525,12 @@ class GrooveExtractor(_Base):
         edge = float(fu[0] if left else fu[-1])
         unseen = wall is None or not len(wall.index)  # no wall seen, or a hidden one's mirror
         if wall is not None:
-            hidden = not len(wall.index)  # its round's rise is all there is of its foot:
-            window, raw = (0.2, True) if hidden else (0.3, False)  # read finer
-            du, dv = float(wall.direction @ u), float(wall.direction @ v)
-            level = risen_level(fu, fv, left, seg.spacing, seg.tol, window, raw, (du, dv))
+            # (a hidden wall: the round's rise is all there is of its foot, read finer)
+            fine = not len(wall.index)
+            level = risen_level(fu, fv, left, seg.spacing, seg.tol, *((0.2, True) if fine else ()))
             if level is not None:  # a round into the wall: the wall's line at the fill's level
                 cu, cv = float(wall.centroid @ u), float(wall.centroid @ v)
+                du, dv = float(wall.direction @ u), float(wall.direction @ v)
                 if abs(dv) > 1e-9:
                     t = (level - cv) / dv
                     return np.asarray((cu + t * du) * u + level * v)
