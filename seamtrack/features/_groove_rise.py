@@ -137,9 +137,10 @@ def a_step(
     """Whether the steep piece ``index`` of a raised part is a step: its rise (along
     ``normal``) lies at least half between the surface's levels beyond its ends (the median of
     the first 8 points beyond each end within 2 mm of it across the groove, less those of
-    any ``steep`` piece: more than 60 deg off the plates). A block's side joins two levels; a spike streak over a crowned fill
-    (12-15 points over 1.2-2.9 mm, 81 deg off the plates) stands out of a surface that runs
-    on across it. A side with fewer than 3 such points counts as a step."""
+    any ``steep`` piece: more than 60 deg off the plates). A block's side joins two levels; a
+    spike streak over a crowned fill (12-15 points over 1.2-2.9 mm, 81 deg off the plates)
+    stands out of a surface that runs on across it. A side with fewer than 3 such points
+    counts as a step."""
     lo, hi = int(index[0]), int(index[-1])
     level = points @ normal
     along = np.array([normal[1], -normal[0]])

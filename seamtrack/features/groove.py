@@ -289,9 +289,8 @@ class GrooveExtractor(_Base):
             ln = seg.lines[j]
             off = _angle_deg(ln.direction, along)
             mask[ln.index] = off > 60.0
-            if ln.extent < 1.0 or float((ln.centroid - start) @ normal) > -self.min_depth_mm:
-                continue
-            if off > 80.0:
+            raised = float((ln.centroid - start) @ normal) <= -self.min_depth_mm
+            if ln.extent >= 1.0 and raised and off > 80.0:
                 steep.append(ln.index)
         if any(a_step(P, index, normal, mask) for index in steep):
             return why
