@@ -34,6 +34,7 @@ from types import MappingProxyType
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.features import _synthetic_kernels as kern
 from seamtrack.sensing.profiles import Profile, Reason
 from seamtrack.sensing.sensor import LaserLineSensor
 
@@ -307,34 +308,18 @@ def _cast(origin: FloatArray, dirs: FloatArray, segs: FloatArray) -> tuple[Float
     t : (n,) float, inf where nothing is hit
     index : (n,) int, the segment hit (-1 for none)
     """
-    a = segs[:, 0]
-    e = segs[:, 1] - a  # (k, 2)
-    w = a - origin  # (k, 2)
-    # Solve t d - s e = w  (Cramer): det = -d x e
-    det = dirs[:, None, 0] * -e[None, :, 1] + e[None, :, 0] * dirs[:, None, 1]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = (w[None, :, 0] * -e[None, :, 1] + e[None, :, 0] * w[None, :, 1]) / det
-        s = (dirs[:, None, 0] * w[None, :, 1] - dirs[:, None, 1] * w[None, :, 0]) / det
-    ok = (np.abs(det) > 1e-15) & (t > 1e-9) & (s >= -1e-12) & (s <= 1 + 1e-12)
-    t = np.where(ok, t, np.inf)
-    index = np.argmin(t, axis=1)
-    t_hit = t[np.arange(len(dirs)), index]
-    return t_hit, np.where(np.isfinite(t_hit), index, -1)
+    hit = kern.cast(_f64(origin), _f64(dirs), _f64(segs).reshape(-1, 2, 2))
+    return hit.t, hit.segment
 
 
 def _occluded(hits: FloatArray, eye: FloatArray, segs: FloatArray) -> NDArray[np.bool_]:
-    """(n,) True where the 2D sight line from a hit to ``eye`` crosses a segment."""
-    d = eye - hits  # (n, 2) sight lines, parameter u in (0, 1]
-    a = segs[:, 0]
-    e = segs[:, 1] - a
-    w = a[None, :, :] - hits[:, None, :]  # (n, k, 2)
-    det = d[:, None, 0] * -e[None, :, 1] + e[None, :, 0] * d[:, None, 1]
-    with np.errstate(divide="ignore", invalid="ignore"):
-        u = (w[..., 0] * -e[None, :, 1] + e[None, :, 0] * w[..., 1]) / det
-        s = (d[:, None, 0] * w[..., 1] - d[:, None, 1] * w[..., 0]) / det
-    # The hit's own surface (and a corner's neighbour) is crossed at u ~ 0: skip it.
-    blocked = (np.abs(det) > 1e-15) & (u > 1e-7) & (u <= 1) & (s > 1e-9) & (s < 1 - 1e-9)
-    return np.asarray(blocked.any(axis=1))
+    """(n,) True where the 2D sight line from a hit to ``eye`` crosses a segment (compiled:
+    :func:`seamtrack.features._synthetic_kernels.occluded`)."""
+    return kern.occluded(_f64(hits), _f64(eye), _f64(segs).reshape(-1, 2, 2))
+
+
+def _f64(a: FloatArray) -> FloatArray:
+    return np.ascontiguousarray(a, dtype=np.float64)
 
 
 def _rotation(pitch_rad: float, roll_rad: float) -> FloatArray:
