@@ -170,38 +170,11 @@ def closest_on_polyline(
     """(m, 3) the closest points to ``points`` on the segments ``a + t d`` (the nearest of all,
     the first on a tie: :func:`~seamtrack.geometry.nearest.nearest_of`'s arithmetic), reusing
     ``last_near`` for the rows ``points`` shares with ``last_points`` (a window sliding along
-    the same stored points: ``points`` starts inside ``last_points``)."""
-    m = points.shape[0]
-    near = np.empty((m, 3))
-    k = 0
-    for j in range(last_points.shape[0]):
-        if (last_points[j, 0] == points[0, 0] and last_points[j, 1] == points[0, 1]
-                and last_points[j, 2] == points[0, 2]):  # fmt: skip
-            k = min(last_points.shape[0] - j, m)
-            for r in range(k):
-                for c in range(3):
-                    if last_points[j + r, c] != points[r, c]:
-                        k = 0
-            for r in range(k):
-                near[r] = last_near[j + r]
-            break
-    for r in range(k, m):
-        best, bt, bs = np.inf, 0.0, 0
-        q0, q1, q2 = points[r, 0], points[r, 1], points[r, 2]
-        for c in range(a.shape[0]):
-            dd = max(d[c, 0] * d[c, 0] + d[c, 1] * d[c, 1] + d[c, 2] * d[c, 2], 1e-300)
-            num = (q0 - a[c, 0]) * d[c, 0] + (q1 - a[c, 1]) * d[c, 1]
-            num += (q2 - a[c, 2]) * d[c, 2]
-            t = min(max(num / dd, 0.0), 1.0)
-            e0 = q0 - (a[c, 0] + t * d[c, 0])
-            e1 = q1 - (a[c, 1] + t * d[c, 1])
-            e2 = q2 - (a[c, 2] + t * d[c, 2])
-            dist = np.sqrt(e0 * e0 + e1 * e1 + e2 * e2)
-            if dist < best:
-                best, bt, bs = dist, t, c
-        for c in range(3):
-            near[r, c] = a[bs, c] + bt * d[bs, c]
-    return near
+    the same stored points: ``points`` starts inside ``last_points``): every segment looked
+    at, in order (:func:`closest_on_polyline_chunked` with no chunks)."""
+    return closest_on_polyline_chunked(
+        points, last_points, last_near, a, d, np.empty((0, 3)), np.empty(0)
+    )
 
 
 @numba.njit(cache=True, nogil=True)
