@@ -279,6 +279,41 @@ def wrist_joint_1(
     return True, math.atan2(b, a), math.acos(min(max(hp / r, -1.0), 1.0)), d
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def wrist_rotation(g: FloatArray, ws: FloatArray, q1: float, q2: float, q3: float) -> FloatArray:
+    """The rotation a spherical wrist's joints 4-6 are left to make once joints 1-3 are
+    known, in the basis (u4, u5, u4 x u5): N = B^T R3^T R R0^T B (``ws[2]``: R R0^T B; ``ws``
+    3-6 overwritten, N in ``ws[6]``)."""
+    u1, u2, u3 = g[_W_U1 : _W_U1 + 3], g[_W_U2 : _W_U2 + 3], g[_W_U3 : _W_U3 + 3]
+    B = g[_W_B : _W_B + 9].reshape(3, 3)
+    _rot_into(u1, q1, ws[3])
+    _rot_into(u2, q2, ws[4])
+    mul_into(ws[3], ws[4], ws[5])
+    _rot_into(u3, q3, ws[3])
+    mul_into(ws[5], ws[3], ws[4])  # R3
+    _tmul_into(ws[4], ws[2], ws[5])  # R3^T R R0^T B
+    _tmul_into(B, ws[5], ws[6])  # N = B^T R3^T R R0^T B
+    return ws[6]
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def wrist_456(N: FloatArray, sb: float, sign: float, q4_near: float) -> tuple[float, float, float]:
+    """Joints 4 and 5 and joint 6's angle before its sign (c6) of the wrist rotation ``N`` =
+    Rx(q4) Ry(q5) Rx(c6), on the branch ``sign`` (sb = |N[0, 1:]|; ``q4_near`` at the
+    singularity, where only q4 - c6 or q4 + c6 is fixed)."""
+    q5 = math.atan2(sign * sb, N[0, 0])
+    if sb < SINGULAR_SIN:
+        q4 = q4_near
+        if N[0, 0] > 0.0:
+            c6 = math.atan2(N[2, 1], N[1, 1]) - q4
+        else:
+            c6 = q4 + math.atan2(-N[2, 1], N[1, 1])
+    else:
+        q4 = math.atan2(sign * N[1, 0], -sign * N[2, 0])
+        c6 = math.atan2(sign * N[0, 1], sign * N[0, 2])
+    return q4, q5, c6
+
+
 @numba.njit(cache=True, nogil=True)
 def _wrist_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: FloatArray) -> int:
     """Spherical wrist: up to 8 joint solutions of the torch pose ``T`` (metres).
@@ -291,7 +326,7 @@ def _wrist_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: Float
     reached, beta, k, d = wrist_joint_1(g, T, ws)
     if not reached:
         return 0
-    o1, u2 = g[_W_O1 : _W_O1 + 3], g[_W_U2 : _W_U2 + 3]
+    o1 = g[_W_O1 : _W_O1 + 3]
     o2, e1, e2 = g[_W_O2 : _W_O2 + 3], g[_W_E1 : _W_E1 + 3], g[_W_E2 : _W_E2 + 3]
     o3x, o3y = g[_W_O3], g[_W_O3 + 1]
     w0x, w0y = g[_W_W0], g[_W_W0 + 1]
@@ -299,8 +334,7 @@ def _wrist_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: Float
     l3 = math.hypot(w0x - o3x, w0y - o3y)
     g2, g3 = math.atan2(o3y, o3x), math.atan2(w0y - o3y, w0x - o3x)
     s3, s6 = g[_W_S3], g[_W_S6]
-    u1, u3 = g[_W_U1 : _W_U1 + 3], g[_W_U3 : _W_U3 + 3]
-    B = g[_W_B : _W_B + 9].reshape(3, 3)
+    u1 = g[_W_U1 : _W_U1 + 3]
     count = 0
     for q1 in (beta + k, beta - k):
         _rot_into(u1, -q1, ws[3])
@@ -318,26 +352,10 @@ def _wrist_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: Float
             vy = o3y + math.sin(phi3) * (w0x - o3x) + math.cos(phi3) * (w0y - o3y)
             q2 = math.atan2(py, px) - math.atan2(vy, vx)
             q3 = s3 * phi3
-            _rot_into(u1, q1, ws[3])
-            _rot_into(u2, q2, ws[4])
-            mul_into(ws[3], ws[4], ws[5])
-            _rot_into(u3, q3, ws[3])
-            mul_into(ws[5], ws[3], ws[4])  # R3
-            _tmul_into(ws[4], ws[2], ws[5])  # R3^T R R0^T B
-            _tmul_into(B, ws[5], ws[6])  # N = B^T R3^T R R0^T B
-            N = ws[6]
+            N = wrist_rotation(g, ws, q1, q2, q3)
             sb = math.hypot(N[0, 1], N[0, 2])
             for sign in (1.0, -1.0):
-                q5 = math.atan2(sign * sb, N[0, 0])
-                if sb < SINGULAR_SIN:
-                    q4 = q_near[3]
-                    if N[0, 0] > 0.0:
-                        c6 = math.atan2(N[2, 1], N[1, 1]) - q4
-                    else:
-                        c6 = q4 + math.atan2(-N[2, 1], N[1, 1])
-                else:
-                    q4 = math.atan2(sign * N[1, 0], -sign * N[2, 0])
-                    c6 = math.atan2(sign * N[0, 1], sign * N[0, 2])
+                q4, q5, c6 = wrist_456(N, sb, sign, q_near[3])
                 row = out[count]
                 row[0], row[1], row[2] = q1, q2, q3
                 row[3], row[4], row[5] = q4, q5, s6 * c6

@@ -27,7 +27,6 @@ from seamtrack.control.closed_form import (
     _U_S1,
     _U_S4,
     _U_S5,
-    _W_B,
     _W_E1,
     _W_E2,
     _W_O1,
@@ -36,23 +35,21 @@ from seamtrack.control.closed_form import (
     _W_S3,
     _W_S6,
     _W_U1,
-    _W_U2,
-    _W_U3,
     _W_W0,
     KIND_UR,
     KIND_WRIST,
-    SINGULAR_SIN,
     _m4j,
     _near,
     _rot_into,
     _rz_left,
-    _tmul_into,
     ik_branches,
     mul_into,
     ur_joint_1,
     ur_planar,
     ur_q6,
+    wrist_456,
     wrist_joint_1,
+    wrist_rotation,
 )  # fmt: skip
 
 FloatArray = NDArray[np.float64]
@@ -157,7 +154,7 @@ def _wrist_nearest(g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatA
     reached, beta, k, d = wrist_joint_1(g, T, ws)
     if not reached:
         return False
-    o1, u2 = g[_W_O1 : _W_O1 + 3], g[_W_U2 : _W_U2 + 3]
+    o1 = g[_W_O1 : _W_O1 + 3]
     o2, e1, e2 = g[_W_O2 : _W_O2 + 3], g[_W_E1 : _W_E1 + 3], g[_W_E2 : _W_E2 + 3]
     o3x, o3y = g[_W_O3], g[_W_O3 + 1]
     w0x, w0y = g[_W_W0], g[_W_W0 + 1]
@@ -165,8 +162,7 @@ def _wrist_nearest(g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatA
     l3 = math.hypot(w0x - o3x, w0y - o3y)
     g2, g3 = math.atan2(o3y, o3x), math.atan2(w0y - o3y, w0x - o3x)
     s3, s6 = g[_W_S3], g[_W_S6]
-    u1, u3 = g[_W_U1 : _W_U1 + 3], g[_W_U3 : _W_U3 + 3]
-    B = g[_W_B : _W_B + 9].reshape(3, 3)
+    u1 = g[_W_U1 : _W_U1 + 3]
     best = math.inf
     best_key = 8  # the branch's place in _wrist_branches' order (i1, i3, i6)
     q1s = (beta + k, beta - k)
@@ -201,27 +197,11 @@ def _wrist_nearest(g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatA
             if t12 > best:
                 continue
             q2, q3 = (q2a, q3a) if i3 == 0 else (q2b, q3b)
-            _rot_into(u1, q1, ws[3])
-            _rot_into(u2, q2, ws[4])
-            mul_into(ws[3], ws[4], ws[5])
-            _rot_into(u3, q3, ws[3])
-            mul_into(ws[5], ws[3], ws[4])  # R3
-            _tmul_into(ws[4], ws[2], ws[5])  # R3^T R R0^T B
-            _tmul_into(B, ws[5], ws[6])  # N = B^T R3^T R R0^T B
-            N = ws[6]
+            N = wrist_rotation(g, ws, q1, q2, q3)
             sb = math.hypot(N[0, 1], N[0, 2])
             for i6 in range(2):
                 sign = 1.0 if i6 == 0 else -1.0
-                q5 = math.atan2(sign * sb, N[0, 0])
-                if sb < SINGULAR_SIN:
-                    q4 = q_near[3]
-                    if N[0, 0] > 0.0:
-                        c6 = math.atan2(N[2, 1], N[1, 1]) - q4
-                    else:
-                        c6 = q4 + math.atan2(-N[2, 1], N[1, 1])
-                else:
-                    q4 = math.atan2(sign * N[1, 0], -sign * N[2, 0])
-                    c6 = math.atan2(sign * N[0, 1], sign * N[0, 2])
+                q4, q5, c6 = wrist_456(N, sb, sign, q_near[3])
                 v1, v2 = _near(q2, q_near[1]), _near(q3, q_near[2])
                 v3, v4, v5 = _near(q4, q_near[3]), _near(q5, q_near[4]), _near(s6 * c6, q_near[5])
                 dd = t12  # nearest_branch's sum, in its order (joints 1-3 in t12)
