@@ -279,9 +279,20 @@ def _smooth(values: FloatArray, half_window: int = 4) -> FloatArray:
     values = np.asarray(values, dtype=float)
     if len(values) <= 2:
         return values
-    padded = np.pad(values, half_window, mode="edge")
-    windows = np.lib.stride_tricks.sliding_window_view(padded, 2 * half_window + 1)
-    return np.asarray(np.median(windows, axis=1))
+    return station_median(values, half_window)
+
+
+def station_median(values: Any, half_window: int = 4, cut_ends: bool = False) -> FloatArray:
+    """A running median along the stations (axis 0) over 2 * half_window + 1 of them; at the
+    ends over the end station repeated, or with ``cut_ends`` over the stations there are."""
+    v = np.asarray(values, dtype=float)
+    pad = ((half_window, half_window),) + ((0, 0),) * (v.ndim - 1)
+    if cut_ends:
+        padded = np.pad(v, pad, constant_values=np.nan)
+    else:
+        padded = np.pad(v, pad, mode="edge")
+    windows = np.lib.stride_tricks.sliding_window_view(padded, 2 * half_window + 1, axis=0)
+    return np.asarray((np.nanmedian if cut_ends else np.median)(windows, axis=-1))
 
 
 class FixedPlanner(AdaptivePlanner):

@@ -420,8 +420,8 @@ def _steered(
             # leaves its stripe now and then)
             feature = planned_feature(feature, T_world_sensor, fill, plan, previous,
                                       STATION_SPACING_MM, _POINT_INDEX)  # fmt: skip
-            planned = measured_groove([(feature, T_world_sensor)], fill, cad_seam,
-                                      T_station_world) if feature else None  # fmt: skip
+            planned = one_station(frame_groove(feature, T_world_sensor, fill, cad_seam,
+                                               T_station_world), fill)  # fmt: skip
         if feature:
             s = float(cad_seam.closest(feature.point_world[None]).arc_length_mm[0])
             i = station(s)

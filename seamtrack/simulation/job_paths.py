@@ -13,6 +13,7 @@ from seamtrack.control.planner import (
     POINT_INDEX,
     MeasuredGroove,
     PassPlan,
+    station_median,
 )
 from seamtrack.geometry.seam import Seam
 from seamtrack.sensing.profiles import Feature, laser_to_world
@@ -46,9 +47,7 @@ def pass_path(fill: Any, reference: str, plan: PassPlan | None, window: int = 4)
     onto the fill surface the bottom points describe, or a cap bead at the plates' top line
     (:func:`~seamtrack.simulation.passes.aim_point`: where the bead aims, as the tracker does
     with the measured points)."""
-    pts = fill.all_groove_points()
-    padded = np.pad(pts, ((window, window), (0, 0), (0, 0)), mode="edge")
-    pts = np.median(np.lib.stride_tricks.sliding_window_view(padded, 2 * window + 1, axis=0), -1)
+    pts = station_median(fill.all_groove_points(), window)
     offset = np.zeros(len(pts)) if plan is None else plan.offset_at(fill.s_mm)
     yz = aim_point(pts, _POINT_INDEX[reference], offset, plan is not None and plan.cap)
     local = np.column_stack([np.zeros(len(yz)), yz[:, 0], yz[:, 1], np.ones(len(yz))])
@@ -201,7 +200,5 @@ def settled(groove: MeasuredGroove, half_window: int = 4) -> MeasuredGroove:
     reject."""
     if len(groove) <= 2:
         return groove
-    pad = ((half_window, half_window), (0, 0), (0, 0))
-    padded = np.pad(groove.points, pad, constant_values=np.nan)
-    windows = np.lib.stride_tricks.sliding_window_view(padded, 2 * half_window + 1, axis=0)
-    return MeasuredGroove(groove.s_mm, np.nanmedian(windows, axis=-1), groove.area_mm2)
+    points = station_median(groove.points, half_window, cut_ends=True)
+    return MeasuredGroove(groove.s_mm, points, groove.area_mm2)
