@@ -13,48 +13,46 @@ spikes and reflection streaks left out, straight pieces by split-and-merge):
   step) and the points no piece took on its line after them (its last step), refitted as one
   line; the two must run within ``max_plate_deg`` of each other. Their mean direction is
   the groove's width axis u (left to right), its normal v points into the groove.
-* **walls**: of the pieces between the plates that go down into the groove at least
-  ``wall_deg`` off the plates and whose line passes within 1 mm of the plate's inner end, the
-  one whose line carries most points, refitted with the pieces on its line and trimmed to the
-  points within two tolerances of it (a root radius's round at its foot left out). A piece
-  more than 3 mm below the corner, and not carrying on a run of wall pieces from it (a wall
-  split into pieces), must stand 75 deg off the plates, be 1 mm long and have no more points
-  outwards of it, deeper than a millimetre below the corner, than on it (a bead's flank or a
-  spike streak pointing at the corner by chance, with the fill's flank outwards of it, is no
-  wall). A wall nearly along the rays (a narrow gap's), or in the
-  shadow of its plate's edge, shows no points: then there is none.
+* **walls**: of the pieces between the plates that go down into the groove at least ``wall_deg``
+  off the plates and whose line passes within 1 mm of the plate's inner end, the one whose line
+  carries most points, refitted with the pieces on its line and trimmed to the points within two
+  tolerances of it (a root radius's round at its foot left out). A piece more than 3 mm below the
+  corner, and not carrying on a run of wall pieces from it (a wall split into pieces), must stand
+  75 deg off the plates, be 1 mm long and have no more points outwards of it, deeper than a
+  millimetre below the corner, than on it (a bead's flank or a spike streak pointing at the corner
+  by chance, with the fill's flank outwards of it, is no wall). A wall nearly along the rays (a
+  narrow gap's), or in the shadow of its plate's edge, shows no points: then there is none.
 * **top corners**: a plate's line meets its wall's line; with no wall seen, the plate's end
   (half a spacing beyond its last point).
-* **fill surface**: the groove's points inside the walls and off their lines (by five times
-  the wall's rms, at least 0.06 mm and at most two tolerances: a bead's flank running down
-  into the notch at the wall stays surface; below where a wall was seen, on its line too;
-  3 mm below, either side), less what a running median over 0.6 mm leaves out and the
-  islands (runs between jumps off the surface carried across them, at an end at a slope of
-  at most 1, and again without the islands found: spike runs, streaks where a dropout took
-  the surface), the largest stretch without a 2 mm break (2.5 mm towards a side with no wall
-  seen: a shadow in a crowned fill).
-* **bottom corners**: where the fill surface rises from its deepest part into the wall (a
-  U's round, bare or partly filled), the wall's line at that part's level (the virtual sharp
-  corner of an empty U). Else a line through the most surface points within 1.5 mm of the
-  surface's end (lines through pairs of points: spike scraps do not move it) crossed with
-  the wall's line, when that lies within 1.5 mm of the surface's outermost point on the line
-  and within 3 mm (or half the wall's seen length) of the wall's points, or within 1 mm of
-  the wall's deepest point and not above it (a bead's toe lost in the notch at the wall);
-  else that point (half a spacing beyond it). A wall hidden in its plate's shadow is the
-  seen one mirrored through its own top corner (bevels are cut alike), when the fill stays
-  inside that line; so is one seen over less than 3 mm and a quarter of the other's seen
-  length, ending more than 3 mm above the fill (a scrap at its top edge says little of its
-  direction). A hidden wall's round is read finer (its rise over 0.2 mm, from the surface's
-  raw end: a bead's toe on the round is all there is of the wall's foot). With a hidden
-  wall, or one seen only far above the fill, the corner no ray lights is its line crossed
-  with the surface's line (over its last 0.6 mm; 1.5 mm under a wall seen far above) where
-  that lies at most 1 mm beyond the surface's outermost point on the line. Else, and with
-  no wall seen on a side (buried, or along the rays), the surface's
-  outermost point on its line over its last 0.6 mm, carried as far as the rays of the
-  points near that line reach (a spike moves a point along its ray: its column still lit
-  the surface). With no surface at all (an empty V without a gap), the walls' intersection.
-  A wall no piece covers (a quantized wall's staircase) is fitted to the points between the
-  plate's last piece and the groove's first.
+* **fill surface**: the groove's points inside the walls and off their lines (by five times the
+  wall's rms, at least 0.06 mm and at most two tolerances: a bead's flank running down into the
+  notch at the wall stays surface; below where a wall was seen, on its line too; 3 mm below, either
+  side), less what a running median over 0.6 mm leaves out and the islands (runs between jumps off
+  the surface carried across them, at an end at a slope of at most 1, and again without the islands
+  found: spike runs, streaks where a dropout took the surface), the largest stretch without a 2 mm
+  break (2.5 mm towards a side with no wall seen: a shadow in a crowned fill).
+* **bottom corners**: where the fill surface rises from its deepest part into the wall (a U's
+  round, bare or partly filled; a bead's toe on it, a notch read at its tip), the wall's line at
+  that part's level (the virtual sharp corner of an empty U). Else a line through the most surface
+  points within 1.5 mm of the surface's end (lines through pairs of points: spike scraps do not
+  move it) crossed with the wall's line, when that lies within 1.5 mm of the surface's outermost
+  point on the line and within 3 mm (or half the wall's seen length) of the wall's points, or
+  within 1 mm of the wall's deepest point and not above it (a bead's toe lost in the notch at the
+  wall); else that point (half a spacing beyond it). A wall hidden in its plate's shadow is the
+  seen one mirrored through its own top corner (bevels are cut alike), when the fill stays inside
+  that line; so is one seen over less than 3 mm and a quarter of the other's seen length, ending
+  more than 3 mm above the fill (a scrap at its top edge says little of its direction), and of two
+  walls 2 deg off each other's mirror the one seen over less than 3/4 of the other's length. A
+  hidden wall's round is read finer (its rise over 0.2 mm, from the surface's raw end: a bead's toe
+  on the round is all there is of the wall's foot). With a hidden wall, or one seen only far above
+  the fill, the corner no ray lights is its line crossed with the surface's line (over its last 0.6
+  mm; 1.5 mm under a wall seen far above) where that lies at most 1 mm beyond the surface's
+  outermost point on the line. Else, and with no wall seen on a side (buried, or along the rays),
+  the surface's outermost point on its line over its last 0.6 mm, carried as far as the rays of the
+  points near that line reach (a spike moves a point along its ray: its column still lit the
+  surface). With no surface at all (an empty V without a gap), the walls' intersection. A wall no
+  piece covers (a quantized wall's staircase) is fitted to the points between the plate's last
+  piece and the groove's first.
 * **bottom points**: the fill surface between the bottom corners at a quarter, half and three
   quarters of the way across (along u), each a local robust line fit of the surface points
   there, in v; where no surface shows there (an open root), on the line joining the corners.
@@ -62,12 +60,13 @@ spikes and reflection streaks left out, straight pieces by split-and-merge):
   between them, below the line joining the top corners (mm^2, ``Feature.area_mm2``), signed:
   metal above that line counts against it (about 0 for a nearly full groove, negative under a
   cap).
-* **crowned and nearly full grooves**: where the fill rises above the line of the plates' ends
-  (a cap, or the last fill layer's crowns), the walls are buried: the top corners are where the
-  plates' lines end, the bottom corners the fill surface's outermost points there, and the
-  bottom points on the fill surface between them, however convex. Such a raised part is taken
-  for a fill when it stands at most ``max_crown_mm`` above the plates' ends and no piece of it
-  a millimetre long stands more than 80 deg off the plates; else it is a block.
+* **crowned and nearly full grooves**: where the fill rises above the line of the plates' ends (a
+  cap, or the last fill layer's crowns), the walls are buried: the top corners are where the
+  plates' lines end, the bottom corners the fill surface's outermost points there, and the bottom
+  points on the fill surface between them, however convex. Such a raised part is taken for a fill
+  when it stands at most ``max_crown_mm`` above the plates' ends and no piece of it a millimetre
+  long stands more than 80 deg off the plates as a step between two levels (a spike streak standing
+  out of a cap the surface runs on across is none); else a block.
 
 The seam point is chosen by ``reference``: ``"centre"`` the middle bottom point, ``"left"`` /
 ``"right"`` that bottom corner (the wall's foot at the fill surface). ``edges_laser`` holds the
@@ -276,7 +275,7 @@ class GrooveExtractor(_Base):
         """Why a part raised between the plates is no crowned fill ("" when it is one): a
         fill's cap stands at most ``max_crown_mm`` above the line of the plates' ends (the
         95th percentile of its points: spikes do not count), and no piece of it a millimetre
-        long stands more than 80 deg off the plates (a block's sides do)."""
+        long stands more than 80 deg off the plates as a step (a block's side: ``a_step``)."""
         why = "not a groove: a raised part stands between the plates"
         if len(inner) < self.min_points or float(np.percentile(-depth, 95)) > self.max_crown_mm:
             return why
