@@ -1,6 +1,7 @@
 """The package tree shows the data flow: one subpackage per stage, imports pointing down the
 pipeline, no import cycle between modules (lazy imports inside functions count, and so do
-imports for annotations only, under ``if TYPE_CHECKING:``), no module over 600 lines.
+imports for annotations only, under ``if TYPE_CHECKING:``);
+no new private name imported across modules (the count only falls).
 
 Every ``import`` and ``from ... import`` statement of every module is read with :mod:`ast`,
 wherever it stands (module level, inside a function, under ``try``, under ``if TYPE_CHECKING:``).
@@ -203,13 +204,39 @@ def test_the_checker_sees_an_import_for_annotations_only(tmp_path: Path) -> None
     assert _imports("seamtrack.y", b, modules, type_only=False) == set()
 
 
-def test_no_module_over_600_lines() -> None:
-    long = {
-        name: n
-        for name, path in _modules().items()
-        if (n := len(path.read_text().splitlines())) > 600
-    }
-    assert long == {}
+#: Private names (``_name``, not a module) that one module imports from another, today. The
+#: 600-line cap this replaces made most of them (issue 40); the count may only fall, to 0.
+PRIVATE_IMPORTS_TODAY = 93
+
+
+def private_imports() -> list[str]:
+    """Each ``from x import _name`` across modules, where ``_name`` is no module of ``x``."""
+    found = []
+    for name, path in _modules().items():
+        if ROOT not in path.parents:  # cad/'s scripts are the users' own
+            continue
+        for node in ast.walk(ast.parse(path.read_text())):
+            if not isinstance(node, ast.ImportFrom):
+                continue
+            if node.level:
+                base = path.parent
+                for _ in range(node.level - 1):
+                    base = base.parent
+                pkg = base.joinpath(*(node.module or "").split("."))
+            elif (node.module or "").startswith("seamtrack"):
+                pkg = ROOT.parent.joinpath(*(node.module or "").split("."))
+            else:
+                continue
+            for alias in node.names:
+                private = alias.name.startswith("_") and not alias.name.startswith("__")
+                module = (pkg / f"{alias.name}.py").exists() or (pkg / alias.name).is_dir()
+                if private and not module:
+                    found.append(f"{name}: {alias.name}")
+    return found
+
+
+def test_private_names_crossing_modules_only_fall() -> None:
+    assert len(private_imports()) <= PRIVATE_IMPORTS_TODAY, private_imports()
 
 
 def test_every_subpackage_is_a_stage() -> None:
