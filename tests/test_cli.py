@@ -192,3 +192,11 @@ def test_user_tracker_from_the_scene(tmp_path) -> None:
     assert res.returncode == 0, res.stderr
     summary = json.loads((out / "summary.json").read_text())
     assert summary["mean_speed_mm_s"] == pytest.approx(2.5, rel=0.02)
+
+
+def test_default_outputs_land_under_runs(tmp_path) -> None:
+    """A command given no --out writes under runs/ (git-ignored), never loose in the folder."""
+    res = run_cli("scan", "paper-verification", "--at", "10", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["runs"]
+    assert (tmp_path / "runs" / "scan-paper-verification-10mm.csv").is_file()

@@ -261,3 +261,21 @@ def test_every_subpackage_is_installed() -> None:
     )
     present = {f"seamtrack.{p.parent.name}" for p in ROOT.glob("*/__init__.py")}
     assert present <= listed
+
+
+def test_every_data_folder_is_declared() -> None:
+    """A folder of data files inside the package (the arms' URDFs) is a package of its own in
+    pyproject.toml, with its files as package data: setuptools otherwise warns "Package would be
+    ignored" on every install, and a wheel might leave the files out."""
+    import tomllib
+
+    setuptools = tomllib.loads((ROOT.parent / "pyproject.toml").read_text())["tool"]["setuptools"]
+    for folder in ROOT.rglob("*"):
+        if not folder.is_dir() or folder.name == "__pycache__":
+            continue
+        files = [p for p in folder.iterdir() if p.is_file() and p.suffix not in (".py", ".pyc")]
+        if files and not (folder / "__init__.py").exists():
+            name = ".".join(("seamtrack", *folder.relative_to(ROOT).parts))
+            assert name in setuptools["packages"], name
+            patterns = setuptools["package-data"][name]
+            assert all(any(p.match(g) for g in patterns) for p in files), (name, files)

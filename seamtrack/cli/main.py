@@ -330,7 +330,7 @@ def cmd_scan(args: argparse.Namespace) -> int:
             fix="give an arc length along the seam in mm",
         )
     T_world_sensor, _ = sensor_pose_at(parts.robot, parts.tool_program, args.at)
-    out = Path(args.out) if args.out else Path(f"scan-{scene.name}-{args.at:g}mm.csv")
+    out = Path(args.out) if args.out else Path("runs") / f"scan-{scene.name}-{args.at:g}mm.csv"
     folder = out.parent if str(out.parent) else Path(".")
     check_writable(folder)
     mesh_mode = scene.config.sensor.mode == "mesh"
@@ -492,7 +492,10 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="S_MM",
         help="arc length along the seam, mm (default 0)",
     )
-    p.add_argument("--out", help="CSV file (a PNG plot is written beside it in mesh mode)")
+    p.add_argument(
+        "--out",
+        help="CSV file (default: runs/scan-<scene>-<S>mm.csv; in mesh mode a PNG plot beside it)",
+    )
 
     seams_command.add_parser(sub)
     serve_command.add_parser(sub)
@@ -510,7 +513,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="S_MM",
         help="arc length along the seam, mm (default 0)",
     )
-    p.add_argument("--out", help="PNG to write (default: render-<scene>-<S>mm.png)")
+    p.add_argument("--out", help="PNG to write (default: runs/render-<scene>-<S>mm.png)")
 
     p = add(
         "view",
@@ -525,7 +528,7 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="S_MM",
         help="torch position along the seam, mm (default: mid-seam)",
     )
-    p.add_argument("--out", help="PNG to write (default: <scene>-view.png)")
+    p.add_argument("--out", help="PNG to write (default: runs/<scene>-view.png)")
 
     p = add(
         "extractors",

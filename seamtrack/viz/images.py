@@ -109,7 +109,7 @@ def render_command(
             field="sensor.mode",
             fix="use a mesh scene (seamtrack init --list), e.g. v-groove-camera",
         )
-    path = Path(out) if out else Path(f"render-{scene.name}-{at_mm:g}mm.png")
+    path = Path(out) if out else Path("runs") / f"render-{scene.name}-{at_mm:g}mm.png"
     folder = path.parent if str(path.parent) else Path(".")
     check_writable(folder)
     parts = build_parts(scene)

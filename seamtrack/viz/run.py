@@ -212,7 +212,7 @@ def view_command(
     at_mm : float, optional
         Torch position along the seam (mm); default mid-seam.
     out : str or Path, optional
-        Default ``<scene name>-view.png`` in the current folder.
+        Default ``runs/<scene name>-view.png``.
     overrides : dict or list of "KEY=VALUE", optional
     interactive : bool, optional
     window_size : (2,) int
@@ -226,7 +226,7 @@ def view_command(
             field="--at",
             fix="give an arc length along the seam in mm",
         )
-    target = Path(out) if out is not None else Path(f"{view.name}-view.png")
+    target = Path(out) if out is not None else Path("runs") / f"{view.name}-view.png"
     path = render_png(view, target, at_mm=at_mm, window_size=window_size)
     wanted = (out is None) if interactive is None else interactive
     if wanted and has_display() and not _pyvista().OFF_SCREEN:

@@ -557,7 +557,7 @@ def show(
     Returns
     -------
     Path or None
-        The PNG written when nothing could be shown (``<scene name>-view.png``), else None.
+        The PNG written when nothing could be shown (``runs/<scene name>-view.png``), else None.
     """
     pv = _pyvista()
     if in_notebook():
@@ -568,4 +568,5 @@ def show(
         scene_plotter(scene, at_mm=at_mm, result=result, off_screen=False, **kwargs).show()
         return None
     view = scene_view(scene, kwargs.pop("overrides", None))
-    return render_png(view, Path(f"{view.name}-view.png"), at_mm=at_mm, result=result, **kwargs)
+    target = Path("runs") / f"{view.name}-view.png"
+    return render_png(view, target, at_mm=at_mm, result=result, **kwargs)
