@@ -14,7 +14,8 @@ from seamtrack.sensing.scan import sense_seam
 from seamtrack.sensing.sensor import preset
 from seamtrack.simulation.assemble import build_parts
 from seamtrack.simulation.loop import run
-from seamtrack.simulation.scene import builtin_scenes, load_scene, scene_text
+from seamtrack.simulation.scene import load_scene, scene_text
+from seamtrack.simulation.templates import builtin_scenes
 
 pytestmark = [pytest.mark.cad, pytest.mark.embree]
 

@@ -134,7 +134,7 @@ def cmd_cache(args: argparse.Namespace) -> int:
 
 
 def cmd_init(args: argparse.Namespace) -> int:
-    from seamtrack.simulation.scene import builtin_scenes, scene_text
+    from seamtrack.simulation.templates import builtin_scenes
 
     scenes = builtin_scenes()
     if args.list:
@@ -142,6 +142,8 @@ def cmd_init(args: argparse.Namespace) -> int:
         for name, description in scenes.items():
             print(f"{name:<{width}}  {description}")
         return 0
+    from seamtrack.simulation.scene import scene_text
+
     name = args.template or "paper-verification"
     text, _ = scene_text(name) if name in scenes else (None, None)
     if text is None:

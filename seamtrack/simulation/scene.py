@@ -30,19 +30,10 @@ from seamtrack.simulation.config import (  # the types live there; imported by n
 )
 from seamtrack.simulation.passes import check_passes
 from seamtrack.simulation.robots import check_robot, is_arm
+from seamtrack.simulation.templates import builtin_scenes
 
 
 # --------------------------------------------------------------------------- loading
-def builtin_scenes() -> dict[str, str]:
-    """Built-in scene names and their one-line descriptions."""
-    out = {}
-    for entry in sorted(resources.files("seamtrack.scenes").iterdir(), key=lambda p: p.name):
-        if entry.name.endswith(".toml"):
-            data = tomllib.loads(entry.read_text())
-            out[entry.name[:-5]] = str(data.get("description", ""))
-    return out
-
-
 def scene_text(name_or_path: str | Path) -> tuple[str, Path | None]:
     """The TOML text of a built-in scene or a file, and the file's folder (None: built-in)."""
     path = Path(name_or_path)
