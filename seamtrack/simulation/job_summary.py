@@ -12,6 +12,7 @@ from numpy.typing import NDArray
 
 from seamtrack.control.planner import PassPlan, fill_order
 from seamtrack.simulation.scene import Scene
+from seamtrack.workpiece.inspection import MIN_THICKNESS_MM, inspect_weld
 
 FloatArray = NDArray[np.float64]
 
@@ -62,12 +63,50 @@ def job_summary(
         "fusion_margin_threshold_mm": threshold,
         "fusion_flagged_stations": len(flagged),
         "fusion_flagged_s_mm": [round(float(s), 2) for s in flagged[:50]],
+        **_inspection(scene, fill, keep, reinf, margin < threshold - 1e-9),
         "max_tracking_error_mm": float(np.nanmax(errors)) if errors else math.nan,
         "arc_time_s": float(sum(r.arc_time_s for r in welded)),
         "job_time_s": float(sum(float(r.result.trace.t_s[-1]) for r in records)),
         "wall_time_s": wall_s,
         "per_pass": [_pass_row(r) for r in records],
     }
+
+
+def plate_thickness_mm(scene: Scene, fill: Any) -> float:
+    """The plates' thickness t for ISO 5817: the workpiece's ``plate_thickness_mm`` parameter,
+    else the groove's depth below the plates' top line (a groove cut into thicker plate judged
+    by its depth: the stricter limits)."""
+    t = scene.config.workpiece.params.get("plate_thickness_mm") if scene.config.workpiece else None
+    if t is not None:
+        return float(t)
+    corners_z = np.asarray(fill.top_corners)[:, :, 1].min(axis=1)
+    return float(np.max(corners_z - np.asarray(fill.base_z).min(axis=1)))
+
+
+def _inspection(
+    scene: Scene,
+    fill: Any,
+    keep: NDArray[np.bool_],
+    reinf: FloatArray,
+    unfused: NDArray[np.bool_],
+) -> dict[str, Any]:
+    """``quality_level`` and ``inspection``: the welded stations judged by ISO 5817 (see
+    :mod:`seamtrack.workpiece.inspection`); the weld's width b is the groove's top width."""
+    t = plate_thickness_mm(scene, fill)
+    s = np.asarray(fill.s_mm)[keep]
+    if t <= MIN_THICKNESS_MM or len(s) < 2:
+        return {"quality_level": None, "inspection": None}
+    corners = np.asarray(fill.top_corners)[keep]
+    weld = inspect_weld(
+        s,
+        thickness_mm=t,
+        width_mm=np.abs(corners[:, 1, 0] - corners[:, 0, 0]),
+        excess_mm=reinf[:, 1],
+        underfill_mm=-reinf[:, 0],
+        unfused=unfused,
+    )
+    out = weld.as_dict()
+    return {"quality_level": out["level"], "inspection": out}
 
 
 def _pass_row(r: Any) -> dict[str, Any]:
