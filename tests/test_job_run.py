@@ -174,3 +174,26 @@ def test_the_job_is_judged_by_iso_5817(short_job) -> None:
     filled = s["inspection"]["incompletely_filled_groove"]
     assert (filled["level"] == "B") == (s["underfilled_stations"] == 0)
     assert s["quality_level"] in ("B", "C", "D", "none")
+
+
+def test_the_job_folder_shows_its_weld(short_job, tmp_path: Path) -> None:
+    """weld.png, inspection.png and fill.png: the cross-sections at the start, middle, end and
+    worst station (worst: where the worst imperfection is), ISO along the seam, the part in 3D."""
+    from seamtrack.simulation.job_summary import inspect_job
+    from seamtrack.viz.fill import weld_stations
+    from seamtrack.viz.job import write_job_pictures
+
+    scene = load_scene("multipass-v-groove", SHORT)
+    written = write_job_pictures(short_job, scene, tmp_path)
+    assert [p.name for p in written] == ["weld.png", "inspection.png", "fill.png"]
+    for path in written:
+        assert path.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    weld = inspect_job(scene, short_job.fill, [r for r in short_job.passes if r.plan])
+    assert weld is not None
+    at = weld_stations(short_job.fill, weld)
+    s = short_job.fill.s_mm
+    assert s[at["start"]] == weld.s_mm[0] and s[at["end"]] == weld.s_mm[-1]
+    assert at["start"] < at["middle"] < at["end"]
+    rank = {"B": 0, "C": 1, "D": 2, "": 3}
+    worst = max(weld.imperfections, key=lambda i: (rank[i.level], i.worst_mm > 0))
+    assert s[at["worst"]] == pytest.approx(worst.worst_s_mm)

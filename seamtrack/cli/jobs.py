@@ -20,6 +20,7 @@ def run_job_command(args: argparse.Namespace, scene: Any, out: Path) -> int:
     """``seamtrack run`` of a scene with ``[passes]``: the multi-pass job."""
     from seamtrack.io.output import write_job
     from seamtrack.simulation.job import run_job
+    from seamtrack.viz.job import write_job_pictures
     from seamtrack.viz.plots import plot_run
 
     exports = (("--weldx", args.weldx), ("--render", args.render), ("--record", args.record))
@@ -31,6 +32,7 @@ def run_job_command(args: argparse.Namespace, scene: Any, out: Path) -> int:
                 fix=f"drop {flag}, or run one pass's scene.toml from the job's folder",
             )
     job = run_job(scene, progress=progress_wanted(args))
+    pictures: list[str] = []
     write_job(
         job,
         out,
@@ -39,13 +41,19 @@ def run_job_command(args: argparse.Namespace, scene: Any, out: Path) -> int:
         extra=None
         if args.no_plot
         else lambda record, folder: plot_run(record.result, folder / "error.png"),
+        finish=None
+        if args.no_plot
+        else lambda folder: pictures.extend(
+            path.name for path in write_job_pictures(job, scene, folder)
+        ),
     )
     if not args.quiet:
         rows = [
             (k, v) for k, v in job.summary.items() if k not in ("per_pass", "fusion_flagged_s_mm")
         ]
         print_table(rows, f"seamtrack run {scene.name} (multi-pass job)")
-        print(f"wrote {out}/job.json, scene.toml and {len(job.passes)} pass folders")
+        drawn = "".join(f", {name}" for name in pictures)
+        print(f"wrote {out}/job.json, scene.toml{drawn} and {len(job.passes)} pass folders")
     return 0
 
 

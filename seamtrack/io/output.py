@@ -196,12 +196,13 @@ def write_job(
     scene_toml: str | None = None,
     trace_period_s: float = 0.01,
     extra: Callable[[Any, Path], object] | None = None,
+    finish: Callable[[Path], object] | None = None,
 ) -> Path:
     """Write a multi-pass job (:class:`seamtrack.simulation.job.JobResult`) into ``out_dir``:
     one folder a pass (``pass_00_scan``, ``pass_01``, ...: a run's summary.json, trace.csv,
     frames.csv and scene.toml, plus what ``extra(record, folder)`` adds), ``job.json`` and the
-    job's scene.toml; all staged and moved into place at the end, so a failed or interrupted
-    job writes nothing."""
+    job's scene.toml, then what ``finish(folder)`` adds (the job's pictures); all staged and
+    moved into place at the end, so a failed or interrupted job writes nothing."""
     with staged(out_dir) as stage:
         for record in job.passes:
             folder = stage / record.name
@@ -216,4 +217,6 @@ def write_job(
         (stage / "job.json").write_text(json.dumps(json_safe(job.summary), indent=2) + "\n")
         if scene_toml is not None:
             (stage / "scene.toml").write_text(scene_toml)
+        if finish is not None:
+            finish(stage)
     return Path(out_dir)

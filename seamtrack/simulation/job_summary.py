@@ -12,7 +12,7 @@ from numpy.typing import NDArray
 
 from seamtrack.control.planner import PassPlan, fill_order
 from seamtrack.simulation.scene import Scene
-from seamtrack.workpiece.inspection import MIN_THICKNESS_MM, inspect_weld
+from seamtrack.workpiece.inspection import MIN_THICKNESS_MM, Inspection, inspect_weld
 
 FloatArray = NDArray[np.float64]
 
@@ -63,7 +63,7 @@ def job_summary(
         "fusion_margin_threshold_mm": threshold,
         "fusion_flagged_stations": len(flagged),
         "fusion_flagged_s_mm": [round(float(s), 2) for s in flagged[:50]],
-        **_inspection(scene, fill, keep, reinf, margin < threshold - 1e-9),
+        **_inspection(scene, fill, welded),
         "max_tracking_error_mm": float(np.nanmax(errors)) if errors else math.nan,
         "arc_time_s": float(sum(r.arc_time_s for r in welded)),
         "job_time_s": float(sum(float(r.result.trace.t_s[-1]) for r in records)),
@@ -83,28 +83,35 @@ def plate_thickness_mm(scene: Scene, fill: Any) -> float:
     return float(np.max(corners_z - np.asarray(fill.base_z).min(axis=1)))
 
 
-def _inspection(
-    scene: Scene,
-    fill: Any,
-    keep: NDArray[np.bool_],
-    reinf: FloatArray,
-    unfused: NDArray[np.bool_],
-) -> dict[str, Any]:
-    """``quality_level`` and ``inspection``: the welded stations judged by ISO 5817 (see
-    :mod:`seamtrack.workpiece.inspection`); the weld's width b is the groove's top width."""
+def inspect_job(scene: Scene, fill: Any, welded: list[Any]) -> Inspection | None:
+    """The welded stations judged by ISO 5817 (:mod:`seamtrack.workpiece.inspection`): b the
+    groove's top width, t :func:`plate_thickness_mm`, a wall bead's toe short of the wall by
+    more than ``passes.fusion_margin_min_mm`` a lack of fusion. None for plate of 3 mm or
+    less (ISO 5817's thin-sheet rows are not implemented) or fewer than two stations."""
+    assert scene.config.passes is not None
+    lo, hi = welded_range(welded, fill)
+    keep = (fill.s_mm >= lo) & (fill.s_mm <= hi)
     t = plate_thickness_mm(scene, fill)
-    s = np.asarray(fill.s_mm)[keep]
-    if t <= MIN_THICKNESS_MM or len(s) < 2:
-        return {"quality_level": None, "inspection": None}
+    if t <= MIN_THICKNESS_MM or np.count_nonzero(keep) < 2:
+        return None
+    reinf = np.asarray(fill.reinforcement_mm())[keep]
+    margin = fusion_margin_mm(fill, welded)[keep]
     corners = np.asarray(fill.top_corners)[keep]
-    weld = inspect_weld(
-        s,
+    return inspect_weld(
+        np.asarray(fill.s_mm)[keep],
         thickness_mm=t,
         width_mm=np.abs(corners[:, 1, 0] - corners[:, 0, 0]),
         excess_mm=reinf[:, 1],
         underfill_mm=-reinf[:, 0],
-        unfused=unfused,
+        unfused=margin < scene.config.passes.fusion_margin_min_mm - 1e-9,
     )
+
+
+def _inspection(scene: Scene, fill: Any, welded: list[Any]) -> dict[str, Any]:
+    """job.json's ``quality_level`` and ``inspection`` (see :func:`inspect_job`)."""
+    weld = inspect_job(scene, fill, welded)
+    if weld is None:
+        return {"quality_level": None, "inspection": None}
     out = weld.as_dict()
     return {"quality_level": out["level"], "inspection": out}
 

@@ -23,6 +23,7 @@ from seamtrack.viz.run import _gif_writer
 from seamtrack.viz.sensor_view import _pyvista
 from seamtrack.viz.views import _off_screen
 from seamtrack.workpiece.fill import FillState
+from seamtrack.workpiece.inspection import LEVELS, Inspection
 
 __all__ = [
     "animate_fill",
@@ -30,7 +31,10 @@ __all__ = [
     "fill_plotter",
     "pass_colors",
     "plot_fill_section",
+    "plot_inspection",
+    "plot_weld_sections",
     "render_fill_png",
+    "weld_stations",
 ]
 
 #: The parent metal's colour in the cross-section.
@@ -181,3 +185,94 @@ def render_fill_png(
     finally:
         plotter.close()
     return out
+
+
+#: Line styles of ISO 5817's levels in the weld's pictures.
+LEVEL_STYLES = {"B": ("tab:green", "--"), "C": ("tab:orange", "--"), "D": ("tab:red", ":")}
+
+
+def weld_stations(state: FillState, inspection: Inspection) -> dict[str, int]:
+    """The stations a weld's cross-sections show: its start, middle and end (of the welded
+    stations the inspection judged) and its worst station (that of the imperfection with the
+    worst level, the excess weld metal on a tie)."""
+    s = np.asarray(state.s_mm)
+    judged = np.searchsorted(s, inspection.s_mm)
+    order = {lv: k for k, lv in enumerate((*LEVELS, ""))}
+    worst = max(inspection.imperfections, key=lambda i: (order[i.level], i.worst_mm > 0))
+    return {
+        "start": int(judged[0]),
+        "middle": int(judged[len(judged) // 2]),
+        "end": int(judged[-1]),
+        "worst": int(np.searchsorted(s, worst.worst_s_mm)),
+    }
+
+
+def _draw_limits(ax: Any, state: FillState, station: int, inspection: Inspection) -> None:
+    """ISO 5817's excess weld metal limits above the plates' top line (B, C, D) and the
+    incompletely-filled-groove limit below it (C), between the groove's top corners."""
+    (y0, z0), (y1, z1) = state.top_corners[station]
+    y = np.array([y0, y1])
+    line = np.array([z0, z1])
+    k = int(np.clip(np.searchsorted(inspection.s_mm, state.s_mm[station]), 0,
+                    len(inspection.s_mm) - 1))  # fmt: skip
+    excess = inspection["excess_weld_metal"].limit_mm
+    for level, (color, style) in LEVEL_STYLES.items():
+        ax.plot(y, line + excess[level][k], color=color, ls=style, lw=1.0,
+                label=f"level {level}: excess weld metal")  # fmt: skip
+    under = inspection["incompletely_filled_groove"].limit_mm["C"][k]
+    ax.plot(y, line - under, color=LEVEL_STYLES["C"][0], ls="-.", lw=1.0,
+            label="level C: deepest short underfill (B: none)")  # fmt: skip
+    ax.plot(y, line, color="0.3", lw=0.8, label="plates' top line")
+
+
+def plot_weld_sections(state: FillState, inspection: Inspection, path: str | Path) -> Path:
+    """PNG of four cross-sections (start, middle, end, worst station), each bead coloured by
+    pass, the 7 groove points and ISO 5817's limits; one legend below them all, clear of the
+    cap beads. Returns the path written."""
+    plt = _pyplot()
+    stations = weld_stations(state, inspection)
+    fig, axes = plt.subplots(2, 2, figsize=(11, 8), layout="constrained")
+    for ax, (name, i) in zip(axes.flat, stations.items(), strict=True):
+        draw_fill_section(ax, state, i, legend=False)
+        _draw_limits(ax, state, i, inspection)
+        (y0, _), (y1, _) = state.top_corners[i]
+        ax.set_xlim(min(y0, y1) - 6.0, max(y0, y1) + 6.0)  # the groove and its toes
+        bottom, top = ax.get_ylim()
+        ax.set_ylim(bottom, max(top, max(line.get_ydata().max() for line in ax.lines) + 0.5))
+        ax.set_title(f"{name}: s = {state.s_mm[i]:.1f} mm")
+    handles, labels = axes.flat[0].get_legend_handles_labels()
+    seen = dict(zip(labels, handles, strict=True))
+    fig.suptitle(f"ISO 5817 level met: {inspection.level or 'none'}")
+    fig.legend(seen.values(), seen.keys(), loc="outside lower center", ncol=min(6, len(seen)),
+               fontsize=7, frameon=False)  # fmt: skip
+    return _save(fig, path)
+
+
+def plot_inspection(inspection: Inspection, path: str | Path) -> Path:
+    """PNG along the seam: each imperfection's measure and ISO 5817's limits for B, C and D;
+    the stations where a level is missed are marked. Returns the path written."""
+    plt = _pyplot()
+    s = inspection.s_mm
+    fig, axes = plt.subplots(len(inspection.imperfections), 1, figsize=(9, 8), sharex=True)
+    for ax, imperfection in zip(axes, inspection.imperfections, strict=True):
+        ax.plot(s, imperfection.value_mm, color="k", lw=1.0, label="measured")
+        for level, (color, style) in LEVEL_STYLES.items():
+            limit = imperfection.limit_mm[level]
+            if np.all(np.isfinite(limit)):
+                ax.plot(s, limit, color=color, ls=style, lw=1.0, label=f"level {level}")
+            bad = np.isnan(limit) & (imperfection.value_mm > 0) | (
+                imperfection.value_mm > np.nan_to_num(limit, nan=np.inf) + 1e-9
+            )
+            if bad.any():
+                ax.plot(s[bad], imperfection.value_mm[bad], "x", color=color, ms=4,
+                        label=f"over level {level}")  # fmt: skip
+        name = imperfection.name.replace("_", " ")
+        if imperfection.name == "undercut":
+            name += " (not modelled: the bead model cuts no groove beside a toe)"
+        ax.set_title(f"{name}: level {imperfection.level or 'none'}", fontsize=9)
+        ax.set_ylabel("mm" if imperfection.name != "lack_of_fusion" else "unfused")
+        ax.legend(loc="center left", bbox_to_anchor=(1.01, 0.5), fontsize=7, frameon=False)
+    axes[-1].set_xlabel("s along the seam (mm)")
+    fig.suptitle(f"ISO 5817 along the seam: level {inspection.level or 'none'} met")
+    fig.tight_layout()
+    return _save(fig, path)
