@@ -15,7 +15,10 @@ Rows:
    the CPU time (waiting: other work on the machine);
 3. ``AsyncVectorEnv, 1 process`` and ``2 processes``: environment steps per second of all
    workers together (what the pipes and pickling cost shows in the first; the second scales it
-   on two cores).
+   on two cores);
+4. ``BatchedVectorEnv``: :class:`seamtrack.gym.vector.BatchedVectorEnv`, 16 environments in
+   one process, then in 2 worker processes of 8 (one round trip a worker a step, observations
+   in shared memory): the goal (issue 41) is twice the single env's steps/s on 2 cores.
 
 The target (issue 26): >= 1,000 steps/s on one core, on a quiet machine; the 1-minute load
 average before each row is written beside it.
@@ -152,6 +155,32 @@ def _vector(processes: int, steps: int) -> dict[str, Any]:
     }
 
 
+def _batched(workers: int, num_envs: int, steps: int) -> dict[str, Any]:
+    from seamtrack.gym.vector import BatchedVectorEnv
+
+    vec = BatchedVectorEnv(num_envs, workers=workers, scene="paper-v-groove", overrides=OVERRIDES)
+    try:
+        vec.reset(seed=0)
+        zeros = np.zeros((num_envs, 2), dtype=np.float32)
+        vec.step(zeros)  # the workers warm
+        load = os.getloadavg()[0]
+        rounds = max(1, steps // num_envs)
+        start = time.perf_counter()
+        for _ in range(rounds):
+            vec.step(zeros)  # an ended episode resets on the next step (autoreset)
+        wall = time.perf_counter() - start
+    finally:
+        vec.close()
+    return {
+        "row": f"BatchedVectorEnv, {num_envs} envs, {workers} process"
+        + ("es" if workers > 1 else ""),
+        "load_average_before": load,
+        "steps": rounds * num_envs,
+        "steps_per_s": rounds * num_envs / wall,
+        "ms_per_step": 1e3 * wall / (rounds * num_envs),
+    }
+
+
 def bench_gym(out_dir: str | Path, quick: bool = False) -> dict[str, Any]:
     """Steps per second of ``seamtrack/Scene-v0`` on 1 and 2 processes, and a step's split.
 
@@ -168,7 +197,8 @@ def bench_gym(out_dir: str | Path, quick: bool = False) -> dict[str, Any]:
 
     steps = 300 if quick else 3000
     first = _single(steps)
-    rows = [first["reference"], first["single"], _vector(1, steps), _vector(2, steps)]
+    rows = [first["reference"], first["single"], _vector(1, steps), _vector(2, steps),
+            _batched(1, 16, steps), _batched(2, 16, steps)]  # fmt: skip
     report = {
         "machine": machine_info(),
         "scene": "paper-v-groove",

@@ -31,6 +31,7 @@ except ImportError as exc:
 
 from seamtrack.gym.env import TORCH_STATE, SeamTrackEnv, split_observation  # noqa: E402
 from seamtrack.gym.policies import ProfilePD  # noqa: E402
+from seamtrack.gym.vector import BatchedVectorEnv  # noqa: E402
 
 #: The environment ids ``import seamtrack.gym`` registers.
 ENV_IDS = ("seamtrack/Scene-v0",)
@@ -39,12 +40,14 @@ if "seamtrack/Scene-v0" not in gymnasium.registry:  # a re-import must not warn
     gymnasium.register(
         id="seamtrack/Scene-v0",
         entry_point="seamtrack.gym.env:SeamTrackEnv",
+        vector_entry_point="seamtrack.gym.vector:BatchedVectorEnv",
         disable_env_checker=False,
     )
 
 __all__ = [
     "ENV_IDS",
     "TORCH_STATE",
+    "BatchedVectorEnv",
     "GymnasiumMissing",
     "ProfilePD",
     "SeamTrackEnv",
