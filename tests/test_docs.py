@@ -31,6 +31,7 @@ RUN = (
     "extractors.md",
     "multipass-geometry.md",
     "gym.md",
+    "heat.md",
 )
 
 
