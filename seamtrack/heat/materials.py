@@ -29,6 +29,8 @@ class ThermalMaterial:
     density_kg_m3: float
     specific_heat_j_per_kg_k: float
     source: str
+    expansion_per_k: float = 0.0  # linear thermal expansion, 1/K (the distortion models)
+    expansion_source: str = ""
 
     @property
     def volumetric_heat_j_per_mm3_k(self) -> float:
@@ -37,17 +39,21 @@ class ThermalMaterial:
 
 
 #: The built-in materials by name. Conductivity k and diffusivity alpha = k / (rho c) as the
-#: table gives them (k 60.5, 14.9, 237 W/(m K); alpha 17.7, 3.95, 97.1 x 1e-6 m^2/s).
+#: table gives them (k 60.5, 14.9, 237 W/(m K); alpha 17.7, 3.95, 97.1 x 1e-6 m^2/s); the
+#: linear expansion from the handbooks named in ``expansion_source``.
 THERMAL_MATERIALS: dict[str, ThermalMaterial] = {
     "carbon_steel": ThermalMaterial(
         "carbon_steel", 0.0605, 17.7, 7854.0, 434.0,
         INCROPERA + ": plain carbon steel (Mn <= 1 %, Si <= 0.1 %)",
+        11.7e-6, "ASM Handbook Vol. 1 (1990), AISI 1020, mean over 20-100 degC",
     ),
     "stainless_steel": ThermalMaterial(
-        "stainless_steel", 0.0149, 3.95, 7900.0, 477.0, INCROPERA + ": stainless steel AISI 304"
+        "stainless_steel", 0.0149, 3.95, 7900.0, 477.0, INCROPERA + ": stainless steel AISI 304",
+        17.3e-6, "ASM Handbook Vol. 1 (1990), AISI 304, mean over 0-100 degC",
     ),
     "aluminium": ThermalMaterial(
-        "aluminium", 0.237, 97.1, 2702.0, 903.0, INCROPERA + ": aluminium, pure"
+        "aluminium", 0.237, 97.1, 2702.0, 903.0, INCROPERA + ": aluminium, pure",
+        23.1e-6, "CRC Handbook of Chemistry and Physics, aluminium at 25 degC",
     ),
 }  # fmt: skip
 
