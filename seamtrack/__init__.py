@@ -35,6 +35,8 @@ _EXPORTS = {
     "load_workpiece": "seamtrack.workpiece.loader",
     "find_seams": "seamtrack.workpiece.weldment",
     "SeamtrackError": "seamtrack.errors",
+    "rosenthal_temperature": "seamtrack.heat.rosenthal",
+    "image_source_temperature": "seamtrack.heat.rosenthal",
 }
 
 __all__ = sorted(_EXPORTS)

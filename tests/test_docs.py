@@ -32,6 +32,7 @@ RUN = (
     "multipass-geometry.md",
     "gym.md",
     "inspection.md",
+    "heat.md",
 )
 
 

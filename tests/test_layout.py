@@ -23,6 +23,7 @@ ROOT = Path(seamtrack.__file__).parent
 STAGES = [
     ("base", {"seamtrack.errors", "seamtrack.constants", "seamtrack._version", "seamtrack.params"}),
     ("geometry", {"seamtrack.geometry"}),
+    ("heat", {"seamtrack.heat"}),  # the arc's temperature field and the distortion it drives
     ("workpiece", {"seamtrack.workpiece", "seamtrack.cad"}),
     ("sensing", {"seamtrack.sensing"}),
     ("features", {"seamtrack.features"}),

@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from seamtrack._version import __version__
+from seamtrack.cli import heat as heat_command
 from seamtrack.cli import jobs
 from seamtrack.cli import seams as seams_command
 from seamtrack.cli import serve as serve_command
@@ -501,6 +502,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     seams_command.add_parser(sub)
     serve_command.add_parser(sub)
+    heat_command.add_parser(sub)
 
     p = add(
         "render",
