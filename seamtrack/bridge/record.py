@@ -35,6 +35,7 @@ from __future__ import annotations
 import dataclasses
 import heapq
 import os
+import struct
 import tempfile
 from collections.abc import Iterator
 from pathlib import Path
@@ -184,20 +185,6 @@ class McapOut:
     def metadata(self, name: str, data: dict[str, str]) -> None:
         self._writer.add_metadata(name, data)
 
-    def finish(self) -> Path:
-        """Finish the file under its temporary name (read it back with :meth:`copy_into`)."""
-        try:
-            self._writer.finish()
-            self._file.close()
-        except OSError as exc:
-            self.discard()
-            raise OutputError(
-                f"cannot write {str(self.target)!r}: {exc.strerror or exc}",
-                field="--record",
-                fix="choose a file you can write to",
-            ) from None
-        return self._tmp
-
     def close(self) -> Path:
         """Finish the file and move it to its name."""
         try:
@@ -249,33 +236,56 @@ def at_epoch(message: Any, epoch_ns: int) -> Any:
     return dataclasses.replace(message, **changes)
 
 
-def _merged(frames_file: Path, extra: list[tuple[int, str, str, bytes]]) -> Iterator[Any]:
-    """The messages of the finished MCAP ``frames_file`` (in file order, which is time order)
-    and ``extra`` ((log time, topic, type, CDR bytes) in time order), merged in time order;
-    on equal times the file's first. Yields (log time, topic, type, data, latched)."""
-    from mcap.reader import make_reader
+#: A spooled message's head: log time (ns), topic index, data length.
+_HEAD = struct.Struct("<qHI")
 
-    with frames_file.open("rb") as f:
-        reader = make_reader(f)
-        recorded = (
-            (m.log_time, c.topic, s.name if s is not None else "", m.data,
-             "durability: 1" in c.metadata.get("offered_qos_profiles", ""))
-            for s, c, m in reader.iter_messages(log_time_order=False)
-        )  # fmt: skip
-        added = ((t, topic, kind, data, False) for t, topic, kind, data in extra)
-        yield from heapq.merge(recorded, added, key=lambda row: row[0])
+#: ``std_msgs/Float64`` in little-endian CDR: the encapsulation header, then the double.
+_FLOAT64_CDR = b"\x00\x01\x00\x00"
+
+
+class _Spool:
+    """Encoded messages in the order they come, in an anonymous temporary file (gone with the
+    process, whatever ends it): the frames of a run, before the error series are known."""
+
+    def __init__(self, folder: Path) -> None:
+        self._file = tempfile.TemporaryFile(dir=folder)
+        self.topics: list[tuple[str, str, bool]] = []  # (topic, type, latched) by index
+        self._index: dict[str, int] = {}
+
+    def add(self, topic: str, typename: str, data: bytes, log_time_ns: int, latched: bool) -> None:
+        k = self._index.get(topic)
+        if k is None:
+            k = self._index[topic] = len(self.topics)
+            self.topics.append((topic, typename, latched))
+        self._file.write(_HEAD.pack(log_time_ns, k, len(data)))
+        self._file.write(data)
+
+    def __iter__(self) -> Iterator[tuple[int, str, str, bytes, bool]]:
+        """(log time, topic, type, data, latched) in the order added."""
+        f = self._file
+        f.flush()
+        f.seek(0)
+        while head := f.read(_HEAD.size):
+            t_ns, k, n = _HEAD.unpack(head)
+            topic, typename, latched = self.topics[k]
+            yield t_ns, topic, typename, f.read(n), latched
+
+    def close(self) -> None:
+        self._file.close()
 
 
 class Recorder:
     """An :func:`~seamtrack.bridge.frames.observe` callback that records every frame of a run
     (module docstring); :meth:`finish` adds the error series in time order and moves the file
-    into place. ``epoch_ns``: the recording's clock at the run's t = 0 (default 1970)."""
+    into place. ``epoch_ns``: the recording's clock at the run's t = 0 (default 1970).
+
+    The frames are spooled (CDR bytes, :class:`_Spool`) while the run goes, and written into
+    the MCAP file once, merged with the error series, when it ends."""
 
     def __init__(self, path: str | Path, parts: Any, scene: Any = None, epoch_ns: int = 0) -> None:
-        self.path = Path(path)
         self.epoch_ns = int(epoch_ns)
-        # the frames, uncompressed (read once more by finish), then the file in time order
-        self.out = McapOut(path, compression="none", epoch_ns=self.epoch_ns)
+        self.out = McapOut(path, epoch_ns=self.epoch_ns)
+        self._spool = _Spool(self.out.target.parent if str(self.out.target.parent) else Path("."))
         self.robot = parts.robot
         self.seam, self.sensor = parts.seam, parts.sensor
         self.frames = 0
@@ -285,9 +295,14 @@ class Recorder:
             meta["sensor_mode"] = scene.config.sensor.mode
         if self.epoch_ns:
             meta["epoch_ns"] = str(self.epoch_ns)
-        self.meta = meta
+        self.out.metadata("seamtrack", meta)
         topic = msgs.TOPICS["seam"].name
-        self.out.write(topic, msgs.seam_marker(parts.seam.points), 0.0, latched=True)
+        self._add(topic, msgs.seam_marker(parts.seam.points), 0.0, latched=True)
+
+    def _add(self, topic: str, message: Any, t_s: float, latched: bool = False) -> None:
+        message = at_epoch(message, self.epoch_ns)
+        ns = msgs.stamp_ns(t_s) + self.epoch_ns
+        self._spool.add(topic, message.__msgtype__, msgs.encode(message), ns, latched)
 
     def __call__(self, frame: Frame) -> None:
         t = frame.t_s
@@ -297,13 +312,13 @@ class Recorder:
         for topic, message in msgs.frame_messages(
             t, frame.profile, frame.feature, chain, truth, frame.image
         ):
-            self.out.write(topic, message, t)
+            self._add(topic, message, t)
         self.frames += 1
 
     def finish(self, result: Any = None, trace_period_s: float = 0.01) -> Path:
-        """Merge the error series of ``result`` (none after a ``KeyboardInterrupt``) with the
-        frames, in time order, into the file, and move it into place."""
-        extra: list[tuple[int, str, str, bytes]] = []
+        """Write the frames, merged in time order with the error series of ``result`` (none
+        after a ``KeyboardInterrupt``), and move the file into place."""
+        extra: list[tuple[int, str, str, bytes, bool]] = []
         if result is not None:
             tr = result.trace
             idx = tr.decimated(trace_period_s)
@@ -317,21 +332,22 @@ class Recorder:
                 ns = msgs.stamp_ns(t) + self.epoch_ns
                 for key, values in series:
                     value = float(values[i]) / msgs.MM_PER_M
-                    if np.isfinite(value):
-                        data = msgs.encode(msgs.float64(value))
-                        extra.append((ns, msgs.TOPICS[key].name, kind, data))
-        frames_file = self.out.finish()
-        final = McapOut(self.path, epoch_ns=self.epoch_ns)
+                    if np.isfinite(value):  # the CDR of std_msgs/Float64, as encode() makes it
+                        data = _FLOAT64_CDR + struct.pack("<d", value)
+                        extra.append((ns, msgs.TOPICS[key].name, kind, data, False))
         try:
-            final.metadata("seamtrack", self.meta)
-            for t_ns, topic, kind, data, latched in _merged(frames_file, extra):
-                final.write_encoded(topic, kind, data, t_ns, latched)
-            self.out.discard()
-            return final.close()
+            # frames first at equal times (a stable merge of two time-ordered streams)
+            for t_ns, topic, kind, data, latched in heapq.merge(
+                self._spool, extra, key=lambda row: row[0]
+            ):
+                self.out.write_encoded(topic, kind, data, t_ns, latched)
+            return self.out.close()
         except BaseException:
-            final.discard()
             self.out.discard()
             raise
+        finally:
+            self._spool.close()
 
     def discard(self) -> None:
+        self._spool.close()
         self.out.discard()

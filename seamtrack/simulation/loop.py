@@ -333,10 +333,12 @@ def run(
                 tracker,
             )
             if why == REFUSED:  # what the reference path would refuse, refused the same way
-                tx, ty, tz, speed, fx, fy, fz, stop = ticks.refused.tolist()
+                tx, ty, tz, speed, fx, fy, fz, at_target = ticks.refused.tolist()
                 ff = np.array((fx, fy, fz))
                 _checked(
-                    Command(np.array((tx, ty, tz)), speed, ff, stop > 0), name, (tick + n) * dt
+                    Command(np.array((tx, ty, tz)), speed, ff, at_target > 0),
+                    name,
+                    (tick + n) * dt,
                 )
             if why == LIMIT:
                 ending.end("limit_violation")
