@@ -17,8 +17,8 @@ $(STAMP): pyproject.toml
 MESH_DEMO := paper-v-groove --set workpiece.params.seam_length_mm=60
 
 demo: $(STAMP)
-	$(BIN)/seamtrack run --out runs/demo
-	$(BIN)/seamtrack run $(MESH_DEMO) --out runs/demo-mesh
+	$(BIN)/seamtrack run --out runs/demo --force
+	$(BIN)/seamtrack run $(MESH_DEMO) --out runs/demo-mesh --force
 	$(BIN)/seamtrack scan $(MESH_DEMO) --at 30 --out runs/demo-mesh/stripe.csv
 	@echo "pictures: runs/demo/error.png (seam mode), runs/demo-mesh/error.png (mesh mode),"
 	@echo "          runs/demo-mesh/stripe.png (the laser stripe on the CAD V-groove at 30 mm)"

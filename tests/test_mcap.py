@@ -318,3 +318,73 @@ def test_importer_refuses_more_points_than_memory_allows(
     with pytest.raises(SeamtrackError, match="more than 1,536 profile points") as info:
         read_scans(tmp / "run.mcap")
     assert info.value.field == "--real"
+
+
+def test_messages_are_in_time_order_in_the_file(recorded) -> None:
+    """Issue 43 item 6: a reader in file order (not sorting by log time) never goes back in
+    time, and it meets the error series among the frames, not after them; every channel has
+    the QoS profile ``ros2 bag record`` writes (reliable; latched only the seam marker)."""
+    tmp, topics, _, _, _ = recorded
+    times, order = [], []
+    with (tmp / "run.mcap").open("rb") as fh:
+        reader = make_reader(fh)
+        for _, channel, message in reader.iter_messages(log_time_order=False):
+            times.append(message.log_time)
+            order.append(channel.topic)
+        channels = list(reader.get_summary().channels.values())
+    assert np.all(np.diff(times) >= 0)
+    first_error = order.index("/seamtrack/error")
+    assert first_error < order.index("/clock") + 10  # with the first frames, not at the end
+    assert len(order) == sum(len(v) for v in topics.values())
+    for channel in channels:
+        qos = channel.metadata["offered_qos_profiles"]
+        assert "reliability: 1" in qos, channel.topic
+        durability = 1 if channel.topic == "/seamtrack/seam" else 2
+        assert f"durability: {durability}\n" in qos, channel.topic
+
+
+def test_a_recording_starts_at_the_given_epoch(recorded, tmp_path: Path) -> None:
+    """``--record-epoch``: the same messages, every log time and stamp moved by the epoch
+    (whole nanoseconds: no float rounding of 1.7e9 s), the payloads otherwise unchanged."""
+    _, topics, _, _, _ = recorded
+    epoch_s = "1767225600.000000123"
+    epoch_ns = 1767225600_000000123
+    sets = [a for kv in SHORT for a in ("--set", kv)]
+    record = ["--record", str(tmp_path / "at.mcap"), "--record-epoch", epoch_s]
+    code = main(["run", "paper-v-groove", *sets, "--out", str(tmp_path / "run"), "--no-plot",
+                 "-q", *record])  # fmt: skip
+    assert code == 0
+    moved = _read(tmp_path / "at.mcap")
+    assert moved.keys() == topics.keys()
+
+    def stamp_ns(msg) -> int:
+        return msg.sec * 1_000_000_000 + msg.nanosec
+
+    for topic, rows in topics.items():
+        assert [ns + epoch_ns for ns, _ in rows] == [ns for ns, _ in moved[topic]], topic
+    for (ns, clock), (ns2, clock2) in zip(topics["/clock"], moved["/clock"], strict=True):
+        assert stamp_ns(clock.clock) == ns and stamp_ns(clock2.clock) == ns2
+    for (_, tf), (_, tf2) in zip(topics["/tf"], moved["/tf"], strict=True):
+        for a, b in zip(tf.transforms, tf2.transforms, strict=True):
+            assert stamp_ns(b.header.stamp) - stamp_ns(a.header.stamp) == epoch_ns
+            assert a.transform.translation.x == b.transform.translation.x
+    for (_, a), (_, b) in zip(topics["/seamtrack/profile"], moved["/seamtrack/profile"],
+                              strict=True):  # fmt: skip
+        assert stamp_ns(b.header.stamp) - stamp_ns(a.header.stamp) == epoch_ns
+        assert bytes(a.data) == bytes(b.data)
+
+
+def test_a_recording_is_never_written_over_without_force(recorded, tmp_path: Path) -> None:
+    """An earlier recording is replaced only with --force (and then whole: it decodes as the
+    new run's); a file that is not MCAP never (catalogue: 'record onto ...')."""
+    tmp, topics, _, _, _ = recorded
+    sets = [a for kv in SHORT for a in ("--set", kv)]
+    target = tmp_path / "run.mcap"
+    target.write_bytes((tmp / "run.mcap").read_bytes()[:-100])  # an earlier, damaged one
+    args = ["run", "paper-v-groove", *sets, "--no-plot", "-q", "--record", str(target)]
+    assert main([*args, "--out", str(tmp_path / "a")]) == 2
+    assert not (tmp_path / "a").exists()
+    assert main([*args, "--out", str(tmp_path / "b"), "--force"]) == 0
+    again = _read(target)
+    assert {k: len(v) for k, v in again.items()} == {k: len(v) for k, v in topics.items()}
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".partial-")]

@@ -14,6 +14,7 @@ from seamtrack.bench import (
     failure_inputs_camera,
     failure_inputs_heat,
     failure_inputs_multipass,
+    failure_inputs_outputs,
     failure_inputs_parts,
     failure_inputs_ros,
 )
@@ -512,6 +513,7 @@ CATALOGUE: tuple[Entry, ...] = (
     *failure_inputs_ros.ENTRIES,
     *failure_inputs_multipass.ENTRIES,
     *failure_inputs_heat.ENTRIES,
+    *failure_inputs_outputs.ENTRIES,
 )
 
 _AREAS = (
@@ -522,6 +524,7 @@ _AREAS = (
     failure_inputs_ros,
     failure_inputs_multipass,
     failure_inputs_heat,
+    failure_inputs_outputs,
 )
 
 

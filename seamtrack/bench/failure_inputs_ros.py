@@ -12,6 +12,7 @@ from seamtrack.bench.failure_kit import SHORT, Entry, _run
 #: Files written into the workspace (name -> bytes).
 FILES: dict[str, bytes] = {
     "garbage.mcap": b"\x89MCAP0\r\nthis is not an MCAP file\n",
+    "notes.mcap": b"a user's notes, named .mcap by mistake\n",
 }
 
 
@@ -71,6 +72,29 @@ ENTRIES: tuple[Entry, ...] = (
     Entry("record to a .txt name", _run(*SHORT, "--record", "run.txt"), field="--record"),
     Entry("record onto a folder", _run(*SHORT, "--record", "a_folder.mcap"), field="--record"),
     Entry("record under a file", _run(*SHORT, "--record", "a_file/run.mcap"), field="--record"),
+    Entry(
+        "record onto an earlier recording",
+        _run(*SHORT, "--record", "one_cloud.mcap"),
+        field="--record",
+    ),
+    Entry(
+        "record with --force onto a file that is not MCAP",
+        _run(*SHORT, "--record", "notes.mcap", "--force"),
+        field="--record",
+    ),
+    Entry(
+        "record epoch not a number",
+        _run(*SHORT, "--record", "new.mcap", "--record-epoch", "yesterday"),
+        field="--record-epoch",
+    ),
+    Entry(
+        "record epoch past 2038",
+        _run(*SHORT, "--record", "new.mcap", "--record-epoch", "3e9"),
+        field="--record-epoch",
+    ),
+    Entry(
+        "record epoch without --record", _run(*SHORT, "--record-epoch", "0"), field="--record-epoch"
+    ),
     Entry("bench a recording that is not MCAP", _bench("garbage.mcap"), field="--real"),
     Entry("bench a recording without profiles", _bench("clock_only.mcap"), field="--real"),
     Entry("bench a recording of two profile topics", _bench("two_clouds.mcap"), field="--real"),

@@ -36,6 +36,7 @@ from numpy.typing import NDArray
 
 from seamtrack.bridge import messages as msgs
 from seamtrack.errors import SeamtrackError
+from seamtrack.io.output import staged
 from seamtrack.sensing.profiles import Profile
 
 FloatArray = NDArray[np.float64]
@@ -230,13 +231,21 @@ def _profile(
         raise _error(str(exc), path, fix, field_name) from None
 
 
-def write_real_set(scans: Scans, folder: str | Path, joint: str | None = None) -> Path:
+def write_real_set(
+    scans: Scans, folder: str | Path, joint: str | None = None, replace: bool = False
+) -> Path:
     """Write ``scans`` in the extractors bench's real-data layout into ``folder`` (created):
     ``set.json`` (``joint``, default the scans' or ``"none"``; the source and topics as
     metadata), ``profiles.npz`` (``y_mm``, ``z_mm``: (n, m), NaN-padded where profiles are
-    shorter, NaN at invalid points) and, with labels, ``labels.csv``."""
-    out = Path(folder)
-    out.mkdir(parents=True, exist_ok=True)
+    shorter, NaN at invalid points) and, with labels, ``labels.csv``. Staged and moved in
+    whole; ``replace``: what ``folder`` held is removed first
+    (:func:`seamtrack.io.output.check_fresh`)."""
+    with staged(folder, replace) as stage:
+        _write_set(scans, stage, joint)
+    return Path(folder)
+
+
+def _write_set(scans: Scans, out: Path, joint: str | None) -> None:
     width = max(len(p) for p in scans.profiles)
     y = np.full((len(scans.profiles), width), np.nan)
     z = np.full_like(y, np.nan)
@@ -251,4 +260,3 @@ def write_real_set(scans: Scans, folder: str | Path, joint: str | None = None) -
     if scans.labels is not None and kind != "none":
         rows = [f"{i},{a!r},{b!r}" for i, (a, b) in enumerate(scans.labels.tolist())]
         (out / "labels.csv").write_text("index,y_mm,z_mm\n" + "\n".join(rows) + "\n")
-    return out

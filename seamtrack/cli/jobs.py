@@ -16,8 +16,13 @@ def progress_wanted(args: argparse.Namespace) -> bool:
     return not getattr(args, "quiet", False) and sys.stderr.isatty()
 
 
-def run_job_command(args: argparse.Namespace, scene: Any, out: Path) -> int:
-    """``seamtrack run`` of a scene with ``[passes]``: the multi-pass job."""
+def run_job_command(
+    args: argparse.Namespace, scene: Any, out: Path, stop: Any = None, replace: bool = False
+) -> int:
+    """``seamtrack run`` of a scene with ``[passes]``: the multi-pass job (``stop``: a
+    signal's request; the job writes its passes up to the stop; ``replace``: ``out`` holds an
+    earlier output that ``--force`` replaces whole)."""
+    from seamtrack.cli.signals import exit_code
     from seamtrack.io.output import write_job
     from seamtrack.simulation.job import run_job
     from seamtrack.viz.job import write_job_pictures
@@ -31,8 +36,9 @@ def run_job_command(args: argparse.Namespace, scene: Any, out: Path) -> int:
                 field=flag,
                 fix=f"drop {flag}, or run one pass's scene.toml from the job's folder",
             )
-    job = run_job(scene, progress=progress_wanted(args))
+    job = run_job(scene, progress=progress_wanted(args), stop=stop)
     pictures: list[str] = []
+    stopped = stop is not None and stop.requested  # then the job's pictures are not drawn
     write_job(
         job,
         out,
@@ -42,11 +48,20 @@ def run_job_command(args: argparse.Namespace, scene: Any, out: Path) -> int:
         if args.no_plot
         else lambda record, folder: plot_run(record.result, folder / "error.png"),
         finish=None
-        if args.no_plot
+        if args.no_plot or stopped
         else lambda folder: pictures.extend(
             path.name for path in write_job_pictures(job, scene, folder)
         ),
+        replace=replace,
     )
+    if stop is not None and stop.requested:  # one line, whatever --quiet says
+        print(
+            f"seamtrack: {stop.reason}; the job stopped in {job.passes[-1].name} (status "
+            f"{job.status}); wrote {out}/job.json, scene.toml and {len(job.passes)} pass "
+            "folders up to the stop",
+            file=sys.stderr,
+        )
+        return exit_code(stop)
     if not args.quiet:
         rows = [
             (k, v) for k, v in job.summary.items() if k not in ("per_pass", "fusion_flagged_s_mm")

@@ -22,6 +22,7 @@ from seamtrack.cli.recording import (
     EXTRACTORS_ACTIONS,
     add_record_argument,
     add_recording_arguments,
+    record_epoch_ns,
 )
 from seamtrack.cli.tables import print_table
 from seamtrack.errors import OutputError, PluginRuntimeError, SceneError, SeamtrackError
@@ -40,7 +41,15 @@ _progress_wanted = jobs.progress_wanted
 
 # --------------------------------------------------------------------------- commands
 def cmd_run(args: argparse.Namespace) -> int:
-    from seamtrack.io.output import check_writable, write_run
+    from seamtrack.cli.signals import stop_on_signals
+
+    with stop_on_signals() as stop:  # SIGINT, SIGTERM: stop between frames (cli/signals.py)
+        return _run(args, stop)
+
+
+def _run(args: argparse.Namespace, stop: Any) -> int:
+    from seamtrack.cli.signals import exit_code
+    from seamtrack.io.output import check_fresh, write_run
     from seamtrack.simulation.assemble import build_parts
     from seamtrack.simulation.loop import run
     from seamtrack.simulation.scene import load_scene
@@ -48,9 +57,12 @@ def cmd_run(args: argparse.Namespace) -> int:
 
     scene = load_scene(args.scene, _overrides(args))
     out = Path(args.out) if args.out else Path("runs") / scene.name
-    check_writable(out)  # fail before the run, not after it (and create nothing yet)
+    # fail before the run, not after it (and create nothing yet); never mix two runs. The
+    # default runs/<scene> is seamtrack's own: an earlier run there is replaced whole.
+    replace = check_fresh(out, args.force or not args.out)
+    epoch_ns = record_epoch_ns(args.record_epoch, args.record)
     if scene.config.passes is not None:
-        return jobs.run_job_command(args, scene, out)
+        return jobs.run_job_command(args, scene, out, stop, replace)
     if args.weldx:
         from seamtrack.io.weldx_file import check_weldx_target, write_weldx
 
@@ -58,21 +70,36 @@ def cmd_run(args: argparse.Namespace) -> int:
     if args.record:  # the ros extra, imported only for a recording
         from seamtrack.cli.recording import check_record, recorded_run
 
-        check_record(args.record)
+        check_record(args.record, args.force)
     parts = build_parts(scene)
+    if stop.requested:  # before the loop began: nothing was simulated, nothing is written
+        print(f"seamtrack: {stop.reason} before the run began; nothing written", file=sys.stderr)
+        return exit_code(stop)
     if args.record:
-        result = recorded_run(args.record, scene, parts, _progress_wanted(args))
+        result = recorded_run(args.record, scene, parts, _progress_wanted(args), stop, epoch_ns)
     else:
-        result = run(parts, progress=_progress_wanted(args))
+        result = run(parts, progress=_progress_wanted(args), stop=stop)
     write_run(
         result,
         out,
         scene.to_toml(),
         scene.config.simulation.trace_period_s,
         extra=None if args.no_plot else lambda stage: plot_run(result, stage / "error.png"),
+        replace=replace,
     )
     if args.weldx:
         write_weldx(result, scene, parts, args.weldx, scene.config.simulation.trace_period_s)
+    if stop.requested:  # one line, whatever --quiet says; no render of a stopped run
+        when = f"stopped at t = {result.summary['sim_time_s']:.2f} s"
+        print(
+            f"seamtrack: {stop.reason}; "
+            + (when if result.status == "interrupted" else "after the run ended")
+            + f" (status {result.status}); wrote {out}"
+            + (f" and {args.record}" if args.record else "")
+            + (f" and {args.weldx}" if args.weldx else ""),
+            file=sys.stderr,
+        )
+        return exit_code(stop)
     if not args.quiet:
         print_table(list(result.summary.items()), f"seamtrack run {scene.name}")
         print(
@@ -433,6 +460,11 @@ def build_parser() -> argparse.ArgumentParser:
         help="built-in scene name or .toml file (default: paper-verification)",
     )
     p.add_argument("--out", help="output folder (default: runs/<scene name>)")
+    p.add_argument(
+        "--force",
+        action="store_true",
+        help="replace an earlier run's folder (--out) whole, and an earlier --record file",
+    )
     p.add_argument("--no-plot", action="store_true", help="skip error.png")
     p.add_argument("--weldx", metavar="FILE", help="also write the run as a weldx file (.wx)")
     add_record_argument(p)
@@ -554,6 +586,9 @@ def build_parser() -> argparse.ArgumentParser:
         "labels.csv) or a folder of them, or a recording (MCAP, ROS bag); docs/extractors.md",
     )
     add_recording_arguments(p)
+    p.add_argument(
+        "--force", action="store_true", help="import: replace a set imported before into --out"
+    )
     p.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)
 
     add_dataset_parser(add)

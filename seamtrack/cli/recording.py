@@ -5,7 +5,9 @@ imported only when one of these is asked for."""
 from __future__ import annotations
 
 import argparse
+import decimal
 import sys
+import time
 from pathlib import Path
 from typing import Any
 
@@ -21,6 +23,38 @@ def add_record_argument(p: argparse.ArgumentParser) -> None:
         help="also record every frame as ROS 2 messages in an MCAP file (Foxglove opens it; "
         "needs pip install 'seamtrack[ros]')",
     )
+    p.add_argument(
+        "--record-epoch",
+        metavar="SECONDS",
+        help="the recording's clock at the run's start: Unix time in seconds, or 'now' "
+        "(default 0, 1970)",
+    )
+
+
+def record_epoch_ns(text: str | None, record: str | None) -> int:
+    """``--record-epoch`` as integer nanoseconds (0 when not given), or a one-line error."""
+    if text is None:
+        return 0
+    if not record:
+        raise SeamtrackError(
+            "--record-epoch without --record", field="--record-epoch",
+            fix="add --record FILE.mcap, or drop --record-epoch",
+        )  # fmt: skip
+    if text.strip().lower() == "now":
+        return time.time_ns()
+    from seamtrack.bridge.record import MAX_EPOCH_S
+
+    try:
+        value = decimal.Decimal(text.strip())
+    except decimal.InvalidOperation:
+        value = decimal.Decimal("NaN")
+    if not value.is_finite() or not 0 <= value <= MAX_EPOCH_S:
+        raise SeamtrackError(
+            f"{text!r} is not a start time", field="--record-epoch",
+            fix=f"give Unix seconds from 0 to {MAX_EPOCH_S} (e.g. 1767225600 for "
+            "2026-01-01), or 'now'",
+        )  # fmt: skip
+    return int(value * 1_000_000_000)
 
 
 def add_recording_arguments(p: argparse.ArgumentParser) -> None:
@@ -38,26 +72,30 @@ def add_recording_arguments(p: argparse.ArgumentParser) -> None:
     )
 
 
-def check_record(path: str) -> None:
-    """Refuse, before the run, a missing extra or a bad target (nothing is written)."""
+def check_record(path: str, force: bool = False) -> None:
+    """Refuse, before the run, a missing extra or a bad target (nothing is written): an
+    existing file too, unless ``force`` and it is an MCAP file (never another kind of file)."""
     from seamtrack.bridge.extra import require_ros
 
     require_ros("--record")
     from seamtrack.bridge.record import check_record_target
 
-    check_record_target(path)
+    check_record_target(path, force=force)
 
 
-def recorded_run(path: str, scene: Any, parts: Any, progress: bool) -> Any:
+def recorded_run(
+    path: str, scene: Any, parts: Any, progress: bool, stop: Any = None, epoch_ns: int = 0
+) -> Any:
     """Run ``parts`` recording every frame into ``path`` (an MCAP file): whole when the run
-    ends (any status), up to the stop on Ctrl-C, nothing when the run fails."""
+    ends (any status, ``interrupted`` by ``stop`` too: up to the stop, with its error series),
+    without the error series on a ``KeyboardInterrupt``, nothing when the run fails."""
     from seamtrack.bridge.frames import observe
     from seamtrack.bridge.record import Recorder
     from seamtrack.simulation.loop import run
 
-    recorder = Recorder(path, parts, scene)
+    recorder = Recorder(path, parts, scene, epoch_ns=epoch_ns)
     try:
-        result = run(observe(parts, recorder), progress=progress)
+        result = run(observe(parts, recorder), progress=progress, stop=stop)
     except KeyboardInterrupt:
         recorder.finish(None)
         print(f"seamtrack: stopped; wrote {path} up to the stop", file=sys.stderr)
@@ -73,7 +111,7 @@ def extractors_real(args: argparse.Namespace, progress: bool) -> int:
     """``extractors bench --real SETS_OR_RECORDING`` and ``extractors import --real RECORDING
     --out DIR`` (a recording's profiles in the real-data layout)."""
     from seamtrack.bench.extractors import bench_real, load_real_sets
-    from seamtrack.io.output import check_writable, new_dir
+    from seamtrack.io.output import check_fresh, check_writable, new_dir
 
     recording = {"topic": args.topic, "labels": args.labels, "joint": args.joint}
     if args.real is None:
@@ -89,11 +127,12 @@ def extractors_real(args: argparse.Namespace, progress: bool) -> int:
                 fix="give an .mcap file or a ROS bag (a set folder needs no import)",
             )  # fmt: skip
         out = check_writable(args.out)
+        replace = check_fresh(out, args.force)
         (found,) = load_real_sets(args.real, **recording)  # refused before anything is written
         from seamtrack.bridge.importer import read_scans, write_real_set
 
         scans = read_scans(args.real, args.topic, args.labels, joint=found.joint)
-        write_real_set(scans, out, joint=found.joint)
+        write_real_set(scans, out, joint=found.joint, replace=replace)
         labelled = "with labels" if found.labels is not None else "without labels"
         print(
             f"wrote {Path(out)}/set.json, profiles.npz: {len(found.profiles)} profiles, {labelled}"

@@ -2,6 +2,10 @@
 
 Files are first written into a hidden staging folder next to the destination and moved into
 place only when all of them are complete, so a failed run leaves nothing half-written.
+
+Two runs never share a folder (:func:`check_fresh`): a run goes into a new or empty folder; a
+folder that holds an earlier seamtrack output is replaced whole only with ``--force``, once
+the new output is complete; a folder holding anything else is never written into.
 """
 
 from __future__ import annotations
@@ -68,6 +72,38 @@ def check_writable(path: str | Path, field: str = "--out") -> Path:
     return out
 
 
+#: The files that make a folder seamtrack's own output, each set enough: a run, a job, a real
+#: set (``extractors import``).
+OWN_OUTPUTS = (("summary.json", "scene.toml"), ("job.json", "scene.toml"), ("set.json",))
+
+
+def is_own_output(folder: Path) -> bool:
+    """Whether ``folder`` holds an output seamtrack wrote (:data:`OWN_OUTPUTS`)."""
+    return any(all((folder / name).is_file() for name in names) for names in OWN_OUTPUTS)
+
+
+def check_fresh(path: str | Path, force: bool = False, field: str = "--out") -> bool:
+    """Refuse to mix a new output with an old one: ``True`` when ``path`` holds an earlier
+    seamtrack output that ``force`` lets the new one replace whole, ``False`` when it is new
+    or empty; else :class:`OutputError` (checked before the run, nothing written)."""
+    out = check_writable(path, field)
+    if not out.is_dir() or not any(out.iterdir()):
+        return False
+    if not is_own_output(out):
+        raise OutputError(
+            f"{str(out)!r} is not empty and holds no seamtrack output",
+            field=field,
+            fix="give a new or empty folder (seamtrack never deletes files it did not write)",
+        )
+    if not force:
+        raise OutputError(
+            f"{str(out)!r} holds an earlier output",
+            field=field,
+            fix="add --force to replace it whole, or give a new folder",
+        )
+    return True
+
+
 def prepare_dir(path: str | Path, field: str = "--out") -> Path:
     """Create ``path`` (and parents), once there is something to write into it."""
     out = check_writable(path, field)
@@ -105,12 +141,20 @@ def new_dir(path: str | Path, field: str = "--out") -> Iterator[Path]:
 
 
 @contextmanager
-def staged(out_dir: str | Path) -> Iterator[Path]:
-    """Yield a staging folder; on success move its files into ``out_dir``, else delete it."""
+def staged(out_dir: str | Path, replace: bool = False) -> Iterator[Path]:
+    """Yield a staging folder; on success move its files into ``out_dir`` (``replace``: after
+    removing what ``out_dir`` held before, so old and new never mix), else delete it."""
     with new_dir(out_dir) as out:
         stage = Path(tempfile.mkdtemp(prefix=".partial-", dir=out))
         try:
             yield stage
+            for old in sorted(out.iterdir()) if replace else ():
+                if old == stage:
+                    continue
+                if old.is_dir() and not old.is_symlink():
+                    shutil.rmtree(old)
+                else:
+                    old.unlink()
             for item in sorted(stage.iterdir()):
                 target = out / item.name
                 if item.is_dir() and target.is_dir():  # a job's pass folder from a run before
@@ -176,10 +220,12 @@ def write_run(
     scene_toml: str | None = None,
     trace_period_s: float = 0.01,
     extra: Callable[[Path], object] | None = None,
+    replace: bool = False,
 ) -> Path:
     """Write a run's outputs into ``out_dir`` (see the module docstring); ``extra(stage)`` adds
-    files (e.g. the error plot) to the staged folder before it is moved into place."""
-    with staged(out_dir) as stage:
+    files (e.g. the error plot) to the staged folder before it is moved into place;
+    ``replace``: what ``out_dir`` held is removed first (:func:`check_fresh`)."""
+    with staged(out_dir, replace) as stage:
         (stage / "summary.json").write_text(json.dumps(json_safe(result.summary), indent=2) + "\n")
         write_trace_csv(result, stage / "trace.csv", trace_period_s)
         write_frames_csv(result, stage / "frames.csv")
@@ -197,13 +243,15 @@ def write_job(
     trace_period_s: float = 0.01,
     extra: Callable[[Any, Path], object] | None = None,
     finish: Callable[[Path], object] | None = None,
+    replace: bool = False,
 ) -> Path:
     """Write a multi-pass job (:class:`seamtrack.simulation.job.JobResult`) into ``out_dir``:
     one folder a pass (``pass_00_scan``, ``pass_01``, ...: a run's summary.json, trace.csv,
     frames.csv and scene.toml, plus what ``extra(record, folder)`` adds), ``job.json`` and the
     job's scene.toml, then what ``finish(folder)`` adds (the job's pictures); all staged and
-    moved into place at the end, so a failed or interrupted job writes nothing."""
-    with staged(out_dir) as stage:
+    moved into place at the end, so a failed or interrupted job writes nothing. ``replace``: as
+    :func:`write_run`'s."""
+    with staged(out_dir, replace) as stage:
         for record in job.passes:
             folder = stage / record.name
             folder.mkdir()

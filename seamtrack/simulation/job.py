@@ -84,6 +84,7 @@ from seamtrack.simulation.passes import (
 )
 from seamtrack.simulation.robots import is_arm, tool_program
 from seamtrack.simulation.scene import Scene, load_scene
+from seamtrack.simulation.stop import INTERRUPTED, StopRequest
 from seamtrack.workpiece.beads import bead_area_mm2
 
 FloatArray = NDArray[np.float64]
@@ -127,11 +128,14 @@ def run_job(
     progress: bool = False,
     planner_override: Any = None,
     on_pass: Any = None,
+    stop: StopRequest | None = None,
 ) -> JobResult:
     """Run a multi-pass job (a scene with ``[passes]``); see the module docstring.
 
     ``planner_override``: a planner instance used instead of the scene's; ``on_pass(record,
-    fill)`` is called after each pass (a notebook's or a bench's hook).
+    fill)`` is called after each pass (a notebook's or a bench's hook). ``stop``: a request
+    from outside (a signal); the pass it lands in ends there as ``interrupted``, and the job
+    with it (status ``interrupted``, the passes up to the stop kept).
 
     Memory: the objects that exist when the job starts are frozen out of Python's garbage
     collections for its duration (:func:`gc.freeze`, unless the caller froze some already),
@@ -142,14 +146,19 @@ def run_job(
         gc.collect()
         gc.freeze()
     try:
-        return _run_job(scene, progress, planner_override, on_pass, frozen)
+        return _run_job(scene, progress, planner_override, on_pass, frozen, stop)
     finally:
         if frozen:
             gc.unfreeze()
 
 
 def _run_job(
-    scene: Scene | str, progress: bool, planner_override: Any, on_pass: Any, freeze: bool
+    scene: Scene | str,
+    progress: bool,
+    planner_override: Any,
+    on_pass: Any,
+    freeze: bool,
+    stop: StopRequest | None = None,
 ) -> JobResult:
     from seamtrack.workpiece.beads import BeadShape
     from seamtrack.workpiece.fill import FillState  # trimesh, scipy: a job's own imports
@@ -182,9 +191,12 @@ def _run_job(
 
     groove: MeasuredGroove | None = None
     if c.passes.scan_first:
-        scan = _pass(scene, None, fill, cad_seam, rng, process, progress, "pass_00_scan", flip)
+        scan = _pass(scene, None, fill, cad_seam, rng, process, progress, "pass_00_scan", flip,
+                     stop=stop)  # fmt: skip
         _release_pass(freeze)
         records.append(scan.record)
+        if stop is not None and stop.requested:
+            return _interrupted(scene, records, fill, wall_start, stop, job_bar)
         if scan.groove is None:
             raise PluginRuntimeError(
                 "the groove extractor measured the groove in no frame of the scan-only pass",
@@ -210,8 +222,11 @@ def _run_job(
                                 gantry=not is_arm(c), field="passes.overrides")  # fmt: skip
             assert plan is not None
         done = _pass(scene, plan, fill, cad_seam, rng, process, progress, f"pass_{index + 1:02d}",
-                     flip, adapt, name, groove)  # fmt: skip
+                     flip, adapt, name, groove, stop)  # fmt: skip
         _release_pass(freeze)
+        if stop is not None and stop.requested:  # the bead of a stopped pass is not laid
+            records.append(done.record)
+            return _interrupted(scene, records, fill, wall_start, stop, job_bar)
         start = time.perf_counter()
         try:
             if len(done.path_world) >= 2:
@@ -243,6 +258,23 @@ def _run_job(
             fix="return a PassPlan for pass 1 (None only when the groove is full)",
         )
     summary = job_summary(scene, records, fill, time.perf_counter() - wall_start, stopped)
+    return JobResult(summary, records, fill)
+
+
+def _interrupted(
+    scene: Scene,
+    records: list[PassRecord],
+    fill: Any,
+    wall_start: float,
+    stop: StopRequest,
+    bar: Any,
+) -> JobResult:
+    """A job stopped from outside: its passes up to the stop, status ``interrupted``."""
+    if bar is not None:
+        bar.close()
+    why = f"{stop.reason} during {records[-1].name}"
+    summary = job_summary(scene, records, fill, time.perf_counter() - wall_start, why)
+    summary["status"] = INTERRUPTED
     return JobResult(summary, records, fill)
 
 
@@ -292,6 +324,7 @@ def _pass(
     adapt: Any = None,
     planner_name: str = "planner",
     previous: MeasuredGroove | None = None,
+    stop: StopRequest | None = None,
 ) -> _Done:
     """One closed-loop pass (``plan`` None: the scan-only pass along the groove's middle).
     ``flip``: the laser's y_L runs against the stations' y (the extractor's left is the
@@ -327,7 +360,7 @@ def _pass(
     parts = _steered(parts, fill, cad_seam, plan, frames, adapt, planner_name, previous, each)
     build_s = time.perf_counter() - start
     start = time.perf_counter()
-    result = run(parts, progress=progress, seed=c.simulation.seed)
+    result = run(parts, progress=progress, seed=c.simulation.seed, stop=stop)
     run_s = time.perf_counter() - start
     groove = measured_groove(frames, fill, cad_seam, each=each)
     path, t, speeds = _arc_path(result, parts.settings.trace_period_s, process.speed_min_mm_s)

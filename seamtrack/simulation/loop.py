@@ -15,8 +15,11 @@ End of the run: the torch waits at rest, with the last frame showing no seam, fo
 a frame period plus the latency (nothing new can come): ``completed`` when it got within
 ``end_tolerance_mm`` of the seam's end, else ``lost_seam``; ``stop_cause`` in the summary says
 why it stopped (the tracker's own ``stop_cause`` when it has one). No
-progress along the seam for ``stall_time_s`` (or the time or wall-clock limit) is ``stalled``;
-a commanded target outside the axis travel is ``limit_violation``.
+progress along the seam for ``stall_time_s`` (or the time or wall-clock limit) is ``stalled``,
+its ``stop_cause`` ``stalled``, ``time_limit`` or ``wall_time_limit``; a commanded target
+outside the axis travel is ``limit_violation``. A :class:`~seamtrack.simulation.stop.StopRequest`
+(a signal, a bridge, a caller) stops the run at its next tick as ``interrupted``, scored up to
+there. :func:`seamtrack.simulation.stop.outcome` names every end in one place.
 """
 
 from __future__ import annotations
@@ -43,6 +46,7 @@ from seamtrack.simulation.assemble import LoopSettings, Parts, build_parts
 from seamtrack.simulation.progress import CHECKED, FOUND, GO_ON, LAST_SEEN, ProgressCheck
 from seamtrack.simulation.scene import Scene, load_scene
 from seamtrack.simulation.scoring import orientation_summary, torch_axes, with_joints
+from seamtrack.simulation.stop import StopRequest, outcome
 from seamtrack.simulation.ticks import LIMIT, REFUSED, STOPPED, compiled_ticks
 
 FloatArray = NDArray[np.float64]
@@ -193,12 +197,15 @@ def run(
     progress: bool = False,
     seed: int | None = None,
     clock: Callable[[], float] = time.perf_counter,
+    stop: StopRequest | None = None,
 ) -> Result:
     """The loop, then the metrics.
 
     ``clock`` (seconds) drives the wall-clock guard; it is read every
     :data:`WALL_CHECK_TICKS` ticks whatever the control period, so the guard stops a run
-    within about that many ticks of its limit.
+    within about that many ticks of its limit. ``stop``: a request from outside, checked
+    every tick the loop runs in Python (at least once a sensor frame); once it is made the
+    run ends there as ``interrupted`` (the loop only reads it).
 
     Raises
     ------
@@ -257,8 +264,8 @@ def run(
     last_cmd: Command | None = None
     last_rot: tuple[Any, Any] = (None, None)  # the last command's rotation, angular velocity
     move: MoveCommand | None = None
-    status = ""
-    stop_reason = ""
+    ending = StopRequest()  # how the run ended: outcome() names it after the loop
+    stop = stop if stop is not None else StopRequest()
     bar = _progress_bar(progress, cfg.time_limit_s, seam.length_mm)
 
     sense_time = 0.0
@@ -326,18 +333,20 @@ def run(
                 tracker,
             )
             if why == REFUSED:  # what the reference path would refuse, refused the same way
-                tx, ty, tz, speed, fx, fy, fz, stop = ticks.refused.tolist()
+                tx, ty, tz, speed, fx, fy, fz, at_target = ticks.refused.tolist()
                 ff = np.array((fx, fy, fz))
                 _checked(
-                    Command(np.array((tx, ty, tz)), speed, ff, stop > 0), name, (tick + n) * dt
+                    Command(np.array((tx, ty, tz)), speed, ff, at_target > 0),
+                    name,
+                    (tick + n) * dt,
                 )
             if why == LIMIT:
-                status = "limit_violation"
+                ending.end("limit_violation")
                 break
             tick += n - 1  # the last tick run: its checks follow
             t = tick * dt
             if why == STOPPED:  # its own progress check ended the run
-                status, stop_reason = checks.ended(int(checks.P[FOUND]))
+                ending.end(*checks.ended(int(checks.P[FOUND])))
                 break
         else:
             try:
@@ -353,17 +362,22 @@ def run(
                     else (cmd.rotation_world, cmd.angular_velocity_world)
                 )
                 if move is not None and not robot.within_travel(move.target):
-                    status = "limit_violation"
+                    ending.end("limit_violation")
             tcp_log.extend(tcp_list)
             if turns_tool:
                 axis_log.extend((R @ state.R[:, 2]).tolist())
                 joint_log.extend(state.joints.tolist())
             target_log.extend(nan3 if cmd is None else np.asarray(cmd.target_world).tolist())
-            if status:
+            if ending.status:
                 break
             robot.step(state, move)
+        if stop.status:  # asked from outside (a signal, a bridge): stop here
+            ending.end(stop.status, stop.reason, stop.cause)
+            break
         if not tick % WALL_CHECK_TICKS and clock() - wall_start > cfg.wall_time_limit_s:
-            status, stop_reason = "stalled", f"wall-clock limit {cfg.wall_time_limit_s:g} s"
+            ending.end(
+                "stalled", f"wall-clock limit {cfg.wall_time_limit_s:g} s", "wall_time_limit"
+            )
             break
 
         if tick % check_every == 0 and tick != checks.P[CHECKED]:
@@ -371,14 +385,15 @@ def run(
                 tcp_list = ticks.tcp[ticks.count - 1].tolist()
             found = checks.check(t, tcp_list, state.v)
             if found != GO_ON:
-                status, stop_reason = checks.ended(found)
+                ending.end(*checks.ended(found))
                 break
             if bar is not None and tick % (check_every * 100) == 0:
                 bar.update(t - bar.n)
     if bar is not None:
         bar.close()
-    if not status:
-        status, stop_reason = "stalled", f"time limit {cfg.time_limit_s:g} s"
+    if not ending.status:
+        ending.end("stalled", f"time limit {cfg.time_limit_s:g} s", "time_limit")
+    status, stop_reason, stop_cause = outcome(ending, closed, getattr(tracker, "stop_cause", ""))
     if ticks is not None:  # every tick ran compiled, and logged there
         ticks.finish(state, tracker)
         tcp_log, target_log = ticks.tcp[: ticks.count], ticks.target[: ticks.count]
@@ -394,24 +409,9 @@ def run(
     summary = _summary(trace, seam, status, cfg, clock() - wall_start)
     summary.update(orientation_summary(trace, robot, cfg, state))
     summary["stop_reason"] = stop_reason
-    summary["stop_cause"] = _stop_cause(status, closed, getattr(tracker, "stop_cause", ""))
+    summary["stop_cause"] = stop_cause
     summary["sense_wall_time_s"] = sense_time
     return Result(summary=summary, trace=trace)
-
-
-def _stop_cause(status: str, closed: bool, tracker_cause: Any) -> str:
-    """Why the torch stopped: ``stalled`` and ``limit_violation`` as the status; else the
-    tracker's own word (its ``stop_cause``: ``end_of_part``, ``seam_end``), ``closed_seam`` for
-    a girth seam back at its start, ``seam_lost_at_end`` for a tracker that gives no cause and
-    stopped at the seam's end once frames showed no seam (``overrun_mm`` says how far past it
-    bridged), or ``lost_seam``."""
-    if status in ("stalled", "limit_violation"):
-        return status
-    if closed and status == "completed":
-        return "closed_seam"
-    if isinstance(tracker_cause, str) and tracker_cause:
-        return tracker_cause
-    return "seam_lost_at_end" if status == "completed" else "lost_seam"
 
 
 def _to_move(robot: Any, cmd: Command) -> MoveCommand:
