@@ -15,6 +15,7 @@ from seamtrack.bench import (
     failure_inputs_multipass,
     failure_inputs_parts,
     failure_inputs_ros,
+    failure_inputs_units,
 )
 from seamtrack.bench.failure_kit import (
     ARM,
@@ -510,6 +511,7 @@ CATALOGUE: tuple[Entry, ...] = (
     *failure_inputs_bridge.ENTRIES,
     *failure_inputs_ros.ENTRIES,
     *failure_inputs_multipass.ENTRIES,
+    *failure_inputs_units.ENTRIES,
 )
 
 _AREAS = (
@@ -519,6 +521,7 @@ _AREAS = (
     failure_inputs_bridge,
     failure_inputs_ros,
     failure_inputs_multipass,
+    failure_inputs_units,
 )
 
 
