@@ -7,6 +7,7 @@ numbers, of no profile or no measured point, and a 0.5 MB npz that would load in
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 from typing import Any
 
@@ -15,8 +16,8 @@ import numpy as np
 from seamtrack.bench.failure_kit import Entry, _run, _set
 
 #: paper-verification's seam (Eq. 15-17, 400 mm) written in metres.
-_t = np.linspace(0.0, 0.4, 201)
-_METRES = "x_mm,y_mm,z_mm\n" + "".join(f"{x!r},{0.01 * np.sin(10 * x)!r},0.0\n" for x in _t)
+_t = np.linspace(0.0, 0.4, 201).tolist()
+_METRES = "x_mm,y_mm,z_mm\n" + "".join(f"{x!r},{0.01 * math.sin(10 * x)!r},0.0\n" for x in _t)
 
 #: Files written into the workspace (name -> bytes).
 FILES: dict[str, bytes] = {

@@ -7,6 +7,7 @@ problem, ``seamtrack: error: <field>: <what>; fix: <how>``, and exits with code 
 from __future__ import annotations
 
 import argparse
+import errno
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -624,6 +625,21 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("seamtrack: interrupted", file=sys.stderr)
         return 130
+    except OSError as exc:
+        if exc.errno not in _DISK_FULL:
+            raise
+        where = f" writing {exc.filename}" if exc.filename else ""
+        print(
+            f"seamtrack: error: --out: the disk is full{where} ({exc.strerror}); nothing "
+            "half-written is kept; fix: free some space on that disk, or give --out on another "
+            "(seamtrack dataset keeps its finished chunks and resumes from them)",
+            file=sys.stderr,
+        )
+        return EXIT_USAGE
+
+
+#: The errors of a disk (or a quota) with no room left.
+_DISK_FULL = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG}
 
 
 if __name__ == "__main__":
