@@ -56,13 +56,17 @@ def check_ticks(c: SceneConfig, seam_length_mm: float | None) -> None:
             else math.inf
         )
         raise SceneError(
-            f"a welding speed of {c.simulation.welding_speed_mm_s:.3g} mm/s takes "
-            f"{limit:.3g} s over the {seam_length_mm:.4g} mm seam (the default time limit), "
-            f"{ticks:.3g} control ticks, more than the {constants.MAX_TICKS:.0e} a run holds "
-            f"even at the sensor's frame period of {1.0 / c.sensor.frame_rate_hz:.3g} s",
+            f"a welding speed of {c.simulation.welding_speed_mm_s:.3g} mm/s gives the "
+            f"{seam_length_mm:.4g} mm seam a default time limit of {limit:.3g} s: more than "
+            f"the {constants.MAX_TICKS:.0e} control ticks a run holds at any control period "
+            f"up to the sensor's frame period ({1.0 / c.sensor.frame_rate_hz:.3g} s)",
             field="simulation.welding_speed_mm_s",
-            fix=f"use a welding speed of at least {slowest:.3g} mm/s, or set "
-            "simulation.time_limit_s",
+            fix=(
+                f"use a welding speed of at least {slowest:.3g} mm/s, or set "
+                "simulation.time_limit_s"
+                if math.isfinite(slowest)
+                else "set simulation.time_limit_s"
+            ),
         )
     if ticks > constants.MAX_TICKS:
         raise SceneError(
