@@ -393,3 +393,19 @@ def test_sweep_png_draws_the_max_and_p95_errors(monkeypatch, tmp_path: Path) -> 
     assert set(drawn) == set(PLOT_KEYS) == {"max_error_mm", "p95_error_mm"}
     np.testing.assert_allclose(drawn["max_error_mm"], [1.5, 2.5])
     np.testing.assert_allclose(drawn["p95_error_mm"], [1.0, 1.5])
+
+
+def test_a_recordings_profiles_and_labels_meet_a_sets_checks(tmp_path: Path) -> None:
+    """What a recording gives (profiles of several lengths, labels) is held to the same checks:
+    in mm it passes; in metres, or with a label that is NaN, it is refused."""
+    from seamtrack.sensing.profiles import Profile
+
+    y = np.linspace(-10.0, 10.0, 201)
+    mm = [Profile(np.column_stack([y[: 201 - k], _v(1)[0][: 201 - k]])) for k in (0, 20)]
+    labels = np.array([[0.0, 110.0], [0.0, 110.0]])
+    real_input.check_recorded(mm, labels, tmp_path)
+    metres = [Profile(1e-3 * p.points_laser) for p in mm]
+    with pytest.raises(SeamtrackError, match="looks like metres"):
+        real_input.check_recorded(metres, 1e-3 * labels, tmp_path)
+    with pytest.raises(SeamtrackError, match="label of profile 1"):
+        real_input.check_recorded(mm, np.array([[0.0, 110.0], [np.nan, 110.0]]), tmp_path)

@@ -31,6 +31,7 @@ from seamtrack.bench.real_input import (
     check_label_scale,
     check_npz_sizes,
     check_profiles,
+    check_recorded,
     read_labels,
 )
 from seamtrack.errors import SeamtrackError
@@ -463,6 +464,7 @@ def _recorded_set(path: Path, topic: str | None, labels: str | None, joint: str 
     from seamtrack.bridge.importer import read_scans
 
     scans = read_scans(path, topic, labels, joint=joint)
+    check_recorded(scans.profiles, scans.labels, path)  # no point, metres, labels not finite
     kind = scans.joint or ("none" if scans.labels is None else None)
     if kind not in (*REAL_FAMILIES, "none"):
         raise SeamtrackError(

@@ -17,6 +17,7 @@ import csv
 import math
 import zipfile
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -165,3 +166,29 @@ def check_label_scale(labels: np.ndarray, y: np.ndarray, z: np.ndarray, path: Pa
             path,
             "give y_mm and z_mm of labels.csv in millimetres (multiply metres by 1000)",
         )
+
+
+def check_recorded(profiles: list[Any], labels: np.ndarray | None, path: Path) -> None:
+    """A recording's profiles (and labels) held to a set's checks: some profile, some measured
+    point, millimetres, finite labels."""
+    width = max((len(p) for p in profiles), default=0)
+    y = np.full((len(profiles), width), np.nan)
+    z = np.full_like(y, np.nan)
+    for i, p in enumerate(profiles):
+        pts = (
+            p.points_laser
+            if p.valid is None
+            else np.where(p.valid[:, None], p.points_laser, np.nan)
+        )
+        y[i, : len(pts)], z[i, : len(pts)] = pts[:, 0], pts[:, 1]
+    check_profiles(y, z, path)
+    if labels is None:
+        return
+    bad = np.flatnonzero(~np.isfinite(labels).all(axis=1))
+    if bad.size:
+        raise _error(
+            f"the label of profile {int(bad[0])} is {labels[bad[0]].tolist()}, not a finite point",
+            path,
+            "record finite seam points, or give --labels a topic that has them",
+        )
+    check_label_scale(labels, y, z, path)
