@@ -13,7 +13,17 @@ from typing import Any
 
 import numpy as np
 
-from seamtrack.bench.failure_kit import Entry, _run, _set
+from seamtrack.bench.failure_kit import Entry
+
+
+def _set(*pairs: str) -> tuple[str, ...]:
+    """``--set`` before each pair (as failure_kit's, kept here: no private name imported)."""
+    return tuple(arg for pair in pairs for arg in ("--set", pair))
+
+
+def _run(*extra: str) -> tuple[str, ...]:
+    return ("run", *extra, "--out", "OUT")
+
 
 #: paper-verification's seam (Eq. 15-17, 400 mm) written in metres.
 _t = np.linspace(0.0, 0.4, 201).tolist()

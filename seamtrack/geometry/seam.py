@@ -237,10 +237,10 @@ class Seam:
             ) from None
         if rows and not _is_number(rows[0][0]):
             rows, line_of = rows[1:], line_of[1:]
-        for row, line in zip(rows, line_of, strict=True):
+        for row, number in zip(rows, line_of, strict=True):
             if len(row) != len(rows[0]):
                 raise SeamError(
-                    f"{path.name}, line {line}: {len(row)} cells where line {line_of[0]} has "
+                    f"{path.name}, line {number}: {len(row)} cells where line {line_of[0]} has "
                     f"{len(rows[0])}",
                     field=field,
                     fix="give every row the same columns (x_mm, y_mm, z_mm[, nx, ny, nz])",
@@ -248,7 +248,7 @@ class Seam:
             bad = next((cell for cell in row if not _is_number(cell)), None)
             if bad is not None:
                 raise SeamError(
-                    f"{path.name}, line {line}: {bad!r} is not a number",
+                    f"{path.name}, line {number}: {bad!r} is not a number",
                     field=field,
                     fix="every data cell must be a number",
                 )
