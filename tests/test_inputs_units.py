@@ -409,3 +409,21 @@ def test_a_recordings_profiles_and_labels_meet_a_sets_checks(tmp_path: Path) -> 
         real_input.check_recorded(metres, 1e-3 * labels, tmp_path)
     with pytest.raises(SeamtrackError, match="label of profile 1"):
         real_input.check_recorded(mm, np.array([[0.0, 110.0], [np.nan, 110.0]]), tmp_path)
+
+
+def test_sweep_and_dataset_say_in_one_line_that_they_cap_the_workers(capsys, tmp_path) -> None:
+    """One case: one worker, whatever --workers asks; the line says why, and the run goes on.
+    A dataset of 2 chunks: at most 2 workers, and no more than this process's CPUs."""
+    points = "seam.points_mm=[[0,0,0],[20,0,0],[30,10,0]]"
+    code = main(["sweep", "paper-corner", "--param", "tracker.radius_mm", "--values", "1",
+                 "--workers", "100000", "--set", points])  # fmt: skip
+    err = capsys.readouterr().err
+    assert code == 0
+    assert err.splitlines() == ["seamtrack: --workers 100000 capped at 1 (1 case to run)"]
+    spec = tmp_path / "spec.toml"
+    spec.write_text('rays = 64\nchunk_size = 8\n[joint]\nfamilies = ["v-groove"]\n')
+    code = main(["dataset", str(spec), "--n", "16", "--out", str(tmp_path / "d"), "--workers",
+                 "100000", "-q"])  # fmt: skip
+    (line,) = capsys.readouterr().err.splitlines()
+    assert code == 0 and line.startswith("seamtrack: --workers 100000 capped at ")
+    assert 1 <= int(line.split()[5]) <= min(2, len(os.sched_getaffinity(0)))

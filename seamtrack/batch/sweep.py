@@ -186,7 +186,7 @@ def usable_workers(requested: int, cases: int) -> tuple[int, str]:
         f"{available_mb / 1024:.1f} GB of free memory at {WORKER_MB / 1024:.1f} GB a worker": (
             by_memory
         ),
-        f"{cases} cases to run": max(1, cases),
+        f"{cases} case{'' if cases == 1 else 's'} to run": max(1, cases),
     }
     reason, cap = min(limits.items(), key=lambda item: item[1])
     if requested <= cap:

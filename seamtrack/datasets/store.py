@@ -287,8 +287,9 @@ def _execute(
         for k in todo:
             yield make_chunk(spec, k, counts[k], str(out))
     else:
-        from seamtrack.batch.sweep import die_with_parent
+        from seamtrack.batch.sweep import die_with_parent, usable_workers
 
+        workers, _ = usable_workers(workers, len(todo))  # no more than the machine runs
         with ProcessPoolExecutor(max_workers=workers, initializer=die_with_parent) as pool:
             pending: set[Future[int]] = {
                 pool.submit(make_chunk, spec, k, counts[k], str(out)) for k in todo
