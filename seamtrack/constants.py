@@ -43,6 +43,11 @@ MAX_SWEEP_CASES = 100_000
 #: than fit in memory (and Embree's float32 cannot resolve the difference anyway).
 MIN_MESH_TOLERANCE_MM = 1e-4
 
+#: Coarsest chordal meshing tolerance a scene may ask for: the facets stand off a curved face by
+#: up to the tolerance, so a coarser mesh moves the surface the sensor sees by more than a
+#: millimetre (pipe-on-plate at 1e308 mm "completed" with a 14.6 mm error).
+MAX_MESH_TOLERANCE_MM = 1.0
+
 #: Finest meshing tolerance relative to the part's bounding-box diagonal, checked once the part
 #: is built (the paper's part at 1e-3 mm, 2.4e-6 of its size, meshes into 1.7e6 triangles).
 MIN_MESH_TOLERANCE_RATIO = 1e-6

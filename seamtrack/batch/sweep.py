@@ -39,6 +39,10 @@ TABLE_KEYS = (
     "completed_fraction",
 )
 
+#: What sweep.png draws against the swept value: the largest error and the 95th percentile
+#: (the minimum error, 0 wherever the torch crosses the seam, says nothing).
+PLOT_KEYS = ("max_error_mm", "p95_error_mm")
+
 
 @dataclass(frozen=True)
 class Case:
@@ -133,6 +137,8 @@ def run_sweep(
     values = expand_values(scene, param, values, overrides)
     seed_list: list[int | None] = list(seeds) if seeds else [None]
     _check_sweep(scene, param, values, overrides, seed_list, workers)
+    if scheduler is not None:
+        check_scheduler(scheduler)  # before anything is written, within a time bound
     cases = [Case(param, v, s) for v in values for s in seed_list]
     results_path = None
     done: dict[str, dict[str, Any]] = {}
@@ -141,6 +147,7 @@ def run_sweep(
         results_path = Path(out_dir) / "results.jsonl"
         done = _done(results_path)
     todo = [c for c in cases if c.key not in done]
+    workers, _ = usable_workers(workers, len(todo))
     bar = None
     if progress and todo:
         from tqdm import tqdm
@@ -157,6 +164,51 @@ def run_sweep(
     if bar is not None:
         bar.close()
     return [done[c.key] for c in cases]
+
+
+#: What one worker of a sweep may take (MB): a mesh-mode case holds its libraries and mesh,
+#: about 0.7 GB (seamtrack.constants, MAX_MESH_TRIANGLES); a seam-mode case far less.
+WORKER_MB = 700.0
+
+
+def usable_workers(requested: int, cases: int) -> tuple[int, str]:
+    """The workers a sweep starts: ``requested``, but no more than the cases, the CPUs this
+    process may run on (its affinity), and what the available memory holds at
+    :data:`WORKER_MB` each; and a line saying why when that is fewer than asked."""
+    import os
+
+    cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    cpus = max(1, cpus or 1)
+    available_mb = _available_mb()
+    by_memory = max(1, int(available_mb // WORKER_MB)) if math.isfinite(available_mb) else cpus
+    limits = {
+        f"{cpus} CPUs this process may use": cpus,
+        f"{available_mb / 1024:.1f} GB of free memory at {WORKER_MB / 1024:.1f} GB a worker": (
+            by_memory
+        ),
+        f"{cases} case{'' if cases == 1 else 's'} to run": max(1, cases),
+    }
+    reason, cap = min(limits.items(), key=lambda item: item[1])
+    if requested <= cap:
+        return requested, ""
+    return cap, f"--workers {requested} capped at {cap} ({reason})"
+
+
+def _available_mb() -> float:
+    """Memory available to new processes (MB): Linux's MemAvailable (free plus reclaimable
+    cache), else the free pages; inf where neither is known."""
+    import os
+
+    try:
+        for line in Path("/proc/meminfo").read_text().splitlines():
+            if line.startswith("MemAvailable:"):
+                return float(line.split()[1]) / 1024
+    except OSError:
+        pass
+    try:
+        return float(os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")) / 2**20
+    except (ValueError, OSError, AttributeError):
+        return math.inf
 
 
 def expand_values(
@@ -270,14 +322,79 @@ def dask_client(scheduler: str) -> Any:
         raise SeamtrackError(
             "Dask is not installed", field="--scheduler", fix="pip install 'seamtrack[dask]'"
         ) from None
+    check_scheduler(scheduler)
     try:
         return Client(scheduler, timeout=f"{DASK_CONNECT_TIMEOUT_S}s")
-    except OSError as exc:
+    except (OSError, ValueError) as exc:
         raise SeamtrackError(
             f"cannot reach the Dask scheduler {scheduler!r}: {exc}",
             field="--scheduler",
             fix="start it or give its tcp:// address",
         ) from None
+
+
+def check_scheduler(scheduler: str, timeout_s: float | None = None) -> None:
+    """Refuse an address that is not one (``'not a url'``), nothing listening there, or a
+    server that does not answer a Dask scheduler's ``identity`` within ``timeout_s`` (default
+    :data:`DASK_CONNECT_TIMEOUT_S`; some other server: the Dask client would wait for its
+    handshake forever)."""
+    import asyncio
+
+    timeout_s = DASK_CONNECT_TIMEOUT_S if timeout_s is None else timeout_s
+    try:
+        from distributed.comm import connect
+        from distributed.comm.addressing import parse_address, parse_host_port
+    except ImportError:
+        raise SeamtrackError(
+            "Dask is not installed", field="--scheduler", fix="pip install 'seamtrack[dask]'"
+        ) from None
+
+    fix = "give the scheduler's address, e.g. tcp://127.0.0.1:8786 (dask scheduler prints it)"
+    try:
+        scheme, location = parse_address(scheduler, strict=True)
+        if scheme in ("tcp", "tls", "ws", "wss"):
+            _, port = parse_host_port(location)
+            if not 0 < int(port) < 65536:
+                raise ValueError(f"port {port} is not within 1..65535")
+    except ValueError as exc:
+        raise SeamtrackError(
+            f"{scheduler!r} is not a scheduler address ({exc})", field="--scheduler", fix=fix
+        ) from None
+
+    async def identity() -> Any:
+        comm = await connect(scheduler, timeout=timeout_s)
+        try:
+            await comm.write({"op": "identity", "reply": True})
+            return await comm.read()
+        finally:
+            comm.abort()
+
+    async def bounded() -> Any:
+        return await asyncio.wait_for(identity(), timeout_s)
+
+    try:
+        reply = asyncio.run(bounded())
+    except (OSError, TimeoutError) as exc:
+        silent = isinstance(exc, TimeoutError) and not str(exc)  # connected, no answer
+        what = "it answered nothing (a server that is not Dask's)" if silent else str(exc)
+        raise SeamtrackError(
+            f"no Dask scheduler answered at {scheduler!r} within {timeout_s:g} s: {what}",
+            field="--scheduler",
+            fix="start the scheduler (dask scheduler) or give its address",
+        ) from None
+    except Exception as exc:  # the server answered, but not in Dask's protocol
+        raise SeamtrackError(
+            f"the server at {scheduler!r} is not a Dask scheduler ({type(exc).__name__})",
+            field="--scheduler",
+            fix=fix,
+        ) from None
+    if not isinstance(reply, dict) or reply.get("type") != "Scheduler":
+        kind = reply.get("type") if isinstance(reply, dict) else type(reply).__name__
+        raise SeamtrackError(
+            f"the server at {scheduler!r} is not a Dask scheduler (it says {kind!r})",
+            field="--scheduler",
+            fix=fix,
+        )
 
 
 def _execute_dask(
@@ -313,7 +430,7 @@ def summarize(rows: Sequence[dict[str, Any]]) -> list[dict[str, Any]]:
             continue
         statuses = sorted({s["status"] for s in ok})
         out["status"] = "/".join(statuses)
-        for metric in TABLE_KEYS[1:]:
+        for metric in (*TABLE_KEYS[1:], *PLOT_KEYS):
             values = np.array(
                 [np.nan if s.get(metric) is None else s[metric] for s in ok], dtype=float
             )
@@ -393,4 +510,4 @@ def write_sweep(
 
         numeric = [r for r in table if isinstance(r["value"], (int, float)) and "error" not in r]
         if numeric:
-            plot_sweep(numeric, param, out / "sweep.png")
+            plot_sweep(numeric, param, out / "sweep.png", keys=PLOT_KEYS)

@@ -26,6 +26,14 @@ import numpy as np
 
 from seamtrack.bench.extractors_angles import DETECTED_MM, angle_sweep, angle_table
 from seamtrack.bench.extractors_groove import GROOVE_COLUMNS, bench_real_groove, groove_table
+from seamtrack.bench.real_input import (
+    LAYOUT,
+    check_label_scale,
+    check_npz_sizes,
+    check_profiles,
+    check_recorded,
+    read_labels,
+)
 from seamtrack.errors import SeamtrackError
 from seamtrack.features.extractors import BUILTIN, extractor
 from seamtrack.features.synthetic import Imperfections, synthetic_profile
@@ -396,9 +404,10 @@ def load_real_set(path: str | Path) -> RealSet:
         A missing or malformed file (field ``--real``, with a fix).
     """
     d = Path(path)
-    layout = "see docs/extractors.md, 'Real data' (set.json, profiles.npz, labels.csv)"
+    layout = LAYOUT
     try:
         meta = json.loads((d / "set.json").read_text())
+        check_npz_sizes(d / "profiles.npz")  # from the headers, before anything is allocated
         with np.load(d / "profiles.npz") as data:
             y, z = np.asarray(data["y_mm"], dtype=float), np.asarray(data["z_mm"], dtype=float)
     except (OSError, ValueError, KeyError) as exc:
@@ -413,21 +422,12 @@ def load_real_set(path: str | Path) -> RealSet:
     if z.ndim != 2 or y.shape not in (z.shape, z.shape[1:]):
         raise _real_error(f"y_mm {y.shape} and z_mm {z.shape} do not match", d, layout)
     y = np.broadcast_to(y, z.shape)
-    profiles = [Profile(np.column_stack([yi, zi])) for yi, zi in zip(y, z, strict=True)]
+    check_profiles(y, z, d)  # none, all NaN, or not in mm
     labels = None
     if joint != "none":
-        try:
-            table = np.genfromtxt(d / "labels.csv", delimiter=",", names=True, ndmin=1)
-            labels = np.column_stack([table["y_mm"], table["z_mm"]]).astype(float)
-            index = np.asarray(table["index"], dtype=int)
-        except (OSError, ValueError) as exc:
-            raise _real_error(f"no usable labels.csv ({exc})", d, layout) from exc
-        if not np.array_equal(index, np.arange(len(profiles))):
-            raise _real_error(
-                f"labels.csv has {len(index)} rows, indices not 0..{len(profiles) - 1}",
-                d,
-                "give one label per profile, in order",
-            )
+        labels = read_labels(d, len(z))
+        check_label_scale(labels, y, z, d)
+    profiles = [Profile(np.column_stack([yi, zi])) for yi, zi in zip(y, z, strict=True)]
     return RealSet(d.name, str(joint), profiles, labels, meta)
 
 
@@ -464,6 +464,7 @@ def _recorded_set(path: Path, topic: str | None, labels: str | None, joint: str 
     from seamtrack.bridge.importer import read_scans
 
     scans = read_scans(path, topic, labels, joint=joint)
+    check_recorded(scans.profiles, scans.labels, path)  # no point, metres, labels not finite
     kind = scans.joint or ("none" if scans.labels is None else None)
     if kind not in (*REAL_FAMILIES, "none"):
         raise SeamtrackError(

@@ -17,6 +17,7 @@ from seamtrack.bench import (
     failure_inputs_outputs,
     failure_inputs_parts,
     failure_inputs_ros,
+    failure_inputs_units,
 )
 from seamtrack.bench.failure_kit import (
     ARM,
@@ -514,6 +515,7 @@ CATALOGUE: tuple[Entry, ...] = (
     *failure_inputs_multipass.ENTRIES,
     *failure_inputs_heat.ENTRIES,
     *failure_inputs_outputs.ENTRIES,
+    *failure_inputs_units.ENTRIES,
 )
 
 _AREAS = (
@@ -525,6 +527,7 @@ _AREAS = (
     failure_inputs_multipass,
     failure_inputs_heat,
     failure_inputs_outputs,
+    failure_inputs_units,
 )
 
 

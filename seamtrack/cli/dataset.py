@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import sys
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -52,6 +53,12 @@ def cmd_dataset(args: argparse.Namespace) -> int:
     spec = load_spec(args.spec)
     if args.images:
         spec = with_images(spec)
+    if isinstance(args.workers, int) and args.workers > 1 and args.scheduler is None:
+        from seamtrack.batch.sweep import usable_workers
+
+        _, note = usable_workers(args.workers, math.ceil(args.n / spec.chunk_size))
+        if note:
+            print(f"seamtrack: {note}", file=sys.stderr)
     done = write_dataset(spec, args.n, args.out, workers=args.workers, scheduler=args.scheduler,
                          progress=_progress_wanted(args))  # fmt: skip
     if not args.quiet and done["written"] == 0:

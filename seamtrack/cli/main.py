@@ -7,6 +7,7 @@ problem, ``seamtrack: error: <field>: <what>; fix: <how>``, and exits with code 
 from __future__ import annotations
 
 import argparse
+import errno
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -220,7 +221,9 @@ def _apply_to_text(text: str, overrides: list[str]) -> str:
 
 def cmd_check(args: argparse.Namespace) -> int:
     from seamtrack.geometry.frames import make as make_pose
-    from seamtrack.simulation.assemble import build_parts
+    from seamtrack.simulation.assemble import build_parts, planned_tcp_poses
+    from seamtrack.simulation.checks import check_seam_in_view
+    from seamtrack.simulation.robots import is_arm
     from seamtrack.simulation.scene import load_scene
 
     scene = load_scene(args.scene, _overrides(args))
@@ -234,6 +237,9 @@ def cmd_check(args: argparse.Namespace) -> int:
         start_joints = robot.joints_for_tool(make_pose(translation=parts.tcp_start_world))
     start_pose = robot.T_world_sensor(start_joints)
     first = parts.sense(start_pose, 0.0)
+    path = planned_tcp_poses(seam.length_mm, parts.tool_program, robot, is_arm(c))
+    assert parts.sensor is not None
+    in_view = check_seam_in_view(path @ robot.T_tcp_sensor, parts.sensor, seam)
     rows: list[tuple[str, Any]] = [
         ("scene", scene.name),
         ("mode", c.sensor.mode),
@@ -248,7 +254,8 @@ def cmd_check(args: argparse.Namespace) -> int:
         ("end tolerance (mm)", settings.end_tolerance_mm),
         ("time limit (s)", settings.time_limit_s),
         ("seam seen at start", bool(first) or first.reason),
-        ("sensor mount", parts.mount.describe() if parts.mount else "sensor.mount_rotation_deg"),
+        ("seam in view along the path", f"from {in_view} of {len(path)} poses 5 mm apart"),
+        ("sensor mount", _mount_text(c, parts.mount)),
         ("extractor", parts.extractor_name if c.sensor.mode == "mesh" else "none (seam mode)"),
         ("sensor resolution (mm)", parts.sensor_resolution_mm),
     ]
@@ -256,6 +263,20 @@ def cmd_check(args: argparse.Namespace) -> int:
         rows += jobs.check_rows(c)
     print_table(rows, f"{scene.name}: valid")
     return 0
+
+
+def _mount_text(c: Any, mount: Any) -> str:
+    """Where the sensor sits, for ``check``: the seam's own mount as the mount says it, else the
+    values the scene gives (not the keys' names)."""
+    if mount is not None and mount.from_seam:
+        return str(mount.describe())
+    tool = c.robot.tool
+    if tool.sensor_xyz_mm is not None or tool.sensor_rpy_deg is not None:
+        return (
+            f"robot.tool: sensor_xyz_mm {tool.sensor_xyz_mm}, sensor_rpy_deg {tool.sensor_rpy_deg}"
+        )
+    rotation = c.sensor.mount_rotation_deg or (0.0, 0.0, 0.0)
+    return f"turned {[float(a) for a in rotation]} deg (sensor.mount_rotation_deg)"
 
 
 def cmd_sensor(args: argparse.Namespace) -> int:
@@ -282,6 +303,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     from seamtrack.simulation.scene import parse_override
 
     overrides = dict(parse_override(o) for o in _overrides(args))
+    _say_workers(args.workers, len(values) * max(1, args.seeds))
     rows = run_sweep(
         args.scene,
         args.param,
@@ -308,6 +330,16 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     return 0
 
 
+def _say_workers(requested: Any, cases: int) -> None:
+    """One line on stderr when the sweep starts fewer workers than ``--workers`` asks."""
+    from seamtrack.batch.sweep import usable_workers
+
+    if isinstance(requested, int) and requested > 1:
+        _, note = usable_workers(requested, cases)
+        if note:
+            print(f"seamtrack: {note}", file=sys.stderr)
+
+
 def cmd_compare(args: argparse.Namespace) -> int:
     """Each tracker on the same scene: a sweep over the whole ``[tracker]`` table, so the
     scene's own tracker keeps its parameters and the others run with their defaults."""
@@ -323,6 +355,7 @@ def cmd_compare(args: argparse.Namespace) -> int:
         own.model_dump(exclude_none=True) if ALIASES.get(name, name) == own_name else {"name": name}
         for name in trackers
     ]
+    _say_workers(args.workers, len(values))
     rows = run_sweep(
         args.scene,
         "tracker",
@@ -634,6 +667,21 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print("seamtrack: interrupted", file=sys.stderr)
         return 130
+    except OSError as exc:
+        if exc.errno not in _DISK_FULL:
+            raise
+        where = f" writing {exc.filename}" if exc.filename else ""
+        print(
+            f"seamtrack: error: --out: the disk is full{where} ({exc.strerror}); nothing "
+            "half-written is kept; fix: free some space on that disk, or give --out on another "
+            "(seamtrack dataset keeps its finished chunks and resumes from them)",
+            file=sys.stderr,
+        )
+        return EXIT_USAGE
+
+
+#: The errors of a disk (or a quota) with no room left.
+_DISK_FULL = {errno.ENOSPC, errno.EDQUOT, errno.EFBIG}
 
 
 if __name__ == "__main__":

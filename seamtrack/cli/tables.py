@@ -11,7 +11,7 @@ def _fmt(value: Any) -> str:
     if isinstance(value, float):
         if not math.isfinite(value):
             return "n/a"
-        return f"{value:.6g}"
+        return f"{value + 0.0:.6g}"  # + 0.0: -0.0 prints as 0, not -0
     return str(value)
 
 

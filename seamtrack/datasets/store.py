@@ -70,13 +70,20 @@ IMAGE_COMPRESSION: dict[str, Any] = {"compression": "gzip", "compression_opts": 
 
 
 def write_chunk(out: Path, spec: DatasetSpec, k: int, arrays: dict[str, np.ndarray]) -> Path:
-    """Write chunk ``k`` to a temporary file beside it, then rename it into place."""
+    """Write chunk ``k`` to a temporary file beside it, then rename it into place.
+
+    The HDF5 file is built in memory and written with Python's own I/O: a full disk is then a
+    plain ``OSError`` (ENOSPC) from ``write``, where HDF5 writing to the disk itself fails in
+    its flush on close and crashed the process (exit 139)."""
+    import io
+
     import h5py
 
     path = chunk_path(out, k)
     tmp = out / f".{path.name}.{os.getpid()}.tmp"
+    buffer = io.BytesIO()
     try:
-        with h5py.File(tmp, "w") as f:
+        with h5py.File(buffer, "w") as f:
             for name in arrays_of(spec.images, spec.joint.passes[1] > 0):
                 # One HDF5 chunk an image, compressed (mostly dark pixels).
                 filters = (
@@ -93,6 +100,8 @@ def write_chunk(out: Path, spec: DatasetSpec, k: int, arrays: dict[str, np.ndarr
             f.attrs["start"] = k * spec.chunk_size
             f.attrs["count"] = len(arrays["index"])
             f.attrs["names"] = json.dumps(names(spec), sort_keys=True)
+        with open(tmp, "wb") as handle:
+            handle.write(buffer.getbuffer())
         os.replace(tmp, path)
     finally:
         if tmp.exists():
@@ -278,8 +287,9 @@ def _execute(
         for k in todo:
             yield make_chunk(spec, k, counts[k], str(out))
     else:
-        from seamtrack.batch.sweep import die_with_parent
+        from seamtrack.batch.sweep import die_with_parent, usable_workers
 
+        workers, _ = usable_workers(workers, len(todo))  # no more than the machine runs
         with ProcessPoolExecutor(max_workers=workers, initializer=die_with_parent) as pool:
             pending: set[Future[int]] = {
                 pool.submit(make_chunk, spec, k, counts[k], str(out)) for k in todo

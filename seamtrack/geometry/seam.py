@@ -213,12 +213,18 @@ class Seam:
                 fix="give the path of a CSV seam file (relative to the scene file)",
             )
         rows: list[list[str]] = []
+        line_of: list[int] = []  # each row's line in the file (1-based), for the messages
         try:
-            with path.open(newline="", encoding="utf-8") as handle:
-                lines = (line for line in handle if not line.lstrip().startswith("#"))
-                for row in csv.reader(lines):
+            with path.open(newline="", encoding="utf-8-sig") as handle:
+                numbered = (
+                    (i, line) for i, line in enumerate(handle, 1)
+                    if not line.lstrip().startswith("#")
+                )  # fmt: skip
+                for i, line in numbered:
+                    row = next(csv.reader([line]), [])
                     if row and any(cell.strip() for cell in row):
                         rows.append([cell.strip() for cell in row])
+                        line_of.append(i)
                     if len(rows) > constants.MAX_SEAM_POINTS + 1:
                         raise SeamError(
                             f"{path.name}: more than {constants.MAX_SEAM_POINTS:.0e} points",
@@ -230,13 +236,23 @@ class Seam:
                 f"{path.name} is not a text file", field=field, fix="give a CSV text file"
             ) from None
         if rows and not _is_number(rows[0][0]):
-            rows = rows[1:]
-        try:
-            data = np.array([[float(c) for c in row] for row in rows], dtype=np.float64)
-        except ValueError as exc:
-            raise SeamError(
-                f"{path.name}: {exc}", field=field, fix="every data cell must be a number"
-            ) from None
+            rows, line_of = rows[1:], line_of[1:]
+        for row, number in zip(rows, line_of, strict=True):
+            if len(row) != len(rows[0]):
+                raise SeamError(
+                    f"{path.name}, line {number}: {len(row)} cells where line {line_of[0]} has "
+                    f"{len(rows[0])}",
+                    field=field,
+                    fix="give every row the same columns (x_mm, y_mm, z_mm[, nx, ny, nz])",
+                )
+            bad = next((cell for cell in row if not _is_number(cell)), None)
+            if bad is not None:
+                raise SeamError(
+                    f"{path.name}, line {number}: {bad!r} is not a number",
+                    field=field,
+                    fix="every data cell must be a number",
+                )
+        data = np.array([[float(c) for c in row] for row in rows], dtype=np.float64)
         if data.ndim != 2 or data.shape[1] not in (3, 6):
             raise SeamError(
                 f"{path.name}: expected 3 or 6 columns, got shape {data.shape}",

@@ -202,6 +202,8 @@ def write_trace_csv(result: Result, path: Path, period_s: float) -> None:
 
 
 def write_frames_csv(result: Result, path: Path) -> None:
+    """One row per sensor frame: its capture time, ``found`` as 0 or 1 (an integer, not
+    ``1.000000``), and the seam point found (NaN where none was)."""
     f = result.trace.frames
     table = np.column_stack([f["t_capture_s"], f["found"].astype(float), f["point_world"]])
     np.savetxt(
@@ -210,7 +212,7 @@ def write_frames_csv(result: Result, path: Path) -> None:
         delimiter=",",
         header="t_capture_s,found,x_mm,y_mm,z_mm",
         comments="",
-        fmt="%.6f",
+        fmt=["%.6f", "%d", "%.6f", "%.6f", "%.6f"],
     )
 
 

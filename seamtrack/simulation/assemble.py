@@ -24,7 +24,12 @@ from seamtrack.geometry.seam import Seam
 from seamtrack.sensing.profiles import Feature, Profile, SeamHint, laser_to_world
 from seamtrack.sensing.scan import SeamNoise, sense_seam
 from seamtrack.sensing.sensor import LaserLineSensor
-from seamtrack.simulation.checks import check_expect, check_ticks, default_time_limit_s
+from seamtrack.simulation.checks import (
+    check_expect,
+    check_seam_scale,
+    check_ticks,
+    default_time_limit_s,
+)
 from seamtrack.simulation.mount import Mount
 from seamtrack.simulation.robots import (
     check_sensor_outside,
@@ -99,9 +104,11 @@ def make_seam(scene: Scene) -> Seam:
         seam = Seam.from_paper(c.step_mm, c.length_mm)
     elif c.source == "points":
         seam = Seam.from_points(c.points_mm or [], field="seam.points_mm", name=scene.name)
+        check_seam_scale(seam, scene.config.sensor.look_ahead_mm, "seam.points_mm")
     elif c.source == "csv":
         assert c.file is not None
         seam = Seam.from_csv(scene.resolve_path(c.file), field="seam.file")
+        check_seam_scale(seam, scene.config.sensor.look_ahead_mm, "seam.file")
     else:
         raise SceneError("make_seam does not build workpiece seams", field="seam.source")
     return seam.transformed(frames.from_xyz_rpy_deg(c.offset_mm, c.rotation_deg))
@@ -376,17 +383,12 @@ def build_parts(
     start = seam.points[0] + np.asarray(c.robot.start_offset_mm)
     program = tool_program(scene, seam)
     start_joints = None
-    check_s = np.linspace(0.0, seam.length_mm, max(2, int(seam.length_mm // 5.0) + 1))
     if is_arm(c):
         start_joints = plan_arm(robot, program, start)
-        rotations = program.rotations(check_s)
     else:
         robot.require_reachable(seam.points, "seam", field="seam")
         robot.require_reachable(start, "start", field="robot.start_offset_mm")
-        rotations = np.broadcast_to(robot.T_world_base[:3, :3], (len(check_s), 3, 3))
-    poses = np.tile(np.eye(4), (len(check_s), 1, 1))
-    poses[:, :3, :3] = rotations
-    poses[:, :3, 3] = program.frame(check_s)[0]
+    poses = planned_tcp_poses(seam.length_mm, program, robot, is_arm(c))
     tool = c.robot.tool
     explicit = tool.sensor_xyz_mm is not None or tool.sensor_rpy_deg is not None
     solid = None if mesh is None or loaded is None else loaded.solid
@@ -440,6 +442,20 @@ def build_parts(
         last_image=loaded.last_image if scan is not None and loaded is not None else None,
         sense_uses_hint=scan is not None and loaded is not None and loaded.hinted,
     )
+
+
+def planned_tcp_poses(length_mm: float, program: Any, robot: Any, arm: bool) -> FloatArray:
+    """(n, 4, 4) torch poses along the planned path, one every 5 mm of the nominal seam: an
+    arm's turn with the tool program, a gantry's keep its base's orientation."""
+    check_s = np.linspace(0.0, length_mm, max(2, int(length_mm // 5.0) + 1))
+    if arm:
+        rotations = program.rotations(check_s)
+    else:
+        rotations = np.broadcast_to(robot.T_world_base[:3, :3], (len(check_s), 3, 3))
+    poses = np.tile(np.eye(4), (len(check_s), 1, 1))
+    poses[:, :3, :3] = rotations
+    poses[:, :3, 3] = program.frame(check_s)[0]
+    return poses
 
 
 def workpiece_seams(scene: Scene) -> list[Any]:

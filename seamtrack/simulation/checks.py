@@ -10,6 +10,9 @@ import itertools
 import math
 from typing import Any
 
+import numpy as np
+from numpy.typing import NDArray
+
 from seamtrack import constants
 from seamtrack.control.registry import tracker_class
 from seamtrack.errors import SceneError
@@ -17,7 +20,8 @@ from seamtrack.features.base import _Base
 from seamtrack.features.expect import parse_expect
 from seamtrack.features.extractors import extractor_target
 from seamtrack.params import check_params
-from seamtrack.sensing.scan import StripeNoise
+from seamtrack.sensing.scan import StripeNoise, sense_seam
+from seamtrack.sensing.sensor import LaserLineSensor
 from seamtrack.simulation.config import SceneConfig
 
 
@@ -37,6 +41,33 @@ def check_ticks(c: SceneConfig, seam_length_mm: float | None) -> None:
         assert seam_length_mm is not None
         limit = default_time_limit_s(seam_length_mm, c.simulation.welding_speed_mm_s)
     ticks = limit / c.robot.control_period_s
+    needed_period_s = limit / constants.MAX_TICKS
+    if (
+        ticks > constants.MAX_TICKS
+        and c.simulation.time_limit_s is None
+        and needed_period_s > 1.0 / c.sensor.frame_rate_hz
+    ):
+        # No control period both holds the default time limit and keeps up with the sensor:
+        # the speed sets that limit, so the speed is at fault (1e-300 mm/s, not the period).
+        assert seam_length_mm is not None
+        slowest = (
+            3.0 * seam_length_mm / (constants.MAX_TICKS / c.sensor.frame_rate_hz - 60.0)
+            if constants.MAX_TICKS / c.sensor.frame_rate_hz > 60.0
+            else math.inf
+        )
+        raise SceneError(
+            f"a welding speed of {c.simulation.welding_speed_mm_s:.3g} mm/s gives the "
+            f"{seam_length_mm:.4g} mm seam a default time limit of {limit:.3g} s: more than "
+            f"the {constants.MAX_TICKS:.0e} control ticks a run holds at any control period "
+            f"up to the sensor's frame period ({1.0 / c.sensor.frame_rate_hz:.3g} s)",
+            field="simulation.welding_speed_mm_s",
+            fix=(
+                f"use a welding speed of at least {slowest:.3g} mm/s, or set "
+                "simulation.time_limit_s"
+                if math.isfinite(slowest)
+                else "set simulation.time_limit_s"
+            ),
+        )
     if ticks > constants.MAX_TICKS:
         raise SceneError(
             f"a time limit of {limit:.4g} s at a control period of {c.robot.control_period_s:.3g} "
@@ -98,8 +129,66 @@ def check_sizes(c: SceneConfig) -> None:
             field="workpiece.tolerance_mm",
             fix=f"use at least {constants.MIN_MESH_TOLERANCE_MM:.0e} mm (0.01 is the default)",
         )
+    if c.workpiece is not None and c.workpiece.tolerance_mm > constants.MAX_MESH_TOLERANCE_MM:
+        raise SceneError(
+            f"meshing tolerance {c.workpiece.tolerance_mm:.3g} mm is coarser than "
+            f"{constants.MAX_MESH_TOLERANCE_MM:g} mm: the facets would move the part's curved "
+            "faces by that much, and the tracker would follow them, not the part",
+            field="workpiece.tolerance_mm",
+            fix=f"use at most {constants.MAX_MESH_TOLERANCE_MM:g} mm (0.01 is the default)",
+        )
     length = {"paper": s.length_mm, "points": _polyline_length(s.points_mm or [])}.get(s.source)
     check_ticks(c, length)
+
+
+def check_seam_scale(seam: Any, look_ahead_mm: float, field: str) -> None:
+    """Refuse a seam (from a file or a list of points) shorter than the sensor's look-ahead: the
+    laser line starts past its end, so no frame can see it. Most often its points are in metres
+    (a 400 mm seam given as 0.4): then say so."""
+    length = float(seam.length_mm)
+    if length >= look_ahead_mm:
+        return
+    span = float(np.ptp(seam.points, axis=0).max())
+    metres = 1000.0 * length >= look_ahead_mm
+    raise SceneError(
+        f"the points span {span:.3g} mm (a seam {length:.3g} mm long), shorter than the "
+        f"sensor's {look_ahead_mm:.3g} mm look-ahead: the laser line starts past the seam's end"
+        + (f"; looks like metres (x1000: {1000.0 * length:.4g} mm)" if metres else ""),
+        field=field,
+        fix="give the points in millimetres (multiply metres by 1000)"
+        if metres
+        else "give a seam longer than sensor.look_ahead_mm, or a shorter look-ahead",
+    )
+
+
+def check_seam_in_view(
+    poses_T_world_sensor: NDArray[np.float64], sensor: LaserLineSensor, seam: Any
+) -> int:
+    """How many of the sensor poses along the planned path see the seam (the laser plane
+    crosses it inside the field of view and depth of field; geometry only, no occlusion).
+    Refuse a sensor that sees it from none of them: the run could only end ``lost_seam``."""
+    reasons: dict[str, int] = {}
+    seen = 0
+    for T in poses_T_world_sensor:
+        found = sense_seam(seam, T, sensor)
+        if found:
+            seen += 1
+        else:
+            reasons[found.reason] = reasons.get(found.reason, 0) + 1
+    if seen:
+        return seen
+    reason = max(reasons, key=lambda r: reasons[r]) if reasons else "no pose"
+    crosses = "field of view" in reason  # the plane crosses it, but out of range
+    raise SceneError(
+        f"the seam is never in view: from none of {len(poses_T_world_sensor)} sensor poses "
+        f"along the planned path ({reason})",
+        field="sensor.range_mm" if crosses else "sensor.mount_rotation_deg",
+        fix="bring the seam into the sensor's range (sensor.range_mm, sensor.look_ahead_mm; "
+        "seamtrack sensor shows the range)"
+        if crosses
+        else "turn the laser line across the seam (sensor.mount_rotation_deg, or leave it unset "
+        "to mount the sensor from the seam)",
+    )
 
 
 def check_plugin_params(c: SceneConfig) -> None:

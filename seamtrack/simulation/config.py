@@ -23,6 +23,17 @@ Flag = Annotated[bool, Field(strict=True)]
 NonNegativeInt = Annotated[int, Field(ge=0, strict=True)]
 Vec3 = tuple[Finite, Finite, Finite]
 PositiveVec3 = tuple[Positive, Positive, Positive]
+#: An angle within a turn (deg): far beyond, a value is a typo (1e308 deg is accepted by
+#: ``sin`` but means nothing).
+Turn = Annotated[float, Field(ge=-360, le=360, allow_inf_nan=False, strict=True)]
+TurnVec3 = tuple[Turn, Turn, Turn]
+#: The welding travel speed (mm/s): the fastest processes (laser welding of thin sheet,
+#: high-speed GMAW) travel at some 10-20 m/min, 167-333 mm/s; 1000 mm/s (60 m/min) bounds them
+#: with room to spare, and a weld at 1e6 mm/s is a typo.
+WeldSpeed = Annotated[float, Field(gt=0, le=1_000, allow_inf_nan=False, strict=True)]
+#: A laser profiler's frame rate (Hz): the fastest sample at tens of kHz (Keyence LJ-X8000: up
+#: to 16 kHz; LMI Gocator 2500: 10 kHz; Keyence LJ-V7000 at a cut window: 64 kHz).
+FrameRate = Annotated[float, Field(gt=0, le=100_000, allow_inf_nan=False, strict=True)]
 
 
 class _Section(BaseModel):
@@ -30,7 +41,7 @@ class _Section(BaseModel):
 
 
 class SimulationConfig(_Section):
-    welding_speed_mm_s: Positive = 5.0
+    welding_speed_mm_s: WeldSpeed = 5.0
     seed: Annotated[int, Field(ge=0, strict=True)] = 0
     end_tolerance_mm: Positive | None = None
     stall_time_s: Positive = 5.0
@@ -46,7 +57,7 @@ class SeamConfig(_Section):
     points_mm: list[list[Finite]] | None = None
     file: str | None = None
     offset_mm: Vec3 = (0.0, 0.0, 0.0)
-    rotation_deg: Vec3 = (0.0, 0.0, 0.0)
+    rotation_deg: TurnVec3 = (0.0, 0.0, 0.0)
 
 
 class CameraConfig(_Section):
@@ -89,11 +100,11 @@ class SensorConfig(_Section):
     mode: Literal["seam", "mesh"] = "seam"
     source: Literal["geometry", "image"] = "geometry"
     camera: CameraConfig | None = None
-    frame_rate_hz: Positive = 1.0
+    frame_rate_hz: FrameRate = 1.0
     latency_s: NonNegative = 0.0
     look_ahead_mm: NonNegative = 10.0
     range_mm: Positive | None = None
-    mount_rotation_deg: Vec3 | None = None
+    mount_rotation_deg: TurnVec3 | None = None
     quantize: Flag = True
     noise_range_mm: NonNegative = 0.0
     noise_lateral_mm: NonNegative = 0.0
@@ -123,7 +134,6 @@ TOOL_MM, CELL_MM, START_MM = 2_000.0, 100_000.0, 1_000.0
 ToolLength = Annotated[float, Field(ge=-TOOL_MM, le=TOOL_MM, allow_inf_nan=False, strict=True)]
 CellLength = Annotated[float, Field(ge=-CELL_MM, le=CELL_MM, allow_inf_nan=False, strict=True)]
 StartLength = Annotated[float, Field(ge=-START_MM, le=START_MM, allow_inf_nan=False, strict=True)]
-Turn = Annotated[float, Field(ge=-360, le=360, allow_inf_nan=False, strict=True)]
 Speed = Annotated[float, Field(gt=0, le=10_000, allow_inf_nan=False, strict=True)]  # mm/s
 Accel = Annotated[float, Field(gt=0, le=100_000, allow_inf_nan=False, strict=True)]  # mm/s^2
 TurnRate = Annotated[float, Field(gt=0, le=3_600, allow_inf_nan=False, strict=True)]  # deg/s
@@ -161,8 +171,8 @@ class RobotConfig(_Section):
     tool: ToolConfig = Field(default_factory=ToolConfig)
     position_min_mm: Vec3 = (0.0, 0.0, 0.0)
     position_max_mm: Vec3 = (800.0, 150.0, 150.0)
-    velocity_max_mm_s: PositiveVec3 = (20.0, 10.0, 10.0)
-    acceleration_max_mm_s2: PositiveVec3 = (30.0, 15.0, 15.0)
+    velocity_max_mm_s: tuple[Speed, Speed, Speed] = (20.0, 10.0, 10.0)
+    acceleration_max_mm_s2: tuple[Accel, Accel, Accel] = (30.0, 15.0, 15.0)
     base_origin_mm: tuple[CellLength, CellLength, CellLength] = (-100.0, -75.0, -75.0)
     base_rotation_deg: tuple[Turn, Turn, Turn] = (0.0, 0.0, 0.0)
     start_offset_mm: tuple[StartLength, StartLength, StartLength] = (0.0, 0.0, 0.0)
@@ -212,7 +222,7 @@ class WorkpieceConfig(_Section):
     angular_tolerance_deg: Positive = 5.0
     params: dict[str, Any] = Field(default_factory=dict)
     offset_mm: Vec3 = (0.0, 0.0, 0.0)
-    rotation_deg: Vec3 = (0.0, 0.0, 0.0)
+    rotation_deg: TurnVec3 = (0.0, 0.0, 0.0)
     obstacles: list[Box] = Field(default_factory=list)
     material: str | None = None  # a name of seamtrack.sensing.materials.MATERIALS (image mode)
 

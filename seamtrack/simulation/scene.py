@@ -45,7 +45,8 @@ def scene_text(name_or_path: str | Path) -> tuple[str, Path | None]:
                 fix="give a .toml path, or a built-in name (seamtrack init --list)",
             )
         try:
-            text = path.read_text(encoding="utf-8")
+            # utf-8-sig: a byte-order mark (Windows Notepad writes one) is not TOML, so drop it.
+            text = path.read_text(encoding="utf-8-sig")
         except UnicodeDecodeError:
             raise SceneError(
                 f"{str(path)!r} is not a text file",

@@ -167,15 +167,17 @@ def plot_sweep(
     rows: Sequence[dict[str, Any]],
     param: str,
     path: str | Path,
-    keys: Sequence[str] = ("max_error_mm", "min_error_mm"),
+    keys: Sequence[str] = ("max_error_mm", "p95_error_mm"),
 ) -> Path:
-    """Metrics against a swept parameter (log x when all values are positive)."""
+    """Metrics against a swept parameter (log x when all values are positive), with their 95 %
+    confidence half-widths (``<key>_ci95``, several seeds) as error bars."""
     plt = _pyplot()
     x = np.array([float(r["value"]) for r in rows])
     fig, ax = plt.subplots(figsize=(7, 4), constrained_layout=True)
     for key in keys:
         y = np.array([float(r.get(key, np.nan)) for r in rows])
-        ax.plot(x, y, "o-", label=key)
+        ci = np.array([float(r.get(f"{key}_ci95", 0.0)) for r in rows])
+        ax.errorbar(x, y, yerr=ci if ci.any() else None, fmt="o-", capsize=3, label=key)
     if (x > 0).all():
         ax.set_xscale("log")
     ax.set_xlabel(param)
