@@ -157,11 +157,14 @@ def cmd_init(args: argparse.Namespace) -> int:
             field="-o",
             fix="choose another name or pass --force to overwrite",
         )
-    if args.set:
-        from seamtrack.simulation.scene import load_scene
+    from seamtrack.simulation.scene import load_scene
+    from seamtrack.simulation.scene_help import commented_scene
 
-        load_scene(name, _overrides(args))  # validate the overrides before writing
-        text = _apply_to_text(text, _overrides(args))
+    lines = text.splitlines()
+    opening = next((i for i, line in enumerate(lines) if not line.startswith("#")), len(lines))
+    header = "\n".join(lines[:opening])  # the template's opening comment
+    # every key of the resolved scene, each commented (the overrides validated before writing)
+    text = commented_scene(load_scene(name, _overrides(args)), header)
     try:
         target.write_text(text)
     except OSError as exc:
@@ -172,20 +175,6 @@ def cmd_init(args: argparse.Namespace) -> int:
         ) from None
     print(f"wrote {target} (edit it, then: seamtrack check {target})")
     return 0
-
-
-def _apply_to_text(text: str, overrides: list[str]) -> str:
-    """Append overrides as TOML tables (a later key would clash, so rebuild from the data)."""
-    import tomllib
-
-    import tomli_w
-
-    from seamtrack.simulation.scene import _apply_overrides, parse_override
-
-    data = tomllib.loads(text)
-    _apply_overrides(data, dict(parse_override(o) for o in overrides))
-    header = "\n".join(line for line in text.splitlines() if line.startswith("#"))
-    return header + "\n\n" + tomli_w.dumps(data)
 
 
 def cmd_check(args: argparse.Namespace) -> int:
