@@ -24,6 +24,7 @@ from seamtrack.cli.recording import (
 )
 from seamtrack.cli.tables import print_table
 from seamtrack.errors import OutputError, PluginRuntimeError, SceneError, SeamtrackError
+from seamtrack.simulation.compiling import announce_compiling, announce_wanted
 
 EXIT_USAGE = 2
 SCENE_HELP = "built-in scene name (seamtrack init --list) or a .toml file"
@@ -571,6 +572,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
+        if announce_wanted(args.command, bool(getattr(args, "quiet", False))):
+            with announce_compiling():
+                return int(args.fn(args))
         return int(args.fn(args))
     except SeamtrackError as exc:
         for line in str(exc).splitlines():
