@@ -20,10 +20,15 @@ import pytest
 import seamtrack as st
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
-#: Pages whose Python blocks run here (in order, one namespace per page). Left out: cad.md
-#: (reads a STEP file of the user's), sweeps.md (starts a Dask cluster), views.md (renders with
-#: PyVista): their commands are covered by tests/test_cad.py, test_sweep.py and test_viz.py.
+#: Pages whose Python blocks run here (in order, one namespace per page; README.md from the
+#: repository's root). Left out: cad.md (reads a STEP file of the user's; its commands are
+#: covered by tests/test_cad.py), ros.md (its client needs a server; tests/test_bridge*.py),
+#: multipass.md (a planner file of the user's; tests/test_job*.py), trackers.md (its block is
+#: a plugin file, run below). sweeps.md and views.md run in their own tests below (once: they
+#: take a while).
 RUN = (
+    "index.md",
+    "README.md",
     "mesh-mode.md",
     "camera.md",
     "weldments.md",
@@ -32,6 +37,11 @@ RUN = (
     "multipass-geometry.md",
     "gym.md",
 )
+
+
+def page_path(name: str) -> Path:
+    """A page of the docs, or the README at the repository's root."""
+    return DOCS / name if (DOCS / name).is_file() else DOCS.parent / name
 
 
 def python_blocks(path: Path) -> list[str]:
@@ -55,10 +65,10 @@ def _run_page(name: str, tmp_path: Path) -> dict[str, Any]:
     cwd = Path.cwd()
     os.chdir(tmp_path)
     try:
-        for block in python_blocks(DOCS / name):
+        for block in python_blocks(page_path(name)):
             if block in _module_blocks().values():
                 continue
-            exec(compile(block, str(DOCS / name), "exec"), namespace)
+            exec(compile(block, str(page_path(name)), "exec"), namespace)
     finally:
         os.chdir(cwd)
     return namespace
@@ -66,8 +76,50 @@ def _run_page(name: str, tmp_path: Path) -> dict[str, Any]:
 
 @pytest.mark.parametrize("page", RUN)
 def test_the_pages_python_blocks_run(page: str, tmp_path: Path) -> None:
-    assert python_blocks(DOCS / page), f"{page} has no Python example left to run"
+    assert python_blocks(page_path(page)), f"{page} has no Python example left to run"
     _run_page(page, tmp_path)
+
+
+@pytest.mark.parametrize("page", ["index.md", "README.md"])
+def test_the_tour_gives_what_its_comments_say(page: str, tmp_path: Path) -> None:
+    ns = _run_page(page, tmp_path)
+    assert ns["sensor"].baseline_mm == pytest.approx(26.41, abs=0.005)  # "26.41 mm, 60 mm"
+    assert ns["sensor"].depth_of_field_mm == pytest.approx(60.0)
+    np.testing.assert_allclose(ns["y_L"], [0.0, 5.0], atol=1e-9)  # "and back"
+    np.testing.assert_allclose(ns["z_L"], [90.0, 100.0], atol=1e-9)
+    assert ns["result"].summary["status"] == "completed"
+    assert ns["feature"]  # the CAD seam found by the stripe
+    assert ns["part"].seam.closest(ns["feature"].point_world).distance_mm[0] < 0.05
+
+
+def test_the_sweeps_example_gives_one_row_per_value(tmp_path: Path) -> None:
+    ns = _run_page("sweeps.md", tmp_path)
+    assert [row["value"] for row in ns["table"]] == [6, 5, 1, 0.1]
+    assert len(ns["rows"]) == 2  # the Dask block: two cases
+    assert (tmp_path / "runs" / "t4" / "results.jsonl").is_file()
+
+
+def test_the_views_example_writes_its_images(tmp_path: Path) -> None:
+    pytest.importorskip("pyvista")
+    ns = _run_page("views.md", tmp_path)
+    for name in ("view.png", "run.png", "run.gif"):
+        assert (tmp_path / name).stat().st_size > 1000, name
+    assert ns["feature"]
+
+
+def test_the_pages_bench_tables_are_what_their_json_renders() -> None:
+    spec = importlib.util.spec_from_file_location("figures", DOCS / "figures.py")
+    assert spec is not None and spec.loader is not None
+    figures = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(figures)
+    found = {}
+    for page in figures.pages():
+        for source, written, rendered in figures.page_tables(page.read_text()):
+            assert written == rendered, (
+                f"{page.name}: {source} is stale; python docs/figures.py --write"
+            )
+            found[page.name] = source
+    assert found.get("trackers.md") == "bench/trackers/trackers.json"
 
 
 def test_mesh_mode_example_finds_the_cad_seam(tmp_path: Path) -> None:
