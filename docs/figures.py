@@ -8,8 +8,10 @@ figures" page are both made here from what the benches wrote.
                                       # every page's bench tables (below) into their pages
     python docs/figures.py --check    # exit 1 if a table is not what the JSON says
 
-A figure table inside a page is written between two markers naming the bench JSON it comes
-from, and rendered by the bench's own table function (:data:`RENDERERS`)::
+A figure table inside a page is written between two markers naming the bench output it comes
+from: a bench JSON, rendered by the bench's own table function (:data:`RENDERERS`); a bench's
+markdown (written by the bench from the same measurement as its JSON), whole; or the N-th
+table of one (``bench/<name>/<file>.md#N``, from 0)::
 
     <!-- table: bench/trackers/trackers.json -->
     | ... the rendered table ... |
@@ -73,7 +75,8 @@ BENCHES: dict[str, tuple[tuple[str, ...], str, str]] = {
 
 #: A page's bench table: its markers and what lies between them.
 TABLE = re.compile(
-    r"^<!-- table: (?P<source>bench/[\w/.-]+\.json) -->\n(?P<body>.*?)^<!-- end table -->$",
+    r"^<!-- table: (?P<source>bench/[\w/.-]+\.(json|md(#\d+)?)) -->\n(?P<body>.*?)"
+    r"^<!-- end table -->$",
     re.S | re.M,
 )
 
@@ -90,10 +93,27 @@ RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {
 }
 
 
+def md_tables(text: str) -> list[str]:
+    """The tables of a markdown text, in order, each with a final newline."""
+    found, current = [], []
+    for line in [*text.splitlines(), ""]:
+        if line.startswith("|"):
+            current.append(line)
+        elif current:
+            found.append("\n".join(current) + "\n")
+            current = []
+    return found
+
+
 def render_table(source: str) -> str:
-    """The table of one bench JSON (``bench/<name>/<file>.json``, relative to docs/)."""
-    path = BENCH.parent / source
-    return RENDERERS[path.name](json.loads(path.read_text()))
+    """What a page's markers name (``bench/<name>/<file>.json``, ``.md`` or ``.md#N``,
+    relative to docs/), rendered from the bench's output."""
+    file, _, index = source.partition("#")
+    path = BENCH.parent / file
+    if path.suffix == ".json":
+        return RENDERERS[path.name](json.loads(path.read_text()))
+    text = path.read_text()
+    return md_tables(text)[int(index)] if index else text.rstrip("\n") + "\n"
 
 
 def page_tables(text: str) -> list[tuple[str, str, str]]:
