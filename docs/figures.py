@@ -4,8 +4,18 @@ No figure is copied by hand: the README's headline table and the documentation's
 figures" page are both made here from what the benches wrote.
 
     python docs/figures.py            # print the headline table
-    python docs/figures.py --write    # put it into README.md, between its two markers
-    python docs/figures.py --check    # exit 1 if README.md's table is not what the JSON says
+    python docs/figures.py --write    # put it into README.md, between its two markers, and
+                                      # every page's bench tables (below) into their pages
+    python docs/figures.py --check    # exit 1 if a table is not what the JSON says
+
+A figure table inside a page is written between two markers naming the bench output it comes
+from: a bench JSON, rendered by the bench's own table function (:data:`RENDERERS`); a bench's
+markdown (written by the bench from the same measurement as its JSON), whole; or the N-th
+table of one (``bench/<name>/<file>.md#N``, from 0)::
+
+    <!-- table: bench/trackers/trackers.json -->
+    | ... the rendered table ... |
+    <!-- end table -->
 
 The site's build calls :func:`figures_page` through ``docs/hooks.py``.
 """
@@ -15,6 +25,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import re
 import sys
 from collections.abc import Callable
 from pathlib import Path
@@ -54,7 +65,73 @@ BENCHES: dict[str, tuple[tuple[str, ...], str, str]] = {
     "multipass": (("multipass.json",), "seamtrack bench multipass", "multi-pass jobs"),
     "gym": (("gym.json",), "seamtrack bench gym", "the Gymnasium environment's steps"),
     "bridge": (("bridge.json",), "seamtrack bench bridge", "the lockstep bridge's cost"),
+    "trackers": (
+        ("trackers.json",),
+        "seamtrack bench trackers",
+        "the paper's algorithms against the trajectory tracker on `paper-v-groove`",
+    ),
 }
+
+
+#: A page's bench table: its markers and what lies between them.
+TABLE = re.compile(
+    r"^<!-- table: (?P<source>bench/[\w/.-]+\.(json|md(#\d+)?)) -->\n(?P<body>.*?)"
+    r"^<!-- end table -->$",
+    re.S | re.M,
+)
+
+
+def _trackers_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.trackers import trackers_table
+
+    return trackers_table(data)
+
+
+#: The bench JSON files a page may quote -> the bench's own function that renders their table.
+RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {
+    "trackers.json": _trackers_table,
+}
+
+
+def md_tables(text: str) -> list[str]:
+    """The tables of a markdown text, in order, each with a final newline."""
+    found, current = [], []
+    for line in [*text.splitlines(), ""]:
+        if line.startswith("|"):
+            current.append(line)
+        elif current:
+            found.append("\n".join(current) + "\n")
+            current = []
+    return found
+
+
+def render_table(source: str) -> str:
+    """What a page's markers name (``bench/<name>/<file>.json``, ``.md`` or ``.md#N``,
+    relative to docs/), rendered from the bench's output."""
+    file, _, index = source.partition("#")
+    path = BENCH.parent / file
+    if path.suffix == ".json":
+        return RENDERERS[path.name](json.loads(path.read_text()))
+    text = path.read_text()
+    return md_tables(text)[int(index)] if index else text.rstrip("\n") + "\n"
+
+
+def page_tables(text: str) -> list[tuple[str, str, str]]:
+    """A page's bench tables: (source, the table in the page, the table its JSON renders)."""
+    return [(m["source"], m["body"], render_table(m["source"])) for m in TABLE.finditer(text)]
+
+
+def render_pages(text: str) -> str:
+    """A page with every bench table rendered again from its JSON."""
+    return TABLE.sub(
+        lambda m: f"<!-- table: {m['source']} -->\n{render_table(m['source'])}<!-- end table -->",
+        text,
+    )
+
+
+def pages() -> list[Path]:
+    """The pages that may hold bench tables: README.md and docs/*.md."""
+    return [README, *sorted((ROOT / "docs").glob("*.md"))]
 
 
 def load(name: str, file: str | None = None) -> dict[str, Any]:
@@ -430,16 +507,26 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     text = README.read_text()
     if args.check:
+        stale = [
+            f"{page.relative_to(ROOT)}: {source}"
+            for page in pages()
+            for source, written, rendered in page_tables(page.read_text())
+            if written != rendered
+        ]
         if readme_table(text) != table:
+            stale.append("README.md: the headline figures")
+        for line in stale:
             print(
-                "README.md: the headline figures differ from docs/bench/*/*.json; "
-                "fix: python docs/figures.py --write",
+                f"{line} differs from docs/bench/*/*.json; fix: python docs/figures.py --write",
                 file=sys.stderr,
             )
-            return 1
-        return 0
+        return 1 if stale else 0
     head, rest = text.split(BEGIN, 1)
     README.write_text(head + BEGIN + "\n" + table + rest[rest.index(END) :])
+    for page in pages():
+        page_text = page.read_text()
+        if TABLE.search(page_text):
+            page.write_text(render_pages(page_text))
     return 0
 
 

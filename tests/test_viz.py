@@ -173,9 +173,52 @@ def test_view_command_writes_png_without_display(tmp_path: Path) -> None:
         timeout=120,
     )
     assert res.returncode == 0, res.stderr
+    # VTK chooses an off-screen window itself (EGL or OSMesa): no "bad X server connection"
+    assert "X server" not in res.stderr and "WARN" not in res.stderr, res.stderr
     assert res.stdout.strip().endswith("view.png")
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     assert pv.read(str(out)).dimensions[:2] == (320, 240)
+
+
+def legend_labels(plotter: pv.Plotter) -> list[str]:
+    legend = plotter.legend
+    assert legend is not None, "the view has no legend"
+    return [legend.GetEntryString(i) for i in range(legend.GetNumberOfEntries())]
+
+
+def test_the_view_names_every_part_it_draws_in_a_legend() -> None:
+    plotter = viz.scene_plotter("paper-corner", at_mm=100.0, off_screen=True, window_size=WINDOW)
+    try:
+        labels = legend_labels(plotter)
+    finally:
+        plotter.close()
+    for part in (
+        "true seam",
+        "sensor housing (box)",
+        "laser emitter (red sphere)",
+        "camera centre (blue sphere)",
+        "laser fan",
+        "field of view",
+        "torch (cone)",
+        "seam point found (yellow sphere)",
+    ):
+        assert part in labels, (part, labels)
+
+
+@pytest.mark.embree
+def test_the_legend_counts_the_stripe_points_by_reason(v_groove_view: viz.SceneView) -> None:
+    profile, _ = v_groove_view.stripe(v_groove_view.pose_at(100.0))
+    assert profile is not None and profile.reason is not None
+    plotter = viz.scene_plotter(v_groove_view, at_mm=100.0, off_screen=True, window_size=WINDOW)
+    try:
+        labels = legend_labels(plotter)
+    finally:
+        plotter.close()
+    assert "workpiece" in labels
+    stripe = [label for label in labels if label.startswith("stripe: ")]
+    counted = sum(int(label.rsplit("(", 1)[1].rstrip(")")) for label in stripe)
+    assert counted == len(profile)  # every ray in one entry
+    assert f"stripe: valid ({np.count_nonzero(profile.valid)})" in stripe
 
 
 def test_view_command_rejects_a_position_off_the_seam(tmp_path: Path) -> None:

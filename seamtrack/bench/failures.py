@@ -24,6 +24,7 @@ from typing import Any
 
 from seamtrack.bench.common import machine_info
 from seamtrack.bench.failure_inputs import CATALOGUE, Entry, _set, workspace
+from seamtrack.simulation.compiling import MESSAGE as COMPILING_MESSAGE
 
 __all__ = ["CATALOGUE", "Entry", "Outcome", "bench_failures", "run_entry", "workspace"]
 
@@ -40,7 +41,8 @@ class Outcome:
     def problems(self, field: str) -> list[str]:
         """What makes this outcome fall short (empty: it passed)."""
         found = []
-        lines = self.stderr.splitlines()
+        # the first run's compiling notice is not an error line
+        lines = [line for line in self.stderr.splitlines() if line != COMPILING_MESSAGE]
         if self.exit_code != 2:
             found.append(f"exit {self.exit_code}")
         if "Traceback (most recent call last)" in self.stderr:

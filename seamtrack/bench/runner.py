@@ -240,6 +240,12 @@ def _bench_multipass(out: Path, quick: bool) -> dict:
     return bench_multipass(out, quick=quick)
 
 
+def _bench_trackers(out: Path, quick: bool) -> Any:
+    from seamtrack.bench.trackers import bench_trackers
+
+    return bench_trackers(out, quick=quick)
+
+
 BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "raycast": lambda out, quick: bench_raycast(out, quick=quick),
     "extractors": _bench_extractors,
@@ -254,6 +260,7 @@ BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "gym": _bench_gym,
     "bridge": _bench_bridge,
     "multipass": _bench_multipass,
+    "trackers": _bench_trackers,
 }
 
 

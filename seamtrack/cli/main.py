@@ -27,6 +27,7 @@ from seamtrack.cli.recording import (
 )
 from seamtrack.cli.tables import print_table
 from seamtrack.errors import OutputError, PluginRuntimeError, SceneError, SeamtrackError
+from seamtrack.simulation.compiling import announce_compiling, announce_wanted
 
 EXIT_USAGE = 2
 SCENE_HELP = "built-in scene name (seamtrack init --list) or a .toml file"
@@ -188,11 +189,14 @@ def cmd_init(args: argparse.Namespace) -> int:
             field="-o",
             fix="choose another name or pass --force to overwrite",
         )
-    if args.set:
-        from seamtrack.simulation.scene import load_scene
+    from seamtrack.simulation.scene import load_scene
+    from seamtrack.simulation.scene_help import commented_scene
 
-        load_scene(name, _overrides(args))  # validate the overrides before writing
-        text = _apply_to_text(text, _overrides(args))
+    lines = text.splitlines()
+    opening = next((i for i, line in enumerate(lines) if not line.startswith("#")), len(lines))
+    header = "\n".join(lines[:opening])  # the template's opening comment
+    # every key of the resolved scene, each commented (the overrides validated before writing)
+    text = commented_scene(load_scene(name, _overrides(args)), header)
     try:
         target.write_text(text)
     except OSError as exc:
@@ -203,20 +207,6 @@ def cmd_init(args: argparse.Namespace) -> int:
         ) from None
     print(f"wrote {target} (edit it, then: seamtrack check {target})")
     return 0
-
-
-def _apply_to_text(text: str, overrides: list[str]) -> str:
-    """Append overrides as TOML tables (a later key would clash, so rebuild from the data)."""
-    import tomllib
-
-    import tomli_w
-
-    from seamtrack.simulation.scene import _apply_overrides, parse_override
-
-    data = tomllib.loads(text)
-    _apply_overrides(data, dict(parse_override(o) for o in overrides))
-    header = "\n".join(line for line in text.splitlines() if line.startswith("#"))
-    return header + "\n\n" + tomli_w.dumps(data)
 
 
 def cmd_check(args: argparse.Namespace) -> int:
@@ -646,7 +636,7 @@ def build_parser() -> argparse.ArgumentParser:
         nargs="?",
         default="all",
         help="raycast, extractors, mesh, loop, tradeoff, sweep, scaling, failures, camera, "
-        "dataset, multipass, gym, bridge, or all",
+        "dataset, multipass, gym, bridge, trackers, or all",
     )
     p.add_argument("--out", default="bench-results", help="folder for the results")
     p.add_argument("--quick", action="store_true", help="fewer repeats (a smoke run)")
@@ -657,6 +647,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
+        if announce_wanted(args.command, bool(getattr(args, "quiet", False))):
+            with announce_compiling():
+                return int(args.fn(args))
         return int(args.fn(args))
     except SeamtrackError as exc:
         for line in str(exc).splitlines():

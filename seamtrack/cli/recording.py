@@ -132,15 +132,32 @@ def extractors_real(args: argparse.Namespace, progress: bool) -> int:
         from seamtrack.bridge.importer import read_scans, write_real_set
 
         scans = read_scans(args.real, args.topic, args.labels, joint=found.joint)
+        before = _stamps(Path(out))
         write_real_set(scans, out, joint=found.joint, replace=replace)
         labelled = "with labels" if found.labels is not None else "without labels"
         print(
-            f"wrote {Path(out)}/set.json, profiles.npz: {len(found.profiles)} profiles, {labelled}"
+            f"wrote {Path(out)}/{_written(Path(out), before)}: {len(found.profiles)} profiles, "
+            f"{labelled}"
         )
         return 0
     load_real_sets(args.real, **recording)  # a bad input is refused before any writing
     with new_dir(args.out) as out:
         bench_real(args.real, out, progress=progress, **recording)
     print((out / "extractors_real.md").read_text(), end="")
-    print(f"wrote {out}/extractors_real.csv, extractors_real.md, extractors_real.json")
+    print(f"wrote {out}/{_written(out, {})}")
     return 0
+
+
+def _stamps(folder: Path) -> dict[str, tuple[int, int]]:
+    """Each file in ``folder`` (not below) by name -> (mtime in ns, size): what was there."""
+    if not folder.is_dir():
+        return {}
+    return {
+        f.name: (f.stat().st_mtime_ns, f.stat().st_size) for f in folder.iterdir() if f.is_file()
+    }
+
+
+def _written(folder: Path, before: dict[str, tuple[int, int]]) -> str:
+    """The files of ``folder`` new or changed since ``before`` (:func:`_stamps`), by name."""
+    now = _stamps(folder)
+    return ", ".join(sorted(name for name, stamp in now.items() if before.get(name) != stamp))

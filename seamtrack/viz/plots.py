@@ -37,6 +37,15 @@ REASON_COLORS: dict[Reason, str] = {
 }
 
 _VIEWS = {"top": (0, 1, "Y"), "side": (0, 2, "Z")}
+#: Most sensed seam points drawn in a path plot: at 100 frames/s a run senses thousands, whose
+#: dots would bury the seam and torch lines; beyond this every k-th is drawn.
+MAX_SENSED_MARKERS = 200
+
+
+def sensed_point_step(n: int) -> int:
+    """Draw every ``step``-th of ``n`` sensed points, so that at most
+    :data:`MAX_SENSED_MARKERS` are drawn."""
+    return max(1, math.ceil(n / MAX_SENSED_MARKERS))
 
 
 def _pyplot() -> Any:
@@ -74,12 +83,23 @@ def draw_path(ax: Any, result: Result, view: str = "top", *, legend: bool = True
     i, j, label = _VIEWS[view]
     tr = result.trace
     seam_pts = tr.closest_world
-    ax.plot(seam_pts[:, i], seam_pts[:, j], color="0.6", lw=3, label="seam (closest points)")
-    ax.plot(tr.tcp_world[:, i], tr.tcp_world[:, j], color="C3", lw=1, label="torch tip")
+    ax.plot(
+        seam_pts[:, i], seam_pts[:, j], color="0.6", lw=3, label="seam (closest points)", zorder=2
+    )
+    ax.plot(tr.tcp_world[:, i], tr.tcp_world[:, j], color="C3", lw=1, label="torch tip", zorder=3)
     found = np.asarray(tr.frames.get("found", np.zeros(0, dtype=bool)), dtype=bool)
     if found.any():
         pts = tr.frames["point_world"][found]
-        ax.plot(pts[:, i], pts[:, j], "k.", ms=3, label="sensed seam points")
+        step = sensed_point_step(len(pts))
+        ax.plot(
+            pts[::step, i],
+            pts[::step, j],
+            ".",
+            color="k",
+            ms=2.5 if step == 1 else 1.5,
+            zorder=1,  # under the lines, which stay visible
+            label="sensed seam points" + (f" (every {step}th)" if step > 1 else ""),
+        )
     ax.set_xlabel("X (mm)")
     ax.set_ylabel(f"{label} (mm)")
     if legend:

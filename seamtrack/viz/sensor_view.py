@@ -6,7 +6,10 @@ PyVista with the ``pip install`` that fixes its absence. Views are built in
 
 from __future__ import annotations
 
+import ctypes.util
 import math
+import os
+import sys
 from typing import Any
 
 import numpy as np
@@ -21,11 +24,39 @@ _HOUSING_COLOR = "#4d4d4d"
 _CAMERA_COLOR = "#1f77b4"
 
 
+#: VTK's off-screen render windows by the library each needs (VTK's runtime settings,
+#: https://docs.vtk.org/en/latest/advanced/runtime_settings.html#opengl), in VTK's own order.
+_HEADLESS_WINDOWS = (("EGL", "vtkEGLRenderWindow"), ("OSMesa", "vtkOSOpenGLRenderWindow"))
+
+
+def has_display() -> bool:
+    """True when an interactive window can open (Windows, macOS, or X11/Wayland on Linux)."""
+    if sys.platform in ("win32", "darwin"):
+        return True
+    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
+
+
+def headless_window() -> str | None:
+    """Without a display, choose VTK's off-screen render window (EGL, else OSMesa) through
+    ``VTK_DEFAULT_OPENGL_WINDOW`` (unless the user set it), before any window is made: VTK
+    would otherwise try X first and print a "bad X server connection" warning before falling
+    back. Returns the window class chosen, or None (a display, the user's choice, or neither
+    library found)."""
+    if has_display() or os.environ.get("VTK_DEFAULT_OPENGL_WINDOW"):
+        return None
+    for library, window in _HEADLESS_WINDOWS:
+        if ctypes.util.find_library(library):
+            os.environ["VTK_DEFAULT_OPENGL_WINDOW"] = window
+            return window
+    return None
+
+
 def _pyvista() -> Any:
     try:
         import pyvista as pv
     except ImportError as exc:
         raise ImportError(f"seamtrack's 3D views need PyVista: {PIP_HINT}") from exc
+    headless_window()
     return pv
 
 
@@ -72,6 +103,18 @@ def sensor_meshes(pv: Any, sensor: LaserLineSensor) -> dict[str, Any]:
         "fov": _polyline(pv, np.vstack([corners, corners[:1]])),
         "fov_fill": pv.PolyData(corners, faces=[4, 0, 1, 2, 3]),
     }
+
+
+def sensor_legend() -> list[dict[str, str]]:
+    """The sensor's parts as legend entries (``label``, ``color``, ``face``) for
+    ``pyvista.Plotter.add_legend``, in the colours :func:`add_sensor` draws them."""
+    return [
+        {"label": "sensor housing (box)", "color": _HOUSING_COLOR, "face": "rectangle"},
+        {"label": "laser emitter (red sphere)", "color": _LASER_COLOR, "face": "circle"},
+        {"label": "camera centre (blue sphere)", "color": _CAMERA_COLOR, "face": "circle"},
+        {"label": "laser fan", "color": _LASER_COLOR, "face": "triangle"},
+        {"label": "field of view", "color": _FOV_COLOR, "face": "rectangle"},
+    ]
 
 
 def add_sensor(plotter: Any, sensor: LaserLineSensor, T_world_sensor: ArrayLike) -> list[Any]:

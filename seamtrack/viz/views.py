@@ -22,7 +22,6 @@ environment variable ``PYVISTA_OFF_SCREEN=true``) forces off-screen rendering.
 
 from __future__ import annotations
 
-import os
 import sys
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -44,7 +43,9 @@ from seamtrack.viz.sensor_view import (
     _polyline,
     _pyvista,
     add_sensor,
+    sensor_legend,
 )
+from seamtrack.viz.sensor_view import has_display as has_display  # re-exported
 from seamtrack.viz.sensor_view import sensor_meshes as sensor_meshes  # re-exported
 
 __all__ = [
@@ -65,17 +66,11 @@ SenseFn = Callable[[FloatArray, float], Feature]
 _MESH_COLOR = "#b8c4d6"
 _SEAM_COLOR = "#1f3b99"
 _FEATURE_COLOR = "#ffd700"
+_TORCH_COLOR = "#c08000"
 _LIFT_MM = 0.2
 
 
 # --------------------------------------------------------------------------- environment
-def has_display() -> bool:
-    """True when an interactive window can open (Windows, macOS, or X11/Wayland on Linux)."""
-    if sys.platform in ("win32", "darwin"):
-        return True
-    return bool(os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY"))
-
-
 def in_notebook() -> bool:
     """True inside a Jupyter kernel (IPython is not imported to find out)."""
     ipython = sys.modules.get("IPython")
@@ -401,7 +396,7 @@ def scene_plotter(
         T = view.pose_at_tcp(tcp)
     add_sensor(plotter, view.sensor, T)
     plotter.add_mesh(
-        _torch_mesh(pv, 0.2 * view.sensor.range_center_mm), color="#c08000", name="torch"
+        _torch_mesh(pv, 0.2 * view.sensor.range_center_mm), color=_TORCH_COLOR, name="torch"
     ).user_matrix = T_tcp
     if joints is not None:
         from seamtrack.viz.arm import ArmActors
@@ -412,7 +407,6 @@ def scene_plotter(
         cloud = stripe_polydata(pv, view.sensor, profile, T)
         if cloud.n_points:
             plotter.add_mesh(cloud, scalars="rgb", rgb=True, point_size=4, name="stripe")
-        _add_reason_legend(plotter, profile)
     marker = pv.Sphere(radius=0.012 * view.sensor.range_center_mm)
     if feature:
         plotter.add_mesh(
@@ -420,6 +414,7 @@ def scene_plotter(
         )
     if result is not None:
         _add_result(plotter, pv, view, result)
+    add_view_legend(plotter, legend_entries(view, profile, feature, result))
     if title:
         where = (
             "whole run"
@@ -435,24 +430,47 @@ def scene_plotter(
     return plotter
 
 
-def _add_reason_legend(plotter: Any, profile: Profile) -> None:
-    assert profile.reason is not None
-    counts = np.bincount(profile.reason, minlength=len(Reason))
-    entries = [
-        [f"{code.name.lower().replace('_', ' ')} ({counts[code]})", REASON_COLORS[code]]
-        for code in Reason
-        if counts[code]
-    ]
-    if entries:
-        plotter.add_legend(
-            entries,
-            bcolor="white",
-            border=True,
-            face="rectangle",
-            loc="lower left",
-            size=(0.3, 0.04 * len(entries)),
-            background_opacity=0.8,
+def legend_entries(
+    view: SceneView, profile: Profile | None, feature: Feature, result: Any = None
+) -> list[dict[str, str]]:
+    """What a view draws, as legend entries (``label``, ``color``, ``face``): the seam, the
+    workpiece, the sensor's parts, the torch cone, the seam point found, the stripe's points
+    by :class:`Reason` (with their counts) and, after a run, the sensed seam points."""
+    entries = [{"label": "true seam", "color": _SEAM_COLOR, "face": "line"}]
+    if view.mesh is not None:
+        entries.append({"label": "workpiece", "color": _MESH_COLOR, "face": "rectangle"})
+    entries += sensor_legend()
+    entries.append({"label": "torch (cone)", "color": _TORCH_COLOR, "face": "triangle"})
+    if feature:
+        entries.append(
+            {"label": "seam point found (yellow sphere)", "color": _FEATURE_COLOR, "face": "circle"}
         )
+    if profile is not None and profile.reason is not None:
+        counts = np.bincount(profile.reason, minlength=len(Reason))
+        entries += [
+            {
+                "label": f"stripe: {code.name.lower().replace('_', ' ')} ({counts[code]})",
+                "color": REASON_COLORS[code],
+                "face": "circle",
+            }
+            for code in Reason
+            if counts[code]
+        ]
+    if result is not None:
+        entries.append({"label": "sensed seam points", "color": "black", "face": "circle"})
+    return entries
+
+
+def add_view_legend(plotter: Any, entries: list[dict[str, str]]) -> Any:
+    """One legend box in the lower left (PyVista keeps one legend per view)."""
+    return plotter.add_legend(
+        entries,
+        bcolor="white",
+        border=True,
+        loc="lower left",
+        size=(0.28, min(0.035 * len(entries), 0.6)),
+        background_opacity=0.8,
+    )
 
 
 def _add_result(plotter: Any, pv: Any, view: SceneView, result: Any) -> None:
