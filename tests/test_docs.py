@@ -229,6 +229,8 @@ HAND_WRITTEN_FIGURE_TABLES = {
     "camera.md": 3,
     "extractors.md": 4,
     "gym.md": 1,  # the observation's slices, not a figure
+    "heat.md": 2,  # the materials' handbook constants and the relations used, not figures
+    "inspection.md": 1,  # ISO 5817's limits, not a figure
     "mesh-mode.md": 2,
     "multipass.md": 1,
     "paper.md": 4,
