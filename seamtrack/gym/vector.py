@@ -47,6 +47,13 @@ SLOTS: dict[str, tuple[type, Any]] = {
 }
 
 
+def observation_size(env: SeamTrackEnv) -> int:
+    """The length of an environment's flat observation."""
+    shape = env.observation_space.shape
+    assert shape is not None
+    return int(shape[0])
+
+
 class Batch:
     """Environments stepped together with Gymnasium's NEXT_STEP autoreset, writing into
     arrays they are given (rows ``indices`` of the batch's arrays)."""
@@ -106,7 +113,7 @@ def _worker(
     batch = None
     try:
         batch = Batch(indices, env_kwargs)
-        size = int(batch.envs[0].observation_space.shape[0])
+        size = observation_size(batch.envs[0])
         memories, arrays = _attach(names, n, size)
         conn.send(("ready", None))
         while True:
@@ -179,7 +186,7 @@ class BatchedVectorEnv(gymnasium.vector.VectorEnv):
         self.single_action_space = single.action_space
         self.observation_space = batch_space(self.single_observation_space, num_envs)
         self.action_space = batch_space(self.single_action_space, num_envs)
-        size = int(self.single_observation_space.shape[0])
+        size = observation_size(single)
         if probe is not None:
             probe.close()
             self._arrays = self._share(size)
@@ -202,7 +209,7 @@ class BatchedVectorEnv(gymnasium.vector.VectorEnv):
         return arrays
 
     def _start(self, context: str, env_kwargs: dict[str, Any]) -> None:
-        ctx = mp.get_context(context)
+        ctx: Any = mp.get_context(context)
         names = dict(zip(SLOTS, (m.name for m in self._memories), strict=True))
         for indices in self._slices:
             mine, theirs = ctx.Pipe()
@@ -281,7 +288,8 @@ class BatchedVectorEnv(gymnasium.vector.VectorEnv):
             for conn in self._conns:
                 conn.send(("step", None))
             per_env = [info for answer in self._gather() for info in answer]
-        return (*self._outputs(), self._infos(per_env))
+        obs, reward, terminated, truncated = self._outputs()
+        return obs, reward, terminated, truncated, self._infos(per_env)
 
     def close_extras(self, **kwargs: Any) -> None:
         if getattr(self, "_closed", True) and not self._memories:
