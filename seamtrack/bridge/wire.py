@@ -199,7 +199,7 @@ def parse(raw: bytes, limit: int = MAX_MESSAGE_BYTES) -> dict[str, Any]:
     except (UnicodeDecodeError, ValueError) as exc:
         raise BridgeFailure(
             f"sent what is not JSON ({exc.__class__.__name__})",
-            fix="send UTF-8 JSON objects as docs/bridge.md gives them",
+            fix="send UTF-8 JSON objects as docs/ros.md gives them",
         ) from None
     if not isinstance(message, dict) or not isinstance(message.get("op"), str):
         raise BridgeFailure(
@@ -217,7 +217,7 @@ def expect(message: dict[str, Any], op: str) -> None:
     if message["op"] != op:
         raise BridgeFailure(
             f"sent op {str(message['op'])[:40]!r} where {op!r} was due",
-            fix=f"answer with {op!r} (docs/bridge.md gives the order)",
+            fix=f"answer with {op!r} (docs/ros.md gives the order)",
         )
 
 
@@ -338,5 +338,5 @@ def _optional(body: dict[str, Any], key: str, n: int) -> list[float] | None:
     return checked
 
 
-def _bad(what: str, fix: str = "see the command's fields in docs/bridge.md") -> BridgeFailure:
+def _bad(what: str, fix: str = "see the command's fields in docs/ros.md") -> BridgeFailure:
     return BridgeFailure(f"sent a bad command: {what}", fix=fix)
