@@ -33,6 +33,7 @@ import ipaddress
 import json
 import math
 import os
+import re
 import socket
 import stat
 import time
@@ -79,6 +80,12 @@ def check_endpoint(endpoint: str, token: str | None = None) -> None:
     host, colon, port = rest.rpartition(":")
     if not colon or not host:
         raise SeamtrackError(f"{endpoint[:80]!r} has no HOST:PORT", field="--endpoint", fix=fix)
+    if not re.fullmatch(r"[A-Za-z0-9._*:\[\]-]+", host):
+        raise SeamtrackError(
+            f"host {host[:40]!r} of {endpoint[:80]!r} is not an address",
+            field="--endpoint",
+            fix=fix,
+        )
     if port != "*" and not (port.isdigit() and 1 <= int(port) <= 65535):
         raise SeamtrackError(
             f"port {port[:20]!r} of {endpoint[:80]!r} is not 1-65535", field="--endpoint", fix=fix
