@@ -206,3 +206,40 @@ def test_a_signal_ends_serve_as_interrupted_with_everything_written(k: int, tmp_
     assert not (tmp_path / "bridge").exists()  # the socket file is gone
     assert client.returncode == 1, c_err  # told: the run was interrupted
     assert f"interrupted: bridge: interrupted by {name}" in c_err
+
+
+def test_a_port_scan_changes_nothing_over_zenoh(tmp_path: Path) -> None:
+    """Over Zenoh the run ends only when the tracker node's own liveliness tokens go: TCP
+    connections opened and closed on the router's port all through the run (a port scan)
+    leave it the in-process run, to the byte."""
+    pytest.importorskip("zenoh")
+    pytest.importorskip("rosbags")
+    reference = tmp_path / "in-process"
+    assert main(["run", "paper-corner", *SEAM, "--out", str(reference), "--no-plot", "-q"]) == 0
+    port = _free_port()
+    endpoint = f"tcp/127.0.0.1:{port}"
+    out = tmp_path / "served"
+    server = _server(endpoint, out, "-q", "--transport", "zenoh")
+    script = Path(__file__).parent / "bridge_clients" / "zenoh_algorithm2.py"
+    client = subprocess.Popen(
+        [sys.executable, str(script), endpoint], stdout=subprocess.PIPE, stderr=subprocess.PIPE
+    )
+    scans = 0
+    try:
+        while server.poll() is None:
+            try:
+                _port_scan(port)
+                scans += 1
+            except OSError:  # not listening yet, or no more
+                pass
+            time.sleep(0.05)
+        _, err = server.communicate(timeout=60)
+        client.communicate(timeout=30)
+    finally:
+        for proc in (server, client):
+            if proc.poll() is None:
+                proc.kill()
+    assert server.returncode == 0, err
+    assert scans >= 5
+    for name in ("trace.csv", "frames.csv"):
+        assert (out / name).read_bytes() == (reference / name).read_bytes(), name
