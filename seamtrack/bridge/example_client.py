@@ -152,7 +152,7 @@ def main(argv: list[str] | None = None) -> int:
     sock.connect(args.endpoint)
     try:
         sock.send_json(hello(args))
-        reset = sock.recv_json()
+        reset: dict = json.loads(sock.recv())
         if reset["op"] != "reset":  # a refusal: {"op": "error", "status", "reason"}
             print(f"refused: {reset.get('reason')}", file=sys.stderr)
             return 1

@@ -5,7 +5,8 @@ lists; in JSON a NaN is ``null``.
 Client -> server (each message one ZeroMQ frame of UTF-8 JSON, at most
 :data:`MAX_MESSAGE_BYTES`):
 
-* ``{"op": "hello", "protocol": 2, "profile": true}`` (``profile``: send the stripe profiles);
+* ``{"op": "hello", "protocol": 2, "profile": true}`` (``profile``: send the stripe profiles;
+  ``"token"``: the server's shared token, when it has one);
 * ``{"op": "ready"}`` after the ``reset``;
 * ``{"op": "command", "seq": k, "command": null | {...}}`` answering step ``k``. A command holds
   ``target_mm`` (x, y, z, required), ``speed_mm_s`` (> 0, required), and optionally
@@ -38,10 +39,13 @@ Server -> client:
   little-endian float64, row-major (NaN where a ray hit nothing), part ``i + 1`` the n
   reason codes as uint8 (0: valid; :data:`seamtrack.bridge.messages.REASON_CODES`). A part's
   length is the product of its shape times the dtype's size: check it before reading;
-* ``{"op": "end", "summary": {...}}`` once the run is over (no answer expected).
+* ``{"op": "end", "status": s, "reason": r, "summary": {...}}`` once the run is over,
+  whatever ended it (``reason``: the summary's ``stop_reason``; no answer expected);
+* ``{"op": "error", "status": "refused", "reason": r}`` to a peer that is refused: a hello of
+  another protocol or without the token, any message of a peer other than the session's.
 
 Protocol 1 sent the profiles as JSON lists (some 50 kB and milliseconds a frame); a client
-saying protocol 1 is refused, the error naming protocol 2.
+saying protocol 1 is refused, the refusal (and the error) naming protocol 2.
 """
 
 from __future__ import annotations

@@ -36,8 +36,8 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
         "--transport",
         choices=["zmq", "zenoh"],
         default="zmq",
-        help="zmq: JSON and raw profile arrays over a ZeroMQ REP socket; zenoh: ROS 2 messages "
-        "as rmw_zenoh puts them",
+        help="zmq: JSON and raw profile arrays over a ZeroMQ ROUTER socket (one client a run); "
+        "zenoh: ROS 2 messages as rmw_zenoh puts them",
     )
     p.add_argument(
         "--endpoint",
@@ -128,8 +128,8 @@ def start_hint(args: argparse.Namespace, endpoint: str) -> str:
     """How to start a tracker for this serve (the example client that ships with seamtrack)."""
     if args.transport == "zenoh":
         return (
-            "a ROS 2 node with RMW_IMPLEMENTATION=rmw_zenoh_cpp and this router in its "
-            "ZENOH_CONFIG_OVERRIDE (docs/ros.md)"
+            "a ROS 2 node under RMW_IMPLEMENTATION=rmw_zenoh_cpp, without rmw_zenohd: this is "
+            "its router (docs/ros.md)"
         )
     return f"python -m seamtrack.bridge.example_client {endpoint}"
 
