@@ -86,7 +86,8 @@ def _serve(
     args = [sys.executable, str(script), endpoint, *client_args]
     if transport == "zmq" and not misbehave:  # the client that ships with seamtrack
         args = [sys.executable, "-m", "seamtrack.bridge.example_client", endpoint, *client_args]
-    args += ["--misbehave", misbehave, "--deadline-s", str(timeout_s)] if misbehave else []
+    args += ["--misbehave", misbehave] if misbehave else []
+    args += ["--deadline-s", str(timeout_s)] if misbehave and transport == "zmq" else []
     client = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         s_out, s_err = server.communicate(timeout=240)

@@ -149,21 +149,35 @@ def test_a_token_binds_the_session_to_the_client_that_has_it(tmp_path: Path) -> 
 
 SIGNALS = [signal.SIGINT, signal.SIGTERM]
 
+#: (transport, k): four seeded moments over ZeroMQ, two over Zenoh.
+MOMENTS = [("zmq", k) for k in range(4)] + [("zenoh", k) for k in range(2)]
 
-@pytest.mark.parametrize("k", range(4))
-def test_a_signal_ends_serve_as_interrupted_with_everything_written(k: int, tmp_path: Path) -> None:
-    """SIGINT or SIGTERM at a random moment (seeded) of a run with the example client
-    attached: exit 128 + the signal, one line naming it, the run folder written with status
-    ``interrupted`` up to the stop (its trace ends where the summary says), no temporary file
-    and no socket file left, and the client told (``end``, status ``interrupted``)."""
+
+@pytest.mark.parametrize(("transport", "k"), MOMENTS)
+def test_a_signal_ends_serve_as_interrupted_with_everything_written(
+    transport: str, k: int, tmp_path: Path
+) -> None:
+    """SIGINT or SIGTERM at a random moment (seeded) of a run with a client attached: exit
+    128 + the signal, one line naming it, the run folder written with status ``interrupted``
+    up to the stop (its trace ends where the summary says), no temporary file and no socket
+    file left, and the client told (``end``, or ``/seamtrack/status``: ``interrupted``)."""
+    if transport == "zenoh":
+        pytest.importorskip("zenoh")
+        pytest.importorskip("rosbags")
     rng = np.random.default_rng(43 + k)
     signum = SIGNALS[k % 2]
-    endpoint = f"ipc://{tmp_path}/bridge"
+    if transport == "zmq":
+        endpoint = f"ipc://{tmp_path}/bridge"
+        client_args = ["-m", "seamtrack.bridge.example_client", endpoint, "--then", "0"]
+    else:
+        endpoint = f"tcp/127.0.0.1:{_free_port()}"
+        script = Path(__file__).parent / "bridge_clients" / "zenoh_algorithm2.py"
+        client_args = [str(script), endpoint]
     out = tmp_path / "runs" / "served"
     # a long seam, so that the run is still going when the signal comes
     server = subprocess.Popen(
         [sys.executable, "-m", "seamtrack.cli", "serve", "paper-verification"]
-        + ["--endpoint", endpoint, "--out", str(out), "--no-plot", "--lockstep", "tick"],
+        + ["--endpoint", endpoint, "--out", str(out), "--no-plot", "--transport", transport],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -172,10 +186,11 @@ def test_a_signal_ends_serve_as_interrupted_with_everything_written(k: int, tmp_
     try:
         assert server.stderr is not None
         waiting = server.stderr.readline()  # once it listens
-        assert "waiting up to 60 s for a tracker" in waiting
-        assert f"python -m seamtrack.bridge.example_client {endpoint}" in waiting
+        assert f"waiting up to 60 s for a tracker on {endpoint}; start one, e.g. " in waiting
+        if transport == "zmq":
+            assert f"python -m seamtrack.bridge.example_client {endpoint}" in waiting
         client = subprocess.Popen(
-            [sys.executable, "-m", "seamtrack.bridge.example_client", endpoint, "--then", "0"],
+            [sys.executable, *client_args],
             stdout=subprocess.PIPE,
             stderr=subprocess.PIPE,
             text=True,
@@ -183,7 +198,7 @@ def test_a_signal_ends_serve_as_interrupted_with_everything_written(k: int, tmp_
         time.sleep(float(rng.uniform(0.3, 3.0)))
         os.kill(server.pid, signum)
         _, s_err = server.communicate(timeout=60)
-        _, c_err = client.communicate(timeout=30)
+        c_out, c_err = client.communicate(timeout=30)
     finally:
         for proc in (server, client):
             if proc is not None and proc.poll() is None:
@@ -203,9 +218,35 @@ def test_a_signal_ends_serve_as_interrupted_with_everything_written(k: int, tmp_
     assert sorted(p.name for p in out.iterdir()) == sorted(
         ["summary.json", "trace.csv", "frames.csv", "scene.toml"]
     )
-    assert not (tmp_path / "bridge").exists()  # the socket file is gone
-    assert client.returncode == 1, c_err  # told: the run was interrupted
-    assert f"interrupted: bridge: interrupted by {name}" in c_err
+    if transport == "zmq":
+        assert not (tmp_path / "bridge").exists()  # the socket file is gone
+        assert client.returncode == 1, c_err  # told: the run was interrupted
+        assert f"interrupted: bridge: interrupted by {name}" in c_err
+    else:
+        status = json.loads(c_out.strip().splitlines()[-1])
+        assert status["status"] == "interrupted" and name in status["reason"]
+
+
+def test_a_signal_while_serve_waits_writes_the_run_as_interrupted_at_zero(tmp_path: Path) -> None:
+    """No client yet: SIGTERM ends the wait at once (not after --wait-s), and the run folder
+    says so (interrupted at t = 0)."""
+    endpoint = f"ipc://{tmp_path}/bridge"
+    out = tmp_path / "served"
+    server = _server(endpoint, out)
+    try:
+        assert server.stderr is not None
+        assert "waiting up to 60 s" in server.stderr.readline()
+        server.send_signal(signal.SIGTERM)
+        _, err = server.communicate(timeout=30)
+    finally:
+        if server.poll() is None:
+            server.kill()
+    assert server.returncode == 128 + signal.SIGTERM, err
+    assert "SIGTERM: stopped at t = 0.000 s (status interrupted)" in err
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["status"] == "interrupted" and summary["sim_time_s"] < 0.1
+    assert summary["bridge_steps"] == 0
+    assert not (tmp_path / "bridge").exists()
 
 
 def test_a_port_scan_changes_nothing_over_zenoh(tmp_path: Path) -> None:

@@ -158,6 +158,9 @@ class ZmqTransport:
 
         self._zmq = zmq
         self._bound = ""
+        self.told = False  # the client was sent its end (or refusal)
+        self.owed = False  # the client owes an answer to what was sent last
+        self.refused = 0  # messages of other peers refused
         self.endpoint = endpoint
         self.timeout_s = timeout_s
         self.wait_s = wait_s
@@ -191,9 +194,6 @@ class ZmqTransport:
         #: socket puts) and the file descriptor of its connection; None before its hello.
         self.peer: list[bytes] | None = None
         self.peer_fd = -1
-        self.told = False  # the client was sent its end (or refusal)
-        self.owed = False  # the client owes an answer to what was sent last
-        self.refused = 0  # messages of other peers refused
         #: The client's last seam hint (point_mm, direction, tolerance_mm), world frame.
         self.seam_hint: tuple[Any, ...] | None = None
 
