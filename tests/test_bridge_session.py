@@ -174,10 +174,11 @@ def test_a_signal_ends_serve_as_interrupted_with_everything_written(
         script = Path(__file__).parent / "bridge_clients" / "zenoh_algorithm2.py"
         client_args = [str(script), endpoint]
     out = tmp_path / "runs" / "served"
-    # a long seam, so that the run is still going when the signal comes
+    # a long seam, a step a tick: the run is still going when the signal comes
     server = subprocess.Popen(
-        [sys.executable, "-m", "seamtrack.cli", "serve", "paper-verification"]
-        + ["--endpoint", endpoint, "--out", str(out), "--no-plot", "--transport", transport],
+        [sys.executable, "-m", "seamtrack.cli", "serve", "paper-verification", "--lockstep"]
+        + ["tick", "--endpoint", endpoint, "--out", str(out), "--no-plot"]
+        + ["--transport", transport],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
