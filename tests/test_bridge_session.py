@@ -110,7 +110,7 @@ def test_a_port_scan_and_a_second_client_change_nothing(tmp_path: Path) -> None:
 
 def test_a_token_binds_the_session_to_the_client_that_has_it(tmp_path: Path) -> None:
     """With a shared token, a hello without it, or with another, is refused and the server
-    waits on; the hello with it starts the session (reset)."""
+    waits on; the hello with it starts the session (reset), here from a DEALER socket."""
     from seamtrack.bridge.zmq_transport import ZmqTransport
 
     endpoint = f"ipc://{tmp_path}/bridge"
@@ -123,16 +123,23 @@ def test_a_token_binds_the_session_to_the_client_that_has_it(tmp_path: Path) -> 
     try:
         thread.start()
         answers = []
-        for given in (None, "k3y-" + "y" * 20, token):
-            sock = ctx.socket(zmq.REQ)
+        for given in (None, "k3y-" + "y" * 20, token):  # the last one a DEALER, as docs say
+            sock = ctx.socket(zmq.REQ if given != token else zmq.DEALER)
             sock.setsockopt(zmq.LINGER, 0)
             sock.setsockopt(zmq.RCVTIMEO, 10000)
             sock.connect(endpoint)
             socks.append(sock)
             hello = {"op": "hello", "protocol": 2}
-            sock.send_json(hello if given is None else {**hello, "token": given})
-            answers.append(sock.recv_json())
-        socks[-1].send_json({"op": "ready"})
+            text = json.dumps(hello if given is None else {**hello, "token": given}).encode()
+            if given != token:
+                sock.send(text)
+                answers.append(json.loads(sock.recv()))
+            else:  # an empty frame first, as a REQ socket puts it
+                sock.send_multipart([b"", text])
+                empty, reset = sock.recv_multipart()
+                assert empty == b""
+                answers.append(json.loads(reset))
+        socks[-1].send_multipart([b"", b'{"op": "ready"}'])
         thread.join(timeout=30)
         assert not thread.is_alive()
     finally:
