@@ -37,7 +37,7 @@ def _free_port() -> int:
 def _server(endpoint: str, out: Path, *extra: str) -> subprocess.Popen:
     return subprocess.Popen(
         [sys.executable, "-m", "seamtrack.cli", "serve", "paper-corner", *SEAM]
-        + ["--endpoint", endpoint, "--out", str(out), "--no-plot", "--wait-s", "60", *extra],
+        + ["--endpoint", endpoint, "--out", str(out), "--wait-s", "60", *extra],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
@@ -60,7 +60,7 @@ def test_a_port_scan_and_a_second_client_change_nothing(tmp_path: Path) -> None:
     port = _free_port()
     endpoint = f"tcp://127.0.0.1:{port}"
     out = tmp_path / "served"
-    server = _server(endpoint, out, "-q", "--lockstep", "tick")
+    server = _server(endpoint, out, "-q", "--lockstep", "tick", "--no-plot")
     ctx = zmq.Context()
     real, stranger = ctx.socket(zmq.REQ), ctx.socket(zmq.REQ)
     for sock in (real, stranger):
@@ -237,7 +237,7 @@ def test_a_signal_ends_serve_as_interrupted_with_everything_written(
 
 def test_a_signal_while_serve_waits_writes_the_run_as_interrupted_at_zero(tmp_path: Path) -> None:
     """No client yet: SIGTERM ends the wait at once (not after --wait-s), and the run folder
-    says so (interrupted at t = 0)."""
+    says so (interrupted at t = 0); the line names every file written, error.png too."""
     endpoint = f"ipc://{tmp_path}/bridge"
     out = tmp_path / "served"
     server = _server(endpoint, out)
@@ -251,6 +251,9 @@ def test_a_signal_while_serve_waits_writes_the_run_as_interrupted_at_zero(tmp_pa
             server.kill()
     assert server.returncode == 128 + signal.SIGTERM, err
     assert "SIGTERM: stopped at t = 0.000 s (status interrupted)" in err
+    files = "summary.json, trace.csv, frames.csv, scene.toml, error.png"
+    assert err.strip().splitlines()[-1].endswith(f"wrote {out}/{files}")
+    assert sorted(p.name for p in out.iterdir()) == sorted(files.split(", "))
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "interrupted" and summary["sim_time_s"] < 0.1
     assert summary["bridge_steps"] == 0
@@ -268,7 +271,7 @@ def test_a_port_scan_changes_nothing_over_zenoh(tmp_path: Path) -> None:
     port = _free_port()
     endpoint = f"tcp/127.0.0.1:{port}"
     out = tmp_path / "served"
-    server = _server(endpoint, out, "-q", "--transport", "zenoh")
+    server = _server(endpoint, out, "-q", "--transport", "zenoh", "--no-plot")
     script = Path(__file__).parent / "bridge_clients" / "zenoh_algorithm2.py"
     client = subprocess.Popen(
         [sys.executable, str(script), endpoint], stdout=subprocess.PIPE, stderr=subprocess.PIPE
