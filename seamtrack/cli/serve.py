@@ -131,7 +131,8 @@ def start_hint(args: argparse.Namespace, endpoint: str) -> str:
             "a ROS 2 node under RMW_IMPLEMENTATION=rmw_zenoh_cpp, without rmw_zenohd: this is "
             "its router (docs/ros.md)"
         )
-    return f"python -m seamtrack.bridge.example_client {endpoint}"
+    token = f" --token-file {args.token_file}" if args.token_file else ""
+    return f"python -m seamtrack.bridge.example_client {endpoint}{token}"
 
 
 @contextlib.contextmanager
