@@ -84,7 +84,10 @@ def _serve(
     )
     script = CLIENTS / f"{transport}_algorithm2.py"
     args = [sys.executable, str(script), endpoint, *client_args]
+    if transport == "zmq" and not misbehave:  # the client that ships with seamtrack
+        args = [sys.executable, "-m", "seamtrack.bridge.example_client", endpoint, *client_args]
     args += ["--misbehave", misbehave] if misbehave else []
+    args += ["--deadline-s", str(timeout_s)] if misbehave and transport == "zmq" else []
     client = subprocess.Popen(args, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         s_out, s_err = server.communicate(timeout=240)
@@ -214,7 +217,7 @@ CAUSES = {
 @pytest.mark.parametrize(("transport", "misbehave"), list(CAUSES))
 def test_misbehaving_client_ends_the_run(transport: str, misbehave: str, tmp_path: Path) -> None:
     out = tmp_path / "run"
-    server, _ = _serve("paper-corner", transport, out, misbehave, timeout_s=2.0)
+    server, client = _serve("paper-corner", transport, out, misbehave, timeout_s=2.0)
     assert server.returncode == 2
     lines = server.stderr.strip().splitlines()
     assert len(lines) == 1, server.stderr
@@ -225,6 +228,12 @@ def test_misbehaving_client_ends_the_run(transport: str, misbehave: str, tmp_pat
     assert CAUSES[transport, misbehave] in summary["stop_reason"]
     assert (out / "trace.csv").exists() and (out / "frames.csv").exists()
     assert not list(out.glob(".partial-*"))
+    if transport == "zmq" and misbehave != "vanish":  # the client is told why, and how it ended
+        told = json.loads(client.stdout.strip().splitlines()[-1])
+        assert told is not None, client.stderr
+        assert told["op"] == "end" and told["status"] == "stalled"
+        assert CAUSES[transport, misbehave] in told["reason"]
+        assert told["summary"]["stop_reason"] == summary["stop_reason"]
 
 
 def test_every_frame_brings_its_profile_over_zmq(

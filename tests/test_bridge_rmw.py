@@ -103,7 +103,8 @@ def test_an_ipc_path_a_server_listens_on_is_refused(tmp_path: Path) -> None:
 
 def test_a_protocol_1_client_is_refused_naming_protocol_2() -> None:
     """Protocol 1 sent the profiles as JSON: a client that says it speaks it is told which
-    protocol to speak instead, before anything is sent to it."""
+    protocol to speak instead (an ``error`` message, ``status`` ``refused``), before anything
+    else is sent to it."""
     zmq = pytest.importorskip("zmq")
     import socket
 
@@ -122,6 +123,11 @@ def test_a_protocol_1_client_is_refused_naming_protocol_2() -> None:
         with pytest.raises(BridgeFailure, match="protocol 1, not 2") as info:
             server.start(None, None, "frame")  # type: ignore[arg-type]
         assert "'protocol': 2" in info.value.fix
+        server.close()  # lingers until the refusal is out
+        assert client.poll(5000)  # the client is told, not left waiting
+        refusal = client.recv_json()
+        assert refusal["op"] == "error" and refusal["status"] == "refused"
+        assert "protocol 1, not 2" in refusal["reason"] and "'protocol': 2" in refusal["reason"]
     finally:
         client.close(0)
         ctx.term()

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from seamtrack.bench.failure_kit import Entry
 
-FILES: dict[str, bytes] = {}
+FILES: dict[str, bytes] = {"short-token.txt": b"letmein\n"}
 GENERATED: dict[str, Callable[[Path], None]] = {}
 
 
@@ -37,4 +37,35 @@ ENTRIES: tuple[Entry, ...] = (
         field="--endpoint",
     ),
     Entry("serve zenoh domain id negative", _serve("--domain-id", "-3"), field="--domain-id"),
+    # issue 43: refused up front, naming the field (not blamed on the client later)
+    Entry(
+        "serve zmq endpoint port out of range",
+        _serve("--endpoint", "tcp://127.0.0.1:99999"),
+        field="--endpoint",
+    ),
+    Entry(
+        "serve zmq endpoint beyond loopback without a token",
+        _serve("--endpoint", "tcp://0.0.0.0:5555"),
+        field="--endpoint",
+    ),
+    Entry(
+        "serve token file missing",
+        _serve("--endpoint", "tcp://0.0.0.0:5555", "--token-file", "no-such-token.txt"),
+        field="--token-file",
+    ),
+    Entry(
+        "serve token too short",
+        _serve("--endpoint", "tcp://0.0.0.0:5555", "--token-file", "short-token.txt"),
+        field="--token-file",
+    ),
+    Entry(
+        "serve token file with zenoh",
+        _serve("--transport", "zenoh", "--token-file", "short-token.txt"),
+        field="--token-file",
+    ),
+    Entry(
+        "serve zenoh endpoint port out of range",
+        _serve("--transport", "zenoh", "--endpoint", "tcp/127.0.0.1:70000"),
+        field="--endpoint",
+    ),
 )

@@ -21,7 +21,10 @@ torch's position and velocity at that tick.
 A client that disconnects, sends what is not a command, or misses the deadline ends the run:
 the tracker brakes to rest, the loop's wall-clock guard (:data:`seamtrack.simulation.loop.
 WALL_CHECK_TICKS` ticks later at most) stops it as ``stalled``, and ``stop_reason`` names the
-cause (:func:`serve`).
+cause (:func:`serve`). A :class:`StopRequest` (set by ``seamtrack serve``'s SIGINT and SIGTERM
+handler: a flag, nothing more, so the signal never lands in compiled code) ends it the same
+way, between two steps or while the bridge waits for the client, as ``interrupted``. Either
+way the client is told: the transport's ``finish`` sends the status and the reason.
 """
 
 from __future__ import annotations
@@ -29,6 +32,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
+import signal
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -57,8 +61,47 @@ class BridgeFailure(SeamtrackError):
 
     def __init__(self, message: str, field: str = "client", fix: str = "") -> None:
         super().__init__(
-            message, field=field, fix=fix or "check the tracker process against docs/bridge.md"
+            message, field=field, fix=fix or "check the tracker process against docs/ros.md"
         )
+
+
+class Interrupted(BridgeFailure):
+    """The run was stopped by a signal (:class:`StopRequest`), not by the client."""
+
+    def __init__(self, signum: int) -> None:
+        self.signum = signum
+        super().__init__(
+            f"interrupted by {signal_name(signum)}", field="signal", fix="nothing: it was asked"
+        )
+
+
+def signal_name(signum: int) -> str:
+    """``SIGINT`` for 2, ...; the number for a signal Python does not name."""
+    try:
+        return signal.Signals(signum).name
+    except ValueError:
+        return f"signal {signum}"
+
+
+class StopRequest:
+    """A request to stop the bridged run, set from a signal handler (it is one:
+    ``signal.signal(signal.SIGTERM, request)``) and read between steps and while the bridge
+    waits: the handler only sets a flag, so a signal never raises inside compiled code (the
+    loop's numba kernels) and the run ends where a step would, written as ``interrupted``.
+    """
+
+    def __init__(self) -> None:
+        self.signum = 0
+
+    def __call__(self, signum: int, frame: Any = None) -> None:
+        if not self.signum:  # the first signal names the stop
+            self.signum = signum
+
+    def __bool__(self) -> bool:
+        return self.signum != 0
+
+    def failure(self) -> Interrupted:
+        return Interrupted(self.signum)
 
 
 @dataclass(frozen=True, eq=False)
@@ -111,7 +154,11 @@ _ASK_MARGIN = 1e-9
 
 
 class Transport(Protocol):
-    """How steps go out and commands come in (one tracker process at a time)."""
+    """How steps go out and commands come in (one tracker process at a time). ``stop`` is
+    read while the transport waits (:func:`serve` sets it): once set, the wait ends with its
+    :class:`Interrupted`."""
+
+    stop: StopRequest
 
     def start(self, context: TrackerContext, chain: TfChain, lockstep: str) -> None:
         """Wait for the tracker process and give it the run's context."""
@@ -121,7 +168,8 @@ class Transport(Protocol):
         :class:`BridgeFailure`."""
 
     def finish(self, summary: dict[str, Any]) -> None:
-        """Tell the tracker the run is over (best effort)."""
+        """Tell the tracker the run is over, its ``status`` and ``stop_reason`` (best
+        effort: also after a failure, so that the client is never left waiting)."""
 
     def close(self) -> None: ...
 
@@ -147,8 +195,10 @@ class BridgeTracker:
         chain: TfChain,
         lockstep: str = "tick",
         profiles: dict[float, tuple[Profile, Any]] | None = None,
+        stop: StopRequest | None = None,
     ) -> None:
         self.transport = transport
+        self.stop = stop if stop is not None else StopRequest()
         self.chain = chain
         self.lockstep = lockstep
         self.profiles = profiles if profiles is not None else {}
@@ -190,6 +240,9 @@ class BridgeTracker:
         self, t_s: float, tcp_world: FloatArray, tcp_velocity_world: FloatArray
     ) -> Command | None:
         if self.failure is not None:
+            return None
+        if self.stop:  # checked once a tick: between steps, never inside compiled code
+            self.failure = self.stop.failure()
             return None
         if self.lockstep == "frame" and not self._frames and self._within > 0.0:
             tcp = np.asarray(tcp_world, dtype=float).tolist()  # Python floats: every tick
@@ -302,29 +355,34 @@ def serve(
     lockstep: str = "tick",
     seed: int | None = None,
     clock: Callable[[], float] | None = None,
+    stop: StopRequest | None = None,
 ) -> tuple[Result, BridgeTracker]:
     """Run ``parts`` with the tracker behind ``transport``. The result's summary is the
     loop's; a failed bridge stops the run as ``stalled`` with ``stop_reason`` naming the cause
-    (``tracker.failure`` holds it); ``bridge_steps`` and ``bridge_exchange_s`` count the round
-    trips and their wall time, ``bridge_wait_s`` the wait for the tracker (in ``wall_time_s``)."""
+    (``tracker.failure`` holds it), a set ``stop`` as ``interrupted`` (``stop_cause`` too);
+    ``bridge_steps`` and ``bridge_exchange_s`` count the round trips and their wall time,
+    ``bridge_wait_s`` the wait for the tracker (in ``wall_time_s``). The client is told the
+    status and the reason in every case (``transport.finish``)."""
     if lockstep not in LOCKSTEPS:
         raise ValueError(f"lockstep must be one of {LOCKSTEPS}, got {lockstep!r}")
-    tracker = BridgeTracker(transport, tf_chain(parts), lockstep)
+    stop = stop if stop is not None else StopRequest()
+    transport.stop = stop
+    tracker = BridgeTracker(transport, tf_chain(parts), lockstep, stop=stop)
     bridged = bridged_parts(parts, tracker)
     start = time.perf_counter()
     try:
         result = run(bridged, seed=seed, clock=clock or _FailClock(tracker))
         summary = result.summary
         if tracker.failure is not None:
-            summary["status"] = "stalled"
+            cause = "interrupted" if isinstance(tracker.failure, Interrupted) else "stalled"
+            summary["status"] = cause
             summary["stop_reason"] = f"bridge: {tracker.failure.message}"
-            summary["stop_cause"] = "stalled"
+            summary["stop_cause"] = cause
             summary["wall_time_s"] = time.perf_counter() - start
         summary["bridge_steps"] = tracker.steps
         summary["bridge_exchange_s"] = tracker.exchange_time_s
         summary["bridge_wait_s"] = tracker.wait_time_s
-        if tracker.failure is None:
-            transport.finish(summary)
+        transport.finish(summary)
     finally:
         transport.close()
     return result, tracker

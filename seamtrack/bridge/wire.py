@@ -5,7 +5,8 @@ lists; in JSON a NaN is ``null``.
 Client -> server (each message one ZeroMQ frame of UTF-8 JSON, at most
 :data:`MAX_MESSAGE_BYTES`):
 
-* ``{"op": "hello", "protocol": 2, "profile": true}`` (``profile``: send the stripe profiles);
+* ``{"op": "hello", "protocol": 2, "profile": true}`` (``profile``: send the stripe profiles;
+  ``"token"``: the server's shared token, when it has one);
 * ``{"op": "ready"}`` after the ``reset``;
 * ``{"op": "command", "seq": k, "command": null | {...}}`` answering step ``k``. A command holds
   ``target_mm`` (x, y, z, required), ``speed_mm_s`` (> 0, required), and optionally
@@ -38,10 +39,13 @@ Server -> client:
   little-endian float64, row-major (NaN where a ray hit nothing), part ``i + 1`` the n
   reason codes as uint8 (0: valid; :data:`seamtrack.bridge.messages.REASON_CODES`). A part's
   length is the product of its shape times the dtype's size: check it before reading;
-* ``{"op": "end", "summary": {...}}`` once the run is over (no answer expected).
+* ``{"op": "end", "status": s, "reason": r, "summary": {...}}`` once the run is over,
+  whatever ended it (``reason``: the summary's ``stop_reason``; no answer expected);
+* ``{"op": "error", "status": "refused", "reason": r}`` to a peer that is refused: a hello of
+  another protocol or without the token, any message of a peer other than the session's.
 
 Protocol 1 sent the profiles as JSON lists (some 50 kB and milliseconds a frame); a client
-saying protocol 1 is refused, the error naming protocol 2.
+saying protocol 1 is refused, the refusal (and the error) naming protocol 2.
 """
 
 from __future__ import annotations
@@ -199,7 +203,7 @@ def parse(raw: bytes, limit: int = MAX_MESSAGE_BYTES) -> dict[str, Any]:
     except (UnicodeDecodeError, ValueError) as exc:
         raise BridgeFailure(
             f"sent what is not JSON ({exc.__class__.__name__})",
-            fix="send UTF-8 JSON objects as docs/bridge.md gives them",
+            fix="send UTF-8 JSON objects as docs/ros.md gives them",
         ) from None
     if not isinstance(message, dict) or not isinstance(message.get("op"), str):
         raise BridgeFailure(
@@ -217,7 +221,7 @@ def expect(message: dict[str, Any], op: str) -> None:
     if message["op"] != op:
         raise BridgeFailure(
             f"sent op {str(message['op'])[:40]!r} where {op!r} was due",
-            fix=f"answer with {op!r} (docs/bridge.md gives the order)",
+            fix=f"answer with {op!r} (docs/ros.md gives the order)",
         )
 
 
@@ -338,5 +342,5 @@ def _optional(body: dict[str, Any], key: str, n: int) -> list[float] | None:
     return checked
 
 
-def _bad(what: str, fix: str = "see the command's fields in docs/bridge.md") -> BridgeFailure:
+def _bad(what: str, fix: str = "see the command's fields in docs/ros.md") -> BridgeFailure:
     return BridgeFailure(f"sent a bad command: {what}", fix=fix)

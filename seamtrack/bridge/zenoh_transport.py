@@ -1,6 +1,6 @@
 """The Zenoh transport: ROS 2 messages (CDR) on rmw_zenoh's key expressions, so that a ROS 2
 node under ``RMW_IMPLEMENTATION=rmw_zenoh_cpp`` can be the tracker (:mod:`seamtrack.bridge.rmw`
-gives the formats; docs/bridge.md the topics).
+gives the formats; docs/ros.md the topics).
 
 The bridge is a node ``/seamtrack`` in a Zenoh session in router mode, listening on loopback
 (rmw_zenoh's router port 7447 by default, so a ROS node connects to it as to ``rmw_zenohd``).
@@ -39,9 +39,10 @@ from typing import Any
 import numpy as np
 
 from seamtrack.bridge import cdr, messages, rmw
-from seamtrack.bridge.lockstep import Answer, BridgeFailure, Reply, Step, TfChain
+from seamtrack.bridge.lockstep import Answer, BridgeFailure, Reply, Step, StopRequest, TfChain
 from seamtrack.bridge.wire import MAX_MESSAGE_BYTES, MAX_THEN, context_json, make_command
 from seamtrack.control.tracking import TrackerContext
+from seamtrack.errors import SeamtrackError
 
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
 NODE = "seamtrack"
@@ -89,6 +90,20 @@ WATCH_S = 0.05
 HARD_LIMIT_BYTES = 65536
 
 
+def check_locator(endpoint: str) -> None:
+    """Refuse, before anything runs, a Zenoh locator ``PROTOCOL/HOST:PORT`` whose port is not
+    1-65535 (Zenoh itself says what else is wrong with a locator when it opens)."""
+    proto, slash, rest = endpoint.partition("/")
+    host, colon, port = rest.rpartition(":")
+    if slash and colon and host and proto in ("tcp", "udp", "tls", "quic", "ws"):
+        if not (port.isdigit() and 1 <= int(port) <= 65535):
+            raise SeamtrackError(
+                f"port {port[:20]!r} of {endpoint[:80]!r} is not 1-65535",
+                field="--endpoint",
+                fix="give a Zenoh locator tcp/HOST:PORT with PORT 1-65535, e.g. tcp/127.0.0.1:7448",
+            )
+
+
 class ZenohTransport:
     """Serve one ROS 2 tracker node over Zenoh (see the module docstring)."""
 
@@ -105,6 +120,7 @@ class ZenohTransport:
         self.timeout_s = timeout_s
         self.wait_s = wait_s
         self.domain = domain_id
+        self.stop = StopRequest()
         try:
             config = zenoh.Config()
             config.insert_json5("mode", '"router"')
@@ -210,7 +226,7 @@ class ZenohTransport:
         """Wake the loop once its deadline has passed (the inbox's receive has no timeout)."""
         while not self._stop.wait(WATCH_S):
             deadline = self._deadline
-            if deadline is not None and time.monotonic() > deadline:
+            if deadline is not None and (time.monotonic() > deadline or self.stop):
                 self._wake()
 
     # ------------------------------------------------------------------ protocol
@@ -240,7 +256,7 @@ class ZenohTransport:
         client = self.client
         wanted = [t for kind, t in seen[client] if kind == "MS" and t in self.pubs]
         while not all(self.pubs[t].matching_status.matching for t in wanted):
-            if time.monotonic() > deadline:
+            if time.monotonic() > deadline or self.stop:
                 self._next(deadline, "--wait-s", "receive from its subscriptions")
             time.sleep(0.01)
         time.sleep(SETTLE_S)
@@ -295,7 +311,8 @@ class ZenohTransport:
     def finish(self, summary: dict[str, Any]) -> None:
         from seamtrack.io.output import json_safe
 
-        text = json.dumps({"status": summary.get("status"), "summary": json_safe(summary)})
+        status, reason = summary.get("status"), summary.get("stop_reason")
+        text = json.dumps({"status": status, "reason": reason, "summary": json_safe(summary)})
         self._put("/seamtrack/status", rmw.encode_string(text))
         time.sleep(SETTLE_S)  # let it leave before the session closes
 
@@ -319,11 +336,17 @@ class ZenohTransport:
         self.pubs[topic].put(payload, attachment=rmw.attachment(self.seq, stamp, self.gids[topic]))
 
     def _next(self, deadline: float, field: str, what: str) -> tuple[str, Any, Any]:
-        left = deadline - time.monotonic()
         try:
-            if left <= 0:
-                raise queue.Empty
-            return self.events.get(timeout=left)
+            while True:
+                if self.stop:
+                    raise self.stop.failure()
+                left = deadline - time.monotonic()
+                if left <= 0:
+                    raise queue.Empty
+                try:
+                    return self.events.get(timeout=min(left, WATCH_S))
+                except queue.Empty:
+                    continue
         except queue.Empty:
             timeout = self.wait_s if field == "--wait-s" else self.timeout_s
             raise BridgeFailure(
@@ -368,6 +391,8 @@ class ZenohTransport:
                 return topic, size, payload.to_bytes() if size <= MAX_MESSAGE_BYTES else None
             if key != self.wake_key:
                 continue  # another type on a cmd_ topic: not the tracker's command
+            if self.stop:
+                raise self.stop.failure()
             while not self.events.empty():
                 _, what, token = self.events.get_nowait()
                 fields = rmw.parse_token(token)
@@ -413,7 +438,7 @@ class ZenohTransport:
 _PAIR = {"/seamtrack/cmd_pose", "/seamtrack/cmd_speed"}
 _THEN = _PAIR | {"/seamtrack/cmd_then"}
 _KEEP_RUNNING = "keep the tracker node running until /seamtrack/status says the run is over"
-_FIX_TYPES = "publish geometry_msgs/msg/PoseStamped and TwistStamped as docs/bridge.md gives them"
+_FIX_TYPES = "publish geometry_msgs/msg/PoseStamped and TwistStamped as docs/ros.md gives them"
 
 
 def command_from_ros(pose_msg: Any, speed_msg: Any) -> Reply:

@@ -1,10 +1,20 @@
 """``seamtrack serve SCENE``: run a scene with its tracker in another process (the lockstep
-bridge, :mod:`seamtrack.bridge.lockstep`; docs/bridge.md)."""
+bridge, :mod:`seamtrack.bridge.lockstep`; docs/ros.md).
+
+SIGINT (Ctrl-C) and SIGTERM (``kill``, a CI time-out, a container stop) only set a flag, the
+bridge's :class:`~seamtrack.bridge.lockstep.StopRequest`, read between steps and while the
+bridge waits for the client: the run ends there as ``interrupted``, the client is sent its
+``end``, the run folder is written (staged, so nothing half-written is left), one line says so,
+and the exit code is 130 (SIGINT) or 143 (SIGTERM), as a shell reports a command a signal
+ended. A second signal while the folder is written changes nothing."""
 
 from __future__ import annotations
 
 import argparse
+import contextlib
+import signal
 import sys
+from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
@@ -26,15 +36,20 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
         "--transport",
         choices=["zmq", "zenoh"],
         default="zmq",
-        help="zmq: JSON and raw profile arrays over a ZeroMQ REP socket; zenoh: ROS 2 messages "
-        "as rmw_zenoh puts them",
+        help="zmq: JSON and raw profile arrays over a ZeroMQ ROUTER socket (one client a run); "
+        "zenoh: ROS 2 messages as rmw_zenoh puts them",
     )
     p.add_argument(
         "--endpoint",
         help="where to listen: zmq default tcp://127.0.0.1:5555 (loopback; "
         "ipc:///PATH: a Unix socket, faster; tcp://HOST:PORT for another machine); "
         "zenoh default tcp/127.0.0.1:7447 (rmw_zenoh's router "
-        "port); this machine only unless you say otherwise",
+        "port); this machine only unless you say otherwise (then zmq needs --token-file)",
+    )
+    p.add_argument(
+        "--token-file",
+        help="zmq: a file holding a shared secret (16+ characters) that the client's hello "
+        'must carry as "token"; needed to listen beyond loopback',
     )
     p.add_argument(
         "--lockstep",
@@ -73,6 +88,23 @@ def check_flags(args: argparse.Namespace) -> None:
             field="--domain-id",
             fix="give the ROS_DOMAIN_ID of your ROS 2 nodes (0 by default)",
         )
+    if args.transport == "zenoh":
+        if args.token_file is not None:
+            raise SeamtrackError(
+                "is for --transport zmq",
+                field="--token-file",
+                fix="leave it out (a Zenoh router beyond loopback: docs/ros.md)",
+            )
+        if args.endpoint is not None:
+            from seamtrack.bridge.zenoh_transport import check_locator
+
+            check_locator(args.endpoint)
+        return
+    from seamtrack.bridge.zmq_transport import DEFAULT_ENDPOINT, check_endpoint, read_token
+
+    token = None if args.token_file is None else read_token(args.token_file)
+    check_endpoint(args.endpoint or DEFAULT_ENDPOINT, token)
+    args.token = token
 
 
 def make_transport(args: argparse.Namespace) -> Any:
@@ -89,11 +121,45 @@ def make_transport(args: argparse.Namespace) -> Any:
     from seamtrack.bridge.zmq_transport import DEFAULT_ENDPOINT as ZMQ_ENDPOINT
     from seamtrack.bridge.zmq_transport import ZmqTransport
 
-    return ZmqTransport(args.endpoint or ZMQ_ENDPOINT, args.timeout_s, args.wait_s)
+    return ZmqTransport(args.endpoint or ZMQ_ENDPOINT, args.timeout_s, args.wait_s, args.token)
+
+
+def start_hint(args: argparse.Namespace, endpoint: str) -> str:
+    """How to start a tracker for this serve (the example client that ships with seamtrack)."""
+    if args.transport == "zenoh":
+        return (
+            "a ROS 2 node under RMW_IMPLEMENTATION=rmw_zenoh_cpp, without rmw_zenohd: this is "
+            "its router (docs/ros.md)"
+        )
+    token = f" --token-file {args.token_file}" if args.token_file else ""
+    return f"python -m seamtrack.bridge.example_client {endpoint}{token}"
+
+
+@contextlib.contextmanager
+def stop_on_signals(request: Any) -> Iterator[None]:
+    """SIGINT and SIGTERM set ``request`` (a flag; nothing is raised) while the block runs;
+    the handlers that were there come back after it."""
+    signums = (signal.SIGINT, signal.SIGTERM)
+    before = {signum: signal.getsignal(signum) for signum in signums}
+    for signum in signums:
+        signal.signal(signum, request)
+    try:
+        yield
+    finally:
+        for signum, handler in before.items():
+            signal.signal(signum, handler)
 
 
 def cmd_serve(args: argparse.Namespace) -> int:
-    from seamtrack.bridge.lockstep import serve
+    from seamtrack.bridge.lockstep import StopRequest
+
+    stop = StopRequest()
+    with stop_on_signals(stop):
+        return _serve(args, stop)
+
+
+def _serve(args: argparse.Namespace, stop: Any) -> int:
+    from seamtrack.bridge.lockstep import Interrupted, serve, signal_name
     from seamtrack.cli.tables import print_table
     from seamtrack.io.output import check_writable, write_run
     from seamtrack.simulation.assemble import build_parts
@@ -105,22 +171,43 @@ def cmd_serve(args: argparse.Namespace) -> int:
     out = Path(args.out) if args.out else Path("runs") / scene.name
     check_writable(out)
     parts = build_parts(scene)
+    if stop:  # before the run began: nothing was simulated, nothing is written
+        print(f"seamtrack serve: {signal_name(stop.signum)} before the run began; "
+              "nothing written", file=sys.stderr)  # fmt: skip
+        return 128 + stop.signum
     transport = make_transport(args)
     if not args.quiet:
-        print(f"seamtrack serve: {scene.name} on {transport.endpoint}", file=sys.stderr)
+        print(
+            f"seamtrack serve: {scene.name}: waiting up to {args.wait_s:g} s for a tracker on "
+            f"{transport.endpoint}; start one, e.g. {start_hint(args, transport.endpoint)}",
+            file=sys.stderr,
+        )
     sys.stderr.flush()
-    result, tracker = serve(parts, transport, args.lockstep, seed=scene.config.simulation.seed)
+    result, tracker = serve(
+        parts, transport, args.lockstep, seed=scene.config.simulation.seed, stop=stop
+    )
+    plot = not args.no_plot
     write_run(
         result,
         out,
         scene.to_toml(),
         scene.config.simulation.trace_period_s,
-        extra=None if args.no_plot else lambda stage: plot_run(result, stage / "error.png"),
+        extra=lambda stage: plot_run(result, stage / "error.png") if plot else None,
     )
+    files = ["summary.json", "trace.csv", "frames.csv", "scene.toml"] + ["error.png"] * plot
+    wrote = f"{out}/" + ", ".join(files)
+    if isinstance(tracker.failure, Interrupted):
+        t_s = result.summary.get("sim_time_s", 0.0)
+        print(
+            f"seamtrack serve: {signal_name(tracker.failure.signum)}: stopped at t = "
+            f"{t_s:.3f} s (status interrupted); wrote {wrote}",
+            file=sys.stderr,
+        )
+        return 128 + tracker.failure.signum
     if tracker.failure is not None:
         print(f"seamtrack: error: {tracker.failure}", file=sys.stderr)
         return 2
     if not args.quiet:
         print_table(list(result.summary.items()), f"seamtrack serve {scene.name}")
-        print(f"wrote {out}/summary.json, trace.csv, frames.csv, scene.toml")
+        print(f"wrote {wrote}")
     return 0

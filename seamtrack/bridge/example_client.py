@@ -1,0 +1,189 @@
+"""An external tracker for ``seamtrack serve`` (ZeroMQ transport): the paper's algorithm II,
+written with pyzmq and the standard library only, nothing else of seamtrack, so that it reads
+as a client in any language would be written from docs/ros.md.
+
+Usage::
+
+    seamtrack serve paper-verification                       # terminal 1
+    python -m seamtrack.bridge.example_client                # terminal 2
+    python -m seamtrack.bridge.example_client ipc:///tmp/b --radius-mm 0.5 --then 0
+
+It says hello, then answers every step with its command, and prints the run's summary (one
+JSON line) when the ``end`` comes; a refusal (``error``) or an ``end`` of a failed run is
+printed to stderr with its reason, exit code 1. A step is a multipart message: a JSON header,
+then each frame's profile as raw little-endian arrays (float64 points, uint8 reasons) that
+the header describes; algorithm II needs only the seam points, ``--dump-profiles`` reads the
+profiles too and writes them as JSON lines. Each command carries the next ``--then`` points of
+the queue (``then``: the bridge goes on to them itself when the torch comes within the radius,
+between frames; ``--then 0``: it asks at each switch instead). ``--token-file`` sends a
+server's shared token (needed beyond loopback).
+
+Algorithm II, exactly as seamtrack's in-process ``convergence-radius`` (so that the run is the
+same, byte for byte, with ``--set tracker.params={}``): every found seam point is queued
+unless it is closer than ``min_spacing_mm`` (0.05) to the last point queued (a torch that
+waits keeps seeing the same spot); at each step, while more than one point is queued and the
+torch is within ``radius_mm`` of the oldest (``sqrt(dx² + dy² + dz²) <= r``), that one is
+dropped; the command goes to the oldest at the welding speed, passing through it
+(``stop_at_target`` false), or arriving at rest on it when it is the only one left.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import struct
+import sys
+
+DEFAULT_ENDPOINT = "tcp://127.0.0.1:5555"
+
+
+class ConvergenceRadius:
+    """Go to the oldest unreached seam point at the welding speed; take the next one as soon as
+    the torch is within the radius; arrive at rest on the last one known."""
+
+    def __init__(
+        self,
+        speed_mm_s: float,
+        radius_mm: float = 1.0,
+        min_spacing_mm: float = 0.05,
+        then: int = 2,
+    ):
+        self.speed = speed_mm_s
+        self.radius = radius_mm
+        self.min_spacing = min_spacing_mm
+        self.then = then  # how many of the next points go with each command
+        self.points: list[list[float]] = []
+        self.last_pushed: list[float] | None = None
+        self.command: dict | None = None
+
+    def update(self, point: list[float]) -> None:
+        if self.last_pushed is not None and dist(point, self.last_pushed) < self.min_spacing:
+            return
+        self.points.append(point)
+        self.last_pushed = point
+
+    def step(self, tcp: list[float], taken: int = 0) -> dict | None:
+        # The bridge went on to `taken` of the points sent with the last command (its `then`):
+        # the torch came within the radius of those before them, between the frames.
+        del self.points[:taken]
+        while len(self.points) > 1 and dist(tcp, self.points[0]) <= self.radius:
+            self.points.pop(0)
+            self.command = None
+        if not self.points:
+            return None
+        last = len(self.points) == 1
+        if self.command is None or taken or last != self.command["stop_at_target"]:
+            self.command = self._go(0)
+        if not last and self.then:  # the points that follow, taken over without a round trip
+            ahead = range(1, min(1 + self.then, len(self.points)))
+            self.command["then"] = [self._go(i) for i in ahead]
+        return self.command
+
+    def _go(self, i: int) -> dict:
+        """The command to the queue's point i."""
+        last = i == len(self.points) - 1
+        command = {"target_mm": self.points[i], "speed_mm_s": self.speed, "stop_at_target": last}
+        if not last:  # the switch comes within the radius: be asked then (frame lockstep)
+            command["ask_within_mm"] = self.radius
+        return command
+
+
+def dist(a: list[float], b: list[float]) -> float:
+    dx, dy, dz = a[0] - b[0], a[1] - b[1], a[2] - b[2]
+    return math.sqrt(dx * dx + dy * dy + dz * dz)
+
+
+def read_profile(profile: dict, parts: list[bytes]) -> tuple[list, list]:
+    """A frame's profile: [(y_mm, z_mm), ...] (None for NaN) and the reason codes; every part's
+    size checked against its shape before it is read."""
+    out = []
+    for name, dtype, size in (("points", "<f8", 8), ("reason", "|u1", 1)):
+        d = profile[name]
+        if d["dtype"] != dtype:
+            raise ValueError(f"{name}: dtype {d['dtype']}, not {dtype}")
+        count = math.prod(d["shape"])
+        raw = parts[d["part"]]
+        if len(raw) != count * size:
+            raise ValueError(f"{name}: {len(raw)} bytes for shape {d['shape']}")
+        out.append(raw)
+    n = profile["reason"]["shape"][0]
+    values = struct.unpack(f"<{2 * n}d", out[0])  # little-endian on any machine
+    points = [[None if v != v else v for v in values[2 * i : 2 * i + 2]] for i in range(n)]
+    return points, list(out[1])
+
+
+def parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(
+        prog="python -m seamtrack.bridge.example_client",
+        description="algorithm II as a tracker process for seamtrack serve (ZeroMQ)",
+    )
+    ap.add_argument("endpoint", nargs="?", default=DEFAULT_ENDPOINT, help="serve's --endpoint")
+    ap.add_argument("--radius-mm", type=float, default=1.0, help="the radius of convergence")
+    ap.add_argument("--then", type=int, default=2, help="points sent ahead with each command")
+    ap.add_argument("--no-profile", action="store_true", help="ask for no profiles")
+    ap.add_argument("--dump-profiles", default="", help="write each frame's profile (JSON lines)")
+    ap.add_argument("--token-file", default="", help="a file holding serve's shared token")
+    return ap
+
+
+def hello(args: argparse.Namespace) -> dict:
+    message = {"op": "hello", "protocol": 2, "profile": not args.no_profile}
+    if args.token_file:
+        with open(args.token_file, encoding="utf-8") as f:
+            message["token"] = f.read().strip()
+    return message
+
+
+def _fault(end: dict) -> bool:
+    """Did the run end by the bridge (this client's fault, a signal) rather than by the
+    simulation itself (completed, lost_seam, a time limit, ...)?"""
+    return end["status"] == "interrupted" or str(end["reason"]).startswith("bridge:")
+
+
+def main(argv: list[str] | None = None) -> int:
+    import zmq
+
+    args = parser().parse_args(argv)
+    dump = open(args.dump_profiles, "w") if args.dump_profiles else None
+    ctx = zmq.Context()
+    sock = ctx.socket(zmq.REQ)
+    sock.setsockopt(zmq.LINGER, 0)
+    sock.connect(args.endpoint)
+    try:
+        sock.send_json(hello(args))
+        reset: dict = json.loads(sock.recv())
+        if reset["op"] != "reset":  # a refusal: {"op": "error", "status", "reason"}
+            print(f"refused: {reset.get('reason')}", file=sys.stderr)
+            return 1
+        tracker = ConvergenceRadius(
+            reset["context"]["welding_speed_mm_s"], args.radius_mm, then=args.then
+        )
+        sock.send_json({"op": "ready"})
+        while True:
+            parts = sock.recv_multipart()  # blocks until the step is there: no polling
+            msg = json.loads(parts[0])
+            if msg["op"] != "step":  # the end of the run, a fault too: status and reason
+                print(json.dumps(msg.get("summary", msg)))
+                if msg["op"] == "end" and not _fault(msg):
+                    return 0
+                print(f"{msg['status']}: {msg['reason']}", file=sys.stderr)
+                return 1
+            for frame in msg["frames"]:
+                if frame["found"]:
+                    tracker.update(frame["point_mm"])
+                if dump and frame["profile"] is not None:
+                    points, reason = read_profile(frame["profile"], parts)
+                    row = {"t_capture_s": frame["t_capture_s"], "points": points, "reason": reason}
+                    dump.write(json.dumps(row) + "\n")
+            cmd = tracker.step(msg["tcp_mm"], msg["then_taken"])
+            sock.send(json.dumps({"op": "command", "seq": msg["seq"], "command": cmd}).encode())
+    finally:
+        if dump:
+            dump.close()
+        sock.close(0)
+        ctx.term()
+
+
+if __name__ == "__main__":
+    sys.exit(main())
