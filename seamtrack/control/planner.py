@@ -308,6 +308,14 @@ def _builtin() -> dict[str, type]:
     return {"adaptive": AdaptivePlanner, "fixed": FixedPlanner}
 
 
+def is_builtin(maker: Any) -> bool:
+    """Whether a planner (a name or an instance) is one of seamtrack's own, not a plugin (a
+    built-in that fails is seamtrack's fault, never the user's plugin's)."""
+    if isinstance(maker, str):
+        return maker in _builtin()
+    return type(maker) in _builtin().values()
+
+
 def planner_class(name: str) -> type:
     """The class behind a planner name: a built-in or ``package.module:Class``."""
     builtin = _builtin()
@@ -357,9 +365,11 @@ def checked_plan(
     groove: MeasuredGroove,
     gantry: bool,
     field: str = "planner.name",
+    window: tuple[float, float] | None = None,
 ) -> PassPlan | None:
     """A planner's answer, refused with a one-line error naming ``field`` (the planner, or the
-    scene's overrides that changed the plan) when it is not a usable pass."""
+    scene's overrides that changed the plan) when it is not a usable pass. ``window``: the
+    process's travel speed window (mm/s), which every speed of the plan must keep."""
 
     def refuse(what: str, fix: str) -> PluginRuntimeError:
         return PluginRuntimeError(f"{name!r} plan() for pass {pass_index + 1} {what}",
@@ -395,6 +405,18 @@ def checked_plan(
                 "give speed_s_mm and speed_profile_mm_s of one length",
             )
         plan = replace(plan, speed_s_mm=s, speed_profile_mm_s=profile)
+    if window is not None:
+        lo, hi = window
+        speeds = [plan.travel_speed_mm_s]
+        if plan.speed_profile_mm_s is not None and len(plan.speed_profile_mm_s):
+            profile = plan.speed_profile_mm_s
+            speeds += [float(np.min(profile)), float(np.max(profile))]
+        outside_window = [v for v in speeds if not lo - 1e-9 <= v <= hi + 1e-9]
+        if outside_window:
+            raise refuse(f"asks for a travel speed of {outside_window[0]:.4g} mm/s, outside the "
+                         f"process window [{lo:g}, {hi:g}] mm/s",
+                         "keep the travel speed within process.travel_speed_min_mm_s .. "
+                         "_max_mm_s")  # fmt: skip
     if plan.offset_profile_mm is not None:
         offsets = np.asarray(plan.offset_profile_mm, dtype=float)
         s_of = np.asarray(plan.speed_s_mm if plan.speed_s_mm is not None else [], dtype=float)
