@@ -215,3 +215,17 @@ def test_a_job_refuses_a_single_run_export(tmp_path: Path, capsys, flag: str) ->
     assert err.count("\n") == 1 and flag in err and "fix:" in err
     assert not out.exists()
     assert not target or not (tmp_path / target).exists()
+
+
+def test_the_docs_show_what_check_and_init_print(capsys) -> None:
+    """docs/multipass.md's ``init --list`` line is the scene's description, and the passes it
+    shows ``check`` printing are the ones check prints (laid out on the CAD groove)."""
+    doc = (Path(__file__).parent.parent / "docs" / "multipass.md").read_text()
+    listed = re.search(r"^multipass-v-groove +(.*)$", doc, re.M)
+    assert listed and listed.group(1) == load_scene("multipass-v-groove").config.description
+    shown = re.search(r"^ +(passes the plan lays \(CAD groove\)) +(.*)$", doc, re.M)
+    assert shown
+    assert main(["check", "multipass-v-groove"]) == 0
+    printed = re.search(r"passes the plan lays \(CAD groove\) +(.*)$", capsys.readouterr().out,
+                        re.M)  # fmt: skip
+    assert printed and printed.group(1).strip() == shown.group(2).strip()

@@ -413,15 +413,15 @@ def checked_plan(
             )
         plan = replace(plan, speed_s_mm=s, speed_profile_mm_s=profile)
     if window is not None:
-        lo, hi = window
+        slowest, fastest = window
         speeds = [plan.travel_speed_mm_s]
         if plan.speed_profile_mm_s is not None and len(plan.speed_profile_mm_s):
             profile = plan.speed_profile_mm_s
             speeds += [float(np.min(profile)), float(np.max(profile))]
-        outside_window = [v for v in speeds if not lo - 1e-9 <= v <= hi + 1e-9]
+        outside_window = [v for v in speeds if not slowest - 1e-9 <= v <= fastest + 1e-9]
         if outside_window:
             raise refuse(f"asks for a travel speed of {outside_window[0]:.4g} mm/s, outside the "
-                         f"process window [{lo:g}, {hi:g}] mm/s",
+                         f"process window [{slowest:g}, {fastest:g}] mm/s",
                          "keep the travel speed within process.travel_speed_min_mm_s .. "
                          "_max_mm_s")  # fmt: skip
     if plan.offset_profile_mm is not None:
