@@ -253,23 +253,3 @@ def test_checked_plan_keeps_the_process_window(speed: float) -> None:
     with pytest.raises(PluginRuntimeError):
         checked_plan(profile, "p", 0, g, gantry=True, window=(2.0, 15.0))
     assert checked_plan(_ok_plan(travel_speed_mm_s=speed), "p", 0, g, gantry=True) is not None
-
-
-def test_the_last_measured_station_does_not_outvote_the_ones_before() -> None:
-    """The last station a pass's sensor measures, where its stripe leaves the part, is often
-    off (here its left foot 0.4 mm out). The planner's running median along the seam is cut
-    short at the ends, so that station is one vote of five there, and a wall bead's offset
-    from its top corner keeps its place to the seam's end (the end station repeated four
-    times outvoted the others: the offset, and the pass's true path, jumped 0.77 mm in the
-    last millimetre of multipass-v-groove's pass 3)."""
-    g = groove(np.full(12, 2.0))
-    points = g.points.copy()
-    points[-1, 1, 0] += 0.4  # the left foot
-    odd = MeasuredGroove(g.s_mm, points, g.area_mm2)
-    state = JobState(PROCESS)
-    lay = layout(g, state)
-    assert lay.beads_per_layer[0] >= 2  # a wall bead of a layer of several: from a top corner
-    plan = AdaptivePlanner().plan(odd, 0, state)
-    clean = AdaptivePlanner().plan(g, 0, state)
-    assert plan is not None and clean is not None and plan.reference == "left_top"
-    np.testing.assert_allclose(plan.offset_at(g.s_mm), clean.offset_at(g.s_mm), atol=1e-12)

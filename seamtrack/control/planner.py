@@ -275,18 +275,21 @@ class AdaptivePlanner:
 
 
 def _smooth(values: FloatArray, half_window: int = 4) -> FloatArray:
-    """A running median over 2 * half_window + 1 stations (the measured groove's jitter), cut
-    short at the ends (over the stations there are).
+    """A running median over 2 * half_window + 1 stations (the measured groove's jitter), over
+    the end station repeated at the ends.
 
-    Not over the end station repeated: the last station a pass's sensor measures, where its
-    stripe leaves the part, is often off (a wall's foot 0.4 mm out), and repeated it outvoted
-    the stations before it (5 of 9) at the last four, so a bead's offset from its top corner
-    jumped 0.77 mm in the seam's last millimetre (pass 3 of multipass-v-groove), and with it
-    the pass's true path and its torch."""
+    Known end artefact (issue 43): the last station a pass's sensor measures, where its stripe
+    leaves the part, is often off (a wall's foot 0.4 mm out), and repeated it outvotes the
+    stations before it (5 of 9) at the last four, so a bead's offset from its top corner jumps
+    0.77 mm in the seam's last millimetre (pass 3 of multipass-v-groove: 0.387 mm of error).
+    Cut short at the ends instead, that job's passes keep within 0.161 mm, but the 300 mm job's
+    closed loop, which a change at a pass's end perturbs along the whole pass, then runs one
+    pass 0.9 mm off mid-seam (cut at the far end only: 1.87 mm and a lost seam); kept until
+    that sensitivity is understood."""
     values = np.asarray(values, dtype=float)
     if len(values) <= 2:
         return values
-    return station_median(values, half_window, cut_ends=True)
+    return station_median(values, half_window)
 
 
 def station_median(values: Any, half_window: int = 4, cut_ends: bool = False) -> FloatArray:
