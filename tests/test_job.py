@@ -319,3 +319,204 @@ def test_a_planned_frame_aims_a_top_corner_bead_at_the_fill_under_it() -> None:
     z_fill = np.interp(y, truth[4, :, 0], truth[4, :, 1])
     assert z == pytest.approx(z_fill, abs=1e-9)
     assert truth[4, 6, 1] - z > 5.0  # the corner's height, which the torch aimed at before
+
+
+# --------------------------------------------------------------- issue 43: refusals and status
+def _config(**sets):
+    from seamtrack.simulation.scene import load_scene
+
+    return load_scene("multipass-v-groove", sets).config
+
+
+@pytest.mark.parametrize(
+    "key", ["process.wire_feed_m_min", "process.wire_diameter_mm", "passes.overrides"]
+)
+def test_tiny_process_values_are_refused_naming_the_field(key: str) -> None:
+    """1e-300 m/min of wire (or mm of it) is no GMAW process: refused at load naming the field
+    (it reached the planner as an OverflowError / ZeroDivisionError blamed on a plugin)."""
+    from seamtrack.simulation.scene import load_scene
+
+    value = "[{number = 1, wire_feed_m_min = 1e-300}]" if key == "passes.overrides" else "1e-300"
+    with pytest.raises(SceneError) as info:
+        load_scene("multipass-v-groove", [f"{key}={value}"])
+    assert info.value.field.startswith(key)
+
+
+def test_a_built_in_planner_is_no_plugin() -> None:
+    from seamtrack.control.planner import AdaptivePlanner, FixedPlanner, is_builtin
+
+    class Mine(AdaptivePlanner):
+        pass
+
+    assert is_builtin("adaptive") and is_builtin(FixedPlanner()) and is_builtin(AdaptivePlanner())
+    assert not is_builtin("my_planner:Mine") and not is_builtin(Mine())
+
+
+def test_the_plan_on_the_cad_groove_and_its_refusals() -> None:
+    """The passes the plan lays, as check prints them, and the plans that cannot fill the
+    groove, refused before the run. Oracle: the analytic V's area (gap t + t^2 tan 30 deg on a
+    20 mm plate, 2 mm gap: 270.9 mm^2) against the largest bead, mass conservation at the
+    slowest speed (0.97 pi 0.6^2 133.3 / 2 = 73.1 mm^2): 3 beads cannot hold it, 4 can."""
+    fill = v_state()
+    area = 2.0 * 20.0 + 20.0**2 * TAN30
+    assert float(np.median(fill.remaining_area_mm2())) == pytest.approx(area, rel=2e-3)
+    plan = job.planned_layout(fill, _config())
+    assert plan is not None and plan.passes == sum(plan.beads_per_layer)
+    largest = 0.97 * math.pi * 0.36 * (8000.0 / 60.0) / 2.0
+    assert 3 * largest < area < 4 * largest
+    with pytest.raises(SceneError) as info:
+        job.planned_layout(fill, _config(**{"passes.count": 3}))
+    assert info.value.field == "passes.count" and "at least 4 passes" in info.value.fix
+    assert job.planned_layout(fill, _config(**{"passes.count": 4})).passes == 4
+    # 1 m/min of 0.5 mm wire: 0.63 mm^2 beads at 5 mm/s, ~400 of them; a job lays <= 200
+    with pytest.raises(SceneError) as info:
+        job.planned_layout(fill, _config(**{"process.wire_feed_m_min": 1.0,
+                                            "process.wire_diameter_mm": 0.5}))  # fmt: skip
+    assert info.value.field == "process.wire_feed_m_min"
+    # an override of a pass beyond the plan
+    overrides = [{"number": plan.passes + 1, "offset_mm": 0.0}]
+    with pytest.raises(SceneError) as info:
+        job.planned_layout(fill, _config(**{"passes.overrides": overrides}))
+    assert info.value.field == "passes.overrides.0.number"
+    plugin = SimpleNamespace(planner=SimpleNamespace(name="my_planner:Mine"))
+    assert job.planned_layout(fill, plugin) is None  # a plugin's plan: only its run knows
+
+
+def test_an_override_laid_by_no_pass_is_refused() -> None:
+    passes = SimpleNamespace(overrides=[SimpleNamespace(number=2), SimpleNamespace(number=99)])
+    job._check_overrides_laid(SimpleNamespace(overrides=passes.overrides[:1]), 2, "p")
+    with pytest.raises(SceneError) as info:
+        job._check_overrides_laid(passes, 2, "p")
+    assert info.value.field == "passes.overrides.1.number"
+
+
+@pytest.mark.parametrize(
+    ("speed", "field"),
+    [
+        (1000.0, "passes.overrides.0.travel_speed_mm_s"),
+        (1.0, "passes.overrides.0.travel_speed_mm_s"),
+    ],
+)
+def test_an_override_keeps_the_speed_window(speed: float, field: str) -> None:
+    """An override's travel speed is checked like the scene's: inside the process window
+    (2-15 mm/s) and within the axes' reach."""
+    from seamtrack.simulation.scene import load_scene
+
+    with pytest.raises(SceneError) as info:
+        load_scene("multipass-v-groove",
+                   [f"passes.overrides=[{{number = 1, travel_speed_mm_s = {speed}}}]"])  # fmt: skip
+    assert info.value.field == field
+    load_scene("multipass-v-groove", ["passes.overrides=[{number = 1, travel_speed_mm_s = 9.0}]"])
+    with pytest.raises(SceneError) as info:  # the window widened past what the axes reach
+        load_scene("multipass-v-groove", ["process.travel_speed_max_mm_s=2000.0",
+                                          "passes.overrides=[{number = 1, travel_speed_mm_s = "
+                                          "1500.0}]"])  # fmt: skip
+    assert info.value.field == field and "axes" in info.value.message
+
+
+@pytest.mark.parametrize(
+    ("stopped", "statuses", "lowest", "status"),
+    [
+        ("", ["completed"] * 3, [0.2, -0.4, 0.1], "completed"),
+        ("", ["completed"] * 3, [0.2, -1.2, 0.1], "underfilled"),
+        ("", ["completed", "lost_seam"], [0.2, 0.3], "incomplete"),
+        ("why", ["completed"], [-5.0], "stopped"),
+    ],
+)
+def test_a_job_that_leaves_the_groove_unfilled_is_not_completed(stopped, statuses, lowest, status):
+    """A fill surface more than UNDERFILL_LIMIT_MM (1 mm, ISO 5817 level C) under the plates'
+    top line at a station every pass welded: ``underfilled``, with the station named."""
+    from seamtrack.simulation.job_summary import UNDERFILL_LIMIT_MM, job_status
+
+    got, reason = job_status(stopped, statuses, np.array(lowest), np.arange(len(lowest)) * 0.5)
+    assert got == status
+    if status == "underfilled":
+        assert UNDERFILL_LIMIT_MM == 1.0 and "1.2 mm at s = 0.5 mm" in reason
+
+
+def test_a_call_over_its_wall_time_budget_is_left_and_reported() -> None:
+    """within_budget: the answer, the call's own error, or TimeoutError once the budget is
+    spent (the call, blocked for good, is left in its daemon thread)."""
+    import threading
+
+    assert job.within_budget(lambda: 42, 5.0) == 42
+    with pytest.raises(ValueError):
+        job.within_budget(lambda: int("x"), 5.0)
+    never = threading.Event()
+    with pytest.raises(TimeoutError):
+        job.within_budget(never.wait, 0.05)
+    never.set()
+
+
+def test_the_frame_check_refuses_a_foot_inside_the_last_fill() -> None:
+    """The fill surface only widens up a V's walls: a frame whose left (right) foot lies more
+    than 2 FILL_DROP_MM inside the one the pass before measured there is no groove, 1.9 mm
+    is."""
+    fill = v_state()
+    seam = job.Seam.from_points(fill.T_world_station[:, :3, 3])
+    truth = fill.groove_points(4)
+    T = np.eye(4)
+    T[:3, :3] = np.diag([1.0, -1.0, -1.0])
+    T[:3, 3] = (2.0, 0.0, 100.0)
+    laser = np.column_stack([-truth[:, 0], 100.0 - truth[:, 1]])[::-1]
+    frame = (Feature(point_laser=laser[3], point_world=np.array([2.0, 0, 0.0]),
+                     edges_laser=laser, area_mm2=50.0), T)  # fmt: skip
+    previous = job.measured_groove([frame], fill, seam)
+    assert previous is not None
+    for row, sign in ((1, -1.0), (5, 1.0)):  # the left foot further left, the right further right
+        for shift, below in (
+            (2 * job.FILL_DROP_MM + 0.1, True),
+            (2 * job.FILL_DROP_MM - 0.1, False),
+        ):
+            points = previous.points.copy()
+            points[:, row, 0] += sign * shift
+            wider = job.MeasuredGroove(previous.s_mm, points, previous.area_mm2)
+            assert job._below_the_fill(frame, fill, seam, wider) is below, (row, shift)
+
+
+def test_a_groove_wider_than_the_old_probe_window_is_cut() -> None:
+    """A 130 mm wide slot between two plates on a backing (its top corners at +-65 mm, beyond
+    the +-60 mm the probe sections reached, which refused it with "widen half_width_mm", no
+    scene key): the fill finds its top corners where the plates' edges are."""
+    import trimesh
+
+    plates = [trimesh.creation.box(bounds=[[0, lo, 0], [20, hi, 20]])
+              for lo, hi in ((-115.0, -65.0), (65.0, 115.0))]  # fmt: skip
+    backing = trimesh.creation.box(bounds=[[0, -115, -5], [20, 115, 0]])
+    mesh = trimesh.util.concatenate([*plates, backing])
+    seam = job.Seam.from_points([[0.0, 0.0, 0.0], [20.0, 0.0, 0.0]], normals=[[0, 0, 1]] * 2)
+    fill = FillState.from_mesh(mesh, seam)
+    corners = np.tile([-65.0, 65.0], (len(fill.s_mm), 1))
+    np.testing.assert_allclose(fill.top_corners[:, :, 0], corners, atol=0.1)
+
+
+def test_a_pass_error_plot_says_which_pass_it_shows() -> None:
+    from seamtrack.cli.jobs import pass_title
+
+    result = SimpleNamespace(status="completed")
+    cap = PassPlan("left_top", 1.0, 0.0, 5.0, 100.0, 5, 1, 6, True)
+    assert pass_title("mp", SimpleNamespace(name="pass_12", plan=cap, result=result)) == (
+        "mp pass_12: layer 6 (cap), bead 2 of 6 (from left_top); status: completed"
+    )
+    scan = SimpleNamespace(name="pass_00_scan", plan=None, result=result)
+    assert "scan-only" in pass_title("mp", scan)
+
+
+def test_the_catalogue_holds_issue_43s_multipass_reproducers() -> None:
+    """Each bad input of issue 43's multi-pass items is an entry of the bad-input catalogue
+    (found by its command line), naming the field the issue says."""
+    from seamtrack.bench.failures import CATALOGUE
+
+    def field_of(*needles: str) -> str:
+        for entry in CATALOGUE:
+            if all(n in " ".join(entry.args) for n in needles):
+                return entry.field
+        return ""
+
+    assert field_of("process.wire_feed_m_min=1e-300") == "process.wire_feed_m_min"
+    assert field_of("process.wire_diameter_mm=1e-300") == "process.wire_diameter_mm"
+    assert field_of("process.wire_feed_m_min=0.01") == "process.wire_feed_m_min"
+    assert field_of("multipass-v-groove", "passes.count=3") == "passes.count"
+    assert field_of("travel_speed_mm_s = 1000.0") == "passes.overrides.0.travel_speed_mm_s"
+    assert field_of("number = 99", "passes.count=2") == "passes.overrides.0.number"
+    assert field_of("bad_planners:NeverReturns", "wall_time_limit_s") == "planner.name"

@@ -211,3 +211,45 @@ def test_planner_names() -> None:
     assert info.value.field == "planner.params"
     with pytest.raises(PluginError, match="cannot import"):
         planner("no_such_module_xyz:Planner")
+
+
+def test_the_last_bead_is_taken_off_the_area_it_was_measured_with() -> None:
+    """Mass balance: the groove a pass is planned on was measured before the last bead went
+    in (the sensor looks ahead of the torch), so the planner takes that bead's area
+    (``JobState.last_bead_area_mm2``) off it. With 30 mm^2 laid at every station the area a
+    bead is to hold drops by 30 mm^2 over the fill beads left, and the mass-conservation speed
+    rises to match: bead_area(v) = (area - last - band) / beads left."""
+    g = groove(np.array([3.0, 3.5, 4.0, 4.5]))
+    state = JobState(PROCESS)
+    first = AdaptivePlanner().plan(g, 1, state)
+    state.last_bead_area_mm2 = np.full(len(g), 30.0)
+    second = AdaptivePlanner().plan(g, 1, state)
+    assert first is not None and second is not None
+    lay = layout(g, JobState(PROCESS))
+    left = sum(lay.beads_per_layer[:-1]) - 1  # pass 2 of the fill: this bead and those after
+    band = lay.beads_per_layer[-1] * lay.cap_bead_area_mm2 - cap_area_mm2(g.top_width_mm, 2.0)
+    for plan, last in ((first, 0.0), (second, 30.0)):
+        v = plan.speed_at(g.s_mm)
+        inside = (v > 2.0) & (v < 15.0)
+        assert inside.all()
+        expected = (g.area_mm2 - last - band) / left
+        assert PROCESS.bead_area_mm2(v) == pytest.approx(expected, rel=1e-9)
+    drop = PROCESS.bead_area_mm2(first.speed_at(g.s_mm)) - PROCESS.bead_area_mm2(
+        second.speed_at(g.s_mm)
+    )
+    assert drop == pytest.approx(np.full(len(g), 30.0 / left), rel=1e-9)
+
+
+@pytest.mark.parametrize("speed", [1000.0, 1.0])
+def test_checked_plan_keeps_the_process_window(speed: float) -> None:
+    """A plan's (or an override's) travel speed outside the process window is refused when
+    the window is given: a speed the torch never reaches is never reported as laid."""
+    g = groove(np.full(2, 2.0))
+    with pytest.raises(PluginRuntimeError) as info:
+        checked_plan(_ok_plan(travel_speed_mm_s=speed), "p", 0, g, gantry=True,
+                     field="passes.overrides", window=(2.0, 15.0))  # fmt: skip
+    assert info.value.field == "passes.overrides" and "process window" in str(info.value)
+    profile = _ok_plan(speed_s_mm=g.s_mm, speed_profile_mm_s=np.array([5.0, speed]))
+    with pytest.raises(PluginRuntimeError):
+        checked_plan(profile, "p", 0, g, gantry=True, window=(2.0, 15.0))
+    assert checked_plan(_ok_plan(travel_speed_mm_s=speed), "p", 0, g, gantry=True) is not None

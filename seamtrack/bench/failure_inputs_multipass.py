@@ -32,6 +32,22 @@ class ReturnsGarbage:
 
 class NoPlan:
     pass
+
+
+class NeverReturns:
+    def plan(self, groove, pass_index, state):
+        import threading
+
+        threading.Event().wait()  # blocks for good, without using the CPU
+
+
+class TooFast:
+    def plan(self, groove, pass_index, state):
+        from seamtrack.control.planner import PassPlan
+
+        return PassPlan(reference="centre", offset_mm=0.0, work_angle_rad=0.0,
+                        travel_speed_mm_s=1000.0, wire_feed_mm_s=state.process.wire_feed_mm_s,
+                        layer=pass_index, bead_in_layer=0)
 '''
 
 #: Files written into the workspace (name -> bytes).
@@ -53,8 +69,48 @@ ENTRIES: tuple[Entry, ...] = (
     Entry("multipass wire feed -2", _job("process.wire_feed_m_min=-2.0"),
           field="process.wire_feed_m_min"),
     Entry("multipass bead larger than the groove",
-          _job("process.wire_feed_m_min=30.0", "process.wire_diameter_mm=4.0"),
+          _job("process.wire_feed_m_min=30.0", "process.wire_diameter_mm=3.2",
+               "workpiece.params.plate_thickness_mm=6.0"),
           field="process.wire_feed_m_min", quick=False),
+    # issue 43 item 8: tiny process values, named (not an overflow blamed on a plugin)
+    Entry("multipass wire feed 1e-300 m/min", _job("process.wire_feed_m_min=1e-300"),
+          field="process.wire_feed_m_min"),
+    Entry("multipass wire diameter 1e-300 mm", _job("process.wire_diameter_mm=1e-300"),
+          field="process.wire_diameter_mm"),
+    Entry("multipass wire diameter 5 mm (no GMAW wire)", _job("process.wire_diameter_mm=5.0"),
+          field="process.wire_diameter_mm"),
+    Entry("multipass override wire feed 1e-300",
+          _job("passes.overrides=[{number = 1, wire_feed_m_min = 1e-300}]"),
+          field="passes.overrides.0.wire_feed_m_min"),
+    # item 9: plans that cannot fill the groove, refused before the run
+    Entry("multipass wire feed 0.01 m/min", _job("process.wire_feed_m_min=0.01"),
+          field="process.wire_feed_m_min"),
+    Entry("multipass auto plan of 400 passes",
+          _job("process.wire_feed_m_min=1.0", "process.wire_diameter_mm=0.5"),
+          field="process.wire_feed_m_min", quick=False),
+    Entry("multipass 3 passes for a 20 mm V", _job("passes.count=3"), field="passes.count",
+          quick=False),
+    # item 17: overrides checked like the scene, and the planner's time
+    Entry("multipass override at 1000 mm/s",
+          _job("passes.overrides=[{number = 1, travel_speed_mm_s = 1000.0}]"),
+          field="passes.overrides.0.travel_speed_mm_s"),
+    Entry("multipass override beyond the axes' reach",
+          _job("process.travel_speed_max_mm_s=2000.0",
+               "passes.overrides=[{number = 1, travel_speed_mm_s = 1500.0}]"),
+          field="passes.overrides.0.travel_speed_mm_s"),
+    Entry("multipass override of pass 99 of 16",
+          _job("passes.overrides=[{number = 99, offset_mm = 0.0}]"),
+          field="passes.overrides.0.number", quick=False),
+    Entry("multipass override of pass 99 of 2",
+          _job("passes.count=2", "passes.overrides=[{number = 99, offset_mm = 0.0}]"),
+          field="passes.overrides.0.number"),
+    Entry("multipass planner never returns",
+          _job('planner.name="bad_planners:NeverReturns"', "passes.scan_first=false",
+               "simulation.wall_time_limit_s=1.0"),
+          field="planner.name", quick=False),
+    Entry("multipass planner at 1000 mm/s",
+          _job('planner.name="bad_planners:TooFast"', "passes.scan_first=false"),
+          field="planner.name", quick=False),
     Entry("multipass zero passes", _job("passes.count=0"), field="passes.count"),
     Entry("multipass unknown planner", _job('planner.name="nope"'), field="planner.name"),
     Entry("multipass planner without plan()", _job('planner.name="bad_planners:NoPlan"'),

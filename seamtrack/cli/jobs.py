@@ -46,7 +46,9 @@ def run_job_command(
         scene.config.simulation.trace_period_s,
         extra=None
         if args.no_plot
-        else lambda record, folder: plot_run(record.result, folder / "error.png"),
+        else lambda record, folder: plot_run(
+            record.result, folder / "error.png", title=pass_title(scene.name, record)
+        ),
         finish=None
         if args.no_plot or stopped
         else lambda folder: pictures.extend(
@@ -72,15 +74,31 @@ def run_job_command(
     return 0
 
 
-def check_rows(c: Any) -> list[tuple[str, Any]]:
-    """``seamtrack check``'s rows for a multi-pass job: the process and the plan's frame."""
+def pass_title(scene_name: str, record: Any) -> str:
+    """A pass's error.png title: which pass of the job it shows, and its status."""
+    plan = record.plan
+    if plan is None:
+        what = "the scan-only pass (arc off)"
+    else:
+        layer = f"layer {plan.layer + 1}{' (cap)' if plan.cap else ''}"
+        bead = f"bead {plan.bead_in_layer + 1} of {plan.beads_in_layer}"
+        what = f"{layer}, {bead} (from {plan.reference})"
+    return f"{scene_name} {record.name}: {what}; status: {record.result.status}"
+
+
+def check_rows(c: Any, parts: Any = None) -> list[tuple[str, Any]]:
+    """``seamtrack check``'s rows for a multi-pass job: the process and the plan's frame, and
+    with the scene's ``parts`` the passes the plan lays on the CAD groove (a plan that cannot
+    fill the groove is refused here, as before a run)."""
     from seamtrack.simulation.passes import heat_input_kj_mm, process_of
 
     p = process_of(c)
     v = c.simulation.welding_speed_mm_s
     assert c.passes is not None
-    return [
-        ("passes", c.passes.count),
+    rows: list[tuple[str, Any]] = [("passes", c.passes.count)]
+    if parts is not None:
+        rows.append(("passes the plan lays (CAD groove)", planned_passes(c, parts)))
+    return rows + [
         ("planner", c.planner.name if c.planner is not None else "adaptive"),
         ("scan-only pass first", c.passes.scan_first),
         ("wire feed (mm/s)", p.wire_feed_mm_s),
@@ -89,3 +107,18 @@ def check_rows(c: Any) -> list[tuple[str, Any]]:
         ("travel speed window (mm/s)", f"{p.speed_min_mm_s:g} .. {p.speed_max_mm_s:g}"),
         ("heat input at the nominal speed (kJ/mm)", heat_input_kj_mm(c, v)),
     ]
+
+
+def planned_passes(c: Any, parts: Any) -> str:
+    """The plan on the CAD groove, as a row of ``check``: the passes, the layers, the cap."""
+    from seamtrack.simulation.job import planned_layout
+    from seamtrack.simulation.job_paths import STATION_SPACING_MM
+    from seamtrack.workpiece.fill import FillState
+
+    fill = FillState.from_mesh(parts.mesh, parts.seam, spacing_mm=STATION_SPACING_MM)
+    plan = planned_layout(fill, c)
+    if plan is None:
+        return "decided by the plugin as it runs"
+    *fill_layers, cap = plan.beads_per_layer
+    layers = ", ".join(str(n) for n in fill_layers) or "none"
+    return f"{plan.passes} (fill layers of {layers} beads; a cap of {cap})"

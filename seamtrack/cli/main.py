@@ -250,7 +250,7 @@ def cmd_check(args: argparse.Namespace) -> int:
         ("sensor resolution (mm)", parts.sensor_resolution_mm),
     ]
     if c.passes is not None:
-        rows += jobs.check_rows(c)
+        rows += jobs.check_rows(c, parts)
     print_table(rows, f"{scene.name}: valid")
     return 0
 

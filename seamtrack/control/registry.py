@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import importlib
 import inspect
+import os
+import sys
 from importlib.metadata import entry_points
 from typing import Any
 
@@ -40,7 +42,7 @@ def load_class(name: str, field: str) -> Any:
     ``field``."""
     module_name, _, attr = name.partition(":")
     try:
-        module = importlib.import_module(module_name)
+        module = _import_from_here(module_name)
     except Exception as exc:  # the user's module may fail in any way on import
         raise PluginError(
             f"cannot import {module_name!r}: {exc}",
@@ -55,6 +57,27 @@ def load_class(name: str, field: str) -> Any:
             fix="name the class as package.module:Class",
         )
     return cls
+
+
+def _import_from_here(module_name: str) -> Any:
+    """``module_name`` imported, looked for in the current directory too when it is on no
+    path (as uvicorn and gunicorn load ``module:app``: the ``seamtrack`` command, unlike
+    ``python -m``, does not put the current directory on ``sys.path``)."""
+    try:
+        return importlib.import_module(module_name)
+    except ModuleNotFoundError as exc:
+        here = os.getcwd()
+        top = module_name.partition(".")[0]
+        if exc.name != top or here in sys.path or not _is_module_in(here, top):
+            raise
+    sys.path.insert(0, here)
+    return importlib.import_module(module_name)
+
+
+def _is_module_in(folder: str, top: str) -> bool:
+    return os.path.isfile(os.path.join(folder, top + ".py")) or os.path.isdir(
+        os.path.join(folder, top)
+    )
 
 
 def tracker_class(name: str) -> type:

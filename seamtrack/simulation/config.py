@@ -242,14 +242,22 @@ class BeadShapeConfig(_Section):
     ) = None
 
 
+#: GMAW electrode wire: 0.5-3.2 mm across (0.020-1/8 in; the usual 0.8-1.6 mm), fed at
+#: 100-800 in/min, 2.5-20 m/min (arctech.com.tr, "Solid Wire Electrodes for GMAW"); the window
+#: is that with room either side (wire feeders reach about 1.3 m/min at their slowest). Outside
+#: it mass conservation gives no bead a torch lays (1e-300 m/min: an infinite travel speed).
+WireDiameter = Annotated[float, Field(ge=0.5, le=3.2, allow_inf_nan=False, strict=True)]
+WireFeed = Annotated[float, Field(ge=1.0, le=30, allow_inf_nan=False, strict=True)]
+
+
 class ProcessConfig(_Section):
     """``[process]``: the welding process (GMAW). The bead's area follows from mass
     conservation, ``deposition_efficiency * pi * (d/2)^2 * v_wire / v_travel``, at the torch's
     actual travel speed; heat input (kJ/mm) is ``thermal_efficiency * U * I / v_travel * 1e-3``.
     The travel speed window bounds what a planner may command."""
 
-    wire_diameter_mm: Annotated[float, Field(gt=0, le=5, allow_inf_nan=False, strict=True)] = 1.2
-    wire_feed_m_min: Annotated[float, Field(gt=0, le=30, allow_inf_nan=False, strict=True)] = 8.0
+    wire_diameter_mm: WireDiameter = 1.2
+    wire_feed_m_min: WireFeed = 8.0
     deposition_efficiency: Fraction = 0.97
     voltage_v: Annotated[float, Field(gt=0, le=100, allow_inf_nan=False, strict=True)] = 28.0
     current_a: Annotated[float, Field(gt=0, le=2000, allow_inf_nan=False, strict=True)] = 250.0
@@ -269,9 +277,7 @@ class PassOverride(_Section):
     offset_mm: Finite | None = None
     work_angle_deg: Angle | None = None
     travel_speed_mm_s: Positive | None = None
-    wire_feed_m_min: Annotated[float, Field(gt=0, le=30, allow_inf_nan=False, strict=True)] | (
-        None
-    ) = None
+    wire_feed_m_min: WireFeed | None = None
 
 
 class PassesConfig(_Section):

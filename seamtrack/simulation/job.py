@@ -34,6 +34,7 @@ from __future__ import annotations
 import dataclasses
 import gc
 import math
+import threading
 import time
 from dataclasses import dataclass
 from typing import Any
@@ -43,9 +44,12 @@ from numpy.typing import NDArray
 
 from seamtrack.control.planner import (
     JobState,
+    Layout,
     MeasuredGroove,
     PassPlan,
     checked_plan,
+    is_builtin,
+    layout,
     planner,
 )
 from seamtrack.errors import PluginRuntimeError, SceneError, plugin_failed
@@ -91,6 +95,10 @@ FloatArray = NDArray[np.float64]
 
 #: A frame whose fill surface lies this far (mm) below the pass before's is no groove.
 FILL_DROP_MM = 1.0
+
+#: The most passes a job lays: ``passes.count``'s bound, and where an ``auto`` plan that is
+#: not done by then stops (a plan the CAD groove says needs more is refused before the run).
+MAX_PASSES = 200
 
 
 @dataclass(frozen=True, eq=False)
@@ -185,6 +193,9 @@ def _run_job(
     count = c.passes.count if isinstance(c.passes.count, int) else None
     state = JobState(process, count=count, reinforcement_mm=c.passes.reinforcement_mm)
     _check_bead_fits(fill, process, c)
+    planned_layout(fill, c)  # a plan that cannot fill the groove is refused before the run
+    window = (process.speed_min_mm_s, process.speed_max_mm_s)
+    budget_s = c.simulation.wall_time_limit_s
     records: list[PassRecord] = []
     job_bar = _job_bar(progress, count)
     wall_start = time.perf_counter()
@@ -209,17 +220,20 @@ def _run_job(
             scene = _with(scene, {"extractor.params.wall_deg": wall_deg(groove)})
     else:
         groove = _true_groove(fill)
-    limit = count if count is not None else 200
+    limit = count if count is not None else MAX_PASSES
     index = 0
     stopped = ""
     while index < limit:
         assert groove is not None
-        plan = _plan(plan_maker, name, groove, index, state, arm=is_arm(c))
+        plan = _plan(plan_maker, name, groove, index, state, arm=is_arm(c), window=window,
+                     budget_s=budget_s)  # fmt: skip
         if plan is None:
+            _check_overrides_laid(c.passes, index, name)
             break
         if c.passes.overrides:
             plan = checked_plan(overridden(plan, c.passes, index), name, index, groove,
-                                gantry=not is_arm(c), field="passes.overrides")  # fmt: skip
+                                gantry=not is_arm(c), field="passes.overrides",
+                                window=window)  # fmt: skip
             assert plan is not None
         done = _pass(scene, plan, fill, cad_seam, rng, process, progress, f"pass_{index + 1:02d}",
                      flip, adapt, name, groove, stop)  # fmt: skip
@@ -249,6 +263,12 @@ def _run_job(
         state.last_bead_area_mm2 = np.interp(done.groove.s_mm, done.path_s_mm,
                                              done.path_area_mm2)  # fmt: skip
         groove = done.groove
+    else:
+        if count is None:  # the planner was not done after MAX_PASSES passes
+            stopped = (
+                f"{name!r} was not done after {MAX_PASSES} passes, the most a job lays "
+                "(the groove is not full)"
+            )
     if job_bar is not None:
         job_bar.close()
     if index == 0:
@@ -551,14 +571,118 @@ def _laser_flipped(parts: Parts, fill: Any) -> bool:
 
 
 def _plan(maker: Any, name: str, groove: MeasuredGroove, index: int, state: JobState,
-          arm: bool) -> PassPlan | None:  # fmt: skip
-    try:
+          arm: bool, window: tuple[float, float] | None = None,
+          budget_s: float = math.inf) -> PassPlan | None:  # fmt: skip
+    """The planner's plan for pass ``index``, checked. A plugin's ``plan()`` runs under the
+    wall-time budget ``budget_s`` (:func:`within_budget`); one of seamtrack's own that fails
+    is seamtrack's bug, raised as it is, never blamed on a plugin."""
+    if is_builtin(maker):
         plan = maker.plan(groove, index, state)
-    except (PluginRuntimeError, SceneError):
-        raise
-    except Exception as exc:  # the user's planner may fail in any way
-        raise plugin_failed("planner.name", name, "plan", 0.0, exc) from exc
-    return checked_plan(plan, name, index, groove, gantry=not arm)
+    else:
+        try:
+            plan = within_budget(lambda: maker.plan(groove, index, state), budget_s)
+        except (PluginRuntimeError, SceneError):
+            raise
+        except TimeoutError:
+            raise PluginRuntimeError(
+                f"{name!r} plan() for pass {index + 1} did not return within "
+                f"simulation.wall_time_limit_s = {budget_s:g} s (it is left running until "
+                "seamtrack exits: Python cannot stop a thread)",
+                field="planner.name",
+                fix="make plan() return a PassPlan, or None when the groove is full (or raise "
+                "simulation.wall_time_limit_s)",
+            ) from None
+        except Exception as exc:  # the user's planner may fail in any way
+            raise plugin_failed("planner.name", name, "plan", 0.0, exc) from exc
+    return checked_plan(plan, name, index, groove, gantry=not arm, window=window)
+
+
+def within_budget(call: Any, budget_s: float) -> Any:
+    """``call()``'s answer, or TimeoutError when it has not returned within ``budget_s``.
+
+    The call runs in a daemon thread the caller waits for with a timeout (an interruptible
+    wait: Ctrl-C still reaches the main thread). On time-out the thread is abandoned, not
+    killed: Python has no sound way to stop a thread (an exception injected into it lands
+    anywhere, in a ``finally`` or a lock, and never inside compiled code), nor does Linux
+    (``pthread_cancel`` under a running interpreter corrupts it); SIGALRM reaches the main
+    thread only, and only between bytecodes. The job stops with an error, and the process's
+    exit ends the thread. A plugin's state is not shared with a second process, so running
+    ``plan()`` in a subprocess (which could be killed) would lose the planner's memory of the
+    passes before."""
+    if not math.isfinite(budget_s):
+        return call()
+    box: dict[str, Any] = {}
+
+    def target() -> None:
+        try:
+            box["value"] = call()
+        except BaseException as exc:  # handed to the waiting thread
+            box["error"] = exc
+
+    worker = threading.Thread(target=target, name="seamtrack-planner", daemon=True)
+    worker.start()
+    worker.join(budget_s)
+    if worker.is_alive():
+        raise TimeoutError(f"no answer within {budget_s:g} s")
+    if "error" in box:
+        raise box["error"]
+    return box.get("value")
+
+
+def _check_overrides_laid(passes: Any, laid: int, name: str) -> None:
+    """An override for a pass the plan never lays is refused (it would be silently ignored)."""
+    for i, o in enumerate(passes.overrides):
+        if o.number > laid:
+            raise SceneError(
+                f"pass {o.number} is overridden but {name!r} planned {laid} passes",
+                field=f"passes.overrides.{i}.number",
+                fix=f"number the overridden passes from 1 to {laid}",
+            )
+
+
+def planned_layout(fill: Any, c: Any) -> Layout | None:
+    """The plan a built-in planner lays on the CAD groove ``fill`` (None: a plugin's, which
+    only its run knows; the scan-only pass's measured groove may change it by a pass or so),
+    refused when it cannot fill the groove: an ``auto`` plan of more than
+    :data:`MAX_PASSES` passes (the process lays beads too small), or a ``passes.count`` of
+    beads that, each the largest the process lays (at its slowest travel speed), hold less
+    than the groove. Overrides of passes beyond the plan are refused too."""
+    name = c.planner.name if c.planner is not None else "adaptive"
+    if not is_builtin(name):
+        return None
+    process = process_of(c)
+    count = c.passes.count if isinstance(c.passes.count, int) else None
+    groove = _true_groove(fill)
+    state = JobState(process, count=count, reinforcement_mm=c.passes.reinforcement_mm)
+    plan = layout(groove, state)
+    area = float(np.median(groove.area_mm2))
+    largest = float(process.bead_area_mm2(process.speed_min_mm_s))
+    if count is None and plan.passes > MAX_PASSES:
+        raise SceneError(
+            f"the plan needs {plan.passes} passes to fill the groove ({area:.4g} mm^2) with "
+            f"beads of {float(process.bead_area_mm2(process.nominal_speed_mm_s)):.3g} mm^2 at "
+            f"the nominal speed; a job lays at most {MAX_PASSES}",
+            field="process.wire_feed_m_min",
+            fix="feed more wire (process.wire_feed_m_min or process.wire_diameter_mm), or "
+            "weld slower (simulation.welding_speed_mm_s)",
+        )
+    if count is not None and count * largest < area:
+        need = math.ceil(area / largest)
+        raise SceneError(
+            f"{count} passes cannot fill the groove: {area:.4g} mm^2, and the largest bead "
+            f"the process lays is {largest:.3g} mm^2 (at process.travel_speed_min_mm_s = "
+            f"{process.speed_min_mm_s:g} mm/s)",
+            field="passes.count",
+            fix=f'give at least {need} passes, or count = "auto"',
+        )
+    for i, o in enumerate(c.passes.overrides):
+        if o.number > plan.passes:
+            raise SceneError(
+                f"pass {o.number} is overridden but the plan lays {plan.passes} passes",
+                field=f"passes.overrides.{i}.number",
+                fix=f"number the overridden passes from 1 to {plan.passes}",
+            )
+    return plan
 
 
 def _check_bead_fits(fill: Any, process: Any, c: Any) -> None:

@@ -16,6 +16,12 @@ from seamtrack.workpiece.inspection import MIN_THICKNESS_MM, Inspection, inspect
 
 FloatArray = NDArray[np.float64]
 
+#: A job whose fill surface lies deeper than this (mm) under the plates' top line at a station
+#: every pass welded ends ``underfilled``, not ``completed``: ISO 5817:2014's limit for an
+#: incompletely filled groove (imperfection 511) at quality level C, h <= 0.1 t but at most
+#: 1 mm (t: the plate, here >= 10 mm).
+UNDERFILL_LIMIT_MM = 1.0
+
 
 def job_summary(
     scene: Scene, records: list[Any], fill: Any, wall_s: float, stopped: str = ""
@@ -39,14 +45,11 @@ def job_summary(
     crown = reinf[:, 1]
     statuses = [r.result.status for r in records]
     errors = [float(r.result.summary.get("max_error_mm", math.nan)) for r in welded]
+    status, reason = job_status(stopped, statuses, reinf[:, 0], fill.s_mm[keep])
     return {
         "scene": scene.name,
-        "status": "stopped"
-        if stopped
-        else "completed"
-        if all(s == "completed" for s in statuses)
-        else "incomplete",
-        "stop_reason": stopped,
+        "status": status,
+        "stop_reason": reason,
         "passes": len(welded),
         "scan_pass": len(records) > len(welded),
         "layers": len(layers),
@@ -114,6 +117,31 @@ def _inspection(scene: Scene, fill: Any, welded: list[Any]) -> dict[str, Any]:
         return {"quality_level": None, "inspection": None}
     out = weld.as_dict()
     return {"quality_level": out["level"], "inspection": out}
+
+
+def job_status(
+    stopped: str, statuses: list[str], fill_top_mm: FloatArray, s_mm: FloatArray
+) -> tuple[str, str]:
+    """The job's status and why: ``stopped`` (the job stopped early, for ``stopped``),
+    ``incomplete`` (a pass did not complete), ``underfilled`` (the fill surface lies more than
+    :data:`UNDERFILL_LIMIT_MM` under the plates' top line at a station, ``fill_top_mm``: each
+    station's lowest fill height over that line; the plan could not fill the groove), else
+    ``completed``."""
+    if stopped:
+        return "stopped", stopped
+    if not all(s == "completed" for s in statuses):
+        return "incomplete", ""
+    deep = np.flatnonzero(np.asarray(fill_top_mm) < -UNDERFILL_LIMIT_MM)
+    if len(deep) or not len(fill_top_mm):
+        if not len(fill_top_mm):
+            return "underfilled", "no station was welded by every pass"
+        worst = int(np.argmin(fill_top_mm))
+        return "underfilled", (
+            f"{len(deep)} of {len(fill_top_mm)} stations lie more than {UNDERFILL_LIMIT_MM:g} mm "
+            f"under the plates' top line ({-float(fill_top_mm[worst]):.3g} mm at s = "
+            f"{float(s_mm[worst]):.4g} mm): the plan did not fill the groove"
+        )
+    return "completed", ""
 
 
 def _pass_row(r: Any) -> dict[str, Any]:

@@ -108,12 +108,15 @@ def check_passes(c: SceneConfig) -> None:
             field="extractor.name",
             fix='set extractor.name = "groove"',
         )
-    check_overrides(c.passes, arm=is_arm(c))
+    check_overrides(c.passes, arm=is_arm(c), config=c)
     name = c.planner.name if c.planner is not None else "adaptive"
     planner_class(name)  # an unknown or broken planner is refused before the run
 
 
-def check_overrides(passes: PassesConfig, arm: bool) -> None:
+def check_overrides(passes: PassesConfig, arm: bool, config: SceneConfig | None = None) -> None:
+    """The scene's pass overrides: one entry a pass, within the job's passes, no work angle on
+    a gantry, and (with the scene's ``config``) a travel speed inside the process window and
+    within what the axes reach, as the scene's own welding speed must be."""
     numbers = [o.number for o in passes.overrides]
     for i, o in enumerate(passes.overrides):
         if o.number in numbers[:i]:
@@ -128,6 +131,9 @@ def check_overrides(passes: PassesConfig, arm: bool) -> None:
                 field=f"passes.overrides.{i}.number",
                 fix="number the passes from 1 to passes.count",
             )
+        if config is not None and o.travel_speed_mm_s is not None:
+            _check_override_speed(o.travel_speed_mm_s, f"passes.overrides.{i}.travel_speed_mm_s",
+                                  config, arm)  # fmt: skip
         if not arm and o.work_angle_deg:
             raise SceneError(
                 f"a work angle of {o.work_angle_deg} deg on the gantry, which cannot tilt "
@@ -135,6 +141,27 @@ def check_overrides(passes: PassesConfig, arm: bool) -> None:
                 field=f"passes.overrides.{i}.work_angle_deg",
                 fix="remove it (0 on a gantry), or weld on an arm (robot.model)",
             )
+
+
+def _check_override_speed(speed: float, field: str, c: SceneConfig, arm: bool) -> None:
+    p = c.process or ProcessConfig()
+    if not p.travel_speed_min_mm_s <= speed <= p.travel_speed_max_mm_s:
+        raise SceneError(
+            f"travel speed {speed:g} mm/s is outside the process window "
+            f"[{p.travel_speed_min_mm_s:g}, {p.travel_speed_max_mm_s:g}] mm/s",
+            field=field,
+            fix="give a speed inside process.travel_speed_min_mm_s .. _max_mm_s (or widen them)",
+        )
+    limits = c.robot.tcp_velocity_max_mm_s if arm else c.robot.velocity_max_mm_s
+    reach = math.hypot(*limits)
+    if speed > reach:
+        raise SceneError(
+            f"travel speed {speed:g} mm/s exceeds what the axes can reach (velocity limits "
+            f"{list(limits)} mm/s)",
+            field=field,
+            fix=f"use at most {reach:.4g} mm/s (and at most the axis limit along a seam that "
+            "follows one axis)",
+        )
 
 
 def overridden(plan: PassPlan, passes: PassesConfig, pass_index: int) -> PassPlan:

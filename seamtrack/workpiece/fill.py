@@ -64,6 +64,9 @@ SEAL_DEPTH_MM = 0.02
 MESH_KINK_MM = 1e-3
 #: Lateral margin (mm) of the station grid beyond the groove's top corners.
 GRID_MARGIN_MM = 12.0
+#: The probe sections that find the groove's top corners reach at least this far (mm) either
+#: side of the seam, and as far as the part does.
+PROBE_HALF_WIDTH_MM = 60.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -214,10 +217,14 @@ class FillState:
         s[0], s[-1] = inset, length - inset
         frames = station_frames(seam, s)
         tri = np.asarray(mesh.triangles, dtype=np.float64)
-        if half_width_mm is None:
-            probe_y = np.arange(-60.0, 60.0 + 1e-9, 0.25)
+        if half_width_mm is None:  # probe across the whole part (at least +-60 mm)
             probes = frames[np.unique(np.linspace(0, n - 1, 9).astype(int))[1:-1]]
-            env = fill_gaps(section_envelopes(tri, probes, probe_y, 90.0), "workpiece")
+            vertices = np.asarray(mesh.vertices, dtype=np.float64)
+            across = max(float(np.abs((vertices - T[:3, 3]) @ T[:3, 1]).max()) for T in probes)
+            probe_half = max(PROBE_HALF_WIDTH_MM, math.ceil(across))
+            probe_y = np.arange(-probe_half, probe_half + 1e-9, 0.25)
+            env = fill_gaps(section_envelopes(tri, probes, probe_y, probe_half + 30.0),
+                            "workpiece")  # fmt: skip
             _, corners, _ = top_corners(probe_y, env)
             half_width_mm = float(np.abs(corners[:, :, 0]).max()) + GRID_MARGIN_MM
         half = float(half_width_mm)

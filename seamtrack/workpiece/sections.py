@@ -121,7 +121,8 @@ def top_corners(y: FloatArray, z: FloatArray) -> tuple[FloatArray, FloatArray, I
         raise WorkpieceError(
             "a station's section has no groove below the plates' top",
             field="workpiece",
-            fix="check the seam lies in a groove, or widen half_width_mm",
+            fix="check the seam lies in a groove below both plates' tops (the groove's "
+            "workpiece.params, or the seam workpiece.seam / workpiece.seam_near_mm picks)",
         )
     j_left = np.argmax(low_left, axis=1)  # first node below the left plate
     j_right = k - 1 - np.argmax(low_right[:, ::-1], axis=1)  # last node below the right plate
