@@ -134,13 +134,28 @@ def test_extractor_bench(tmp_path: Path) -> None:
 
 @pytest.mark.embree
 def test_raycast_bench(tmp_path: Path) -> None:
-    from seamtrack.bench.raycast import bench_raycast
+    from seamtrack.bench.raycast import AGREE_MM, RAYS, bench_raycast
 
     result = bench_raycast(tmp_path, quick=True)
     _written(tmp_path, "raycast.json", "raycast.md")
     assert result["quick"] is True and result["cases"]
+    assert json.loads((tmp_path / "raycast.json").read_text())["cases"] == result["cases"]
     for case in result["cases"]:
-        assert len(case["profiles_per_s"]) >= 4 and case["ratios"]
+        # The result the speeds are of: two independent methods on the same rays, the exact
+        # plane section of the mesh and Embree's hits refined in float64, agree on every ray
+        # off a triangle edge (hit or miss, reason, distance within AGREE_MM = 1e-9 mm).
+        agreement = case["agreement"]
+        assert agreement["rays"] == agreement["poses"] * RAYS > 0
+        assert agreement["disagree"] == 0 and agreement["hit_mismatch"] == 0
+        assert agreement["reason_mismatch"] == 0
+        assert agreement["max_dt_mm"] <= AGREE_MM
+        assert 0 < case["valid_points"] <= RAYS
+        # every rate was measured, and the ratios are the rates' own
+        rates = case["profiles_per_s"]
+        assert all(math.isfinite(v) and v > 0 for v in rates.values())
+        scan = rates["scan_mesh (Profile), plane-section fan"]
+        embree = rates["scan_mesh (Profile), Embree fan, float64 refinement"]
+        assert case["ratios"]["scan_mesh, plane-section / Embree fan"] == scan / embree
 
 
 @pytest.mark.cad

@@ -267,3 +267,27 @@ def test_hand_written_figure_tables_only_fall() -> None:
             counts[page.name] = n
     grown = {k: v for k, v in counts.items() if v > HAND_WRITTEN_FIGURE_TABLES.get(k, 0)}
     assert not grown, f"new hand-written figure tables (render them from a bench): {grown}"
+@pytest.mark.embree
+@pytest.mark.cad
+def test_the_vector_env_example_runs_as_a_script(tmp_path: Path) -> None:
+    """docs/gym.md's vector-env example, saved as the file it names and run with ``python``: a
+    spawned worker re-imports the script, so it needs its own ``import seamtrack.gym`` and the
+    ``__main__`` guard; without either the workers fail with tracebacks."""
+    pytest.importorskip("gymnasium")
+    import subprocess
+
+    blocks = _module_blocks()
+    assert "vector_envs.py" in blocks
+    script = tmp_path / "vector_envs.py"
+    script.write_text(blocks["vector_envs.py"])
+    env = {**os.environ, "PYTHONPATH": str(DOCS.parent)}
+    done = subprocess.run(
+        [sys.executable, script.name], cwd=tmp_path, env=env, capture_output=True, text=True,
+        timeout=600,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert "Traceback" not in done.stderr
+    # paper-v-groove's 1024 rays: 3 n + 9 numbers an observation, one row per environment
+    assert done.stdout.startswith(f"observations (2, {3 * 1024 + 9}) rewards")
+    rewards = done.stdout.split("rewards", 1)[1].strip(" []\n").split()
+    assert len(rewards) == 2 and all(float(r) <= 0.0 for r in rewards)

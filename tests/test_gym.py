@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
+import warnings
 
 import numpy as np
 import pytest
@@ -205,12 +206,126 @@ def test_reset_and_close_mid_episode_end_the_run() -> None:
     assert not second.alive and not running(env)
 
 
-def test_a_non_finite_action_is_refused() -> None:
+def correction(obs: np.ndarray, rays: int) -> np.ndarray:
+    """The correction held, (lateral, vertical) mm, as the observation reports it."""
+    torch = sgym.split_observation(obs, rays)["torch"]
+    return torch[..., 5:7].astype(np.float64)
+
+
+BAD_ACTIONS = {
+    "nan": np.array([np.nan, 0.0], dtype=np.float32),
+    "inf": np.array([0.2, -np.inf], dtype=np.float32),
+    "three numbers": np.zeros(3, dtype=np.float32),
+    "a batch of one": np.zeros((1, 2), dtype=np.float32),
+    "text": "left",
+    "none": None,
+}
+
+
+@pytest.mark.parametrize("bad", BAD_ACTIONS, ids=list(BAD_ACTIONS))
+def test_a_bad_action_is_refused_and_the_step_runs_as_with_zero_action(bad: str) -> None:
+    """A bad action raises nothing (a raise ends an AsyncVectorEnv's worker): the step applies
+    no new correction, so it gives the very observation and reward of a zero action, and says
+    why in ``info``; the episode goes on."""
+    steps = [np.array([0.3, -0.2], dtype=np.float32), np.array([-0.1, 0.1], dtype=np.float32)]
+    runs = []
     env = make()
     try:
-        env.reset(seed=0)
-        with pytest.raises(ValueError, match="not finite"):
-            env.step(np.array([np.nan, 0.0], dtype=np.float32))
+        for action in (np.zeros(2, dtype=np.float32), BAD_ACTIONS[bad]):
+            env.reset(seed=5)
+            first = env.step(steps[0])
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                middle = env.step(action)
+            after = env.step(steps[1])
+            runs.append((first, middle, after, [w.category for w in caught]))
+    finally:
+        env.close()
+    (_, zero_mid, zero_after, zero_warned), (_, bad_mid, bad_after, bad_warned) = runs
+    assert zero_warned == [] and bad_warned == [sgym.BadActionWarning]
+    assert zero_mid[4]["action_refused"] == ""
+    assert bad_mid[4]["action_refused"] and "\n" not in bad_mid[4]["action_refused"]
+    assert not bad_mid[4]["action_clipped"]
+    for zero_step, bad_step in ((zero_mid, bad_mid), (zero_after, bad_after)):
+        assert zero_step[0].tobytes() == bad_step[0].tobytes()
+        assert zero_step[1:4] == bad_step[1:4]  # reward, terminated, truncated
+    # the correction held is the sum of the accepted actions only
+    rays = env.unwrapped.rays
+    np.testing.assert_array_equal(
+        correction(bad_after[0], rays), np.float32(steps[0]) + np.float32(steps[1])
+    )
+
+
+def test_an_action_beyond_the_bound_moves_the_torch_by_the_bound_only() -> None:
+    """``max_correction_mm`` bounds each axis of an action: 5 mm asked with a 0.5 mm bound moves
+    the correction held by 0.5 mm (and says so), exactly as asking 0.5 mm does; an action
+    within the bound is applied as it is."""
+    env = make(max_correction_mm=0.5)
+    try:
+        rays = env.unwrapped.rays
+        observed = []
+        for action in ([5.0, -3.0], [0.5, -0.5]):
+            env.reset(seed=2)
+            obs, reward, *_, info = env.step(np.array(action, dtype=np.float32))
+            observed.append((obs, reward, info))
+        obs, _, _, _, inside = env.step(np.array([-0.25, 0.125], dtype=np.float32))
+    finally:
+        env.close()
+    (beyond, beyond_reward, beyond_info), (at_bound, bound_reward, bound_info) = observed
+    np.testing.assert_array_equal(correction(beyond, rays), [0.5, -0.5])
+    assert beyond_info["action_clipped"] and not bound_info["action_clipped"]
+    assert beyond.tobytes() == at_bound.tobytes() and beyond_reward == bound_reward
+    np.testing.assert_array_equal(correction(obs, rays), [0.25, -0.375])
+    assert not inside["action_clipped"] and inside["action_refused"] == ""
+
+
+@pytest.mark.parametrize("mode", ["sync", "async"])
+def test_a_bad_action_leaves_a_vector_env_usable(mode: str) -> None:
+    """One NaN, one inf and a batch of the wrong width in a vector env: no worker dies, the
+    refused steps are those of a zero action (the other env untouched), and the vector env
+    steps and resets on as before; its episodes are those of single envs."""
+    seeds = [3, 4]
+    zero2 = np.zeros((2, 2), dtype=np.float32)
+    small = np.array([[0.05, -0.02], [-0.03, 0.04]], dtype=np.float32)
+    nan_first = np.array([[np.nan, 0.0], [0.02, 0.01]], dtype=np.float32)
+    inf_second = np.array([[0.01, 0.02], [0.0, np.inf]], dtype=np.float32)
+    wide = np.zeros((2, 3), dtype=np.float32)  # each env gets three numbers
+    actions = [small, nan_first, small, inf_second, wide, small]
+    # what a single env is given instead: a refused action is a zero one
+    as_applied = [small, np.array([[0.0, 0.0], [0.02, 0.01]], dtype=np.float32), small,
+                  np.array([[0.01, 0.02], [0.0, 0.0]], dtype=np.float32), zero2, small]  # fmt: skip
+    refused = [[False, False], [True, False], [False, False], [False, True], [True, True],
+               [False, False]]  # fmt: skip
+    kwargs = {"vector_kwargs": {"context": "spawn"}} if mode == "async" else {}
+    vec = gymnasium.make_vec(
+        ID, num_envs=2, vectorization_mode=mode, scene="paper-v-groove", overrides=SHORT,
+        **kwargs,
+    )  # fmt: skip
+    try:
+        obs, _ = vec.reset(seed=seeds)
+        vec_obs, vec_rewards = [obs], []
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", sgym.BadActionWarning)  # a sync env's, in-process
+            for a, flags in zip(actions, refused, strict=True):
+                obs, reward, terminated, truncated, info = vec.step(a)
+                assert not (terminated.any() or truncated.any())
+                assert [bool(r) for r in info["action_refused"]] == flags
+                vec_obs.append(obs)
+                vec_rewards.append(reward)
+        again, _ = vec.reset(seed=seeds)  # the workers are alive and reset as before
+        vec.step(small)
+    finally:
+        vec.close()
+    assert again.tobytes() == vec_obs[0].tobytes()
+    env = make()
+    try:
+        for k, seed in enumerate(seeds):
+            obs, _ = env.reset(seed=seed)
+            assert obs.tobytes() == vec_obs[0][k].tobytes()
+            for i, a in enumerate(as_applied):
+                obs, reward, *_ = env.step(a[k])
+                assert obs.tobytes() == vec_obs[i + 1][k].tobytes()
+                assert reward == vec_rewards[i][k]
     finally:
         env.close()
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 import ast
 import importlib
 import inspect
+import math
 from pathlib import Path
 
 import numba
@@ -21,7 +22,9 @@ import pytest
 from numba.core import types
 
 from seamtrack.features.extractors import BUILTIN, extractor
+from seamtrack.features.lines import segment_profile
 from seamtrack.features.synthetic import Imperfections, synthetic_profile
+from seamtrack.sensing.profiles import Profile
 from seamtrack.sensing.sensor import preset
 
 #: The modules whose kernels this file holds to the rule (the two-plate side's are held to
@@ -221,3 +224,38 @@ def test_compiled_kernels_return_named_tuples() -> None:
     # second run, has no signatures of its own; a fresh clone compiles and checks it)
     assert {"_segmentation.segment", "_v_groove_model.v_groove"} <= seen
     assert not bad, "\n".join(bad)
+
+
+@pytest.mark.parametrize(
+    ("wall_deg", "depth_mm", "root_y_mm"), [(60.0, 5.0, 0.0), (45.0, 3.0, 1.3), (70.0, 8.0, -2.1)]
+)
+def test_the_kernels_results_are_the_analytic_groove(wall_deg, depth_mm, root_y_mm) -> None:
+    """What the named results hold, not only their form: on a V drawn analytically (plates at
+    range 100 mm, walls ``wall_deg`` from them, 3 um seeded noise), the compiled segmentation
+    gives the four straight pieces at the drawn angles, each on its drawn line, and the
+    compiled V-groove model gives the root and the top corners where the geometry puts them."""
+    slope = math.tan(math.radians(wall_deg))
+    half = depth_mm / slope  # the walls' half-width at the plates
+    y = np.linspace(-15.0, 15.0, 1501) + root_y_mm
+    z = 100.0 + np.clip(depth_mm - np.abs(y - root_y_mm) * slope, 0.0, None)
+    noise = np.random.default_rng(4).normal(0.0, 0.003, y.size)
+    profile = Profile(np.column_stack([y, z + noise]))
+    segments = segment_profile(profile)
+    assert not isinstance(segments, str)
+    lines = sorted(segments.lines, key=lambda line: line.centroid[0])
+    angles = [math.degrees(math.atan2(ln.direction[1], ln.direction[0])) for ln in lines]
+    np.testing.assert_allclose(angles, [0.0, wall_deg, -wall_deg, 0.0], atol=0.05)
+    for line, (y0, z0, a) in zip(
+        lines,
+        [(root_y_mm - half, 100.0, 0.0), (root_y_mm, 100.0 + depth_mm, wall_deg),
+         (root_y_mm, 100.0 + depth_mm, -wall_deg), (root_y_mm + half, 100.0, 0.0)],
+        strict=True,
+    ):  # fmt: skip
+        normal = np.array([-math.sin(math.radians(a)), math.cos(math.radians(a))])
+        assert abs((line.centroid - (y0, z0)) @ normal) < 0.002  # on the drawn line
+    feature = extractor("v-groove")(profile)
+    assert feature and feature.joint == "v-groove"
+    np.testing.assert_allclose(feature.point_laser, [root_y_mm, 100.0 + depth_mm], atol=0.01)
+    np.testing.assert_allclose(
+        feature.edges_laser, [[root_y_mm - half, 100.0], [root_y_mm + half, 100.0]], atol=0.02
+    )

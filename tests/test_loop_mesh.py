@@ -52,9 +52,9 @@ OWN_TESTS += tuple(n for n in MESH_SCENES if "passes" in _toml(n))
 #: (README, "the paper reproduced").
 PAPER_TARGET_MM = 0.1
 
-#: The mitred corners: the false V where the laser plane crosses the mitre puts the seam point
-#: up to ~0.75 mm off (tests/test_v_groove_false_v.py, a strict xfail until the mitre fix),
-#: and the 45 deg turn is cut while the set-point brakes. Loose until that fix lands.
+#: The mitred corners: without a hint, the false V where the laser plane crosses the mitre
+#: puts the seam point up to ~0.75 mm off, flagged with a confidence below 0.4
+#: (tests/test_v_groove_false_v.py), and the 45 deg turn is cut while the set-point brakes.
 CORNER_SCENES_MM = {"v-groove-corner": 2.0, "v-groove-corner-arm": 2.0}
 
 

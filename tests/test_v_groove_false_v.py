@@ -56,11 +56,16 @@ def test_the_false_v_at_the_mitred_corner_is_flagged(corner):
         assert feature.confidence < 0.4
 
 
-def test_without_a_hint_the_false_v_drifts_off_the_seam(corner_any_share):
-    """The ambiguity the hint resolves: without a prior the false V's apex sinks below the root
-    as the plane moves into the mitre (0.7 mm off the seam at its far end)."""
-    _, error = _scan(corner_any_share, AT_THE_CORNER[-1])
-    assert error is not None and error > 0.5
+def test_without_a_hint_a_point_off_the_seam_is_flagged(corner_any_share):
+    """Without a prior the false V's apex may sink below the root as the plane moves into the
+    mitre (today up to 0.7 mm off the seam at its far end); what must hold is that a point
+    farther than the suite's 'detected' radius (0.5 mm) from the CAD seam never comes with
+    the confidence of a true V (0.71-0.76 next to the corner): it stays below 0.4, so a
+    tracker can discount it. An extractor that finds the true V here passes too."""
+    for s in AT_THE_CORNER:
+        feature, error = _scan(corner_any_share, s)
+        if feature and error is not None and error > 0.5:
+            assert feature.confidence < 0.4, f"{error:.3f} mm off at s = {s:.1f} mm"
 
 
 def test_with_the_trackers_hint_the_seam_point_lies_on_the_seam(corner_any_share):

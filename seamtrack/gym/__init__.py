@@ -29,7 +29,12 @@ except ImportError as exc:
         fix="pip install 'seamtrack[gym]'",
     ) from None
 
-from seamtrack.gym.env import TORCH_STATE, SeamTrackEnv, split_observation  # noqa: E402
+from seamtrack.gym.env import (  # noqa: E402
+    TORCH_STATE,
+    BadActionWarning,
+    SeamTrackEnv,
+    split_observation,
+)
 from seamtrack.gym.policies import ProfilePD  # noqa: E402
 from seamtrack.gym.vector import BatchedVectorEnv  # noqa: E402
 
@@ -47,6 +52,7 @@ if "seamtrack/Scene-v0" not in gymnasium.registry:  # a re-import must not warn
 __all__ = [
     "ENV_IDS",
     "TORCH_STATE",
+    "BadActionWarning",
     "BatchedVectorEnv",
     "GymnasiumMissing",
     "ProfilePD",

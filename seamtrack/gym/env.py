@@ -18,6 +18,14 @@ Spaces (``n`` = the scene's laser rays):
   applied for this frame (each in ``[-max_correction_mm, max_correction_mm]``, 1 mm by default:
   100 mm/s of correction at 100 frames/s); the correction held stays within ``+- 2 lost_mm``.
 
+A bad action never raises: an exception in ``step()`` shuts an ``AsyncVectorEnv``'s worker down
+for good (Gymnasium's vector contract), so one NaN from a policy would end the whole vector
+env. An action outside the bound is clipped to it, as Gymnasium's own continuous environments
+and its ``ClipAction`` wrapper do (``info["action_clipped"]``). One that is not two finite
+numbers (NaN, inf, another shape, not numbers) is refused: the step runs as with a zero action
+(the correction held is kept), ``info["action_refused"]`` says why (``""`` when accepted) and a
+:class:`BadActionWarning` is issued.
+
 Reward: minus the torch tip's distance to the true seam (mm) at the frame; when the seam is
 lost, minus ``lost_mm`` for every frame left to the seam's end at the welding speed on top (so
 losing the seam never pays better than staying just inside the limit).
@@ -31,6 +39,7 @@ from __future__ import annotations
 
 import bisect
 import math
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -79,6 +88,10 @@ def split_observation(observation: NDArray[Any], rays: int) -> dict[str, NDArray
         "valid": obs[..., 2 * rays : 3 * rays] > 0.5,
         "torch": obs[..., 3 * rays :],
     }
+
+
+class BadActionWarning(UserWarning):
+    """A step's action was refused (not two finite numbers); the step went on without it."""
 
 
 class _Polyline:
@@ -276,16 +289,24 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         run = self._run
         if run is None:
             raise RuntimeError("call reset() before step() (and after an episode ends)")
-        a = np.asarray(action, dtype=np.float64).reshape(2)
-        if not np.isfinite(a).all():
-            raise ValueError(f"the action {a.tolist()} is not finite (a policy gave NaN or inf)")
+        a, refused = read_action(action)
+        if refused:
+            warnings.warn(
+                f"seamtrack.gym: action refused: {refused}; the step applies no correction",
+                BadActionWarning,
+                stacklevel=2,
+            )
         bound = self.max_correction_mm
+        clipped = bool((np.abs(a) > bound).any())
         reach = 2.0 * self.lost_mm  # farther is lost anyway; keeps the aim inside the travel
         self._correction = np.clip(self._correction + np.clip(a, -bound, bound), -reach, reach)
         frame = run.next_frame(self._command())
         if isinstance(frame, Ended):
-            return self._ended(frame)
+            obs, reward, terminated, truncated, info = self._ended(frame)
+            info.update(action_clipped=clipped, action_refused=refused)
+            return obs, reward, terminated, truncated, info
         obs, info = self._observe(frame)
+        info.update(action_clipped=clipped, action_refused=refused)
         error = info["error_mm"]
         reward = -error
         terminated = truncated = False
@@ -392,6 +413,20 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         profile, _ = parts.scan(robot.sensor_pose(state), 0.0)
         self._rng.bit_generator.state = saved
         return len(profile.points_laser)
+
+
+def read_action(action: Any) -> tuple[FloatArray, str]:
+    """The action as a ``(2,)`` float64 array, and ``""``; or, for an action that is not two
+    finite numbers, zeros and the reason it was refused."""
+    try:
+        a = np.asarray(action, dtype=np.float64)
+    except (TypeError, ValueError):
+        return np.zeros(2), f"{type(action).__name__} is not an array of two numbers"
+    if a.shape != (2,):
+        return np.zeros(2), f"its shape is {a.shape}, not (2,)"
+    if not np.isfinite(a).all():
+        return np.zeros(2), f"{a.tolist()} is not finite (the policy gave NaN or inf)"
+    return a, ""
 
 
 def _check_number(name: str, value: Any, zero: bool = False) -> None:

@@ -14,11 +14,18 @@ to a fraction of a pixel by
   delta = (ln I[-1] - ln I[+1]) / (2 (ln I[-1] - 2 ln I[0] + ln I[+1])) (falls back to the
   centroid on a saturated plateau or at the image edge);
 - ``steger``: Steger's curvilinear line detector (IEEE PAMI 20(2), 1998): Gaussian-smoothed
-  derivatives; at each pixel of the run the line's normal n is the Hessian's eigenvector of the
-  most negative eigenvalue; from the run's pixel of strongest response, Steger's step
-  t = -(g . n) / (n^T H n) points to the centre (which must lie within a pixel), located as the
-  zero of the directional derivative g . n between that pixel and its neighbour towards it; the
-  line is followed along its direction to the column's centre.
+  derivatives; at the run's brightest smoothed pixel, the Hessian's eigenvector of the most
+  negative eigenvalue is the line's normal n (a line is there only where that eigenvalue is
+  negative); the centre is the zero of the first derivative, taken *along the column* and
+  averaged *along the line* (over columns c + s at rows shifted by the line's slope s, with
+  Steger's Gaussian weights), located on the cubic through four rows. Along the column because
+  the laser sheet's thickness images onto the chip's rows, so each column's profile is
+  symmetric about the centre while the profile across n is not once the brightness changes
+  along a slanted line; averaged along the line, not smoothed across the columns, because
+  that smoothing shifts a slanted line's centre where the brightness changes (the two together
+  put Steger's centre 0.03 px off at 30 deg of tilt and 0.14 px at 70 deg on the paper's
+  chip, issue 43). A line within 17 deg of the column keeps Steger's point p + t n,
+  t = -(g . n) / (n^T H n).
 
 Rows are centre-based: row i's centre is i (as :attr:`StripeImage.truth_row`).
 """
@@ -189,8 +196,9 @@ def detect(
     choose : {"strongest", "first", "widest"}
         "first" is the first along the range: the peak nearest the sensor (largest row).
     sigma_px : float, optional
-        Steger's smoothing scale; default the median run width / (2 sqrt 3) (Steger's bound
-        for a bar-shaped line), at least 0.8.
+        Steger's smoothing scale (along the column, and the weights' scale along the line);
+        default the median run width / (2 sqrt 3) (Steger's bound for a bar-shaped line), at
+        least 0.8.
     relative, noise_sigmas : float
         The default threshold's share of each column's peak (0-1) and its floor in noise
         sigmas (>= 0).
@@ -255,7 +263,7 @@ def _steger(
     def derivative(order: tuple[int, int]) -> FloatArray:
         return np.asarray(ndimage.gaussian_filter(crop, sigma, order=order, mode="nearest"))
 
-    g_r, g_c = derivative((1, 0)), derivative((0, 1))
+    smooth, g_r, g_c = derivative((0, 0)), derivative((1, 0)), derivative((0, 1))
     h_rr, h_cc, h_rc = derivative((2, 0)), derivative((0, 2)), derivative((1, 1))
     # Every pixel of every chosen run, with the run it belongs to.
     run_of = np.repeat(np.arange(len(k)), width)
@@ -263,8 +271,18 @@ def _steger(
     offset = np.arange(len(run_of)) - np.repeat(np.cumsum(width) - width, width)
     rr = first + offset - r0
     cc = np.repeat(cols, width)
-    a, b, d = h_rr[rr, cc], h_rc[rr, cc], h_cc[rr, cc]
-    # Most negative eigenvalue of [[a, b], [b, d]] and its eigenvector (the line's normal).
+    # The line's pixel in each run: the brightest of the smoothed image (a plateau's middle).
+    response = smooth[rr, cc]
+    best = np.full(len(k), -np.inf)
+    np.maximum.at(best, run_of, response)
+    winners = np.flatnonzero(response == best[run_of])
+    pick = np.full(len(k), -1, dtype=np.int64)
+    pick[run_of[winners]] = winners
+    p = np.maximum(pick, 0)
+    pr, pc = rr[p], cc[p]
+    a, b, d = h_rr[pr, pc], h_rc[pr, pc], h_cc[pr, pc]
+    # Most negative eigenvalue of the Hessian [[a, b], [b, d]] and its eigenvector: the line's
+    # normal n; a line is there only where the curvature across it is negative.
     half_trace, root = 0.5 * (a + d), np.sqrt(0.25 * (a - d) ** 2 + b**2)
     eig = half_trace - root
     n_r, n_c = b, eig - a  # (H - eig I) v = 0 -> v = (b, eig - a), or (eig - d, b)
@@ -273,37 +291,89 @@ def _steger(
     norm = np.hypot(n_r, n_c)
     norm = np.where(norm > 0, norm, 1.0)
     n_r, n_c = n_r / norm, n_c / norm
+    # A line nearly along the column (|n_r| < 0.3: within 17 deg of it) crosses the column at a
+    # grazing angle: there the centre is Steger's own point p + t n, t = -(g . n) / (n^T H n).
+    steep = np.abs(n_r) < 0.3
+    slope = np.where(steep, 0.0, -n_c / np.where(steep, 1.0, n_r))  # rows per column
+    along = np.asarray(ndimage.gaussian_filter1d(crop, sigma, axis=0, order=1, mode="nearest"))
+    # The columns the line runs through whole: a run cut by the image's top or bottom edge is
+    # not the line's full profile.
+    whole = np.zeros(image.shape[1], dtype=bool)
+    whole[cols] = (peaks.start[k] > 0) & (peaks.stop[k] < image.shape[0])
+    row = _centre_in_column(along, pr, pc, slope, sigma, whole)
     curvature = n_r * n_r * a + 2 * n_r * n_c * b + n_c * n_c * d
     with np.errstate(invalid="ignore", divide="ignore"):
-        t = -(n_r * g_r[rr, cc] + n_c * g_c[rr, cc]) / curvature
-    # The ridge's pixel in each run: the strongest (most negative) curvature across the line.
-    best = np.full(len(k), np.inf)
-    np.minimum.at(best, run_of, eig)
-    winners = np.flatnonzero(eig == best[run_of])
-    pick = np.full(len(k), -1, dtype=np.int64)
-    pick[run_of[winners]] = winners
-    p = np.maximum(pick, 0)
-    good = (
-        (pick >= 0) & (eig[p] < 0) & (np.abs(t[p] * n_r[p]) <= 1.0) & (np.abs(t[p] * n_c[p]) <= 1.0)
-    )
-    # Steger's Newton step t is off by about -x^3 / sigma^2 at an offset x from the pixel; the
-    # zero of the first directional derivative between the pixel and its neighbour towards the
-    # centre is found by linear interpolation instead (exact for a symmetric line halfway).
-    nr, nc, tp = n_r[p], n_c[p], t[p]
-    step_r = np.rint(np.sign(tp) * nr).astype(np.int64)
-    step_c = np.rint(np.sign(tp) * nc).astype(np.int64)
-    pr, pc = rr[p], cc[p]
-    qr = np.clip(pr + step_r, 0, crop.shape[0] - 1)
-    qc = np.clip(pc + step_c, 0, crop.shape[1] - 1)
-    slope_p = nr * g_r[pr, pc] + nc * g_c[pr, pc]
-    slope_q = nr * g_r[qr, qc] + nc * g_c[qr, qc]
-    crossing = (slope_p * slope_q <= 0) & (slope_p != slope_q) & ((qr != pr) | (qc != pc))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        frac = np.where(crossing, slope_p / (slope_p - slope_q), 0.0)
-        point_r = np.where(crossing, pr + frac * (qr - pr), pr + tp * nr)
-        point_c = np.where(crossing, pc + frac * (qc - pc), pc + tp * nc)
-        # Along the line (perpendicular to n) back to the column's centre; a line nearly along
-        # the column keeps the point itself.
-        steep = np.abs(nr) < 0.3
-        row = np.where(steep, point_r, point_r - (pc - point_c) * nc / nr) + r0
+        t = -(n_r * g_r[pr, pc] + n_c * g_c[pr, pc]) / curvature
+    row = np.where(steep, pr + t * n_r, row) + r0
+    good = (pick >= 0) & (eig < 0) & np.isfinite(row) & (~steep | (np.abs(t) <= 1.0))
     return np.where(good, row, peaks.centroid[k])
+
+
+#: The column's rows where the derivative is sampled, about the line's pixel.
+_TAPS = np.arange(-3, 4)
+
+
+def _centre_in_column(
+    d_row: FloatArray,
+    pr: IntArray,
+    pc: IntArray,
+    slope: FloatArray,
+    sigma_px: float,
+    whole: NDArray[np.bool_],
+) -> FloatArray:
+    """The row, in each pixel (pr, pc)'s own column, where the derivative along the column
+    falls through zero (the ridge's top), the derivative averaged along the line.
+
+    ``d_row`` is the image's derivative along the columns (rows smoothed at the line's
+    scale, the columns not mixed). Each column's profile is symmetric about the stripe's
+    centre (the laser sheet's thickness, along x_L as the camera's baseline, images onto the
+    chip's rows), and a straight line's centre moves by ``slope`` rows a column; so the
+    derivative sampled at ``row + slope * s`` in column ``pc + s`` and averaged over s with
+    Gaussian weights (scale ``sigma_px``, as Steger's smoothing; linear interpolation along
+    the rows) keeps that symmetry, whatever the brightness does along the line, and averages
+    speckle as Steger's smoothing does. The zero is bracketed between two rows next to the
+    pixel and located on the cubic through four rows. NaN where no bracket lies within 2
+    rows."""
+    n_rows, n_cols = d_row.shape
+    reach = int(math.ceil(3.0 * sigma_px))
+    s = np.arange(-reach, reach + 1)
+    weight = np.exp(-0.5 * (s / sigma_px) ** 2)
+    columns = pc[:, None] + s[None, :]  # (k, S)
+    # Only over columns the line crosses whole (``whole``: not past its end, the image's side
+    # or a column where it leaves the chip), as far on both sides: an error in the slope
+    # then cancels.
+    gaps = np.concatenate(([-1], np.flatnonzero(~whole), [n_cols]))
+    at = np.searchsorted(gaps, pc)
+    half = np.maximum(np.minimum(pc - gaps[at - 1], gaps[at] - pc) - 1, 0)
+    inside = np.abs(s)[None, :] <= half[:, None]
+    columns = np.clip(columns, 0, n_cols - 1)[:, None, :]
+    rows = pr[:, None, None] + _TAPS[None, :, None] + slope[:, None, None] * s[None, None, :]
+    low = np.floor(rows)
+    frac = rows - low
+    low_i = np.clip(low.astype(np.int64), 0, n_rows - 1)
+    high_i = np.clip(low_i + 1, 0, n_rows - 1)
+    values = (1.0 - frac) * d_row[low_i, columns] + frac * d_row[high_i, columns]  # (k, 7, S)
+    w = (weight[None, :] * inside)[:, None, :]
+    f = (values * w).sum(axis=2) / w.sum(axis=2)  # (k, 7)
+    out = np.full(len(pr), np.nan)
+    # Brackets [i, i + 1] with i = -2..1 (a cubic needs i - 1..i + 2), nearest the pixel first.
+    for i in (0, -1, 1, -2):
+        j = i + 3  # the tap's column in f
+        todo = np.isnan(out) & (f[:, j] >= 0) & (f[:, j + 1] <= 0) & (f[:, j] != f[:, j + 1])
+        if not todo.any():
+            continue
+        y = f[todo][:, j - 1 : j + 3]  # values at x = -1, 0, 1, 2 (x = 0 is row pr + i)
+        # The cubic through the four values, in powers of x.
+        c0 = y[:, 1]
+        c1 = -y[:, 0] / 3.0 - y[:, 1] / 2.0 + y[:, 2] - y[:, 3] / 6.0
+        c2 = y[:, 0] / 2.0 - y[:, 1] + y[:, 2] / 2.0
+        c3 = -y[:, 0] / 6.0 + y[:, 1] / 2.0 - y[:, 2] / 2.0 + y[:, 3] / 6.0
+        linear = y[:, 1] / (y[:, 1] - y[:, 2])
+        x = linear  # then Newton on the cubic, kept in the bracket
+        for _ in range(4):
+            value = c0 + x * (c1 + x * (c2 + x * c3))
+            slope_x = c1 + x * (2.0 * c2 + 3.0 * x * c3)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                x = np.clip(x - value / slope_x, 0.0, 1.0)
+        out[todo] = pr[todo] + i + np.where(np.isfinite(x), x, linear)
+    return out
