@@ -267,6 +267,8 @@ def test_hand_written_figure_tables_only_fall() -> None:
             counts[page.name] = n
     grown = {k: v for k, v in counts.items() if v > HAND_WRITTEN_FIGURE_TABLES.get(k, 0)}
     assert not grown, f"new hand-written figure tables (render them from a bench): {grown}"
+
+
 @pytest.mark.embree
 @pytest.mark.cad
 def test_the_vector_env_example_runs_as_a_script(tmp_path: Path) -> None:
