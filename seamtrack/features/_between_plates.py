@@ -32,9 +32,12 @@ from seamtrack.features._two_lines import (
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
-#: As :data:`seamtrack.features.lines._WALL_DEG`, ``_BOTTOM_DEG`` and ``_PLATE_DEG` (rad).
+#: A gap's wall or a lap's edge face stands at least this steep on the plates (as
+#: :data:`seamtrack.features.lines._WALL_DEG`, rad).
 _WALL = math.radians(65.0)
+#: A gap's bottom (a backing seen through the gap) lies within this angle of the plates (rad).
 _BOTTOM = math.radians(10.0)
+#: A piece within this angle of a plate is plate where it lies on the plate's line (rad).
 _PLATE = math.radians(20.0)
 
 

@@ -163,7 +163,7 @@ def line_end(
     tol: float,
 ) -> Point:
     """Where a run's ``line`` ends at ``end`` (its last inlier when ``at_end``, else its
-    first): :func:`seamtrack.features.lines.corner_or_end` with the pieces of
+    first): :func:`seamtrack.features.lines.corner_with` with the pieces of
     ``min_points`` as the others, ``skip`` the run's own piece or -1. Its crossing with a
     piece meeting it there (a visible corner), else half a step beyond the end inlier."""
     cy, cz, dy, dz = line

@@ -108,7 +108,7 @@ _NO_RUN = Run(-1, -1, -1, 0, Line(0.0, 0.0, 0.0, 0.0), 0.0, Point(0.0, 0.0))
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def _along(points: FloatArray, idx: IntArray, line: Line) -> FloatArray:
-    """Coordinates of ``points[idx]`` along a line (:func:`seamtrack.features.lines._on`)."""
+    """Coordinates of ``points[idx]`` along a line."""
     cy, cz, dy, dz = line
     t = np.empty(idx.shape[0])
     for i in range(idx.shape[0]):

@@ -96,7 +96,7 @@ def plate_depth(tb, plate, qy, qz):
 
 @numba.njit(cache=True, nogil=True)
 def _off(tb, r, qy, qz):
-    """``abs(_towards_sensor(r, q))``: distance of (qy, qz) from record ``r``'s line."""
+    """Distance of (qy, qz) from record ``r``'s line."""
     g = tb.geo
     return abs((qy - g[r, CY]) * -g[r, UZ] + (qz - g[r, CZ]) * g[r, UY])
 
