@@ -21,13 +21,13 @@ from numpy.typing import NDArray
 from seamtrack.features._segmentation import _fit as _fit_tls
 from seamtrack.features._two_lines import (
     PieceLines,
-    Point,
     RunEnd,
     angle,
     kept,
     median,
     towards,
 )
+from seamtrack.features.line_geometry import Point
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]

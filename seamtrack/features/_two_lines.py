@@ -19,16 +19,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.features.counts import explained_share
+from seamtrack.features.line_geometry import Point
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
-
-
-class Point(NamedTuple):
-    """A point in the laser plane (mm)."""
-
-    y: float
-    z: float
 
 
 class Line(NamedTuple):

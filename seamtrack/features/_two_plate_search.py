@@ -27,13 +27,13 @@ from seamtrack.features._two_lines import (
     Line,
     PieceLines,
     PieceSpans,
-    Point,
     RunEnd,
     line_end,
     piece_line,
     steps,
     two_lines_share,
 )
+from seamtrack.features.line_geometry import Point
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]

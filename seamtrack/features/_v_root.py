@@ -27,7 +27,6 @@ from seamtrack.features._v_search import (
     START,
     UY,
     UZ,
-    Point,
     contains,
     dot_dir,
     end,
@@ -39,6 +38,7 @@ from seamtrack.features._v_search import (
     step,
     t_end,
 )
+from seamtrack.features.line_geometry import Point
 from seamtrack.features.lines import _WALL_DEG
 from seamtrack.features.select import sort_small
 

@@ -36,6 +36,7 @@ from seamtrack.features._segmentation import (
     fit_line,
 )
 from seamtrack.features.counts import explained_share, support
+from seamtrack.features.line_geometry import Point
 from seamtrack.features.select import sort_small
 
 FloatArray = NDArray[np.float64]
@@ -69,13 +70,6 @@ class LineTable(NamedTuple):
     index: IntArray  # type: ignore[assignment]  # a field, over tuple.index
     along: FloatArray
     used: IntArray
-
-
-class Point(NamedTuple):
-    """A point of the laser plane (y, z; mm)."""
-
-    y: float
-    z: float
 
 
 class Corner(NamedTuple):

@@ -101,7 +101,7 @@ class GenericExtractor:
 
     def _corner(self, profile: Profile, p: FloatArray, c: int, k: int, turn: float) -> Feature:
         corner = corner_point(p, c, k)
-        if corner.too_near_end:
+        if math.isnan(corner.y):  # a side has fewer than 3 points
             return Feature.failed("the corner is too near the profile's end", joint=self.name)
         conf = float(np.clip(turn / math.radians(90), 0.0, 1.0))
         return Feature.found(

@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 
 from seamtrack.features._between_plates import Scale
 from seamtrack.features._plate_lines import PlateLimits
-from seamtrack.features._two_lines import Line, Point
+from seamtrack.features._two_lines import Line
 from seamtrack.features._two_plate_search import (
     FIT,
     PIECE,
@@ -30,6 +30,7 @@ from seamtrack.features._two_plate_search import (
     two_plates,
 )
 from seamtrack.features.base import _Base
+from seamtrack.features.line_geometry import Point
 from seamtrack.features.lines import Segments
 from seamtrack.sensing.profiles import Feature, Profile
 
