@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from seamtrack.features import _segmentation as kernels
+from seamtrack.features.line_geometry import fit_line
 from seamtrack.features.lines import segment_profile
 from seamtrack.features.robust import (
     DEFAULT_RESOLUTION_MM,
@@ -47,7 +48,7 @@ def test_fit_line_equals_svd(seed: int) -> None:
     p = np.column_stack([t * np.cos(angle), t * np.sin(angle)]) + rng.normal(0, 0.05, (n, 2))
     p += rng.uniform(-50, 50, 2)
     idx = np.sort(rng.choice(n, size=max(2, n // 2), replace=False)).astype(np.int64)
-    cy, cz, uy, uz, rms, along = kernels.fit_line(p, idx)
+    cy, cz, uy, uz, rms, along = fit_line(p, idx)
     c, u, r = _svd_line(p[idx])
     np.testing.assert_allclose([cy, cz], c, atol=1e-9)
     np.testing.assert_allclose([uy, uz], u, atol=1e-9)

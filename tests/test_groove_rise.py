@@ -13,7 +13,7 @@ import pytest
 
 from seamtrack.features._groove_fit import MIRROR_DEG, short_walls
 from seamtrack.features._groove_rise import _round_level, a_step, risen_level
-from seamtrack.features.lines import Line
+from seamtrack.features.line_geometry import Line
 
 SPACING = 0.028  # mm between points, the wide sensor's 2048 rays
 TOL = 0.15

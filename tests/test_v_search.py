@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from seamtrack.features import _v_search as vs
-from seamtrack.features.lines import Line, Segments, collinear_groups, corner_with, segment_profile
+from seamtrack.features.line_geometry import Line
+from seamtrack.features.lines import Segments, collinear_groups, corner_with, segment_profile
 from seamtrack.features.synthetic import Imperfections, synthetic_profile
 from seamtrack.sensing.sensor import preset
 

@@ -18,7 +18,6 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features._segmentation import _fit as _fit_tls
 from seamtrack.features._two_lines import (
     PieceLines,
     RunEnd,
@@ -27,7 +26,7 @@ from seamtrack.features._two_lines import (
     median,
     towards,
 )
-from seamtrack.features.line_geometry import Point
+from seamtrack.features.line_geometry import Point, fit_points
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -325,7 +324,7 @@ def hole(
                 behind[r] = -(math.nan if math.isnan(x) or math.isnan(y) else max(x, y))
             if not median(behind) >= min_bottom_mm:
                 if e - s >= 3:
-                    _, _, uy, uz, _ = _fit_tls(q, part, part.shape[0])
+                    _, _, uy, uz, _ = fit_points(q, part, part.shape[0])
                     yes = angle(uy, uz, ady, adz) < _WALL
                     if not yes:
                         top = -math.inf

@@ -23,8 +23,8 @@ from numpy.typing import NDArray
 
 from seamtrack.features import _groove_kernels as kern
 from seamtrack.features._groove_kernels import local_v, robust_uv_line
-from seamtrack.features._segmentation import fit_line
-from seamtrack.features.lines import Line, Segments
+from seamtrack.features.line_geometry import Line, fit_line
+from seamtrack.features.lines import Segments
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
@@ -53,10 +53,9 @@ def trim_wall(points: FloatArray, line: Line, tol: float, rounds: int = 3) -> Li
         if len(new) < max(3, len(index) // 2) or np.array_equal(new, keep):
             break
         keep = new
-        f = fit_line(points, np.asarray(keep, dtype=np.int64))
-        cur = Line(keep, np.array([f.cy, f.cz]), np.array([f.uy, f.uz]), f.along, f.rms)
+        cur = Line.from_fit(keep, fit_line(points, np.asarray(keep, dtype=np.int64)))
     if cur.direction[0] * line.direction[0] + cur.direction[1] * line.direction[1] < 0:
-        cur = Line(cur.index, cur.centroid, -cur.direction, -cur.t, cur.rms)
+        cur = cur.flipped()
     return cur
 
 
@@ -379,10 +378,9 @@ def _stretched(seg: Segments, plate: Line, stop: int, step: int) -> Line:
     if not add:
         return plate
     index = np.sort(np.concatenate([plate.index, np.asarray(add, dtype=np.intp)]))
-    f = fit_line(P, np.asarray(index, dtype=np.int64))
-    line = Line(index, np.array([f.cy, f.cz]), np.array([f.uy, f.uz]), f.along, f.rms)
+    line = Line.from_fit(index, fit_line(P, np.asarray(index, dtype=np.int64)))
     if line.direction[0] < 0:
-        line = Line(line.index, line.centroid, -line.direction, -line.t, line.rms)
+        line = line.flipped()
     return line
 
 

@@ -20,8 +20,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features._segmentation import fit_range
-from seamtrack.features.line_geometry import Point
+from seamtrack.features.line_geometry import Point, fit_range, principal_angle
 
 FloatArray = NDArray[np.float64]
 
@@ -148,7 +147,7 @@ def window_turns(p: FloatArray, k: int, jump_mm: float) -> Turns:
         cyy = sum_yy[i + k] - sum_yy[i] - sy * sy / k
         czz = sum_zz[i + k] - sum_zz[i] - sz * sz / k
         cyz = sum_yz[i + k] - sum_yz[i] - sy * sz / k
-        t = 0.5 * math.atan2(2.0 * cyz, cyy - czz)
+        t = principal_angle(cyy, czz, cyz)
         chord_y = p[i + k - 1, 0] - p[i, 0]
         chord_z = p[i + k - 1, 1] - p[i, 1]
         if math.cos(t) * chord_y + math.sin(t) * chord_z < 0.0:

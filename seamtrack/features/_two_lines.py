@@ -2,7 +2,8 @@
 tables the two-plate kernels pass, where a line ends, and the share of a profile two lines
 explain.
 
-Lines are passed as :class:`Line` (centroid and unit direction, as floats); the profile's
+Lines are passed as :class:`~seamtrack.features.line_geometry.LineThrough` (centroid and unit
+direction, as floats); the profile's
 pieces as :class:`PieceLines`, one array per field (piece ``j``'s line is ``pieces.cy[j]``,
 ...). The arithmetic is that of the numpy formulation of :mod:`seamtrack.features.lines` and
 :mod:`seamtrack.features.base` (the same formulas, medians as numpy takes them), so results
@@ -19,19 +20,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.features.counts import explained_share
-from seamtrack.features.line_geometry import Point
+from seamtrack.features.line_geometry import LineThrough, Point
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
-
-
-class Line(NamedTuple):
-    """A line: its centroid (``cy``, ``cz``) and unit direction (``dy``, ``dz``)."""
-
-    cy: float
-    cz: float
-    dy: float
-    dz: float
 
 
 class PieceLines(NamedTuple):
@@ -46,7 +38,7 @@ class PieceLines(NamedTuple):
 class PieceSpans(NamedTuple):
     """Where each piece's inliers lie along its line: their number (``n_inliers``), the
     first's and the last's coordinates, and the mean spacing of the first and of the last
-    ten (:meth:`~seamtrack.features.lines.Line.step`)."""
+    ten (:meth:`~seamtrack.features.line_geometry.Line.step`)."""
 
     n_inliers: IntArray
     t_first: FloatArray
@@ -66,19 +58,19 @@ class RunEnd(NamedTuple):
     """A run at one of its ends: its line, the end inlier's coordinate along it and the
     step there."""
 
-    line: Line
+    line: LineThrough
     t: float
     step: float
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def piece_line(pieces: PieceLines, j: int) -> Line:
+def piece_line(pieces: PieceLines, j: int) -> LineThrough:
     """Piece ``j``'s line."""
-    return Line(pieces.cy[j], pieces.cz[j], pieces.dy[j], pieces.dz[j])
+    return LineThrough(pieces.cy[j], pieces.cz[j], pieces.dy[j], pieces.dz[j])
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def towards(line: Line, y: float, z: float) -> float:
+def towards(line: LineThrough, y: float, z: float) -> float:
     """Signed distance of (y, z) from ``line``, positive on the sensor's side (the origin)."""
     h = (y - line.cy) * -line.dz + (z - line.cz) * line.dy
     return h if line.cy * -line.dz + line.cz * line.dy < 0 else -h
@@ -136,7 +128,7 @@ def kept(keep: NDArray[np.bool_]) -> IntArray:
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def steps(t: FloatArray) -> Steps:
     """Mean spacing of the first and of the last ten coordinates
-    (:meth:`~seamtrack.features.lines.Line.step`)."""
+    (:meth:`~seamtrack.features.line_geometry.Line.step`)."""
     n = t.shape[0]
     k = min(10, n - 1)
     if k < 1:
@@ -146,7 +138,7 @@ def steps(t: FloatArray) -> Steps:
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def line_end(
-    line: Line,
+    line: LineThrough,
     end: RunEnd,
     at_end: bool,
     skip: int,
@@ -202,18 +194,18 @@ def two_lines_share(
     stray: NDArray[np.bool_],
     lo: int,
     hi: int,
-    a: Line | tuple[float, float, float, float],
-    b: Line | tuple[float, float, float, float],
+    a: LineThrough | tuple[float, float, float, float],
+    b: LineThrough | tuple[float, float, float, float],
     band: float,
 ) -> float:
     """Share of the surface points (``stray`` left out when it flags each point) within
     ``band`` of their line when line ``a`` runs from the profile's start to kept point
     ``lo`` and line ``b`` from ``hi`` to its end, what lies between them left out:
     :func:`seamtrack.features.base.explained` of a two-plate or two-face model
-    (:func:`seamtrack.features.counts.explained_share`). The lines: :class:`Line` or, from
+    (:func:`seamtrack.features.counts.explained_share`). The lines: :class:`LineThrough` or, from
     Python, plain tuples of its fields (numba types a named tuple argument in Python on every
     call, some microseconds; a plain one at once)."""
-    a, b = Line(*a), Line(*b)
+    a, b = LineThrough(*a), LineThrough(*b)
     m = points.shape[0]
     zones = np.empty((3, 3), dtype=np.int64)
     zones[0, 0], zones[0, 1], zones[0, 2] = 0, lo, 1

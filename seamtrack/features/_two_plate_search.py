@@ -22,9 +22,7 @@ from numpy.typing import NDArray
 
 from seamtrack.features._between_plates import NO_HOLE, Hole, Scale, hole
 from seamtrack.features._plate_lines import PlateLimits, plate_pieces, span
-from seamtrack.features._segmentation import fit_line
 from seamtrack.features._two_lines import (
-    Line,
     PieceLines,
     PieceSpans,
     RunEnd,
@@ -33,7 +31,7 @@ from seamtrack.features._two_lines import (
     steps,
     two_lines_share,
 )
-from seamtrack.features.line_geometry import Point
+from seamtrack.features.line_geometry import LineThrough, Point, fit_line
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -64,7 +62,7 @@ class RunLine(NamedTuple):
     the line, its rms (FIT only, else 0), its inliers and their coordinates along it."""
 
     kind: int
-    line: Line
+    line: LineThrough
     rms: float
     inliers: IntArray
     t: FloatArray
@@ -80,7 +78,7 @@ class Run(NamedTuple):
     first_piece: int
     anchor: int
     n_inliers: int
-    line: Line
+    line: LineThrough
     rms: float
     end: Point
 
@@ -103,11 +101,11 @@ class PlatePair(NamedTuple):
     share: float
 
 
-_NO_RUN = Run(-1, -1, -1, 0, Line(0.0, 0.0, 0.0, 0.0), 0.0, Point(0.0, 0.0))
+_NO_RUN = Run(-1, -1, -1, 0, LineThrough(0.0, 0.0, 0.0, 0.0), 0.0, Point(0.0, 0.0))
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _along(points: FloatArray, idx: IntArray, line: Line) -> FloatArray:
+def _along(points: FloatArray, idx: IntArray, line: LineThrough) -> FloatArray:
     """Coordinates of ``points[idx]`` along a line."""
     cy, cz, dy, dz = line
     t = np.empty(idx.shape[0])
@@ -147,7 +145,7 @@ def _run_line(
             c += 1
     if span(pieces.lines, t_first, t_last, anchor, members) >= min_plate_mm:
         cy, cz, dy, dz, rms, t = fit_line(points, idx)
-        return RunLine(FIT, Line(cy, cz, dy, dz), rms, idx, t)
+        return RunLine(FIT, LineThrough(cy, cz, dy, dz), rms, idx, t)
     on = piece_line(pieces.lines, anchor)
     return RunLine(ON, on, 0.0, idx, _along(points, idx, on))
 

@@ -33,10 +33,9 @@ from seamtrack.features._segmentation import (
     FIT_UY,
     FIT_UZ,
     PieceTable,
-    fit_line,
 )
 from seamtrack.features.counts import explained_share, support
-from seamtrack.features.line_geometry import Point
+from seamtrack.features.line_geometry import Point, fit_line
 from seamtrack.features.select import sort_small
 
 FloatArray = NDArray[np.float64]
@@ -184,11 +183,11 @@ def owners(owner, tb, n):
 @numba.njit(cache=True, nogil=True)
 def add_fit(points, tb, sel):
     """A new record: the total-least-squares line through ``points[sel]`` (as
-    :func:`~seamtrack.features.lines._fit`)."""
+    :func:`~seamtrack.features.line_geometry.fit_line`)."""
     geo, span, index, along, used = tb
     r, a, n = used[0], used[1], sel.shape[0]
     f = fit_line(points, sel)
-    geo[r, CY], geo[r, CZ], geo[r, UY], geo[r, UZ], geo[r, RMS] = f.cy, f.cz, f.uy, f.uz, f.rms
+    geo[r, CY], geo[r, CZ], geo[r, UY], geo[r, UZ], geo[r, RMS] = f.cy, f.cz, f.dy, f.dz, f.rms
     span[r, START], span[r, COUNT] = a, n
     for k in range(n):
         index[a + k] = sel[k]

@@ -30,9 +30,9 @@ from seamtrack.features._v_search import (
     search,
 )
 from seamtrack.features.expect import Expect, parse_expect
+from seamtrack.features.line_geometry import Line
 from seamtrack.features.lines import (
     DATA_ERRORS,
-    Line,
     Segments,
     segment_profile,
 )

@@ -61,10 +61,8 @@ from seamtrack.features.base import _Base, _confidence, included
 from seamtrack.features.expect import Expect
 from seamtrack.features.generic import GenericExtractor
 from seamtrack.features.groove import GrooveExtractor
-from seamtrack.features.lines import (
-    Line,
-    Segments,
-)
+from seamtrack.features.line_geometry import Line
+from seamtrack.features.lines import Segments
 from seamtrack.features.plates import LapExtractor, SquareButtExtractor
 from seamtrack.features.vgroove import VGrooveExtractor
 from seamtrack.sensing.profiles import Feature, Profile

@@ -112,9 +112,9 @@ from seamtrack.features._groove_fit import (  # noqa: F401 (RAY_*: the extractor
 )
 from seamtrack.features._groove_kernels import running_median
 from seamtrack.features._groove_rise import a_step, risen_level
-from seamtrack.features._segmentation import fit_line
 from seamtrack.features.base import _Base
-from seamtrack.features.lines import Line, Segments, intersect, segment_profile
+from seamtrack.features.line_geometry import Line, fit_line
+from seamtrack.features.lines import Segments, intersect, segment_profile
 from seamtrack.sensing.profiles import Feature, Profile
 
 FloatArray = NDArray[np.float64]
@@ -151,8 +151,7 @@ class GroovePoints(NamedTuple):
 
 
 def _fit(points: FloatArray, index: IntArray) -> Line:
-    f = fit_line(points, np.asarray(index, dtype=np.int64))
-    return Line(np.asarray(index), np.array([f.cy, f.cz]), np.array([f.uy, f.uz]), f.along, f.rms)
+    return Line.from_fit(np.asarray(index), fit_line(points, np.asarray(index, dtype=np.int64)))
 
 
 @dataclass(frozen=True)
@@ -339,7 +338,7 @@ class GrooveExtractor(_Base):
         idx = np.sort(np.concatenate(index))
         line = _fit(seg.points, idx) if len(index) > 1 else base
         if line.direction[0] < 0:  # along increasing column (y)
-            line = Line(line.index, line.centroid, -line.direction, -line.t, line.rms)
+            line = line.flipped()
         return line, k
 
     def _wall(
@@ -403,7 +402,7 @@ class GrooveExtractor(_Base):
         line = _fit(P, np.sort(np.concatenate(index))) if len(index) > 1 else ref
         line = trim_wall(P, line, seg.tol)  # a round at its foot, a spike's points: left out
         if line.direction[0] < 0:
-            line = Line(line.index, line.centroid, -line.direction, -line.t, line.rms)
+            line = line.flipped()
         return Wall(line, on[0], on[-1])
 
     def _bare_wall(
@@ -424,7 +423,7 @@ class GrooveExtractor(_Base):
             return Wall(None, -1, -1)
         line = _fit(seg.points, index)
         if line.direction[0] < 0:
-            line = Line(line.index, line.centroid, -line.direction, -line.t, line.rms)
+            line = line.flipped()
         d = line.direction if from_left else -line.direction
         off = math.degrees(math.asin(min(1.0, abs(float(d @ v)))))
         near = abs(float((top - line.centroid) @ line.normal)) <= max(1.0, 3 * seg.tol)

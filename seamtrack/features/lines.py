@@ -13,7 +13,6 @@ Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groov
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass, field
 
@@ -26,9 +25,9 @@ from seamtrack.features._segmentation import (
     TOO_MANY_PIECES,
     PieceTable,
     buffer_layout,
-    fit_line,
     segment,
 )
+from seamtrack.features.line_geometry import Line, fit_line
 from seamtrack.features.robust import CONSTANT, DEFAULT_RESOLUTION_MM, TOO_FEW_POINTS
 from seamtrack.sensing.profiles import Profile
 
@@ -37,69 +36,13 @@ FloatArray = NDArray[np.float64]
 _MIN_KINK = math.radians(5.0)
 
 
-@dataclass
-class Line:
-    """A straight piece of a profile (internal to the extractors; mutable while built).
-
-    ``index`` are the inliers' positions in the kept points (column order); ``direction``
-    points along increasing column; ``t`` are the inliers' coordinates along it.
-    """
-
-    index: NDArray[np.intp]
-    centroid: FloatArray
-    direction: FloatArray
-    t: FloatArray
-    rms: float
-
-    @functools.cached_property
-    def normal(self) -> FloatArray:
-        return np.array([-self.direction[1], self.direction[0]])
-
-    @property
-    def count(self) -> int:
-        return len(self.index)
-
-    @property
-    def extent(self) -> float:
-        return float(self.t[-1] - self.t[0]) if len(self.t) else 0.0
-
-    def point(self, t: float) -> FloatArray:
-        return self.centroid + t * self.direction
-
-    @functools.cached_property
-    def scalars(self) -> tuple[float, float, float, float, float, float]:
-        """Centroid (y, z), direction (y, z) and the first and last inliers' coordinates
-        along the line, as floats (scalar tests without numpy's per-call overhead)."""
-        (cy, cz), (dy, dz) = self.centroid.tolist(), self.direction.tolist()
-        t0, t1 = float(self.t[0]), float(self.t[-1])  # IndexError on no inliers, as before
-        return cy, cz, dy, dz, t0, t1
-
-    @functools.cached_property
-    def _steps(self) -> tuple[float, float]:
-        k = min(10, len(self.t) - 1)
-        if k < 1:
-            return 0.0, 0.0
-        t = self.t
-        return float(abs(t[k] - t[0])) / k, float(abs(t[-1] - t[-1 - k])) / k
-
-    def step(self, at_end: bool) -> float:
-        """Mean spacing of the last (``at_end``) or first ten inliers along the line."""
-        return self._steps[1 if at_end else 0]
-
-    def end(self, at_end: bool) -> FloatArray:
-        """The line's end half a spacing beyond its last (first) inlier."""
-        half = 0.5 * self.step(at_end)
-        return self.point(float(self.t[-1] + half if at_end else self.t[0] - half))
-
-
 def _fit(points: FloatArray, index: NDArray[np.intp]) -> Line:
     """Total-least-squares line through ``points[index]`` (column order kept); compiled
-    (:func:`seamtrack.features._segmentation.fit_line`): numpy's per-call overhead on a few hundred
+    (:func:`seamtrack.features.line_geometry.fit_line`): numpy's per-call overhead on a few hundred
     points was most of its cost."""
     if len(index) == 0:
         raise ValueError("no points to fit a line to")
-    f = fit_line(points, np.asarray(index, dtype=np.int64))
-    return Line(index, np.array([f.cy, f.cz]), np.array([f.uy, f.uz]), f.along, f.rms)
+    return Line.from_fit(index, fit_line(points, np.asarray(index, dtype=np.int64)))
 
 
 @dataclass
