@@ -20,7 +20,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.features.counts import explained_share
-from seamtrack.features.line_geometry import LineThrough, Point
+from seamtrack.features.line_geometry import (
+    CORNER_MIN_RAD,
+    LineThrough,
+    Point,
+    corner_crossing,
+    end_distance,
+)
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -149,34 +155,27 @@ def line_end(
     tol: float,
 ) -> Point:
     """Where a run's ``line`` ends at ``end`` (its last inlier when ``at_end``, else its
-    first): :func:`seamtrack.features.lines.corner_with` with the pieces of
+    first): the corner search of :func:`seamtrack.features._v_search.corner_with` with the pieces of
     ``min_points`` as the others, ``skip`` the run's own piece or -1. Its crossing with a
     piece meeting it there (a visible corner), else half a step beyond the end inlier."""
     cy, cz, dy, dz = line
     tip_y, tip_z = cy + end.t * dy, cz + end.t * dz
     reach = 3.0 * (spacing if spacing > end.step else end.step) + tol
-    cos_min = math.cos(math.radians(20))
+    cos_min = math.cos(CORNER_MIN_RAD)
     found = False
     best_y = best_z = 0.0
     best_d = math.inf
     for j in range(pieces.cy.shape[0]):
         if spans.n_inliers[j] < min_points or j == skip:
             continue
-        ocy, ocz, ody, odz = piece_line(pieces, j)
-        if abs(dy * ody + dz * odz) > cos_min:
-            continue  # within 20 deg: no corner
-        det = dy * odz - dz * ody
-        if abs(det) < 1e-9:
+        other = piece_line(pieces, j)
+        hit, xy, xz = corner_crossing(line, other, cos_min)
+        if not hit:
             continue
-        s = ((ocy - cy) * odz - (ocz - cz) * ody) / det
-        xy, xz = cy + s * dy, cz + s * dz
         d = math.hypot(xy - tip_y, xz - tip_z)
         if d > reach or d >= best_d:
             continue
-        t_first, t_last = spans.t_first[j], spans.t_last[j]
-        near = math.hypot(ocy + t_first * ody - xy, ocz + t_first * odz - xz)
-        far = math.hypot(ocy + t_last * ody - xy, ocz + t_last * odz - xz)
-        near = far if far < near else near
+        near = end_distance(other, spans.t_first[j], spans.t_last[j], xy, xz)
         wide = spans.step_last[j]
         wide = spans.step_first[j] if spans.step_first[j] > wide else wide
         wide = spacing if spacing > wide else wide

@@ -35,7 +35,14 @@ from seamtrack.features._segmentation import (
     PieceTable,
 )
 from seamtrack.features.counts import explained_share, support
-from seamtrack.features.line_geometry import Point, fit_line
+from seamtrack.features.line_geometry import (
+    CORNER_MIN_RAD,
+    LineThrough,
+    Point,
+    corner_crossing,
+    end_distance,
+    fit_line,
+)
 from seamtrack.features.select import sort_small
 
 FloatArray = NDArray[np.float64]
@@ -44,8 +51,8 @@ IntArray = NDArray[np.int64]
 RAD_TO_DEG = 180.0 / math.pi
 #: Pieces within this angle join a collinear group (deg; see ``collinear_members``).
 COS_GROUP = math.cos(math.radians(30.0))
-#: Lines within this angle meet in no corner (deg; see ``corner_with``).
-COS_CORNER = math.cos(math.radians(20.0))
+#: Lines within this angle meet in no corner (see ``corner_with``).
+COS_CORNER = math.cos(CORNER_MIN_RAD)
 #: A record that is no line.
 NONE = -1
 #: The columns of :attr:`LineTable.geo`.
@@ -501,35 +508,28 @@ def best_pair(points, surface, owner, tb, groups, n, tol, params):
 
 @numba.njit(cache=True, nogil=True)
 def corner_with(tb, line, at_end, others, spacing, tol):
-    """As :func:`~seamtrack.features.lines.corner_with`: where record ``line`` ends and the
-    record of ``others`` it meets
-    there (:class:`Corner`; :data:`NONE`: none, the end half a spacing beyond the last
-    inlier)."""
+    """Where record ``line`` ends and the record of ``others`` it meets there
+    (:class:`Corner`): its crossing with a line that meets it at that end (a visible corner,
+    exact; :func:`~seamtrack.features.line_geometry.corner_crossing`), else (:data:`NONE`)
+    half a spacing beyond its last inlier (the edge lies between rays)."""
     geo = tb.geo
     cy, cz, dy, dz = geo[line, CY], geo[line, CZ], geo[line, UY], geo[line, UZ]
     t_tip = t_end(tb, line, at_end)
     tip_y, tip_z = cy + t_tip * dy, cz + t_tip * dz
     reach = 3.0 * pmax(step(tb, line, at_end), spacing) + tol
     best, best_d, best_y, best_z = NONE, np.inf, 0.0, 0.0
+    here = LineThrough(cy, cz, dy, dz)
     for other in others:
         if other == line:
             continue
-        ocy, ocz, ody, odz = geo[other, CY], geo[other, CZ], geo[other, UY], geo[other, UZ]
-        if abs(dy * ody + dz * odz) > COS_CORNER:
-            continue  # within 20 deg: no corner
-        det = dy * odz - dz * ody
-        if abs(det) < 1e-9:
+        there = LineThrough(geo[other, CY], geo[other, CZ], geo[other, UY], geo[other, UZ])
+        hit, xy, xz = corner_crossing(here, there, COS_CORNER)
+        if not hit:
             continue
-        s = ((ocy - cy) * odz - (ocz - cz) * ody) / det
-        xy, xz = cy + s * dy, cz + s * dz
         d = math.hypot(xy - tip_y, xz - tip_z)
         if d > reach or d >= best_d:
             continue
-        o_first, o_last = t_end(tb, other, False), t_end(tb, other, True)
-        near = pmin(
-            math.hypot(ocy + o_first * ody - xy, ocz + o_first * odz - xz),
-            math.hypot(ocy + o_last * ody - xy, ocz + o_last * odz - xz),
-        )
+        near = end_distance(there, t_end(tb, other, False), t_end(tb, other, True), xy, xz)
         wide = pmax(pmax(step(tb, other, True), step(tb, other, False)), spacing)
         if near <= 3.0 * wide + tol:
             best, best_d, best_y, best_z = other, d, xy, xz

@@ -217,3 +217,41 @@ def fit_range(p: FloatArray, lo: int, hi: int) -> LineThrough:
     if uy * (p[hi - 1, 0] - p[lo, 0]) + uz * (p[hi - 1, 1] - p[lo, 1]) < 0.0:
         uy, uz = -uy, -uz
     return LineThrough(cy, cz, uy, uz)
+
+
+# ----------------------------------------------------------------- corners
+#: Lines within this angle (rad) of each other meet in no corner.
+CORNER_MIN_RAD = math.radians(20.0)
+
+
+class Crossing(NamedTuple):
+    """Where two lines cross (``y``, ``z``), when they meet in a corner (``found``)."""
+
+    found: bool
+    y: float
+    z: float
+
+
+@numba.njit(cache=True, nogil=True)
+def corner_crossing(line: LineThrough, other: LineThrough, cos_min: float) -> Crossing:
+    """The crossing of two lines that meet in a corner: their directions more than
+    ``acos(cos_min)`` apart (and not parallel); else not found."""
+    cy, cz, dy, dz = line
+    ocy, ocz, ody, odz = other
+    if abs(dy * ody + dz * odz) > cos_min:
+        return Crossing(False, 0.0, 0.0)  # too near parallel: no corner
+    det = dy * odz - dz * ody
+    if abs(det) < 1e-9:
+        return Crossing(False, 0.0, 0.0)
+    s = ((ocy - cy) * odz - (ocz - cz) * ody) / det
+    return Crossing(True, cy + s * dy, cz + s * dz)
+
+
+@numba.njit(cache=True, nogil=True)
+def end_distance(line: LineThrough, t_first: float, t_last: float, y: float, z: float) -> float:
+    """Distance of (y, z) from the nearer of a line's end inliers (at ``t_first`` and
+    ``t_last`` along it): whether a corner found on it lies at one of its ends."""
+    cy, cz, dy, dz = line
+    near = math.hypot(cy + t_first * dy - y, cz + t_first * dz - z)
+    far = math.hypot(cy + t_last * dy - y, cz + t_last * dz - z)
+    return far if far < near else near

@@ -1,12 +1,12 @@
 """Split-and-merge line segmentation of stripe profiles: the front end of the extractors.
 
 :func:`segment_profile` drops isolated outliers against a 5-point running median, estimates the
-noise from second differences, cuts the profile at jumps, splits each run by Douglas-Peucker at a
-noise-scaled tolerance, merges neighbours that fit one line, and refits each piece by total
-least squares on its inliers. :func:`collinear_groups`, :func:`intersect` and
-:func:`corner_with` are the geometry the family extractors build on, and ``_Base`` their
-shared parameters and never-raise wrapper (the extractors themselves live in
-:mod:`seamtrack.features.extractors` and :mod:`seamtrack.features.plates`).
+noise from second differences, cuts the profile at jumps, splits each run by Douglas-Peucker at
+a noise-scaled tolerance, merges neighbours that fit one line, and refits each piece by total
+least squares on its inliers. :func:`collinear_groups` and :func:`intersect` are the geometry
+the family extractors build on, and ``_Base`` their shared parameters and never-raise wrapper
+(the extractors themselves live in :mod:`seamtrack.features.extractors` and
+:mod:`seamtrack.features.plates`).
 
 Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groove).
 """
@@ -235,45 +235,6 @@ def intersect(a: Line, b: Line) -> FloatArray | None:
         return None
     s = ((by - ay) * bdz - (bz - az) * bdy) / d
     return np.array([ay + s * ady, az + s * adz])
-
-
-def corner_with(
-    line: Line, at_end: bool, others: list[Line], seg: Segments
-) -> tuple[FloatArray, Line | None]:
-    """Where ``line`` ends and the neighbour it meets there: its crossing with a line of
-    ``others`` that meets it at that end (a visible corner, exact), else half a spacing
-    beyond its last inlier (the edge lies between rays) and None."""
-    # Scalars, not numpy: a handful of tests per neighbour, where numpy's per-call overhead
-    # would dominate (the extractors call this four times per profile).
-    cy, cz, dy, dz, t_first, t_last = line.scalars
-    t_tip = t_last if at_end else t_first
-    tip_y, tip_z = cy + t_tip * dy, cz + t_tip * dz
-    reach = 3.0 * max(line.step(at_end), seg.spacing) + seg.tol
-    cos_min = math.cos(math.radians(20))
-    best, best_d, best_line = None, math.inf, None
-    for other in others:
-        if other is line:
-            continue
-        ocy, ocz, ody, odz, o_first, o_last = other.scalars
-        if abs(dy * ody + dz * odz) > cos_min:
-            continue  # within 20 deg: no corner
-        det = dy * odz - dz * ody
-        if abs(det) < 1e-9:
-            continue
-        s = ((ocy - cy) * odz - (ocz - cz) * ody) / det
-        xy, xz = cy + s * dy, cz + s * dz
-        d = math.hypot(xy - tip_y, xz - tip_z)
-        if d > reach or d >= best_d:
-            continue
-        near_other = min(
-            math.hypot(ocy + t * ody - xy, ocz + t * odz - xz) for t in (o_first, o_last)
-        )
-        reach_other = 3.0 * max(other.step(True), other.step(False), seg.spacing) + seg.tol
-        if near_other <= reach_other:
-            best, best_d, best_line = (xy, xz), d, other
-    if best is None:
-        return line.end(at_end), None
-    return np.array(best), best_line
 
 
 # ----------------------------------------------------------------- the extractors' base
