@@ -64,6 +64,7 @@ from seamtrack.features.groove import GrooveExtractor
 from seamtrack.features.line_geometry import Line
 from seamtrack.features.lines import Segments
 from seamtrack.features.plates import LapExtractor, SquareButtExtractor
+from seamtrack.features.refusal import Refusal
 from seamtrack.features.vgroove import VGrooveExtractor
 from seamtrack.sensing.profiles import Feature, Profile
 
@@ -102,8 +103,8 @@ class FilletExtractor(_Base):
         if fast is not None:
             return fast
         found = self._arms(seg, False, lo, hi, self.max_gap_mm)
-        if isinstance(found, str):
-            return Feature.failed(found, joint=self.name)
+        if isinstance(found, Refusal):
+            return Feature.failed(found.reason, joint=self.name)
         return _two_faces(self, profile, seg, found)
 
 
@@ -122,8 +123,8 @@ class OutsideCornerExtractor(_Base):
         if fast is not None:
             return fast
         found = self._arms(seg, True, lo, hi, self.max_gap_mm)
-        if isinstance(found, str):
-            return Feature.failed(found, joint=self.name)
+        if isinstance(found, Refusal):
+            return Feature.failed(found.reason, joint=self.name)
         return _two_faces(self, profile, seg, found)
 
 

@@ -115,6 +115,7 @@ from seamtrack.features._groove_rise import a_step, risen_level
 from seamtrack.features.base import _Base
 from seamtrack.features.line_geometry import Line, fit_line
 from seamtrack.features.lines import Segments, intersect, segment_profile
+from seamtrack.features.refusal import Refusal
 from seamtrack.sensing.profiles import Feature, Profile
 
 FloatArray = NDArray[np.float64]
@@ -240,7 +241,7 @@ class GrooveExtractor(_Base):
                 fix=f"use one of {', '.join(REFERENCES)}",
             )
 
-    def segments(self, profile: Profile) -> Segments | str:
+    def segments(self, profile: Profile) -> Segments | Refusal:
         """The front end's pieces, up to ``max_lines`` of them (beads are curved: a clean
         profile of a few caps needs more pieces than the other families' joints)."""
         return segment_profile(
@@ -253,8 +254,8 @@ class GrooveExtractor(_Base):
 
     def _extract(self, profile: Profile, seg: Segments) -> Feature | tuple[Feature, float]:
         found = self.model(seg)
-        if isinstance(found, str):
-            return Feature.failed(found, joint=self.name)
+        if isinstance(found, Refusal):
+            return Feature.failed(found.reason, joint=self.name)
         pts = found.points
         point = {"centre": pts[3], "left": pts[1], "right": pts[5]}[self.reference]
         rms = max(0.0, 1.0 - found.rms / max(seg.tol, 1e-12))
@@ -269,11 +270,11 @@ class GrooveExtractor(_Base):
         return feature, found.explained
 
     # ------------------------------------------------------------------ the model
-    def model(self, seg: Segments) -> GroovePoints | str:
+    def model(self, seg: Segments) -> GroovePoints | Refusal:
         """The groove's 7 points, area and fit, or why the profile shows no groove."""
         P = seg.points
         plates = self._plates(seg)
-        if isinstance(plates, str):
+        if isinstance(plates, Refusal):
             return plates
         pl, pr = plates.left, plates.right
         u = pl.direction + pr.direction
@@ -291,10 +292,10 @@ class GrooveExtractor(_Base):
         below = np.count_nonzero(depth > self.min_depth_mm) >= self.min_points
         raised = np.count_nonzero(depth < -self.min_depth_mm) > RAISED_SHARE * len(inner)
         if not below and not raised:
-            return "not a groove: nothing lies below the plates between them"
+            return Refusal("not a groove: nothing lies below the plates between them")
         if raised:  # a crowned fill (a cap over the plates), or a block
             why = self._raised(seg, plates, inner, depth, end_r - end_l)
-            if why:
+            if why is not None:
                 return why
         groove = list(range(plates.left_last + 1, plates.right_first))
         left = self._wall(seg, groove, v, True, end_l)
@@ -305,10 +306,10 @@ class GrooveExtractor(_Base):
         fu, fv = self._floor(seg, inner, (left, right), u, v)
         if len(fu) < 3:
             if left.line is None or right.line is None:
-                return "not a groove: no bottom between the walls"
+                return Refusal("not a groove: no bottom between the walls")
             x = intersect(left.line, right.line)  # an empty V: the walls meet
             if x is None:
-                return "not a groove: no bottom between the walls"
+                return Refusal("not a groove: no bottom between the walls")
             bl = br = x
         else:
             seen = short_walls((left.line, right.line), fv, v)
@@ -318,11 +319,11 @@ class GrooveExtractor(_Base):
             bl = self._corner(seg, wl, fu, fv, u, v, True, P[lo:hi])
             br = self._corner(seg, wr, fu, fv, u, v, False, P[lo:hi])
         if (br - bl) @ u < -max(seg.tol, CROSSED_SPACINGS * seg.spacing):
-            return "not a groove: its walls cross (a ridge?)"
+            return Refusal("not a groove: its walls cross (a ridge?)")
         bottom = bottom_points(seg, fu, fv, bl, br, u, v)
         pts = np.vstack([tl, bl, bottom, br, tr])
         if _along_a_ray(pts[1:6]):
-            return "not a groove: its bottom lies along one laser ray (a spike streak)"
+            return Refusal("not a groove: its bottom lies along one laser ray (a spike streak)")
         area = _area(pts, P, inner, u)
         rms = max(pl.rms, pr.rms, *(w.line.rms for w in (left, right) if w.line is not None))
         walls = (left.line, right.line)
@@ -331,12 +332,12 @@ class GrooveExtractor(_Base):
 
     def _raised(
         self, seg: Segments, plates: Plates, inner: IntArray, depth: FloatArray, chord: FloatArray
-    ) -> str:
-        """Why a part raised between the plates is no crowned fill ("" when it is one): a
+    ) -> Refusal | None:
+        """Why a part raised between the plates is no crowned fill (None when it is one): a
         fill's cap stands at most ``max_crown_mm`` above the line of the plates' ends (the
         95th percentile of its points: spikes do not count), and no piece of it a millimetre
         long stands more than 80 deg off the plates as a step (a block's side: ``a_step``)."""
-        why = "not a groove: a raised part stands between the plates"
+        why = Refusal("not a groove: a raised part stands between the plates")
         if (
             len(inner) < self.min_points
             or float(np.percentile(-depth, CROWN_PERCENTILE)) > self.max_crown_mm
@@ -356,21 +357,21 @@ class GrooveExtractor(_Base):
                 steep.append(ln.index)
         if any(a_step(P, index, normal, mask) for index in steep):
             return why
-        return ""
+        return None
 
-    def _plates(self, seg: Segments) -> Plates | str:
+    def _plates(self, seg: Segments) -> Plates | Refusal:
         lines = seg.lines
         long = [j for j, ln in enumerate(lines) if ln.extent >= self.min_plate_mm]
         if len(long) < 2:
-            return "not a groove: no plate on both sides"
+            return Refusal("not a groove: no plate on both sides")
         a, b = long[0], long[-1]
         la, lb = self._grow(seg, a, +1, b), self._grow(seg, b, -1, a)
         if la[1] >= lb[1]:
-            return "not a groove: no plate on both sides"
+            return Refusal("not a groove: no plate on both sides")
         left, right = la[0], lb[0]
         apart = _angle_deg(left.direction, right.direction)
         if apart > self.max_plate_deg:
-            return (
+            return Refusal(
                 f"not a groove: the plates beside it are {apart:.0f} deg apart "
                 f"(at most {self.max_plate_deg:.0f}: a fillet or a corner?)"
             )

@@ -28,6 +28,7 @@ from seamtrack.features._segmentation import (
     segment,
 )
 from seamtrack.features.line_geometry import Line, fit_line
+from seamtrack.features.refusal import Refusal
 from seamtrack.features.robust import CONSTANT, DEFAULT_RESOLUTION_MM, TOO_FEW_POINTS
 from seamtrack.sensing.profiles import Profile
 
@@ -104,8 +105,8 @@ def segment_profile(
     min_points: int = 8,
     max_lines: int = 64,
     max_detour_mm: float = 3.0,
-) -> Segments | str:
-    """Split-and-merge a profile into straight pieces, or say why not (a ``str``).
+) -> Segments | Refusal:
+    """Split-and-merge a profile into straight pieces, or say why not (a :class:`Refusal`).
 
     Parameters
     ----------
@@ -130,7 +131,7 @@ def segment_profile(
     valid = np.ascontiguousarray(profile.valid, dtype=np.bool_).reshape(-1)
     n = len(pts)
     if valid.shape != (n,):
-        return "too few valid points (0)"
+        return Refusal("too few valid points (0)")
     max_lines = int(max_lines)
     # The compiled call writes into these (see :func:`seamtrack.features._segmentation.segment`).
     at = buffer_layout(n, max_lines)
@@ -152,7 +153,7 @@ def segment_profile(
         stray,
     )
     if found.code != SEGMENTED:
-        return _WHY[found.code].format(found.kept)
+        return Refusal(_WHY[found.code].format(found.kept))
     m, k = found.kept, found.n_pieces
     bounds = ints[at.offsets : at.offsets + k + 1]
     fits = floats[at.fits : at.fits + 7 * k].reshape(k, 7)

@@ -30,6 +30,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.features.line_geometry import fit_spans
+from seamtrack.features.refusal import Refusal
 from seamtrack.features.select import BUCKETS, kth_nonneg
 from seamtrack.sensing.profiles import Profile, Reason
 
@@ -490,9 +491,10 @@ def front_end(
     sigma_factor: float = 5.0,
     min_points: int = 8,
     max_detour_mm: float = 3.0,
-) -> FrontEnd | str:
+) -> FrontEnd | Refusal:
     """Kept points, noise, tolerance, runs between jumps and detours of a profile, or why
-    there are none (a ``str``); the parameters as for :func:`segment_profile`.
+    there are none (a :class:`~seamtrack.features.refusal.Refusal`); the parameters as for
+    :func:`segment_profile`.
 
     One compiled pass (:func:`front`): the valid bounded points,
     their spacing (:func:`_spacing`; medians by :func:`seamtrack.features.select.kth_nonneg`)
@@ -504,7 +506,7 @@ def front_end(
     pts = np.ascontiguousarray(profile.points_laser, dtype=np.float64).reshape(-1, 2)
     valid = np.ascontiguousarray(profile.valid, dtype=np.bool_).reshape(-1)
     if valid.shape != (len(pts),):
-        return "too few valid points (0)"
+        return Refusal("too few valid points (0)")
     fr = front(
         pts,
         valid,
@@ -518,9 +520,9 @@ def front_end(
         TOL_RESOLUTIONS,
     )
     if fr.code == TOO_FEW_POINTS:
-        return f"too few valid points ({len(fr.points)})"
+        return Refusal(f"too few valid points ({len(fr.points)})")
     if fr.code == CONSTANT:
-        return "the valid points do not spread out (constant profile)"
+        return Refusal("the valid points do not spread out (constant profile)")
     s = fr.scalars
     return FrontEnd(
         *(fr.points, fr.columns, fr.spikes, fr.runs, fr.stray),
@@ -549,7 +551,7 @@ def reject(
         min_points=min_points,
         max_detour_mm=max_detour_mm,
     )
-    if not isinstance(fe, str):
+    if not isinstance(fe, Refusal):
         reason[fe.spike_columns] = Reason.SPIKE
         reason[fe.columns[fe.stray]] = Reason.REFLECTION
     points = profile.points_laser.copy()
