@@ -2,7 +2,8 @@
 before it, tracked within 0.5 mm, the groove filled (reinforcement 0-3 mm at every station),
 and ``seamtrack run`` writing one folder a pass and job.json.
 
-Needs the groove extractor (``seamtrack.features.groove``, issue 25's ``groove`` branch)."""
+Needs the groove extractor (``seamtrack.features.groove.extractor``, issue 25's ``groove``
+branch)."""
 
 from __future__ import annotations
 
@@ -13,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-pytest.importorskip("seamtrack.features.groove")
+pytest.importorskip("seamtrack.features.groove.extractor")
 
 from seamtrack.cli.main import main
 from seamtrack.control.planner import CAP_OVERLAP_MM

@@ -25,7 +25,17 @@ STAGES = [
     ("geometry", {"seamtrack.geometry"}),
     ("workpiece", {"seamtrack.workpiece", "seamtrack.cad"}),
     ("sensing", {"seamtrack.sensing"}),
-    ("features", {"seamtrack.features"}),
+    (
+        "features",
+        {
+            "seamtrack.features",
+            # the extractor families, each its own subpackage (issue 40)
+            "seamtrack.features.generic",
+            "seamtrack.features.groove",
+            "seamtrack.features.plates",
+            "seamtrack.features.vgroove",
+        },
+    ),
     ("control", {"seamtrack.control"}),
     ("simulation", {"seamtrack.simulation"}),
     ("io", {"seamtrack.io"}),

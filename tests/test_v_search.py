@@ -1,7 +1,7 @@
-"""The V search's compiled line table (seamtrack.features._v_search) against the Python geometry
-it replaces in the V extractors (seamtrack.features.lines.collinear_groups; corner_with, written
-here in plain Python; Line.step and Line.end), on synthetic profiles of every joint with noise,
-outliers, dropouts, false reflections and tacks."""
+"""The V search's compiled line table (seamtrack.features.vgroove._v_search) against the Python
+geometry it replaces in the V extractors (seamtrack.features.lines.collinear_groups; corner_with,
+written here in plain Python; Line.step and Line.end), on synthetic profiles of every joint with
+noise, outliers, dropouts, false reflections and tacks."""
 
 from __future__ import annotations
 
@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 from numpy.typing import NDArray
 
-from seamtrack.features import _v_search as vs
 from seamtrack.features.line_geometry import Line
 from seamtrack.features.lines import Segments, collinear_groups, segment_profile
 from seamtrack.features.synthetic import Imperfections, synthetic_profile
+from seamtrack.features.vgroove import _v_search as vs
 from seamtrack.sensing.sensor import preset
 
 FloatArray = NDArray[np.float64]

@@ -14,7 +14,15 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features._v_search import (
+from seamtrack.features.expect import Expect, parse_expect
+from seamtrack.features.line_geometry import Line
+from seamtrack.features.lines import (
+    DATA_ERRORS,
+    Segments,
+    segment_profile,
+)
+from seamtrack.features.refusal import Refusal
+from seamtrack.features.vgroove._v_search import (
     COUNT,
     CY,
     CZ,
@@ -29,14 +37,6 @@ from seamtrack.features._v_search import (
     pieces_of,
     search,
 )
-from seamtrack.features.expect import Expect, parse_expect
-from seamtrack.features.line_geometry import Line
-from seamtrack.features.lines import (
-    DATA_ERRORS,
-    Segments,
-    segment_profile,
-)
-from seamtrack.features.refusal import Refusal
 from seamtrack.sensing.profiles import Feature, Profile, SeamHint
 
 FloatArray = NDArray[np.float64]
@@ -168,7 +168,7 @@ class _Base:
         on the arms' lines (within two tolerances), on their sides of the apex (fragments of
         a bevel cut up by spikes count, whatever piece they are in). The arms are returned
         without their inliers more than a tolerance past the apex (refitted). Compiled
-        (:func:`seamtrack.features._v_search.search`)."""
+        (:func:`seamtrack.features.vgroove._v_search.search`)."""
         if not seg.n_lines:
             return Refusal("no pair of lines forms the joint")
         params = SearchParams(
@@ -195,8 +195,9 @@ class _Base:
 
 
 def _record(seg: Segments, tb: LineTable, r: int) -> Line:
-    """The line of record ``r`` of a table (:class:`seamtrack.features._v_search.LineTable`):
-    the piece itself when it is one, else a new line."""
+    """The line of record ``r`` of a table
+    (:class:`seamtrack.features.vgroove._v_search.LineTable`): the piece itself when it is
+    one, else a new line."""
     if r < seg.n_lines:
         return seg.line(r)
     a, c = int(tb.span[r, START]), int(tb.span[r, COUNT])

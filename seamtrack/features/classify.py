@@ -20,10 +20,10 @@ import numpy as np
 
 from seamtrack.features.base import _Base
 from seamtrack.features.extractors import BUILTIN
-from seamtrack.features.groove import GrooveExtractor
+from seamtrack.features.groove.extractor import GrooveExtractor
 from seamtrack.features.lines import DATA_ERRORS, segment_profile
 from seamtrack.features.refusal import Refusal
-from seamtrack.features.vgroove import VGrooveExtractor
+from seamtrack.features.vgroove.extractor import VGrooveExtractor
 from seamtrack.sensing.profiles import Profile
 
 #: The joint families :func:`classify` tells apart (besides ``"none"``), and ``"groove"``: an

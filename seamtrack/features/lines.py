@@ -6,7 +6,7 @@ a noise-scaled tolerance, merges neighbours that fit one line, and refits each p
 least squares on its inliers. :func:`collinear_groups` and :func:`intersect` are the geometry
 the family extractors build on, and ``_Base`` their shared parameters and never-raise wrapper
 (the extractors themselves live in :mod:`seamtrack.features.extractors` and
-:mod:`seamtrack.features.plates`).
+:mod:`seamtrack.features.plates.extractor`).
 
 Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groove).
 """

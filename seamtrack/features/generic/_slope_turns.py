@@ -1,5 +1,5 @@
 """Slopes and turns of a profile, compiled: the inner loops of the generic (slope/curvature)
-extractor (:mod:`seamtrack.features.generic`).
+extractor (:mod:`seamtrack.features.generic.extractor`).
 
 The generic extractor is the fastest built-in: its work is a handful of passes over the profile
 (valid points, spacing, noise, a running median, window sums, turning angles), which numpy does

@@ -1,5 +1,5 @@
 """The two-plate search, compiled: the plates of a profile and the pair of runs the two-plate
-extractors (:mod:`seamtrack.features.plates`) read.
+extractors (:mod:`seamtrack.features.plates.extractor`) read.
 
 :func:`two_plates` finds the plates (plate lines, runs, the square butt's test for an open
 gap between pieces of one plate line), their neighbours and the extractors' choice of the
@@ -8,7 +8,7 @@ as Python on ``Line`` objects it was some hundreds of small operations per profi
 extractor's time once the segmentation is compiled. The plate lines' groups are
 :func:`seamtrack.features.lines.collinear_members`' and the runs' refits
 :func:`seamtrack.features._segmentation.fit_line`'s, computed the same way; what lies between two
-runs is :func:`seamtrack.features._between_plates.hole`'s.
+runs is :func:`seamtrack.features.plates._between_plates.hole`'s.
 """
 
 from __future__ import annotations
@@ -20,9 +20,10 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features._between_plates import NO_HOLE, Hole, Scale, hole
-from seamtrack.features._plate_lines import PlateLimits, plate_pieces, span
-from seamtrack.features._two_lines import (
+from seamtrack.features.line_geometry import LineThrough, Point, fit_line
+from seamtrack.features.plates._between_plates import NO_HOLE, Hole, Scale, hole
+from seamtrack.features.plates._plate_lines import PlateLimits, plate_pieces, span
+from seamtrack.features.plates._two_lines import (
     PieceLines,
     PieceSpans,
     RunEnd,
@@ -31,12 +32,11 @@ from seamtrack.features._two_lines import (
     steps,
     two_lines_share,
 )
-from seamtrack.features.line_geometry import LineThrough, Point, fit_line
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
-#: :class:`PlateLimits` and :class:`~seamtrack.features._between_plates.Scale` as plain
+#: :class:`PlateLimits` and :class:`~seamtrack.features.plates._between_plates.Scale` as plain
 #: tuples (what :func:`two_plates` takes from Python).
 PlainLimits = tuple[int, float, float, float, bool, float, float, float, float]
 PlainScale = tuple[float, float, float]
@@ -86,7 +86,7 @@ class Run(NamedTuple):
 class PlatePair(NamedTuple):
     """The pair of runs a two-plate extractor reads (``found``: a pair qualifies), ``left``
     before ``right`` in column order; whether what lies between them is an open gap (square
-    butt only), what lies between them (:class:`~seamtrack.features._between_plates.Hole`),
+    butt only), what lies between them (:class:`~seamtrack.features.plates._between_plates.Hole`),
     the step from ``left`` down to ``right`` (lap only; > 0: ``right`` is deeper), and the
     share of the surface points the two-plate model explains (each plate running on to the
     profile's end, what lies between them left out;
@@ -406,7 +406,7 @@ def two_plates(
     (:attr:`seamtrack.features.lines.Segments.table`: ``index``, ``along``, ``fits`` a row
     per piece (centroid y, z, direction y, z, rms, first and last coordinate), ``bounds``),
     ``limits`` and ``scale`` as plain tuples of :class:`PlateLimits`' and
-    :class:`~seamtrack.features._between_plates.Scale`'s fields (numba types a named tuple
+    :class:`~seamtrack.features.plates._between_plates.Scale`'s fields (numba types a named tuple
     argument in Python on every call, some microseconds; plain ones and arrays at once), the
     result flattened (:class:`PairReading`)."""
     n = bounds.shape[0] - 1

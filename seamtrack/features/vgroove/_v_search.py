@@ -2,7 +2,7 @@
 collinear groups (:func:`groups_of`), the best pair of lines forming a V or a ridge
 (:func:`best_pair`), and the corners where lines meet (:func:`corner_with`); :func:`search`
 runs the search's steps in order, for the corner extractors (``_Base._arms``) and the V-groove
-model (:mod:`seamtrack.features._v_groove_model`).
+model (:mod:`seamtrack.features.vgroove._v_groove_model`).
 
 The family extractors' Python formulation made a handful of numpy calls on 2-vectors per line
 and per pair, where each call costs more than the arithmetic; here the same tests run on

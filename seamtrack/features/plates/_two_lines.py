@@ -155,8 +155,8 @@ def line_end(
     tol: float,
 ) -> Point:
     """Where a run's ``line`` ends at ``end`` (its last inlier when ``at_end``, else its
-    first): the corner search of :func:`seamtrack.features._v_search.corner_with` with the pieces of
-    ``min_points`` as the others, ``skip`` the run's own piece or -1. Its crossing with a
+    first): the corner search of :func:`seamtrack.features.vgroove._v_search.corner_with` with the
+    pieces of ``min_points`` as the others, ``skip`` the run's own piece or -1. Its crossing with a
     piece meeting it there (a visible corner), else half a step beyond the end inlier."""
     cy, cz, dy, dz = line
     tip_y, tip_z = cy + end.t * dy, cz + end.t * dz

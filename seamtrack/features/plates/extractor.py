@@ -19,18 +19,18 @@ from typing import cast
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features._between_plates import Scale
-from seamtrack.features._plate_lines import PlateLimits
-from seamtrack.features._two_plate_search import (
+from seamtrack.features.base import _Base
+from seamtrack.features.line_geometry import LineThrough, Point
+from seamtrack.features.lines import Segments
+from seamtrack.features.plates._between_plates import Scale
+from seamtrack.features.plates._plate_lines import PlateLimits
+from seamtrack.features.plates._two_plate_search import (
     FIT,
     PIECE,
     PlainLimits,
     PlainScale,
     two_plates,
 )
-from seamtrack.features.base import _Base
-from seamtrack.features.line_geometry import LineThrough, Point
-from seamtrack.features.lines import Segments
 from seamtrack.sensing.profiles import Feature, Profile
 
 FloatArray = NDArray[np.float64]
@@ -40,7 +40,7 @@ IntArray = NDArray[np.int64]
 @dataclass(frozen=True)
 class _Hole:
     """What lies between two consecutive plate runs
-    (:func:`seamtrack.features._between_plates.hole`).
+    (:func:`seamtrack.features.plates._between_plates.hole`).
 
     ``open_mm``: how much of the stretch between their ends (along the left run's line)
     nothing covers: columns with no point (the laser fell through a gap or into a shadow), a
@@ -110,7 +110,7 @@ def _pair(
     min_opening: float = 0.0,
 ) -> _Pair | None:
     """The plates of a profile and the pair of consecutive runs the extractor reads (None:
-    no pair qualifies): :func:`seamtrack.features._two_plate_search.two_plates` on the
+    no pair qualifies): :func:`seamtrack.features.plates._two_plate_search.two_plates` on the
     pieces as a table of arrays.
 
     Flat pieces (within ``max_tilt_deg`` of the y axis) that lie on one line form a plate

@@ -88,7 +88,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.errors import PluginError
-from seamtrack.features._groove_fit import (  # noqa: F401 (RAY_*: the extractor's names)
+from seamtrack.features.base import _Base
+from seamtrack.features.groove._groove_fit import (  # noqa: F401 (RAY_*: the extractor's names)
     RAY_DEPTH_MM,
     RAY_SPREAD_RAD,
     _along_a_ray,
@@ -110,9 +111,8 @@ from seamtrack.features._groove_fit import (  # noqa: F401 (RAY_*: the extractor
     short_walls,
     trim_wall,
 )
-from seamtrack.features._groove_kernels import running_median
-from seamtrack.features._groove_rise import a_step, risen_level
-from seamtrack.features.base import _Base
+from seamtrack.features.groove._groove_kernels import running_median
+from seamtrack.features.groove._groove_rise import a_step, risen_level
 from seamtrack.features.line_geometry import Line, fit_line
 from seamtrack.features.lines import Segments, intersect, segment_profile
 from seamtrack.features.refusal import Refusal
@@ -221,7 +221,7 @@ class GrooveExtractor(_Base):
     """Groove (issue 25): the 7 points of an empty or partly filled groove (V, narrow gap,
     U; 0..n layers of beads), the remaining area, and a seam point per ``reference``
     (``"centre"``: the middle bottom point; ``"left"`` / ``"right"``: that wall's foot at the
-    fill surface). The model and its refusals: :mod:`seamtrack.features.groove`."""
+    fill surface). The model and its refusals: :mod:`seamtrack.features.groove.extractor`."""
 
     name: str = "groove"
     reference: str = "centre"

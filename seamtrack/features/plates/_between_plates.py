@@ -1,5 +1,5 @@
 """What lies between two plate runs (:func:`hole`), compiled: the inner loop of the two-plate
-extractors (:mod:`seamtrack.features.plates`).
+extractors (:mod:`seamtrack.features.plates.extractor`).
 
 Done as numpy calls on the few dozen points of a hole, its masks, medians and stretches were
 some hundred small array operations per profile, whose per-call overhead was most of the
@@ -18,7 +18,8 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features._two_lines import (
+from seamtrack.features.line_geometry import Point, fit_points
+from seamtrack.features.plates._two_lines import (
     PieceLines,
     RunEnd,
     angle,
@@ -26,7 +27,6 @@ from seamtrack.features._two_lines import (
     median,
     towards,
 )
-from seamtrack.features.line_geometry import Point, fit_points
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
