@@ -13,6 +13,7 @@ from seamtrack.features.artefacts import SensorArtefacts, real_sensor_profile
 from seamtrack.features.classify import classify
 from seamtrack.features.extractors import extractor
 from seamtrack.features.lines import segment_profile
+from seamtrack.features.refusal import Refusal
 from seamtrack.features.robust import front_end, range_quantum, reject
 from seamtrack.features.synthetic import synthetic_profile
 from seamtrack.sensing.profiles import Profile, Reason
@@ -50,11 +51,11 @@ def test_quantized_profile_is_split_at_corners_not_at_every_count():
     art = SensorArtefacts(spike_runs=0.0, dropout_groove=0.0, dropout_plate=0.0)
     profile, _ = real_sensor_profile("v-groove", rng, artefacts=art, roll_deg=10.0, **LDS_V)
     fe = front_end(profile)
-    assert not isinstance(fe, str)
+    assert not isinstance(fe, Refusal)
     assert fe.quantum == pytest.approx(0.05, rel=1e-6)
     assert fe.tol >= 2.0 * fe.quantum
     seg = segment_profile(profile)
-    assert not isinstance(seg, str)
+    assert not isinstance(seg, Refusal)
     assert len([ln for ln in seg.lines if ln.count >= 50]) == 4  # plates and bevels
 
 

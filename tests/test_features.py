@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import ast
 import math
 import sys
 import types
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -12,6 +14,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
+import seamtrack.features
 from seamtrack.errors import PluginError
 from seamtrack.features.classify import classify
 from seamtrack.features.extractors import BUILTIN, FeatureExtractor, extractor
@@ -344,3 +347,20 @@ def test_registry_bad_params_raise_plugin_error():
     with pytest.raises(PluginError) as info:
         extractor("fillet", no_such_param=1)
     assert info.value.field == "extractor.params"
+
+
+def test_features_has_one_line_point_and_corner_class() -> None:
+    """One line geometry in features/ (issue 40): walking every module's syntax tree finds
+    exactly one class named ``Line`` (its compiled form is ``LineThrough``, next to it), one
+    ``Point`` and one ``Corner``."""
+    root = Path(seamtrack.features.__file__).parent
+    found: dict[str, list[str]] = {"Line": [], "Point": [], "Corner": []}
+    for path in sorted(root.rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(), str(path))):
+            if isinstance(node, ast.ClassDef) and node.name in found:
+                found[node.name].append(str(path.relative_to(root)))
+    assert {name: len(where) for name, where in found.items()} == {
+        "Line": 1,
+        "Point": 1,
+        "Corner": 1,
+    }, found

@@ -8,8 +8,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from seamtrack.features import _groove_kernels as kern
-from seamtrack.features import groove
+from seamtrack.features.groove import _groove_kernels as kern
+from seamtrack.features.groove import extractor as groove
 from seamtrack.geometry import seam as seam_module
 from seamtrack.geometry.seam import Seam
 

@@ -1,5 +1,5 @@
 """The groove extractor's reads of a wall's foot and of a raised part
-(seamtrack.features._groove_rise, short_walls in seamtrack.features._groove_fit).
+(seamtrack.features.groove._groove_rise, short_walls in seamtrack.features.groove._groove_fit).
 
 Oracles: analytic notches, rounds and steps drawn point by point (u across the groove, v into
 it), with seeded noise; a wall's line and its mirror built from known angles."""
@@ -11,9 +11,9 @@ import math
 import numpy as np
 import pytest
 
-from seamtrack.features._groove_fit import MIRROR_DEG, short_walls
-from seamtrack.features._groove_rise import a_step, risen_level
-from seamtrack.features.lines import Line
+from seamtrack.features.groove._groove_fit import MIRROR_DEG, short_walls
+from seamtrack.features.groove._groove_rise import a_step, risen_level
+from seamtrack.features.line_geometry import Line
 
 SPACING = 0.028  # mm between points, the wide sensor's 2048 rays
 TOL = 0.15

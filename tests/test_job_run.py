@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import seamtrack.features.groove  # noqa: F401 (the jobs' extractor: an ImportError fails here)
+import seamtrack.features.groove.extractor  # noqa: F401 (the jobs' extractor: an ImportError fails here)
 from seamtrack.cli.main import main
 from seamtrack.control.planner import CAP_OVERLAP_MM, AdaptivePlanner, cap_area_mm2
 from seamtrack.simulation.job import run_job

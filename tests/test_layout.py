@@ -26,7 +26,17 @@ STAGES = [
     ("heat", {"seamtrack.heat"}),  # the arc's temperature field and the distortion it drives
     ("workpiece", {"seamtrack.workpiece", "seamtrack.cad"}),
     ("sensing", {"seamtrack.sensing"}),
-    ("features", {"seamtrack.features"}),
+    (
+        "features",
+        {
+            "seamtrack.features",
+            # the extractor families, each its own subpackage (issue 40)
+            "seamtrack.features.generic",
+            "seamtrack.features.groove",
+            "seamtrack.features.plates",
+            "seamtrack.features.vgroove",
+        },
+    ),
     ("control", {"seamtrack.control"}),
     ("simulation", {"seamtrack.simulation"}),
     ("io", {"seamtrack.io"}),

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import seamtrack as st
-from seamtrack.features.vgroove import VGrooveExtractor
+from seamtrack.features.vgroove.extractor import VGrooveExtractor
 from seamtrack.sensing.profiles import Feature, Profile, SeamHint, hint_from_path
 from seamtrack.simulation.assemble import takes_hint
 
@@ -81,7 +81,7 @@ def test_an_extractor_without_hint_is_called_as_before() -> None:
 
 
 OLD_STYLE = """
-from seamtrack.features.vgroove import VGrooveExtractor
+from seamtrack.features.vgroove.extractor import VGrooveExtractor
 
 CALLS = []
 

@@ -1,19 +1,64 @@
-"""The V search's compiled line table (seamtrack.features._v_search) against the Python geometry
-it replaces in the V extractors (seamtrack.features.lines: collinear_groups, corner_with,
-Line.step and Line.end), on synthetic profiles of every joint with noise, outliers, dropouts,
-false reflections and tacks."""
+"""The V search's compiled line table (seamtrack.features.vgroove._v_search) against the Python
+geometry it replaces in the V extractors (seamtrack.features.lines.collinear_groups; corner_with,
+written here in plain Python; Line.step and Line.end), on synthetic profiles of every joint with
+noise, outliers, dropouts, false reflections and tacks."""
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
+from numpy.typing import NDArray
 
-from seamtrack.features import _v_search as vs
-from seamtrack.features.lines import Line, Segments, collinear_groups, corner_with, segment_profile
+from seamtrack.features.line_geometry import Line
+from seamtrack.features.lines import Segments, collinear_groups, segment_profile
 from seamtrack.features.synthetic import Imperfections, synthetic_profile
+from seamtrack.features.vgroove import _v_search as vs
 from seamtrack.sensing.sensor import preset
 
+FloatArray = NDArray[np.float64]
 _JOINTS = ("v-groove", "square-butt", "fillet", "lap", "outside-corner")
+
+
+def corner_with(
+    line: Line, at_end: bool, others: list[Line], seg: Segments
+) -> tuple[FloatArray, Line | None]:
+    """The reference (plain Python on :class:`Line`) of the compiled corner search: where
+    ``line`` ends and the neighbour it meets there: its crossing with a line of ``others``
+    that meets it at that end (a visible corner, exact), else half a spacing beyond its
+    last inlier (the edge lies between rays) and None."""
+    # Scalars, not numpy: a handful of tests per neighbour, where numpy's per-call overhead
+    # would dominate (the extractors call this four times per profile).
+    cy, cz, dy, dz, t_first, t_last = line.scalars
+    t_tip = t_last if at_end else t_first
+    tip_y, tip_z = cy + t_tip * dy, cz + t_tip * dz
+    reach = 3.0 * max(line.step(at_end), seg.spacing) + seg.tol
+    cos_min = math.cos(math.radians(20))
+    best, best_d, best_line = None, math.inf, None
+    for other in others:
+        if other is line:
+            continue
+        ocy, ocz, ody, odz, o_first, o_last = other.scalars
+        if abs(dy * ody + dz * odz) > cos_min:
+            continue  # within 20 deg: no corner
+        det = dy * odz - dz * ody
+        if abs(det) < 1e-9:
+            continue
+        s = ((ocy - cy) * odz - (ocz - cz) * ody) / det
+        xy, xz = cy + s * dy, cz + s * dz
+        d = math.hypot(xy - tip_y, xz - tip_z)
+        if d > reach or d >= best_d:
+            continue
+        near_other = min(
+            math.hypot(ocy + t * ody - xy, ocz + t * odz - xz) for t in (o_first, o_last)
+        )
+        reach_other = 3.0 * max(other.step(True), other.step(False), seg.spacing) + seg.tol
+        if near_other <= reach_other:
+            best, best_d, best_line = (xy, xz), d, other
+    if best is None:
+        return line.end(at_end), None
+    return np.array(best), best_line
 
 
 def _segments(joint: str, seed: int) -> Segments:
@@ -66,8 +111,8 @@ def test_groups_equal_collinear_groups(joint: str, seed: int) -> None:
 
 @pytest.mark.parametrize("joint", _JOINTS)
 @pytest.mark.parametrize("seed", range(4))
-def test_corner_with_equals_lines_corner_with(joint: str, seed: int) -> None:
-    """Every piece's corner at either end among the pieces, as lines.corner_with finds it:
+def test_corner_with_equals_python_corner_with(joint: str, seed: int) -> None:
+    """Every piece's corner at either end among the pieces, as the Python corner_with finds it:
     the same neighbour and the same point; and the pieces' ends (Line.end)."""
     seg = _segments(joint, seed)
     tb = _table(seg)

@@ -1,2 +1,2 @@
-"""Features: line fits, the joint-family and generic extractors, and synthetic profiles with
-truth."""
+"""Features: one line geometry, the segmentation front end, the extractors (one subpackage per
+family: vgroove, plates, groove, generic), and synthetic profiles with truth."""

@@ -3,9 +3,9 @@
 :func:`segment` is :func:`seamtrack.features.lines.segment_profile` in one call: the front end
 (:func:`seamtrack.features.robust.front`), then the split-and-merge (:func:`_pieces`:
 Douglas-Peucker, merge, best two-line corners, end kinks, trimmed total-least-squares
-refits); :func:`fit_line` is its line fit. Done as numpy calls on ~1,000 points they were
-some hundreds of small array operations per profile, whose per-call overhead was most of an
-extractor's time. The arithmetic is that of the numpy
+refits; the fits are :mod:`seamtrack.features.line_geometry`'s). Done as numpy calls on
+~1,000 points they were some hundreds of small array operations per profile, whose per-call
+overhead was most of an extractor's time. The arithmetic is that of the numpy
 formulation (upper medians by sorting, the median-of-5 network, prefix-sum split costs,
 total-least-squares directions from atan2 of the second moments); sums run in another order,
 so results agree to rounding, not bit for bit.
@@ -20,12 +20,12 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.features.line_geometry import fit_points, fit_range
 from seamtrack.features.robust import (
     _MAX_ABS_MM,
     DEFAULT_RESOLUTION_MM,
     KEPT,
     TOL_RESOLUTIONS,
-    LineThrough,
     _front,
 )
 
@@ -58,27 +58,6 @@ FIT_CY, FIT_CZ, FIT_UY, FIT_UZ, FIT_RMS, FIT_FIRST, FIT_LAST = range(7)
 #: enough inliers.
 SEGMENTED = KEPT
 TOO_MANY_PIECES, NO_PIECE = 3, 4
-
-
-class LineFit(NamedTuple):
-    """A total-least-squares line: centroid (y, z), unit direction (y, z), rms residual."""
-
-    cy: float
-    cz: float
-    uy: float
-    uz: float
-    rms: float
-
-
-class LineAlong(NamedTuple):
-    """A :class:`LineFit` and its points' coordinates along the line."""
-
-    cy: float
-    cz: float
-    uy: float
-    uz: float
-    rms: float
-    along: FloatArray
 
 
 class Split(NamedTuple):
@@ -153,63 +132,6 @@ class Segmentation(NamedTuple):
 
 
 # ----------------------------------------------------------------------- split and merge
-@numba.njit(cache=True, nogil=True)
-def _fit(p: FloatArray, idx: IntArray, n: int) -> LineFit:
-    """Total-least-squares line through ``p[idx[:n]]``: centroid, unit direction (from the
-    first point towards the last), rms residual; as ``seamtrack.features.lines._fit``."""
-    cy = 0.0
-    cz = 0.0
-    for k in range(n):
-        cy += p[idx[k], 0]
-        cz += p[idx[k], 1]
-    cy /= n
-    cz /= n
-    syy = 0.0
-    szz = 0.0
-    syz = 0.0
-    for k in range(n):
-        dy, dz = p[idx[k], 0] - cy, p[idx[k], 1] - cz
-        syy += dy * dy
-        szz += dz * dz
-        syz += dy * dz
-    theta = 0.5 * math.atan2(2.0 * syz, syy - szz)
-    uy, uz = math.cos(theta), math.sin(theta)
-    a, b = idx[0], idx[n - 1]
-    if uy * (p[b, 0] - p[a, 0]) + uz * (p[b, 1] - p[a, 1]) < 0.0:
-        uy, uz = -uy, -uz
-    rr = 0.0
-    for k in range(n):
-        r = -(p[idx[k], 0] - cy) * uz + (p[idx[k], 1] - cz) * uy
-        rr += r * r
-    return LineFit(cy, cz, uy, uz, math.sqrt(rr / n))
-
-
-@numba.njit(cache=True, nogil=True)
-def fit_range(p: FloatArray, lo: int, hi: int) -> LineThrough:
-    """Total-least-squares line through ``p[lo:hi]``: centroid and unit direction."""
-    n = hi - lo
-    cy = 0.0
-    cz = 0.0
-    for i in range(lo, hi):
-        cy += p[i, 0]
-        cz += p[i, 1]
-    cy /= n
-    cz /= n
-    syy = 0.0
-    szz = 0.0
-    syz = 0.0
-    for i in range(lo, hi):
-        dy, dz = p[i, 0] - cy, p[i, 1] - cz
-        syy += dy * dy
-        szz += dz * dz
-        syz += dy * dz
-    theta = 0.5 * math.atan2(2.0 * syz, syy - szz)
-    uy, uz = math.cos(theta), math.sin(theta)
-    if uy * (p[hi - 1, 0] - p[lo, 0]) + uz * (p[hi - 1, 1] - p[lo, 1]) < 0.0:
-        uy, uz = -uy, -uz
-    return LineThrough(cy, cz, uy, uz)
-
-
 @numba.njit(cache=True, nogil=True)
 def _cost(n: float, s1: float, s2: float, s3: float, s4: float, s5: float) -> float:
     n = max(n, 1.0)
@@ -363,44 +285,21 @@ def _refit(
     their total-least-squares line written to ``fit`` (centroid, direction, rms, first and
     last coordinate along it) and their coordinates along it to ``along``.
 
-    The arithmetic of :func:`fit_range` and then :func:`_fit` on the inliers, in fewer
-    passes: the inliers' sums are taken while they are picked, and the residuals while
-    their coordinates are."""
+    The arithmetic of :func:`~seamtrack.features.line_geometry.fit_range` and then
+    :func:`~seamtrack.features.line_geometry.fit_points` on the inliers."""
     cy, cz, uy, uz = fit_range(p, a, b + 1)
     n = 0
-    sy = 0.0
-    sz = 0.0
     for i in range(a, b + 1):
         if abs(-(p[i, 0] - cy) * uz + (p[i, 1] - cz) * uy) <= trim:
             index[n] = i
-            sy += p[i, 0]
-            sz += p[i, 1]
             n += 1
     if n < min_points:
         return n
-    cy = sy / n
-    cz = sz / n
-    syy = 0.0
-    szz = 0.0
-    syz = 0.0
+    cy, cz, uy, uz, rms = fit_points(p, index, n)
     for k in range(n):
-        dy, dz = p[index[k], 0] - cy, p[index[k], 1] - cz
-        syy += dy * dy
-        szz += dz * dz
-        syz += dy * dz
-    theta = 0.5 * math.atan2(2.0 * syz, syy - szz)
-    uy, uz = math.cos(theta), math.sin(theta)
-    f, g = index[0], index[n - 1]
-    if uy * (p[g, 0] - p[f, 0]) + uz * (p[g, 1] - p[f, 1]) < 0.0:
-        uy, uz = -uy, -uz
-    rr = 0.0
-    for k in range(n):
-        dy, dz = p[index[k], 0] - cy, p[index[k], 1] - cz
-        r = -dy * uz + dz * uy
-        rr += r * r
-        along[k] = dy * uy + dz * uz
+        along[k] = (p[index[k], 0] - cy) * uy + (p[index[k], 1] - cz) * uz
     fit[0], fit[1], fit[2], fit[3] = cy, cz, uy, uz
-    fit[4], fit[5], fit[6] = math.sqrt(rr / n), along[0], along[n - 1]
+    fit[4], fit[5], fit[6] = rms, along[0], along[n - 1]
     return n
 
 
@@ -577,16 +476,3 @@ def segment(
         front.quantum,
         front.resolution,
     )
-
-
-@numba.njit(cache=True, nogil=True)
-def fit_line(p: FloatArray, idx: IntArray) -> LineAlong:
-    """Total-least-squares line through ``p[idx]`` (at least one point): centroid, unit
-    direction (from the first point towards the last), rms residual, and the points'
-    coordinates along it; :func:`seamtrack.features.lines._fit` in one call."""
-    n = idx.shape[0]
-    cy, cz, uy, uz, rms = _fit(p, idx, n)
-    t = np.empty(n)
-    for k in range(n):
-        t[k] = (p[idx[k], 0] - cy) * uy + (p[idx[k], 1] - cz) * uz
-    return LineAlong(cy, cz, uy, uz, rms, t)

@@ -14,7 +14,15 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features._v_search import (
+from seamtrack.features.expect import Expect, parse_expect
+from seamtrack.features.line_geometry import Line
+from seamtrack.features.lines import (
+    DATA_ERRORS,
+    Segments,
+    segment_profile,
+)
+from seamtrack.features.refusal import Refusal
+from seamtrack.features.vgroove._v_search import (
     COUNT,
     CY,
     CZ,
@@ -28,13 +36,6 @@ from seamtrack.features._v_search import (
     explained_of,
     pieces_of,
     search,
-)
-from seamtrack.features.expect import Expect, parse_expect
-from seamtrack.features.lines import (
-    DATA_ERRORS,
-    Line,
-    Segments,
-    segment_profile,
 )
 from seamtrack.sensing.profiles import Feature, Profile, SeamHint
 
@@ -90,7 +91,7 @@ class _Base:
         among candidates (the v-groove's V's), ignored by the others."""
         return self.scored(profile, hint=hint)[0]
 
-    def segments(self, profile: Profile) -> Segments | str:
+    def segments(self, profile: Profile) -> Segments | Refusal:
         """The profile's straight pieces with this extractor's front-end parameters."""
         return segment_profile(
             profile,
@@ -102,7 +103,7 @@ class _Base:
     def scored(
         self,
         profile: Profile,
-        seg: Segments | str | None = None,
+        seg: Segments | Refusal | None = None,
         hint: SeamHint | None = None,
     ) -> tuple[Feature, float]:
         """The feature and the share of the profile's surface points its joint model explains
@@ -112,8 +113,8 @@ class _Base:
             with np.errstate(all="ignore"):
                 if seg is None:
                     seg = self.segments(profile)
-                if isinstance(seg, str):
-                    return Feature.failed(seg, joint=self.name), 0.0
+                if isinstance(seg, Refusal):
+                    return Feature.failed(seg.reason, joint=self.name), 0.0
                 if hint is None:
                     found = self._extract(profile, seg)
                 else:
@@ -152,7 +153,7 @@ class _Base:
         min_deg: float,
         max_deg: float,
         max_reach_mm: float,
-    ) -> tuple[Line, Line, FloatArray, float] | str:
+    ) -> tuple[Line, Line, FloatArray, float] | Refusal:
         """The best pair of lines forming a V (opening towards the sensor, -z) or a ridge
         (``opening_down``: the arms fall away from the sensor): (left, right, apex, score).
 
@@ -167,9 +168,9 @@ class _Base:
         on the arms' lines (within two tolerances), on their sides of the apex (fragments of
         a bevel cut up by spikes count, whatever piece they are in). The arms are returned
         without their inliers more than a tolerance past the apex (refitted). Compiled
-        (:func:`seamtrack.features._v_search.search`)."""
+        (:func:`seamtrack.features.vgroove._v_search.search`)."""
         if not seg.n_lines:
-            return "no pair of lines forms the joint"
+            return Refusal("no pair of lines forms the joint")
         params = SearchParams(
             sign=1.0 if opening_down else -1.0,
             min_deg=float(min_deg),
@@ -188,14 +189,15 @@ class _Base:
         )
         pair = found.pair
         if pair.left == NONE:
-            return "no pair of lines forms the joint"
+            return Refusal("no pair of lines forms the joint")
         left, right = _record(seg, found.table, pair.left), _record(seg, found.table, pair.right)
         return left, right, np.array([pair.apex_y, pair.apex_z]), float(pair.score)
 
 
 def _record(seg: Segments, tb: LineTable, r: int) -> Line:
-    """The line of record ``r`` of a table (:class:`seamtrack.features._v_search.LineTable`):
-    the piece itself when it is one, else a new line."""
+    """The line of record ``r`` of a table
+    (:class:`seamtrack.features.vgroove._v_search.LineTable`): the piece itself when it is
+    one, else a new line."""
     if r < seg.n_lines:
         return seg.line(r)
     a, c = int(tb.span[r, START]), int(tb.span[r, COUNT])

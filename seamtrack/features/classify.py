@@ -20,9 +20,10 @@ import numpy as np
 
 from seamtrack.features.base import _Base
 from seamtrack.features.extractors import BUILTIN
-from seamtrack.features.groove import GrooveExtractor
+from seamtrack.features.groove.extractor import GrooveExtractor
 from seamtrack.features.lines import DATA_ERRORS, segment_profile
-from seamtrack.features.vgroove import VGrooveExtractor
+from seamtrack.features.refusal import Refusal
+from seamtrack.features.vgroove.extractor import VGrooveExtractor
 from seamtrack.sensing.profiles import Profile
 
 #: The joint families :func:`classify` tells apart (besides ``"none"``), and ``"groove"``: an
@@ -55,7 +56,7 @@ def _groove_share(
     try:
         with np.errstate(all="ignore"):
             seg = segment_profile(profile, resolution_mm=resolution_mm)
-            if isinstance(seg, str):
+            if isinstance(seg, Refusal):
                 return None
             feature, share = _groove(resolution_mm).scored(profile, seg)
     except DATA_ERRORS:
@@ -96,7 +97,7 @@ def scores(profile: Profile, *, resolution_mm: float | None = None) -> dict[str,
     try:
         with np.errstate(all="ignore"):
             seg = segment_profile(profile, resolution_mm=resolution_mm)
-            if isinstance(seg, str):
+            if isinstance(seg, Refusal):
                 return out
             for ex in _extractors(resolution_mm):
                 feature, share = ex.scored(profile, seg)

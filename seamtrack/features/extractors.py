@@ -17,12 +17,12 @@ intersect their lines; a line that ends at a gap ends half a ray spacing beyond 
 (the edge lies between two rays). Each checks that the profile shows its joint (its model
 explains ``min_explained`` of the points, and the family's own tests hold) and refuses with a
 reason otherwise; :func:`seamtrack.features.classify.classify` names the family. The two-plate
-extractors (square butt, lap; in :mod:`seamtrack.features.plates`) gather pieces on one line
-into a plate however short they are, and read what lies between two plates: a stray line cut off
-both (a false reflection) hides the columns it covers, it opens no gap, and where it covers a
+extractors (square butt, lap; in :mod:`seamtrack.features.plates.extractor`) gather pieces on one
+line into a plate however short they are, and read what lies between two plates: a stray line cut
+off both (a false reflection) hides the columns it covers, it opens no gap, and where it covers a
 plate's edge the edge is estimated under it. The v-groove extractor
-(:mod:`seamtrack.features.vgroove`) reads what lies just beyond each bevel's lower end: a stray
-line there hides the root corner, which is then put where the bevel reaches the other corner's
+(:mod:`seamtrack.features.vgroove.extractor`) reads what lies just beyond each bevel's lower end: a
+stray line there hides the root corner, which is then put where the bevel reaches the other corner's
 depth below the plates; with no gap showing, the bevels' intersection is the seam. The generic
 extractor needs no segmentation: sliding-window slopes, the sharpest turn, two local fits.
 
@@ -43,8 +43,16 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.errors import PluginError
-from seamtrack.features._two_lines import two_lines_share
-from seamtrack.features._v_search import (
+from seamtrack.features.base import _Base, _confidence, included
+from seamtrack.features.expect import Expect
+from seamtrack.features.generic.extractor import GenericExtractor
+from seamtrack.features.groove.extractor import GrooveExtractor
+from seamtrack.features.line_geometry import Line
+from seamtrack.features.lines import Segments
+from seamtrack.features.plates._two_lines import two_lines_share
+from seamtrack.features.plates.extractor import LapExtractor, SquareButtExtractor
+from seamtrack.features.refusal import Refusal
+from seamtrack.features.vgroove._v_search import (
     COUNT,
     CY,
     CZ,
@@ -57,16 +65,7 @@ from seamtrack.features._v_search import (
     pieces_of,
     search,
 )
-from seamtrack.features.base import _Base, _confidence, included
-from seamtrack.features.expect import Expect
-from seamtrack.features.generic import GenericExtractor
-from seamtrack.features.groove import GrooveExtractor
-from seamtrack.features.lines import (
-    Line,
-    Segments,
-)
-from seamtrack.features.plates import LapExtractor, SquareButtExtractor
-from seamtrack.features.vgroove import VGrooveExtractor
+from seamtrack.features.vgroove.extractor import VGrooveExtractor
 from seamtrack.sensing.profiles import Feature, Profile
 
 FloatArray = NDArray[np.float64]
@@ -104,8 +103,8 @@ class FilletExtractor(_Base):
         if fast is not None:
             return fast
         found = self._arms(seg, False, lo, hi, self.max_gap_mm)
-        if isinstance(found, str):
-            return Feature.failed(found, joint=self.name)
+        if isinstance(found, Refusal):
+            return Feature.failed(found.reason, joint=self.name)
         return _two_faces(self, profile, seg, found)
 
 
@@ -124,8 +123,8 @@ class OutsideCornerExtractor(_Base):
         if fast is not None:
             return fast
         found = self._arms(seg, True, lo, hi, self.max_gap_mm)
-        if isinstance(found, str):
-            return Feature.failed(found, joint=self.name)
+        if isinstance(found, Refusal):
+            return Feature.failed(found.reason, joint=self.name)
         return _two_faces(self, profile, seg, found)
 
 
@@ -148,7 +147,7 @@ class CornerFound(NamedTuple):
 def _corner_search(
     points: FloatArray, stray: NDArray[np.bool_], tol: float, pieces: Any, params: SearchParams
 ) -> CornerFound:  # fmt: skip
-    """:func:`~seamtrack.features._v_search.search` and what :func:`_corner` reads of it, in
+    """:func:`~seamtrack.features.vgroove._v_search.search` and what :func:`_corner` reads of it, in
     one call (boxing the search's tables for Python cost about as much as the search)."""
     found = search(points, stray, tol, pieces, params)
     left, right = found.pair.left, found.pair.right
@@ -236,7 +235,7 @@ def _two_faces(
     """A corner's feature from its faces (left, right, apex, score), and the share of the
     profile the model of a corner explains: each face runs on to the profile's end; the
     corner between the faces' last points is left out (:func:`~.base.explained`, here in one
-    compiled call, :func:`seamtrack.features._two_lines.two_lines_share`)."""
+    compiled call, :func:`seamtrack.features.plates._two_lines.two_lines_share`)."""
     left, right, apex, _ = found
     if isinstance(ex.expect, Expect):  # the included angle matters only against an expectation
         wrong = ex._implausible(angle=included(left, right, apex))
@@ -318,9 +317,10 @@ def extractor(name: str, **params: Any) -> FeatureExtractor:
     name : str
         A built-in (``"v-groove"``, ``"square-butt"``, ``"fillet"``, ``"lap"``,
         ``"outside-corner"``, ``"generic"``, ``"groove"``: the 7 points of an empty or
-        partly filled groove, :mod:`seamtrack.features.groove`), ``"package.module:Class"``,
-        or the name of an entry point in the group ``seamtrack.extractors``. A class is called with
-        ``params``; an object that already is an extractor is used as is.
+        partly filled groove, :mod:`seamtrack.features.groove.extractor`),
+        ``"package.module:Class"``, or the name of an entry point in the group
+        ``seamtrack.extractors``. A class is called with ``params``; an object that already is
+        an extractor is used as is.
 
     Raises
     ------

@@ -1,20 +1,18 @@
 """Split-and-merge line segmentation of stripe profiles: the front end of the extractors.
 
 :func:`segment_profile` drops isolated outliers against a 5-point running median, estimates the
-noise from second differences, cuts the profile at jumps, splits each run by Douglas-Peucker at a
-noise-scaled tolerance, merges neighbours that fit one line, and refits each piece by total
-least squares on its inliers. :func:`collinear_groups`, :func:`intersect` and
-:func:`corner_or_end` are the geometry the family extractors build on, and ``_Base`` their
-shared parameters and never-raise wrapper (the extractors themselves live in
-:mod:`seamtrack.features.extractors` and :mod:`seamtrack.features.plates`).
+noise from second differences, cuts the profile at jumps, splits each run by Douglas-Peucker at
+a noise-scaled tolerance, merges neighbours that fit one line, and refits each piece by total
+least squares on its inliers. :func:`collinear_groups` and :func:`intersect` are the geometry
+the family extractors build on, and ``_Base`` their shared parameters and never-raise wrapper
+(the extractors themselves live in :mod:`seamtrack.features.extractors` and
+:mod:`seamtrack.features.plates.extractor`).
 
 Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groove).
 """
 
 from __future__ import annotations
 
-import functools
-import itertools
 import math
 from dataclasses import dataclass, field
 
@@ -27,9 +25,10 @@ from seamtrack.features._segmentation import (
     TOO_MANY_PIECES,
     PieceTable,
     buffer_layout,
-    fit_line,
     segment,
 )
+from seamtrack.features.line_geometry import Line, fit_line
+from seamtrack.features.refusal import Refusal
 from seamtrack.features.robust import CONSTANT, DEFAULT_RESOLUTION_MM, TOO_FEW_POINTS
 from seamtrack.sensing.profiles import Profile
 
@@ -38,69 +37,13 @@ FloatArray = NDArray[np.float64]
 _MIN_KINK = math.radians(5.0)
 
 
-@dataclass
-class Line:
-    """A straight piece of a profile (internal to the extractors; mutable while built).
-
-    ``index`` are the inliers' positions in the kept points (column order); ``direction``
-    points along increasing column; ``t`` are the inliers' coordinates along it.
-    """
-
-    index: NDArray[np.intp]
-    centroid: FloatArray
-    direction: FloatArray
-    t: FloatArray
-    rms: float
-
-    @functools.cached_property
-    def normal(self) -> FloatArray:
-        return np.array([-self.direction[1], self.direction[0]])
-
-    @property
-    def count(self) -> int:
-        return len(self.index)
-
-    @property
-    def extent(self) -> float:
-        return float(self.t[-1] - self.t[0]) if len(self.t) else 0.0
-
-    def point(self, t: float) -> FloatArray:
-        return self.centroid + t * self.direction
-
-    @functools.cached_property
-    def scalars(self) -> tuple[float, float, float, float, float, float]:
-        """Centroid (y, z), direction (y, z) and the first and last inliers' coordinates
-        along the line, as floats (scalar tests without numpy's per-call overhead)."""
-        (cy, cz), (dy, dz) = self.centroid.tolist(), self.direction.tolist()
-        t0, t1 = float(self.t[0]), float(self.t[-1])  # IndexError on no inliers, as before
-        return cy, cz, dy, dz, t0, t1
-
-    @functools.cached_property
-    def _steps(self) -> tuple[float, float]:
-        k = min(10, len(self.t) - 1)
-        if k < 1:
-            return 0.0, 0.0
-        t = self.t
-        return float(abs(t[k] - t[0])) / k, float(abs(t[-1] - t[-1 - k])) / k
-
-    def step(self, at_end: bool) -> float:
-        """Mean spacing of the last (``at_end``) or first ten inliers along the line."""
-        return self._steps[1 if at_end else 0]
-
-    def end(self, at_end: bool) -> FloatArray:
-        """The line's end half a spacing beyond its last (first) inlier."""
-        half = 0.5 * self.step(at_end)
-        return self.point(float(self.t[-1] + half if at_end else self.t[0] - half))
-
-
 def _fit(points: FloatArray, index: NDArray[np.intp]) -> Line:
     """Total-least-squares line through ``points[index]`` (column order kept); compiled
-    (:func:`seamtrack.features._segmentation.fit_line`): numpy's per-call overhead on a few hundred
+    (:func:`seamtrack.features.line_geometry.fit_line`): numpy's per-call overhead on a few hundred
     points was most of its cost."""
     if len(index) == 0:
         raise ValueError("no points to fit a line to")
-    f = fit_line(points, np.asarray(index, dtype=np.int64))
-    return Line(index, np.array([f.cy, f.cz]), np.array([f.uy, f.uz]), f.along, f.rms)
+    return Line.from_fit(index, fit_line(points, np.asarray(index, dtype=np.int64)))
 
 
 @dataclass
@@ -162,8 +105,8 @@ def segment_profile(
     min_points: int = 8,
     max_lines: int = 64,
     max_detour_mm: float = 3.0,
-) -> Segments | str:
-    """Split-and-merge a profile into straight pieces, or say why not (a ``str``).
+) -> Segments | Refusal:
+    """Split-and-merge a profile into straight pieces, or say why not (a :class:`Refusal`).
 
     Parameters
     ----------
@@ -188,7 +131,7 @@ def segment_profile(
     valid = np.ascontiguousarray(profile.valid, dtype=np.bool_).reshape(-1)
     n = len(pts)
     if valid.shape != (n,):
-        return "too few valid points (0)"
+        return Refusal("too few valid points (0)")
     max_lines = int(max_lines)
     # The compiled call writes into these (see :func:`seamtrack.features._segmentation.segment`).
     at = buffer_layout(n, max_lines)
@@ -210,7 +153,7 @@ def segment_profile(
         stray,
     )
     if found.code != SEGMENTED:
-        return _WHY[found.code].format(found.kept)
+        return Refusal(_WHY[found.code].format(found.kept))
     m, k = found.kept, found.n_pieces
     bounds = ints[at.offsets : at.offsets + k + 1]
     fits = floats[at.fits : at.fits + 7 * k].reshape(k, 7)
@@ -239,116 +182,6 @@ _WHY = {
     TOO_MANY_PIECES: "no straight pieces (too noisy or curved)",
     NO_PIECE: "no straight pieces with enough points",
 }
-
-
-def _best_split(q: FloatArray, min_size: int) -> tuple[int, float, float]:
-    """Best split of ordered points into two lines: (b, cost of q[:b] + q[b:], cost of q).
-
-    Costs are total-least-squares sums of squared residuals, for every b at once from
-    prefix sums (O(n)).
-    """
-    k = len(q)
-    q = q - q.mean(axis=0)
-    cols = np.column_stack(
-        [np.ones(k), q[:, 0], q[:, 1], q[:, 0] ** 2, q[:, 1] ** 2, q[:, 0] * q[:, 1]]
-    )
-    pre = np.cumsum(cols, axis=0)
-    total = pre[-1]
-
-    def cost(s: FloatArray) -> FloatArray:
-        n = np.maximum(s[..., 0], 1.0)
-        cyy = s[..., 3] - s[..., 1] ** 2 / n
-        czz = s[..., 4] - s[..., 2] ** 2 / n
-        cyz = s[..., 5] - s[..., 1] * s[..., 2] / n
-        return np.maximum(0.5 * (cyy + czz) - np.hypot(0.5 * (cyy - czz), cyz), 0.0)
-
-    b = np.arange(min_size, k - min_size + 1)
-    if b.size == 0:
-        c = float(cost(total))
-        return k, c, c
-    left = pre[b - 1]
-    both = cost(left) + cost(total - left)
-    i = int(np.argmin(both))
-    return int(b[i]), float(both[i]), float(cost(total))
-
-
-def _refine(
-    p: FloatArray,
-    pieces: list[tuple[int, int]],
-    sigma: float,
-    min_tol_mm: float,
-    min_points: int,
-    min_kink_deg: float = 5.0,
-) -> list[tuple[int, int]]:
-    """Place each corner between neighbouring pieces at the best two-line split (DP's split
-    point strays under noise), and split a run's end pieces at a kink too small for DP's
-    tolerance (a root face seen at a slant) when that explains the points much better."""
-    out = [list(piece) for piece in pieces]
-    for left, right in itertools.pairwise(out):
-        lo, hi = left[0], right[1] + 1
-        if hi - lo >= 6:
-            cut = lo + _best_split(p[lo:hi], 3)[0]
-            left[1], right[0] = cut - 1, cut
-    significant = 30.0 * max(sigma, min_tol_mm / 5.0) ** 2
-    result: list[tuple[int, int]] = []
-    for i, (lo, hi) in enumerate(out):
-        cuts = []
-        if hi - lo + 1 >= 4 * min_points:
-            mid = (lo + hi) // 2
-            halves = ([(lo, mid + 1)] if i == 0 else []) + (
-                [(mid, hi + 1)] if i == len(out) - 1 else []
-            )
-            for h_lo, h_hi in halves:
-                b, split, single = _best_split(p[h_lo:h_hi], min_points)
-                if single - split > significant:
-                    cut = h_lo + b
-                    kink = _angle(_fit(p, np.arange(lo, cut)), _fit(p, np.arange(cut, hi + 1)))
-                    if kink > math.radians(min_kink_deg):
-                        cuts.append(cut)
-        bounds = [lo, *sorted(cuts), hi + 1]
-        result += [(a, b - 1) for a, b in itertools.pairwise(bounds) if b > a]
-    return result
-
-
-def _chord_distance(p: FloatArray, a: int, b: int) -> FloatArray:
-    chord = p[b] - p[a]
-    norm = math.hypot(chord[0], chord[1])
-    q = p[a + 1 : b] - p[a]
-    if norm == 0.0:
-        return np.hypot(q[:, 0], q[:, 1])
-    return np.abs(q[:, 0] * chord[1] - q[:, 1] * chord[0]) / norm
-
-
-def _split(p: FloatArray, lo: int, hi: int, tol: float, limit: int) -> list[tuple[int, int]] | None:
-    """Douglas-Peucker: inclusive index ranges whose points lie within ``tol`` of the chord."""
-    out, stack = [], [(lo, hi)]
-    while stack:
-        a, b = stack.pop()
-        if b - a < 2:
-            out.append((a, b))
-            continue
-        d = _chord_distance(p, a, b)
-        k = int(np.argmax(d))
-        if d[k] > tol:
-            stack += [(a + 1 + k, b), (a, a + 1 + k)]
-        else:
-            out.append((a, b))
-        if len(out) + len(stack) > limit:
-            return None
-    return out
-
-
-def _merge(p: FloatArray, pieces: list[tuple[int, int]], tol: float) -> list[tuple[int, int]]:
-    """Join neighbouring pieces whose union still fits one line within ``tol``."""
-    merged = [pieces[0]]
-    for lo, hi in pieces[1:]:
-        a = merged[-1][0]
-        line = _fit(p, np.arange(a, hi + 1))
-        if np.max(np.abs((p[a : hi + 1] - line.centroid) @ line.normal)) <= tol:
-            merged[-1] = (a, hi)
-        else:
-            merged.append((lo, hi))
-    return merged
 
 
 def collinear_members(
@@ -405,56 +238,6 @@ def intersect(a: Line, b: Line) -> FloatArray | None:
     return np.array([ay + s * ady, az + s * adz])
 
 
-def _angle(a: Line, b: Line) -> float:
-    """Unsigned angle between two lines (rad, in [0, pi/2])."""
-    return math.acos(min(1.0, abs(float(a.direction @ b.direction))))
-
-
-def corner_with(
-    line: Line, at_end: bool, others: list[Line], seg: Segments
-) -> tuple[FloatArray, Line | None]:
-    """Where ``line`` ends and the neighbour it meets there: its crossing with a line of
-    ``others`` that meets it at that end (a visible corner, exact), else half a spacing
-    beyond its last inlier (the edge lies between rays) and None."""
-    # Scalars, not numpy: a handful of tests per neighbour, where numpy's per-call overhead
-    # would dominate (the extractors call this four times per profile).
-    cy, cz, dy, dz, t_first, t_last = line.scalars
-    t_tip = t_last if at_end else t_first
-    tip_y, tip_z = cy + t_tip * dy, cz + t_tip * dz
-    reach = 3.0 * max(line.step(at_end), seg.spacing) + seg.tol
-    cos_min = math.cos(math.radians(20))
-    best, best_d, best_line = None, math.inf, None
-    for other in others:
-        if other is line:
-            continue
-        ocy, ocz, ody, odz, o_first, o_last = other.scalars
-        if abs(dy * ody + dz * odz) > cos_min:
-            continue  # within 20 deg: no corner
-        det = dy * odz - dz * ody
-        if abs(det) < 1e-9:
-            continue
-        s = ((ocy - cy) * odz - (ocz - cz) * ody) / det
-        xy, xz = cy + s * dy, cz + s * dz
-        d = math.hypot(xy - tip_y, xz - tip_z)
-        if d > reach or d >= best_d:
-            continue
-        near_other = min(
-            math.hypot(ocy + t * ody - xy, ocz + t * odz - xz) for t in (o_first, o_last)
-        )
-        reach_other = 3.0 * max(other.step(True), other.step(False), seg.spacing) + seg.tol
-        if near_other <= reach_other:
-            best, best_d, best_line = (xy, xz), d, other
-    if best is None:
-        return line.end(at_end), None
-    return np.array(best), best_line
-
-
-def corner_or_end(line: Line, at_end: bool, others: list[Line], seg: Segments) -> FloatArray:
-    """Where ``line`` ends: its crossing with a neighbour that meets it there (a visible
-    corner, exact), else half a spacing beyond its last inlier (the edge lies between rays)."""
-    return corner_with(line, at_end, others, seg)[0]
-
-
 # ----------------------------------------------------------------- the extractors' base
 #: What bad data (NaN, degenerate fits, empty selections) can raise inside an extractor: caught
 #: and turned into a falsy ``Feature.failed``.
@@ -473,28 +256,3 @@ DATA_ERRORS = (
 #: reflection is a stray line tilted by at most 45 deg in the laser plane: up to 60 deg on a
 #: plate rolled by 15 deg, so it is never taken for a wall.
 _WALL_DEG = 65.0
-#: A gap's bottom (a backing seen through the gap) lies within this angle of the plates (deg).
-_BOTTOM_DEG = 10.0
-#: A piece within this angle of a plate (deg) is plate where it lies on the plate's line.
-_PLATE_DEG = 20.0
-
-
-def _on(line: Line, index: NDArray[np.intp], points: FloatArray) -> Line:
-    """``line`` carrying other inliers (their coordinates along it): a stub's edge measured
-    on the line of the whole plate."""
-    t = (points[index] - line.centroid) @ line.direction
-    return Line(index, line.centroid, line.direction, t, line.rms)
-
-
-def _towards_sensor(line: Line, q: FloatArray) -> FloatArray:
-    """Signed distance of points from ``line``, positive on the sensor's side (the origin)."""
-    h = (q - line.centroid) @ line.normal
-    return h if float(line.centroid @ line.normal) < 0 else -h
-
-
-def _ray_t(line: Line, q: FloatArray) -> FloatArray:
-    """Where the rays from the emitter (the origin) through points ``q`` cross ``line``, as
-    coordinates along it: which stretch of the plate those columns would have shown."""
-    n = line.normal
-    s = float(line.centroid @ n) / (q @ n)
-    return (q * s[:, None] - line.centroid) @ line.direction

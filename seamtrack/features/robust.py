@@ -29,6 +29,8 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.features.line_geometry import fit_spans
+from seamtrack.features.refusal import Refusal
 from seamtrack.features.select import BUCKETS, kth_nonneg
 from seamtrack.sensing.profiles import Profile, Reason
 
@@ -38,15 +40,6 @@ IntArray = NDArray[np.intp]
 #: The front end's codes (:attr:`Front.code`): points kept; too few valid points; the valid
 #: points do not spread out (a constant profile).
 KEPT, TOO_FEW_POINTS, CONSTANT = 0, 1, 2
-
-
-class LineThrough(NamedTuple):
-    """A total-least-squares line: centroid (y, z) and unit direction (y, z)."""
-
-    cy: float
-    cz: float
-    uy: float
-    uz: float
 
 
 class FrontScalars(NamedTuple):
@@ -148,31 +141,6 @@ def range_quantum(z: FloatArray) -> float:
 
 
 @numba.njit(cache=True, nogil=True)
-def _tls(p: FloatArray, lo: int, hi: int, lo2: int, hi2: int) -> LineThrough:
-    """Total-least-squares line through p[lo:hi] and p[lo2:hi2]: centroid, unit direction."""
-    n = (hi - lo) + (hi2 - lo2)
-    cy = 0.0
-    cz = 0.0
-    for r in ((lo, hi), (lo2, hi2)):
-        for i in range(r[0], r[1]):
-            cy += p[i, 0]
-            cz += p[i, 1]
-    cy /= n
-    cz /= n
-    syy = 0.0
-    szz = 0.0
-    syz = 0.0
-    for r in ((lo, hi), (lo2, hi2)):
-        for i in range(r[0], r[1]):
-            dy, dz = p[i, 0] - cy, p[i, 1] - cz
-            syy += dy * dy
-            szz += dz * dz
-            syz += dy * dz
-    theta = 0.5 * math.atan2(2.0 * syz, syy - szz)
-    return LineThrough(cy, cz, math.cos(theta), math.sin(theta))
-
-
-@numba.njit(cache=True, nogil=True)
 def detours(
     p: FloatArray,
     starts: IntArray,
@@ -209,9 +177,9 @@ def detours(
                 lo, hi = max(starts[a], ends[a] - w), ends[a]
                 lo2, hi2 = starts[b], min(ends[b], starts[b] + w)
                 # Both ends run the same way (within 15 deg) and fit one line.
-                _, _, ay, az = _tls(p, lo, hi, lo, lo)
-                _, _, by, bz = _tls(p, lo2, hi2, lo2, lo2)
-                cy, cz, uy, uz = _tls(p, lo, hi, lo2, hi2)
+                _, _, ay, az = fit_spans(p, lo, hi, lo, lo)
+                _, _, by, bz = fit_spans(p, lo2, hi2, lo2, lo2)
+                cy, cz, uy, uz = fit_spans(p, lo, hi, lo2, hi2)
                 same = min(abs(ay * by + az * bz), abs(ay * uy + az * uz), abs(by * uy + bz * uz))
                 worst = 0.0 if same >= _COS_15 else np.inf
                 for r in ((lo, hi), (lo2, hi2)):
@@ -523,9 +491,10 @@ def front_end(
     sigma_factor: float = 5.0,
     min_points: int = 8,
     max_detour_mm: float = 3.0,
-) -> FrontEnd | str:
+) -> FrontEnd | Refusal:
     """Kept points, noise, tolerance, runs between jumps and detours of a profile, or why
-    there are none (a ``str``); the parameters as for :func:`segment_profile`.
+    there are none (a :class:`~seamtrack.features.refusal.Refusal`); the parameters as for
+    :func:`segment_profile`.
 
     One compiled pass (:func:`front`): the valid bounded points,
     their spacing (:func:`_spacing`; medians by :func:`seamtrack.features.select.kth_nonneg`)
@@ -537,7 +506,7 @@ def front_end(
     pts = np.ascontiguousarray(profile.points_laser, dtype=np.float64).reshape(-1, 2)
     valid = np.ascontiguousarray(profile.valid, dtype=np.bool_).reshape(-1)
     if valid.shape != (len(pts),):
-        return "too few valid points (0)"
+        return Refusal("too few valid points (0)")
     fr = front(
         pts,
         valid,
@@ -551,9 +520,9 @@ def front_end(
         TOL_RESOLUTIONS,
     )
     if fr.code == TOO_FEW_POINTS:
-        return f"too few valid points ({len(fr.points)})"
+        return Refusal(f"too few valid points ({len(fr.points)})")
     if fr.code == CONSTANT:
-        return "the valid points do not spread out (constant profile)"
+        return Refusal("the valid points do not spread out (constant profile)")
     s = fr.scalars
     return FrontEnd(
         *(fr.points, fr.columns, fr.spikes, fr.runs, fr.stray),
@@ -582,7 +551,7 @@ def reject(
         min_points=min_points,
         max_detour_mm=max_detour_mm,
     )
-    if not isinstance(fe, str):
+    if not isinstance(fe, Refusal):
         reason[fe.spike_columns] = Reason.SPIKE
         reason[fe.columns[fe.stray]] = Reason.REFLECTION
     points = profile.points_laser.copy()

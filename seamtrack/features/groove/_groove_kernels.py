@@ -1,5 +1,5 @@
-"""The groove extractor's inner loops, compiled (:mod:`seamtrack.features.groove`): the fill
-surface's local and robust line fits and its running median. The same arithmetic as the numpy
+"""The groove extractor's inner loops, compiled (:mod:`seamtrack.features.groove.extractor`): the
+fill surface's local and robust line fits and its running median. The same arithmetic as the numpy
 they replace, without numpy's per-call overhead on a few dozen points (the extractor runs on
 every frame of every pass of a multi-pass job); the least-squares lines are solved in closed
 form (centred sums) where numpy's ``lstsq`` used an SVD: the same line to a few ulps.

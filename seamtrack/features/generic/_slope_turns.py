@@ -1,5 +1,5 @@
 """Slopes and turns of a profile, compiled: the inner loops of the generic (slope/curvature)
-extractor (:mod:`seamtrack.features.generic`).
+extractor (:mod:`seamtrack.features.generic.extractor`).
 
 The generic extractor is the fastest built-in: its work is a handful of passes over the profile
 (valid points, spacing, noise, a running median, window sums, turning angles), which numpy does
@@ -20,7 +20,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features._segmentation import fit_range
+from seamtrack.features.line_geometry import Point, fit_range, principal_angle
 
 FloatArray = NDArray[np.float64]
 
@@ -51,15 +51,6 @@ class Turns(NamedTuple):
 
     gaps: FloatArray
     turn: FloatArray
-
-
-class Corner(NamedTuple):
-    """A corner (:func:`corner_point`): ``too_near_end`` (a side has fewer than 3 points;
-    then no point), else the point (``y``, ``z``)."""
-
-    too_near_end: bool
-    y: float
-    z: float
 
 
 @numba.njit(cache=True, nogil=True)
@@ -156,7 +147,7 @@ def window_turns(p: FloatArray, k: int, jump_mm: float) -> Turns:
         cyy = sum_yy[i + k] - sum_yy[i] - sy * sy / k
         czz = sum_zz[i + k] - sum_zz[i] - sz * sz / k
         cyz = sum_yz[i + k] - sum_yz[i] - sy * sz / k
-        t = 0.5 * math.atan2(2.0 * cyz, cyy - czz)
+        t = principal_angle(cyy, czz, cyz)
         chord_y = p[i + k - 1, 0] - p[i, 0]
         chord_z = p[i + k - 1, 1] - p[i, 1]
         if math.cos(t) * chord_y + math.sin(t) * chord_z < 0.0:
@@ -173,16 +164,16 @@ def window_turns(p: FloatArray, k: int, jump_mm: float) -> Turns:
 
 
 @numba.njit(cache=True, nogil=True)
-def corner_point(p: FloatArray, c: int, k: int) -> Corner:
+def corner_point(p: FloatArray, c: int, k: int) -> Point:
     """The corner at point c: the crossing of the lines fitted 2k points to each side (a guard
-    of k/2 points left out), or point c itself when the crossing is implausibly far; too
-    near an end when a side has fewer than 3 points."""
+    of k/2 points left out), or point c itself when the crossing is implausibly far; NaN
+    (too near an end) when a side has fewer than 3 points."""
     m = p.shape[0]
     guard = max(1, k // 2)
     llo, lhi = max(0, c - guard - 2 * k), max(1, c - guard)
     rlo, rhi = c + guard, min(c + guard + 2 * k, m)
     if lhi - llo < 3 or rhi - rlo < 3:
-        return Corner(True, 0.0, 0.0)
+        return Point(math.nan, math.nan)
     ay, az, ady, adz = fit_range(p, llo, lhi)
     by, bz, bdy, bdz = fit_range(p, rlo, rhi)
     # Spacing along the left line over its last ten points, as Line.step(True).
@@ -196,5 +187,5 @@ def corner_point(p: FloatArray, c: int, k: int) -> Corner:
         s = (wy * bdz - wz * bdy) / d
         y, z = ay + s * ady, az + s * adz
         if math.hypot(y - p[c, 0], z - p[c, 1]) <= 2 * k * (step + 1e-9) + 1.0:
-            return Corner(False, y, z)
-    return Corner(False, p[c, 0], p[c, 1])
+            return Point(y, z)
+    return Point(p[c, 0], p[c, 1])

@@ -1,5 +1,5 @@
 """Where the fill surface rises into a wall, and raised parts that are no block (the groove
-extractor's, :mod:`seamtrack.features.groove`).
+extractor's, :mod:`seamtrack.features.groove.extractor`).
 
 * :func:`risen_level`: the level of a fill surface that rises into the wall (a U groove's
   round, bare or partly filled; a bead's toe on the round, a notch): the wall's foot is that
@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features._groove_fit import _median, _robust_uv_line, _running_median
+from seamtrack.features.groove._groove_fit import _median, _robust_uv_line, _running_median
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]

@@ -1,6 +1,6 @@
-"""The V-groove's root, compiled (:class:`seamtrack.features.vgroove.VGrooveExtractor`): what
-lies between and beyond the bevels' lower ends, on the line table of the V search
-(:class:`seamtrack.features._v_search.LineTable`: the profile's pieces, their groups, the
+"""The V-groove's root, compiled (:class:`seamtrack.features.vgroove.extractor.VGrooveExtractor`):
+what lies between and beyond the bevels' lower ends, on the line table of the V search
+(:class:`seamtrack.features.vgroove._v_search.LineTable`: the profile's pieces, their groups, the
 arms). The bevels are a :class:`Bevels` (two records and the apex), their lower ends a
 :class:`RootEnds`.
 
@@ -19,7 +19,10 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from seamtrack.features._v_search import (
+from seamtrack.features.line_geometry import Point
+from seamtrack.features.lines import _WALL_DEG
+from seamtrack.features.select import sort_small
+from seamtrack.features.vgroove._v_search import (
     COUNT,
     CY,
     CZ,
@@ -27,7 +30,6 @@ from seamtrack.features._v_search import (
     START,
     UY,
     UZ,
-    Point,
     contains,
     dot_dir,
     end,
@@ -39,8 +41,6 @@ from seamtrack.features._v_search import (
     step,
     t_end,
 )
-from seamtrack.features.lines import _WALL_DEG
-from seamtrack.features.select import sort_small
 
 #: A piece steeper than this on the plates is a wall (a root face).
 COS_WALL = math.cos(math.radians(_WALL_DEG))
@@ -96,7 +96,7 @@ def plate_depth(tb, plate, qy, qz):
 
 @numba.njit(cache=True, nogil=True)
 def _off(tb, r, qy, qz):
-    """``abs(_towards_sensor(r, q))``: distance of (qy, qz) from record ``r``'s line."""
+    """Distance of (qy, qz) from record ``r``'s line."""
     g = tb.geo
     return abs((qy - g[r, CY]) * -g[r, UZ] + (qz - g[r, CZ]) * g[r, UY])
 
@@ -122,7 +122,7 @@ def continued(points, tb, n, arm, at_end, ay, az, ey, ez, tol):
     """Where bevel ``arm`` ends when pieces beyond its last (``at_end``, else first) inlier,
     towards the apex (ay, az), lie on its line (within 15 deg and two tolerances: the bevel
     goes on past spikes or a dropout): the farthest such point; else (ey, ez)
-    (:class:`~seamtrack.features._v_search.Point`)."""
+    (:class:`~seamtrack.features.vgroove._v_search.Point`)."""
     t_apex = _along(tb, arm, ay, az)
     t_stop = t_end(tb, arm, at_end)
     best = t_stop
@@ -232,7 +232,7 @@ def covered_end(points, tb, n, line, at_end, other, plate, tol, spacing, sigma):
 @numba.njit(cache=True, nogil=True)
 def at_depth(tb, line, plate, depth, s0, s1):
     """The point of ``line`` at ``depth`` behind ``plate``, kept within the stretch s0..s1
-    (coordinates along the line; a :class:`~seamtrack.features._v_search.Point`)."""
+    (coordinates along the line; a :class:`~seamtrack.features.vgroove._v_search.Point`)."""
     g = tb.geo
     ny, nz = -g[plate, UZ], g[plate, UY]
     if not g[plate, CY] * ny + g[plate, CZ] * nz > 0:

@@ -13,7 +13,10 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features._v_groove_model import (
+from seamtrack.features.base import _Base
+from seamtrack.features.expect import Expect
+from seamtrack.features.lines import Segments
+from seamtrack.features.vgroove._v_groove_model import (
     GROOVE,
     NO_PLATE,
     NO_V,
@@ -23,14 +26,11 @@ from seamtrack.features._v_groove_model import (
     VGrooveResult,
     v_groove,
 )
-from seamtrack.features._v_search import pieces_of
-from seamtrack.features.base import _Base
-from seamtrack.features.expect import Expect
-from seamtrack.features.lines import Segments
+from seamtrack.features.vgroove._v_search import pieces_of
 from seamtrack.sensing.profiles import Feature, Profile, SeamHint
 
 FloatArray = NDArray[np.float64]
-#: Why a V is no groove, by the code of :func:`seamtrack.features._v_groove_model.v_groove`.
+#: Why a V is no groove, by the code of :func:`seamtrack.features.vgroove._v_groove_model.v_groove`.
 _REFUSALS = {
     NO_V: "no pair of lines forms the joint",
     NO_PLATE: "not a v-groove: no plate beside the bevels (two faces alone: a fillet?)",
@@ -139,10 +139,11 @@ class VGrooveExtractor(_Base):
     ``min_explained`` of the profile on the model's lines) or when ``expect`` says the
     included angle, the depth below the plates or the gap is implausible.
 
-    The model runs compiled, in one call (:func:`seamtrack.features._v_groove_model.v_groove`):
-    the Python formulation spent ten times the arithmetic's cost on numpy calls on 2-vectors.
-    Its steps: segment the profile (``_Base.segments``), run the groove's model on the pieces,
-    refuse what it refuses or what ``expect`` finds implausible, else the seam point.
+    The model runs compiled, in one call
+    (:func:`seamtrack.features.vgroove._v_groove_model.v_groove`): the Python formulation spent ten
+    times the arithmetic's cost on numpy calls on 2-vectors. Its steps: segment the profile
+    (``_Base.segments``), run the groove's model on the pieces, refuse what it refuses or what
+    ``expect`` finds implausible, else the seam point.
     """
 
     name: str = "v-groove"

@@ -1,5 +1,5 @@
 """The two-plate search, compiled: the plates of a profile and the pair of runs the two-plate
-extractors (:mod:`seamtrack.features.plates`) read.
+extractors (:mod:`seamtrack.features.plates.extractor`) read.
 
 :func:`two_plates` finds the plates (plate lines, runs, the square butt's test for an open
 gap between pieces of one plate line), their neighbours and the extractors' choice of the
@@ -8,7 +8,7 @@ as Python on ``Line`` objects it was some hundreds of small operations per profi
 extractor's time once the segmentation is compiled. The plate lines' groups are
 :func:`seamtrack.features.lines.collinear_members`' and the runs' refits
 :func:`seamtrack.features._segmentation.fit_line`'s, computed the same way; what lies between two
-runs is :func:`seamtrack.features._between_plates.hole`'s.
+runs is :func:`seamtrack.features.plates._between_plates.hole`'s.
 """
 
 from __future__ import annotations
@@ -20,14 +20,12 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features._between_plates import NO_HOLE, Hole, Scale, hole
-from seamtrack.features._plate_lines import PlateLimits, plate_pieces, span
-from seamtrack.features._segmentation import fit_line
-from seamtrack.features._two_lines import (
-    Line,
+from seamtrack.features.line_geometry import LineThrough, Point, fit_line
+from seamtrack.features.plates._between_plates import NO_HOLE, Hole, Scale, hole
+from seamtrack.features.plates._plate_lines import PlateLimits, plate_pieces, span
+from seamtrack.features.plates._two_lines import (
     PieceLines,
     PieceSpans,
-    Point,
     RunEnd,
     line_end,
     piece_line,
@@ -38,7 +36,7 @@ from seamtrack.features._two_lines import (
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
-#: :class:`PlateLimits` and :class:`~seamtrack.features._between_plates.Scale` as plain
+#: :class:`PlateLimits` and :class:`~seamtrack.features.plates._between_plates.Scale` as plain
 #: tuples (what :func:`two_plates` takes from Python).
 PlainLimits = tuple[int, float, float, float, bool, float, float, float, float]
 PlainScale = tuple[float, float, float]
@@ -64,7 +62,7 @@ class RunLine(NamedTuple):
     the line, its rms (FIT only, else 0), its inliers and their coordinates along it."""
 
     kind: int
-    line: Line
+    line: LineThrough
     rms: float
     inliers: IntArray
     t: FloatArray
@@ -80,7 +78,7 @@ class Run(NamedTuple):
     first_piece: int
     anchor: int
     n_inliers: int
-    line: Line
+    line: LineThrough
     rms: float
     end: Point
 
@@ -88,7 +86,7 @@ class Run(NamedTuple):
 class PlatePair(NamedTuple):
     """The pair of runs a two-plate extractor reads (``found``: a pair qualifies), ``left``
     before ``right`` in column order; whether what lies between them is an open gap (square
-    butt only), what lies between them (:class:`~seamtrack.features._between_plates.Hole`),
+    butt only), what lies between them (:class:`~seamtrack.features.plates._between_plates.Hole`),
     the step from ``left`` down to ``right`` (lap only; > 0: ``right`` is deeper), and the
     share of the surface points the two-plate model explains (each plate running on to the
     profile's end, what lies between them left out;
@@ -103,12 +101,12 @@ class PlatePair(NamedTuple):
     share: float
 
 
-_NO_RUN = Run(-1, -1, -1, 0, Line(0.0, 0.0, 0.0, 0.0), 0.0, Point(0.0, 0.0))
+_NO_RUN = Run(-1, -1, -1, 0, LineThrough(0.0, 0.0, 0.0, 0.0), 0.0, Point(0.0, 0.0))
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _along(points: FloatArray, idx: IntArray, line: Line) -> FloatArray:
-    """Coordinates of ``points[idx]`` along a line (:func:`seamtrack.features.lines._on`)."""
+def _along(points: FloatArray, idx: IntArray, line: LineThrough) -> FloatArray:
+    """Coordinates of ``points[idx]`` along a line."""
     cy, cz, dy, dz = line
     t = np.empty(idx.shape[0])
     for i in range(idx.shape[0]):
@@ -147,7 +145,7 @@ def _run_line(
             c += 1
     if span(pieces.lines, t_first, t_last, anchor, members) >= min_plate_mm:
         cy, cz, dy, dz, rms, t = fit_line(points, idx)
-        return RunLine(FIT, Line(cy, cz, dy, dz), rms, idx, t)
+        return RunLine(FIT, LineThrough(cy, cz, dy, dz), rms, idx, t)
     on = piece_line(pieces.lines, anchor)
     return RunLine(ON, on, 0.0, idx, _along(points, idx, on))
 
@@ -408,7 +406,7 @@ def two_plates(
     (:attr:`seamtrack.features.lines.Segments.table`: ``index``, ``along``, ``fits`` a row
     per piece (centroid y, z, direction y, z, rms, first and last coordinate), ``bounds``),
     ``limits`` and ``scale`` as plain tuples of :class:`PlateLimits`' and
-    :class:`~seamtrack.features._between_plates.Scale`'s fields (numba types a named tuple
+    :class:`~seamtrack.features.plates._between_plates.Scale`'s fields (numba types a named tuple
     argument in Python on every call, some microseconds; plain ones and arrays at once), the
     result flattened (:class:`PairReading`)."""
     n = bounds.shape[0] - 1

@@ -2,7 +2,7 @@
 collinear groups (:func:`groups_of`), the best pair of lines forming a V or a ridge
 (:func:`best_pair`), and the corners where lines meet (:func:`corner_with`); :func:`search`
 runs the search's steps in order, for the corner extractors (``_Base._arms``) and the V-groove
-model (:mod:`seamtrack.features._v_groove_model`).
+model (:mod:`seamtrack.features.vgroove._v_groove_model`).
 
 The family extractors' Python formulation made a handful of numpy calls on 2-vectors per line
 and per pair, where each call costs more than the arithmetic; here the same tests run on
@@ -33,9 +33,16 @@ from seamtrack.features._segmentation import (
     FIT_UY,
     FIT_UZ,
     PieceTable,
-    fit_line,
 )
 from seamtrack.features.counts import explained_share, support
+from seamtrack.features.line_geometry import (
+    CORNER_MIN_RAD,
+    LineThrough,
+    Point,
+    corner_crossing,
+    end_distance,
+    fit_line,
+)
 from seamtrack.features.select import sort_small
 
 FloatArray = NDArray[np.float64]
@@ -44,8 +51,8 @@ IntArray = NDArray[np.int64]
 RAD_TO_DEG = 180.0 / math.pi
 #: Pieces within this angle join a collinear group (deg; see ``collinear_members``).
 COS_GROUP = math.cos(math.radians(30.0))
-#: Lines within this angle meet in no corner (deg; see ``corner_with``).
-COS_CORNER = math.cos(math.radians(20.0))
+#: Lines within this angle meet in no corner (see ``corner_with``).
+COS_CORNER = math.cos(CORNER_MIN_RAD)
 #: A record that is no line.
 NONE = -1
 #: The columns of :attr:`LineTable.geo`.
@@ -69,13 +76,6 @@ class LineTable(NamedTuple):
     index: IntArray  # type: ignore[assignment]  # a field, over tuple.index
     along: FloatArray
     used: IntArray
-
-
-class Point(NamedTuple):
-    """A point of the laser plane (y, z; mm)."""
-
-    y: float
-    z: float
 
 
 class Corner(NamedTuple):
@@ -190,11 +190,11 @@ def owners(owner, tb, n):
 @numba.njit(cache=True, nogil=True)
 def add_fit(points, tb, sel):
     """A new record: the total-least-squares line through ``points[sel]`` (as
-    :func:`~seamtrack.features.lines._fit`)."""
+    :func:`~seamtrack.features.line_geometry.fit_line`)."""
     geo, span, index, along, used = tb
     r, a, n = used[0], used[1], sel.shape[0]
     f = fit_line(points, sel)
-    geo[r, CY], geo[r, CZ], geo[r, UY], geo[r, UZ], geo[r, RMS] = f.cy, f.cz, f.uy, f.uz, f.rms
+    geo[r, CY], geo[r, CZ], geo[r, UY], geo[r, UZ], geo[r, RMS] = f.cy, f.cz, f.dy, f.dz, f.rms
     span[r, START], span[r, COUNT] = a, n
     for k in range(n):
         index[a + k] = sel[k]
@@ -508,35 +508,28 @@ def best_pair(points, surface, owner, tb, groups, n, tol, params):
 
 @numba.njit(cache=True, nogil=True)
 def corner_with(tb, line, at_end, others, spacing, tol):
-    """As :func:`~seamtrack.features.lines.corner_with`: where record ``line`` ends and the
-    record of ``others`` it meets
-    there (:class:`Corner`; :data:`NONE`: none, the end half a spacing beyond the last
-    inlier)."""
+    """Where record ``line`` ends and the record of ``others`` it meets there
+    (:class:`Corner`): its crossing with a line that meets it at that end (a visible corner,
+    exact; :func:`~seamtrack.features.line_geometry.corner_crossing`), else (:data:`NONE`)
+    half a spacing beyond its last inlier (the edge lies between rays)."""
     geo = tb.geo
     cy, cz, dy, dz = geo[line, CY], geo[line, CZ], geo[line, UY], geo[line, UZ]
     t_tip = t_end(tb, line, at_end)
     tip_y, tip_z = cy + t_tip * dy, cz + t_tip * dz
     reach = 3.0 * pmax(step(tb, line, at_end), spacing) + tol
     best, best_d, best_y, best_z = NONE, np.inf, 0.0, 0.0
+    here = LineThrough(cy, cz, dy, dz)
     for other in others:
         if other == line:
             continue
-        ocy, ocz, ody, odz = geo[other, CY], geo[other, CZ], geo[other, UY], geo[other, UZ]
-        if abs(dy * ody + dz * odz) > COS_CORNER:
-            continue  # within 20 deg: no corner
-        det = dy * odz - dz * ody
-        if abs(det) < 1e-9:
+        there = LineThrough(geo[other, CY], geo[other, CZ], geo[other, UY], geo[other, UZ])
+        hit, xy, xz = corner_crossing(here, there, COS_CORNER)
+        if not hit:
             continue
-        s = ((ocy - cy) * odz - (ocz - cz) * ody) / det
-        xy, xz = cy + s * dy, cz + s * dz
         d = math.hypot(xy - tip_y, xz - tip_z)
         if d > reach or d >= best_d:
             continue
-        o_first, o_last = t_end(tb, other, False), t_end(tb, other, True)
-        near = pmin(
-            math.hypot(ocy + o_first * ody - xy, ocz + o_first * odz - xz),
-            math.hypot(ocy + o_last * ody - xy, ocz + o_last * odz - xz),
-        )
+        near = end_distance(there, t_end(tb, other, False), t_end(tb, other, True), xy, xz)
         wide = pmax(pmax(step(tb, other, True), step(tb, other, False)), spacing)
         if near <= 3.0 * wide + tol:
             best, best_d, best_y, best_z = other, d, xy, xz

@@ -1,4 +1,4 @@
-"""Fits the groove extractor's corners rest on (:mod:`seamtrack.features.groove`).
+"""Fits the groove extractor's corners rest on (:mod:`seamtrack.features.groove.extractor`).
 
 * :func:`trim_wall`: a wall's line refitted on the points that lie on it (a root radius's
   round at the wall's foot, and the odd spike, left out);
@@ -21,10 +21,10 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features import _groove_kernels as kern
-from seamtrack.features._groove_kernels import local_v, robust_uv_line
-from seamtrack.features._segmentation import fit_line
-from seamtrack.features.lines import Line, Segments
+from seamtrack.features.groove import _groove_kernels as kern
+from seamtrack.features.groove._groove_kernels import local_v, robust_uv_line
+from seamtrack.features.line_geometry import Line, fit_line
+from seamtrack.features.lines import Segments
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
@@ -53,10 +53,9 @@ def trim_wall(points: FloatArray, line: Line, tol: float, rounds: int = 3) -> Li
         if len(new) < max(3, len(index) // 2) or np.array_equal(new, keep):
             break
         keep = new
-        f = fit_line(points, np.asarray(keep, dtype=np.int64))
-        cur = Line(keep, np.array([f.cy, f.cz]), np.array([f.uy, f.uz]), f.along, f.rms)
+        cur = Line.from_fit(keep, fit_line(points, np.asarray(keep, dtype=np.int64)))
     if cur.direction[0] * line.direction[0] + cur.direction[1] * line.direction[1] < 0:
-        cur = Line(cur.index, cur.centroid, -cur.direction, -cur.t, cur.rms)
+        cur = cur.flipped()
     return cur
 
 
@@ -323,7 +322,7 @@ def _robust_uv_line(qu: FloatArray, qv: FloatArray, tol: float) -> tuple[float, 
     """v = a + b u through the most points within two tolerances, of the lines through pairs
     of (at most 40, evenly picked) points at least a third of the stretch apart; refitted on
     those points. Spike runs less than half the points do not move it (compiled:
-    :func:`seamtrack.features._groove_kernels.robust_uv_line`)."""
+    :func:`seamtrack.features.groove._groove_kernels.robust_uv_line`)."""
     n = len(qu)
     if n < 3:
         return None
@@ -379,10 +378,9 @@ def _stretched(seg: Segments, plate: Line, stop: int, step: int) -> Line:
     if not add:
         return plate
     index = np.sort(np.concatenate([plate.index, np.asarray(add, dtype=np.intp)]))
-    f = fit_line(P, np.asarray(index, dtype=np.int64))
-    line = Line(index, np.array([f.cy, f.cz]), np.array([f.uy, f.uz]), f.along, f.rms)
+    line = Line.from_fit(index, fit_line(P, np.asarray(index, dtype=np.int64)))
     if line.direction[0] < 0:
-        line = Line(line.index, line.centroid, -line.direction, -line.t, line.rms)
+        line = line.flipped()
     return line
 
 
@@ -429,7 +427,7 @@ def explained_share(
 def _local_v(qu: FloatArray, qv: FloatArray, ut: float, h: float, tol: float) -> float | None:
     """v of the surface at u = ut: a robust line fit of the points within h of it (None: fewer
     than 3 there, or none on one side; compiled:
-    :func:`seamtrack.features._groove_kernels.local_v`)."""
+    :func:`seamtrack.features.groove._groove_kernels.local_v`)."""
     val = local_v(_c(qu), _c(qv), float(ut), float(h), float(tol))
     return None if math.isnan(val) else float(val)
 

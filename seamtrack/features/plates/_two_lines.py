@@ -2,7 +2,8 @@
 tables the two-plate kernels pass, where a line ends, and the share of a profile two lines
 explain.
 
-Lines are passed as :class:`Line` (centroid and unit direction, as floats); the profile's
+Lines are passed as :class:`~seamtrack.features.line_geometry.LineThrough` (centroid and unit
+direction, as floats); the profile's
 pieces as :class:`PieceLines`, one array per field (piece ``j``'s line is ``pieces.cy[j]``,
 ...). The arithmetic is that of the numpy formulation of :mod:`seamtrack.features.lines` and
 :mod:`seamtrack.features.base` (the same formulas, medians as numpy takes them), so results
@@ -19,25 +20,16 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.features.counts import explained_share
+from seamtrack.features.line_geometry import (
+    CORNER_MIN_RAD,
+    LineThrough,
+    Point,
+    corner_crossing,
+    end_distance,
+)
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
-
-
-class Point(NamedTuple):
-    """A point in the laser plane (mm)."""
-
-    y: float
-    z: float
-
-
-class Line(NamedTuple):
-    """A line: its centroid (``cy``, ``cz``) and unit direction (``dy``, ``dz``)."""
-
-    cy: float
-    cz: float
-    dy: float
-    dz: float
 
 
 class PieceLines(NamedTuple):
@@ -52,7 +44,7 @@ class PieceLines(NamedTuple):
 class PieceSpans(NamedTuple):
     """Where each piece's inliers lie along its line: their number (``n_inliers``), the
     first's and the last's coordinates, and the mean spacing of the first and of the last
-    ten (:meth:`~seamtrack.features.lines.Line.step`)."""
+    ten (:meth:`~seamtrack.features.line_geometry.Line.step`)."""
 
     n_inliers: IntArray
     t_first: FloatArray
@@ -72,19 +64,19 @@ class RunEnd(NamedTuple):
     """A run at one of its ends: its line, the end inlier's coordinate along it and the
     step there."""
 
-    line: Line
+    line: LineThrough
     t: float
     step: float
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def piece_line(pieces: PieceLines, j: int) -> Line:
+def piece_line(pieces: PieceLines, j: int) -> LineThrough:
     """Piece ``j``'s line."""
-    return Line(pieces.cy[j], pieces.cz[j], pieces.dy[j], pieces.dz[j])
+    return LineThrough(pieces.cy[j], pieces.cz[j], pieces.dy[j], pieces.dz[j])
 
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def towards(line: Line, y: float, z: float) -> float:
+def towards(line: LineThrough, y: float, z: float) -> float:
     """Signed distance of (y, z) from ``line``, positive on the sensor's side (the origin)."""
     h = (y - line.cy) * -line.dz + (z - line.cz) * line.dy
     return h if line.cy * -line.dz + line.cz * line.dy < 0 else -h
@@ -142,7 +134,7 @@ def kept(keep: NDArray[np.bool_]) -> IntArray:
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def steps(t: FloatArray) -> Steps:
     """Mean spacing of the first and of the last ten coordinates
-    (:meth:`~seamtrack.features.lines.Line.step`)."""
+    (:meth:`~seamtrack.features.line_geometry.Line.step`)."""
     n = t.shape[0]
     k = min(10, n - 1)
     if k < 1:
@@ -152,7 +144,7 @@ def steps(t: FloatArray) -> Steps:
 
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def line_end(
-    line: Line,
+    line: LineThrough,
     end: RunEnd,
     at_end: bool,
     skip: int,
@@ -163,34 +155,27 @@ def line_end(
     tol: float,
 ) -> Point:
     """Where a run's ``line`` ends at ``end`` (its last inlier when ``at_end``, else its
-    first): :func:`seamtrack.features.lines.corner_or_end` with the pieces of
-    ``min_points`` as the others, ``skip`` the run's own piece or -1. Its crossing with a
+    first): the corner search of :func:`seamtrack.features.vgroove._v_search.corner_with` with the
+    pieces of ``min_points`` as the others, ``skip`` the run's own piece or -1. Its crossing with a
     piece meeting it there (a visible corner), else half a step beyond the end inlier."""
     cy, cz, dy, dz = line
     tip_y, tip_z = cy + end.t * dy, cz + end.t * dz
     reach = 3.0 * (spacing if spacing > end.step else end.step) + tol
-    cos_min = math.cos(math.radians(20))
+    cos_min = math.cos(CORNER_MIN_RAD)
     found = False
     best_y = best_z = 0.0
     best_d = math.inf
     for j in range(pieces.cy.shape[0]):
         if spans.n_inliers[j] < min_points or j == skip:
             continue
-        ocy, ocz, ody, odz = piece_line(pieces, j)
-        if abs(dy * ody + dz * odz) > cos_min:
-            continue  # within 20 deg: no corner
-        det = dy * odz - dz * ody
-        if abs(det) < 1e-9:
+        other = piece_line(pieces, j)
+        hit, xy, xz = corner_crossing(line, other, cos_min)
+        if not hit:
             continue
-        s = ((ocy - cy) * odz - (ocz - cz) * ody) / det
-        xy, xz = cy + s * dy, cz + s * dz
         d = math.hypot(xy - tip_y, xz - tip_z)
         if d > reach or d >= best_d:
             continue
-        t_first, t_last = spans.t_first[j], spans.t_last[j]
-        near = math.hypot(ocy + t_first * ody - xy, ocz + t_first * odz - xz)
-        far = math.hypot(ocy + t_last * ody - xy, ocz + t_last * odz - xz)
-        near = far if far < near else near
+        near = end_distance(other, spans.t_first[j], spans.t_last[j], xy, xz)
         wide = spans.step_last[j]
         wide = spans.step_first[j] if spans.step_first[j] > wide else wide
         wide = spacing if spacing > wide else wide
@@ -208,18 +193,18 @@ def two_lines_share(
     stray: NDArray[np.bool_],
     lo: int,
     hi: int,
-    a: Line | tuple[float, float, float, float],
-    b: Line | tuple[float, float, float, float],
+    a: LineThrough | tuple[float, float, float, float],
+    b: LineThrough | tuple[float, float, float, float],
     band: float,
 ) -> float:
     """Share of the surface points (``stray`` left out when it flags each point) within
     ``band`` of their line when line ``a`` runs from the profile's start to kept point
     ``lo`` and line ``b`` from ``hi`` to its end, what lies between them left out:
     :func:`seamtrack.features.base.explained` of a two-plate or two-face model
-    (:func:`seamtrack.features.counts.explained_share`). The lines: :class:`Line` or, from
+    (:func:`seamtrack.features.counts.explained_share`). The lines: :class:`LineThrough` or, from
     Python, plain tuples of its fields (numba types a named tuple argument in Python on every
     call, some microseconds; a plain one at once)."""
-    a, b = Line(*a), Line(*b)
+    a, b = LineThrough(*a), LineThrough(*b)
     m = points.shape[0]
     zones = np.empty((3, 3), dtype=np.int64)
     zones[0, 0], zones[0, 1], zones[0, 2] = 0, lo, 1

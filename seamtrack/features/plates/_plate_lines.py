@@ -1,11 +1,11 @@
 """The pieces of a profile that lie on plates, compiled (:func:`plate_pieces`): the first step
-of the two-plate search (:mod:`seamtrack.features._two_plate_search`).
+of the two-plate search (:mod:`seamtrack.features.plates._two_plate_search`).
 
 Flat pieces are grouped by the line they lie on as
 :func:`seamtrack.features.lines.collinear_members` groups them (best supported first, each
 joining the earliest group whose anchor holds both its ends); a line spanning
 ``min_plate_mm`` is a plate line. The pieces are passed as
-:class:`~seamtrack.features._two_lines.PieceLines` and per-piece arrays.
+:class:`~seamtrack.features.plates._two_lines.PieceLines` and per-piece arrays.
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features._two_lines import PieceLines, median, piece_line
+from seamtrack.features.plates._two_lines import PieceLines, median, piece_line
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]

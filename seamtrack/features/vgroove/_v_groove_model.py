@@ -1,8 +1,8 @@
-"""The V-groove extractor's model, compiled: the V (:mod:`seamtrack.features._v_search`), its
-root ends and top edges, the plates beside the bevels, what lies between the root ends
-(:mod:`seamtrack.features._v_root`), the seam point, its confidence and the share of the profile
-the model explains, in one call (:func:`v_groove`, for
-:meth:`seamtrack.features.vgroove.VGrooveExtractor._extract`).
+"""The V-groove extractor's model, compiled: the V (:mod:`seamtrack.features.vgroove._v_search`),
+its root ends and top edges, the plates beside the bevels, what lies between the root ends
+(:mod:`seamtrack.features.vgroove._v_root`), the seam point, its confidence and the share of the
+profile the model explains, in one call (:func:`v_groove`, for
+:meth:`seamtrack.features.vgroove.extractor.VGrooveExtractor._extract`).
 
 Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groove).
 """
@@ -15,7 +15,17 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from seamtrack.features._v_root import (
+from seamtrack.features.counts import (
+    LINE_CY,
+    LINE_CZ,
+    LINE_NY,
+    LINE_NZ,
+    ZONE_HI,
+    ZONE_LINES,
+    ZONE_LO,
+    explained_share,
+)
+from seamtrack.features.vgroove._v_root import (
     Bevels,
     RootEnds,
     at_depth,
@@ -25,7 +35,7 @@ from seamtrack.features._v_root import (
     gap_seen,
     plate_depth,
 )
-from seamtrack.features._v_search import (
+from seamtrack.features.vgroove._v_search import (
     COUNT,
     CY,
     CZ,
@@ -43,16 +53,6 @@ from seamtrack.features._v_search import (
     pmin,
     point,
     search,
-)
-from seamtrack.features.counts import (
-    LINE_CY,
-    LINE_CZ,
-    LINE_NY,
-    LINE_NZ,
-    ZONE_HI,
-    ZONE_LINES,
-    ZONE_LO,
-    explained_share,
 )
 
 #: A bevel within this angle of a plate runs along it (deg): a quarter of the flattest V's

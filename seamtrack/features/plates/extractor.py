@@ -19,18 +19,18 @@ from typing import cast
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features._between_plates import Scale
-from seamtrack.features._plate_lines import PlateLimits
-from seamtrack.features._two_lines import Line, Point
-from seamtrack.features._two_plate_search import (
+from seamtrack.features.base import _Base
+from seamtrack.features.line_geometry import LineThrough, Point
+from seamtrack.features.lines import Segments
+from seamtrack.features.plates._between_plates import Scale
+from seamtrack.features.plates._plate_lines import PlateLimits
+from seamtrack.features.plates._two_plate_search import (
     FIT,
     PIECE,
     PlainLimits,
     PlainScale,
     two_plates,
 )
-from seamtrack.features.base import _Base
-from seamtrack.features.lines import Segments
 from seamtrack.sensing.profiles import Feature, Profile
 
 FloatArray = NDArray[np.float64]
@@ -40,7 +40,7 @@ IntArray = NDArray[np.int64]
 @dataclass(frozen=True)
 class _Hole:
     """What lies between two consecutive plate runs
-    (:func:`seamtrack.features._between_plates.hole`).
+    (:func:`seamtrack.features.plates._between_plates.hole`).
 
     ``open_mm``: how much of the stretch between their ends (along the left run's line)
     nothing covers: columns with no point (the laser fell through a gap or into a shadow), a
@@ -64,8 +64,8 @@ class _Pair:
     of a two-plate joint explains (each plate running on to the profile's end; what lies
     between them left out)."""
 
-    a: Line
-    b: Line
+    a: LineThrough
+    b: LineThrough
     end_a: Point
     start_b: Point
     hole: _Hole
@@ -110,7 +110,7 @@ def _pair(
     min_opening: float = 0.0,
 ) -> _Pair | None:
     """The plates of a profile and the pair of consecutive runs the extractor reads (None:
-    no pair qualifies): :func:`seamtrack.features._two_plate_search.two_plates` on the
+    no pair qualifies): :func:`seamtrack.features.plates._two_plate_search.two_plates` on the
     pieces as a table of arrays.
 
     Flat pieces (within ``max_tilt_deg`` of the y axis) that lie on one line form a plate
@@ -157,8 +157,8 @@ def _pair(
     fit = max(0.0, 1.0 - max(rms_left, rms_right) / seg.tol)
     conf = min(max(float(0.5 * explained + 0.5 * fit), 0.0), 1.0)  # NaN stays NaN
     return _Pair(
-        Line(r.left_cy, r.left_cz, r.left_dy, r.left_dz),
-        Line(r.right_cy, r.right_cz, r.right_dy, r.right_dz),
+        LineThrough(r.left_cy, r.left_cz, r.left_dy, r.left_dz),
+        LineThrough(r.right_cy, r.right_cz, r.right_dy, r.right_dz),
         Point(r.left_end_y, r.left_end_z),
         Point(r.right_end_y, r.right_end_z),
         hole,
@@ -169,7 +169,7 @@ def _pair(
     )
 
 
-def _foot(point: Point, line: Line) -> Point:
+def _foot(point: Point, line: LineThrough) -> Point:
     """``point`` projected normally onto ``line``."""
     py, pz = point
     cy, cz, dy, dz = line
@@ -177,7 +177,7 @@ def _foot(point: Point, line: Line) -> Point:
     return Point(py - h * -dz, pz - h * dy)
 
 
-def _ray_hit(point: Point, line: Line) -> Point | None:
+def _ray_hit(point: Point, line: LineThrough) -> Point | None:
     """Where the ray from the emitter (the origin) through ``point`` crosses ``line``, or
     None when (nearly) parallel (:func:`seamtrack.features.lines.intersect` of the ray and
     the line)."""

@@ -88,7 +88,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.errors import PluginError
-from seamtrack.features._groove_fit import (  # noqa: F401 (RAY_*: the extractor's names)
+from seamtrack.features.base import _Base
+from seamtrack.features.groove._groove_fit import (  # noqa: F401 (RAY_*: the extractor's names)
     RAY_DEPTH_MM,
     RAY_SPREAD_RAD,
     _along_a_ray,
@@ -110,17 +111,78 @@ from seamtrack.features._groove_fit import (  # noqa: F401 (RAY_*: the extractor
     short_walls,
     trim_wall,
 )
-from seamtrack.features._groove_kernels import running_median
-from seamtrack.features._groove_rise import a_step, risen_level
-from seamtrack.features._segmentation import fit_line
-from seamtrack.features.base import _Base
-from seamtrack.features.lines import Line, Segments, intersect, segment_profile
+from seamtrack.features.groove._groove_kernels import running_median
+from seamtrack.features.groove._groove_rise import a_step, risen_level
+from seamtrack.features.line_geometry import Line, fit_line
+from seamtrack.features.lines import Segments, intersect, segment_profile
+from seamtrack.features.refusal import Refusal
 from seamtrack.sensing.profiles import Feature, Profile
 
 FloatArray = NDArray[np.float64]
 
 IntArray = NDArray[np.intp]
 REFERENCES = ("centre", "left", "right")
+
+# The model's thresholds (the module docstring says where each applies; mm unless named).
+#: A raised part: more than this share of the points between the plates above their ends.
+RAISED_SHARE = 0.2
+#: A cap's height is that of this percentile of its points (spikes do not count).
+CROWN_PERCENTILE = 95
+#: A piece of a raised part this far off the plates (deg) is no level (``a_step``'s mask).
+LEVEL_DEG = 60.0
+#: A piece of a raised part at least this long and this far off the plates (deg) is a step.
+STEP_MIN_MM, STEP_DEG = 1.0, 80.0
+#: Pieces within this angle (deg) run on one line (a plate's, a wall's run of pieces).
+ON_LINE_DEG = 5.0
+#: Points within this many tolerances lie on a line (a plate's pieces, a wall's support, the
+#: fill surface's band off a wall).
+BAND_TOLS = 2.0
+#: A wall piece's shortest extent.
+WALL_MIN_MM = 0.3
+#: Wall pieces whose ends lie within max(this, this many spacings) carry on one wall.
+WALL_JOIN_MM, WALL_JOIN_SPACINGS = 1.0, 5.0
+#: A wall's line passes within max(this, this many tolerances) of the plate's inner end.
+WALL_TOP_MM, WALL_TOP_TOLS = 1.0, 3
+#: A wall piece farther than this below the corner must stand ``WALL_FAR_DEG`` off the plates
+#: and be ``WALL_FAR_MIN_MM`` long; surface this far below a seen wall is surface either side.
+WALL_FAR_MM = 3.0
+WALL_FAR_DEG, WALL_FAR_MIN_MM = 75.0, 1.0
+#: Points deeper than this below the corner, outwards of a wall piece, count against it.
+WALL_BELOW_MM = 1.0
+#: A bare wall's (no piece covers it) rms at most max(this many tolerances, spacings).
+BARE_RMS_TOLS, BARE_RMS_SPACINGS = 3.0, 0.5
+#: A top corner farther than max(this, this many reaches) from the plate's end is none.
+TOP_FAR_MM, TOP_FAR_REACHES = 3.0, 10
+#: A corner's reach: this many spacings (and a tolerance).
+TOP_REACH_SPACINGS = 3.0
+#: Bottom corners crossed by more than max(tolerance, this many spacings): the walls cross.
+CROSSED_SPACINGS = 2
+#: The fill surface's band off a wall: this many wall rms, at least this (mm).
+FLOOR_BAND_RMS, FLOOR_BAND_MM = 5.0, 0.06
+#: The fill surface's running median: over this width, of this many points at the least and
+#: the most; it keeps points within max(this many tolerances, this mm).
+MEDIAN_MM, MEDIAN_MIN, MEDIAN_MAX = 0.6, 5, 101
+MEDIAN_TOLS, MEDIAN_FLOOR_MM = 3.0, 0.2
+#: The fill surface's largest stretch has no break wider than this; towards a side with no
+#: wall seen, a break up to ``SHADOW_MM`` is a shadow.
+BREAK_MM, SHADOW_MM = 2.0, 2.5
+#: A hidden wall's round: its rise read over this.
+FINE_RISE_MM = 0.2
+#: The surface's line for a bottom corner: fitted over its first this-many mm from the wall;
+#: a crossing within this of the surface's outermost point is the corner.
+SURFACE_END_MM = 1.5
+#: Points within this many tolerances of the surface's line are on it.
+ON_SURFACE_TOLS = 3.0
+#: A wall seen farther above the fill than max(``WALL_FAR_MM``, this share of its length).
+FAR_SHARE = 0.5
+#: The surface's line near a hidden wall: over its last this-many mm.
+SURFACE_LINE_MM = 0.6
+#: The corner no ray lights: a wall's line crossing the surface's line at most ``UNLIT_MM``
+#: beyond its outermost point (``UNLIT_BACK_MM`` before it) and within ``UNLIT_MM`` of it.
+UNLIT_MM, UNLIT_BACK_MM = 1.0, 0.05
+#: A bead's toe lost in the notch at a wall: a crossing within this of the wall's foot, at
+#: most ``NOTCH_ABOVE_MM`` above it.
+NOTCH_MM, NOTCH_ABOVE_MM = 1.0, 0.5
 
 
 class Plates(NamedTuple):
@@ -151,8 +213,7 @@ class GroovePoints(NamedTuple):
 
 
 def _fit(points: FloatArray, index: IntArray) -> Line:
-    f = fit_line(points, np.asarray(index, dtype=np.int64))
-    return Line(np.asarray(index), np.array([f.cy, f.cz]), np.array([f.uy, f.uz]), f.along, f.rms)
+    return Line.from_fit(np.asarray(index), fit_line(points, np.asarray(index, dtype=np.int64)))
 
 
 @dataclass(frozen=True)
@@ -160,7 +221,7 @@ class GrooveExtractor(_Base):
     """Groove (issue 25): the 7 points of an empty or partly filled groove (V, narrow gap,
     U; 0..n layers of beads), the remaining area, and a seam point per ``reference``
     (``"centre"``: the middle bottom point; ``"left"`` / ``"right"``: that wall's foot at the
-    fill surface). The model and its refusals: :mod:`seamtrack.features.groove`."""
+    fill surface). The model and its refusals: :mod:`seamtrack.features.groove.extractor`."""
 
     name: str = "groove"
     reference: str = "centre"
@@ -180,7 +241,7 @@ class GrooveExtractor(_Base):
                 fix=f"use one of {', '.join(REFERENCES)}",
             )
 
-    def segments(self, profile: Profile) -> Segments | str:
+    def segments(self, profile: Profile) -> Segments | Refusal:
         """The front end's pieces, up to ``max_lines`` of them (beads are curved: a clean
         profile of a few caps needs more pieces than the other families' joints)."""
         return segment_profile(
@@ -193,8 +254,8 @@ class GrooveExtractor(_Base):
 
     def _extract(self, profile: Profile, seg: Segments) -> Feature | tuple[Feature, float]:
         found = self.model(seg)
-        if isinstance(found, str):
-            return Feature.failed(found, joint=self.name)
+        if isinstance(found, Refusal):
+            return Feature.failed(found.reason, joint=self.name)
         pts = found.points
         point = {"centre": pts[3], "left": pts[1], "right": pts[5]}[self.reference]
         rms = max(0.0, 1.0 - found.rms / max(seg.tol, 1e-12))
@@ -209,11 +270,11 @@ class GrooveExtractor(_Base):
         return feature, found.explained
 
     # ------------------------------------------------------------------ the model
-    def model(self, seg: Segments) -> GroovePoints | str:
+    def model(self, seg: Segments) -> GroovePoints | Refusal:
         """The groove's 7 points, area and fit, or why the profile shows no groove."""
         P = seg.points
         plates = self._plates(seg)
-        if isinstance(plates, str):
+        if isinstance(plates, Refusal):
             return plates
         pl, pr = plates.left, plates.right
         u = pl.direction + pr.direction
@@ -229,26 +290,26 @@ class GrooveExtractor(_Base):
         chord_v = np.array([-chord_u[1], chord_u[0]])
         depth = (P[inner] - end_l) @ chord_v
         below = np.count_nonzero(depth > self.min_depth_mm) >= self.min_points
-        raised = np.count_nonzero(depth < -self.min_depth_mm) > 0.2 * len(inner)
+        raised = np.count_nonzero(depth < -self.min_depth_mm) > RAISED_SHARE * len(inner)
         if not below and not raised:
-            return "not a groove: nothing lies below the plates between them"
+            return Refusal("not a groove: nothing lies below the plates between them")
         if raised:  # a crowned fill (a cap over the plates), or a block
             why = self._raised(seg, plates, inner, depth, end_r - end_l)
-            if why:
+            if why is not None:
                 return why
         groove = list(range(plates.left_last + 1, plates.right_first))
         left = self._wall(seg, groove, v, True, end_l)
         right = self._wall(seg, groove[::-1], v, False, end_r)
-        reach = 3.0 * seg.spacing + seg.tol
+        reach = TOP_REACH_SPACINGS * seg.spacing + seg.tol
         tl = self._top(pl, left.line, True, reach)
         tr = self._top(pr, right.line, False, reach)
         fu, fv = self._floor(seg, inner, (left, right), u, v)
         if len(fu) < 3:
             if left.line is None or right.line is None:
-                return "not a groove: no bottom between the walls"
+                return Refusal("not a groove: no bottom between the walls")
             x = intersect(left.line, right.line)  # an empty V: the walls meet
             if x is None:
-                return "not a groove: no bottom between the walls"
+                return Refusal("not a groove: no bottom between the walls")
             bl = br = x
         else:
             seen = short_walls((left.line, right.line), fv, v)
@@ -257,12 +318,12 @@ class GrooveExtractor(_Base):
             wr = right.line if wr is None else wr
             bl = self._corner(seg, wl, fu, fv, u, v, True, P[lo:hi])
             br = self._corner(seg, wr, fu, fv, u, v, False, P[lo:hi])
-        if (br - bl) @ u < -max(seg.tol, 2 * seg.spacing):
-            return "not a groove: its walls cross (a ridge?)"
+        if (br - bl) @ u < -max(seg.tol, CROSSED_SPACINGS * seg.spacing):
+            return Refusal("not a groove: its walls cross (a ridge?)")
         bottom = bottom_points(seg, fu, fv, bl, br, u, v)
         pts = np.vstack([tl, bl, bottom, br, tr])
         if _along_a_ray(pts[1:6]):
-            return "not a groove: its bottom lies along one laser ray (a spike streak)"
+            return Refusal("not a groove: its bottom lies along one laser ray (a spike streak)")
         area = _area(pts, P, inner, u)
         rms = max(pl.rms, pr.rms, *(w.line.rms for w in (left, right) if w.line is not None))
         walls = (left.line, right.line)
@@ -271,13 +332,16 @@ class GrooveExtractor(_Base):
 
     def _raised(
         self, seg: Segments, plates: Plates, inner: IntArray, depth: FloatArray, chord: FloatArray
-    ) -> str:
-        """Why a part raised between the plates is no crowned fill ("" when it is one): a
+    ) -> Refusal | None:
+        """Why a part raised between the plates is no crowned fill (None when it is one): a
         fill's cap stands at most ``max_crown_mm`` above the line of the plates' ends (the
         95th percentile of its points: spikes do not count), and no piece of it a millimetre
         long stands more than 80 deg off the plates as a step (a block's side: ``a_step``)."""
-        why = "not a groove: a raised part stands between the plates"
-        if len(inner) < self.min_points or float(np.percentile(-depth, 95)) > self.max_crown_mm:
+        why = Refusal("not a groove: a raised part stands between the plates")
+        if (
+            len(inner) < self.min_points
+            or float(np.percentile(-depth, CROWN_PERCENTILE)) > self.max_crown_mm
+        ):
             return why
         P = seg.points
         along = chord / max(math.hypot(*chord), 1e-12)
@@ -287,27 +351,27 @@ class GrooveExtractor(_Base):
         for j in range(plates.left_last + 1, plates.right_first):
             ln = seg.lines[j]
             off = _angle_deg(ln.direction, along)
-            mask[ln.index] = off > 60.0
+            mask[ln.index] = off > LEVEL_DEG
             raised = float((ln.centroid - start) @ normal) <= -self.min_depth_mm
-            if ln.extent >= 1.0 and raised and off > 80.0:
+            if ln.extent >= STEP_MIN_MM and raised and off > STEP_DEG:
                 steep.append(ln.index)
         if any(a_step(P, index, normal, mask) for index in steep):
             return why
-        return ""
+        return None
 
-    def _plates(self, seg: Segments) -> Plates | str:
+    def _plates(self, seg: Segments) -> Plates | Refusal:
         lines = seg.lines
         long = [j for j, ln in enumerate(lines) if ln.extent >= self.min_plate_mm]
         if len(long) < 2:
-            return "not a groove: no plate on both sides"
+            return Refusal("not a groove: no plate on both sides")
         a, b = long[0], long[-1]
         la, lb = self._grow(seg, a, +1, b), self._grow(seg, b, -1, a)
         if la[1] >= lb[1]:
-            return "not a groove: no plate on both sides"
+            return Refusal("not a groove: no plate on both sides")
         left, right = la[0], lb[0]
         apart = _angle_deg(left.direction, right.direction)
         if apart > self.max_plate_deg:
-            return (
+            return Refusal(
                 f"not a groove: the plates beside it are {apart:.0f} deg apart "
                 f"(at most {self.max_plate_deg:.0f}: a fillet or a corner?)"
             )
@@ -324,13 +388,13 @@ class GrooveExtractor(_Base):
         k = j
         while k + step != stop:
             nxt = lines[k + step]
-            if _angle_deg(nxt.direction, base.direction) > 5.0:
+            if _angle_deg(nxt.direction, base.direction) > ON_LINE_DEG:
                 break
             off = np.abs((seg.points[nxt.index] - base.centroid) @ base.normal)
             # (or the plate so far on the next piece's line: a short outer piece, one step
             # of a quantized plate at a tilt, is flatter than the plate)
             back = np.abs((seg.points[base.index] - nxt.centroid) @ nxt.normal)
-            if _median(off) > 2.0 * seg.tol and _median(back) > 2.0 * seg.tol:
+            if _median(off) > BAND_TOLS * seg.tol and _median(back) > BAND_TOLS * seg.tol:
                 break
             index.append(nxt.index)
             k += step
@@ -339,7 +403,7 @@ class GrooveExtractor(_Base):
         idx = np.sort(np.concatenate(index))
         line = _fit(seg.points, idx) if len(index) > 1 else base
         if line.direction[0] < 0:  # along increasing column (y)
-            line = Line(line.index, line.centroid, -line.direction, -line.t, line.rms)
+            line = line.flipped()
         return line, k
 
     def _wall(
@@ -363,13 +427,13 @@ class GrooveExtractor(_Base):
         # The run of wall pieces before j (a wall split into pieces, its top one short): how
         # far its top lies from the corner, its lower end, its direction.
         run_top, run_end, run_dir = math.inf, None, None
-        join = max(1.0, 5.0 * seg.spacing)
+        join = max(WALL_JOIN_MM, WALL_JOIN_SPACINGS * seg.spacing)
         for j in groove:
             ln = lines[j]
             _, _, uy, uz, _, _ = ln.scalars  # floats: no numpy call a piece
             dv = sign * (uy * vy + uz * vz)
             off = math.degrees(math.asin(min(1.0, abs(dv))))
-            if not (dv > 0 and off >= self.wall_deg and ln.extent >= 0.3):
+            if not (dv > 0 and off >= self.wall_deg and ln.extent >= WALL_MIN_MM):
                 run_end = None
                 continue
             upper = P[ln.index[0] if from_left else ln.index[-1]]
@@ -378,18 +442,20 @@ class GrooveExtractor(_Base):
                 run_end is not None
                 and run_dir is not None
                 and math.hypot(*(upper - run_end)) <= join
-                and _angle_deg(ln.direction, run_dir) <= 5.0
+                and _angle_deg(ln.direction, run_dir) <= ON_LINE_DEG
             ):
                 near_top = min(near_top, run_top)  # it carries on a wall from the corner
             run_top, run_dir = near_top, ln.direction
             run_end = P[ln.index[-1] if from_left else ln.index[0]]
-            if abs(float((top - ln.centroid) @ ln.normal)) > max(1.0, 3 * seg.tol):
+            if abs(float((top - ln.centroid) @ ln.normal)) > max(
+                WALL_TOP_MM, WALL_TOP_TOLS * seg.tol
+            ):
                 continue
-            if near_top > 3.0 and (off < 75.0 or ln.extent < 1.0):
+            if near_top > WALL_FAR_MM and (off < WALL_FAR_DEG or ln.extent < WALL_FAR_MIN_MM):
                 continue  # a bead's flank or a streak pointing at the corner by chance
-            n = int(np.count_nonzero(np.abs((q - ln.centroid) @ ln.normal) <= 2.0 * seg.tol))
-            below = float(top @ v) + 1.0  # (a streak deep in the groove: fill outwards)
-            if near_top > 3.0 and _beyond(q, ln, v, from_left, seg.tol, below) > max(
+            n = int(np.count_nonzero(np.abs((q - ln.centroid) @ ln.normal) <= BAND_TOLS * seg.tol))
+            below = float(top @ v) + WALL_BELOW_MM  # (a streak deep in the groove: fill outwards)
+            if near_top > WALL_FAR_MM and _beyond(q, ln, v, from_left, seg.tol, below) > max(
                 self.min_points, n
             ):
                 continue  # the surface goes on beyond it: a streak in the groove, no wall
@@ -403,7 +469,7 @@ class GrooveExtractor(_Base):
         line = _fit(P, np.sort(np.concatenate(index))) if len(index) > 1 else ref
         line = trim_wall(P, line, seg.tol)  # a round at its foot, a spike's points: left out
         if line.direction[0] < 0:
-            line = Line(line.index, line.centroid, -line.direction, -line.t, line.rms)
+            line = line.flipped()
         return Wall(line, on[0], on[-1])
 
     def _bare_wall(
@@ -424,19 +490,21 @@ class GrooveExtractor(_Base):
             return Wall(None, -1, -1)
         line = _fit(seg.points, index)
         if line.direction[0] < 0:
-            line = Line(line.index, line.centroid, -line.direction, -line.t, line.rms)
+            line = line.flipped()
         d = line.direction if from_left else -line.direction
         off = math.degrees(math.asin(min(1.0, abs(float(d @ v)))))
-        near = abs(float((top - line.centroid) @ line.normal)) <= max(1.0, 3 * seg.tol)
+        near = abs(float((top - line.centroid) @ line.normal)) <= max(
+            WALL_TOP_MM, WALL_TOP_TOLS * seg.tol
+        )
         # from the plate's end: a spike streak deep in a narrow gap, along a ray nearly as
         # steep as its wall, is none
-        near &= float(np.min(np.hypot(*(seg.points[index] - top).T))) <= 3.0
+        near &= float(np.min(np.hypot(*(seg.points[index] - top).T))) <= WALL_FAR_MM
         if (
             float(d @ v) <= 0
             or off < self.wall_deg
-            or line.extent < 1.0
+            or line.extent < WALL_FAR_MIN_MM
             or not near
-            or line.rms > max(3.0 * seg.tol, 0.5 * seg.spacing)
+            or line.rms > max(BARE_RMS_TOLS * seg.tol, BARE_RMS_SPACINGS * seg.spacing)
         ):
             return Wall(None, -1, -1)
         return Wall(line, first, first)
@@ -447,7 +515,7 @@ class GrooveExtractor(_Base):
         if wall is None:
             return end
         x = intersect(plate, wall)
-        if x is None or math.hypot(*(x - end)) > max(3.0, 10 * reach):
+        if x is None or math.hypot(*(x - end)) > max(TOP_FAR_MM, TOP_FAR_REACHES * reach):
             return end
         return x
 
@@ -467,36 +535,38 @@ class GrooveExtractor(_Base):
             # carried down from its top, a narrow gap's, cuts no surface short).
             low = float(np.max(seg.points[w.line.index] @ v)) if len(w.line.index) else np.inf
             off, qv_ = (q - w.line.centroid) @ n, q @ v
-            band = min(2.0 * seg.tol, max(5.0 * w.line.rms, 0.06))
+            band = min(BAND_TOLS * seg.tol, max(FLOOR_BAND_RMS * w.line.rms, FLOOR_BAND_MM))
             keep &= (
                 (off > band)
-                | ((qv_ > low + 2.0 * seg.tol) & (off > -2.0 * seg.tol))
-                | (qv_ > low + 3.0)
+                | ((qv_ > low + BAND_TOLS * seg.tol) & (off > -BAND_TOLS * seg.tol))
+                | (qv_ > low + WALL_FAR_MM)
             )
         qu, qv = q[keep] @ u, q[keep] @ v
         run = (np.searchsorted(seg.runs, inner, side="right") - 1)[keep]
         order = np.argsort(qu, kind="stable")
         qu, qv, run = qu[order], qv[order], run[order]
-        k = int(min(101, max(5, round(0.6 / max(seg.spacing, 1e-9)))) | 1)
+        k = int(min(MEDIAN_MAX, max(MEDIAN_MIN, round(MEDIAN_MM / max(seg.spacing, 1e-9)))) | 1)
         if len(qv) >= k:
             med = running_median(_c(qv), k)  # the ends: their whole window's
-            ok = np.abs(qv - med) <= max(3.0 * seg.tol, 0.2)
+            ok = np.abs(qv - med) <= max(MEDIAN_TOLS * seg.tol, MEDIAN_FLOOR_MM)
             qu, qv, run = qu[ok], qv[ok], run[ok]
         ok = drop_islands(qu, qv, run, seg.spacing, seg.tol)  # spike runs the median kept
         qu, qv = qu[ok], qv[ok]
         if len(qu) > 1:  # the largest stretch without a break of 2 mm (scraps at the top edges)
-            cut = np.flatnonzero(np.diff(qu) > 2.0) + 1
+            cut = np.flatnonzero(np.diff(qu) > BREAK_MM) + 1
             bounds = np.concatenate(([0], cut, [len(qu)]))
             j = int(np.argmax(np.diff(bounds)))
             a, b = j, j + 1
             # Towards a side with no wall seen (buried under a crowned fill) a break of up to
             # 2.5 mm is a shadow in the fill surface, not a scrap: the surface goes on.
-            while walls[0].line is None and a > 0 and qu[bounds[a]] - qu[bounds[a] - 1] <= 2.5:
+            while (
+                walls[0].line is None and a > 0 and qu[bounds[a]] - qu[bounds[a] - 1] <= SHADOW_MM
+            ):
                 a -= 1
             while (
                 walls[1].line is None
                 and b < len(bounds) - 1
-                and qu[bounds[b]] - qu[bounds[b] - 1] <= 2.5
+                and qu[bounds[b]] - qu[bounds[b] - 1] <= SHADOW_MM
             ):
                 b += 1
             qu, qv = qu[bounds[a] : bounds[b]], qv[bounds[a] : bounds[b]]
@@ -525,7 +595,9 @@ class GrooveExtractor(_Base):
         if wall is not None:
             # (a hidden wall: the round's rise is all there is of its foot, read finer)
             fine = not len(wall.index)
-            level = risen_level(fu, fv, left, seg.spacing, seg.tol, *((0.2, True) if fine else ()))
+            level = risen_level(
+                fu, fv, left, seg.spacing, seg.tol, *((FINE_RISE_MM, True) if fine else ())
+            )
             if level is not None:  # a round into the wall: the wall's line at the fill's level
                 cu, cv = float(wall.centroid @ u), float(wall.centroid @ v)
                 du, dv = float(wall.direction @ u), float(wall.direction @ v)
@@ -535,12 +607,12 @@ class GrooveExtractor(_Base):
         if wall is None and columns is None:  # the surface's outermost point
             ou, ov = edge, float(fv[0] if left else fv[-1])
             return np.asarray((ou - sign * 0.5 * seg.spacing) * u + ov * v)
-        sel = sign * (fu - edge) <= 1.5
+        sel = sign * (fu - edge) <= SURFACE_END_MM
         su, sv = fu[sel], fv[sel]
         fit = _robust_uv_line(su, sv, seg.tol)
         if fit is not None:  # the surface's outermost point on its line (not a spike's)
             a, b = fit
-            on = np.abs(sv - (a + b * su)) <= 3.0 * seg.tol
+            on = np.abs(sv - (a + b * su)) <= ON_SURFACE_TOLS * seg.tol
             k = int(np.argmin(sign * su[on]))
             ou, ov = float(su[on][k]), float(sv[on][k])
         else:
@@ -564,15 +636,17 @@ class GrooveExtractor(_Base):
         elif wall is not None and cross is not None:
             seen = seg.points[wall.index] @ np.column_stack([u, v])
             gap = float(np.min(np.hypot(*(seen - cross).T)))
-            if gap > max(3.0, 0.5 * float(np.ptp(wall.t))):
+            if gap > max(WALL_FAR_MM, FAR_SHARE * float(np.ptp(wall.t))):
                 far = wall
                 cross, columns = None, None  # below a wall, rays may light it unseen
         if wall is None or cross is None:  # the surface's outermost point
-            near = sign * (fu - edge) <= 0.6  # on its line there (a flank bends further in)
+            near = (
+                sign * (fu - edge) <= SURFACE_LINE_MM
+            )  # on its line there (a flank bends further in)
             if unseen and (short := _robust_uv_line(fu[near], fv[near], seg.tol)) is not None:
                 fit = short
                 a, b = fit
-                on = np.abs(fv[near] - (a + b * fu[near])) <= 3.0 * seg.tol
+                on = np.abs(fv[near] - (a + b * fu[near])) <= ON_SURFACE_TOLS * seg.tol
                 if np.any(on):
                     k = int(np.argmin(sign * fu[near][on]))
                     ou, ov = float(fu[near][on][k]), float(fv[near][on][k])
@@ -581,19 +655,19 @@ class GrooveExtractor(_Base):
             line = far if far is not None else mirror
             if line is not None and fit is not None:
                 x = cross_uv(line, fit[0], fit[1], u, v)
-                if x is not None and -0.05 <= sign * (ou - x[0]) <= 1.0:
-                    if math.hypot(x[0] - ou, x[1] - ov) <= 1.0:
+                if x is not None and -UNLIT_BACK_MM <= sign * (ou - x[0]) <= UNLIT_MM:
+                    if math.hypot(x[0] - ou, x[1] - ov) <= UNLIT_MM:
                         return np.asarray(x[0] * u + x[1] * v)
             if fit is not None and columns is not None:  # on its line, as far as its rays go
                 ou = ray_reach(columns, u, v, a, b, ou, left)
                 ov = a + b * ou
             return np.asarray((ou - sign * 0.5 * seg.spacing) * u + ov * v)
-        if cross is not None and math.hypot(cross[0] - ou, cross[1] - ov) <= 1.5:
+        if cross is not None and math.hypot(cross[0] - ou, cross[1] - ov) <= SURFACE_END_MM:
             return np.asarray(cross[0] * u + cross[1] * v)
         if cross is not None and wall is not None:  # the surface's toe lost in a notch:
             seen = seg.points[wall.index] @ np.column_stack([u, v])  # the wall's foot is on
             foot = seen[int(np.argmax(seen[:, 1]))]  # its line, where its points end
-            if math.hypot(*(cross - foot)) <= 1.0 and cross[1] >= foot[1] - 0.5:
+            if math.hypot(*(cross - foot)) <= NOTCH_MM and cross[1] >= foot[1] - NOTCH_ABOVE_MM:
                 return np.asarray(cross[0] * u + cross[1] * v)
         ou -= sign * 0.5 * seg.spacing
         return np.asarray(ou * u + ov * v)

@@ -1,11 +1,11 @@
 """The generic (slope / curvature) extractor: no segmentation, no joint model.
 
-Its steps, each one compiled call of :mod:`seamtrack.features._slope_turns`: clean the
+Its steps, each one compiled call of :mod:`seamtrack.features.generic._slope_turns`: clean the
 profile's points up (valid, bounded, isolated outliers against a running median of 5 left
-out; :func:`~seamtrack.features._slope_turns.clean_points`), the turn between sliding
-windows' directions (:func:`~seamtrack.features._slope_turns.window_turns`), and where the
+out; :func:`~seamtrack.features.generic._slope_turns.clean_points`), the turn between sliding
+windows' directions (:func:`~seamtrack.features.generic._slope_turns.window_turns`), and where the
 sharpest turn lies, the crossing of two local fits
-(:func:`~seamtrack.features._slope_turns.corner_point`). Registered in
+(:func:`~seamtrack.features.generic._slope_turns.corner_point`). Registered in
 :mod:`seamtrack.features.extractors` as ``"generic"``.
 
 Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groove).
@@ -19,7 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features._slope_turns import (
+from seamtrack.features.generic._slope_turns import (
     NO_SPREAD,
     TOO_FEW,
     clean_points,
@@ -101,7 +101,7 @@ class GenericExtractor:
 
     def _corner(self, profile: Profile, p: FloatArray, c: int, k: int, turn: float) -> Feature:
         corner = corner_point(p, c, k)
-        if corner.too_near_end:
+        if math.isnan(corner.y):  # a side has fewer than 3 points
             return Feature.failed("the corner is too near the profile's end", joint=self.name)
         conf = float(np.clip(turn / math.radians(90), 0.0, 1.0))
         return Feature.found(

@@ -1,5 +1,5 @@
 """What lies between two plate runs (:func:`hole`), compiled: the inner loop of the two-plate
-extractors (:mod:`seamtrack.features.plates`).
+extractors (:mod:`seamtrack.features.plates.extractor`).
 
 Done as numpy calls on the few dozen points of a hole, its masks, medians and stretches were
 some hundred small array operations per profile, whose per-call overhead was most of the
@@ -18,10 +18,9 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features._segmentation import _fit as _fit_tls
-from seamtrack.features._two_lines import (
+from seamtrack.features.line_geometry import Point, fit_points
+from seamtrack.features.plates._two_lines import (
     PieceLines,
-    Point,
     RunEnd,
     angle,
     kept,
@@ -32,9 +31,12 @@ from seamtrack.features._two_lines import (
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
-#: As :data:`seamtrack.features.lines._WALL_DEG`, ``_BOTTOM_DEG`` and ``_PLATE_DEG` (rad).
+#: A gap's wall or a lap's edge face stands at least this steep on the plates (as
+#: :data:`seamtrack.features.lines._WALL_DEG`, rad).
 _WALL = math.radians(65.0)
+#: A gap's bottom (a backing seen through the gap) lies within this angle of the plates (rad).
 _BOTTOM = math.radians(10.0)
+#: A piece within this angle of a plate is plate where it lies on the plate's line (rad).
 _PLATE = math.radians(20.0)
 
 
@@ -322,7 +324,7 @@ def hole(
                 behind[r] = -(math.nan if math.isnan(x) or math.isnan(y) else max(x, y))
             if not median(behind) >= min_bottom_mm:
                 if e - s >= 3:
-                    _, _, uy, uz, _ = _fit_tls(q, part, part.shape[0])
+                    _, _, uy, uz, _ = fit_points(q, part, part.shape[0])
                     yes = angle(uy, uz, ady, adz) < _WALL
                     if not yes:
                         top = -math.inf
