@@ -154,9 +154,11 @@ def _agrees() -> bool:
 
 
 def _draw(rng: np.random.Generator, n: int) -> NDArray[np.float32]:
+    """n numbers from the Generator's PCG64 state, which is then set to where NumPy's own
+    draw would have left it."""
     bg = rng.bit_generator
-    state = bg.state
-    pcg = state["state"]
+    state = dict(bg.state)
+    pcg = dict(state["state"])
     st = np.array(
         [
             pcg["state"] >> 64,
@@ -171,6 +173,7 @@ def _draw(rng: np.random.Generator, n: int) -> NDArray[np.float32]:
     out = np.empty(n, dtype=np.float32)
     _ziggurat(st, out, _K, _W, _F, _R_F, _INV_R_F)
     pcg["state"] = (int(st[0]) << 64) | int(st[1])
+    state["state"] = pcg
     state["has_uint32"], state["uinteger"] = int(st[4]), int(st[5])
     bg.state = state
     return out
