@@ -242,13 +242,8 @@ def _speckle_boxes(
         n_r = max(shapes[k][0] for k in members)
         n_c = max(shapes[k][1] for k in members)
         field = np.zeros((len(members), padded[0], n_c), dtype=np.complex64)
-        for m, k in enumerate(members):
-            c0, c1, box_c0, box_c1, r0, r1, lo, hi = boxes[k].tolist()
-            cells = np.zeros(shapes[k])
-            _deposit_box(cells, r0, box_c0, uf[lo:hi], wf[lo:hi], hf[lo:hi], gf[lo:hi],
-                         sf[lo:hi], e[lo:hi], REACH)  # fmt: skip
-            box_noise = noise[starts[k] : starts[k + 1]].reshape(2, *shapes[k])
-            _field(field[m], cells, box_noise, constants.gain, constants.steady)
+        _fields(field, boxes[members], np.array(starts)[members], noise, uf, wf, hf, gf, sf, e,
+                constants.gain, constants.steady)  # fmt: skip
         pupil = _pupil(padded, optics.cell_mm, constants.f_c)
         rows = np.flatnonzero(pupil.any(axis=1))
         columns = np.flatnonzero(pupil.any(axis=0))
@@ -331,16 +326,28 @@ def _spread_scaled(
 
 
 @numba.njit(cache=True, nogil=True)
-def _field(
-    field: NDArray[np.complex64], cells: FloatArray, noise: NDArray[np.float32],
-    gain: np.float32, steady: np.float32,
+def _fields(
+    field: NDArray[np.complex64], boxes: NDArray[np.int64], starts: NDArray[np.int64],
+    noise: NDArray[np.float32], uf: FloatArray, wf: FloatArray, hf: FloatArray, gf: FloatArray,
+    sf: FloatArray, e: FloatArray, gain: np.float32, steady: np.float32,
 ) -> None:  # fmt: skip
-    """The surface's field on the cells (the top left corner of the zeroed ``field``):
-    sqrt(I) (noise_0 gain + steady) + i sqrt(I) noise_1 gain, in float32."""
-    for i in range(cells.shape[0]):
-        for j in range(cells.shape[1]):
-            a = np.sqrt(np.float32(cells[i, j]))
-            field[i, j] = complex(a * (noise[0, i, j] * gain + steady), a * noise[1, i, j] * gain)
+    """Per box m (rows of :func:`_plan_boxes`): its cells (:func:`_deposit_box`) and the
+    surface's field on them, in the top left corner of the zeroed ``field[m]``:
+    sqrt(I) (noise_0 gain + steady) + i sqrt(I) noise_1 gain, in float32, the box's noise
+    from ``starts[m]`` (first the real parts, then the imaginary, row by row)."""
+    for m in range(boxes.shape[0]):
+        _, _, box_c0, box_c1, r0, r1, lo, hi = boxes[m]
+        n_r, n_c = r1 - r0, box_c1 - box_c0
+        cells = np.zeros((n_r, n_c))
+        _deposit_box(cells, r0, box_c0, uf[lo:hi], wf[lo:hi], hf[lo:hi], gf[lo:hi], sf[lo:hi],
+                     e[lo:hi], REACH)  # fmt: skip
+        re = noise[starts[m] : starts[m] + n_r * n_c]
+        im = noise[starts[m] + n_r * n_c : starts[m] + 2 * n_r * n_c]
+        for i in range(n_r):
+            for j in range(n_c):
+                a = np.sqrt(np.float32(cells[i, j]))
+                q = i * n_c + j
+                field[m, i, j] = complex(a * (re[q] * gain + steady), a * im[q] * gain)
 
 
 @numba.njit(cache=True, nogil=True)
