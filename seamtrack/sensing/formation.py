@@ -21,6 +21,8 @@ import scipy.fft
 from numpy.typing import NDArray
 from scipy import ndimage
 
+from seamtrack.sensing import gauss32
+
 FloatArray = NDArray[np.float64]
 
 #: A stripe piece is laid out to this many standard deviations (its energy scaled back up).
@@ -103,16 +105,46 @@ def _deposit_box(
                 cdf_lo = cdf_hi
 
 
-def _runs_of_rows(top: FloatArray, bottom: FloatArray, gap: int) -> list[tuple[int, int]]:
-    """Merge row intervals [top, bottom) closer than ``gap`` into runs (sorted)."""
-    order = np.argsort(top)
-    runs: list[tuple[int, int]] = []
-    for t, b in zip(top[order], bottom[order], strict=True):
-        if runs and t <= runs[-1][1] + gap:
-            runs[-1] = (runs[-1][0], max(runs[-1][1], int(b)))
-        else:
-            runs.append((int(t), int(b)))
-    return runs
+@numba.njit(cache=True, nogil=True)
+def _plan_boxes(
+    wf: FloatArray, top: FloatArray, bottom: FloatArray, n_rows: int, n_cols: int, s: int,
+    block: int, apron: int, reach_w: float,
+) -> NDArray[np.int64]:  # fmt: skip
+    """The boxes, in the order they are drawn: per block of columns (left to right), the runs
+    of its pieces' rows (row intervals closer than 2 aprons + 1 merged, top to bottom), each
+    widened by the apron to whole pixels. Rows of (c0, c1, box_c0, box_c1, r0, r1, lo, hi):
+    the block's columns, the box's columns and rows (cells), and the pieces [lo, hi) that
+    may reach it (sorted by ``wf``)."""
+    boxes = np.empty((0, 8), dtype=np.int64)
+    found = []
+    gap = 2 * apron + 1
+    for c0 in range(0, n_cols, block):
+        c1 = min(n_cols, c0 + block)
+        lo = np.searchsorted(wf, c0 - apron - reach_w)
+        hi = np.searchsorted(wf, c1 + apron + reach_w)
+        if lo == hi:
+            continue
+        box_c0, box_c1 = max(0, c0 - apron), min(n_cols, c1 + apron)
+        order = np.argsort(top[lo:hi])
+        t_run = -1
+        b_run = -1
+        for j in range(order.shape[0] + 1):
+            if j < order.shape[0]:
+                t = int(top[lo + order[j]])
+                b = int(bottom[lo + order[j]])
+                if j > 0 and t <= b_run + gap:
+                    b_run = max(b_run, b)
+                    continue
+            if j > 0:  # close the run [t_run, b_run)
+                r0 = max(0, s * ((t_run - apron) // s))
+                r1 = min(n_rows, s * -(-(b_run + apron) // s))
+                if r1 > r0:
+                    found.append((c0, c1, box_c0, box_c1, r0, r1, lo, hi))
+            if j < order.shape[0]:
+                t_run, b_run = t, b
+    if found:
+        boxes = np.array(found, dtype=np.int64)
+    return boxes
 
 
 def form_image(
@@ -142,6 +174,13 @@ def form_image(
         is widened here by the blur.
     electrons : (n,) float
         Signal of each piece.
+
+    Notes
+    -----
+    With speckle, every box's Gaussian draws are made at once, in the boxes' order (the same
+    numbers, in the same order, as one draw per box); the field, the pupil and the squared
+    modulus summed into pixels run in numba, the transforms in :func:`scipy.fft.fft2` box by
+    box on the same zero-padded grids: the image is the same to the bit.
     """
     s = optics.supersample
     if not optics.speckle:
@@ -158,29 +197,69 @@ def form_image(
     if len(e) == 0:
         return image
     apron = optics.apron_cells()
-    block = optics.block_columns * s
-    top = np.floor(uf - extent)
-    bottom = np.ceil(uf + extent)
-    reach_w = float(hf.max())
-    for c0 in range(0, n_cols, block):
-        c1 = min(n_cols, c0 + block)
-        lo, hi = np.searchsorted(wf, [c0 - apron - reach_w, c1 + apron + reach_w])
-        if lo == hi:
-            continue
-        box_c0, box_c1 = max(0, c0 - apron), min(n_cols, c1 + apron)
-        for r_first, r_last in _runs_of_rows(top[lo:hi], bottom[lo:hi], 2 * apron + 1):
-            r0 = max(0, s * ((r_first - apron) // s))
-            r1 = min(n_rows, s * -(-(r_last + apron) // s))
-            if r1 <= r0:
-                continue
-            cells = np.zeros((r1 - r0, box_c1 - box_c0))
-            _deposit_box(cells, r0, box_c0, uf[lo:hi], wf[lo:hi], hf[lo:hi], gf[lo:hi],
-                         sf[lo:hi], e[lo:hi], REACH)  # fmt: skip
-            lit = _speckle(cells, optics, apron, rng) if optics.speckle else _blur(cells, optics)
-            core = lit[:, c0 - box_c0 : c1 - box_c0]
-            pixels = core.reshape((r1 - r0) // s, s, (c1 - c0) // s, s).sum(axis=(1, 3))
-            image[r0 // s : r1 // s, c0 // s : c1 // s] += pixels
+    boxes = _plan_boxes(wf, np.floor(uf - extent), np.ceil(uf + extent), n_rows, n_cols, s,
+                        optics.block_columns * s, apron, float(hf.max()))  # fmt: skip
+    if optics.speckle:
+        _speckle_boxes(image, boxes, uf, wf, hf, gf, sf, e, optics, apron, rng)
+        return image
+    for c0, c1, box_c0, box_c1, r0, r1, lo, hi in boxes.tolist():
+        cells = np.zeros((r1 - r0, box_c1 - box_c0))
+        _deposit_box(cells, r0, box_c0, uf[lo:hi], wf[lo:hi], hf[lo:hi], gf[lo:hi],
+                     sf[lo:hi], e[lo:hi], REACH)  # fmt: skip
+        core = _blur(cells, optics)[:, c0 - box_c0 : c1 - box_c0]
+        pixels = core.reshape((r1 - r0) // s, s, (c1 - c0) // s, s).sum(axis=(1, 3))
+        image[r0 // s : r1 // s, c0 // s : c1 // s] += pixels
     return image
+
+
+def _speckle_boxes(
+    image: FloatArray, boxes: NDArray[np.int64], uf: FloatArray, wf: FloatArray,
+    hf: FloatArray, gf: FloatArray, sf: FloatArray, e: FloatArray, optics: Optics, apron: int,
+    rng: np.random.Generator,
+) -> None:  # fmt: skip
+    """Add the speckle image of every box into ``image`` (see :class:`_SpeckleConstants`).
+
+    The Gaussian draws of all boxes are made at once, in the boxes' order. Boxes whose padded
+    grids agree are transformed together, and only where the pupil lets light through: the
+    forward transform's second pass only on the frequency rows the pupil meets, the inverse's
+    first pass only on its frequency columns, its second only on the box's rows (the rest is
+    zeros in, zeros out, or cropped away). Each 1-D transform is pocketfft's, on the same
+    numbers as the whole 2-D one (its scaling after the first inverse pass, as pocketfft
+    scales), so the image is the same to the bit as a full ``ifft2(pupil * fft2(field))``.
+    """
+    s = optics.supersample
+    constants = _SpeckleConstants(optics)
+    sizes = 2 * (boxes[:, 5] - boxes[:, 4]) * (boxes[:, 3] - boxes[:, 2])
+    noise = gauss32.standard_normal_f32(rng, int(sizes.sum()))
+    starts = np.concatenate([[0], np.cumsum(sizes)]).tolist()
+    groups: dict[tuple[int, int], list[int]] = {}
+    shapes = []
+    for k, (_, _, box_c0, box_c1, r0, r1, _, _) in enumerate(boxes.tolist()):
+        shapes.append((r1 - r0, box_c1 - box_c0))
+        groups.setdefault(constants.padded(shapes[-1], apron), []).append(k)
+    intensity: list[tuple[NDArray[np.complex64], int]] = [None] * len(boxes)  # type: ignore[list-item]
+    for padded, members in groups.items():
+        n_r = max(shapes[k][0] for k in members)
+        n_c = max(shapes[k][1] for k in members)
+        field = np.zeros((len(members), padded[0], n_c), dtype=np.complex64)
+        _fields(field, boxes[members], np.array(starts)[members], noise, uf, wf, hf, gf, sf, e,
+                constants.gain, constants.steady)  # fmt: skip
+        pupil = _pupil(padded, optics.cell_mm, constants.f_c)
+        rows = np.flatnonzero(pupil.any(axis=1))
+        columns = np.flatnonzero(pupil.any(axis=0))
+        half = scipy.fft.fft(field, axis=1, overwrite_x=True)
+        spectrum = scipy.fft.fft(half[:, rows, :], n=padded[1], axis=2, overwrite_x=True)
+        band = np.zeros((len(members), padded[0], len(columns)), dtype=np.complex64)
+        _pass_band(spectrum, pupil, rows, columns, band)
+        back = scipy.fft.ifft(band, axis=1, norm="forward", overwrite_x=True)
+        rows_back = np.zeros((len(members), n_r, padded[1]), dtype=np.complex64)
+        _spread_scaled(back, columns, np.float32(1.0 / (padded[0] * padded[1])), rows_back)
+        out = scipy.fft.ifft(rows_back, axis=2, norm="forward", overwrite_x=True)
+        for m, k in enumerate(members):
+            intensity[k] = (out, m)
+    for k, (c0, c1, box_c0, _, r0, r1, _, _) in enumerate(boxes.tolist()):
+        out, m = intensity[k]
+        _add_intensity(image, out[m], r0, r1, c0 - box_c0, c0, c1, s)
 
 
 def _blur(cells: FloatArray, optics: Optics) -> FloatArray:
@@ -192,30 +271,101 @@ def _blur(cells: FloatArray, optics: Optics) -> FloatArray:
     )
 
 
-def _speckle(cells: FloatArray, optics: Optics, apron: int, rng: np.random.Generator) -> FloatArray:
-    """The rough surface's coherent field imaged through the circular pupil: intensity.
+class _SpeckleConstants:
+    """The rough surface's coherent field imaged through the circular pupil.
 
     Each cell's field is sqrt(I) times a phasor; a fully rough surface (C = 1) gives a circular
     Gaussian phasor of unit mean power, a smoother one a constant part besides (contrast C).
     The pupil passes frequencies up to f_c = 1 / (2 lambda N); the random part, white over the
     cells' band, keeps the pi f_c^2 d_r d_c share of its power, so it is scaled up by the
     inverse: the mean image keeps the energy (the incoherent image, blurred by the Airy PSF).
+    A box of cells is padded by the apron (to a fast FFT length) against wrap-around.
     """
-    shape = cells.shape
-    padded = (scipy.fft.next_fast_len(shape[0] + apron), scipy.fft.next_fast_len(shape[1] + apron))
-    f_c = 1.0 / (2.0 * optics.speckle_size_mm)
-    passed = min(1.0, math.pi * f_c**2 * optics.cell_mm[0] * optics.cell_mm[1])
-    contrast = optics.speckle_contrast
-    random_share = 1.0 - math.sqrt(max(0.0, 1.0 - contrast**2))
-    noise = rng.standard_normal((2, *shape), dtype=np.float32)
-    gain = np.float32(math.sqrt(0.5 * random_share / passed))
-    amplitude = np.sqrt(cells.astype(np.float32))
-    field = amplitude * (noise[0] * gain + np.float32(math.sqrt(1.0 - random_share)))
-    field = field + 1j * (amplitude * noise[1] * gain)
-    spectrum = scipy.fft.fft2(field.astype(np.complex64), s=padded)
-    spectrum *= _pupil(padded, optics.cell_mm, f_c)
-    image = scipy.fft.ifft2(spectrum)[: shape[0], : shape[1]]
-    return np.asarray(image.real**2 + image.imag**2, dtype=np.float64)
+
+    def __init__(self, optics: Optics) -> None:
+        self.f_c = 1.0 / (2.0 * optics.speckle_size_mm)
+        passed = min(1.0, math.pi * self.f_c**2 * optics.cell_mm[0] * optics.cell_mm[1])
+        contrast = optics.speckle_contrast
+        random_share = 1.0 - math.sqrt(max(0.0, 1.0 - contrast**2))
+        self.gain = np.float32(math.sqrt(0.5 * random_share / passed))
+        self.steady = np.float32(math.sqrt(1.0 - random_share))
+
+    @staticmethod
+    def padded(shape: tuple[int, ...], apron: int) -> tuple[int, int]:
+        return (
+            scipy.fft.next_fast_len(shape[0] + apron),
+            scipy.fft.next_fast_len(shape[1] + apron),
+        )
+
+
+@numba.njit(cache=True, nogil=True)
+def _pass_band(
+    spectrum: NDArray[np.complex64], pupil: NDArray[np.bool_], rows: NDArray[np.int64],
+    columns: NDArray[np.int64], band: NDArray[np.complex64],
+) -> None:  # fmt: skip
+    """band[:, rows[i], j] = spectrum[:, i, columns[j]] where the pupil passes it, else 0."""
+    for m in range(spectrum.shape[0]):
+        for i in range(rows.shape[0]):
+            for j in range(columns.shape[0]):
+                if pupil[rows[i], columns[j]]:
+                    band[m, rows[i], j] = spectrum[m, i, columns[j]]
+
+
+@numba.njit(cache=True, nogil=True)
+def _spread_scaled(
+    back: NDArray[np.complex64], columns: NDArray[np.int64], scale: np.float32,
+    out: NDArray[np.complex64],
+) -> None:  # fmt: skip
+    """out[:, r, columns[j]] = back[:, r, j] * scale (real and imaginary parts, float32), for
+    the rows of ``out``."""
+    for m in range(out.shape[0]):
+        for r in range(out.shape[1]):
+            for j in range(columns.shape[0]):
+                z = back[m, r, j]
+                out[m, r, columns[j]] = complex(z.real * scale, z.imag * scale)
+
+
+@numba.njit(cache=True, nogil=True)
+def _fields(
+    field: NDArray[np.complex64], boxes: NDArray[np.int64], starts: NDArray[np.int64],
+    noise: NDArray[np.float32], uf: FloatArray, wf: FloatArray, hf: FloatArray, gf: FloatArray,
+    sf: FloatArray, e: FloatArray, gain: np.float32, steady: np.float32,
+) -> None:  # fmt: skip
+    """Per box m (rows of :func:`_plan_boxes`): its cells (:func:`_deposit_box`) and the
+    surface's field on them, in the top left corner of the zeroed ``field[m]``:
+    sqrt(I) (noise_0 gain + steady) + i sqrt(I) noise_1 gain, in float32, the box's noise
+    from ``starts[m]`` (first the real parts, then the imaginary, row by row)."""
+    for m in range(boxes.shape[0]):
+        _, _, box_c0, box_c1, r0, r1, lo, hi = boxes[m]
+        n_r, n_c = r1 - r0, box_c1 - box_c0
+        cells = np.zeros((n_r, n_c))
+        _deposit_box(cells, r0, box_c0, uf[lo:hi], wf[lo:hi], hf[lo:hi], gf[lo:hi], sf[lo:hi],
+                     e[lo:hi], REACH)  # fmt: skip
+        re = noise[starts[m] : starts[m] + n_r * n_c]
+        im = noise[starts[m] + n_r * n_c : starts[m] + 2 * n_r * n_c]
+        for i in range(n_r):
+            for j in range(n_c):
+                a = np.sqrt(np.float32(cells[i, j]))
+                q = i * n_c + j
+                field[m, i, j] = complex(a * (re[q] * gain + steady), a * im[q] * gain)
+
+
+@numba.njit(cache=True, nogil=True)
+def _add_intensity(
+    image: FloatArray, field: NDArray[np.complex64], r0: int, r1: int, first: int, c0: int,
+    c1: int, s: int,
+) -> None:  # fmt: skip
+    """Add |field|^2 (float32, then float64) of the cells [r0, r1) x [c0, c1) (the field's
+    columns from ``first``) into the image's pixels, each pixel's s x s cells summed row by
+    row (as numpy sums them)."""
+    for pr in range(r0 // s, r1 // s):
+        for pc in range(c0 // s, c1 // s):
+            total = 0.0
+            for i in range(s):
+                for j in range(s):
+                    z = field[pr * s - r0 + i, pc * s - c0 + first + j]
+                    total += np.float64(z.real * z.real + z.imag * z.imag)
+            image[pr, pc] += total
 
 
 @functools.lru_cache(maxsize=64)
@@ -239,21 +389,69 @@ def chip_readout(
     bit_depth: int | None,
 ) -> NDArray[np.float32]:
     """Electrons to the digital image, as a fraction of full scale: ambient light, shot
-    noise, read noise, saturation, quantization (in this order)."""
-    e = (electrons + ambient * full_well_e).astype(np.float32)
+    noise, read noise, saturation, quantization (in this order).
+
+    The draws: Poisson counts of every lit pixel (every pixel with ambient light), in raster
+    order, then a float32 normal per pixel (:mod:`seamtrack.sensing.gauss32`, NumPy's numbers);
+    the arithmetic is float32 throughout."""
+    e = np.empty(electrons.shape, dtype=np.float32)
+    lit = _to_float32(electrons, ambient * full_well_e, e)
+    flat = e.reshape(-1)
     if shot_noise:
         if ambient > 0:
-            e = rng.poisson(e).astype(np.float32)
-        else:
-            lit = np.flatnonzero(e)
-            e.flat[lit] = rng.poisson(e.flat[lit])
-    if read_noise_e > 0:
-        e += np.float32(read_noise_e) * rng.standard_normal(e.shape, dtype=np.float32)
-    fraction = np.clip(e * np.float32(1.0 / full_well_e), 0.0, 1.0)
-    if bit_depth is not None:
-        levels = np.float32(2**bit_depth - 1)
-        fraction = np.round(fraction * levels) / levels
-    return fraction.astype(np.float32, copy=False)
+            flat[:] = rng.poisson(flat)
+        elif len(lit):
+            flat[lit] = rng.poisson(flat[lit])
+    noise = (
+        gauss32.standard_normal_f32(rng, flat.shape)
+        if read_noise_e > 0
+        else np.empty(0, dtype=np.float32)
+    )
+    levels = -1.0 if bit_depth is None else float(2**bit_depth - 1)
+    _digitize(flat, noise, np.float32(read_noise_e), np.float32(1.0 / full_well_e),
+              np.float32(levels))  # fmt: skip
+    return e
+
+
+@numba.njit(cache=True, nogil=True)
+def _to_float32(
+    electrons: FloatArray, offset: float, out: NDArray[np.float32]
+) -> NDArray[np.int64]:
+    """out = float32(electrons + offset); return the flat indices of its nonzero pixels."""
+    src = electrons.reshape(-1)
+    dst = out.reshape(-1)
+    lit = np.empty(src.shape[0], dtype=np.int64)
+    n = 0
+    for i in range(src.shape[0]):
+        v = np.float32(src[i] + offset)
+        dst[i] = v
+        if v != 0:
+            lit[n] = i
+            n += 1
+    return lit[:n]
+
+
+@numba.njit(cache=True, nogil=True)
+def _digitize(
+    e: NDArray[np.float32], noise: NDArray[np.float32], read_noise: np.float32,
+    per_electron: np.float32, levels: np.float32,
+) -> None:  # fmt: skip
+    """In place: e + read_noise * noise (when drawn), times per_electron, clipped to [0, 1],
+    rounded (half to even) to ``levels`` steps when levels > 0."""
+    zero = np.float32(0.0)
+    one = np.float32(1.0)
+    for i in range(e.shape[0]):
+        v = e[i]
+        if noise.shape[0]:
+            v = v + read_noise * noise[i]
+        v = v * per_electron
+        if v < zero:
+            v = zero
+        elif v > one:
+            v = one
+        if levels > zero:
+            v = np.rint(v * levels) / levels
+        e[i] = v
 
 
 # --------------------------------------------------------------------------- truth

@@ -1,0 +1,239 @@
+"""The fast image formation makes the very images of the straightforward one (issue 41 item 5).
+
+Oracles, both independent of the package's fast paths:
+- NumPy itself for :mod:`seamtrack.sensing.gauss32` (the same float32 normals, the same
+  generator state after, the ziggurat's rare tail included);
+- the per-block formation as it stood before the speed work, copied here: one
+  ``rng.standard_normal`` per box, ``scipy.fft.fft2`` / ``ifft2`` of the whole padded box, the
+  pupil as a mask, numpy's reshape-sum into pixels, and the chip's readout in numpy. The images
+  must agree to the byte for the same seed.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+import pytest
+import scipy.fft
+from scipy import ndimage
+
+from seamtrack.sensing import formation, gauss32
+
+# --------------------------------------------------------------------------- the oracle
+
+
+@numba.njit(cache=False)
+def _deposit_reference(box, r0, c0, u, w, half_width, slope, sigma, electrons, reach):  # type: ignore[no-untyped-def]
+    n_r, n_c = box.shape
+    inv_sqrt2 = 1.0 / math.sqrt(2.0)
+    whole = 2.0 * math.erf(reach * inv_sqrt2)
+    for i in range(u.shape[0]):
+        sg = max(sigma[i], 0.05)
+        hw = max(half_width[i], 1e-6)
+        left, right = w[i] - hw, w[i] + hw
+        for col in range(max(c0, int(math.floor(left))), min(c0 + n_c, int(math.floor(right)) + 1)):
+            length = min(right, col + 1.0) - max(left, float(col))
+            if length <= 0.0:
+                continue
+            centre = u[i] + slope[i] * (
+                0.5 * (min(right, col + 1.0) + max(left, float(col))) - w[i]
+            )
+            lo = max(r0, int(math.floor(centre - reach * sg)))
+            hi = min(r0 + n_r, int(math.ceil(centre + reach * sg)))
+            scale = electrons[i] * length / (2.0 * hw) / whole
+            cdf_lo = math.erf((lo - centre) / sg * inv_sqrt2)
+            for k in range(lo, hi):
+                cdf_hi = math.erf((k + 1 - centre) / sg * inv_sqrt2)
+                box[k - r0, col - c0] += (cdf_hi - cdf_lo) * scale
+                cdf_lo = cdf_hi
+
+
+def _runs(top, bottom, gap):  # type: ignore[no-untyped-def]
+    order = np.argsort(top)
+    runs: list[tuple[int, int]] = []
+    for t, b in zip(top[order], bottom[order], strict=True):
+        if runs and t <= runs[-1][1] + gap:
+            runs[-1] = (runs[-1][0], max(runs[-1][1], int(b)))
+        else:
+            runs.append((int(t), int(b)))
+    return runs
+
+
+def _speckle_reference(cells, optics, apron, rng):  # type: ignore[no-untyped-def]
+    shape = cells.shape
+    padded = (scipy.fft.next_fast_len(shape[0] + apron), scipy.fft.next_fast_len(shape[1] + apron))
+    f_c = 1.0 / (2.0 * optics.speckle_size_mm)
+    passed = min(1.0, math.pi * f_c**2 * optics.cell_mm[0] * optics.cell_mm[1])
+    random_share = 1.0 - math.sqrt(max(0.0, 1.0 - optics.speckle_contrast**2))
+    noise = rng.standard_normal((2, *shape), dtype=np.float32)
+    gain = np.float32(math.sqrt(0.5 * random_share / passed))
+    amplitude = np.sqrt(cells.astype(np.float32))
+    field = amplitude * (noise[0] * gain + np.float32(math.sqrt(1.0 - random_share)))
+    field = field + 1j * (amplitude * noise[1] * gain)
+    spectrum = scipy.fft.fft2(field.astype(np.complex64), s=padded)
+    fr = scipy.fft.fftfreq(padded[0], d=optics.cell_mm[0])
+    fc = scipy.fft.fftfreq(padded[1], d=optics.cell_mm[1])
+    spectrum *= (fr[:, None] ** 2 + fc[None, :] ** 2) <= f_c**2
+    image = scipy.fft.ifft2(spectrum)[: shape[0], : shape[1]]
+    return np.asarray(image.real**2 + image.imag**2, dtype=np.float64)
+
+
+def _form_reference(u, w, half_width, slope, sigma, electrons, optics, rng):  # type: ignore[no-untyped-def]
+    s = optics.supersample
+    if not optics.speckle:
+        sigma = np.hypot(sigma, optics.blur_sigma_mm / (optics.cell_mm[0] * s))
+    n_rows, n_cols = optics.rows * s, optics.columns * s
+    image = np.zeros((optics.rows, optics.columns))
+    uf, wf, sf, hf = u * s, w * s, np.maximum(sigma * s, 0.05), np.maximum(half_width * s, 1e-6)
+    extent = formation.REACH * sf + np.abs(slope) * hf
+    keep = (electrons > 0) & (wf + hf > 0) & (wf - hf < n_cols)
+    keep &= (uf + extent > 0) & (uf - extent < n_rows)
+    order = np.flatnonzero(keep)[np.argsort(wf[keep], kind="stable")]
+    uf, wf, sf, hf, e = uf[order], wf[order], sf[order], hf[order], electrons[order]
+    gf, extent = slope[order], extent[order]
+    apron = optics.apron_cells()
+    block = optics.block_columns * s
+    top, bottom = np.floor(uf - extent), np.ceil(uf + extent)
+    reach_w = float(hf.max())
+    for c0 in range(0, n_cols, block):
+        c1 = min(n_cols, c0 + block)
+        lo, hi = np.searchsorted(wf, [c0 - apron - reach_w, c1 + apron + reach_w])
+        if lo == hi:
+            continue
+        box_c0, box_c1 = max(0, c0 - apron), min(n_cols, c1 + apron)
+        for r_first, r_last in _runs(top[lo:hi], bottom[lo:hi], 2 * apron + 1):
+            r0 = max(0, s * ((r_first - apron) // s))
+            r1 = min(n_rows, s * -(-(r_last + apron) // s))
+            if r1 <= r0:
+                continue
+            cells = np.zeros((r1 - r0, box_c1 - box_c0))
+            _deposit_reference(cells, r0, box_c0, uf[lo:hi], wf[lo:hi], hf[lo:hi], gf[lo:hi],
+                               sf[lo:hi], e[lo:hi], formation.REACH)  # fmt: skip
+            if optics.speckle:
+                lit = _speckle_reference(cells, optics, apron, rng)
+            else:
+                sigma_c = optics.blur_sigma_mm / optics.cell_mm[1]
+                lit = ndimage.gaussian_filter1d(
+                    cells, sigma_c, axis=1, mode="constant", truncate=4.0
+                )
+            core = lit[:, c0 - box_c0 : c1 - box_c0]
+            pixels = core.reshape((r1 - r0) // s, s, (c1 - c0) // s, s).sum(axis=(1, 3))
+            image[r0 // s : r1 // s, c0 // s : c1 // s] += pixels
+    return image
+
+
+def _readout_reference(
+    electrons, rng, *, full_well_e, ambient, shot_noise, read_noise_e, bit_depth
+):  # type: ignore[no-untyped-def]
+    e = (electrons + ambient * full_well_e).astype(np.float32)
+    if shot_noise:
+        if ambient > 0:
+            e = rng.poisson(e).astype(np.float32)
+        else:
+            lit = np.flatnonzero(e)
+            e.flat[lit] = rng.poisson(e.flat[lit])
+    if read_noise_e > 0:
+        e += np.float32(read_noise_e) * rng.standard_normal(e.shape, dtype=np.float32)
+    fraction = np.clip(e * np.float32(1.0 / full_well_e), 0.0, 1.0)
+    if bit_depth is not None:
+        levels = np.float32(2**bit_depth - 1)
+        fraction = np.round(fraction * levels) / levels
+    return fraction.astype(np.float32, copy=False)
+
+
+# --------------------------------------------------------------------------- scenes
+
+
+def _stripes(columns: int, seed: int):  # type: ignore[no-untyped-def]
+    """A sloped stripe sampled 2.5 rays a column, a second stripe far below (another run of
+    rows), a gap in the first, and a few broad pieces (a rough bounce)."""
+    rng = np.random.default_rng(seed)
+    w = np.arange(0.2, columns - 0.2, 0.4)
+    w = w[(w < 0.3 * columns) | (w > 0.4 * columns)]
+    u = 60.0 + 0.3 * w + 0.2 * np.sin(w / 7.0)
+    w2 = np.arange(0.1, columns, 0.5)
+    u2 = np.full_like(w2, 190.0)
+    wb = rng.uniform(0, columns, 12)
+    ub = rng.uniform(100, 150, 12)
+    u_all = np.concatenate([u, u2, ub])
+    w_all = np.concatenate([w, w2, wb])
+    n = len(u_all)
+    half = np.full(n, 0.2)
+    slope = np.concatenate([np.full(len(u), 0.3), np.zeros(len(u2) + 12)])
+    sigma = np.concatenate([np.full(len(u) + len(u2), 1.7), np.full(12, 8.0)])
+    electrons = np.concatenate([rng.uniform(500, 3000, len(u) + len(u2)), np.full(12, 50.0)])
+    return u_all, w_all, half, slope, sigma, electrons
+
+
+def _optics(s: int, speckle: bool, contrast: float = 1.0) -> formation.Optics:
+    return formation.Optics(
+        rows=256, columns=192, supersample=s, cell_mm=(0.005 / s, 0.0038 / s),
+        blur_sigma_mm=0.0022, speckle_size_mm=0.00528, speckle=speckle,
+        speckle_contrast=contrast, block_columns=32,
+    )  # fmt: skip
+
+
+# --------------------------------------------------------------------------- tests
+
+
+@pytest.mark.parametrize("n", [1, 2, 7, 1000, 250_001])
+@pytest.mark.parametrize("odd_start", [False, True])
+def test_gauss32_draws_numpys_float32_normals_and_leaves_its_state(n, odd_start) -> None:
+    ours, theirs = np.random.default_rng(n), np.random.default_rng(n)
+    if odd_start:  # a kept half-word at the start
+        ours.standard_normal(3, dtype=np.float32)
+        theirs.standard_normal(3, dtype=np.float32)
+    a = gauss32.standard_normal_f32(ours, (n,))
+    b = theirs.standard_normal(n, dtype=np.float32)
+    assert a.tobytes() == b.tobytes()
+    assert ours.bit_generator.state == theirs.bit_generator.state
+    assert np.array_equal(ours.poisson(7.0, 5), theirs.poisson(7.0, 5))
+
+
+def test_gauss32_ziggurat_tail_and_wedges_match_numpy() -> None:
+    ours, theirs = np.random.default_rng(41), np.random.default_rng(41)
+    a = gauss32.standard_normal_f32(ours, (2_000_000,))
+    b = theirs.standard_normal(2_000_000, dtype=np.float32)
+    assert (np.abs(b) > gauss32.ZIGGURAT_R).sum() > 100  # the tail beyond r was drawn
+    assert a.tobytes() == b.tobytes()
+
+
+def test_gauss32_falls_back_to_numpy_for_another_bit_generator() -> None:
+    ours = np.random.Generator(np.random.MT19937(5))
+    theirs = np.random.Generator(np.random.MT19937(5))
+    assert np.array_equal(
+        gauss32.standard_normal_f32(ours, (4, 5)), theirs.standard_normal((4, 5), dtype=np.float32)
+    )
+
+
+@pytest.mark.parametrize(
+    ("s", "speckle", "contrast"), [(2, True, 1.0), (3, True, 1.0), (2, True, 0.6), (2, False, 1.0)]
+)
+def test_form_image_is_the_per_block_reference_to_the_byte(s, speckle, contrast) -> None:
+    optics = _optics(s, speckle, contrast)
+    pieces = _stripes(optics.columns, seed=s)
+    ours, theirs = np.random.default_rng(3), np.random.default_rng(3)
+    a = formation.form_image(*pieces, optics, ours)
+    b = _form_reference(*pieces, optics, theirs)
+    assert a.sum() > 0
+    assert a.tobytes() == b.tobytes()
+    assert ours.bit_generator.state == theirs.bit_generator.state
+
+
+@pytest.mark.parametrize(
+    "change",
+    [{}, {"ambient": 0.01}, {"bit_depth": None}, {"read_noise_e": 0.0}, {"shot_noise": False}],
+)
+def test_chip_readout_is_the_numpy_reference_to_the_byte(change) -> None:
+    optics = _optics(2, True)
+    electrons = formation.form_image(*_stripes(optics.columns, 1), optics, np.random.default_rng(1))
+    chip = {"full_well_e": 10_000.0, "ambient": 0.0, "shot_noise": True, "read_noise_e": 5.0,
+            "bit_depth": 10, **change}  # fmt: skip
+    ours, theirs = np.random.default_rng(9), np.random.default_rng(9)
+    a = formation.chip_readout(electrons * 4.0, ours, **chip)
+    b = _readout_reference(electrons * 4.0, theirs, **chip)
+    assert a.dtype == b.dtype == np.float32
+    assert a.tobytes() == b.tobytes()
+    assert ours.bit_generator.state == theirs.bit_generator.state
