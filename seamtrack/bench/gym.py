@@ -121,6 +121,31 @@ def _single(steps: int) -> dict[str, Any]:
     return {"reference": reference, "single": single}
 
 
+def _steps_per_s(vec: Any, num_envs: int, steps: int, row: str) -> dict[str, Any]:
+    """Zero actions on a vector env, seeds 0, 1, ...: its steps per second (of all its
+    environments together), after one warming step; an ended episode resets on the next step
+    (autoreset). Closes the env."""
+    try:
+        vec.reset(seed=0)
+        zeros = np.zeros((num_envs, 2), dtype=np.float32)
+        vec.step(zeros)  # the workers warm
+        load = os.getloadavg()[0]
+        rounds = max(1, steps // num_envs)
+        start = time.perf_counter()
+        for _ in range(rounds):
+            vec.step(zeros)
+        wall = time.perf_counter() - start
+    finally:
+        vec.close()
+    return {
+        "row": row,
+        "load_average_before": load,
+        "steps": rounds * num_envs,
+        "steps_per_s": rounds * num_envs / wall,
+        "ms_per_step": 1e3 * wall / (rounds * num_envs),
+    }
+
+
 def _vector(processes: int, steps: int) -> dict[str, Any]:
     import gymnasium
 
@@ -134,51 +159,16 @@ def _vector(processes: int, steps: int) -> dict[str, Any]:
         scene="paper-v-groove",
         overrides=OVERRIDES,
     )
-    try:
-        vec.reset(seed=0)  # the workers get seeds 0, 1, ...
-        zeros = np.zeros((processes, 2), dtype=np.float32)
-        vec.step(zeros)  # the workers warm
-        load = os.getloadavg()[0]
-        rounds = max(1, steps // processes)
-        start = time.perf_counter()
-        for _ in range(rounds):
-            vec.step(zeros)  # an ended episode resets on the next step (autoreset)
-        wall = time.perf_counter() - start
-    finally:
-        vec.close()
-    return {
-        "row": f"AsyncVectorEnv, {processes} process{'es' if processes > 1 else ''}",
-        "load_average_before": load,
-        "steps": rounds * processes,
-        "steps_per_s": rounds * processes / wall,
-        "ms_per_step": 1e3 * wall / (rounds * processes),
-    }
+    row = f"AsyncVectorEnv, {processes} process{'es' if processes > 1 else ''}"
+    return _steps_per_s(vec, processes, steps, row)
 
 
 def _batched(workers: int, num_envs: int, steps: int) -> dict[str, Any]:
     from seamtrack.gym.vector import BatchedVectorEnv
 
     vec = BatchedVectorEnv(num_envs, workers=workers, scene="paper-v-groove", overrides=OVERRIDES)
-    try:
-        vec.reset(seed=0)
-        zeros = np.zeros((num_envs, 2), dtype=np.float32)
-        vec.step(zeros)  # the workers warm
-        load = os.getloadavg()[0]
-        rounds = max(1, steps // num_envs)
-        start = time.perf_counter()
-        for _ in range(rounds):
-            vec.step(zeros)  # an ended episode resets on the next step (autoreset)
-        wall = time.perf_counter() - start
-    finally:
-        vec.close()
-    return {
-        "row": f"BatchedVectorEnv, {num_envs} envs, {workers} process"
-        + ("es" if workers > 1 else ""),
-        "load_average_before": load,
-        "steps": rounds * num_envs,
-        "steps_per_s": rounds * num_envs / wall,
-        "ms_per_step": 1e3 * wall / (rounds * num_envs),
-    }
+    row = f"BatchedVectorEnv, {num_envs} envs, {workers} process{'es' if workers > 1 else ''}"
+    return _steps_per_s(vec, num_envs, steps, row)
 
 
 def bench_gym(out_dir: str | Path, quick: bool = False) -> dict[str, Any]:
