@@ -348,11 +348,17 @@ def _gym() -> str:
     rows = {row["row"]: row for row in load("gym")["rows"]}
     single = next(v for k, v in rows.items() if k.startswith("1 env"))
     vector = [v for k, v in rows.items() if k.startswith("AsyncVectorEnv")]
-    return (
+    batched = [v for k, v in rows.items() if k.startswith("BatchedVectorEnv")]
+    text = (
         f"{single['steps_per_s']:,.0f} steps/s in one process (load "
         f"{single['load_average_before']:.1f}); AsyncVectorEnv "
         + ", ".join(f"{v['steps_per_s']:,.0f} steps/s ({v['row'].split(', ')[1]})" for v in vector)
     )
+    if batched:
+        text += "; BatchedVectorEnv, 16 envs, " + ", ".join(
+            f"{v['steps_per_s']:,.0f} steps/s ({v['row'].split(', ')[2]})" for v in batched
+        )
+    return text
 
 
 def _arms() -> str:
