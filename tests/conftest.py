@@ -2,10 +2,17 @@
 
 from __future__ import annotations
 
+import os
+
 import pytest
 
 import seamtrack as st
 from seamtrack.sensing.sensor import preset
+
+# The first-compile notice off for the whole suite (and the commands it starts): which test
+# compiles a kernel first depends on the order the workers take them, and many check stderr.
+# tests/test_compiling_notice.py turns it back on where it tests it.
+os.environ["SEAMTRACK_COMPILE_NOTICE"] = "0"
 
 
 @pytest.fixture(scope="session")

@@ -40,15 +40,19 @@ class _Tty(io.StringIO):
         return True
 
 
-def test_the_notice_is_wanted_off_a_terminal_unless_quiet() -> None:
+def test_the_notice_is_wanted_off_a_terminal_unless_quiet(monkeypatch) -> None:
+    monkeypatch.delenv("SEAMTRACK_COMPILE_NOTICE", raising=False)
     assert announce_wanted("run", quiet=False, stdout=io.StringIO())
     assert not announce_wanted("run", quiet=False, stdout=_Tty())  # the bars show progress
     assert not announce_wanted("run", quiet=True, stdout=io.StringIO())
     assert not announce_wanted("init", quiet=False, stdout=io.StringIO())
+    monkeypatch.setenv("SEAMTRACK_COMPILE_NOTICE", "0")
+    assert not announce_wanted("run", quiet=False, stdout=io.StringIO())
 
 
 def test_a_cold_run_into_a_pipe_says_it_compiles(tmp_path: Path) -> None:
     env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba")}  # an empty cache
+    env.pop("SEAMTRACK_COMPILE_NOTICE", None)  # the suite turns it off
     res = subprocess.run(
         [sys.executable, "-m", "seamtrack.cli", "run", "paper-verification",
          "--set", "seam.length_mm=20", "--out", str(tmp_path / "run"), "--no-plot"],
