@@ -150,11 +150,15 @@ def test_every_kernel_returns_one_value_or_a_named_tuple(module: types.ModuleTyp
 
 def test_the_extractors_entry_kernels_were_checked_compiled() -> None:
     """The kernels the extractors call from Python have compiled signatures to inspect
-    (so the compiled check above is not vacuous for them)."""
+    (so the compiled check above is not vacuous for them).
+
+    ``_two_lines.two_lines_share`` is not required here: the corner extractors reach it from
+    the compiled ``_corner_search``, and when both load from numba's cache it has no signatures
+    of its own (this test failed on every second run of the suite); a fresh checkout compiles
+    it, and the check above inspects it then."""
     _run_every_extractor()
     for kernel in (
         _two_plate_search.two_plates,
-        _two_lines.two_lines_share,
         _slope_turns.clean_points,
         _slope_turns.window_turns,
         _slope_turns.corner_point,
