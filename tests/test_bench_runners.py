@@ -212,8 +212,8 @@ def test_failures_bench(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None
     for r in result["rows"]:
         assert r["exit"] == 2 and r["problems"] == [], r
         assert r["first_line"].startswith("seamtrack: error: ")
-        assert _finite_positive(r["peak_mb_so_far"])
-        assert r["peak_mb_so_far"] < 2048
+        assert _finite_positive(r["peak_mb"])
+        assert r["peak_mb"] < 2048
     assert result["largest_run"] is None  # quick leaves the largest run out
 
 

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import json
 import os
-import resource
 import subprocess
 import sys
 import tempfile
@@ -26,7 +25,7 @@ from seamtrack.bench.common import machine_info
 from seamtrack.bench.failure_inputs import CATALOGUE, Entry, _set, workspace
 from seamtrack.simulation.compiling import MESSAGE as COMPILING_MESSAGE
 
-__all__ = ["CATALOGUE", "Entry", "Outcome", "bench_failures", "run_entry", "workspace"]
+__all__ = ["CATALOGUE", "Entry", "Outcome", "bench_failures", "run_entry", "run_measured", "workspace"]
 
 
 @dataclass(frozen=True)
@@ -67,19 +66,28 @@ def run_entry(entry: Entry, root: Path) -> Outcome:
     args = [str(out) if a == "OUT" else a.replace("OUT/", f"{out}/") for a in entry.args]
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(root), *sys.path])}
     start = time.perf_counter()
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "seamtrack.cli", *args],
-        cwd=root,
-        env=env,
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.PIPE,
-        text=True,
-    )
-    _, stderr = proc.communicate()
+    code, stderr, peak = run_measured([sys.executable, "-m", "seamtrack.cli", *args], root, env)
     wall = time.perf_counter() - start
-    # The largest peak of any child so far (the kernel keeps the maximum): a running bound.
-    peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
-    return Outcome(entry.name, proc.returncode, stderr, out.exists(), peak, wall)
+    return Outcome(entry.name, code, stderr, out.exists(), peak, wall)
+
+
+def run_measured(
+    command: list[str], cwd: Path, env: dict[str, str] | None = None
+) -> tuple[int, str, float]:
+    """Run ``command``; its exit code, its stderr and its own peak resident memory in MB.
+
+    The peak is this child's alone (``os.wait4``'s rusage): ``RUSAGE_CHILDREN`` would be the
+    largest of every child the calling process ever waited for, a pytest worker's included.
+    """
+    proc = subprocess.Popen(
+        command, cwd=cwd, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True
+    )
+    assert proc.stderr is not None
+    stderr = proc.stderr.read()  # the only pipe: reading it to its end cannot deadlock
+    proc.stderr.close()
+    _, status, usage = os.wait4(proc.pid, 0)
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    return proc.returncode, stderr, usage.ru_maxrss / 1024
 
 
 #: The largest run the size limits allow: 3.99e6 control ticks (0.2 ms over 799 s), a slow
@@ -94,25 +102,16 @@ LARGEST_RUN = (
 def _largest_run(root: Path) -> dict[str, Any]:
     out = root / "largest"
     start = time.perf_counter()
-    proc = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "seamtrack.cli",
-            *(str(out) if a == "OUT" else a for a in LARGEST_RUN),
-        ],
-        cwd=root,
-        capture_output=True,
-        text=True,
-    )
+    command = [sys.executable, "-m", "seamtrack.cli"]
+    code, _, peak = run_measured(command + [str(out) if a == "OUT" else a for a in LARGEST_RUN], root)
     wall = time.perf_counter() - start
-    summary = json.loads((out / "summary.json").read_text()) if proc.returncode == 0 else {}
+    summary = json.loads((out / "summary.json").read_text()) if code == 0 else {}
     return {
         "command": "seamtrack " + " ".join(LARGEST_RUN),
-        "exit": proc.returncode,
+        "exit": code,
         "ticks": int(round(summary.get("sim_time_s", 0.0) / 2e-4)) + 1,
         "status": summary.get("status"),
-        "peak_mb": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024,
+        "peak_mb": peak,
         "wall_s": wall,
     }
 
@@ -135,7 +134,7 @@ def bench_failures(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any
                     "exit": outcome.exit_code,
                     "first_line": (outcome.stderr.splitlines() or [""])[0],
                     "problems": outcome.problems(entry.field),
-                    "peak_mb_so_far": outcome.peak_mb,
+                    "peak_mb": outcome.peak_mb,
                     "wall_s": outcome.wall_s,
                 }
             )
@@ -148,7 +147,7 @@ def bench_failures(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any
         f"{len(rows)} bad inputs, {len(bad)} falling short; "
         f"tracebacks: {sum('traceback' in r['problems'] for r in rows)}, "
         f"output folders left: {sum('output folder left behind' in r['problems'] for r in rows)}, "
-        f"largest peak: {max(r['peak_mb_so_far'] for r in rows):.0f} MB.",
+        f"largest peak: {max(r['peak_mb'] for r in rows):.0f} MB.",
         "",
         "| input | exit | s | first line of the answer | problems |",
         "|---|---|---|---|---|",
