@@ -25,7 +25,15 @@ from seamtrack.bench.common import machine_info
 from seamtrack.bench.failure_inputs import CATALOGUE, Entry, _set, workspace
 from seamtrack.simulation.compiling import MESSAGE as COMPILING_MESSAGE
 
-__all__ = ["CATALOGUE", "Entry", "Outcome", "bench_failures", "run_entry", "run_measured", "workspace"]
+__all__ = [
+    "CATALOGUE",
+    "Entry",
+    "Outcome",
+    "bench_failures",
+    "run_entry",
+    "run_measured",
+    "workspace",
+]
 
 
 @dataclass(frozen=True)
@@ -103,7 +111,9 @@ def _largest_run(root: Path) -> dict[str, Any]:
     out = root / "largest"
     start = time.perf_counter()
     command = [sys.executable, "-m", "seamtrack.cli"]
-    code, _, peak = run_measured(command + [str(out) if a == "OUT" else a for a in LARGEST_RUN], root)
+    code, _, peak = run_measured(
+        command + [str(out) if a == "OUT" else a for a in LARGEST_RUN], root
+    )
     wall = time.perf_counter() - start
     summary = json.loads((out / "summary.json").read_text()) if code == 0 else {}
     return {
