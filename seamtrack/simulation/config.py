@@ -314,6 +314,25 @@ class PlannerConfig(_Section):
     params: dict[str, Any] = Field(default_factory=dict)
 
 
+class ArcConfig(_Section):
+    """The welding arc in the sensor's view: its light, the plate it lights and heats, spatter
+    and fume (issue 38, docs/arc.md). A scene without ``[arc]`` has no arc and runs as before.
+
+    ``model`` names how the arc reaches the profile: ``"image"`` draws it into the camera's
+    image (``sensor.source = "image"``), ``"profile"`` applies a statistical model of false
+    points and drop-outs along the stripe, measured from the image model by ``seamtrack bench
+    arc``; ``"auto"`` is the image model when the sensor forms images, else the profile model.
+    """
+
+    process: Literal["mag-short", "mag-spray", "tig"] = "mag-spray"
+    #: The welding current (A); it sets the arc's radiance, the spatter and the fume.
+    current_a: Annotated[float, Field(gt=0, le=1000, allow_inf_nan=False, strict=True)] = 250.0
+    model: Literal["auto", "image", "profile"] = "auto"
+    spatter: Flag = True
+    fume: Flag = True
+    glow: Flag = True
+
+
 class SceneConfig(_Section):
     name: str = ""
     description: str = ""
@@ -328,6 +347,7 @@ class SceneConfig(_Section):
     process: ProcessConfig | None = None
     passes: PassesConfig | None = None
     planner: PlannerConfig | None = None
+    arc: ArcConfig | None = None
 
 
 @dataclass(frozen=True)

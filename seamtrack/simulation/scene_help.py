@@ -158,6 +158,13 @@ KEY_HELP: dict[str, str] = {
     "workpiece.obstacles.max_mm": "the box's upper corner, world frame",
     "workpiece.material": "surface material in image mode (seamtrack.sensing.materials)",
     # [process]
+    "arc": "the welding arc in the sensor's view (docs/arc.md); no section, no arc",
+    "arc.process": '"mag-short", "mag-spray" or "tig"',
+    "arc.current_a": "welding current, A (the arc's radiance, spatter and fume)",
+    "arc.model": '"image", "profile" or "auto" (image when the sensor forms images)',
+    "arc.spatter": "glowing droplets on ballistic paths",
+    "arc.fume": "the fume's attenuation and veiling glow",
+    "arc.glow": "the hot plate's own light near the arc",
     "process": "the welding process (GMAW) of a multi-pass job",
     "process.wire_diameter_mm": "wire diameter",
     "process.wire_feed_m_min": "wire feed speed, m/min",
