@@ -60,7 +60,9 @@ def test_a_device_is_refused_without_reading_it() -> None:
 def test_six_continuous_joints_are_named_as_such(tmp_path: Path) -> None:
     with pytest.raises(SceneError, match="joint 'j1' is continuous") as info:
         ArmKinematics.from_urdf(_write(tmp_path, chain_urdf(6, kind="continuous", limit=None)))
-    assert "12" not in str(info.value)
+    # named as continuous, not counted among the too-many movable joints (the message holds
+    # the file's path, whose pytest-NNN folder may hold any digits)
+    assert "movable joints" not in str(info.value)
 
 
 @pytest.mark.parametrize(

@@ -86,134 +86,137 @@ def _floats(element: Any, attribute: str, count: int) -> list[float] | None:
     return values
 
 
+class _Finding(Exception):
+    """What a check of :func:`check_urdf` found wrong, and the fix (the caller names the file
+    and the scene's field)."""
+
+    def __init__(self, message: str, fix: str) -> None:
+        super().__init__(message)
+        self.message, self.fix = message, fix
+
+
+_A_URDF = "give a URDF file (XML with a <robot> element)"
+
+
 def check_urdf(text: str, what: str, field: str = "robot.urdf") -> None:
     """Refuse, naming ``field``, a URDF that urdfdom would reject (with its own stderr lines) or
     that is too large a chain: see the module's docstring."""
+    try:
+        root = _robot(text)
+        links = [link.get("name") for link in root.findall("link")]
+        joints = root.findall("joint")
+        _check_sizes(links, joints)
+        children: set[str] = set()
+        for index, joint in enumerate(joints):
+            child = _checked_joint(joint, joint.get("name") or f"number {index + 1}", links)
+            if child in children:
+                raise _Finding(
+                    f"joint {joint.get('name') or f'number {index + 1}'!r}: link {child!r} is "
+                    "the child of two joints",
+                    "give every link one parent joint (a serial chain)",
+                )
+            children.add(child)
+        roots = [link for link in links if link not in children]
+        if len(roots) != 1:
+            raise _Finding(
+                f"has {len(roots)} root links ({', '.join(map(str, roots[:4]))}): a serial "
+                "arm's links hang from one base link",
+                "attach every link to the chain by a joint (or remove the ones not attached)",
+            )
+    except _Finding as finding:
+        raise _refuse(what, finding.message, finding.fix, field) from None
+
+
+def _robot(text: str) -> ElementTree.Element:
+    """The ``<robot>`` element of a URDF's text, parsed without DTDs or entities."""
     if "<robot" not in text:
-        raise _refuse(
-            what,
-            "is not a URDF: no <robot> element",
-            "give a URDF file (XML with a <robot> element)",
-            field,
-        )
+        raise _Finding("is not a URDF: no <robot> element", _A_URDF)
     if "<!ENTITY" in text or "<!DOCTYPE" in text:
-        raise _refuse(
-            what,
+        raise _Finding(
             "declares a DTD or entities, which a URDF never needs",
             "remove the <!DOCTYPE ...> and <!ENTITY ...> declarations",
-            field,
         )
     try:
         root = ElementTree.fromstring(text)
     except ElementTree.ParseError as exc:
-        raise _refuse(
-            what,
+        raise _Finding(
             f"does not parse as a URDF: not well-formed XML ({exc})",
             "check the file's XML (every element closed, quotes matched)",
-            field,
         ) from None
     if root.tag != "robot":
-        raise _refuse(
-            what,
-            f"its root element is <{root.tag}>, not <robot>",
-            "give a URDF file (XML with a <robot> element)",
-            field,
-        )
-    links = [link.get("name") for link in root.findall("link")]
-    joints = root.findall("joint")
+        raise _Finding(f"its root element is <{root.tag}>, not <robot>", _A_URDF)
+    return root
+
+
+def _check_sizes(links: list[str | None], joints: list[ElementTree.Element]) -> None:
+    """At most :data:`MAX_JOINTS` movable joints and :data:`MAX_ALL_JOINTS` in all; every link
+    named once."""
     movable = sum(joint.get("type") in (*_MOVABLE, *_UNSUPPORTED) for joint in joints)
     if movable > MAX_JOINTS:
-        raise _refuse(
-            what,
+        raise _Finding(
             f"has {movable} movable joints, more than {MAX_JOINTS} (a welding arm has 6 or 7; "
             "a track and a positioner add a few)",
             f"give one serial arm of at most {MAX_JOINTS} joints",
-            field,
         )
     if len(joints) > MAX_ALL_JOINTS:
-        raise _refuse(
-            what,
+        raise _Finding(
             f"has {len(joints)} joints, more than {MAX_ALL_JOINTS}",
             f"give one serial arm (at most {MAX_JOINTS} movable joints)",
-            field,
         )
     if None in links or len(set(links)) != len(links):
-        raise _refuse(
-            what,
-            "every <link> needs a name, each name used once",
-            'give each link a unique name="..."',
-            field,
+        raise _Finding(
+            "every <link> needs a name, each name used once", 'give each link a unique name="..."'
         )
-    children: set[str] = set()
-    for index, joint in enumerate(joints):
-        name = joint.get("name") or f"number {index + 1}"
-        kind = joint.get("type")
-        where = f"joint {name!r}"
-        if kind in _UNSUPPORTED:
-            raise _refuse(
-                what,
-                f"{where} is {kind}: seamtrack needs a range for every joint (a "
-                f"{kind} joint has none)",
-                'make it type="revolute" or "prismatic" with <limit lower="..." upper="..." '
-                'velocity="..." effort="..."/>',
-                field,
-            )
-        if kind not in (*_MOVABLE, "fixed"):
-            raise _refuse(
-                what, f"{where} has type {kind!r}", "use revolute, prismatic or fixed", field
-            )
-        ends = [joint.find(tag) for tag in ("parent", "child")]
-        names = [None if end is None else end.get("link") for end in ends]
-        for tag, link in zip(("parent", "child"), names, strict=True):
-            if link is None or link not in links:
-                raise _refuse(
-                    what,
-                    f"{where}: its <{tag} link=...> names no <link> of the file",
-                    f"give the {tag} link's name, declared as <link name=...>",
-                    field,
-                )
-        child = str(names[1])
-        if child in children:
-            raise _refuse(
-                what,
-                f"{where}: link {child!r} is the child of two joints",
-                "give every link one parent joint (a serial chain)",
-                field,
-            )
-        children.add(child)
-        try:
-            origin = joint.find("origin")
-            if origin is not None:
-                _floats(origin, "xyz", 3)
-                _floats(origin, "rpy", 3)
-            axis = joint.find("axis")
-            vector = None if axis is None else _floats(axis, "xyz", 3)
-            if vector is not None and not any(vector):
-                raise ValueError('axis xyz="0 0 0" has no direction')
-            if kind in _MOVABLE:
-                limit = joint.find("limit")
-                if limit is None:
-                    raise ValueError("a revolute or prismatic joint needs a <limit>")
-                for attribute in ("lower", "upper", "velocity", "effort"):
-                    if _floats(limit, attribute, 1) is None:
-                        raise ValueError(f"its <limit> has no {attribute}")
-        except ValueError as exc:
-            raise _refuse(
-                what,
-                f"{where}: {exc}",
-                'give finite numbers: <origin xyz="x y z" rpy="r p y"/>, <axis '
-                'xyz="x y z"/>, <limit lower upper velocity effort/>',
-                field,
-            ) from None
-    roots = [link for link in links if link not in children]
-    if len(roots) != 1:
-        raise _refuse(
-            what,
-            f"has {len(roots)} root links ({', '.join(map(str, roots[:4]))}): a serial "
-            "arm's links hang from one base link",
-            "attach every link to the chain by a joint (or remove the ones not attached)",
-            field,
+
+
+def _checked_joint(joint: ElementTree.Element, name: str, links: list[str | None]) -> str:
+    """Check one ``<joint>`` (its type, its two links, its numbers); its child link's name."""
+    kind = joint.get("type")
+    where = f"joint {name!r}"
+    if kind in _UNSUPPORTED:
+        raise _Finding(
+            f"{where} is {kind}: seamtrack needs a range for every joint (a {kind} joint has none)",
+            'make it type="revolute" or "prismatic" with <limit lower="..." upper="..." '
+            'velocity="..." effort="..."/>',
         )
+    if kind not in (*_MOVABLE, "fixed"):
+        raise _Finding(f"{where} has type {kind!r}", "use revolute, prismatic or fixed")
+    ends = [joint.find(tag) for tag in ("parent", "child")]
+    names = [None if end is None else end.get("link") for end in ends]
+    for tag, link in zip(("parent", "child"), names, strict=True):
+        if link is None or link not in links:
+            raise _Finding(
+                f"{where}: its <{tag} link=...> names no <link> of the file",
+                f"give the {tag} link's name, declared as <link name=...>",
+            )
+    try:
+        _check_numbers(joint, kind)
+    except ValueError as exc:
+        raise _Finding(
+            f"{where}: {exc}",
+            'give finite numbers: <origin xyz="x y z" rpy="r p y"/>, <axis xyz="x y z"/>, '
+            "<limit lower upper velocity effort/>",
+        ) from None
+    return str(names[1])
+
+
+def _check_numbers(joint: ElementTree.Element, kind: str | None) -> None:
+    """The joint's origin, axis and limits are finite numbers, its axis a direction."""
+    origin = joint.find("origin")
+    if origin is not None:
+        _floats(origin, "xyz", 3)
+        _floats(origin, "rpy", 3)
+    axis = joint.find("axis")
+    vector = None if axis is None else _floats(axis, "xyz", 3)
+    if vector is not None and not any(vector):
+        raise ValueError('axis xyz="0 0 0" has no direction')
+    if kind in _MOVABLE:
+        limit = joint.find("limit")
+        if limit is None:
+            raise ValueError("a revolute or prismatic joint needs a <limit>")
+        for attribute in ("lower", "upper", "velocity", "effort"):
+            if _floats(limit, attribute, 1) is None:
+                raise ValueError(f"its <limit> has no {attribute}")
 
 
 @contextmanager
