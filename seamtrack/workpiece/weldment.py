@@ -338,17 +338,15 @@ def seams_of_bodies(
     field: str = "workpiece.step",
 ) -> list[FoundSeam]:
     """Every candidate weld between the given (name, solid) bodies; see :func:`find_seams`."""
-    from seamtrack.workpiece import clearance, contacts, crossings
+    from seamtrack.workpiece import clearance, contacts
 
-    for name, value in (
-        ("max_gap_mm", max_gap_mm),
-        ("torch_length_mm", torch_length_mm),
-        ("tolerance_mm", tolerance_mm),
-        ("spacing_mm", spacing_mm),
-        ("min_length_mm", min_length_mm),
-    ):
-        if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
-            raise WorkpieceError(f"{name} must be > 0, got {value!r}", field=name, fix="e.g. 1")
+    _check_positive(
+        max_gap_mm=max_gap_mm,
+        torch_length_mm=torch_length_mm,
+        tolerance_mm=tolerance_mm,
+        spacing_mm=spacing_mm,
+        min_length_mm=min_length_mm,
+    )
     if len(bodies) < 2:
         raise WorkpieceError(
             f"{source} holds {len(bodies)} solid: seams are found where two bodies meet",
@@ -373,49 +371,88 @@ def seams_of_bodies(
             nearest = min(nearest, (d, i, j))
             if d > max_gap_mm:
                 continue
-            pieces = []
-            for fa, fb, gap, region in contacts.facing_regions(
-                solids[i], solids[j], max_gap_mm, min_area, met.short_mm
-            ):
-                if gap > contacts.ON_TOL_MM:  # facing across a gap: is it free?
-                    filler = clearance.gap_filled(region, fa.normal, gap, space, (i, j))
-                    if filler is not None:
-                        met.filled.append((i, j, filler))
-                        continue
-                pieces += contacts.region_pieces(
-                    (solids[i], solids[j]), (i, j), fa, fb, gap, region, tolerance_mm, spacing_mm
-                )
-            if d <= contacts.ON_TOL_MM and crossings.overlap(solids[i], solids[j]):
-                met.overlapping.append((i, j))
-                pieces += crossings.crossing_pieces(
-                    (solids[i], solids[j]), (i, j), tolerance_mm, spacing_mm
-                )
+            pieces = _pair_pieces(
+                solids, (i, j), d, space, met, max_gap_mm, min_area, tolerance_mm, spacing_mm
+            )
             for piece in pieces:
                 for candidate in _candidates(piece, space, thin, min_length_mm, met):
                     raw.append(((i, j), candidate))
     if not raw:
         if nearest[0] > max_gap_mm:
-            if math.isinf(nearest[0]):  # no bounding boxes met: measure every pair
-                nearest = min(
-                    (contacts.distance(solids[i], solids[j]), i, j)
-                    for i in range(len(solids))
-                    for j in range(i + 1, len(solids))
-                )
-            a, b = names[nearest[1]], names[nearest[2]]
-            where = (
-                "" if math.isinf(nearest[0]) else f" (nearest: {a} and {b}, {nearest[0]:.3g} mm)"
-            )
-            raise WorkpieceError(
-                f"{source}: no two of its {len(names)} bodies come within {max_gap_mm:g} mm of "
-                f"each other{where}",
-                field=field,
-                fix="check the bodies' placement and units, or raise max_gap_mm",
-            )
+            raise _too_far(solids, names, nearest, max_gap_mm, source, field)
         raise clearance.no_seam_error(
             met, solids, names, source=source, field_name=field, min_length_mm=min_length_mm
         )
     seams = [_finish(pair, c, names, space, torch_length_mm) for pair, c in raw]
     return _number(seams)
+
+
+def _check_positive(**values: float) -> None:
+    """Each option a finite number > 0, or an error naming it."""
+    for name, value in values.items():
+        if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
+            raise WorkpieceError(f"{name} must be > 0, got {value!r}", field=name, fix="e.g. 1")
+
+
+def _pair_pieces(
+    solids: list[Any],
+    pair: tuple[int, int],
+    distance_mm: float,
+    space: Any,
+    met: Any,
+    max_gap_mm: float,
+    min_area: float,
+    tolerance_mm: float,
+    spacing_mm: float,
+) -> list[Any]:
+    """The seam pieces where two bodies face each other (across a free gap, or in contact) or
+    where their surfaces cross; a gap filled by a third body is noted in ``met``, not a seam."""
+    from seamtrack.workpiece import clearance, contacts, crossings
+
+    i, j = pair
+    pieces = []
+    for fa, fb, gap, region in contacts.facing_regions(
+        solids[i], solids[j], max_gap_mm, min_area, met.short_mm
+    ):
+        if gap > contacts.ON_TOL_MM:  # facing across a gap: is it free?
+            filler = clearance.gap_filled(region, fa.normal, gap, space, pair)
+            if filler is not None:
+                met.filled.append((i, j, filler))
+                continue
+        pieces += contacts.region_pieces(
+            (solids[i], solids[j]), pair, fa, fb, gap, region, tolerance_mm, spacing_mm
+        )
+    if distance_mm <= contacts.ON_TOL_MM and crossings.overlap(solids[i], solids[j]):
+        met.overlapping.append(pair)
+        pieces += crossings.crossing_pieces((solids[i], solids[j]), pair, tolerance_mm, spacing_mm)
+    return pieces
+
+
+def _too_far(
+    solids: list[Any],
+    names: list[str],
+    nearest: tuple[float, int, int],
+    max_gap_mm: float,
+    source: str,
+    field: str,
+) -> WorkpieceError:
+    """The error when no two bodies come within ``max_gap_mm``, naming the nearest pair."""
+    from seamtrack.workpiece import contacts
+
+    if math.isinf(nearest[0]):  # no bounding boxes met: measure every pair
+        nearest = min(
+            (contacts.distance(solids[i], solids[j]), i, j)
+            for i in range(len(solids))
+            for j in range(i + 1, len(solids))
+        )
+    a, b = names[nearest[1]], names[nearest[2]]
+    where = "" if math.isinf(nearest[0]) else f" (nearest: {a} and {b}, {nearest[0]:.3g} mm)"
+    return WorkpieceError(
+        f"{source}: no two of its {len(names)} bodies come within {max_gap_mm:g} mm of "
+        f"each other{where}",
+        field=field,
+        fix="check the bodies' placement and units, or raise max_gap_mm",
+    )
 
 
 def _candidates(
