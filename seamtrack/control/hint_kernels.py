@@ -105,6 +105,28 @@ def _nearer(
 
 
 @numba.njit(cache=True, nogil=True)
+def _reused_rows(
+    points: FloatArray, last_points: FloatArray, last_near: FloatArray, near: FloatArray
+) -> int:
+    """Copy into ``near`` the answers ``last_near`` holds for the first rows of ``points``
+    (where ``points`` starts inside ``last_points`` and goes on alike); how many rows."""
+    m = points.shape[0]
+    k = 0
+    for j in range(last_points.shape[0]):
+        if (last_points[j, 0] == points[0, 0] and last_points[j, 1] == points[0, 1]
+                and last_points[j, 2] == points[0, 2]):  # fmt: skip
+            k = min(last_points.shape[0] - j, m)
+            for r in range(k):
+                for c in range(3):
+                    if last_points[j + r, c] != points[r, c]:
+                        k = 0
+            for r in range(k):
+                near[r] = last_near[j + r]
+            break
+    return k
+
+
+@numba.njit(cache=True, nogil=True)
 def closest_on_polyline_chunked(
     points: FloatArray,
     last_points: FloatArray,
@@ -121,18 +143,7 @@ def closest_on_polyline_chunked(
     order the segments are looked at in."""
     m = points.shape[0]
     near = np.empty((m, 3))
-    k = 0
-    for j in range(last_points.shape[0]):
-        if (last_points[j, 0] == points[0, 0] and last_points[j, 1] == points[0, 1]
-                and last_points[j, 2] == points[0, 2]):  # fmt: skip
-            k = min(last_points.shape[0] - j, m)
-            for r in range(k):
-                for c in range(3):
-                    if last_points[j + r, c] != points[r, c]:
-                        k = 0
-            for r in range(k):
-                near[r] = last_near[j + r]
-            break
+    k = _reused_rows(points, last_points, last_near, near)
     n_seg, n_chunk = a.shape[0], radii.shape[0]
     lower = np.empty(n_chunk)
     for r in range(k, m):

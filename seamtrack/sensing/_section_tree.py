@@ -106,13 +106,7 @@ def _build(
            NDArray[np.int64]]:  # fmt: skip
     f = faces.shape[0]
     order = np.arange(f)
-    centre = np.empty((f, 3))
-    for k in range(f):
-        for a in range(3):
-            p, q, r = vertices[faces[k, 0], a], vertices[faces[k, 1], a], vertices[faces[k, 2], a]
-            centre[k, a] = 0.5 * (min(p, q, r) + max(p, q, r))
-    cmin = np.empty(3)
-    cmax = np.empty(3)
+    centre = _box_centres(vertices, faces)
     lo = np.empty((nodes, 3))
     hi = np.empty((nodes, 3))
     child = np.zeros(nodes, dtype=np.int64)
@@ -133,25 +127,61 @@ def _build(
             child[node] = start
             count[node] = end - start
             continue
-        for a in range(3):
-            cmin[a] = np.inf
-            cmax[a] = -np.inf
-        for j in range(start, end):
-            for a in range(3):
-                cmin[a] = min(cmin[a], centre[order[j], a])
-                cmax[a] = max(cmax[a], centre[order[j], a])
-        axis = 0
-        for a in range(1, 3):
-            if cmax[a] - cmin[a] > cmax[axis] - cmin[axis]:
-                axis = a
         mid = (start + end) // 2
-        _select(order, centre, axis, start, end, mid)
+        _select(order, centre, _longest_axis(centre, order, start, end), start, end, mid)
         child[node] = used
         stack_node[top], stack_start[top], stack_end[top] = used, start, mid
         stack_node[top + 1], stack_start[top + 1], stack_end[top + 1] = used + 1, mid, end
         top += 2
         used += 2
-    # The boxes, children before parents.
+    _node_boxes(vertices, faces, order, child, count, used, lo, hi)
+    return lo, hi, child, count, order
+
+
+@numba.njit(cache=True, nogil=True)
+def _box_centres(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.float64]:
+    """Each face's bounding box's centre."""
+    f = faces.shape[0]
+    centre = np.empty((f, 3))
+    for k in range(f):
+        for a in range(3):
+            p, q, r = vertices[faces[k, 0], a], vertices[faces[k, 1], a], vertices[faces[k, 2], a]
+            centre[k, a] = 0.5 * (min(p, q, r) + max(p, q, r))
+    return centre
+
+
+@numba.njit(cache=True, nogil=True)
+def _longest_axis(
+    centre: NDArray[np.float64], order: NDArray[np.int64], start: int, end: int
+) -> int:
+    """The axis along which the centres ``order[start:end]`` spread the most (the first of
+    equals)."""
+    cmin = np.full(3, np.inf)
+    cmax = np.full(3, -np.inf)
+    for j in range(start, end):
+        for a in range(3):
+            cmin[a] = min(cmin[a], centre[order[j], a])
+            cmax[a] = max(cmax[a], centre[order[j], a])
+    axis = 0
+    for a in range(1, 3):
+        if cmax[a] - cmin[a] > cmax[axis] - cmin[axis]:
+            axis = a
+    return axis
+
+
+@numba.njit(cache=True, nogil=True)
+def _node_boxes(
+    vertices: NDArray[np.float64],
+    faces: NDArray[np.int64],
+    order: NDArray[np.int64],
+    child: NDArray[np.int64],
+    count: NDArray[np.int64],
+    used: int,
+    lo: NDArray[np.float64],
+    hi: NDArray[np.float64],
+) -> None:
+    """Fill the nodes' boxes, children before parents: a leaf's from its faces' vertices, an
+    inner node's from its two children."""
     for node in range(used - 1, -1, -1):
         if count[node] > 0:
             for a in range(3):
@@ -168,4 +198,3 @@ def _build(
             for a in range(3):
                 lo[node, a] = min(lo[first, a], lo[first + 1, a])
                 hi[node, a] = max(hi[first, a], hi[first + 1, a])
-    return lo, hi, child, count, order
