@@ -103,28 +103,57 @@ def _bare_rays(sensor: Any, caster: Any, T: np.ndarray) -> tuple[np.ndarray, ...
     )
 
 
-def _case(name: str, mesh: Any, poses: list[np.ndarray], calls: int, repeats: int) -> dict:
-    """Time every method on one mesh: each call casts one profile at every pose in turn."""
-    import trimesh
+def _pipeline_methods(
+    sensor: Any, mesh: Any, caster: Any, embreex_caster: Any, poses: list[np.ndarray]
+) -> dict[str, Callable[[], object]]:
+    """The stripe as the library casts it (``scan_mesh``, ``stripe_hits``), by every fan and
+    backend: one call casts one profile at every pose in turn."""
+    from seamtrack.sensing.scan import scan_mesh, stripe_hits
 
-    from seamtrack.sensing import raycast, section
-    from seamtrack.sensing.scan import laser_fan, ray_caster, scan_mesh, stripe_hits
+    def every_pose(fn: Callable[[np.ndarray], object]) -> Callable[[], None]:
+        def run() -> None:
+            for T in poses:
+                fn(T)
+
+        return run
+
+    return {
+        "scan_mesh (Profile), plane-section fan": every_pose(
+            lambda T: scan_mesh(sensor, mesh, T, rays=RAYS, fan="section")
+        ),
+        "scan_mesh (Profile), Embree fan, float64 refinement": every_pose(
+            lambda T: scan_mesh(sensor, mesh, T, rays=RAYS, fan="embree")
+        ),
+        "scan_mesh (Profile), Embree fan, float32 only": every_pose(
+            lambda T: scan_mesh(sensor, mesh, T, rays=RAYS, refine=False)
+        ),
+        "stripe_hits (arrays), plane-section fan": every_pose(
+            lambda T: stripe_hits(sensor, caster, T, RAYS, fan="section")
+        ),
+        "stripe_hits (arrays), Embree fan, float64 refinement": every_pose(
+            lambda T: stripe_hits(sensor, caster, T, RAYS, fan="embree")
+        ),
+        "stripe_hits (arrays), Embree fan, float32 only": every_pose(
+            lambda T: stripe_hits(sensor, caster, T, RAYS, refine=False)
+        ),
+        "stripe_hits (arrays), Embree fan, embreex backend": every_pose(
+            lambda T: stripe_hits(sensor, embreex_caster, T, RAYS, fan="embree")
+        ),
+    }
+
+
+def _part_methods(
+    rays: list[tuple[np.ndarray, ...]],
+    caster: Any,
+    scene: Any,
+    intersector: Any,
+    poses: list[np.ndarray],
+) -> dict[str, Callable[[], object]]:
+    """The same rays through the bare libraries (embreex, trimesh), and each part of the
+    stripe alone (the fan, the shadow rays, the plane section)."""
+    from seamtrack.sensing import section
+    from seamtrack.sensing.scan import laser_fan
     from seamtrack.sensing.sensor import preset
-
-    sensor = preset("paper")
-    build_start = time.perf_counter()
-    raycast.RayCaster.from_mesh(mesh)
-    build_s = time.perf_counter() - build_start
-    caster = ray_caster(mesh)  # the cached one that scan_mesh uses
-    section.build(caster.vertices_local, caster.faces)  # compiled and warm before it is timed
-    build_start = time.perf_counter()
-    section.build(caster.vertices_local, caster.faces)
-    section_build_s = time.perf_counter() - build_start
-    # embreex's own scene (the fallback backend): the bare calls and the pipeline on it.
-    embreex_caster = raycast.RayCaster.from_mesh(mesh, backend="embreex")
-    rays = [_bare_rays(sensor, caster, T) for T in poses]
-    scene = embreex_caster.scene
-    intersector = mesh.ray
 
     def bare() -> None:
         for fan_o32, fan_d32, sh_o32, sh_d32, sh_far32, *_ in rays:
@@ -152,17 +181,10 @@ def _case(name: str, mesh: Any, poses: list[np.ndarray], calls: int, repeats: in
             intersector.intersects_location(fan_o64, fan_world, multiple_hits=False)
             intersector.intersects_any(sh_o64, sh_d)
 
-    def every_pose(fn: Callable[[np.ndarray], object]) -> Callable[[], None]:
-        def run() -> None:
-            for T in poses:
-                fn(T)
-
-        return run
-
-    index = caster.section  # built once per mesh, like the Embree scene (timed below)
+    index = caster.section
     origins = [T[:3, 3] - caster.local_origin for T in poses]
     rotations = [np.ascontiguousarray(T[:3, :3]) for T in poses]
-    fan = laser_fan(sensor, RAYS).directions
+    fan = laser_fan(preset("paper"), RAYS).directions
     tree = (index.lo, index.hi, index.child, index.count, index.order, caster.vertices_local,
             caster.faces)  # fmt: skip
 
@@ -170,28 +192,7 @@ def _case(name: str, mesh: Any, poses: list[np.ndarray], calls: int, repeats: in
         for origin, rotation in zip(origins, rotations, strict=True):
             section.section_hits(*tree, origin, rotation, fan)
 
-    methods: dict[str, Callable[[], object]] = {
-        "scan_mesh (Profile), plane-section fan": every_pose(
-            lambda T: scan_mesh(sensor, mesh, T, rays=RAYS, fan="section")
-        ),
-        "scan_mesh (Profile), Embree fan, float64 refinement": every_pose(
-            lambda T: scan_mesh(sensor, mesh, T, rays=RAYS, fan="embree")
-        ),
-        "scan_mesh (Profile), Embree fan, float32 only": every_pose(
-            lambda T: scan_mesh(sensor, mesh, T, rays=RAYS, refine=False)
-        ),
-        "stripe_hits (arrays), plane-section fan": every_pose(
-            lambda T: stripe_hits(sensor, caster, T, RAYS, fan="section")
-        ),
-        "stripe_hits (arrays), Embree fan, float64 refinement": every_pose(
-            lambda T: stripe_hits(sensor, caster, T, RAYS, fan="embree")
-        ),
-        "stripe_hits (arrays), Embree fan, float32 only": every_pose(
-            lambda T: stripe_hits(sensor, caster, T, RAYS, refine=False)
-        ),
-        "stripe_hits (arrays), Embree fan, embreex backend": every_pose(
-            lambda T: stripe_hits(sensor, embreex_caster, T, RAYS, fan="embree")
-        ),
+    return {
         "bare embreex scene.run (same rays)": bare,
         "trimesh mesh.ray (same rays)": via_trimesh,
         "part: plane-section fan only (float64 hits)": section_fan,
@@ -199,6 +200,34 @@ def _case(name: str, mesh: Any, poses: list[np.ndarray], calls: int, repeats: in
         "part: Embree packets, shadow rays only": packets_shadow,
         "part: bare embreex, fan only": bare_fan,
         "part: bare embreex, shadow rays only": bare_shadow,
+    }
+
+
+def _case(name: str, mesh: Any, poses: list[np.ndarray], calls: int, repeats: int) -> dict:
+    """Time every method on one mesh: each call casts one profile at every pose in turn."""
+    import trimesh
+
+    from seamtrack.sensing import raycast, section
+    from seamtrack.sensing.scan import ray_caster, stripe_hits
+    from seamtrack.sensing.sensor import preset
+
+    sensor = preset("paper")
+    build_start = time.perf_counter()
+    raycast.RayCaster.from_mesh(mesh)
+    build_s = time.perf_counter() - build_start
+    caster = ray_caster(mesh)  # the cached one that scan_mesh uses
+    section.build(caster.vertices_local, caster.faces)  # compiled and warm before it is timed
+    build_start = time.perf_counter()
+    section.build(caster.vertices_local, caster.faces)
+    section_build_s = time.perf_counter() - build_start
+    # embreex's own scene (the fallback backend): the bare calls and the pipeline on it.
+    embreex_caster = raycast.RayCaster.from_mesh(mesh, backend="embreex")
+    rays = [_bare_rays(sensor, caster, T) for T in poses]
+    intersector = mesh.ray
+    index = caster.section  # built once per mesh, like the Embree scene (timed below)
+    methods = {
+        **_pipeline_methods(sensor, mesh, caster, embreex_caster, poses),
+        **_part_methods(rays, caster, embreex_caster.scene, intersector, poses),
     }
     rates = {key: 0.0 for key in methods}
     for _ in range(repeats):  # interleaved, so that drift hits every method alike
