@@ -310,7 +310,6 @@ OVER_THE_BOUNDS_TODAY = {
     "seamtrack/features/generic/_slope_turns.py::clean_points",
     "seamtrack/features/groove/_groove_fit.py::drop_islands",
     "seamtrack/features/groove/extractor.py::_corner",
-    "seamtrack/features/plates/_between_plates.py::hole",
     "seamtrack/features/plates/_plate_lines.py::plate_pieces",
     "seamtrack/features/plates/_two_plate_search.py::_two_plates",
     "seamtrack/features/robust.py::_front",

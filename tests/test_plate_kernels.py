@@ -33,6 +33,9 @@ ONE_QUANTITY = {
     "kept": "positions of the True flags",
     "_order": "positions, in order",
     "_along": "coordinates along one line",
+    "_pieces_cover": "flags: the points of a hole its pieces cover",
+    "_stray": "flags: the points of a hole on a stray line",
+    "_loose_cover": "flags: the points of a hole its loose points cover",
 }
 
 

@@ -18,7 +18,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features.line_geometry import Point, fit_points
+from seamtrack.features.line_geometry import LineThrough, Point, fit_points
 from seamtrack.features.plates._two_lines import (
     PieceLines,
     RunEnd,
@@ -187,6 +187,197 @@ def _hidden_edge(
     return EdgeUnder(True, 0.5 * (t_end + t[part[s_last]] + sign * 0.5 * spacing))
 
 
+class NearPlates(NamedTuple):
+    """The points of a hole against the plates' two lines: signed offsets towards each (the
+    side of the line its normal points to), their sizes, the nearer one, and ``plate`` (within
+    the tolerance of either)."""
+
+    towards_a: FloatArray
+    towards_b: FloatArray
+    off_a: FloatArray
+    off_b: FloatArray
+    off: FloatArray
+    plate: NDArray[np.bool_]
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _near_plates(q: FloatArray, la: LineThrough, lb: LineThrough, tol: float) -> NearPlates:
+    n = q.shape[0]
+    towards_a = np.empty(n)
+    towards_b = np.empty(n)
+    off_a = np.empty(n)
+    off_b = np.empty(n)
+    off = np.empty(n)
+    plate = np.empty(n, dtype=np.bool_)
+    for i in range(n):
+        towards_a[i] = towards(la, q[i, 0], q[i, 1])
+        towards_b[i] = towards(lb, q[i, 0], q[i, 1])
+        off_a[i] = abs(towards_a[i])
+        off_b[i] = abs(towards_b[i])
+        x, y = off_a[i], off_b[i]
+        off[i] = math.nan if math.isnan(x) or math.isnan(y) else min(x, y)
+        plate[i] = off[i] <= tol
+    return NearPlates(towards_a, towards_b, off_a, off_b, off, plate)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _highest(off: FloatArray, members: IntArray) -> float:
+    """The largest offset of ``members`` (NaN as numpy's ``max`` takes it: the first NaN
+    wins)."""
+    top = -math.inf
+    for r in range(members.shape[0]):
+        x = off[members[r]]
+        if x > top or math.isnan(x):
+            top = x if not math.isnan(top) else top
+    return top
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _median_of(v: FloatArray, members: IntArray) -> float:
+    w = np.empty(members.shape[0])
+    for r in range(members.shape[0]):
+        w[r] = v[members[r]]
+    return median(w)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _pieces_cover(
+    own: IntArray,
+    pieces: PieceLines,
+    near: NearPlates,
+    la: LineThrough,
+    lb: LineThrough,
+    tol: float,
+    min_bottom_mm: float,
+    butt: bool,
+) -> NDArray[np.bool_]:
+    """Which points of the hole the pieces in it cover: all but a wall going down into a gap
+    and a bottom ``min_bottom_mm`` behind both plates; a piece crossing a plate's line at an
+    angle is no plate where it does (``near.plate`` cleared there)."""
+    n = own.shape[0]
+    ady, adz = la[2], la[3]
+    cover = np.zeros(n, dtype=np.bool_)
+    present = np.zeros(pieces.cy.shape[0], dtype=np.bool_)
+    for i in range(n):
+        if own[i] >= 0:
+            present[own[i]] = True
+    for j in range(pieces.cy.shape[0]):
+        if not present[j]:
+            continue
+        members = np.flatnonzero(own == j)
+        rel = angle(pieces.dy[j], pieces.dz[j], ady, adz)
+        if rel >= _WALL and _highest(near.off, members) >= 2 * tol:
+            if not butt or _median_of(near.towards_a, members) < 0.0:
+                continue  # a wall going down into a gap
+        if rel <= _BOTTOM:
+            cy, cz = pieces.cy[j], pieces.cz[j]
+            x = towards(la, cy, cz)
+            y = towards(lb, cy, cz)
+            if -(y if y > x else x) >= min_bottom_mm:
+                continue
+        for k in members:
+            if rel > _PLATE:
+                near.plate[k] = False
+            cover[k] = True
+    return cover
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _loose_cover(
+    q: FloatArray,
+    own: IntArray,
+    near: NearPlates,
+    ady: float,
+    adz: float,
+    tol: float,
+    min_bottom_mm: float,
+    butt: bool,
+) -> NDArray[np.bool_]:
+    """Which points of the hole the runs of three or more points in no piece and off the
+    plates cover: all but those far behind both plates, and a wall standing off them (in a
+    butt joint: one going down into the gap)."""
+    n = own.shape[0]
+    cover = np.zeros(n, dtype=np.bool_)
+    loose = np.flatnonzero((own < 0) & ~near.plate[:n])
+    nloose = loose.shape[0]
+    if nloose < 3:
+        return cover
+    s = 0
+    while s < nloose:
+        e = s + 1
+        while e < nloose and loose[e] - loose[e - 1] <= 1:
+            e += 1
+        part = loose[s:e]
+        behind = np.empty(e - s)
+        for r in range(e - s):
+            x, y = near.towards_a[part[r]], near.towards_b[part[r]]
+            behind[r] = -(math.nan if math.isnan(x) or math.isnan(y) else max(x, y))
+        if not median(behind) >= min_bottom_mm and e - s >= 3:
+            _, _, uy, uz, _ = fit_points(q, part, part.shape[0])
+            yes = angle(uy, uz, ady, adz) < _WALL
+            if not yes:
+                yes = _highest(near.off, part) < 2 * tol
+            if not yes and butt:
+                yes = _median_of(near.towards_a, part) > 0.0
+            if yes:
+                for r in range(e - s):
+                    cover[part[r]] = True
+        s = e
+    return cover
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _stray(
+    points: FloatArray,
+    lo: int,
+    hi: int,
+    cover: NDArray[np.bool_],
+    plate: NDArray[np.bool_],
+    scale: Scale,
+) -> NDArray[np.bool_]:
+    """The covering points that are no plate and lie between jumps (a line cut off both
+    plates: a false reflection), from the jumps between consecutive points of the hole, its
+    plates' ends included."""
+    tol, spacing, sigma = scale
+    n = hi - lo - 1
+    m = n + 1
+    cut = np.empty(m, dtype=np.bool_)
+    big = max(6 * spacing, 2 * tol, 0.1)
+    held = max(6 * spacing, 4 * sigma, 0.1)
+    for i in range(m):
+        dy = points[lo + i + 1, 0] - points[lo + i, 0]
+        dz = points[lo + i + 1, 1] - points[lo + i, 1]
+        d = math.hypot(dy, dz)
+        cut[i] = d > (held if i == 0 or i == m - 1 else big)
+    stray = np.zeros(n, dtype=np.bool_)
+    cuts = np.flatnonzero(cut)
+    if cuts.shape[0] == 0:
+        return stray
+    k0, k1 = cuts[0], cuts[-1]
+    for i in range(n):
+        st = cover[i] and not plate[i]
+        if not cut[0] and i < k0:
+            st = False
+        if not cut[m - 1] and i >= k1:
+            st = False
+        stray[i] = st
+    return stray
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _along(q: FloatArray, line: LineThrough) -> FloatArray:
+    """Each point's position along ``line`` where the ray from the sensor's origin through it
+    meets the line."""
+    cy, cz, dy, dz = line
+    n = q.shape[0]
+    t = np.empty(n)
+    normal = cy * -dz + cz * dy
+    for i in range(n):
+        s_ = normal / (q[i, 0] * -dz + q[i, 1] * dy)
+        t[i] = (q[i, 0] * s_ - cy) * dy + (q[i, 1] * s_ - cz) * dz
+    return t
+
+
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def hole(
     points: FloatArray,
@@ -227,187 +418,50 @@ def hole(
     la, lb = a.line, b.line
     acy, acz, ady, adz = la
     bcy, bcz, bdy, bdz = lb
-    a_t, a_step, b_t, b_step = a.t, a.step, b.t, b.step
-    tol, spacing, sigma = scale
-    sp_a = max(a_step, spacing)
-    sp_b = max(b_step, spacing)
-    ta = a_t + 0.5 * a_step
-    tb_b = b_t - 0.5 * b_step
+    tol, spacing = scale.tol, scale.spacing
+    sp_a = max(a.step, spacing)
+    sp_b = max(b.step, spacing)
+    ta = a.t + 0.5 * a.step
+    tb_b = b.t - 0.5 * b.step
     tb = (bcy + tb_b * bdy - acy) * ady + (bcz + tb_b * bdz - acz) * adz
     width = tb - ta
     if hi - lo < 2:
         return Hole(width, _SEEN, _SEEN)
-    n = hi - lo - 1
     q = points[lo + 1 : hi]
     own = owner[lo + 1 : hi]
-    towards_a = np.empty(n)
-    towards_b = np.empty(n)
-    off_a = np.empty(n)
-    off_b = np.empty(n)
-    off = np.empty(n)
-    plate = np.empty(n, dtype=np.bool_)
-    for i in range(n):
-        towards_a[i] = towards(la, q[i, 0], q[i, 1])
-        towards_b[i] = towards(lb, q[i, 0], q[i, 1])
-        off_a[i] = abs(towards_a[i])
-        off_b[i] = abs(towards_b[i])
-        x, y = off_a[i], off_b[i]
-        off[i] = math.nan if math.isnan(x) or math.isnan(y) else min(x, y)
-        plate[i] = off[i] <= tol
-    cover = np.zeros(n, dtype=np.bool_)
-    nlines = pieces.cy.shape[0]
-    present = np.zeros(nlines, dtype=np.bool_)
-    for i in range(n):
-        if own[i] >= 0:
-            present[own[i]] = True
-    for j in range(nlines):
-        if not present[j]:
-            continue
-        rel = angle(pieces.dy[j], pieces.dz[j], ady, adz)
-        if rel >= _WALL:
-            top = -math.inf
-            cnt = 0
-            for i in range(n):
-                if own[i] == j:
-                    cnt += 1
-                    if off[i] > top or math.isnan(off[i]):
-                        top = off[i] if not math.isnan(top) else top
-            if top >= 2 * tol:
-                drop = True
-                if butt:
-                    v = np.empty(cnt)
-                    c = 0
-                    for i in range(n):
-                        if own[i] == j:
-                            v[c] = towards_a[i]
-                            c += 1
-                    drop = median(v) < 0.0
-                if drop:
-                    continue  # a wall going down into a gap
-        if rel <= _BOTTOM:
-            cy, cz = pieces.cy[j], pieces.cz[j]
-            x = towards(la, cy, cz)
-            y = towards(lb, cy, cz)
-            depth = -(y if y > x else x)
-            if depth >= min_bottom_mm:
-                continue
-        unplate = rel > _PLATE
-        for i in range(n):
-            if own[i] == j:
-                if unplate:
-                    plate[i] = False
-                cover[i] = True
+    near = _near_plates(q, la, lb, tol)
+    cover = _pieces_cover(own, pieces, near, la, lb, tol, min_bottom_mm, butt)
     if butt:
-        for i in range(n):
-            if own[i] < 0 and off[i] <= 3.0 * tol:
-                plate[i] = True
-    nloose = 0
-    for i in range(n):
-        if own[i] < 0 and not plate[i]:
-            nloose += 1
-    if nloose >= 3:
-        loose = np.empty(nloose, dtype=np.int64)
-        c = 0
-        for i in range(n):
-            if own[i] < 0 and not plate[i]:
-                loose[c] = i
-                c += 1
-        s = 0
-        while s < nloose:
-            e = s + 1
-            while e < nloose and loose[e] - loose[e - 1] <= 1:
-                e += 1
-            part = loose[s:e]
-            behind = np.empty(e - s)
-            for r in range(e - s):
-                x, y = towards_a[part[r]], towards_b[part[r]]
-                behind[r] = -(math.nan if math.isnan(x) or math.isnan(y) else max(x, y))
-            if not median(behind) >= min_bottom_mm:
-                if e - s >= 3:
-                    _, _, uy, uz, _ = fit_points(q, part, part.shape[0])
-                    yes = angle(uy, uz, ady, adz) < _WALL
-                    if not yes:
-                        top = -math.inf
-                        for r in range(e - s):
-                            x = off[part[r]]
-                            if x > top or math.isnan(x):
-                                top = x if not math.isnan(top) else top
-                        yes = top < 2 * tol
-                    if not yes and butt:
-                        v = np.empty(e - s)
-                        for r in range(e - s):
-                            v[r] = towards_a[part[r]]
-                        yes = median(v) > 0.0
-                    if yes:
-                        for r in range(e - s):
-                            cover[part[r]] = True
-            s = e
+        for i in range(q.shape[0]):
+            if own[i] < 0 and near.off[i] <= 3.0 * tol:
+                near.plate[i] = True
+    loose = _loose_cover(q, own, near, ady, adz, tol, min_bottom_mm, butt)
     anything = False
-    for i in range(n):
-        cover[i] = cover[i] or plate[i]
+    for i in range(q.shape[0]):
+        cover[i] = cover[i] or loose[i] or near.plate[i]
         anything = anything or cover[i]
     if not anything:
         return Hole(width, _SEEN, _SEEN)
-    # Jumps between consecutive points of the hole, its plates' ends included.
-    m = n + 1
-    cut = np.empty(m, dtype=np.bool_)
-    big = max(6 * spacing, 2 * tol, 0.1)
-    held = max(6 * spacing, 4 * sigma, 0.1)
-    for i in range(m):
-        dy = points[lo + i + 1, 0] - points[lo + i, 0]
-        dz = points[lo + i + 1, 1] - points[lo + i, 1]
-        d = math.hypot(dy, dz)
-        cut[i] = d > (held if i == 0 or i == m - 1 else big)
-    stray = np.empty(n, dtype=np.bool_)
-    any_stray = False
-    k0 = -1
-    k1 = -1
-    for i in range(m):
-        if cut[i]:
-            if k0 < 0:
-                k0 = i
-            k1 = i
-    for i in range(n):
-        st = cover[i] and not plate[i]
-        if k0 < 0:
-            st = False
-        else:
-            if not cut[0] and i < k0:
-                st = False
-            if not cut[m - 1] and i >= k1:
-                st = False
-        stray[i] = st
-        any_stray = any_stray or st
-    qa = np.empty(n)
-    na = acy * -adz + acz * ady
-    for i in range(n):
-        s_ = na / (q[i, 0] * -adz + q[i, 1] * ady)
-        qa[i] = (q[i, 0] * s_ - acy) * ady + (q[i, 1] * s_ - acz) * adz
+    stray = _stray(points, lo, hi, cover, near.plate, scale)
+    qa = _along(q, la)
     covered = _covered(cover, qa, sp_a, ta, tb)
     left = right = _SEEN
-    if any_stray:
-        on_a = np.empty(n, dtype=np.bool_)
-        on_b = np.empty(n, dtype=np.bool_)
-        for i in range(n):
-            on_a[i] = plate[i] and off_a[i] <= tol
-            on_b[i] = plate[i] and off_b[i] <= tol
+    if stray.any():
+        on_a = np.empty(q.shape[0], dtype=np.bool_)
+        on_b = np.empty(q.shape[0], dtype=np.bool_)
+        for i in range(q.shape[0]):
+            on_a[i] = near.plate[i] and near.off_a[i] <= tol
+            on_b[i] = near.plate[i] and near.off_b[i] <= tol
         # Runtime flags: a literal True or False would compile a copy of the callee each.
         at_end, at_start = butt | True, butt & False
         first = _stretch_ends(cover, qa, sp_a, at_end)
         if first.start <= ta + 2.0 * sp_a:
             under = _hidden_edge(first.part, qa, on_a, stray, ta, sp_a, at_end)
             left = HiddenEdge(under.found, Point(acy + under.t * ady, acz + under.t * adz))
-        qb = np.empty(n)
-        nb = bcy * -bdz + bcz * bdy
-        for i in range(n):
-            s_ = nb / (q[i, 0] * -bdz + q[i, 1] * bdy)
-            qb[i] = (q[i, 0] * s_ - bcy) * bdy + (q[i, 1] * s_ - bcz) * bdz
+        qb = _along(q, lb)
         last = _stretch_ends(cover, qb, sp_b, at_start)
         if last.end >= tb_b - 2.0 * sp_b:
-            n_last = last.part.shape[0]
-            back = np.empty_like(last.part)
-            for i in range(n_last):
-                back[i] = last.part[n_last - 1 - i]
+            back = last.part[::-1].copy()
             under = _hidden_edge(back, qb, on_b, stray, tb_b, sp_b, at_start)
             right = HiddenEdge(under.found, Point(bcy + under.t * bdy, bcz + under.t * bdz))
     rest = width - covered
