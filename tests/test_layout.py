@@ -311,7 +311,6 @@ OVER_THE_BOUNDS_TODAY = {
     "seamtrack/features/groove/_groove_fit.py::drop_islands",
     "seamtrack/features/groove/extractor.py::_corner",
     "seamtrack/features/plates/_plate_lines.py::plate_pieces",
-    "seamtrack/features/plates/_two_plate_search.py::_two_plates",
     "seamtrack/features/robust.py::_front",
     "seamtrack/features/synthetic.py::synthetic_profile",
     "seamtrack/features/vgroove/_v_root.py::covered_end",

@@ -14,7 +14,7 @@ runs is :func:`seamtrack.features.plates._between_plates.hole`'s.
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numba
 import numpy as np
@@ -150,26 +150,26 @@ def _run_line(
     return RunLine(ON, on, 0.0, idx, _along(points, idx, on))
 
 
+class PieceIndex(NamedTuple):
+    """The pieces' table as the search reads it: where each piece's inliers start in
+    ``pieces.members`` (``offsets``, one more than the pieces), each kept point's piece
+    (``owner``, -1 for none), each piece's number of inliers, its first and last inlier's
+    coordinates along its line, and its first inlier."""
+
+    offsets: IntArray
+    owner: IntArray
+    n_inliers: IntArray
+    t_first: FloatArray
+    t_last: FloatArray
+    first: IntArray
+
+
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def _two_plates(
-    points: FloatArray,
-    pieces: Pieces,
-    stray: NDArray[np.bool_],
-    limits: PlateLimits,
-    scale: Scale,
-) -> PlatePair:
-    """The two plates of a square butt (``limits.butt``) or a lap, as the extractors choose
-    them, from the profile's kept ``points`` and its ``pieces``; ``stray``: the
-    segmentation's detour points (left out of the explained share)."""
-    (min_points, min_plate_mm, _, max_gap_mm, butt, min_opening, min_open_mm, min_bottom_mm,
-     min_step_mm) = limits  # fmt: skip
-    tol, spacing = scale.tol, scale.spacing
-    lines = pieces.lines
-    nl = lines.cy.shape[0]
+def _piece_index(m: int, pieces: Pieces) -> PieceIndex:
+    nl = pieces.lines.cy.shape[0]
     offsets = np.zeros(nl + 1, dtype=np.int64)
     for j in range(nl):
         offsets[j + 1] = offsets[j] + pieces.counts[j]
-    m = points.shape[0]
     owner = np.full(m, -1, dtype=np.int64)
     count = np.empty(nl, dtype=np.int64)
     t_first = np.empty(nl)
@@ -182,10 +182,195 @@ def _two_plates(
         first[j] = pieces.members[a]
         for k in range(a, b):
             owner[pieces.members[k]] = j
-    plated = plate_pieces(lines, count, t_first, t_last, first, limits, tol)
+    return PieceIndex(offsets, owner, count, t_first, t_last, first)
+
+
+class Facing(NamedTuple):
+    """Two pieces of one plate line facing each other across a stretch: the left piece at
+    its last inlier and the right one at its first (on the plate line), those inliers (kept
+    points ``lo`` and ``hi``), and the opening between their edges (half a step beyond each)."""
+
+    left: RunEnd
+    right: RunEnd
+    lo: int
+    hi: int
+    opening: float
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _facing(
+    points: FloatArray, pieces: Pieces, offsets: IntArray, on: LineThrough, left: int, right: int
+) -> Facing:
+    """Pieces ``left`` and ``right`` of the plate line ``on`` at their facing ends (the
+    steps from their last and first ten inliers)."""
+    li = pieces.members[max(offsets[left], offsets[left + 1] - 11) : offsets[left + 1]]
+    ri = pieces.members[offsets[right] : min(offsets[right + 1], offsets[right] + 11)]
+    tl = _along(points, li, on)
+    tr = _along(points, ri, on)
+    step_l = steps(tl).last
+    step_r = steps(tr).first
+    t_l, t_r = tl[-1], tr[0]
+    el, er = t_l + 0.5 * step_l, t_r - 0.5 * step_r
+    cy, cz, dy, dz = on
+    gap = (cy + er * dy - (cy + el * dy)) * dy + (cz + er * dz - (cz + el * dz)) * dz
+    return Facing(RunEnd(on, t_l, step_l), RunEnd(on, t_r, step_r), li[-1], ri[0], gap)
+
+
+class RunTable(NamedTuple):
+    """The runs (consecutive pieces of one plate line): their pieces ``pl[lo:hi]``, their
+    kinds and refits' rms, their lines, where their inliers lie along them
+    (:class:`~seamtrack.features.plates._two_lines.PieceSpans`), and their first and last
+    inliers (kept points)."""
+
+    lo: IntArray
+    hi: IntArray
+    kind: IntArray
+    rms: FloatArray
+    lines: PieceLines
+    spans: PieceSpans
+    first_inlier: IntArray
+    last_inlier: IntArray
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _run_table(
+    points: FloatArray,
+    pieces: Pieces,
+    index: PieceIndex,
+    plated: Any,
+    run_lo: IntArray,
+    run_hi: IntArray,
+    min_plate_mm: float,
+) -> RunTable:
+    """Each run's line: a long piece as it is, else a refit of its pieces (long enough) or
+    its pieces measured on their plate's line."""
+    nr = run_lo.shape[0]
+    kind = np.empty(nr, dtype=np.int64)
+    rms = np.empty(nr)  # the refits' (FIT only)
+    run_lines = PieceLines(np.empty(nr), np.empty(nr), np.empty(nr), np.empty(nr))
+    runs = PieceSpans(
+        np.empty(nr, dtype=np.int64), np.empty(nr), np.empty(nr), np.empty(nr), np.empty(nr)
+    )
+    first_inlier = np.empty(nr, dtype=np.int64)
+    last_inlier = np.empty(nr, dtype=np.int64)
+    for r in range(nr):
+        lo, hi = run_lo[r], run_hi[r]
+        anchor = plated.anchor[plated.plate[lo]]
+        run = _run_line(
+            points, pieces, index.offsets, index.t_first, index.t_last, plated.piece[lo:hi],
+            anchor, min_plate_mm,
+        )  # fmt: skip
+        kind[r], rms[r] = run.kind, run.rms
+        run_lines.cy[r], run_lines.cz[r], run_lines.dy[r], run_lines.dz[r] = run.line
+        at = steps(run.t)
+        runs.t_first[r], runs.t_last[r] = run.t[0], run.t[-1]
+        runs.step_first[r], runs.step_last[r] = at.first, at.last
+        first_inlier[r], last_inlier[r] = run.inliers[0], run.inliers[-1]
+        runs.n_inliers[r] = run.inliers.shape[0]
+    return RunTable(run_lo, run_hi, kind, rms, run_lines, runs, first_inlier, last_inlier)
+
+
+class BestPair(NamedTuple):
+    """The neighbouring runs ``a`` and ``a + 1`` chosen (``a`` -1: none), what lies between
+    them (square butt), whether it is open, and the lap's step."""
+
+    a: int
+    hole: Hole
+    is_open: bool
+    step: float
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _best_pair(
+    points: FloatArray,
+    owner: IntArray,
+    lines: PieceLines,
+    runs: RunTable,
+    plate_of: IntArray,
+    limits: PlateLimits,
+    scale: Scale,
+    holes: list[Hole],
+    hole_lo: IntArray,
+    hole_hi: IntArray,
+) -> BestPair:
+    """Neighbouring runs near parallel, their facing ends near; the best pair: a square
+    butt's widest opening (an open gap first), a lap's pair with the most inliers across a
+    step. ``holes``: those found between pieces while the runs were made (at kept points
+    ``hole_lo``/``hole_hi``), reused."""
+    max_gap_mm, butt, min_opening = limits.max_gap_mm, limits.butt, limits.min_opening
+    ten = math.radians(10.0)
+    best = BestPair(-1, NO_HOLE, False, 0.0)
+    best_key = 0.0
+    spans = runs.spans
+    for a in range(runs.lo.shape[0] - 1):
+        b = a + 1
+        la, lb = piece_line(runs.lines, a), piece_line(runs.lines, b)
+        acy, acz, ady, adz = la
+        bcy, bcz, bdy, bdz = lb
+        if not math.acos(min(1.0, abs(ady * bdy + adz * bdz))) <= ten:
+            continue
+        ta, tb = spans.t_last[a], spans.t_first[b]
+        if (
+            not math.hypot(bcy + tb * bdy - (acy + ta * ady), bcz + tb * bdz - (acz + ta * adz))
+            <= max_gap_mm
+        ):
+            continue
+        if not butt:
+            step = (bcy - acy) * -adz + (bcz - acz) * ady  # > 0: b is deeper
+            if plate_of[runs.lo[a]] == plate_of[runs.lo[b]] or abs(step) < max(
+                limits.min_step_mm, 3 * scale.tol
+            ):
+                continue
+            score = float(spans.n_inliers[a] + spans.n_inliers[b])
+            if score > best_key:
+                best_key = score
+                best = BestPair(a, NO_HOLE, False, step)
+            continue
+        ea, eb = ta + 0.5 * spans.step_last[a], tb - 0.5 * spans.step_first[b]
+        opening = math.hypot(bcy + eb * bdy - (acy + ea * ady), bcz + eb * bdz - (acz + ea * adz))
+        if opening < min_opening:
+            continue
+        lo, hi = runs.last_inlier[a], runs.first_inlier[b]
+        hit = -1
+        for k in range(len(holes)):
+            if hole_lo[k] == lo and hole_hi[k] == hi:
+                hit = k
+        between = (
+            holes[hit]
+            if hit >= 0
+            else hole(
+                points, owner, lines, RunEnd(la, ta, spans.step_last[a]),
+                RunEnd(lb, tb, spans.step_first[b]), lo, hi, scale, limits.min_bottom_mm, butt,
+            )
+        )  # fmt: skip
+        is_open = between.open_mm >= limits.min_open_mm
+        if not is_open and not between.left.hidden and not between.right.hidden:
+            continue
+        if (is_open and not best.is_open) or (is_open == best.is_open and opening > best_key):
+            best_key = opening
+            best = BestPair(a, between, is_open, 0.0)
+    return best
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _two_plates(
+    points: FloatArray,
+    pieces: Pieces,
+    stray: NDArray[np.bool_],
+    limits: PlateLimits,
+    scale: Scale,
+) -> PlatePair:
+    """The two plates of a square butt (``limits.butt``) or a lap, as the extractors choose
+    them, from the profile's kept ``points`` and its ``pieces``; ``stray``: the
+    segmentation's detour points (left out of the explained share)."""
+    butt = limits.butt
+    tol, spacing = scale.tol, scale.spacing
+    lines = pieces.lines
+    index = _piece_index(points.shape[0], pieces)
+    offsets = index.offsets
+    plated = plate_pieces(lines, index.n_inliers, index.t_first, index.t_last, index.first, limits, tol)
     pg, pl, plate_anchor = plated.plate, plated.piece, plated.anchor
     n = pg.shape[0]
-    ten = math.radians(10.0)
     # Runs: consecutive pieces of one plate line, unless (square butt) an open gap lies
     # between them. Holes found on the way are kept for the pair chosen below.
     run_lo = np.empty(n + 1, dtype=np.int64)
@@ -199,155 +384,62 @@ def _two_plates(
             join = True
             if butt:
                 on = piece_line(lines, plate_anchor[pg[p]])
-                left = pl[p - 1]
-                right = pl[p]
-                li = pieces.members[max(offsets[left], offsets[left + 1] - 11) : offsets[left + 1]]
-                ri = pieces.members[offsets[right] : min(offsets[right + 1], offsets[right] + 11)]
-                tl = _along(points, li, on)
-                tr = _along(points, ri, on)
-                step_l = steps(tl).last
-                step_r = steps(tr).first
-                t_l, t_r = tl[-1], tr[0]
-                el, er = t_l + 0.5 * step_l, t_r - 0.5 * step_r
-                cy, cz, dy, dz = on
-                gap = (cy + er * dy - (cy + el * dy)) * dy + (cz + er * dz - (cz + el * dz)) * dz
-                if not gap < min_opening:
-                    lo, hi = li[-1], ri[0]
+                facing = _facing(points, pieces, offsets, on, pl[p - 1], pl[p])
+                if not facing.opening < limits.min_opening:
                     between = hole(
-                        points,
-                        owner,
-                        lines,
-                        RunEnd(on, t_l, step_l),
-                        RunEnd(on, t_r, step_r),
-                        lo,
-                        hi,
-                        scale,
-                        min_bottom_mm,
-                        butt,
-                    )
-                    hole_lo[len(holes)], hole_hi[len(holes)] = lo, hi
+                        points, index.owner, lines, facing.left, facing.right, facing.lo,
+                        facing.hi, scale, limits.min_bottom_mm, butt,
+                    )  # fmt: skip
+                    hole_lo[len(holes)], hole_hi[len(holes)] = facing.lo, facing.hi
                     holes.append(between)
-                    join = not between.open_mm >= min_open_mm
+                    join = not between.open_mm >= limits.min_open_mm
             if join:
                 run_hi[nr - 1] = p + 1
                 continue
         run_lo[nr], run_hi[nr] = p, p + 1
         nr += 1
-    # Each run's line: a long piece as it is, else a refit of its pieces (long enough) or
-    # its pieces measured on their plate's line.
-    kind = np.empty(nr, dtype=np.int64)
-    rms = np.empty(nr)  # the refits' (FIT only)
-    run_lines = PieceLines(np.empty(nr), np.empty(nr), np.empty(nr), np.empty(nr))
-    runs = PieceSpans(
-        np.empty(nr, dtype=np.int64), np.empty(nr), np.empty(nr), np.empty(nr), np.empty(nr)
-    )
-    first_inlier = np.empty(nr, dtype=np.int64)
-    last_inlier = np.empty(nr, dtype=np.int64)
-    for r in range(nr):
-        lo, hi = run_lo[r], run_hi[r]
-        anchor = plate_anchor[pg[lo]]
-        run = _run_line(points, pieces, offsets, t_first, t_last, pl[lo:hi], anchor, min_plate_mm)
-        kind[r], rms[r] = run.kind, run.rms
-        run_lines.cy[r], run_lines.cz[r], run_lines.dy[r], run_lines.dz[r] = run.line
-        at = steps(run.t)
-        runs.t_first[r], runs.t_last[r] = run.t[0], run.t[-1]
-        runs.step_first[r], runs.step_last[r] = at.first, at.last
-        first_inlier[r], last_inlier[r] = run.inliers[0], run.inliers[-1]
-        runs.n_inliers[r] = run.inliers.shape[0]
-    # Neighbouring runs near parallel, their facing ends near; the best pair.
-    best_a, best_b = -1, -1
-    best_hole = NO_HOLE
-    best_step = 0.0
-    best_open = False
-    best_key = 0.0
-    for a in range(nr - 1):
-        b = a + 1
-        la, lb = piece_line(run_lines, a), piece_line(run_lines, b)
-        acy, acz, ady, adz = la
-        bcy, bcz, bdy, bdz = lb
-        if not math.acos(min(1.0, abs(ady * bdy + adz * bdz))) <= ten:
-            continue
-        ta, tb = runs.t_last[a], runs.t_first[b]
-        if (
-            not math.hypot(bcy + tb * bdy - (acy + ta * ady), bcz + tb * bdz - (acz + ta * adz))
-            <= max_gap_mm
-        ):
-            continue
-        if butt:
-            ea, eb = ta + 0.5 * runs.step_last[a], tb - 0.5 * runs.step_first[b]
-            opening = math.hypot(
-                bcy + eb * bdy - (acy + ea * ady), bcz + eb * bdz - (acz + ea * adz)
-            )
-            if opening < min_opening:
-                continue
-            lo, hi = last_inlier[a], first_inlier[b]
-            hit = -1
-            for k in range(len(holes)):
-                if hole_lo[k] == lo and hole_hi[k] == hi:
-                    hit = k
-            if hit >= 0:
-                between = holes[hit]
-            else:
-                between = hole(
-                    points,
-                    owner,
-                    lines,
-                    RunEnd(la, ta, runs.step_last[a]),
-                    RunEnd(lb, tb, runs.step_first[b]),
-                    lo,
-                    hi,
-                    scale,
-                    min_bottom_mm,
-                    butt,
-                )
-            is_open = between.open_mm >= min_open_mm
-            if not is_open and not between.left.hidden and not between.right.hidden:
-                continue
-            if (is_open and not best_open) or (is_open == best_open and opening > best_key):
-                best_open, best_key = is_open, opening
-                best_a, best_b, best_hole = a, b, between
-        else:
-            step = (bcy - acy) * -adz + (bcz - acz) * ady  # > 0: b is deeper
-            if pg[run_lo[a]] == pg[run_lo[b]] or abs(step) < max(min_step_mm, 3 * tol):
-                continue
-            score = float(runs.n_inliers[a] + runs.n_inliers[b])
-            if score > best_key:
-                best_key = score
-                best_a, best_b, best_step = a, b, step
-    if best_a < 0:
-        return PlatePair(False, _NO_RUN, _NO_RUN, False, best_hole, 0.0, 0.0)
-    a, b = best_a, best_b
-    la, lb = piece_line(run_lines, a), piece_line(run_lines, b)
-    at_a = RunEnd(la, runs.t_last[a], runs.step_last[a])  # a at its last inlier
-    at_b = RunEnd(lb, runs.t_first[b], runs.step_first[b])  # b at its first
+    runs = _run_table(points, pieces, index, plated, run_lo[:nr], run_hi[:nr], limits.min_plate_mm)
+    best = _best_pair(points, index.owner, lines, runs, pg, limits, scale, holes, hole_lo, hole_hi)
+    if best.a < 0:
+        return PlatePair(False, _NO_RUN, _NO_RUN, False, best.hole, 0.0, 0.0)
+    a, b = best.a, best.a + 1
+    spans = runs.spans
+    la, lb = piece_line(runs.lines, a), piece_line(runs.lines, b)
+    at_a = RunEnd(la, spans.t_last[a], spans.step_last[a])  # a at its last inlier
+    at_b = RunEnd(lb, spans.t_first[b], spans.step_first[b])  # b at its first
+    best_hole = best.hole
     if not butt:
         best_hole = hole(
-            points, owner, lines, at_a, at_b, last_inlier[a], first_inlier[b], scale, math.inf,
-            butt,
+            points, index.owner, lines, at_a, at_b, runs.last_inlier[a], runs.first_inlier[b],
+            scale, math.inf, butt,
         )  # fmt: skip
     # The runs' ends (a visible corner or half a step beyond the last inlier), the share of
     # the profile the model (each plate running on to the profile's end) explains.
     # Runtime flags: a literal True or False would compile a copy of the callee each.
     at_end, at_start = butt | True, butt & False
-    piece_a = pl[run_lo[a]] if kind[a] == PIECE else -1
-    piece_b = pl[run_lo[b]] if kind[b] == PIECE else -1
+    piece_a = pl[runs.lo[a]] if runs.kind[a] == PIECE else -1
+    piece_b = pl[runs.lo[b]] if runs.kind[b] == PIECE else -1
+    nl = lines.cy.shape[0]
     step_first = np.empty(nl)
     step_last = np.empty(nl)
     for j in range(nl):
         step_first[j], step_last[j] = steps(pieces.along[offsets[j] : offsets[j + 1]])
-    spans = PieceSpans(count, t_first, t_last, step_first, step_last)
-    end_a = line_end(la, at_a, at_end, piece_a, lines, spans, min_points, spacing, tol)
-    start_b = line_end(lb, at_b, at_start, piece_b, lines, spans, min_points, spacing, tol)
+    pieces_spans = PieceSpans(index.n_inliers, index.t_first, index.t_last, step_first, step_last)
+    min_points = limits.min_points
+    end_a = line_end(la, at_a, at_end, piece_a, lines, pieces_spans, min_points, spacing, tol)
+    start_b = line_end(lb, at_b, at_start, piece_b, lines, pieces_spans, min_points, spacing, tol)
     explained = two_lines_share(
-        points, stray, last_inlier[a] + 1, first_inlier[b], la, lb, 3.0 * tol
+        points, stray, runs.last_inlier[a] + 1, runs.first_inlier[b], la, lb, 3.0 * tol
     )
     left = Run(
-        kind[a], pl[run_lo[a]], plate_anchor[pg[run_lo[a]]], runs.n_inliers[a], la, rms[a], end_a
-    )
+        runs.kind[a], pl[runs.lo[a]], plate_anchor[pg[runs.lo[a]]], spans.n_inliers[a], la,
+        runs.rms[a], end_a,
+    )  # fmt: skip
     right = Run(
-        kind[b], pl[run_lo[b]], plate_anchor[pg[run_lo[b]]], runs.n_inliers[b], lb, rms[b], start_b
-    )
-    return PlatePair(True, left, right, best_open, best_hole, best_step, explained)
+        runs.kind[b], pl[runs.lo[b]], plate_anchor[pg[runs.lo[b]]], spans.n_inliers[b], lb,
+        runs.rms[b], start_b,
+    )  # fmt: skip
+    return PlatePair(True, left, right, best.is_open, best_hole, best.step, explained)
 
 
 class PairReading(NamedTuple):
