@@ -84,35 +84,33 @@ def span(
     return hi - lo
 
 
+class FlatGroups(NamedTuple):
+    """The flat pieces (positions among the pieces, best supported first), each one's group
+    of pieces on one line (a position in ``anchors``) and each group's anchor piece."""
+
+    flat: IntArray
+    group: IntArray
+    anchors: IntArray
+
+
 @numba.njit(cache=True, nogil=True, error_model="numpy")
-def plate_pieces(
+def _flat_groups(
     lines: PieceLines,
     count: IntArray,
     t_first: FloatArray,
     t_last: FloatArray,
-    first: IntArray,
     limits: PlateLimits,
     tol: float,
-) -> PlatePieces:
-    """The pieces that lie on plates, in column order (``first``: each piece's first
-    inlier): flat pieces (``limits.min_points``, within ``limits.max_tilt_deg`` of the y
-    axis) grouped by the line they lie on, the lines spanning ``limits.min_plate_mm``
-    plates; a plate line showing only briefly between two stretches of another is no plate
-    there."""
-    min_points, min_plate_mm, min_bottom_mm = (
-        limits.min_points,
-        limits.min_plate_mm,
-        limits.min_bottom_mm,
-    )
-    max_tilt_deg, butt = limits.max_tilt_deg, limits.butt
+) -> FlatGroups:
+    """Flat pieces (``limits.min_points``, within ``limits.max_tilt_deg`` of the y axis),
+    grouped by the line they lie on (collinear_members: best supported first, each joins the
+    earliest group whose anchor holds both its ends)."""
     nl = lines.cy.shape[0]
-    # Flat pieces, grouped by the line they lie on (collinear_members: best supported first,
-    # each joins the earliest group whose anchor holds both its ends).
-    tilt = math.radians(max_tilt_deg)
+    tilt = math.radians(limits.max_tilt_deg)
     flat = np.empty(nl, dtype=np.int64)
     nf = 0
     for j in range(nl):
-        if count[j] >= min_points and abs(math.atan2(lines.dz[j], lines.dy[j])) <= tilt:
+        if count[j] >= limits.min_points and abs(math.atan2(lines.dz[j], lines.dy[j])) <= tilt:
             flat[nf] = j
             nf += 1
     flat = flat[:nf]
@@ -144,66 +142,98 @@ def plate_pieces(
             joined = ng
             ng += 1
         group[o] = joined
+    return FlatGroups(flat, group, anchors[:ng])
+
+
+class Block(NamedTuple):
+    """A block of plate pieces ``[start, end)`` (-1, -1: none)."""
+
+    start: int
+    end: int
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _weakest_brief_block(
+    lines: PieceLines,
+    count: IntArray,
+    t_first: FloatArray,
+    t_last: FloatArray,
+    pg: IntArray,
+    pl: IntArray,
+    plate_anchor: IntArray,
+    limits: PlateLimits,
+) -> Block:
+    """Of the blocks of one plate line showing between two stretches of another and tilted
+    to it, far behind it (square butt) or too short, the one with the fewest inliers."""
+    ten = math.radians(10.0)
+    n = pg.shape[0]
+    best_c, bi, bj = 0, -1, -1
+    i = 1
+    while i < n - 1:
+        j = i
+        while j < n and pg[j] == pg[i]:
+            j += 1
+        if j < n and pg[i - 1] == pg[j]:
+            host = plate_anchor[pg[j]]
+            b0 = pl[i]
+            c = abs(lines.dy[b0] * lines.dy[host] + lines.dz[b0] * lines.dz[host])
+            tilted = math.acos(min(1.0, c)) > ten
+            hy, hz, hdy, hdz = piece_line(lines, host)
+            flip = not hy * -hdz + hz * hdy < 0
+            heights = np.empty(j - i)
+            for r in range(i, j):
+                h = (lines.cy[pl[r]] - hy) * -hdz + (lines.cz[pl[r]] - hz) * hdy
+                heights[r - i] = -h if flip else h
+            behind = -median(heights) >= limits.min_bottom_mm if limits.butt else False
+            short = span(lines, t_first, t_last, plate_anchor[pg[i]], pl[i:j]) < limits.min_plate_mm
+            if tilted or behind or short:
+                cnt = 0
+                for r in range(i, j):
+                    cnt += count[pl[r]]
+                if bi < 0 or cnt < best_c:
+                    best_c, bi, bj = cnt, i, j
+        i = j
+    return Block(bi, bj)
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def plate_pieces(
+    lines: PieceLines,
+    count: IntArray,
+    t_first: FloatArray,
+    t_last: FloatArray,
+    first: IntArray,
+    limits: PlateLimits,
+    tol: float,
+) -> PlatePieces:
+    """The pieces that lie on plates, in column order (``first``: each piece's first
+    inlier): flat pieces (``limits.min_points``, within ``limits.max_tilt_deg`` of the y
+    axis) grouped by the line they lie on, the lines spanning ``limits.min_plate_mm``
+    plates; a plate line showing only briefly between two stretches of another is no plate
+    there."""
+    flat, group, anchors = _flat_groups(lines, count, t_first, t_last, limits, tol)
     # Plate lines span min_plate_mm; their pieces in column order.
+    ng = anchors.shape[0]
     plate_of = np.full(ng, -1, dtype=np.int64)  # collinear group -> plate line
     plate_anchor = np.empty(ng, dtype=np.int64)
     npl = 0
     for k in range(ng):
-        members = np.empty(nf, dtype=np.int64)
-        c = 0
-        for o in range(nf):
-            if group[o] == k:
-                members[c] = flat[o]
-                c += 1
-        members = members[:c]
-        if span(lines, t_first, t_last, anchors[k], members) >= min_plate_mm:
+        members = flat[group == k]
+        if span(lines, t_first, t_last, anchors[k], members) >= limits.min_plate_mm:
             plate_of[k] = npl
             plate_anchor[npl] = anchors[k]
             npl += 1
-    pg = np.empty(nf, dtype=np.int64)  # in column order: each plate piece's plate line
-    pl = np.empty(nf, dtype=np.int64)  # and the piece
-    n = 0
-    for o in range(nf):
-        if plate_of[group[o]] >= 0:
-            pg[n], pl[n] = plate_of[group[o]], flat[o]
-            n += 1
-    starts = np.empty(n, dtype=np.int64)
-    for o in range(n):
-        starts[o] = first[pl[o]]
-    srt = _order(starts)
-    pg0, pl0 = pg.copy(), pl.copy()
-    for o in range(n):
-        pg[o], pl[o] = pg0[srt[o]], pl0[srt[o]]
+    on_plate = plate_of[group] >= 0
+    pg = plate_of[group][on_plate]  # each plate piece's plate line
+    pl = flat[on_plate]  # and the piece
+    srt = _order(first[pl])  # in column order
+    pg, pl = pg[srt], pl[srt]
+    n = pg.shape[0]
     # A plate line showing briefly between two stretches of another, tilted to it, far
     # behind it or too short, is no plate there; of competing blocks the smallest goes.
-    ten = math.radians(10.0)
     while True:
-        best_c, bi, bj = 0, -1, -1
-        i = 1
-        while i < n - 1:
-            j = i
-            while j < n and pg[j] == pg[i]:
-                j += 1
-            if j < n and pg[i - 1] == pg[j]:
-                host = plate_anchor[pg[j]]
-                b0 = pl[i]
-                c = abs(lines.dy[b0] * lines.dy[host] + lines.dz[b0] * lines.dz[host])
-                tilted = math.acos(min(1.0, c)) > ten
-                hy, hz, hdy, hdz = piece_line(lines, host)
-                flip = not hy * -hdz + hz * hdy < 0
-                heights = np.empty(j - i)
-                for r in range(i, j):
-                    h = (lines.cy[pl[r]] - hy) * -hdz + (lines.cz[pl[r]] - hz) * hdy
-                    heights[r - i] = -h if flip else h
-                behind = -median(heights) >= min_bottom_mm if butt else False
-                short = span(lines, t_first, t_last, plate_anchor[pg[i]], pl[i:j]) < min_plate_mm
-                if tilted or behind or short:
-                    cnt = 0
-                    for r in range(i, j):
-                        cnt += count[pl[r]]
-                    if bi < 0 or cnt < best_c:
-                        best_c, bi, bj = cnt, i, j
-            i = j
+        bi, bj = _weakest_brief_block(lines, count, t_first, t_last, pg[:n], pl[:n],
+                                      plate_anchor, limits)  # fmt: skip
         if bi < 0:
             break
         for o in range(bj, n):
