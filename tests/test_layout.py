@@ -305,7 +305,6 @@ OVER_THE_BOUNDS_TODAY = {
     "seamtrack/cli/main.py::build_parser",
     "seamtrack/control/arm_kernels.py::arm_step",
     "seamtrack/control/planner.py::checked_plan",
-    "seamtrack/datasets/noise.py::secondary_points",
     "seamtrack/features/_segmentation.py::_pieces",
     "seamtrack/features/generic/_slope_turns.py::clean_points",
     "seamtrack/features/groove/_groove_fit.py::drop_islands",

@@ -51,6 +51,51 @@ def _inside(y: float, z: float, k: FloatArray) -> bool:
 
 
 @numba.njit(cache=True, nogil=True)
+def _mirrored(
+    origin: FloatArray, directions: FloatArray, t: FloatArray, face: NDArray[np.int64],
+    segs: FloatArray, rows: NDArray[np.int64], offset: float,
+) -> tuple[FloatArray, FloatArray]:  # fmt: skip
+    """The lit rays ``rows`` reflected specularly off their faces (the section's segments):
+    where each reflected ray starts (``offset`` off the surface) and its direction, (m, 3)
+    each."""
+    m = rows.shape[0]
+    start = np.empty((m, 3))
+    ray = np.empty((m, 3))
+    for j in range(m):
+        i = rows[j]
+        f = face[i]
+        ey, ez = segs[f, 2] - segs[f, 0], segs[f, 3] - segs[f, 1]
+        length = np.sqrt(ey * ey + ez * ez)
+        ny, nz = -ez / length, ey / length
+        dx, dy, dz = directions[i, 0], directions[i, 1], directions[i, 2]
+        d_dot_n = dx * 0.0 + dy * ny + dz * nz
+        ray[j, 0] = dx - 2.0 * d_dot_n * 0.0
+        ray[j, 1] = dy - 2.0 * d_dot_n * ny
+        ray[j, 2] = dz - 2.0 * d_dot_n * nz
+        for a in range(3):
+            start[j, a] = origin[a] + t[i] * directions[i, a] + offset * ray[j, a]
+    return start, ray
+
+
+@numba.njit(cache=True, nogil=True)
+def _clear_to(q: FloatArray, cam: FloatArray, segs: FloatArray, offset: float) -> NDArray[np.bool_]:
+    """Whether each point ``q`` sees the camera ``cam`` past the section (one batch of
+    shadow rays, each starting ``offset`` towards the camera)."""
+    c = q.shape[0]
+    oy, oz, vy, vz, far = np.empty(c), np.empty(c), np.empty(c), np.empty(c), np.empty(c)
+    for a in range(c):
+        tx, ty, tz = cam[0] - q[a, 0], cam[1] - q[a, 1], cam[2] - q[a, 2]
+        length = np.sqrt(tx * tx + ty * ty + tz * tz)
+        vy[a], vz[a] = ty / length, tz / length
+        oy[a], oz[a] = q[a, 1] + offset * vy[a], q[a, 2] + offset * vz[a]
+        far[a] = max(length - offset, 0.0)
+    t3 = np.empty(c)
+    blocker = np.empty(c, dtype=np.int64)
+    _crossings(oy, oz, vy, vz, segs, 0.0, far, t3, blocker)
+    return blocker < 0
+
+
+@numba.njit(cache=True, nogil=True)
 def secondary_points(
     origin: FloatArray, rotation: FloatArray, directions: FloatArray, t: FloatArray,
     face: NDArray[np.int64], segs: FloatArray, k: FloatArray, offset: float,
@@ -72,25 +117,11 @@ def secondary_points(
     seen = np.zeros(n, dtype=np.bool_)
     rows = np.flatnonzero(face >= 0)
     m = rows.shape[0]
-    sx, sy, sz = np.empty(m), np.empty(m), np.empty(m)
-    ry, rz, rx = np.empty(m), np.empty(m), np.empty(m)
-    for j in range(m):
-        i = rows[j]
-        f = face[i]
-        ey, ez = segs[f, 2] - segs[f, 0], segs[f, 3] - segs[f, 1]
-        length = np.sqrt(ey * ey + ez * ez)
-        ny, nz = -ez / length, ey / length
-        dx, dy, dz = directions[i, 0], directions[i, 1], directions[i, 2]
-        d_dot_n = dx * 0.0 + dy * ny + dz * nz
-        rx[j] = dx - 2.0 * d_dot_n * 0.0
-        ry[j] = dy - 2.0 * d_dot_n * ny
-        rz[j] = dz - 2.0 * d_dot_n * nz
-        sx[j] = origin[0] + t[i] * dx + offset * rx[j]
-        sy[j] = origin[1] + t[i] * dy + offset * ry[j]
-        sz[j] = origin[2] + t[i] * dz + offset * rz[j]
+    start, ray = _mirrored(origin, directions, t, face, segs, rows, offset)
     t2 = np.empty(m)
     hit2 = np.empty(m, dtype=np.int64)
-    _crossings(sy, sz, ry, rz, segs, T_MIN_MM, np.full(m, NO_HIT), t2, hit2)
+    _crossings(start[:, 1], start[:, 2], ray[:, 1], ray[:, 2], segs, T_MIN_MM, np.full(m, NO_HIT),
+               t2, hit2)  # fmt: skip
     b = k[_B]
     cam = np.array([origin[0] + b * rotation[0, 0], origin[1] + b * rotation[1, 0],
                     origin[2] + b * rotation[2, 0]])  # fmt: skip
@@ -102,28 +133,19 @@ def secondary_points(
         f = hit2[j]
         if f < 0:
             continue
-        qx, qy, qz = sx[j] + t2[j] * rx[j], sy[j] + t2[j] * ry[j], sz[j] + t2[j] * rz[j]
+        here = start[j] + t2[j] * ray[j]
         ey, ez = segs[f, 2] - segs[f, 0], segs[f, 3] - segs[f, 1]
         length = np.sqrt(ey * ey + ez * ez)
         ny, nz = -ez / length, ey / length
-        if ny * ry[j] + nz * rz[j] > 0:  # turned to face the ray's origin
+        if ny * ray[j, 1] + nz * ray[j, 2] > 0:  # turned to face the ray's origin
             ny, nz = -ny, -nz
-        if ny * (cam[1] - qy) + nz * (cam[2] - qz) > 0:
+        if ny * (cam[1] - here[1]) + nz * (cam[2] - here[2]) > 0:
             cand[c] = j
-            q[c, 0], q[c, 1], q[c, 2] = qx, qy, qz
+            q[c] = here
             c += 1
-    oy, oz, vy, vz, far = np.empty(c), np.empty(c), np.empty(c), np.empty(c), np.empty(c)
+    unblocked = _clear_to(q[:c], cam, segs, offset)
     for a in range(c):
-        tx, ty, tz = cam[0] - q[a, 0], cam[1] - q[a, 1], cam[2] - q[a, 2]
-        length = np.sqrt(tx * tx + ty * ty + tz * tz)
-        vy[a], vz[a] = ty / length, tz / length
-        oy[a], oz[a] = q[a, 1] + offset * vy[a], q[a, 2] + offset * vz[a]
-        far[a] = max(length - offset, 0.0)
-    t3 = np.empty(c)
-    blocker = np.empty(c, dtype=np.int64)
-    _crossings(oy, oz, vy, vz, segs, 0.0, far, t3, blocker)
-    for a in range(c):
-        if blocker[a] >= 0:
+        if not unblocked[a]:
             continue
         px, py, pz = q[a, 0] - origin[0], q[a, 1] - origin[1], q[a, 2] - origin[2]
         q_x = px * rotation[0, 0] + py * rotation[1, 0] + pz * rotation[2, 0]

@@ -368,7 +368,9 @@ def _two_plates(
     lines = pieces.lines
     index = _piece_index(points.shape[0], pieces)
     offsets = index.offsets
-    plated = plate_pieces(lines, index.n_inliers, index.t_first, index.t_last, index.first, limits, tol)
+    plated = plate_pieces(
+        lines, index.n_inliers, index.t_first, index.t_last, index.first, limits, tol
+    )
     pg, pl, plate_anchor = plated.plate, plated.piece, plated.anchor
     n = pg.shape[0]
     # Runs: consecutive pieces of one plate line, unless (square butt) an open gap lies
