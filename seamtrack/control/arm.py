@@ -106,6 +106,10 @@ class ArmState:
         self.cnt = np.zeros(4, dtype=np.int64)  # limited, clamped, servo tick, ipo ticks
         self.cmd = np.zeros(ak.CMD_FIELDS)
         self.work = np.empty(ak.work_size(n))  # the compiled tick's scratch
+        #: The arrays above, as the compiled tick takes them (the same objects).
+        self.data = ak.ArmData(
+            self.cart, self.rot, self.omega, self.jnt, self.cnt, self.cmd, self.work
+        )
         #: The last goal rotation handed in (a tracker hands the same object for many ticks).
         self.goal_from: Any = None
         self.servo = servo
@@ -196,6 +200,8 @@ class ArticulatedRobot:
     _par: FloatArray = field(init=False, repr=False)
     _jl: FloatArray = field(init=False, repr=False)
     _servo_table: FloatArray = field(init=False, repr=False)
+    #: The tables above and the chain, as the compiled tick takes them.
+    _model: ak.ArmModel = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "T_world_base", np.asarray(self.T_world_base, dtype=float))
@@ -230,6 +236,10 @@ class ArticulatedRobot:
         object.__setattr__(self, "_par", par)
         object.__setattr__(self, "_jl", jl)
         object.__setattr__(self, "_servo_table", table)
+        object.__setattr__(
+            self, "_model",
+            ak.ArmModel(par, cart._limits, jl, table, kin.geometry, *kin.chain),
+        )  # fmt: skip
 
     def with_iterative_ik(self) -> ArticulatedRobot:
         """The same arm with the tick's inverse kinematics by Newton steps only (as before the
@@ -360,12 +370,7 @@ class ArticulatedRobot:
             cmd[ak.M_ROT : ak.M_ROT + 9] = np.asarray(rotation, dtype=np.float64).ravel()
 
     def _tick(self, state: ArmState) -> None:
-        place, axes, kinds, index = self.kinematics.chain
-        ak.arm_step(
-            self._par, self._cart._limits, self._jl, self._servo_table,
-            self.kinematics.geometry, place, axes, kinds, index, state.cart, state.rot,
-            state.omega, state.jnt, state.cnt, state.cmd, state.work,
-        )  # fmt: skip
+        ak.arm_step(self._model, state.data)
 
     # ----------------------------------------------------------------- plan
     def plan(

@@ -19,6 +19,7 @@ tick, so one step leaves a residual of the order of the error squared).
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -72,6 +73,43 @@ def work_size(dof: int) -> int:
     """Floats of :func:`arm_step`'s scratch for an arm of ``dof`` joints (the chain has at
     most as many)."""
     return W_JOINTS + 3 * dof + 16 * (dof + 1)
+
+
+class ArmModel(NamedTuple):
+    """What an arm's control tick reads and never changes (Pinocchio's *model*): the tick's
+    parameters (rows ``P_*``), the Cartesian interpolator's limits
+    (:attr:`CartesianRobot._limits <seamtrack.control.robot.CartesianRobot>`), the joint table
+    (rows ``J_*``), the servo's table, the closed form's geometry
+    (:mod:`seamtrack.control.closed_form`) and the chain (:attr:`ArmKinematics.chain
+    <seamtrack.control.kinematics.ArmKinematics.chain>`: each joint's placement, axis, kind and
+    index)."""
+
+    par: FloatArray
+    limits: FloatArray
+    joint_limits: FloatArray
+    servo: FloatArray
+    geometry: FloatArray
+    place: FloatArray
+    axes: FloatArray
+    kinds: IntArray
+    joint_index: IntArray
+
+
+class ArmData(NamedTuple):
+    """What an arm's control tick updates in place (Pinocchio's *data*): the Cartesian
+    set-point and the measured torch tip (``cart``, rows ``C_*``), the orientation set-point,
+    its goal and the measured rotation (``rot``, (3, 3, 3)), the set-point's angular velocity
+    (``omega``), the joints (``jnt``, rows ``S_*``), the counters (``cnt``, ``K_*``), the
+    command (``cmd``, fields ``M_*``) and the tick's scratch (``work``, :func:`work_size`), so
+    that a tick allocates nothing."""
+
+    cart: FloatArray
+    rot: FloatArray
+    omega: FloatArray
+    jnt: FloatArray
+    cnt: IntArray
+    cmd: FloatArray
+    work: FloatArray
 
 
 @numba.njit(cache=True, nogil=True)
@@ -337,20 +375,22 @@ def solve_pose(
 
 
 @numba.njit(cache=True, nogil=True)
-def arm_step(
-    par: FloatArray, lim: FloatArray, jl: FloatArray, servo: FloatArray, geo: FloatArray,
-    place: FloatArray, axes: FloatArray, kinds: IntArray, index: IntArray, cart: FloatArray,
-    rot: FloatArray, omega: FloatArray, jnt: FloatArray, cnt: IntArray, cmd: FloatArray,
-    work: FloatArray,
-) -> None:  # fmt: skip
-    """One control tick of an arm (every array updated in place; see the module's rows):
-    the interpolator, the orientation set-point, the inverse kinematics, the joint limits, the
-    servo and the forward kinematics of the measured joints.
-
-    ``rot``: (3, 3, 3) the orientation set-point, its goal, the measured tool rotation;
-    ``omega``: the set-point's angular velocity (rad/s); ``work``: the tick's scratch
-    (:func:`work_size`), so that it allocates nothing.
-    """
+def arm_step(model: ArmModel, data: ArmData) -> None:
+    """One control tick of an arm (``data`` updated in place): the interpolator, the
+    orientation set-point, the inverse kinematics, the joint limits, the servo and the forward
+    kinematics of the measured joints."""
+    par, lim, jl, servo = model.par, model.limits, model.joint_limits, model.servo
+    geo = model.geometry
+    place, axes, kinds, index = model.place, model.axes, model.kinds, model.joint_index
+    cart, rot, omega, jnt, cnt, cmd, work = (
+        data.cart,
+        data.rot,
+        data.omega,
+        data.jnt,
+        data.cnt,
+        data.cmd,
+        data.work,
+    )
     dt = par[P_DT]
     has = cmd[M_HAS] > 0.0
     axes_step(

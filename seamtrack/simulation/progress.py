@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import bisect
 import math
-from typing import Any
+from typing import Any, NamedTuple
 
 import numba
 import numpy as np
@@ -200,6 +200,19 @@ def progress_check(
     return GO_ON
 
 
+class CheckArrays(NamedTuple):
+    """The arrays a progress check reads and writes, as the compiled ticks take them: its
+    state (:func:`progress_check`'s, fields ``S_BEST``...), the seam's points, arc lengths and
+    columns, and the log of (t, s) at every check (the count in its last row's first
+    column)."""
+
+    state: FloatArray
+    points: FloatArray
+    knots: FloatArray
+    columns: FloatArray
+    log: FloatArray
+
+
 class ProgressCheck:
     """The loop's progress checks of one run: their state (:func:`progress_check`'s array),
     the seam's arrays and the log of (t, s) at every check, whether the loop checks
@@ -220,7 +233,7 @@ class ProgressCheck:
         # made; the count in the last row's first column; grown by doubling (:meth:`room`).
         self.checks = np.zeros((1025, 2))
         self._seam = (near.points, near.knots, near.columns)
-        self.args = (P, *self._seam, self.checks)
+        self.args = CheckArrays(P, *self._seam, self.checks)
 
     def room(self, rows: int) -> bool:
         """At least ``rows`` free rows in the log; True when it was replaced by a larger one
@@ -235,7 +248,7 @@ class ProgressCheck:
         self.checks = np.zeros((size + 1, 2))
         self.checks[:m] = checks[:m]
         self.checks[-1, 0] = m
-        self.args = (self.P, *self._seam, self.checks)
+        self.args = CheckArrays(self.P, *self._seam, self.checks)
         return True
 
     @property

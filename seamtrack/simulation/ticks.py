@@ -16,7 +16,7 @@ steps the tracker and the robot use themselves (``setpoint_step``, ``axes_step``
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, NamedTuple
 
 import numba
 import numpy as np
@@ -36,10 +36,12 @@ from seamtrack.control.arm_kernels import (
     M_T,
     M_W,
     S_JOINTS,
+    ArmData,
+    ArmModel,
     arm_step,
 )  # fmt: skip
 from seamtrack.control.orientation import turning_at
-from seamtrack.control.path_kernels import V_SET, setpoint_step
+from seamtrack.control.path_kernels import TCP_X, TCP_Y, TCP_Z, V_SET, setpoint_step
 from seamtrack.control.robot import CartesianRobot, RobotState, axes_step
 from seamtrack.control.servo import loops_step
 from seamtrack.simulation.progress import (
@@ -47,6 +49,7 @@ from seamtrack.simulation.progress import (
     FOUND,
     GO_ON,
     S_NOW,
+    CheckArrays,
     ProgressCheck,
     _closest_in_window,
     progress_check,
@@ -61,71 +64,149 @@ EVENT, LIMIT, REFUSED, STOPPED = 0, 1, 2, 3
 _LO, _HI = 2, 3
 
 
+class Clock(NamedTuple):
+    """A stretch of ticks: the first tick, the last the run may reach, the control period (s),
+    when the next frame is due and the next measurement arrives (s), and every how many ticks
+    the run's progress is checked and the loop looks at the wall clock."""
+
+    tick: int
+    max_ticks: int
+    dt: float
+    next_capture: float
+    next_arrival: float
+    check_every: int
+    wall_every: int
+
+
+class Follow(NamedTuple):
+    """The built-in tracker as its set-point step (:func:`~seamtrack.control.path_kernels.
+    setpoint_step`) takes it: the set-point (fields ``S_SET``... of ``path_kernels``), the
+    stored path and its arc lengths, the speed envelope (arc lengths, speeds), and whether it
+    has seen the seam."""
+
+    setpoint: FloatArray
+    path: FloatArray
+    s: FloatArray
+    envelope_s: FloatArray
+    envelope_v: FloatArray
+    seen: bool
+
+
+class Trace(NamedTuple):
+    """Where the ticks log: the torch tip and the target of each tick, and an arm's torch axis
+    and joints (empty on a gantry); the kernels write from a given row on (:class:`_Logs`)."""
+
+    tcp: FloatArray
+    target: FloatArray
+    axis: FloatArray
+    joints: FloatArray
+
+
+class GantryAxes(NamedTuple):
+    """A gantry as its ticks take it: the offsets (the torch tip from the axes (3), the world
+    to the base (3)), the axes (rows q, v (the servo's output), the set-point's q, v, the held
+    set-point), the limits (:attr:`CartesianRobot._limits`), the servo's table, and
+    ``ipo`` (ticks per interpolation, the servo's tick; -1: ideal axes)."""
+
+    offset: FloatArray
+    axes: FloatArray
+    limits: FloatArray
+    servo: FloatArray
+    ipo: NDArray[np.int64]
+
+
+class ArmMount(NamedTuple):
+    """Where an arm stands: ``world`` (3, 4), the base's rotation and origin in the world,
+    ``base`` (3, 4) its inverse, and the arm's reach (mm) from the base."""
+
+    world: FloatArray
+    base: FloatArray
+    reach: float
+
+
+class ToolProgram(NamedTuple):
+    """The robot program's tool orientation, as the tracker refreshes it every ``orient[0]``-th
+    command (its count in ``orient[1]``): the seam's points, arc lengths, segment lengths,
+    normals, the program's parameters, the points' columns, and ``turn``: the last refresh's
+    rotation (9), angular velocity (3) and arc length (see :func:`_refresh_orientation`)."""
+
+    points: FloatArray
+    knots: FloatArray
+    seg_len: FloatArray
+    normals: FloatArray
+    par: FloatArray
+    columns: FloatArray
+    turn: FloatArray
+    orient: NDArray[np.int64]
+
+
 @numba.njit(cache=True, nogil=True)
 def _checked(
-    tick: int, t: float, x: float, y: float, z: float, v: FloatArray, check_every: int,
-    wall_every: int, progress: FloatArray, seam: FloatArray, seam_s: FloatArray,
-    seam_columns: FloatArray, checks: FloatArray,
+    tick: int, t: float, x: float, y: float, z: float, v: FloatArray, clock: Clock,
+    checks: CheckArrays,
 ) -> bool:  # fmt: skip
     """After a tick: True when the ticks stop here. A wall-clock tick (and every hundredth
     check, the progress bar's) is the loop's to check; any other check tick is checked here,
     as the loop would (:func:`~seamtrack.simulation.progress.progress_check`, the torch tip
-    (x, y, z) at the tick's start, its speed after it), logged in ``checks`` (rows t, s; the
-    count in its last row's first column), and stops the ticks when the run ends there."""
-    if tick % wall_every == 0 or tick % (100 * check_every) == 0:
+    (x, y, z) at the tick's start, its speed after it), logged in ``checks.log`` (rows t, s;
+    the count in its last row's first column), and stops the ticks when the run ends there."""
+    every = clock.check_every
+    if tick % clock.wall_every == 0 or tick % (100 * every) == 0:
         return True
-    if tick % check_every != 0:
+    if tick % every != 0:
         return False
     speed = math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
-    found = progress_check(progress, t, x, y, z, speed, seam, seam_s, seam_columns)
-    m = int(checks[-1, 0])
-    checks[m, 0], checks[m, 1] = t, progress[S_NOW]
-    checks[-1, 0] = m + 1
+    progress, log = checks.state, checks.log
+    found = progress_check(progress, t, x, y, z, speed, checks.points, checks.knots,
+                           checks.columns)  # fmt: skip
+    m = int(log[-1, 0])
+    log[m, 0], log[m, 1] = t, progress[S_NOW]
+    log[-1, 0] = m + 1
     progress[CHECKED], progress[FOUND] = tick, found
     return found != GO_ON
 
 
 @numba.njit(cache=True, nogil=True)
 def gantry_ticks(
-    tick: int, max_ticks: int, dt: float, next_capture: float, next_arrival: float,
-    check_every: int, wall_every: int, offset: FloatArray, axes: FloatArray, lim: FloatArray,
-    servo: FloatArray, ipo: NDArray[np.int64], sp: FloatArray, path: FloatArray, s: FloatArray,
-    env_s: FloatArray, env_v: FloatArray, seen: bool, tcp_out: FloatArray,
-    target_out: FloatArray, k0: int, refused: FloatArray, progress: FloatArray,
-    seam: FloatArray, seam_s: FloatArray, seam_columns: FloatArray, checks: FloatArray,
+    clock: Clock, row: int, follow: Follow, gantry: GantryAxes, trace: Trace,
+    checks: CheckArrays, refused: FloatArray,
 ) -> tuple[int, int]:  # fmt: skip
-    """Control ticks from ``tick`` on, until the next event: stops before a tick at which a
-    frame is due (``next_capture``) or a measurement arrives (``next_arrival``), after a tick
-    at which the loop checks the wall clock (``wall_every``; see :func:`_checked`), or at a
-    target outside the travel (``LIMIT``), an unusable command (``REFUSED``: its target,
+    """Control ticks from ``clock.tick`` on, until the next event: stops before a tick at
+    which a frame is due (``next_capture``) or a measurement arrives (``next_arrival``), after
+    a tick at which the loop checks the wall clock (``wall_every``; see :func:`_checked`), or
+    at a target outside the travel (``LIMIT``), an unusable command (``REFUSED``: its target,
     speed, feed-forward and stop in ``refused``) or a progress check (every ``check_every``
-    ticks, made here: ``progress``, ``seam``, ``seam_s``, ``seam_columns``, ``checks``, see
-    :class:`~seamtrack.simulation.progress.ProgressCheck`) that ends the run (``STOPPED``).
+    ticks, made here on ``checks``, see :class:`~seamtrack.simulation.progress.ProgressCheck`)
+    that ends the run (``STOPPED``).
 
-    ``offset``: (tcp from axes (3), world to base (3)); ``axes``: rows q, v (the servo's
-    output), set-point q, v, held set-point; ``ipo``: (ticks per interpolation, servo tick;
-    -1: ideal axes). Writes the torch tip and the target of each tick into ``tcp_out`` and
-    ``target_out``, rows from ``k0`` on. Returns (ticks run, what stopped it).
+    Steps ``gantry``'s axes and ``follow``'s set-point in place and writes the torch tip and
+    the target of each tick into ``trace``, rows from ``row`` on. Returns (ticks run, what
+    stopped it).
     """
+    offset, lim, servo, ipo, dt = gantry.offset, gantry.limits, gantry.servo, gantry.ipo, clock.dt
+    axes = gantry.axes
     q, v, sq, sv, held = axes[0], axes[1], axes[2], axes[3], axes[4]
+    sp, tcp_out, target_out = follow.setpoint, trace.tcp, trace.target
     has_servo = ipo[0] > 0
-    first = tick
-    while tick <= max_ticks:
+    tick = first = clock.tick
+    while tick <= clock.max_ticks:
         t = tick * dt
-        if tick > first and (t + 1e-9 >= next_capture or next_arrival <= t + 1e-9):
+        if tick > first and (t + 1e-9 >= clock.next_capture or clock.next_arrival <= t + 1e-9):
             break
         k = tick - first
-        r = k0 + k
+        r = row + k
         x, y, z = q[0] + offset[0], q[1] + offset[1], q[2] + offset[2]
         tcp_out[r, 0], tcp_out[r, 1], tcp_out[r, 2] = x, y, z
-        if not seen:
-            sp[2], sp[3], sp[4] = x, y, z  # the tracker's view of the torch (naive poses)
+        if not follow.seen:
+            sp[TCP_X], sp[TCP_Y], sp[TCP_Z] = x, y, z  # the tracker's view of the torch
             target_out[r, :] = np.nan
             has_target = False
             tx = ty = tz = speed = fx = fy = fz = 0.0
             stop = False
         else:
-            tx, ty, tz, speed, fx, fy, fz, stop = setpoint_step(sp, path, s, env_s, env_v, x, y, z)
+            tx, ty, tz, speed, fx, fy, fz, stop = setpoint_step(
+                sp, follow.path, follow.s, follow.envelope_s, follow.envelope_v, x, y, z
+            )
             if not (0.0 < speed < math.inf and math.isfinite(tx + ty + tz + fx + fy + fz)):
                 refused[:] = (tx, ty, tz, speed, fx, fy, fz, 1.0 if stop else 0.0)
                 return k, REFUSED
@@ -149,10 +230,56 @@ def gantry_ticks(
         else:
             axes_step(q, v, lim, dt, has_target, tx, ty, tz, speed, fx, fy, fz, stop)
         tick += 1
-        if _checked(tick - 1, t, x, y, z, v, check_every, wall_every, progress, seam, seam_s,
-                    seam_columns, checks):  # fmt: skip
-            return tick - first, STOPPED if progress[FOUND] != GO_ON else EVENT
+        if _checked(tick - 1, t, x, y, z, v, clock, checks):
+            return tick - first, STOPPED if checks.state[FOUND] != GO_ON else EVENT
     return tick - first, EVENT
+
+
+def follow(tracker: Any) -> Follow:
+    """The built-in trajectory tracker's arrays as the compiled ticks step them, each of one
+    type through a run: the stored path and arc lengths are views that
+    :class:`~seamtrack.control.path_kernels.PathBuffer` cuts from float64 C arrays, and the
+    envelope is always a new 1-D float64 array (it is replaced at every tracker update)."""
+    path = tracker._buffer
+    return Follow(
+        tracker._sp, path.path, path.s, tracker._env_s, tracker._env_v, bool(tracker._seen_seam)
+    )
+
+
+class _Direct:
+    """A compiled kernel called through its entry point while its arguments' types cannot
+    have changed. numba's dispatcher types every argument of every call, a record of arrays
+    in Python (about 2 us a record, against 0.1 us an array), and a stretch of ticks is short
+    (10 ticks between two 100 Hz frames). Each stretch passes a new :class:`Clock` and
+    :class:`Follow` (each field of one type through a run: :func:`clock`, :func:`follow`), its
+    first row, and the records of the last stretch, the same objects until an array in them
+    is replaced (a log grown): while they are, the call skips the dispatcher."""
+
+    def __init__(self, kernel: Any) -> None:
+        self.kernel = kernel
+        self.records: tuple[Any, ...] = ()
+        self.entry: Any = None
+
+    def __call__(self, clock: Clock, row: int, follow: Follow, *records: Any) -> tuple[int, int]:
+        last = self.records
+        if len(last) == len(records) and all(a is b for a, b in zip(last, records, strict=True)):
+            return self.entry(clock, row, follow, *records)
+        kernel = self.kernel
+        out = kernel(clock, row, follow, *records)
+        types = tuple(kernel.typeof_pyval(a) for a in (clock, row, follow, *records))
+        self.records, self.entry = records, kernel.overloads[types].entry_point
+        return out
+
+
+def clock(
+    tick: int, max_ticks: int, dt: float, next_capture: float, next_arrival: float,
+    check_every: int, wall_every: int,
+) -> Clock:  # fmt: skip
+    """A :class:`Clock`, each field of the type the kernels were compiled for."""
+    return Clock(
+        int(tick), int(max_ticks), float(dt), float(next_capture), float(next_arrival),
+        int(check_every), int(wall_every),
+    )  # fmt: skip
 
 
 class _Logs:
@@ -166,6 +293,7 @@ class _Logs:
         self.target = np.empty((4096, 3))
         self.axis = np.empty((4096 if dof else 0, 3))
         self.joints = np.empty((4096 if dof else 0, dof))
+        self.trace = Trace(self.tcp, self.target, self.axis, self.joints)
 
     def room(self, rows: int) -> bool:
         """At least ``rows`` rows free after ``count``; True when the arrays were replaced."""
@@ -180,6 +308,7 @@ class _Logs:
                 new = np.empty((size, old.shape[1]))
                 new[: self.count] = old[: self.count]
                 setattr(self, name, new)
+        self.trace = Trace(self.tcp, self.target, self.axis, self.joints)
         return True
 
 
@@ -204,7 +333,9 @@ class GantryTicks(_Logs):
             self.servo = servo._table
             self.ipo[0] = servo.ipo_ticks
         self.axes = np.zeros((5, 3))
+        self.gantry = GantryAxes(self.offset, self.axes, self.lim, self.servo, self.ipo)
         self.refused = np.zeros(8)
+        self._ticks = _Direct(gantry_ticks)
 
     def run(
         self, state: RobotState, tick: int, max_ticks: int, next_capture: float,
@@ -221,12 +352,10 @@ class GantryTicks(_Logs):
             assert state.setpoint is not None
             axes[2], axes[3], axes[4] = state.setpoint.q, state.setpoint.v, servo.held
             self.ipo[1] = servo.tick
-        path = tracker._buffer
-        n, why = gantry_ticks(
-            tick, max_ticks, self.dt, next_capture, next_arrival, check_every, wall_every,
-            self.offset, axes, self.lim, self.servo, self.ipo, tracker._sp, path.path, path.s,
-            tracker._env_s, tracker._env_v, tracker._seen_seam, self.tcp, self.target,
-            self.count, self.refused, *self.checks.args,
+        when = clock(tick, max_ticks, self.dt, next_capture, next_arrival, check_every, wall_every)
+        n, why = self._ticks(
+            when, self.count, follow(tracker), self.gantry, self.trace, self.checks.args,
+            self.refused,
         )  # fmt: skip
         self.count += n
         state.q[:], state.v[:] = axes[0].tolist(), axes[1].tolist()
@@ -271,18 +400,20 @@ def _closest_near(
 
 @numba.njit(cache=True, nogil=True)
 def _refresh_orientation(
-    x: float, y: float, z: float, sp: FloatArray, base: FloatArray, prog: FloatArray,
-    knots: FloatArray, seg_len: FloatArray, normals: FloatArray, prog_par: FloatArray,
-    columns: FloatArray, turn: FloatArray, cmd: FloatArray,
+    x: float, y: float, z: float, speed: float, base: FloatArray, program: ToolProgram,
+    cmd: FloatArray,
 ) -> None:  # fmt: skip
     """The tracker's tool-orientation refresh (:meth:`TrajectoryTracker.command_floats
     <seamtrack.control.trajectory.TrajectoryTracker.command_floats>`: the program's rotation
-    and turning rate at the seam point closest to the set-point) and the command's rotation in
-    the base frame (``ArticulatedRobot.command_in_base``, ``_set_rotation``): ``turn`` holds
-    the world rotation (9), angular velocity (3) and arc length."""
+    and turning rate at the seam point closest to the set-point (x, y, z), moving at
+    ``speed``) and the command's rotation in the base frame (``ArticulatedRobot.
+    command_in_base``, ``_set_rotation``), kept in ``program.turn``."""
+    turn = program.turn
     q = np.array((x, y, z))
-    s = _closest_near(prog, knots, columns, q, turn[12])
-    R, w = turning_at(s, sp[V_SET], prog, knots, seg_len, normals, prog_par)
+    s = _closest_near(program.points, program.knots, program.columns, q, turn[12])
+    R, w = turning_at(
+        s, speed, program.points, program.knots, program.seg_len, program.normals, program.par
+    )
     turn[:9] = R.ravel()
     turn[9:12] = w
     turn[12] = s
@@ -300,82 +431,64 @@ def _refresh_orientation(
 
 @numba.njit(cache=True, nogil=True)
 def arm_ticks(
-    tick: int, max_ticks: int, dt: float, next_capture: float, next_arrival: float,
-    check_every: int, wall_every: int, world: FloatArray,
-    base: FloatArray, reach: float, orient: NDArray[np.int64], par: FloatArray, lim: FloatArray,
-    jl: FloatArray, servo: FloatArray, geo: FloatArray, place: FloatArray, axes: FloatArray,
-    kinds: NDArray[np.int64], index: NDArray[np.int64], cart: FloatArray, rot: FloatArray,
-    omega: FloatArray, jnt: FloatArray, cnt: NDArray[np.int64], cmd: FloatArray,
-    work: FloatArray, sp: FloatArray, path: FloatArray, s: FloatArray, env_s: FloatArray,
-    env_v: FloatArray,
-    seen: bool, tcp_out: FloatArray, target_out: FloatArray, axis_out: FloatArray,
-    joint_out: FloatArray, k0: int, refused: FloatArray, prog: FloatArray,
-    knots: FloatArray, seg_len: FloatArray, normals: FloatArray, prog_par: FloatArray,
-    columns: FloatArray, turn: FloatArray, progress: FloatArray, seam: FloatArray,
-    seam_s: FloatArray, seam_columns: FloatArray, checks: FloatArray,
+    clock: Clock, row: int, follow: Follow, mount: ArmMount, model: ArmModel, data: ArmData,
+    program: ToolProgram, trace: Trace, checks: CheckArrays, refused: FloatArray,
 ) -> tuple[int, int]:  # fmt: skip
     """:func:`gantry_ticks` for an arm and the built-in tracker: per tick the torch tip in the
-    world (``world``: (3, 4) rotation and origin of the base), the tracker's set-point step,
-    the command in the base frame (``base``: the inverse), the reach check (``LIMIT``), the
-    traces (torch tip, target, torch axis, joints, rows from ``k0``) and the arm's compiled
-    tick (:func:`~seamtrack.control.arm_kernels.arm_step` on the state's arrays).
-
-    Every ``orient[0]``-th command of the tracker (its count in ``orient[1]``) refreshes the
-    tool orientation from the robot program (``prog``: the seam's points, arc lengths, segment
-    lengths, normals, the program's parameters, the points' columns; ``turn``: the rotation,
-    angular velocity and arc length, see :func:`_refresh_orientation`). Returns (ticks run,
-    what stopped it).
+    world (``mount.world``), the tracker's set-point step, the command in the base frame
+    (``mount.base``), the reach check (``LIMIT``), the traces (torch tip, target, torch axis,
+    joints) and the arm's compiled tick (:func:`~seamtrack.control.arm_kernels.arm_step` on
+    ``model`` and ``data``). Every ``program.orient[0]``-th command of the tracker refreshes
+    the tool orientation from the robot program (:func:`_refresh_orientation`). Returns
+    (ticks run, what stopped it).
     """
-    first = tick
+    world, base, sp, cart, cmd = mount.world, mount.base, follow.setpoint, data.cart, data.cmd
+    orient = program.orient
+    tick = first = clock.tick
     k = 0
-    while tick <= max_ticks:
-        t = tick * dt
-        if tick > first and (t + 1e-9 >= next_capture or next_arrival <= t + 1e-9):
+    while tick <= clock.max_ticks:
+        t = tick * clock.dt
+        if tick > first and (t + 1e-9 >= clock.next_capture or clock.next_arrival <= t + 1e-9):
             break
         q = cart[C_Q]
         x = world[0, 0] * q[0] + world[0, 1] * q[1] + world[0, 2] * q[2] + world[0, 3]
         y = world[1, 0] * q[0] + world[1, 1] * q[1] + world[1, 2] * q[2] + world[1, 3]
         z = world[2, 0] * q[0] + world[2, 1] * q[1] + world[2, 2] * q[2] + world[2, 3]
-        r = k0 + k
-        tcp_out[r, 0], tcp_out[r, 1], tcp_out[r, 2] = x, y, z
-        if not seen:
-            sp[2], sp[3], sp[4] = x, y, z  # the tracker's view of the torch (naive poses)
-            target_out[r, :] = np.nan
+        r = row + k
+        trace.tcp[r, 0], trace.tcp[r, 1], trace.tcp[r, 2] = x, y, z
+        if not follow.seen:
+            sp[TCP_X], sp[TCP_Y], sp[TCP_Z] = x, y, z  # the tracker's view of the torch
+            trace.target[r, :] = np.nan
             cmd[M_HAS] = 0.0
         else:
-            tx, ty, tz, speed, fx, fy, fz, stop = setpoint_step(sp, path, s, env_s, env_v, x, y, z)
+            tx, ty, tz, speed, fx, fy, fz, stop = setpoint_step(
+                sp, follow.path, follow.s, follow.envelope_s, follow.envelope_v, x, y, z
+            )
             if not (0.0 < speed < math.inf and math.isfinite(tx + ty + tz + fx + fy + fz)):
                 refused[:] = (tx, ty, tz, speed, fx, fy, fz, 1.0 if stop else 0.0)
                 return k, REFUSED
             orient[1] += 1
             if orient[1] % orient[0] == 0:
-                _refresh_orientation(
-                    tx, ty, tz, sp, base, prog, knots, seg_len, normals, prog_par, columns, turn,
-                    cmd,
-                )  # fmt: skip
-            target_out[r, 0], target_out[r, 1], target_out[r, 2] = tx, ty, tz
+                _refresh_orientation(tx, ty, tz, sp[V_SET], base, program, cmd)
+            trace.target[r, 0], trace.target[r, 1], trace.target[r, 2] = tx, ty, tz
             cmd[M_HAS] = 1.0
             for i in range(3):
                 cmd[M_T + i] = base[i, 0] * tx + base[i, 1] * ty + base[i, 2] * tz + base[i, 3]
                 cmd[M_FF + i] = base[i, 0] * fx + base[i, 1] * fy + base[i, 2] * fz
             cmd[M_SPEED], cmd[M_STOP] = speed, 1.0 if stop else 0.0
-        R = rot[2]
+        R = data.rot[2]
         for i in range(3):
-            axis_out[r, i] = world[i, 0] * R[0, 2] + world[i, 1] * R[1, 2] + world[i, 2] * R[2, 2]
-        joint_out[r] = jnt[S_JOINTS]
+            trace.axis[r, i] = world[i, 0] * R[0, 2] + world[i, 1] * R[1, 2] + world[i, 2] * R[2, 2]
+        trace.joints[r] = data.jnt[S_JOINTS]
         if cmd[M_HAS] > 0.0:
             d = math.sqrt(cmd[M_T] ** 2 + cmd[M_T + 1] ** 2 + cmd[M_T + 2] ** 2)
-            if d > reach:
+            if d > mount.reach:
                 return k + 1, LIMIT
-        arm_step(
-            par, lim, jl, servo, geo, place, axes, kinds, index, cart, rot, omega, jnt, cnt, cmd,
-            work,
-        )  # fmt: skip
+        arm_step(model, data)
         tick += 1
         k += 1
-        if _checked(tick - 1, t, x, y, z, cart[C_V], check_every, wall_every, progress, seam,
-                    seam_s, seam_columns, checks):  # fmt: skip
-            return k, STOPPED if progress[FOUND] != GO_ON else EVENT
+        if _checked(tick - 1, t, x, y, z, cart[C_V], clock, checks):
+            return k, STOPPED if checks.state[FOUND] != GO_ON else EVENT
     return k, EVENT
 
 
@@ -393,17 +506,23 @@ class ArmTicks(_Logs):
         self.robot = robot
         self.checks = checks
         self.dt = robot.control_period_s
-        self.world = np.ascontiguousarray(robot.T_world_base[:3, :4])
-        self.base = np.ascontiguousarray(robot._T_base_world[:3, :4])
+        self.mount = ArmMount(
+            np.ascontiguousarray(robot.T_world_base[:3, :4]),
+            np.ascontiguousarray(robot._T_base_world[:3, :4]),
+            float(robot._reach_mm),
+        )
         self._R, self._p0 = robot.T_world_base[:3, :3], robot.T_world_base[:3, 3]
         program = tracker._program
-        self.prog, self.knots, self.seg_len, self.normals, self.prog_par = program._arrays
-        self.columns = np.ascontiguousarray(program.seam.points.T)
-        self.orient = np.array([tracker._orient_every, 0], dtype=np.int64)
-        self.turn = np.zeros(13)
+        points, knots, seg_len, normals, par = program._arrays
+        self.program = ToolProgram(
+            points, knots, seg_len, normals, par, np.ascontiguousarray(program.seam.points.T),
+            np.zeros(13), np.array([tracker._orient_every, 0], dtype=np.int64),
+        )  # fmt: skip
+        self.orient, self.turn = self.program.orient, self.program.turn
         self.refused = np.zeros(8)
         self._refreshed = -1  # the orientation refresh last handed to the tracker
-        self._args: tuple[Any, ...] = (None, None, (), (), ())  # state, tracker, _fixed's
+        self._started: tuple[Any, Any] = (None, None)  # the state and tracker of this run
+        self._ticks = _Direct(arm_ticks)
 
     def _rotation(self, state: Any, tracker: Any) -> None:
         """The tracker's commanded rotation into the state's command, converted as
@@ -414,51 +533,25 @@ class ArmTicks(_Logs):
         omega_base = None if omega is None else R @ np.asarray(omega, dtype=float)
         self.robot._set_rotation(state, rot_base, omega_base)
 
-    def _fixed(self, state: Any, tracker: Any) -> tuple[tuple[Any, ...], ...]:
-        """The arguments of :func:`arm_ticks` that stay the same objects while the logs and
-        the checks keep their arrays (the robot's tables, the state's and the set-point's
-        arrays, the outputs), gathered once: before the stored path's (which grows and
-        moves), the logs, and after the logs' row count."""
-        robot = self.robot
-        place, axes, kinds, index = robot.kinematics.chain
-        head = (
-            self.world, self.base, robot._reach_mm, self.orient, robot._par,
-            robot._cart._limits, robot._jl, robot._servo_table, robot.kinematics.geometry,
-            place, axes, kinds, index, state.cart, state.rot, state.omega, state.jnt, state.cnt,
-            state.cmd, state.work, tracker._sp,
-        )  # fmt: skip
-        logs = (self.tcp, self.target, self.axis, self.joints)
-        tail = (
-            self.refused, self.prog, self.knots, self.seg_len, self.normals, self.prog_par,
-            self.columns, self.turn, *self.checks.args,
-        )  # fmt: skip
-        return head, logs, tail
-
     def run(
         self, state: Any, tick: int, max_ticks: int, next_capture: float, next_arrival: float,
         check_every: int, wall_every: int, tracker: Any,
     ) -> tuple[int, int]:  # fmt: skip
         """Ticks from ``tick`` to the next event (see :func:`arm_ticks`); the ticks' torch
         tips, targets, torch axes and joints are logged (:class:`_Logs`)."""
-        grown = self.room(wall_every + 1)  # a stretch of ticks ends at a wall-clock tick
+        self.room(wall_every + 1)  # a stretch of ticks ends at a wall-clock tick
         self.checks.room(wall_every // check_every + 2)
-        tail = self._args[4]
-        grown = grown or not tail or tail[-1] is not self.checks.checks  # its log replaced
-        if self._args[0] is not state or self._args[1] is not tracker:
+        if self._started[0] is not state or self._started[1] is not tracker:
             # The first stretch: the tracker's orientation, from here on the ticks'.
             self.orient[1] = tracker._tick
             self.turn[12] = tracker._s_program
             self._refreshed = tracker._tick // tracker._orient_every
             self._rotation(state, tracker)
-            grown = True
-        if grown:
-            self._args = (state, tracker, *self._fixed(state, tracker))
-        _, _, head, logs, tail = self._args
-        path = tracker._buffer
-        n, why = arm_ticks(  # type: ignore[call-arg]  # its arguments, gathered (_fixed)
-            tick, max_ticks, self.dt, next_capture, next_arrival, check_every, wall_every,
-            *head, path.path, path.s, tracker._env_s, tracker._env_v, tracker._seen_seam,
-            *logs, self.count, *tail,
+            self._started = (state, tracker)
+        when = clock(tick, max_ticks, self.dt, next_capture, next_arrival, check_every, wall_every)
+        n, why = self._ticks(
+            when, self.count, follow(tracker), self.mount, self.robot._model, state.data,
+            self.program, self.trace, self.checks.args, self.refused,
         )  # fmt: skip
         self.count += n
         return n, why
@@ -471,7 +564,7 @@ class ArmTicks(_Logs):
         """After the run: the tool orientation back to the tracker, as it keeps it (its
         command count; where the ticks refreshed it, the rotation, the turning rate and the
         arc length)."""
-        if self._args[1] is not tracker:
+        if self._started[1] is not tracker:
             return
         count = int(self.orient[1])
         if count // self.orient[0] != self._refreshed:
