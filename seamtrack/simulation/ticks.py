@@ -127,8 +127,8 @@ class ArmMount(NamedTuple):
 class ToolProgram(NamedTuple):
     """The robot program's tool orientation, as the tracker refreshes it every ``orient[0]``-th
     command (its count in ``orient[1]``): the seam's points, arc lengths, segment lengths,
-    normals, the program's parameters, the points' columns, and ``turn``: the last refresh's
-    rotation (9), angular velocity (3) and arc length (see :func:`_refresh_orientation`)."""
+    normals, the program's parameters, the points' columns, and the last refresh's rotation
+    (3, 3), angular velocity (3) and arc length (1) (see :func:`_refresh_orientation`)."""
 
     points: FloatArray
     knots: FloatArray
@@ -136,7 +136,9 @@ class ToolProgram(NamedTuple):
     normals: FloatArray
     par: FloatArray
     columns: FloatArray
-    turn: FloatArray
+    rotation: FloatArray
+    omega: FloatArray
+    at_s: FloatArray
     orient: NDArray[np.int64]
 
 
@@ -407,16 +409,15 @@ def _refresh_orientation(
     <seamtrack.control.trajectory.TrajectoryTracker.command_floats>`: the program's rotation
     and turning rate at the seam point closest to the set-point (x, y, z), moving at
     ``speed``) and the command's rotation in the base frame (``ArticulatedRobot.
-    command_in_base``, ``_set_rotation``), kept in ``program.turn``."""
-    turn = program.turn
+    command_in_base``, ``_set_rotation``), kept in ``program``."""
     q = np.array((x, y, z))
-    s = _closest_near(program.points, program.knots, program.columns, q, turn[12])
+    s = _closest_near(program.points, program.knots, program.columns, q, program.at_s[0])
     R, w = turning_at(
         s, speed, program.points, program.knots, program.seg_len, program.normals, program.par
     )
-    turn[:9] = R.ravel()
-    turn[9:12] = w
-    turn[12] = s
+    program.rotation[:, :] = R
+    program.omega[:] = w
+    program.at_s[0] = s
     new = cmd[M_HAS_ROT] == 0.0
     for i in range(3):
         for j in range(3):
@@ -516,9 +517,10 @@ class ArmTicks(_Logs):
         points, knots, seg_len, normals, par = program._arrays
         self.program = ToolProgram(
             points, knots, seg_len, normals, par, np.ascontiguousarray(program.seam.points.T),
-            np.zeros(13), np.array([tracker._orient_every, 0], dtype=np.int64),
+            np.zeros((3, 3)), np.zeros(3), np.zeros(1),
+            np.array([tracker._orient_every, 0], dtype=np.int64),
         )  # fmt: skip
-        self.orient, self.turn = self.program.orient, self.program.turn
+        self.orient = self.program.orient
         self.refused = np.zeros(8)
         self._refreshed = -1  # the orientation refresh last handed to the tracker
         self._started: tuple[Any, Any] = (None, None)  # the state and tracker of this run
@@ -544,7 +546,7 @@ class ArmTicks(_Logs):
         if self._started[0] is not state or self._started[1] is not tracker:
             # The first stretch: the tracker's orientation, from here on the ticks'.
             self.orient[1] = tracker._tick
-            self.turn[12] = tracker._s_program
+            self.program.at_s[0] = tracker._s_program
             self._refreshed = tracker._tick // tracker._orient_every
             self._rotation(state, tracker)
             self._started = (state, tracker)
@@ -568,9 +570,9 @@ class ArmTicks(_Logs):
             return
         count = int(self.orient[1])
         if count // self.orient[0] != self._refreshed:
-            tracker._rotation = self.turn[:9].reshape(3, 3).copy()
-            tracker._omega = self.turn[9:12].copy()
-            tracker._s_program = float(self.turn[12])
+            tracker._rotation = self.program.rotation.copy()
+            tracker._omega = self.program.omega.copy()
+            tracker._s_program = float(self.program.at_s[0])
             state.goal_from = None  # the goal is in the command (compiled)
         tracker._tick = count
 
