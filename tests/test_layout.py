@@ -171,24 +171,11 @@ def test_no_import_cycle(graph: dict[str, set[str]]) -> None:
     assert _cycles(running) == []
 
 
-#: The one circle left through imports for annotations only. ``LaserLineSensor`` (sensor.py)
-#: offers ``sensor.scan(...)`` and ``sensor.render(...)``, thin delegates down to scan.py and
-#: render.py (public API: README, notebooks), while those modules, camera.py and stripe.py
-#: (the stripe's realism knobs, split out of scan.py) take the sensor as an argument and name
-#: its type. A protocol would have to list some twenty members
-#: of the triangulation model (no small protocol), and moving the type means splitting the
-#: sensor into a geometry base class below scan.py and a subclass adding the delegates: a class
-#: hierarchy made for the import checker. Listed exactly: a new circle fails, and so does
-#: breaking this one without removing it here.
-KNOWN_TYPE_ONLY_CIRCLES = [
-    [
-        "seamtrack.sensing.camera",
-        "seamtrack.sensing.render",
-        "seamtrack.sensing.scan",
-        "seamtrack.sensing.sensor",
-        "seamtrack.sensing.stripe",
-    ]
-]
+#: Circles left through imports for annotations only: none. The last one (the sensor, whose
+#: ``scan()``/``render()`` hand it to scan.py and render.py, which named its class) ended when
+#: those modules took the sensor's geometry as a protocol
+#: (:mod:`seamtrack.sensing.sensor_geometry`). Listed exactly: a new circle fails.
+KNOWN_TYPE_ONLY_CIRCLES: list[list[str]] = []
 
 
 def test_no_circle_even_through_imports_for_annotations(graph: dict[str, set[str]]) -> None:

@@ -29,8 +29,8 @@ from seamtrack.sensing.materials import Material
 from seamtrack.sensing.peaks import NOISE_SIGMAS, RELATIVE_THRESHOLD
 from seamtrack.sensing.profiles import Profile
 
-if TYPE_CHECKING:  # annotations only: the sensor module imports the renderer, which imports this
-    from seamtrack.sensing.sensor import LaserLineSensor
+if TYPE_CHECKING:
+    from seamtrack.sensing.sensor_geometry import SensorGeometry
 
 FloatArray = NDArray[np.float64]
 
@@ -352,7 +352,7 @@ class Camera:
         width = np.hypot(self.line_thickness_mm, self.divergence_rad() * (d - waist_mm))
         return np.asarray(0.25 * width)
 
-    def imaging_sensor(self, sensor: LaserLineSensor) -> LaserLineSensor:
+    def imaging_sensor(self, sensor: SensorGeometry) -> SensorGeometry:
         """The sensor geometry this camera images with: its pixel grid and lens, the same field
         of view, every point measured (no incidence limit, no pixel snapping)."""
         f = self.focal_length_mm or sensor.focal_length_mm
@@ -368,13 +368,13 @@ class Camera:
             max_incidence_rad=math.pi / 2,
         )
 
-    def window(self, imaging: LaserLineSensor) -> tuple[int, int, int, int]:
+    def window(self, imaging: SensorGeometry) -> tuple[int, int, int, int]:
         """(row0, row1, col0, col1) of the image in the full chip grid."""
         if self.roi is None:
             return 0, imaging.pixels_h, 0, imaging.pixels_v
         return self.roi
 
-    def supersampling(self, imaging: LaserLineSensor) -> int:
+    def supersampling(self, imaging: SensorGeometry) -> int:
         """Sub-pixels per pixel and axis: 1 without speckle; with speckle, two per lambda N on
         the chip (the intensity's band limit), at most :data:`MAX_SUPERSAMPLE`."""
         if self.supersample is not None:
@@ -396,7 +396,7 @@ class Camera:
         factor = 0.125 if peak >= 1.0 else min(max(self.target_peak / peak, 1.0 / 16.0), 16.0)
         return float(min(bound.hi, max(bound.lo, exposure * factor)))
 
-    def check(self, sensor: LaserLineSensor) -> None:
+    def check(self, sensor: SensorGeometry) -> None:
         """Refuse what cannot work with this sensor: a region of interest off the chip, a laser
         line thicker than the field of view or the depth of field."""
         imaging = self.imaging_sensor(sensor)
@@ -417,14 +417,14 @@ class Camera:
                         f"depth of field, wider than the field ({field:.4g} mm)",
                         "give the 1/e^2 thickness of the line, typically 0.02-1 mm")  # fmt: skip
 
-    def apron_cells(self, imaging: LaserLineSensor, s: int) -> int:
+    def apron_cells(self, imaging: SensorGeometry, s: int) -> int:
         """Cells the renderer adds around each box: 4 blur sigmas, or 4 lambda N with speckle;
         a whole number of pixels (as :meth:`seamtrack.sensing.formation.Optics.apron_cells`)."""
         reach = 4.0 * (self.speckle_size_mm if self.speckle else self.blur_sigma_mm)
         cells = math.ceil(reach / (min(imaging.pixel_pitch_mm) / s)) + 1
         return s * math.ceil(cells / s)
 
-    def _check_memory(self, imaging: LaserLineSensor) -> None:
+    def _check_memory(self, imaging: SensorGeometry) -> None:
         """Refuse an image whose rendering would take more than :data:`MAX_IMAGE_BYTES`: name
         the supersampling when less of it fits, else the chip size."""
         r0, r1, c0, c1 = self.window(imaging)
@@ -471,7 +471,7 @@ class StripeImage:
     pixels : (rows, columns) float32
         Signal as a fraction of full scale (1.0: saturated), quantized to the bit depth.
     camera : Camera
-    sensor : LaserLineSensor
+    sensor : SensorGeometry
         The imaging geometry (:meth:`Camera.imaging_sensor`): triangulates the measured rows.
     material : Material
     window : (row0, row1, col0, col1)
@@ -496,7 +496,7 @@ class StripeImage:
 
     pixels: NDArray[np.float32]
     camera: Camera
-    sensor: LaserLineSensor
+    sensor: SensorGeometry
     material: Material
     window: tuple[int, int, int, int]
     truth_row: FloatArray

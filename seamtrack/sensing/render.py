@@ -52,9 +52,9 @@ from seamtrack.sensing.materials import DEFAULT_MATERIAL, Material, material
 from seamtrack.sensing.profiles import Reason
 from seamtrack.sensing.scan import laser_fan, ray_caster, stripe_hits
 
-if TYPE_CHECKING:  # annotations only: the sensor module imports this one
+if TYPE_CHECKING:
     from seamtrack.sensing.raycast import RayCaster
-    from seamtrack.sensing.sensor import LaserLineSensor
+    from seamtrack.sensing.sensor_geometry import SensorGeometry
 
 FloatArray = NDArray[np.float64]
 
@@ -70,7 +70,7 @@ MIN_COS_INCIDENCE = 1e-3
 
 
 def render_image(
-    sensor: LaserLineSensor,
+    sensor: SensorGeometry,
     part: Any,
     T_world_sensor: ArrayLike,
     *,
@@ -84,7 +84,7 @@ def render_image(
 
     Parameters
     ----------
-    sensor : LaserLineSensor
+    sensor : SensorGeometry
     part : trimesh.Trimesh, object with ``.mesh``, or RayCaster
         The part in the world frame (its Embree scene is cached, shared with ``scan``).
     T_world_sensor : (4, 4) float
@@ -199,7 +199,7 @@ class _Optics:
     """The imaging geometry in one place: projection, pupil, grid, exposure scale."""
 
     def __init__(
-        self, imaging: LaserLineSensor, cam: Camera, window: tuple[int, int, int, int], s: int,
+        self, imaging: SensorGeometry, cam: Camera, window: tuple[int, int, int, int], s: int,
         waist_default_mm: float,
     ) -> None:  # fmt: skip
         self.imaging, self.cam, self.window, self.s = imaging, cam, window, s

@@ -39,9 +39,9 @@ from seamtrack.sensing.stripe import (
     secondary_reflection_points as secondary_reflection_points,
 )
 
-if TYPE_CHECKING:  # annotations only: the sensor module imports this one
+if TYPE_CHECKING:
     from seamtrack.sensing.raycast import RayCaster
-    from seamtrack.sensing.sensor import LaserLineSensor
+    from seamtrack.sensing.sensor_geometry import SensorGeometry
 
 FloatArray = NDArray[np.float64]
 
@@ -112,7 +112,7 @@ def laser_plane_crossings(seam: Seam, T_world_sensor: ArrayLike) -> FloatArray:
 def sense_seam(
     seam: Seam,
     T_world_sensor: ArrayLike,
-    sensor: LaserLineSensor,
+    sensor: SensorGeometry,
     noise: SeamNoise | None = None,
     rng: np.random.Generator | None = None,
 ) -> Feature:
@@ -184,7 +184,7 @@ class FanRays:
 
 
 @functools.lru_cache(maxsize=32)
-def laser_fan(sensor: LaserLineSensor, rays: int) -> FanRays:
+def laser_fan(sensor: SensorGeometry, rays: int) -> FanRays:
     """The fan of ``rays`` rays spanning the sensor's field of view (cached per sensor)."""
     if rays < 1:
         raise ValueError(f"a laser fan needs at least one ray, got {rays}")
@@ -223,7 +223,7 @@ def ray_caster(part: Any) -> RayCaster:
 
 
 def stripe_hits(
-    sensor: LaserLineSensor,
+    sensor: SensorGeometry,
     caster: RayCaster,
     T_world_sensor: NDArray[np.float64],
     rays: int,
@@ -338,7 +338,7 @@ def _section_stripe(
 
 
 def scan_mesh(
-    sensor: LaserLineSensor,
+    sensor: SensorGeometry,
     part: Any,
     T_world_sensor: ArrayLike,
     *,
@@ -353,7 +353,7 @@ def scan_mesh(
 
     Parameters
     ----------
-    sensor : LaserLineSensor
+    sensor : SensorGeometry
     part : trimesh.Trimesh, object with ``.mesh``, or RayCaster
         The part, in the world frame. Its Embree scene is built once per mesh and cached.
     T_world_sensor : (4, 4) float

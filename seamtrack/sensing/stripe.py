@@ -22,7 +22,7 @@ from seamtrack.sensing.profiles import Reason
 
 if TYPE_CHECKING:
     from seamtrack.sensing.raycast import RayCaster
-    from seamtrack.sensing.sensor import LaserLineSensor
+    from seamtrack.sensing.sensor_geometry import SensorGeometry
 
 FloatArray = NDArray[np.float64]
 
@@ -121,7 +121,7 @@ class StripeHits:
 
 
 def apply_stripe_noise(
-    sensor: LaserLineSensor,
+    sensor: SensorGeometry,
     caster: RayCaster,
     T_world_sensor: NDArray[np.float64],
     hits: StripeHits,
@@ -154,7 +154,7 @@ def apply_stripe_noise(
 
 
 def chip_noise(
-    sensor: LaserLineSensor,
+    sensor: SensorGeometry,
     noise: StripeNoise,
     x_c: NDArray[np.float64],
     idx: NDArray[np.intp],
@@ -208,7 +208,7 @@ def _correlated_normal(n: int, correlation: float, rng: np.random.Generator) -> 
 
 
 def secondary_reflection_points(
-    sensor: LaserLineSensor,
+    sensor: SensorGeometry,
     caster: RayCaster,
     T_world_sensor: NDArray[np.float64],
     hits: StripeHits,
