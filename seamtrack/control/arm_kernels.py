@@ -25,7 +25,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.control.closed_form import KIND_NONE, mul, mul_into
+from seamtrack.control.closed_form import KIND_NONE, mul, mul_into, rodrigues_into
 from seamtrack.control.closed_form_nearest import ik_nearest_in
 from seamtrack.control.robot import axes_step
 from seamtrack.control.servo import loops_step
@@ -115,17 +115,7 @@ class ArmData(NamedTuple):
 @numba.njit(cache=True, nogil=True)
 def rotation_about(axis: FloatArray, angle: float, out: FloatArray) -> None:
     """``out`` (3, 3) = rotation by ``angle`` about the unit ``axis`` (Rodrigues)."""
-    _rotation_about(axis[0], axis[1], axis[2], angle, out)
-
-
-@numba.njit(cache=True, nogil=True, inline="always")
-def _rotation_about(x: float, y: float, z: float, angle: float, out: FloatArray) -> None:
-    """:func:`rotation_about` on the axis's coordinates."""
-    c, s = math.cos(angle), math.sin(angle)
-    t = 1.0 - c
-    out[0, 0], out[0, 1], out[0, 2] = c + t * x * x, t * x * y - s * z, t * x * z + s * y
-    out[1, 0], out[1, 1], out[1, 2] = t * x * y + s * z, c + t * y * y, t * y * z - s * x
-    out[2, 0], out[2, 1], out[2, 2] = t * x * z - s * y, t * y * z + s * x, c + t * z * z
+    rodrigues_into(axis[0], axis[1], axis[2], angle, out)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -145,7 +135,7 @@ def _turn(wx: float, wy: float, wz: float, R: FloatArray, tmp: FloatArray) -> No
     angle = math.sqrt(wx * wx + wy * wy + wz * wz)
     if angle < 1e-300:
         return
-    _rotation_about(wx / angle, wy / angle, wz / angle, angle, tmp)
+    rodrigues_into(wx / angle, wy / angle, wz / angle, angle, tmp)
     for j in range(3):
         a, b, c = R[0, j], R[1, j], R[2, j]
         for i in range(3):
@@ -338,21 +328,6 @@ def newton_ik(
         if worst < ONE_STEP_ERROR:
             break
     return q
-
-
-@numba.njit(cache=True, nogil=True)
-def nearest_branch(branches: FloatArray, count: int, q_near: FloatArray) -> int:
-    """The branch (row of ``branches``, already turned by whole turns towards ``q_near``)
-    nearest ``q_near`` (sum of squared joint differences); -1 if none."""
-    best, best_d = -1, math.inf
-    for b in range(count):
-        d = 0.0
-        for j in range(q_near.shape[0]):
-            x = branches[b, j] - q_near[j]
-            d += x * x
-        if d < best_d:
-            best, best_d = b, d
-    return best
 
 
 @numba.njit(cache=True, nogil=True)

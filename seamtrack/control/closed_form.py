@@ -113,14 +113,19 @@ def _rz_right(A: FloatArray, q: float, out: FloatArray) -> None:
         out[i, 2], out[i, 3] = A[i, 2], A[i, 3]
 
 
-@numba.njit(cache=True, nogil=True)
-def _rot_into(axis: FloatArray, angle: float, out: FloatArray) -> None:
-    x, y, z = axis[0], axis[1], axis[2]
+@numba.njit(cache=True, nogil=True, inline="always")
+def rodrigues_into(x: float, y: float, z: float, angle: float, out: FloatArray) -> None:
+    """``out`` (3, 3) = the rotation by ``angle`` about the unit axis (x, y, z) (Rodrigues)."""
     c, s = math.cos(angle), math.sin(angle)
     t = 1.0 - c
     out[0, 0], out[0, 1], out[0, 2] = c + t * x * x, t * x * y - s * z, t * x * z + s * y
     out[1, 0], out[1, 1], out[1, 2] = t * x * y + s * z, c + t * y * y, t * y * z - s * x
     out[2, 0], out[2, 1], out[2, 2] = t * x * z - s * y, t * y * z + s * x, c + t * z * z
+
+
+@numba.njit(cache=True, nogil=True)
+def _rot_into(axis: FloatArray, angle: float, out: FloatArray) -> None:
+    rodrigues_into(axis[0], axis[1], axis[2], angle, out)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -280,6 +285,49 @@ def wrist_joint_1(
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
+def wrist_links(g: FloatArray) -> tuple[float, float, float, float]:
+    """The spherical wrist arm's planar 2R chain of joints 2 and 3: the link lengths l2, l3
+    and their angles g2, g3 in the zero pose."""
+    o3x, o3y = g[_W_O3], g[_W_O3 + 1]
+    w0x, w0y = g[_W_W0], g[_W_W0 + 1]
+    l2 = math.hypot(o3x, o3y)
+    l3 = math.hypot(w0x - o3x, w0y - o3y)
+    return l2, l3, math.atan2(o3y, o3x), math.atan2(w0y - o3y, w0x - o3x)
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def wrist_plane(
+    g: FloatArray, ws: FloatArray, d: FloatArray, q1: float, l2: float, l3: float
+) -> tuple[bool, float, float, float]:  # fmt: skip
+    """With joint 1 at ``q1``: the wrist centre (``d`` from the shoulder's origin) in the
+    plane of joints 2 and 3 (px, py) and the cosine of the elbow's angle (kappa); False where
+    the 2R chain cannot reach it (``ws[3]`` overwritten)."""
+    o1, o2 = g[_W_O1 : _W_O1 + 3], g[_W_O2 : _W_O2 + 3]
+    e1, e2 = g[_W_E1 : _W_E1 + 3], g[_W_E2 : _W_E2 + 3]
+    _rot_into(g[_W_U1 : _W_U1 + 3], -q1, ws[3])
+    P = np.empty(3)
+    for i in range(3):
+        P[i] = o1[i] - o2[i] + ws[3, i, 0] * d[0] + ws[3, i, 1] * d[1] + ws[3, i, 2] * d[2]
+    px = P[0] * e1[0] + P[1] * e1[1] + P[2] * e1[2]
+    py = P[0] * e2[0] + P[1] * e2[1] + P[2] * e2[2]
+    kappa = (px * px + py * py - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
+    if abs(kappa) > 1.0 + 1e-12:
+        return False, px, py, kappa
+    return True, px, py, min(max(kappa, -1.0), 1.0)
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def wrist_elbow(g: FloatArray, phi3: float, px: float, py: float) -> tuple[float, float]:
+    """Joints 2 and 3 that put the wrist centre at (px, py) in the plane of the 2R chain,
+    with the elbow at ``phi3``."""
+    o3x, o3y = g[_W_O3], g[_W_O3 + 1]
+    w0x, w0y = g[_W_W0], g[_W_W0 + 1]
+    vx = o3x + math.cos(phi3) * (w0x - o3x) - math.sin(phi3) * (w0y - o3y)
+    vy = o3y + math.sin(phi3) * (w0x - o3x) + math.cos(phi3) * (w0y - o3y)
+    return math.atan2(py, px) - math.atan2(vy, vx), g[_W_S3] * phi3
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
 def wrist_rotation(g: FloatArray, ws: FloatArray, q1: float, q2: float, q3: float) -> FloatArray:
     """The rotation a spherical wrist's joints 4-6 are left to make once joints 1-3 are
     known, in the basis (u4, u5, u4 x u5): N = B^T R3^T R R0^T B (``ws[2]``: R R0^T B; ``ws``
@@ -326,32 +374,15 @@ def _wrist_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: Float
     reached, beta, k, d = wrist_joint_1(g, T, ws)
     if not reached:
         return 0
-    o1 = g[_W_O1 : _W_O1 + 3]
-    o2, e1, e2 = g[_W_O2 : _W_O2 + 3], g[_W_E1 : _W_E1 + 3], g[_W_E2 : _W_E2 + 3]
-    o3x, o3y = g[_W_O3], g[_W_O3 + 1]
-    w0x, w0y = g[_W_W0], g[_W_W0 + 1]
-    l2 = math.hypot(o3x, o3y)
-    l3 = math.hypot(w0x - o3x, w0y - o3y)
-    g2, g3 = math.atan2(o3y, o3x), math.atan2(w0y - o3y, w0x - o3x)
-    s3, s6 = g[_W_S3], g[_W_S6]
-    u1 = g[_W_U1 : _W_U1 + 3]
+    l2, l3, g2, g3 = wrist_links(g)
+    s6 = g[_W_S6]
     count = 0
     for q1 in (beta + k, beta - k):
-        _rot_into(u1, -q1, ws[3])
-        P = np.empty(3)
-        for i in range(3):
-            P[i] = o1[i] - o2[i] + ws[3, i, 0] * d[0] + ws[3, i, 1] * d[1] + ws[3, i, 2] * d[2]
-        px = P[0] * e1[0] + P[1] * e1[1] + P[2] * e1[2]
-        py = P[0] * e2[0] + P[1] * e2[1] + P[2] * e2[2]
-        kappa = (px * px + py * py - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
-        if abs(kappa) > 1.0 + 1e-12:
+        inside, px, py, kappa = wrist_plane(g, ws, d, q1, l2, l3)
+        if not inside:
             continue
-        kappa = min(max(kappa, -1.0), 1.0)
         for phi3 in (g2 - g3 + math.acos(kappa), g2 - g3 - math.acos(kappa)):
-            vx = o3x + math.cos(phi3) * (w0x - o3x) - math.sin(phi3) * (w0y - o3y)
-            vy = o3y + math.sin(phi3) * (w0x - o3x) + math.cos(phi3) * (w0y - o3y)
-            q2 = math.atan2(py, px) - math.atan2(vy, vx)
-            q3 = s3 * phi3
+            q2, q3 = wrist_elbow(g, phi3, px, py)
             N = wrist_rotation(g, ws, q1, q2, q3)
             sb = math.hypot(N[0, 1], N[0, 2])
             for sign in (1.0, -1.0):

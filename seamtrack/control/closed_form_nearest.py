@@ -1,6 +1,6 @@
 """The closed forms' branch nearest a configuration, as the arm's control tick wants it: the
 branch of :func:`~seamtrack.control.closed_form.ik_branches` that
-:func:`~seamtrack.control.arm_kernels.nearest_branch` picks (the same numbers), with most
+:func:`nearest_branch` picks (the same numbers), with most
 branches never worked out (:func:`ik_nearest`).
 
 A branch's squared distance from the configuration is a sum of one non-negative term per joint;
@@ -27,20 +27,11 @@ from seamtrack.control.closed_form import (
     _U_S1,
     _U_S4,
     _U_S5,
-    _W_E1,
-    _W_E2,
-    _W_O1,
-    _W_O2,
-    _W_O3,
-    _W_S3,
     _W_S6,
-    _W_U1,
-    _W_W0,
     KIND_UR,
     KIND_WRIST,
     _m4j,
     _near,
-    _rot_into,
     _rz_left,
     ik_branches,
     mul_into,
@@ -48,7 +39,10 @@ from seamtrack.control.closed_form import (
     ur_planar,
     ur_q6,
     wrist_456,
+    wrist_elbow,
     wrist_joint_1,
+    wrist_links,
+    wrist_plane,
     wrist_rotation,
 )  # fmt: skip
 
@@ -154,23 +148,15 @@ def _wrist_nearest(g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatA
     reached, beta, k, d = wrist_joint_1(g, T, ws)
     if not reached:
         return False
-    o1 = g[_W_O1 : _W_O1 + 3]
-    o2, e1, e2 = g[_W_O2 : _W_O2 + 3], g[_W_E1 : _W_E1 + 3], g[_W_E2 : _W_E2 + 3]
-    o3x, o3y = g[_W_O3], g[_W_O3 + 1]
-    w0x, w0y = g[_W_W0], g[_W_W0 + 1]
-    l2 = math.hypot(o3x, o3y)
-    l3 = math.hypot(w0x - o3x, w0y - o3y)
-    g2, g3 = math.atan2(o3y, o3x), math.atan2(w0y - o3y, w0x - o3x)
-    s3, s6 = g[_W_S3], g[_W_S6]
-    u1 = g[_W_U1 : _W_U1 + 3]
+    l2, l3, g2, g3 = wrist_links(g)
+    s6 = g[_W_S6]
     best = math.inf
     best_key = 8  # the branch's place in _wrist_branches' order (i1, i3, i6)
     q1s = (beta + k, beta - k)
     x0 = _near(q1s[0], q_near[0]) - q_near[0]
     x1 = _near(q1s[1], q_near[0]) - q_near[0]
     first = 0 if not x1 * x1 < x0 * x0 else 1
-    P = np.empty(3)
-    for n1 in range(2):  # (o1 is the shoulder's origin)
+    for n1 in range(2):
         i1 = first if n1 == 0 else 1 - first
         q1 = q1s[i1]
         v0 = _near(q1, q_near[0])
@@ -178,18 +164,12 @@ def _wrist_nearest(g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatA
         t0 += (v0 - q_near[0]) * (v0 - q_near[0])
         if t0 > best:
             continue
-        _rot_into(u1, -q1, ws[3])
-        for i in range(3):
-            P[i] = o1[i] - o2[i] + ws[3, i, 0] * d[0] + ws[3, i, 1] * d[1] + ws[3, i, 2] * d[2]
-        px = P[0] * e1[0] + P[1] * e1[1] + P[2] * e1[2]
-        py = P[0] * e2[0] + P[1] * e2[1] + P[2] * e2[2]
-        kappa = (px * px + py * py - l2 * l2 - l3 * l3) / (2.0 * l2 * l3)
-        if abs(kappa) > 1.0 + 1e-12:
+        inside, px, py, kappa = wrist_plane(g, ws, d, q1, l2, l3)
+        if not inside:
             continue
-        kappa = min(max(kappa, -1.0), 1.0)
         phis = (g2 - g3 + math.acos(kappa), g2 - g3 - math.acos(kappa))
-        q2a, q3a, ta = _wrist_elbow(phis[0], o3x, o3y, w0x, w0y, px, py, s3, q_near, t0)
-        q2b, q3b, tb = _wrist_elbow(phis[1], o3x, o3y, w0x, w0y, px, py, s3, q_near, t0)
+        q2a, q3a, ta = _wrist_elbow(g, phis[0], px, py, q_near, t0)
+        q2b, q3b, tb = _wrist_elbow(g, phis[1], px, py, q_near, t0)
         first3 = 0 if not tb < ta else 1
         for o3 in range(2):
             i3 = first3 if o3 == 0 else 1 - first3
@@ -217,19 +197,30 @@ def _wrist_nearest(g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatA
 
 @numba.njit(cache=True, nogil=True, inline="always")
 def _wrist_elbow(
-    phi3: float, o3x: float, o3y: float, w0x: float, w0y: float, px: float, py: float,
-    s3: float, q_near: FloatArray, t0: float,
+    g: FloatArray, phi3: float, px: float, py: float, q_near: FloatArray, t0: float
 ) -> tuple[float, float, float]:  # fmt: skip
-    """:func:`_wrist_branches`' joints 2 and 3 for the elbow at ``phi3``, and the sum of
-    squared differences from ``q_near`` over joints 1-3 (``t0``: joint 1's, in
-    nearest_branch's order)."""
-    vx = o3x + math.cos(phi3) * (w0x - o3x) - math.sin(phi3) * (w0y - o3y)
-    vy = o3y + math.sin(phi3) * (w0x - o3x) + math.cos(phi3) * (w0y - o3y)
-    q2 = math.atan2(py, px) - math.atan2(vy, vx)
-    q3 = s3 * phi3
+    """:func:`~seamtrack.control.closed_form.wrist_elbow`'s joints 2 and 3 for the elbow at
+    ``phi3``, and the sum of squared differences from ``q_near`` over joints 1-3 (``t0``:
+    joint 1's, in nearest_branch's order)."""
+    q2, q3 = wrist_elbow(g, phi3, px, py)
     x1 = _near(q2, q_near[1]) - q_near[1]
     x2 = _near(q3, q_near[2]) - q_near[2]
     return q2, q3, (t0 + x1 * x1) + x2 * x2
+
+
+@numba.njit(cache=True, nogil=True)
+def nearest_branch(branches: FloatArray, count: int, q_near: FloatArray) -> int:
+    """The branch (row of ``branches``, already turned by whole turns towards ``q_near``)
+    nearest ``q_near`` (sum of squared joint differences); -1 if none."""
+    best, best_d = -1, math.inf
+    for b in range(count):
+        d = 0.0
+        for j in range(q_near.shape[0]):
+            x = branches[b, j] - q_near[j]
+            d += x * x
+        if d < best_d:
+            best, best_d = b, d
+    return best
 
 
 @numba.njit(cache=True, nogil=True)
@@ -237,7 +228,7 @@ def ik_nearest(
     kind: int, g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatArray
 ) -> bool:
     """The closed-form branch of the torch pose ``T`` nearest ``q_near`` into ``row`` (the
-    row of :func:`ik_branches` that :func:`~seamtrack.control.arm_kernels.nearest_branch`
+    row of :func:`ik_branches` that :func:`nearest_branch`
     picks, the same numbers); False where there is none: by :func:`_ur_nearest` and
     :func:`_wrist_nearest` (most branches not worked out), else from all branches."""
     return ik_nearest_in(kind, g, T, q_near, row, np.empty((6, 4, 4)))
@@ -255,14 +246,7 @@ def ik_nearest_in(
         return _wrist_nearest(g, T, q_near, row)
     branches = np.empty((8, q_near.shape[0]))
     count = ik_branches(kind, g, T, q_near, branches)
-    best, best_d = -1, math.inf
-    for b in range(count):
-        d = 0.0
-        for j in range(q_near.shape[0]):
-            x = branches[b, j] - q_near[j]
-            d += x * x
-        if d < best_d:
-            best, best_d = b, d
+    best = nearest_branch(branches, count, q_near)
     if best < 0:
         return False
     row[:] = branches[best]
