@@ -58,9 +58,8 @@ def test_the_ticks_nearest_branch_is_the_nearest_of_all_branches(name: str) -> N
     branch and nearest_branch's choice: the same joints to the last bit, near the pose (a
     tick's set-point), far from it, at the wrist singularity (joint 5 at 0) and at a pose
     drawn exactly (a tie of two branches is possible there)."""
-    from seamtrack.control.closed_form_nearest import nearest_branch
     from seamtrack.control.closed_form import ik_branches
-    from seamtrack.control.closed_form_nearest import ik_nearest
+    from seamtrack.control.closed_form_nearest import ik_nearest, nearest_branch
 
     kin = ArmKinematics.named(name, TOOL)
     rng = np.random.default_rng(2028)

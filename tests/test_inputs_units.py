@@ -381,14 +381,14 @@ def test_sweep_png_draws_the_max_and_p95_errors(monkeypatch, tmp_path: Path) -> 
         for v in (1.0, 2.0) for s in (0, 1)
     ]  # fmt: skip
     drawn: dict[str, np.ndarray] = {}
-    real = plots._save
+    real = plots.save_figure
 
     def capture(fig, path):
         for container in fig.axes[0].containers:
             drawn[container.get_label()] = np.asarray(container.lines[0].get_ydata())
         return real(fig, path)
 
-    monkeypatch.setattr(plots, "_save", capture)
+    monkeypatch.setattr(plots, "save_figure", capture)
     write_sweep(summarize(rows), "x", tmp_path / "s", rows=rows)
     assert set(drawn) == set(PLOT_KEYS) == {"max_error_mm", "p95_error_mm"}
     np.testing.assert_allclose(drawn["max_error_mm"], [1.5, 2.5])

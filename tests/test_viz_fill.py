@@ -29,9 +29,9 @@ def filled() -> FillState:
 
 def test_section_plot_draws_each_bead_with_its_area(filled, tmp_path) -> None:
     from seamtrack.viz.fill import draw_fill_section, plot_fill_section
-    from seamtrack.viz.plots import _pyplot
+    from seamtrack.viz.plots import pyplot_module
 
-    plt = _pyplot()
+    plt = pyplot_module()
     fig, ax = plt.subplots()
     patches = draw_fill_section(ax, filled, 7)
     areas = [polygon_area_mm2(p.get_xy()) for p in patches]

@@ -213,9 +213,9 @@ def markdown(result: dict[str, Any]) -> str:
 
 
 def _plot(rows: list[dict[str, Any]], path: Path) -> None:
-    from seamtrack.viz.plots import _pyplot
+    from seamtrack.viz.plots import pyplot_module
 
-    plt = _pyplot()
+    plt = pyplot_module()
     fig, ax = plt.subplots(figsize=(8, 5), constrained_layout=True)
     for r in rows:
         color = "C3" if r["pareto"] else "0.5"

@@ -53,7 +53,7 @@ _TWO_PI = 2.0 * math.pi
 
 
 @numba.njit(cache=True, nogil=True)
-def _near(x: float, ref: float) -> float:
+def nearest_turn(x: float, ref: float) -> float:
     """x turned by whole turns to the nearest of ``ref``."""
     return x + _TWO_PI * round((ref - x) / _TWO_PI)
 
@@ -92,7 +92,7 @@ def _tmul_into(A: FloatArray, B: FloatArray, out: FloatArray) -> None:
 
 
 @numba.njit(cache=True, nogil=True)
-def _rz_left(q: float, A: FloatArray, out: FloatArray) -> None:
+def rz_left_into(q: float, A: FloatArray, out: FloatArray) -> None:
     """out = Rz(q) @ A (4 x 4)."""
     c, s = math.cos(q), math.sin(q)
     for j in range(4):
@@ -149,13 +149,13 @@ def _rot(axis: FloatArray, angle: float) -> FloatArray:
 
 
 # Layout of the UR parameters: four 4 x 4 matrices, then scalars.
-_U_P2I, _U_P1I, _U_P6I, _U_P5I, _U_TCP = 0, 16, 32, 48, 64
-_U_A2, _U_A3, _U_DLAT, _U_S1, _U_S4, _U_S5 = 80, 81, 82, 83, 84, 85
+U_P2I, U_P1I, U_P6I, U_P5I, U_TCP = 0, 16, 32, 48, 64
+U_A2, U_A3, U_DLAT, U_S1, U_S4, U_S5 = 80, 81, 82, 83, 84, 85
 UR_FIELDS = 86
 
 
 @numba.njit(cache=True, nogil=True)
-def _m4j(g: FloatArray, at: int) -> FloatArray:
+def pose_at(g: FloatArray, at: int) -> FloatArray:
     return g[at : at + 16].reshape(4, 4)
 
 
@@ -167,9 +167,9 @@ def ur_joint_1(g: FloatArray, T: FloatArray, ws: FloatArray) -> tuple[bool, floa
     solutions psi + k and psi + pi - k; False where the wrist point lies inside the cylinder
     of radius dlat about axis 1 (no solution)."""
     J6 = ws[0]
-    mul_into(T, _m4j(g, _U_TCP), J6)
-    mul_into(_m4j(g, _U_P1I), J6, ws[1])
-    dlat, s1 = g[_U_DLAT], g[_U_S1]
+    mul_into(T, pose_at(g, U_TCP), J6)
+    mul_into(pose_at(g, U_P1I), J6, ws[1])
+    dlat, s1 = g[U_DLAT], g[U_S1]
     px, py = J6[0, 3], J6[1, 3]
     r = math.hypot(px, py)
     if r <= abs(dlat):
@@ -222,10 +222,10 @@ def _ur_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: FloatArr
     reached, psi, k = ur_joint_1(g, T, ws)
     if not reached:
         return 0  # the wrist point inside the cylinder of radius dlat about axis 1
-    P2i, P6i, P5i = _m4j(g, _U_P2I), _m4j(g, _U_P6I), _m4j(g, _U_P5I)
+    P2i, P6i, P5i = pose_at(g, U_P2I), pose_at(g, U_P6I), pose_at(g, U_P5I)
     J6 = ws[0]
-    a2, a3 = g[_U_A2], g[_U_A3]
-    s1, s4, s5a = g[_U_S1], g[_U_S4], g[_U_S5]
+    a2, a3 = g[U_A2], g[U_A3]
+    s1, s4, s5a = g[U_S1], g[U_S4], g[U_S5]
     count = 0
     for q1 in (psi + k, psi + math.pi - k):
         z1x, z1y = s1 * math.sin(q1), -s1 * math.cos(q1)  # frame 1's z in the base
@@ -233,7 +233,7 @@ def _ur_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: FloatArr
         if abs(c5) > 1.0 + 1e-12:
             continue
         c5 = min(max(c5, -1.0), 1.0)
-        _rz_left(-q1, ws[1], ws[3])
+        rz_left_into(-q1, ws[1], ws[3])
         mul_into(P2i, ws[3], ws[2])  # frame 1 to joint 6
         for q5 in (math.acos(c5), -math.acos(c5)):
             q6 = ur_q6(q5, z1x, z1y, J6, s4, q_near[5])
@@ -246,14 +246,14 @@ def _ur_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: FloatArr
                 row[0], row[1], row[2] = q1, q2, q3
                 row[3], row[4], row[5] = q234 - q2 - q3, q5, q6
                 for j in range(6):
-                    row[j] = _near(row[j], q_near[j])
+                    row[j] = nearest_turn(row[j], q_near[j])
                 count += 1
     return count
 
 
 # Layout of the spherical-wrist parameters (base frame, zero pose, metres).
-_W_WT, _W_O1, _W_U2, _W_V, _W_HP, _W_O2, _W_E1, _W_E2 = 0, 3, 6, 9, 12, 13, 16, 19
-_W_O3, _W_W0, _W_S3, _W_U1, _W_U3, _W_B, _W_S6, _W_R0 = 22, 24, 26, 27, 30, 33, 42, 43
+W_WT, W_O1, W_U2, W_V, W_HP, W_O2, W_E1, W_E2 = 0, 3, 6, 9, 12, 13, 16, 19
+W_O3, W_W0, W_S3, W_U1, W_U3, W_B, W_S6, W_R0 = 22, 24, 26, 27, 30, 33, 42, 43
 WRIST_FIELDS = 52
 
 
@@ -268,19 +268,19 @@ def wrist_joint_1(
     B^T R3^T (R R0^T B) B^T ... in B's basis)."""
     RT = ws[0]
     RT[:, :] = T[:3, :3]
-    w = g[_W_WT : _W_WT + 3]
+    w = g[W_WT : W_WT + 3]
     c = np.empty(3)
     for i in range(3):
         c[i] = T[i, 3] + RT[i, 0] * w[0] + RT[i, 1] * w[1] + RT[i, 2] * w[2]
-    o1, u2, v = g[_W_O1 : _W_O1 + 3], g[_W_U2 : _W_U2 + 3], g[_W_V : _W_V + 3]
+    o1, u2, v = g[W_O1 : W_O1 + 3], g[W_U2 : W_U2 + 3], g[W_V : W_V + 3]
     d = c - o1
     a, b = d[0] * u2[0] + d[1] * u2[1] + d[2] * u2[2], d[0] * v[0] + d[1] * v[1] + d[2] * v[2]
     r = math.hypot(a, b)
-    hp = g[_W_HP]
+    hp = g[W_HP]
     if r < abs(hp) or r == 0.0:
         return False, 0.0, 0.0, d
-    mul_into(RT, np.ascontiguousarray(g[_W_R0 : _W_R0 + 9].reshape(3, 3).T), ws[1])
-    mul_into(ws[1], g[_W_B : _W_B + 9].reshape(3, 3), ws[2])
+    mul_into(RT, np.ascontiguousarray(g[W_R0 : W_R0 + 9].reshape(3, 3).T), ws[1])
+    mul_into(ws[1], g[W_B : W_B + 9].reshape(3, 3), ws[2])
     return True, math.atan2(b, a), math.acos(min(max(hp / r, -1.0), 1.0)), d
 
 
@@ -288,8 +288,8 @@ def wrist_joint_1(
 def wrist_links(g: FloatArray) -> tuple[float, float, float, float]:
     """The spherical wrist arm's planar 2R chain of joints 2 and 3: the link lengths l2, l3
     and their angles g2, g3 in the zero pose."""
-    o3x, o3y = g[_W_O3], g[_W_O3 + 1]
-    w0x, w0y = g[_W_W0], g[_W_W0 + 1]
+    o3x, o3y = g[W_O3], g[W_O3 + 1]
+    w0x, w0y = g[W_W0], g[W_W0 + 1]
     l2 = math.hypot(o3x, o3y)
     l3 = math.hypot(w0x - o3x, w0y - o3y)
     return l2, l3, math.atan2(o3y, o3x), math.atan2(w0y - o3y, w0x - o3x)
@@ -302,9 +302,9 @@ def wrist_plane(
     """With joint 1 at ``q1``: the wrist centre (``d`` from the shoulder's origin) in the
     plane of joints 2 and 3 (px, py) and the cosine of the elbow's angle (kappa); False where
     the 2R chain cannot reach it (``ws[3]`` overwritten)."""
-    o1, o2 = g[_W_O1 : _W_O1 + 3], g[_W_O2 : _W_O2 + 3]
-    e1, e2 = g[_W_E1 : _W_E1 + 3], g[_W_E2 : _W_E2 + 3]
-    _rot_into(g[_W_U1 : _W_U1 + 3], -q1, ws[3])
+    o1, o2 = g[W_O1 : W_O1 + 3], g[W_O2 : W_O2 + 3]
+    e1, e2 = g[W_E1 : W_E1 + 3], g[W_E2 : W_E2 + 3]
+    _rot_into(g[W_U1 : W_U1 + 3], -q1, ws[3])
     P = np.empty(3)
     for i in range(3):
         P[i] = o1[i] - o2[i] + ws[3, i, 0] * d[0] + ws[3, i, 1] * d[1] + ws[3, i, 2] * d[2]
@@ -320,11 +320,11 @@ def wrist_plane(
 def wrist_elbow(g: FloatArray, phi3: float, px: float, py: float) -> tuple[float, float]:
     """Joints 2 and 3 that put the wrist centre at (px, py) in the plane of the 2R chain,
     with the elbow at ``phi3``."""
-    o3x, o3y = g[_W_O3], g[_W_O3 + 1]
-    w0x, w0y = g[_W_W0], g[_W_W0 + 1]
+    o3x, o3y = g[W_O3], g[W_O3 + 1]
+    w0x, w0y = g[W_W0], g[W_W0 + 1]
     vx = o3x + math.cos(phi3) * (w0x - o3x) - math.sin(phi3) * (w0y - o3y)
     vy = o3y + math.sin(phi3) * (w0x - o3x) + math.cos(phi3) * (w0y - o3y)
-    return math.atan2(py, px) - math.atan2(vy, vx), g[_W_S3] * phi3
+    return math.atan2(py, px) - math.atan2(vy, vx), g[W_S3] * phi3
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -332,8 +332,8 @@ def wrist_rotation(g: FloatArray, ws: FloatArray, q1: float, q2: float, q3: floa
     """The rotation a spherical wrist's joints 4-6 are left to make once joints 1-3 are
     known, in the basis (u4, u5, u4 x u5): N = B^T R3^T R R0^T B (``ws[2]``: R R0^T B; ``ws``
     3-6 overwritten, N in ``ws[6]``)."""
-    u1, u2, u3 = g[_W_U1 : _W_U1 + 3], g[_W_U2 : _W_U2 + 3], g[_W_U3 : _W_U3 + 3]
-    B = g[_W_B : _W_B + 9].reshape(3, 3)
+    u1, u2, u3 = g[W_U1 : W_U1 + 3], g[W_U2 : W_U2 + 3], g[W_U3 : W_U3 + 3]
+    B = g[W_B : W_B + 9].reshape(3, 3)
     _rot_into(u1, q1, ws[3])
     _rot_into(u2, q2, ws[4])
     mul_into(ws[3], ws[4], ws[5])
@@ -375,7 +375,7 @@ def _wrist_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: Float
     if not reached:
         return 0
     l2, l3, g2, g3 = wrist_links(g)
-    s6 = g[_W_S6]
+    s6 = g[W_S6]
     count = 0
     for q1 in (beta + k, beta - k):
         inside, px, py, kappa = wrist_plane(g, ws, d, q1, l2, l3)
@@ -391,7 +391,7 @@ def _wrist_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: Float
                 row[0], row[1], row[2] = q1, q2, q3
                 row[3], row[4], row[5] = q4, q5, s6 * c6
                 for j in range(6):
-                    row[j] = _near(row[j], q_near[j])
+                    row[j] = nearest_turn(row[j], q_near[j])
                 count += 1
     return count
 
@@ -435,12 +435,12 @@ def _ur_parameters(place: FloatArray, axes: FloatArray) -> FloatArray | None:
     if not (right and parallel and no_a) or min(abs(a[2]), abs(a[3])) <= GEOMETRY_TOL:
         return None
     g = np.zeros(UR_FIELDS)
-    for at, M in ((_U_P2I, place[1]), (_U_P1I, P1), (_U_P6I, place[5]), (_U_P5I, place[4])):
+    for at, M in ((U_P2I, place[1]), (U_P1I, P1), (U_P6I, place[5]), (U_P5I, place[4])):
         g[at : at + 16] = np.linalg.inv(M).ravel()
-    g[_U_TCP : _U_TCP + 16] = np.linalg.inv(place[6]).ravel()
-    g[_U_A2], g[_U_A3] = a[2], a[3]
-    g[_U_DLAT] = place[2][2, 3] + place[3][2, 3] + place[4][2, 3]
-    g[_U_S1], g[_U_S4], g[_U_S5] = sin[1], sin[4], sin[5]
+    g[U_TCP : U_TCP + 16] = np.linalg.inv(place[6]).ravel()
+    g[U_A2], g[U_A3] = a[2], a[3]
+    g[U_DLAT] = place[2][2, 3] + place[3][2, 3] + place[4][2, 3]
+    g[U_S1], g[U_S4], g[U_S5] = sin[1], sin[4], sin[5]
     return g
 
 
@@ -470,17 +470,17 @@ def _wrist_parameters(frames: FloatArray, axes: FloatArray) -> FloatArray | None
         return None
     tcp = frames[6]
     g = np.zeros(WRIST_FIELDS)
-    g[_W_WT : _W_WT + 3] = tcp[:3, :3].T @ (W0 - tcp[:3, 3])
-    g[_W_O1 : _W_O1 + 3], g[_W_U2 : _W_U2 + 3] = o[0], u[1]
-    g[_W_V : _W_V + 3] = np.cross(u[0], u[1])
-    g[_W_HP] = (W0 - o[0]) @ u[1]
-    g[_W_O2 : _W_O2 + 3], g[_W_E1 : _W_E1 + 3], g[_W_E2 : _W_E2 + 3] = o[1], e1, e2
-    g[_W_O3 : _W_O3 + 2], g[_W_W0 : _W_W0 + 2] = o3, w0
-    g[_W_S3] = 1.0 if u[2] @ u[1] > 0 else -1.0
-    g[_W_U1 : _W_U1 + 3], g[_W_U3 : _W_U3 + 3] = u[0], u[2]
-    g[_W_B : _W_B + 9] = np.column_stack([u[3], u[4], np.cross(u[3], u[4])]).ravel()
-    g[_W_S6] = 1.0 if u[5] @ u[3] > 0 else -1.0
-    g[_W_R0 : _W_R0 + 9] = tcp[:3, :3].ravel()
+    g[W_WT : W_WT + 3] = tcp[:3, :3].T @ (W0 - tcp[:3, 3])
+    g[W_O1 : W_O1 + 3], g[W_U2 : W_U2 + 3] = o[0], u[1]
+    g[W_V : W_V + 3] = np.cross(u[0], u[1])
+    g[W_HP] = (W0 - o[0]) @ u[1]
+    g[W_O2 : W_O2 + 3], g[W_E1 : W_E1 + 3], g[W_E2 : W_E2 + 3] = o[1], e1, e2
+    g[W_O3 : W_O3 + 2], g[W_W0 : W_W0 + 2] = o3, w0
+    g[W_S3] = 1.0 if u[2] @ u[1] > 0 else -1.0
+    g[W_U1 : W_U1 + 3], g[W_U3 : W_U3 + 3] = u[0], u[2]
+    g[W_B : W_B + 9] = np.column_stack([u[3], u[4], np.cross(u[3], u[4])]).ravel()
+    g[W_S6] = 1.0 if u[5] @ u[3] > 0 else -1.0
+    g[W_R0 : W_R0 + 9] = tcp[:3, :3].ravel()
     return g
 
 

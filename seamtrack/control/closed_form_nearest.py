@@ -19,22 +19,22 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.control.closed_form import (
-    _U_A2,
-    _U_A3,
-    _U_P2I,
-    _U_P5I,
-    _U_P6I,
-    _U_S1,
-    _U_S4,
-    _U_S5,
-    _W_S6,
     KIND_UR,
     KIND_WRIST,
-    _m4j,
-    _near,
-    _rz_left,
+    U_A2,
+    U_A3,
+    U_P2I,
+    U_P5I,
+    U_P6I,
+    U_S1,
+    U_S4,
+    U_S5,
+    W_S6,
     ik_branches,
     mul_into,
+    nearest_turn,
+    pose_at,
+    rz_left_into,
     ur_joint_1,
     ur_planar,
     ur_q6,
@@ -58,8 +58,8 @@ def _ur_q6(
     sum of squared differences from ``q_near`` with joints 1, 5 and 6 known (``t0``: joint
     1's term)."""
     q6 = ur_q6(q5, z1x, z1y, J6, s4, q_near[5])
-    x4 = _near(q5, q_near[4]) - q_near[4]
-    x5 = _near(q6, q_near[5]) - q_near[5]
+    x4 = nearest_turn(q5, q_near[4]) - q_near[4]
+    x5 = nearest_turn(q6, q_near[5]) - q_near[5]
     return q6, (t0 + x4 * x4) + x5 * x5
 
 
@@ -78,20 +78,20 @@ def _ur_nearest(
     reached, psi, k = ur_joint_1(g, T, ws)  # ws: J6, P1i J6, T01^-1 J6, two scratch, A
     if not reached:
         return False
-    P2i, P6i, P5i = _m4j(g, _U_P2I), _m4j(g, _U_P6I), _m4j(g, _U_P5I)
+    P2i, P6i, P5i = pose_at(g, U_P2I), pose_at(g, U_P6I), pose_at(g, U_P5I)
     J6 = ws[0]
-    a2, a3 = g[_U_A2], g[_U_A3]
-    s1, s4, s5a = g[_U_S1], g[_U_S4], g[_U_S5]
+    a2, a3 = g[U_A2], g[U_A3]
+    s1, s4, s5a = g[U_S1], g[U_S4], g[U_S5]
     best = math.inf
     best_key = 8  # the branch's place in _ur_branches' order (i1, i5, i3): a tie's tiebreak
     q1s = (psi + k, psi + math.pi - k)
-    x0 = _near(q1s[0], q_near[0]) - q_near[0]
-    x1 = _near(q1s[1], q_near[0]) - q_near[0]
+    x0 = nearest_turn(q1s[0], q_near[0]) - q_near[0]
+    x1 = nearest_turn(q1s[1], q_near[0]) - q_near[0]
     first = 0 if not x1 * x1 < x0 * x0 else 1
     for o1 in range(2):
         i1 = first if o1 == 0 else 1 - first
         q1 = q1s[i1]
-        r0 = _near(q1, q_near[0])
+        r0 = nearest_turn(q1, q_near[0])
         t0 = (r0 - q_near[0]) * (r0 - q_near[0])
         if t0 > best:
             continue
@@ -100,7 +100,7 @@ def _ur_nearest(
         if abs(c5) > 1.0 + 1e-12:
             continue
         c5 = min(max(c5, -1.0), 1.0)
-        _rz_left(-q1, ws[1], ws[3])
+        rz_left_into(-q1, ws[1], ws[3])
         mul_into(P2i, ws[3], ws[2])
         q5s = (math.acos(c5), -math.acos(c5))
         q6a, bound_a = _ur_q6(q5s[0], z1x, z1y, J6, s4, q_near, t0)
@@ -119,12 +119,12 @@ def _ur_nearest(
                 q2 = math.atan2(y, x) - math.atan2(a3 * math.sin(q3), a2 + a3 * math.cos(q3))
                 v0, v1, v2 = q1, q2, q3
                 v3, v4, v5 = q234 - q2 - q3, q5, q6
-                v0 = _near(v0, q_near[0])
-                v1 = _near(v1, q_near[1])
-                v2 = _near(v2, q_near[2])
-                v3 = _near(v3, q_near[3])
-                v4 = _near(v4, q_near[4])
-                v5 = _near(v5, q_near[5])
+                v0 = nearest_turn(v0, q_near[0])
+                v1 = nearest_turn(v1, q_near[1])
+                v2 = nearest_turn(v2, q_near[2])
+                v3 = nearest_turn(v3, q_near[3])
+                v4 = nearest_turn(v4, q_near[4])
+                v5 = nearest_turn(v5, q_near[5])
                 d = 0.0  # nearest_branch's sum, in its order
                 d += (v0 - q_near[0]) * (v0 - q_near[0])
                 d += (v1 - q_near[1]) * (v1 - q_near[1])
@@ -149,17 +149,17 @@ def _wrist_nearest(g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatA
     if not reached:
         return False
     l2, l3, g2, g3 = wrist_links(g)
-    s6 = g[_W_S6]
+    s6 = g[W_S6]
     best = math.inf
     best_key = 8  # the branch's place in _wrist_branches' order (i1, i3, i6)
     q1s = (beta + k, beta - k)
-    x0 = _near(q1s[0], q_near[0]) - q_near[0]
-    x1 = _near(q1s[1], q_near[0]) - q_near[0]
+    x0 = nearest_turn(q1s[0], q_near[0]) - q_near[0]
+    x1 = nearest_turn(q1s[1], q_near[0]) - q_near[0]
     first = 0 if not x1 * x1 < x0 * x0 else 1
     for n1 in range(2):
         i1 = first if n1 == 0 else 1 - first
         q1 = q1s[i1]
-        v0 = _near(q1, q_near[0])
+        v0 = nearest_turn(q1, q_near[0])
         t0 = 0.0
         t0 += (v0 - q_near[0]) * (v0 - q_near[0])
         if t0 > best:
@@ -182,8 +182,9 @@ def _wrist_nearest(g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatA
             for i6 in range(2):
                 sign = 1.0 if i6 == 0 else -1.0
                 q4, q5, c6 = wrist_456(N, sb, sign, q_near[3])
-                v1, v2 = _near(q2, q_near[1]), _near(q3, q_near[2])
-                v3, v4, v5 = _near(q4, q_near[3]), _near(q5, q_near[4]), _near(s6 * c6, q_near[5])
+                v1, v2 = nearest_turn(q2, q_near[1]), nearest_turn(q3, q_near[2])
+                v3, v4 = nearest_turn(q4, q_near[3]), nearest_turn(q5, q_near[4])
+                v5 = nearest_turn(s6 * c6, q_near[5])
                 dd = t12  # nearest_branch's sum, in its order (joints 1-3 in t12)
                 dd += (v3 - q_near[3]) * (v3 - q_near[3])
                 dd += (v4 - q_near[4]) * (v4 - q_near[4])
@@ -203,8 +204,8 @@ def _wrist_elbow(
     ``phi3``, and the sum of squared differences from ``q_near`` over joints 1-3 (``t0``:
     joint 1's, in nearest_branch's order)."""
     q2, q3 = wrist_elbow(g, phi3, px, py)
-    x1 = _near(q2, q_near[1]) - q_near[1]
-    x2 = _near(q3, q_near[2]) - q_near[2]
+    x1 = nearest_turn(q2, q_near[1]) - q_near[1]
+    x2 = nearest_turn(q3, q_near[2]) - q_near[2]
     return q2, q3, (t0 + x1 * x1) + x2 * x2
 
 

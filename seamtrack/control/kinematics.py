@@ -88,7 +88,7 @@ ARM_MODELS: dict[str, ArmModel] = {
 }
 
 
-def _pinocchio() -> Any:
+def import_pinocchio() -> Any:
     try:
         import pinocchio
     except ImportError:  # pragma: no cover - the extra is part of dev and CI
@@ -170,7 +170,7 @@ class ArmKinematics:
     geometry: FloatArray = field(init=False, repr=False)
 
     def __post_init__(self) -> None:
-        pin = _pinocchio()
+        pin = import_pinocchio()
         tool = np.array(self.T_flange_tcp, dtype=np.float64)
         object.__setattr__(self, "T_flange_tcp", tool)
         # The torch tip as a frame of the model (on a copy: the caller's model is not touched),
@@ -241,7 +241,7 @@ class ArmKinematics:
 
     @staticmethod
     def _parse(text: str, field_name: str, what: str) -> Any:
-        pin = _pinocchio()
+        pin = import_pinocchio()
         check_urdf(text, what, field_name)  # what urdfdom would print its own errors about
         try:
             with quiet_c_stderr() as printed:
@@ -314,7 +314,7 @@ class ArmKinematics:
 
     def fk(self, q: ArrayLike, data: Any = None) -> FloatArray:
         """``T_base_tcp(q)``, (4, 4), mm."""
-        pin = _pinocchio()
+        pin = import_pinocchio()
         data = self.new_data() if data is None else data
         pin.forwardKinematics(self.model, data, np.asarray(q, dtype=np.float64))
         pin.updateFramePlacement(self.model, data, self.tcp_id)
@@ -365,7 +365,7 @@ class ArmKinematics:
             Rows: TCP linear velocity (m/s per rad/s: Pinocchio's units, so that the damping
             weighs metres against radians), then angular velocity, both in base axes.
         """
-        pin = _pinocchio()
+        pin = import_pinocchio()
         J = pin.computeFrameJacobian(
             self.model, data, np.asarray(q, dtype=np.float64), self.tcp_id,
             pin.LOCAL_WORLD_ALIGNED,
@@ -382,7 +382,7 @@ class ArmKinematics:
             **metres** (a fresh array).
         J : (6, n) float
         """
-        pin = _pinocchio()
+        pin = import_pinocchio()
         J = pin.computeFrameJacobian(self.model, data, q, self.tcp_id, pin.LOCAL_WORLD_ALIGNED)
         return data.oMf[self.tcp_id].np, J
 
@@ -411,7 +411,7 @@ class ArmKinematics:
         damping : float
             Damping (m or rad) where the error is large.
         """
-        pin = _pinocchio()
+        pin = import_pinocchio()
         data = self.new_data() if data is None else data
         target = np.asarray(T_base_tcp, dtype=np.float64)
         p_target = target[:3, 3] * M_PER_MM
@@ -441,13 +441,13 @@ class ArmKinematics:
     def wrist_angle(self, q: ArrayLike, data: Any = None) -> float:
         """Angle (rad, 0..pi/2) between the axes of joints 4 and 6: 0 is the wrist singularity
         (the two axes aligned, one rotation lost)."""
-        pin = _pinocchio()
+        pin = import_pinocchio()
         data = self.new_data() if data is None else data
         pin.forwardKinematics(self.model, data, np.asarray(q, dtype=np.float64))
         axes = []
         for j in (4, 6):  # Pinocchio joint ids: 0 is the universe
             joint = self.model.joints[j]
-            local = _joint_axis(joint)
+            local = joint_axis(joint)
             axes.append(data.oMi[j].rotation @ local)
         c = abs(float(axes[0] @ axes[1]))
         return math.acos(min(c, 1.0))
@@ -492,12 +492,12 @@ def _chain(model: Any, tcp_id: int) -> tuple[Any, ...]:
         place[k] = model.jointPlacements[j].homogeneous
         short = joint.shortname()
         kinds[k] = 1 if "Prismatic" in short or short[-2:] in ("PX", "PY", "PZ") else 0
-        axes[k] = _joint_axis(joint)
+        axes[k] = joint_axis(joint)
     place[-1] = frame.placement.homogeneous
     return place, axes, kinds, index
 
 
-def _joint_axis(joint: Any) -> FloatArray:
+def joint_axis(joint: Any) -> FloatArray:
     """Unit axis of a revolute or prismatic joint in its own frame (X/Y/Z or an arbitrary
     axis)."""
     short = joint.shortname()

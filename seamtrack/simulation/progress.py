@@ -45,7 +45,7 @@ def _interp(x: float, knots: FloatArray, values: FloatArray) -> float:
 
 
 @numba.njit(cache=True, nogil=True)
-def _closest_in_window(
+def closest_in_window(
     points: FloatArray,
     knots: FloatArray,
     columns: FloatArray,
@@ -119,7 +119,7 @@ class ProgressTracker:
             s1 = min(arc_length_hint_mm + window_mm, length)
             i0 = min(max(bisect.bisect_right(knot_list, s0) - 1, 0), n_seg - 1)
             i1 = min(max(bisect.bisect_left(knot_list, s1), i0 + 1), n_seg)
-            s_start, t, dx, dy, dz = _closest_in_window(
+            s_start, t, dx, dy, dz = closest_in_window(
                 self.points, knots, self.columns, q, s0, s1, i0, i1
             )
             d = np.array((dx, dy, dz))
@@ -149,7 +149,7 @@ def progress_near(
         s1 = min(hint + window, length)
         i0 = min(max(int(np.searchsorted(knots, s0, side="right")) - 1, 0), n_seg - 1)
         i1 = min(max(int(np.searchsorted(knots, s1, side="left")), i0 + 1), n_seg)
-        s_start, t, d[0], d[1], d[2] = _closest_in_window(points, knots, columns, q, s0, s1, i0, i1)
+        s_start, t, d[0], d[1], d[2] = closest_in_window(points, knots, columns, q, s0, s1, i0, i1)
         s = s_start + t * math.sqrt(np.dot(d, d))
         cut_low = s0 > 0.0 and s <= s0 + 1e-12
         cut_high = s1 < length and s >= s1 - 1e-12

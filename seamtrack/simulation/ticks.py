@@ -51,7 +51,7 @@ from seamtrack.simulation.progress import (
     S_NOW,
     CheckArrays,
     ProgressCheck,
-    _closest_in_window,
+    closest_in_window,
     progress_check,
 )
 
@@ -391,7 +391,7 @@ def _closest_near(
         s1 = min(hint + window, length)
         i0 = min(max(int(np.searchsorted(knots, s0, side="right")) - 1, 0), n_seg - 1)
         i1 = min(max(int(np.searchsorted(knots, s1, side="left")), i0 + 1), n_seg)
-        s_start, t, dx, dy, dz = _closest_in_window(points, knots, columns, q, s0, s1, i0, i1)
+        s_start, t, dx, dy, dz = closest_in_window(points, knots, columns, q, s0, s1, i0, i1)
         s = s_start + t * math.sqrt(dx * dx + dy * dy + dz * dz)
         cut_low = s0 > 0.0 and s <= s0 + 1e-12
         cut_high = s1 < length and s >= s1 - 1e-12

@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from seamtrack.control.arm import ArticulatedRobot
-from seamtrack.control.kinematics import M_PER_MM, _joint_axis, _pinocchio
+from seamtrack.control.kinematics import M_PER_MM, import_pinocchio, joint_axis
 
 FloatArray = NDArray[np.float64]
 
@@ -103,7 +103,7 @@ def joint_poses_world(robot: ArticulatedRobot, q: ArrayLike, data: Any = None) -
     q : (n,) float
         Joint positions, rad.
     """
-    pin = _pinocchio()
+    pin = import_pinocchio()
     kin = robot.kinematics
     data = kin.new_data() if data is None else data
     pin.forwardKinematics(kin.model, data, np.asarray(q, dtype=np.float64))
@@ -146,7 +146,7 @@ class ArmActors:
         self._add(plotter, base, 0, "arm-base", _BASE_COLOR)
         for j in range(1, model.njoints):
             r = radius * (1.0 - 0.45 * (j - 1) / max(n - 1, 1))
-            axis = _joint_axis(model.joints[j])
+            axis = joint_axis(model.joints[j])
             motor = pv.Cylinder(
                 center=(0.0, 0.0, 0.0), direction=tuple(axis), radius=r, height=2.2 * r,
                 resolution=32,

@@ -18,10 +18,10 @@ from typing import Any
 
 import numpy as np
 
-from seamtrack.viz.plots import _pyplot, _save
-from seamtrack.viz.run import _gif_writer
-from seamtrack.viz.sensor_view import _pyvista
-from seamtrack.viz.views import _off_screen
+from seamtrack.viz.plots import pyplot_module, save_figure
+from seamtrack.viz.run import gif_writer
+from seamtrack.viz.sensor_view import pyvista_module
+from seamtrack.viz.views import off_screen_mode
 from seamtrack.workpiece.fill import FillState
 from seamtrack.workpiece.inspection import LEVELS, Inspection
 
@@ -43,7 +43,7 @@ PLATE_COLOR = "#b0b4b8"
 
 def pass_colors(n_passes: int) -> list[tuple[float, float, float, float]]:
     """One RGBA colour per pass (matplotlib's ``viridis``, first pass dark)."""
-    plt = _pyplot()
+    plt = pyplot_module()
     cmap = plt.get_cmap("viridis")
     return [cmap(x) for x in np.linspace(0.0, 0.95, max(n_passes, 1))][:n_passes]
 
@@ -104,11 +104,11 @@ def plot_fill_section(
     state: FillState, station: int, path: str | Path, *, passes: int | None = None
 ) -> Path:
     """PNG of :func:`draw_fill_section` at ``station``; returns the path written."""
-    plt = _pyplot()
+    plt = pyplot_module()
     fig, ax = plt.subplots(figsize=(7, 4.5))
     draw_fill_section(ax, state, station, passes=passes)
     fig.tight_layout()
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def animate_fill(state: FillState, station: int, path: str | Path, *, fps: float = 2.0) -> Path:
@@ -117,10 +117,10 @@ def animate_fill(state: FillState, station: int, path: str | Path, *, fps: float
     One frame per pass (``state.n_passes`` frames; at least one, the empty groove, when no
     pass was laid). Returns the path written (its folder is created).
     """
-    plt = _pyplot()
+    plt = pyplot_module()
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
-    append, finish = _gif_writer(out, fps)
+    append, finish = gif_writer(out, fps)
     fig, ax = plt.subplots(figsize=(6, 4))
     try:
         for p in range(1, state.n_passes + 1) if state.n_passes else [0]:
@@ -147,8 +147,8 @@ def fill_plotter(
     The fill's mesh is ``state.mesh()`` (its ``pass`` vertex attribute the colour); the camera
     looks down the groove from above its start.
     """
-    pv = _pyvista()
-    plotter = pv.Plotter(off_screen=_off_screen(off_screen), window_size=list(window_size))
+    pv = pyvista_module()
+    plotter = pv.Plotter(off_screen=off_screen_mode(off_screen), window_size=list(window_size))
     plotter.add_mesh(pv.wrap(part_mesh), color=PLATE_COLOR, name="part")
     fill = state.mesh()
     if len(fill.faces):
@@ -229,7 +229,7 @@ def plot_weld_sections(state: FillState, inspection: Inspection, path: str | Pat
     """PNG of four cross-sections (start, middle, end, worst station), each bead coloured by
     pass, the 7 groove points and ISO 5817's limits; one legend below them all, clear of the
     cap beads. Returns the path written."""
-    plt = _pyplot()
+    plt = pyplot_module()
     stations = weld_stations(state, inspection)
     fig, axes = plt.subplots(2, 2, figsize=(11, 8), layout="constrained")
     for ax, (name, i) in zip(axes.flat, stations.items(), strict=True):
@@ -245,13 +245,13 @@ def plot_weld_sections(state: FillState, inspection: Inspection, path: str | Pat
     fig.suptitle(f"ISO 5817 level met: {inspection.level or 'none'}")
     fig.legend(seen.values(), seen.keys(), loc="outside lower center", ncol=min(6, len(seen)),
                fontsize=7, frameon=False)  # fmt: skip
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_inspection(inspection: Inspection, path: str | Path) -> Path:
     """PNG along the seam: each imperfection's measure and ISO 5817's limits for B, C and D;
     the stations where a level is missed are marked. Returns the path written."""
-    plt = _pyplot()
+    plt = pyplot_module()
     s = inspection.s_mm
     fig, axes = plt.subplots(len(inspection.imperfections), 1, figsize=(9, 8), sharex=True)
     for ax, imperfection in zip(axes, inspection.imperfections, strict=True):
@@ -275,4 +275,4 @@ def plot_inspection(inspection: Inspection, path: str | Path) -> Path:
     axes[-1].set_xlabel("s along the seam (mm)")
     fig.suptitle(f"ISO 5817 along the seam: level {inspection.level or 'none'} met")
     fig.tight_layout()
-    return _save(fig, path)
+    return save_figure(fig, path)

@@ -11,7 +11,7 @@ import numpy as np
 from seamtrack.errors import SceneError
 from seamtrack.sensing.camera import StripeImage
 from seamtrack.sensing.profiles import Feature, Profile
-from seamtrack.viz.plots import LEGEND_MARKER_PT, _pyplot
+from seamtrack.viz.plots import LEGEND_MARKER_PT, pyplot_module
 
 
 def plot_stripe_image(
@@ -43,7 +43,7 @@ def plot_stripe_image(
     -------
     Path
     """
-    plt = _pyplot()
+    plt = pyplot_module()
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(8.0, 7.5), height_ratios=[1.1, 1.0])

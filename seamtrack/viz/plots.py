@@ -48,7 +48,7 @@ def sensed_point_step(n: int) -> int:
     return max(1, math.ceil(n / MAX_SENSED_MARKERS))
 
 
-def _pyplot() -> Any:
+def pyplot_module() -> Any:
     import matplotlib
 
     matplotlib.use("Agg", force=False)
@@ -57,8 +57,8 @@ def _pyplot() -> Any:
     return plt
 
 
-def _save(fig: Any, path: str | Path, dpi: int = 110) -> Path:
-    plt = _pyplot()
+def save_figure(fig: Any, path: str | Path, dpi: int = 110) -> Path:
+    plt = pyplot_module()
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
     try:
@@ -135,14 +135,14 @@ def _error_title(result: Result) -> str:
 def plot_run(result: Result, path: str | Path, title: str = "") -> Path:
     """error.png: the paper's Fig. 7 style path plot (seam vs torch, top view and side view)
     and the tracking error along the seam (total, lateral, vertical)."""
-    plt = _pyplot()
+    plt = pyplot_module()
     fig, axes = plt.subplots(3, 1, figsize=(9, 9), constrained_layout=True)
     draw_path(axes[0], result, "top")
     draw_path(axes[1], result, "side")
     axes[0].set_title(title or f"status: {result.status}")
     draw_error_components(axes[2], result)
     axes[2].set_title(_error_title(result))
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_path(result: Result, path: str | Path, title: str = "") -> Path:
@@ -160,12 +160,12 @@ def plot_path(result: Result, path: str | Path, title: str = "") -> Path:
     -------
     Path
     """
-    plt = _pyplot()
+    plt = pyplot_module()
     fig, axes = plt.subplots(2, 1, figsize=(9, 6.5), constrained_layout=True)
     draw_path(axes[0], result, "top")
     draw_path(axes[1], result, "side", legend=False)
     axes[0].set_title(title or f"status: {result.status}; {_error_title(result)}")
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_error_components(result: Result, path: str | Path, title: str = "") -> Path:
@@ -176,11 +176,11 @@ def plot_error_components(result: Result, path: str | Path, title: str = "") -> 
     Path
         The PNG written.
     """
-    plt = _pyplot()
+    plt = pyplot_module()
     fig, ax = plt.subplots(figsize=(9, 3.6), constrained_layout=True)
     draw_error_components(ax, result)
     ax.set_title(title or _error_title(result))
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def plot_sweep(
@@ -191,7 +191,7 @@ def plot_sweep(
 ) -> Path:
     """Metrics against a swept parameter (log x when all values are positive), with their 95 %
     confidence half-widths (``<key>_ci95``, several seeds) as error bars."""
-    plt = _pyplot()
+    plt = pyplot_module()
     x = np.array([float(r["value"]) for r in rows])
     fig, ax = plt.subplots(figsize=(7, 4), constrained_layout=True)
     for key in keys:
@@ -203,7 +203,7 @@ def plot_sweep(
     ax.set_xlabel(param)
     ax.set_ylabel("mm")
     ax.legend()
-    return _save(fig, path)
+    return save_figure(fig, path)
 
 
 def draw_profile_2d(
@@ -301,14 +301,14 @@ def plot_profile_2d(
     -------
     Path
     """
-    plt = _pyplot()
+    plt = pyplot_module()
     fig, ax = plt.subplots(figsize=figsize, constrained_layout=True)
     try:
         draw_profile_2d(ax, profile, truth=truth, feature=feature)
     except Exception:
         plt.close(fig)
         raise
-    return _save(fig, path, dpi=dpi)
+    return save_figure(fig, path, dpi=dpi)
 
 
 #: Marker size (points) of every legend entry of :func:`plot_profile_png`.
@@ -330,7 +330,7 @@ def plot_profile_png(
     Path
         The file written.
     """
-    plt = _pyplot()
+    plt = pyplot_module()
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
     assert profile.valid is not None and profile.reason is not None

@@ -15,17 +15,17 @@ from numpy.typing import NDArray
 
 from seamtrack.geometry.frames import make
 from seamtrack.viz.views import (
-    _FEATURE_COLOR,
-    _camera_on_sensor,
-    _error_clim,
-    _pyvista,
-    _torch_path,
+    FEATURE_COLOR,
     camera_on_cell,
+    camera_on_sensor,
+    error_clim,
     has_display,
+    pyvista_module,
     render_png,
     scene_plotter,
     scene_view,
     stripe_polydata,
+    torch_path,
 )
 
 FloatArray = NDArray[np.float64]
@@ -37,7 +37,7 @@ def _frame_ticks(result: Any, frames_: int) -> NDArray[np.intp]:
     return np.unique(np.linspace(0, n - 1, max(2, frames_)).round().astype(np.intp))
 
 
-def _gif_writer(path: Path, fps: float) -> tuple[Callable[[Any], None], Callable[[], None]]:
+def gif_writer(path: Path, fps: float) -> tuple[Callable[[Any], None], Callable[[], None]]:
     """(append an RGB frame, finish): GIF through Pillow; MP4 through imageio-ffmpeg."""
     if path.suffix.lower() == ".mp4":
         try:
@@ -105,7 +105,7 @@ def animate_run(
     """
     from tqdm import tqdm
 
-    pv = _pyvista()
+    pv = pyvista_module()
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
     view = scene_view(scene, overrides)
@@ -125,22 +125,22 @@ def animate_run(
     stripe = pv.PolyData(np.zeros((1, 3)))  # a placeholder: pyvista refuses empty meshes
     stripe.point_data["rgb"] = np.zeros((1, 3), dtype=np.uint8)
     stripe_actor = plotter.add_mesh(stripe, scalars="rgb", rgb=True, point_size=4, name="stripe")
-    path_mesh = _torch_path(pv, view, result, stop=1)
+    path_mesh = torch_path(pv, view, result, stop=1)
     plotter.add_mesh(
         path_mesh,
         scalars="tracking error (mm)",
         cmap="plasma",
-        clim=_error_clim(result),
+        clim=error_clim(result),
         line_width=5,
         name="torch-path",
         scalar_bar_args={"title": "tracking error (mm)", "color": "black"},
     )
     point_actor = plotter.add_mesh(
         pv.Sphere(radius=0.012 * view.sensor.range_center_mm),
-        color=_FEATURE_COLOR,
+        color=FEATURE_COLOR,
         name="seam-point",
     )
-    append, finish = _gif_writer(out, fps)
+    append, finish = gif_writer(out, fps)
     bar = tqdm(
         total=len(ticks),
         unit="frame",
@@ -166,7 +166,7 @@ def animate_run(
             if cloud.n_points:
                 stripe.copy_from(cloud)
             stripe_actor.visibility = cloud.n_points > 0
-            path_mesh.copy_from(_torch_path(pv, view, result, stop=tick + 1, max_points=1500))
+            path_mesh.copy_from(torch_path(pv, view, result, stop=tick + 1, max_points=1500))
             if feature:
                 point_actor.user_matrix = make(translation=feature.point_world)
             point_actor.visibility = bool(feature)
@@ -177,7 +177,7 @@ def animate_run(
                 name="title",
             )
             if arm is None:
-                _camera_on_sensor(plotter, view.sensor, T)
+                camera_on_sensor(plotter, view.sensor, T)
             elif tick == ticks[0]:
                 camera_on_cell(plotter, view)
             plotter.render()
@@ -229,7 +229,7 @@ def view_command(
     target = Path(out) if out is not None else Path("runs") / f"{view.name}-view.png"
     path = render_png(view, target, at_mm=at_mm, window_size=window_size)
     wanted = (out is None) if interactive is None else interactive
-    if wanted and has_display() and not _pyvista().OFF_SCREEN:
+    if wanted and has_display() and not pyvista_module().OFF_SCREEN:
         scene_plotter(view, at_mm=at_mm, off_screen=False, window_size=window_size).show()
     return path
 

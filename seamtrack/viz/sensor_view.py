@@ -51,7 +51,7 @@ def headless_window() -> str | None:
     return None
 
 
-def _pyvista() -> Any:
+def pyvista_module() -> Any:
     try:
         import pyvista as pv
     except ImportError as exc:
@@ -60,7 +60,7 @@ def _pyvista() -> Any:
     return pv
 
 
-def _polyline(pv: Any, points: ArrayLike) -> Any:
+def polyline_mesh(pv: Any, points: ArrayLike) -> Any:
     pts = np.asarray(points, dtype=np.float64)
     return pv.lines_from_points(pts) if len(pts) > 1 else pv.PolyData(pts)
 
@@ -97,10 +97,10 @@ def sensor_meshes(pv: Any, sensor: LaserLineSensor) -> dict[str, Any]:
         "housing": housing,
         "emitter": pv.Sphere(radius=radius, center=(0.0, 0.0, 0.0)),
         "camera": pv.Sphere(radius=1.3 * radius, center=tuple(camera)),
-        "baseline": _polyline(pv, np.vstack([np.zeros(3), camera])),
-        "optical_axis": _polyline(pv, np.vstack([camera, crossing])),
+        "baseline": polyline_mesh(pv, np.vstack([np.zeros(3), camera])),
+        "optical_axis": polyline_mesh(pv, np.vstack([camera, crossing])),
         "fan": pv.PolyData(fan_points, faces=fan_faces),
-        "fov": _polyline(pv, np.vstack([corners, corners[:1]])),
+        "fov": polyline_mesh(pv, np.vstack([corners, corners[:1]])),
         "fov_fill": pv.PolyData(corners, faces=[4, 0, 1, 2, 3]),
     }
 
@@ -119,7 +119,7 @@ def sensor_legend() -> list[dict[str, str]]:
 
 def add_sensor(plotter: Any, sensor: LaserLineSensor, T_world_sensor: ArrayLike) -> list[Any]:
     """Draw the sensor at a pose; returns its actors (move them with ``actor.user_matrix``)."""
-    pv = _pyvista()
+    pv = pyvista_module()
     parts = sensor_meshes(pv, sensor)
     styles: dict[str, dict[str, Any]] = {
         "housing": {"color": _HOUSING_COLOR, "opacity": 0.35},

@@ -40,9 +40,9 @@ from seamtrack.sensing.sensor import LaserLineSensor
 from seamtrack.viz.plots import REASON_COLORS, plot_profile_2d
 from seamtrack.viz.sensor_view import PIP_HINT as PIP_HINT  # re-exported
 from seamtrack.viz.sensor_view import (
-    _polyline,
-    _pyvista,
     add_sensor,
+    polyline_mesh,
+    pyvista_module,
     sensor_legend,
 )
 from seamtrack.viz.sensor_view import has_display as has_display  # re-exported
@@ -65,7 +65,7 @@ SenseFn = Callable[[FloatArray, float], Feature]
 
 _MESH_COLOR = "#b8c4d6"
 _SEAM_COLOR = "#1f3b99"
-_FEATURE_COLOR = "#ffd700"
+FEATURE_COLOR = "#ffd700"
 _TORCH_COLOR = "#c08000"
 _LIFT_MM = 0.2
 
@@ -80,15 +80,15 @@ def in_notebook() -> bool:
     return shell is not None and type(shell).__name__ == "ZMQInteractiveShell"
 
 
-def _off_screen(off_screen: bool | None) -> bool:
+def off_screen_mode(off_screen: bool | None) -> bool:
     if off_screen is not None:
         return bool(off_screen)
-    return bool(_pyvista().OFF_SCREEN) or not has_display()
+    return bool(pyvista_module().OFF_SCREEN) or not has_display()
 
 
 def jupyter_backend() -> str:
     """``"trame"`` (interactive) in a notebook with a display, else ``"static"`` (an image)."""
-    return "trame" if has_display() and not _pyvista().OFF_SCREEN else "static"
+    return "trame" if has_display() and not pyvista_module().OFF_SCREEN else "static"
 
 
 # --------------------------------------------------------------------------- the scene
@@ -300,7 +300,7 @@ def _rgb(hex_color: str) -> tuple[int, int, int]:
     return int(h[0:2], 16), int(h[2:4], 16), int(h[4:6], 16)
 
 
-def _torch_path(
+def torch_path(
     pv: Any, view: SceneView, result: Any, stop: int | None = None, max_points: int = 4000
 ) -> Any:
     """The torch tip's path (up to tick ``stop``) with the tracking error as scalars; on a mesh
@@ -311,12 +311,12 @@ def _torch_path(
     points = tr.tcp_world[idx]
     if view.mesh is not None:
         points = points + 2 * _LIFT_MM * view.seam.normals[view.seam.closest(points).segment]
-    path = _polyline(pv, points)
+    path = polyline_mesh(pv, points)
     path.point_data["tracking error (mm)"] = tr.error_mm[idx]
     return path
 
 
-def _error_clim(result: Any) -> tuple[float, float]:
+def error_clim(result: Any) -> tuple[float, float]:
     tr = result.trace
     err = tr.error_mm[tr.welding] if tr.welding.any() else tr.error_mm
     top = float(np.nanmax(err)) if err.size else 1.0
@@ -362,9 +362,9 @@ def scene_plotter(
     -------
     pyvista.Plotter
     """
-    pv = _pyvista()
+    pv = pyvista_module()
     view = scene_view(scene, overrides)
-    plotter = pv.Plotter(off_screen=_off_screen(off_screen), window_size=list(window_size))
+    plotter = pv.Plotter(off_screen=off_screen_mode(off_screen), window_size=list(window_size))
     plotter.set_background("white")
     if view.mesh is not None:
         plotter.add_mesh(
@@ -376,7 +376,7 @@ def scene_plotter(
         )
     lift = _LIFT_MM * view.seam.normals if view.mesh is not None else 0.0  # off the surface
     plotter.add_mesh(
-        _polyline(pv, view.seam.points + lift), color=_SEAM_COLOR, line_width=3, name="seam"
+        polyline_mesh(pv, view.seam.points + lift), color=_SEAM_COLOR, line_width=3, name="seam"
     )
     whole_run = result is not None and at_mm is None
     tcp = view.tcp_at(0.5 * view.seam.length_mm if at_mm is None else at_mm)
@@ -410,7 +410,7 @@ def scene_plotter(
     marker = pv.Sphere(radius=0.012 * view.sensor.range_center_mm)
     if feature:
         plotter.add_mesh(
-            marker.translate(feature.point_world), color=_FEATURE_COLOR, name="seam-point"
+            marker.translate(feature.point_world), color=FEATURE_COLOR, name="seam-point"
         )
     if result is not None:
         _add_result(plotter, pv, view, result)
@@ -426,7 +426,7 @@ def scene_plotter(
     if (camera or ("cell" if view.is_arm else "sensor")) == "cell":
         camera_on_cell(plotter, view)
     else:
-        _camera_on_sensor(plotter, view.sensor, T, fit=whole_run)
+        camera_on_sensor(plotter, view.sensor, T, fit=whole_run)
     return plotter
 
 
@@ -443,7 +443,7 @@ def legend_entries(
     entries.append({"label": "torch (cone)", "color": _TORCH_COLOR, "face": "triangle"})
     if feature:
         entries.append(
-            {"label": "seam point found (yellow sphere)", "color": _FEATURE_COLOR, "face": "circle"}
+            {"label": "seam point found (yellow sphere)", "color": FEATURE_COLOR, "face": "circle"}
         )
     if profile is not None and profile.reason is not None:
         counts = np.bincount(profile.reason, minlength=len(Reason))
@@ -475,10 +475,10 @@ def add_view_legend(plotter: Any, entries: list[dict[str, str]]) -> Any:
 
 def _add_result(plotter: Any, pv: Any, view: SceneView, result: Any) -> None:
     plotter.add_mesh(
-        _torch_path(pv, view, result),
+        torch_path(pv, view, result),
         scalars="tracking error (mm)",
         cmap="plasma",
-        clim=_error_clim(result),
+        clim=error_clim(result),
         line_width=5,
         name="torch-path",
         scalar_bar_args={"title": "tracking error (mm)", "color": "black"},
@@ -494,7 +494,7 @@ def _add_result(plotter: Any, pv: Any, view: SceneView, result: Any) -> None:
         )
 
 
-def _camera_on_sensor(
+def camera_on_sensor(
     plotter: Any, sensor: LaserLineSensor, T_world_sensor: ArrayLike, fit: bool = False
 ) -> None:
     """Look at the stripe from ahead, beside and well above (steep enough to see into a 60 deg
@@ -577,7 +577,7 @@ def show(
     Path or None
         The PNG written when nothing could be shown (``runs/<scene name>-view.png``), else None.
     """
-    pv = _pyvista()
+    pv = pyvista_module()
     if in_notebook():
         plotter = scene_plotter(scene, at_mm=at_mm, result=result, off_screen=True, **kwargs)
         plotter.show(jupyter_backend=jupyter_backend())

@@ -123,7 +123,7 @@ def _vec(v: Any) -> FloatArray:
     return np.array(v.Coord() if hasattr(v, "Coord") else v, dtype=np.float64)
 
 
-def _unit(v: FloatArray) -> FloatArray:
+def unit_vector(v: FloatArray) -> FloatArray:
     n = float(np.linalg.norm(v))
     return v / n if n > 0 else v
 
@@ -169,7 +169,7 @@ def face_normal(face: TopoDS_Face, point: FloatArray) -> FloatArray:
     uv = ShapeAnalysis_Surface(surface).ValueOfUV(gp_Pnt(*point), ON_TOL_MM)
     pnt, vec = gp_Pnt(), gp_Vec()
     BRepGProp_Face(face).Normal(uv.X(), uv.Y(), pnt, vec)
-    return _unit(_vec(vec))
+    return unit_vector(_vec(vec))
 
 
 def planar_faces(shape: TopoDS_Shape) -> list[PlanarFace]:
@@ -182,7 +182,7 @@ def planar_faces(shape: TopoDS_Shape) -> list[PlanarFace]:
         pnt, vec = gp_Pnt(), gp_Vec()
         BRepGProp_Face(face).Normal(0.5 * (u0 + u1), 0.5 * (v0 + v1), pnt, vec)
         lo, hi = bounds(face)
-        out.append(PlanarFace(face, _unit(_vec(vec)), _vec(pnt), lo, hi))
+        out.append(PlanarFace(face, unit_vector(_vec(vec)), _vec(pnt), lo, hi))
     return out
 
 
@@ -291,7 +291,7 @@ def _ancestors(solid: TopoDS_Shape) -> TopTools_IndexedDataMapOfShapeListOfShape
     return ancestors
 
 
-def _inside_face(face: TopoDS_Face, point: FloatArray) -> bool:
+def inside_face(face: TopoDS_Face, point: FloatArray) -> bool:
     state = BRepClass_FaceClassifier(face, gp_Pnt(*point), ON_TOL_MM).State()
     return state in (TopAbs_IN, TopAbs_ON)
 
@@ -304,8 +304,8 @@ def _side(
     step_mm: float = SIDE_STEP_MM,
 ) -> float:
     """+1 if the face lies on the ``normal x tangent`` side of the point, else -1."""
-    direction = _unit(np.cross(normal, tangent))
-    inside = _inside_face(face, point + step_mm * direction)
+    direction = unit_vector(np.cross(normal, tangent))
+    inside = inside_face(face, point + step_mm * direction)
     return 1.0 if inside else -1.0
 
 
@@ -329,7 +329,7 @@ def sample_edge(
     for t in ts:
         curve.D1(t, pnt, vec)
         pts.append(_vec(pnt))
-        tangents.append(_unit(_vec(vec)))
+        tangents.append(unit_vector(_vec(vec)))
     points, tan = np.array(pts), np.array(tangents)
     return (points, tan) if forward else (points[::-1], -tan[::-1])
 
@@ -469,7 +469,7 @@ def _piece(
     # Step less than the region's width into it (parts far under a millimetre).
     lo, hi = bounds(region)
     step = min(SIDE_STEP_MM, 0.1 * float(np.sort(hi - lo)[1]))
-    s_in = _side(region, p_mid, n_a, t_mid, step) * _unit(np.cross(n_a, t_mid))
+    s_in = _side(region, p_mid, n_a, t_mid, step) * unit_vector(np.cross(n_a, t_mid))
     n = len(points)
     normals = np.empty((n, 2, 3))
     along = np.empty((n, 2, 3))
@@ -482,7 +482,7 @@ def _piece(
         at = points + offsets[k]
         normals[:, k] = [face_normal(wall, p) for p in at]
         sign = _side(wall, at[mid], normals[mid, k], t_mid, step)
-        along[:, k] = sign * _unit_rows(np.cross(normals[:, k], tangents))
+        along[:, k] = sign * unit_vector_rows(np.cross(normals[:, k], tangents))
     if ends == (True, False):
         seam = points  # on B's face, under A's wall
     elif ends == (False, True):
@@ -498,10 +498,10 @@ def _piece(
 def s_in_all(tangents: FloatArray, normal: FloatArray, s_mid: FloatArray, t_mid: FloatArray):
     """The in-region direction at every point, with the sign found at the middle point."""
     sign = 1.0 if float(np.cross(normal, t_mid) @ s_mid) > 0 else -1.0
-    return sign * _unit_rows(np.cross(normal, tangents))
+    return sign * unit_vector_rows(np.cross(normal, tangents))
 
 
-def _unit_rows(v: FloatArray) -> FloatArray:
+def unit_vector_rows(v: FloatArray) -> FloatArray:
     norms = np.linalg.norm(v, axis=1, keepdims=True)
     return v / np.where(norms > 0, norms, 1.0)
 

@@ -22,13 +22,13 @@ from seamtrack.workpiece.contacts import (
     CLASSIFY_TOL_MM,
     FloatArray,
     Piece,
-    _inside_face,
-    _unit,
-    _unit_rows,
     chain_edges,
     edges,
     face_normal,
+    inside_face,
     sample_edge,
+    unit_vector,
+    unit_vector_rows,
 )
 
 #: Bodies whose shared volume is below this fraction of the smaller one only touch (mm^3/mm^3).
@@ -59,12 +59,12 @@ def _showing_side(
 ) -> FloatArray | None:
     """The unit direction, square to the crossing line within ``face``, along which the face
     goes on outside the other body; None unless exactly one side of the line shows."""
-    across = _unit(np.cross(normal, tangent))
+    across = unit_vector(np.cross(normal, tangent))
     shows = []
     for sign in (1.0, -1.0):
         q = point + sign * CROSS_STEP_MM * across
         state = BRepClass3d_SolidClassifier(other, gp_Pnt(*q), CLASSIFY_TOL_MM).State()
-        shows.append(_inside_face(face, q) and state != TopAbs_IN)
+        shows.append(inside_face(face, q) and state != TopAbs_IN)
     if shows[0] == shows[1]:
         return None
     return across if shows[0] else -across
@@ -119,7 +119,7 @@ def crossing_pieces(
             shown = True
             for j, (face, other) in enumerate(((face_a, solids[1]), (face_b, solids[0]))):
                 normals[:, j] = [face_normal(face, p) for p in points]
-                across = _unit_rows(np.cross(normals[:, j], tangents))
+                across = unit_vector_rows(np.cross(normals[:, j], tangents))
                 signs: set[float] = set()
                 for k in probes:  # which side shows, decided where the line runs clear
                     side = _showing_side(face, points[k], normals[k, j], tangents[k], other)
