@@ -25,9 +25,9 @@ from seamtrack.bench.failure_kit import (
     MESH,
     SHORT,
     Entry,
-    _dataset,
-    _run,
-    _set,
+    dataset_args,
+    run_args,
+    set_args,
 )
 
 PLUGINS = """
@@ -154,11 +154,17 @@ GENERATED: dict[str, Any] = {"sheet.step": _no_solid, "apart.step": _apart}
 
 CATALOGUE: tuple[Entry, ...] = (
     # --- scene files and keys
-    Entry("unknown key", _run(*_set("sensor.frame_rte_hz=2")), field="sensor.frame_rte_hz"),
-    Entry("'yes' for a boolean", _run(*_set('sensor.quantize="yes"')), field="sensor.quantize"),
-    Entry("false for a number", _run(*_set("sensor.look_ahead_mm=false")), field="look_ahead"),
-    Entry("true for a seed", _run(*_set("simulation.seed=true")), field="simulation.seed"),
-    Entry("NaN speed", _run(*_set("simulation.welding_speed_mm_s=nan")), field="welding_speed"),
+    Entry("unknown key", run_args(*set_args("sensor.frame_rte_hz=2")), field="sensor.frame_rte_hz"),
+    Entry(
+        "'yes' for a boolean", run_args(*set_args('sensor.quantize="yes"')), field="sensor.quantize"
+    ),
+    Entry(
+        "false for a number", run_args(*set_args("sensor.look_ahead_mm=false")), field="look_ahead"
+    ),
+    Entry("true for a seed", run_args(*set_args("simulation.seed=true")), field="simulation.seed"),
+    Entry(
+        "NaN speed", run_args(*set_args("simulation.welding_speed_mm_s=nan")), field="welding_speed"
+    ),
     Entry("binary scene file", ("check", "binary.toml"), field="SCENE"),
     Entry("empty scene file", ("check", "empty.toml"), field="SCENE"),
     Entry("comment-only scene file", ("check", "comments.toml"), field="SCENE"),
@@ -166,43 +172,59 @@ CATALOGUE: tuple[Entry, ...] = (
     Entry("missing scene file", ("run", "missing.toml", "--out", "OUT"), field="SCENE"),
     Entry("unknown built-in scene", ("run", "paper-verifcation", "--out", "OUT"), field="SCENE"),
     # --- sizes that would not fit in memory
-    Entry("1e8 rays", _run(*_set("sensor.rays=100000000")), field="sensor.rays"),
-    Entry("unknown laser fan", _run(*_set('sensor.fan="optix"')), field="sensor.fan"),
+    Entry("1e8 rays", run_args(*set_args("sensor.rays=100000000")), field="sensor.rays"),
+    Entry("unknown laser fan", run_args(*set_args('sensor.fan="optix"')), field="sensor.fan"),
     Entry(
         "plane-section fan in float32",
-        _run(*_set('sensor.fan="section"', "sensor.refine_float64=false")),
+        run_args(*set_args('sensor.fan="section"', "sensor.refine_float64=false")),
         field="sensor.fan",
     ),
-    Entry("seam step 1e-6 mm", _run(*_set("seam.step_mm=1e-6")), field="seam.step_mm"),
-    Entry("seam length 1e9 mm", _run(*_set("seam.length_mm=1e9")), field="seam.step_mm"),
-    Entry("control period 1e-8 s", _run(*_set("robot.control_period_s=1e-8")), field="control"),
-    Entry("trace period 1e-9 s", _run(*_set("simulation.trace_period_s=1e-9")), field="trace"),
-    Entry("near-zero speed", _run(*_set("simulation.welding_speed_mm_s=1e-3")), field="control"),
+    Entry("seam step 1e-6 mm", run_args(*set_args("seam.step_mm=1e-6")), field="seam.step_mm"),
+    Entry("seam length 1e9 mm", run_args(*set_args("seam.length_mm=1e9")), field="seam.step_mm"),
+    Entry(
+        "control period 1e-8 s", run_args(*set_args("robot.control_period_s=1e-8")), field="control"
+    ),
+    Entry(
+        "trace period 1e-9 s", run_args(*set_args("simulation.trace_period_s=1e-9")), field="trace"
+    ),
+    Entry(
+        "near-zero speed",
+        run_args(*set_args("simulation.welding_speed_mm_s=1e-3")),
+        field="control",
+    ),
     Entry(
         "mesh tolerance 1e-9 mm",
-        ("run", *MESH, *_set("workpiece.tolerance_mm=1e-9"), "--out", "OUT"),
+        ("run", *MESH, *set_args("workpiece.tolerance_mm=1e-9"), "--out", "OUT"),
         field="workpiece.tolerance_mm",
     ),
     Entry(
         "mesh tolerance too fine for the part",
-        ("run", "paper-v-groove", *_set("workpiece.tolerance_mm=2e-4"), "--out", "OUT"),
+        ("run", "paper-v-groove", *set_args("workpiece.tolerance_mm=2e-4"), "--out", "OUT"),
         quick=False,
         field="workpiece.tolerance_mm",
     ),
     # --- seam files
     Entry(
         "NaN in a seam file",
-        _run(*_set('seam.source="csv"', 'seam.file="nan.csv"')),
+        run_args(*set_args('seam.source="csv"', 'seam.file="nan.csv"')),
         field="seam.file",
     ),
-    Entry("one-point seam", _run(*_set('seam.source="csv"', 'seam.file="one.csv"')), field="seam"),
-    Entry("text in a seam file", _run(*_set('seam.source="csv"', 'seam.file="text.csv"'))),
-    Entry("missing seam file", _run(*_set('seam.source="csv"', 'seam.file="nope.csv"'))),
-    Entry("points source without points", _run(*_set('seam.source="points"')), field="points"),
+    Entry(
+        "one-point seam",
+        run_args(*set_args('seam.source="csv"', 'seam.file="one.csv"')),
+        field="seam",
+    ),
+    Entry("text in a seam file", run_args(*set_args('seam.source="csv"', 'seam.file="text.csv"'))),
+    Entry("missing seam file", run_args(*set_args('seam.source="csv"', 'seam.file="nope.csv"'))),
+    Entry(
+        "points source without points", run_args(*set_args('seam.source="points"')), field="points"
+    ),
     # --- free-form sections
     *(
         Entry(
-            f"stripe_noise {kv}", _run(*_set(f"sensor.stripe_noise.{kv}")), field=kv.split("=")[0]
+            f"stripe_noise {kv}",
+            run_args(*set_args(f"sensor.stripe_noise.{kv}")),
+            field=kv.split("=")[0],
         )
         for kv in (
             "range_sigma_mm=-1",
@@ -217,98 +239,126 @@ CATALOGUE: tuple[Entry, ...] = (
     *(
         Entry(
             f"tracker.params {kv}",
-            _run(*_set('tracker.name="trajectory"', f"tracker.params.{kv}")),
+            run_args(*set_args('tracker.name="trajectory"', f"tracker.params.{kv}")),
             field=kv.split("=")[0],
         )
         for kv in ("gain_1_s=[1,2]", 'gain_1_s="x"', "bridge_mm=-inf", "use_capture_pose=1")
     ),
-    Entry("unknown tracker", _run(*_set('tracker.name="nope"')), field="tracker.name"),
-    Entry("missing tracker module", _run(*_set('tracker.name="nomod:X"')), field="tracker.name"),
-    Entry("negative radius", _run(*_set("tracker.radius_mm=-1")), field="tracker.radius_mm"),
+    Entry("unknown tracker", run_args(*set_args('tracker.name="nope"')), field="tracker.name"),
+    Entry(
+        "missing tracker module",
+        run_args(*set_args('tracker.name="nomod:X"')),
+        field="tracker.name",
+    ),
+    Entry(
+        "negative radius", run_args(*set_args("tracker.radius_mm=-1")), field="tracker.radius_mm"
+    ),
     # --- impossible optics and geometry
-    Entry("unknown preset", _run(*_set('sensor.preset="nope"')), field="preset"),
-    Entry("impossible field of view", _run(*_set("sensor.fov_near_mm=100")), field="sensor"),
-    Entry("seam out of reach", _run(*_set("seam.offset_mm=[500, 0, 0]")), field="seam"),
-    Entry("frame rate below control", _run(*_set("sensor.frame_rate_hz=5000")), field="control"),
+    Entry("unknown preset", run_args(*set_args('sensor.preset="nope"')), field="preset"),
+    Entry(
+        "impossible field of view", run_args(*set_args("sensor.fov_near_mm=100")), field="sensor"
+    ),
+    Entry("seam out of reach", run_args(*set_args("seam.offset_mm=[500, 0, 0]")), field="seam"),
+    Entry(
+        "frame rate below control",
+        run_args(*set_args("sensor.frame_rate_hz=5000")),
+        field="control",
+    ),
     # --- articulated arms
-    Entry("unknown robot model", _run(*_set('robot.model="ur10"')), field="robot.model"),
-    Entry("URDF that does not parse", _run(*_set('robot.urdf="broken.urdf"')), field="robot.urdf"),
+    Entry("unknown robot model", run_args(*set_args('robot.model="ur10"')), field="robot.model"),
+    Entry(
+        "URDF that does not parse",
+        run_args(*set_args('robot.urdf="broken.urdf"')),
+        field="robot.urdf",
+    ),
     Entry(
         "seam point out of an arm's reach",
-        _run(*_set(*ARM[:2], "robot.base_origin_mm=[-1400,-700,0]")),
+        run_args(*set_args(*ARM[:2], "robot.base_origin_mm=[-1400,-700,0]")),
         field="seam",
     ),
     Entry(
         "sensor mounted inside the part",
-        _run(*_set(*ARM, "robot.tool.sensor_xyz_mm=[10,0,-60]")),
+        run_args(*set_args(*ARM, "robot.tool.sensor_xyz_mm=[10,0,-60]")),
         field="robot.tool.sensor_xyz_mm",
     ),
-    Entry("servo gain that rings", _run(*_set("robot.servo_gain_1_s=900")), field="servo_gain"),
+    Entry(
+        "servo gain that rings", run_args(*set_args("robot.servo_gain_1_s=900")), field="servo_gain"
+    ),
     # --- the camera (image mode)
-    Entry("f-number 0", _run(*_set("sensor.camera.f_number=0")), field="sensor.camera.f_number"),
+    Entry(
+        "f-number 0",
+        run_args(*set_args("sensor.camera.f_number=0")),
+        field="sensor.camera.f_number",
+    ),
     Entry(
         "f-number -2.8",
-        ("render", *CAMERA, *_set("sensor.camera.f_number=-2.8")),
+        ("render", *CAMERA, *set_args("sensor.camera.f_number=-2.8")),
         field="sensor.camera.f_number",
     ),
     Entry(
         "wavelength 150 nm",
-        _run(*_set("sensor.camera.wavelength_nm=150")),
+        run_args(*set_args("sensor.camera.wavelength_nm=150")),
         field="sensor.camera.wavelength_nm",
     ),
     Entry(
         "wavelength 2500 nm",
-        ("render", *CAMERA, *_set("sensor.camera.wavelength_nm=2500")),
+        ("render", *CAMERA, *set_args("sensor.camera.wavelength_nm=2500")),
         field="sensor.camera.wavelength_nm",
     ),
     Entry(
         "line wider than the field",
-        _run(*_set("sensor.camera.line_thickness_mm=30")),
+        run_args(*set_args("sensor.camera.line_thickness_mm=30")),
         field="sensor.camera.line_thickness_mm",
     ),
     Entry(
         "roi off the chip",
-        _run(*_set("sensor.camera.rows=100", "sensor.camera.roi=[0, 200, 0, 50]")),
+        run_args(*set_args("sensor.camera.rows=100", "sensor.camera.roi=[0, 200, 0, 50]")),
         field="sensor.camera.roi",
     ),
     Entry(
         "unknown peak detector",
-        _run(*_set('sensor.camera.method="peak"')),
+        run_args(*set_args('sensor.camera.method="peak"')),
         field="sensor.camera.method",
     ),
     Entry(
         "unknown material",
-        ("render", *CAMERA, *_set('workpiece.material="chrome"')),
+        ("render", *CAMERA, *set_args('workpiece.material="chrome"')),
         field="workpiece.material",
     ),
-    Entry("image mode without a mesh", _run(*_set('sensor.source="image"')), field="sensor.source"),
+    Entry(
+        "image mode without a mesh",
+        run_args(*set_args('sensor.source="image"')),
+        field="sensor.source",
+    ),
     Entry(
         "render a seam-mode scene",
         ("render", "paper-verification", "--at", "10"),
         field="sensor.mode",
     ),
-    Entry("unknown real sensor", _run(*_set('sensor.preset="gocator-2331"')), field="preset"),
+    Entry(
+        "unknown real sensor", run_args(*set_args('sensor.preset="gocator-2331"')), field="preset"
+    ),
     # --- CAD
     Entry(
         "unknown CAD parameter",
-        ("run", *MESH, *_set("workpiece.params.bogus_mm=1"), "--out", "OUT"),
+        ("run", *MESH, *set_args("workpiece.params.bogus_mm=1"), "--out", "OUT"),
         quick=False,
         field="workpiece.params.bogus_mm",
     ),
     Entry(
         "boolean CAD parameter",
-        ("run", *MESH, *_set("workpiece.params.groove_angle_deg=true"), "--out", "OUT"),
+        ("run", *MESH, *set_args("workpiece.params.groove_angle_deg=true"), "--out", "OUT"),
         quick=False,
         field="workpiece.params.groove_angle_deg",
     ),
     Entry(
         "missing CAD script",
-        ("run", *MESH, *_set('workpiece.script="missing_part.py"'), "--out", "OUT"),
+        ("run", *MESH, *set_args('workpiece.script="missing_part.py"'), "--out", "OUT"),
         field="workpiece.script",
     ),
     Entry(
         "unknown extractor",
-        ("run", *MESH, *_set('extractor.name="nope"'), "--out", "OUT"),
+        ("run", *MESH, *set_args('extractor.name="nope"'), "--out", "OUT"),
         quick=False,
         field="extractor.name",
     ),
@@ -316,7 +366,7 @@ CATALOGUE: tuple[Entry, ...] = (
     *(
         Entry(
             f"tracker {cls}",
-            _run(*SHORT, *_set(f'tracker.name="bad_plugins:{cls}"')),
+            run_args(*SHORT, *set_args(f'tracker.name="bad_plugins:{cls}"')),
             field="tracker.name",
         )
         for cls in (
@@ -332,7 +382,7 @@ CATALOGUE: tuple[Entry, ...] = (
     *(
         Entry(
             f"extractor {cls}",
-            ("run", *MESH, *_set(f'extractor.name="bad_plugins:{cls}"'), "--out", "OUT"),
+            ("run", *MESH, *set_args(f'extractor.name="bad_plugins:{cls}"'), "--out", "OUT"),
             quick=False,
             field="extractor.name",
         )
@@ -401,7 +451,7 @@ CATALOGUE: tuple[Entry, ...] = (
     Entry("unknown benchmark", ("bench", "nope", "--out", "OUT"), field="bench"),
     Entry(
         "extractor.expect with an unknown key",
-        ("run", *MESH, *_set("extractor.expect={angel_deg=60}"), "--out", "OUT"),
+        ("run", *MESH, *set_args("extractor.expect={angel_deg=60}"), "--out", "OUT"),
         field="extractor.expect.angel_deg",
     ),
     Entry(
@@ -409,7 +459,7 @@ CATALOGUE: tuple[Entry, ...] = (
         (
             "run",
             *MESH,
-            *_set('extractor.name="generic"', "extractor.expect={angle_deg=60}"),
+            *set_args('extractor.name="generic"', "extractor.expect={angle_deg=60}"),
             "--out",
             "OUT",
         ),
@@ -420,7 +470,7 @@ CATALOGUE: tuple[Entry, ...] = (
         (
             "run",
             *MESH,
-            *_set('extractor.name="groove"', 'extractor.params={reference="middle"}'),
+            *set_args('extractor.name="groove"', 'extractor.params={reference="middle"}'),
             "--out",
             "OUT",
         ),
@@ -439,7 +489,7 @@ CATALOGUE: tuple[Entry, ...] = (
     ),
     Entry(
         "weldment scene, STEP without solids",
-        ("run", "weld.toml", *_set('workpiece.step="sheet.step"'), "--out", "OUT"),
+        ("run", "weld.toml", *set_args('workpiece.step="sheet.step"'), "--out", "OUT"),
         field="workpiece.step",
     ),
     Entry(
@@ -449,12 +499,12 @@ CATALOGUE: tuple[Entry, ...] = (
     ),
     Entry(
         "workpiece.seam naming no seam",
-        ("run", "weldment-bracket", *_set('workpiece.seam="s99"'), "--out", "OUT"),
+        ("run", "weldment-bracket", *set_args('workpiece.seam="s99"'), "--out", "OUT"),
         field="workpiece.seam",
     ),
     Entry(
         "groove weldx does not define",
-        ("run", "weldx-v-groove", *_set('workpiece.groove.type="ZGroove"'), "--out", "OUT"),
+        ("run", "weldx-v-groove", *set_args('workpiece.groove.type="ZGroove"'), "--out", "OUT"),
         field="workpiece.groove.type",
     ),
     Entry(
@@ -462,7 +512,7 @@ CATALOGUE: tuple[Entry, ...] = (
         (
             "run",
             "weldx-v-groove",
-            *_set('workpiece.groove={type="VGroove", t_mm=10}'),
+            *set_args('workpiece.groove={type="VGroove", t_mm=10}'),
             "--out",
             "OUT",
         ),
@@ -475,12 +525,14 @@ CATALOGUE: tuple[Entry, ...] = (
     ),
     Entry("unknown sensor preset", ("sensor", "--preset", "nope"), field="preset"),
     # --- seamtrack dataset
-    Entry("dataset range min > max", _dataset("dataset_min_max.toml"), field="joint.gap_mm"),
-    Entry("dataset unknown joint family", _dataset("dataset_family.toml"), field="families.1"),
-    Entry("dataset unknown spec key", _dataset("dataset_key.toml"), field="sensor.tilt_degs"),
-    Entry("dataset --n 0", _dataset("dataset.toml", n="0"), field="--n"),
-    Entry("dataset --n -5", _dataset("dataset.toml", n="-5"), field="--n"),
-    Entry("dataset --workers 0", (*_dataset("dataset.toml"), "--workers", "0"), field="--workers"),
+    Entry("dataset range min > max", dataset_args("dataset_min_max.toml"), field="joint.gap_mm"),
+    Entry("dataset unknown joint family", dataset_args("dataset_family.toml"), field="families.1"),
+    Entry("dataset unknown spec key", dataset_args("dataset_key.toml"), field="sensor.tilt_degs"),
+    Entry("dataset --n 0", dataset_args("dataset.toml", n="0"), field="--n"),
+    Entry("dataset --n -5", dataset_args("dataset.toml", n="-5"), field="--n"),
+    Entry(
+        "dataset --workers 0", (*dataset_args("dataset.toml"), "--workers", "0"), field="--workers"
+    ),
     Entry(
         "dataset output is a file",
         ("dataset", "dataset.toml", "--n", "8", "--out", "a_file"),
@@ -491,21 +543,25 @@ CATALOGUE: tuple[Entry, ...] = (
         ("dataset", "dataset.toml", "--n", "8", "--out", "other_dataset"),
         field="--out",
     ),
-    Entry("dataset unknown material", _dataset("dataset_material.toml"), field="part.materials.0"),
     Entry(
-        "dataset images chunk too large", _dataset("dataset_image_chunk.toml"), field="chunk_size"
+        "dataset unknown material", dataset_args("dataset_material.toml"), field="part.materials.0"
+    ),
+    Entry(
+        "dataset images chunk too large",
+        dataset_args("dataset_image_chunk.toml"),
+        field="chunk_size",
     ),
     Entry(
         "dataset images line too thick",
-        _dataset("dataset_line.toml"),
+        dataset_args("dataset_line.toml"),
         field="camera.line_thickness_mm",
     ),
     Entry(
         "dataset camera bit depth 17",
-        (*_dataset("dataset_bits.toml"), "--images"),
+        (*dataset_args("dataset_bits.toml"), "--images"),
         field="camera.bit_depth",
     ),
-    Entry("dataset missing spec file", _dataset("missing.toml"), field="SPEC"),
+    Entry("dataset missing spec file", dataset_args("missing.toml"), field="SPEC"),
     # --- the newer features, each area in its own module
     *failure_inputs_camera.ENTRIES,
     *failure_inputs_arms.ENTRIES,

@@ -6,7 +6,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 
-from seamtrack.bench.failure_kit import ARM, SHORT, Entry, _run, _set
+from seamtrack.bench.failure_kit import ARM, SHORT, Entry, run_args, set_args
 
 #: The KUKA KR 16 where it reaches the paper's seam (the arm entries' other model).
 KR16 = ('robot.model="kr16"', 'tracker.name="trajectory"', "robot.base_origin_mm=[-700,0,-300]")
@@ -104,11 +104,11 @@ def _fixed_tail(count: int) -> str:
 
 
 def _urdf(name: str) -> tuple[str, ...]:
-    return _run(*SHORT, *_set('tracker.name="trajectory"', f'robot.urdf="{name}"'))
+    return run_args(*SHORT, *set_args('tracker.name="trajectory"', f'robot.urdf="{name}"'))
 
 
 def _arm(*pairs: str, model: tuple[str, ...] = ARM) -> tuple[str, ...]:
-    return _run(*SHORT, *_set(*model, *pairs))
+    return run_args(*SHORT, *set_args(*model, *pairs))
 
 
 _ACCEL = "robot.joint_acceleration_max_deg_s2"
@@ -138,7 +138,7 @@ ENTRIES: tuple[Entry, ...] = (
           field="robot.servo_gain_1_s"),
     Entry("servo gains [50,true] on a UR10e", _arm("robot.servo_gain_1_s=[50,true]"),
           field="robot.servo_gain_1_s.1"),
-    Entry("servo gains [] on the gantry", _run(*SHORT, *_set("robot.servo_gain_1_s=[]")),
+    Entry("servo gains [] on the gantry", run_args(*SHORT, *set_args("robot.servo_gain_1_s=[]")),
           field="robot.servo_gain_1_s"),
     Entry("4 servo gains on a KR 16", _arm("robot.servo_gain_1_s=[50,50,50,50]", model=KR16),
           field="robot.servo_gain_1_s"),
@@ -156,7 +156,7 @@ ENTRIES: tuple[Entry, ...] = (
           field="robot.tool.tcp_rpy_deg"),
     Entry("arm base 1e300 mm away", _arm("robot.base_origin_mm=[1e300,0,0]"),
           field="robot.base_origin_mm"),
-    Entry("gantry base 1e9 mm away", _run(*SHORT, *_set("robot.base_origin_mm=[1e9,0,0]")),
+    Entry("gantry base 1e9 mm away", run_args(*SHORT, *set_args("robot.base_origin_mm=[1e9,0,0]")),
           field="robot.base_origin_mm"),
     Entry("base turned 1e9 deg", _arm("robot.base_rotation_deg=[0,0,1e9]"),
           field="robot.base_rotation_deg"),

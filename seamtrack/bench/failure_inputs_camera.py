@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from seamtrack.bench.failure_kit import CAMERA, MESH, Entry, _dataset, _run, _set
+from seamtrack.bench.failure_kit import CAMERA, MESH, Entry, dataset_args, run_args, set_args
 
 #: Files written into the workspace (name -> bytes).
 FILES: dict[str, bytes] = {
@@ -42,21 +42,21 @@ F = "sensor.camera."
 
 def _render(*pairs: str) -> tuple[str, ...]:
     """``seamtrack render v-groove-camera --at 10 --out OUT/image.png --set ...``"""
-    return ("render", *CAMERA, *_set(*pairs))
+    return ("render", *CAMERA, *set_args(*pairs))
 
 
 def _image_run(*pairs: str) -> tuple[str, ...]:
     """``seamtrack run v-groove-camera --set ... --out OUT``"""
-    return _run("v-groove-camera", *_set(*pairs))
+    return run_args("v-groove-camera", *set_args(*pairs))
 
 
 def _check(*pairs: str) -> tuple[str, ...]:
     """``seamtrack check v-groove-camera --set ...``"""
-    return ("check", "v-groove-camera", *_set(*pairs))
+    return ("check", "v-groove-camera", *set_args(*pairs))
 
 
 #: paper-v-groove (a mesh scene) in image mode: the camera on another scene.
-IMAGE_MESH = (*MESH, *_set('sensor.source="image"'))
+IMAGE_MESH = (*MESH, *set_args('sensor.source="image"'))
 
 ENTRIES: tuple[Entry, ...] = (
     # --- issue 23.1: camera values checked for size, not only sign
@@ -65,7 +65,7 @@ ENTRIES: tuple[Entry, ...] = (
     Entry("camera f-number 0.5", _check(f"{F}f_number=0.5"), field=f"{F}f_number"),
     Entry(
         "camera f-number 100 on paper-v-groove",
-        ("run", *IMAGE_MESH, *_set(f"{F}f_number=100"), "--out", "OUT"),
+        ("run", *IMAGE_MESH, *set_args(f"{F}f_number=100"), "--out", "OUT"),
         field=f"{F}f_number",
     ),
     Entry("camera focal length 1e-9 mm", _render(f"{F}focal_length_mm=1e-9"), field="focal_length"),
@@ -84,7 +84,7 @@ ENTRIES: tuple[Entry, ...] = (
         (
             "run",
             *IMAGE_MESH,
-            *_set('sensor.preset="gocator-2340"', f"{F}ambient=2"),
+            *set_args('sensor.preset="gocator-2340"', f"{F}ambient=2"),
             "--out",
             "OUT",
         ),
@@ -159,71 +159,73 @@ ENTRIES: tuple[Entry, ...] = (
     # --- the same values through dataset specs: refused before dataset.json or spec.toml
     Entry(
         "dataset --images camera f-number 1e9",
-        (*_dataset("camera_f_number.toml"), "--images"),
+        (*dataset_args("camera_f_number.toml"), "--images"),
         field="camera.f_number",
     ),
     Entry(
-        "dataset camera f-number 1e4", _dataset("camera_f_number_1e4.toml"), field="camera.f_number"
+        "dataset camera f-number 1e4",
+        dataset_args("camera_f_number_1e4.toml"),
+        field="camera.f_number",
     ),
     Entry(
         "dataset --images full well 1e-300",
-        (*_dataset("camera_full_well.toml"), "--images"),
+        (*dataset_args("camera_full_well.toml"), "--images"),
         field="camera.full_well_e",
     ),
     Entry(
         "dataset images full well 1e300",
-        _dataset("camera_full_well_big.toml"),
+        dataset_args("camera_full_well_big.toml"),
         field="camera.full_well_e",
     ),
     Entry(
         "dataset --images ambient 1e300",
-        (*_dataset("camera_ambient.toml"), "--images"),
+        (*dataset_args("camera_ambient.toml"), "--images"),
         field="camera.ambient",
     ),
     Entry(
         "dataset --images exposure 1e300",
-        (*_dataset("camera_exposure.toml"), "--images"),
+        (*dataset_args("camera_exposure.toml"), "--images"),
         field="camera.exposure",
     ),
     Entry(
         "dataset --images read noise 1e300",
-        (*_dataset("camera_read_noise.toml"), "--images"),
+        (*dataset_args("camera_read_noise.toml"), "--images"),
         field="camera.read_noise_e",
     ),
     Entry(
         "dataset --images line 1e-9 mm thick",
-        (*_dataset("camera_thickness.toml"), "--images"),
+        (*dataset_args("camera_thickness.toml"), "--images"),
         field="camera.line_thickness_mm",
     ),
     Entry(
         "dataset wavelength 100 nm",
-        _dataset("camera_wavelength.toml"),
+        dataset_args("camera_wavelength.toml"),
         field="camera.wavelength_nm",
     ),
     Entry(
         "dataset images 4096 x 4096 at f/0.95",
-        _dataset("camera_fast_lens.toml"),
+        dataset_args("camera_fast_lens.toml"),
         field="camera.rows",
     ),
     # --- issue 23.8: the seam within the sensor's range and field of view
     Entry(
         "dataset offsets of 1000 mm",
-        _dataset("offsets_1000.toml"),
+        dataset_args("offsets_1000.toml"),
         field="sensor.standoff_offset_mm",
     ),
     Entry(
         "dataset lateral offset 50 mm",
-        _dataset("offsets_lateral.toml"),
+        dataset_args("offsets_lateral.toml"),
         field="sensor.lateral_offset_mm",
     ),
     Entry(
         "dataset images standoff 45 mm beyond the range",
-        _dataset("offsets_far.toml"),
+        dataset_args("offsets_far.toml"),
         field="sensor.standoff_offset_mm",
     ),
     Entry(
         "dataset standoff beyond a small preset's range",
-        _dataset("offsets_small_preset.toml"),
+        dataset_args("offsets_small_preset.toml"),
         field="sensor.standoff_offset_mm",
     ),
 )

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from seamtrack.bench.failure_kit import Entry, _run, _set
+from seamtrack.bench.failure_kit import Entry, run_args, set_args
 
 _PLANNERS = '''\
 """Planners that fail, for the bad-input catalogue."""
@@ -56,11 +56,11 @@ FILES: dict[str, bytes] = {"bad_planners.py": _PLANNERS.encode()}
 #: Files made when the workspace is (none here).
 GENERATED: dict[str, Any] = {}
 
-JOB = ("multipass-v-groove", *_set("workpiece.params.seam_length_mm=20.0"))
+JOB = ("multipass-v-groove", *set_args("workpiece.params.seam_length_mm=20.0"))
 
 
 def _job(*pairs: str) -> tuple[str, ...]:
-    return _run(*JOB, *_set(*pairs))
+    return run_args(*JOB, *set_args(*pairs))
 
 
 ENTRIES: tuple[Entry, ...] = (

@@ -15,7 +15,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from seamtrack.bench.failure_kit import Entry, _run, _set
+from seamtrack.bench.failure_kit import Entry, run_args, set_args
 
 #: Files written into the workspace (name -> bytes).
 FILES: dict[str, bytes] = {}
@@ -67,7 +67,9 @@ _GROOVE = ("weldx-v-groove", "--set", "workpiece.params.seam_length_mm=20")
 
 def _groove(field: str, *pairs: str, name: str = "") -> Entry:
     """A groove run with the given ``--set`` pairs, its error naming ``field``."""
-    return Entry(name or f"groove {' '.join(pairs)}", _run(*_GROOVE, *_set(*pairs)), field=field)
+    return Entry(
+        name or f"groove {' '.join(pairs)}", run_args(*_GROOVE, *set_args(*pairs)), field=field
+    )
 
 
 def _table(groove: str, field: str, name: str) -> Entry:
@@ -88,7 +90,7 @@ WELDMENTS: tuple[Entry, ...] = (
     _seams("seams, plates facing across a rod", "rod_in_gap.step"),
     Entry(
         "weldment scene, two coincident boxes",
-        ("run", "weld.toml", *_set('workpiece.step="coincident.step"'), "--out", "OUT"),
+        ("run", "weld.toml", *set_args('workpiece.step="coincident.step"'), "--out", "OUT"),
         field="workpiece.step",
     ),
     Entry(

@@ -7,7 +7,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from pathlib import Path
 
-from seamtrack.bench.failure_kit import SHORT, Entry, _run
+from seamtrack.bench.failure_kit import SHORT, Entry, run_args
 
 #: Files written into the workspace (name -> bytes).
 FILES: dict[str, bytes] = {
@@ -69,31 +69,33 @@ def _bench(recording: str, *extra: str) -> tuple[str, ...]:
 
 
 ENTRIES: tuple[Entry, ...] = (
-    Entry("record to a .txt name", _run(*SHORT, "--record", "run.txt"), field="--record"),
-    Entry("record onto a folder", _run(*SHORT, "--record", "a_folder.mcap"), field="--record"),
-    Entry("record under a file", _run(*SHORT, "--record", "a_file/run.mcap"), field="--record"),
+    Entry("record to a .txt name", run_args(*SHORT, "--record", "run.txt"), field="--record"),
+    Entry("record onto a folder", run_args(*SHORT, "--record", "a_folder.mcap"), field="--record"),
+    Entry("record under a file", run_args(*SHORT, "--record", "a_file/run.mcap"), field="--record"),
     Entry(
         "record onto an earlier recording",
-        _run(*SHORT, "--record", "one_cloud.mcap"),
+        run_args(*SHORT, "--record", "one_cloud.mcap"),
         field="--record",
     ),
     Entry(
         "record with --force onto a file that is not MCAP",
-        _run(*SHORT, "--record", "notes.mcap", "--force"),
+        run_args(*SHORT, "--record", "notes.mcap", "--force"),
         field="--record",
     ),
     Entry(
         "record epoch not a number",
-        _run(*SHORT, "--record", "new.mcap", "--record-epoch", "yesterday"),
+        run_args(*SHORT, "--record", "new.mcap", "--record-epoch", "yesterday"),
         field="--record-epoch",
     ),
     Entry(
         "record epoch past 2038",
-        _run(*SHORT, "--record", "new.mcap", "--record-epoch", "3e9"),
+        run_args(*SHORT, "--record", "new.mcap", "--record-epoch", "3e9"),
         field="--record-epoch",
     ),
     Entry(
-        "record epoch without --record", _run(*SHORT, "--record-epoch", "0"), field="--record-epoch"
+        "record epoch without --record",
+        run_args(*SHORT, "--record-epoch", "0"),
+        field="--record-epoch",
     ),
     Entry("bench a recording that is not MCAP", _bench("garbage.mcap"), field="--real"),
     Entry("bench a recording without profiles", _bench("clock_only.mcap"), field="--real"),

@@ -16,12 +16,12 @@ import numpy as np
 from seamtrack.bench.failure_kit import Entry
 
 
-def _set(*pairs: str) -> tuple[str, ...]:
+def set_args(*pairs: str) -> tuple[str, ...]:
     """``--set`` before each pair (as failure_kit's, kept here: no private name imported)."""
     return tuple(arg for pair in pairs for arg in ("--set", pair))
 
 
-def _run(*extra: str) -> tuple[str, ...]:
+def run_args(*extra: str) -> tuple[str, ...]:
     return ("run", *extra, "--out", "OUT")
 
 
@@ -87,10 +87,12 @@ def _real(folder: str) -> tuple[str, ...]:
 
 ENTRIES: tuple[Entry, ...] = (
     # --- item 16: units and labels
-    Entry("seam CSV in metres", _run(*_set('seam.source="csv"', 'seam.file="seam_in_metres.csv"')),
+    Entry("seam CSV in metres",
+          run_args(*set_args('seam.source="csv"', 'seam.file="seam_in_metres.csv"')),
           field="seam.file"),
     Entry("seam points in metres",
-          _run(*_set('seam.source="points"', "seam.points_mm=[[0,0,0],[0.2,0,0],[0.4,0.01,0]]")),
+          run_args(*set_args('seam.source="points"',
+                             "seam.points_mm=[[0,0,0],[0.2,0,0],[0.4,0.01,0]]")),
           field="seam.points_mm"),
     Entry("real-profile set in metres", _real("real_in_metres"), field="--real"),
     Entry("real-profile labels in metres", _real("real_labels_in_metres"), field="--real"),
@@ -111,24 +113,24 @@ ENTRIES: tuple[Entry, ...] = (
           field="--scheduler"),
     # --- item 19: values that complete a wrong run
     Entry("mesh tolerance 1e308 mm on pipe-on-plate",
-          ("run", "pipe-on-plate", *_set("workpiece.tolerance_mm=1e308"), "--out", "OUT"),
+          ("run", "pipe-on-plate", *set_args("workpiece.tolerance_mm=1e308"), "--out", "OUT"),
           field="workpiece.tolerance_mm"),
-    Entry("seam rotation 1e308 deg", _run(*_set("seam.rotation_deg=[1e308,0,0]")),
+    Entry("seam rotation 1e308 deg", run_args(*set_args("seam.rotation_deg=[1e308,0,0]")),
           field="seam.rotation_deg"),
     Entry("weld at 1e6 mm/s with the axis limits raised",
-          _run(*_set("robot.velocity_max_mm_s=[1e4,1e4,1e4]",
+          run_args(*set_args("robot.velocity_max_mm_s=[1e4,1e4,1e4]",
                      "simulation.welding_speed_mm_s=1e6")),
           field="simulation.welding_speed_mm_s"),
-    Entry("axis speed limit 1e7 mm/s", _run(*_set("robot.velocity_max_mm_s=[1e7,10,10]")),
+    Entry("axis speed limit 1e7 mm/s", run_args(*set_args("robot.velocity_max_mm_s=[1e7,10,10]")),
           field="robot.velocity_max_mm_s"),
     Entry("sensor that never sees the seam",
-          ("check", "paper-verification", *_set("sensor.range_mm=300")),
+          ("check", "paper-verification", *set_args("sensor.range_mm=300")),
           field="sensor.range_mm"),
     # --- item 20: messages that blamed the wrong field
-    Entry("welding speed 1e-300 mm/s", _run(*_set("simulation.welding_speed_mm_s=1e-300")),
+    Entry("welding speed 1e-300 mm/s", run_args(*set_args("simulation.welding_speed_mm_s=1e-300")),
           field="simulation.welding_speed_mm_s"),
-    Entry("frame rate 1e308 Hz", _run(*_set("sensor.frame_rate_hz=1e308")),
+    Entry("frame rate 1e308 Hz", run_args(*set_args("sensor.frame_rate_hz=1e308")),
           field="sensor.frame_rate_hz"),
     Entry("ragged seam CSV row",
-          _run(*_set('seam.source="csv"', 'seam.file="ragged.csv"')), field="seam.file"),
+          run_args(*set_args('seam.source="csv"', 'seam.file="ragged.csv"')), field="seam.file"),
 )  # fmt: skip

@@ -27,16 +27,16 @@ class Entry:
     field: str = ""  # the field the error line must name (a substring of it)
 
 
-def _set(*pairs: str) -> tuple[str, ...]:
+def set_args(*pairs: str) -> tuple[str, ...]:
     out: list[str] = []
     for pair in pairs:
         out += ["--set", pair]
     return tuple(out)
 
 
-def _run(*extra: str) -> tuple[str, ...]:
+def run_args(*extra: str) -> tuple[str, ...]:
     return ("run", *extra, "--out", "OUT")
 
 
-def _dataset(spec: str, n: str = "8") -> tuple[str, ...]:
+def dataset_args(spec: str, n: str = "8") -> tuple[str, ...]:
     return ("dataset", spec, "--n", n, "--out", "OUT")

@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Any
 
 from seamtrack.bench.common import machine_info
-from seamtrack.bench.failure_inputs import CATALOGUE, Entry, _set, workspace
+from seamtrack.bench.failure_inputs import CATALOGUE, Entry, set_args, workspace
 from seamtrack.simulation.compiling import MESSAGE as COMPILING_MESSAGE
 
 __all__ = [
@@ -101,7 +101,7 @@ def run_measured(
 #: The largest run the size limits allow: 3.99e6 control ticks (0.2 ms over 799 s), a slow
 #: weld that lasts to its time limit. Measured for its memory, not refused.
 LARGEST_RUN = (
-    "run", *_set("robot.control_period_s=2e-4", "simulation.time_limit_s=799",
+    "run", *set_args("robot.control_period_s=2e-4", "simulation.time_limit_s=799",
                  "simulation.welding_speed_mm_s=0.4", "simulation.trace_period_s=0.01"),
     "--out", "OUT", "--no-plot", "-q",
 )  # fmt: skip
