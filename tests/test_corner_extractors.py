@@ -1,6 +1,6 @@
 """The corner extractors' (fillet, outside corner) fast path, ``extractors._corner``, against
-their Python steps (``_Base._arms`` and ``_two_faces``, which build a Line per face): the same
-feature (point, world point, reason, confidence) and the same explained share, bit for bit,
+their Python steps (``ExtractorBase._arms`` and ``_two_faces``, which build a Line per face): the
+same feature (point, world point, reason, confidence) and the same explained share, bit for bit,
 on noisy, reflected, tilted and wrong-family profiles; and the seam point of a noise-free
 fillet within the sensor's resolution of the faces' analytic corner."""
 

@@ -11,7 +11,7 @@ import pytest
 from seamtrack.errors import PluginError
 from seamtrack.features.expect import Expect, parse_expect
 from seamtrack.features.extractors import extractor
-from seamtrack.features.synthetic import _line_in_laser_plane, synthetic_profile
+from seamtrack.features.synthetic import line_in_laser_plane, synthetic_profile
 from seamtrack.sensing.sensor import preset
 
 SENSOR = preset("paper")
@@ -83,7 +83,7 @@ def test_v_groove_expected_without_gap_reports_the_bevels_intersection():
     profile, truth = _v(gap_mm=1.0)
     g, half = 1.0, math.radians(30.0)
     apex_joint = np.array([[0.0, 7.0 + 0.5 * g / math.tan(half)]])
-    apex = _line_in_laser_plane(truth.T_world_sensor, apex_joint)[0]
+    apex = line_in_laser_plane(truth.T_world_sensor, apex_joint)[0]
     f = extractor("v-groove", expect={"gap_mm": 0.0})(profile)
     assert f and np.hypot(*(f.point_laser - apex)) < 0.02 and f.gap_mm == 0.0
     plain = extractor("v-groove")(profile)

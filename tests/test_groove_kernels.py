@@ -70,9 +70,9 @@ def _surface(rng: np.random.Generator, n: int) -> tuple[np.ndarray, np.ndarray]:
 def test_median_is_numpys(n: int) -> None:
     rng = np.random.default_rng(n)
     x = rng.normal(size=n)
-    assert groove._median(x) == np.median(x)
+    assert groove.median_of(x) == np.median(x)
     x[rng.integers(n)] = np.nan
-    assert np.isnan(groove._median(x))
+    assert np.isnan(groove.median_of(x))
 
 
 @pytest.mark.parametrize("k", [5, 11, 101])
@@ -107,12 +107,12 @@ def test_local_v_and_robust_line_are_the_numpy_fits() -> None:
         qu, qv = _surface(rng, int(rng.integers(2, 120)))
         tol = float(rng.uniform(0.005, 0.05))
         ut, h = float(rng.uniform(-6, 6)), float(rng.uniform(0.1, 2.0))
-        want, got = _local_v_numpy(qu, qv, ut, h, tol), groove._local_v(qu, qv, ut, h, tol)
+        want, got = _local_v_numpy(qu, qv, ut, h, tol), groove.surface_v_at(qu, qv, ut, h, tol)
         assert (want is None) == (got is None), trial
         if want is not None:
             assert got == pytest.approx(want, abs=1e-9)
             compared += 1
-        want2, got2 = _robust_uv_line_numpy(qu, qv, tol), groove._robust_uv_line(qu, qv, tol)
+        want2, got2 = _robust_uv_line_numpy(qu, qv, tol), groove.robust_uv_fit(qu, qv, tol)
         assert (want2 is None) == (got2 is None), trial
         if want2 is not None:
             assert np.allclose(got2, want2, rtol=0, atol=1e-9)
@@ -143,12 +143,12 @@ def test_a_bottom_along_one_laser_ray_is_a_spike_streak_not_a_surface() -> None:
     bottom 12 mm wide are not."""
     ray = np.array([0.037, 1.0]) / np.hypot(0.037, 1.0)
     streak = np.outer([104.0, 148.0, 192.0, 236.0, 280.0], ray)
-    assert groove._along_a_ray(streak)
-    assert not groove._along_a_ray(np.tile([[0.5, 98.0]], (5, 1)))  # a V's root
+    assert groove.along_a_ray(streak)
+    assert not groove.along_a_ray(np.tile([[0.5, 98.0]], (5, 1)))  # a V's root
     fill = np.column_stack([np.linspace(-6.0, 6.0, 5), np.full(5, 110.0)])
-    assert not groove._along_a_ray(fill)
+    assert not groove.along_a_ray(fill)
     tilted = streak + np.column_stack([np.linspace(0.0, 2.0, 5), np.zeros(5)])
-    assert not groove._along_a_ray(tilted)  # 2 mm across the rays: a surface
+    assert not groove.along_a_ray(tilted)  # 2 mm across the rays: a surface
 
 
 @pytest.mark.parametrize("k", [3, 5, 11, 51])

@@ -20,7 +20,7 @@ def _set(d, n=6):
     g = groove("v", angle_deg=90.0, gap_mm=0.0, thickness_mm=10.0)
     apex = np.array([[0.0, -10.0]])  # the bevels' intersection (station frame)
     ys, zs, labels, truths = [], [], [], []
-    from seamtrack.features.synthetic import _line_in_laser_plane
+    from seamtrack.features.synthetic import line_in_laser_plane
 
     for i in range(n):
         rng = np.random.default_rng([i, 5])
@@ -28,7 +28,7 @@ def _set(d, n=6):
         p, t = groove_profile(g, s, rng=rng, roll_deg=rng.uniform(-4, 4), rays=1400, artefacts=None)
         ys.append(p.points_laser[:, 0])
         zs.append(p.points_laser[:, 1])
-        labels.append(_line_in_laser_plane(t.T_world_sensor, to_joint(apex))[0])
+        labels.append(line_in_laser_plane(t.T_world_sensor, to_joint(apex))[0])
         truths.append(t)
     d.mkdir(parents=True)
     np.savez_compressed(d / "profiles.npz", y_mm=np.array(ys), z_mm=np.array(zs))

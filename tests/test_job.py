@@ -175,7 +175,7 @@ def test_measured_groove_in_station_frames_left_to_right() -> None:
 def test_ramped_start_and_crater_keep_the_planned_area() -> None:
     planned = np.full(7, 5.0)
     speed = np.array([0.5, 2.0, 5.0, 3.0, 5.0, 1.0, 0.2])
-    out = job._ramped(speed, planned)
+    out = job.ramped(speed, planned)
     # the slow middle (a tracking slowdown) stays: a fatter bead; the ramps take the plan's
     assert out.tolist() == [5.0, 5.0, 5.0, 3.0, 5.0, 5.0, 5.0]
 
@@ -189,7 +189,7 @@ def test_the_braking_on_to_the_end_is_the_crater() -> None:
     braking laid a bead up to a third fatter at every pass's end, and the bumps grew."""
     planned = np.full(9, 5.0)
     speed = np.array([1.0, 5.0, 4.0, 5.0, 4.9, 4.1, 4.4, 4.0, 0.5])
-    out = job._ramped(speed, planned)
+    out = job.ramped(speed, planned)
     assert out.tolist() == [5.0, 5.0, 4.0, 5.0, 4.9, 5.0, 5.0, 5.0, 5.0]
     area = bead_area_mm2(1.2, 100.0, out, 0.97)
     assert np.allclose(area[5:], 0.97 * math.pi * 0.36 * 100.0 / 5.0)
@@ -199,11 +199,11 @@ def test_path_runs_off_the_ends_within_the_margin() -> None:
     seam = job.Seam.from_points([[0.0, 0, 0], [30.0, 0, 0]])
     path = np.column_stack([np.linspace(1.0, 28.5, 10), np.full(10, 0.2), np.zeros(10)])
     area = np.arange(10.0)
-    out, a = job._to_the_ends(path, area, seam)
+    out, a = job.to_the_ends(path, area, seam)
     assert np.allclose(out[0], [0.0, 0.2, 0.0]) and np.allclose(out[-1], [30.0, 0.2, 0.0])
     assert a[0] == 0.0 and a[-1] == 9.0 and len(a) == 12
     far = path[2:-2]  # 4.1 mm from the start: beyond the margin, left as it is
-    out, a = job._to_the_ends(far, area[2:-2], seam)
+    out, a = job.to_the_ends(far, area[2:-2], seam)
     assert len(out) == len(far)
 
 

@@ -35,7 +35,7 @@ import math
 from seamtrack.control.tracking import Command
 
 
-class _Base:
+class ExtractorBase:
     def reset(self, context):
         self.speed = context.welding_speed_mm_s
 
@@ -46,37 +46,37 @@ class _Base:
         return Command(tcp_world + [1.0, 0.0, 0.0], self.speed)
 
 
-class RaisesInReset(_Base):
+class RaisesInReset(ExtractorBase):
     def reset(self, context):
         raise RuntimeError("cannot start")
 
 
-class RaisesInUpdate(_Base):
+class RaisesInUpdate(ExtractorBase):
     def update(self, measurement):
         return 1 / 0
 
 
-class RaisesInCommand(_Base):
+class RaisesInCommand(ExtractorBase):
     def command(self, t_s, tcp_world, tcp_velocity_world):
         raise KeyError("target")
 
 
-class ReturnsString(_Base):
+class ReturnsString(ExtractorBase):
     def command(self, t_s, tcp_world, tcp_velocity_world):
         return "go"
 
 
-class ReturnsShortTarget(_Base):
+class ReturnsShortTarget(ExtractorBase):
     def command(self, t_s, tcp_world, tcp_velocity_world):
         return Command([1.0, 2.0], self.speed)
 
 
-class ReturnsNaNTarget(_Base):
+class ReturnsNaNTarget(ExtractorBase):
     def command(self, t_s, tcp_world, tcp_velocity_world):
         return Command([math.nan, 0.0, 0.0], self.speed)
 
 
-class ReturnsNegativeSpeed(_Base):
+class ReturnsNegativeSpeed(ExtractorBase):
     def command(self, t_s, tcp_world, tcp_velocity_world):
         return Command(tcp_world + [1.0, 0.0, 0.0], -5.0)
 

@@ -115,7 +115,7 @@ def _dry(seam_mm: float) -> list[dict[str, Any]]:
     (:func:`seamtrack.simulation.job.dry_run`)."""
     from seamtrack.control.planner import JobState, planner
     from seamtrack.simulation.assemble import build_parts
-    from seamtrack.simulation.job import STATION_SPACING_MM, _bead_shape, dry_run
+    from seamtrack.simulation.job import STATION_SPACING_MM, bead_shape, dry_run
     from seamtrack.simulation.passes import process_of
     from seamtrack.simulation.scene import load_scene
     from seamtrack.workpiece.beads import BeadShape
@@ -129,7 +129,7 @@ def _dry(seam_mm: float) -> list[dict[str, Any]]:
     rows = []
     for name in ("adaptive", "fixed"):
         state = JobState(process_of(c), reinforcement_mm=c.passes.reinforcement_mm)
-        fill, plans = dry_run(empty, planner(name), state, _bead_shape(c, BeadShape))
+        fill, plans = dry_run(empty, planner(name), state, bead_shape(c, BeadShape))
         r = fill.reinforcement_mm()
         rows.append({"planner": name, "passes": len(plans),
                      "reinforcement_min_mm": float(r[:, 0].min()),

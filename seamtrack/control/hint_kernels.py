@@ -194,15 +194,15 @@ def program_hint(
     window: FloatArray, last_window: FloatArray, last_near: FloatArray, a: FloatArray,
     d: FloatArray,
 ) -> tuple[bool, float, float, float, float, float, FloatArray]:  # fmt: skip
-    """:func:`_program_hint` with every segment of the program looked at."""
-    return _program_hint(
+    """:func:`program_hint_culled` with every segment of the program looked at."""
+    return program_hint_culled(
         T, last, direction, program, window, last_window, last_near, a, d, np.empty((0, 3)),
         np.empty(0),
     )  # fmt: skip
 
 
 @numba.njit(cache=True, nogil=True)
-def _program_hint(
+def program_hint_culled(
     T: FloatArray, last: FloatArray, direction: FloatArray, program: FloatArray,
     window: FloatArray, last_window: FloatArray, last_near: FloatArray, a: FloatArray,
     d: FloatArray, centres: FloatArray, radii: FloatArray,

@@ -16,11 +16,11 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.control.hint_kernels import _program_hint
 from seamtrack.control.hint_kernels import closest_on_polyline as closest_on_polyline
 from seamtrack.control.hint_kernels import column_medians as column_medians
 from seamtrack.control.hint_kernels import plane_crossings as plane_crossings
 from seamtrack.control.hint_kernels import program_hint as program_hint
+from seamtrack.control.hint_kernels import program_hint_culled
 
 FloatArray = NDArray[np.float64]
 
@@ -343,7 +343,7 @@ def tracker_hint(
     window = raw[i:].copy() if n > i else raw[n - 1 :].copy()
     direction = np.empty(3)
     direction[0], direction[1], direction[2] = end_direction(path, s, fit_mm)
-    found, y, z, dx, dy, dz, near = _program_hint(
+    found, y, z, dx, dy, dz, near = program_hint_culled(
         T, raw[n - 1], direction, program, window, last_window, last_near, a, d, centres, radii
     )
     return found, y, z, dx, dy, dz, near, window

@@ -31,7 +31,7 @@ NO_HIT = 1e300
 
 
 @numba.njit(cache=True, nogil=True)
-def _crossings(
+def ray_segment_crossings(
     oy: NDArray[np.float64], oz: NDArray[np.float64], dy: NDArray[np.float64],
     dz: NDArray[np.float64], segs: NDArray[np.float64], t_min: float, t_max: NDArray[np.float64],
     best_t: NDArray[np.float64], best: NDArray[np.int64],
@@ -111,7 +111,7 @@ def stripe(
                                 + rotation[a, 2] * fan[i, 2])  # fmt: skip
     t_hit = np.empty(n)
     face = np.empty(n, dtype=np.int64)
-    _crossings(np.full(n, origin[1]), np.full(n, origin[2]),
+    ray_segment_crossings(np.full(n, origin[1]), np.full(n, origin[2]),
                np.ascontiguousarray(directions[:, 1]), np.ascontiguousarray(directions[:, 2]),
                segs, T_MIN_MM, np.full(n, NO_HIT), t_hit, face)  # fmt: skip
     # The segments' normals (x component 0: an extrusion), then the mesh-mode stripe's clips
@@ -132,9 +132,11 @@ def stripe(
     m = s_index.shape[0]
     blocked_t = np.empty(m)
     blocker = np.empty(m, dtype=np.int64)
-    _crossings(np.ascontiguousarray(s_origins[:, 1]), np.ascontiguousarray(s_origins[:, 2]),
-               np.ascontiguousarray(s_directions[:, 1]), np.ascontiguousarray(s_directions[:, 2]),
-               segs, 0.0, s_far, blocked_t, blocker)  # fmt: skip
+    ray_segment_crossings(
+        np.ascontiguousarray(s_origins[:, 1]), np.ascontiguousarray(s_origins[:, 2]),
+        np.ascontiguousarray(s_directions[:, 1]), np.ascontiguousarray(s_directions[:, 2]),
+        segs, 0.0, s_far, blocked_t, blocker,
+    )  # fmt: skip
     fan_stripe_finish(points, reason, chip, blocker >= 0, s_index, sp, quantize)
     return points, reason, t, face, cos_incidence, directions
 
@@ -149,7 +151,7 @@ def first_hits(
     m = origins.shape[0]
     t = np.empty(m)
     seg = np.empty(m, dtype=np.int64)
-    _crossings(np.ascontiguousarray(origins[:, 1]), np.ascontiguousarray(origins[:, 2]),
+    ray_segment_crossings(np.ascontiguousarray(origins[:, 1]), np.ascontiguousarray(origins[:, 2]),
                np.ascontiguousarray(directions[:, 1]), np.ascontiguousarray(directions[:, 2]),
                segs, T_MIN_MM, far, t, seg)  # fmt: skip
     return t, seg

@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack import constants
-from seamtrack.datasets.kernel import NO_HIT, T_MIN_MM, _crossings
+from seamtrack.datasets.kernel import NO_HIT, T_MIN_MM, ray_segment_crossings
 from seamtrack.sensing.profiles import Reason
 from seamtrack.sensing.scan import StripeNoise
 from seamtrack.sensing.sensor import LaserLineSensor
@@ -91,7 +91,7 @@ def _clear_to(q: FloatArray, cam: FloatArray, segs: FloatArray, offset: float) -
         far[a] = max(length - offset, 0.0)
     t3 = np.empty(c)
     blocker = np.empty(c, dtype=np.int64)
-    _crossings(oy, oz, vy, vz, segs, 0.0, far, t3, blocker)
+    ray_segment_crossings(oy, oz, vy, vz, segs, 0.0, far, t3, blocker)
     return blocker < 0
 
 
@@ -120,8 +120,9 @@ def secondary_points(
     start, ray = _mirrored(origin, directions, t, face, segs, rows, offset)
     t2 = np.empty(m)
     hit2 = np.empty(m, dtype=np.int64)
-    _crossings(start[:, 1], start[:, 2], ray[:, 1], ray[:, 2], segs, T_MIN_MM, np.full(m, NO_HIT),
-               t2, hit2)  # fmt: skip
+    ray_segment_crossings(
+        start[:, 1], start[:, 2], ray[:, 1], ray[:, 2], segs, T_MIN_MM, np.full(m, NO_HIT), t2, hit2
+    )  # fmt: skip
     b = k[_B]
     cam = np.array([origin[0] + b * rotation[0, 0], origin[1] + b * rotation[1, 0],
                     origin[2] + b * rotation[2, 0]])  # fmt: skip

@@ -22,11 +22,11 @@ from numpy.typing import NDArray
 
 from seamtrack.features.line_geometry import fit_points, fit_range
 from seamtrack.features.robust import (
-    _MAX_ABS_MM,
     DEFAULT_RESOLUTION_MM,
     KEPT,
+    MAX_ABS_MM,
     TOL_RESOLUTIONS,
-    _front,
+    robust_front,
 )
 
 FloatArray = NDArray[np.float64]
@@ -431,10 +431,10 @@ def segment(
     runs = ints[at.runs : at.offsets]
     inliers = ints[at.inliers :]
     # The spikes' columns go where the inliers will: they are not returned.
-    front = _front(
+    front = robust_front(
         points,
         valid,
-        _MAX_ABS_MM,
+        MAX_ABS_MM,
         min_points,
         resolution_mm,
         min_tol_mm,

@@ -46,7 +46,7 @@ Zone = tuple[int, int, Line | tuple[Line, ...] | None]
 
 
 @dataclass(frozen=True)
-class _Base:
+class ExtractorBase:
     """Shared parameters and the never-raise wrapper of the built-in extractors."""
 
     name: str = "base"
@@ -83,7 +83,7 @@ class _Base:
         """Whether the tracker's prior can change this extractor's answer: it overrides
         :meth:`_extract_hinted` (the v-groove's choice among V's). The loop asks the tracker
         for a hint only for an extractor that uses one (computing it costs ~10 us a frame)."""
-        return type(self)._extract_hinted is not _Base._extract_hinted
+        return type(self)._extract_hinted is not ExtractorBase._extract_hinted
 
     def __call__(self, profile: Profile, hint: SeamHint | None = None) -> Feature:
         """The seam point of ``profile``; ``hint``: the tracker's prior on it
@@ -210,7 +210,7 @@ def _record(seg: Segments, tb: LineTable, r: int) -> Line:
     )
 
 
-def _confidence(arms: list[Line], seg: Segments) -> float:
+def line_confidence(arms: list[Line], seg: Segments) -> float:
     """Share of the kept points explained by the feature's lines, scaled by their fit."""
     explained = sum(a.count for a in arms) / max(len(seg.points), 1)
     fit = max(0.0, 1.0 - max(a.rms for a in arms) / seg.tol)

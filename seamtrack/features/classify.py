@@ -18,7 +18,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from seamtrack.features.base import _Base
+from seamtrack.features.base import ExtractorBase
 from seamtrack.features.extractors import BUILTIN
 from seamtrack.features.groove.extractor import GrooveExtractor
 from seamtrack.features.lines import DATA_ERRORS, segment_profile
@@ -80,11 +80,11 @@ def _groove_share(
 
 
 @lru_cache(maxsize=8)
-def _extractors(resolution_mm: float | None) -> tuple[_Base, ...]:
+def _extractors(resolution_mm: float | None) -> tuple[ExtractorBase, ...]:
     out = []
     for name in FAMILIES:
         ex = BUILTIN[name](resolution_mm=resolution_mm)
-        assert isinstance(ex, _Base)
+        assert isinstance(ex, ExtractorBase)
         out.append(ex)
     return tuple(out)
 

@@ -1,6 +1,6 @@
 """Compiled counts of the family extractors' joint models: the share of a profile a model's
 lines explain (:func:`seamtrack.features.base.explained`) and an arm's support in the V search
-(:meth:`seamtrack.features.base._Base._arms`). One pass over the kept points each, where the
+(:meth:`seamtrack.features.base.ExtractorBase._arms`). One pass over the kept points each, where the
 numpy formulation made a dozen small array operations per zone or group."""
 
 from __future__ import annotations
@@ -71,7 +71,8 @@ def support(
 ) -> int:
     """Surface points within ``band`` of the line (centroid, unit direction) on one side of
     the point whose projection on the direction is ``x_u`` (``sign``: which side; a
-    tolerance past it counts): an arm's support (:meth:`seamtrack.features.base._Base._arms`)."""
+    tolerance past it counts): an arm's support
+    (:meth:`seamtrack.features.base.ExtractorBase._arms`)."""
     n = 0
     for i in range(p.shape[0]):
         if surface[i]:

@@ -43,7 +43,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.errors import PluginError
-from seamtrack.features.base import _Base, _confidence, included
+from seamtrack.features.base import ExtractorBase, included, line_confidence
 from seamtrack.features.expect import Expect
 from seamtrack.features.generic.extractor import GenericExtractor
 from seamtrack.features.groove.extractor import GrooveExtractor
@@ -71,7 +71,7 @@ from seamtrack.sensing.profiles import Feature, Profile
 FloatArray = NDArray[np.float64]
 ENTRY_POINT_GROUP = "seamtrack.extractors"
 #: Coordinates beyond this (mm) are not measurements: treated as invalid.
-_MAX_ABS_MM = 1e6
+MAX_ABS_MM = 1e6
 
 
 @runtime_checkable
@@ -88,7 +88,7 @@ class FeatureExtractor(Protocol):
 
 # ----------------------------------------------------------------- extractors
 @dataclass(frozen=True)
-class FilletExtractor(_Base):
+class FilletExtractor(ExtractorBase):
     """Fillet / T joint: two faces meeting in a corner that opens towards the sensor.
     Seam: the faces' intersection (the corner line)."""
 
@@ -109,7 +109,7 @@ class FilletExtractor(_Base):
 
 
 @dataclass(frozen=True)
-class OutsideCornerExtractor(_Base):
+class OutsideCornerExtractor(ExtractorBase):
     """Outside corner: two faces falling away from a ridge. Seam: their intersection."""
 
     name: str = "outside-corner"
@@ -168,7 +168,7 @@ def _corner_search(
 
 
 def _corner(
-    ex: _Base,
+    ex: ExtractorBase,
     profile: Profile,
     seg: Segments,
     opening_down: bool,
@@ -176,7 +176,7 @@ def _corner(
     max_deg: float,
     max_reach_mm: float,
 ) -> Feature | tuple[Feature, float] | None:
-    """:meth:`~.base._Base._arms` and :func:`_two_faces` with the same answers, read off the
+    """:meth:`~.base.ExtractorBase._arms` and :func:`_two_faces` with the same answers, read off the
     search's table as floats: no :class:`~seamtrack.features.lines.Line` built per face
     (array copies), no numpy call on a 2-vector. None where the Python steps must run: an
     expectation to check the included angle against, no pieces, a face without inliers."""
@@ -200,7 +200,7 @@ def _corner(
         return Feature.failed("no pair of lines forms the joint", joint=ex.name)
     if not (l_count and r_count):
         return None
-    # _confidence's arithmetic on the faces' counts and rms
+    # line_confidence's arithmetic on the faces' counts and rms
     explained = (l_count + r_count) / max(len(seg.points), 1)
     fit = max(0.0, 1.0 - max(l_rms, r_rms) / seg.tol)
     confidence = min(max(float(0.5 * explained + 0.5 * fit), 0.0), 1.0)  # NaN stays NaN
@@ -230,7 +230,7 @@ def _search_params(
 
 
 def _two_faces(
-    ex: _Base, profile: Profile, seg: Segments, found: tuple[Line, Line, FloatArray, float]
+    ex: ExtractorBase, profile: Profile, seg: Segments, found: tuple[Line, Line, FloatArray, float]
 ) -> Feature | tuple[Feature, float]:
     """A corner's feature from its faces (left, right, apex, score), and the share of the
     profile the model of a corner explains: each face runs on to the profile's end; the
@@ -241,7 +241,7 @@ def _two_faces(
         wrong = ex._implausible(angle=included(left, right, apex))
         if wrong is not None:
             return wrong
-    feature = ex._found(profile, apex, confidence=_confidence([left, right], seg))
+    feature = ex._found(profile, apex, confidence=line_confidence([left, right], seg))
     a = (*left.centroid.tolist(), *left.direction.tolist())  # cy, cz, dy, dz
     b = (*right.centroid.tolist(), *right.direction.tolist())
     lo, hi = int(left.index[-1]) + 1, int(right.index[0])

@@ -4,8 +4,8 @@
 noise from second differences, cuts the profile at jumps, splits each run by Douglas-Peucker at
 a noise-scaled tolerance, merges neighbours that fit one line, and refits each piece by total
 least squares on its inliers. :func:`collinear_groups` and :func:`intersect` are the geometry
-the family extractors build on, and ``_Base`` their shared parameters and never-raise wrapper
-(the extractors themselves live in :mod:`seamtrack.features.extractors` and
+the family extractors build on, and ``ExtractorBase`` their shared parameters and never-raise
+wrapper (the extractors themselves live in :mod:`seamtrack.features.extractors` and
 :mod:`seamtrack.features.plates.extractor`).
 
 Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groove).
@@ -255,4 +255,4 @@ DATA_ERRORS = (
 #: A gap's wall or a lap's edge face stands at least this steep on the plates (deg). A false
 #: reflection is a stray line tilted by at most 45 deg in the laser plane: up to 60 deg on a
 #: plate rolled by 15 deg, so it is never taken for a wall.
-_WALL_DEG = 65.0
+WALL_DEG = 65.0

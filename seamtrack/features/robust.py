@@ -43,7 +43,7 @@ KEPT, TOO_FEW_POINTS, CONSTANT = 0, 1, 2
 
 
 class FrontScalars(NamedTuple):
-    """What :func:`_front` found besides the arrays it wrote: the front end's code, the
+    """What :func:`robust_front` found besides the arrays it wrote: the front end's code, the
     points kept, the spikes and run bounds written, the noise (mm), the tolerance (mm), its
     floor (mm), the median spacing (mm), the range quantum (mm) and the resolution (mm)."""
 
@@ -74,7 +74,7 @@ class Front(NamedTuple):
 
 
 #: Coordinates beyond this (mm) are not measurements: treated as invalid.
-_MAX_ABS_MM = 1e6
+MAX_ABS_MM = 1e6
 #: Range resolution assumed when neither the sensor's nor the profile's is known (mm): the
 #: paper's sensor (Table 3).
 DEFAULT_RESOLUTION_MM = 0.01
@@ -218,11 +218,11 @@ def _kept(profile: Profile) -> tuple[FloatArray, NDArray[np.intp]]:
     if valid.shape != (len(pts),):
         return np.empty((0, 2)), np.empty(0, dtype=np.intp)
     a = np.abs(pts)
-    columns = np.flatnonzero(valid & (a[:, 0] < _MAX_ABS_MM) & (a[:, 1] < _MAX_ABS_MM))
+    columns = np.flatnonzero(valid & (a[:, 0] < MAX_ABS_MM) & (a[:, 1] < MAX_ABS_MM))
     return pts[columns], columns  # NaN fails the bounds too
 
 
-def _median(x: FloatArray) -> float:
+def median_of(x: FloatArray) -> float:
     """Upper median, without ``np.median``'s overhead (0 for an empty array).
 
     A full sort, not ``np.partition``: on quantized profiles most values repeat (second
@@ -237,8 +237,8 @@ def _spacing(points: FloatArray) -> float:
     """Typical distance between neighbouring columns (mm): the median lateral step, which
     range noise does not inflate (the median absolute step when the profile is vertical)."""
     d = np.abs(np.diff(points, axis=0))
-    lateral = _median(d[:, 0])
-    return lateral if lateral > 0 else _median(np.hypot(d[:, 0], d[:, 1]))
+    lateral = median_of(d[:, 0])
+    return lateral if lateral > 0 else median_of(np.hypot(d[:, 0], d[:, 1]))
 
 
 def noise_sigma(points: FloatArray, lags: tuple[int, ...] = (1,)) -> float:
@@ -253,7 +253,7 @@ def noise_sigma(points: FloatArray, lags: tuple[int, ...] = (1,)) -> float:
     """
     z = points[:, 1]
     estimates = [
-        _SIGMA_FROM_SECOND_DIFF * _median(np.abs(z[2 * k :] - 2.0 * z[k:-k] + z[: -2 * k]))
+        _SIGMA_FROM_SECOND_DIFF * median_of(np.abs(z[2 * k :] - 2.0 * z[k:-k] + z[: -2 * k]))
         for k in lags
         if len(z) > 2 * k
     ]
@@ -328,7 +328,7 @@ def _noise(
 
 
 @numba.njit(cache=True, nogil=True)
-def _front(
+def robust_front(
     points: FloatArray,
     valid: NDArray[np.bool_],
     max_abs: float,
@@ -462,7 +462,7 @@ def front(
     spikes = np.empty(n, dtype=np.int64)
     runs = np.empty(n + 1, dtype=np.int64)
     stray = np.zeros(n, dtype=np.bool_)
-    f = _front(
+    f = robust_front(
         points,
         valid,
         max_abs,
@@ -510,7 +510,7 @@ def front_end(
     fr = front(
         pts,
         valid,
-        _MAX_ABS_MM,
+        MAX_ABS_MM,
         int(min_points),
         float(resolution_mm) if resolution_mm else 0.0,
         math.nan if min_tol_mm is None else float(min_tol_mm),

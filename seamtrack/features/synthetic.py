@@ -346,7 +346,7 @@ def ray_angles(sensor: LaserLineSensor, rays: int) -> FloatArray:
     return np.linspace(-half, half, int(rays))
 
 
-def _line_in_laser_plane(T: FloatArray, yz: FloatArray) -> FloatArray:
+def line_in_laser_plane(T: FloatArray, yz: FloatArray) -> FloatArray:
     """(m, 2) laser-plane crossings of seam-parallel lines through joint-frame points (y, z)."""
     if yz.size == 0:
         return np.empty((0, 2))
@@ -480,12 +480,12 @@ def synthetic_profile(
     y_m, z_m = sensor.measure(y_L, z_L)
     points = np.where(valid[:, None], np.column_stack([y_m, z_m]), np.nan)
     profile = Profile(points, valid=valid, reason=reason, T_world_sensor=T)
-    seam_laser = _line_in_laser_plane(T, seam.reshape(-1, 2)).reshape(-1)
+    seam_laser = line_in_laser_plane(T, seam.reshape(-1, 2)).reshape(-1)
     truth = GroundTruth(
         joint=joint,
         seam_laser=seam_laser,
         seam_world=(T @ np.r_[0.0, seam_laser, 1.0])[:3] if seam.size else np.empty(0),
-        edges_laser=_line_in_laser_plane(T, edges),
+        edges_laser=line_in_laser_plane(T, edges),
         gap_mm=float(gap),
         T_world_sensor=T,
         params=params,

@@ -154,7 +154,7 @@ def remaining_area_mm2(surface: FloatArray, top: FloatArray) -> float:
     return float(np.sum(0.5 * (depth[1:] + depth[:-1]) * np.diff(s[:, 0])))
 
 
-def _on_line(p: FloatArray, a: FloatArray, b: FloatArray, tol: float = 1e-6) -> NDArray[np.bool_]:
+def on_line(p: FloatArray, a: FloatArray, b: FloatArray, tol: float = 1e-6) -> NDArray[np.bool_]:
     d = b - a
     n = np.array([-d[1], d[0]]) / math.hypot(*d)
     return np.asarray(np.abs((p - a) @ n) <= tol * max(1.0, math.hypot(*d)))
@@ -172,7 +172,7 @@ def groove_points(g: Groove, surface: FloatArray | None = None) -> FloatArray:
     feet = []
     for side in (0, 1):
         top, foot = g.top[side], g.foot[side]
-        on = _on_line(s, top, foot)
+        on = on_line(s, top, foot)
         # The surface's vertices on the wall, between the top corner and the foot.
         lo, hi = min(top[1], foot[1]) - 1e-9, max(top[1], foot[1]) + 1e-9
         wall = np.flatnonzero(on & (s[:, 1] >= lo) & (s[:, 1] <= hi) & (s[:, 1] < top[1] - 1e-9))
@@ -325,7 +325,7 @@ def groove_profile(
     import dataclasses
 
     from seamtrack.features.artefacts import SensorArtefacts, real_sensor_profile
-    from seamtrack.features.synthetic import _line_in_laser_plane, synthetic_profile
+    from seamtrack.features.synthetic import line_in_laser_plane, synthetic_profile
     from seamtrack.sensing.sensor import preset
 
     s = g.surface if surface is None else np.asarray(surface, dtype=np.float64)
@@ -349,7 +349,7 @@ def groove_profile(
         profile, truth = real_sensor_profile("groove", rng, artefacts=a, sensor=base, **pose)
     T = truth.T_world_sensor
     return profile, GrooveTruth(
-        points_laser=_line_in_laser_plane(T, joint_pts),
+        points_laser=line_in_laser_plane(T, joint_pts),
         points_station=pts,
         area_mm2=remaining_area_mm2(s, g.top),
         T_world_sensor=T,

@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 from seamtrack import constants
 from seamtrack.control.registry import tracker_class
 from seamtrack.errors import SceneError
-from seamtrack.features.base import _Base
+from seamtrack.features.base import ExtractorBase
 from seamtrack.features.expect import parse_expect
 from seamtrack.features.extractors import extractor_target
 from seamtrack.params import check_params
@@ -216,7 +216,7 @@ def check_expect(name: str | None, expect: dict[str, Any]) -> None:
     if name is None:
         return
     target = extractor_target(name)
-    if not (isinstance(target, type) and issubclass(target, _Base)):
+    if not (isinstance(target, type) and issubclass(target, ExtractorBase)):
         raise SceneError(
             f"{name!r} takes no expectations (only the built-in family extractors do)",
             field="extractor.expect",

@@ -58,18 +58,18 @@ from seamtrack.sensing.profiles import Feature
 from seamtrack.simulation.assemble import Parts, build_parts
 from seamtrack.simulation.checks import default_time_limit_s
 from seamtrack.simulation.job_paths import (
-    _POINT_INDEX,
+    POINT_INDEX,
     STATION_SPACING_MM,
     FrameGroove,
-    _arc_path,
-    _ramped,
-    _to_the_ends,
-    _true_groove,
+    arc_path,
     frame_groove,
     measured_groove,
     one_station,
     pass_path,
+    ramped,
     settled,
+    to_the_ends,
+    true_groove,
 )
 from seamtrack.simulation.job_summary import (  # noqa: F401 (the job's public names)
     fusion_margin_mm,
@@ -184,7 +184,7 @@ def _run_job(
     fill = FillState.from_mesh(base_parts.mesh, cad_seam, spacing_mm=STATION_SPACING_MM)
     flip = _laser_flipped(base_parts, fill)
     process = process_of(c)
-    shape = _bead_shape(c, BeadShape)
+    shape = bead_shape(c, BeadShape)
     name = c.planner.name if c.planner is not None else "adaptive"
     params = dict(c.planner.params) if c.planner is not None else {}
     plan_maker = planner_override if planner_override is not None else planner(name, **params)
@@ -219,7 +219,7 @@ def _run_job(
         if c.extractor.name == "groove" and "wall_deg" not in c.extractor.params:
             scene = _with(scene, {"extractor.params.wall_deg": wall_deg(groove)})
     else:
-        groove = _true_groove(fill)
+        groove = true_groove(fill)
     limit = count if count is not None else MAX_PASSES
     index = 0
     stopped = ""
@@ -308,7 +308,7 @@ def dry_run(
     seam = Seam.from_points(fill.T_world_station[:, :3, 3], field="passes", name="stations")
     plans: list[PassPlan] = []
     for index in range(max_passes):
-        groove = _true_groove(fill)
+        groove = true_groove(fill)
         plan = checked_plan(plan_maker.plan(groove, index, state), "planner", index, groove,
                             gantry=False)  # fmt: skip
         if plan is None:
@@ -383,17 +383,17 @@ def _pass(
     result = run(parts, progress=progress, seed=c.simulation.seed, stop=stop)
     run_s = time.perf_counter() - start
     groove = measured_groove(frames, fill, cad_seam, each=each)
-    path, t, speeds = _arc_path(result, parts.settings.trace_period_s, process.speed_min_mm_s)
+    path, t, speeds = arc_path(result, parts.settings.trace_period_s, process.speed_min_mm_s)
     arc_time = float(t[-1] - t[0]) if len(t) > 1 else 0.0
     wire = process.wire_feed_mm_s if plan is None else plan.wire_feed_mm_s
     if plan is not None and len(path):
         planned = plan.speed_at(cad_seam.closest(path).arc_length_mm)
-        speeds = _ramped(speeds, np.asarray(planned, dtype=float))
+        speeds = ramped(speeds, np.asarray(planned, dtype=float))
     area = np.asarray(
         bead_area_mm2(process.wire_diameter_mm, wire, speeds, process.deposition_efficiency),
         dtype=float,
     ).reshape(-1)
-    path, area = _to_the_ends(path, area, cad_seam)
+    path, area = to_the_ends(path, area, cad_seam)
     s_path = cad_seam.closest(path).arc_length_mm if len(path) else np.zeros(0)
     mean_speed = float(np.mean(speeds)) if len(speeds) else math.nan
     record = PassRecord(
@@ -472,7 +472,7 @@ def _steered(
             # edge bead puts the sensor so far off the groove's middle that the far plate
             # leaves its stripe now and then)
             feature = planned_feature(feature, T_world_sensor, fill, plan, previous,
-                                      STATION_SPACING_MM, _POINT_INDEX)  # fmt: skip
+                                      STATION_SPACING_MM, POINT_INDEX)  # fmt: skip
             planned = one_station(frame_groove(feature, T_world_sensor, fill, cad_seam,
                                                T_station_world), fill)  # fmt: skip
         if feature:
@@ -485,7 +485,7 @@ def _steered(
             here = (now if now is not None else planned) if own else None
             if here is not None:  # on the fill surface the frame measured, under the bead
                 k = min(int(np.searchsorted(s_stations, here.s_mm[0])), len(s_stations) - 1)
-                y, z = aim_point(here.points, _POINT_INDEX[plan.reference], offset, plan.cap)[0]
+                y, z = aim_point(here.points, POINT_INDEX[plan.reference], offset, plan.cap)[0]
                 point = (fill.T_world_station[k] @ np.array([0.0, y, z, 1.0]))[:3]
                 feature = dataclasses.replace(feature, point_world=point)
             elif offset:  # the planned point (no groove measured yet)
@@ -652,7 +652,7 @@ def planned_layout(fill: Any, c: Any) -> Layout | None:
         return None
     process = process_of(c)
     count = c.passes.count if isinstance(c.passes.count, int) else None
-    groove = _true_groove(fill)
+    groove = true_groove(fill)
     state = JobState(process, count=count, reinforcement_mm=c.passes.reinforcement_mm)
     plan = layout(groove, state)
     area = float(np.median(groove.area_mm2))
@@ -698,7 +698,7 @@ def _check_bead_fits(fill: Any, process: Any, c: Any) -> None:
         )
 
 
-def _bead_shape(c: Any, BeadShape: Any) -> Any:
+def bead_shape(c: Any, BeadShape: Any) -> Any:
     from seamtrack.simulation.config import ProcessConfig
 
     bead = (c.process or ProcessConfig()).bead

@@ -33,9 +33,7 @@ FloatArray = NDArray[np.float64]
 #: Station spacing of the fill state (mm): the issue's "every <= 0.5 mm".
 STATION_SPACING_MM = 0.5
 
-_POINT_INDEX = POINT_INDEX
-
-#: A bead that stops this close (mm) to the part's end is run off the edge (:func:`_to_the_ends`).
+#: A bead that stops this close (mm) to the part's end is run off the edge (:func:`to_the_ends`).
 RUN_OFF_MM = 3.0
 
 
@@ -49,7 +47,7 @@ def pass_path(fill: Any, reference: str, plan: PassPlan | None, window: int = 4)
     with the measured points)."""
     pts = station_median(fill.all_groove_points(), window)
     offset = np.zeros(len(pts)) if plan is None else plan.offset_at(fill.s_mm)
-    yz = aim_point(pts, _POINT_INDEX[reference], offset, plan is not None and plan.cap)
+    yz = aim_point(pts, POINT_INDEX[reference], offset, plan is not None and plan.cap)
     local = np.column_stack([np.zeros(len(yz)), yz[:, 0], yz[:, 1], np.ones(len(yz))])
     points = np.einsum("mij,mj->mi", fill.T_world_station, local)[:, :3]
     return Seam.from_points(points, field="passes", name="pass path")
@@ -124,14 +122,14 @@ def frame_groove(
     return i, yz, float(feature.area_mm2)
 
 
-def _true_groove(fill: Any) -> MeasuredGroove:
+def true_groove(fill: Any) -> MeasuredGroove:
     """The CAD groove's 7 points and area (no scan-only pass: the first plan is the nominal
     groove's; later ones are measured)."""
     points = np.stack([fill.groove_points(i) for i in range(len(fill.s_mm))])
     return MeasuredGroove(fill.s_mm, points, fill.remaining_area_mm2())
 
 
-def _arc_path(
+def arc_path(
     result: Result, period_s: float, floor_mm_s: float
 ) -> tuple[FloatArray, FloatArray, FloatArray]:
     """The torch's path while the arc burns, its times and speeds (decimated to
@@ -151,7 +149,7 @@ def _arc_path(
     return path[keep], t[keep], np.maximum(speed[keep], floor_mm_s)
 
 
-def _ramped(speed: FloatArray, planned: FloatArray, fraction: float = 0.95) -> FloatArray:
+def ramped(speed: FloatArray, planned: FloatArray, fraction: float = 0.95) -> FloatArray:
     """The speed that sets the bead's area: the actual one, except while the torch speeds up
     from rest at the start and brakes to rest at the end (before it first reaches, and after
     it last runs at, ``fraction`` of the planned speed there), where the wire feed follows the
@@ -175,7 +173,7 @@ def _ramped(speed: FloatArray, planned: FloatArray, fraction: float = 0.95) -> F
     return out
 
 
-def _to_the_ends(path: FloatArray, area: FloatArray, seam: Seam) -> tuple[FloatArray, FloatArray]:
+def to_the_ends(path: FloatArray, area: FloatArray, seam: Seam) -> tuple[FloatArray, FloatArray]:
     """The path carried on along the seam to the part's ends where it stops within
     :data:`RUN_OFF_MM` of them (the torch stops at the last seam point its sensor saw, a
     fraction of a mm before the plate's edge; a welder runs the bead off the edge), with the

@@ -27,7 +27,7 @@ from seamtrack.features.generic._slope_turns import (
     window_turns,
 )
 from seamtrack.features.lines import DATA_ERRORS
-from seamtrack.features.robust import _MAX_ABS_MM
+from seamtrack.features.robust import MAX_ABS_MM
 from seamtrack.sensing.profiles import Feature, Profile
 
 FloatArray = NDArray[np.float64]
@@ -57,7 +57,7 @@ class GenericExtractor:
         valid = np.asarray(profile.valid, dtype=bool).reshape(-1)
         if valid.shape != (len(points),):
             return Feature.failed("valid does not match the points", joint=self.name)
-        cleaned = clean_points(points, valid, _MAX_ABS_MM, 4 * self.min_points)
+        cleaned = clean_points(points, valid, MAX_ABS_MM, 4 * self.min_points)
         p, spacing, sigma = cleaned.kept, cleaned.spacing, cleaned.sigma
         if cleaned.status == TOO_FEW:
             return Feature.failed(f"too few valid points ({len(p)})", joint=self.name)

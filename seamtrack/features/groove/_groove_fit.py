@@ -35,7 +35,7 @@ RAY_SPREAD_RAD = math.radians(0.2)
 RAY_DEPTH_MM = 1.0
 
 
-def _angle_deg(a: FloatArray, b: FloatArray) -> float:
+def angle_deg(a: FloatArray, b: FloatArray) -> float:
     return math.degrees(math.acos(min(1.0, abs(float(a @ b)))))
 
 
@@ -59,7 +59,7 @@ def trim_wall(points: FloatArray, line: Line, tol: float, rounds: int = 3) -> Li
     return cur
 
 
-def _running_median(v: FloatArray, k: int) -> FloatArray:
+def running_median(v: FloatArray, k: int) -> FloatArray:
     """The median over ``k`` points about each point; at the ends over those there are (a
     window cut short: the end's own level, not its whole window's)."""
     if len(v) < k:
@@ -284,7 +284,7 @@ def cross_uv(wall: Line, a: float, b: float, u: FloatArray, v: FloatArray) -> Fl
     return np.array([cu + t * du, cv + t * dv])
 
 
-def _median(x: FloatArray) -> float:
+def median_of(x: FloatArray) -> float:
     """``np.median`` of a 1-d array, the same number without its per-call overhead (the
     extractor takes thousands of small medians a second)."""
     n = len(x)
@@ -297,16 +297,16 @@ def _median(x: FloatArray) -> float:
     return float(s[h]) if n % 2 else float((s[h - 1] + s[h]) / 2)
 
 
-def _on_line(seg: Segments, ref: Line, ln: Line, max_deg: float = 5.0) -> bool:
+def on_line(seg: Segments, ref: Line, ln: Line, max_deg: float = 5.0) -> bool:
     """Whether piece ``ln`` lies on the line of ``ref`` (within ``max_deg`` and two
     tolerances)."""
-    if _angle_deg(ln.direction, ref.direction) > max_deg:
+    if angle_deg(ln.direction, ref.direction) > max_deg:
         return False
     off = np.abs((seg.points[ln.index] - ref.centroid) @ ref.normal)
-    return bool(_median(off) <= 2.0 * seg.tol)
+    return bool(median_of(off) <= 2.0 * seg.tol)
 
 
-def _beyond(
+def count_outwards(
     q: FloatArray, ln: Line, v: FloatArray, left: bool, tol: float, upper: float | None = None
 ) -> int:
     """How many of the points ``q`` lie outwards of a wall piece ``ln`` (on the plate's side,
@@ -318,7 +318,7 @@ def _beyond(
     return int(np.count_nonzero(out))
 
 
-def _robust_uv_line(qu: FloatArray, qv: FloatArray, tol: float) -> tuple[float, float] | None:
+def robust_uv_fit(qu: FloatArray, qv: FloatArray, tol: float) -> tuple[float, float] | None:
     """v = a + b u through the most points within two tolerances, of the lines through pairs
     of (at most 40, evenly picked) points at least a third of the stretch apart; refitted on
     those points. Spike runs less than half the points do not move it (compiled:
@@ -327,13 +327,13 @@ def _robust_uv_line(qu: FloatArray, qv: FloatArray, tol: float) -> tuple[float, 
     if n < 3:
         return None
     i, j = _pairs(n)
-    a, b, found = robust_uv_line(_c(qu), _c(qv), float(tol), i, j)
+    a, b, found = robust_uv_line(contiguous(qu), contiguous(qv), float(tol), i, j)
     return (a, b) if found else None
 
 
 @functools.lru_cache(maxsize=256)
 def _pairs(n: int) -> tuple[IntArray, IntArray]:
-    """The pairs of :func:`_robust_uv_line` among ``n`` points, in order (read-only)."""
+    """The pairs of :func:`robust_uv_fit` among ``n`` points, in order (read-only)."""
     pick = np.unique(np.linspace(0, n - 1, min(n, 40)).round().astype(np.intp))
     i, j = np.triu_indices(len(pick), k=max(1, len(pick) // 3))
     i, j = pick[i], pick[j]
@@ -342,11 +342,11 @@ def _pairs(n: int) -> tuple[IntArray, IntArray]:
     return i, j
 
 
-def _c(x: FloatArray) -> FloatArray:
+def contiguous(x: FloatArray) -> FloatArray:
     return np.ascontiguousarray(x, dtype=np.float64)
 
 
-def _area(pts: FloatArray, P: FloatArray, inner: IntArray, u: FloatArray) -> float:
+def polygon_area(pts: FloatArray, P: FloatArray, inner: IntArray, u: FloatArray) -> float:
     """The polygon of the top corners, the bottom corners and the surface between them, below
     the line joining the top corners (mm^2), signed: a crowned fill's metal above that line
     counts against it (a nearly full groove's area is about 0, a capped one's negative)."""
@@ -359,7 +359,7 @@ def _area(pts: FloatArray, P: FloatArray, inner: IntArray, u: FloatArray) -> flo
     return float(-0.5 * (np.dot(a, b_next) - np.dot(b, a_next)))
 
 
-def _stretched(seg: Segments, plate: Line, stop: int, step: int) -> Line:
+def stretched(seg: Segments, plate: Line, stop: int, step: int) -> Line:
     """``plate`` carried on over the points after its last piece (``step`` +1: rightwards) that
     no piece took and that lie within two tolerances of its line, up to point ``stop`` (the
     next piece's first): a quantized plate's last step, which split-and-merge leaves between
@@ -384,7 +384,7 @@ def _stretched(seg: Segments, plate: Line, stop: int, step: int) -> Line:
     return line
 
 
-def _along_a_ray(bottom: FloatArray) -> bool:
+def along_a_ray(bottom: FloatArray) -> bool:
     """Whether the bottom corners and points lie along one ray of the fan (from the laser
     frame's origin, within :data:`RAY_SPREAD_RAD`) over more than :data:`RAY_DEPTH_MM` of
     depth: a streak of spikes (a reflection) does; a fill surface, which crosses the rays, and
@@ -424,11 +424,11 @@ def explained_share(
     return float(np.count_nonzero(ok[kept]) / len(kept))
 
 
-def _local_v(qu: FloatArray, qv: FloatArray, ut: float, h: float, tol: float) -> float | None:
+def surface_v_at(qu: FloatArray, qv: FloatArray, ut: float, h: float, tol: float) -> float | None:
     """v of the surface at u = ut: a robust line fit of the points within h of it (None: fewer
     than 3 there, or none on one side; compiled:
     :func:`seamtrack.features.groove._groove_kernels.local_v`)."""
-    val = local_v(_c(qu), _c(qv), float(ut), float(h), float(tol))
+    val = local_v(contiguous(qu), contiguous(qv), float(ut), float(h), float(tol))
     return None if math.isnan(val) else float(val)
 
 
@@ -443,7 +443,7 @@ def bottom_points(
 ) -> FloatArray:
     """The three bottom points (3, 2): the fill surface (``qu``, ``qv``) at a quarter, half
     and three quarters of the way from the bottom corner ``bl`` to ``br`` along u, each a
-    local robust line fit there (:func:`_local_v`, over 4 times the width where too few
+    local robust line fit there (:func:`surface_v_at`, over 4 times the width where too few
     points show); on the line joining the corners where none do (an open root)."""
     ul, ur = float(bl @ u), float(br @ u)
     out = []
@@ -453,9 +453,9 @@ def bottom_points(
         ut = float(chord @ u)
         val = None
         if ur - ul > 2 * h:
-            val = _local_v(qu, qv, ut, h, seg.tol)
+            val = surface_v_at(qu, qv, ut, h, seg.tol)
             if val is None:
-                val = _local_v(qu, qv, ut, 4 * h, seg.tol)
+                val = surface_v_at(qu, qv, ut, 4 * h, seg.tol)
         if val is None:
             out.append(chord)
         else:

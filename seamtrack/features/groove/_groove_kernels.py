@@ -55,7 +55,7 @@ def _line_fit(a: FloatArray, b: FloatArray, keep: NDArray[np.bool_]) -> tuple[fl
 
 @numba.njit(cache=True, nogil=True)
 def local_v(qu: FloatArray, qv: FloatArray, ut: float, h: float, tol: float) -> float:
-    """:func:`seamtrack.features.groove._local_v` (NaN for its None)."""
+    """:func:`seamtrack.features.groove.surface_v_at` (NaN for its None)."""
     count = 0
     for m in range(len(qu)):
         if abs(qu[m] - ut) <= h:
@@ -97,7 +97,7 @@ def robust_uv_line(
     i: NDArray[np.intp],
     j: NDArray[np.intp],
 ) -> tuple[float, float, bool]:
-    """:func:`seamtrack.features.groove._robust_uv_line` for the pairs of points ``(i, j)``
+    """:func:`seamtrack.features.groove.robust_uv_fit` for the pairs of points ``(i, j)``
     (in their order): (a, b, found)."""
     best = -1
     best_a = 0.0

@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features.groove._groove_fit import _median, _robust_uv_line, _running_median
+from seamtrack.features.groove._groove_fit import median_of, robust_uv_fit, running_median
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
@@ -78,10 +78,10 @@ def risen_level(
     nd, nv = zd[near], zv[near]
     if len(nv) < 7:
         return level
-    smooth = _running_median(nv, _odd(NOTCH_WINDOW_MM / max(spacing, 1e-9)))
+    smooth = running_median(nv, _odd(NOTCH_WINDOW_MM / max(spacing, 1e-9)))
     j = int(np.argmax(smooth))
     if level is None:
-        end = _median(nv[nd <= max(0.05, 2 * spacing)])
+        end = median_of(nv[nd <= max(0.05, 2 * spacing)])
         rise, run = float(smooth[j]) - end, float(nd[j])
         lo, hi = NOTCH_SLOPE
         if not (run >= NOTCH_IN_MM and rise >= NOTCH_RISE_MM and lo * run <= rise <= hi * run):
@@ -100,9 +100,9 @@ def _round_level(
 ) -> float | None:
     """:func:`risen_level`'s read of a round (its first bullet), on the side's points ``zd``
     (in from the outer end, ascending) and ``zv``."""
-    smooth = _running_median(zv, _odd(window / max(spacing, 1e-9)))
+    smooth = running_median(zv, _odd(window / max(spacing, 1e-9)))
     j = int(np.argmax(smooth))
-    end = _median((zv if raw_end else smooth)[zd <= max(0.1, 3 * spacing)])
+    end = median_of((zv if raw_end else smooth)[zd <= max(0.1, 3 * spacing)])
     if zd[j] < 0.25 or smooth[j] - end < 0.3:
         return None
     deep = smooth >= smooth[j] - min(2.0 * tol, 0.05)
@@ -122,8 +122,8 @@ def _flank_crossing(
     inner = (zd >= deepest) & (zd <= deepest + FLANK_MM)
     if np.count_nonzero(outer) < 3 or np.count_nonzero(inner) < 3:
         return None
-    fo = _robust_uv_line(zd[outer], zv[outer], tol)
-    fi = _robust_uv_line(zd[inner], zv[inner], tol)
+    fo = robust_uv_fit(zd[outer], zv[outer], tol)
+    fi = robust_uv_fit(zd[inner], zv[inner], tol)
     if fo is None or fi is None or fi[1] > -INNER_SLOPE or abs(fo[1] - fi[1]) < 1e-6:
         return None  # (v grows into the groove: a flank rising inwards has v falling)
     x = (fi[0] - fo[0]) / (fo[1] - fi[1])
@@ -153,7 +153,7 @@ def a_step(
         k = k[np.abs((points[k] - edge) @ along) <= 2.0][:8]
         if len(k) < 3:
             return True
-        ends.append(_median(level[k]))
+        ends.append(median_of(level[k]))
     rise = level[index]
     overlap = min(float(rise.max()), max(ends)) - max(float(rise.min()), min(ends))
     return overlap >= 0.5 * float(np.ptp(rise))

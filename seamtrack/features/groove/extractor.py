@@ -88,27 +88,27 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.errors import PluginError
-from seamtrack.features.base import _Base
+from seamtrack.features.base import ExtractorBase
 from seamtrack.features.groove._groove_fit import (  # noqa: F401 (RAY_*: the extractor's names)
     RAY_DEPTH_MM,
     RAY_SPREAD_RAD,
-    _along_a_ray,
-    _angle_deg,
-    _area,
-    _beyond,
-    _c,
-    _local_v,
-    _median,
-    _on_line,
-    _robust_uv_line,
-    _stretched,
+    along_a_ray,
+    angle_deg,
     bottom_points,
+    contiguous,
+    count_outwards,
     cross_uv,
     drop_islands,
     explained_share,
+    median_of,
     mirrored_walls,
+    on_line,
+    polygon_area,
     ray_reach,
+    robust_uv_fit,
     short_walls,
+    stretched,
+    surface_v_at,
     trim_wall,
 )
 from seamtrack.features.groove._groove_kernels import running_median
@@ -217,7 +217,7 @@ def _fit(points: FloatArray, index: IntArray) -> Line:
 
 
 @dataclass(frozen=True)
-class GrooveExtractor(_Base):
+class GrooveExtractor(ExtractorBase):
     """Groove (issue 25): the 7 points of an empty or partly filled groove (V, narrow gap,
     U; 0..n layers of beads), the remaining area, and a seam point per ``reference``
     (``"centre"``: the middle bottom point; ``"left"`` / ``"right"``: that wall's foot at the
@@ -322,9 +322,9 @@ class GrooveExtractor(_Base):
             return Refusal("not a groove: its walls cross (a ridge?)")
         bottom = bottom_points(seg, fu, fv, bl, br, u, v)
         pts = np.vstack([tl, bl, bottom, br, tr])
-        if _along_a_ray(pts[1:6]):
+        if along_a_ray(pts[1:6]):
             return Refusal("not a groove: its bottom lies along one laser ray (a spike streak)")
-        area = _area(pts, P, inner, u)
+        area = polygon_area(pts, P, inner, u)
         rms = max(pl.rms, pr.rms, *(w.line.rms for w in (left, right) if w.line is not None))
         walls = (left.line, right.line)
         explained = explained_share(seg, (pl, pr), walls, inner, bl, br, u)
@@ -350,7 +350,7 @@ class GrooveExtractor(_Base):
         steep, mask = [], np.zeros(len(P), dtype=bool)  # (mask: pieces 60 deg off, no level)
         for j in range(plates.left_last + 1, plates.right_first):
             ln = seg.lines[j]
-            off = _angle_deg(ln.direction, along)
+            off = angle_deg(ln.direction, along)
             mask[ln.index] = off > LEVEL_DEG
             raised = float((ln.centroid - start) @ normal) <= -self.min_depth_mm
             if ln.extent >= STEP_MIN_MM and raised and off > STEP_DEG:
@@ -369,14 +369,14 @@ class GrooveExtractor(_Base):
         if la[1] >= lb[1]:
             return Refusal("not a groove: no plate on both sides")
         left, right = la[0], lb[0]
-        apart = _angle_deg(left.direction, right.direction)
+        apart = angle_deg(left.direction, right.direction)
         if apart > self.max_plate_deg:
             return Refusal(
                 f"not a groove: the plates beside it are {apart:.0f} deg apart "
                 f"(at most {self.max_plate_deg:.0f}: a fillet or a corner?)"
             )
-        left = _stretched(seg, left, seg.lines[la[1] + 1].index[0], +1)
-        right = _stretched(seg, right, seg.lines[lb[1] - 1].index[-1], -1)
+        left = stretched(seg, left, seg.lines[la[1] + 1].index[0], +1)
+        right = stretched(seg, right, seg.lines[lb[1] - 1].index[-1], -1)
         return Plates(left, right, la[1], lb[1])
 
     def _grow(self, seg: Segments, j: int, step: int, stop: int) -> tuple[Line, int]:
@@ -388,13 +388,13 @@ class GrooveExtractor(_Base):
         k = j
         while k + step != stop:
             nxt = lines[k + step]
-            if _angle_deg(nxt.direction, base.direction) > ON_LINE_DEG:
+            if angle_deg(nxt.direction, base.direction) > ON_LINE_DEG:
                 break
             off = np.abs((seg.points[nxt.index] - base.centroid) @ base.normal)
             # (or the plate so far on the next piece's line: a short outer piece, one step
             # of a quantized plate at a tilt, is flatter than the plate)
             back = np.abs((seg.points[base.index] - nxt.centroid) @ nxt.normal)
-            if _median(off) > BAND_TOLS * seg.tol and _median(back) > BAND_TOLS * seg.tol:
+            if median_of(off) > BAND_TOLS * seg.tol and median_of(back) > BAND_TOLS * seg.tol:
                 break
             index.append(nxt.index)
             k += step
@@ -442,7 +442,7 @@ class GrooveExtractor(_Base):
                 run_end is not None
                 and run_dir is not None
                 and math.hypot(*(upper - run_end)) <= join
-                and _angle_deg(ln.direction, run_dir) <= ON_LINE_DEG
+                and angle_deg(ln.direction, run_dir) <= ON_LINE_DEG
             ):
                 near_top = min(near_top, run_top)  # it carries on a wall from the corner
             run_top, run_dir = near_top, ln.direction
@@ -455,7 +455,7 @@ class GrooveExtractor(_Base):
                 continue  # a bead's flank or a streak pointing at the corner by chance
             n = int(np.count_nonzero(np.abs((q - ln.centroid) @ ln.normal) <= BAND_TOLS * seg.tol))
             below = float(top @ v) + WALL_BELOW_MM  # (a streak deep in the groove: fill outwards)
-            if near_top > WALL_FAR_MM and _beyond(q, ln, v, from_left, seg.tol, below) > max(
+            if near_top > WALL_FAR_MM and count_outwards(q, ln, v, from_left, seg.tol, below) > max(
                 self.min_points, n
             ):
                 continue  # the surface goes on beyond it: a streak in the groove, no wall
@@ -464,7 +464,7 @@ class GrooveExtractor(_Base):
         if best is None:
             return self._bare_wall(seg, groove[0], v, from_left, top)
         ref = lines[best]
-        on = [j for j in groove if _on_line(seg, ref, lines[j])]
+        on = [j for j in groove if on_line(seg, ref, lines[j])]
         index = [lines[j].index for j in on]
         line = _fit(P, np.sort(np.concatenate(index))) if len(index) > 1 else ref
         line = trim_wall(P, line, seg.tol)  # a round at its foot, a spike's points: left out
@@ -547,7 +547,7 @@ class GrooveExtractor(_Base):
         qu, qv, run = qu[order], qv[order], run[order]
         k = int(min(MEDIAN_MAX, max(MEDIAN_MIN, round(MEDIAN_MM / max(seg.spacing, 1e-9)))) | 1)
         if len(qv) >= k:
-            med = running_median(_c(qv), k)  # the ends: their whole window's
+            med = running_median(contiguous(qv), k)  # the ends: their whole window's
             ok = np.abs(qv - med) <= max(MEDIAN_TOLS * seg.tol, MEDIAN_FLOOR_MM)
             qu, qv, run = qu[ok], qv[ok], run[ok]
         ok = drop_islands(qu, qv, run, seg.spacing, seg.tol)  # spike runs the median kept
@@ -609,7 +609,7 @@ class GrooveExtractor(_Base):
             return np.asarray((ou - sign * 0.5 * seg.spacing) * u + ov * v)
         sel = sign * (fu - edge) <= SURFACE_END_MM
         su, sv = fu[sel], fv[sel]
-        fit = _robust_uv_line(su, sv, seg.tol)
+        fit = robust_uv_fit(su, sv, seg.tol)
         if fit is not None:  # the surface's outermost point on its line (not a spike's)
             a, b = fit
             on = np.abs(sv - (a + b * su)) <= ON_SURFACE_TOLS * seg.tol
@@ -643,7 +643,7 @@ class GrooveExtractor(_Base):
             near = (
                 sign * (fu - edge) <= SURFACE_LINE_MM
             )  # on its line there (a flank bends further in)
-            if unseen and (short := _robust_uv_line(fu[near], fv[near], seg.tol)) is not None:
+            if unseen and (short := robust_uv_fit(fu[near], fv[near], seg.tol)) is not None:
                 fit = short
                 a, b = fit
                 on = np.abs(fv[near] - (a + b * fu[near])) <= ON_SURFACE_TOLS * seg.tol

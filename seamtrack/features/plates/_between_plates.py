@@ -32,7 +32,7 @@ FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
 #: A gap's wall or a lap's edge face stands at least this steep on the plates (as
-#: :data:`seamtrack.features.lines._WALL_DEG`, rad).
+#: :data:`seamtrack.features.lines.WALL_DEG`, rad).
 _WALL = math.radians(65.0)
 #: A gap's bottom (a backing seen through the gap) lies within this angle of the plates (rad).
 _BOTTOM = math.radians(10.0)

@@ -19,7 +19,7 @@ from typing import cast
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features.base import _Base
+from seamtrack.features.base import ExtractorBase
 from seamtrack.features.line_geometry import LineThrough, Point
 from seamtrack.features.lines import Segments
 from seamtrack.features.plates._between_plates import Scale
@@ -60,7 +60,7 @@ class _Pair:
     order) as lines, where ``a`` ends and ``b`` starts (a visible corner, else half a step
     beyond the last inlier), what lies between them, whether it is an open gap, the step
     from ``a`` down to ``b`` (lap only; > 0: b is deeper), the confidence of the two lines
-    (:func:`seamtrack.features.base._confidence`) and the share of the profile the model
+    (:func:`seamtrack.features.base.line_confidence`) and the share of the profile the model
     of a two-plate joint explains (each plate running on to the profile's end; what lies
     between them left out)."""
 
@@ -152,7 +152,7 @@ def _pair(
     )
     rms_left = _rms(seg, r.left_kind, r.left_piece, r.left_anchor, r.left_rms)
     rms_right = _rms(seg, r.right_kind, r.right_piece, r.right_anchor, r.right_rms)
-    # As base._confidence of the two runs' lines.
+    # As base.line_confidence of the two runs' lines.
     explained = (0 + r.left_count + r.right_count) / max(len(seg.points), 1)
     fit = max(0.0, 1.0 - max(rms_left, rms_right) / seg.tol)
     conf = min(max(float(0.5 * explained + 0.5 * fit), 0.0), 1.0)  # NaN stays NaN
@@ -193,7 +193,7 @@ def _ray_hit(point: Point, line: LineThrough) -> Point | None:
 
 
 @dataclass(frozen=True)
-class SquareButtExtractor(_Base):
+class SquareButtExtractor(ExtractorBase):
     """Square butt: two plates side by side with a gap and/or a high-low step between them.
     Seam: the midpoint of the two plate edges.
 
@@ -249,7 +249,7 @@ class SquareButtExtractor(_Base):
 
 
 @dataclass(frozen=True)
-class LapExtractor(_Base):
+class LapExtractor(ExtractorBase):
     """Lap: two parallel sheets with a step. Seam: the top sheet's edge projected normally
     onto the lower sheet (the corner where the edge meets it). Edge: the top sheet's edge.
 

@@ -386,7 +386,7 @@ def v_groove(points, stray, columns, runs, tol, sigma, spacing, pieces, params):
         sy, sz = 0.5 * (lx + rx), 0.5 * (lz + rz)
         if bridged(tb, n, bevels, ends, ref_l, min_points, tol, spacing):
             sure = False
-    # Confidence (_confidence): the bevels' share of the points, scaled by their fit.
+    # Confidence (line_confidence): the bevels' share of the points, scaled by their fit.
     share = (tb.span[left, COUNT] + tb.span[right, COUNT]) / max(m, 1)
     fit = pmax(0.0, 1.0 - pmax(geo[left, RMS], geo[right, RMS]) / tol)
     conf = pmin(pmax(0.5 * share + 0.5 * fit, 0.0), 1.0)

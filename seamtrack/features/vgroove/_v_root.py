@@ -20,7 +20,7 @@ import numba
 import numpy as np
 
 from seamtrack.features.line_geometry import Point
-from seamtrack.features.lines import _WALL_DEG
+from seamtrack.features.lines import WALL_DEG
 from seamtrack.features.select import sort_small
 from seamtrack.features.vgroove._v_search import (
     COUNT,
@@ -43,7 +43,7 @@ from seamtrack.features.vgroove._v_search import (
 )
 
 #: A piece steeper than this on the plates is a wall (a root face).
-COS_WALL = math.cos(math.radians(_WALL_DEG))
+COS_WALL = math.cos(math.radians(WALL_DEG))
 #: A piece within this angle of a bevel is part of it (deg).
 COS_ARM = math.cos(math.radians(15.0))
 #: A plate within this angle of its bevel is a piece of the bevel (deg; ``_level``).

@@ -1,8 +1,8 @@
 """The V search, compiled: a profile's pieces as a table of lines (:class:`LineTable`), their
 collinear groups (:func:`groups_of`), the best pair of lines forming a V or a ridge
 (:func:`best_pair`), and the corners where lines meet (:func:`corner_with`); :func:`search`
-runs the search's steps in order, for the corner extractors (``_Base._arms``) and the V-groove
-model (:mod:`seamtrack.features.vgroove._v_groove_model`).
+runs the search's steps in order, for the corner extractors (``ExtractorBase._arms``) and the
+V-groove model (:mod:`seamtrack.features.vgroove._v_groove_model`).
 
 The family extractors' Python formulation made a handful of numpy calls on 2-vectors per line
 and per pair, where each call costs more than the arithmetic; here the same tests run on
@@ -412,7 +412,7 @@ def _short_of(points, tb, r, xy, xz, tol):
 
 @numba.njit(cache=True, nogil=True)
 def best_pair(points, surface, owner, tb, groups, n, tol, params):
-    """``_Base._arms``: the best pair of records forming a V (``params.sign`` -1: opening
+    """``ExtractorBase._arms``: the best pair of records forming a V (``params.sign`` -1: opening
     towards the sensor) or a ridge (+1), the arms cut short at the apex (:class:`VPair`;
     left :data:`NONE` when no pair does). With a hint (``params.tol_y``, ``tol_z`` > 0), of
     the pairs whose apex lies within the tolerance ellipse about the expected point the

@@ -13,7 +13,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features.base import _Base
+from seamtrack.features.base import ExtractorBase
 from seamtrack.features.expect import Expect
 from seamtrack.features.lines import Segments
 from seamtrack.features.vgroove._v_groove_model import (
@@ -108,7 +108,7 @@ def _fill_height(
 
 
 @dataclass(frozen=True)
-class VGrooveExtractor(_Base):
+class VGrooveExtractor(ExtractorBase):
     """V-groove: two bevels opening towards the sensor, a plate beside at least one of them.
     Seam: the root centre, midpoint of the bevels' lower ends, when a root gap shows between
     them (the ends level, the V's tip below them empty, the columns between them open);
@@ -142,8 +142,8 @@ class VGrooveExtractor(_Base):
     The model runs compiled, in one call
     (:func:`seamtrack.features.vgroove._v_groove_model.v_groove`): the Python formulation spent ten
     times the arithmetic's cost on numpy calls on 2-vectors. Its steps: segment the profile
-    (``_Base.segments``), run the groove's model on the pieces, refuse what it refuses or what
-    ``expect`` finds implausible, else the seam point.
+    (``ExtractorBase.segments``), run the groove's model on the pieces, refuse what it refuses or
+    what ``expect`` finds implausible, else the seam point.
     """
 
     name: str = "v-groove"
