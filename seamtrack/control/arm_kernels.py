@@ -354,51 +354,72 @@ def arm_step(model: ArmModel, data: ArmData) -> None:
     """One control tick of an arm (``data`` updated in place): the interpolator, the
     orientation set-point, the inverse kinematics, the joint limits, the servo and the forward
     kinematics of the measured joints."""
-    par, lim, jl, servo = model.par, model.limits, model.joint_limits, model.servo
-    geo = model.geometry
-    place, axes, kinds, index = model.place, model.axes, model.kinds, model.joint_index
-    cart, rot, omega, jnt, cnt, cmd, work = (
-        data.cart,
-        data.rot,
-        data.omega,
-        data.jnt,
-        data.cnt,
-        data.cmd,
-        data.work,
-    )
-    dt = par[P_DT]
+    cart, cmd, work, jnt = data.cart, data.cmd, data.work, data.jnt
+    dt = model.par[P_DT]
     has = cmd[M_HAS] > 0.0
     axes_step(
-        cart[C_SQ], cart[C_SV], lim, dt, has, cmd[M_T], cmd[M_T + 1], cmd[M_T + 2],
+        cart[C_SQ], cart[C_SV], model.limits, dt, has, cmd[M_T], cmd[M_T + 1], cmd[M_T + 2],
         cmd[M_SPEED], cmd[M_FF], cmd[M_FF + 1], cmd[M_FF + 2], cmd[M_STOP] > 0.0,
     )  # fmt: skip
-    # Orientation set-point: towards the goal, which turns on at the feed-forward.
-    R_set, R_goal = rot[0], rot[1]
-    tmp = work[W_TMP : W_TMP + 9].reshape(3, 3)
+    _orientation_step(model.par, data, has)
+    # Inverse kinematics from the last joint set-point.
+    p_set = work[W_P : W_P + 3]
+    for i in range(3):
+        p_set[i] = cart[C_SQ, i] * 1e-3
+    q_ref = jnt[S_REF]
+    n = q_ref.shape[0]
+    q = work[W_JOINTS : W_JOINTS + n]
+    solve_pose(
+        p_set, data.rot[0], q_ref, int(model.par[P_SOLVER]), model.geometry, model.place,
+        model.axes, model.kinds, model.joint_index, q, work[W_T : W_T + 16].reshape(4, 4),
+        work[W_IK : W_IK + 96].reshape(6, 4, 4),
+    )  # fmt: skip
+    new_ref = _joint_limits(model.joint_limits, data, q, dt)
+    _servo_and_measure(model, data, new_ref, dt)
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _goal_velocity(par: FloatArray, data: ArmData) -> tuple[float, float, float]:
+    """The orientation set-point's commanded angular velocity: towards the goal (a new goal
+    from the command, or the goal turned by the command's feed-forward), proportional to the
+    error, capped by the speed from which braking at the angular acceleration limit stops on
+    the goal (no overshoot), plus the goal's own turning, capped at the angular speed limit."""
+    cmd, work = data.cmd, data.work
+    R_set, R_goal = data.rot[0], data.rot[1]
+    dt = par[P_DT]
     wx = wy = wz = 0.0
-    if has and cmd[M_HAS_ROT] > 0.0:
-        fx, fy, fz = cmd[M_W], cmd[M_W + 1], cmd[M_W + 2]
-        if cmd[M_NEW_GOAL] > 0.0:
-            R_goal[:, :] = cmd[M_ROT : M_ROT + 9].reshape(3, 3)
-            cmd[M_NEW_GOAL] = 0.0
-        elif cmd[M_HAS_W] > 0.0:
-            _turn(fx * dt, fy * dt, fz * dt, R_goal, tmp)
-        prod, err = work[W_PROD : W_PROD + 9].reshape(3, 3), work[W_LOG : W_LOG + 3]
-        _mul_t_into(R_goal, R_set, prod)
-        _log3_into(prod, err)
-        size = math.sqrt(err[0] ** 2 + err[1] ** 2 + err[2] ** 2)
-        # Proportional, capped by the speed from which braking at the angular acceleration
-        # limit stops on the goal (no overshoot), on top of the goal's own turning.
-        speed = min(par[P_GAIN] * size, math.sqrt(2.0 * par[P_A_MAX] * size))
-        if size > 0.0:
-            k = speed / size
-            wx, wy, wz = err[0] * k, err[1] * k, err[2] * k
-        if cmd[M_HAS_W] > 0.0:
-            wx, wy, wz = wx + fx, wy + fy, wz + fz
-        norm = math.sqrt(wx * wx + wy * wy + wz * wz)
-        if norm > par[P_W_MAX]:
-            k = par[P_W_MAX] / norm
-            wx, wy, wz = wx * k, wy * k, wz * k
+    fx, fy, fz = cmd[M_W], cmd[M_W + 1], cmd[M_W + 2]
+    if cmd[M_NEW_GOAL] > 0.0:
+        R_goal[:, :] = cmd[M_ROT : M_ROT + 9].reshape(3, 3)
+        cmd[M_NEW_GOAL] = 0.0
+    elif cmd[M_HAS_W] > 0.0:
+        _turn(fx * dt, fy * dt, fz * dt, R_goal, work[W_TMP : W_TMP + 9].reshape(3, 3))
+    prod, err = work[W_PROD : W_PROD + 9].reshape(3, 3), work[W_LOG : W_LOG + 3]
+    _mul_t_into(R_goal, R_set, prod)
+    _log3_into(prod, err)
+    size = math.sqrt(err[0] ** 2 + err[1] ** 2 + err[2] ** 2)
+    speed = min(par[P_GAIN] * size, math.sqrt(2.0 * par[P_A_MAX] * size))
+    if size > 0.0:
+        k = speed / size
+        wx, wy, wz = err[0] * k, err[1] * k, err[2] * k
+    if cmd[M_HAS_W] > 0.0:
+        wx, wy, wz = wx + fx, wy + fy, wz + fz
+    norm = math.sqrt(wx * wx + wy * wy + wz * wz)
+    if norm > par[P_W_MAX]:
+        k = par[P_W_MAX] / norm
+        wx, wy, wz = wx * k, wy * k, wz * k
+    return wx, wy, wz
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _orientation_step(par: FloatArray, data: ArmData, has: bool) -> None:
+    """The orientation set-point's tick: its angular velocity towards the commanded one
+    (:func:`_goal_velocity`; zero without a command), within the angular acceleration limit,
+    and the set-point turned by it."""
+    omega = data.omega
+    wx = wy = wz = 0.0
+    if has and data.cmd[M_HAS_ROT] > 0.0:
+        wx, wy, wz = _goal_velocity(par, data)
     dx, dy, dz = wx - omega[0], wy - omega[1], wz - omega[2]
     norm = math.sqrt(dx * dx + dy * dy + dz * dz)
     if norm > par[P_DW_MAX]:
@@ -408,21 +429,22 @@ def arm_step(model: ArmModel, data: ArmData) -> None:
     omega[1] += dy
     omega[2] += dz
     if omega[0] != 0.0 or omega[1] != 0.0 or omega[2] != 0.0:
-        _turn(omega[0] * dt, omega[1] * dt, omega[2] * dt, R_set, tmp)
-    # Inverse kinematics from the last joint set-point.
-    p_set = work[W_P : W_P + 3]
-    for i in range(3):
-        p_set[i] = cart[C_SQ, i] * 1e-3
+        dt = par[P_DT]
+        tmp = data.work[W_TMP : W_TMP + 9].reshape(3, 3)
+        _turn(omega[0] * dt, omega[1] * dt, omega[2] * dt, data.rot[0], tmp)
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _joint_limits(jl: FloatArray, data: ArmData, q: FloatArray, dt: float) -> FloatArray:
+    """The joint set-point moved towards the inverse kinematics' joints ``q`` within the
+    joints' velocity and acceleration limits (all joints scaled together, so the tool keeps
+    its path) and their travel (clamped); the counters of limited and clamped ticks. Returns
+    the new set-point (in the tick's scratch)."""
+    jnt, cnt, work = data.jnt, data.cnt, data.work
     q_ref = jnt[S_REF]
     n = q_ref.shape[0]
-    q = work[W_JOINTS : W_JOINTS + n]
     qd = work[W_JOINTS + n : W_JOINTS + 2 * n]
     new_ref = work[W_JOINTS + 2 * n : W_JOINTS + 3 * n]
-    solve_pose(
-        p_set, R_set, q_ref, int(par[P_SOLVER]), geo, place, axes, kinds, index, q,
-        work[W_T : W_T + 16].reshape(4, 4), work[W_IK : W_IK + 96].reshape(6, 4, 4),
-    )  # fmt: skip
-    # Joint limits on the set-point's motion.
     for j in range(n):
         qd[j] = (q[j] - q_ref[j]) / dt
     limited = False
@@ -456,25 +478,35 @@ def arm_step(model: ArmModel, data: ArmData) -> None:
         cnt[K_LIMITED] += 1
     jnt[S_REF] = new_ref
     jnt[S_QD] = qd
-    # Servo, then the measured pose.
+    return new_ref
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _servo_and_measure(model: ArmModel, data: ArmData, new_ref: FloatArray, dt: float) -> None:
+    """The joint servo on the new set-point (held for the interpolation's ticks), then the
+    measured joints' forward kinematics: the torch tip's position and velocity (mm) and
+    rotation."""
+    jnt, cnt, cart, jl = data.jnt, data.cnt, data.cart, model.joint_limits
+    n = new_ref.shape[0]
     if cnt[K_IPO] > 0:
         if cnt[K_SERVO_TICK] % cnt[K_IPO] == 0:
             jnt[S_HELD] = new_ref
         cnt[K_SERVO_TICK] += 1
-        loops_step(jnt[S_SQ], jnt[S_SV], jnt[S_HELD], servo, dt)
+        loops_step(jnt[S_SQ], jnt[S_SV], jnt[S_HELD], model.servo, dt)
         for j in range(n):
             jnt[S_JOINTS, j] = min(max(jnt[S_SQ, j], jl[J_LO, j]), jl[J_HI, j])
     else:
         jnt[S_JOINTS] = new_ref
-    m = axes.shape[0]
-    frames = work[W_JOINTS + 3 * n : W_JOINTS + 3 * n + 16 * (m + 1)].reshape(m + 1, 4, 4)
-    chain_fk(jnt[S_JOINTS], place, axes, kinds, index, frames)
+    m = model.axes.shape[0]
+    start = W_JOINTS + 3 * n
+    frames = data.work[start : start + 16 * (m + 1)].reshape(m + 1, 4, 4)
+    chain_fk(jnt[S_JOINTS], model.place, model.axes, model.kinds, model.joint_index, frames)
     T = frames[m]
     for i in range(3):
         x = T[i, 3] * 1e3
         cart[C_V, i] = (x - cart[C_Q, i]) / dt
         cart[C_Q, i] = x
-    rot[2] = T[:3, :3]
+    data.rot[2] = T[:3, :3]
 
 
 @numba.njit(cache=True, nogil=True)
