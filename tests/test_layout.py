@@ -11,6 +11,7 @@ An import ``from a.b import c`` is an edge to ``a.b.c`` when that is a module, e
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
 import pytest
@@ -160,6 +161,41 @@ def _cycles(graph: dict[str, set[str]]) -> list[list[str]]:
         if v not in index:
             visit(v)
     return sorted(cycles)
+
+
+def stage_edges(graph: dict[str, set[str]]) -> set[tuple[str, str]]:
+    """Which stage imports which, as few edges as draw the same order: an edge a -> b is left
+    out where a imports another stage c that reaches b (the transitive reduction; the stages'
+    imports form no cycle, so it is unique)."""
+    names = [name for name, _ in STAGES]
+    edges = {
+        (names[_stage(a)], names[_stage(b)])
+        for a, targets in graph.items()
+        for b in targets
+        if _stage(a) != _stage(b)
+    }
+    reach = {name: {b for a, b in edges if a == name} for name in names}
+    grown = True
+    while grown:
+        grown = False
+        for name in names:
+            more = set().union(reach[name], *(reach[b] for b in reach[name]))
+            grown, reach[name] = grown or more != reach[name], more
+    return {
+        (a, b)
+        for a, b in edges
+        if not any((a, c) in edges and b in reach[c] for c in names if c not in (a, b))
+    }
+
+
+def test_docs_layout_draws_the_stages_as_they_import(graph: dict[str, set[str]]) -> None:
+    """docs/layout.md's drawing (a Mermaid flowchart, ``a --> b``: a imports b) has exactly the
+    stages' import edges, reduced (:func:`stage_edges`): it cannot go stale."""
+    text = (ROOT.parent / "docs" / "layout.md").read_text()
+    block = re.search(r"```mermaid\n(.*?)```", text, flags=re.S)
+    assert block, "docs/layout.md lost its ```mermaid drawing of the stages"
+    drawn = set(re.findall(r"^\s*(\w+) --> (\w+)\s*$", block.group(1), flags=re.M))
+    assert drawn == stage_edges(graph)
 
 
 def test_no_import_cycle(graph: dict[str, set[str]]) -> None:
