@@ -15,6 +15,7 @@ import math
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 
 from seamtrack.sensing.sensor import preset
@@ -236,3 +237,15 @@ def test_bridge_bench(tmp_path: Path) -> None:
         if "frame" in name:
             assert row["round_trips"] <= row["frames"] + 1, name
     assert rows["zmq / tick"]["round_trips"] > 5 * rows["zmq / frame"]["round_trips"]
+
+
+def test_a_childs_peak_memory_is_its_own(tmp_path: Path) -> None:
+    """The failure bench's 2 GB bound is the child's: a caller holding 1.5 GB (a pytest worker
+    late in the suite) does not lend it its high-water mark, as the child's rusage would."""
+    from seamtrack.bench.failures import run_measured
+
+    held = np.ones(1536 * 2**20 // 8)  # touched: 1.5 GB resident in this process
+    code, stderr, peak_mb = run_measured(["--help"], tmp_path)
+    assert held[-1] == 1.0
+    assert code == 0, stderr
+    assert 10 < peak_mb < 1024, peak_mb
