@@ -41,9 +41,10 @@ from pathlib import Path
 from typing import Any
 
 from seamtrack.bridge import wire
-from seamtrack.bridge.lockstep import Answer, BridgeFailure, Step, StopRequest, TfChain
+from seamtrack.bridge.lockstep import Answer, BridgeFailure, Interrupted, Step, TfChain
 from seamtrack.control.tracking import TrackerContext
 from seamtrack.errors import SeamtrackError
+from seamtrack.simulation.stop import StopRequest
 
 #: TCP on the loopback interface: a tracker on this machine connects to the same endpoint.
 DEFAULT_ENDPOINT = "tcp://127.0.0.1:5555"
@@ -322,8 +323,8 @@ class ZmqTransport:
 
         zmq = self._zmq
         while True:
-            if self.stop:
-                raise self.stop.failure()
+            if self.stop.requested:
+                raise Interrupted(self.stop.reason)
             left = deadline - time.monotonic()
             if left <= 0:
                 raise BridgeFailure(
