@@ -60,7 +60,11 @@ from seamtrack.bridge.lockstep import BridgeFailure, Reply, Step, finite_vector
 from seamtrack.control.tracking import Command, TrackerContext
 from seamtrack.sensing.profiles import HINT_TOLERANCE_MM
 
-PROTOCOL = 2
+PROTOCOL = 3
+
+#: The protocols served: 3 (steps and commands as packed records,
+#: :mod:`seamtrack.bridge.packed`) and 2 (JSON steps and commands, as below).
+PROTOCOLS = (2, 3)
 
 #: The largest message a client may send: a command is a few hundred bytes.
 MAX_MESSAGE_BYTES = 4096

@@ -40,7 +40,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from seamtrack.bridge import wire
+from seamtrack.bridge import packed, wire
 from seamtrack.bridge.lockstep import Answer, BridgeFailure, Interrupted, Step, TfChain
 from seamtrack.control.tracking import TrackerContext
 from seamtrack.errors import SeamtrackError
@@ -191,6 +191,8 @@ class ZmqTransport:
         self.poller.register(self.sock, zmq.POLLIN)
         self.poller.register(self.monitor, zmq.POLLIN)
         self.with_profile = True
+        self.packed = False  # protocol 3: packed steps and commands
+        self.encoder = packed.StepEncoder()
         #: The session's client: its routing envelope (id, and the empty delimiter a REQ
         #: socket puts) and the file descriptor of its connection; None before its hello.
         self.peer: list[bytes] | None = None
@@ -210,18 +212,20 @@ class ZmqTransport:
                 self._refuse(envelope, "no token, or not the server's (docs/ros.md)")
                 self.peer, self.peer_fd = None, -1  # a stranger: wait on for the client
                 continue
-            if hello.get("protocol") != wire.PROTOCOL:
+            if hello.get("protocol") not in wire.PROTOCOLS:
                 failure = BridgeFailure(
-                    f"speaks protocol {str(hello.get('protocol'))[:20]}, not {wire.PROTOCOL}",
-                    fix=f"send 'protocol': {wire.PROTOCOL} (docs/ros.md gives its messages)",
+                    f"speaks protocol {str(hello.get('protocol'))[:20]}, not 2 or 3",
+                    fix="send 'protocol': 3 (packed records) or 'protocol': 2 (JSON) "
+                    "(docs/ros.md gives their messages)",
                 )
                 self._refuse(envelope, f"{failure.message}; fix: {failure.fix}")
                 self.told = True
                 raise failure
         self.with_profile = hello.get("profile", True) is not False
+        self.packed = hello.get("protocol") == 3
         reset = {
             "op": "reset",
-            "protocol": wire.PROTOCOL,
+            "protocol": hello.get("protocol"),
             "lockstep": lockstep,
             "context": wire.context_json(context),
             "max_message_bytes": wire.MAX_MESSAGE_BYTES,
@@ -231,12 +235,26 @@ class ZmqTransport:
         wire.expect(wire.parse(raw), "ready")
 
     def exchange(self, step: Step) -> Answer:
+        if self.packed:
+            return self._exchange_packed(step)
         self._send(wire.step_parts(step, self.with_profile))
         raw = self._recv(self.timeout_s, "--timeout-s", f"answer step {step.seq}")
         message = wire.parse(raw)
         (command, within), then = wire.commands_from_json(message, step.seq)
         if "seam_hint" in message:  # it holds until the client says another (or null)
             self.seam_hint = wire.seam_hint_from_json(message)
+        return Answer(command, within, tuple(then), self.seam_hint)
+
+    def _exchange_packed(self, step: Step) -> Answer:
+        """Protocol 3: the step's packed records out (the profiles' points without a copy),
+        the packed command in (:mod:`seamtrack.bridge.packed`)."""
+        self._send(self.encoder.parts(step, self.with_profile), copy_after=1)
+        raw = self._recv(self.timeout_s, "--timeout-s", f"answer step {step.seq}")
+        if len(raw) > wire.MAX_MESSAGE_BYTES:
+            wire.parse(raw)  # refused as oversized, as in protocol 2
+        (command, within), then, hint = packed.decode_command(raw, step.seq)
+        if hint is not False:  # it holds until the client says another (or clears it)
+            self.seam_hint = hint  # type: ignore[assignment]
         return Answer(command, within, tuple(then), self.seam_hint)
 
     def finish(self, summary: dict[str, Any]) -> None:
@@ -285,12 +303,24 @@ class ZmqTransport:
             cut = 2 if len(frames) > 2 and frames[1] == b"" else 1
             self._refuse(frames[:cut], "this server serves another client; one at a time")
 
-    def _send(self, parts: list[bytes]) -> None:
+    def _send(self, parts: list[Any], copy_after: int = -1) -> None:
+        """Send ``parts`` to the client; from part ``copy_after`` on (the profiles' arrays)
+        without a copy of ours (ZeroMQ holds the buffer until it is sent); the parts before
+        are copied, so their buffer may be reused at once."""
         assert self.peer is not None
         self.owed = True
+        zmq = self._zmq
         try:
-            self.sock.send_multipart([*self.peer, *parts], self._zmq.NOBLOCK)
-        except self._zmq.ZMQError:  # the client's queue is full, or it is gone
+            if copy_after < 0:
+                self.sock.send_multipart([*self.peer, *parts], zmq.NOBLOCK)
+                return
+            for part in self.peer:
+                self.sock.send(part, zmq.NOBLOCK | zmq.SNDMORE)
+            last = len(parts) - 1
+            for i, part in enumerate(parts):
+                more = zmq.SNDMORE if i < last else 0
+                self.sock.send(part, zmq.NOBLOCK | more, copy=i < copy_after)
+        except zmq.ZMQError:  # the client's queue is full, or it is gone
             pass
 
     def _refuse(self, envelope: list[bytes], reason: str) -> None:
