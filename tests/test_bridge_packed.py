@@ -93,3 +93,15 @@ def test_the_example_clients_packed_command_is_the_json_command() -> None:
 def test_a_bad_packed_command_is_refused(raw: bytes, what: str) -> None:
     with pytest.raises(BridgeFailure, match=what):
         packed.decode_command(raw, 9)
+
+
+def test_a_move_the_same_to_the_byte_is_taken_again_and_a_changed_one_read() -> None:
+    known: dict = {}
+    a = {"target_mm": [1.0, 2.0, 3.0], "speed_mm_s": 5.0, "stop_at_target": False}
+    b = {**a, "target_mm": [1.0, 2.0, 3.5]}
+    first = packed.decode_command(packed.encode_command(1, [a, b]), 1, known)
+    again = packed.decode_command(packed.encode_command(2, [b]), 2, known)
+    assert again[0] is first[1][0]  # b, sent again: the same command
+    other = packed.decode_command(packed.encode_command(3, [a]), 3, known)
+    assert other[0] is not first[0]  # a was not in the last message: read anew
+    assert other[0][0] is not None and other[0][0].target_world.tolist() == [1.0, 2.0, 3.0]

@@ -166,9 +166,13 @@ def _move(m: dict[str, Any]) -> bytes:
     )  # fmt: skip
 
 
-def decode_command(raw: bytes, seq: int) -> tuple[Reply, list[Reply], Hint]:
+def decode_command(
+    raw: bytes, seq: int, known: dict[bytes, Reply] | None = None
+) -> tuple[Reply, list[Reply], Hint]:
     """The command answering step ``seq``, its ``then``, and its seam hint (point, unit
-    direction, tolerance; None: cleared; False: not given); every field checked."""
+    direction, tolerance; None: cleared; False: not given); every field checked. ``known``:
+    the moves of the last message, by their record's bytes (a move the same to the byte is
+    the same command: it is taken again, not read again); replaced by this message's."""
     if len(raw) < COMMAND.size or raw[:4] != COMMAND_MAGIC:
         raise _bad("is not a protocol-3 command (b'CMD3' ...)", "send the COMMAND record")
     _, got, flags, then = COMMAND.unpack_from(raw)
@@ -180,13 +184,28 @@ def decode_command(raw: bytes, seq: int) -> tuple[Reply, list[Reply], Hint]:
     size = COMMAND.size + moves * MOVE.size + (HINT.size if flags & 2 else 0)
     if len(raw) != size:
         raise _bad(f"holds {len(raw)} bytes where its counts give {size}")
-    replies = [_read_move(raw, COMMAND.size + k * MOVE.size) for k in range(moves)]
+    replies = [_move_at(raw, COMMAND.size + k * MOVE.size, known) for k in range(moves)]
+    if known is not None:  # this message's moves are the ones known from now on
+        known.clear()
+        for k, reply in enumerate(replies):
+            start = COMMAND.size + k * MOVE.size
+            known[raw[start : start + MOVE.size]] = reply
     hint: Hint = None if flags & 4 else False
     if flags & 2:
         hint = _read_hint(raw, COMMAND.size + moves * MOVE.size)
     if not replies:
         return (None, 0.0), [], hint
     return replies[0], replies[1:], hint
+
+
+def _move_at(raw: bytes, offset: int, known: dict[bytes, Reply] | None) -> Reply:
+    if known is None:
+        return _read_move(raw, offset)
+    record = raw[offset : offset + MOVE.size]
+    reply = known.get(record)
+    if reply is None:
+        reply = _read_move(raw, offset)
+    return reply
 
 
 def _read_move(raw: bytes, offset: int) -> Reply:

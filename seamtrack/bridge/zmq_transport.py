@@ -192,7 +192,14 @@ class ZmqTransport:
         self.poller.register(self.monitor, zmq.POLLIN)
         self.with_profile = True
         self.packed = False  # protocol 3: packed steps and commands
+        # zmq's flags as plain ints, looked up once (an enum's | costs microseconds a step)
+        self._srcfd = int(zmq.SRCFD)
+        self._noblock, self._more = int(zmq.NOBLOCK), int(zmq.NOBLOCK | zmq.SNDMORE)
+        from zmq.utils.monitor import recv_monitor_message
+
+        self._monitor_message = recv_monitor_message
         self.encoder = packed.StepEncoder()
+        self._known: dict[bytes, Any] = {}  # the last command's moves, by their bytes
         #: The session's client: its routing envelope (id, and the empty delimiter a REQ
         #: socket puts) and the file descriptor of its connection; None before its hello.
         self.peer: list[bytes] | None = None
@@ -252,7 +259,7 @@ class ZmqTransport:
         raw = self._recv(self.timeout_s, "--timeout-s", f"answer step {step.seq}")
         if len(raw) > wire.MAX_MESSAGE_BYTES:
             wire.parse(raw)  # refused as oversized, as in protocol 2
-        (command, within), then, hint = packed.decode_command(raw, step.seq)
+        (command, within), then, hint = packed.decode_command(raw, step.seq, self._known)
         if hint is not False:  # it holds until the client says another (or clears it)
             self.seam_hint = hint  # type: ignore[assignment]
         return Answer(command, within, tuple(then), self.seam_hint)
@@ -314,12 +321,12 @@ class ZmqTransport:
             if copy_after < 0:
                 self.sock.send_multipart([*self.peer, *parts], zmq.NOBLOCK)
                 return
+            send, more = self.sock.send, self._more
             for part in self.peer:
-                self.sock.send(part, zmq.NOBLOCK | zmq.SNDMORE)
+                send(part, more)
             last = len(parts) - 1
             for i, part in enumerate(parts):
-                more = zmq.SNDMORE if i < last else 0
-                self.sock.send(part, zmq.NOBLOCK | more, copy=i < copy_after)
+                send(part, more if i < last else self._noblock, copy=i < copy_after)
         except zmq.ZMQError:  # the client's queue is full, or it is gone
             pass
 
@@ -349,9 +356,6 @@ class ZmqTransport:
         """The next message of any peer: its envelope, its connection's file descriptor and
         its parts. The session client's disconnection, the deadline and the stop request end
         the wait; other peers' connections coming and going do not."""
-        from zmq.utils.monitor import recv_monitor_message
-
-        zmq = self._zmq
         while True:
             if self.stop.requested:
                 raise Interrupted(self.stop.reason)
@@ -366,12 +370,12 @@ class ZmqTransport:
             ready = dict(self.poller.poll(slice_ms))
             if self.sock in ready:
                 frames = self.sock.recv_multipart(copy=False)
-                fd = int(frames[-1].get(zmq.SRCFD))
+                fd = int(frames[-1].get(self._srcfd))
                 raw = [bytes(f.bytes) for f in frames]
                 cut = 2 if len(raw) > 2 and raw[1] == b"" else 1  # REQ: id, b"", ...
                 return raw[:cut], fd, raw[cut:]
             if self.monitor in ready:
-                event = recv_monitor_message(self.monitor)
+                event = self._monitor_message(self.monitor)
                 if self.peer is not None and int(event["value"]) == self.peer_fd:
                     self.owed = False  # nobody to answer
                     raise BridgeFailure(
