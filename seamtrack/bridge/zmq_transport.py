@@ -1,6 +1,7 @@
 """The ZeroMQ transport: a ROUTER socket (the server) serving one REQ (or DEALER) client; JSON
-messages, the steps' profiles as raw arrays in further parts of a multipart message
-(:mod:`seamtrack.bridge.wire` gives the format). The client speaks first: ``hello`` ->
+messages, or in protocol 3 steps and commands as packed records, the steps' profiles as raw
+arrays in further parts of a multipart message (:mod:`seamtrack.bridge.wire` and
+:mod:`seamtrack.bridge.packed` give the formats). The client speaks first: ``hello`` ->
 ``reset``, ``ready`` -> step 0, ``command`` -> step 1, ... -> ``end``.
 
 By default the socket listens on the loopback interface, :data:`DEFAULT_ENDPOINT`;
@@ -21,8 +22,8 @@ the run's ``status`` and ``reason`` (:meth:`ZmqTransport.finish`).
 Safety: the socket listens on this machine only unless told otherwise; ZeroMQ drops a peer
 whose message is over :data:`HARD_LIMIT_BYTES` (no allocation for it), and a message over
 :data:`~seamtrack.bridge.wire.MAX_MESSAGE_BYTES`, or of more than one part, is refused before
-it is decoded; messages are parsed as JSON and checked field by field, never evaluated or
-unpickled.
+it is decoded; messages are parsed as JSON or unpacked as records and checked field by field,
+never evaluated or unpickled.
 """
 
 from __future__ import annotations

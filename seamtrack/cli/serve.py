@@ -18,7 +18,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-HELP = "run a scene with the tracker in another process (ZeroMQ JSON, or ROS 2 over Zenoh)"
+HELP = "run a scene with the tracker in another process (ZeroMQ, or ROS 2 over Zenoh)"
 
 
 def add_parser(sub: Any) -> argparse.ArgumentParser:
@@ -36,7 +36,8 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
         "--transport",
         choices=["zmq", "zenoh"],
         default="zmq",
-        help="zmq: JSON and raw profile arrays over a ZeroMQ ROUTER socket (one client a run); "
+        help="zmq: packed records (protocol 3) or JSON (2) and raw profile arrays over a ZeroMQ "
+        "ROUTER socket (one client a run); "
         "zenoh: ROS 2 messages as rmw_zenoh puts them",
     )
     p.add_argument(
