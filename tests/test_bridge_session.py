@@ -218,7 +218,7 @@ def test_a_signal_ends_serve_as_interrupted_with_everything_written(
     assert lines[0].startswith(f"seamtrack serve: {name}: stopped at t = ")
     assert f"wrote {out}/summary.json, trace.csv, frames.csv, scene.toml" in lines[0]
     summary = json.loads((out / "summary.json").read_text())
-    assert summary["status"] == "interrupted" and summary["stop_cause"] == "interrupted"
+    assert summary["status"] == "interrupted" and summary["stop_cause"] == name.lower()
     assert name in summary["stop_reason"]
     trace = np.loadtxt(out / "trace.csv", delimiter=",", skiprows=1, ndmin=2)
     assert trace[-1, 0] <= summary["sim_time_s"] + 1e-9 and len(trace) >= 1

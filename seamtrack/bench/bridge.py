@@ -6,13 +6,16 @@ The scene is ``paper-v-groove`` (100 frames/s of 1024 rays, 1 kHz control) with 
 algorithm II, cut to :data:`SIM_S` simulated seconds. Runs:
 
 1. in-process: seamtrack's own algorithm II;
-2. for each transport (ZeroMQ over TCP on loopback, its default: JSON and the profiles as raw
-   arrays; Zenoh: ROS 2 CDR) and lockstep (a command every control tick, or one per frame): the loop
-   served in this process, the tracker an external process that imports nothing of seamtrack
-   (tests/bridge_clients/, the scripts the tests run; they need a source checkout: it sends
+2. for each transport (ZeroMQ over TCP on loopback, its default, protocol 3: packed records
+   and the profiles as raw arrays; Zenoh: ROS 2 CDR) and lockstep (a command every control
+   tick, or one per frame): the loop served in this process, the tracker an external process
+   that imports nothing of seamtrack but its own module (ZeroMQ: the example client,
+   :mod:`seamtrack.bridge.example_client`; Zenoh: tests/bridge_clients/, the script the tests
+   run; it needs a source checkout; the tests' ZeroMQ client for the protocol-2 rows: it sends
    the points that follow with each command, ZeroMQ's ``then``, Zenoh's ``cmd_then``; over
    Zenoh it subscribes to the seam points and the torch only); and ZeroMQ per frame without
-   the profiles (what sending them costs), and over a Unix socket (``ipc://``). Each row is
+   the profiles (what sending them costs), over a Unix socket (``ipc://``), and in protocol 2
+   (JSON steps and commands) in both locksteps. Each row is
    the fastest of :data:`REPEATS` runs, as the loop bench keeps its rows' fastest.
 
 Per run: wall time of the loop (the wait for the tracker to connect left out), x real time
@@ -89,6 +92,7 @@ def _bridged(
     clients: Path,
     profile: bool = True,
     ipc: bool = False,
+    protocol: int = 3,
 ) -> dict[str, Any]:
     import shutil
     import tempfile
@@ -109,7 +113,9 @@ def _bridged(
 
         endpoint = f"tcp/127.0.0.1:{port}"
         server = ZenohTransport(endpoint, timeout_s=30.0, wait_s=120.0)
-    script = clients / f"{transport}_algorithm2.py"
+    command = [sys.executable, str(clients / f"{transport}_algorithm2.py")]
+    if transport == "zmq" and protocol == 3:  # the example client: protocol 3, packed
+        command = [sys.executable, "-m", "seamtrack.bridge.example_client"]
     server = _CpuMeter(server)
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     # The client's stderr goes to a file (a pipe nobody reads would stall a chatty client),
@@ -117,7 +123,7 @@ def _bridged(
     errors = Path(folder) / "client.err"
     with errors.open("wb") as err:
         client = subprocess.Popen(
-            [sys.executable, str(script), endpoint, *([] if profile else ["--no-profile"])],
+            [*command, endpoint, *([] if profile else ["--no-profile"])],
             stdout=subprocess.DEVNULL,
             stderr=err,
         )
@@ -235,6 +241,10 @@ def bench_bridge(out_dir: str | Path, quick: bool = False) -> dict[str, Any]:
     # a Unix socket (ipc://, this machine only) instead of TCP over loopback.
     rows.append(fastest("zmq / frame, no profile", "zmq", "frame", sim_s, clients, profile=False))
     rows.append(fastest("zmq / frame, Unix socket", "zmq", "frame", sim_s, clients, ipc=True))
+    # Protocol 2 (JSON steps and commands; the tests' client) against 3 (packed records).
+    for lockstep in ("tick", "frame"):
+        name = f"zmq / {lockstep}, protocol 2 (JSON)"
+        rows.append(fastest(name, "zmq", lockstep, sim_s, clients, protocol=2))
     report = {
         "machine": machine_info(),
         "scene": SCENE,

@@ -8,12 +8,14 @@ Usage::
     python -m seamtrack.bridge.example_client                # terminal 2
     python -m seamtrack.bridge.example_client ipc:///tmp/b --radius-mm 0.5 --then 0
 
-It says hello, then answers every step with its command, and prints the run's summary (one
-JSON line) when the ``end`` comes; a refusal (``error``) or an ``end`` of a failed run is
-printed to stderr with its reason, exit code 1. A step is a multipart message: a JSON header,
-then each frame's profile as raw little-endian arrays (float64 points, uint8 reasons) that
-the header describes; algorithm II needs only the seam points, ``--dump-profiles`` reads the
-profiles too and writes them as JSON lines. Each command carries the next ``--then`` points of
+It says hello (protocol 3), then answers every step with its command, and prints the run's
+summary (one JSON line) when the ``end`` comes; a refusal (``error``) or an ``end`` of a failed
+run is printed to stderr with its reason, exit code 1. A step is a multipart message: its
+packed record and its frames' (little-endian, the :data:`STEP` and :data:`FRAME` layouts of
+docs/ros.md), then each frame's profile as raw little-endian arrays (float64 points, uint8
+reasons); the command goes back as packed records too (:data:`COMMAND`, :data:`MOVE`).
+Algorithm II needs only the seam points, ``--dump-profiles`` reads the profiles too and
+writes them as JSON lines. Each command carries the next ``--then`` points of
 the queue (``then``: the bridge goes on to them itself when the torch comes within the radius,
 between frames; ``--then 0``: it asks at each switch instead). ``--token-file`` sends a
 server's shared token (needed beyond loopback).
@@ -36,6 +38,13 @@ import struct
 import sys
 
 DEFAULT_ENDPOINT = "tcp://127.0.0.1:5555"
+
+# Protocol 3's records (docs/ros.md), little-endian whatever the machine.
+STEP = struct.Struct("<4sIHHd3d3d")  # b"STP3", seq, then_taken, frames, t_s, tcp, velocity
+FRAME = struct.Struct("<ddB3xI3d16d3d")  # t_capture, t_arrival, flags, n, point, T, tcp
+COMMAND = struct.Struct("<4sIBB2x")  # b"CMD3", seq, flags (1: a command), then
+MOVE = struct.Struct("<B7x3ddd3d9d3d")  # flags (1: stop), target, speed, ask_within, ...
+_ZEROS = (0.0,) * 15  # a move's velocity_ff, rotation and angular velocity: not sent
 
 
 class ConvergenceRadius:
@@ -113,6 +122,46 @@ def read_profile(profile: dict, parts: list[bytes]) -> tuple[list, list]:
     return points, list(out[1])
 
 
+def read_step(parts: list[bytes]) -> tuple[int, int, list[float], list[tuple]]:
+    """A protocol-3 step: seq, then_taken, the torch tip, and its frames as (found,
+    point_mm, t_capture_s, profile parts or None); every size checked before it is read."""
+    head = parts[0]
+    _, seq, taken, count, _, *state = STEP.unpack_from(head)
+    if len(head) != STEP.size + count * FRAME.size:
+        raise ValueError(f"a step of {count} frames in {len(head)} bytes")
+    frames, i = [], 1
+    for k in range(count):
+        t_capture, _, flags, n, *v = FRAME.unpack_from(head, STEP.size + k * FRAME.size)
+        profile = None
+        if flags & 2:  # the profile's points and reasons follow, in two parts
+            profile = (parts[i], parts[i + 1])
+            if len(profile[0]) != 16 * n or len(profile[1]) != n:
+                raise ValueError(f"frame {k}: profile parts not of {n} points")
+            i += 2
+        frames.append((bool(flags & 1), list(v[:3]), t_capture, profile))
+    return seq, taken, list(state[:3]), frames
+
+
+def command_bytes(seq: int, command: dict | None) -> bytes:
+    """A protocol-3 command answering step ``seq`` (None: brake to rest and wait)."""
+    if command is None:
+        return COMMAND.pack(b"CMD3", seq, 0, 0)
+    moves = [command, *command.get("then", [])]
+    flags = [1 if m["stop_at_target"] else 0 for m in moves]
+    return COMMAND.pack(b"CMD3", seq, 1, len(moves) - 1) + b"".join(
+        MOVE.pack(f, *m["target_mm"], m["speed_mm_s"], m.get("ask_within_mm", 0.0), *_ZEROS)
+        for f, m in zip(flags, moves, strict=True)
+    )
+
+
+def profile_row(t_capture_s: float, points: bytes, reason: bytes) -> dict:
+    """A protocol-3 frame's profile as a JSON line: the points (None for NaN), the reasons."""
+    n = len(reason)
+    values = struct.unpack(f"<{2 * n}d", points)  # little-endian on any machine
+    rows = [[None if v != v else v for v in values[2 * i : 2 * i + 2]] for i in range(n)]
+    return {"t_capture_s": t_capture_s, "points": rows, "reason": list(reason)}
+
+
 def parser() -> argparse.ArgumentParser:
     ap = argparse.ArgumentParser(
         prog="python -m seamtrack.bridge.example_client",
@@ -127,8 +176,8 @@ def parser() -> argparse.ArgumentParser:
     return ap
 
 
-def hello(args: argparse.Namespace) -> dict:
-    message = {"op": "hello", "protocol": 2, "profile": not args.no_profile}
+def hello(args: argparse.Namespace, protocol: int = 3) -> dict:
+    message = {"op": "hello", "protocol": protocol, "profile": not args.no_profile}
     if args.token_file:
         with open(args.token_file, encoding="utf-8") as f:
             message["token"] = f.read().strip()
@@ -162,22 +211,20 @@ def main(argv: list[str] | None = None) -> int:
         sock.send_json({"op": "ready"})
         while True:
             parts = sock.recv_multipart()  # blocks until the step is there: no polling
-            msg = json.loads(parts[0])
-            if msg["op"] != "step":  # the end of the run, a fault too: status and reason
+            if parts[0][:4] != b"STP3":  # the end of the run, a fault too: status and reason
+                msg = json.loads(parts[0])
                 print(json.dumps(msg.get("summary", msg)))
                 if msg["op"] == "end" and not _fault(msg):
                     return 0
                 print(f"{msg['status']}: {msg['reason']}", file=sys.stderr)
                 return 1
-            for frame in msg["frames"]:
-                if frame["found"]:
-                    tracker.update(frame["point_mm"])
-                if dump and frame["profile"] is not None:
-                    points, reason = read_profile(frame["profile"], parts)
-                    row = {"t_capture_s": frame["t_capture_s"], "points": points, "reason": reason}
-                    dump.write(json.dumps(row) + "\n")
-            cmd = tracker.step(msg["tcp_mm"], msg["then_taken"])
-            sock.send(json.dumps({"op": "command", "seq": msg["seq"], "command": cmd}).encode())
+            seq, taken, tcp, frames = read_step(parts)
+            for found, point, t_capture, profile in frames:
+                if found:
+                    tracker.update(point)
+                if dump and profile is not None:
+                    dump.write(json.dumps(profile_row(t_capture, *profile)) + "\n")
+            sock.send(command_bytes(seq, tracker.step(tcp, taken)))
     finally:
         if dump:
             dump.close()

@@ -18,13 +18,15 @@ only once they are used up is the tracker asked.
 A step carries the frames that arrived at it (profile, seam point, the sensor's pose) and the
 torch's position and velocity at that tick.
 
-A client that disconnects, sends what is not a command, or misses the deadline ends the run:
-the tracker brakes to rest, the loop's wall-clock guard (:data:`seamtrack.simulation.loop.
-WALL_CHECK_TICKS` ticks later at most) stops it as ``stalled``, and ``stop_reason`` names the
-cause (:func:`serve`). A :class:`StopRequest` (set by ``seamtrack serve``'s SIGINT and SIGTERM
-handler: a flag, nothing more, so the signal never lands in compiled code) ends it the same
-way, between two steps or while the bridge waits for the client, as ``interrupted``. Either
-way the client is told: the transport's ``finish`` sends the status and the reason.
+Every stop goes through the loop's own :class:`~seamtrack.simulation.stop.StopRequest`, which
+the loop reads after each tick. A client that disconnects, sends what is not a command, or
+misses the deadline makes the request itself (status ``stalled``, ``stop_cause``
+``bridge_failure``, ``stop_reason`` ``bridge: ...`` naming the cause): the run ends at the tick
+it failed in. ``seamtrack serve``'s SIGINT and SIGTERM handler makes it too (status
+``interrupted``, ``stop_cause`` ``sigint`` or ``sigterm``: a flag, nothing more, so the signal
+never lands in compiled code), read after each tick and while the bridge waits for the client
+(the wait then ends with :class:`Interrupted`). Either way the client is told: the
+transport's ``finish`` sends the status and the reason.
 """
 
 from __future__ import annotations
@@ -32,7 +34,6 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-import signal
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -48,6 +49,7 @@ from seamtrack.errors import SeamtrackError
 from seamtrack.sensing.profiles import Feature, Profile, SeamHint, hint_from_path
 from seamtrack.simulation.assemble import Parts
 from seamtrack.simulation.loop import Result, run
+from seamtrack.simulation.stop import StopRequest
 
 FloatArray = NDArray[np.float64]
 
@@ -66,42 +68,11 @@ class BridgeFailure(SeamtrackError):
 
 
 class Interrupted(BridgeFailure):
-    """The run was stopped by a signal (:class:`StopRequest`), not by the client."""
+    """The run was stopped from outside (a signal's :class:`StopRequest`), not by the client;
+    ``reason`` is the request's."""
 
-    def __init__(self, signum: int) -> None:
-        self.signum = signum
-        super().__init__(
-            f"interrupted by {signal_name(signum)}", field="signal", fix="nothing: it was asked"
-        )
-
-
-def signal_name(signum: int) -> str:
-    """``SIGINT`` for 2, ...; the number for a signal Python does not name."""
-    try:
-        return signal.Signals(signum).name
-    except ValueError:
-        return f"signal {signum}"
-
-
-class StopRequest:
-    """A request to stop the bridged run, set from a signal handler (it is one:
-    ``signal.signal(signal.SIGTERM, request)``) and read between steps and while the bridge
-    waits: the handler only sets a flag, so a signal never raises inside compiled code (the
-    loop's numba kernels) and the run ends where a step would, written as ``interrupted``.
-    """
-
-    def __init__(self) -> None:
-        self.signum = 0
-
-    def __call__(self, signum: int, frame: Any = None) -> None:
-        if not self.signum:  # the first signal names the stop
-            self.signum = signum
-
-    def __bool__(self) -> bool:
-        return self.signum != 0
-
-    def failure(self) -> Interrupted:
-        return Interrupted(self.signum)
+    def __init__(self, reason: str) -> None:
+        super().__init__(reason, field="signal", fix="nothing: it was asked")
 
 
 @dataclass(frozen=True, eq=False)
@@ -155,7 +126,7 @@ _ASK_MARGIN = 1e-9
 
 class Transport(Protocol):
     """How steps go out and commands come in (one tracker process at a time). ``stop`` is
-    read while the transport waits (:func:`serve` sets it): once set, the wait ends with its
+    read while the transport waits (:func:`serve` sets it): once requested, the wait ends with
     :class:`Interrupted`."""
 
     stop: StopRequest
@@ -219,7 +190,7 @@ class BridgeTracker:
         try:
             self.transport.start(context, self.chain, self.lockstep)
         except BridgeFailure as exc:
-            self.failure = exc
+            self._failed(exc)
         self.wait_time_s = time.perf_counter() - start
 
     def update(self, measurement: Measurement) -> None:
@@ -239,10 +210,7 @@ class BridgeTracker:
     def command(
         self, t_s: float, tcp_world: FloatArray, tcp_velocity_world: FloatArray
     ) -> Command | None:
-        if self.failure is not None:
-            return None
-        if self.stop:  # checked once a tick: between steps, never inside compiled code
-            self.failure = self.stop.failure()
+        if self.failure is not None:  # the loop stops after this tick (the stop request)
             return None
         if self.lockstep == "frame" and not self._frames and self._within > 0.0:
             tcp = np.asarray(tcp_world, dtype=float).tolist()  # Python floats: every tick
@@ -258,7 +226,7 @@ class BridgeTracker:
         try:
             answer = self.transport.exchange(step)
         except BridgeFailure as exc:
-            self.failure = exc
+            self._failed(exc)
             return None
         self.exchange_time_s += time.perf_counter() - start
         self.steps += 1
@@ -267,6 +235,13 @@ class BridgeTracker:
         self._seam_hint = answer.seam_hint
         self._hold(answer.command, answer.ask_within_mm)
         return self._last
+
+    def _failed(self, exc: BridgeFailure) -> None:
+        """Keep the failure and ask the loop to stop after this tick: ``stalled``, its cause
+        ``bridge_failure`` (a signal's :class:`Interrupted` was asked for already, and the
+        first request wins)."""
+        self.failure = exc
+        self.stop.request("bridge_failure", f"bridge: {exc.message}", status="stalled")
 
     def _hold(self, received: Command | None, within: float) -> None:
         self._within = within
@@ -324,18 +299,6 @@ def _equal(a: Any, b: Any) -> bool:
     return bool(np.array_equal(a, b))
 
 
-class _FailClock:
-    """The loop's wall clock; it jumps past the wall-clock limit once the bridge has failed,
-    so that the loop stops at its next guard check and writes the run as any stopped run."""
-
-    def __init__(self, tracker: BridgeTracker) -> None:
-        self.tracker = tracker
-
-    def __call__(self) -> float:
-        now = time.perf_counter()
-        return now + 1e12 if self.tracker.failure is not None else now
-
-
 def bridged_parts(parts: Parts, tracker: BridgeTracker) -> Parts:
     """``parts`` with the bridge as its tracker; every frame's profile (the stripe in mesh
     mode, the seam point alone in seam mode: :func:`seamtrack.bridge.frames.observe`) goes
@@ -359,7 +322,8 @@ def serve(
 ) -> tuple[Result, BridgeTracker]:
     """Run ``parts`` with the tracker behind ``transport``. The result's summary is the
     loop's; a failed bridge stops the run as ``stalled`` with ``stop_reason`` naming the cause
-    (``tracker.failure`` holds it), a set ``stop`` as ``interrupted`` (``stop_cause`` too);
+    (``tracker.failure`` holds it), a requested ``stop`` as ``interrupted`` (both through the
+    loop's stop request, :mod:`seamtrack.simulation.stop`);
     ``bridge_steps`` and ``bridge_exchange_s`` count the round trips and their wall time,
     ``bridge_wait_s`` the wait for the tracker (in ``wall_time_s``). The client is told the
     status and the reason in every case (``transport.finish``)."""
@@ -369,16 +333,9 @@ def serve(
     transport.stop = stop
     tracker = BridgeTracker(transport, tf_chain(parts), lockstep, stop=stop)
     bridged = bridged_parts(parts, tracker)
-    start = time.perf_counter()
     try:
-        result = run(bridged, seed=seed, clock=clock or _FailClock(tracker))
+        result = run(bridged, seed=seed, clock=clock or time.perf_counter, stop=stop)
         summary = result.summary
-        if tracker.failure is not None:
-            cause = "interrupted" if isinstance(tracker.failure, Interrupted) else "stalled"
-            summary["status"] = cause
-            summary["stop_reason"] = f"bridge: {tracker.failure.message}"
-            summary["stop_cause"] = cause
-            summary["wall_time_s"] = time.perf_counter() - start
         summary["bridge_steps"] = tracker.steps
         summary["bridge_exchange_s"] = tracker.exchange_time_s
         summary["bridge_wait_s"] = tracker.wait_time_s

@@ -155,4 +155,4 @@ def deserialize(raw: bytes, msgtype: str) -> Any:
 
 
 def is_finite(*values: float) -> bool:
-    return all(math.isfinite(v) for v in values)
+    return all(map(math.isfinite, values))  # no generator frame: a few us a step less

@@ -1,5 +1,7 @@
-"""The bridge's messages over ZeroMQ (JSON, and the profiles as raw arrays), and the command
-check both transports share. Units are the simulator's: mm, s, rad; poses are row-major 4 x 4
+"""The bridge's messages over ZeroMQ in protocol 2 (JSON, and the profiles as raw arrays; the
+hello, reset, ready, end and refusals of protocol 3 too, whose steps and commands are packed
+records: :mod:`seamtrack.bridge.packed`), and the command check both transports share. Units
+are the simulator's: mm, s, rad; poses are row-major 4 x 4
 lists; in JSON a NaN is ``null``.
 
 Client -> server (each message one ZeroMQ frame of UTF-8 JSON, at most
@@ -45,7 +47,7 @@ Server -> client:
   another protocol or without the token, any message of a peer other than the session's.
 
 Protocol 1 sent the profiles as JSON lists (some 50 kB and milliseconds a frame); a client
-saying protocol 1 is refused, the refusal (and the error) naming protocol 2.
+saying protocol 1 is refused, the refusal (and the error) naming protocols 2 and 3.
 """
 
 from __future__ import annotations
@@ -60,7 +62,11 @@ from seamtrack.bridge.lockstep import BridgeFailure, Reply, Step, finite_vector
 from seamtrack.control.tracking import Command, TrackerContext
 from seamtrack.sensing.profiles import HINT_TOLERANCE_MM
 
-PROTOCOL = 2
+PROTOCOL = 3
+
+#: The protocols served: 3 (steps and commands as packed records,
+#: :mod:`seamtrack.bridge.packed`) and 2 (JSON steps and commands, as below).
+PROTOCOLS = (2, 3)
 
 #: The largest message a client may send: a command is a few hundred bytes.
 MAX_MESSAGE_BYTES = 4096

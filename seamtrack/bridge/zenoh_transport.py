@@ -39,10 +39,11 @@ from typing import Any
 import numpy as np
 
 from seamtrack.bridge import cdr, messages, rmw
-from seamtrack.bridge.lockstep import Answer, BridgeFailure, Reply, Step, StopRequest, TfChain
+from seamtrack.bridge.lockstep import Answer, BridgeFailure, Interrupted, Reply, Step, TfChain
 from seamtrack.bridge.wire import MAX_MESSAGE_BYTES, MAX_THEN, context_json, make_command
 from seamtrack.control.tracking import TrackerContext
 from seamtrack.errors import SeamtrackError
+from seamtrack.simulation.stop import StopRequest
 
 DEFAULT_ENDPOINT = "tcp/127.0.0.1:7447"
 NODE = "seamtrack"
@@ -226,7 +227,7 @@ class ZenohTransport:
         """Wake the loop once its deadline has passed (the inbox's receive has no timeout)."""
         while not self._stop.wait(WATCH_S):
             deadline = self._deadline
-            if deadline is not None and (time.monotonic() > deadline or self.stop):
+            if deadline is not None and (time.monotonic() > deadline or self.stop.requested):
                 self._wake()
 
     # ------------------------------------------------------------------ protocol
@@ -256,7 +257,7 @@ class ZenohTransport:
         client = self.client
         wanted = [t for kind, t in seen[client] if kind == "MS" and t in self.pubs]
         while not all(self.pubs[t].matching_status.matching for t in wanted):
-            if time.monotonic() > deadline or self.stop:
+            if time.monotonic() > deadline or self.stop.requested:
                 self._next(deadline, "--wait-s", "receive from its subscriptions")
             time.sleep(0.01)
         time.sleep(SETTLE_S)
@@ -338,8 +339,8 @@ class ZenohTransport:
     def _next(self, deadline: float, field: str, what: str) -> tuple[str, Any, Any]:
         try:
             while True:
-                if self.stop:
-                    raise self.stop.failure()
+                if self.stop.requested:
+                    raise Interrupted(self.stop.reason)
                 left = deadline - time.monotonic()
                 if left <= 0:
                     raise queue.Empty
@@ -391,8 +392,8 @@ class ZenohTransport:
                 return topic, size, payload.to_bytes() if size <= MAX_MESSAGE_BYTES else None
             if key != self.wake_key:
                 continue  # another type on a cmd_ topic: not the tracker's command
-            if self.stop:
-                raise self.stop.failure()
+            if self.stop.requested:
+                raise Interrupted(self.stop.reason)
             while not self.events.empty():
                 _, what, token = self.events.get_nowait()
                 fields = rmw.parse_token(token)

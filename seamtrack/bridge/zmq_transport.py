@@ -1,6 +1,7 @@
 """The ZeroMQ transport: a ROUTER socket (the server) serving one REQ (or DEALER) client; JSON
-messages, the steps' profiles as raw arrays in further parts of a multipart message
-(:mod:`seamtrack.bridge.wire` gives the format). The client speaks first: ``hello`` ->
+messages, or in protocol 3 steps and commands as packed records, the steps' profiles as raw
+arrays in further parts of a multipart message (:mod:`seamtrack.bridge.wire` and
+:mod:`seamtrack.bridge.packed` give the formats). The client speaks first: ``hello`` ->
 ``reset``, ``ready`` -> step 0, ``command`` -> step 1, ... -> ``end``.
 
 By default the socket listens on the loopback interface, :data:`DEFAULT_ENDPOINT`;
@@ -21,8 +22,8 @@ the run's ``status`` and ``reason`` (:meth:`ZmqTransport.finish`).
 Safety: the socket listens on this machine only unless told otherwise; ZeroMQ drops a peer
 whose message is over :data:`HARD_LIMIT_BYTES` (no allocation for it), and a message over
 :data:`~seamtrack.bridge.wire.MAX_MESSAGE_BYTES`, or of more than one part, is refused before
-it is decoded; messages are parsed as JSON and checked field by field, never evaluated or
-unpickled.
+it is decoded; messages are parsed as JSON or unpacked as records and checked field by field,
+never evaluated or unpickled.
 """
 
 from __future__ import annotations
@@ -40,10 +41,11 @@ import time
 from pathlib import Path
 from typing import Any
 
-from seamtrack.bridge import wire
-from seamtrack.bridge.lockstep import Answer, BridgeFailure, Step, StopRequest, TfChain
+from seamtrack.bridge import packed, wire
+from seamtrack.bridge.lockstep import Answer, BridgeFailure, Interrupted, Step, TfChain
 from seamtrack.control.tracking import TrackerContext
 from seamtrack.errors import SeamtrackError
+from seamtrack.simulation.stop import StopRequest
 
 #: TCP on the loopback interface: a tracker on this machine connects to the same endpoint.
 DEFAULT_ENDPOINT = "tcp://127.0.0.1:5555"
@@ -190,6 +192,15 @@ class ZmqTransport:
         self.poller.register(self.sock, zmq.POLLIN)
         self.poller.register(self.monitor, zmq.POLLIN)
         self.with_profile = True
+        self.packed = False  # protocol 3: packed steps and commands
+        # zmq's flags as plain ints, looked up once (an enum's | costs microseconds a step)
+        self._srcfd = int(zmq.SRCFD)
+        self._noblock, self._more = int(zmq.NOBLOCK), int(zmq.NOBLOCK | zmq.SNDMORE)
+        from zmq.utils.monitor import recv_monitor_message
+
+        self._monitor_message = recv_monitor_message
+        self.encoder = packed.StepEncoder()
+        self._known: dict[bytes, Any] = {}  # the last command's moves, by their bytes
         #: The session's client: its routing envelope (id, and the empty delimiter a REQ
         #: socket puts) and the file descriptor of its connection; None before its hello.
         self.peer: list[bytes] | None = None
@@ -209,18 +220,20 @@ class ZmqTransport:
                 self._refuse(envelope, "no token, or not the server's (docs/ros.md)")
                 self.peer, self.peer_fd = None, -1  # a stranger: wait on for the client
                 continue
-            if hello.get("protocol") != wire.PROTOCOL:
+            if hello.get("protocol") not in wire.PROTOCOLS:
                 failure = BridgeFailure(
-                    f"speaks protocol {str(hello.get('protocol'))[:20]}, not {wire.PROTOCOL}",
-                    fix=f"send 'protocol': {wire.PROTOCOL} (docs/ros.md gives its messages)",
+                    f"speaks protocol {str(hello.get('protocol'))[:20]}, not 2 or 3",
+                    fix="send 'protocol': 3 (packed records) or 'protocol': 2 (JSON) "
+                    "(docs/ros.md gives their messages)",
                 )
                 self._refuse(envelope, f"{failure.message}; fix: {failure.fix}")
                 self.told = True
                 raise failure
         self.with_profile = hello.get("profile", True) is not False
+        self.packed = hello.get("protocol") == 3
         reset = {
             "op": "reset",
-            "protocol": wire.PROTOCOL,
+            "protocol": hello.get("protocol"),
             "lockstep": lockstep,
             "context": wire.context_json(context),
             "max_message_bytes": wire.MAX_MESSAGE_BYTES,
@@ -230,12 +243,26 @@ class ZmqTransport:
         wire.expect(wire.parse(raw), "ready")
 
     def exchange(self, step: Step) -> Answer:
+        if self.packed:
+            return self._exchange_packed(step)
         self._send(wire.step_parts(step, self.with_profile))
         raw = self._recv(self.timeout_s, "--timeout-s", f"answer step {step.seq}")
         message = wire.parse(raw)
         (command, within), then = wire.commands_from_json(message, step.seq)
         if "seam_hint" in message:  # it holds until the client says another (or null)
             self.seam_hint = wire.seam_hint_from_json(message)
+        return Answer(command, within, tuple(then), self.seam_hint)
+
+    def _exchange_packed(self, step: Step) -> Answer:
+        """Protocol 3: the step's packed records out (the profiles' points without a copy),
+        the packed command in (:mod:`seamtrack.bridge.packed`)."""
+        self._send(self.encoder.parts(step, self.with_profile), copy_after=1)
+        raw = self._recv(self.timeout_s, "--timeout-s", f"answer step {step.seq}")
+        if len(raw) > wire.MAX_MESSAGE_BYTES:
+            wire.parse(raw)  # refused as oversized, as in protocol 2
+        (command, within), then, hint = packed.decode_command(raw, step.seq, self._known)
+        if hint is not False:  # it holds until the client says another (or clears it)
+            self.seam_hint = hint  # type: ignore[assignment]
         return Answer(command, within, tuple(then), self.seam_hint)
 
     def finish(self, summary: dict[str, Any]) -> None:
@@ -284,12 +311,24 @@ class ZmqTransport:
             cut = 2 if len(frames) > 2 and frames[1] == b"" else 1
             self._refuse(frames[:cut], "this server serves another client; one at a time")
 
-    def _send(self, parts: list[bytes]) -> None:
+    def _send(self, parts: list[Any], copy_after: int = -1) -> None:
+        """Send ``parts`` to the client; from part ``copy_after`` on (the profiles' arrays)
+        without a copy of ours (ZeroMQ holds the buffer until it is sent); the parts before
+        are copied, so their buffer may be reused at once."""
         assert self.peer is not None
         self.owed = True
+        zmq = self._zmq
         try:
-            self.sock.send_multipart([*self.peer, *parts], self._zmq.NOBLOCK)
-        except self._zmq.ZMQError:  # the client's queue is full, or it is gone
+            if copy_after < 0:
+                self.sock.send_multipart([*self.peer, *parts], zmq.NOBLOCK)
+                return
+            send, more = self.sock.send, self._more
+            for part in self.peer:
+                send(part, more)
+            last = len(parts) - 1
+            for i, part in enumerate(parts):
+                send(part, more if i < last else self._noblock, copy=i < copy_after)
+        except zmq.ZMQError:  # the client's queue is full, or it is gone
             pass
 
     def _refuse(self, envelope: list[bytes], reason: str) -> None:
@@ -318,12 +357,9 @@ class ZmqTransport:
         """The next message of any peer: its envelope, its connection's file descriptor and
         its parts. The session client's disconnection, the deadline and the stop request end
         the wait; other peers' connections coming and going do not."""
-        from zmq.utils.monitor import recv_monitor_message
-
-        zmq = self._zmq
         while True:
-            if self.stop:
-                raise self.stop.failure()
+            if self.stop.requested:
+                raise Interrupted(self.stop.reason)
             left = deadline - time.monotonic()
             if left <= 0:
                 raise BridgeFailure(
@@ -335,12 +371,12 @@ class ZmqTransport:
             ready = dict(self.poller.poll(slice_ms))
             if self.sock in ready:
                 frames = self.sock.recv_multipart(copy=False)
-                fd = int(frames[-1].get(zmq.SRCFD))
+                fd = int(frames[-1].get(self._srcfd))
                 raw = [bytes(f.bytes) for f in frames]
                 cut = 2 if len(raw) > 2 and raw[1] == b"" else 1  # REQ: id, b"", ...
                 return raw[:cut], fd, raw[cut:]
             if self.monitor in ready:
-                event = recv_monitor_message(self.monitor)
+                event = self._monitor_message(self.monitor)
                 if self.peer is not None and int(event["value"]) == self.peer_fd:
                     self.owed = False  # nobody to answer
                     raise BridgeFailure(

@@ -2,7 +2,7 @@
 bridge, :mod:`seamtrack.bridge.lockstep`; docs/ros.md).
 
 SIGINT (Ctrl-C) and SIGTERM (``kill``, a CI time-out, a container stop) only set a flag, the
-bridge's :class:`~seamtrack.bridge.lockstep.StopRequest`, read between steps and while the
+loop's :class:`~seamtrack.simulation.stop.StopRequest`, read after each tick and while the
 bridge waits for the client: the run ends there as ``interrupted``, the client is sent its
 ``end``, the run folder is written (staged, so nothing half-written is left), one line says so,
 and the exit code is 130 (SIGINT) or 143 (SIGTERM), as a shell reports a command a signal
@@ -18,7 +18,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
-HELP = "run a scene with the tracker in another process (ZeroMQ JSON, or ROS 2 over Zenoh)"
+HELP = "run a scene with the tracker in another process (ZeroMQ, or ROS 2 over Zenoh)"
 
 
 def add_parser(sub: Any) -> argparse.ArgumentParser:
@@ -36,7 +36,8 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
         "--transport",
         choices=["zmq", "zenoh"],
         default="zmq",
-        help="zmq: JSON and raw profile arrays over a ZeroMQ ROUTER socket (one client a run); "
+        help="zmq: packed records (protocol 3) or JSON (2) and raw profile arrays over a ZeroMQ "
+        "ROUTER socket (one client a run); "
         "zenoh: ROS 2 messages as rmw_zenoh puts them",
     )
     p.add_argument(
@@ -136,22 +137,28 @@ def start_hint(args: argparse.Namespace, endpoint: str) -> str:
 
 
 @contextlib.contextmanager
-def stop_on_signals(request: Any) -> Iterator[None]:
-    """SIGINT and SIGTERM set ``request`` (a flag; nothing is raised) while the block runs;
-    the handlers that were there come back after it."""
+def stop_on_signals(stop: Any) -> Iterator[None]:
+    """SIGINT and SIGTERM request ``stop`` (a :class:`~seamtrack.simulation.stop.StopRequest`:
+    a flag, nothing is raised; the first signal names it, cause ``sigint`` or ``sigterm``)
+    while the block runs; the handlers that were there come back after it."""
     signums = (signal.SIGINT, signal.SIGTERM)
     before = {signum: signal.getsignal(signum) for signum in signums}
+
+    def handler(signum: int, frame: Any) -> None:
+        name = signal.Signals(signum).name
+        stop.request(name.lower(), f"bridge: interrupted by {name}")
+
     for signum in signums:
-        signal.signal(signum, request)
+        signal.signal(signum, handler)
     try:
         yield
     finally:
-        for signum, handler in before.items():
-            signal.signal(signum, handler)
+        for signum, handler_before in before.items():
+            signal.signal(signum, handler_before)
 
 
 def cmd_serve(args: argparse.Namespace) -> int:
-    from seamtrack.bridge.lockstep import StopRequest
+    from seamtrack.simulation.stop import StopRequest
 
     stop = StopRequest()
     with stop_on_signals(stop):
@@ -159,7 +166,8 @@ def cmd_serve(args: argparse.Namespace) -> int:
 
 
 def _serve(args: argparse.Namespace, stop: Any) -> int:
-    from seamtrack.bridge.lockstep import Interrupted, serve, signal_name
+    from seamtrack.bridge.lockstep import serve
+    from seamtrack.cli.signals import exit_code
     from seamtrack.cli.tables import print_table
     from seamtrack.io.output import check_writable, write_run
     from seamtrack.simulation.assemble import build_parts
@@ -171,10 +179,10 @@ def _serve(args: argparse.Namespace, stop: Any) -> int:
     out = Path(args.out) if args.out else Path("runs") / scene.name
     check_writable(out)
     parts = build_parts(scene)
-    if stop:  # before the run began: nothing was simulated, nothing is written
-        print(f"seamtrack serve: {signal_name(stop.signum)} before the run began; "
+    if stop.requested:  # before the run began: nothing was simulated, nothing is written
+        print(f"seamtrack serve: {stop.cause.upper()} before the run began; "
               "nothing written", file=sys.stderr)  # fmt: skip
-        return 128 + stop.signum
+        return exit_code(stop)
     transport = make_transport(args)
     if not args.quiet:
         print(
@@ -196,14 +204,14 @@ def _serve(args: argparse.Namespace, stop: Any) -> int:
     )
     files = ["summary.json", "trace.csv", "frames.csv", "scene.toml"] + ["error.png"] * plot
     wrote = f"{out}/" + ", ".join(files)
-    if isinstance(tracker.failure, Interrupted):
+    if exit_code(stop):  # stopped by a signal
         t_s = result.summary.get("sim_time_s", 0.0)
         print(
-            f"seamtrack serve: {signal_name(tracker.failure.signum)}: stopped at t = "
+            f"seamtrack serve: {stop.cause.upper()}: stopped at t = "
             f"{t_s:.3f} s (status interrupted); wrote {wrote}",
             file=sys.stderr,
         )
-        return 128 + tracker.failure.signum
+        return exit_code(stop)
     if tracker.failure is not None:
         print(f"seamtrack: error: {tracker.failure}", file=sys.stderr)
         return 2

@@ -248,7 +248,7 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         self.max_correction_mm = bound = float(max_correction_mm)
         self.action_space = spaces.Box(-bound, bound, shape=(2,), dtype=np.float32)
         self._run: LockstepRun | None = None
-        self._correction = np.zeros(2)
+        self._correction = (0.0, 0.0)  # (lateral, vertical) mm, as floats
         self._s_nominal = 0.0
         self._s_true = 0.0
         self._last_obs = np.zeros(size, dtype=np.float32)
@@ -270,7 +270,7 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         _, _, lateral, normal = self.nominal.frame(0.0)
         start = self.parts.tcp_start_world + jitter[0] * lateral + jitter[1] * normal
         parts = _with_start(self.parts, start)
-        self._correction = np.zeros(2)
+        self._correction = (0.0, 0.0)  # (lateral, vertical) mm, as floats
         self._s_nominal = 0.0
         self._s_true = 0.0
         self._run = run = LockstepRun(parts, loop_seed)
@@ -297,9 +297,14 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
                 stacklevel=2,
             )
         bound = self.max_correction_mm
-        clipped = bool((np.abs(a) > bound).any())
+        ax, ay = a.tolist()  # finite floats: np.clip's min(max(x, lo), hi) in Python
+        clipped = abs(ax) > bound or abs(ay) > bound
         reach = 2.0 * self.lost_mm  # farther is lost anyway; keeps the aim inside the travel
-        self._correction = np.clip(self._correction + np.clip(a, -bound, bound), -reach, reach)
+        cx, cy = self._correction
+        self._correction = (
+            min(max(cx + min(max(ax, -bound), bound), -reach), reach),
+            min(max(cy + min(max(ay, -bound), bound), -reach), reach),
+        )
         frame = run.next_frame(self._command())
         if isinstance(frame, Ended):
             obs, reward, terminated, truncated, info = self._ended(frame)
@@ -336,7 +341,7 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         correction; the last stretch arrives at rest at the path's end."""
         s = min(self._s_nominal + self.lead_mm, self.nominal.length_mm)
         point, _, lateral, normal = self.nominal.frame_floats(s)
-        c_lat, c_vert = self._correction.tolist()
+        c_lat, c_vert = self._correction
         target = np.array(
             [p + c_lat * a + c_vert * b for p, a, b in zip(point, lateral, normal, strict=True)]
         )
@@ -358,13 +363,15 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         assert valid is not None
         np.copyto(obs[: 2 * n].reshape(n, 2), profile.points_laser, where=valid[:, None])
         obs[2 * n : 3 * n] = valid
-        c_lat, c_vert = self._correction.tolist()
+        c_lat, c_vert = self._correction
         obs[3 * n :] = (
             _dot(off, lateral), _dot(off, normal),
             _dot(velocity, lateral), _dot(velocity, normal), _dot(velocity, tangent),
             c_lat, c_vert, frame.t_s, s_nom / self.nominal.length_mm,
         )  # fmt: skip
-        np.clip(obs, -OBSERVATION_LIMIT, OBSERVATION_LIMIT, out=obs)
+        # np.clip's arithmetic (max, then min) as two ufuncs, without its Python wrapper
+        np.maximum(obs, -OBSERVATION_LIMIT, out=obs)
+        np.minimum(obs, OBSERVATION_LIMIT, out=obs)
         seam_point = self.truth.frame_floats(s_true)[0]
         error = math.dist((x, y, z), seam_point)
         self._last_obs = obs

@@ -28,20 +28,12 @@ from numpy.typing import NDArray
 
 from seamtrack.bridge.frames import observe
 from seamtrack.control.tracking import Command, Measurement, TrackerContext
-from seamtrack.errors import PluginRuntimeError
 from seamtrack.sensing.profiles import Feature, Profile
 from seamtrack.simulation.assemble import Parts
 from seamtrack.simulation.loop import Result, run
+from seamtrack.simulation.stop import StopRequest
 
 FloatArray = NDArray[np.float64]
-
-
-class _Stop(Exception):
-    """Raised inside the loop's greenlet to end the run (the episode ended, or the env
-    closed)."""
-
-
-_STOP = object()  # the command that ends the run
 
 
 @dataclass(frozen=True, eq=False)
@@ -108,13 +100,10 @@ class LockstepTracker:
         if measurement is not None:
             self._arrived = None
             profile = self.profiles.popleft()
-            reply = self.parent.switch(
+            self._command = self.parent.switch(
                 Frame(profile, measurement.feature, measurement, t_s, tcp_world,
                       tcp_velocity_world)
             )  # fmt: skip
-            if reply is _STOP:
-                raise _Stop
-            self._command = reply
         return self._command
 
 
@@ -137,14 +126,13 @@ class LockstepRun:
         observed = observe(parts, lambda frame: profiles.append(frame.profile))
         self.parts = dataclasses.replace(observed, tracker=self.tracker)
         self.seed = seed
+        self.stop_request = StopRequest()  # the loop reads it after each tick
         self.ended: Ended | None = None
         self._greenlet = greenlet.greenlet(self._run)
 
     def _run(self) -> Ended:
         try:
-            result = run(self.parts, seed=self.seed)
-        except PluginRuntimeError as exc:
-            return Ended() if isinstance(exc.error, _Stop) else Ended(error=exc)
+            result = run(self.parts, seed=self.seed, stop=self.stop_request)
         except greenlet.GreenletExit:  # dropped unfinished: the collector ends it
             raise
         except BaseException as exc:  # handed to the environment, raised there
@@ -162,9 +150,12 @@ class LockstepRun:
         return item
 
     def stop(self) -> None:
-        """End the run (the loop is waiting for a command, has ended, or never started)."""
+        """End the run (the loop is waiting for a command, has ended, or never started):
+        a stop request, which the loop honours after the tick it waits in (it brakes there)
+        and ends as ``interrupted``."""
         if self.ended is None and self._greenlet:  # started and not dead: waiting in command()
-            self.ended = self._greenlet.switch(_STOP)
+            self.stop_request.request("env_stop", "the environment ended the episode")
+            self.ended = self._greenlet.switch(None)
         self.ended = self.ended or Ended()
 
     @property

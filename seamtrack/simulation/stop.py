@@ -16,6 +16,7 @@ The loop's own ends go through the same record (:meth:`StopRequest.end`), and
 how the run ended       ``status``          ``stop_cause``
 =====================  ==================  ============================================
 a request from outside  ``interrupted``     the requester's cause (``sigint``, ...)
+a bridge's client fails ``stalled``         ``bridge_failure`` (a request with a status)
 target out of travel    ``limit_violation`` ``limit_violation``
 no progress             ``stalled``         ``stalled``
 simulated-time limit    ``stalled``         ``time_limit``
@@ -50,12 +51,13 @@ class StopRequest:
     def requested(self) -> bool:
         return bool(self.status)
 
-    def request(self, cause: str, reason: str = "") -> None:
-        """Ask the loop to stop at its next tick (status ``interrupted``); safe in a signal
+    def request(self, cause: str, reason: str = "", status: str = INTERRUPTED) -> None:
+        """Ask the loop to stop at its next tick (status ``interrupted`` unless the requester
+        names another, as a bridge whose client failed does: ``stalled``); safe in a signal
         handler. The first request wins."""
         if not self.status:
             self.cause, self.reason = cause, reason or cause
-            self.status = INTERRUPTED
+            self.status = status
 
     def end(self, status: str, reason: str = "", cause: str = "") -> None:
         """The loop's own end (``limit_violation``, ``stalled``, ``completed``, ...)."""

@@ -31,7 +31,7 @@ def main() -> int:
     sock = ctx.socket(zmq.REQ)
     sock.setsockopt(zmq.LINGER, 0)
     sock.connect(args.endpoint)
-    sock.send_json(hello(args))
+    sock.send_json({**hello(args), "protocol": 2})  # JSON steps: its misbehaviours are JSON
     reset = sock.recv_json()
     speed = reset["context"]["welding_speed_mm_s"]
     tracker = ConvergenceRadius(speed, args.radius_mm, then=args.then)
