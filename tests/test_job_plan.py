@@ -83,3 +83,28 @@ def test_the_plan_check_prints_is_the_plan_laid() -> None:
     assert predicted is not None and predicted.passes == len(plans)
     assert [sum(1 for p in plans if p.layer == k) for k in range(len(predicted.beads_per_layer))] \
         == list(predicted.beads_per_layer)  # fmt: skip
+
+
+def _iso_level(fill) -> str:
+    from seamtrack.workpiece.inspection import inspect_weld
+
+    r, corners = fill.reinforcement_mm(), np.asarray(fill.top_corners)
+    return inspect_weld(fill.s_mm, thickness_mm=20.0,
+                        width_mm=np.abs(corners[:, 1, 0] - corners[:, 0, 0]),
+                        excess_mm=r[:, 1], underfill_mm=-r[:, 0]).level  # fmt: skip
+
+
+@pytest.mark.parametrize("count", [12, 14])
+def test_a_forced_pass_count_fills_to_level_b(count: int) -> None:
+    """multipass-v-groove's V (20 mm, 60 deg, 2 mm gap) in a forced count of passes: the
+    plan's cap holds as many beads as cover the top width at the cap beads' own size (a bead
+    every 0.7 of its width), so no valley between two cap beads dips under the plates' line
+    (before: 4 cap beads sized as the fill's, 6.5 mm apart, 0.24 mm under it at 12 passes),
+    and the crown stays within ISO 5817 level B (h <= 1 + 0.1 b, b 24 mm: 3.4 mm)."""
+    fill, plans = dry_run(v_groove(lambda s: np.full_like(s, 2.0)), AdaptivePlanner(),
+                          JobState(PROCESS, count=count, reinforcement_mm=2.0),
+                          BeadShape())  # fmt: skip
+    assert len(plans) == count
+    reinforcement = fill.reinforcement_mm()
+    assert np.all(reinforcement[:, 0] >= 0.0)
+    assert _iso_level(fill) == "B"

@@ -208,11 +208,11 @@ def layout(groove: MeasuredGroove, state: LayoutState) -> Layout:
     fill_total = fill_area - band
     cap_bead = (band + total - fill_area) / cap_beads
     for _ in range(5):  # the cap's beads as many as cover the width at their own size
-        if state.count is not None:
-            break
         n = max(1, math.ceil((top + 2 * CAP_OVERLAP_MM) / (0.7 * p.bead_width_mm(cap_bead))))
         # no bead smaller than the fastest travel speed lays
         n = min(n, max(1, int((band + total - fill_area) / p.bead_area_mm2(p.speed_max_mm_s))))
+        if state.count is not None:  # and at least one fill bead left of a forced count
+            n = min(n, max(1, state.count - 1))
         if n == cap_beads:
             break
         cap_beads, cap_bead = n, (band + total - fill_area) / n
