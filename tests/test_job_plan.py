@@ -108,3 +108,23 @@ def test_a_forced_pass_count_fills_to_level_b(count: int) -> None:
     reinforcement = fill.reinforcement_mm()
     assert np.all(reinforcement[:, 0] >= 0.0)
     assert _iso_level(fill) == "B"
+
+
+def test_check_warns_of_a_count_that_cannot_fill_to_level_b(capsys) -> None:
+    """40 passes on multipass-v-groove's V: even at the fastest travel speed (15 mm/s) each
+    bead is 9.75 mm^2, 390 mm^2 in all, more than the groove (about 250 mm^2) and the largest
+    crown level B allows over its top width (h <= 1 + 0.1 b = 3.4 mm, a parabola:
+    2/3 * 24 * 3.4 = 54 mm^2) hold: ``check`` warns, naming the field. 12 passes fill it
+    (the forced-count test above): no warning."""
+    from seamtrack.cli.main import main
+    from seamtrack.control.planner import Process
+
+    p = Process()
+    smallest = float(p.bead_area_mm2(p.speed_max_mm_s))
+    groove = 0.5 * (2.0 + 2.0 + 2 * 19.0 * TAN30) * 19.0 + 2.0 * 1.0
+    assert 40 * smallest > groove + 2.0 / 3.0 * 24.0 * (1.0 + 0.1 * 24.0)
+    assert main(["check", "multipass-v-groove", "--set", "passes.count=40"]) == 0
+    err = capsys.readouterr().err
+    assert "warning: passes.count = 40" in err and "not B" in err
+    assert main(["check", "multipass-v-groove", "--set", "passes.count=12"]) == 0
+    assert "warning" not in capsys.readouterr().err
