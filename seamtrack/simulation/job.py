@@ -476,7 +476,7 @@ def _steered(
         planned = None  # the pass before's groove where this frame gives none (not yet seen)
         if feature:
             seen[0] = True
-        elif previous is not None and (not seen[0] or (plan.cap and plan.reference in _FIXED)):
+        elif guide is not None and (not seen[0] or (plan.cap and plan.reference in _FIXED)):
             # not yet seen: start on the plan; a cap bead's top corner, which no bead moves,
             # and whose height is the cap's aim: where the pass before measured it (a cap's
             # edge bead puts the sensor so far off the groove's middle that the far plate
