@@ -118,6 +118,7 @@ class PassRecord:
     run_s: float
     deposit_s: float
     scene: Scene
+    plan_s: float = 0.0  # the planner's plan() for this pass (wall time)
 
 
 @dataclass(frozen=True, eq=False)
@@ -227,8 +228,10 @@ def _run_job(
     stopped = ""
     while index < limit:
         assert groove is not None
+        planning = time.perf_counter()
         plan = _plan(plan_maker, name, groove, index, state, arm=is_arm(c), window=window,
                      budget_s=budget_s)  # fmt: skip
+        plan_s = time.perf_counter() - planning
         if plan is None:
             _check_overrides_laid(c.passes, index, name)
             break
@@ -250,7 +253,8 @@ def _run_job(
                 fill = fill.deposit(done.path_world, done.path_area_mm2, shape)
         except SceneError as exc:  # the torch left the groove: the bead cannot be laid
             stopped = f"the bead of pass {index + 1} could not be laid ({exc.message})"
-        record = dataclasses.replace(done.record, deposit_s=time.perf_counter() - start)
+        record = dataclasses.replace(done.record, deposit_s=time.perf_counter() - start,
+                                     plan_s=plan_s)  # fmt: skip
         records.append(record)
         if stopped:
             break
