@@ -63,7 +63,7 @@ def test_a_gap_varying_along_the_seam(planner) -> None:
         top = empty.top_corners[:, 1, 0] - empty.top_corners[:, 0, 0]
         assert np.ptp(excess - 2.0 / 3.0 * top * 2.0) <= 0.1 * np.ptp(groove)
         assert np.ptp(fill.reinforcement_mm()[:, 1]) <= 1.0
-        assert np.all(fill.reinforcement_mm()[:, 0] >= -0.25)
+        assert np.all(fill.reinforcement_mm()[:, 0] >= 0.0)  # no station under the line
     else:
         np.testing.assert_allclose(laid, laid[0], rtol=1e-9)
         assert np.ptp(excess) == pytest.approx(np.ptp(groove), rel=1e-6)
@@ -94,13 +94,15 @@ def _iso_level(fill) -> str:
                         excess_mm=r[:, 1], underfill_mm=-r[:, 0]).level  # fmt: skip
 
 
-@pytest.mark.parametrize("count", [12, 14])
+@pytest.mark.parametrize("count", [12, 14, 20])
 def test_a_forced_pass_count_fills_to_level_b(count: int) -> None:
     """multipass-v-groove's V (20 mm, 60 deg, 2 mm gap) in a forced count of passes: the
     plan's cap holds as many beads as cover the top width at the cap beads' own size (a bead
     every 0.7 of its width), so no valley between two cap beads dips under the plates' line
     (before: 4 cap beads sized as the fill's, 6.5 mm apart, 0.24 mm under it at 12 passes),
-    and the crown stays within ISO 5817 level B (h <= 1 + 0.1 b, b 24 mm: 3.4 mm)."""
+    and the crown stays within ISO 5817 level B (h <= 1 + 0.1 b, b 24 mm: 3.4 mm). The first
+    cap bead, alone against the left corner, gets CAP_FIRST_WEIGHT of each other's area
+    (20 passes: 0.06 mm under the line without)."""
     fill, plans = dry_run(v_groove(lambda s: np.full_like(s, 2.0)), AdaptivePlanner(),
                           JobState(PROCESS, count=count, reinforcement_mm=2.0),
                           BeadShape())  # fmt: skip
