@@ -331,7 +331,8 @@ HEADLINE = (
 
 def _multipass() -> str:
     r = load("multipass")
-    t, forced = r["jobs"][0], r["jobs"][1]
+    t = r["jobs"][0]
+    forced = next(j for j in r["jobs"] if j["count"] == 12)
     gap = {row["planner"]: row for row in r["varying_gap"]}
     spread = ", ".join(f"{k} {v['reinforcement_spread_mm']:.2f} mm" for k, v in gap.items())
     return (

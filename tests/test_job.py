@@ -520,3 +520,43 @@ def test_the_catalogue_holds_issue_43s_multipass_reproducers() -> None:
     assert field_of("travel_speed_mm_s = 1000.0") == "passes.overrides.0.travel_speed_mm_s"
     assert field_of("number = 99", "passes.count=2") == "passes.overrides.0.number"
     assert field_of("bad_planners:NeverReturns", "wall_time_limit_s") == "planner.name"
+
+
+def test_the_handover_from_the_approach_is_the_start_ramp() -> None:
+    """The torch reaches the plan on its approach, then slows for a while as the tracker takes
+    over (the handover, path indices 3..6): that slowdown is the start (planned area); a dip
+    after the handover stays a fatter bead."""
+    planned = np.full(10, 5.0)
+    speed = np.array([1.0, 5.0, 5.0, 5.0, 3.5, 4.0, 5.0, 5.0, 3.0, 5.0])
+    assert job.ramped(speed, planned).tolist() == [5.0, 5, 5, 5, 3.5, 4.0, 5, 5, 3.0, 5]
+    out = job.ramped(speed, planned, handover=(3, 6))
+    assert out.tolist() == [5.0, 5, 5, 5, 5, 5, 5, 5, 3.0, 5]
+
+
+def _trapezoid(bottom_z: float, half_gap: float = 1.0, top_z: float = 20.0) -> np.ndarray:
+    """A 60 deg V's 7 points (y, z) with a flat fill surface at bottom_z (walls 30 deg off
+    vertical), the top corners at top_z."""
+    t = math.tan(math.radians(30))
+    foot = half_gap + bottom_z * t
+    top = half_gap + top_z * t
+    ys = np.linspace(-foot, foot, 5)
+    return np.array([[-top, top_z], *[[y, bottom_z] for y in ys], [top, top_z]])
+
+
+def test_after_bead_lifts_the_fill_surface_by_the_bead_area() -> None:
+    """The groove measured before a bead with that bead added is the V filled to the height
+    that holds the bead's area: on a 60 deg V (w = 2 + 2 z tan 30) the trapezoid between the
+    old and new fill surfaces has the bead's area (analytic), the feet on the walls, the top
+    corners where they were."""
+    from seamtrack.control.planner import MeasuredGroove
+    from seamtrack.simulation.job_paths import after_bead
+
+    before = _trapezoid(8.0)[None]
+    groove = MeasuredGroove(np.array([0.0]), before, np.array([100.0]))
+    out = after_bead(groove, np.array([30.0]))
+    z1 = float(out.points[0, 3, 1])
+    width = lambda z: 2.0 + 2.0 * z * math.tan(math.radians(30))  # noqa: E731
+    assert 0.5 * (width(8.0) + width(z1)) * (z1 - 8.0) == pytest.approx(30.0, rel=1e-9)
+    np.testing.assert_allclose(out.points[0], _trapezoid(z1), atol=1e-9)
+    assert out.area_mm2[0] == pytest.approx(70.0)
+    assert after_bead(groove, None) is groove

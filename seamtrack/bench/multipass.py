@@ -26,6 +26,8 @@ import numpy as np
 from seamtrack.bench.common import machine_info
 
 SEAM_MM, QUICK_SEAM_MM = 300.0, 40.0
+#: The forced pass counts the bench runs besides the plan's own (issue 42: each at level B).
+FORCED_COUNTS = (10, 12, 14)
 
 
 def _job(scene_name: str, overrides: dict[str, Any]) -> tuple[Any, float, int]:
@@ -48,6 +50,9 @@ def _costs(job: Any) -> dict[str, float]:
         "build_s_per_pass": float(np.mean([r.build_s for r in welded])),
         "run_s_per_pass": float(np.mean([r.run_s for r in welded])),
         "deposit_s_per_pass": float(np.mean([r.deposit_s for r in welded])),
+        # the planner's plan() a pass (issue 42: target <= 15 ms)
+        "plan_ms_per_pass": 1e3 * float(np.mean([r.plan_s for r in welded])),
+        "plan_ms_max": 1e3 * float(np.max([r.plan_s for r in welded])),
     }
 
 
@@ -55,7 +60,7 @@ def bench_multipass(out_dir: str | Path, quick: bool = False) -> dict[str, Any]:
     """Run the bench (see the module docstring); writes ``multipass.json`` and ``.md``."""
     out = Path(out_dir)
     seam = QUICK_SEAM_MM if quick else SEAM_MM
-    jobs = [_one_job(seam, "auto"), _one_job(seam, 12)]
+    jobs = [_one_job(seam, count) for count in ("auto", *FORCED_COUNTS)]
     compare = []
     for name in ("adaptive", "fixed"):
         job, wall, _ = _job(
@@ -71,6 +76,8 @@ def bench_multipass(out_dir: str | Path, quick: bool = False) -> dict[str, Any]:
                 "reinforcement_spread_mm": s["reinforcement_spread_mm"],
                 "underfilled_stations": s["underfilled_stations"],
                 "max_tracking_error_mm": s["max_tracking_error_mm"],
+                "quality_level": s.get("quality_level"),
+                "worst": _worst(s.get("inspection")),
                 "wall_time_s": wall,
             }
         )
@@ -106,8 +113,17 @@ def _one_job(seam: float, count: int | str) -> dict[str, Any]:
         "reinforcement_min_mm": s["reinforcement_min_mm"],
         "reinforcement_max_mm": s["reinforcement_max_mm"],
         "underfilled_stations": s["underfilled_stations"],
+        "quality_level": s.get("quality_level"),
         **_costs(job),
     }
+
+
+def _worst(inspection: dict[str, Any] | None) -> dict[str, Any]:
+    """Each ISO 5817 imperfection's level, worst station and value (job.json's inspection)."""
+    if not inspection:
+        return {}
+    return {name: {"level": v["level"], "s_mm": v["worst_s_mm"], "mm": v["worst_mm"]}
+            for name, v in inspection.items() if isinstance(v, dict)}  # fmt: skip
 
 
 def _dry(seam_mm: float) -> list[dict[str, Any]]:
@@ -138,40 +154,51 @@ def _dry(seam_mm: float) -> list[dict[str, Any]]:
     return rows
 
 
+def _planner_ms(row: dict[str, Any]) -> str:
+    """The planner's time a pass, mean and max (ms); '-' in a result from before it was kept."""
+    if "plan_ms_per_pass" not in row:
+        return "-"
+    return f"{row['plan_ms_per_pass']:.1f}, {row['plan_ms_max']:.1f}"
+
+
 def markdown(result: dict[str, Any]) -> str:
     lines = [
         f"multipass-v-groove on a {result['jobs'][0]['seam_mm']:g} mm seam: its own plan, and"
-        " forced into 12 passes:",
+        " forced into other pass counts:",
         "",
         "| passes.count | passes | beads per layer | status | wall time (s) | peak memory (MB) |"
         " arc time (s) | x real time | mesh rebuild (s/pass) | loop (s/pass) |"
-        " deposition (s/pass) | max tracking error (mm) | passes over 0.5 mm |"
-        " reinforcement (mm) | underfilled stations |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        " deposition (s/pass) | planner (ms/pass, max) | max tracking error (mm) |"
+        " passes over 0.5 mm | reinforcement (mm) | underfilled stations | ISO 5817 level |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for t in result["jobs"]:
         lines.append(
             f"| {t['count']} | {t['passes']} | {t['beads_per_layer']} | {t['status']} | "
             f"{t['wall_time_s']:.1f} | {t['peak_rss_mb']:.0f} | {t['arc_time_s']:.1f} | "
             f"{t['x_real_time']:.2f} | {t['build_s_per_pass']:.2f} | "
-            f"{t['run_s_per_pass']:.2f} | {t['deposit_s_per_pass']:.3f} | "
+            f"{t['run_s_per_pass']:.2f} | {t['deposit_s_per_pass']:.3f} | {_planner_ms(t)} | "
             f"{t['max_tracking_error_mm']:.3f} | {t['passes_over_0_5_mm']} | "
             f"{t['reinforcement_min_mm']:.2f} to {t['reinforcement_max_mm']:.2f} | "
-            f"{t['underfilled_stations']} |"
+            f"{t['underfilled_stations']} | {t.get('quality_level') or '-'} |"
         )
     lines += [
         "",
         "multipass-varying-gap, adaptive against fixed planner:",
         "",
         "| planner | passes | reinforcement min (mm) | max (mm) | spread along the seam (mm) |"
-        " underfilled stations |",
-        "|---|---|---|---|---|---|",
+        " underfilled stations | ISO 5817 level | worst stations |",
+        "|---|---|---|---|---|---|---|---|",
     ]
     for row in result["varying_gap"]:
+        worst = "; ".join(f"{k.replace('_', ' ')} {v['level']} at {v['s_mm']:g} mm "
+                          f"({v['mm']:.2f} mm)" for k, v in row.get("worst", {}).items()
+                          if v["level"] != "B")  # fmt: skip
         lines.append(
             f"| {row['planner']} | {row['passes']} | {row['reinforcement_min_mm']:.2f} | "
             f"{row['reinforcement_max_mm']:.2f} | {row['reinforcement_spread_mm']:.2f} | "
-            f"{row['underfilled_stations']} |"
+            f"{row['underfilled_stations']} | {row.get('quality_level') or '-'} | "
+            f"{worst or '-'} |"
         )
     lines += ["", "the same, each plan laid with perfect tracking (the planners alone):", "",
               "| planner | passes | reinforcement min (mm) | max (mm) | spread along the seam"

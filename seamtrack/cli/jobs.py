@@ -7,6 +7,8 @@ import sys
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from seamtrack.cli.tables import print_table
 from seamtrack.errors import SceneError
 
@@ -98,6 +100,10 @@ def check_rows(c: Any, parts: Any = None) -> list[tuple[str, Any]]:
     rows: list[tuple[str, Any]] = [("passes", c.passes.count)]
     if parts is not None:
         rows.append(("passes the plan lays (CAD groove)", planned_passes(c, parts)))
+        level, warning = planned_level(c, parts)
+        rows.append(("ISO 5817 level of the plan, perfectly tracked", level))
+        if warning:
+            print(f"warning: {warning}", file=sys.stderr)
     return rows + [
         ("planner", c.planner.name if c.planner is not None else "adaptive"),
         ("scan-only pass first", c.passes.scan_first),
@@ -107,6 +113,52 @@ def check_rows(c: Any, parts: Any = None) -> list[tuple[str, Any]]:
         ("travel speed window (mm/s)", f"{p.speed_min_mm_s:g} .. {p.speed_max_mm_s:g}"),
         ("heat input at the nominal speed (kJ/mm)", heat_input_kj_mm(c, v)),
     ]
+
+
+def planned_level(c: Any, parts: Any) -> tuple[str, str]:
+    """The ISO 5817 level the plan meets laid with perfect tracking on the CAD groove (the
+    dry run: :func:`seamtrack.simulation.job.dry_run`, every speed within the process's
+    window), and a warning (empty: none) when a requested ``passes.count`` does not meet
+    level B: the beads the process lays at its limits, that many, leave the groove under
+    the plates' line or the crown over the limit."""
+    from seamtrack.control.planner import JobState, is_builtin, planner
+    from seamtrack.simulation.job import bead_shape, dry_run
+    from seamtrack.simulation.job_paths import STATION_SPACING_MM
+    from seamtrack.simulation.passes import process_of
+    from seamtrack.workpiece.beads import BeadShape
+    from seamtrack.workpiece.fill import FillState
+    from seamtrack.workpiece.inspection import MIN_THICKNESS_MM, inspect_weld
+
+    assert c.passes is not None
+    name = c.planner.name if c.planner is not None else "adaptive"
+    if not is_builtin(name):
+        return "decided by the plugin as it runs", ""
+    params = dict(c.planner.params) if c.planner is not None else {}
+    count = c.passes.count if isinstance(c.passes.count, int) else None
+    empty = FillState.from_mesh(parts.mesh, parts.seam, spacing_mm=STATION_SPACING_MM)
+    state = JobState(process_of(c), count=count, reinforcement_mm=c.passes.reinforcement_mm)
+    fill, _ = dry_run(empty, planner(name, **params), state, bead_shape(c, BeadShape))
+    r = np.asarray(fill.reinforcement_mm())
+    corners = np.asarray(fill.top_corners)
+    t = c.workpiece.params.get("plate_thickness_mm") if c.workpiece is not None else None
+    thickness = float(t) if t is not None else float(np.max(corners[:, :, 1].min(axis=1)
+                                                         - empty.base_z.min(axis=1)))  # fmt: skip
+    if thickness <= MIN_THICKNESS_MM:
+        return "not judged (plate of 3 mm or less)", ""
+    weld = inspect_weld(fill.s_mm, thickness_mm=thickness,
+                        width_mm=np.abs(corners[:, 1, 0] - corners[:, 0, 0]),
+                        excess_mm=r[:, 1], underfill_mm=-r[:, 0])  # fmt: skip
+    level = weld.level or "none"
+    text = (f"{level} (reinforcement {r[:, 0].min():.2f} to {r[:, 1].max():.2f} mm, "
+            f"{int(np.count_nonzero(r[:, 0] < 0))} stations under the plates' line)")  # fmt: skip
+    if count is None or level == "B":
+        return text, ""
+    return text, (
+        f"passes.count = {count}: the plan laid with perfect tracking on the CAD groove meets "
+        f"ISO 5817 level {level}, not B ({text.split('(', 1)[1][:-1]}): {count} beads within "
+        "the process's travel speed window do not fill this groove cleanly; fix: give "
+        'another passes.count, or count = "auto"'
+    )
 
 
 def planned_passes(c: Any, parts: Any) -> str:

@@ -43,6 +43,7 @@ from seamtrack.control.fill_layout import (  # noqa: F401 (the layout moved; nam
     MeasuredGroove,
     Process,
     cap_area_mm2,
+    cap_share,
     fill_order,
     layout,
 )
@@ -208,7 +209,7 @@ class AdaptivePlanner:
             if self._cap is None:
                 share = (np.maximum(remaining, 0.0) + crown) / max(left, 1)
                 self._cap = (groove.s_mm.copy(), share)
-            target = np.interp(groove.s_mm, *self._cap)
+            target = cap_share(np.interp(groove.s_mm, *self._cap), n, slot_rank)
         else:  # what the cap will not hold, over the fill beads left
             cap_beads = self.layout.beads_per_layer[-1]
             band = cap_beads * self.layout.cap_bead_area_mm2 - crown

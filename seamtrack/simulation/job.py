@@ -61,8 +61,10 @@ from seamtrack.simulation.job_paths import (
     POINT_INDEX,
     STATION_SPACING_MM,
     FrameGroove,
+    after_bead,
     arc_path,
     frame_groove,
+    handover,
     measured_groove,
     one_station,
     pass_path,
@@ -116,6 +118,7 @@ class PassRecord:
     run_s: float
     deposit_s: float
     scene: Scene
+    plan_s: float = 0.0  # the planner's plan() for this pass (wall time)
 
 
 @dataclass(frozen=True, eq=False)
@@ -225,8 +228,10 @@ def _run_job(
     stopped = ""
     while index < limit:
         assert groove is not None
+        planning = time.perf_counter()
         plan = _plan(plan_maker, name, groove, index, state, arm=is_arm(c), window=window,
                      budget_s=budget_s)  # fmt: skip
+        plan_s = time.perf_counter() - planning
         if plan is None:
             _check_overrides_laid(c.passes, index, name)
             break
@@ -236,7 +241,8 @@ def _run_job(
                                 window=window)  # fmt: skip
             assert plan is not None
         done = _pass(scene, plan, fill, cad_seam, rng, process, progress, f"pass_{index + 1:02d}",
-                     flip, adapt, name, groove, stop)  # fmt: skip
+                     flip, adapt, name, groove, stop,
+                     after_bead(groove, state.last_bead_area_mm2))  # fmt: skip
         _release_pass(freeze)
         if stop is not None and stop.requested:  # the bead of a stopped pass is not laid
             records.append(done.record)
@@ -247,7 +253,8 @@ def _run_job(
                 fill = fill.deposit(done.path_world, done.path_area_mm2, shape)
         except SceneError as exc:  # the torch left the groove: the bead cannot be laid
             stopped = f"the bead of pass {index + 1} could not be laid ({exc.message})"
-        record = dataclasses.replace(done.record, deposit_s=time.perf_counter() - start)
+        record = dataclasses.replace(done.record, deposit_s=time.perf_counter() - start,
+                                     plan_s=plan_s)  # fmt: skip
         records.append(record)
         if stopped:
             break
@@ -345,6 +352,7 @@ def _pass(
     planner_name: str = "planner",
     previous: MeasuredGroove | None = None,
     stop: StopRequest | None = None,
+    expected: MeasuredGroove | None = None,
 ) -> _Done:
     """One closed-loop pass (``plan`` None: the scan-only pass along the groove's middle).
     ``flip``: the laser's y_L runs against the stations' y (the extractor's left is the
@@ -377,7 +385,8 @@ def _pass(
     )
     frames: list[tuple[Feature, FloatArray]] = []
     each: list[FrameGroove | None] = []  # every frame's groove, as the sense function saw it
-    parts = _steered(parts, fill, cad_seam, plan, frames, adapt, planner_name, previous, each)
+    parts = _steered(parts, fill, cad_seam, plan, frames, adapt, planner_name, previous, each,
+                     expected)  # fmt: skip
     build_s = time.perf_counter() - start
     start = time.perf_counter()
     result = run(parts, progress=progress, seed=c.simulation.seed, stop=stop)
@@ -387,8 +396,9 @@ def _pass(
     arc_time = float(t[-1] - t[0]) if len(t) > 1 else 0.0
     wire = process.wire_feed_mm_s if plan is None else plan.wire_feed_mm_s
     if plan is not None and len(path):
-        planned = plan.speed_at(cad_seam.closest(path).arc_length_mm)
-        speeds = ramped(speeds, np.asarray(planned, dtype=float))
+        s_on = cad_seam.closest(path).arc_length_mm
+        planned = plan.speed_at(s_on)
+        speeds = ramped(speeds, np.asarray(planned, dtype=float), handover=handover(result, s_on))
     area = np.asarray(
         bead_area_mm2(process.wire_diameter_mm, wire, speeds, process.deposition_efficiency),
         dtype=float,
@@ -422,6 +432,7 @@ def _steered(
     planner_name: str = "planner",
     previous: MeasuredGroove | None = None,
     each: list[FrameGroove | None] | None = None,
+    expected: MeasuredGroove | None = None,
 ) -> Parts:
     """The parts with a sense function that records every frame's feature (and, in
     ``each``, its groove: :func:`~seamtrack.simulation.job_paths.frame_groove`), moves the measured
@@ -430,8 +441,11 @@ def _steered(
     replace the speed and offset at the station the sensor sees, for when the torch gets
     there. A frame whose fill surface lies more than :data:`FILL_DROP_MM` below the one the
     pass before measured there (``previous``, a running median along the seam: :func:`settled`;
-    the fill only grows) is taken as no groove."""
+    the fill only grows) is taken as no groove. Until the pass's sensor measures the groove,
+    the torch follows the plan on ``expected`` (``previous`` with its pass's bead added:
+    :func:`~seamtrack.simulation.job_paths.after_bead`), else on ``previous``."""
     sense = parts.sense
+    guide = previous if expected is None else expected
     tracker = parts.tracker
     T_sensor_tcp = np.linalg.inv(np.asarray(parts.robot.T_tcp_sensor, dtype=float))
     lateral = fill.T_world_station[:, :3, 1]
@@ -466,12 +480,12 @@ def _steered(
         planned = None  # the pass before's groove where this frame gives none (not yet seen)
         if feature:
             seen[0] = True
-        elif previous is not None and (not seen[0] or (plan.cap and plan.reference in _FIXED)):
+        elif guide is not None and (not seen[0] or (plan.cap and plan.reference in _FIXED)):
             # not yet seen: start on the plan; a cap bead's top corner, which no bead moves,
             # and whose height is the cap's aim: where the pass before measured it (a cap's
             # edge bead puts the sensor so far off the groove's middle that the far plate
             # leaves its stripe now and then)
-            feature = planned_feature(feature, T_world_sensor, fill, plan, previous,
+            feature = planned_feature(feature, T_world_sensor, fill, plan, guide,
                                       STATION_SPACING_MM, POINT_INDEX)  # fmt: skip
             planned = one_station(frame_groove(feature, T_world_sensor, fill, cad_seam,
                                                T_station_world), fill)  # fmt: skip

@@ -149,7 +149,12 @@ def arc_path(
     return path[keep], t[keep], np.maximum(speed[keep], floor_mm_s)
 
 
-def ramped(speed: FloatArray, planned: FloatArray, fraction: float = 0.95) -> FloatArray:
+def ramped(
+    speed: FloatArray,
+    planned: FloatArray,
+    fraction: float = 0.95,
+    handover: tuple[int, int] = (0, 0),
+) -> FloatArray:
     """The speed that sets the bead's area: the actual one, except while the torch speeds up
     from rest at the start and brakes to rest at the end (before it first reaches, and after
     it last runs at, ``fraction`` of the planned speed there), where the wire feed follows the
@@ -163,14 +168,47 @@ def ramped(speed: FloatArray, planned: FloatArray, fraction: float = 0.95) -> Fl
     sensor saw the bump and its torch rose over it, and the bumps piled up layer on layer
     (a 2 mm crown over the last 5 mm of a 100 mm seam, the fill passes' trackers 0.5-1.2 mm
     off the smoothed fill surface there). Within 5 % of the plan the torch is welding; below
-    it, at the ends, the crater is."""
+    it, at the ends, the crater is.
+
+    The start is the same: the torch runs at the plan on its approach to the first point its
+    sensor measured, then slows as the tracker takes over (to 3.4 mm/s for a 4.6 mm/s plan,
+    over a millimetre or two), the ``handover`` (path indices, from to: :func:`handover`).
+    Counted at the actual speed, that laid a bead a third fatter 10 mm into every pass, at
+    the same place every pass (the sensor's look-ahead): a 1.9 mm bump by the third layer,
+    which the next torch met as its first measured point and overshot by 2-4 mm. The start
+    ramp ends at the first point at the plan's speed after the last slow one of the
+    handover."""
     out = speed.copy()
-    fast = np.flatnonzero(speed >= fraction * planned)
-    if not len(fast):
+    fast = speed >= fraction * planned
+    if not fast.any():
         return planned.copy()
-    out[: fast[0]] = planned[: fast[0]]
-    out[fast[-1] + 1 :] = planned[fast[-1] + 1 :]
+    first = int(np.argmax(fast))
+    slow = np.flatnonzero(~fast[handover[0] : handover[1]])
+    if len(slow):
+        after = np.flatnonzero(fast[handover[0] + slow[-1] :])
+        first = max(first, handover[0] + slow[-1] + int(after[0]) if len(after) else first)
+    last = len(fast) - 1 - int(np.argmax(fast[::-1]))
+    out[:first] = planned[:first]
+    out[last + 1 :] = planned[last + 1 :]
     return out
+
+
+#: How far past the first point its sensor measured (mm) a torch may still be slowing as the
+#: tracker takes over from its approach (:func:`ramped`; up to 4 mm past it measured on
+#: multipass-v-groove's 12-pass plan, the slowest 2.9 mm/s of 4.6 planned).
+HANDOVER_MM = 6.0
+
+
+def handover(result: Result, path_s_mm: FloatArray) -> tuple[int, int]:
+    """The indices of the arc's path (its points' arc lengths ``path_s_mm``, ascending) from
+    where the torch reaches the first point its sensor measured (the loop's welding portion
+    starts: the end of its approach) to :data:`HANDOVER_MM` past it ((0, 0): none)."""
+    welding = np.flatnonzero(result.trace.welding)
+    if not len(welding) or not len(path_s_mm):
+        return 0, 0
+    s_on = float(result.trace.arc_length_mm[welding[0]])
+    lo, hi = np.searchsorted(path_s_mm, [s_on, s_on + HANDOVER_MM])
+    return int(lo), int(hi)
 
 
 def to_the_ends(path: FloatArray, area: FloatArray, seam: Seam) -> tuple[FloatArray, FloatArray]:
@@ -200,3 +238,37 @@ def settled(groove: MeasuredGroove, half_window: int = 4) -> MeasuredGroove:
         return groove
     points = station_median(groove.points, half_window, cut_ends=True)
     return MeasuredGroove(groove.s_mm, points, groove.area_mm2)
+
+
+def after_bead(groove: MeasuredGroove, area_mm2: Any) -> MeasuredGroove:
+    """The groove a pass's sensor measured *before* its torch laid its bead, with that bead
+    added: the fill surface (the 5 bottom points) lifted by the height ``dz`` at which the
+    groove between the walls holds the bead's area (``area_mm2``, (m,) at its stations; None:
+    ``groove`` itself), ``w dz + k dz^2 / 2 = area`` with w the fill surface's width and k the
+    walls' widening per mm of height (their slopes from the 7 points), the feet moved up their
+    walls, the top corners (which no bead moves) kept.
+
+    What the pass after expects where its sensor has not yet measured the groove (its start,
+    :func:`~seamtrack.simulation.passes.planned_feature`): the groove before the last bead
+    lies a bead lower (a single-bead layer of the 12-pass plan: 4 mm), and a torch started
+    there dived under the fill and overshot it by 2-4 mm over the next 15 mm."""
+    if area_mm2 is None or not len(groove):
+        return groove
+    p = groove.points.copy()
+    area = np.maximum(np.asarray(area_mm2, dtype=float).reshape(len(groove)), 0.0)
+    rise = np.maximum(p[:, [0, 6], 1] - p[:, [1, 5], 1], 1e-9)  # (m, 2) the walls' heights
+    widen = np.abs(p[:, [1, 5], 0] - p[:, [0, 6], 0]) / rise  # mm of width per mm of height
+    w = np.maximum(p[:, 5, 0] - p[:, 1, 0], 0.0)
+    k = widen.sum(axis=1)
+    dz = np.where(k > 1e-9, (np.sqrt(w * w + 2 * k * area) - w) / np.maximum(k, 1e-9),
+                  area / np.maximum(w, 1e-9))  # fmt: skip
+    dz = np.minimum(dz, rise.min(axis=1))
+    left = p[:, 1, 0] - widen[:, 0] * dz
+    right = p[:, 5, 0] + widen[:, 1] * dz
+    old_left, old_w = p[:, 1, 0].copy(), np.maximum(w, 1e-9)
+    for row in range(1, 6):  # the bottom points stretched between the new feet, lifted
+        frac = (p[:, row, 0] - old_left) / old_w
+        p[:, row, 0] = left + frac * (right - left)
+        p[:, row, 1] += dz
+    remaining = np.maximum(groove.area_mm2 - area, 0.0)
+    return MeasuredGroove(groove.s_mm, p, remaining)
