@@ -87,9 +87,16 @@ def _trackers_table(data: dict[str, Any]) -> str:
     return trackers_table(data)
 
 
+def _presets_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.tradeoff import presets_table
+
+    return presets_table(data)
+
+
 #: The bench JSON files a page may quote -> the bench's own function that renders their table.
 RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {
     "trackers.json": _trackers_table,
+    "tradeoff.json": _presets_table,
 }
 
 
