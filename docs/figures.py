@@ -75,7 +75,7 @@ BENCHES: dict[str, tuple[tuple[str, ...], str, str]] = {
 
 #: A page's bench table: its markers and what lies between them.
 TABLE = re.compile(
-    r"^<!-- table: (?P<source>bench/[\w/.-]+\.(json|md(#\d+)?)) -->\n(?P<body>.*?)"
+    r"^<!-- table: (?P<source>bench/[\w/.-]+\.(json(#\w+)?|md(#\d+)?)) -->\n(?P<body>.*?)"
     r"^<!-- end table -->$",
     re.S | re.M,
 )
@@ -87,16 +87,24 @@ def _trackers_table(data: dict[str, Any]) -> str:
     return trackers_table(data)
 
 
+def _speckle_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.camera_speckle import speckle_summary_table
+
+    return speckle_summary_table(data)
+
+
 def _presets_table(data: dict[str, Any]) -> str:
     from seamtrack.bench.tradeoff import presets_table
 
     return presets_table(data)
 
 
-#: The bench JSON files a page may quote -> the bench's own function that renders their table.
+#: The bench JSON files a page may quote (``file.json``, or ``file.json#name`` for one of a
+#: file's several tables) -> the bench's own function that renders the table.
 RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {
     "trackers.json": _trackers_table,
     "tradeoff.json": _presets_table,
+    "camera.json#speckle": _speckle_table,
 }
 
 
@@ -118,7 +126,8 @@ def render_table(source: str) -> str:
     file, _, index = source.partition("#")
     path = BENCH.parent / file
     if path.suffix == ".json":
-        return RENDERERS[path.name](json.loads(path.read_text()))
+        name = f"{path.name}#{index}" if index else path.name
+        return RENDERERS[name](json.loads(path.read_text()))
     text = path.read_text()
     return md_tables(text)[int(index)] if index else text.rstrip("\n") + "\n"
 
