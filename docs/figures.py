@@ -70,6 +70,11 @@ BENCHES: dict[str, tuple[tuple[str, ...], str, str]] = {
         "seamtrack bench trackers",
         "the paper's algorithms against the trajectory tracker on `paper-v-groove`",
     ),
+    "paper": (
+        ("paper.json",),
+        "seamtrack bench paper",
+        "the paper's Table 4: algorithm II on `paper-corner` over the radius of convergence",
+    ),
 }
 
 
@@ -93,6 +98,18 @@ def _speckle_table(data: dict[str, Any]) -> str:
     return speckle_summary_table(data)
 
 
+def _table4_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.paper import table4_table
+
+    return table4_table(data)
+
+
+def _servo_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.paper import servo_table
+
+    return servo_table(data)
+
+
 def _presets_table(data: dict[str, Any]) -> str:
     from seamtrack.bench.tradeoff import presets_table
 
@@ -105,6 +122,8 @@ RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {
     "trackers.json": _trackers_table,
     "tradeoff.json": _presets_table,
     "camera.json#speckle": _speckle_table,
+    "paper.json#table4": _table4_table,
+    "paper.json#servo": _servo_table,
 }
 
 
