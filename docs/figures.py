@@ -70,12 +70,17 @@ BENCHES: dict[str, tuple[tuple[str, ...], str, str]] = {
         "seamtrack bench trackers",
         "the paper's algorithms against the trajectory tracker on `paper-v-groove`",
     ),
+    "paper": (
+        ("paper.json",),
+        "seamtrack bench paper",
+        "the paper's Table 4: algorithm II on `paper-corner` over the radius of convergence",
+    ),
 }
 
 
 #: A page's bench table: its markers and what lies between them.
 TABLE = re.compile(
-    r"^<!-- table: (?P<source>bench/[\w/.-]+\.(json|md(#\d+)?)) -->\n(?P<body>.*?)"
+    r"^<!-- table: (?P<source>bench/[\w/.-]+\.(json(#\w+)?|md(#\d+)?)) -->\n(?P<body>.*?)"
     r"^<!-- end table -->$",
     re.S | re.M,
 )
@@ -87,9 +92,38 @@ def _trackers_table(data: dict[str, Any]) -> str:
     return trackers_table(data)
 
 
-#: The bench JSON files a page may quote -> the bench's own function that renders their table.
+def _speckle_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.camera_speckle import speckle_summary_table
+
+    return speckle_summary_table(data)
+
+
+def _table4_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.paper import table4_table
+
+    return table4_table(data)
+
+
+def _servo_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.paper import servo_table
+
+    return servo_table(data)
+
+
+def _presets_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.tradeoff import presets_table
+
+    return presets_table(data)
+
+
+#: The bench JSON files a page may quote (``file.json``, or ``file.json#name`` for one of a
+#: file's several tables) -> the bench's own function that renders the table.
 RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {
     "trackers.json": _trackers_table,
+    "tradeoff.json": _presets_table,
+    "camera.json#speckle": _speckle_table,
+    "paper.json#table4": _table4_table,
+    "paper.json#servo": _servo_table,
 }
 
 
@@ -111,7 +145,8 @@ def render_table(source: str) -> str:
     file, _, index = source.partition("#")
     path = BENCH.parent / file
     if path.suffix == ".json":
-        return RENDERERS[path.name](json.loads(path.read_text()))
+        name = f"{path.name}#{index}" if index else path.name
+        return RENDERERS[name](json.loads(path.read_text()))
     text = path.read_text()
     return md_tables(text)[int(index)] if index else text.rstrip("\n") + "\n"
 

@@ -249,3 +249,18 @@ def test_a_childs_peak_memory_is_its_own(tmp_path: Path) -> None:
     assert held[-1] == 1.0
     assert code == 0, stderr
     assert 10 < peak_mb < 1024, peak_mb
+
+
+def test_paper_bench(tmp_path: Path) -> None:
+    """The paper's Table 4 on two radii: a larger radius of convergence cuts the corner more (the
+    torch switches to the next point before reaching the current one), and the servo's lag
+    rounds the corner, lowering the maximum."""
+    from seamtrack.bench.runner import run_benches
+
+    result = run_benches("paper", tmp_path, quick=True)["paper"]
+    _written(tmp_path / "paper", "paper.json", "paper.md")
+    ideal, servo = result["ideal_axes"], result["servo_on"]
+    assert [r["radius_mm"] for r in ideal] == [6.0, 0.1]
+    assert all(r["status"] == "completed" for r in ideal + servo)
+    assert ideal[0]["max_error_mm"] > ideal[1]["max_error_mm"]
+    assert servo[1]["max_error_mm"] < ideal[1]["max_error_mm"]

@@ -223,23 +223,28 @@ def test_multipass_geometry_example_lays_a_bead_of_its_area(tmp_path: Path) -> N
 #: writes yet (a test's or a one-off command's); once a bench writes it, render it between
 #: markers (docs/figures.py) and lower its count here.
 HAND_WRITTEN_FIGURE_TABLES = {
-    "README.md": 1,  # the documentation map (a decimal in a page's description)
     "arms.md": 2,
-    "cad.md": 1,  # parameters and their defaults, not a figure
-    "camera.md": 3,
-    "extractors.md": 4,
-    "gym.md": 1,  # the observation's slices, not a figure
-    "heat.md": 2,  # the materials' handbook constants and the relations used, not figures
-    "inspection.md": 1,  # ISO 5817's limits, not a figure
-    "mesh-mode.md": 2,
-    "multipass.md": 1,
-    "paper.md": 4,
-    "scenes.md": 1,  # keys and their defaults, not a figure
-    "speed.md": 1,
+    "camera.md": 1,
+    "extractors.md": 2,
+    "mesh-mode.md": 1,
+    "paper.md": 1,
     "sweeps.md": 1,
     "trackers.md": 1,
-    "views.md": 1,  # the notebooks, not a figure
     "weldments.md": 2,
+}
+
+#: Tables with decimals that are no figure (nothing the code measures), per page, and why.
+NOT_FIGURE_TABLES = {
+    "README.md": 1,  # the documentation map (a decimal in a page's description)
+    "cad.md": 1,  # parameters and their defaults
+    "extractors.md": 2,  # the families' models and refusals (their thresholds, parameters)
+    "gym.md": 1,  # the observation's slices
+    "heat.md": 2,  # the materials' handbook constants and the relations used
+    "inspection.md": 1,  # ISO 5817's limits
+    "mesh-mode.md": 1,  # the realism knobs' models (a worked value of the dropout law)
+    "paper.md": 1,  # the paper's own Table 4, quoted for comparison
+    "scenes.md": 1,  # keys and their defaults
+    "views.md": 1,  # the notebooks
 }
 
 
@@ -265,7 +270,10 @@ def test_hand_written_figure_tables_only_fall() -> None:
         n = hand_written_figure_tables(page.read_text())
         if n:
             counts[page.name] = n
-    grown = {k: v for k, v in counts.items() if v > HAND_WRITTEN_FIGURE_TABLES.get(k, 0)}
+    allowed = {
+        k: HAND_WRITTEN_FIGURE_TABLES.get(k, 0) + NOT_FIGURE_TABLES.get(k, 0) for k in counts
+    }
+    grown = {k: v for k, v in counts.items() if v > allowed[k]}
     assert not grown, f"new hand-written figure tables (render them from a bench): {grown}"
 
 

@@ -198,3 +198,37 @@ def speckle_sweep_table(rows: list[dict[str, Any]], table: Any) -> list[str]:
             for r in rows
         ],
     )
+
+
+def speckle_summary_table(result: dict[str, Any]) -> str:
+    """docs/camera.md's summary of the speckle sweep (a ``camera.json``): per chip, the range of
+    each ratio over line widths and f-numbers, and the camera's default 0.2 mm line at 512 x
+    1024, f/2.8, 5.6 and 11."""
+    rows = result["speckle_sweep"]
+    keys = ("centroid_ratio", "vs_line_formula", "spot_ratio")
+    lines = [
+        "| pixels (pitch um) | column / Dorsch (C = 1) | column / line formula "
+        "| patch / Dorsch spot |",
+        "|---|---|---|---|",
+    ]
+    for px in sorted({tuple(r["image_px"]) for r in rows}):
+        chip = [r for r in rows if tuple(r["image_px"]) == px]
+        pitch = chip[0]["pixel_pitch_um"]
+        cells = [f"{min(r[k] for r in chip):.2f}-{max(r[k] for r in chip):.2f}" for k in keys]
+        lines.append(
+            f"| {px[0]} x {px[1]} ({pitch[0]:.1f} x {pitch[1]:.1f}) | " + " | ".join(cells) + " |"
+        )
+    stops = (2.8, 5.6, 11.0)
+    default = {
+        r["f_number"]: r
+        for r in rows
+        if tuple(r["image_px"]) == (512, 1024) and r["line_thickness_mm"] == 0.2
+    }
+    if all(f in default for f in stops):
+        cells = [" / ".join(f"{default[f][k]:.2f}" for f in stops) for k in keys]
+        lines.append(
+            "| the camera's default 0.2 mm line, 512 x 1024, f/2.8 / 5.6 / 11 | "
+            + " | ".join(cells)
+            + " |"
+        )
+    return "\n".join(lines) + "\n"

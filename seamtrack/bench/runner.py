@@ -246,6 +246,12 @@ def _bench_trackers(out: Path, quick: bool) -> Any:
     return bench_trackers(out, quick=quick)
 
 
+def _bench_paper(out: Path, quick: bool) -> Any:
+    from seamtrack.bench.paper import bench_paper
+
+    return bench_paper(out, quick=quick)
+
+
 BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "raycast": lambda out, quick: bench_raycast(out, quick=quick),
     "extractors": _bench_extractors,
@@ -261,6 +267,7 @@ BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "bridge": _bench_bridge,
     "multipass": _bench_multipass,
     "trackers": _bench_trackers,
+    "paper": _bench_paper,
 }
 
 

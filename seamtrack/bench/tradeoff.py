@@ -212,6 +212,29 @@ def markdown(result: dict[str, Any]) -> str:
     return "\n".join(lines) + "\n"
 
 
+#: The presets the docs recommend (docs/speed.md), in the order of its table, with a note.
+PRESET_NOTES = {"fast preview": "", "default": " (the built-in scenes)", "reference": ""}
+
+
+def presets_table(result: dict[str, Any]) -> str:
+    """docs/speed.md's table of the recommended presets: their settings, cost and errors."""
+    rows = {r["label"]: r for r in result["rows"]}
+    lines = [
+        "| preset | mesh tolerance | rays | float64 refinement | frame rate | control period "
+        "| cost | RMS / max error |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for label, note in PRESET_NOTES.items():
+        r = rows[label]
+        lines.append(
+            f"| **{label}**{note} | {r['tolerance_mm']:g} mm | {r['rays']} | "
+            f"{'on' if r['refine_float64'] else 'off'} | {r['frame_rate_hz']:g} Hz | "
+            f"{r['control_period_s'] * 1e3:g} ms | {r['total_s']:.2g} s | "
+            f"{r['rms_error_mm']:.2g} / {r['max_error_mm']:.2g} mm |"
+        )
+    return "\n".join(lines) + "\n"
+
+
 def _plot(rows: list[dict[str, Any]], path: Path) -> None:
     from seamtrack.viz.plots import pyplot_module
 
