@@ -354,13 +354,15 @@ def scene_arc_light(scene: Scene, camera: Any) -> Any:
 
 def arc_frame(arc_light: Any, T_world_sensor: FloatArray, tcp: list[FloatArray | None]) -> Any:
     """The arc in this frame: at the torch's tip (the TCP, from the sensor's pose), the plate's
-    normal taken against the torch's axis (the tool's z points into the work)."""
+    normal taken along the torch's axis, on the side of the sensor."""
     from seamtrack.sensing.arc.image import ArcFrame
 
     sensor_to_tcp = tcp[0]
     assert sensor_to_tcp is not None, "the robot sets the sensor-to-torch transform"
     T_world_tcp = np.asarray(T_world_sensor) @ sensor_to_tcp
-    return ArcFrame(arc_light, T_world_tcp[:3, 3].copy(), -T_world_tcp[:3, 2])
+    tip, axis = T_world_tcp[:3, 3].copy(), T_world_tcp[:3, 2]
+    up = axis if float(np.dot(np.asarray(T_world_sensor)[:3, 3] - tip, axis)) >= 0 else -axis
+    return ArcFrame(arc_light, tip, up)
 
 
 def _stripe_noise(params: dict[str, Any]) -> Any:
