@@ -94,3 +94,19 @@ def test_cooling_field_is_one_over_r_and_glow_follows_planck() -> None:
         float(light.planck_radiance(660.0, 1811.0) / light.planck_radiance(660.0, 1500.0)),
         rel=1e-3,
     )
+
+
+def test_rosenthal_plate_field_is_the_heat_modules_in_the_source_frame() -> None:
+    from seamtrack.heat.rosenthal import rosenthal_temperature
+
+    heat = light.RosenthalHeat(5000.0, 5.0, 0.04, 10.0)
+    arc = np.array([10.0, 20.0, 3.0])
+    # travel along world -y on a plate of normal +z: source-frame x = -(world y - 20)
+    pts = arc + np.array([[0.0, -8.0, 0.0], [0.0, 12.0, 0.0], [5.0, 0.0, 0.0]])
+    got = light.rosenthal_plate_temperature(pts, arc, [0.0, -1.0, 0.0], [0, 0, 1.0], heat)
+    local = np.array([[8.0, 0.0, 0.0], [-12.0, 0.0, 0.0], [0.0, 5.0, 0.0]])
+    want = rosenthal_temperature(local, power_w=5000.0, speed_mm_s=5.0,
+                                 conductivity_w_per_mm_k=0.04, diffusivity_mm2_per_s=10.0,
+                                 ambient_c=light.ROOM_K - 273.15) + 273.15  # fmt: skip
+    np.testing.assert_allclose(got, np.minimum(want, light.MELT_K))
+    assert got[1] > got[0]  # behind the arc is hotter than ahead at a similar distance

@@ -150,7 +150,7 @@ def render_image(
     if arc is not None:
         electrons = electrons + arc_electrons(
             arc.light, optics.arc_view(T, arc.light.laser_power_w), caster, mat, arc.arc_mm,
-            arc.up, t_s if math.isfinite(t_s) else 0.0, rng,
+            arc.up, t_s if math.isfinite(t_s) else 0.0, rng, arc.travel,
         ).astype(electrons.dtype)  # fmt: skip
     spacing = hits.distance_mm[direct.ray] * power[direct.ray]
     truth = formation.stripe_rows(direct.u, direct.w, direct.ray, direct.points, spacing,

@@ -349,7 +349,20 @@ def scene_arc_light(scene: Scene, camera: Any) -> Any:
         fwhm_nm=c.filter_fwhm_nm if c else 10.0,
         shape=c.filter_shape if c else "gaussian",
     )
-    return ArcLight(a.process, a.current_a, band, spatter=a.spatter, fume=a.fume, glow=a.glow)
+    heat = None
+    p, w = scene.config.process, scene.config.workpiece
+    if p is not None:  # Rosenthal's field of the scene's heat input, at the welding speed
+        from seamtrack.heat.materials import thermal_material
+        from seamtrack.heat.rosenthal import process_power_w
+        from seamtrack.sensing.arc.light import RosenthalHeat
+
+        steel = thermal_material("stainless_steel" if w and w.material and "stainless" in
+                                 w.material else "carbon_steel")  # fmt: skip
+        speed = scene.config.simulation.welding_speed_mm_s
+        heat = RosenthalHeat(process_power_w(p), speed, steel.conductivity_w_per_mm_k,
+                             steel.diffusivity_mm2_per_s)  # fmt: skip
+    return ArcLight(a.process, a.current_a, band, spatter=a.spatter, fume=a.fume, glow=a.glow,
+                    heat=heat)  # fmt: skip
 
 
 def arc_frame(arc_light: Any, T_world_sensor: FloatArray, tcp: list[FloatArray | None]) -> Any:
@@ -362,7 +375,10 @@ def arc_frame(arc_light: Any, T_world_sensor: FloatArray, tcp: list[FloatArray |
     T_world_tcp = np.asarray(T_world_sensor) @ sensor_to_tcp
     tip, axis = T_world_tcp[:3, 3].copy(), T_world_tcp[:3, 2]
     up = axis if float(np.dot(np.asarray(T_world_sensor)[:3, 3] - tip, axis)) >= 0 else -axis
-    return ArcFrame(arc_light, tip, up)
+    ahead = np.asarray(T_world_sensor)[:3, 3] - tip  # the sensor looks ahead of the arc
+    ahead = ahead - np.dot(ahead, up) * up
+    norm = float(np.linalg.norm(ahead))
+    return ArcFrame(arc_light, tip, up, ahead / norm if norm > 1e-9 else None)
 
 
 def _stripe_noise(params: dict[str, Any]) -> Any:

@@ -57,6 +57,9 @@ class ArcLight:
     exposure_s: float = 2e-4
     laser_power_w: float = 0.1
     coarse_px: int = 32
+    #: The heat input for Rosenthal's moving-source field (a scene's ``[process]``); None:
+    #: the static 1/R cooling law (:func:`seamtrack.sensing.arc.light.cooling_temperature`).
+    heat: light.RosenthalHeat | None = None
     #: Electrons below this share of the full well on a pixel are left out of the smooth terms
     #: (as the renderer leaves out stripe light below a tenth of a grey level).
     min_signal: float = 1e-4
@@ -81,8 +84,25 @@ class ArcView:
     full_well_e: float
 
 
+def _plate_temperature(
+    arc: ArcLight, p: FloatArray, arc_mm: FloatArray, up: FloatArray, travel: FloatArray | None
+) -> FloatArray:
+    """The plate's temperature at ``p``: Rosenthal's field with a heat input and a travel
+    direction, else the static cooling law."""
+    if arc.heat is not None and travel is not None and len(p):
+        return light.rosenthal_plate_temperature(p, arc_mm, travel, up, arc.heat)
+    return light.cooling_temperature(np.linalg.norm(p - arc_mm, axis=1), arc.process,
+                                     arc.current_a)  # fmt: skip
+
+
 def _smooth_terms(
-    arc: ArcLight, view: ArcView, caster: Any, mat: Material, arc_mm: FloatArray, j: float
+    arc: ArcLight,
+    view: ArcView,
+    caster: Any,
+    mat: Material,
+    arc_mm: FloatArray,
+    j: float,
+    frame: tuple[FloatArray, FloatArray, FloatArray | None],
 ) -> FloatArray:
     """Items 1-3 of the module on the coarse grid, interpolated to every pixel (electrons)."""
     k = max(1, arc.coarse_px)
@@ -108,8 +128,7 @@ def _smooth_terms(
         brdf = brdf + mat.specular_reflectance * g / cos_v
     radiance[h] = e * brdf
     if arc.glow:
-        t = light.cooling_temperature(np.linalg.norm(p - arc_mm, axis=1), arc.process,
-                                      arc.current_a)  # fmt: skip
+        t = _plate_temperature(arc, p, *frame)
         radiance[h] += light.glow_radiance(t, arc.band)
     if arc.fume:
         sigma0, scale, albedo = fume_model.fume_sigma(arc.process, arc.current_a)
@@ -213,17 +232,19 @@ def arc_electrons(
     up: FloatArray,
     t_s: float,
     rng: np.random.Generator,
+    travel: FloatArray | None = None,
 ) -> FloatArray:
     """Electrons per pixel (rows, columns) of the arc's light in one exposure: the plate it
     lights and heats, the fume, the arc itself and spatter (see the module docstring).
     ``arc_mm`` the arc's root on the part (world), ``up`` the plate's normal there (world,
-    unit), ``t_s`` the frame's start; spatter is drawn from ``rng``."""
+    unit), ``t_s`` the frame's start; spatter is drawn from ``rng``; ``travel`` the
+    direction the arc moves (for Rosenthal's field, with ``arc.heat``)."""
     arc_mm = np.asarray(arc_mm, dtype=np.float64)
     up = np.asarray(up, dtype=np.float64)
     up = up / np.linalg.norm(up)
     column = arc_mm + 0.5 * light.arc_radius_mm(arc.process, arc.current_a) * up
     j = light.arc_in_band_intensity(arc.process, arc.current_a, arc.band)
-    image = _smooth_terms(arc, view, caster, mat, column, j)
+    image = _smooth_terms(arc, view, caster, mat, column, j, (arc_mm, up, travel))
     image[image < arc.min_signal * view.full_well_e] = 0.0
     transmission = 1.0
     if arc.fume:
@@ -241,8 +262,10 @@ def arc_electrons(
 @dataclass(frozen=True)
 class ArcFrame:
     """The arc in one frame, what the renderer takes: the settings ``light``, the arc's root
-    ``arc_mm`` (3,) on the part and the plate's normal ``up`` (3,), world frame."""
+    ``arc_mm`` (3,) on the part, the plate's normal ``up`` (3,) and the direction of travel
+    ``travel`` (3,) or None, world frame."""
 
     light: ArcLight
     arc_mm: FloatArray
     up: FloatArray
+    travel: FloatArray | None = None

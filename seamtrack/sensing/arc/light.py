@@ -33,6 +33,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from seamtrack.errors import SeamtrackError
+from seamtrack.heat.rosenthal import rosenthal_temperature
 
 FloatArray = NDArray[np.float64]
 
@@ -280,3 +281,46 @@ def glow_radiance(
     lam, w = band.grid()
     b = planck_radiance(lam[None, :], t.reshape(-1, 1))
     return np.asarray((emissivity * b @ w).reshape(t.shape))
+
+
+@dataclass(frozen=True)
+class RosenthalHeat:
+    """The heat input for the moving source's field (a scene's ``[process]``):
+    ``power_w`` into the plate (:func:`seamtrack.heat.rosenthal.arc_power_w`), the travel
+    ``speed_mm_s`` and the plate's ``conductivity_w_per_mm_k`` and ``diffusivity_mm2_per_s``
+    (:data:`seamtrack.heat.materials.THERMAL_MATERIALS`)."""
+
+    power_w: float
+    speed_mm_s: float
+    conductivity_w_per_mm_k: float
+    diffusivity_mm2_per_s: float
+
+
+def rosenthal_plate_temperature(
+    points_mm: ArrayLike,
+    arc_mm: ArrayLike,
+    travel: ArrayLike,
+    up: ArrayLike,
+    heat: RosenthalHeat,
+    room_k: float = ROOM_K,
+) -> FloatArray:
+    """The plate's temperature (K) at world ``points_mm`` (n, 3) from Rosenthal's thick-plate
+    field (:func:`seamtrack.heat.rosenthal.rosenthal_temperature`) of a source at ``arc_mm``
+    moving along ``travel`` on a plate of normal ``up``; capped at the melting point (the
+    field describes the plate outside the pool), the points taken on the surface."""
+    u = np.asarray(up, dtype=np.float64)
+    u = u / np.linalg.norm(u)
+    x = np.asarray(travel, dtype=np.float64)
+    x = x - np.dot(x, u) * u
+    x = x / np.linalg.norm(x)
+    y = np.cross(u, x)
+    d = np.atleast_2d(np.asarray(points_mm, dtype=np.float64)) - np.asarray(arc_mm, float)
+    local = np.stack([d @ x, d @ y, np.zeros(len(d))], axis=1)
+    r = np.hypot(local[:, 0], local[:, 1])
+    local[r < 0.05, 0] = 0.05  # inside the pool (capped below): off the singular point
+    t_c = rosenthal_temperature(
+        local, power_w=heat.power_w, speed_mm_s=heat.speed_mm_s,
+        conductivity_w_per_mm_k=heat.conductivity_w_per_mm_k,
+        diffusivity_mm2_per_s=heat.diffusivity_mm2_per_s, ambient_c=room_k - 273.15,
+    )  # fmt: skip
+    return np.asarray(np.minimum(t_c + 273.15, MELT_K))
