@@ -1,7 +1,8 @@
 """The arc drawn into the camera's image: :func:`arc_electrons` adds, in electrons per pixel,
 
 1. the plate lit by the arc: each pixel's ray is cast onto the part; the arc's in-band
-   intensity J lights the hit point with E = J cos(theta_i) / r^2
+   intensity J lights the hit point, unless the part stands between (a shadow ray), with
+   E = J cos(theta_i) / r^2
    (:func:`seamtrack.sensing.arc.light.irradiance`), which the part's material sends back as
    L = E (rho_d / pi + rho_s G(beta) / cos(theta_v)) (the Lambert + Gaussian-lobe model of
    :mod:`seamtrack.sensing.materials`, the same as the laser's);
@@ -116,6 +117,9 @@ def _smooth_terms(
     p, n = hits.points[h], hits.normals[h]
     view_dir = -d[h]
     e = light.irradiance(j, arc_mm, p, n)
+    blocked = getattr(caster, "line_of_sight_blocked", None)  # a caster of a mesh: shadows
+    if blocked is not None and len(p):
+        e[blocked(p, arc_mm)] = 0.0
     cos_v = np.clip(np.einsum("ij,ij->i", n, view_dir), 0.05, 1.0)
     brdf = np.full(len(p), mat.diffuse_albedo / math.pi)
     if mat.specular_reflectance > 0:
