@@ -10,6 +10,8 @@
    of :func:`seamtrack.sensing.arc.light.cooling_temperature`;
 3. the fume: both dimmed by the fume on the way to the camera, plus the veil it scatters
    (:mod:`seamtrack.sensing.arc.fume`);
+   The weld pool (the plate at the melting point) mirrors the arc: it takes :data:`POOL`'s
+   reflectance instead of the part's.
 4. the arc itself, where the camera sees it: a blob of the column's width carrying
    J A_pupil / r^2;
 5. spatter: each droplet's streak over the exposure (:mod:`seamtrack.sensing.arc.spatter`).
@@ -96,6 +98,29 @@ def _plate_temperature(
                                      arc.current_a)  # fmt: skip
 
 
+#: The weld pool's surface: liquid steel, opaque, so its reflectance is 1 - emissivity
+#: (Kirchhoff), about 0.65 with :data:`~seamtrack.sensing.arc.light.STEEL_EMISSIVITY`; almost
+#: all of it specular (a liquid surface is smooth; its ripples give the narrow lobe, assumed).
+POOL = Material("weld pool", diffuse_albedo=0.05, specular_reflectance=0.6, roughness_rad=0.03)
+
+
+def _brdf(mat: Material, p: FloatArray, n: FloatArray, view_dir: FloatArray,
+          arc_mm: FloatArray) -> FloatArray:  # fmt: skip
+    """The material's BRDF (1/sr) for the arc's light at ``p`` seen along ``view_dir``:
+    rho_d / pi + rho_s G(beta) / cos(theta_v) (the image mode's model, per irradiance)."""
+    cos_v = np.clip(np.einsum("ij,ij->i", n, view_dir), 0.05, 1.0)
+    brdf = np.full(len(p), mat.diffuse_albedo / math.pi)
+    if mat.specular_reflectance > 0 and len(p):
+        incoming = p - arc_mm
+        incoming /= np.linalg.norm(incoming, axis=1, keepdims=True)
+        mirror = incoming - 2.0 * np.einsum("ij,ij->i", incoming, n)[:, None] * n
+        beta = np.arccos(np.clip(np.einsum("ij,ij->i", mirror, view_dir), -1.0, 1.0))
+        lobe = mat.lobe_rad
+        g = np.exp(-0.5 * (beta / lobe) ** 2) / (2.0 * math.pi * lobe**2)
+        brdf = brdf + mat.specular_reflectance * g / cos_v
+    return brdf
+
+
 def _smooth_terms(
     arc: ArcLight,
     view: ArcView,
@@ -120,19 +145,13 @@ def _smooth_terms(
     blocked = getattr(caster, "line_of_sight_blocked", None)  # a caster of a mesh: shadows
     if blocked is not None and len(p):
         e[blocked(p, arc_mm)] = 0.0
-    cos_v = np.clip(np.einsum("ij,ij->i", n, view_dir), 0.05, 1.0)
-    brdf = np.full(len(p), mat.diffuse_albedo / math.pi)
-    if mat.specular_reflectance > 0:
-        incoming = p - arc_mm
-        incoming /= np.linalg.norm(incoming, axis=1, keepdims=True)
-        mirror = incoming - 2.0 * np.einsum("ij,ij->i", incoming, n)[:, None] * n
-        beta = np.arccos(np.clip(np.einsum("ij,ij->i", mirror, view_dir), -1.0, 1.0))
-        lobe = mat.lobe_rad
-        g = np.exp(-0.5 * (beta / lobe) ** 2) / (2.0 * math.pi * lobe**2)
-        brdf = brdf + mat.specular_reflectance * g / cos_v
+    t = _plate_temperature(arc, p, *frame)
+    wet = t >= light.MELT_K - 1e-6  # the pool mirrors the arc
+    brdf = np.empty(len(p))
+    for surface, where in ((mat, ~wet), (POOL, wet)):
+        brdf[where] = _brdf(surface, p[where], n[where], view_dir[where], arc_mm)
     radiance[h] = e * brdf
     if arc.glow:
-        t = _plate_temperature(arc, p, *frame)
         radiance[h] += light.glow_radiance(t, arc.band)
     if arc.fume:
         sigma0, scale, albedo = fume_model.fume_sigma(arc.process, arc.current_a)
