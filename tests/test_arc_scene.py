@@ -50,3 +50,22 @@ def test_the_arc_sits_at_the_torch_tip() -> None:
     frame = arc_frame(light, T_world_sensor, [np.linalg.inv(T_tcp_sensor)])
     np.testing.assert_allclose(frame.arc_mm, [70.0, 5.0, 0.0])
     np.testing.assert_allclose(frame.up, [0.0, 0.0, 1.0])  # towards the sensor's side
+
+
+def test_a_frame_with_the_arc_is_seeded_and_adds_light() -> None:
+    from seamtrack.simulation.assemble import build_parts
+    from seamtrack.simulation.robots import sensor_pose_at
+
+    scene = load_scene("v-groove-arc", {"arc.process": "mag-short",
+                                        "sensor.camera.exposure_mode": "fixed"})  # fmt: skip
+    c = scene.config
+    parts = build_parts(scene)
+    camera = make_camera(c.sensor.camera, c.sensor.preset)
+    light = scene_arc_light(scene, camera)
+    T, _ = sensor_pose_at(parts.robot, parts.tool_program, 30.0)
+    frame = arc_frame(light, T, [np.linalg.inv(parts.robot.T_tcp_sensor)])
+    a, b = (parts.sensor.render(parts.mesh, T, camera=camera, seed=5, arc=frame, t_s=0.0)
+            for _ in range(2))  # fmt: skip
+    np.testing.assert_array_equal(a.pixels, b.pixels)
+    dark = parts.sensor.render(parts.mesh, T, camera=camera, seed=5, t_s=0.0)
+    assert a.pixels.sum() > dark.pixels.sum()  # the arc only adds light
