@@ -47,6 +47,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from seamtrack import constants
 from seamtrack.sensing import formation
+from seamtrack.sensing.arc.image import ArcFrame, ArcView, arc_electrons
 from seamtrack.sensing.camera import BLOCK_COLUMNS, RANGES, Camera, StripeImage
 from seamtrack.sensing.materials import DEFAULT_MATERIAL, Material, material
 from seamtrack.sensing.profiles import Reason
@@ -79,6 +80,7 @@ def render_image(
     seed: int | np.random.Generator | None = None,
     t_s: float = float("nan"),
     exposure: float | None = None,
+    arc: ArcFrame | None = None,
 ) -> StripeImage:
     """The camera image of the stripe on a part at a pose (see the module docstring).
 
@@ -99,6 +101,10 @@ def render_image(
     exposure : float, optional
         This frame's exposure (auto-exposure's state, kept by the caller); default the
         camera's ``exposure``.
+    arc : ArcFrame, optional
+        The welding arc in this frame (:mod:`seamtrack.sensing.arc.image`): its light, the
+        plate it lights and heats, fume and spatter are added to the stripe's electrons before
+        the chip reads them out. None (default): no arc, and nothing is drawn for it.
 
     Returns
     -------
@@ -141,6 +147,11 @@ def render_image(
     seen = peak >= MIN_SIGNAL * cam.full_well_e
     electrons = formation.form_image(u[seen], w[seen], half[seen], slope[seen], sigma[seen],
                                      signal[seen], grid, rng)  # fmt: skip
+    if arc is not None:
+        electrons = electrons + arc_electrons(
+            arc.light, optics.arc_view(T, arc.light.laser_power_w), caster, mat, arc.arc_mm,
+            arc.up, t_s if math.isfinite(t_s) else 0.0, rng, arc.travel,
+        ).astype(electrons.dtype)  # fmt: skip
     spacing = hits.distance_mm[direct.ray] * power[direct.ray]
     truth = formation.stripe_rows(direct.u, direct.w, direct.ray, direct.points, spacing,
                                   optics.columns)  # fmt: skip
@@ -256,6 +267,38 @@ class _Optics:
             )
         cos_axis = np.clip(-view @ self.axis, 0.0, 1.0)
         return np.asarray(radiant * self.pupil_area * cos_axis / r**2)
+
+    def arc_view(self, T: FloatArray, laser_power_w: float) -> ArcView:
+        """The camera for the arc model (:class:`ArcView`), world frame at the pose ``T``:
+        pixel rays (the inverse of :meth:`project`), the projection, and the electrons per
+        watt: the laser's ``laser_power_w`` over its fan gives the exposure scale's power."""
+        R, t = T[:3, :3], T[:3, 3]
+        center = R @ self.camera_center + t
+        z0 = self.imaging.range_center_mm
+        fan = 2.0 * math.atan(float(self.imaging.half_width_mm(z0)) / z0)
+
+        def rays(u: FloatArray, w: FloatArray) -> FloatArray:
+            x_c = (u + self.window[0]) * self.pitch_h - 0.5 * self.imaging.chip_h_mm
+            z_c = (w + self.window[2]) * self.pitch_v - 0.5 * self.imaging.chip_v_mm
+            a = self.sin + x_c / self.lam * self.cos
+            d = np.stack([-a, z_c / self.lam, self.cos - x_c / self.lam * self.sin], axis=1)
+            d /= np.linalg.norm(d, axis=1, keepdims=True)
+            return np.asarray(d @ R.T)
+
+        def project(points: FloatArray) -> tuple[FloatArray, FloatArray, NDArray[np.bool_]]:
+            local = (points - t) @ R
+            depth = (self.b - local[:, 0]) * self.sin + local[:, 2] * self.cos
+            front = depth > 1e-6
+            safe = np.where(front[:, None], local, [0.0, 0.0, self.imaging.range_center_mm])
+            u, w = self.grid(*self.project(safe))
+            return u, w, front
+
+        return ArcView(
+            center=center, rays=rays, project=project, rows=self.rows, columns=self.columns,
+            pupil_area_mm2=self.pupil_area, pixel_sr=self.pitch_h * self.pitch_v / self.lam**2,
+            electrons_per_w=self.electrons_per_power * fan / laser_power_w,
+            full_well_e=self.cam.full_well_e,
+        )  # fmt: skip
 
     def _exposure_scale(self) -> tuple[float, float]:
         """Electrons per unit fan power (radian) that make a white Lambertian plane across the

@@ -387,6 +387,7 @@ class LaserLineSensor:
         material: Any = None,
         t_s: float = float("nan"),
         exposure: float | None = None,
+        arc: Any = None,
     ) -> Any:
         """The camera image of the stripe on a mesh at a pose (a :class:`StripeImage`).
 
@@ -394,13 +395,14 @@ class LaserLineSensor:
         :class:`~seamtrack.sensing.camera.Camera` (default ``Camera()``), ``seed`` an int or a
         numpy Generator, ``material`` a name (``"bright aluminium"``) or a
         :class:`~seamtrack.sensing.materials.Material`, ``exposure`` this frame's (auto-exposure's
-        state; default the camera's). ``image.profile(method=...)`` measures the profile from
-        its pixels.
+        state; default the camera's), ``arc`` the welding arc in this frame (an
+        :class:`~seamtrack.sensing.arc.image.ArcFrame`, default none). ``image.profile(method=...)``
+        measures the profile from its pixels.
         """
         from seamtrack.sensing.render import render_image
 
         return render_image(self, part, T_world_sensor, camera=camera, material_name=material,
-                            seed=seed, t_s=t_s, exposure=exposure)  # fmt: skip
+                            seed=seed, t_s=t_s, exposure=exposure, arc=arc)  # fmt: skip
 
 
 def _whole_pixels(count: float) -> int:

@@ -176,6 +176,9 @@ class MeshScan:
     # The part and its obstacles without the extra mesh (a job's beads, an open surface of
     # up to ~0.6 million triangles): the sensor-inside test's solid.
     solid: Any = None
+    # Image mode with an ``[arc]``: the sensor-to-torch transform, set once the robot is built
+    # (the arc sits at the torch's tip, inv(T_tcp_sensor) from the sensor's pose).
+    sensor_to_tcp: list[FloatArray | None] = dataclasses.field(default_factory=lambda: [None])
 
 
 def uses_hint(find: Callable[..., Any]) -> bool:
@@ -253,6 +256,7 @@ def _mesh_scan(
     shift = bool(offset.any())
     s = scene.config.sensor
     noise = _stripe_noise(s.stripe_noise)
+    tcp: list[FloatArray | None] = [None]  # inv(T_tcp_sensor), once the robot is built
 
     def measure(T_world_sensor: FloatArray, t_s: float) -> Profile:
         return scan_mesh(sensor, caster, T_world_sensor, rays=s.rays, refine=s.refine_float64,
@@ -261,6 +265,7 @@ def _mesh_scan(
     if s.source == "image":  # every frame rendered by the camera and measured from its pixels
         camera, detector = make_camera(s.camera, s.preset), s.camera or CameraConfig()
         surface = w.material or "mill-scale steel"
+        arc_light = scene_arc_light(scene, camera)
 
         # Auto-exposure's state lives in the run: each frame's exposure from the previous
         # frame's peak (deterministic: the images are drawn from the run's seeded Generator).
@@ -269,8 +274,10 @@ def _mesh_scan(
 
         def measure(T_world_sensor: FloatArray, t_s: float) -> Profile:
             images[0] = None  # let the last image go before the next is rendered (peak memory)
+            arc = None if arc_light is None else arc_frame(arc_light, T_world_sensor, tcp)
             image = sensor.render(caster, T_world_sensor, camera=camera, seed=rng,
-                                  material=surface, t_s=t_s, exposure=exposure[0])  # fmt: skip
+                                  material=surface, t_s=t_s, exposure=exposure[0],
+                                  **({} if arc is None else {"arc": arc}))  # fmt: skip
             if camera.exposure_mode == "auto":
                 exposure[0] = camera.next_exposure(image.exposure, image.peak)
             images[0] = image
@@ -323,7 +330,55 @@ def _mesh_scan(
     view = None if part.view_normal is None else T_world_part[:3, :3] @ part.view_normal
     last_image = (lambda: images[0]) if s.source == "image" else None
     return MeshScan(seam, scan, mesh, caster, extractor_name, view, find, last_image, hinted,
-                    solid)  # fmt: skip
+                    solid, tcp)  # fmt: skip
+
+
+def scene_arc_light(scene: Scene, camera: Any) -> Any:
+    """The arc's settings for image mode (:class:`seamtrack.sensing.arc.image.ArcLight`), or
+    None: no ``[arc]``, or its ``model`` is ``profile``. The band-pass from ``[sensor.camera]``'s
+    filter keys, centred on the laser's wavelength by default."""
+    a = scene.config.arc
+    if a is None or a.model == "profile":
+        return None
+    from seamtrack.sensing.arc.image import ArcLight
+    from seamtrack.sensing.arc.light import BandPass
+
+    c = scene.config.sensor.camera
+    band = BandPass(
+        centre_nm=(c.filter_centre_nm if c and c.filter_centre_nm else camera.wavelength_nm),
+        fwhm_nm=c.filter_fwhm_nm if c else 10.0,
+        shape=c.filter_shape if c else "gaussian",
+    )
+    heat = None
+    p, w = scene.config.process, scene.config.workpiece
+    if p is not None:  # Rosenthal's field of the scene's heat input, at the welding speed
+        from seamtrack.heat.materials import thermal_material
+        from seamtrack.heat.rosenthal import process_power_w
+        from seamtrack.sensing.arc.light import RosenthalHeat
+
+        steel = thermal_material("stainless_steel" if w and w.material and "stainless" in
+                                 w.material else "carbon_steel")  # fmt: skip
+        speed = scene.config.simulation.welding_speed_mm_s
+        heat = RosenthalHeat(process_power_w(p), speed, steel.conductivity_w_per_mm_k,
+                             steel.diffusivity_mm2_per_s)  # fmt: skip
+    return ArcLight(a.process, a.current_a, band, spatter=a.spatter, fume=a.fume, glow=a.glow,
+                    heat=heat)  # fmt: skip
+
+
+def arc_frame(arc_light: Any, T_world_sensor: FloatArray, tcp: list[FloatArray | None]) -> Any:
+    """The arc in this frame: at the torch's tip (the TCP, from the sensor's pose), the plate's
+    normal taken along the torch's axis, on the side of the sensor."""
+    from seamtrack.sensing.arc.image import ArcFrame
+
+    sensor_to_tcp = tcp[0]
+    assert sensor_to_tcp is not None, "the robot sets the sensor-to-torch transform"
+    T_world_tcp = np.asarray(T_world_sensor) @ sensor_to_tcp
+    tip, axis = T_world_tcp[:3, 3].copy(), T_world_tcp[:3, 2]
+    up = axis if float(np.dot(np.asarray(T_world_sensor)[:3, 3] - tip, axis)) >= 0 else -axis
+    ahead = np.asarray(T_world_sensor)[:3, 3] - tip  # the sensor looks ahead of the arc
+    ahead = ahead - np.dot(ahead, up) * up
+    norm = float(np.linalg.norm(ahead))
+    return ArcFrame(arc_light, tip, up, ahead / norm if norm > 1e-9 else None)
 
 
 def _stripe_noise(params: dict[str, Any]) -> Any:
@@ -380,6 +435,8 @@ def build_parts(
         None if loaded is None else loaded.view,
     )
     robot = make_robot(scene, sensor, mount)
+    if loaded is not None:
+        loaded.sensor_to_tcp[0] = np.linalg.inv(robot.T_tcp_sensor)
     start = seam.points[0] + np.asarray(c.robot.start_offset_mm)
     program = tool_program(scene, seam)
     start_joints = None

@@ -73,6 +73,16 @@ class CameraConfig(_Section):
     # Default: the preset's data sheet, else 660 nm.
     wavelength_nm: Positive | None = None
     line_thickness_mm: Positive = 0.2
+    # The band-pass filter in front of the lens (issue 38): centre (default the laser's
+    # wavelength), full width at half maximum (>= 0.1 nm; 10 nm: a common laser-line filter)
+    # and shape. Only the arc's light (``[arc]``) is filtered; the laser passes at the centre.
+    filter_centre_nm: (
+        Annotated[float, Field(ge=200, le=2000, allow_inf_nan=False, strict=True)] | None
+    ) = None
+    filter_fwhm_nm: Annotated[float, Field(ge=0.1, le=1000, allow_inf_nan=False, strict=True)] = (
+        10.0
+    )
+    filter_shape: Literal["gaussian", "top-hat"] = "gaussian"
     line_divergence_mrad: NonNegative | None = None
     waist_range_mm: Positive | None = None
     exposure: Positive = 0.5

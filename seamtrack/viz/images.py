@@ -97,7 +97,7 @@ def render_command(
     seam point the scene's extractor finds in it. Writes the PNG; returns the lines to print."""
     from seamtrack.io.output import check_writable, new_dir
     from seamtrack.sensing.peaks import detect
-    from seamtrack.simulation.assemble import build_parts
+    from seamtrack.simulation.assemble import arc_frame, build_parts, scene_arc_light
     from seamtrack.simulation.robots import sensor_pose_at
     from seamtrack.simulation.scene import CameraConfig, load_scene, make_camera
 
@@ -124,8 +124,13 @@ def render_command(
     T_world_sensor, _ = sensor_pose_at(parts.robot, parts.tool_program, at_mm)
     detector = c.sensor.camera or CameraConfig()
     camera = make_camera(c.sensor.camera, c.sensor.preset)
+    arc_light = scene_arc_light(scene, camera)  # the scene's [arc], if image mode draws it
+    arc = None
+    if arc_light is not None:
+        arc = arc_frame(arc_light, T_world_sensor, [np.linalg.inv(parts.robot.T_tcp_sensor)])
     image = parts.sensor.render(parts.mesh, T_world_sensor, camera=camera,
-                                seed=c.simulation.seed, material=c.workpiece.material)  # fmt: skip
+                                seed=c.simulation.seed, material=c.workpiece.material,
+                                **({} if arc is None else {"arc": arc}))  # fmt: skip
     rows = detect(image.pixels, method=detector.method, threshold=detector.threshold,
                   choose=detector.choose, relative=detector.relative,
                   noise_sigmas=detector.noise_sigmas)  # fmt: skip
