@@ -9,8 +9,10 @@ At a station ``xi`` mm ahead of the arc (negative behind it) the seam moves:
 - **up or down** (along the torch normal), by ``W * beta`` with ``W`` the plate's width and
   ``beta`` its angle: the transient angle near the arc from the temperature difference through
   the thickness (:func:`~seamtrack.heat.distortion.transient_angle_rad`, positive: the weld
-  line rises towards the torch), less half the permanent angular distortion behind it
-  (:func:`~seamtrack.heat.distortion.permanent_angle_rad`), which builds up as the weld cools;
+  line rises towards the torch), less half the permanent angular distortion
+  (:func:`~seamtrack.heat.distortion.permanent_angle_rad`) times the fraction of the seam
+  whose weld has locked it in (the plate is one rigid body: the angle turns all of it, the
+  unwelded part ahead too);
 - **across**, by half the gap's change when one plate is clamped in its plane: the transverse
   shrinkage behind the arc closes the gap (Okerblom,
   :func:`~seamtrack.heat.distortion.transverse_shrinkage_mm`), and ahead of it the free plate
@@ -81,6 +83,7 @@ class JointMotion:
     xi_mm: FloatArray  # the transient table's stations
     transient_rad: FloatArray
     developed: FloatArray  # the fraction of the permanent distortion built up at each station
+    lock_mm: float = 0.0  # how far behind the arc the weld locks its distortion in
     constraints: tuple[Tack | Clamp, ...] = ()
     release_mm: FloatArray = field(default_factory=lambda: np.zeros(0))  # arc position
 
@@ -97,7 +100,10 @@ class JointMotion:
         f = np.interp(xi, self.xi_mm, self.developed, left=self.developed[0], right=0.0)
         behind = xi < 0
         f = np.where(behind, f, 0.0)
-        vertical = self.plate_width_mm * (beta - 0.5 * self.permanent_rad * f)
+        # Each plate is one rigid body: the angle locked into the weld behind the arc turns
+        # all of it, ahead of the arc too, in proportion to the length locked in.
+        locked = np.clip(arc - self.lock_mm, 0.0, self.seam_length_mm) / self.seam_length_mm
+        vertical = self.plate_width_mm * (beta - 0.5 * self.permanent_rad * locked)
         gap = -self.shrinkage_mm * f  # behind: closed by the shrinkage
         if self.gap_rotation_rad and self.side:
             turning = np.where(self.held(arc), 0.0, self.gap_rotation_rad)
@@ -188,7 +194,7 @@ def joint_motion(
         speed_mm_s=speed_mm_s, seam_length_mm=seam_length_mm, plate_width_mm=plate_width_mm,
         shrinkage_mm=shrink, permanent_rad=permanent, gap_rotation_rad=gap_rotation_rad,
         side=side, xi_mm=xi, transient_rad=beta, developed=developed,
-        constraints=constraints, release_mm=release,
+        lock_mm=lock + LOCK_RAMP_MM / 2, constraints=constraints, release_mm=release,
     )  # fmt: skip
 
 
