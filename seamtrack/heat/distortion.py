@@ -74,6 +74,33 @@ def spraragen_ettinger_shrinkage_mm(
     return 0.2 * area / t + 0.05 * d
 
 
+def permanent_angle_rad(
+    heat_input_j_per_mm: float, *, thickness_mm: float, peak_rad: float, peak_q_per_h2: float
+) -> float:
+    """The permanent angular distortion of a single-pass weld (radians, the angle between the
+    two plates' faces, edges turned towards the torch) as a function of the heat input
+    parameter ``p = Q / h^2`` (J/mm^3): ``peak * (p / p_peak) * exp(1 - p / p_peak)``.
+
+    The parameter and the shape, a rise to a maximum and a fall beyond it (the heat reaches
+    the bottom face and the plate heats through, so less of it bends), are those of the
+    measurements of M. Watanabe and K. Satoh, "Effect of welding conditions on the shrinkage
+    distortion in welded structures", Welding Journal 40 (1961) 377s-384s, on which W.-J. Seong
+    built the bead-on-plate database of "Prediction and characteristics of angular distortion
+    in multi-layer butt welding", Materials 12 (2019) 1435 (doi:10.3390/ma12091435). This
+    closed form through that maximum is this module's; ``peak_rad`` and ``peak_q_per_h2`` are
+    a fit to measurements of your process and material (no default here)."""
+    q = float(heat_input_j_per_mm)
+    if not np.isfinite(q) or q < 0:
+        raise SeamtrackError(f"{q!r} J/mm", field="heat_input_j_per_mm", fix="give >= 0 J/mm")
+    t = _positive(thickness_mm, "thickness_mm")
+    peak = float(peak_rad)
+    if not np.isfinite(peak) or peak < 0:
+        raise SeamtrackError(f"{peak!r} rad", field="angle_peak", fix="give an angle >= 0")
+    p0 = _positive(peak_q_per_h2, "angle_peak_q_per_h2")
+    ratio = q / t**2 / p0
+    return peak * ratio * float(np.exp(1.0 - ratio))
+
+
 def thermal_curvature_per_mm(
     temperature_rise_k: ArrayLike, z_mm: ArrayLike, *, thickness_mm: float, expansion_per_k: float
 ) -> NDArray[np.float64]:

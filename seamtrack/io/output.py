@@ -197,6 +197,9 @@ def write_trace_csv(result: Result, path: Path, period_s: float) -> None:
         ]
     )
     joints = [f"q{j + 1}_deg" for j in range(tr.joints_rad.shape[1])]
+    if len(tr.seam_shift_mm):  # [distortion] only: other runs' traces stay as they were
+        table = np.column_stack([table, tr.seam_shift_mm[idx]])
+        joints.append("seam_shift_mm")
     header = ",".join([*TRACE_COLUMNS, *joints])
     np.savetxt(path, table, delimiter=",", header=header, comments="", fmt="%.6f")
 

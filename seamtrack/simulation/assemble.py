@@ -95,6 +95,8 @@ class Parts:
     # Whether ``sense`` passes a hint on to its extractor: the loop asks the tracker for one
     # only then (False: the seam model's sensing, an extractor that ignores hints).
     sense_uses_hint: bool = True
+    # [distortion]: the seam moving while it is welded (MovingSeam), None when it does not
+    moving: Any = None
 
 
 def make_seam(scene: Scene) -> Seam:
@@ -427,6 +429,12 @@ def build_parts(
         def sense(T_world_sensor: FloatArray, t_s: float, hint: SeamHint | None = None) -> Feature:
             return sense_seam(sensed, T_world_sensor, sensor, noise=noise, rng=rng)
 
+    moving = None
+    if c.distortion is not None:  # the part moves while it is welded (issue 39)
+        from seamtrack.simulation.distorted import moving_seam
+
+        moving = moving_seam(c, seam)
+        sense = moving.sense(sense)
     mount = sensor_mount(
         scene,
         sensor,
@@ -498,6 +506,7 @@ def build_parts(
         extract=None if loaded is None else loaded.extract,
         last_image=loaded.last_image if scan is not None and loaded is not None else None,
         sense_uses_hint=scan is not None and loaded is not None and loaded.hinted,
+        moving=moving,
     )
 
 

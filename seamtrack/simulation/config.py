@@ -343,6 +343,42 @@ class ArcConfig(_Section):
     glow: Flag = True
 
 
+class TackConfig(_Section):
+    """A tack weld across the joint (``[[distortion.tacks]]``), ``position_mm`` along the seam."""
+
+    position_mm: Finite
+    length_mm: Positive = 10.0
+    throat_mm: Positive = 2.0
+
+
+class ClampConfig(_Section):
+    """A clamp across the joint (``[[distortion.clamps]]``): it holds whatever the force."""
+
+    position_mm: Finite
+
+
+class DistortionConfig(_Section):
+    """``[distortion]``: the butt joint moving while it is welded (issue 39,
+    :mod:`seamtrack.heat.motion`). The heat comes from ``[process]`` at the welding speed. The
+    permanent angle's peak and where it peaks (``Q / h^2``, J/mm^3) are a fit to your process:
+    no default. A scene without ``[distortion]`` runs as before."""
+
+    material: Literal["carbon_steel", "stainless_steel", "aluminium"] = "carbon_steel"
+    thickness_mm: Positive
+    plate_width_mm: Positive
+    angle_peak_deg: Annotated[float, Field(ge=0, le=45, allow_inf_nan=False, strict=True)]
+    angle_peak_q_per_h2_j_mm3: Positive
+    shrinkage_coefficient: Positive = 1.0  # Okerblom's A: 1 keeps the whole free expansion
+    gap_rotation_deg: Annotated[float, Field(ge=-10, le=10, allow_inf_nan=False, strict=True)] = 0.0
+    fixed_plate: Literal["left", "right", "none"] = "left"
+    #: ~600 degC for mild steel: the "mechanical melting temperature" (Radaj, Heat Effects of
+    #: Welding, Springer 1992).
+    stiff_below_c: Positive = 600.0
+    transient: Flag = True
+    tacks: list[TackConfig] = Field(default_factory=list)
+    clamps: list[ClampConfig] = Field(default_factory=list)
+
+
 class SceneConfig(_Section):
     name: str = ""
     description: str = ""
@@ -358,6 +394,7 @@ class SceneConfig(_Section):
     passes: PassesConfig | None = None
     planner: PlannerConfig | None = None
     arc: ArcConfig | None = None
+    distortion: DistortionConfig | None = None
 
 
 @dataclass(frozen=True)

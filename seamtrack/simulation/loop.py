@@ -159,6 +159,8 @@ class Trace:
     work_angle_error_rad: FloatArray = field(default_factory=lambda: np.zeros(0))
     travel_angle_error_rad: FloatArray = field(default_factory=lambda: np.zeros(0))
     joints_rad: FloatArray = field(default_factory=lambda: np.zeros((0, 0)))
+    #: [distortion]: how far the seam has moved at the torch (none without it)
+    seam_shift_mm: FloatArray = field(default_factory=lambda: np.zeros(0))
 
     def decimated(self, period_s: float) -> NDArray[np.intp]:
         """Indices of ticks one ``period_s`` apart (plus the last tick)."""
@@ -406,7 +408,11 @@ def run(
         axis, (cfg.work_angle_rad, cfg.travel_angle_rad),
     )  # fmt: skip
     trace = with_joints(trace, joint_log, robot)
+    if parts.moving is not None:  # scored against the seam where it is at each tick
+        trace = parts.moving.rescore(trace)
     summary = _summary(trace, seam, status, cfg, clock() - wall_start)
+    if parts.moving is not None:
+        summary.update(parts.moving.summary(trace))
     summary.update(orientation_summary(trace, robot, cfg, state))
     summary["stop_reason"] = stop_reason
     summary["stop_cause"] = stop_cause

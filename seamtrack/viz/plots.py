@@ -118,6 +118,9 @@ def draw_error_components(ax: Any, result: Result, *, legend: bool = True) -> No
     ax.plot(s, tr.error_mm[weld], color="k", lw=1, label="error")
     ax.plot(s, tr.error_lateral_mm[weld], color="C0", lw=0.8, label="lateral")
     ax.plot(s, tr.error_vertical_mm[weld], color="C1", lw=0.8, label="vertical")
+    if len(tr.seam_shift_mm):  # [distortion]: the seam's move, the taught path's error
+        ax.plot(s, tr.seam_shift_mm[weld], color="C3", lw=1, ls="--",
+                label="seam shift (taught path's error)")  # fmt: skip
     ax.axhline(0.0, color="0.8", lw=0.5, zorder=0)
     ax.set_xlabel("arc length along the seam (mm)")
     ax.set_ylabel("tracking error (mm)")
