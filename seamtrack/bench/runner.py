@@ -246,6 +246,12 @@ def _bench_trackers(out: Path, quick: bool) -> Any:
     return bench_trackers(out, quick=quick)
 
 
+def _bench_firstrun(out: Path, quick: bool) -> Any:
+    from seamtrack.bench.firstrun import bench_firstrun
+
+    return bench_firstrun(out, quick=quick)
+
+
 BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "raycast": lambda out, quick: bench_raycast(out, quick=quick),
     "extractors": _bench_extractors,
@@ -261,6 +267,7 @@ BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "bridge": _bench_bridge,
     "multipass": _bench_multipass,
     "trackers": _bench_trackers,
+    "firstrun": _bench_firstrun,
 }
 
 
