@@ -70,6 +70,11 @@ BENCHES: dict[str, tuple[tuple[str, ...], str, str]] = {
         "seamtrack bench trackers",
         "the paper's algorithms against the trajectory tracker on `paper-v-groove`",
     ),
+    "firstrun": (
+        ("firstrun.json",),
+        "seamtrack bench firstrun",
+        "the demo's first mesh-mode run with an empty numba cache, then the same run again",
+    ),
 }
 
 
@@ -87,9 +92,16 @@ def _trackers_table(data: dict[str, Any]) -> str:
     return trackers_table(data)
 
 
+def _firstrun_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.firstrun import firstrun_table
+
+    return firstrun_table(data)
+
+
 #: The bench JSON files a page may quote -> the bench's own function that renders their table.
 RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {
     "trackers.json": _trackers_table,
+    "firstrun.json": _firstrun_table,
 }
 
 
