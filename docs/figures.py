@@ -75,6 +75,11 @@ BENCHES: dict[str, tuple[tuple[str, ...], str, str]] = {
         "seamtrack bench paper",
         "the paper's Table 4: algorithm II on `paper-corner` over the radius of convergence",
     ),
+    "firstrun": (
+        ("firstrun.json",),
+        "seamtrack bench firstrun",
+        "the demo's first mesh-mode run with an empty numba cache, then the same run again",
+    ),
 }
 
 
@@ -90,6 +95,12 @@ def _trackers_table(data: dict[str, Any]) -> str:
     from seamtrack.bench.trackers import trackers_table
 
     return trackers_table(data)
+
+
+def _firstrun_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.firstrun import firstrun_table
+
+    return firstrun_table(data)
 
 
 def _speckle_table(data: dict[str, Any]) -> str:
@@ -124,6 +135,7 @@ RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {
     "camera.json#speckle": _speckle_table,
     "paper.json#table4": _table4_table,
     "paper.json#servo": _servo_table,
+    "firstrun.json": _firstrun_table,
 }
 
 

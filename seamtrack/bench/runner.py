@@ -252,6 +252,12 @@ def _bench_paper(out: Path, quick: bool) -> Any:
     return bench_paper(out, quick=quick)
 
 
+def _bench_firstrun(out: Path, quick: bool) -> Any:
+    from seamtrack.bench.firstrun import bench_firstrun
+
+    return bench_firstrun(out, quick=quick)
+
+
 BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "raycast": lambda out, quick: bench_raycast(out, quick=quick),
     "extractors": _bench_extractors,
@@ -268,6 +274,7 @@ BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "multipass": _bench_multipass,
     "trackers": _bench_trackers,
     "paper": _bench_paper,
+    "firstrun": _bench_firstrun,
 }
 
 

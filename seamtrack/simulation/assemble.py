@@ -208,6 +208,7 @@ def _mesh_scan(
     ``extra_mesh`` (world frame, e.g. the beads of a multi-pass job) is ray-cast with the part;
     the seam is the part's."""
     from seamtrack.features.extractors import extractor
+    from seamtrack.features.warm import start_warming
     from seamtrack.sensing.raycast import RayCaster
     from seamtrack.sensing.scan import scan_mesh
     from seamtrack.workpiece.loader import load_workpiece
@@ -252,6 +253,7 @@ def _mesh_scan(
             check_expect(extractor_name, scene.config.extractor.expect)
         params["expect"] = dict(scene.config.extractor.expect)
     find = extractor(extractor_name, **params)
+    start_warming(find, extractor_name, sensor, scene.config.sensor.rays)
     hinted = uses_hint(find)  # once, at set-up: a user's extractor may have no ``hint``
     find_hinted: Any = find  # called with ``hint=`` only when it takes one
     offset = np.asarray(scene.config.extractor.offset_mm, dtype=float)
