@@ -12,9 +12,9 @@ import pytest
 
 from seamtrack.control.planner import PassPlan
 from seamtrack.errors import PluginError, PluginRuntimeError, SceneError
+from seamtrack.multipass import job, summary
 from seamtrack.sensing.profiles import Feature
-from seamtrack.simulation import job
-from seamtrack.simulation.passes import (
+from seamtrack.simulation.process import (
     arc_width_to_height,
     check_passes,
     heat_input_kj_mm,
@@ -219,12 +219,12 @@ def test_fusion_margin_counts_the_wall_beads_only() -> None:
         return SimpleNamespace(plan=PassPlan("centre", 0.0, 0.0, 5.0, 100.0, 0, bead, n, cap))
 
     # a cap bead, and the third of three (the middle, laid after both walls): no wall bead
-    assert np.all(np.isinf(job.fusion_margin_mm(fill, [rec(0, 3, cap=True), rec(2, 3)])))
-    margin = job.fusion_margin_mm(fill, [rec(0, 3), rec(2, 3)])
+    assert np.all(np.isinf(summary.fusion_margin_mm(fill, [rec(0, 3, cap=True), rec(2, 3)])))
+    margin = summary.fusion_margin_mm(fill, [rec(0, 3), rec(2, 3)])
     expected = -np.nanmin(fill.beads[0].margin_mm, axis=1)
     assert np.allclose(margin, expected)
-    assert job.is_wall_bead(PassPlan("left", 1.0, 0.0, 5.0, 100.0, 0, 2, 3))
-    assert job.is_wall_bead(PassPlan("centre", 0.0, 0.0, 5.0, 100.0, 0, 0, 1))
+    assert summary.is_wall_bead(PassPlan("left", 1.0, 0.0, 5.0, 100.0, 0, 2, 3))
+    assert summary.is_wall_bead(PassPlan("centre", 0.0, 0.0, 5.0, 100.0, 0, 0, 1))
 
 
 def test_a_planners_adapt_is_checked() -> None:
@@ -272,7 +272,7 @@ def test_the_pass_befores_groove_is_settled_along_the_seam() -> None:
     and its torch dived 20 mm. Checked against the running median along the seam (cut short
     at the ends), the last station keeps its neighbours' fill, which such a frame lies 13 mm
     below (more than FILL_DROP_MM: refused)."""
-    from seamtrack.simulation.job_paths import settled
+    from seamtrack.multipass.paths import settled
 
     s = np.arange(20) * 0.5
     points = np.tile(np.array([[-12.0, 20.0], [-7.0, 11.0], [-4.0, 13.0], [-1.0, 13.5],
@@ -296,9 +296,9 @@ def test_a_planned_frame_aims_a_top_corner_bead_at_the_fill_under_it() -> None:
     in from a top corner aims at the fill surface under that place (the 7 points' polyline
     there), as from a measured frame, not at the corner's height, 9 mm higher on the 12-pass
     plan. Oracle: the analytic V's 7 points at the station, carried through the frames."""
-    from seamtrack.control.planner import POINT_INDEX
-    from seamtrack.simulation.job_paths import measured_groove
-    from seamtrack.simulation.passes import aim_point, planned_feature
+    from seamtrack.control.fill_layout import POINT_INDEX
+    from seamtrack.multipass.aim import aim_point, planned_feature
+    from seamtrack.multipass.paths import measured_groove
 
     fill = v_state()
     seam = job.Seam.from_points(fill.T_world_station[:, :3, 3])
@@ -426,7 +426,7 @@ def test_an_override_keeps_the_speed_window(speed: float, field: str) -> None:
 def test_a_job_that_leaves_the_groove_unfilled_is_not_completed(stopped, statuses, lowest, status):
     """A fill surface more than UNDERFILL_LIMIT_MM (1 mm, ISO 5817 level C) under the plates'
     top line at a station every pass welded: ``underfilled``, with the station named."""
-    from seamtrack.simulation.job_summary import UNDERFILL_LIMIT_MM, job_status
+    from seamtrack.multipass.summary import UNDERFILL_LIMIT_MM, job_status
 
     got, reason = job_status(stopped, statuses, np.array(lowest), np.arange(len(lowest)) * 0.5)
     assert got == status
@@ -549,7 +549,7 @@ def test_after_bead_lifts_the_fill_surface_by_the_bead_area() -> None:
     old and new fill surfaces has the bead's area (analytic), the feet on the walls, the top
     corners where they were."""
     from seamtrack.control.planner import MeasuredGroove
-    from seamtrack.simulation.job_paths import after_bead
+    from seamtrack.multipass.paths import after_bead
 
     before = _trapezoid(8.0)[None]
     groove = MeasuredGroove(np.array([0.0]), before, np.array([100.0]))

@@ -1,5 +1,5 @@
 """The groove and paths a multi-pass job measures and lays its beads along (from
-:mod:`seamtrack.simulation.job`): the pass's true path, the groove the sensor measured, the
+:mod:`seamtrack.multipass.job`): the pass's true path, the groove the sensor measured, the
 arc's path from the trace, the ramps and the run-off to the part's ends."""
 
 from __future__ import annotations
@@ -9,24 +9,13 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.control.planner import (
-    POINT_INDEX,
-    MeasuredGroove,
-    PassPlan,
-    station_median,
-)
+from seamtrack.control.fill_layout import POINT_INDEX, MeasuredGroove
+from seamtrack.control.planner import PassPlan
 from seamtrack.geometry.seam import Seam
+from seamtrack.geometry.smoothing import station_median
+from seamtrack.multipass.aim import aim_point
 from seamtrack.sensing.profiles import Feature, laser_to_world
-from seamtrack.simulation.job_summary import (  # noqa: F401 (the job's public names)
-    fusion_margin_mm,
-    is_wall_bead,
-    job_summary,
-    welded_range,
-)
 from seamtrack.simulation.loop import Result
-from seamtrack.simulation.passes import (
-    aim_point,
-)
 
 FloatArray = NDArray[np.float64]
 
@@ -43,7 +32,7 @@ def pass_path(fill: Any, reference: str, plan: PassPlan | None, window: int = 4)
     stations, 2 mm: where a toe wets a wall the foot jumps along it from one station to the
     next, faster than any torch follows), moved across the seam by the plan's offset there,
     onto the fill surface the bottom points describe, or a cap bead at the plates' top line
-    (:func:`~seamtrack.simulation.passes.aim_point`: where the bead aims, as the tracker does
+    (:func:`~seamtrack.multipass.aim.aim_point`: where the bead aims, as the tracker does
     with the measured points)."""
     pts = station_median(fill.all_groove_points(), window)
     offset = np.zeros(len(pts)) if plan is None else plan.offset_at(fill.s_mm)
@@ -249,7 +238,7 @@ def after_bead(groove: MeasuredGroove, area_mm2: Any) -> MeasuredGroove:
     walls, the top corners (which no bead moves) kept.
 
     What the pass after expects where its sensor has not yet measured the groove (its start,
-    :func:`~seamtrack.simulation.passes.planned_feature`): the groove before the last bead
+    :func:`~seamtrack.multipass.aim.planned_feature`): the groove before the last bead
     lies a bead lower (a single-bead layer of the 12-pass plan: 4 mm), and a torch started
     there dived under the fill and overshot it by 2-4 mm over the next 15 mm."""
     if area_mm2 is None or not len(groove):

@@ -42,23 +42,12 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.control.planner import (
-    JobState,
-    Layout,
-    MeasuredGroove,
-    PassPlan,
-    checked_plan,
-    is_builtin,
-    layout,
-    planner,
-)
+from seamtrack.control.fill_layout import POINT_INDEX, Layout, MeasuredGroove, layout
+from seamtrack.control.planner import JobState, PassPlan, checked_plan, is_builtin, planner
 from seamtrack.errors import PluginRuntimeError, SceneError, plugin_failed
 from seamtrack.geometry.seam import Seam
-from seamtrack.sensing.profiles import Feature
-from seamtrack.simulation.assemble import Parts, build_parts
-from seamtrack.simulation.checks import default_time_limit_s
-from seamtrack.simulation.job_paths import (
-    POINT_INDEX,
+from seamtrack.multipass.aim import aim_point, planned_feature, wall_deg
+from seamtrack.multipass.paths import (
     STATION_SPACING_MM,
     FrameGroove,
     after_bead,
@@ -73,21 +62,12 @@ from seamtrack.simulation.job_paths import (
     to_the_ends,
     true_groove,
 )
-from seamtrack.simulation.job_summary import (  # noqa: F401 (the job's public names)
-    fusion_margin_mm,
-    is_wall_bead,
-    job_summary,
-    welded_range,
-)
+from seamtrack.multipass.summary import job_summary
+from seamtrack.sensing.profiles import Feature
+from seamtrack.simulation.assemble import Parts, build_parts
+from seamtrack.simulation.checks import default_time_limit_s
 from seamtrack.simulation.loop import Result, run
-from seamtrack.simulation.passes import (
-    aim_point,
-    heat_input_kj_mm,
-    overridden,
-    planned_feature,
-    process_of,
-    wall_deg,
-)
+from seamtrack.simulation.process import heat_input_kj_mm, overridden, process_of
 from seamtrack.simulation.robots import is_arm, tool_program
 from seamtrack.simulation.scene import Scene, load_scene
 from seamtrack.simulation.stop import INTERRUPTED, StopRequest
@@ -435,7 +415,7 @@ def _steered(
     expected: MeasuredGroove | None = None,
 ) -> Parts:
     """The parts with a sense function that records every frame's feature (and, in
-    ``each``, its groove: :func:`~seamtrack.simulation.job_paths.frame_groove`), moves the measured
+    ``each``, its groove: :func:`~seamtrack.multipass.paths.frame_groove`), moves the measured
     point by the plan's lateral offset there (station frame), and sets the tracker's speed
     along the seam from the plan; ``adapt(groove_ahead, plan)`` (a planner's, optional) may
     replace the speed and offset at the station the sensor sees, for when the torch gets
@@ -443,7 +423,7 @@ def _steered(
     pass before measured there (``previous``, a running median along the seam: :func:`settled`;
     the fill only grows) is taken as no groove. Until the pass's sensor measures the groove,
     the torch follows the plan on ``expected`` (``previous`` with its pass's bead added:
-    :func:`~seamtrack.simulation.job_paths.after_bead`), else on ``previous``."""
+    :func:`~seamtrack.multipass.paths.after_bead`), else on ``previous``."""
     sense = parts.sense
     guide = previous if expected is None else expected
     tracker = parts.tracker

@@ -1,6 +1,6 @@
 """A multi-pass job's summary (``job.json``): the passes, the layers, the final fill and its
 checks (reinforcement along the seam, underfill, the sidewall fusion margin), heat input and
-arc time. See :mod:`seamtrack.simulation.job`."""
+arc time. See :mod:`seamtrack.multipass.job`."""
 
 from __future__ import annotations
 
