@@ -12,7 +12,7 @@ import pytest
 
 from seamtrack.control.planner import PassPlan
 from seamtrack.errors import PluginError, PluginRuntimeError, SceneError
-from seamtrack.multipass import job, summary
+from seamtrack.multipass import job, steering, summary
 from seamtrack.sensing.profiles import Feature
 from seamtrack.simulation.process import (
     arc_width_to_height,
@@ -230,18 +230,18 @@ def test_fusion_margin_counts_the_wall_beads_only() -> None:
 def test_a_planners_adapt_is_checked() -> None:
     plan = PassPlan("centre", 0.0, 0.0, 5.0, 100.0, 0, 0)
     ahead = None
-    assert np.isnan(job._adapted(lambda g, p: None, ahead, plan, "p", 0.0)).all()
-    assert job._adapted(lambda g, p: (4.0, 0.5), ahead, plan, "p", 0.0) == (4.0, 0.5)
+    assert np.isnan(steering.adapted_answer(lambda g, p: None, ahead, plan, "p", 0.0)).all()
+    assert steering.adapted_answer(lambda g, p: (4.0, 0.5), ahead, plan, "p", 0.0) == (4.0, 0.5)
     for garbage in [(0.0, 1.0), (4.0, float("nan")), "fast", (1.0,)]:
         with pytest.raises(PluginRuntimeError) as info:
-            job._adapted(lambda g, p, answer=garbage: answer, ahead, plan, "p", 1.0)
+            steering.adapted_answer(lambda g, p, answer=garbage: answer, ahead, plan, "p", 1.0)
         assert info.value.field == "planner.name"
 
     def raises(g, p):
         raise ValueError("bug")
 
     with pytest.raises(PluginRuntimeError) as info:
-        job._adapted(raises, ahead, plan, "p", 1.0)
+        steering.adapted_answer(raises, ahead, plan, "p", 1.0)
     assert info.value.field == "planner.name"
 
 
@@ -259,10 +259,10 @@ def test_a_frame_below_the_last_fill_is_no_groove() -> None:
                      edges_laser=laser, area_mm2=50.0), T)  # fmt: skip
     previous = job.measured_groove([frame], fill, seam)
     assert previous is not None
-    assert not job._below_the_fill(frame, fill, seam, previous)
-    higher = job.MeasuredGroove(previous.s_mm, previous.points + [0.0, job.FILL_DROP_MM + 0.1],
+    assert not steering.below_the_fill(frame, fill, seam, previous)
+    higher = job.MeasuredGroove(previous.s_mm, previous.points + [0.0, steering.FILL_DROP_MM + 0.1],
                                 previous.area_mm2)  # fmt: skip
-    assert job._below_the_fill(frame, fill, seam, higher)
+    assert steering.below_the_fill(frame, fill, seam, higher)
 
 
 def test_the_pass_befores_groove_is_settled_along_the_seam() -> None:
@@ -283,7 +283,7 @@ def test_the_pass_befores_groove_is_settled_along_the_seam() -> None:
     groove = job.MeasuredGroove(s, points, np.full(20, 50.0))
     floor = settled(groove)
     assert floor.points[-1, 3, 1] == pytest.approx(13.5, abs=0.05)
-    assert floor.points[-1, 3, 1] - points[-1, 3, 1] > job.FILL_DROP_MM
+    assert floor.points[-1, 3, 1] - points[-1, 3, 1] > steering.FILL_DROP_MM
     for i in range(20):  # the median of the stations within 4 of it, as many as there are
         window = points[max(i - 4, 0) : i + 5]
         np.testing.assert_allclose(floor.points[i], np.median(window, axis=0), rtol=0, atol=1e-12)
@@ -465,13 +465,13 @@ def test_the_frame_check_refuses_a_foot_inside_the_last_fill() -> None:
     assert previous is not None
     for row, sign in ((1, -1.0), (5, 1.0)):  # the left foot further left, the right further right
         for shift, below in (
-            (2 * job.FILL_DROP_MM + 0.1, True),
-            (2 * job.FILL_DROP_MM - 0.1, False),
+            (2 * steering.FILL_DROP_MM + 0.1, True),
+            (2 * steering.FILL_DROP_MM - 0.1, False),
         ):
             points = previous.points.copy()
             points[:, row, 0] += sign * shift
             wider = job.MeasuredGroove(previous.s_mm, points, previous.area_mm2)
-            assert job._below_the_fill(frame, fill, seam, wider) is below, (row, shift)
+            assert steering.below_the_fill(frame, fill, seam, wider) is below, (row, shift)
 
 
 def test_a_groove_wider_than_the_old_probe_window_is_cut() -> None:

@@ -7,8 +7,6 @@ import sys
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from seamtrack.cli.tables import print_table
 from seamtrack.errors import SceneError
 
@@ -121,6 +119,8 @@ def planned_level(c: Any, parts: Any) -> tuple[str, str]:
     window), and a warning (empty: none) when a requested ``passes.count`` does not meet
     level B: the beads the process lays at its limits, that many, leave the groove under
     the plates' line or the crown over the limit."""
+    import numpy as np
+
     from seamtrack.control.planner import JobState, is_builtin, planner
     from seamtrack.multipass.job import bead_shape, dry_run
     from seamtrack.multipass.paths import STATION_SPACING_MM

@@ -4,7 +4,7 @@ arc's path from the trace, the ramps and the run-off to the part's ends."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -17,6 +17,9 @@ from seamtrack.multipass.aim import aim_point
 from seamtrack.sensing.profiles import Feature, laser_to_world
 from seamtrack.simulation.loop import Result
 
+if TYPE_CHECKING:
+    from seamtrack.workpiece.fill import FillState
+
 FloatArray = NDArray[np.float64]
 
 #: Station spacing of the fill state (mm): the issue's "every <= 0.5 mm".
@@ -26,7 +29,7 @@ STATION_SPACING_MM = 0.5
 RUN_OFF_MM = 3.0
 
 
-def pass_path(fill: Any, reference: str, plan: PassPlan | None, window: int = 4) -> Seam:
+def pass_path(fill: FillState, reference: str, plan: PassPlan | None, window: int = 4) -> Seam:
     """A pass's true path in the world: at every station the reference point of the true fill
     surface (left or right wall's foot, or the middle; a running median over ``2 window + 1``
     stations, 2 mm: where a toe wets a wall the foot jumps along it from one station to the
@@ -48,7 +51,7 @@ FrameGroove = tuple[int, FloatArray, float]
 
 def measured_groove(
     frames: list[tuple[Feature, FloatArray]],
-    fill: Any,
+    fill: FillState,
     cad_seam: Seam,
     T_station_world: FloatArray | None = None,
     each: list[FrameGroove | None] | None = None,
@@ -63,7 +66,7 @@ def measured_groove(
         if len(frames) == 1:  # one frame (a pass's sense function, every frame): no medians
             return one_station(frame_groove(*frames[0], fill, cad_seam, T_station_world), fill)
         if T_station_world is None:
-            T_station_world = np.linalg.inv(fill.T_world_station)
+            T_station_world = np.asarray(np.linalg.inv(fill.T_world_station), dtype=np.float64)
         each = [frame_groove(f, T, fill, cad_seam, T_station_world) for f, T in frames]
     found = [one for one in each if one is not None]
     if not found:
@@ -77,7 +80,7 @@ def measured_groove(
     return MeasuredGroove(fill.s_mm[keep], med_pts, med_area)
 
 
-def one_station(one: FrameGroove | None, fill: Any) -> MeasuredGroove | None:
+def one_station(one: FrameGroove | None, fill: FillState) -> MeasuredGroove | None:
     """One frame's groove (:func:`frame_groove`) as a measured groove of one station."""
     if one is None:
         return None
@@ -88,7 +91,7 @@ def one_station(one: FrameGroove | None, fill: Any) -> MeasuredGroove | None:
 def frame_groove(
     feature: Feature,
     T_world_sensor: FloatArray,
-    fill: Any,
+    fill: FillState,
     cad_seam: Seam,
     T_station_world: FloatArray | None = None,
 ) -> FrameGroove | None:
@@ -111,7 +114,7 @@ def frame_groove(
     return i, yz, float(feature.area_mm2)
 
 
-def true_groove(fill: Any) -> MeasuredGroove:
+def true_groove(fill: FillState) -> MeasuredGroove:
     """The CAD groove's 7 points and area (no scan-only pass: the first plan is the nominal
     groove's; later ones are measured)."""
     points = np.stack([fill.groove_points(i) for i in range(len(fill.s_mm))])
