@@ -296,7 +296,7 @@ def test_a_planned_frame_aims_a_top_corner_bead_at_the_fill_under_it() -> None:
     in from a top corner aims at the fill surface under that place (the 7 points' polyline
     there), as from a measured frame, not at the corner's height, 9 mm higher on the 12-pass
     plan. Oracle: the analytic V's 7 points at the station, carried through the frames."""
-    from seamtrack.control.fill_layout import POINT_INDEX
+    from seamtrack.geometry.groove_points import POINT_INDEX
     from seamtrack.multipass.aim import aim_point, planned_feature
     from seamtrack.multipass.paths import measured_groove
 
@@ -309,7 +309,7 @@ def test_a_planned_frame_aims_a_top_corner_bead_at_the_fill_under_it() -> None:
     T[:3, 3] = (2.0, 0.0, 100.0)  # the laser plane through station 4 (s = 2 mm)
     plan = PassPlan("right_top", -9.0, 0.0, 5.0, 100.0, 1, 1, 2, False)
     failed = job.Feature(confidence=0.0, reason="below the fill", stripe_points=500)
-    planned = planned_feature(failed, T, fill, plan, previous, 0.5, POINT_INDEX)
+    planned = planned_feature(failed, T, fill, plan, previous, 0.5)
     assert planned and planned.edges_laser.shape == (7, 2)
     np.testing.assert_allclose(planned.point_world, [2.0, *truth[4, 6]], atol=1e-9)
     got = measured_groove([(planned, T)], fill, seam)

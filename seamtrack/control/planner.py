@@ -31,10 +31,6 @@ from numpy.typing import NDArray
 
 from seamtrack.control.fill_layout import (
     CAP_OVERLAP_MM,
-    LEFT_FOOT,
-    LEFT_TOP,
-    POINT_INDEX,
-    RIGHT_TOP,
     Layout,
     MeasuredGroove,
     Process,
@@ -45,6 +41,7 @@ from seamtrack.control.fill_layout import (
 )
 from seamtrack.control.registry import load_class
 from seamtrack.errors import PluginError, PluginRuntimeError
+from seamtrack.geometry.groove_points import LEFT_FOOT, LEFT_TOP, POINT_INDEX, RIGHT_TOP
 from seamtrack.geometry.smoothing import station_median
 
 FloatArray = NDArray[np.float64]

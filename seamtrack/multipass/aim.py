@@ -15,6 +15,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.control.planner import MeasuredGroove, PassPlan
+from seamtrack.geometry.groove_points import (
+    BOTTOM,
+    LEFT_FOOT,
+    LEFT_TOP,
+    POINT_INDEX,
+    RIGHT_FOOT,
+    RIGHT_TOP,
+)
 from seamtrack.sensing.profiles import Feature
 
 if TYPE_CHECKING:
@@ -25,7 +33,7 @@ FloatArray = NDArray[np.float64]
 
 def planned_feature(
     feature: Feature, T_world_sensor: FloatArray, fill: FillState, plan: PassPlan,
-    previous: MeasuredGroove, spacing_mm: float, point_index: dict[str, int],
+    previous: MeasuredGroove, spacing_mm: float,
 ) -> Feature:  # fmt: skip
     """Until the pass's sensor first measures the groove, a frame that does not (a crowned
     fill's first millimetres, a spatter, the arc's start) gives the planned point instead: the
@@ -36,7 +44,7 @@ def planned_feature(
     bead offset from a top corner aims at the fill surface under it, as from a measured
     frame, not at the corner's height (a torch of the 12-pass plan started 9 mm high).
     Frames off the part, or where the laser plane crosses no station, stay failed.
-    ``spacing_mm``: the stations'; ``point_index``: each reference's row of the 7 points."""
+    ``spacing_mm``: the stations'."""
     if feature.stripe_points == 0 or not len(previous):
         return feature
     origin = fill.T_world_station[:, :3, 3]
@@ -53,7 +61,7 @@ def planned_feature(
     world = fill.T_world_station[i] @ np.column_stack([np.zeros(7), yz, np.ones(7)]).T
     laser = np.linalg.solve(T_world_sensor, world)[1:3].T
     area = float(np.interp(s, previous.s_mm, previous.area_mm2))
-    return Feature.found(laser[point_index[plan.reference]], T_world_sensor, confidence=0.0,
+    return Feature.found(laser[POINT_INDEX[plan.reference]], T_world_sensor, confidence=0.0,
                          joint=feature.joint or "groove", edges_laser=laser,
                          area_mm2=area)  # fmt: skip
 
@@ -63,9 +71,9 @@ def wall_deg(groove: MeasuredGroove, margin_deg: float = 12.0) -> float:
     off the plates as the scan measured them, less ``margin_deg`` (at least 35 deg, its
     default). A bead's flank by a buried wall, shallower than the bevel, is then no wall."""
     p = groove.points
-    top = p[:, 6] - p[:, 0]
+    top = p[:, RIGHT_TOP] - p[:, LEFT_TOP]
     angles = []
-    for a, b in ((0, 1), (6, 5)):
+    for a, b in ((LEFT_TOP, LEFT_FOOT), (RIGHT_TOP, RIGHT_FOOT)):
         wall = p[:, b] - p[:, a]
         cos = np.abs(np.sum(wall * top, axis=1)) / np.maximum(
             np.linalg.norm(wall, axis=1) * np.linalg.norm(top, axis=1), 1e-12
@@ -92,7 +100,7 @@ def aim_point(points: FloatArray, index: int, offset_mm: Any, cap: bool = False)
     """(m, 2) where a bead ``offset_mm`` (m,) across the groove from row ``index`` of the 7
     points ``points`` (m, 7, 2) aims: a fill bead at the fill surface under it
     (:func:`offset_point`), a cap bead (``cap``) at the height of the plates' top line there
-    (the line through the top corners, rows 0 and 6).
+    (the line through the top corners, rows LEFT_TOP and RIGHT_TOP).
 
     Why a cap bead is aimed at the plates' line: the cap is laid on a fill surface left
     between the last fill beads' crowns and the valleys between them, a millimetre or two
@@ -107,7 +115,7 @@ def aim_point(points: FloatArray, index: int, offset_mm: Any, cap: bool = False)
     yz = offset_point(points, index, offset_mm)
     if cap:
         p = np.asarray(points, dtype=float).reshape(-1, 7, 2)
-        (y0, z0), (y1, z1) = p[:, 0].T, p[:, 6].T
+        (y0, z0), (y1, z1) = p[:, LEFT_TOP].T, p[:, RIGHT_TOP].T
         span = np.where(np.abs(y1 - y0) > 1e-9, y1 - y0, 1.0)
         yz[:, 1] = z0 + (yz[:, 0] - y0) * (z1 - z0) / span
     return yz
@@ -115,5 +123,5 @@ def aim_point(points: FloatArray, index: int, offset_mm: Any, cap: bool = False)
 
 def _profile(p: FloatArray) -> tuple[FloatArray, FloatArray]:
     """The 7 points' y and z as a function of y (the bottom five where a wall leans over)."""
-    rows = p if np.all(np.diff(p[:, 0]) >= 0) else p[1:6]
+    rows = p if np.all(np.diff(p[:, 0]) >= 0) else p[BOTTOM]
     return rows[:, 0], rows[:, 1]

@@ -9,8 +9,18 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.control.fill_layout import POINT_INDEX, MeasuredGroove
+from seamtrack.control.fill_layout import MeasuredGroove
 from seamtrack.control.planner import PassPlan
+from seamtrack.geometry.groove_points import (
+    FEET,
+    LEFT_FOOT,
+    LEFT_TOP,
+    MIDDLE,
+    POINT_INDEX,
+    RIGHT_FOOT,
+    RIGHT_TOP,
+    TOPS,
+)
 from seamtrack.geometry.seam import Seam
 from seamtrack.geometry.smoothing import station_median
 from seamtrack.multipass.aim import aim_point
@@ -101,7 +111,7 @@ def frame_groove(
     if not feature or edges.shape != (7, 2) or not np.isfinite(edges).all():
         return None
     world = laser_to_world(T_world_sensor, edges)
-    s = float(cad_seam.closest(world[3][None]).arc_length_mm[0])
+    s = float(cad_seam.closest(world[MIDDLE][None]).arc_length_mm[0])
     i = min(int(round((s - fill.s_mm[0]) / STATION_SPACING_MM)), len(fill.s_mm) - 1)
     if T_station_world is None:
         T_station_i = np.linalg.inv(fill.T_world_station[i])
@@ -109,7 +119,7 @@ def frame_groove(
         T_station_i = T_station_world[i]
     local = (T_station_i @ np.column_stack((world, np.ones(7))).T).T
     yz = local[:, 1:3]
-    if yz[0, 0] > yz[6, 0]:  # the laser's left is the stations' right: y ascending
+    if yz[LEFT_TOP, 0] > yz[RIGHT_TOP, 0]:  # the laser's left is the stations' right: y ascending
         yz = yz[::-1]
     return i, yz, float(feature.area_mm2)
 
@@ -248,17 +258,19 @@ def after_bead(groove: MeasuredGroove, area_mm2: Any) -> MeasuredGroove:
         return groove
     p = groove.points.copy()
     area = np.maximum(np.asarray(area_mm2, dtype=float).reshape(len(groove)), 0.0)
-    rise = np.maximum(p[:, [0, 6], 1] - p[:, [1, 5], 1], 1e-9)  # (m, 2) the walls' heights
-    widen = np.abs(p[:, [1, 5], 0] - p[:, [0, 6], 0]) / rise  # mm of width per mm of height
-    w = np.maximum(p[:, 5, 0] - p[:, 1, 0], 0.0)
+    rise = np.maximum(p[:, TOPS, 1] - p[:, FEET, 1], 1e-9)  # (m, 2) the walls' heights
+    widen = np.abs(p[:, FEET, 0] - p[:, TOPS, 0]) / rise  # mm of width per mm of height
+    w = np.maximum(p[:, RIGHT_FOOT, 0] - p[:, LEFT_FOOT, 0], 0.0)
     k = widen.sum(axis=1)
     dz = np.where(k > 1e-9, (np.sqrt(w * w + 2 * k * area) - w) / np.maximum(k, 1e-9),
                   area / np.maximum(w, 1e-9))  # fmt: skip
     dz = np.minimum(dz, rise.min(axis=1))
-    left = p[:, 1, 0] - widen[:, 0] * dz
-    right = p[:, 5, 0] + widen[:, 1] * dz
-    old_left, old_w = p[:, 1, 0].copy(), np.maximum(w, 1e-9)
-    for row in range(1, 6):  # the bottom points stretched between the new feet, lifted
+    left = p[:, LEFT_FOOT, 0] - widen[:, 0] * dz
+    right = p[:, RIGHT_FOOT, 0] + widen[:, 1] * dz
+    old_left, old_w = p[:, LEFT_FOOT, 0].copy(), np.maximum(w, 1e-9)
+    for row in range(
+        LEFT_FOOT, RIGHT_FOOT + 1
+    ):  # the bottom points stretched between the new feet, lifted
         frac = (p[:, row, 0] - old_left) / old_w
         p[:, row, 0] = left + frac * (right - left)
         p[:, row, 1] += dz

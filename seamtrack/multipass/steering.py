@@ -18,9 +18,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.control.fill_layout import LEFT_FOOT, MIDDLE, POINT_INDEX, RIGHT_FOOT, MeasuredGroove
+from seamtrack.control.fill_layout import MeasuredGroove
 from seamtrack.control.planner import PassPlan
 from seamtrack.errors import PluginRuntimeError, plugin_failed
+from seamtrack.geometry.groove_points import LEFT_FOOT, MIDDLE, POINT_INDEX, RIGHT_FOOT
 from seamtrack.geometry.seam import Seam
 from seamtrack.multipass.aim import aim_point, planned_feature
 from seamtrack.multipass.paths import (
@@ -132,7 +133,7 @@ class SteeredSense:
             # edge bead puts the sensor so far off the groove's middle that the far plate
             # leaves its stripe now and then)
             feature = planned_feature(feature, T_world_sensor, self.fill, plan, self.guide,
-                                      STATION_SPACING_MM, POINT_INDEX)  # fmt: skip
+                                      STATION_SPACING_MM)  # fmt: skip
             planned = one_station(frame_groove(feature, T_world_sensor, self.fill, self.cad_seam,
                                                self.T_station_world), self.fill)  # fmt: skip
         if feature:
