@@ -73,7 +73,8 @@ BENCHES: dict[str, tuple[tuple[str, ...], str, str]] = {
     "paper": (
         ("paper.json",),
         "seamtrack bench paper",
-        "the paper's Table 4: algorithm II on `paper-corner` over the radius of convergence",
+        "the paper's Table 3 through Eq. 4-8, and its Table 4: algorithm II on `paper-corner` "
+        "over the radius of convergence",
     ),
     "firstrun": (
         ("firstrun.json",),
@@ -109,6 +110,12 @@ def _speckle_table(data: dict[str, Any]) -> str:
     return speckle_summary_table(data)
 
 
+def _table3_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.paper import table3_table
+
+    return table3_table(data)
+
+
 def _table4_table(data: dict[str, Any]) -> str:
     from seamtrack.bench.paper import table4_table
 
@@ -133,6 +140,7 @@ RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {
     "trackers.json": _trackers_table,
     "tradeoff.json": _presets_table,
     "camera.json#speckle": _speckle_table,
+    "paper.json#table3": _table3_table,
     "paper.json#table4": _table4_table,
     "paper.json#servo": _servo_table,
     "firstrun.json": _firstrun_table,

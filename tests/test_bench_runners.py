@@ -264,3 +264,7 @@ def test_paper_bench(tmp_path: Path) -> None:
     assert all(r["status"] == "completed" for r in ideal + servo)
     assert ideal[0]["max_error_mm"] > ideal[1]["max_error_mm"]
     assert servo[1]["max_error_mm"] < ideal[1]["max_error_mm"]
+    # Table 3 (the paper's published specs) back through Eq. 4-8 from the solved geometry
+    table3 = result["table3"]
+    for key, published in table3["table3"].items():
+        assert table3["eq4_8"][key] == pytest.approx(published, rel=1e-9), key
