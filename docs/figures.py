@@ -110,6 +110,12 @@ def _speckle_table(data: dict[str, Any]) -> str:
     return speckle_summary_table(data)
 
 
+def _must_show_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.camera_summary import must_show_table
+
+    return must_show_table(data)
+
+
 def _table3_table(data: dict[str, Any]) -> str:
     from seamtrack.bench.paper import table3_table
 
@@ -140,6 +146,7 @@ RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {
     "trackers.json": _trackers_table,
     "tradeoff.json": _presets_table,
     "camera.json#speckle": _speckle_table,
+    "camera.json#must_show": _must_show_table,
     "paper.json#table3": _table3_table,
     "paper.json#table4": _table4_table,
     "paper.json#servo": _servo_table,
