@@ -68,7 +68,8 @@ BENCHES: dict[str, tuple[tuple[str, ...], str, str]] = {
     "trackers": (
         ("trackers.json",),
         "seamtrack bench trackers",
-        "the paper's algorithms against the trajectory tracker on `paper-v-groove`",
+        "the paper's algorithms against the trajectory tracker on `paper-v-groove`, and the "
+        "tracker's stop at the part's end",
     ),
     "paper": (
         ("paper.json",),
@@ -96,6 +97,12 @@ def _trackers_table(data: dict[str, Any]) -> str:
     from seamtrack.bench.trackers import trackers_table
 
     return trackers_table(data)
+
+
+def _end_of_part_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.trackers import end_of_part_table
+
+    return end_of_part_table(data)
 
 
 def _firstrun_table(data: dict[str, Any]) -> str:
@@ -144,6 +151,7 @@ def _presets_table(data: dict[str, Any]) -> str:
 #: file's several tables) -> the bench's own function that renders the table.
 RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {
     "trackers.json": _trackers_table,
+    "trackers.json#end_of_part": _end_of_part_table,
     "tradeoff.json": _presets_table,
     "camera.json#speckle": _speckle_table,
     "camera.json#must_show": _must_show_table,

@@ -268,3 +268,16 @@ def test_paper_bench(tmp_path: Path) -> None:
     table3 = result["table3"]
     for key, published in table3["table3"].items():
         assert table3["eq4_8"][key] == pytest.approx(published, rel=1e-9), key
+
+
+def test_trackers_bench_end_of_part() -> None:
+    """The seam's end on the demo's 60 mm part: with the tracker's end handling off the torch
+    bridges on past the part's end (about one look-ahead of air); on, it stops at the CAD
+    seam's end, within 0.05 mm."""
+    from seamtrack.bench.trackers import END_RUNS, end_of_part_rows, end_of_part_table
+
+    (row,) = end_of_part_rows(END_RUNS[:1])
+    assert row["stop_cause_before"] != "end_of_part" and row["overrun_mm_before"] > 5.0
+    assert row["stop_cause_after"] == "end_of_part"
+    assert abs(row["overrun_mm_after"]) < 0.05
+    assert "`end_of_part`" in end_of_part_table({"end_of_part": [row]})

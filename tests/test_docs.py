@@ -227,7 +227,6 @@ HAND_WRITTEN_FIGURE_TABLES = {
     "extractors.md": 2,
     "mesh-mode.md": 1,
     "sweeps.md": 1,
-    "trackers.md": 1,
     "weldments.md": 2,
 }
 
