@@ -46,7 +46,11 @@ BENCHES: dict[str, tuple[tuple[str, ...], str, str]] = {
         "the paper's verification run, the CAD cache, a 1e5-point seam, the wall-clock guard",
     ),
     "loop": (("loop.json",), "seamtrack bench loop", "the closed loop on `paper-v-groove`"),
-    "raycast": (("raycast.json",), "seamtrack bench raycast", "stripe profiles by ray casting"),
+    "raycast": (
+        ("raycast.json",),
+        "seamtrack bench raycast",
+        "stripe profiles by ray casting, and their precision against exact hits",
+    ),
     "extractors": (
         ("extractors.json", "extractors_real.json"),
         "seamtrack extractors bench (--real DIR for the real sets)",
@@ -105,6 +109,12 @@ def _end_of_part_table(data: dict[str, Any]) -> str:
     return end_of_part_table(data)
 
 
+def _precision_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.raycast_precision import precision_table
+
+    return precision_table(data)
+
+
 def _firstrun_table(data: dict[str, Any]) -> str:
     from seamtrack.bench.firstrun import firstrun_table
 
@@ -159,6 +169,7 @@ RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {
     "paper.json#table4": _table4_table,
     "paper.json#servo": _servo_table,
     "firstrun.json": _firstrun_table,
+    "raycast.json#precision": _precision_table,
 }
 
 

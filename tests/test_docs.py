@@ -225,7 +225,6 @@ def test_multipass_geometry_example_lays_a_bead_of_its_area(tmp_path: Path) -> N
 HAND_WRITTEN_FIGURE_TABLES = {
     "arms.md": 1,
     "extractors.md": 2,
-    "mesh-mode.md": 1,
     "sweeps.md": 1,
     "weldments.md": 2,
 }
