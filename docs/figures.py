@@ -501,7 +501,9 @@ def _cell(value: Any) -> str:
         return f"{value:,}" if abs(value) >= 1e4 else str(value)
     if isinstance(value, list) and all(not isinstance(v, (dict, list)) for v in value):
         return ", ".join(_cell(v) for v in value)
-    return str(value).replace("|", "\\|").replace("\n", " ")
+    # Text as text: "[a][#b]" would read as a reference link, "<b>" as a tag.
+    text = str(value).replace("|", "\\|").replace("\n", " ").replace("[", "\\[")
+    return text.replace("]", "\\]").replace("<", "&lt;").replace(">", "&gt;")
 
 
 def _scalar(value: Any) -> bool:
