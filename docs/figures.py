@@ -86,6 +86,11 @@ BENCHES: dict[str, tuple[tuple[str, ...], str, str]] = {
         "seamtrack bench firstrun",
         "the demo's first mesh-mode run with an empty numba cache, then the same run again",
     ),
+    "weldments": (
+        ("weldments.json",),
+        "seamtrack bench weldments",
+        "every seam of the bracket weldment tracked, one sweep on 2 workers",
+    ),
 }
 
 
@@ -113,6 +118,12 @@ def _precision_table(data: dict[str, Any]) -> str:
     from seamtrack.bench.raycast_precision import precision_table
 
     return precision_table(data)
+
+
+def _weldments_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.weldments import weldments_table
+
+    return weldments_table(data)
 
 
 def _firstrun_table(data: dict[str, Any]) -> str:
@@ -170,6 +181,7 @@ RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {
     "paper.json#servo": _servo_table,
     "firstrun.json": _firstrun_table,
     "raycast.json#precision": _precision_table,
+    "weldments.json": _weldments_table,
 }
 
 

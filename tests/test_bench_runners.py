@@ -281,3 +281,19 @@ def test_trackers_bench_end_of_part() -> None:
     assert row["stop_cause_after"] == "end_of_part"
     assert abs(row["overrun_mm_after"]) < 0.05
     assert "`end_of_part`" in end_of_part_table({"end_of_part": [row]})
+
+
+def test_weldments_bench(tmp_path: Path) -> None:
+    """Two of the bracket's seams (a lap and a fillet) through the bench's sweep: both completed
+    with a max error under 0.1 mm (the paper asks 0.5 mm), each row labelled with its seam as
+    ``seamtrack seams`` names it."""
+    from seamtrack.bench.runner import run_benches
+
+    result = run_benches("weldments", tmp_path, quick=True)["weldments"]
+    _written(tmp_path / "weldments", "weldments.json", "weldments.md")
+    rows = {r["value"]: r for r in result["rows"]}
+    assert [rows[s]["label"] for s in ("s1", "s7")] == [
+        "s1 lap base/strap/0",
+        "s7 fillet web/gusset/0",
+    ]
+    assert all(r["status"] == "completed" and r["max_error_mm"] < 0.1 for r in rows.values())
