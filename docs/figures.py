@@ -126,6 +126,12 @@ def _weldments_table(data: dict[str, Any]) -> str:
     return weldments_table(data)
 
 
+def _arm_outcomes_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.loop_arms import arm_outcomes_table
+
+    return arm_outcomes_table(data)
+
+
 def _firstrun_table(data: dict[str, Any]) -> str:
     from seamtrack.bench.firstrun import firstrun_table
 
@@ -182,6 +188,7 @@ RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {
     "firstrun.json": _firstrun_table,
     "raycast.json#precision": _precision_table,
     "weldments.json": _weldments_table,
+    "loop.json#arm_outcomes": _arm_outcomes_table,
 }
 
 
