@@ -91,6 +91,11 @@ BENCHES: dict[str, tuple[tuple[str, ...], str, str]] = {
         "seamtrack bench weldments",
         "every seam of the bracket weldment tracked, one sweep on 2 workers",
     ),
+    "stability": (
+        ("stability.json",),
+        "seamtrack bench stability",
+        "what the extremes of a scene's inputs do (seam mode)",
+    ),
 }
 
 
@@ -130,6 +135,12 @@ def _arm_outcomes_table(data: dict[str, Any]) -> str:
     from seamtrack.bench.loop_arms import arm_outcomes_table
 
     return arm_outcomes_table(data)
+
+
+def _stability_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.stability import stability_table
+
+    return stability_table(data)
 
 
 def _firstrun_table(data: dict[str, Any]) -> str:
@@ -189,6 +200,7 @@ RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {
     "raycast.json#precision": _precision_table,
     "weldments.json": _weldments_table,
     "loop.json#arm_outcomes": _arm_outcomes_table,
+    "stability.json": _stability_table,
 }
 
 

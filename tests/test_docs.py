@@ -224,7 +224,6 @@ def test_multipass_geometry_example_lays_a_bead_of_its_area(tmp_path: Path) -> N
 #: markers (docs/figures.py) and lower its count here.
 HAND_WRITTEN_FIGURE_TABLES = {
     "extractors.md": 2,
-    "sweeps.md": 1,
     "weldments.md": 1,
 }
 
