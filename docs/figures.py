@@ -89,7 +89,8 @@ BENCHES: dict[str, tuple[tuple[str, ...], str, str]] = {
     "weldments": (
         ("weldments.json",),
         "seamtrack bench weldments",
-        "every seam of the bracket weldment tracked, one sweep on 2 workers",
+        "every seam of the bracket weldment tracked, one sweep on 2 workers; `seamtrack seams` "
+        "on the public STEP files",
     ),
     "stability": (
         ("stability.json",),
@@ -141,6 +142,12 @@ def _stability_table(data: dict[str, Any]) -> str:
     from seamtrack.bench.stability import stability_table
 
     return stability_table(data)
+
+
+def _public_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.weldments_public import public_table
+
+    return public_table(data)
 
 
 def _firstrun_table(data: dict[str, Any]) -> str:
@@ -199,6 +206,7 @@ RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {
     "firstrun.json": _firstrun_table,
     "raycast.json#precision": _precision_table,
     "weldments.json": _weldments_table,
+    "weldments.json#public": _public_table,
     "loop.json#arm_outcomes": _arm_outcomes_table,
     "stability.json": _stability_table,
 }

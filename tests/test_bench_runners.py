@@ -305,3 +305,7 @@ def test_weldments_bench(tmp_path: Path) -> None:
         "s7 fillet web/gusset/0",
     ]
     assert all(r["status"] == "completed" and r["max_error_mm"] < 0.1 for r in rows.values())
+    # The shelf bracket's STEP: the 4 butt seams a welder names (2 joints, both sides), 6 in long.
+    (bracket,) = result["public"]
+    assert (bracket["found"], bracket["missed"], bracket["false"]) == (4, 0, 0)
+    assert all(abs(s["length_mm"] - 6 * 25.4) < 1e-6 for s in bracket["seams"])

@@ -224,7 +224,6 @@ def test_multipass_geometry_example_lays_a_bead_of_its_area(tmp_path: Path) -> N
 #: markers (docs/figures.py) and lower its count here.
 HAND_WRITTEN_FIGURE_TABLES = {
     "extractors.md": 2,
-    "weldments.md": 1,
 }
 
 #: Tables with decimals that are no figure (nothing the code measures), per page, and why.

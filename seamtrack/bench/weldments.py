@@ -1,5 +1,6 @@
-"""``seamtrack bench weldments``: every seam of the bracket weldment tracked, docs/weldments.md's
-table.
+"""``seamtrack bench weldments``: every seam of the bracket weldment tracked, and ``seamtrack
+seams`` on public STEP files (:mod:`seamtrack.bench.weldments_public`): docs/weldments.md's
+tables.
 
 The same runs as ``seamtrack sweep weldment-bracket --param workpiece.seam --values all
 --workers 2`` (mesh mode, 1024 rays, 100 frames/s, 10 mm/s, the trajectory tracker). Writes
@@ -18,6 +19,7 @@ from pathlib import Path
 from typing import Any
 
 from seamtrack.bench.common import machine_info
+from seamtrack.bench.weldments_public import public_rows, public_table
 
 SCENE = "weldment-bracket"
 PARAM = "workpiece.seam"
@@ -38,6 +40,7 @@ def bench_weldments(out_dir: str | Path, quick: bool = False) -> dict[str, Any]:
     cases = run_sweep(SCENE, PARAM, values, workers=WORKERS)
     wall = time.perf_counter() - start
     labels = seam_labels(SCENE, {})
+    public = public_rows(quick)
     rows = summarize(cases)
     for row in rows:
         row["label"] = labels.get(row["value"], str(row["value"]))
@@ -49,9 +52,10 @@ def bench_weldments(out_dir: str | Path, quick: bool = False) -> dict[str, Any]:
         "wall_s": wall,
         "load_average_before": load,
         "rows": rows,
+        "public": public,
     }
     (out / "weldments.json").write_text(json.dumps(result, indent=2) + "\n")
-    (out / "weldments.md").write_text(weldments_table(result))
+    (out / "weldments.md").write_text(weldments_table(result) + "\n" + public_table(result))
     return result
 
 
