@@ -150,6 +150,12 @@ def _public_table(data: dict[str, Any]) -> str:
     return public_table(data)
 
 
+def _groove_fill_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.groove_fill import groove_fill_table
+
+    return groove_fill_table(data)
+
+
 def _firstrun_table(data: dict[str, Any]) -> str:
     from seamtrack.bench.firstrun import firstrun_table
 
@@ -209,6 +215,7 @@ RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {
     "weldments.json#public": _public_table,
     "loop.json#arm_outcomes": _arm_outcomes_table,
     "stability.json": _stability_table,
+    "groove_fill.json": _groove_fill_table,
 }
 
 
