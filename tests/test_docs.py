@@ -223,14 +223,7 @@ def test_multipass_geometry_example_lays_a_bead_of_its_area(tmp_path: Path) -> N
 #: writes yet (a test's or a one-off command's); once a bench writes it, render it between
 #: markers (docs/figures.py) and lower its count here.
 HAND_WRITTEN_FIGURE_TABLES = {
-    "arms.md": 2,
-    "camera.md": 1,
     "extractors.md": 2,
-    "mesh-mode.md": 1,
-    "paper.md": 1,
-    "sweeps.md": 1,
-    "trackers.md": 1,
-    "weldments.md": 2,
 }
 
 #: Tables with decimals that are no figure (nothing the code measures), per page, and why.
