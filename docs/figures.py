@@ -453,6 +453,7 @@ HEADLINE = (
     ("multipass", "multi-pass jobs (gantry, 1.2 mm wire)", "seamtrack bench multipass"),
     ("gym", "Gymnasium environment, paper-v-groove", "seamtrack bench gym"),
     ("bridge", "lockstep bridge, algorithm II in another process", "seamtrack bench bridge"),
+    ("firstrun", "the demo's first mesh-mode run, empty numba cache", "seamtrack bench firstrun"),
 )
 
 
@@ -507,6 +508,19 @@ def _bridge() -> str:
     return f"x real time (load {r['load_average_before']:.1f}): {runs}"
 
 
+def _firstrun() -> str:
+    rows = load("firstrun")["rows"]
+    first = rows[0]
+    text = (
+        f"{first['first_s']:.0f} s, {first['extra_s']:.0f} s more than the same run again "
+        f"({first['variant']}, load {first['load_1min']:.2f}; the goal: 15 s more)"
+    )
+    if len(rows) > 1:
+        one = rows[1]
+        text += f"; {one['first_s']:.0f} s in one process"
+    return text
+
+
 def headline() -> str:
     """The README's table: one line per figure, each with the command that measured it."""
     measured = {
@@ -527,6 +541,7 @@ def headline() -> str:
         "multipass": _multipass,
         "gym": _gym,
         "bridge": _bridge,
+        "firstrun": _firstrun,
     }
     rows = [_row(name, what, measured[name], command) for name, what, command in HEADLINE]
     head = ["| figure | measured | command |", "|---|---|---|"]
