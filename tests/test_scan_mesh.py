@@ -12,8 +12,9 @@ import sys
 import numpy as np
 import pytest
 import trimesh
-from test_raycast import SECTIONS, analytic_first_hit, extruded_mesh, posed
+from test_raycast import SECTIONS, extruded_mesh, posed
 
+from seamtrack.bench.raycast_precision import analytic_first_hit
 from seamtrack.geometry import frames
 from seamtrack.io.profiles import write_profile_csv
 from seamtrack.sensing.profiles import Feature, Profile, Reason

@@ -13,9 +13,10 @@ import numpy as np
 import pytest
 import trimesh
 from scipy.spatial.transform import Rotation
-from test_raycast import SECTIONS, analytic_first_hit, extruded_mesh, posed
+from test_raycast import SECTIONS, extruded_mesh, posed
 
 from seamtrack.bench.raycast import AGREE_MM, fan_agreement, v_groove_plate_mesh
+from seamtrack.bench.raycast_precision import analytic_first_hit
 from seamtrack.errors import SceneError
 from seamtrack.geometry import frames
 from seamtrack.sensing import section
@@ -113,17 +114,15 @@ def test_the_hierarchy_finds_every_triangle_the_plane_cuts_in_the_wedge(seed: in
     T = frames.make(rotation, [rng.uniform(-10, 10), rng.uniform(-10, 10), 91.0])
     tan_max = 0.2
     index = caster.section
-    _, tri = section.section_segments(
-        index.lo, index.hi, index.child, index.count, index.order, caster.vertices_local,
-        caster.faces, T[:3, 3] - caster.local_origin, np.ascontiguousarray(T[:3, :3]), tan_max,
-    )  # fmt: skip
+    _, tri = section.section_segments(index, caster.section_mesh, T[:3, 3] - caster.local_origin,
+                                      np.ascontiguousarray(T[:3, :3]), tan_max)  # fmt: skip
     expected = _brute_force_segments(caster, T, tan_max)
     assert len(expected) > 20
     assert expected <= set(tri.tolist())
     # Every triangle of the mesh sits in exactly one leaf.
-    leaves = index.count > 0
+    leaves = index.leaf_count > 0
     assert sorted(index.order.tolist()) == list(range(len(mesh.faces)))
-    assert index.count[leaves].sum() == len(mesh.faces)
+    assert index.leaf_count[leaves].sum() == len(mesh.faces)
 
 
 # ----------------------------------------------------------------------------- agreement
@@ -251,9 +250,8 @@ def _all_rays_hits(caster: RayCaster, T: np.ndarray, fan: np.ndarray) -> tuple[n
     index = caster.section
     tans = fan[:, 1] / fan[:, 2]
     segs, tri = section.section_segments(
-        index.lo, index.hi, index.child, index.count, index.order, caster.vertices_local,
-        caster.faces, T[:3, 3] - caster.local_origin, np.ascontiguousarray(T[:3, :3]),
-        float(np.abs(tans).max()) * (1 + 1e-9) + 1e-9,
+        index, caster.section_mesh, T[:3, 3] - caster.local_origin,
+        np.ascontiguousarray(T[:3, :3]), float(np.abs(tans).max()) * (1 + 1e-9) + 1e-9,
     )  # fmt: skip
     best_t = np.full(len(fan), np.inf)
     best_f = np.full(len(fan), -1, dtype=np.int64)
@@ -289,16 +287,13 @@ def test_the_rays_a_segment_covers_miss_no_hit(part: str, even: bool) -> None:
     tans = fan[:, 1] / fan[:, 2]
     assert (section._even_step(tans) > 0.0) == even
     index = caster.section
-    tree = (index.lo, index.hi, index.child, index.count, index.order, caster.vertices_local,
-            caster.faces)  # fmt: skip
+    mesh = caster.section_mesh
     last = section.NO_SEEDS
     for _ in range(6):
         rotation = Rotation.from_rotvec(rng.normal(0.0, 0.15, 3)).as_matrix() @ LOOK_DOWN
         T = frames.make(rotation, [rng.uniform(-10, 10), rng.uniform(-10, 10), 91.0])
-        t, face = section.section_hits(
-            index.lo, index.hi, index.child, index.count, index.order, caster.vertices_local,
-            caster.faces, T[:3, 3] - caster.local_origin, np.ascontiguousarray(T[:3, :3]), fan,
-        )  # fmt: skip
+        t, face = section.section_hits(index, mesh, T[:3, 3] - caster.local_origin,
+                                       np.ascontiguousarray(T[:3, :3]), fan)  # fmt: skip
         t_all, face_all = _all_rays_hits(caster, T, fan)
         assert (face >= 0).sum() > len(fan) // 2
         if part == "pipe":  # the culling runs: more crossings than it waits for
@@ -309,7 +304,7 @@ def test_the_rays_a_segment_covers_miss_no_hit(part: str, even: bool) -> None:
         assert set(seen.tolist()) == set(face_all[face_all >= 0].tolist())
         o, r = T[:3, 3] - caster.local_origin, np.ascontiguousarray(T[:3, :3])
         for seeds in (seen, last, rng.choice(len(caster.faces), 50)):
-            t_s, face_s, _ = section._section_hits(*tree, o, r, fan, *section.fan_tans(fan),
+            t_s, face_s, _ = section._section_hits(index, mesh, o, r, fan, *section.fan_tans(fan),
                                                    seeds.astype(np.int64))  # fmt: skip
             np.testing.assert_array_equal(face_s, face_all)
             np.testing.assert_array_equal(t_s, t_all)

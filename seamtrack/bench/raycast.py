@@ -187,12 +187,11 @@ def _part_methods(
     origins = [T[:3, 3] - caster.local_origin for T in poses]
     rotations = [np.ascontiguousarray(T[:3, :3]) for T in poses]
     fan = laser_fan(preset("paper"), RAYS).directions
-    tree = (index.lo, index.hi, index.child, index.count, index.order, caster.vertices_local,
-            caster.faces)  # fmt: skip
+    mesh = caster.section_mesh
 
     def section_fan() -> None:
         for origin, rotation in zip(origins, rotations, strict=True):
-            section.section_hits(*tree, origin, rotation, fan)
+            section.section_hits(index, mesh, origin, rotation, fan)
 
     return {
         "bare embreex scene.run (same rays)": bare,
@@ -469,10 +468,8 @@ def fan_agreement(
         b = stripe_hits(sensor, caster, T, rays, fan="embree")
         refined = caster.first_hit(T[:3, 3], a.directions_local).refined
         origin = np.asarray(T[:3, 3] - caster.local_origin, dtype=np.float64)
-        segs, _ = section.section_segments(
-            index.lo, index.hi, index.child, index.count, index.order, caster.vertices_local,
-            caster.faces, origin, np.ascontiguousarray(T[:3, :3]), tan_max,
-        )  # fmt: skip
+        rotation = np.ascontiguousarray(T[:3, :3])
+        segs, _ = section.section_segments(index, caster.section_mesh, origin, rotation, tan_max)
         ends = np.concatenate([segs[:, :2], segs[:, 2:]])  # (e, 2) = (y_L, z_L)
         d = fan.directions[:, 1:]  # (n, 2)
         along = d @ ends.T  # (n, e): distance along each ray to each end's foot

@@ -3,7 +3,7 @@ built once per mesh, in numba."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -13,8 +13,7 @@ from numpy.typing import NDArray
 LEAF_SIZE = 4
 
 
-@dataclass(frozen=True, eq=False)
-class SectionIndex:
+class SectionIndex(NamedTuple):
     """A bounding-volume hierarchy over a mesh's triangles (arrays, built by :func:`build`).
 
     Attributes
@@ -23,7 +22,7 @@ class SectionIndex:
         Each node's box.
     child : (m,) int64
         An inner node's first child (the second follows it); a leaf's first entry in ``order``.
-    count : (m,) int64
+    leaf_count : (m,) int64
         A leaf's number of triangles; 0 for an inner node.
     order : (f,) int64
         Triangle indices, leaf by leaf.
@@ -32,13 +31,13 @@ class SectionIndex:
     lo: NDArray[np.float64]
     hi: NDArray[np.float64]
     child: NDArray[np.int64]
-    count: NDArray[np.int64]
+    leaf_count: NDArray[np.int64]
     order: NDArray[np.int64]
 
     @property
     def nbytes(self) -> int:
         """Memory held by the index."""
-        return sum(a.nbytes for a in (self.lo, self.hi, self.child, self.count, self.order))
+        return sum(a.nbytes for a in self)
 
 
 def build(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> SectionIndex:
@@ -52,7 +51,7 @@ def build(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> SectionInd
     v = np.ascontiguousarray(vertices, dtype=np.float64)
     f = np.ascontiguousarray(faces, dtype=np.int64)
     lo, hi, child, count, order = _build(v, f, LEAF_SIZE, _nodes(len(f)))
-    return SectionIndex(lo=lo, hi=hi, child=child, count=count, order=order)
+    return SectionIndex(lo=lo, hi=hi, child=child, leaf_count=count, order=order)
 
 
 def _nodes(n: int) -> int:

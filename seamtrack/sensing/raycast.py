@@ -34,6 +34,7 @@ from numpy.typing import ArrayLike, NDArray
 from seamtrack import constants
 from seamtrack.sensing import embree, section
 from seamtrack.sensing.kernels import refine_hits
+from seamtrack.sensing.section import SectionMesh
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -190,6 +191,11 @@ class RayCaster:
         if self._section is None:
             self._section = section.build(self.vertices_local, self.faces)
         return self._section
+
+    @property
+    def section_mesh(self) -> SectionMesh:
+        """The mesh as the section's kernels take it (local frame, one record)."""
+        return SectionMesh(self.vertices_local, self.faces, self.face_normals)
 
     @property
     def weld(self) -> NDArray[np.int64]:

@@ -289,9 +289,7 @@ def _section_args(caster: RayCaster, fan: FanRays) -> tuple[tuple[Any, ...], ...
     to frame (before and after the pose; the packets' query), gathered once per fan."""
     args = caster.section_args.get(fan)
     if args is None:
-        index = caster.section
-        head = (index.lo, index.hi, index.child, index.count, index.order, caster.vertices_local,
-                caster.faces, caster.face_normals)  # fmt: skip
+        head = (caster.section, caster.section_mesh)
         tail = (fan.directions, *fan.section_tans, fan.sensor_params,
                 constants.SHADOW_RAY_OFFSET_MM)  # fmt: skip
         packets = caster.packets
@@ -326,10 +324,20 @@ def _section_stripe(
     else:
         from seamtrack.sensing.kernels import fan_stripe_finish
 
-        (points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index, directions,
-         caster.section_seeds) = section.fan_stripe_section(  # type: ignore[call-arg]
-            *head, origin, rotation, *tail, seeds
-        )  # fmt: skip
+        (
+            points,
+            reason,
+            t,
+            face,
+            cos_incidence,
+            chip,
+            s_o,
+            s_d,
+            s_far,
+            s_index,
+            directions,
+            caster.section_seeds,
+        ) = section.fan_stripe_section(*head, origin, rotation, *tail, seeds)  # type: ignore[call-arg]
         blocked = caster.occluded_local(s_o, s_d, s_far)
         fan_stripe_finish(points, reason, chip, blocked, s_index, fan.sensor_params, quantize)
     return StripeHits(points_laser=points, reason=reason, distance_mm=t, face=face,

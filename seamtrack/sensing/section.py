@@ -23,7 +23,7 @@ plane at one vertex only is skipped.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, NamedTuple
 
 import numba
 import numpy as np
@@ -33,8 +33,27 @@ from seamtrack.sensing import embree
 from seamtrack.sensing._section_tree import LEAF_SIZE, SectionIndex, build
 from seamtrack.sensing.kernels import fan_stripe_finish, fan_stripe_hits
 
-__all__ = ["LEAF_SIZE", "SectionIndex", "build", "fan_stripe_section", "fan_stripe_section_packets",
-           "fan_tans", "hit_faces", "section_hits", "section_segments"]  # fmt: skip
+__all__ = ["LEAF_SIZE", "SectionIndex", "SectionMesh", "build", "fan_stripe_section",
+           "fan_stripe_section_packets", "fan_tans", "hit_faces", "section_hits",
+           "section_segments"]  # fmt: skip
+
+
+class SectionMesh(NamedTuple):
+    """The mesh as the section's kernels take it: in the caster's local frame (its vertices
+    less the caster's ``local_origin``), one record, with the :class:`SectionIndex` over it.
+
+    Attributes
+    ----------
+    vertices : (v, 3) float
+    faces : (f, 3) int64
+    face_normals : (f, 3) float
+        Unit normals (0 for a degenerate triangle).
+    """
+
+    vertices: NDArray[np.float64]
+    faces: NDArray[np.int64]
+    face_normals: NDArray[np.float64]
+
 
 #: A crossing at a segment's end counts for the segment within this fraction of its length.
 END_SLACK = 1e-12
@@ -358,10 +377,8 @@ def fan_tans(fan: NDArray[np.float64]) -> tuple[NDArray[np.float64], float, floa
 
 @numba.njit(cache=True, nogil=True)
 def section_hits(
-    lo: NDArray[np.float64], hi: NDArray[np.float64], child: NDArray[np.int64],
-    count: NDArray[np.int64], order: NDArray[np.int64], vertices: NDArray[np.float64],
-    faces: NDArray[np.int64], origin: NDArray[np.float64], rotation: NDArray[np.float64],
-    fan: NDArray[np.float64],
+    tree: SectionIndex, mesh: SectionMesh, origin: NDArray[np.float64],
+    rotation: NDArray[np.float64], fan: NDArray[np.float64],
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:  # fmt: skip
     """First hit of each fan ray: (t (n,), triangle (n,)); (inf, -1) where none.
 
@@ -375,8 +392,7 @@ def section_hits(
     cut. Which crossings win does not depend on the order (:func:`_sweep`).
     """
     tans, tan_max, step = fan_tans(fan)
-    t, face, _ = _section_hits(lo, hi, child, count, order, vertices, faces, origin, rotation,
-                               fan, tans, tan_max, step, NO_SEEDS)  # fmt: skip
+    t, face, _ = _section_hits(tree, mesh, origin, rotation, fan, tans, tan_max, step, NO_SEEDS)
     return t, face
 
 
@@ -414,11 +430,9 @@ def _cut_and_sweep(
 
 @numba.njit(cache=True, nogil=True)
 def _section_hits(
-    lo: NDArray[np.float64], hi: NDArray[np.float64], child: NDArray[np.int64],
-    count: NDArray[np.int64], order: NDArray[np.int64], vertices: NDArray[np.float64],
-    faces: NDArray[np.int64], origin: NDArray[np.float64], rotation: NDArray[np.float64],
-    fan: NDArray[np.float64], tans: NDArray[np.float64], tan_max: float, step: float,
-    seeds: NDArray[np.int64],
+    tree: SectionIndex, mesh: SectionMesh, origin: NDArray[np.float64],
+    rotation: NDArray[np.float64], fan: NDArray[np.float64], tans: NDArray[np.float64],
+    tan_max: float, step: float, seeds: NDArray[np.int64],
 ) -> tuple[NDArray[np.float64], NDArray[np.int64], int]:  # fmt: skip
     """:func:`section_hits` with the fan's :func:`fan_tans` given, and how many triangles it
     cut; ``seeds``: triangles (of this mesh) cut first, before the hierarchy is walked (the
@@ -426,6 +440,8 @@ def _section_hits(
     count towards :data:`CULL_AFTER`, and their crossings are true crossings, so once the walk
     culls, it culls behind them; which crossings win does not depend on the seeds (each is
     cut once: met again in the walk it is skipped), only how much is cut."""
+    lo, hi, child, count, order = tree
+    vertices, faces = mesh.vertices, mesh.faces
     n = fan.shape[0]
     best_t = np.full(n, NO_HIT)
     best_f = np.full(n, -1, dtype=np.int64)
@@ -501,13 +517,13 @@ def _section_hits(
 
 @numba.njit(cache=True, nogil=True)
 def section_segments(
-    lo: NDArray[np.float64], hi: NDArray[np.float64], child: NDArray[np.int64],
-    count: NDArray[np.int64], order: NDArray[np.int64], vertices: NDArray[np.float64],
-    faces: NDArray[np.int64], origin: NDArray[np.float64], rotation: NDArray[np.float64],
-    tan_max: float,
+    tree: SectionIndex, mesh: SectionMesh, origin: NDArray[np.float64],
+    rotation: NDArray[np.float64], tan_max: float,
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:  # fmt: skip
     """The plane section inside the wedge |y_L| <= tan_max z_L (and maybe a little more):
     segments (k, 4) = (y0, z0, y1, z1) in the laser frame and their triangles (k,)."""
+    lo, hi, child, count, order = tree
+    vertices, faces = mesh.vertices, mesh.faces
     leaves, found = _visit(lo, hi, child, count, order, origin, rotation, tan_max)
     segs = np.empty((found * 4, 4))
     tri = np.empty(found * 4, dtype=np.int64)
@@ -527,9 +543,7 @@ def section_segments(
 # --------------------------------------------------------------------------- the stripe
 @numba.njit(cache=True, nogil=True)
 def fan_stripe_section(
-    lo: NDArray[np.float64], hi: NDArray[np.float64], child: NDArray[np.int64],
-    count: NDArray[np.int64], order: NDArray[np.int64], vertices: NDArray[np.float64],
-    faces: NDArray[np.int64], face_normals: NDArray[np.float64], origin: NDArray[np.float64],
+    tree: SectionIndex, mesh: SectionMesh, origin: NDArray[np.float64],
     rotation: NDArray[np.float64], fan: NDArray[np.float64], tans: NDArray[np.float64],
     tan_max: float, step: float, sp: NDArray[np.float64], offset: float,
     seeds: NDArray[np.int64],
@@ -550,15 +564,14 @@ def fan_stripe_section(
         for a in range(3):
             directions[i, a] = (rotation[a, 0] * fan[i, 0] + rotation[a, 1] * fan[i, 1]
                                 + rotation[a, 2] * fan[i, 2])  # fmt: skip
-    t, face, cuts = _section_hits(lo, hi, child, count, order, vertices, faces, origin,
-                                  rotation, fan, tans, tan_max, step, seeds)  # fmt: skip
+    t, face, cuts = _section_hits(tree, mesh, origin, rotation, fan, tans, tan_max, step, seeds)
     none = np.empty(0, dtype=np.int64)
     next_seeds = hit_faces(face) if cuts >= CULL_AFTER else none
     if next_seeds.shape[0] > MAX_SEEDS:
         next_seeds = none
     points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index = fan_stripe_hits(
-        origin, rotation, fan, directions, face, t, vertices, faces,  # type: ignore[arg-type]
-        none, none, none, face_normals, False, 0.0, sp, offset,
+        origin, rotation, fan, directions, face, t, mesh.vertices, mesh.faces,  # type: ignore[arg-type]
+        none, none, none, mesh.face_normals, False, 0.0, sp, offset,
     )  # fmt: skip
     return (points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index, directions,
             next_seeds)  # fmt: skip
@@ -566,9 +579,7 @@ def fan_stripe_section(
 
 @numba.njit(cache=True, nogil=True)
 def fan_stripe_section_packets(
-    occluded: Any, width: int, scene: int, lo: NDArray[np.float64], hi: NDArray[np.float64],
-    child: NDArray[np.int64], count: NDArray[np.int64], order: NDArray[np.int64],
-    vertices: NDArray[np.float64], faces: NDArray[np.int64], face_normals: NDArray[np.float64],
+    occluded: Any, width: int, scene: int, tree: SectionIndex, mesh: SectionMesh,
     origin: NDArray[np.float64], rotation: NDArray[np.float64], fan: NDArray[np.float64],
     tans: NDArray[np.float64], tan_max: float, step: float, sp: NDArray[np.float64],
     offset: float, quantize: bool, seeds: NDArray[np.int64],
@@ -581,8 +592,8 @@ def fan_stripe_section_packets(
     next frame's seeds (:func:`fan_stripe_section`'s). ``tans, tan_max, step``: the fan's
     :func:`fan_tans`; ``seeds``: :func:`_section_hits`'."""
     points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index, directions, nxt = (
-        fan_stripe_section(lo, hi, child, count, order, vertices, faces, face_normals, origin,
-                           rotation, fan, tans, tan_max, step, sp, offset, seeds)
+        fan_stripe_section(tree, mesh, origin, rotation, fan, tans, tan_max, step, sp, offset,
+                           seeds)
     )  # fmt: skip
     blocked = np.empty(s_index.shape[0], dtype=np.bool_)
     embree.occluded(occluded, width, scene, s_o, s_d, s_far, 0.0, blocked)
