@@ -80,6 +80,11 @@ BENCHES: dict[str, tuple[tuple[str, ...], str, str]] = {
         "seamtrack bench firstrun",
         "the demo's first mesh-mode run with an empty numba cache, then the same run again",
     ),
+    "arc": (
+        ("arc.json",),
+        "seamtrack bench arc",
+        "the arc in image and profile mode: current, look-ahead, seam-point errors, cost",
+    ),
 }
 
 
@@ -127,6 +132,12 @@ def _presets_table(data: dict[str, Any]) -> str:
     return presets_table(data)
 
 
+def _arc_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.arc import arc_table
+
+    return arc_table(data)
+
+
 #: The bench JSON files a page may quote (``file.json``, or ``file.json#name`` for one of a
 #: file's several tables) -> the bench's own function that renders the table.
 RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {
@@ -136,6 +147,7 @@ RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {
     "paper.json#table4": _table4_table,
     "paper.json#servo": _servo_table,
     "firstrun.json": _firstrun_table,
+    "arc.json": _arc_table,
 }
 
 

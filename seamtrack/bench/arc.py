@@ -43,8 +43,9 @@ MODES = ("image", "profile")
 COUNTERMEASURES: dict[str, dict[str, Any]] = {"none": {}}
 #: The scenes of the two modes.
 SCENES = {"image": "v-groove-arc", "profile": "v-groove-arc-profile"}
-#: The closed loop's curve: the V-groove on an arc of this radius (mm).
-CURVE_RADIUS_MM = 100.0
+#: The closed loop's curve: the V-groove on an arc of this radius (mm); 50 mm ahead on it the
+#: laser line crosses the seam 6.3 mm off the torch's tangent.
+CURVE_RADIUS_MM = 200.0
 COLUMNS = (
     "current_a",
     "look_ahead_mm",
@@ -103,7 +104,8 @@ def poses_along(
 # --------------------------------------------------------------------------- calibration
 def _columns(on: Any, truth: Any, arc: FloatArray) -> dict[str, FloatArray]:
     """Per stripe column of one frame: the distance of the true point from the arc, whether
-    the arc took it (lost), whether the reported point is false, its range offset."""
+    the arc took it (lost), whether the reported point is false, its range offset from the
+    true point (dz) and its range from the arc's (zr)."""
     tv, tp = truth.valid, truth.points_laser
     ov, op = on.valid, on.points_laser
     dz = op[:, 1] - tp[:, 1]
@@ -115,6 +117,7 @@ def _columns(on: Any, truth: Any, arc: FloatArray) -> dict[str, FloatArray]:
         "lost": (~ov | off)[tv],
         "false": (ov & off)[tv],
         "dz": np.where(ov & off, dz, np.nan)[tv],
+        "zr": np.where(ov & off, op[:, 1] - arc[2], np.nan)[tv],
     }
 
 
@@ -213,9 +216,9 @@ def fit_profile_arc(
     radius, gamma, edge = _fit_blob(d, lost, current, base)
     model = ArcProfileModel(process, 250.0, ProfileArcParams(radius, gamma, edge, 1, 0, 0, 0, 1))
     inside = d < radius * (current / 250.0) ** gamma + 2.0 * edge
-    false, dz = gather("false"), gather("dz")
+    false, zr = gather("false"), gather("zr")
     share = float(false[inside & lost].sum() / max((inside & lost).sum(), 1))
-    offsets = dz[inside & false]
+    offsets = zr[inside & false]
     runs: list[float] = []
     for by_current in data.values():
         for cur, frames in by_current.items():
@@ -313,32 +316,32 @@ def open_loop(scene: Any, frames: int) -> dict[str, float]:
     }
 
 
-def closed_loop_max_error(scene: Any, seam_length_mm: float) -> float:
-    """The closed loop's max error on the scene's V-groove bent on :data:`CURVE_RADIUS_MM`."""
+def closed_loop_max_error(
+    current_a: float, look_ahead_mm: float, mode: str, countermeasures: str,
+    overrides: dict[str, Any],
+) -> tuple[float, str]:  # fmt: skip
+    """The closed loop's max error (mm) and status on the cell's scene with its V-groove bent on
+    :data:`CURVE_RADIUS_MM` (``overrides`` as the open loop's)."""
     from seamtrack.simulation.loop import simulate
-    from seamtrack.simulation.scene import load_scene
 
-    c = scene.config
-    overrides = {
-        "workpiece.params.path": "arc",
-        "workpiece.params.arc_radius_mm": CURVE_RADIUS_MM,
-        "workpiece.params.seam_length_mm": seam_length_mm,
-        "arc.current_a": c.arc.current_a,
-        "sensor.look_ahead_mm": c.sensor.look_ahead_mm,
-    }
-    curved = load_scene(scene.name, overrides)
-    if c.arc is not None:
-        curved = dataclasses.replace(curved, config=curved.config.model_copy(update={
-            "arc": c.arc, "sensor": c.sensor}))  # fmt: skip
-    summary = simulate(curved).summary
+    curve = {**overrides, "workpiece.params.path": "arc",
+             "workpiece.params.arc_radius_mm": CURVE_RADIUS_MM}  # fmt: skip
+    scene = arc_scene(current_a, look_ahead_mm, mode, countermeasures, curve)
+    summary = simulate(scene).summary
     value = summary.get("max_error_mm")
-    return float(value) if value is not None else math.nan
+    return float(value) if value is not None else math.nan, str(summary.get("status"))
 
 
-def bench_cells(quick: bool) -> list[tuple[float, float, str, str]]:
+#: The grid the documentation's figures were measured on when the whole grid would take over
+#: 5 minutes on a busy machine (``python -m seamtrack.bench.arc --reduced``).
+REDUCED_CURRENTS_A = (100.0, 250.0, 350.0)
+REDUCED_LOOK_AHEADS_MM = (10.0, 20.0, 30.0, 50.0)
+
+
+def bench_cells(quick: bool, reduced: bool = False) -> list[tuple[float, float, str, str]]:
     """The cells run: (current, look-ahead, mode, countermeasures)."""
-    currents = (250.0,) if quick else CURRENTS_A
-    looks = (30.0,) if quick else LOOK_AHEADS_MM
+    currents = (250.0,) if quick else REDUCED_CURRENTS_A if reduced else CURRENTS_A
+    looks = (30.0,) if quick else REDUCED_LOOK_AHEADS_MM if reduced else LOOK_AHEADS_MM
     return [(i, la, m, cm) for i in currents for la in looks for m in MODES
             for cm in COUNTERMEASURES]  # fmt: skip
 
@@ -346,33 +349,41 @@ def bench_cells(quick: bool) -> list[tuple[float, float, str, str]]:
 def bench_arc(
     out_dir: str | Path,
     quick: bool = False,
-    cells: list[tuple[float, float, str, str]] | None = None,
+    reduced: bool = False,
     frames: int | None = None,
     loop: bool = True,
 ) -> dict[str, Any]:
-    """Run the cells (default :func:`bench_cells`), write ``arc.json`` and ``arc.png``."""
+    """Run the cells (:func:`bench_cells`), write ``arc.json``, ``arc.md`` and ``arc.png``.
+    ``reduced``: the smaller grid, 12 frames a cell and a seam 30 mm longer than the
+    look-ahead (40 mm in the whole grid)."""
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    frames = frames or (4 if quick else 20)
-    overrides: dict[str, Any] = {"workpiece.params.seam_length_mm": 60.0}
-    if quick:  # a small camera and fan: a smoke run, not the docs' figures
-        overrides.update(QUICK_OVERRIDES)
+    frames = frames or (4 if quick else 12 if reduced else 20)
+    extra = 10.0 if quick else 30.0 if reduced else 40.0  # seam beyond the look-ahead (mm)
     rows = []
     load_before = os.getloadavg()[0]
-    for current, look, mode, cm in cells or bench_cells(quick):
-        scene = arc_scene(current, look, mode, cm, _mode_overrides(mode, overrides))
+    for current, look, mode, cm in bench_cells(quick, reduced):
+        given = {"workpiece.params.seam_length_mm": look + extra}
+        given.update(QUICK_CAMERA if quick and mode == "image" else {})
         row: dict[str, Any] = {"current_a": current, "look_ahead_mm": look, "mode": mode,
                                "countermeasures": cm}  # fmt: skip
-        row.update(open_loop(scene, frames))
-        row["loop_max_error_mm"] = (
-            closed_loop_max_error(scene, 40.0 if quick else 60.0) if loop else math.nan
+        row.update(open_loop(arc_scene(current, look, mode, cm, given), frames))
+        row["loop_max_error_mm"], row["loop_status"] = (
+            closed_loop_max_error(current, look, mode, cm, given) if loop else (math.nan, "")
         )
         row["load_1min"] = round(os.getloadavg()[0], 2)
-        rows.append({k: row[k] for k in (*COLUMNS, "load_1min")})
+        rows.append({k: row[k] for k in (*COLUMNS, "loop_status", "load_1min")})
     result = {
         "machine": machine_info(),
-        "command": "seamtrack bench arc" + (" --quick" if quick else ""),
+        "command": (
+            "python -m seamtrack.bench.arc --reduced"
+            if reduced
+            else "seamtrack bench arc" + (" --quick" if quick else "")
+        ),
         "quick": quick,
+        "reduced": reduced,
+        "seam_beyond_look_ahead_mm": extra,
+        "curve_radius_mm": CURVE_RADIUS_MM,
         "frames": frames,
         "load_1min_before": round(load_before, 2),
         "columns": list(COLUMNS),
@@ -384,14 +395,9 @@ def bench_arc(
     return result
 
 
-#: ``--quick``: a smaller camera (the arc's cost scales with its pixels).
-QUICK_OVERRIDES: dict[str, Any] = {}
-
-
-def _mode_overrides(mode: str, overrides: dict[str, Any]) -> dict[str, Any]:
-    if mode == "image":
-        return dict(overrides)
-    return {k: v for k, v in overrides.items() if not k.startswith("sensor.camera.")}
+#: ``--quick``: a smaller camera in image mode (the arc's cost scales with its pixels): a
+#: smoke run, not the docs' figures.
+QUICK_CAMERA: dict[str, Any] = {"sensor.camera.rows": 128, "sensor.camera.columns": 256}
 
 
 def _clean(value: Any) -> Any:
@@ -455,7 +461,11 @@ def main(argv: list[str] | None = None) -> int:
 
     parser = argparse.ArgumentParser(prog="python -m seamtrack.bench.arc")
     parser.add_argument("--calibrate", action="store_true", help="fit the profile model")
+    parser.add_argument("--reduced", action="store_true", help="run the bench's smaller grid")
+    parser.add_argument("--out", default="bench-results/arc", help="the bench's folder")
     args = parser.parse_args(argv)
+    if args.reduced:
+        bench_arc(args.out, reduced=True)
     if args.calibrate:
         start = time.perf_counter()
         load = os.getloadavg()[0]

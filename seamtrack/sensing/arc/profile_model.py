@@ -13,9 +13,13 @@ the arc's light instead of the laser's. Measured on ``v-groove-arc`` (the calibr
        p_lost(d) = 1 / (1 + exp((d - R(I)) / s)),   R(I) = R_ref (I / I_ref) ** gamma,
 
    where ``d`` is the stripe point's distance from the arc (mm; the look-ahead sets its least
-   value), ``I`` the current. A lost point becomes a false point (the peak the detector chose,
-   ``blob_offset_mm`` +- ``blob_offset_sd_mm`` off the true range along z_L) with the
-   probability ``blob_false_fraction``, else a drop-out (``Reason.DROPOUT``).
+   value), ``I`` the current. The edge is drawn once a frame (R(I) plus s times a logistic
+   variate), so the lost points form one region, as the blob does in the image. A lost point
+   becomes a false point (the peak the detector chose) with the probability
+   ``blob_false_fraction``, else a drop-out (``Reason.DROPOUT``). The false points lie on one
+   line across the stripe, ``blob_offset_mm`` (+- ``blob_offset_sd_mm`` from frame to frame)
+   from the arc's range z_L: the detector finds the blob's centre on the same chip row in
+   every column it wins, and the sensor triangulates that row as if it lay in the laser plane.
 2. **Isolated false points.** A glowing droplet streaks across the image and wins a column
    or a few (and the blob leaves a stray column beyond its edge): a run of false points
    ``streak_run_mm`` long along the stripe at a random range in the stripe's depth, at a
@@ -68,7 +72,8 @@ class ProfileArcParams:
     """One process's profile-mode arc model (see the module docstring): ``blob_radius_mm``
     R_ref at :data:`CURRENT_REF_A`, ``blob_radius_exponent`` gamma, ``blob_edge_mm`` s,
     ``blob_false_fraction`` the share of lost points that become false points,
-    ``blob_offset_mm`` and ``blob_offset_sd_mm`` the false points' range offset (z_L, mm),
+    ``blob_offset_mm`` and ``blob_offset_sd_mm`` the false points' range from the arc's
+    (z_L, mm),
     ``streak_probability`` S_ref per stripe point at :data:`DISTANCE_REF_MM` and
     :data:`CURRENT_REF_A`, ``streak_run_mm`` a streak's length along the stripe (y_L)."""
 
@@ -92,9 +97,9 @@ class ProfileArcParams:
 #: mag-spray, tig). Over the grid the fitted model's share of lost points is within 0.09 of
 #: the image model's in every cell (worst at 10 mm and 300-350 A, where it overestimates).
 PROFILE_ARC: dict[str, ProfileArcParams] = {
-    "mag-short": ProfileArcParams(11.738, 0.156, 0.437, 0.999, -18.21, 3.12, 5.79e-4, 0.11),
-    "mag-spray": ProfileArcParams(12.919, 0.191, 0.463, 1.0, -17.13, 2.02, 3.32e-4, 0.04),
-    "tig": ProfileArcParams(10.56, 0.065, 0.072, 1.0, -19.35, 1.04, 4.21e-5, 0.02),
+    "mag-short": ProfileArcParams(11.738, 0.156, 0.437, 0.999, -20.34, 2.47, 5.79e-4, 0.11),
+    "mag-spray": ProfileArcParams(12.919, 0.191, 0.463, 1.0, -19.94, 0.47, 3.32e-4, 0.04),
+    "tig": ProfileArcParams(10.56, 0.065, 0.072, 1.0, -20.9, 0.19, 4.21e-5, 0.02),
 }
 
 
@@ -166,17 +171,23 @@ class ArcProfileModel:
         a = np.asarray(arc_laser, dtype=np.float64)
         y, z = points[idx, 0], points[idx, 1]
         d = np.sqrt(a[0] ** 2 + (y - a[1]) ** 2 + (z - a[2]) ** 2)
-        self._blob(points, reason, idx, d, rng)
+        self._blob(points, reason, idx, d, float(a[2]), rng)
         self._streaks(points, reason, idx, d, rng)
         return points, reason
 
     def _blob(self, points: FloatArray, reason: NDArray[np.uint8], idx: NDArray[np.intp],
-              d: FloatArray, rng: np.random.Generator) -> None:  # fmt: skip
+              d: FloatArray, arc_z: float, rng: np.random.Generator) -> None:  # fmt: skip
+        """The blob takes every point nearer the arc than this frame's edge, R(I) + s L with L
+        drawn once from the logistic distribution (so each point is lost with p_lost(d), and
+        the lost points are one contiguous region, as in the image); its false points lie on
+        one line at the arc's range plus this frame's offset."""
         p = self.p
-        lost = rng.random(len(idx)) < self.loss_probability(d)
+        u = float(np.clip(rng.random(), 1e-12, 1.0 - 1e-12))
+        edge = self.blob_radius_mm() + p.blob_edge_mm * (math.log(u) - math.log1p(-u))
+        lost = d < edge
         false = lost & (rng.random(len(idx)) < p.blob_false_fraction)
-        offset = p.blob_offset_mm + p.blob_offset_sd_mm * rng.standard_normal(len(idx))
-        points[idx[false], 1] += offset[false]
+        offset = p.blob_offset_mm + p.blob_offset_sd_mm * float(rng.standard_normal())
+        points[idx[false], 1] = arc_z + offset
         reason[idx[lost & ~false]] = Reason.DROPOUT
 
     def _streaks(self, points: FloatArray, reason: NDArray[np.uint8], idx: NDArray[np.intp],
