@@ -91,11 +91,12 @@ class ProfileArcParams:
 #: exposure, 10 nm Gaussian filter at 660 nm, mill-scale steel): 8 frames at each look-ahead
 #: of 10, 12.5, 15, 20, 30 and 50 mm and each current of 100, 200, 300 and 350 A, against the
 #: ideal camera's stripe without the arc; fitted by maximum likelihood
-#: (seamtrack.bench.arc.calibrate; ``python -m seamtrack.bench.arc --calibrate``, 2.5 min a
-#: process at a 1-minute load of 13). Measured beside them: the camera's own loss without the
-#: arc, 0.62 % of the columns; 201, 94 and 19 isolated false points counted (mag-short,
-#: mag-spray, tig). Over the grid the fitted model's share of lost points is within 0.09 of
-#: the image model's in every cell (worst at 10 mm and 300-350 A, where it overestimates).
+#: (seamtrack.bench.arc.calibrate; ``python -m seamtrack.bench.arc --calibrate`` prints these
+#: values, in 97 s for the three processes at a 1-minute load of 4.3). Measured beside them:
+#: the camera's own loss without the arc, 0.62 % of the columns; 201, 94 and 19 isolated false
+#: points counted (mag-short, mag-spray, tig). Over the grid the fitted model's share of lost
+#: points is within 0.09 of the image model's in every cell (worst at 10 mm and 300-350 A,
+#: where it overestimates).
 PROFILE_ARC: dict[str, ProfileArcParams] = {
     "mag-short": ProfileArcParams(11.738, 0.156, 0.437, 0.999, -20.34, 2.47, 5.79e-4, 0.11),
     "mag-spray": ProfileArcParams(12.919, 0.191, 0.463, 1.0, -19.94, 0.47, 3.32e-4, 0.04),
