@@ -429,26 +429,32 @@ def arc_table(data: dict[str, Any]) -> str:
 
 
 def plot_arc(data: dict[str, Any], path: Path) -> None:
-    """p95 of the seam point's error against the look-ahead, one line per mode and current."""
+    """Against the look-ahead, one line per mode, countermeasures and current: the detection
+    rate (left) and the p95 of the seam point's error (right; none where nothing was found)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(7, 4))
+    fig, (left, right) = plt.subplots(1, 2, figsize=(9, 3.8))
     rows = data["rows"]
     for key in sorted({(r["mode"], r["countermeasures"], r["current_a"]) for r in rows}):
         sel = sorted((r for r in rows if (r["mode"], r["countermeasures"], r["current_a"]) == key),
                      key=lambda r: r["look_ahead_mm"])  # fmt: skip
         x = [r["look_ahead_mm"] for r in sel]
-        y = [r["p95_mm"] if r["p95_mm"] is not None else np.nan for r in sel]
+        p95 = [r["p95_mm"] if r["p95_mm"] is not None else np.nan for r in sel]
         style = "-" if key[0] == "image" else "--"
-        ax.plot(x, y, style, marker="o", label=f"{key[0]}, {key[1]}, {key[2]:.0f} A")
-    ax.set_xlabel("look-ahead (mm)")
-    ax.set_ylabel("p95 seam-point error (mm)")
-    ax.set_yscale("log")
-    ax.legend(fontsize=7, ncol=2)
-    ax.set_title("seamtrack bench arc: v-groove-arc (image) and v-groove-arc-profile (profile)")
+        label = f"{key[0]}, {key[1]}, {key[2]:.0f} A"
+        left.plot(x, [100 * r["detect_rate"] for r in sel], style, marker="o", label=label)
+        right.plot(x, p95, style, marker="o", label=label)
+    left.set_xlabel("look-ahead (mm)")
+    left.set_ylabel("seam point detected (% of frames)")
+    right.set_xlabel("look-ahead (mm)")
+    right.set_ylabel("p95 seam-point error (mm)")
+    right.set_yscale("log")
+    right.legend(fontsize=7, ncol=2)
+    fig.suptitle("seamtrack bench arc: image mode (v-groove-arc), profile mode "
+                 "(v-groove-arc-profile)", fontsize=10)  # fmt: skip
     fig.tight_layout()
     fig.savefig(path, dpi=100)
     plt.close(fig)
