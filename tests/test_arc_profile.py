@@ -158,3 +158,42 @@ def test_the_command_line_answers_bad_input_in_one_line() -> None:
     assert res.returncode == 2
     lines = res.stderr.strip().splitlines()
     assert len(lines) == 1 and "sensor.look_ahead_mm" in lines[0], res.stderr
+
+
+def test_the_calibration_recovers_a_model_it_did_not_fit() -> None:
+    """Columns drawn from a profile model with known parameters (the V-groove's stripe, the
+    arc at look-aheads and currents like the calibration's): the fit recovers them (an
+    independent check of the maximum-likelihood fit and the false line's offset)."""
+    from seamtrack.bench.arc import fit_profile_arc
+
+    truth = ProfileArcParams(12.0, 0.25, 0.4, 1.0, -20.0, 0.5, 0.0, 0.02)
+    rng = np.random.default_rng(1)
+    y = np.linspace(-10.0, 10.0, 256)
+    z = 91.0 - np.sqrt(3.0) * np.abs(y)  # a 60 deg groove's walls, root at 91 mm
+    points = np.column_stack([y, z])
+    data: dict[float, dict[float, list[dict[str, np.ndarray]]]] = {}
+    for look in (10.0, 12.5, 15.0):
+        arc = np.array([-look, 0.0, 91.1])
+        d = np.sqrt(look**2 + y**2 + (z - arc[2]) ** 2)
+        quiet = {"d": d, "y": y, "lost": np.zeros(len(y), bool), "false": np.zeros(len(y), bool),
+                 "dz": np.full(len(y), np.nan), "zr": np.full(len(y), np.nan)}  # fmt: skip
+        data[look] = {-1.0: [quiet]}
+        for current in (100.0, 200.0, 300.0):
+            model = ArcProfileModel("mag-spray", current, truth)
+            frames = []
+            for _ in range(40):
+                got, _ = model.apply(points, np.zeros(len(y), np.uint8), arc, rng)
+                false = np.abs(got[:, 1] - z) > 0.5
+                frames.append({"d": d, "y": y, "lost": false, "false": false,
+                               "dz": np.where(false, got[:, 1] - z, np.nan),
+                               "zr": np.where(false, got[:, 1] - arc[2], np.nan)})  # fmt: skip
+            data[look][current] = frames
+    fitted = fit_profile_arc("mag-spray", data)
+    assert fitted["blob_radius_mm"] == pytest.approx(12.0, abs=0.3)
+    assert fitted["blob_radius_exponent"] == pytest.approx(0.25, abs=0.05)
+    assert fitted["blob_edge_mm"] == pytest.approx(0.4, rel=0.35)
+    assert fitted["blob_offset_mm"] == pytest.approx(-20.0, abs=0.3)
+    assert fitted["blob_false_fraction"] == 1.0
+    # no streaks drawn; the blob's edge lies beyond R + 4 s in 1 / (1 + e^4) = 1.8 % of the
+    # 360 frames (the logistic's tail), and the calibration counts those as stray columns
+    assert fitted["streaks_counted"] <= 3 * 0.018 * 360
