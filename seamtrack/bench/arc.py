@@ -127,11 +127,14 @@ def measure_image_arc(
     look_ahead_mm: float,
     frames: int,
     seed: int | None = None,
+    countermeasures: str = "none",
 ) -> dict[float, list[dict[str, FloatArray]]]:
     """Image-mode frames on ``v-groove-arc`` at one look-ahead: per current, the columns of
     each frame (:func:`_columns`) against the ideal camera's stripe without the arc; under
     ``-1.0`` the same camera without the arc (the camera's own losses). ``seed``: another
-    run's seed, and stations shifted by 2 mm (a measurement the calibration did not make)."""
+    run's seed, and stations shifted by 2 mm (a measurement the calibration did not make).
+    ``countermeasures``: the frames with the arc measured under these (:data:`COUNTERMEASURES`;
+    a detector that rejects the blob turns its false points into drop-outs)."""
     base: dict[str, Any] = {"arc.process": process}
     if seed is not None:
         base["simulation.seed"] = seed
@@ -142,7 +145,7 @@ def measure_image_arc(
     truths = [truth_parts.scan(T, 0.04 * k, None)[0] for k, T in enumerate(poses)]
     out: dict[float, list[dict[str, FloatArray]]] = {}
     scenes: dict[float, Any] = {
-        float(c): arc_scene(c, look_ahead_mm, "image", overrides=base) for c in currents_a
+        float(c): arc_scene(c, look_ahead_mm, "image", countermeasures, base) for c in currents_a
     }
     scenes[-1.0] = without_arc(scenes[float(currents_a[0])])
     for current, scene in scenes.items():
@@ -274,11 +277,16 @@ def calibrate(
     look_aheads_mm: tuple[float, ...] = CALIBRATION_LOOK_AHEADS_MM,
     currents_a: tuple[float, ...] = CALIBRATION_CURRENTS_A,
     frames: int = CALIBRATION_FRAMES,
+    countermeasures: str = "none",
 ) -> dict[str, dict[str, float]]:
-    """The profile model's parameters per process, measured from the image model."""
+    """The profile model's parameters per process, measured from the image model (under
+    ``countermeasures``; :data:`PROFILE_ARC` holds those measured under ``none``)."""
     fitted = {}
     for process in processes:
-        data = {la: measure_image_arc(process, currents_a, la, frames) for la in look_aheads_mm}
+        data = {
+            la: measure_image_arc(process, currents_a, la, frames, countermeasures=countermeasures)
+            for la in look_aheads_mm
+        }
         fitted[process] = fit_profile_arc(process, data)
     return fitted
 
