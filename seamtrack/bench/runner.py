@@ -258,6 +258,18 @@ def _bench_firstrun(out: Path, quick: bool) -> Any:
     return bench_firstrun(out, quick=quick)
 
 
+def _bench_weldments(out: Path, quick: bool) -> Any:
+    from seamtrack.bench.weldments import bench_weldments
+
+    return bench_weldments(out, quick=quick)
+
+
+def _bench_stability(out: Path, quick: bool) -> Any:
+    from seamtrack.bench.stability import bench_stability
+
+    return bench_stability(out, quick=quick)
+
+
 def _bench_arc(out: Path, quick: bool) -> Any:
     from seamtrack.bench.arc import bench_arc
 
@@ -281,6 +293,8 @@ BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "trackers": _bench_trackers,
     "paper": _bench_paper,
     "firstrun": _bench_firstrun,
+    "weldments": _bench_weldments,
+    "stability": _bench_stability,
     "arc": _bench_arc,
 }
 
