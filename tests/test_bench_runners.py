@@ -327,7 +327,7 @@ def test_arc_bench_through_the_dispatcher(tmp_path: Path) -> None:
         assert 0.0 <= row["detect_rate"] <= 1.0 and _finite_positive(row["frames_per_s"])
         # 250 A, 30 mm: beyond the arc's blob (12.9 mm at 250 A, mag-spray); the seam point
         # within two of the quick camera's rows over the depth of field, and the closed loop
-        # on the 100 mm curve within the paper's 0.5 mm target
+        # on the 200 mm curve within the paper's 0.5 mm target
         assert row["detect_rate"] == 1.0
         assert row["p95_mm"] <= 2 * PAPER.depth_of_field_mm / rows_px
         assert row["loop_max_error_mm"] <= 0.5
