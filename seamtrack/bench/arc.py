@@ -8,7 +8,7 @@ stripe, ``v-groove-arc-profile``), and the countermeasures. Each cell scans fram
 straight V-groove open loop and compares the extractor's seam point with the seam's true
 crossing of the laser plane (the noise-free truth): ``detect_rate``, ``median_mm``,
 ``p95_mm``, ``frames_per_s`` of the scan (render or ray cast, the arc, the extractor). Then it
-runs the closed loop on the V-groove bent on a 100 mm radius (the look-ahead cuts the curve's
+runs the closed loop on the V-groove bent on a 200 mm radius (the look-ahead cuts the curve's
 chord): ``loop_max_error_mm``. Writes ``arc.json`` and ``arc.png``.
 
 The calibration (:func:`calibrate`, ``python -m seamtrack.bench.arc --calibrate``) renders the
