@@ -97,6 +97,11 @@ BENCHES: dict[str, tuple[tuple[str, ...], str, str]] = {
         "seamtrack bench stability",
         "what the extremes of a scene's inputs do (seam mode)",
     ),
+    "arc": (
+        ("arc.json",),
+        "seamtrack bench arc",
+        "the arc in image and profile mode: current, look-ahead, seam-point errors, cost",
+    ),
 }
 
 
@@ -198,6 +203,12 @@ def _presets_table(data: dict[str, Any]) -> str:
     return presets_table(data)
 
 
+def _arc_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.arc import arc_table
+
+    return arc_table(data)
+
+
 #: The bench JSON files a page may quote (``file.json``, or ``file.json#name`` for one of a
 #: file's several tables) -> the bench's own function that renders the table.
 RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {
@@ -216,6 +227,7 @@ RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {
     "loop.json#arm_outcomes": _arm_outcomes_table,
     "stability.json": _stability_table,
     "groove_fill.json": _groove_fill_table,
+    "arc.json": _arc_table,
 }
 
 

@@ -309,3 +309,25 @@ def test_weldments_bench(tmp_path: Path) -> None:
     (bracket,) = result["public"]
     assert (bracket["found"], bracket["missed"], bracket["false"]) == (4, 0, 0)
     assert all(abs(s["length_mm"] - 6 * 25.4) < 1e-6 for s in bracket["seams"])
+
+
+@pytest.mark.cad
+@pytest.mark.embree
+def test_arc_bench_through_the_dispatcher(tmp_path: Path) -> None:
+    from seamtrack.bench.arc import COLUMNS, QUICK_CAMERA
+    from seamtrack.bench.runner import run_benches
+
+    rows_px = QUICK_CAMERA["sensor.camera.rows"]
+    result = run_benches("arc", tmp_path, quick=True)["arc"]
+    files = _written(tmp_path / "arc", "arc.json", "arc.md", "arc.png")
+    assert files["arc.json"]["rows"] == result["rows"]
+    assert {r["mode"] for r in result["rows"]} == {"image", "profile"}
+    for row in result["rows"]:
+        assert set(COLUMNS) <= set(row)
+        assert 0.0 <= row["detect_rate"] <= 1.0 and _finite_positive(row["frames_per_s"])
+        # 250 A, 30 mm: beyond the arc's blob (12.9 mm at 250 A, mag-spray); the seam point
+        # within two of the quick camera's rows over the depth of field, and the closed loop
+        # on the 200 mm curve within the paper's 0.5 mm target
+        assert row["detect_rate"] == 1.0
+        assert row["p95_mm"] <= 2 * PAPER.depth_of_field_mm / rows_px
+        assert row["loop_max_error_mm"] <= 0.5

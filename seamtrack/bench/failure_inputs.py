@@ -9,6 +9,7 @@ from typing import Any
 
 from seamtrack._version import __version__
 from seamtrack.bench import (
+    failure_inputs_arcprofile,
     failure_inputs_arms,
     failure_inputs_bridge,
     failure_inputs_camera,
@@ -572,6 +573,7 @@ CATALOGUE: tuple[Entry, ...] = (
     *failure_inputs_heat.ENTRIES,
     *failure_inputs_outputs.ENTRIES,
     *failure_inputs_units.ENTRIES,
+    *failure_inputs_arcprofile.ENTRIES,
 )
 
 _AREAS = (
@@ -584,6 +586,7 @@ _AREAS = (
     failure_inputs_heat,
     failure_inputs_outputs,
     failure_inputs_units,
+    failure_inputs_arcprofile,
 )
 
 

@@ -270,6 +270,12 @@ def _bench_stability(out: Path, quick: bool) -> Any:
     return bench_stability(out, quick=quick)
 
 
+def _bench_arc(out: Path, quick: bool) -> Any:
+    from seamtrack.bench.arc import bench_arc
+
+    return bench_arc(out, quick=quick)
+
+
 BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "raycast": lambda out, quick: bench_raycast(out, quick=quick),
     "extractors": _bench_extractors,
@@ -289,6 +295,7 @@ BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "firstrun": _bench_firstrun,
     "weldments": _bench_weldments,
     "stability": _bench_stability,
+    "arc": _bench_arc,
 }
 
 

@@ -289,10 +289,12 @@ def _mesh_scan(
                                  choose=detector.choose, relative=detector.relative,
                                  noise_sigmas=detector.noise_sigmas)  # fmt: skip
 
+    measure_arc = with_profile_arc(scene, measure, rng, tcp)
+
     def scan(
         T_world_sensor: FloatArray, t_s: float, hint: SeamHint | None = None
     ) -> tuple[Profile, Feature]:
-        profile = measure(T_world_sensor, t_s)
+        profile = measure_arc(T_world_sensor, t_s)
         try:
             if hinted and hint is not None:
                 feature = find_hinted(profile, hint=hint)
@@ -367,6 +369,46 @@ def scene_arc_light(scene: Scene, camera: Any) -> Any:
                              steel.diffusivity_mm2_per_s)  # fmt: skip
     return ArcLight(a.process, a.current_a, band, spatter=a.spatter, fume=a.fume, glow=a.glow,
                     heat=heat)  # fmt: skip
+
+
+def scene_arc_profile(scene: Scene) -> Any:
+    """The profile-mode arc model of the scene
+    (:class:`seamtrack.sensing.arc.profile_model.ArcProfileModel`), or None: no ``[arc]``, or
+    its ``model`` is the image model (``"image"``, or ``"auto"`` when the sensor forms
+    images)."""
+    a = scene.config.arc
+    if a is None or a.model == "image":
+        return None
+    if a.model == "auto" and scene.config.sensor.source == "image":
+        return None
+    from seamtrack.sensing.arc.profile_model import ArcProfileModel
+
+    return ArcProfileModel(a.process, a.current_a)
+
+
+def with_profile_arc(
+    scene: Scene,
+    measure: Callable[[FloatArray, float], Profile],
+    rng: np.random.Generator,
+    tcp: list[FloatArray | None],
+) -> Callable[[FloatArray, float], Profile]:
+    """``measure`` with the profile-mode arc model applied to each profile it returns (drawn
+    from the run's ``rng``); ``measure`` itself when the scene has none."""
+    model = scene_arc_profile(scene)
+    if model is None:
+        return measure
+
+    def measured(T_world_sensor: FloatArray, t_s: float) -> Profile:
+        profile = measure(T_world_sensor, t_s)
+        sensor_to_tcp = tcp[0]
+        assert sensor_to_tcp is not None, "the robot sets the sensor-to-torch transform"
+        assert profile.reason is not None
+        points, reason = model.apply(profile.points_laser, profile.reason,
+                                     sensor_to_tcp[:3, 3], rng)  # fmt: skip
+        return Profile(points, valid=reason == 0, reason=reason,
+                       T_world_sensor=profile.T_world_sensor, t_s=profile.t_s)  # fmt: skip
+
+    return measured
 
 
 def arc_frame(arc_light: Any, T_world_sensor: FloatArray, tcp: list[FloatArray | None]) -> Any:

@@ -255,3 +255,32 @@ def union_errors(errors: list[Any]) -> list[Any]:
         else:
             kept.append(item)
     return kept
+
+
+def check_arc(c: SceneConfig) -> None:
+    """An ``[arc]`` the run can draw: a stripe profile to act on (mesh mode), the image model
+    only where the camera forms images, the laser line outside the torch's nozzle."""
+    a = c.arc
+    if a is None:
+        return
+    if c.sensor.mode != "mesh":
+        raise SceneError(
+            "the arc acts on the stripe, and seam mode has none",
+            field="arc.model",
+            fix='set sensor.mode = "mesh" (with a [workpiece]), or remove [arc]',
+        )
+    if a.model == "image" and c.sensor.source != "image":
+        raise SceneError(
+            "the image model draws the arc into the camera's image, and this sensor forms none",
+            field="arc.model",
+            fix='set arc.model = "profile" (or "auto"), or sensor.source = "image"',
+        )
+    from seamtrack.sensing.arc.profile_model import MIN_LOOK_AHEAD_MM
+
+    if c.sensor.look_ahead_mm < MIN_LOOK_AHEAD_MM:
+        raise SceneError(
+            f"a {c.sensor.look_ahead_mm:g} mm look-ahead puts the laser line under the torch's "
+            f"nozzle (radius {MIN_LOOK_AHEAD_MM:g} mm)",
+            field="sensor.look_ahead_mm",
+            fix=f"look at least {MIN_LOOK_AHEAD_MM:g} mm ahead of the arc (trackers: 20-40 mm)",
+        )

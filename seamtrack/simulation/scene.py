@@ -21,7 +21,12 @@ from seamtrack.errors import SceneError
 from seamtrack.sensing.camera import Camera
 from seamtrack.sensing.materials import material
 from seamtrack.sensing.sensor import LaserLineSensor, data_sheet, preset
-from seamtrack.simulation.checks import check_plugin_params, check_sizes, union_errors
+from seamtrack.simulation.checks import (
+    check_arc,
+    check_plugin_params,
+    check_sizes,
+    union_errors,
+)
 from seamtrack.simulation.config import (  # the types live there; imported by name here too
     CameraConfig,
     Scene,
@@ -308,6 +313,7 @@ def check_consistency(scene: Scene) -> None:
         make_camera(c.sensor.camera, c.sensor.preset).check(sensor)
     if c.workpiece is not None and c.workpiece.material is not None:
         material(c.workpiece.material)
+    check_arc(c)
     check_passes(c)  # a job's sections, before the plugins they name are loaded
     check_plugin_params(c)
     check_sizes(c)
