@@ -258,6 +258,12 @@ def _bench_firstrun(out: Path, quick: bool) -> Any:
     return bench_firstrun(out, quick=quick)
 
 
+def _bench_distortion(out: Path, quick: bool) -> Any:
+    from seamtrack.bench.distortion import bench_distortion
+
+    return bench_distortion(out, quick=quick)
+
+
 BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "raycast": lambda out, quick: bench_raycast(out, quick=quick),
     "extractors": _bench_extractors,
@@ -275,6 +281,7 @@ BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "trackers": _bench_trackers,
     "paper": _bench_paper,
     "firstrun": _bench_firstrun,
+    "distortion": _bench_distortion,
 }
 
 

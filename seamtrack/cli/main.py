@@ -636,7 +636,7 @@ def build_parser() -> argparse.ArgumentParser:
         nargs="?",
         default="all",
         help="raycast, extractors, mesh, loop, tradeoff, sweep, scaling, failures, camera, "
-        "dataset, multipass, gym, bridge, trackers, paper, firstrun, or all",
+        "dataset, multipass, gym, bridge, trackers, paper, firstrun, distortion, or all",
     )
     p.add_argument("--out", default="bench-results", help="folder for the results")
     p.add_argument("--quick", action="store_true", help="fewer repeats (a smoke run)")
