@@ -120,6 +120,12 @@ def _distortion_loop_table(data: dict[str, Any]) -> str:
     return loop_table(data)
 
 
+def _distortion_multipass_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.distortion import multipass_table
+
+    return multipass_table(data)
+
+
 def _speckle_table(data: dict[str, Any]) -> str:
     from seamtrack.bench.camera_speckle import speckle_summary_table
 
@@ -155,6 +161,7 @@ RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {
     "firstrun.json": _firstrun_table,
     "distortion.json#cases": _distortion_cases_table,
     "distortion.json#loop": _distortion_loop_table,
+    "distortion.json#multipass": _distortion_multipass_table,
 }
 
 

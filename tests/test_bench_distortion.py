@@ -55,3 +55,19 @@ def test_a_case_not_read_has_no_verdict_and_says_so() -> None:
     assert "| not read | - | mm | - |" in table
     read = case_rows((dataclasses.replace(case, measured=1.25),))
     assert "| 1.25 | - | mm | - |" in cases_table({"cases": read})
+
+
+def test_the_multipass_table_has_a_row_per_pass_and_the_jobs_totals() -> None:
+    rows = [
+        {"pass": f"pass_0{i}", "reference": "centre", "cap": i == 2, "angle_deg": 0.5 * i,
+         "accumulated_deg": 0.5 * i * (i + 1) / 2, "max_error_mm": 0.1 * i,
+         "seam_shift_at_start_mm": 0.2 * i}
+        for i in (1, 2)
+    ]  # fmt: skip
+    job = {"rows": rows, "status": "completed", "passes": 2, "underfilled_stations": 0,
+           "angular_distortion_deg": 1.5, "worst_pass_error_mm": 0.2, "wall_s": 12.0,
+           "load_1min": 3.0}  # fmt: skip
+    data = {"multipass": job}
+    table = bench.multipass_table(data)
+    assert "| pass_02 | centre (cap) | 1.00 | 1.50 | 0.40 | 0.200 |" in table
+    assert "turned 1.50 deg; worst pass 0.200 mm" in table
