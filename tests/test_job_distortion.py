@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from seamtrack.control.planner import AdaptivePlanner
-from seamtrack.simulation.job import run_job
+from seamtrack.multipass.job import run_job
 from seamtrack.simulation.scene import load_scene
 
 pytestmark = [pytest.mark.cad, pytest.mark.embree]

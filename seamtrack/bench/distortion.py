@@ -190,7 +190,7 @@ def _multipass_run(quick: bool) -> dict[str, Any]:
     """``multipass-v-groove-distortion`` (the 40 mm, 12 mm quick case when ``quick``): the
     angle after each pass and after the job, each pass's worst error against its true path
     where that path is, and how far the seam had sunk where the pass started."""
-    from seamtrack.simulation.job import run_job
+    from seamtrack.multipass.job import run_job
     from seamtrack.simulation.scene import load_scene
 
     load = os.getloadavg()[0]

@@ -74,7 +74,7 @@ def cache_cold(find: Any) -> bool:
     return False
 
 
-def warm(find: Callable[..., Any], sensor: LaserLineSensor, joint: str, rays: int) -> None:
+def warm(find: Callable[..., Any], sensor: LaserLineSensor, joint: str, rays: int | None) -> None:
     """Call ``find`` once on a synthetic ``joint`` profile of ``rays`` rays (its kernels
     compile and go to numba's cache); an extractor that refuses the profile still compiled."""
     from seamtrack.features.synthetic import synthetic_profile
@@ -87,7 +87,7 @@ def warm(find: Callable[..., Any], sensor: LaserLineSensor, joint: str, rays: in
 
 
 def start_warming(
-    find: Any, name: str, sensor: LaserLineSensor, rays: int, reap: bool = True
+    find: Any, name: str, sensor: LaserLineSensor, rays: int | None, reap: bool = True
 ) -> int | None:
     """Fork a child that runs :func:`warm` when the extractor's cache is cold; return its pid
     (a daemon thread reaps it unless ``reap`` is False: then the caller waits for it), or None

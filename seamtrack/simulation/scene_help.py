@@ -97,6 +97,10 @@ KEY_HELP: dict[str, str] = {
     "sensor.camera.relative": "per-column threshold as a fraction of the column's peak",
     "sensor.camera.noise_sigmas": "per-column threshold in noise standard deviations",
     "sensor.camera.choose": 'which peak of a column: "strongest", "first" or "widest"',
+    "sensor.camera.filter_centre_nm": "band-pass filter's centre wavelength, nm (unset: the "
+    "laser's)",
+    "sensor.camera.filter_fwhm_nm": "band-pass filter's full width at half maximum, nm (>= 0.1)",
+    "sensor.camera.filter_shape": 'band-pass filter\'s transmission: "gaussian" or "top-hat"',
     # [robot]
     "robot": "the robot: the paper's 3-axis gantry or an articulated arm",
     "robot.model": '"cartesian" (the paper\'s gantry) or an arm ("ur10e", "kr16")',
