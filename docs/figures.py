@@ -86,6 +86,11 @@ BENCHES: dict[str, tuple[tuple[str, ...], str, str]] = {
         "seamtrack bench firstrun",
         "the demo's first mesh-mode run with an empty numba cache, then the same run again",
     ),
+    "distortion": (
+        ("distortion.json",),
+        "seamtrack bench distortion",
+        "the distortion models against published measurements; `butt-distortion` on and off",
+    ),
     "weldments": (
         ("weldments.json",),
         "seamtrack bench weldments",
@@ -167,6 +172,24 @@ def _firstrun_table(data: dict[str, Any]) -> str:
     return firstrun_table(data)
 
 
+def _distortion_cases_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.distortion import cases_table
+
+    return cases_table(data)
+
+
+def _distortion_loop_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.distortion import loop_table
+
+    return loop_table(data)
+
+
+def _distortion_multipass_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.distortion import multipass_table
+
+    return multipass_table(data)
+
+
 def _speckle_table(data: dict[str, Any]) -> str:
     from seamtrack.bench.camera_speckle import speckle_summary_table
 
@@ -221,6 +244,9 @@ RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {
     "paper.json#table4": _table4_table,
     "paper.json#servo": _servo_table,
     "firstrun.json": _firstrun_table,
+    "distortion.json#cases": _distortion_cases_table,
+    "distortion.json#loop": _distortion_loop_table,
+    "distortion.json#multipass": _distortion_multipass_table,
     "raycast.json#precision": _precision_table,
     "weldments.json": _weldments_table,
     "weldments.json#public": _public_table,

@@ -129,6 +129,28 @@ def test_the_catalogue_covers_every_item_of_the_issue() -> None:
         assert needed in names
 
 
+def test_the_catalogue_covers_the_bad_inputs_of_the_heat_issue() -> None:
+    """Issue 39's bad inputs (a zero or negative speed, a tack outside the seam, an efficiency
+    above 1, a point inside the source's singularity), each on the command line that takes it:
+    the field, the distorting run and the multi-pass job."""
+    names = {e.name for e in CATALOGUE}
+    for needed in (
+        "heat field at zero speed",
+        "heat field at a negative speed",
+        "heat field at the point source",
+        "heat field on the line source's axis",
+        "heat field efficiency above 1",
+        "heat thermal efficiency above 1",
+        "distortion run at zero speed",
+        "distortion run at a negative speed",
+        "distortion tack outside the seam",
+        "distortion tack before the seam",
+        "distortion clamp outside the seam",
+        "distortion efficiency above 1",
+    ):
+        assert needed in names
+
+
 def test_a_plugin_error_shows_the_users_frames_and_debug_shows_all(
     root: Path, capsys: pytest.CaptureFixture[str], monkeypatch
 ) -> None:

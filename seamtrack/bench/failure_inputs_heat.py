@@ -19,10 +19,18 @@ FILES: dict[str, bytes] = {}
 GENERATED: dict[str, Any] = {}
 
 JOB = ("multipass-v-groove", "--set", "workpiece.params.seam_length_mm=20.0")
+#: The distorting butt joint cut to a 20 mm seam with one tack at its middle: refused before it
+#: runs (the travel speed, the tacks and clamps along the seam, the arc's efficiency).
+BUTT = ("butt-distortion", "--set", "workpiece.params.seam_length_mm=20.0",
+        "--set", "distortion.tacks=[{position_mm = 10.0}]")  # fmt: skip
 
 
 def _job(pair: str) -> tuple[str, ...]:
     return ("run", *JOB, "--set", pair, "--out", "OUT")
+
+
+def _butt(pair: str) -> tuple[str, ...]:
+    return ("run", *BUTT, "--set", pair, "--out", "OUT")
 
 
 #: ``seamtrack heat``: the field asked at a point, 5 mm beside the arc unless said.
@@ -46,5 +54,17 @@ ENTRIES: tuple[Entry, ...] = (
           field="process.thermal_efficiency"),
     Entry("heat thermal efficiency 0",
           _job("process.thermal_efficiency=0.0"),
+          field="process.thermal_efficiency"),
+    Entry("distortion run at zero speed", _butt("simulation.welding_speed_mm_s=0.0"),
+          field="simulation.welding_speed_mm_s"),
+    Entry("distortion run at a negative speed", _butt("simulation.welding_speed_mm_s=-3.0"),
+          field="simulation.welding_speed_mm_s"),
+    Entry("distortion tack outside the seam", _butt("distortion.tacks=[{position_mm = 25.0}]"),
+          field="distortion.tacks[0].position_mm"),
+    Entry("distortion tack before the seam", _butt("distortion.tacks=[{position_mm = -1.0}]"),
+          field="distortion.tacks[0].position_mm"),
+    Entry("distortion clamp outside the seam", _butt("distortion.clamps=[{position_mm = 40.0}]"),
+          field="distortion.clamps[0].position_mm"),
+    Entry("distortion efficiency above 1", _butt("process.thermal_efficiency=1.2"),
           field="process.thermal_efficiency"),
 )  # fmt: skip

@@ -258,6 +258,12 @@ def _bench_firstrun(out: Path, quick: bool) -> Any:
     return bench_firstrun(out, quick=quick)
 
 
+def _bench_distortion(out: Path, quick: bool) -> Any:
+    from seamtrack.bench.distortion import bench_distortion
+
+    return bench_distortion(out, quick=quick)
+
+
 def _bench_weldments(out: Path, quick: bool) -> Any:
     from seamtrack.bench.weldments import bench_weldments
 
@@ -293,6 +299,7 @@ BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "trackers": _bench_trackers,
     "paper": _bench_paper,
     "firstrun": _bench_firstrun,
+    "distortion": _bench_distortion,
     "weldments": _bench_weldments,
     "stability": _bench_stability,
     "arc": _bench_arc,

@@ -650,7 +650,7 @@ def build_parser() -> argparse.ArgumentParser:
         default="all",
         help="raycast, extractors, mesh, loop, tradeoff, sweep, scaling, failures, camera, "
         "dataset, multipass, gym, bridge, trackers, paper, firstrun, weldments, stability, "
-        "arc, or all",
+        "arc, distortion, or all",
     )
     p.add_argument("--out", default="bench-results", help="folder for the results")
     p.add_argument("--quick", action="store_true", help="fewer repeats (a smoke run)")

@@ -86,6 +86,8 @@ class JointMotion:
     lock_mm: float = 0.0  # how far behind the arc the weld locks its distortion in
     constraints: tuple[Tack | Clamp, ...] = ()
     release_mm: FloatArray = field(default_factory=lambda: np.zeros(0))  # arc position
+    #: the angle earlier passes locked in (a multi-pass job: the angles add up), both plates
+    prior_rad: float = 0.0
 
     def shift_mm(self, s_mm: ArrayLike, t_s: ArrayLike) -> tuple[FloatArray, FloatArray]:
         """The seam's move at stations ``s_mm`` at times ``t_s`` (broadcast): across (mm, + to
@@ -103,7 +105,10 @@ class JointMotion:
         # Each plate is one rigid body: the angle locked into the weld behind the arc turns
         # all of it, ahead of the arc too, in proportion to the length locked in.
         locked = np.clip(arc - self.lock_mm, 0.0, self.seam_length_mm) / self.seam_length_mm
-        vertical = self.plate_width_mm * (beta - 0.5 * self.permanent_rad * locked)
+        sink = 0.5 * self.permanent_rad * locked
+        if self.prior_rad:  # a multi-pass job: the passes before's angle, all along the seam
+            sink = sink + 0.5 * self.prior_rad
+        vertical = self.plate_width_mm * (beta - sink)
         gap = -self.shrinkage_mm * f  # behind: closed by the shrinkage
         if self.gap_rotation_rad and self.side:
             turning = np.where(self.held(arc), 0.0, self.gap_rotation_rad)

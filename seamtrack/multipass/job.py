@@ -47,6 +47,13 @@ from seamtrack.control.planner import JobState, PassPlan, checked_plan, is_built
 from seamtrack.errors import PluginRuntimeError, SceneError, plugin_failed
 from seamtrack.geometry.seam import Seam
 from seamtrack.multipass.aim import wall_deg
+from seamtrack.multipass.distortion import (
+    JobDistortion,
+    distorted_parts,
+    into_the_part,
+    locked_in,
+    still,
+)
 from seamtrack.multipass.paths import (
     STATION_SPACING_MM,
     FrameGroove,
@@ -178,6 +185,7 @@ def _run_job(
     window = (process.speed_min_mm_s, process.speed_max_mm_s)
     budget_s = c.simulation.wall_time_limit_s
     records: list[PassRecord] = []
+    bent = JobDistortion() if c.distortion is not None else None  # the angle so far
     job_bar = _job_bar(progress, count)
     wall_start = time.perf_counter()
 
@@ -220,7 +228,7 @@ def _run_job(
             assert plan is not None
         done = _pass(scene, plan, fill, cad_seam, rng, process, progress, f"pass_{index + 1:02d}",
                      flip, adapt, name, groove, stop,
-                     after_bead(groove, state.last_bead_area_mm2))  # fmt: skip
+                     after_bead(groove, state.last_bead_area_mm2), bent)  # fmt: skip
         _release_pass(freeze)
         if stop is not None and stop.requested:  # the bead of a stopped pass is not laid
             records.append(done.record)
@@ -263,6 +271,7 @@ def _run_job(
             fix="return a PassPlan for pass 1 (None only when the groove is full)",
         )
     summary = job_summary(scene, records, fill, time.perf_counter() - wall_start, stopped)
+    summary.update(bent.summary() if bent is not None else {})
     return JobResult(summary, records, fill)
 
 
@@ -331,6 +340,7 @@ def _pass(
     previous: MeasuredGroove | None = None,
     stop: StopRequest | None = None,
     expected: MeasuredGroove | None = None,
+    bent: JobDistortion | None = None,
 ) -> _Done:
     """One closed-loop pass (``plan`` None: the scan-only pass along the groove's middle).
     ``flip``: the laser's y_L runs against the stations' y (the extractor's left is the
@@ -353,7 +363,7 @@ def _pass(
     pass_scene = _with(scene, overrides)
     start = time.perf_counter()
     beads = fill.mesh() if len(fill.beads) else None
-    parts = build_parts(pass_scene, rng, extra_mesh=beads)
+    parts = build_parts(still(pass_scene), rng, extra_mesh=beads)  # the job moves the part
     true_path = pass_path(fill, reference, plan)
     parts = dataclasses.replace(
         parts,
@@ -361,6 +371,7 @@ def _pass(
         tcp_start_world=true_path.points[0] + np.asarray(c.robot.start_offset_mm),
         tool_program=tool_program(pass_scene, true_path),
     )
+    parts, moving = distorted_parts(parts, pass_scene, plan, fill, process, bent)
     frames: list[tuple[Feature, FloatArray]] = []
     each: list[FrameGroove | None] = []  # every frame's groove, as the sense function saw it
     parts = steered(parts, fill, cad_seam, plan, frames, adapt, planner_name, previous, each,
@@ -371,6 +382,9 @@ def _pass(
     run_s = time.perf_counter() - start
     groove = measured_groove(frames, fill, cad_seam, each=each)
     path, t, speeds = arc_path(result, parts.settings.trace_period_s, process.speed_min_mm_s)
+    if moving is not None:  # the bead is laid on the part, in its own frame
+        path = into_the_part(moving, path, t)
+        locked_in(moving, bent)
     arc_time = float(t[-1] - t[0]) if len(t) > 1 else 0.0
     wire = process.wire_feed_mm_s if plan is None else plan.wire_feed_mm_s
     if plan is not None and len(path):
