@@ -30,6 +30,7 @@ from seamtrack.simulation.checks import (
     check_ticks,
     default_time_limit_s,
 )
+from seamtrack.simulation.countermeasures import rejection
 from seamtrack.simulation.mount import Mount
 from seamtrack.simulation.robots import (
     check_sensor_outside,
@@ -268,6 +269,7 @@ def _mesh_scan(
 
     if s.source == "image":  # every frame rendered by the camera and measured from its pixels
         camera, detector = make_camera(s.camera, s.preset), s.camera or CameraConfig()
+        reject = rejection(scene.config)
         surface = w.material or "mill-scale steel"
         arc_light = scene_arc_light(scene, camera)
 
@@ -287,7 +289,7 @@ def _mesh_scan(
             images[0] = image
             return image.profile(detector.method, threshold=detector.threshold,
                                  choose=detector.choose, relative=detector.relative,
-                                 noise_sigmas=detector.noise_sigmas)  # fmt: skip
+                                 noise_sigmas=detector.noise_sigmas, reject=reject)  # fmt: skip
 
     def scan(
         T_world_sensor: FloatArray, t_s: float, hint: SeamHint | None = None

@@ -36,6 +36,11 @@ WeldSpeed = Annotated[float, Field(gt=0, le=1_000, allow_inf_nan=False, strict=T
 FrameRate = Annotated[float, Field(gt=0, le=100_000, allow_inf_nan=False, strict=True)]
 
 
+#: A bound of the peak detector's rejection, times the frame's stripe: above 1 (the stripe itself
+#: passes), and 1000 is far beyond any stripe.
+RejectFactor = Annotated[float, Field(gt=1, le=1000, allow_inf_nan=False, strict=True)]
+
+
 class _Section(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
@@ -103,6 +108,19 @@ class CameraConfig(_Section):
     relative: Annotated[float, Field(ge=0, lt=1, allow_inf_nan=False, strict=True)] = 0.5
     noise_sigmas: Annotated[float, Field(ge=0, le=100, allow_inf_nan=False, strict=True)] = 6.0
     choose: Literal["strongest", "first", "widest"] = "strongest"
+    # Blob and streak rejection (issue 38, seamtrack.sensing.peaks.Rejection): "blobs" drops
+    # candidate runs not shaped like the stripe before choosing. Default (None): from the
+    # scene's `countermeasures`. The bounds are times the frame's own stripe (its median
+    # equivalent width and height); None: the Rejection defaults.
+    reject: Literal["none", "blobs"] | None = None
+    reject_max_width: RejectFactor | None = None
+    reject_max_peak: RejectFactor | None = None
+    reject_min_peak: (
+        Annotated[float, Field(ge=0, lt=1, allow_inf_nan=False, strict=True)] | None
+    ) = None
+    reject_stripe_width_px: (
+        Annotated[float, Field(gt=0, le=1000, allow_inf_nan=False, strict=True)] | None
+    ) = None
 
 
 class SensorConfig(_Section):

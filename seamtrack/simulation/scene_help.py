@@ -97,6 +97,20 @@ KEY_HELP: dict[str, str] = {
     "sensor.camera.relative": "per-column threshold as a fraction of the column's peak",
     "sensor.camera.noise_sigmas": "per-column threshold in noise standard deviations",
     "sensor.camera.choose": 'which peak of a column: "strongest", "first" or "widest"',
+    "sensor.camera.filter_centre_nm": "the band-pass filter's centre, nm (unset: the laser's "
+    "wavelength)",
+    "sensor.camera.filter_fwhm_nm": "the band-pass filter's full width at half maximum, nm",
+    "sensor.camera.filter_shape": '"gaussian" or "top-hat" transmission of the band-pass',
+    "sensor.camera.reject": '"blobs": drop runs not shaped like the stripe (blobs, streaks, '
+    'glow); "none" (unset: from countermeasures)',
+    "sensor.camera.reject_max_width": "a run wider than this times the stripe's equivalent "
+    "width is rejected (unset: 3)",
+    "sensor.camera.reject_max_peak": "a run brighter than this times the stripe's height is "
+    "rejected (unset: 10)",
+    "sensor.camera.reject_min_peak": "a run dimmer than this times the stripe's height is "
+    "rejected (unset: 0)",
+    "sensor.camera.reject_stripe_width_px": "the stripe's equivalent width in pixels (unset: "
+    "the frame's median)",
     # [robot]
     "robot": "the robot: the paper's 3-axis gantry or an articulated arm",
     "robot.model": '"cartesian" (the paper\'s gantry) or an arm ("ur10e", "kr16")',
