@@ -107,3 +107,139 @@ def test_bad_rejection_keys_name_the_field(key: str, value: object) -> None:
         load_scene("v-groove-camera", {key: value})
     assert info.value.field == key, str(info.value)
     assert info.value.fix
+
+
+# ----------------------------------------------------------------------------- the gate
+def _pose(x_mm: float) -> np.ndarray:
+    """The laser pointing down from 100 mm above (x_mm, 0, 0): its plane x_L = 0 is X = x_mm
+    (x_L = X, y_L = -Y, z_L = -Z + 100)."""
+    from seamtrack.geometry import frames
+
+    return frames.from_xyz_rpy_deg([x_mm, 0.0, 100.0], [180.0, 0.0, 0.0])
+
+
+def _frame(x_mm: float, y_mm: float) -> tuple:  # type: ignore[type-arg]
+    """A frame whose seam point is (x_mm, y_mm, 0), and its pose."""
+    from seamtrack.sensing.profiles import Feature
+
+    T = _pose(x_mm)
+    return Feature.found([-y_mm, 100.0], T, joint="v-groove"), T
+
+
+def test_the_prediction_is_where_the_line_crosses_the_laser_plane() -> None:
+    from seamtrack.control.gate import predict_point
+
+    # Points on the line (s, 1 + 0.1 s, 0.2 s); the plane X = 7 crosses it at s = 7.
+    history = np.array([[s, 1 + 0.1 * s, 0.2 * s] for s in (2.0, 3.0, 4.0)])
+    np.testing.assert_allclose(predict_point(history, _pose(7.0)), [7.0, 1.7, 1.4], atol=1e-12)
+    np.testing.assert_allclose(predict_point(history[-1:], _pose(7.0)), history[-1])
+
+
+@pytest.mark.parametrize("on_invalid", ["hold", "predict"])
+def test_a_false_point_outside_the_window_is_refused(on_invalid: str) -> None:
+    from seamtrack.control.gate import OUTSIDE, GateSettings, SeamGate
+
+    gate = SeamGate(GateSettings(window_mm=15.0, reacquire_frames=20, on_invalid=on_invalid))
+    for k in range(10):  # a straight seam y = 2 + 0.05 x, a frame every 0.4 mm
+        feature, T = _frame(0.4 * k, 2 + 0.02 * k)
+        assert gate(feature, T) is feature
+    spatter, T = _frame(4.0, 30.0)  # a streak 28 mm off the seam
+    out = gate(spatter, T)
+    assert gate.refused == 1
+    if on_invalid == "hold":
+        assert not out and out.reason == OUTSIDE
+    else:  # the predicted point: on the seam's line, in this frame's plane
+        assert out and out.confidence == 0.0
+        np.testing.assert_allclose(out.point_world, [4.0, 2.2, 0.0], atol=1e-9)
+    near, T = _frame(4.4, 2.22 + 10.0)  # 10 mm off: inside the window, taken
+    assert gate(near, T) is near
+
+
+def test_after_n_invalid_frames_the_gate_reacquires() -> None:
+    from seamtrack.control.gate import GateSettings, SeamGate
+
+    gate = SeamGate(GateSettings(window_mm=15.0, reacquire_frames=20, on_invalid="hold"))
+    for k in range(5):
+        gate(*_frame(0.4 * k, 0.0))
+    # The seam steps 25 mm sideways (the gate was on a wrong track, or the part moved).
+    results = [gate(*_frame(0.4 * k, 25.0)) for k in range(5, 30)]
+    assert [bool(r) for r in results] == [False] * 20 + [True] * 5
+    assert (gate.refused, gate.reacquired) == (20, 1)
+
+
+def test_prediction_stops_at_the_seams_end_and_after_n_frames() -> None:
+    from seamtrack.control.gate import GateSettings, SeamGate
+    from seamtrack.sensing.profiles import Feature
+
+    gate = SeamGate(GateSettings(window_mm=15.0, reacquire_frames=3, on_invalid="predict"))
+    for k in range(5):
+        gate(*_frame(0.4 * k, 1.0))
+    off_part = dataclasses_replace(Feature.failed("no stripe"), stripe_points=0)
+    assert not gate(off_part, _pose(2.0))  # the stripe left the part: no point made up
+    lost = Feature.failed("no groove")  # the stripe on the part, no seam point in it
+    predicted = [gate(lost, _pose(2.0 + 0.4 * k)) for k in (1, 2)]  # invalid frames 2 and 3
+    assert all(predicted)
+    np.testing.assert_allclose(predicted[-1].point_world, [2.8, 1.0, 0.0], atol=1e-9)
+    assert not gate(lost, _pose(3.2))  # beyond reacquire_frames: the tracker's own rule
+
+
+def dataclasses_replace(feature, **changes):  # type: ignore[no-untyped-def]
+    import dataclasses
+
+    return dataclasses.replace(feature, **changes)
+
+
+# ----------------------------------------------------------------------------- the switch
+def test_the_switch_sets_the_countermeasures_and_explicit_keys_win() -> None:
+    from seamtrack.control.gate import GateSettings
+    from seamtrack.simulation.countermeasures import countermeasures, gate_settings
+
+    plain = load_scene("v-groove-camera").config  # no arc: everything off, as before
+    assert countermeasures(plain) == "none"
+    assert (rejection(plain), gate_settings(plain)) == (None, None)
+    arc = load_scene("v-groove-arc").config  # the arc on: the defaults
+    assert countermeasures(arc) == "default"
+    assert rejection(arc) == Rejection()
+    assert gate_settings(arc) == GateSettings(15.0, 20, "predict")
+    off = load_scene("v-groove-arc", {"countermeasures": "none"}).config
+    assert (rejection(off), gate_settings(off)) == (None, None)
+    mixed = load_scene("v-groove-arc", {"countermeasures": "none", "gate.on_invalid": "predict",
+                                        "gate.window_mm": 5.0})  # fmt: skip
+    assert rejection(mixed.config) is None
+    assert gate_settings(mixed.config) == GateSettings(5.0, 20, "predict")
+    no_gate = load_scene("v-groove-arc", {"gate.enabled": False,
+                                          "sensor.camera.reject": "none"})  # fmt: skip
+    assert (rejection(no_gate.config), gate_settings(no_gate.config)) == (None, None)
+    on = load_scene("paper-verification", {"countermeasures": "default"}).config
+    assert gate_settings(on) == GateSettings(15.0, 20, "predict")
+
+
+@pytest.mark.parametrize(
+    ("key", "value"),
+    [
+        ("countermeasures", "all"),
+        ("gate.window_mm", -1.0),
+        ("gate.reacquire_frames", 0),
+        ("gate.on_invalid", "guess"),
+        ("gate.enabled", "yes"),
+    ],
+)
+def test_bad_gate_keys_name_the_field(key: str, value: object) -> None:
+    with pytest.raises(SceneError) as info:
+        load_scene("v-groove-arc", {key: value})
+    assert info.value.field == key, str(info.value)
+    assert info.value.fix
+
+
+def test_a_gate_that_refuses_nothing_leaves_the_run_unchanged() -> None:
+    """A window wider than any step and ``hold``: the same trace as no gate at all."""
+    from seamtrack.simulation.loop import simulate
+
+    short = {"seam.length_mm": 40.0}
+    plain = simulate(load_scene("paper-verification", short))
+    gated = simulate(load_scene("paper-verification", {**short, "gate.window_mm": 1000.0}))
+    np.testing.assert_array_equal(plain.trace.tcp_world, gated.trace.tcp_world)
+    np.testing.assert_array_equal(
+        plain.trace.frames["point_world"], gated.trace.frames["point_world"]
+    )
+    assert len(plain.trace.t_s) > 100

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.control.gate import GateSettings
 from seamtrack.control.registry import tracker, tracker_parameters
 from seamtrack.control.tracking import Tracker
 from seamtrack.errors import PluginRuntimeError, SceneError, plugin_failed
@@ -30,7 +31,7 @@ from seamtrack.simulation.checks import (
     check_ticks,
     default_time_limit_s,
 )
-from seamtrack.simulation.countermeasures import rejection
+from seamtrack.simulation.countermeasures import gate_settings, rejection
 from seamtrack.simulation.mount import Mount
 from seamtrack.simulation.robots import (
     check_sensor_outside,
@@ -67,6 +68,9 @@ class LoopSettings:
     trace_period_s: float = 0.01
     work_angle_rad: float = 0.0
     travel_angle_rad: float = 0.0
+    # The seam-point gate between the extractor and the tracker (None: none), from the
+    # scene's [gate] and countermeasures (seamtrack.simulation.countermeasures).
+    gate: GateSettings | None = None
 
 
 @dataclass(frozen=True)
@@ -487,6 +491,7 @@ def build_parts(
         trace_period_s=c.simulation.trace_period_s,
         work_angle_rad=math.radians(c.torch.work_angle_deg),
         travel_angle_rad=math.radians(c.torch.travel_angle_deg),
+        gate=gate_settings(c),
     )
     return Parts(
         seam=seam,

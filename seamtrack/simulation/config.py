@@ -361,6 +361,22 @@ class ArcConfig(_Section):
     glow: Flag = True
 
 
+class GateConfig(_Section):
+    """``[gate]``: the seam-point gate in time between the extractor and the tracker (issue
+    38, :mod:`seamtrack.control.gate`). Unset keys come from the scene's ``countermeasures``:
+    ``enabled`` is on with ``"default"`` (or when the table is given), ``on_invalid`` is
+    ``"predict"`` with ``"default"`` and ``"hold"`` with ``"none"``."""
+
+    enabled: Flag | None = None
+    #: The search window's radius about the predicted seam point (mm); 0: no window. Default
+    #: 15 mm, the Riftek RF627Weld's search distance (manual rev. 1.1.1, 2020, p. 30).
+    window_mm: NonNegative | None = None
+    #: Invalid frames in a row after which the next point found is taken. Default 20, the
+    #: RF627Weld's invalid sequence (same page).
+    reacquire_frames: Annotated[int, Field(ge=1, le=100_000, strict=True)] | None = None
+    on_invalid: Literal["hold", "predict"] | None = None
+
+
 class TackConfig(_Section):
     """A tack weld across the joint (``[[distortion.tacks]]``), ``position_mm`` along the seam."""
 
@@ -400,6 +416,11 @@ class DistortionConfig(_Section):
 class SceneConfig(_Section):
     name: str = ""
     description: str = ""
+    #: One switch for the countermeasures against the arc (issue 38): "default" turns on blob
+    #: rejection in the peak detector, the seam-point gate and prediction on invalid frames;
+    #: "none" turns them off. Explicit keys override it. Unset: "default" with an [arc], else
+    #: "none" (a scene without the arc runs as before).
+    countermeasures: Literal["none", "default"] | None = None
     simulation: SimulationConfig = Field(default_factory=SimulationConfig)
     seam: SeamConfig = Field(default_factory=SeamConfig)
     sensor: SensorConfig = Field(default_factory=SensorConfig)
@@ -412,6 +433,7 @@ class SceneConfig(_Section):
     passes: PassesConfig | None = None
     planner: PlannerConfig | None = None
     arc: ArcConfig | None = None
+    gate: GateConfig | None = None
     distortion: DistortionConfig | None = None
 
 

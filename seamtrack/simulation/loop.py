@@ -36,6 +36,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack import constants
+from seamtrack.control.gate import GateSettings, SeamGate
 from seamtrack.control.orientation import is_closed
 from seamtrack.control.robot import MoveCommand
 from seamtrack.control.tracking import Command, Measurement, TrackerContext
@@ -222,6 +223,7 @@ def run(
     wall_start = clock()
     tracker = parts.tracker
     name = parts.tracker_name
+    sense = _gated(parts.sense, cfg.gate)  # a new gate per run: it holds the run's state
 
     R = robot.T_world_base[:3, :3]
     p0 = robot.T_world_base[:3, 3]
@@ -306,7 +308,7 @@ def run(
             T_ws = robot.sensor_pose(state)
             hint = tracker_hint(T_ws) if tracker_hint is not None else None  # the tracker's
             sense_start = clock()
-            feature = parts.sense(T_ws, t, hint) if hint is not None else parts.sense(T_ws, t)
+            feature = sense(T_ws, t, hint) if hint is not None else sense(T_ws, t)
             sense_time += clock() - sense_start
             if ticks is not None:
                 tcp = ticks.tcp_now(state)
@@ -418,6 +420,19 @@ def run(
     summary["stop_cause"] = stop_cause
     summary["sense_wall_time_s"] = sense_time
     return Result(summary=summary, trace=trace)
+
+
+def _gated(sense: Callable[..., Any], gate: GateSettings | None) -> Callable[..., Any]:
+    """``sense`` with the seam-point gate on its features (:mod:`seamtrack.control.gate`), or
+    ``sense`` itself without a gate."""
+    if gate is None:
+        return sense
+    seam_gate = SeamGate(gate)
+
+    def gated_sense(T_world_sensor: FloatArray, t_s: float, *hint: Any) -> Any:
+        return seam_gate(sense(T_world_sensor, t_s, *hint), T_world_sensor)
+
+    return gated_sense
 
 
 def _to_move(robot: Any, cmd: Command) -> MoveCommand:

@@ -21,6 +21,8 @@ from seamtrack.simulation.config import Scene, SceneConfig
 KEY_HELP: dict[str, str] = {
     "name": "the scene's name (outputs and titles)",
     "description": "one line saying what the scene is (seamtrack init --list)",
+    "countermeasures": '"default": blob rejection, seam-point gate, prediction on; "none": '
+    'off (unset: "default" with an [arc]); explicit keys win',
     # [simulation]
     "simulation": "the run: speed, seed, when it ends, how often the trace is written",
     "simulation.welding_speed_mm_s": "the torch's travel speed along the seam",
@@ -106,7 +108,7 @@ KEY_HELP: dict[str, str] = {
     "sensor.camera.reject_max_width": "a run wider than this times the stripe's equivalent "
     "width is rejected (unset: 3)",
     "sensor.camera.reject_max_peak": "a run brighter than this times the stripe's height is "
-    "rejected (unset: 10)",
+    "rejected (unset: 20)",
     "sensor.camera.reject_min_peak": "a run dimmer than this times the stripe's height is "
     "rejected (unset: 0)",
     "sensor.camera.reject_stripe_width_px": "the stripe's equivalent width in pixels (unset: "
@@ -179,6 +181,13 @@ KEY_HELP: dict[str, str] = {
     "arc.spatter": "glowing droplets on ballistic paths",
     "arc.fume": "the fume's attenuation and veiling glow",
     "arc.glow": "the hot plate's own light near the arc",
+    "gate": "the seam-point gate in time between the extractor and the tracker (docs/arc.md)",
+    "gate.enabled": 'the gate on or off (unset: on with countermeasures = "default")',
+    "gate.window_mm": "search window about the predicted seam point (unset: 15; 0: none)",
+    "gate.reacquire_frames": "invalid frames in a row after which the next point is taken "
+    "(unset: 20)",
+    "gate.on_invalid": '"hold" (no seam point: the last target) or "predict" (the predicted '
+    "point); unset: from countermeasures",
     "distortion": "the butt joint moving while it is welded (docs/heat.md); none, still",
     "distortion.material": '"carbon_steel", "stainless_steel" or "aluminium"',
     "distortion.thickness_mm": "plate thickness, mm (the heat and the bending)",
