@@ -243,3 +243,23 @@ def test_a_gate_that_refuses_nothing_leaves_the_run_unchanged() -> None:
         plain.trace.frames["point_world"], gated.trace.frames["point_world"]
     )
     assert len(plain.trace.t_s) > 100
+
+
+# ----------------------------------------------------------------------------- the MAG scene
+@pytest.mark.embree
+def test_the_mag_scene_tracks_within_0_3_mm_with_the_countermeasures() -> None:
+    """v-groove-arc-mag (MAG short-circuit, 250 A, spatter; the seam 2 deg off the robot's
+    axis) on a 40 mm seam: the issue's goal for the shipped arc scenes, a closed-loop max
+    error of 0.3 mm with the default countermeasures."""
+    from seamtrack.simulation.assemble import build_parts
+    from seamtrack.simulation.countermeasures import countermeasures
+    from seamtrack.simulation.loop import run
+
+    scene = load_scene("v-groove-arc-mag", {"workpiece.params.seam_length_mm": 40.0})
+    assert countermeasures(scene.config) == "default"
+    assert scene.config.arc is not None and scene.config.arc.current_a == 250.0
+    parts = build_parts(scene)
+    assert parts.settings.gate is not None
+    s = run(parts, seed=scene.config.simulation.seed).summary
+    assert s["status"] == "completed", s
+    assert s["max_error_mm"] <= 0.3
