@@ -334,6 +334,10 @@ def commented_scene(scene: Scene, header: str = "") -> str:
     ]
     for name in ("name", "description"):
         lines += [_comment(KEY_HELP[name]), f"{name} = {_toml(data[name])}"]
+    switch = data["countermeasures"]
+    lines += [_comment(KEY_HELP["countermeasures"]),
+              f"countermeasures = {_toml(switch)}" if switch is not None else
+              "# countermeasures = (unset)"]  # fmt: skip
     for name, info in SceneConfig.model_fields.items():
         sub = _submodel(info.annotation)
         if sub is None:
