@@ -263,3 +263,8 @@ def test_the_mag_scene_tracks_within_0_3_mm_with_the_countermeasures() -> None:
     s = run(parts, seed=scene.config.simulation.seed).summary
     assert s["status"] == "completed", s
     assert s["max_error_mm"] <= 0.3
+    # Every frame the gate saw is counted once: accepted, or invalid (refused or without a
+    # point), and a prediction only for an invalid one.
+    assert s["gate_accepted"] > 0
+    assert s["gate_accepted"] + s["gate_predicted"] <= s["frames"]
+    assert s["gate_refused"] + s["gate_accepted"] <= s["frames"]

@@ -419,20 +419,34 @@ def run(
     summary["stop_reason"] = stop_reason
     summary["stop_cause"] = stop_cause
     summary["sense_wall_time_s"] = sense_time
+    summary.update(_gate_summary(sense))
     return Result(summary=summary, trace=trace)
 
 
+class _GatedSense:
+    """``sense`` with the seam-point gate of one run on its features
+    (:mod:`seamtrack.control.gate`)."""
+
+    def __init__(self, sense: Callable[..., Any], settings: GateSettings) -> None:
+        self.sense, self.gate = sense, SeamGate(settings)
+
+    def __call__(self, T_world_sensor: FloatArray, t_s: float, *hint: Any) -> Any:
+        return self.gate(self.sense(T_world_sensor, t_s, *hint), T_world_sensor)
+
+
 def _gated(sense: Callable[..., Any], gate: GateSettings | None) -> Callable[..., Any]:
-    """``sense`` with the seam-point gate on its features (:mod:`seamtrack.control.gate`), or
-    ``sense`` itself without a gate."""
-    if gate is None:
-        return sense
-    seam_gate = SeamGate(gate)
+    """``sense`` through a new seam-point gate, or ``sense`` itself without one."""
+    return sense if gate is None else _GatedSense(sense, gate)
 
-    def gated_sense(T_world_sensor: FloatArray, t_s: float, *hint: Any) -> Any:
-        return seam_gate(sense(T_world_sensor, t_s, *hint), T_world_sensor)
 
-    return gated_sense
+def _gate_summary(sense: Callable[..., Any]) -> dict[str, int]:
+    """What the gate did (summary keys ``gate_*``), none without a gate: frames accepted,
+    refused (a point outside the window), handed on as a prediction, and re-acquisitions."""
+    if not isinstance(sense, _GatedSense):
+        return {}
+    g = sense.gate
+    return {"gate_accepted": g.accepted, "gate_refused": g.refused,
+            "gate_predicted": g.predicted, "gate_reacquired": g.reacquired}  # fmt: skip
 
 
 def _to_move(robot: Any, cmd: Command) -> MoveCommand:
