@@ -167,20 +167,36 @@ def test_after_n_invalid_frames_the_gate_reacquires() -> None:
     assert (gate.refused, gate.reacquired) == (20, 1)
 
 
-def test_prediction_stops_at_the_seams_end_and_after_n_frames() -> None:
+def test_frames_without_a_point_pass_and_count_towards_reacquisition() -> None:
     from seamtrack.control.gate import GateSettings, SeamGate
     from seamtrack.sensing.profiles import Feature
 
     gate = SeamGate(GateSettings(window_mm=15.0, reacquire_frames=3, on_invalid="predict"))
     for k in range(5):
         gate(*_frame(0.4 * k, 1.0))
+    # Frames without a seam point reach the tracker as they are (its own bridge, or the seam's
+    # end), whether the stripe left the part or not; they count as invalid.
     off_part = dataclasses_replace(Feature.failed("no stripe"), stripe_points=0)
-    assert not gate(off_part, _pose(2.0))  # the stripe left the part: no point made up
-    lost = Feature.failed("no groove")  # the stripe on the part, no seam point in it
-    predicted = [gate(lost, _pose(2.0 + 0.4 * k)) for k in (1, 2)]  # invalid frames 2 and 3
-    assert all(predicted)
-    np.testing.assert_allclose(predicted[-1].point_world, [2.8, 1.0, 0.0], atol=1e-9)
-    assert not gate(lost, _pose(3.2))  # beyond reacquire_frames: the tracker's own rule
+    assert gate(off_part, _pose(2.0)) is off_part
+    lost = Feature.failed("no groove")
+    assert gate(lost, _pose(2.4)) is lost
+    spatter, T = _frame(2.8, 40.0)  # refused: the third invalid frame, predicted
+    predicted = gate(spatter, T)
+    assert predicted and gate.predicted == 1
+    np.testing.assert_allclose(predicted.point_world, [2.8, 1.0, 0.0], atol=1e-9)
+    moved, T = _frame(3.2, 40.0)  # after 3 invalid frames the next point found is taken
+    assert gate(moved, T) is moved and gate.reacquired == 1
+    assert gate(*_frame(3.6, 40.0)) and gate.refused == 1
+
+
+def test_a_prediction_far_from_the_last_point_is_not_handed_on() -> None:
+    from seamtrack.control.gate import GateSettings, SeamGate
+
+    gate = SeamGate(GateSettings(window_mm=15.0, reacquire_frames=20, on_invalid="predict"))
+    gate(*_frame(0.0, 0.0))
+    gate(*_frame(0.4, 0.0))
+    # A frame 30 mm further on: the line's crossing is 29.6 mm from the last point.
+    assert not gate(*_frame(30.0, 20.0)) and gate.refused == 1 and gate.predicted == 0
 
 
 def dataclasses_replace(feature, **changes):  # type: ignore[no-untyped-def]

@@ -12,13 +12,17 @@ this with a "search distance" of 15 mm from the previous point and an "invalid s
 points, after which a new point is taken as valid (RF627Weld series manual, revision 1.1.1,
 03.08.2020, p. 30, search parameters).
 
-What an invalid frame hands the tracker (``on_invalid``):
+What a refused frame (a point outside the window) hands the tracker (``on_invalid``):
 
 - ``"hold"``: no seam point (a falsy feature): the tracker keeps what it had, its last target
   (the point trackers) or its own bridge (``trajectory``);
-- ``"predict"``: the predicted point, as long as the invalid frames have not outrun
-  ``reacquire_frames``; a frame whose stripe has left the part (``stripe_points == 0``, the
-  seam's end) still hands over none.
+- ``"predict"``: the predicted point instead of the false one, as long as the invalid frames
+  have not outrun ``reacquire_frames`` and the prediction lies within the window of the last
+  accepted point (a chord nearly in the laser plane predicts nothing sensible).
+
+A frame without a seam point reaches the tracker without one in both modes: the tracker's own
+rule bridges it or ends the seam there, and a tracker's end detection needs that frame (a
+prediction past the seam's end would weld on beyond it).
 
 The gate works in the world frame on :class:`~seamtrack.sensing.profiles.Feature` s, and holds
 the state of one run: the loop makes a new one per run.
@@ -57,7 +61,7 @@ class GateSettings:
     ----------
     window_mm : float or None
         The search window's radius about the predicted point; None: no window (every point
-        found is valid; ``on_invalid`` then acts on the frames without one).
+        found is valid, the gate hands every frame on as it is).
     reacquire_frames : int
         Invalid frames in a row after which the next point found is taken (>= 1).
     on_invalid : {"hold", "predict"}
@@ -111,7 +115,8 @@ class SeamGate:
     """The gate of one run: call it on each frame's feature, in capture order.
 
     ``gate(feature, T_world_sensor)`` returns the feature the tracker gets: the frame's own
-    (valid), a falsy one (invalid, ``hold``) or the predicted point (invalid, ``predict``).
+    (valid, or without a seam point), a falsy one (refused, ``hold``) or the predicted point
+    (refused, ``predict``).
     Counters ``accepted``, ``refused`` (found but outside the window), ``predicted`` and
     ``reacquired`` say what it did.
     """
@@ -129,21 +134,24 @@ class SeamGate:
         if found and self._valid(feature.point_world, prediction):
             return self._accept(feature)
         self.invalid_run += 1
-        if found:
-            self.refused += 1
-            feature = Feature.failed(OUTSIDE, feature.joint)
-        predicting = (
-            self.settings.on_invalid == "predict"
-            and prediction is not None
-            and self.invalid_run <= self.settings.reacquire_frames
-            and feature.stripe_points != 0
-        )
-        if not predicting:
+        if not found:
             return feature
+        self.refused += 1
+        if not self._predicts(prediction):
+            return Feature.failed(OUTSIDE, feature.joint)
         assert prediction is not None
         self.predicted += 1
         point_laser = (np.linalg.inv(T) @ np.append(prediction, 1.0))[1:3]
         return Feature.found(point_laser, T, confidence=0.0, joint=feature.joint)
+
+    def _predicts(self, prediction: FloatArray | None) -> bool:
+        """Whether a refused frame hands on the prediction (see the module docstring)."""
+        if self.settings.on_invalid != "predict" or prediction is None:
+            return False
+        if self.invalid_run > self.settings.reacquire_frames:
+            return False
+        window = self.settings.window_mm or 0.0
+        return float(np.linalg.norm(prediction - self.history[-1])) <= window
 
     def _valid(self, point: FloatArray, prediction: FloatArray | None) -> bool:
         window = self.settings.window_mm

@@ -368,7 +368,7 @@ class GateConfig(_Section):
     ``"predict"`` with ``"default"`` and ``"hold"`` with ``"none"``."""
 
     enabled: Flag | None = None
-    #: The search window's radius about the predicted seam point (mm); 0: no window. Default
+    #: The search window's radius about the predicted seam point (mm); 0: no gate. Default
     #: 15 mm, the Riftek RF627Weld's search distance (manual rev. 1.1.1, 2020, p. 30).
     window_mm: NonNegative | None = None
     #: Invalid frames in a row after which the next point found is taken. Default 20, the

@@ -53,8 +53,7 @@ def rejection(config: SceneConfig) -> Rejection | None:
 
 def gate_settings(config: SceneConfig) -> GateSettings | None:
     """The seam-point gate's settings, or None: no gate (``[gate] enabled``, unset on under
-    ``"default"`` or when the table is given), or one that would change nothing (no window and
-    ``hold``)."""
+    ``"default"`` or when the table is given), or one that would change nothing (no window)."""
     switch = countermeasures(config)
     g = config.gate
     enabled = (
@@ -68,7 +67,7 @@ def gate_settings(config: SceneConfig) -> GateSettings | None:
     reacquire = g.reacquire_frames if g is not None and g.reacquire_frames else None
     on_invalid = g.on_invalid if g is not None and g.on_invalid else None
     on_invalid = on_invalid or ("predict" if switch == "default" else "hold")
-    if window == 0 and on_invalid == "hold":
+    if window == 0:
         return None
     return GateSettings(
         window_mm=window or None,

@@ -183,11 +183,11 @@ KEY_HELP: dict[str, str] = {
     "arc.glow": "the hot plate's own light near the arc",
     "gate": "the seam-point gate in time between the extractor and the tracker (docs/arc.md)",
     "gate.enabled": 'the gate on or off (unset: on with countermeasures = "default")',
-    "gate.window_mm": "search window about the predicted seam point (unset: 15; 0: none)",
+    "gate.window_mm": "search window about the predicted seam point (unset: 15; 0: no gate)",
     "gate.reacquire_frames": "invalid frames in a row after which the next point is taken "
     "(unset: 20)",
-    "gate.on_invalid": '"hold" (no seam point: the last target) or "predict" (the predicted '
-    "point); unset: from countermeasures",
+    "gate.on_invalid": 'a refused frame: "hold" (no seam point: the last target) or '
+    '"predict" (the predicted point); unset: from countermeasures',
     "distortion": "the butt joint moving while it is welded (docs/heat.md); none, still",
     "distortion.material": '"carbon_steel", "stainless_steel" or "aluminium"',
     "distortion.thickness_mm": "plate thickness, mm (the heat and the bending)",
