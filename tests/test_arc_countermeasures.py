@@ -247,6 +247,20 @@ def test_bad_gate_keys_name_the_field(key: str, value: object) -> None:
     assert info.value.fix
 
 
+def test_a_bad_key_on_the_command_line_is_one_line_and_exit_2() -> None:
+    import subprocess
+    import sys
+
+    res = subprocess.run(
+        [sys.executable, "-m", "seamtrack.cli", "check", "v-groove-arc-mag", "--set",
+         "gate.window_mm=-1"],
+        capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    assert res.returncode == 2, res.stderr
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and "gate.window_mm" in lines[0] and "fix:" in lines[0], lines
+
+
 def test_a_gate_that_refuses_nothing_leaves_the_run_unchanged() -> None:
     """A window wider than any step and ``hold``: the same trace as no gate at all."""
     from seamtrack.simulation.loop import simulate
