@@ -100,6 +100,8 @@ def test_the_scene_keys_reach_the_detector() -> None:
         ("sensor.camera.reject_max_peak", -3.0),
         ("sensor.camera.reject_min_peak", 1.5),
         ("sensor.camera.reject_stripe_width_px", 0.0),
+        ("sensor.camera.laser_power_w", -0.1),
+        ("sensor.camera.laser_power_w", 50.0),
     ],
 )
 def test_bad_rejection_keys_name_the_field(key: str, value: object) -> None:
@@ -107,6 +109,43 @@ def test_bad_rejection_keys_name_the_field(key: str, value: object) -> None:
         load_scene("v-groove-camera", {key: value})
     assert info.value.field == key, str(info.value)
     assert info.value.fix
+
+
+@pytest.mark.embree
+def test_twice_the_laser_power_halves_the_arcs_light_against_the_stripe() -> None:
+    """The stripe keeps its level (``exposure``), so the arc's electrons fall as 1 / power
+    (an ideal camera: no noise, no quantization)."""
+    import dataclasses
+
+    from seamtrack.simulation.assemble import arc_frame, build_parts, scene_arc_light
+    from seamtrack.simulation.robots import sensor_pose_at
+    from seamtrack.simulation.scene import make_camera
+
+    scene = load_scene("v-groove-arc", {"sensor.camera.exposure_mode": "fixed",
+                                        "sensor.camera.ideal": True,
+                                        "sensor.camera.bit_depth": 0,
+                                        "sensor.camera.laser_power_w": 0.2})  # fmt: skip
+    c = scene.config
+    camera = make_camera(c.sensor.camera, c.sensor.preset)
+    light = scene_arc_light(scene, camera)
+    assert light is not None and light.laser_power_w == 0.2
+    parts = build_parts(scene)
+    T, _ = sensor_pose_at(parts.robot, parts.tool_program, 20.0)
+    to_tcp = [np.linalg.inv(parts.robot.T_tcp_sensor)]
+
+    def pixels(arc_light: object) -> np.ndarray:
+        extra = {} if arc_light is None else {"arc": arc_frame(arc_light, T, to_tcp)}
+        image = parts.sensor.render(parts.mesh, T, camera=camera, seed=5, t_s=0.0, **extra)
+        return image.pixels.astype(np.float64)
+
+    dark = pixels(None)
+    weak, strong = pixels(light), pixels(dataclasses.replace(light, laser_power_w=0.4))
+    # Over the pixels the arc lights at both powers (the renderer leaves out light below 1e-4
+    # of the full well, so the dimmer image lights fewer), unsaturated.
+    lit = (weak < 0.95) & (strong < 0.95) & (strong > dark)
+    assert lit.sum() > 1000
+    ratio = (weak - dark)[lit].sum() / (strong - dark)[lit].sum()
+    assert ratio == pytest.approx(2.0, rel=1e-3)
 
 
 # ----------------------------------------------------------------------------- the gate

@@ -371,8 +371,11 @@ def scene_arc_light(scene: Scene, camera: Any) -> Any:
         speed = scene.config.simulation.welding_speed_mm_s
         heat = RosenthalHeat(process_power_w(p), speed, steel.conductivity_w_per_mm_k,
                              steel.diffusivity_mm2_per_s)  # fmt: skip
-    return ArcLight(a.process, a.current_a, band, spatter=a.spatter, fume=a.fume, glow=a.glow,
-                    heat=heat)  # fmt: skip
+    light = ArcLight(a.process, a.current_a, band, spatter=a.spatter, fume=a.fume, glow=a.glow,
+                     heat=heat)  # fmt: skip
+    if c is not None and c.laser_power_w is not None:  # the laser against the arc's light
+        light = dataclasses.replace(light, laser_power_w=c.laser_power_w)
+    return light
 
 
 def arc_frame(arc_light: Any, T_world_sensor: FloatArray, tcp: list[FloatArray | None]) -> Any:

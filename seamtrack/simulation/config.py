@@ -88,6 +88,13 @@ class CameraConfig(_Section):
         10.0
     )
     filter_shape: Literal["gaussian", "top-hat"] = "gaussian"
+    # The laser's power (W) against the arc's light (issue 38): the stripe keeps its level
+    # (`exposure`), so the arc's light on the chip falls as 1 / power. Unset: 0.1 W
+    # (seamtrack.sensing.arc.image.ArcLight). Line lasers of seam trackers are class 3R-3B, tens
+    # to hundreds of mW; 10 W bounds them with room.
+    laser_power_w: Annotated[float, Field(gt=0, le=10, allow_inf_nan=False, strict=True)] | None = (
+        None
+    )
     line_divergence_mrad: NonNegative | None = None
     waist_range_mm: Positive | None = None
     exposure: Positive = 0.5

@@ -102,6 +102,7 @@ KEY_HELP: dict[str, str] = {
     "sensor.camera.filter_centre_nm": "the band-pass filter's centre, nm (unset: the laser's "
     "wavelength)",
     "sensor.camera.filter_fwhm_nm": "the band-pass filter's full width at half maximum, nm",
+    "sensor.camera.laser_power_w": "the laser's power, W, against the arc's light (unset: 0.1)",
     "sensor.camera.filter_shape": '"gaussian" or "top-hat" transmission of the band-pass',
     "sensor.camera.reject": '"blobs": drop runs not shaped like the stripe (blobs, streaks, '
     'glow); "none" (unset: from countermeasures)',
