@@ -337,3 +337,12 @@ def test_the_mag_scene_tracks_within_0_3_mm_with_the_countermeasures() -> None:
     assert s["gate_accepted"] > 0
     assert s["gate_accepted"] + s["gate_predicted"] <= s["frames"]
     assert s["gate_refused"] + s["gate_accepted"] <= s["frames"]
+
+
+def test_check_says_what_the_switch_resolved_to() -> None:
+    from seamtrack.simulation.countermeasures import describe
+
+    assert describe(load_scene("paper-verification").config) == "none: off"
+    text = describe(load_scene("v-groove-arc-mag").config)
+    assert text.startswith("default: reject blobs") and "gate 15 mm" in text
+    assert "re-acquire after 20 frames, predict" in text

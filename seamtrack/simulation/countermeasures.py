@@ -74,3 +74,16 @@ def gate_settings(config: SceneConfig) -> GateSettings | None:
         reacquire_frames=reacquire or RF627WELD_INVALID_SEQUENCE,
         on_invalid=on_invalid,
     )
+
+
+def describe(config: SceneConfig) -> str:
+    """One line for ``seamtrack check``: the switch and what it resolved to."""
+    reject, gate = rejection(config), gate_settings(config)
+    parts = []
+    if reject is not None:
+        parts.append(f"reject blobs (width <= {reject.max_width:g}x, height <= "
+                     f"{reject.max_peak:g}x the stripe's)")  # fmt: skip
+    if gate is not None:
+        parts.append(f"gate {gate.window_mm:g} mm, re-acquire after {gate.reacquire_frames} "
+                     f"frames, {gate.on_invalid} on a refused frame")  # fmt: skip
+    return f"{countermeasures(config)}: " + ("; ".join(parts) or "off")
