@@ -194,6 +194,17 @@ def test_a_false_point_outside_the_window_is_refused(on_invalid: str) -> None:
     assert gate(near, T) is near
 
 
+def test_a_point_without_a_pose_passes_uncounted() -> None:
+    from seamtrack.control.gate import GateSettings, SeamGate
+    from seamtrack.sensing.profiles import Feature
+
+    gate = SeamGate(GateSettings())
+    gate(*_frame(0.0, 0.0))
+    bare = Feature.found([50.0, 100.0])  # no pose, no world point
+    assert gate(bare, _pose(0.4)) is bare
+    assert (gate.accepted, gate.refused, gate.invalid_run) == (1, 0, 0)
+
+
 def test_after_n_invalid_frames_the_gate_reacquires() -> None:
     from seamtrack.control.gate import GateSettings, SeamGate
 

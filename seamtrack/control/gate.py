@@ -129,7 +129,9 @@ class SeamGate:
 
     def __call__(self, feature: Feature, T_world_sensor: FloatArray) -> Feature:
         T = np.asarray(T_world_sensor, dtype=float)
-        found = bool(feature) and feature.point_world.shape == (3,)
+        found = bool(feature)
+        if found and feature.point_world.shape != (3,):
+            return feature  # no world point (a profile without a pose): nothing to gate
         prediction = predict_point(np.array(self.history), T) if self.history else None
         if found and self._valid(feature.point_world, prediction):
             return self._accept(feature)
