@@ -46,7 +46,11 @@ BENCHES: dict[str, tuple[tuple[str, ...], str, str]] = {
         "the paper's verification run, the CAD cache, a 1e5-point seam, the wall-clock guard",
     ),
     "loop": (("loop.json",), "seamtrack bench loop", "the closed loop on `paper-v-groove`"),
-    "raycast": (("raycast.json",), "seamtrack bench raycast", "stripe profiles by ray casting"),
+    "raycast": (
+        ("raycast.json",),
+        "seamtrack bench raycast",
+        "stripe profiles by ray casting, and their precision against exact hits",
+    ),
     "extractors": (
         ("extractors.json", "extractors_real.json"),
         "seamtrack extractors bench (--real DIR for the real sets)",
@@ -68,17 +72,30 @@ BENCHES: dict[str, tuple[tuple[str, ...], str, str]] = {
     "trackers": (
         ("trackers.json",),
         "seamtrack bench trackers",
-        "the paper's algorithms against the trajectory tracker on `paper-v-groove`",
+        "the paper's algorithms against the trajectory tracker on `paper-v-groove`, and the "
+        "tracker's stop at the part's end",
     ),
     "paper": (
         ("paper.json",),
         "seamtrack bench paper",
-        "the paper's Table 4: algorithm II on `paper-corner` over the radius of convergence",
+        "the paper's Table 3 through Eq. 4-8, and its Table 4: algorithm II on `paper-corner` "
+        "over the radius of convergence",
     ),
     "firstrun": (
         ("firstrun.json",),
         "seamtrack bench firstrun",
         "the demo's first mesh-mode run with an empty numba cache, then the same run again",
+    ),
+    "weldments": (
+        ("weldments.json",),
+        "seamtrack bench weldments",
+        "every seam of the bracket weldment tracked, one sweep on 2 workers; `seamtrack seams` "
+        "on the public STEP files",
+    ),
+    "stability": (
+        ("stability.json",),
+        "seamtrack bench stability",
+        "what the extremes of a scene's inputs do (seam mode)",
     ),
 }
 
@@ -97,6 +114,48 @@ def _trackers_table(data: dict[str, Any]) -> str:
     return trackers_table(data)
 
 
+def _end_of_part_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.trackers import end_of_part_table
+
+    return end_of_part_table(data)
+
+
+def _precision_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.raycast_precision import precision_table
+
+    return precision_table(data)
+
+
+def _weldments_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.weldments import weldments_table
+
+    return weldments_table(data)
+
+
+def _arm_outcomes_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.loop_arms import arm_outcomes_table
+
+    return arm_outcomes_table(data)
+
+
+def _stability_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.stability import stability_table
+
+    return stability_table(data)
+
+
+def _public_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.weldments_public import public_table
+
+    return public_table(data)
+
+
+def _groove_fill_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.groove_fill import groove_fill_table
+
+    return groove_fill_table(data)
+
+
 def _firstrun_table(data: dict[str, Any]) -> str:
     from seamtrack.bench.firstrun import firstrun_table
 
@@ -107,6 +166,18 @@ def _speckle_table(data: dict[str, Any]) -> str:
     from seamtrack.bench.camera_speckle import speckle_summary_table
 
     return speckle_summary_table(data)
+
+
+def _must_show_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.camera_summary import must_show_table
+
+    return must_show_table(data)
+
+
+def _table3_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.paper import table3_table
+
+    return table3_table(data)
 
 
 def _table4_table(data: dict[str, Any]) -> str:
@@ -131,11 +202,20 @@ def _presets_table(data: dict[str, Any]) -> str:
 #: file's several tables) -> the bench's own function that renders the table.
 RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {
     "trackers.json": _trackers_table,
+    "trackers.json#end_of_part": _end_of_part_table,
     "tradeoff.json": _presets_table,
     "camera.json#speckle": _speckle_table,
+    "camera.json#must_show": _must_show_table,
+    "paper.json#table3": _table3_table,
     "paper.json#table4": _table4_table,
     "paper.json#servo": _servo_table,
     "firstrun.json": _firstrun_table,
+    "raycast.json#precision": _precision_table,
+    "weldments.json": _weldments_table,
+    "weldments.json#public": _public_table,
+    "loop.json#arm_outcomes": _arm_outcomes_table,
+    "stability.json": _stability_table,
+    "groove_fill.json": _groove_fill_table,
 }
 
 
@@ -373,6 +453,7 @@ HEADLINE = (
     ("multipass", "multi-pass jobs (gantry, 1.2 mm wire)", "seamtrack bench multipass"),
     ("gym", "Gymnasium environment, paper-v-groove", "seamtrack bench gym"),
     ("bridge", "lockstep bridge, algorithm II in another process", "seamtrack bench bridge"),
+    ("firstrun", "the demo's first mesh-mode run, empty numba cache", "seamtrack bench firstrun"),
 )
 
 
@@ -427,6 +508,19 @@ def _bridge() -> str:
     return f"x real time (load {r['load_average_before']:.1f}): {runs}"
 
 
+def _firstrun() -> str:
+    rows = load("firstrun")["rows"]
+    first = rows[0]
+    text = (
+        f"{first['first_s']:.0f} s, {first['extra_s']:.0f} s more than the same run again "
+        f"({first['variant']}, load {first['load_1min']:.2f}; the goal: 15 s more)"
+    )
+    if len(rows) > 1:
+        one = rows[1]
+        text += f"; {one['first_s']:.0f} s in one process"
+    return text
+
+
 def headline() -> str:
     """The README's table: one line per figure, each with the command that measured it."""
     measured = {
@@ -447,6 +541,7 @@ def headline() -> str:
         "multipass": _multipass,
         "gym": _gym,
         "bridge": _bridge,
+        "firstrun": _firstrun,
     }
     rows = [_row(name, what, measured[name], command) for name, what, command in HEADLINE]
     head = ["| figure | measured | command |", "|---|---|---|"]
@@ -467,7 +562,9 @@ def _cell(value: Any) -> str:
         return f"{value:,}" if abs(value) >= 1e4 else str(value)
     if isinstance(value, list) and all(not isinstance(v, (dict, list)) for v in value):
         return ", ".join(_cell(v) for v in value)
-    return str(value).replace("|", "\\|").replace("\n", " ")
+    # Text as text: "[a][#b]" would read as a reference link, "<b>" as a tag.
+    text = str(value).replace("|", "\\|").replace("\n", " ").replace("[", "\\[")
+    return text.replace("]", "\\]").replace("<", "&lt;").replace(">", "&gt;")
 
 
 def _scalar(value: Any) -> bool:

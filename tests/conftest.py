@@ -13,6 +13,10 @@ from seamtrack.sensing.sensor import preset
 # compiles a kernel first depends on the order the workers take them, and many check stderr.
 # tests/test_compiling_notice.py turns it back on where it tests it.
 os.environ["SEAMTRACK_COMPILE_NOTICE"] = "0"
+# No warming child (seamtrack.features.warm) either: pytest-xdist's workers keep both cores busy,
+# so a child compiling the extractor beside its worker has no free core and only doubles the
+# work while the cache is cold. tests/test_warm.py tests the child itself.
+os.environ["SEAMTRACK_PARALLEL_COMPILE"] = "0"
 
 
 @pytest.fixture(scope="session")

@@ -4,9 +4,11 @@ from __future__ import annotations
 
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 
+from seamtrack.cli.main import main
 from seamtrack.simulation.loop import simulate
 from seamtrack.simulation.scene import load_scene
 
@@ -39,3 +41,27 @@ def test_a_tack_outside_the_seam_is_one_line_exit_2(tmp_path) -> None:
     assert "distortion.tacks[0].position_mm" in res.stderr
     assert len(res.stderr.strip().splitlines()) == 1
     assert not (tmp_path / "o").exists()
+
+
+def test_a_distortion_run_draws_the_seam_moving(tmp_path: Path) -> None:
+    """``seamtrack run`` of a [distortion] scene writes distortion.png beside error.png, whose
+    lines are the motion's own shifts (the snapshot at the run's end: the permanent angle
+    locked in along the whole seam); a scene without [distortion] writes none."""
+    from seamtrack.simulation.assemble import build_parts
+    from seamtrack.viz.distortion import seam_snapshots
+
+    scene = load_scene("butt-distortion", {"workpiece.params.seam_length_mm": 40.0,
+                                           "distortion.tacks": []})  # fmt: skip
+    moving = build_parts(scene).moving
+    length = moving.seam.length_mm
+    end = length / scene.config.simulation.welding_speed_mm_s
+    t, s, lateral, vertical = seam_snapshots(moving.motion, length, end)
+    expect_lat, expect_ver = moving.motion.shift_mm(s, np.full_like(s, t[-1]))
+    assert np.array_equal(vertical[-1], expect_ver) and np.array_equal(lateral[-1], expect_lat)
+    assert t[0] == 0.0 and t[-1] == end and s[-1] == length
+    short = ["--set", "workpiece.params.seam_length_mm=40", "--set", "distortion.tacks=[]"]
+    for name, args, pictures in (("butt-distortion", short, {"error.png", "distortion.png"}),
+                                 ("paper-verification", [], {"error.png"})):  # fmt: skip
+        out = tmp_path / name
+        assert main(["run", name, *args, "--out", str(out), "-q"]) == 0
+        assert {p.name for p in out.glob("*.png")} == pictures

@@ -12,9 +12,9 @@ import pytest
 
 from seamtrack.control.planner import PassPlan
 from seamtrack.errors import PluginError, PluginRuntimeError, SceneError
+from seamtrack.multipass import job, steering, summary
 from seamtrack.sensing.profiles import Feature
-from seamtrack.simulation import job
-from seamtrack.simulation.passes import (
+from seamtrack.simulation.process import (
     arc_width_to_height,
     check_passes,
     heat_input_kj_mm,
@@ -219,29 +219,29 @@ def test_fusion_margin_counts_the_wall_beads_only() -> None:
         return SimpleNamespace(plan=PassPlan("centre", 0.0, 0.0, 5.0, 100.0, 0, bead, n, cap))
 
     # a cap bead, and the third of three (the middle, laid after both walls): no wall bead
-    assert np.all(np.isinf(job.fusion_margin_mm(fill, [rec(0, 3, cap=True), rec(2, 3)])))
-    margin = job.fusion_margin_mm(fill, [rec(0, 3), rec(2, 3)])
+    assert np.all(np.isinf(summary.fusion_margin_mm(fill, [rec(0, 3, cap=True), rec(2, 3)])))
+    margin = summary.fusion_margin_mm(fill, [rec(0, 3), rec(2, 3)])
     expected = -np.nanmin(fill.beads[0].margin_mm, axis=1)
     assert np.allclose(margin, expected)
-    assert job.is_wall_bead(PassPlan("left", 1.0, 0.0, 5.0, 100.0, 0, 2, 3))
-    assert job.is_wall_bead(PassPlan("centre", 0.0, 0.0, 5.0, 100.0, 0, 0, 1))
+    assert summary.is_wall_bead(PassPlan("left", 1.0, 0.0, 5.0, 100.0, 0, 2, 3))
+    assert summary.is_wall_bead(PassPlan("centre", 0.0, 0.0, 5.0, 100.0, 0, 0, 1))
 
 
 def test_a_planners_adapt_is_checked() -> None:
     plan = PassPlan("centre", 0.0, 0.0, 5.0, 100.0, 0, 0)
     ahead = None
-    assert np.isnan(job._adapted(lambda g, p: None, ahead, plan, "p", 0.0)).all()
-    assert job._adapted(lambda g, p: (4.0, 0.5), ahead, plan, "p", 0.0) == (4.0, 0.5)
+    assert np.isnan(steering.adapted_answer(lambda g, p: None, ahead, plan, "p", 0.0)).all()
+    assert steering.adapted_answer(lambda g, p: (4.0, 0.5), ahead, plan, "p", 0.0) == (4.0, 0.5)
     for garbage in [(0.0, 1.0), (4.0, float("nan")), "fast", (1.0,)]:
         with pytest.raises(PluginRuntimeError) as info:
-            job._adapted(lambda g, p, answer=garbage: answer, ahead, plan, "p", 1.0)
+            steering.adapted_answer(lambda g, p, answer=garbage: answer, ahead, plan, "p", 1.0)
         assert info.value.field == "planner.name"
 
     def raises(g, p):
         raise ValueError("bug")
 
     with pytest.raises(PluginRuntimeError) as info:
-        job._adapted(raises, ahead, plan, "p", 1.0)
+        steering.adapted_answer(raises, ahead, plan, "p", 1.0)
     assert info.value.field == "planner.name"
 
 
@@ -259,10 +259,10 @@ def test_a_frame_below_the_last_fill_is_no_groove() -> None:
                      edges_laser=laser, area_mm2=50.0), T)  # fmt: skip
     previous = job.measured_groove([frame], fill, seam)
     assert previous is not None
-    assert not job._below_the_fill(frame, fill, seam, previous)
-    higher = job.MeasuredGroove(previous.s_mm, previous.points + [0.0, job.FILL_DROP_MM + 0.1],
+    assert not steering.below_the_fill(frame, fill, seam, previous)
+    higher = job.MeasuredGroove(previous.s_mm, previous.points + [0.0, steering.FILL_DROP_MM + 0.1],
                                 previous.area_mm2)  # fmt: skip
-    assert job._below_the_fill(frame, fill, seam, higher)
+    assert steering.below_the_fill(frame, fill, seam, higher)
 
 
 def test_the_pass_befores_groove_is_settled_along_the_seam() -> None:
@@ -272,7 +272,7 @@ def test_the_pass_befores_groove_is_settled_along_the_seam() -> None:
     and its torch dived 20 mm. Checked against the running median along the seam (cut short
     at the ends), the last station keeps its neighbours' fill, which such a frame lies 13 mm
     below (more than FILL_DROP_MM: refused)."""
-    from seamtrack.simulation.job_paths import settled
+    from seamtrack.multipass.paths import settled
 
     s = np.arange(20) * 0.5
     points = np.tile(np.array([[-12.0, 20.0], [-7.0, 11.0], [-4.0, 13.0], [-1.0, 13.5],
@@ -283,7 +283,7 @@ def test_the_pass_befores_groove_is_settled_along_the_seam() -> None:
     groove = job.MeasuredGroove(s, points, np.full(20, 50.0))
     floor = settled(groove)
     assert floor.points[-1, 3, 1] == pytest.approx(13.5, abs=0.05)
-    assert floor.points[-1, 3, 1] - points[-1, 3, 1] > job.FILL_DROP_MM
+    assert floor.points[-1, 3, 1] - points[-1, 3, 1] > steering.FILL_DROP_MM
     for i in range(20):  # the median of the stations within 4 of it, as many as there are
         window = points[max(i - 4, 0) : i + 5]
         np.testing.assert_allclose(floor.points[i], np.median(window, axis=0), rtol=0, atol=1e-12)
@@ -296,9 +296,9 @@ def test_a_planned_frame_aims_a_top_corner_bead_at_the_fill_under_it() -> None:
     in from a top corner aims at the fill surface under that place (the 7 points' polyline
     there), as from a measured frame, not at the corner's height, 9 mm higher on the 12-pass
     plan. Oracle: the analytic V's 7 points at the station, carried through the frames."""
-    from seamtrack.control.planner import POINT_INDEX
-    from seamtrack.simulation.job_paths import measured_groove
-    from seamtrack.simulation.passes import aim_point, planned_feature
+    from seamtrack.geometry.groove_points import POINT_INDEX
+    from seamtrack.multipass.aim import aim_point, planned_feature
+    from seamtrack.multipass.paths import measured_groove
 
     fill = v_state()
     seam = job.Seam.from_points(fill.T_world_station[:, :3, 3])
@@ -309,7 +309,7 @@ def test_a_planned_frame_aims_a_top_corner_bead_at_the_fill_under_it() -> None:
     T[:3, 3] = (2.0, 0.0, 100.0)  # the laser plane through station 4 (s = 2 mm)
     plan = PassPlan("right_top", -9.0, 0.0, 5.0, 100.0, 1, 1, 2, False)
     failed = job.Feature(confidence=0.0, reason="below the fill", stripe_points=500)
-    planned = planned_feature(failed, T, fill, plan, previous, 0.5, POINT_INDEX)
+    planned = planned_feature(failed, T, fill, plan, previous, 0.5)
     assert planned and planned.edges_laser.shape == (7, 2)
     np.testing.assert_allclose(planned.point_world, [2.0, *truth[4, 6]], atol=1e-9)
     got = measured_groove([(planned, T)], fill, seam)
@@ -426,7 +426,7 @@ def test_an_override_keeps_the_speed_window(speed: float, field: str) -> None:
 def test_a_job_that_leaves_the_groove_unfilled_is_not_completed(stopped, statuses, lowest, status):
     """A fill surface more than UNDERFILL_LIMIT_MM (1 mm, ISO 5817 level C) under the plates'
     top line at a station every pass welded: ``underfilled``, with the station named."""
-    from seamtrack.simulation.job_summary import UNDERFILL_LIMIT_MM, job_status
+    from seamtrack.multipass.summary import UNDERFILL_LIMIT_MM, job_status
 
     got, reason = job_status(stopped, statuses, np.array(lowest), np.arange(len(lowest)) * 0.5)
     assert got == status
@@ -465,13 +465,13 @@ def test_the_frame_check_refuses_a_foot_inside_the_last_fill() -> None:
     assert previous is not None
     for row, sign in ((1, -1.0), (5, 1.0)):  # the left foot further left, the right further right
         for shift, below in (
-            (2 * job.FILL_DROP_MM + 0.1, True),
-            (2 * job.FILL_DROP_MM - 0.1, False),
+            (2 * steering.FILL_DROP_MM + 0.1, True),
+            (2 * steering.FILL_DROP_MM - 0.1, False),
         ):
             points = previous.points.copy()
             points[:, row, 0] += sign * shift
             wider = job.MeasuredGroove(previous.s_mm, points, previous.area_mm2)
-            assert job._below_the_fill(frame, fill, seam, wider) is below, (row, shift)
+            assert steering.below_the_fill(frame, fill, seam, wider) is below, (row, shift)
 
 
 def test_a_groove_wider_than_the_old_probe_window_is_cut() -> None:
@@ -549,7 +549,7 @@ def test_after_bead_lifts_the_fill_surface_by_the_bead_area() -> None:
     old and new fill surfaces has the bead's area (analytic), the feet on the walls, the top
     corners where they were."""
     from seamtrack.control.planner import MeasuredGroove
-    from seamtrack.simulation.job_paths import after_bead
+    from seamtrack.multipass.paths import after_bead
 
     before = _trapezoid(8.0)[None]
     groove = MeasuredGroove(np.array([0.0]), before, np.array([100.0]))

@@ -1,4 +1,4 @@
-"""The built-in planners laid with perfect tracking (:func:`seamtrack.simulation.job.dry_run`)
+"""The built-in planners laid with perfect tracking (:func:`seamtrack.multipass.job.dry_run`)
 on analytic V grooves: the plan alone fills the groove to a reinforcement of 0-3 mm, and on a
 gap that varies along the seam the adaptive planner keeps the crown's height even where the
 fixed plan (same beads, constant speed) does not."""
@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from seamtrack.control.planner import AdaptivePlanner, FixedPlanner, JobState, Process
-from seamtrack.simulation.job import dry_run
+from seamtrack.multipass.job import dry_run
 from seamtrack.workpiece.beads import BeadShape
 from seamtrack.workpiece.fill import FillState
 
@@ -72,7 +72,7 @@ def test_a_gap_varying_along_the_seam(planner) -> None:
 def test_the_plan_check_prints_is_the_plan_laid() -> None:
     """The passes planned_layout predicts from the CAD groove (what ``seamtrack check`` prints)
     are the passes the planner lays on it, counted independently by the dry run."""
-    from seamtrack.simulation.job import planned_layout
+    from seamtrack.multipass.job import planned_layout
     from seamtrack.simulation.scene import load_scene
 
     fill = v_groove(lambda s: np.full_like(s, 2.0))

@@ -16,8 +16,9 @@ import pytest
 
 import seamtrack.features.groove.extractor  # noqa: F401 (the jobs' extractor: an ImportError fails here)
 from seamtrack.cli.main import main
-from seamtrack.control.planner import CAP_OVERLAP_MM, AdaptivePlanner, cap_area_mm2
-from seamtrack.simulation.job import run_job
+from seamtrack.control.fill_layout import CAP_OVERLAP_MM, cap_area_mm2
+from seamtrack.control.planner import AdaptivePlanner
+from seamtrack.multipass.job import run_job
 from seamtrack.simulation.scene import load_scene
 
 pytestmark = [pytest.mark.cad, pytest.mark.embree]
@@ -241,7 +242,7 @@ def test_the_job_is_judged_by_iso_5817(short_job) -> None:
 def test_the_job_folder_shows_its_weld(short_job, tmp_path: Path) -> None:
     """weld.png, inspection.png and fill.png: the cross-sections at the start, middle, end and
     worst station (worst: where the worst imperfection is), ISO along the seam, the part in 3D."""
-    from seamtrack.simulation.job_summary import inspect_job
+    from seamtrack.multipass.summary import inspect_job
     from seamtrack.viz.fill import weld_stations
     from seamtrack.viz.job import write_job_pictures
 

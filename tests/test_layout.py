@@ -40,6 +40,7 @@ STAGES = [
     ),
     ("control", {"seamtrack.control"}),
     ("simulation", {"seamtrack.simulation"}),
+    ("multipass", {"seamtrack.multipass"}),  # the multi-pass job, pass after pass of the loop
     ("io", {"seamtrack.io"}),
     ("viz", {"seamtrack.viz"}),
     ("batch", {"seamtrack.batch"}),
@@ -337,7 +338,7 @@ OVER_THE_BOUNDS_TODAY = {
     "seamtrack/sensing/camera.py::__post_init__",
     "seamtrack/sensing/kernels.py::fan_stripe_hits",
     "seamtrack/simulation/assemble.py::_mesh_scan",
-    "seamtrack/simulation/job.py::_run_job",
+    "seamtrack/multipass/job.py::_run_job",
     "seamtrack/simulation/loop.py::run",
 }
 

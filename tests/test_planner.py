@@ -8,19 +8,21 @@ import math
 import numpy as np
 import pytest
 
-from seamtrack.control.planner import (
+from seamtrack.control.fill_layout import (
     CAP_BAND_FRACTION,
     CAP_OVERLAP_MM,
+    MeasuredGroove,
+    Process,
+    cap_area_mm2,
+    fill_order,
+    layout,
+)
+from seamtrack.control.planner import (
     AdaptivePlanner,
     FixedPlanner,
     JobState,
-    MeasuredGroove,
     PassPlan,
-    Process,
-    cap_area_mm2,
     checked_plan,
-    fill_order,
-    layout,
     planner,
 )
 from seamtrack.errors import PluginError, PluginRuntimeError

@@ -1,20 +1,23 @@
 """Embree ray casting in a local float32 frame, refined in float64 (seamtrack.sensing.raycast).
 
 Oracles are analytic: every test mesh is a polyline cross-section extruded along x (a flat
-plate, a V-groove, a fillet T-joint), whose planes give each ray's exact hit.
+plate, a V-groove, a fillet T-joint), whose planes give each ray's exact hit
+(:func:`seamtrack.bench.raycast_precision.analytic_first_hit`, which ``seamtrack bench raycast``
+uses for docs/mesh-mode.md's precision table too).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import gc
-import itertools
 
 import numpy as np
 import pytest
 import trimesh
-from scipy.spatial.transform import Rotation
 
+from seamtrack.bench.raycast_precision import SECTIONS, extruded_mesh
+from seamtrack.bench.raycast_precision import laser_errors as bench_laser_errors
+from seamtrack.bench.raycast_precision import posed as bench_posed
 from seamtrack.geometry import frames
 from seamtrack.sensing.profiles import Reason
 from seamtrack.sensing.raycast import RayCaster
@@ -27,98 +30,18 @@ SENSOR = preset("paper")
 IDEAL = dataclasses.replace(SENSOR, quantize=False)
 STANDOFF = SENSOR.range_center_mm
 
-#: Cross-sections (y, z) in the part frame, the surface at z <= 0 seen from +z.
-SECTIONS = {
-    "flat": np.array([[-40.0, 0.0], [40.0, 0.0]]),
-    "v_groove": np.array([[-40.0, 0.0], [-5.0, 0.0], [0.0, -8.0], [5.0, 0.0], [40.0, 0.0]]),
-    # A fillet (T-) joint seen along the bisector, as a fillet weld is tracked: the flange and
-    # the web at right angles, the corner at (0, -6).
-    "fillet": np.array([[-30.0, 24.0], [0.0, -6.0], [30.0, 24.0]]),
-}
-
-
-def extruded_mesh(
-    section: np.ndarray,
-    T_world_part: np.ndarray,
-    *,
-    length: float = 60.0,
-    n_along: int = 13,
-    n_per_segment: int = 7,
-) -> trimesh.Trimesh:
-    """A sheet: ``section`` (k, 2) extruded along the part's x, subdivided, posed in the world."""
-    ys, zs = [], []
-    for (y0, z0), (y1, z1) in itertools.pairwise(section):
-        s = np.linspace(0.0, 1.0, n_per_segment, endpoint=False)
-        ys.append(y0 + s * (y1 - y0))
-        zs.append(z0 + s * (z1 - z0))
-    yz = np.column_stack(
-        [np.concatenate([*ys, [section[-1, 0]]]), np.concatenate([*zs, [section[-1, 1]]])]
-    )
-    x = np.linspace(-0.5 * length, 0.5 * length, n_along)
-    grid = np.stack(np.meshgrid(x, np.arange(len(yz)), indexing="ij"), axis=-1).reshape(-1, 2)
-    vertices = np.column_stack([grid[:, 0], yz[grid[:, 1].astype(int)]])
-    idx = np.arange(len(x) * len(yz)).reshape(len(x), len(yz))
-    a, b = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel()
-    c, d = idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()
-    faces = np.concatenate([np.column_stack([a, b, c]), np.column_stack([a, c, d])])
-    return trimesh.Trimesh(frames.apply(T_world_part, vertices), faces, process=False)
-
-
-def analytic_first_hit(
-    section: np.ndarray,
-    T_world_part: np.ndarray,
-    origin: np.ndarray,
-    directions: np.ndarray,
-    length: float = 60.0,
-) -> np.ndarray:
-    """Exact first hit (world, (n, 3), NaN on a miss) of rays on the extruded ``section``."""
-    T_part_world = frames.invert(T_world_part)
-    o = frames.apply(T_part_world, origin)
-    d = frames.apply_vectors(T_part_world, directions)
-    best = np.full(len(d), np.inf)
-    for (y0, z0), (y1, z1) in itertools.pairwise(section):
-        normal = np.array([0.0, -(z1 - z0), y1 - y0])
-        with np.errstate(divide="ignore", invalid="ignore"):
-            t = (normal @ (np.array([0.0, y0, z0]) - o)) / (d @ normal)
-            p = o + t[:, None] * d
-            u = ((p[:, 1] - y0) * (y1 - y0) + (p[:, 2] - z0) * (z1 - z0)) / (
-                (y1 - y0) ** 2 + (z1 - z0) ** 2
-            )
-        ok = (t > 0) & (u >= -1e-12) & (u <= 1 + 1e-12) & (np.abs(p[:, 0]) <= 0.5 * length)
-        best = np.where(ok & (t < best), t, best)
-    hit = np.where(np.isfinite(best)[:, None], o + best[:, None] * d, np.nan)
-    return frames.apply(T_world_part, hit)
-
 
 def posed(offset: float, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
     """(T_world_part, T_world_sensor): a randomly rotated part ``offset`` mm from the origin,
     the sensor above it looking down -z_part with the laser plane across the part's x."""
-    rng = np.random.default_rng(seed)
-    rotation = Rotation.random(random_state=rng).as_matrix()
-    T_world_part = frames.make(
-        rotation, offset * np.array([1.0, -0.6, 0.3]) + rng.uniform(-1, 1, 3)
-    )
-    T_part_sensor = frames.make(
-        frames.look_rotation([0.1, 0.05, -1.0], [1.0, 0.0, 0.0]), [0.7, 0.3, STANDOFF]
-    )
-    return T_world_part, T_world_part @ T_part_sensor
+    return bench_posed(offset, STANDOFF, seed)
 
 
 def laser_errors(name: str, offset: float, part: object, rays: int = 301) -> float:
     """Largest distance (mm) between valid stripe points and the exact hits."""
-    T_world_part, T_world_sensor = posed(offset)
-    profile = scan_mesh(IDEAL, part, T_world_sensor, rays=rays)
-    fan = laser_fan(IDEAL, rays).directions
-    exact = analytic_first_hit(
-        SECTIONS[name],
-        T_world_part,
-        T_world_sensor[:3, 3],
-        frames.apply_vectors(T_world_sensor, fan),
-    )
-    exact_laser = frames.apply(frames.invert(T_world_sensor), exact)[:, 1:]
-    assert profile.valid is not None
-    assert profile.valid.sum() > rays // 2
-    return float(np.abs(profile.valid_points - exact_laser[profile.valid]).max())
+    error, valid = bench_laser_errors(IDEAL, name, offset, part, rays)
+    assert valid > rays // 2
+    return error
 
 
 PRECISION: dict[tuple[str, float], tuple[float, float, float]] = {}

@@ -14,6 +14,10 @@ tracker, mesh mode):
 Ray casting and extraction per frame are timed apart on 200 poses along the seam. The
 projected figure replaces the measured extraction time by the extractor target (0.15 ms per
 frame); it is a projection, labelled so, not a measurement.
+
+Then the arms: a control tick's cost on the gantry and both arms, each arm scene as a user runs
+it, and what the arm scenes and the gantry on the same seams give (``arm_outcomes``,
+:mod:`seamtrack.bench.loop_arms`).
 """
 
 from __future__ import annotations
@@ -31,6 +35,7 @@ from typing import Any
 import numpy as np
 
 from seamtrack.bench.common import machine_info
+from seamtrack.bench.loop_arms import arm_outcomes
 
 #: The extractors' target per 1024-point profile (issue 14), for the projected figure.
 EXTRACT_TARGET_MS = 0.15
@@ -247,12 +252,14 @@ def bench_loop(out_dir: str | Path, *, quick: bool = False) -> dict[str, Any]:
     stages = _profile(parts, features)
     ticks_rows = tick_cost(quick)
     arm_rows = arm_scenes(quick)
+    outcomes = arm_outcomes(quick)  # no time measured: statuses, errors, joints
     result_dict: dict[str, Any] = {
         "machine": machine_info(),
         "rows": [row],
         "profile": stages,
         "tick_cost": ticks_rows,
         "arm_scenes": arm_rows,
+        "arm_outcomes": outcomes,
         "targets": TARGETS,
         "arm_targets": ARM_TARGETS,
         "extract_target_ms": EXTRACT_TARGET_MS,

@@ -33,7 +33,7 @@ FORCED_COUNTS = (10, 12, 14)
 def _job(scene_name: str, overrides: dict[str, Any]) -> tuple[Any, float, int]:
     from seamtrack.bench.common import peak_rss as _peak_rss
     from seamtrack.bench.common import reset_peak_rss as _reset_peak_rss
-    from seamtrack.simulation.job import run_job
+    from seamtrack.multipass.job import run_job
     from seamtrack.simulation.scene import load_scene
 
     scene = load_scene(scene_name, overrides)
@@ -128,11 +128,11 @@ def _worst(inspection: dict[str, Any] | None) -> dict[str, Any]:
 
 def _dry(seam_mm: float) -> list[dict[str, Any]]:
     """The planners alone on multipass-varying-gap's part: each plan laid with perfect tracking
-    (:func:`seamtrack.simulation.job.dry_run`)."""
+    (:func:`seamtrack.multipass.job.dry_run`)."""
     from seamtrack.control.planner import JobState, planner
+    from seamtrack.multipass.job import STATION_SPACING_MM, bead_shape, dry_run
     from seamtrack.simulation.assemble import build_parts
-    from seamtrack.simulation.job import STATION_SPACING_MM, bead_shape, dry_run
-    from seamtrack.simulation.passes import process_of
+    from seamtrack.simulation.process import process_of
     from seamtrack.simulation.scene import load_scene
     from seamtrack.workpiece.beads import BeadShape
     from seamtrack.workpiece.fill import FillState

@@ -9,7 +9,8 @@ likewise, on Embree packets (:mod:`seamtrack.sensing.embree`) and on the embreex
 ``embreex`` ``scene.run`` calls on pre-built float32 arrays; and trimesh's ``mesh.ray`` methods
 (``intersects_location``, then ``intersects_any``). One thread, best of ``repeats`` runs. Each
 case also reports the plane-section fan's agreement with the refined Embree fan
-(:func:`fan_agreement`).
+(:func:`fan_agreement`). Then the stripe's precision against exact hits on analytic parts up to
+1e5 mm from the origin (:mod:`seamtrack.bench.raycast_precision`, ``precision``).
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ import numpy as np
 
 from seamtrack import constants
 from seamtrack.bench.common import best_rate, machine_info
+from seamtrack.bench.raycast_precision import precision_rows
 from seamtrack.geometry import frames
 
 RAYS = 1024
@@ -362,6 +364,7 @@ def bench_raycast(out_dir: str | Path, *, repeats: int = 30, quick: bool = False
         "quick": quick,
         "cases": cases,
         "skipped": skipped,
+        "precision": precision_rows(),
     }
     (out / "raycast.json").write_text(json.dumps(result, indent=2))
     (out / "raycast.md").write_text(raycast_markdown(result))

@@ -258,6 +258,18 @@ def _bench_firstrun(out: Path, quick: bool) -> Any:
     return bench_firstrun(out, quick=quick)
 
 
+def _bench_weldments(out: Path, quick: bool) -> Any:
+    from seamtrack.bench.weldments import bench_weldments
+
+    return bench_weldments(out, quick=quick)
+
+
+def _bench_stability(out: Path, quick: bool) -> Any:
+    from seamtrack.bench.stability import bench_stability
+
+    return bench_stability(out, quick=quick)
+
+
 BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "raycast": lambda out, quick: bench_raycast(out, quick=quick),
     "extractors": _bench_extractors,
@@ -275,6 +287,8 @@ BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "trackers": _bench_trackers,
     "paper": _bench_paper,
     "firstrun": _bench_firstrun,
+    "weldments": _bench_weldments,
+    "stability": _bench_stability,
 }
 
 

@@ -7,8 +7,6 @@ import sys
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from seamtrack.cli.tables import print_table
 from seamtrack.errors import SceneError
 
@@ -26,7 +24,7 @@ def run_job_command(
     earlier output that ``--force`` replaces whole)."""
     from seamtrack.cli.signals import exit_code
     from seamtrack.io.output import write_job
-    from seamtrack.simulation.job import run_job
+    from seamtrack.multipass.job import run_job
     from seamtrack.viz.job import write_job_pictures
     from seamtrack.viz.plots import plot_run
 
@@ -92,7 +90,7 @@ def check_rows(c: Any, parts: Any = None) -> list[tuple[str, Any]]:
     """``seamtrack check``'s rows for a multi-pass job: the process and the plan's frame, and
     with the scene's ``parts`` the passes the plan lays on the CAD groove (a plan that cannot
     fill the groove is refused here, as before a run)."""
-    from seamtrack.simulation.passes import heat_input_kj_mm, process_of
+    from seamtrack.simulation.process import heat_input_kj_mm, process_of
 
     p = process_of(c)
     v = c.simulation.welding_speed_mm_s
@@ -117,14 +115,16 @@ def check_rows(c: Any, parts: Any = None) -> list[tuple[str, Any]]:
 
 def planned_level(c: Any, parts: Any) -> tuple[str, str]:
     """The ISO 5817 level the plan meets laid with perfect tracking on the CAD groove (the
-    dry run: :func:`seamtrack.simulation.job.dry_run`, every speed within the process's
+    dry run: :func:`seamtrack.multipass.job.dry_run`, every speed within the process's
     window), and a warning (empty: none) when a requested ``passes.count`` does not meet
     level B: the beads the process lays at its limits, that many, leave the groove under
     the plates' line or the crown over the limit."""
+    import numpy as np
+
     from seamtrack.control.planner import JobState, is_builtin, planner
-    from seamtrack.simulation.job import bead_shape, dry_run
-    from seamtrack.simulation.job_paths import STATION_SPACING_MM
-    from seamtrack.simulation.passes import process_of
+    from seamtrack.multipass.job import bead_shape, dry_run
+    from seamtrack.multipass.paths import STATION_SPACING_MM
+    from seamtrack.simulation.process import process_of
     from seamtrack.workpiece.beads import BeadShape
     from seamtrack.workpiece.fill import FillState
     from seamtrack.workpiece.inspection import MIN_THICKNESS_MM, inspect_weld
@@ -163,8 +163,8 @@ def planned_level(c: Any, parts: Any) -> tuple[str, str]:
 
 def planned_passes(c: Any, parts: Any) -> str:
     """The plan on the CAD groove, as a row of ``check``: the passes, the layers, the cap."""
-    from seamtrack.simulation.job import planned_layout
-    from seamtrack.simulation.job_paths import STATION_SPACING_MM
+    from seamtrack.multipass.job import planned_layout
+    from seamtrack.multipass.paths import STATION_SPACING_MM
     from seamtrack.workpiece.fill import FillState
 
     fill = FillState.from_mesh(parts.mesh, parts.seam, spacing_mm=STATION_SPACING_MM)

@@ -42,6 +42,19 @@ _progress_wanted = jobs.progress_wanted
 
 
 # --------------------------------------------------------------------------- commands
+def _run_pictures(result: Any, parts: Any, stage: Path) -> None:
+    """error.png, and with ``[distortion]`` distortion.png (the seam moving through the run)."""
+    from seamtrack.viz.plots import plot_run
+
+    plot_run(result, stage / "error.png")
+    if parts.moving is not None:
+        from seamtrack.viz.distortion import plot_seam_motion
+
+        seam = parts.moving.seam
+        end_s = float(result.summary["sim_time_s"])
+        plot_seam_motion(parts.moving.motion, seam.length_mm, end_s, stage / "distortion.png")
+
+
 def cmd_run(args: argparse.Namespace) -> int:
     from seamtrack.cli.signals import stop_on_signals
 
@@ -55,7 +68,6 @@ def _run(args: argparse.Namespace, stop: Any) -> int:
     from seamtrack.simulation.assemble import build_parts
     from seamtrack.simulation.loop import run
     from seamtrack.simulation.scene import load_scene
-    from seamtrack.viz.plots import plot_run
 
     scene = load_scene(args.scene, _overrides(args))
     out = Path(args.out) if args.out else Path("runs") / scene.name
@@ -86,7 +98,7 @@ def _run(args: argparse.Namespace, stop: Any) -> int:
         out,
         scene.to_toml(),
         scene.config.simulation.trace_period_s,
-        extra=None if args.no_plot else lambda stage: plot_run(result, stage / "error.png"),
+        extra=None if args.no_plot else lambda stage: _run_pictures(result, parts, stage),
         replace=replace,
     )
     if args.weldx:
@@ -107,6 +119,7 @@ def _run(args: argparse.Namespace, stop: Any) -> int:
         print(
             f"wrote {out}/summary.json, trace.csv, frames.csv, scene.toml"
             + ("" if args.no_plot else ", error.png")
+            + ("" if args.no_plot or parts.moving is None else ", distortion.png")
             + (f"; and {args.weldx}" if args.weldx else "")
             + (f"; and {args.record}" if args.record else "")
         )
@@ -638,7 +651,8 @@ def build_parser() -> argparse.ArgumentParser:
         nargs="?",
         default="all",
         help="raycast, extractors, mesh, loop, tradeoff, sweep, scaling, failures, camera, "
-        "dataset, multipass, gym, bridge, trackers, paper, firstrun, or all",
+        "dataset, multipass, gym, bridge, trackers, paper, firstrun, weldments, stability, "
+        "or all",
     )
     p.add_argument("--out", default="bench-results", help="folder for the results")
     p.add_argument("--quick", action="store_true", help="fewer repeats (a smoke run)")

@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.errors import PluginRuntimeError
+from seamtrack.geometry.groove_points import LEFT_FOOT, LEFT_TOP, MIDDLE, RIGHT_FOOT, RIGHT_TOP
 
 FloatArray = NDArray[np.float64]
 
@@ -35,12 +36,6 @@ CAP_BAND_FRACTION = 0.3
 #: plates' line (multipass-v-groove forced into 10 and 20 passes, multipass-varying-gap, with
 #: perfect tracking); at 1.2 those fill to 0.10-0.26 mm over it, -0.09 mm at 10 passes.
 CAP_FIRST_WEIGHT = 1.2
-
-# Indices of the 7 groove points.
-LEFT_TOP, LEFT_FOOT, MIDDLE, RIGHT_FOOT, RIGHT_TOP = 0, 1, 3, 5, 6
-#: Each reference's row of the 7 points.
-POINT_INDEX = {"left": LEFT_FOOT, "right": RIGHT_FOOT, "centre": MIDDLE, "left_top": LEFT_TOP,
-               "right_top": RIGHT_TOP}  # fmt: skip
 
 
 @dataclass(frozen=True)

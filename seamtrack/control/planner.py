@@ -29,16 +29,8 @@ from typing import Any, Protocol, runtime_checkable
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.control.fill_layout import (  # noqa: F401 (the layout moved; names kept here)
-    CAP_BAND_FRACTION,
+from seamtrack.control.fill_layout import (
     CAP_OVERLAP_MM,
-    LEFT_FOOT,
-    LEFT_TOP,
-    MIDDLE,
-    POINT_INDEX,
-    RIGHT_FOOT,
-    RIGHT_TOP,
-    SHAPE_FILL,
     Layout,
     MeasuredGroove,
     Process,
@@ -49,6 +41,8 @@ from seamtrack.control.fill_layout import (  # noqa: F401 (the layout moved; nam
 )
 from seamtrack.control.registry import load_class
 from seamtrack.errors import PluginError, PluginRuntimeError
+from seamtrack.geometry.groove_points import LEFT_FOOT, LEFT_TOP, POINT_INDEX, RIGHT_TOP
+from seamtrack.geometry.smoothing import station_median
 
 FloatArray = NDArray[np.float64]
 
@@ -291,19 +285,6 @@ def _smooth(values: FloatArray, half_window: int = 4) -> FloatArray:
     if len(values) <= 2:
         return values
     return station_median(values, half_window)
-
-
-def station_median(values: Any, half_window: int = 4, cut_ends: bool = False) -> FloatArray:
-    """A running median along the stations (axis 0) over 2 * half_window + 1 of them; at the
-    ends over the end station repeated, or with ``cut_ends`` over the stations there are."""
-    v = np.asarray(values, dtype=float)
-    pad = ((half_window, half_window),) + ((0, 0),) * (v.ndim - 1)
-    if cut_ends:
-        padded = np.pad(v, pad, constant_values=np.nan)
-    else:
-        padded = np.pad(v, pad, mode="edge")
-    windows = np.lib.stride_tricks.sliding_window_view(padded, 2 * half_window + 1, axis=0)
-    return np.asarray((np.nanmedian if cut_ends else np.median)(windows, axis=-1))
 
 
 class FixedPlanner(AdaptivePlanner):

@@ -38,6 +38,11 @@ CAMERA_RANGES = ("f_number", "wavelength_nm", "line_thickness_mm", "exposure", "
 COINS = ("speckle", "shot_noise")
 #: Stored per sample in ``camera_params``: the drawn ranges, then the coins (1.0 on, 0.0 off).
 CAMERA_PARAM_NAMES = (*CAMERA_RANGES, *COINS)
+#: The arc's ranges drawn per sample (after its coin and its process), in draw order.
+ARC_RANGES = ("current_a", "look_ahead_mm", "filter_fwhm_nm")
+#: Stored per sample in ``arc_params`` (a spec whose arc can be on): the coin (1.0 on, 0.0
+#: off), the process's index in ``spec.arc.processes``, then the ranges (NaN when off).
+ARC_PARAM_NAMES = ("arc", "process", *ARC_RANGES)
 
 
 def image_generator(seed: int, index: int) -> np.random.Generator:
@@ -46,10 +51,18 @@ def image_generator(seed: int, index: int) -> np.random.Generator:
     return np.random.Generator(np.random.PCG64(sequence))
 
 
+def arc_generator(seed: int, index: int) -> np.random.Generator:
+    """The generator of sample ``index``'s arc draws: the sample's second child, so a spec
+    without the arc draws its cameras and images as before."""
+    sequence = np.random.SeedSequence(seed, spawn_key=(index, 1))
+    return np.random.Generator(np.random.PCG64(sequence))
+
+
 def empty_images(spec: DatasetSpec, count: int) -> dict[str, np.ndarray]:
     """The image arrays of ``count`` samples (zero / NaN filled)."""
     rows, columns = spec.camera.rows, spec.camera.columns
-    return {
+    arc = {"arc_params": np.full((count, len(ARC_PARAM_NAMES)), np.nan)} if spec.arc.on else {}
+    return arc | {
         "image": np.zeros((count, rows, columns), dtype=np.uint16),
         "image_truth_row": np.full((count, columns), np.nan),
         "image_truth_laser": np.full((count, columns, 2), np.nan),
@@ -82,6 +95,30 @@ def draw_camera(spec: DatasetSpec, rng: np.random.Generator) -> tuple[Any, Float
     return camera, np.array([*values, *(float(x) for x in coins)])
 
 
+def draw_arc(spec: DatasetSpec, index: int, wavelength_nm: float) -> tuple[Any, FloatArray]:
+    """Sample ``index``'s arc (:class:`~seamtrack.sensing.arc.image.ArcFrame` in the seam frame,
+    or None: off) and its ``arc_params`` row, from :func:`arc_generator`. The arc stands on the
+    seam (y = z = 0) ``look_ahead_mm`` behind the laser plane x = 0, the torch travelling
+    along +x; the plate's outward normal is -z (the seam frame's z points into the part)."""
+    from seamtrack.sensing.arc.image import ArcFrame, ArcLight
+    from seamtrack.sensing.arc.light import BandPass
+
+    a = spec.arc
+    u = arc_generator(spec.seed, index).random(2 + len(ARC_RANGES))
+    on = bool(u[0] < sum(a.probability) / 2)  # a coin at the range's mean (as the camera's)
+    if not on:
+        return None, np.array([0.0, *([np.nan] * (1 + len(ARC_RANGES)))])
+    process = min(int(u[1] * len(a.processes)), len(a.processes) - 1)
+    values = [_draw(getattr(a, key), u[2 + i]) for i, key in enumerate(ARC_RANGES)]
+    current, look_ahead, fwhm = values
+    band = BandPass(centre_nm=wavelength_nm, fwhm_nm=fwhm, shape="gaussian")
+    light = ArcLight(a.processes[process], current, band, spatter=a.spatter, fume=a.fume,
+                     glow=a.glow)  # fmt: skip
+    frame = ArcFrame(light, np.array([-look_ahead, 0.0, 0.0]), np.array([0.0, 0.0, -1.0]),
+                     np.array([1.0, 0.0, 0.0]))  # fmt: skip
+    return frame, np.array([1.0, float(process), *values])
+
+
 def _draw(bounds: tuple[float, float], u: float) -> float:
     lo, hi = bounds
     return lo + u * (hi - lo)
@@ -104,11 +141,14 @@ def fill_image(
 
     rng = image_generator(spec.seed, index)
     camera, params = draw_camera(spec, rng)
+    arc = None
+    if spec.arc.on:
+        arc, out["arc_params"][row] = draw_arc(spec, index, camera.wavelength_nm)
     vertices, faces = joints.extruded_mesh(segs)
     caster = RayCaster(vertices, faces)
     # The part is in the seam frame, so the seam frame stands for the world here.
     image = render_image(sensor, caster, T_seam_sensor, camera=camera, material_name=material_name,
-                         seed=rng)  # fmt: skip
+                         seed=rng, arc=arc)  # fmt: skip
     full_scale = np.float32(levels(spec.camera.bit_depth))
     out["image"][row] = np.rint(image.pixels * full_scale).astype(np.uint16)
     out["image_truth_row"][row] = image.truth_row

@@ -25,15 +25,22 @@ IMAGE_ARRAYS = (
     "image", "image_truth_row", "image_truth_laser", "image_reflection", "image_reflection_row",
     "image_points_laser", "image_valid", "camera_params",
 )  # fmt: skip
+#: The array a chunk file adds when its spec's arc can be on (``[arc] probability`` above 0).
+ARC_ARRAYS = ("arc_params",)
 #: The arrays a chunk file adds with beads in the V-grooves (``[joint] passes``): the groove's
 #: 7 points (issue 25) and the number of layers laid.
 PASS_ARRAYS = ("groove_points_laser", "layers")
 REASON_NAMES = ("valid", "miss", "occluded", "out_of_range", "incidence", "dropout")
 
 
-def arrays(images: bool, passes: bool = False) -> tuple[str, ...]:
-    """The arrays of a chunk file of a dataset with or without images and passes."""
-    return ARRAYS + (PASS_ARRAYS if passes else ()) + (IMAGE_ARRAYS if images else ())
+def arrays(images: bool, passes: bool = False, arc: bool = False) -> tuple[str, ...]:
+    """The arrays of a chunk file of a dataset with or without images, passes and the arc."""
+    return (
+        ARRAYS
+        + (PASS_ARRAYS if passes else ())
+        + (IMAGE_ARRAYS if images else ())
+        + (ARC_ARRAYS if images and arc else ())
+    )
 
 
 def chunk_path(out: Path, k: int) -> Path:

@@ -65,6 +65,9 @@ class Dataset:
     bool and ``image_reflection_row`` (C,) float, a false stripe (the first specular bounce);
     the profile the spec's peak detector measures from the image, ``image_points_laser``
     (C, 2) mm and ``image_valid`` (C,); ``camera_params`` (``names["camera_param_names"]``).
+    With the arc (``[arc] probability`` above 0): ``arc_params`` (``names["arc_param_names"]``:
+    on or off, the process's index in ``names["arc_process_names"]``, the current, the
+    look-ahead and the filter's width); the labels stay the arc-free truth.
     """
 
     def __init__(self, path: str | Path):
@@ -87,7 +90,7 @@ class Dataset:
                 field="DIR",
                 fix="read it with that version, or write it anew",
             ) from None
-        self.arrays = arrays_of(self.spec.images, self.spec.joint.passes[1] > 0)
+        self.arrays = arrays_of(self.spec.images, self.spec.joint.passes[1] > 0, self.spec.arc.on)
         self.version = str(manifest.get("seamtrack_version", "?"))
         self._handles: dict[int, Any] = {}
         self._pid = os.getpid()

@@ -328,6 +328,52 @@ class CameraSpec(_Section):
         return self
 
 
+ArcProcess = Literal["mag-short", "mag-spray", "tig"]
+
+
+class ArcSpec(_Section):
+    """The welding arc in ``--images`` (image mode's ``[arc]``, docs/arc.md), drawn per sample:
+    its light through the camera's band-pass filter, the plate it lights and heats, fume and
+    spatter. The labels stay the noise-free truth (``image_truth_*``); ``arc_params`` says what
+    was drawn. The arc stands on the seam ``look_ahead_mm`` behind the laser plane (the torch
+    follows the sensor along +x of the seam frame)."""
+
+    #: Chance that a sample's image has the arc (0: never, and no arc arrays are stored).
+    probability: FractionRange = (0.0, 0.0)
+    processes: Annotated[list[ArcProcess], Field(min_length=1)] = ["mag-spray"]
+    #: The welding current (A), as a scene's ``arc.current_a`` (0-1000 A).
+    current_a: PositiveRange = (150.0, 300.0)
+    #: The laser line's distance ahead of the arc (mm). Published trackers look 20-40 mm ahead
+    #: (ABB Weldguide / Scansonic TH6D product data).
+    look_ahead_mm: PositiveRange = (20.0, 40.0)
+    #: The band-pass filter's full width at half maximum (nm), centred on the laser's line.
+    filter_fwhm_nm: PositiveRange = (10.0, 10.0)
+    spatter: Flag = True
+    fume: Flag = True
+    glow: Flag = True
+
+    @model_validator(mode="after")
+    def _physical(self) -> ArcSpec:
+        if self.current_a[1] > 1000.0:
+            raise _FieldError(
+                "current_a",
+                f"up to {self.current_a[1]:g} A",
+                "draw at most 1000 A (a scene's bound)",
+            )
+        if self.filter_fwhm_nm[0] < 0.1:
+            raise _FieldError(
+                "filter_fwhm_nm",
+                f"a filter {self.filter_fwhm_nm[0]:g} nm wide",
+                "give at least 0.1 nm (the narrowest interference filters)",
+            )
+        return self
+
+    @property
+    def on(self) -> bool:
+        """Whether any sample can draw the arc."""
+        return self.probability[1] > 0.0
+
+
 class DatasetSpec(_Section):
     """A validated dataset spec (frozen)."""
 
@@ -341,6 +387,7 @@ class DatasetSpec(_Section):
     noise: NoiseSpec = NoiseSpec()
     images: Flag = False
     camera: CameraSpec = CameraSpec()
+    arc: ArcSpec = ArcSpec()
 
     @model_validator(mode="before")
     @classmethod
@@ -375,6 +422,12 @@ class DatasetSpec(_Section):
             )
         if self.images:
             self._check_camera()
+        if self.arc.on and not self.images:
+            raise _FieldError(
+                "arc.probability",
+                "the arc is drawn into camera images, and this spec has none",
+                "set images = true (or --images), or arc.probability = 0",
+            )
         return self
 
     def _check_camera(self) -> None:
@@ -433,6 +486,7 @@ _SECTIONS = {
     "sensor": SensorSpec,
     "noise": NoiseSpec,
     "camera": CameraSpec,
+    "arc": ArcSpec,
 }
 
 
@@ -588,4 +642,14 @@ method = "centroid"              # peak detector: centroid, gaussian or steger
 threshold = 0.03                 # candidate pixels above this share of full scale (keep it
                                  # above ambient: dark steel peaks at 0.05-0.2 of full scale)
 choose = "strongest"             # several peaks in a column: strongest, first or widest
+
+[arc]                            # the welding arc in the images (docs/arc.md); labels: the truth
+probability = 0.0                # chance a sample's image has the arc (0: never)
+processes = ["mag-spray"]        # drawn from: mag-short, mag-spray, tig
+current_a = [150.0, 300.0]       # welding current, A, up to 1000
+look_ahead_mm = [20.0, 40.0]     # the laser line ahead of the arc (trackers: 20-40 mm)
+filter_fwhm_nm = 10.0            # band-pass width at half maximum, >= 0.1, on the laser's line
+spatter = true                   # droplets streaking through the exposure
+fume = true                      # the fume's veil and attenuation
+glow = true                      # the plate glowing near the arc
 """

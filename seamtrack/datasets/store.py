@@ -60,6 +60,11 @@ def names(spec: DatasetSpec) -> dict[str, Any]:
         from seamtrack.datasets.images import CAMERA_PARAM_NAMES
 
         out["camera_param_names"] = list(CAMERA_PARAM_NAMES)
+        if spec.arc.on:
+            from seamtrack.datasets.images import ARC_PARAM_NAMES
+
+            out["arc_param_names"] = list(ARC_PARAM_NAMES)
+            out["arc_process_names"] = list(spec.arc.processes)
         out["image_levels"] = 2**spec.camera.bit_depth - 1
     return out
 
@@ -84,7 +89,7 @@ def write_chunk(out: Path, spec: DatasetSpec, k: int, arrays: dict[str, np.ndarr
     buffer = io.BytesIO()
     try:
         with h5py.File(buffer, "w") as f:
-            for name in arrays_of(spec.images, spec.joint.passes[1] > 0):
+            for name in arrays_of(spec.images, spec.joint.passes[1] > 0, spec.arc.on):
                 # One HDF5 chunk an image, compressed (mostly dark pixels).
                 filters = (
                     {"chunks": (1, *arrays[name].shape[1:]), **IMAGE_COMPRESSION}

@@ -44,6 +44,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.geometry.groove_points import LEFT_FOOT, MIDDLE, RIGHT_FOOT
 from seamtrack.workpiece import beads
 
 FloatArray = NDArray[np.float64]
@@ -257,7 +258,7 @@ def fill(
     history = []
     for _ in range(layers):
         pts = groove_points(g, s)
-        (yl, _), (yr, _) = pts[1], pts[5]
+        (yl, _), (yr, _) = pts[LEFT_FOOT], pts[RIGHT_FOOT]
         width = max(yr - yl, 0.0)
         n = max(1, int(round(width / (0.8 * w_bead))))
         if n == 1:
@@ -331,7 +332,7 @@ def groove_profile(
     s = g.surface if surface is None else np.asarray(surface, dtype=np.float64)
     pts = groove_points(g, s)
     joint_pts = to_joint(pts)
-    section = (section_segments(s), joint_pts[3], to_joint(g.top), math.nan)
+    section = (section_segments(s), joint_pts[MIDDLE], to_joint(g.top), math.nan)
     pose: dict[str, Any] = dict(
         rays=rays,
         pitch_deg=pitch_deg,

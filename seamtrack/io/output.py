@@ -250,7 +250,7 @@ def write_job(
     finish: Callable[[Path], object] | None = None,
     replace: bool = False,
 ) -> Path:
-    """Write a multi-pass job (:class:`seamtrack.simulation.job.JobResult`) into ``out_dir``:
+    """Write a multi-pass job (:class:`seamtrack.multipass.job.JobResult`) into ``out_dir``:
     one folder a pass (``pass_00_scan``, ``pass_01``, ...: a run's summary.json, trace.csv,
     frames.csv and scene.toml, plus what ``extra(record, folder)`` adds), ``job.json`` and the
     job's scene.toml, then what ``finish(folder)`` adds (the job's pictures); all staged and

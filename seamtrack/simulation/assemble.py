@@ -414,7 +414,7 @@ def build_parts(
 ) -> Parts:
     """Everything :func:`seamtrack.simulation.loop.run` needs, validated against each other.
     ``extra_mesh``: a mesh in the world frame ray-cast with the workpiece (a multi-pass job's
-    beads, :mod:`seamtrack.simulation.job`); mesh mode only."""
+    beads, :mod:`seamtrack.multipass.job`); mesh mode only."""
     c = scene.config
     rng = rng if rng is not None else np.random.default_rng(c.simulation.seed)
     sensor = make_sensor(c.sensor)

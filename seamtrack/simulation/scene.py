@@ -28,7 +28,7 @@ from seamtrack.simulation.config import (  # the types live there; imported by n
     SceneConfig,
     SensorConfig,
 )
-from seamtrack.simulation.passes import check_passes
+from seamtrack.simulation.process import check_passes
 from seamtrack.simulation.robots import check_robot, is_arm
 from seamtrack.simulation.templates import builtin_scenes
 

@@ -99,11 +99,11 @@ KEY_HELP: dict[str, str] = {
     "sensor.camera.relative": "per-column threshold as a fraction of the column's peak",
     "sensor.camera.noise_sigmas": "per-column threshold in noise standard deviations",
     "sensor.camera.choose": 'which peak of a column: "strongest", "first" or "widest"',
-    "sensor.camera.filter_centre_nm": "the band-pass filter's centre, nm (unset: the laser's "
-    "wavelength)",
-    "sensor.camera.filter_fwhm_nm": "the band-pass filter's full width at half maximum, nm",
+    "sensor.camera.filter_centre_nm": "band-pass filter's centre wavelength, nm (unset: the "
+    "laser's)",
+    "sensor.camera.filter_fwhm_nm": "band-pass filter's full width at half maximum, nm (>= 0.1)",
+    "sensor.camera.filter_shape": 'band-pass filter\'s transmission: "gaussian" or "top-hat"',
     "sensor.camera.laser_power_w": "the laser's power, W, against the arc's light (unset: 0.1)",
-    "sensor.camera.filter_shape": '"gaussian" or "top-hat" transmission of the band-pass',
     "sensor.camera.reject": '"blobs": drop runs not shaped like the stripe (blobs, streaks, '
     'glow); "none" (unset: from countermeasures)',
     "sensor.camera.reject_max_width": "a run wider than this times the stripe's equivalent "

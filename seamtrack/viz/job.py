@@ -11,7 +11,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from seamtrack.simulation.job_summary import inspect_job
+from seamtrack.multipass.summary import inspect_job
 from seamtrack.viz.fill import plot_inspection, plot_weld_sections, render_fill_png
 
 #: The pictures a job's folder holds, by file name.

@@ -39,6 +39,7 @@ from numpy.typing import ArrayLike, NDArray
 from scipy.spatial import cKDTree
 
 from seamtrack.errors import SceneError, WorkpieceError
+from seamtrack.geometry.groove_points import BOTTOM, LEFT_TOP, N_POINTS, RIGHT_TOP
 from seamtrack.geometry.seam import Seam
 from seamtrack.workpiece.beads import BeadShape, lay_beads_on_grid
 from seamtrack.workpiece.sections import (
@@ -286,9 +287,9 @@ class FillState:
         t = (ys - y0) / (y1 - y0)
         zs = z[rows[:, None], j] * (1 - t) + z[rows[:, None], j + 1] * t
         zs[:, 0], zs[:, -1] = z[rows, bottom[:, 0]], z[rows, bottom[:, 1]]
-        out = np.empty((len(idx), 7, 2))
-        out[:, 0], out[:, 6] = top[:, 0], top[:, 1]
-        out[:, 1:6, 0], out[:, 1:6, 1] = ys, zs
+        out = np.empty((len(idx), N_POINTS, 2))
+        out[:, LEFT_TOP], out[:, RIGHT_TOP] = top[:, 0], top[:, 1]
+        out[:, BOTTOM, 0], out[:, BOTTOM, 1] = ys, zs
         return out
 
     def _top_line(self) -> tuple[FloatArray, NDArray[np.bool_]]:
@@ -384,8 +385,8 @@ class FillState:
         laid_here = covered & (station_area > 0)
         # the groove's top width, or as far as a fill spilled over the plates reaches
         seen = self.all_groove_points()
-        lo = np.minimum(self.top_corners[:, 0, 0], seen[:, 0, 0])
-        hi = np.maximum(self.top_corners[:, 1, 0], seen[:, 6, 0])
+        lo = np.minimum(self.top_corners[:, 0, 0], seen[:, LEFT_TOP, 0])
+        hi = np.maximum(self.top_corners[:, 1, 0], seen[:, RIGHT_TOP, 0])
         outside = laid_here & ((y_centre < lo) | (y_centre > hi))
         if np.any(outside):
             i = int(np.flatnonzero(outside)[0])

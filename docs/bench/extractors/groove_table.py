@@ -1,43 +1,25 @@
 """The groove extractor's accuracy table in docs/extractors.md: p95 of the 7 points' errors
 per groove, seed and fill state (20 profiles each, tests/test_groove_extractor.py's draw), the
-worst pool of 3 consecutive seeds and all seeds pooled.
+worst pool of 3 consecutive seeds and all seeds pooled (:mod:`seamtrack.bench.groove_fill`).
 
     python docs/bench/extractors/groove_table.py            # seeds 11-22, about 10 CPU min
+    python docs/bench/extractors/groove_table.py --json docs/bench/extractors/groove_fill.json
     python docs/bench/extractors/groove_table.py u 12 1     # one cell
+
+With ``--json`` it writes the measurement docs/figures.py renders the page's table from
+(``groove_fill.json``), else it prints the table.
 """
 
 from __future__ import annotations
 
+import json
 import sys
+from pathlib import Path
 
 import numpy as np
 
-from seamtrack.features.extractors import extractor
-from seamtrack.features.synthetic_groove import fill, groove, groove_profile
-
-LAYERS = {"v": range(10), "narrow-gap": range(7), "u": range(7)}
-SEEDS = {"v": range(11, 14), "narrow-gap": range(11, 23), "u": range(11, 23)}
-
-
-def errors(kind: str, seed: int, layers: int, n: int = 20) -> np.ndarray:
-    """The 7 points' errors (mm) of n profiles (a missed profile: 99 mm each)."""
-    g = groove(kind)
-    ex = extractor("groove")
-    out = []
-    for i in range(n):
-        rng = np.random.default_rng([layers, i, seed])
-        s = fill(g, layers, bead_area_mm2=20.0, rng=rng, jitter_mm=0.5)[0] if layers else None
-        profile, truth = groove_profile(
-            g,
-            s,
-            rng=rng,
-            roll_deg=rng.uniform(-5, 5),
-            pitch_deg=rng.uniform(-5, 5),
-            lateral_offset_mm=rng.uniform(-2, 2),
-        )
-        f = ex(profile)
-        out.append(np.hypot(*(f.edges_laser - truth.points_laser).T) if f else np.full(7, 99.0))
-    return np.concatenate(out)
+from seamtrack.bench.common import machine_info
+from seamtrack.bench.groove_fill import LAYERS, errors, groove_fill, groove_fill_table
 
 
 def main() -> None:
@@ -45,18 +27,11 @@ def main() -> None:
         kind, seed, layers = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
         print(f"{np.percentile(errors(kind, seed, layers), 95):.3f}")
         return
-    for kind, layers in LAYERS.items():
-        e = {(s, n): errors(kind, s, n) for s in SEEDS[kind] for n in layers}
-        for s in SEEDS[kind]:
-            row = " | ".join(f"{np.percentile(e[s, n], 95):.2f}" for n in layers)
-            print(f"| {kind} | {s} | {row} |")
-        seeds = list(SEEDS[kind])
-        pools = [seeds[i : i + 3] for i in range(len(seeds) - 2)]
-        worst = [max(np.percentile(np.concatenate([e[s, n] for s in p]), 95) for p in pools)
-                 for n in layers]  # fmt: skip
-        pooled = [np.percentile(np.concatenate([e[s, n] for s in seeds]), 95) for n in layers]
-        print(f"| {kind} | worst 3-seed pool | " + " | ".join(f"{x:.2f}" for x in worst) + " |")
-        print(f"| {kind} | all pooled | " + " | ".join(f"{x:.2f}" for x in pooled) + " |")
+    result = {"machine": machine_info(), "grooves": [groove_fill(kind) for kind in LAYERS]}
+    if len(sys.argv) == 3 and sys.argv[1] == "--json":
+        Path(sys.argv[2]).write_text(json.dumps(result, indent=2) + "\n")
+    else:
+        print(groove_fill_table(result), end="")
 
 
 if __name__ == "__main__":

@@ -25,6 +25,7 @@ from seamtrack.features.groove import _groove_kernels as kern
 from seamtrack.features.groove._groove_kernels import local_v, robust_uv_line
 from seamtrack.features.line_geometry import Line, fit_line
 from seamtrack.features.lines import Segments
+from seamtrack.geometry.groove_points import LEFT_FOOT, LEFT_TOP, RIGHT_FOOT, RIGHT_TOP
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
@@ -351,8 +352,8 @@ def polygon_area(pts: FloatArray, P: FloatArray, inner: IntArray, u: FloatArray)
     the line joining the top corners (mm^2), signed: a crowned fill's metal above that line
     counts against it (a nearly full groove's area is about 0, a capped one's negative)."""
     qu = P[inner] @ u
-    zone = inner[(qu > pts[1] @ u) & (qu < pts[5] @ u)]
-    ring = np.vstack([pts[0], pts[1], P[zone], pts[5], pts[6]])
+    zone = inner[(qu > pts[LEFT_FOOT] @ u) & (qu < pts[RIGHT_FOOT] @ u)]
+    ring = np.vstack([pts[LEFT_TOP], pts[LEFT_FOOT], P[zone], pts[RIGHT_FOOT], pts[RIGHT_TOP]])
     v = np.array([-u[1], u[0]])
     a, b = ring @ u, ring @ v  # along the plates, into the groove
     a_next, b_next = np.concatenate((a[1:], a[:1])), np.concatenate((b[1:], b[:1]))  # np.roll

@@ -116,6 +116,7 @@ from seamtrack.features.groove._groove_rise import a_step, risen_level
 from seamtrack.features.line_geometry import Line, fit_line
 from seamtrack.features.lines import Segments, intersect, segment_profile
 from seamtrack.features.refusal import Refusal
+from seamtrack.geometry.groove_points import LEFT_FOOT, POINT_INDEX, RIGHT_FOOT
 from seamtrack.sensing.profiles import Feature, Profile
 
 FloatArray = NDArray[np.float64]
@@ -202,7 +203,7 @@ class Wall(NamedTuple):
     last: int
 
 
-class GroovePoints(NamedTuple):
+class GrooveFit(NamedTuple):
     """The model's answer: the 7 points (7, 2) in the laser frame, the remaining area (mm^2),
     the share of the profile it explains, and the worst line fit (mm rms)."""
 
@@ -257,7 +258,7 @@ class GrooveExtractor(ExtractorBase):
         if isinstance(found, Refusal):
             return Feature.failed(found.reason, joint=self.name)
         pts = found.points
-        point = {"centre": pts[3], "left": pts[1], "right": pts[5]}[self.reference]
+        point = pts[POINT_INDEX[self.reference]]
         rms = max(0.0, 1.0 - found.rms / max(seg.tol, 1e-12))
         feature = self._found(
             profile,
@@ -265,12 +266,12 @@ class GrooveExtractor(ExtractorBase):
             confidence=float(min(max(0.5 * found.explained + 0.5 * rms, 0.0), 1.0)),
             edges_laser=pts,
             area_mm2=found.area_mm2,
-            gap_mm=float(np.hypot(*(pts[5] - pts[1]))),
+            gap_mm=float(np.hypot(*(pts[RIGHT_FOOT] - pts[LEFT_FOOT]))),
         )
         return feature, found.explained
 
     # ------------------------------------------------------------------ the model
-    def model(self, seg: Segments) -> GroovePoints | Refusal:
+    def model(self, seg: Segments) -> GrooveFit | Refusal:
         """The groove's 7 points, area and fit, or why the profile shows no groove."""
         P = seg.points
         plates = self._plates(seg)
@@ -328,7 +329,7 @@ class GrooveExtractor(ExtractorBase):
         rms = max(pl.rms, pr.rms, *(w.line.rms for w in (left, right) if w.line is not None))
         walls = (left.line, right.line)
         explained = explained_share(seg, (pl, pr), walls, inner, bl, br, u)
-        return GroovePoints(pts, area, explained, rms)
+        return GrooveFit(pts, area, explained, rms)
 
     def _raised(
         self, seg: Segments, plates: Plates, inner: IntArray, depth: FloatArray, chord: FloatArray

@@ -37,66 +37,44 @@ import math
 import threading
 import time
 from dataclasses import dataclass
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.control.planner import (
-    JobState,
-    Layout,
-    MeasuredGroove,
-    PassPlan,
-    checked_plan,
-    is_builtin,
-    layout,
-    planner,
-)
+from seamtrack.control.fill_layout import Layout, MeasuredGroove, layout
+from seamtrack.control.planner import JobState, PassPlan, checked_plan, is_builtin, planner
 from seamtrack.errors import PluginRuntimeError, SceneError, plugin_failed
 from seamtrack.geometry.seam import Seam
-from seamtrack.sensing.profiles import Feature
-from seamtrack.simulation.assemble import Parts, build_parts
-from seamtrack.simulation.checks import default_time_limit_s
-from seamtrack.simulation.job_paths import (
-    POINT_INDEX,
+from seamtrack.multipass.aim import wall_deg
+from seamtrack.multipass.paths import (
     STATION_SPACING_MM,
     FrameGroove,
     after_bead,
     arc_path,
-    frame_groove,
     handover,
     measured_groove,
-    one_station,
     pass_path,
     ramped,
-    settled,
     to_the_ends,
     true_groove,
 )
-from seamtrack.simulation.job_summary import (  # noqa: F401 (the job's public names)
-    fusion_margin_mm,
-    is_wall_bead,
-    job_summary,
-    welded_range,
-)
+from seamtrack.multipass.steering import steered
+from seamtrack.multipass.summary import job_summary
+from seamtrack.sensing.profiles import Feature
+from seamtrack.simulation.assemble import Parts, build_parts
+from seamtrack.simulation.checks import default_time_limit_s
 from seamtrack.simulation.loop import Result, run
-from seamtrack.simulation.passes import (
-    aim_point,
-    heat_input_kj_mm,
-    overridden,
-    planned_feature,
-    process_of,
-    wall_deg,
-)
+from seamtrack.simulation.process import heat_input_kj_mm, overridden, process_of
 from seamtrack.simulation.robots import is_arm, tool_program
 from seamtrack.simulation.scene import Scene, load_scene
 from seamtrack.simulation.stop import INTERRUPTED, StopRequest
 from seamtrack.workpiece.beads import bead_area_mm2
 
-FloatArray = NDArray[np.float64]
+if TYPE_CHECKING:
+    from seamtrack.workpiece.fill import FillState
 
-#: A frame whose fill surface lies this far (mm) below the pass before's is no groove.
-FILL_DROP_MM = 1.0
+FloatArray = NDArray[np.float64]
 
 #: The most passes a job lays: ``passes.count``'s bound, and where an ``auto`` plan that is
 #: not done by then stops (a plan the CAD groove says needs more is refused before the run).
@@ -127,7 +105,7 @@ class JobResult:
 
     summary: dict[str, Any]
     passes: list[PassRecord]
-    fill: Any  # FillState
+    fill: FillState  # FillState
 
     @property
     def status(self) -> str:
@@ -291,7 +269,7 @@ def _run_job(
 def _interrupted(
     scene: Scene,
     records: list[PassRecord],
-    fill: Any,
+    fill: FillState,
     wall_start: float,
     stop: StopRequest,
     bar: Any,
@@ -306,7 +284,7 @@ def _interrupted(
 
 
 def dry_run(
-    fill: Any, plan_maker: Any, state: JobState, shape: Any, max_passes: int = 200
+    fill: FillState, plan_maker: Any, state: JobState, shape: Any, max_passes: int = 200
 ) -> tuple[Any, list[PassPlan]]:
     """The plan laid with perfect tracking and the true groove as the measurement: each bead
     along its true pass path (:func:`pass_path`) at the planned speed there. What a planner
@@ -341,7 +319,7 @@ class _Done:
 def _pass(
     scene: Scene,
     plan: PassPlan | None,
-    fill: Any,
+    fill: FillState,
     cad_seam: Seam,
     rng: np.random.Generator,
     process: Any,
@@ -385,7 +363,7 @@ def _pass(
     )
     frames: list[tuple[Feature, FloatArray]] = []
     each: list[FrameGroove | None] = []  # every frame's groove, as the sense function saw it
-    parts = _steered(parts, fill, cad_seam, plan, frames, adapt, planner_name, previous, each,
+    parts = steered(parts, fill, cad_seam, plan, frames, adapt, planner_name, previous, each,
                      expected)  # fmt: skip
     build_s = time.perf_counter() - start
     start = time.perf_counter()
@@ -422,157 +400,7 @@ def _pass(
     return _Done(record, groove, path, s_path, np.asarray(area, dtype=float))
 
 
-def _steered(
-    parts: Parts,
-    fill: Any,
-    cad_seam: Seam,
-    plan: PassPlan | None,
-    frames: list[tuple[Feature, FloatArray]],
-    adapt: Any = None,
-    planner_name: str = "planner",
-    previous: MeasuredGroove | None = None,
-    each: list[FrameGroove | None] | None = None,
-    expected: MeasuredGroove | None = None,
-) -> Parts:
-    """The parts with a sense function that records every frame's feature (and, in
-    ``each``, its groove: :func:`~seamtrack.simulation.job_paths.frame_groove`), moves the measured
-    point by the plan's lateral offset there (station frame), and sets the tracker's speed
-    along the seam from the plan; ``adapt(groove_ahead, plan)`` (a planner's, optional) may
-    replace the speed and offset at the station the sensor sees, for when the torch gets
-    there. A frame whose fill surface lies more than :data:`FILL_DROP_MM` below the one the
-    pass before measured there (``previous``, a running median along the seam: :func:`settled`;
-    the fill only grows) is taken as no groove. Until the pass's sensor measures the groove,
-    the torch follows the plan on ``expected`` (``previous`` with its pass's bead added:
-    :func:`~seamtrack.simulation.job_paths.after_bead`), else on ``previous``."""
-    sense = parts.sense
-    guide = previous if expected is None else expected
-    tracker = parts.tracker
-    T_sensor_tcp = np.linalg.inv(np.asarray(parts.robot.T_tcp_sensor, dtype=float))
-    lateral = fill.T_world_station[:, :3, 1]
-    T_station_world = np.linalg.inv(fill.T_world_station)
-    s_stations = fill.s_mm
-    set_speed = getattr(tracker, "set_speed", None)
-    floor = None if previous is None else settled(previous)  # what a frame is checked against
-    adapted = np.full((len(s_stations), 2), np.nan)  # speed, offset per station
-    seen = [False]  # the pass's sensor has measured the groove
-
-    def station(s: float) -> int:
-        return min(int(np.searchsorted(s_stations, s)), len(s_stations) - 1)
-
-    def steered(T_world_sensor: FloatArray, t_s: float, hint: Any = None) -> Feature:
-        if hint is not None:
-            feature = sense(T_world_sensor, t_s, hint)
-        else:
-            feature = sense(T_world_sensor, t_s)
-        frames.append((feature, T_world_sensor))
-        if plan is None:
-            return feature
-        # The frame's 7 points at their station (measured once: the checks below share it).
-        one = frame_groove(feature, T_world_sensor, fill, cad_seam, T_station_world)
-        now = one_station(one, fill)
-        if feature and floor is not None and _below_the_fill(frames[-1], fill, cad_seam,
-                                                             floor, now):  # fmt: skip
-            feature = Feature.failed("below the fill the pass before measured", feature.joint)
-            frames[-1] = (feature, T_world_sensor)
-            one = now = None
-        if each is not None:
-            each.append(one)
-        planned = None  # the pass before's groove where this frame gives none (not yet seen)
-        if feature:
-            seen[0] = True
-        elif guide is not None and (not seen[0] or (plan.cap and plan.reference in _FIXED)):
-            # not yet seen: start on the plan; a cap bead's top corner, which no bead moves,
-            # and whose height is the cap's aim: where the pass before measured it (a cap's
-            # edge bead puts the sensor so far off the groove's middle that the far plate
-            # leaves its stripe now and then)
-            feature = planned_feature(feature, T_world_sensor, fill, plan, guide,
-                                      STATION_SPACING_MM, POINT_INDEX)  # fmt: skip
-            planned = one_station(frame_groove(feature, T_world_sensor, fill, cad_seam,
-                                               T_station_world), fill)  # fmt: skip
-        if feature:
-            s = float(cad_seam.closest(feature.point_world[None]).arc_length_mm[0])
-            i = station(s)
-            if adapt is not None and now is not None:
-                adapted[i] = _adapted(adapt, now, plan, planner_name, t_s)
-            offset = adapted[i, 1] if np.isfinite(adapted[i, 1]) else float(plan.offset_at(s))
-            own = offset or plan.cap or plan.reference not in ("left", "right", "centre")
-            here = (now if now is not None else planned) if own else None
-            if here is not None:  # on the fill surface the frame measured, under the bead
-                k = min(int(np.searchsorted(s_stations, here.s_mm[0])), len(s_stations) - 1)
-                y, z = aim_point(here.points, POINT_INDEX[plan.reference], offset, plan.cap)[0]
-                point = (fill.T_world_station[k] @ np.array([0.0, y, z, 1.0]))[:3]
-                feature = dataclasses.replace(feature, point_world=point)
-            elif offset:  # the planned point (no groove measured yet)
-                point = feature.point_world + offset * lateral[i]
-                feature = dataclasses.replace(feature, point_world=point)
-        if set_speed is not None:
-            tcp = (T_world_sensor @ T_sensor_tcp)[:3, 3]
-            s_tcp = float(cad_seam.closest(tcp[None]).arc_length_mm[0])
-            speed = adapted[station(s_tcp), 0]
-            set_speed(float(speed) if np.isfinite(speed) else float(plan.speed_at(s_tcp)))
-        return feature
-
-    return dataclasses.replace(parts, sense=steered)
-
-
-def _below_the_fill(
-    frame: tuple[Feature, FloatArray],
-    fill: Any,
-    seam: Seam,
-    previous: MeasuredGroove,
-    now: MeasuredGroove | bool | None = False,
-) -> bool:
-    """Whether a frame's fill surface (its middle bottom point) lies more than
-    :data:`FILL_DROP_MM` below the one measured there by the pass before, or its bottom
-    corners lie more than twice that inside the pass before's (the fill surface only widens
-    up a V's walls; a frame that shows part of it, at the part's end, is no groove).
-    ``now``: the frame's :func:`measured_groove`, when the caller has it already."""
-    if now is False:
-        now = measured_groove([frame], fill, seam)
-    assert now is None or isinstance(now, MeasuredGroove)
-    if now is None or not len(previous):
-        return False
-    p = previous.points
-    before = [float(np.interp(now.s_mm[0], previous.s_mm, p[:, k, c])) for k, c in _PAST]
-    y_left, y_right, z_mid = now.points[0, 1, 0], now.points[0, 5, 0], now.points[0, 3, 1]
-    return bool(
-        z_mid < before[2] - FILL_DROP_MM
-        or y_left > before[0] + 2 * FILL_DROP_MM
-        or y_right < before[1] - 2 * FILL_DROP_MM
-    )
-
-
-#: References no bead moves (the bevels' top edges): a cap bead's frame that misses one takes
-#: it from the pass before's measurement.
-_FIXED = ("left_top", "right_top")
-
-#: The pass before's left foot's y, right foot's y, middle's z (row, column of the 7 points).
-_PAST = ((1, 0), (5, 0), (3, 1))
-
-
-def _adapted(adapt: Any, ahead: MeasuredGroove, plan: PassPlan, name: str,
-             t_s: float) -> tuple[float, float]:  # fmt: skip
-    """A planner's ``adapt`` answer checked: (speed, offset), NaN where it keeps the plan."""
-    try:
-        answer = adapt(ahead, plan)
-    except Exception as exc:  # the user's planner may fail in any way
-        raise plugin_failed("planner.name", name, "adapt", t_s, exc) from exc
-    if answer is None:
-        return math.nan, math.nan
-    try:
-        speed, offset = (float(v) for v in answer)
-    except (TypeError, ValueError):
-        speed, offset = math.nan, math.inf
-    if not (math.isfinite(offset) and math.isfinite(speed) and speed > 0):
-        raise PluginRuntimeError(
-            f"{name!r} adapt() returned {answer!r} at t = {t_s:.6g} s",
-            field="planner.name",
-            fix="return (speed_mm_s > 0, offset_mm), or None to keep the plan",
-        )
-    return speed, offset
-
-
-def _laser_flipped(parts: Parts, fill: Any) -> bool:
+def _laser_flipped(parts: Parts, fill: FillState) -> bool:
     """Whether the laser's y_L axis points against the stations' y at the start pose."""
     from seamtrack.geometry.frames import make as make_pose
 
@@ -654,7 +482,7 @@ def _check_overrides_laid(passes: Any, laid: int, name: str) -> None:
             )
 
 
-def planned_layout(fill: Any, c: Any) -> Layout | None:
+def planned_layout(fill: FillState, c: Any) -> Layout | None:
     """The plan a built-in planner lays on the CAD groove ``fill`` (None: a plugin's, which
     only its run knows; the scan-only pass's measured groove may change it by a pass or so),
     refused when it cannot fill the groove: an ``auto`` plan of more than
@@ -699,7 +527,7 @@ def planned_layout(fill: Any, c: Any) -> Layout | None:
     return plan
 
 
-def _check_bead_fits(fill: Any, process: Any, c: Any) -> None:
+def _check_bead_fits(fill: FillState, process: Any, c: Any) -> None:
     """A bead at the fastest travel speed larger than the whole groove cannot be laid."""
     area = float(np.median(fill.remaining_area_mm2()))
     smallest = float(process.bead_area_mm2(process.speed_max_mm_s))

@@ -1,32 +1,34 @@
 """The groove and paths a multi-pass job measures and lays its beads along (from
-:mod:`seamtrack.simulation.job`): the pass's true path, the groove the sensor measured, the
+:mod:`seamtrack.multipass.job`): the pass's true path, the groove the sensor measured, the
 arc's path from the trace, the ramps and the run-off to the part's ends."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.control.planner import (
+from seamtrack.control.fill_layout import MeasuredGroove
+from seamtrack.control.planner import PassPlan
+from seamtrack.geometry.groove_points import (
+    FEET,
+    LEFT_FOOT,
+    LEFT_TOP,
+    MIDDLE,
     POINT_INDEX,
-    MeasuredGroove,
-    PassPlan,
-    station_median,
+    RIGHT_FOOT,
+    RIGHT_TOP,
+    TOPS,
 )
 from seamtrack.geometry.seam import Seam
+from seamtrack.geometry.smoothing import station_median
+from seamtrack.multipass.aim import aim_point
 from seamtrack.sensing.profiles import Feature, laser_to_world
-from seamtrack.simulation.job_summary import (  # noqa: F401 (the job's public names)
-    fusion_margin_mm,
-    is_wall_bead,
-    job_summary,
-    welded_range,
-)
 from seamtrack.simulation.loop import Result
-from seamtrack.simulation.passes import (
-    aim_point,
-)
+
+if TYPE_CHECKING:
+    from seamtrack.workpiece.fill import FillState
 
 FloatArray = NDArray[np.float64]
 
@@ -37,13 +39,13 @@ STATION_SPACING_MM = 0.5
 RUN_OFF_MM = 3.0
 
 
-def pass_path(fill: Any, reference: str, plan: PassPlan | None, window: int = 4) -> Seam:
+def pass_path(fill: FillState, reference: str, plan: PassPlan | None, window: int = 4) -> Seam:
     """A pass's true path in the world: at every station the reference point of the true fill
     surface (left or right wall's foot, or the middle; a running median over ``2 window + 1``
     stations, 2 mm: where a toe wets a wall the foot jumps along it from one station to the
     next, faster than any torch follows), moved across the seam by the plan's offset there,
     onto the fill surface the bottom points describe, or a cap bead at the plates' top line
-    (:func:`~seamtrack.simulation.passes.aim_point`: where the bead aims, as the tracker does
+    (:func:`~seamtrack.multipass.aim.aim_point`: where the bead aims, as the tracker does
     with the measured points)."""
     pts = station_median(fill.all_groove_points(), window)
     offset = np.zeros(len(pts)) if plan is None else plan.offset_at(fill.s_mm)
@@ -59,7 +61,7 @@ FrameGroove = tuple[int, FloatArray, float]
 
 def measured_groove(
     frames: list[tuple[Feature, FloatArray]],
-    fill: Any,
+    fill: FillState,
     cad_seam: Seam,
     T_station_world: FloatArray | None = None,
     each: list[FrameGroove | None] | None = None,
@@ -74,7 +76,7 @@ def measured_groove(
         if len(frames) == 1:  # one frame (a pass's sense function, every frame): no medians
             return one_station(frame_groove(*frames[0], fill, cad_seam, T_station_world), fill)
         if T_station_world is None:
-            T_station_world = np.linalg.inv(fill.T_world_station)
+            T_station_world = np.asarray(np.linalg.inv(fill.T_world_station), dtype=np.float64)
         each = [frame_groove(f, T, fill, cad_seam, T_station_world) for f, T in frames]
     found = [one for one in each if one is not None]
     if not found:
@@ -88,7 +90,7 @@ def measured_groove(
     return MeasuredGroove(fill.s_mm[keep], med_pts, med_area)
 
 
-def one_station(one: FrameGroove | None, fill: Any) -> MeasuredGroove | None:
+def one_station(one: FrameGroove | None, fill: FillState) -> MeasuredGroove | None:
     """One frame's groove (:func:`frame_groove`) as a measured groove of one station."""
     if one is None:
         return None
@@ -99,7 +101,7 @@ def one_station(one: FrameGroove | None, fill: Any) -> MeasuredGroove | None:
 def frame_groove(
     feature: Feature,
     T_world_sensor: FloatArray,
-    fill: Any,
+    fill: FillState,
     cad_seam: Seam,
     T_station_world: FloatArray | None = None,
 ) -> FrameGroove | None:
@@ -109,7 +111,7 @@ def frame_groove(
     if not feature or edges.shape != (7, 2) or not np.isfinite(edges).all():
         return None
     world = laser_to_world(T_world_sensor, edges)
-    s = float(cad_seam.closest(world[3][None]).arc_length_mm[0])
+    s = float(cad_seam.closest(world[MIDDLE][None]).arc_length_mm[0])
     i = min(int(round((s - fill.s_mm[0]) / STATION_SPACING_MM)), len(fill.s_mm) - 1)
     if T_station_world is None:
         T_station_i = np.linalg.inv(fill.T_world_station[i])
@@ -117,12 +119,12 @@ def frame_groove(
         T_station_i = T_station_world[i]
     local = (T_station_i @ np.column_stack((world, np.ones(7))).T).T
     yz = local[:, 1:3]
-    if yz[0, 0] > yz[6, 0]:  # the laser's left is the stations' right: y ascending
+    if yz[LEFT_TOP, 0] > yz[RIGHT_TOP, 0]:  # the laser's left is the stations' right: y ascending
         yz = yz[::-1]
     return i, yz, float(feature.area_mm2)
 
 
-def true_groove(fill: Any) -> MeasuredGroove:
+def true_groove(fill: FillState) -> MeasuredGroove:
     """The CAD groove's 7 points and area (no scan-only pass: the first plan is the nominal
     groove's; later ones are measured)."""
     points = np.stack([fill.groove_points(i) for i in range(len(fill.s_mm))])
@@ -249,24 +251,26 @@ def after_bead(groove: MeasuredGroove, area_mm2: Any) -> MeasuredGroove:
     walls, the top corners (which no bead moves) kept.
 
     What the pass after expects where its sensor has not yet measured the groove (its start,
-    :func:`~seamtrack.simulation.passes.planned_feature`): the groove before the last bead
+    :func:`~seamtrack.multipass.aim.planned_feature`): the groove before the last bead
     lies a bead lower (a single-bead layer of the 12-pass plan: 4 mm), and a torch started
     there dived under the fill and overshot it by 2-4 mm over the next 15 mm."""
     if area_mm2 is None or not len(groove):
         return groove
     p = groove.points.copy()
     area = np.maximum(np.asarray(area_mm2, dtype=float).reshape(len(groove)), 0.0)
-    rise = np.maximum(p[:, [0, 6], 1] - p[:, [1, 5], 1], 1e-9)  # (m, 2) the walls' heights
-    widen = np.abs(p[:, [1, 5], 0] - p[:, [0, 6], 0]) / rise  # mm of width per mm of height
-    w = np.maximum(p[:, 5, 0] - p[:, 1, 0], 0.0)
+    rise = np.maximum(p[:, TOPS, 1] - p[:, FEET, 1], 1e-9)  # (m, 2) the walls' heights
+    widen = np.abs(p[:, FEET, 0] - p[:, TOPS, 0]) / rise  # mm of width per mm of height
+    w = np.maximum(p[:, RIGHT_FOOT, 0] - p[:, LEFT_FOOT, 0], 0.0)
     k = widen.sum(axis=1)
     dz = np.where(k > 1e-9, (np.sqrt(w * w + 2 * k * area) - w) / np.maximum(k, 1e-9),
                   area / np.maximum(w, 1e-9))  # fmt: skip
     dz = np.minimum(dz, rise.min(axis=1))
-    left = p[:, 1, 0] - widen[:, 0] * dz
-    right = p[:, 5, 0] + widen[:, 1] * dz
-    old_left, old_w = p[:, 1, 0].copy(), np.maximum(w, 1e-9)
-    for row in range(1, 6):  # the bottom points stretched between the new feet, lifted
+    left = p[:, LEFT_FOOT, 0] - widen[:, 0] * dz
+    right = p[:, RIGHT_FOOT, 0] + widen[:, 1] * dz
+    old_left, old_w = p[:, LEFT_FOOT, 0].copy(), np.maximum(w, 1e-9)
+    for row in range(
+        LEFT_FOOT, RIGHT_FOOT + 1
+    ):  # the bottom points stretched between the new feet, lifted
         frac = (p[:, row, 0] - old_left) / old_w
         p[:, row, 0] = left + frac * (right - left)
         p[:, row, 1] += dz

@@ -1,11 +1,11 @@
 """A multi-pass job's summary (``job.json``): the passes, the layers, the final fill and its
 checks (reinforcement along the seam, underfill, the sidewall fusion margin), heat input and
-arc time. See :mod:`seamtrack.simulation.job`."""
+arc time. See :mod:`seamtrack.multipass.job`."""
 
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -13,6 +13,9 @@ from numpy.typing import NDArray
 from seamtrack.control.planner import PassPlan, fill_order
 from seamtrack.simulation.scene import Scene
 from seamtrack.workpiece.inspection import MIN_THICKNESS_MM, Inspection, inspect_weld
+
+if TYPE_CHECKING:
+    from seamtrack.workpiece.fill import FillState
 
 FloatArray = NDArray[np.float64]
 
@@ -24,7 +27,7 @@ UNDERFILL_LIMIT_MM = 1.0
 
 
 def job_summary(
-    scene: Scene, records: list[Any], fill: Any, wall_s: float, stopped: str = ""
+    scene: Scene, records: list[Any], fill: FillState, wall_s: float, stopped: str = ""
 ) -> dict:
     """job.json: the passes, the layers, the final fill and its checks; ``stopped``: why the
     job stopped before its planner said it was done."""
@@ -75,7 +78,7 @@ def job_summary(
     }
 
 
-def plate_thickness_mm(scene: Scene, fill: Any) -> float:
+def plate_thickness_mm(scene: Scene, fill: FillState) -> float:
     """The plates' thickness t for ISO 5817: the workpiece's ``plate_thickness_mm`` parameter,
     else the groove's depth below the plates' top line (a groove cut into thicker plate judged
     by its depth: the stricter limits)."""
@@ -86,7 +89,7 @@ def plate_thickness_mm(scene: Scene, fill: Any) -> float:
     return float(np.max(corners_z - np.asarray(fill.base_z).min(axis=1)))
 
 
-def inspect_job(scene: Scene, fill: Any, welded: list[Any]) -> Inspection | None:
+def inspect_job(scene: Scene, fill: FillState, welded: list[Any]) -> Inspection | None:
     """The welded stations judged by ISO 5817 (:mod:`seamtrack.workpiece.inspection`): b the
     groove's top width, t :func:`plate_thickness_mm`, a wall bead's toe short of the wall by
     more than ``passes.fusion_margin_min_mm`` a lack of fusion. None for plate of 3 mm or
@@ -110,7 +113,7 @@ def inspect_job(scene: Scene, fill: Any, welded: list[Any]) -> Inspection | None
     )
 
 
-def _inspection(scene: Scene, fill: Any, welded: list[Any]) -> dict[str, Any]:
+def _inspection(scene: Scene, fill: FillState, welded: list[Any]) -> dict[str, Any]:
     """job.json's ``quality_level`` and ``inspection`` (see :func:`inspect_job`)."""
     weld = inspect_job(scene, fill, welded)
     if weld is None:
@@ -166,7 +169,7 @@ def _pass_row(r: Any) -> dict[str, Any]:
     return row
 
 
-def welded_range(welded: list[Any], fill: Any) -> tuple[float, float]:
+def welded_range(welded: list[Any], fill: FillState) -> tuple[float, float]:
     """The arc lengths every pass laid its bead over (the stations all passes covered)."""
     covered = np.ones(len(fill.s_mm), dtype=bool)
     for bead in fill.beads:
@@ -177,7 +180,7 @@ def welded_range(welded: list[Any], fill: Any) -> tuple[float, float]:
     return float(s[0]), float(s[-1])
 
 
-def fusion_margin_mm(fill: Any, welded: list[Any]) -> FloatArray:
+def fusion_margin_mm(fill: FillState, welded: list[Any]) -> FloatArray:
     """(m,) per station, how far the wall beads' toes reach past the wall (the smallest over
     the beads laid against a wall, > 0 fused, < 0 a gap; +inf where no bead meets a wall).
 
