@@ -43,6 +43,9 @@ def test_there_is_a_mesh_scene_for_every_joint_family() -> None:
 # paper-v-groove and tacks-and-clamp have tests of their own below; the pipe scenes are run
 # whole, with their own bounds, by tests/test_arm_scenes.py.
 OWN_TESTS = ("paper-v-groove", "tacks-and-clamp", "pipe-on-plate", "pipe-saddle")
+# v-groove-arc-mag runs on a short seam in tests/test_arc_countermeasures.py (a whole run renders
+# 180 frames with the arc).
+OWN_TESTS += ("v-groove-arc-mag",)
 # The multi-pass jobs run in tests/test_job_run.py.
 OWN_TESTS += tuple(n for n in MESH_SCENES if "passes" in _toml(n))
 

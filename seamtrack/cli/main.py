@@ -226,6 +226,7 @@ def cmd_check(args: argparse.Namespace) -> int:
     from seamtrack.geometry.frames import make as make_pose
     from seamtrack.simulation.assemble import build_parts, planned_tcp_poses
     from seamtrack.simulation.checks import check_seam_in_view
+    from seamtrack.simulation.countermeasures import describe as describe_countermeasures
     from seamtrack.simulation.robots import is_arm
     from seamtrack.simulation.scene import load_scene
 
@@ -261,6 +262,7 @@ def cmd_check(args: argparse.Namespace) -> int:
         ("sensor mount", _mount_text(c, parts.mount)),
         ("extractor", parts.extractor_name if c.sensor.mode == "mesh" else "none (seam mode)"),
         ("sensor resolution (mm)", parts.sensor_resolution_mm),
+        ("countermeasures", describe_countermeasures(c)),
     ]
     if c.passes is not None:
         rows += jobs.check_rows(c, parts)

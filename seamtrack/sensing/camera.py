@@ -26,7 +26,7 @@ from numpy.typing import NDArray
 
 from seamtrack.errors import SensorGeometryError
 from seamtrack.sensing.materials import Material
-from seamtrack.sensing.peaks import NOISE_SIGMAS, RELATIVE_THRESHOLD
+from seamtrack.sensing.peaks import NOISE_SIGMAS, RELATIVE_THRESHOLD, Rejection
 from seamtrack.sensing.profiles import Profile
 
 if TYPE_CHECKING:
@@ -547,6 +547,7 @@ class StripeImage:
         sigma_px: float | None = None,
         relative: float = RELATIVE_THRESHOLD,
         noise_sigmas: float = NOISE_SIGMAS,
+        reject: Rejection | None = None,
     ) -> Profile:
         """The stripe profile measured from the pixels, as ``scan()`` gives it.
 
@@ -564,6 +565,8 @@ class StripeImage:
             nearest to the sensor) or the widest.
         sigma_px : float, optional
             Steger's smoothing scale (default from the median width of the peaks).
+        reject : Rejection, optional
+            Drop the runs not shaped like the stripe (blobs, streaks, glow) before choosing.
 
         Returns
         -------
@@ -574,7 +577,8 @@ class StripeImage:
         from seamtrack.sensing.peaks import detect
 
         rows = detect(self.pixels, method=method, threshold=threshold, choose=choose,
-                      sigma_px=sigma_px, relative=relative, noise_sigmas=noise_sigmas)  # fmt: skip
+                      sigma_px=sigma_px, relative=relative, noise_sigmas=noise_sigmas,
+                      reject=reject)  # fmt: skip
         return self.profile_from_rows(rows)
 
     def profile_from_rows(self, rows: FloatArray) -> Profile:

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.control.gate import GateSettings
 from seamtrack.control.registry import tracker, tracker_parameters
 from seamtrack.control.tracking import Tracker
 from seamtrack.errors import PluginRuntimeError, SceneError, plugin_failed
@@ -30,6 +31,7 @@ from seamtrack.simulation.checks import (
     check_ticks,
     default_time_limit_s,
 )
+from seamtrack.simulation.countermeasures import gate_settings, rejection
 from seamtrack.simulation.mount import Mount
 from seamtrack.simulation.robots import (
     check_sensor_outside,
@@ -66,6 +68,9 @@ class LoopSettings:
     trace_period_s: float = 0.01
     work_angle_rad: float = 0.0
     travel_angle_rad: float = 0.0
+    # The seam-point gate between the extractor and the tracker (None: none), from the
+    # scene's [gate] and countermeasures (seamtrack.simulation.countermeasures).
+    gate: GateSettings | None = None
 
 
 @dataclass(frozen=True)
@@ -268,6 +273,7 @@ def _mesh_scan(
 
     if s.source == "image":  # every frame rendered by the camera and measured from its pixels
         camera, detector = make_camera(s.camera, s.preset), s.camera or CameraConfig()
+        reject = rejection(scene.config)
         surface = w.material or "mill-scale steel"
         arc_light = scene_arc_light(scene, camera)
 
@@ -287,7 +293,7 @@ def _mesh_scan(
             images[0] = image
             return image.profile(detector.method, threshold=detector.threshold,
                                  choose=detector.choose, relative=detector.relative,
-                                 noise_sigmas=detector.noise_sigmas)  # fmt: skip
+                                 noise_sigmas=detector.noise_sigmas, reject=reject)  # fmt: skip
 
     measure_arc = with_profile_arc(scene, measure, rng, tcp)
 
@@ -367,8 +373,11 @@ def scene_arc_light(scene: Scene, camera: Any) -> Any:
         speed = scene.config.simulation.welding_speed_mm_s
         heat = RosenthalHeat(process_power_w(p), speed, steel.conductivity_w_per_mm_k,
                              steel.diffusivity_mm2_per_s)  # fmt: skip
-    return ArcLight(a.process, a.current_a, band, spatter=a.spatter, fume=a.fume, glow=a.glow,
-                    heat=heat)  # fmt: skip
+    light = ArcLight(a.process, a.current_a, band, spatter=a.spatter, fume=a.fume, glow=a.glow,
+                     heat=heat)  # fmt: skip
+    if c is not None and c.laser_power_w is not None:  # the laser against the arc's light
+        light = dataclasses.replace(light, laser_power_w=c.laser_power_w)
+    return light
 
 
 def scene_arc_profile(scene: Scene) -> Any:
@@ -527,6 +536,7 @@ def build_parts(
         trace_period_s=c.simulation.trace_period_s,
         work_angle_rad=math.radians(c.torch.work_angle_deg),
         travel_angle_rad=math.radians(c.torch.travel_angle_deg),
+        gate=gate_settings(c),
     )
     return Parts(
         seam=seam,

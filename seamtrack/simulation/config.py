@@ -36,6 +36,11 @@ WeldSpeed = Annotated[float, Field(gt=0, le=1_000, allow_inf_nan=False, strict=T
 FrameRate = Annotated[float, Field(gt=0, le=100_000, allow_inf_nan=False, strict=True)]
 
 
+#: A bound of the peak detector's rejection, times the frame's stripe: above 1 (the stripe itself
+#: passes), and 1000 is far beyond any stripe.
+RejectFactor = Annotated[float, Field(gt=1, le=1000, allow_inf_nan=False, strict=True)]
+
+
 class _Section(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
@@ -83,6 +88,13 @@ class CameraConfig(_Section):
         10.0
     )
     filter_shape: Literal["gaussian", "top-hat"] = "gaussian"
+    # The laser's power (W) against the arc's light (issue 38): the stripe keeps its level
+    # (`exposure`), so the arc's light on the chip falls as 1 / power. Unset: 0.1 W
+    # (seamtrack.sensing.arc.image.ArcLight). Line lasers of seam trackers are class 3R-3B, tens
+    # to hundreds of mW; 10 W bounds them with room.
+    laser_power_w: Annotated[float, Field(gt=0, le=10, allow_inf_nan=False, strict=True)] | None = (
+        None
+    )
     line_divergence_mrad: NonNegative | None = None
     waist_range_mm: Positive | None = None
     exposure: Positive = 0.5
@@ -103,6 +115,19 @@ class CameraConfig(_Section):
     relative: Annotated[float, Field(ge=0, lt=1, allow_inf_nan=False, strict=True)] = 0.5
     noise_sigmas: Annotated[float, Field(ge=0, le=100, allow_inf_nan=False, strict=True)] = 6.0
     choose: Literal["strongest", "first", "widest"] = "strongest"
+    # Blob and streak rejection (issue 38, seamtrack.sensing.peaks.Rejection): "blobs" drops
+    # candidate runs not shaped like the stripe before choosing. Default (None): from the
+    # scene's `countermeasures`. The bounds are times the frame's own stripe (its median
+    # equivalent width and height); None: the Rejection defaults.
+    reject: Literal["none", "blobs"] | None = None
+    reject_max_width: RejectFactor | None = None
+    reject_max_peak: RejectFactor | None = None
+    reject_min_peak: (
+        Annotated[float, Field(ge=0, lt=1, allow_inf_nan=False, strict=True)] | None
+    ) = None
+    reject_stripe_width_px: (
+        Annotated[float, Field(gt=0, le=1000, allow_inf_nan=False, strict=True)] | None
+    ) = None
 
 
 class SensorConfig(_Section):
@@ -343,6 +368,22 @@ class ArcConfig(_Section):
     glow: Flag = True
 
 
+class GateConfig(_Section):
+    """``[gate]``: the seam-point gate in time between the extractor and the tracker (issue
+    38, :mod:`seamtrack.control.gate`). Unset keys come from the scene's ``countermeasures``:
+    ``enabled`` is on with ``"default"`` (or when the table is given), ``on_invalid`` is
+    ``"predict"`` with ``"default"`` and ``"hold"`` with ``"none"``."""
+
+    enabled: Flag | None = None
+    #: The search window's radius about the predicted seam point (mm); 0: no gate. Default
+    #: 15 mm, the Riftek RF627Weld's search distance (manual rev. 1.1.1, 2020, p. 30).
+    window_mm: NonNegative | None = None
+    #: Invalid frames in a row after which the next point found is taken. Default 20, the
+    #: RF627Weld's invalid sequence (same page).
+    reacquire_frames: Annotated[int, Field(ge=1, le=100_000, strict=True)] | None = None
+    on_invalid: Literal["hold", "predict"] | None = None
+
+
 class TackConfig(_Section):
     """A tack weld across the joint (``[[distortion.tacks]]``), ``position_mm`` along the seam."""
 
@@ -382,6 +423,11 @@ class DistortionConfig(_Section):
 class SceneConfig(_Section):
     name: str = ""
     description: str = ""
+    #: One switch for the countermeasures against the arc (issue 38): "default" turns on blob
+    #: rejection in the peak detector, the seam-point gate and prediction on invalid frames;
+    #: "none" turns them off. Explicit keys override it. Unset: "default" with an [arc], else
+    #: "none" (a scene without the arc runs as before).
+    countermeasures: Literal["none", "default"] | None = None
     simulation: SimulationConfig = Field(default_factory=SimulationConfig)
     seam: SeamConfig = Field(default_factory=SeamConfig)
     sensor: SensorConfig = Field(default_factory=SensorConfig)
@@ -394,6 +440,7 @@ class SceneConfig(_Section):
     passes: PassesConfig | None = None
     planner: PlannerConfig | None = None
     arc: ArcConfig | None = None
+    gate: GateConfig | None = None
     distortion: DistortionConfig | None = None
 
 

@@ -36,6 +36,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack import constants
+from seamtrack.control.gate import GateSettings, SeamGate
 from seamtrack.control.orientation import is_closed
 from seamtrack.control.robot import MoveCommand
 from seamtrack.control.tracking import Command, Measurement, TrackerContext
@@ -222,6 +223,7 @@ def run(
     wall_start = clock()
     tracker = parts.tracker
     name = parts.tracker_name
+    sense = _gated(parts.sense, cfg.gate)  # a new gate per run: it holds the run's state
 
     R = robot.T_world_base[:3, :3]
     p0 = robot.T_world_base[:3, 3]
@@ -306,7 +308,7 @@ def run(
             T_ws = robot.sensor_pose(state)
             hint = tracker_hint(T_ws) if tracker_hint is not None else None  # the tracker's
             sense_start = clock()
-            feature = parts.sense(T_ws, t, hint) if hint is not None else parts.sense(T_ws, t)
+            feature = sense(T_ws, t, hint) if hint is not None else sense(T_ws, t)
             sense_time += clock() - sense_start
             if ticks is not None:
                 tcp = ticks.tcp_now(state)
@@ -417,7 +419,34 @@ def run(
     summary["stop_reason"] = stop_reason
     summary["stop_cause"] = stop_cause
     summary["sense_wall_time_s"] = sense_time
+    summary.update(_gate_summary(sense))
     return Result(summary=summary, trace=trace)
+
+
+class _GatedSense:
+    """``sense`` with the seam-point gate of one run on its features
+    (:mod:`seamtrack.control.gate`)."""
+
+    def __init__(self, sense: Callable[..., Any], settings: GateSettings) -> None:
+        self.sense, self.gate = sense, SeamGate(settings)
+
+    def __call__(self, T_world_sensor: FloatArray, t_s: float, *hint: Any) -> Any:
+        return self.gate(self.sense(T_world_sensor, t_s, *hint), T_world_sensor)
+
+
+def _gated(sense: Callable[..., Any], gate: GateSettings | None) -> Callable[..., Any]:
+    """``sense`` through a new seam-point gate, or ``sense`` itself without one."""
+    return sense if gate is None else _GatedSense(sense, gate)
+
+
+def _gate_summary(sense: Callable[..., Any]) -> dict[str, int]:
+    """What the gate did (summary keys ``gate_*``), none without a gate: frames accepted,
+    refused (a point outside the window), handed on as a prediction, and re-acquisitions."""
+    if not isinstance(sense, _GatedSense):
+        return {}
+    g = sense.gate
+    return {"gate_accepted": g.accepted, "gate_refused": g.refused,
+            "gate_predicted": g.predicted, "gate_reacquired": g.reacquired}  # fmt: skip
 
 
 def _to_move(robot: Any, cmd: Command) -> MoveCommand:

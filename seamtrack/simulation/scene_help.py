@@ -21,6 +21,8 @@ from seamtrack.simulation.config import Scene, SceneConfig
 KEY_HELP: dict[str, str] = {
     "name": "the scene's name (outputs and titles)",
     "description": "one line saying what the scene is (seamtrack init --list)",
+    "countermeasures": '"default": blob rejection, seam-point gate, prediction on; "none": '
+    'off (unset: "default" with an [arc]); explicit keys win',
     # [simulation]
     "simulation": "the run: speed, seed, when it ends, how often the trace is written",
     "simulation.welding_speed_mm_s": "the torch's travel speed along the seam",
@@ -101,6 +103,17 @@ KEY_HELP: dict[str, str] = {
     "laser's)",
     "sensor.camera.filter_fwhm_nm": "band-pass filter's full width at half maximum, nm (>= 0.1)",
     "sensor.camera.filter_shape": 'band-pass filter\'s transmission: "gaussian" or "top-hat"',
+    "sensor.camera.laser_power_w": "the laser's power, W, against the arc's light (unset: 0.1)",
+    "sensor.camera.reject": '"blobs": drop runs not shaped like the stripe (blobs, streaks, '
+    'glow); "none" (unset: from countermeasures)',
+    "sensor.camera.reject_max_width": "a run wider than this times the stripe's equivalent "
+    "width is rejected (unset: 3)",
+    "sensor.camera.reject_max_peak": "a run brighter than this times the stripe's height is "
+    "rejected (unset: 20)",
+    "sensor.camera.reject_min_peak": "a run dimmer than this times the stripe's height is "
+    "rejected (unset: 0)",
+    "sensor.camera.reject_stripe_width_px": "the stripe's equivalent width in pixels (unset: "
+    "the frame's median)",
     # [robot]
     "robot": "the robot: the paper's 3-axis gantry or an articulated arm",
     "robot.model": '"cartesian" (the paper\'s gantry) or an arm ("ur10e", "kr16")',
@@ -169,6 +182,13 @@ KEY_HELP: dict[str, str] = {
     "arc.spatter": "glowing droplets on ballistic paths",
     "arc.fume": "the fume's attenuation and veiling glow",
     "arc.glow": "the hot plate's own light near the arc",
+    "gate": "the seam-point gate in time between the extractor and the tracker (docs/arc.md)",
+    "gate.enabled": 'the gate on or off (unset: on with countermeasures = "default")',
+    "gate.window_mm": "search window about the predicted seam point (unset: 15; 0: no gate)",
+    "gate.reacquire_frames": "invalid frames in a row after which the next point is taken "
+    "(unset: 20)",
+    "gate.on_invalid": 'a refused frame: "hold" (no seam point: the last target) or '
+    '"predict" (the predicted point); unset: from countermeasures',
     "distortion": "the butt joint moving while it is welded (docs/heat.md); none, still",
     "distortion.material": '"carbon_steel", "stainless_steel" or "aluminium"',
     "distortion.thickness_mm": "plate thickness, mm (the heat and the bending)",
@@ -315,6 +335,10 @@ def commented_scene(scene: Scene, header: str = "") -> str:
     ]
     for name in ("name", "description"):
         lines += [_comment(KEY_HELP[name]), f"{name} = {_toml(data[name])}"]
+    switch = data["countermeasures"]
+    lines += [_comment(KEY_HELP["countermeasures"]),
+              f"countermeasures = {_toml(switch)}" if switch is not None else
+              "# countermeasures = (unset)"]  # fmt: skip
     for name, info in SceneConfig.model_fields.items():
         sub = _submodel(info.annotation)
         if sub is None:

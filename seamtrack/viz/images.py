@@ -98,6 +98,7 @@ def render_command(
     from seamtrack.io.output import check_writable, new_dir
     from seamtrack.sensing.peaks import detect
     from seamtrack.simulation.assemble import arc_frame, build_parts, scene_arc_light
+    from seamtrack.simulation.countermeasures import rejection
     from seamtrack.simulation.robots import sensor_pose_at
     from seamtrack.simulation.scene import CameraConfig, load_scene, make_camera
 
@@ -133,7 +134,7 @@ def render_command(
                                 **({} if arc is None else {"arc": arc}))  # fmt: skip
     rows = detect(image.pixels, method=detector.method, threshold=detector.threshold,
                   choose=detector.choose, relative=detector.relative,
-                  noise_sigmas=detector.noise_sigmas)  # fmt: skip
+                  noise_sigmas=detector.noise_sigmas, reject=rejection(c))  # fmt: skip
     level = (f"threshold {detector.threshold:g}" if detector.threshold is not None else
              f"threshold {detector.relative:g} of each column's peak, >= "
              f"{detector.noise_sigmas:g} noise sigmas")  # fmt: skip
