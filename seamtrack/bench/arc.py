@@ -37,10 +37,12 @@ FloatArray = np.ndarray
 CURRENTS_A = (100.0, 150.0, 200.0, 250.0, 300.0, 350.0)
 LOOK_AHEADS_MM = (10.0, 20.0, 30.0, 40.0, 50.0)
 MODES = ("image", "profile")
-#: The countermeasures compared: name -> scene overrides. ``none`` is the scene as it is on
-#: this branch; once the countermeasures' switch lands, add e.g.
-#: ``"default": {"arc.countermeasures": "default"}`` (and the explicit ``"none"`` value).
-COUNTERMEASURES: dict[str, dict[str, Any]] = {"none": {}}
+#: The countermeasures compared: name -> scene overrides (the scene's one-word switch,
+#: ``countermeasures``: peak rejection, the seam-point gate, hold or predict; docs/arc.md).
+COUNTERMEASURES: dict[str, dict[str, Any]] = {
+    "none": {"countermeasures": "none"},
+    "default": {"countermeasures": "default"},
+}
 #: The scenes of the two modes.
 SCENES = {"image": "v-groove-arc", "profile": "v-groove-arc-profile"}
 #: The closed loop's curve: the V-groove on an arc of this radius (mm); 50 mm ahead on it the
