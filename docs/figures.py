@@ -501,13 +501,16 @@ def _multipass() -> str:
     forced = next(j for j in r["jobs"] if j["count"] == 12)
     gap = {row["planner"]: row for row in r["varying_gap"]}
     spread = ", ".join(f"{k} {v['reinforcement_spread_mm']:.2f} mm" for k, v in gap.items())
+    levels = ", ".join(f"{j['count']}: {j.get('quality_level') or 'none'}" for j in r["jobs"])
+    busy = r.get("load_average_after")
     return (
         f"{t['passes']} passes on {t['seam_mm']:.0f} mm, {t['status']}: max tracking error "
         f"{t['max_tracking_error_mm']:.2f} mm, reinforcement {t['reinforcement_min_mm']:.2f} to "
-        f"{t['reinforcement_max_mm']:.2f} mm, {t['x_real_time']:.1f}x real time of arc time, "
-        f"peak {t['peak_rss_mb']:.0f} MB; forced into {forced['passes']} passes: max tracking "
-        f"error {forced['max_tracking_error_mm']:.1f} mm; varying gap, reinforcement spread: "
-        f"{spread}"
+        f"{t['reinforcement_max_mm']:.2f} mm, {t['x_real_time']:.1f}x real time of arc time"
+        + (f" (load {busy:.1f})" if busy is not None else " (measured beside other work)")
+        + f", peak {t['peak_rss_mb']:.0f} MB; forced into {forced['passes']} passes: max "
+        f"tracking error {forced['max_tracking_error_mm']:.2f} mm; ISO 5817 level by pass "
+        f"count: {levels}; varying gap, reinforcement spread: {spread}"
     )
 
 

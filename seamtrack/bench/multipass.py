@@ -17,6 +17,7 @@
 from __future__ import annotations
 
 import json
+import os
 import time
 from pathlib import Path
 from typing import Any
@@ -83,7 +84,8 @@ def bench_multipass(out_dir: str | Path, quick: bool = False) -> dict[str, Any]:
         )
     result = {"machine": machine_info(), "quick": quick, "jobs": jobs,
               "varying_gap": compare, "varying_gap_dry": _dry(seam),
-              "targets": {"x_real_time": 10.0, "adaptive_spread_mm": 1.0}}  # fmt: skip
+              "targets": {"x_real_time": 10.0, "adaptive_spread_mm": 1.0},
+              "load_average_after": os.getloadavg()[0]}  # fmt: skip
     out.mkdir(parents=True, exist_ok=True)
     (out / "multipass.json").write_text(json.dumps(result, indent=2, default=float) + "\n")
     (out / "multipass.md").write_text(markdown(result))
@@ -162,9 +164,12 @@ def _planner_ms(row: dict[str, Any]) -> str:
 
 
 def markdown(result: dict[str, Any]) -> str:
+    load = result.get("load_average_after")
     lines = [
         f"multipass-v-groove on a {result['jobs'][0]['seam_mm']:g} mm seam: its own plan, and"
-        " forced into other pass counts:",
+        " forced into other pass counts"
+        + (f" (1-minute load at the end {load:.1f}: the times are the machine's)" if load else "")
+        + ":",
         "",
         "| passes.count | passes | beads per layer | status | wall time (s) | peak memory (MB) |"
         " arc time (s) | x real time | mesh rebuild (s/pass) | loop (s/pass) |"
