@@ -19,6 +19,7 @@ import math
 from pathlib import Path
 from typing import Any
 
+from seamtrack.batch.sweep import TABLE_KEYS
 from seamtrack.bench.common import machine_info
 
 SCENE = "paper-corner"
@@ -26,14 +27,8 @@ RADII_MM = (6.0, 5.0, 1.0, 0.1, 0.05, 0.04, 0.02, 0.01)
 #: ``--quick``: two radii (a smoke run, not the docs' figures).
 QUICK_RADII_MM = (6.0, 0.1)
 SERVO: dict[str, Any] = {"robot.servo_gain_1_s": 20.0, "robot.interpolation_period_s": 0.004}
-COLUMNS = (
-    "status",
-    "max_error_mm",
-    "min_error_mm",
-    "rms_error_mm",
-    "mean_speed_mm_s",
-    "completed_fraction",
-)
+#: The sweep table's columns (a row of Table 4 is a case of ``seamtrack sweep``).
+COLUMNS = TABLE_KEYS
 #: The paper's own Table 4 (MaxError, MinError in mm at RADII_MM), quoted for comparison:
 #: /work/shared/paper/seam-tracking-simulation.md, "Table 4 Seam tracking algorithm II
 #: simulation result".

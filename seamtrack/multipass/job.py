@@ -66,7 +66,7 @@ from seamtrack.multipass.paths import (
     to_the_ends,
     true_groove,
 )
-from seamtrack.multipass.steering import steered
+from seamtrack.multipass.steering import SteeredSense
 from seamtrack.multipass.summary import job_summary
 from seamtrack.sensing.profiles import Feature
 from seamtrack.simulation.assemble import Parts, build_parts
@@ -374,8 +374,9 @@ def _pass(
     parts, moving = distorted_parts(parts, pass_scene, plan, fill, process, bent)
     frames: list[tuple[Feature, FloatArray]] = []
     each: list[FrameGroove | None] = []  # every frame's groove, as the sense function saw it
-    parts = steered(parts, fill, cad_seam, plan, frames, adapt, planner_name, previous, each,
-                     expected)  # fmt: skip
+    sense = SteeredSense(parts, fill, cad_seam, plan, frames, adapt, planner_name, previous, each,
+                         expected)  # fmt: skip
+    parts = dataclasses.replace(parts, sense=sense)
     build_s = time.perf_counter() - start
     start = time.perf_counter()
     result = run(parts, progress=progress, seed=c.simulation.seed, stop=stop)

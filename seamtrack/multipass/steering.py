@@ -48,24 +48,6 @@ FILL_DROP_MM = 1.0
 FIXED_REFERENCES = ("left_top", "right_top")
 
 
-def steered(
-    parts: Parts,
-    fill: FillState,
-    cad_seam: Seam,
-    plan: PassPlan | None,
-    frames: list[tuple[Feature, FloatArray]],
-    adapt: Callable[[MeasuredGroove, PassPlan], Any] | None = None,
-    planner_name: str = "planner",
-    previous: MeasuredGroove | None = None,
-    each: list[FrameGroove | None] | None = None,
-    expected: MeasuredGroove | None = None,
-) -> Parts:
-    """The parts with their sense function wrapped in a :class:`SteeredSense`."""
-    sense = SteeredSense(parts, fill, cad_seam, plan, frames, adapt, planner_name, previous,
-                         each, expected)  # fmt: skip
-    return dataclasses.replace(parts, sense=sense)
-
-
 class SteeredSense:
     """A pass's sense function: records every frame's feature in ``frames`` (and, in ``each``,
     its groove: :func:`~seamtrack.multipass.paths.frame_groove`), moves the measured point by
