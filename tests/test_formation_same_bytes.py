@@ -237,3 +237,25 @@ def test_chip_readout_is_the_numpy_reference_to_the_byte(change) -> None:
     assert a.dtype == b.dtype == np.float32
     assert a.tobytes() == b.tobytes()
     assert ours.bit_generator.state == theirs.bit_generator.state
+
+
+def test_poisson_by_inversion_draws_poisson_counts() -> None:
+    """The arc frames' shot-noise sampler against the Poisson law (scipy.stats.poisson): at
+    means from 0.05 to just under INVERSION_MAX_MEAN the counts' frequencies are the pmf within
+    5 standard errors, mean and variance the mean; a mean at the bound is left to NumPy."""
+    from scipy import stats
+
+    from seamtrack.sensing.formation import INVERSION_MAX_MEAN, poisson_by_inversion
+
+    rng = np.random.default_rng(7)
+    n = 200_000
+    for lam in (0.05, 1.0, 3.3, 12.0, INVERSION_MAX_MEAN - 0.5):
+        counts = poisson_by_inversion(np.full(n, lam, dtype=np.float32), rng.random(n))
+        k = np.arange(int(lam + 8 * np.sqrt(lam) + 10))
+        freq = np.bincount(counts.astype(np.int64), minlength=len(k))[: len(k)] / n
+        pmf = stats.poisson.pmf(k, np.float32(lam))
+        assert np.all(np.abs(freq - pmf) <= 5 * np.sqrt(pmf * (1 - pmf) / n) + 1e-12), lam
+        assert abs(counts.mean() - lam) < 5 * np.sqrt(lam / n)
+        assert abs(counts.var() - lam) < 0.05 * lam + 0.01
+    left = poisson_by_inversion(np.array([INVERSION_MAX_MEAN], dtype=np.float32), np.array([0.5]))
+    assert left[0] == np.float32(INVERSION_MAX_MEAN)

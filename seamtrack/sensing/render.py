@@ -160,7 +160,9 @@ def render_image(
     )
     reflection = bounce_total > REFLECTION_LEVEL * optics.column_reference
     reflection_row = np.where(reflection, reflection_row, np.nan)
-    pixels, column_exposure = _read_out(electrons, cam, rng)
+    # With the arc, fume and glow light most of the chip with a few electrons a pixel: their
+    # shot noise by inverting the CDF (exactly Poisson, faster there; frames without it as before)
+    pixels, column_exposure = _read_out(electrons, cam, rng, dim_by_inversion=arc is not None)
     return StripeImage(
         pixels=pixels, camera=cam, sensor=imaging, material=mat, window=window,
         truth_row=truth, reflection=reflection, reflection_row=reflection_row,
@@ -169,7 +171,7 @@ def render_image(
 
 
 def _read_out(
-    electrons: FloatArray, cam: Camera, rng: np.random.Generator
+    electrons: FloatArray, cam: Camera, rng: np.random.Generator, dim_by_inversion: bool = False
 ) -> tuple[NDArray[np.float32], FloatArray | None]:
     """The chip's readout at the camera's exposure, or (``multi``) at each exposure of its set,
     merged: each column from the longest exposure whose pixels stay below full scale there, the
@@ -188,7 +190,7 @@ def _read_out(
         frame = formation.chip_readout(
             electrons * factor if factor != 1.0 else electrons, rng, full_well_e=cam.full_well_e,
             ambient=cam.ambient, shot_noise=cam.shot_noise, read_noise_e=cam.read_noise_e,
-            bit_depth=cam.bit_depth,
+            bit_depth=cam.bit_depth, dim_by_inversion=dim_by_inversion,
         )  # fmt: skip
         if chosen is None:
             chosen = frame
