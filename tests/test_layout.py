@@ -338,7 +338,6 @@ OVER_THE_BOUNDS_TODAY = {
     "seamtrack/sensing/camera.py::__post_init__",
     "seamtrack/sensing/kernels.py::fan_stripe_hits",
     "seamtrack/simulation/assemble.py::_mesh_scan",
-    "seamtrack/multipass/job.py::_run_job",
     "seamtrack/simulation/loop.py::run",
 }
 

@@ -156,9 +156,6 @@ def _run_job(
     freeze: bool,
     stop: StopRequest | None = None,
 ) -> JobResult:
-    from seamtrack.workpiece.beads import BeadShape
-    from seamtrack.workpiece.fill import FillState  # trimesh, scipy: a job's own imports
-
     if not isinstance(scene, Scene):
         scene = load_scene(scene)
     c = scene.config
@@ -166,18 +163,12 @@ def _run_job(
         raise SceneError(
             "the scene has no [passes]", field="passes", fix="add [passes] for a multi-pass job"
         )
-    rng = np.random.default_rng(c.simulation.seed)
-    base_parts = build_parts(scene, rng)
-    cad_seam = base_parts.seam
-    fill = FillState.from_mesh(base_parts.mesh, cad_seam, spacing_mm=STATION_SPACING_MM)
-    flip = _laser_flipped(base_parts, fill)
+    from seamtrack.workpiece.beads import BeadShape
+
+    rng, cad_seam, fill, flip = _empty_groove(scene)
     process = process_of(c)
     shape = bead_shape(c, BeadShape)
-    name = c.planner.name if c.planner is not None else "adaptive"
-    params = dict(c.planner.params) if c.planner is not None else {}
-    plan_maker = planner_override if planner_override is not None else planner(name, **params)
-    adapt = getattr(plan_maker, "adapt", None)
-    adapt = adapt if callable(adapt) else None
+    name, plan_maker, adapt = _planner_of(c, planner_override)
     count = c.passes.count if isinstance(c.passes.count, int) else None
     state = JobState(process, count=count, reinforcement_mm=c.passes.reinforcement_mm)
     _check_bead_fits(fill, process, c)
@@ -189,7 +180,6 @@ def _run_job(
     job_bar = _job_bar(progress, count)
     wall_start = time.perf_counter()
 
-    groove: MeasuredGroove | None = None
     if c.passes.scan_first:
         scan = _pass(scene, None, fill, cad_seam, rng, process, progress, "pass_00_scan", flip,
                      stop=stop)  # fmt: skip
@@ -197,16 +187,7 @@ def _run_job(
         records.append(scan.record)
         if stop is not None and stop.requested:
             return _interrupted(scene, records, fill, wall_start, stop, job_bar)
-        if scan.groove is None:
-            raise PluginRuntimeError(
-                "the groove extractor measured the groove in no frame of the scan-only pass",
-                field="extractor.name",
-                fix="check the sensor sees the groove (seamtrack check) and the extractor is "
-                "groove",
-            )
-        groove = scan.groove
-        if c.extractor.name == "groove" and "wall_deg" not in c.extractor.params:
-            scene = _with(scene, {"extractor.params.wall_deg": wall_deg(groove)})
+        scene, groove = _scanned(scene, scan)
     else:
         groove = true_groove(fill)
     limit = count if count is not None else MAX_PASSES
@@ -214,18 +195,10 @@ def _run_job(
     stopped = ""
     while index < limit:
         assert groove is not None
-        planning = time.perf_counter()
-        plan = _plan(plan_maker, name, groove, index, state, arm=is_arm(c), window=window,
-                     budget_s=budget_s)  # fmt: skip
-        plan_s = time.perf_counter() - planning
+        plan, plan_s = _next_plan(scene, plan_maker, name, groove, index, state, window, budget_s)
         if plan is None:
             _check_overrides_laid(c.passes, index, name)
             break
-        if c.passes.overrides:
-            plan = checked_plan(overridden(plan, c.passes, index), name, index, groove,
-                                gantry=not is_arm(c), field="passes.overrides",
-                                window=window)  # fmt: skip
-            assert plan is not None
         done = _pass(scene, plan, fill, cad_seam, rng, process, progress, f"pass_{index + 1:02d}",
                      flip, adapt, name, groove, stop,
                      after_bead(groove, state.last_bead_area_mm2), bent)  # fmt: skip
@@ -233,14 +206,7 @@ def _run_job(
         if stop is not None and stop.requested:  # the bead of a stopped pass is not laid
             records.append(done.record)
             return _interrupted(scene, records, fill, wall_start, stop, job_bar)
-        start = time.perf_counter()
-        try:
-            if len(done.path_world) >= 2:
-                fill = fill.deposit(done.path_world, done.path_area_mm2, shape)
-        except SceneError as exc:  # the torch left the groove: the bead cannot be laid
-            stopped = f"the bead of pass {index + 1} could not be laid ({exc.message})"
-        record = dataclasses.replace(done.record, deposit_s=time.perf_counter() - start,
-                                     plan_s=plan_s)  # fmt: skip
+        fill, record, stopped = _laid(fill, done, shape, plan_s, index)
         records.append(record)
         if stopped:
             break
@@ -262,9 +228,19 @@ def _run_job(
                 f"{name!r} was not done after {MAX_PASSES} passes, the most a job lays "
                 "(the groove is not full)"
             )
-    if job_bar is not None:
-        job_bar.close()
-    if index == 0:
+    return _finished(scene, records, fill, wall_start, stopped, bent, job_bar, name, index)
+
+
+def _finished(
+    scene: Scene, records: list[PassRecord], fill: FillState, wall_start: float, stopped: str,
+    bent: JobDistortion | None, bar: Any, name: str, laid: int,
+) -> JobResult:  # fmt: skip
+    """The job's result: its summary (why it stopped, when ``stopped`` says; the plates'
+    angle with ``[distortion]``), its passes and its fill; refused when the planner ``name``
+    planned no pass (``laid`` 0)."""
+    if bar is not None:
+        bar.close()
+    if laid == 0:
         raise PluginRuntimeError(
             f"{name!r} planned no pass at all (a plan of zero beads)",
             field="planner.name",
@@ -273,6 +249,81 @@ def _run_job(
     summary = job_summary(scene, records, fill, time.perf_counter() - wall_start, stopped)
     summary.update(bent.summary() if bent is not None else {})
     return JobResult(summary, records, fill)
+
+
+def _empty_groove(scene: Scene) -> tuple[np.random.Generator, Seam, FillState, bool]:
+    """The job's generator (seeded by the scene), the CAD seam, the empty groove's fill state
+    and whether the laser's y_L runs against the stations' y (:func:`_laser_flipped`)."""
+    from seamtrack.workpiece.fill import FillState  # trimesh, scipy: a job's own imports
+
+    rng = np.random.default_rng(scene.config.simulation.seed)
+    base_parts = build_parts(scene, rng)
+    cad_seam = base_parts.seam
+    fill = FillState.from_mesh(base_parts.mesh, cad_seam, spacing_mm=STATION_SPACING_MM)
+    return rng, cad_seam, fill, _laser_flipped(base_parts, fill)
+
+
+def _planner_of(c: Any, override: Any) -> tuple[str, Any, Any]:
+    """The scene's planner (or ``override``): its name, the planner, its ``adapt`` (None:
+    it has none)."""
+    name = c.planner.name if c.planner is not None else "adaptive"
+    params = dict(c.planner.params) if c.planner is not None else {}
+    plan_maker = override if override is not None else planner(name, **params)
+    adapt = getattr(plan_maker, "adapt", None)
+    return name, plan_maker, adapt if callable(adapt) else None
+
+
+def _scanned(scene: Scene, scan: _Done) -> tuple[Scene, MeasuredGroove]:
+    """After the scan-only pass: the groove it measured, and the scene with the groove
+    extractor's ``wall_deg`` set from it (unless the scene sets it)."""
+    if scan.groove is None:
+        raise PluginRuntimeError(
+            "the groove extractor measured the groove in no frame of the scan-only pass",
+            field="extractor.name",
+            fix="check the sensor sees the groove (seamtrack check) and the extractor is groove",
+        )
+    c = scene.config
+    if c.extractor.name == "groove" and "wall_deg" not in c.extractor.params:
+        scene = _with(scene, {"extractor.params.wall_deg": wall_deg(scan.groove)})
+    return scene, scan.groove
+
+
+def _next_plan(
+    scene: Scene, plan_maker: Any, name: str, groove: MeasuredGroove, index: int,
+    state: JobState, window: tuple[float, float], budget_s: float,
+) -> tuple[PassPlan | None, float]:  # fmt: skip
+    """Pass ``index``'s plan, checked, with the scene's overrides for it (None: the planner is
+    done), and the planner's time for it (s)."""
+    c = scene.config
+    assert c.passes is not None
+    planning = time.perf_counter()
+    plan = _plan(plan_maker, name, groove, index, state, arm=is_arm(c), window=window,
+                 budget_s=budget_s)  # fmt: skip
+    plan_s = time.perf_counter() - planning
+    if plan is not None and c.passes.overrides:
+        plan = checked_plan(overridden(plan, c.passes, index), name, index, groove,
+                            gantry=not is_arm(c), field="passes.overrides",
+                            window=window)  # fmt: skip
+        assert plan is not None
+    return plan, plan_s
+
+
+def _laid(
+    fill: FillState, done: _Done, shape: Any, plan_s: float, index: int
+) -> tuple[FillState, PassRecord, str]:
+    """The fill with the pass's bead laid along the path its torch followed, the pass's record
+    (with the deposition's and the planner's times), and why the job stops here ("" when it
+    goes on): the torch left the groove, so the bead cannot be laid."""
+    start = time.perf_counter()
+    stopped = ""
+    try:
+        if len(done.path_world) >= 2:
+            fill = fill.deposit(done.path_world, done.path_area_mm2, shape)
+    except SceneError as exc:  # the torch left the groove: the bead cannot be laid
+        stopped = f"the bead of pass {index + 1} could not be laid ({exc.message})"
+    record = dataclasses.replace(done.record, deposit_s=time.perf_counter() - start,
+                                 plan_s=plan_s)  # fmt: skip
+    return fill, record, stopped
 
 
 def _interrupted(
