@@ -374,3 +374,16 @@ def test_no_function_over_the_bounds() -> None:
     found = over_the_bounds()
     assert found - OVER_THE_BOUNDS_TODAY == set(), "cut these by what their steps mean"
     assert OVER_THE_BOUNDS_TODAY - found == set(), "these keep the bounds now: strike them"
+
+
+def test_features_define_each_geometric_type_once() -> None:
+    """One line geometry in features/ (issue 40 item 2): a class named ``Line``, ``Point`` or
+    ``Corner`` is defined once across the extractors, not once per family."""
+    names = ("Line", "Point", "Corner")
+    found: dict[str, list[str]] = {n: [] for n in names}
+    for path in sorted((ROOT / "features").rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, ast.ClassDef) and node.name in names:
+                found[node.name].append(str(path.relative_to(ROOT)))
+    assert {n: len(where) for n, where in found.items() if len(where) > 1} == {}, found
+    assert found["Line"] == ["features/line_geometry.py"]
