@@ -2,11 +2,11 @@
 
 Run alone: ``python cad/fillet_t.py [key=value ...] [--step out.step]`` prints a summary (and
 exports STEP); in CQ-editor the part is shown. ``build(**params)`` returns a
-:class:`seamtrack.cad._paths.Joint`: ``.solid`` (cadquery Shape, mm), ``.seams`` (``{"root":
+:class:`seamtrack.cad.kit.cadpaths.Joint`: ``.solid`` (cadquery Shape, mm), ``.seams`` (``{"root":
 [...], "root_opposite": [...]}``, edges in order along the seam), ``.seam_solid`` (the part
 before tack welds).
 
-Cross-section (profile plane, v up, u across; see ``_paths``): a flange plate
+Cross-section (profile plane, v up, u across; see ``cadpaths``): a flange plate
 (``flange_width_mm`` x ``flange_thickness_mm``) with its top at v = 0; a web of
 ``web_thickness_mm`` and ``web_height_mm`` (measured along the web) standing at
 ``web_angle_deg`` from the flange (90 = upright; smaller leans the web over the ``root`` side),
@@ -21,11 +21,11 @@ from __future__ import annotations
 import math
 
 try:
-    from seamtrack.cad import _paths
+    from seamtrack.cad.kit import cadpaths
 except ImportError:  # run from a copy of cad/ without seamtrack installed
-    import _paths  # type: ignore[no-redef]
+    from kit import cadpaths  # type: ignore[no-redef]
 
-Joint = _paths.Joint
+Joint = cadpaths.Joint
 
 
 def build(
@@ -43,7 +43,7 @@ def build(
     tacks: int = 0,
     tack_length_mm: float = 8.0,
     tack_height_mm: float = 1.5,
-) -> _paths.Joint:
+) -> cadpaths.Joint:
     """Build the T joint; see the module docstring for the parameters' meaning."""
     params = dict(locals())
     tf, wf, tw, hw, g = (
@@ -59,15 +59,15 @@ def build(
         ("web_thickness_mm", tw),
         ("web_height_mm", hw),
     ):
-        _paths.require(value > 0, name, f"must be > 0, got {value}")
-    _paths.require(
+        cadpaths.require(value > 0, name, f"must be > 0, got {value}")
+    cadpaths.require(
         30 <= web_angle_deg <= 150, "web_angle_deg", f"must be in [30, 150], got {web_angle_deg}"
     )
-    _paths.require(g >= 0, "web_gap_mm", f"must be >= 0, got {g}")
+    cadpaths.require(g >= 0, "web_gap_mm", f"must be >= 0, got {g}")
     angle = math.radians(web_angle_deg)
     foot = tw / math.sin(angle)  # width of the web's horizontal foot
     lean = (-hw * math.cos(angle), hw * math.sin(angle))  # web direction (upright: (0, h))
-    _paths.require(
+    cadpaths.require(
         wf > foot + 2 * abs(lean[0]) + 1e-9,
         "flange_width_mm",
         f"the flange must be wider than the web's footprint ({foot + 2 * abs(lean[0]):.1f} mm)",
@@ -79,10 +79,12 @@ def build(
     else:
         flange = [(lo, -tf), (hi, -tf), (hi, 0.0), (foot, 0.0), (0.0, 0.0), (lo, 0.0)]
         profiles = [flange, web]
-    return _paths.finish_joint(profiles, {"root": (0.0, 0.0), "root_opposite": (foot, 0.0)}, params)
+    return cadpaths.finish_joint(
+        profiles, {"root": (0.0, 0.0), "root_opposite": (foot, 0.0)}, params
+    )
 
 
 if __name__ == "__main__":
-    _paths.run_script(build)
+    cadpaths.run_script(build)
 elif "show_object" in globals():
     show_object(build().solid)  # type: ignore[name-defined]  # noqa: F821

@@ -2,10 +2,10 @@
 
 Run alone: ``python cad/narrow_gap.py [key=value ...] [--step out.step]`` prints a summary (and
 exports STEP); in CQ-editor the part is shown. ``build(**params)`` returns a
-:class:`seamtrack.cad._paths.Joint`: ``.solid`` (cadquery Shape, mm), ``.seams`` (``{"root":
+:class:`seamtrack.cad.kit.cadpaths.Joint`: ``.solid`` (cadquery Shape, mm), ``.seams`` (``{"root":
 [edges in order along the seam]}``), ``.seam_solid`` (the part before tack welds).
 
-Cross-section (profile plane, v up, u across; see ``_paths``): two plates of
+Cross-section (profile plane, v up, u across; see ``cadpaths``): two plates of
 ``plate_thickness_mm`` (the groove's depth) and ``plate_width_mm`` each, their walls
 ``wall_angle_deg`` off vertical (each), ``gap_mm`` apart at the bottom, standing on a backing bar
 of ``backing_thickness_mm`` x ``backing_width_mm`` centred under the gap. The groove is
@@ -20,11 +20,11 @@ from __future__ import annotations
 import math
 
 try:
-    from seamtrack.cad import _paths
+    from seamtrack.cad.kit import cadpaths
 except ImportError:  # run from a copy of cad/ without seamtrack installed
-    import _paths  # type: ignore[no-redef]
+    from kit import cadpaths  # type: ignore[no-redef]
 
-Joint = _paths.Joint
+Joint = cadpaths.Joint
 
 
 def build(
@@ -42,19 +42,19 @@ def build(
     tacks: int = 0,
     tack_length_mm: float = 8.0,
     tack_height_mm: float = 1.5,
-) -> _paths.Joint:
+) -> cadpaths.Joint:
     """Build the narrow-gap joint; see the module docstring for the parameters' meaning."""
     params = dict(locals())
     t, w, g = plate_thickness_mm, plate_width_mm, gap_mm
-    _paths.require(t > 0, "plate_thickness_mm", f"must be > 0, got {t}")
-    _paths.require(g > 0, "gap_mm", f"must be > 0, got {g}")
-    _paths.require(
+    cadpaths.require(t > 0, "plate_thickness_mm", f"must be > 0, got {t}")
+    cadpaths.require(g > 0, "gap_mm", f"must be > 0, got {g}")
+    cadpaths.require(
         0 <= wall_angle_deg < 45,
         "wall_angle_deg",
         f"must be in [0, 45) (off vertical), got {wall_angle_deg}",
     )
     flare = t * math.tan(math.radians(wall_angle_deg))
-    _paths.require(
+    cadpaths.require(
         flare < w,
         "plate_width_mm",
         f"the wall leans {flare:.2f} mm; plates must be wider than that",
@@ -71,11 +71,11 @@ def build(
         (-h - w, t),
         (-h - w, 0.0),
     ]
-    profile = _paths.on_backing(plates, g, w, backing_thickness_mm, backing_width_mm)
-    return _paths.finish_joint([profile], {"root": (0.0, 0.0)}, params, (0.0, 0.0))
+    profile = cadpaths.on_backing(plates, g, w, backing_thickness_mm, backing_width_mm)
+    return cadpaths.finish_joint([profile], {"root": (0.0, 0.0)}, params, (0.0, 0.0))
 
 
 if __name__ == "__main__":
-    _paths.run_script(build)
+    cadpaths.run_script(build)
 elif "show_object" in globals():
     show_object(build().solid)  # type: ignore[name-defined]  # noqa: F821

@@ -1,7 +1,7 @@
 """A branch pipe set on a main pipe at 90 deg (a tee), fillet-welded round the saddle.
 
 Run alone: ``python cad/pipe_saddle.py [key=value ...] [--step out.step]`` prints a summary
-(and exports STEP). ``build(**params)`` returns a :class:`seamtrack.cad._paths.Joint` whose
+(and exports STEP). ``build(**params)`` returns a :class:`seamtrack.cad.kit.cadpaths.Joint` whose
 ``"root"`` seam is the saddle: the closed 3D curve where the branch's outer wall (x^2 + y^2 =
 r^2) meets the main pipe's outer wall (y^2 + z^2 = R^2), z = sqrt(R^2 - r^2 sin^2 phi) at
 x = r cos phi, y = r sin phi. Its height changes by R - sqrt(R^2 - r^2) round the branch and
@@ -17,13 +17,13 @@ from __future__ import annotations
 import math
 
 try:
-    from seamtrack.cad import _paths
+    from seamtrack.cad.kit import cadpaths
 except ImportError:  # run from a copy of cad/ without seamtrack installed
-    import _paths  # type: ignore[no-redef]
+    from kit import cadpaths  # type: ignore[no-redef]
 
 import cadquery as cq
 
-Joint = _paths.Joint
+Joint = cadpaths.Joint
 
 
 def build(
@@ -33,23 +33,25 @@ def build(
     wall_thickness_mm: float = 6.0,
     main_length_mm: float = 320.0,
     branch_height_mm: float = 80.0,
-) -> _paths.Joint:
+) -> cadpaths.Joint:
     """Build the tee; see the module docstring."""
     params = dict(locals())
     R, r, t = main_outer_diameter_mm / 2, branch_outer_diameter_mm / 2, wall_thickness_mm
-    _paths.require(R > 0, "main_outer_diameter_mm", f"must be > 0, got {2 * R}")
-    _paths.require(
+    cadpaths.require(R > 0, "main_outer_diameter_mm", f"must be > 0, got {2 * R}")
+    cadpaths.require(
         0 < r < R,
         "branch_outer_diameter_mm",
         f"must be in (0, {2 * R}) (smaller than the main pipe), got {2 * r}",
     )
-    _paths.require(0 < t < r, "wall_thickness_mm", f"must be in (0, {r}), got {t}")
-    _paths.require(
+    cadpaths.require(0 < t < r, "wall_thickness_mm", f"must be in (0, {r}), got {t}")
+    cadpaths.require(
         main_length_mm > 2 * r + 2 * t,
         "main_length_mm",
         f"must exceed the branch's diameter plus two walls ({2 * r + 2 * t} mm)",
     )
-    _paths.require(branch_height_mm > 0, "branch_height_mm", f"must be > 0, got {branch_height_mm}")
+    cadpaths.require(
+        branch_height_mm > 0, "branch_height_mm", f"must be > 0, got {branch_height_mm}"
+    )
     top = R + branch_height_mm
     main = cq.Solid.makeCylinder(R, main_length_mm, cq.Vector(-main_length_mm / 2, 0, 0),
                                  cq.Vector(1, 0, 0))  # fmt: skip
@@ -71,11 +73,11 @@ def build(
 
     seam = [e for e in solid.Edges() if on_saddle(e)]
     if not seam:  # pragma: no cover - the fuse always leaves the intersection curve
-        raise _paths.ParamError("branch_outer_diameter_mm", "no saddle edge in the fused part")
+        raise cadpaths.ParamError("branch_outer_diameter_mm", "no saddle edge in the fused part")
     return Joint(solid=solid, seams={"root": seam}, seam_solid=solid, params=params)
 
 
 if __name__ == "__main__":
-    _paths.run_script(build)
+    cadpaths.run_script(build)
 elif "show_object" in globals():
     show_object(build().solid)  # type: ignore[name-defined]  # noqa: F821

@@ -2,10 +2,10 @@
 
 Run alone: ``python cad/square_butt.py [key=value ...] [--step out.step]`` prints a summary (and
 exports STEP); in CQ-editor the part is shown. ``build(**params)`` returns a
-:class:`seamtrack.cad._paths.Joint`: ``.solid`` (cadquery Shape, mm), ``.seams`` (``{"root":
+:class:`seamtrack.cad.kit.cadpaths.Joint`: ``.solid`` (cadquery Shape, mm), ``.seams`` (``{"root":
 [edges in order along the seam]}``), ``.seam_solid`` (the part before tack welds).
 
-Cross-section (profile plane, v up, u across; see ``_paths``): the plate on the -u side has
+Cross-section (profile plane, v up, u across; see ``cadpaths``): the plate on the -u side has
 ``plate_thickness_mm``; the plate on the +u side is ``misalignment_mm`` thicker (its top stands
 higher, bottoms flush: "high-low"). With a ``root_gap_mm`` > 0 the plates sit on a backing
 strip and the seam is the centre of the gap on the backing (the weld root). Without a gap the
@@ -16,11 +16,11 @@ split line in the top face when there is no misalignment either).
 from __future__ import annotations
 
 try:
-    from seamtrack.cad import _paths
+    from seamtrack.cad.kit import cadpaths
 except ImportError:  # run from a copy of cad/ without seamtrack installed
-    import _paths  # type: ignore[no-redef]
+    from kit import cadpaths  # type: ignore[no-redef]
 
-Joint = _paths.Joint
+Joint = cadpaths.Joint
 
 
 def build(
@@ -38,15 +38,15 @@ def build(
     tacks: int = 0,
     tack_length_mm: float = 8.0,
     tack_height_mm: float = 1.5,
-) -> _paths.Joint:
+) -> cadpaths.Joint:
     """Build the square butt joint; see the module docstring for the parameters' meaning."""
     params = dict(locals())
     t, w, g, m = plate_thickness_mm, plate_width_mm, root_gap_mm, misalignment_mm
-    _paths.require(t > 0, "plate_thickness_mm", f"must be > 0, got {t}")
-    _paths.require(w > 0, "plate_width_mm", f"must be > 0, got {w}")
-    _paths.require(g >= 0, "root_gap_mm", f"must be >= 0, got {g}")
-    _paths.require(g < w, "root_gap_mm", f"{g} mm is larger than the plate ({w} mm)")
-    _paths.require(m >= 0, "misalignment_mm", f"must be >= 0, got {m}")
+    cadpaths.require(t > 0, "plate_thickness_mm", f"must be > 0, got {t}")
+    cadpaths.require(w > 0, "plate_width_mm", f"must be > 0, got {w}")
+    cadpaths.require(g >= 0, "root_gap_mm", f"must be >= 0, got {g}")
+    cadpaths.require(g < w, "root_gap_mm", f"{g} mm is larger than the plate ({w} mm)")
+    cadpaths.require(m >= 0, "misalignment_mm", f"must be >= 0, got {m}")
     h = g / 2
     if g == 0:
         # Seam at the top of the joint (0, 0); plates fused along their square edges.
@@ -66,12 +66,12 @@ def build(
             (-h - w, t),
             (-h - w, 0.0),
         ]
-        profile = _paths.on_backing(plates, g, w, backing_thickness_mm, backing_width_mm)
+        profile = cadpaths.on_backing(plates, g, w, backing_thickness_mm, backing_width_mm)
         anchor = (0.0, t)
-    return _paths.finish_joint([profile], {"root": (0.0, 0.0)}, params, anchor)
+    return cadpaths.finish_joint([profile], {"root": (0.0, 0.0)}, params, anchor)
 
 
 if __name__ == "__main__":
-    _paths.run_script(build)
+    cadpaths.run_script(build)
 elif "show_object" in globals():
     show_object(build().solid)  # type: ignore[name-defined]  # noqa: F821

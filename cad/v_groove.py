@@ -2,10 +2,10 @@
 
 Run alone: ``python cad/v_groove.py [key=value ...] [--step out.step]`` prints a summary (and
 exports STEP); in CQ-editor the part is shown. ``build(**params)`` returns a
-:class:`seamtrack.cad._paths.Joint`: ``.solid`` (cadquery Shape, mm), ``.seams`` (``{"root":
+:class:`seamtrack.cad.kit.cadpaths.Joint`: ``.solid`` (cadquery Shape, mm), ``.seams`` (``{"root":
 [edges in order along the seam]}``), ``.seam_solid`` (the part before tack welds).
 
-Cross-section (profile plane, v up, u across; see ``_paths``): plates of ``plate_thickness_mm``
+Cross-section (profile plane, v up, u across; see ``cadpaths``): plates of ``plate_thickness_mm``
 and ``plate_width_mm`` each, bevelled to an included ``groove_angle_deg`` down to a
 ``root_face_mm``. With ``root_gap_mm = 0`` the root faces touch (one fused solid) and the seam
 is the V bottom, the edge between the two bevel faces. With a root gap the plates sit on a
@@ -18,11 +18,11 @@ from __future__ import annotations
 import math
 
 try:
-    from seamtrack.cad import _paths
+    from seamtrack.cad.kit import cadpaths
 except ImportError:  # run from a copy of cad/ without seamtrack installed
-    import _paths  # type: ignore[no-redef]
+    from kit import cadpaths  # type: ignore[no-redef]
 
-Joint = _paths.Joint
+Joint = cadpaths.Joint
 
 
 def build(
@@ -41,26 +41,26 @@ def build(
     tacks: int = 0,
     tack_length_mm: float = 8.0,
     tack_height_mm: float = 1.5,
-) -> _paths.Joint:
+) -> cadpaths.Joint:
     """Build the V-groove joint; see the module docstring for the parameters' meaning."""
     params = dict(locals())
     t, w, g, f = plate_thickness_mm, plate_width_mm, root_gap_mm, root_face_mm
-    _paths.require(t > 0, "plate_thickness_mm", f"must be > 0, got {t}")
-    _paths.require(
+    cadpaths.require(t > 0, "plate_thickness_mm", f"must be > 0, got {t}")
+    cadpaths.require(
         0 < groove_angle_deg < 180,
         "groove_angle_deg",
         f"must be in (0, 180), got {groove_angle_deg}",
     )
-    _paths.require(0 <= f < t, "root_face_mm", f"must be in [0, plate_thickness_mm), got {f}")
-    _paths.require(g >= 0, "root_gap_mm", f"must be >= 0, got {g}")
-    _paths.require(g < w, "root_gap_mm", f"{g} mm is larger than the plate ({w} mm)")
-    _paths.require(
+    cadpaths.require(0 <= f < t, "root_face_mm", f"must be in [0, plate_thickness_mm), got {f}")
+    cadpaths.require(g >= 0, "root_gap_mm", f"must be >= 0, got {g}")
+    cadpaths.require(g < w, "root_gap_mm", f"{g} mm is larger than the plate ({w} mm)")
+    cadpaths.require(
         g > 0 or f > 0,
         "root_face_mm",
         "with no root gap the root face must be > 0 (the plates would touch along a line only)",
     )
     bevel = (t - f) * math.tan(math.radians(groove_angle_deg) / 2)
-    _paths.require(
+    cadpaths.require(
         bevel < w,
         "plate_width_mm",
         f"the bevel is {bevel:.2f} mm wide; plates must be wider than that",
@@ -94,12 +94,12 @@ def build(
             (-h - w, t),
             (-h - w, 0.0),
         ]
-        profiles = [_paths.on_backing(plates, g, w, backing_thickness_mm, backing_width_mm)]
+        profiles = [cadpaths.on_backing(plates, g, w, backing_thickness_mm, backing_width_mm)]
         anchor = (0.0, f)
-    return _paths.finish_joint(profiles, {"root": (0.0, 0.0)}, params, anchor)
+    return cadpaths.finish_joint(profiles, {"root": (0.0, 0.0)}, params, anchor)
 
 
 if __name__ == "__main__":
-    _paths.run_script(build)
+    cadpaths.run_script(build)
 elif "show_object" in globals():
     show_object(build().solid)  # type: ignore[name-defined]  # noqa: F821

@@ -2,7 +2,7 @@
 
 Run alone: ``python cad/v_groove_varying.py [key=value ...] [--step out.step]`` prints a summary
 (and exports STEP); in CQ-editor the part is shown. ``build(**params)`` returns a
-:class:`seamtrack.cad._paths.Joint`: ``.solid`` (cadquery Shape, mm), ``.seams`` (``{"root":
+:class:`seamtrack.cad.kit.cadpaths.Joint`: ``.solid`` (cadquery Shape, mm), ``.seams`` (``{"root":
 [edges in order along the seam]}``), ``.seam_solid`` (the part itself, no tacks).
 
 Cross-section at ``x`` along the seam (+X from the origin; u = +Y across, v = +Z up): two plates
@@ -26,11 +26,11 @@ import math
 import cadquery as cq
 
 try:
-    from seamtrack.cad import _paths
+    from seamtrack.cad.kit import cadpaths
 except ImportError:  # run from a copy of cad/ without seamtrack installed
-    import _paths  # type: ignore[no-redef]
+    from kit import cadpaths  # type: ignore[no-redef]
 
-Joint = _paths.Joint
+Joint = cadpaths.Joint
 
 
 def gap_at(x_mm: float, params: dict[str, float]) -> float:
@@ -52,33 +52,33 @@ def build(
     backing_width_mm: float = 30.0,
     seam_length_mm: float = 300.0,
     section_step_mm: float = 5.0,
-) -> _paths.Joint:
+) -> cadpaths.Joint:
     """Build the varying-gap V-groove; see the module docstring for the parameters' meaning."""
     params = dict(locals())
     t, w, f, length = plate_thickness_mm, plate_width_mm, root_face_mm, seam_length_mm
     amp = gap_amplitude_mm
-    _paths.require(t > 0, "plate_thickness_mm", f"must be > 0, got {t}")
-    _paths.require(length > 0, "seam_length_mm", f"must be > 0, got {length}")
-    _paths.require(
+    cadpaths.require(t > 0, "plate_thickness_mm", f"must be > 0, got {t}")
+    cadpaths.require(length > 0, "seam_length_mm", f"must be > 0, got {length}")
+    cadpaths.require(
         0 < groove_angle_deg < 180,
         "groove_angle_deg",
         f"must be in (0, 180), got {groove_angle_deg}",
     )
-    _paths.require(0 <= f < t, "root_face_mm", f"must be in [0, plate_thickness_mm), got {f}")
-    _paths.require(amp >= 0, "gap_amplitude_mm", f"must be >= 0, got {amp}")
-    _paths.require(
+    cadpaths.require(0 <= f < t, "root_face_mm", f"must be in [0, plate_thickness_mm), got {f}")
+    cadpaths.require(amp >= 0, "gap_amplitude_mm", f"must be >= 0, got {amp}")
+    cadpaths.require(
         root_gap_mm - amp > 0,
         "gap_amplitude_mm",
         f"the gap must stay open: root_gap_mm - gap_amplitude_mm = {root_gap_mm - amp} <= 0",
     )
-    _paths.require(0 < section_step_mm <= length, "section_step_mm", f"must be in (0, {length}]")
-    _paths.require(
+    cadpaths.require(0 < section_step_mm <= length, "section_step_mm", f"must be in (0, {length}]")
+    cadpaths.require(
         backing_width_mm > root_gap_mm + amp,
         "backing_width_mm",
         f"must be wider than the widest gap ({root_gap_mm + amp} mm)",
     )
     bevel = (t - f) * math.tan(math.radians(groove_angle_deg) / 2)
-    _paths.require(bevel < w, "plate_width_mm", f"plates must be wider than the bevel ({bevel})")
+    cadpaths.require(bevel < w, "plate_width_mm", f"plates must be wider than the bevel ({bevel})")
     outer = (root_gap_mm + amp) / 2 + w  # plate outer faces stay put: the plates' width varies
     b = backing_width_mm / 2
 
@@ -109,7 +109,7 @@ def build(
     if solid.Volume() < 0:
         solid = cq.Solid(solid.wrapped.Reversed())
     if not solid.isValid():
-        raise _paths.ParamError("seam_length_mm", "these parameters make an invalid solid")
+        raise cadpaths.ParamError("seam_length_mm", "these parameters make an invalid solid")
     seam_edges = [
         e
         for e in solid.Edges()
@@ -121,6 +121,6 @@ def build(
 
 
 if __name__ == "__main__":
-    _paths.run_script(build)
+    cadpaths.run_script(build)
 elif "show_object" in globals():
     show_object(build().solid)  # type: ignore[name-defined]  # noqa: F821

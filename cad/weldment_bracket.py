@@ -2,7 +2,7 @@
 
 Run alone: ``python cad/weldment_bracket.py [key=value ...] [--step out.step]`` prints a
 summary (and exports a STEP assembly of the bodies). ``build(**params)`` returns a
-:class:`seamtrack.cad._weldment.Weldment`.
+:class:`seamtrack.cad.kit.cadweldment.Weldment`.
 
 Bodies (mm; every plate runs ``length_mm`` along +X from x = 0 unless said otherwise):
 
@@ -26,11 +26,11 @@ from __future__ import annotations
 import math
 
 try:
-    from seamtrack.cad import _weldment
+    from seamtrack.cad.kit import cadweldment
 except ImportError:  # run from a copy of cad/ without seamtrack installed
-    import _weldment  # type: ignore[no-redef]
+    from kit import cadweldment  # type: ignore[no-redef]
 
-Weldment = _weldment.Weldment
+Weldment = cadweldment.Weldment
 
 
 def build(
@@ -42,46 +42,50 @@ def build(
     root_face_mm: float = 2.0,
     root_gap_mm: float = 1.0,
     strap_mm: float = 6.0,
-) -> _weldment.Weldment:
+) -> cadweldment.Weldment:
     """Build the bracket; see the module docstring for the parameters' meaning."""
     params = dict(locals())
-    _weldment.require(length_mm >= 40, "length_mm", f"must be >= 40, got {length_mm}")
-    _weldment.require(0 < plate_mm <= 20, "plate_mm", f"must be in (0, 20], got {plate_mm}")
-    _weldment.require(
+    cadweldment.require(length_mm >= 40, "length_mm", f"must be >= 40, got {length_mm}")
+    cadweldment.require(0 < plate_mm <= 20, "plate_mm", f"must be in (0, 20], got {plate_mm}")
+    cadweldment.require(
         web_height_mm > 30, "web_height_mm", f"must exceed the gusset (30), got {web_height_mm}"
     )
-    _weldment.require(
+    cadweldment.require(
         20 <= groove_angle_deg <= 90,
         "groove_angle_deg",
         f"must be in [20, 90], got {groove_angle_deg}",
     )
-    _weldment.require(
+    cadweldment.require(
         0 < root_face_mm < plate_mm,
         "root_face_mm",
         f"must be in (0, plate_mm), got {root_face_mm}",
     )
-    _weldment.require(0 < strap_mm <= 20, "strap_mm", f"must be in (0, 20], got {strap_mm}")
-    _weldment.require(0 <= root_gap_mm <= 4, "root_gap_mm", f"must be in [0, 4], got {root_gap_mm}")
+    cadweldment.require(0 < strap_mm <= 20, "strap_mm", f"must be in (0, 20], got {strap_mm}")
+    cadweldment.require(
+        0 <= root_gap_mm <= 4, "root_gap_mm", f"must be in [0, 4], got {root_gap_mm}"
+    )
     t, c, g = plate_mm, root_face_mm, root_gap_mm / 2
     bevel = (t - c) * math.tan(math.radians(groove_angle_deg) / 2)  # width of each bevel's top
-    _weldment.require(bevel + g < 10, "groove_angle_deg", "the groove would reach the gusset's toe")
+    cadweldment.require(
+        bevel + g < 10, "groove_angle_deg", "the groove would reach the gusset's toe"
+    )
     x = (0.0, length_mm)
     mid = length_mm / 2
     base = [(-40.0, -t), (40 - g, -t), (40 - g, c - t), (40 - g - bevel, 0.0), (-40.0, 0.0)]
     extension = [(40 + g, -t), (70.0, -t), (70.0, 0.0), (40 + g + bevel, 0.0), (40 + g, c - t)]
     return Weldment(
         bodies={
-            "base": _weldment.prism(base, x),
-            "extension": _weldment.prism(extension, x),
-            "web": _weldment.box(x, (-5.0, 5.0), (0.0, web_height_mm)),
-            "gusset": _weldment.prism([(5.0, 0.0), (30.0, 0.0), (5.0, 30.0)], (mid - 5, mid + 5)),
-            "strap": _weldment.box(x, (-60.0, -30.0), (0.0, strap_mm)),
+            "base": cadweldment.prism(base, x),
+            "extension": cadweldment.prism(extension, x),
+            "web": cadweldment.box(x, (-5.0, 5.0), (0.0, web_height_mm)),
+            "gusset": cadweldment.prism([(5.0, 0.0), (30.0, 0.0), (5.0, 30.0)], (mid - 5, mid + 5)),
+            "strap": cadweldment.box(x, (-60.0, -30.0), (0.0, strap_mm)),
         },
         params=params,
     )
 
 
 if __name__ == "__main__":
-    _weldment.run_script(build)
+    cadweldment.run_script(build)
 elif "show_object" in globals():
     show_object(build().compound())  # type: ignore[name-defined]  # noqa: F821

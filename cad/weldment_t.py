@@ -2,7 +2,7 @@
 
 Run alone: ``python cad/weldment_t.py [key=value ...] [--step out.step]`` prints a summary (and
 exports a STEP assembly of the two bodies). ``build(**params)`` returns a
-:class:`seamtrack.cad._weldment.Weldment` with the bodies ``flange`` and ``web``.
+:class:`seamtrack.cad.kit.cadweldment.Weldment` with the bodies ``flange`` and ``web``.
 
 Geometry (mm): the flange is ``flange_width_mm`` wide (across Y, centred on y = 0),
 ``flange_thickness_mm`` thick with its top at z = 0, and ``length_mm`` long along +X from
@@ -18,11 +18,11 @@ from __future__ import annotations
 import math
 
 try:
-    from seamtrack.cad import _weldment
+    from seamtrack.cad.kit import cadweldment
 except ImportError:  # run from a copy of cad/ without seamtrack installed
-    import _weldment  # type: ignore[no-redef]
+    from kit import cadweldment  # type: ignore[no-redef]
 
-Weldment = _weldment.Weldment
+Weldment = cadweldment.Weldment
 
 
 def build(
@@ -34,20 +34,20 @@ def build(
     web_angle_deg: float = 90.0,
     web_gap_mm: float = 0.0,
     length_mm: float = 100.0,
-) -> _weldment.Weldment:
+) -> cadweldment.Weldment:
     """Build the T; see the module docstring for the parameters' meaning."""
     params = dict(locals())
     for name in ("flange_thickness_mm", "flange_width_mm", "web_thickness_mm", "web_height_mm"):
-        _weldment.require(params[name] > 0, name, f"must be > 0, got {params[name]}")
-    _weldment.require(length_mm > 0, "length_mm", f"must be > 0, got {length_mm}")
-    _weldment.require(
+        cadweldment.require(params[name] > 0, name, f"must be > 0, got {params[name]}")
+    cadweldment.require(length_mm > 0, "length_mm", f"must be > 0, got {length_mm}")
+    cadweldment.require(
         30 <= web_angle_deg <= 150, "web_angle_deg", f"must be in [30, 150], got {web_angle_deg}"
     )
-    _weldment.require(web_gap_mm >= 0, "web_gap_mm", f"must be >= 0, got {web_gap_mm}")
+    cadweldment.require(web_gap_mm >= 0, "web_gap_mm", f"must be >= 0, got {web_gap_mm}")
     angle = math.radians(web_angle_deg)
     foot = web_thickness_mm / math.sin(angle)
     lean = (-web_height_mm * math.cos(angle), web_height_mm * math.sin(angle))
-    _weldment.require(
+    cadweldment.require(
         flange_width_mm / 2 > foot / 2 + abs(lean[0]),
         "flange_width_mm",
         f"the flange must be wider than the web's footprint ({foot + 2 * abs(lean[0]):.1f} mm)",
@@ -61,18 +61,18 @@ def build(
     ]
     return Weldment(
         bodies={
-            "flange": _weldment.box(
+            "flange": cadweldment.box(
                 (0.0, length_mm),
                 (-flange_width_mm / 2, flange_width_mm / 2),
                 (-flange_thickness_mm, 0.0),
             ),
-            "web": _weldment.prism(web, (0.0, length_mm)),
+            "web": cadweldment.prism(web, (0.0, length_mm)),
         },
         params=params,
     )
 
 
 if __name__ == "__main__":
-    _weldment.run_script(build)
+    cadweldment.run_script(build)
 elif "show_object" in globals():
     show_object(build().compound())  # type: ignore[name-defined]  # noqa: F821

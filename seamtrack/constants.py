@@ -53,7 +53,7 @@ MAX_MESH_TOLERANCE_MM = 1.0
 MIN_MESH_TOLERANCE_RATIO = 1e-6
 
 #: Most triangles a part may mesh into. Meshing and measuring the deviation peak at about 200-300
-#: bytes a triangle over what the process held before (`seamtrack bench mesh`; cad/_mesh.py
+#: bytes a triangle over what the process held before (`seamtrack bench mesh`; cad/kit/cadmesh.py
 #: meshes coarse inside and refines in numpy), and a whole mesh-mode scan adds about 270 bytes a
 #: triangle over the 0.7 GB the libraries take (`seamtrack scan paper-v-groove --set
 #: workpiece.tolerance_mm=0.0005`: 782 MB; 0.1 mm: 710 MB): 2 million keep a run under 2 GB.

@@ -519,7 +519,7 @@ def test_the_catalogue_holds_issue_43s_multipass_reproducers() -> None:
     assert field_of("multipass-v-groove", "passes.count=3") == "passes.count"
     assert field_of("travel_speed_mm_s = 1000.0") == "passes.overrides.0.travel_speed_mm_s"
     assert field_of("number = 99", "passes.count=2") == "passes.overrides.0.number"
-    assert field_of("bad_planners:NeverReturns", "wall_time_limit_s") == "planner.name"
+    assert field_of("bad_planners:NeverReturns") == "planner.name"  # a plan() that never returns
 
 
 def test_the_handover_from_the_approach_is_the_start_ramp() -> None:

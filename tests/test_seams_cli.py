@@ -72,7 +72,7 @@ def _no_solid(tmp: Path) -> Path:
 def _apart(tmp: Path) -> Path:
     import importlib
 
-    w = importlib.import_module("seamtrack.cad._weldment")
+    w = importlib.import_module("seamtrack.cad.kit.cadweldment")
     path = tmp / "apart.step"
     w.Weldment(
         bodies={"a": w.box((0, 10), (0, 10), (0, 10)), "b": w.box((12, 20), (0, 10), (0, 10))}

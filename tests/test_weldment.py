@@ -212,7 +212,7 @@ def test_a_step_without_solids_is_refused(tmp_path):
 def test_solids_that_never_touch_are_refused(tmp_path):
     import importlib
 
-    weldment = importlib.import_module("seamtrack.cad._weldment")
+    weldment = importlib.import_module("seamtrack.cad.kit.cadweldment")
     apart = weldment.Weldment(
         bodies={
             "a": weldment.box((0, 10), (0, 10), (0, 10)),

@@ -423,7 +423,7 @@ def test_the_mesher_meshes_coarse_inside_and_the_refinement_meets_the_tolerance(
 
     from OCP.BRepMesh import BRepMesh_IncrementalMesh
     from OCP.BRepTools import BRepTools
-    from seamtrack.cad import _mesh
+    from seamtrack.cad.kit import cadmesh
 
     from seamtrack.workpiece.loader import DEFAULT_ANGULAR_TOLERANCE_RAD
 
@@ -432,7 +432,7 @@ def test_the_mesher_meshes_coarse_inside_and_the_refinement_meets_the_tolerance(
     shape = part.shape
     BRepTools.Clean_s(shape.wrapped)
     BRepMesh_IncrementalMesh(shape.wrapped, 3e-3, False, DEFAULT_ANGULAR_TOLERANCE_RAD, False)
-    _, one_pass, strayed, _ = _mesh.triangulation(shape)  # OCCT's own at the tolerance
+    _, one_pass, strayed, _ = cadmesh.triangulation(shape)  # OCCT's own at the tolerance
     BRepTools.Clean_s(shape.wrapped)
     assert strayed > 3e-3  # OCCT's mesh misses the tolerance here
     assert len(part.mesh.faces) < len(one_pass)  # and the refined one meets it with fewer

@@ -320,7 +320,7 @@ def sample_edge(
 ) -> tuple[FloatArray, FloatArray]:
     """Points (n, 3) on the exact edge curve, at most ``spacing_mm`` apart and closer where the
     chord error would exceed ``tolerance_mm``, with unit tangents (n, 3), in chain order."""
-    from seamtrack.cad._occ import edge_samples
+    from seamtrack.cad.kit.cadocc import edge_samples
 
     curve = BRepAdaptor_Curve(edge)
     ts, _ = edge_samples(curve, tolerance_mm, spacing_mm)

@@ -251,7 +251,7 @@ def build_groove(
 ) -> dict[str, Any]:
     """The groove's two plates along the path, its root seam and torch frame (the fields of
     the loader's ``_Built``: shape, points, face_normals, torch, name, joint, opening_rad)."""
-    from seamtrack.cad import _paths
+    from seamtrack.cad.kit import cadpaths
     from seamtrack.workpiece.contacts import edges, sample_edge
 
     spec = groove_spec(groove)
@@ -272,11 +272,11 @@ def build_groove(
         "corner_angle_deg": params.get("corner_angle_deg", 90.0),
     }
     try:
-        wire = _paths.path_wire(**path_args)
+        wire = cadpaths.path_wire(**path_args)
         profiles = [[tuple(map(float, p)) for p in plate] for plate in plates]
-        joint = _paths.finish(profiles, {}, {}, tacks=0, tack_length_mm=8.0,
+        joint = cadpaths.finish(profiles, {}, {}, tacks=0, tack_length_mm=8.0,
                               tack_height_mm=1.5, **path_args)  # fmt: skip
-    except _paths.ParamError as exc:
+    except cadpaths.ParamError as exc:
         raise WorkpieceError(
             f"the groove part failed: {exc}",
             field=f"workpiece.params.{exc.param}",

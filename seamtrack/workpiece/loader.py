@@ -9,7 +9,7 @@ of the two faces that meet at the seam, so the torch points away from the materi
 groove, out of the fillet corner).
 
 Results are cached on disk (``$SEAMTRACK_CACHE_DIR`` or ``~/.cache/seamtrack``), keyed by the
-script or STEP content, the shared ``cad/_paths.py`` helper, the parameters, tolerances, seam
+script or STEP content, the shared ``cad/kit/cadpaths.py`` helper, the parameters, tolerances, seam
 choice and the seamtrack version. A cache hit imports neither CadQuery nor OCP; a corrupt entry
 is rebuilt. Clear it with :func:`clear_cache` (or delete the folder :func:`cache_dir` names).
 
@@ -257,10 +257,10 @@ def _build(
             chosen.opening_rad,
             chosen.view_normal,
         )
-    from seamtrack.cad import _occ
+    from seamtrack.cad.kit import cadocc
 
-    chained = _occ.chain(_seam_edges(_occ, seam_solid, named, seam, seam_near_mm), "the seam")
-    points, face_normals = _occ.sample_seam(seam_solid, chained, tolerance_mm, spacing_mm)
+    chained = cadocc.chain(_seam_edges(cadocc, seam_solid, named, seam, seam_near_mm), "the seam")
+    points, face_normals = cadocc.sample_seam(seam_solid, chained, tolerance_mm, spacing_mm)
     torch = face_normals.sum(axis=1)  # bisector of the outward normals: away from the material
     label = seam or (next(iter(named)) if named and seam_near_mm is None else "seam")
     return _Built(solid, points, face_normals, torch, f"{path.stem}:{label}")
@@ -270,9 +270,9 @@ def _mesh(shape: Any, tolerance_mm: float, angular_rad: float) -> tuple[Any, flo
     """The mesh (one welded, watertight shell per solid), its measured deviation and time."""
     import trimesh
 
-    from seamtrack.cad import _mesh
+    from seamtrack.cad.kit import cadmesh
 
-    vertices, faces, deviation, spent, counts = _mesh.mesh(shape, tolerance_mm, angular_rad)
+    vertices, faces, deviation, spent, counts = cadmesh.mesh(shape, tolerance_mm, angular_rad)
     solids = shape.Solids()
     if len(solids) == 1:
         return trimesh.Trimesh(vertices, faces, process=True), deviation, spent

@@ -25,7 +25,7 @@ from seamtrack.workpiece.cache import sha256
 #: Built-in scripts whose name starts so are weldments (several bodies), not joints.
 WELDMENT_PREFIX = "weldment_"
 #: The shared helpers of the cad/ scripts: a change in them changes every part.
-HELPERS = ("_paths.py", "_occ.py", "_mesh.py", "_weldment.py")
+HELPERS = ("kit/cadpaths.py", "kit/cadocc.py", "kit/cadmesh.py", "kit/cadweldment.py")
 
 
 @dataclass(frozen=True)

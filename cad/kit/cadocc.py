@@ -1,5 +1,5 @@
 """OCCT kernels behind :mod:`seamtrack.workpiece.loader`: seam edge chains and sampling (the
-meshing is :mod:`seamtrack.cad._mesh`'s).
+meshing is :mod:`seamtrack.cad.kit.cadmesh`'s).
 
 Imported lazily by the loader (never by a seam-mode scene): it needs CadQuery/OCP.
 """

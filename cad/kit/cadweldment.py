@@ -15,9 +15,9 @@ from dataclasses import dataclass, field
 import cadquery as cq
 
 try:
-    from seamtrack.cad._paths import ParamError, require, script_args
+    from seamtrack.cad.kit.cadpaths import ParamError, require, script_args
 except ImportError:  # run from a copy of cad/ without seamtrack installed
-    from _paths import ParamError, require, script_args  # type: ignore[no-redef]
+    from kit.cadpaths import ParamError, require, script_args  # type: ignore[no-redef]
 
 __all__ = ["ParamError", "Weldment", "box", "prism", "require", "run_script"]
 
