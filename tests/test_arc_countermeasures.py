@@ -280,6 +280,60 @@ def test_the_switch_sets_the_countermeasures_and_explicit_keys_win() -> None:
     assert gate_settings(on) == GateSettings(15.0, 20, "predict")
 
 
+def test_the_switch_sets_the_sensors_filter_and_exposure() -> None:
+    """Under "default" a 10 nm Gaussian band-pass on the laser's line and one fixed exposure;
+    under "none" the chip's own band (400-1100 nm: silicon's band gap at 1.12 eV cuts it at
+    1,107 nm) and the camera's multiple exposure; explicit keys win; a scene without the arc
+    keeps the camera it had."""
+    from seamtrack.simulation.countermeasures import band_pass, exposure_mode
+    from seamtrack.simulation.scene import scene_camera
+
+    arc = load_scene("v-groove-arc").config
+    band = band_pass(arc, 660.0)
+    assert (band.centre_nm, band.fwhm_nm, band.shape) == (660.0, 10.0, "gaussian")
+    assert band.transmission(660.0 + 5.0) == pytest.approx(0.5 * band.peak)  # half maximum
+    assert exposure_mode(arc) == "fixed" == scene_camera(arc).exposure_mode
+    off = load_scene("v-groove-arc", {"countermeasures": "none"}).config
+    bare = band_pass(off, 660.0)
+    assert bare.transmission([401.0, 660.0, 1099.0]).tolist() == [1.0, 1.0, 1.0]
+    assert bare.transmission([399.0, 1101.0]).tolist() == [0.0, 0.0]
+    assert bare.equivalent_width_nm == pytest.approx(700.0)
+    assert exposure_mode(off) == "multi"
+    given = load_scene("v-groove-arc", {"countermeasures": "none",
+                                        "sensor.camera.filter_fwhm_nm": 3.0,
+                                        "sensor.camera.exposure_mode": "auto"}).config  # fmt: skip
+    assert (band_pass(given, 660.0).fwhm_nm, exposure_mode(given)) == (3.0, "auto")
+    plain = load_scene("v-groove-camera").config
+    assert scene_camera(plain).exposure_mode == "multi"
+
+
+@pytest.mark.embree
+def test_without_the_filter_the_arc_outshines_the_stripe_at_30_mm() -> None:
+    """250 A, 30 mm ahead: behind the 10 nm band-pass the stripe wins nearly every column;
+    with no filter the arc's light (its continuum over 700 nm of band, and argon's
+    near-infrared lines) takes a quarter of them and more. The oracle: the same frame without
+    the arc, on an ideal camera."""
+    from seamtrack.bench.arc import without_arc
+    from seamtrack.simulation.assemble import build_parts
+    from seamtrack.simulation.robots import sensor_pose_at
+
+    short = {"workpiece.params.seam_length_mm": 40.0}
+    ideal = build_parts(
+        without_arc(load_scene("v-groove-arc", {**short, "sensor.camera.ideal": True}))
+    )
+    T, _ = sensor_pose_at(ideal.robot, ideal.tool_program, 5.0)
+    truth, _ = ideal.scan(T, 0.2, None)
+
+    def on_the_stripe(switch: str) -> float:
+        parts = build_parts(load_scene("v-groove-arc", {**short, "countermeasures": switch}))
+        profile, _ = parts.scan(T, 0.2, None)
+        dz = np.abs(profile.points_laser[:, 1] - truth.points_laser[:, 1])
+        return float(np.mean((profile.valid & (dz < 0.5))[truth.valid]))
+
+    assert on_the_stripe("default") > 0.9
+    assert on_the_stripe("none") < 0.75  # a quarter of the columns and more are the arc's
+
+
 @pytest.mark.parametrize(
     ("key", "value"),
     [

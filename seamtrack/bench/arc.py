@@ -59,6 +59,13 @@ COLUMNS = (
     "loop_max_error_mm",
     "frames_per_s",
 )
+#: The camera the profile model was measured with, whatever the countermeasures switch: the
+#: 10 nm band-pass on the laser's line and the camera's multiple exposure (the profile model
+#: stands for that camera; ``countermeasures`` then switches the rejection and the gate).
+CALIBRATION_CAMERA: dict[str, Any] = {
+    "sensor.camera.filter_fwhm_nm": 10.0,
+    "sensor.camera.exposure_mode": "multi",
+}
 #: A seam point farther than this from the truth, or none, counts as a false or lost point in
 #: the calibration (mm; the camera's own noise is a few hundredths).
 CALIBRATION_TOLERANCE_MM = 0.5
@@ -137,7 +144,7 @@ def measure_image_arc(
     run's seed, and stations shifted by 2 mm (a measurement the calibration did not make).
     ``countermeasures``: the frames with the arc measured under these (:data:`COUNTERMEASURES`;
     a detector that rejects the blob turns its false points into drop-outs)."""
-    base: dict[str, Any] = {"arc.process": process}
+    base: dict[str, Any] = {"arc.process": process, **CALIBRATION_CAMERA}
     if seed is not None:
         base["simulation.seed"] = seed
     truth_parts = _build(without_arc(arc_scene(250.0, look_ahead_mm, "image", overrides={

@@ -31,7 +31,7 @@ from seamtrack.simulation.checks import (
     check_ticks,
     default_time_limit_s,
 )
-from seamtrack.simulation.countermeasures import gate_settings, rejection
+from seamtrack.simulation.countermeasures import band_pass, gate_settings, rejection
 from seamtrack.simulation.mount import Mount
 from seamtrack.simulation.robots import (
     check_sensor_outside,
@@ -44,8 +44,8 @@ from seamtrack.simulation.robots import (
 from seamtrack.simulation.scene import (
     CameraConfig,
     Scene,
-    make_camera,
     make_sensor,
+    scene_camera,
 )
 
 FloatArray = NDArray[np.float64]
@@ -272,7 +272,7 @@ def _mesh_scan(
                          noise=noise, rng=rng, t_s=t_s, fan=s.fan)  # fmt: skip
 
     if s.source == "image":  # every frame rendered by the camera and measured from its pixels
-        camera, detector = make_camera(s.camera, s.preset), s.camera or CameraConfig()
+        camera, detector = scene_camera(scene.config), s.camera or CameraConfig()
         reject = rejection(scene.config)
         surface = w.material or "mill-scale steel"
         arc_light = scene_arc_light(scene, camera)
@@ -353,14 +353,9 @@ def scene_arc_light(scene: Scene, camera: Any) -> Any:
     if a is None or a.model == "profile":
         return None
     from seamtrack.sensing.arc.image import ArcLight
-    from seamtrack.sensing.arc.light import BandPass
 
     c = scene.config.sensor.camera
-    band = BandPass(
-        centre_nm=(c.filter_centre_nm if c and c.filter_centre_nm else camera.wavelength_nm),
-        fwhm_nm=c.filter_fwhm_nm if c else 10.0,
-        shape=c.filter_shape if c else "gaussian",
-    )
+    band = band_pass(scene.config, camera.wavelength_nm)
     heat = None
     p, w = scene.config.process, scene.config.workpiece
     if p is not None:  # Rosenthal's field of the scene's heat input, at the welding speed

@@ -81,13 +81,15 @@ class CameraConfig(_Section):
     # The band-pass filter in front of the lens (issue 38): centre (default the laser's
     # wavelength), full width at half maximum (>= 0.1 nm; 10 nm: a common laser-line filter)
     # and shape. Only the arc's light (``[arc]``) is filtered; the laser passes at the centre.
+    # Unset width and shape: the scene's ``countermeasures`` (seamtrack.simulation.
+    # countermeasures.band_pass: 10 nm Gaussian under "default", no filter under "none").
     filter_centre_nm: (
         Annotated[float, Field(ge=200, le=2000, allow_inf_nan=False, strict=True)] | None
     ) = None
-    filter_fwhm_nm: Annotated[float, Field(ge=0.1, le=1000, allow_inf_nan=False, strict=True)] = (
-        10.0
-    )
-    filter_shape: Literal["gaussian", "top-hat"] = "gaussian"
+    filter_fwhm_nm: (
+        Annotated[float, Field(ge=0.1, le=1000, allow_inf_nan=False, strict=True)] | None
+    ) = None
+    filter_shape: Literal["gaussian", "top-hat"] | None = None
     # The laser's power (W) against the arc's light (issue 38): the stripe keeps its level
     # (`exposure`), so the arc's light on the chip falls as 1 / power. Unset: 0.1 W
     # (seamtrack.sensing.arc.image.ArcLight). Line lasers of seam trackers are class 3R-3B, tens
@@ -106,7 +108,8 @@ class CameraConfig(_Section):
     shot_noise: Flag = True
     supersample: Annotated[int, Field(strict=True)] | None = None
     ideal: Flag = False  # every noise source off (Camera.ideal)
-    exposure_mode: Literal["multi", "auto", "fixed"] = "multi"
+    # Unset: the scene's ``countermeasures`` ("fixed" under "default", else "multi").
+    exposure_mode: Literal["multi", "auto", "fixed"] | None = None
     target_peak: Finite = 0.7
     exposure_set: list[Finite] = [1.0, 0.125, 0.015625, 0.001953125]
     method: Literal["centroid", "gaussian", "steger"] = "centroid"

@@ -33,6 +33,7 @@ from seamtrack.simulation.config import (  # the types live there; imported by n
     SceneConfig,
     SensorConfig,
 )
+from seamtrack.simulation.countermeasures import exposure_mode
 from seamtrack.simulation.process import check_passes
 from seamtrack.simulation.robots import check_robot, is_arm
 from seamtrack.simulation.templates import builtin_scenes
@@ -310,7 +311,7 @@ def check_consistency(scene: Scene) -> None:
             fix='set sensor.mode = "mesh" (with a [workpiece]), or sensor.source = "geometry"',
         )
     if c.sensor.camera is not None or c.sensor.source == "image":
-        make_camera(c.sensor.camera, c.sensor.preset).check(sensor)
+        scene_camera(c).check(sensor)
     if c.workpiece is not None and c.workpiece.material is not None:
         material(c.workpiece.material)
     check_arc(c)
@@ -331,21 +332,31 @@ _SPEC_KEYS = (
 )
 
 
-def make_camera(cfg: CameraConfig | None, sensor_preset: str = "paper") -> Camera:
+def make_camera(
+    cfg: CameraConfig | None, sensor_preset: str = "paper", exposure_mode: str | None = None
+) -> Camera:
     """The camera of ``[sensor.camera]`` (all defaults when the table is absent); the laser's
-    wavelength defaults to the preset's data sheet, else 660 nm."""
+    wavelength defaults to the preset's data sheet, else 660 nm. ``exposure_mode``: the
+    scene's resolved one (:func:`scene_camera`), else the table's, else ``"multi"``."""
     c = cfg if cfg is not None else CameraConfig()
     sheet = data_sheet(sensor_preset)
     wavelength = c.wavelength_nm or (sheet.wavelength_nm if sheet else None) or 660.0
     same = ("rows", "columns", "roi", "focal_length_mm", "f_number",
             "line_thickness_mm", "waist_range_mm", "exposure", "full_well_e", "read_noise_e",
-            "ambient", "speckle", "shot_noise", "supersample", "exposure_mode",
-            "target_peak")  # fmt: skip
+            "ambient", "speckle", "shot_noise", "supersample", "target_peak")  # fmt: skip
     divergence = None if c.line_divergence_mrad is None else 1e-3 * c.line_divergence_mrad
     camera = Camera(**{k: getattr(c, k) for k in same}, bit_depth=c.bit_depth or None,
                     line_divergence_rad=divergence, wavelength_nm=wavelength,
-                    exposure_set=tuple(c.exposure_set))  # fmt: skip
+                    exposure_set=tuple(c.exposure_set),
+                    exposure_mode=exposure_mode or c.exposure_mode or "multi")  # fmt: skip
     return camera.without_noise() if c.ideal else camera
+
+
+def scene_camera(config: SceneConfig) -> Camera:
+    """The scene's camera, its exposure control resolved with the scene's
+    ``countermeasures`` (:func:`seamtrack.simulation.countermeasures.exposure_mode`)."""
+    mode = exposure_mode(config)
+    return make_camera(config.sensor.camera, config.sensor.preset, mode)
 
 
 def make_sensor(cfg: SensorConfig) -> LaserLineSensor:

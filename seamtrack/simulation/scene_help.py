@@ -90,7 +90,8 @@ KEY_HELP: dict[str, str] = {
     "sensor.camera.shot_noise": "draw photon shot noise",
     "sensor.camera.supersample": "sub-pixels per pixel when rendering (unset: automatic)",
     "sensor.camera.ideal": "every noise source off",
-    "sensor.camera.exposure_mode": '"multi" (HDR set), "auto" or "fixed"',
+    "sensor.camera.exposure_mode": '"multi" (HDR set), "auto" or "fixed" (unset: "fixed" under '
+    '`countermeasures = "default"`, else "multi")',
     "sensor.camera.target_peak": "auto exposure's target peak, fraction of full scale",
     "sensor.camera.exposure_set": "the exposures of multi mode, relative",
     "sensor.camera.method": 'peak detector: "centroid", "gaussian" or "steger"',
@@ -101,7 +102,8 @@ KEY_HELP: dict[str, str] = {
     "sensor.camera.choose": 'which peak of a column: "strongest", "first" or "widest"',
     "sensor.camera.filter_centre_nm": "band-pass filter's centre wavelength, nm (unset: the "
     "laser's)",
-    "sensor.camera.filter_fwhm_nm": "band-pass filter's full width at half maximum, nm (>= 0.1)",
+    "sensor.camera.filter_fwhm_nm": "band-pass filter's full width at half maximum, nm (>= 0.1; "
+    'unset: 10 under `countermeasures = "default"`, no filter under "none")',
     "sensor.camera.filter_shape": 'band-pass filter\'s transmission: "gaussian" or "top-hat"',
     "sensor.camera.laser_power_w": "the laser's power, W, against the arc's light (unset: 0.1)",
     "sensor.camera.reject": '"blobs": drop runs not shaped like the stripe (blobs, streaks, '

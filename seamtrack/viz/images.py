@@ -100,7 +100,7 @@ def render_command(
     from seamtrack.simulation.assemble import arc_frame, build_parts, scene_arc_light
     from seamtrack.simulation.countermeasures import rejection
     from seamtrack.simulation.robots import sensor_pose_at
-    from seamtrack.simulation.scene import CameraConfig, load_scene, make_camera
+    from seamtrack.simulation.scene import CameraConfig, load_scene, scene_camera
 
     scene = load_scene(scene_name, overrides)
     c = scene.config
@@ -124,7 +124,7 @@ def render_command(
     assert parts.sensor is not None and c.workpiece is not None
     T_world_sensor, _ = sensor_pose_at(parts.robot, parts.tool_program, at_mm)
     detector = c.sensor.camera or CameraConfig()
-    camera = make_camera(c.sensor.camera, c.sensor.preset)
+    camera = scene_camera(c)
     arc_light = scene_arc_light(scene, camera)  # the scene's [arc], if image mode draws it
     arc = None
     if arc_light is not None:
