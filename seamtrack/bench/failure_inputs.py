@@ -559,7 +559,7 @@ CATALOGUE: tuple[Entry, ...] = (
     ),
     Entry(
         "dataset camera bit depth 17",
-        (*dataset_args("dataset_bits.toml"), "--images"),
+        dataset_args("dataset_bits.toml", images=True),
         field="camera.bit_depth",
     ),
     Entry("dataset missing spec file", dataset_args("missing.toml"), field="SPEC"),

@@ -324,6 +324,19 @@ def fan_stripe_finish(
 
 
 @numba.njit(cache=True, nogil=True)
+def fan_directions(rotation: NDArray[np.float64], fan: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The fan's unit rays (n, 3), given in the laser frame, turned by ``rotation`` (3, 3)
+    (the laser frame's axes as columns) into the frame the rays are cast in."""
+    n = fan.shape[0]
+    directions = np.empty((n, 3))
+    for i in range(n):
+        for a in range(3):
+            directions[i, a] = (rotation[a, 0] * fan[i, 0] + rotation[a, 1] * fan[i, 1]
+                                + rotation[a, 2] * fan[i, 2])  # fmt: skip
+    return directions
+
+
+@numba.njit(cache=True, nogil=True)
 def fan_stripe_packets(
     intersect8: Any, occluded: Any, width: int, scene: int,
     origin: NDArray[np.float64], rotation: NDArray[np.float64], fan: NDArray[np.float64],
@@ -342,11 +355,7 @@ def fan_stripe_packets(
     :func:`fan_stripe_finish`. Returns (points, reason, t, face, cos_incidence, directions).
     """
     n = fan.shape[0]
-    directions = np.empty((n, 3))
-    for i in range(n):
-        for a in range(3):
-            directions[i, a] = (rotation[a, 0] * fan[i, 0] + rotation[a, 1] * fan[i, 1]
-                                + rotation[a, 2] * fan[i, 2])  # fmt: skip
+    directions = fan_directions(rotation, fan)
     origins = origin.reshape((1, 3))
     prim = np.empty(n, dtype=np.int32)
     tfar = np.empty(n, dtype=np.float32)
