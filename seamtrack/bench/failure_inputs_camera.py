@@ -71,7 +71,7 @@ ENTRIES: tuple[Entry, ...] = (
     Entry("camera f-number 0.5", _check(f"{F}f_number=0.5"), field=f"{F}f_number"),
     Entry(
         "camera f-number 100 on paper-v-groove",
-        ("run", *IMAGE_MESH, *set_args(f"{F}f_number=100"), "--out", "OUT"),
+        run_args(*IMAGE_MESH, *set_args(f"{F}f_number=100")),
         field=f"{F}f_number",
     ),
     Entry("camera focal length 1e-9 mm", _render(f"{F}focal_length_mm=1e-9"), field="focal_length"),
