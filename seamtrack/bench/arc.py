@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from seamtrack.bench.common import machine_info
+from seamtrack.bench.common import machine_info, markdown_table
 
 FloatArray = np.ndarray
 
@@ -429,19 +429,16 @@ def _fmt(value: Any, digits: int) -> str:
 
 def arc_table(data: dict[str, Any]) -> str:
     """The bench's markdown table, one row per cell."""
-    lines = [
-        "| current (A) | look-ahead (mm) | mode | countermeasures | detected | median (mm) "
-        "| p95 (mm) | loop max (mm) | frames/s | 1-min load |",
-        "|---:|---:|---|---|---:|---:|---:|---:|---:|---:|",
-    ]
-    for r in data["rows"]:
-        lines.append(
-            f"| {r['current_a']:.0f} | {r['look_ahead_mm']:.0f} | {r['mode']} "
-            f"| {r['countermeasures']} | {100 * r['detect_rate']:.0f} % "
-            f"| {_fmt(r['median_mm'], 3)} | {_fmt(r['p95_mm'], 3)} "
-            f"| {_fmt(r['loop_max_error_mm'], 3)} | {_fmt(r['frames_per_s'], 1)} "
-            f"| {_fmt(r.get('load_1min'), 1)} |"
-        )
+    header = ["current (A)", "look-ahead (mm)", "mode", "countermeasures", "detected",
+              "median (mm)", "p95 (mm)", "loop max (mm)", "frames/s", "1-min load"]  # fmt: skip
+    rows = (
+        [f"{r['current_a']:.0f}", f"{r['look_ahead_mm']:.0f}", r["mode"], r["countermeasures"],
+         f"{100 * r['detect_rate']:.0f} %", _fmt(r["median_mm"], 3), _fmt(r["p95_mm"], 3),
+         _fmt(r["loop_max_error_mm"], 3), _fmt(r["frames_per_s"], 1),
+         _fmt(r.get("load_1min"), 1)]
+        for r in data["rows"]
+    )  # fmt: skip
+    lines = markdown_table(header, rows, right=[True, True, False, False, *[True] * 6])
     return "\n".join(lines) + "\n"
 
 

@@ -50,7 +50,7 @@ from seamtrack.bench.camera_speckle import (
     speckle_sweep,
     speckle_sweep_table,
 )
-from seamtrack.bench.common import machine_info
+from seamtrack.bench.common import machine_info, markdown_table
 from seamtrack.geometry import frames
 from seamtrack.sensing.camera import Camera, StripeImage
 from seamtrack.sensing.materials import material
@@ -397,11 +397,7 @@ def _table(header: list[str], rows: list[list[Any]]) -> list[str]:
             return "-" if math.isnan(v) else f"{v:.4g}"
         return str(v)
 
-    return [
-        "| " + " | ".join(header) + " |",
-        "|" + "---|" * len(header),
-        *["| " + " | ".join(cell(v) for v in row) + " |" for row in rows],
-    ]
+    return markdown_table(header, ([cell(v) for v in row] for row in rows))
 
 
 def markdown(result: dict[str, Any]) -> str:

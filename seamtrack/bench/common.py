@@ -1,11 +1,12 @@
-"""What every benchmark shares: the machine it ran on, and a best-of-N rate."""
+"""What every benchmark shares: the machine it ran on, a best-of-N rate, and its markdown
+tables."""
 
 from __future__ import annotations
 
 import os
 import platform
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -69,3 +70,16 @@ def peak_rss(field: str = "VmHWM") -> int:
     import resource
 
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+
+
+def markdown_table(
+    header: Sequence[str], rows: Iterable[Sequence[str]], right: Sequence[bool] = ()
+) -> list[str]:
+    """The lines of a markdown table: the header, its rule (a column right-aligned where
+    ``right`` says so), one line per row of cells (formatted by the caller)."""
+    rule = "|" + "".join("---:|" if r else "---|" for r in right or [False] * len(header))
+    return [
+        "| " + " | ".join(header) + " |",
+        rule,
+        *("| " + " | ".join(row) + " |" for row in rows),
+    ]

@@ -23,7 +23,7 @@ import time
 from pathlib import Path
 from typing import Any
 
-from seamtrack.bench.common import machine_info
+from seamtrack.bench.common import machine_info, markdown_table
 
 #: Issue 39: the gantry loop runs at least this many times real time with distortion on.
 TARGET_X_REAL_TIME = 25.0
@@ -224,20 +224,22 @@ def _multipass_run(quick: bool) -> dict[str, Any]:
     }
 
 
+def _or_dash(value: float | None) -> str:
+    return "-" if value is None else f"{value:.2f}"
+
+
 def multipass_table(data: dict[str, Any]) -> str:
     """The multi-pass job with distortion: one row per pass."""
     m = data["multipass"]
-    lines = [
-        "| pass | aimed at | its angle (deg) | accumulated (deg) | seam sunk where it starts "
-        "(mm) | max error (mm) |",
-        "|---|---|---|---|---|---|",
-    ]
-    for r in m["rows"]:
-        aim = r["reference"] + (" (cap)" if r["cap"] else "")
-        lines.append(
-            f"| {r['pass']} | {aim} | {r['angle_deg']:.2f} | {r['accumulated_deg']:.2f} | "
-            f"{r['seam_shift_at_start_mm']:.2f} | {r['max_error_mm']:.3f} |"
-        )
+    header = ["pass", "aimed at", "its angle (deg)", "accumulated (deg)",
+              "seam sunk where it starts (mm)", "max error (mm)"]  # fmt: skip
+    rows = (
+        [str(r["pass"]), r["reference"] + (" (cap)" if r["cap"] else ""),
+         f"{r['angle_deg']:.2f}", f"{r['accumulated_deg']:.2f}",
+         f"{r['seam_shift_at_start_mm']:.2f}", f"{r['max_error_mm']:.3f}"]
+        for r in m["rows"]
+    )  # fmt: skip
+    lines = markdown_table(header, rows)
     lines.append(
         f"\n{m['status']}, {m['passes']} passes, {m['underfilled_stations']} stations "
         f"underfilled; the plates turned {m['angular_distortion_deg']:.2f} deg; worst pass "
@@ -255,36 +257,29 @@ def cases_table(data: dict[str, Any]) -> str:
             return "not read" if not bound else "-"
         return (">= " if bound == "lower" else "") + f"{value:.2f}"
 
-    lines = [
-        "| source | DOI | what was measured | measured | simulated | unit | within |",
-        "|---|---|---|---|---|---|---|",
-    ]
-    for r in data["cases"]:
-        simulated = "-" if r["simulated"] is None else f"{r['simulated']:.2f}"
-        within = {None: "-", True: "yes", False: "no"}[r["within"]]
-        lines.append(
-            f"| {r['source']} | {r['doi'] or '-'} | {r['kind']} | "
-            f"{number(r['measured'], r['bound'])} | {simulated} | {r['unit']} | {within} |"
-        )
+    header = ["source", "DOI", "what was measured", "measured", "simulated", "unit", "within"]
+    rows = (
+        [r["source"], r["doi"] or "-", r["kind"], number(r["measured"], r["bound"]),
+         _or_dash(r["simulated"]), r["unit"], {None: "-", True: "yes", False: "no"}[r["within"]]]
+        for r in data["cases"]
+    )  # fmt: skip
+    lines = markdown_table(header, rows)
     return "\n".join(lines) + "\n"
 
 
 def loop_table(data: dict[str, Any]) -> str:
     """butt-distortion with distortion on and off: speed, errors, the load."""
-    lines = [
-        "| butt-distortion | loop x real time (CPU) | x real time (wall) | tracked max error "
-        "(mm) | taught path max error (mm) | max seam shift (mm) | 1-min load |",
-        "|---|---|---|---|---|---|---|",
-    ]
-    for r in data["loop"]:
-        untracked = r.get("untracked_max_error_mm")
-        shift = r.get("max_seam_shift_mm")
-        lines.append(
-            f"| distortion {'on' if r['distortion'] else 'off'} | {r['loop_x_real_time']:.1f} "
-            f"| {r['loop_x_real_time_wall']:.1f} | {r['tracked_max_error_mm']:.3f} | "
-            f"{'-' if untracked is None else f'{untracked:.2f}'} | "
-            f"{'-' if shift is None else f'{shift:.2f}'} | {r['load_1min']:.2f} |"
-        )
+    header = ["butt-distortion", "loop x real time (CPU)", "x real time (wall)",
+              "tracked max error (mm)", "taught path max error (mm)", "max seam shift (mm)",
+              "1-min load"]  # fmt: skip
+    rows = (
+        [f"distortion {'on' if r['distortion'] else 'off'}", f"{r['loop_x_real_time']:.1f}",
+         f"{r['loop_x_real_time_wall']:.1f}", f"{r['tracked_max_error_mm']:.3f}",
+         _or_dash(r.get("untracked_max_error_mm")), _or_dash(r.get("max_seam_shift_mm")),
+         f"{r['load_1min']:.2f}"]
+        for r in data["loop"]
+    )  # fmt: skip
+    lines = markdown_table(header, rows)
     return "\n".join(lines) + "\n"
 
 

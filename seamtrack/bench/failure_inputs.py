@@ -170,8 +170,8 @@ CATALOGUE: tuple[Entry, ...] = (
     Entry("empty scene file", ("check", "empty.toml"), field="SCENE"),
     Entry("comment-only scene file", ("check", "comments.toml"), field="SCENE"),
     Entry("TOML syntax error", ("check", "syntax.toml"), field="syntax.toml"),
-    Entry("missing scene file", ("run", "missing.toml", "--out", "OUT"), field="SCENE"),
-    Entry("unknown built-in scene", ("run", "paper-verifcation", "--out", "OUT"), field="SCENE"),
+    Entry("missing scene file", run_args("missing.toml"), field="SCENE"),
+    Entry("unknown built-in scene", run_args("paper-verifcation"), field="SCENE"),
     # --- sizes that would not fit in memory
     Entry("1e8 rays", run_args(*set_args("sensor.rays=100000000")), field="sensor.rays"),
     Entry("unknown laser fan", run_args(*set_args('sensor.fan="optix"')), field="sensor.fan"),
@@ -195,12 +195,12 @@ CATALOGUE: tuple[Entry, ...] = (
     ),
     Entry(
         "mesh tolerance 1e-9 mm",
-        ("run", *MESH, *set_args("workpiece.tolerance_mm=1e-9"), "--out", "OUT"),
+        run_args(*MESH, *set_args("workpiece.tolerance_mm=1e-9")),
         field="workpiece.tolerance_mm",
     ),
     Entry(
         "mesh tolerance too fine for the part",
-        ("run", "paper-v-groove", *set_args("workpiece.tolerance_mm=2e-4"), "--out", "OUT"),
+        run_args("paper-v-groove", *set_args("workpiece.tolerance_mm=2e-4")),
         quick=False,
         field="workpiece.tolerance_mm",
     ),
@@ -342,24 +342,24 @@ CATALOGUE: tuple[Entry, ...] = (
     # --- CAD
     Entry(
         "unknown CAD parameter",
-        ("run", *MESH, *set_args("workpiece.params.bogus_mm=1"), "--out", "OUT"),
+        run_args(*MESH, *set_args("workpiece.params.bogus_mm=1")),
         quick=False,
         field="workpiece.params.bogus_mm",
     ),
     Entry(
         "boolean CAD parameter",
-        ("run", *MESH, *set_args("workpiece.params.groove_angle_deg=true"), "--out", "OUT"),
+        run_args(*MESH, *set_args("workpiece.params.groove_angle_deg=true")),
         quick=False,
         field="workpiece.params.groove_angle_deg",
     ),
     Entry(
         "missing CAD script",
-        ("run", *MESH, *set_args('workpiece.script="missing_part.py"'), "--out", "OUT"),
+        run_args(*MESH, *set_args('workpiece.script="missing_part.py"')),
         field="workpiece.script",
     ),
     Entry(
         "unknown extractor",
-        ("run", *MESH, *set_args('extractor.name="nope"'), "--out", "OUT"),
+        run_args(*MESH, *set_args('extractor.name="nope"')),
         quick=False,
         field="extractor.name",
     ),
@@ -383,7 +383,7 @@ CATALOGUE: tuple[Entry, ...] = (
     *(
         Entry(
             f"extractor {cls}",
-            ("run", *MESH, *set_args(f'extractor.name="bad_plugins:{cls}"'), "--out", "OUT"),
+            run_args(*MESH, *set_args(f'extractor.name="bad_plugins:{cls}"')),
             quick=False,
             field="extractor.name",
         )
@@ -452,7 +452,7 @@ CATALOGUE: tuple[Entry, ...] = (
     Entry("unknown benchmark", ("bench", "nope", "--out", "OUT"), field="bench"),
     Entry(
         "extractor.expect with an unknown key",
-        ("run", *MESH, *set_args("extractor.expect={angel_deg=60}"), "--out", "OUT"),
+        run_args(*MESH, *set_args("extractor.expect={angel_deg=60}")),
         field="extractor.expect.angel_deg",
     ),
     Entry(
@@ -490,22 +490,22 @@ CATALOGUE: tuple[Entry, ...] = (
     ),
     Entry(
         "weldment scene, STEP without solids",
-        ("run", "weld.toml", *set_args('workpiece.step="sheet.step"'), "--out", "OUT"),
+        run_args("weld.toml", *set_args('workpiece.step="sheet.step"')),
         field="workpiece.step",
     ),
     Entry(
         "weldment scene, solids that never touch",
-        ("run", "weld.toml", "--out", "OUT"),
+        run_args("weld.toml"),
         field="workpiece.step",
     ),
     Entry(
         "workpiece.seam naming no seam",
-        ("run", "weldment-bracket", *set_args('workpiece.seam="s99"'), "--out", "OUT"),
+        run_args("weldment-bracket", *set_args('workpiece.seam="s99"')),
         field="workpiece.seam",
     ),
     Entry(
         "groove weldx does not define",
-        ("run", "weldx-v-groove", *set_args('workpiece.groove.type="ZGroove"'), "--out", "OUT"),
+        run_args("weldx-v-groove", *set_args('workpiece.groove.type="ZGroove"')),
         field="workpiece.groove.type",
     ),
     Entry(
@@ -521,7 +521,7 @@ CATALOGUE: tuple[Entry, ...] = (
     ),
     Entry(
         "--weldx under a file",
-        ("run", *SHORT, "--weldx", "a_file/run.wx", "--out", "OUT"),
+        run_args(*SHORT, "--weldx", "a_file/run.wx"),
         field="--weldx",
     ),
     Entry("unknown sensor preset", ("sensor", "--preset", "nope"), field="preset"),
@@ -559,7 +559,7 @@ CATALOGUE: tuple[Entry, ...] = (
     ),
     Entry(
         "dataset camera bit depth 17",
-        (*dataset_args("dataset_bits.toml"), "--images"),
+        dataset_args("dataset_bits.toml", images=True),
         field="camera.bit_depth",
     ),
     Entry("dataset missing spec file", dataset_args("missing.toml"), field="SPEC"),

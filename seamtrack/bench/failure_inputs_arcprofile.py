@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from seamtrack.bench.failure_kit import Entry
+from seamtrack.bench.failure_kit import Entry, run_args
 
 #: Files written into the workspace (none here).
 FILES: dict[str, bytes] = {}
@@ -18,7 +18,7 @@ GENERATED: dict[str, Any] = {}
 
 
 def _run(pair: str) -> tuple[str, ...]:
-    return ("run", "v-groove-arc-profile", "--set", pair, "--out", "OUT")
+    return run_args("v-groove-arc-profile", "--set", pair)
 
 
 ENTRIES: tuple[Entry, ...] = (

@@ -55,6 +55,12 @@ def _check(*pairs: str) -> tuple[str, ...]:
     return ("check", "v-groove-camera", *set_args(*pairs))
 
 
+def _spec(name: str, spec: str, field: str, images: bool = False, key: str = "camera") -> Entry:
+    """``seamtrack dataset SPEC`` (``images``: with ``--images``), its error naming the spec's
+    ``key.field``."""
+    return Entry(name, dataset_args(spec, images=images), field=f"{key}.{field}")
+
+
 #: paper-v-groove (a mesh scene) in image mode: the camera on another scene.
 IMAGE_MESH = (*MESH, *set_args('sensor.source="image"'))
 
@@ -65,7 +71,7 @@ ENTRIES: tuple[Entry, ...] = (
     Entry("camera f-number 0.5", _check(f"{F}f_number=0.5"), field=f"{F}f_number"),
     Entry(
         "camera f-number 100 on paper-v-groove",
-        ("run", *IMAGE_MESH, *set_args(f"{F}f_number=100"), "--out", "OUT"),
+        run_args(*IMAGE_MESH, *set_args(f"{F}f_number=100")),
         field=f"{F}f_number",
     ),
     Entry("camera focal length 1e-9 mm", _render(f"{F}focal_length_mm=1e-9"), field="focal_length"),
@@ -157,75 +163,23 @@ ENTRIES: tuple[Entry, ...] = (
         field=f"{F}roi",
     ),
     # --- the same values through dataset specs: refused before dataset.json or spec.toml
-    Entry(
-        "dataset --images camera f-number 1e9",
-        (*dataset_args("camera_f_number.toml"), "--images"),
-        field="camera.f_number",
-    ),
-    Entry(
-        "dataset camera f-number 1e4",
-        dataset_args("camera_f_number_1e4.toml"),
-        field="camera.f_number",
-    ),
-    Entry(
-        "dataset --images full well 1e-300",
-        (*dataset_args("camera_full_well.toml"), "--images"),
-        field="camera.full_well_e",
-    ),
-    Entry(
-        "dataset images full well 1e300",
-        dataset_args("camera_full_well_big.toml"),
-        field="camera.full_well_e",
-    ),
-    Entry(
-        "dataset --images ambient 1e300",
-        (*dataset_args("camera_ambient.toml"), "--images"),
-        field="camera.ambient",
-    ),
-    Entry(
-        "dataset --images exposure 1e300",
-        (*dataset_args("camera_exposure.toml"), "--images"),
-        field="camera.exposure",
-    ),
-    Entry(
-        "dataset --images read noise 1e300",
-        (*dataset_args("camera_read_noise.toml"), "--images"),
-        field="camera.read_noise_e",
-    ),
-    Entry(
-        "dataset --images line 1e-9 mm thick",
-        (*dataset_args("camera_thickness.toml"), "--images"),
-        field="camera.line_thickness_mm",
-    ),
-    Entry(
-        "dataset wavelength 100 nm",
-        dataset_args("camera_wavelength.toml"),
-        field="camera.wavelength_nm",
-    ),
-    Entry(
-        "dataset images 4096 x 4096 at f/0.95",
-        dataset_args("camera_fast_lens.toml"),
-        field="camera.rows",
-    ),
+    _spec("dataset --images camera f-number 1e9", "camera_f_number.toml", "f_number", True),
+    _spec("dataset camera f-number 1e4", "camera_f_number_1e4.toml", "f_number"),
+    _spec("dataset --images full well 1e-300", "camera_full_well.toml", "full_well_e", True),
+    _spec("dataset images full well 1e300", "camera_full_well_big.toml", "full_well_e"),
+    _spec("dataset --images ambient 1e300", "camera_ambient.toml", "ambient", True),
+    _spec("dataset --images exposure 1e300", "camera_exposure.toml", "exposure", True),
+    _spec("dataset --images read noise 1e300", "camera_read_noise.toml", "read_noise_e", True),
+    _spec("dataset --images line 1e-9 mm thick", "camera_thickness.toml", "line_thickness_mm",
+          True),
+    _spec("dataset wavelength 100 nm", "camera_wavelength.toml", "wavelength_nm"),
+    _spec("dataset images 4096 x 4096 at f/0.95", "camera_fast_lens.toml", "rows"),
     # --- issue 23.8: the seam within the sensor's range and field of view
-    Entry(
-        "dataset offsets of 1000 mm",
-        dataset_args("offsets_1000.toml"),
-        field="sensor.standoff_offset_mm",
-    ),
-    Entry(
-        "dataset lateral offset 50 mm",
-        dataset_args("offsets_lateral.toml"),
-        field="sensor.lateral_offset_mm",
-    ),
-    Entry(
-        "dataset images standoff 45 mm beyond the range",
-        dataset_args("offsets_far.toml"),
-        field="sensor.standoff_offset_mm",
-    ),
-    Entry(
-        "dataset standoff beyond a small preset's range",
-        dataset_args("offsets_small_preset.toml"),
-        field="sensor.standoff_offset_mm",
-    ),
-)
+    _spec("dataset offsets of 1000 mm", "offsets_1000.toml", "standoff_offset_mm", key="sensor"),
+    _spec("dataset lateral offset 50 mm", "offsets_lateral.toml", "lateral_offset_mm",
+          key="sensor"),
+    _spec("dataset images standoff 45 mm beyond the range", "offsets_far.toml",
+          "standoff_offset_mm", key="sensor"),
+    _spec("dataset standoff beyond a small preset's range", "offsets_small_preset.toml",
+          "standoff_offset_mm", key="sensor"),
+)  # fmt: skip

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from seamtrack.bench.failure_kit import Entry
+from seamtrack.bench.failure_kit import Entry, run_args
 
 #: Files written into the workspace (none here).
 FILES: dict[str, bytes] = {}
@@ -26,11 +26,11 @@ BUTT = ("butt-distortion", "--set", "workpiece.params.seam_length_mm=20.0",
 
 
 def _job(pair: str) -> tuple[str, ...]:
-    return ("run", *JOB, "--set", pair, "--out", "OUT")
+    return run_args(*JOB, "--set", pair)
 
 
 def _butt(pair: str) -> tuple[str, ...]:
-    return ("run", *BUTT, "--set", pair, "--out", "OUT")
+    return run_args(*BUTT, "--set", pair)
 
 
 #: ``seamtrack heat``: the field asked at a point, 5 mm beside the arc unless said.

@@ -90,7 +90,7 @@ WELDMENTS: tuple[Entry, ...] = (
     _seams("seams, plates facing across a rod", "rod_in_gap.step"),
     Entry(
         "weldment scene, two coincident boxes",
-        ("run", "weld.toml", *set_args('workpiece.step="coincident.step"'), "--out", "OUT"),
+        run_args("weld.toml", *set_args('workpiece.step="coincident.step"')),
         field="workpiece.step",
     ),
     Entry(

@@ -13,17 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from seamtrack.bench.failure_kit import Entry
-
-
-def set_args(*pairs: str) -> tuple[str, ...]:
-    """``--set`` before each pair (as failure_kit's, kept here: no private name imported)."""
-    return tuple(arg for pair in pairs for arg in ("--set", pair))
-
-
-def run_args(*extra: str) -> tuple[str, ...]:
-    return ("run", *extra, "--out", "OUT")
-
+from seamtrack.bench.failure_kit import Entry, run_args, set_args
 
 #: paper-verification's seam (Eq. 15-17, 400 mm) written in metres.
 _t = np.linspace(0.0, 0.4, 201).tolist()

@@ -38,5 +38,6 @@ def run_args(*extra: str) -> tuple[str, ...]:
     return ("run", *extra, "--out", "OUT")
 
 
-def dataset_args(spec: str, n: str = "8") -> tuple[str, ...]:
-    return ("dataset", spec, "--n", n, "--out", "OUT")
+def dataset_args(spec: str, n: str = "8", images: bool = False) -> tuple[str, ...]:
+    """``seamtrack dataset SPEC --n N --out OUT`` (``--images``: with camera images)."""
+    return ("dataset", spec, "--n", n, "--out", "OUT", *(("--images",) if images else ()))

@@ -12,8 +12,9 @@ holds seamtrack's mm / 1000.
 
 from __future__ import annotations
 
+import contextlib
 import struct
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 from typing import Any
 
 import numpy as np
@@ -96,32 +97,31 @@ def string(text: str) -> bytes:
     return w.bytes()
 
 
-def point_stamped(t_s: float, frame_id: str, point_m: Iterable[float]) -> bytes:
-    """``geometry_msgs/PointStamped`` of a point already in metres."""
+def _stamped_doubles(t_s: float, frame_id: str, layout: struct.Struct, *values: float) -> bytes:
+    """A message of a header and fixed doubles (``geometry_msgs``' ``*Stamped``)."""
     w = Writer()
     w.header(t_s, frame_id)
-    w.doubles(_3D, *point_m)
+    w.doubles(layout, *values)
     return w.bytes()
+
+
+def point_stamped(t_s: float, frame_id: str, point_m: Iterable[float]) -> bytes:
+    """``geometry_msgs/PointStamped`` of a point already in metres."""
+    return _stamped_doubles(t_s, frame_id, _3D, *point_m)
 
 
 def pose_stamped(
     t_s: float, frame_id: str, position_m: Iterable[float], q: Iterable[float]
 ) -> bytes:
     """``geometry_msgs/PoseStamped``: a position (m) and a quaternion (x, y, z, w)."""
-    w = Writer()
-    w.header(t_s, frame_id)
-    w.doubles(_7D, *position_m, *q)
-    return w.bytes()
+    return _stamped_doubles(t_s, frame_id, _7D, *position_m, *q)
 
 
 def twist_stamped(
     t_s: float, frame_id: str, linear: Iterable[float], angular: Iterable[float]
 ) -> bytes:
     """``geometry_msgs/TwistStamped`` (m/s, rad/s)."""
-    w = Writer()
-    w.header(t_s, frame_id)
-    w.doubles(_6D, *linear, *angular)
-    return w.bytes()
+    return _stamped_doubles(t_s, frame_id, _6D, *linear, *angular)
 
 
 def tf_message(chain: Iterable[tuple[str, str, ArrayLike]], t_s: float) -> bytes:
@@ -206,6 +206,34 @@ def image(image: Any, t_s: float, frame_id: str = messages.FRAMES["sensor"]) -> 
 _STAMPED_DOUBLES = {"geometry_msgs/msg/PoseStamped": 7, "geometry_msgs/msg/TwistStamped": 6}
 
 
+def _read_header(raw: bytes) -> tuple[str, memoryview, int, str, int]:
+    """(byte order, the body after the encapsulation, stamp in ns, frame id, the offset after
+    the header) of a CDR message that starts with a ``std_msgs/Header``; ValueError (or
+    struct.error, UnicodeDecodeError) on anything else."""
+    if len(raw) < 4 or raw[0] != 0 or raw[1] not in (0, 1):
+        raise ValueError("no CDR encapsulation header")
+    order = "<" if raw[1] == 1 else ">"
+    body = memoryview(raw)[4:]
+    sec, nanosec, length = struct.unpack_from(order + "iII", body, 0)
+    if length < 1 or 12 + length > len(body) or body[12 + length - 1] != 0:
+        raise ValueError("a string that does not fit")
+    frame_id = bytes(body[12 : 12 + length - 1]).decode()
+    return order, body, sec * 1_000_000_000 + nanosec, frame_id, 12 + length
+
+
+@contextlib.contextmanager
+def _refused_as(msgtype: str) -> Iterator[None]:
+    """Every way reading bytes as a ``msgtype`` fails, as one ValueError naming it."""
+    try:
+        yield
+    except struct.error:
+        raise ValueError(f"not a {msgtype} (too short)") from None
+    except UnicodeDecodeError:
+        raise ValueError(f"not a {msgtype} (a frame id that is not UTF-8)") from None
+    except ValueError as exc:
+        raise ValueError(f"not a {msgtype} ({exc})") from None
+
+
 def read_stamped(raw: bytes, msgtype: str) -> tuple[int, str, tuple[float, ...]]:
     """A ``geometry_msgs/PoseStamped`` (position, orientation: 7 doubles) or ``TwistStamped``
     (linear, angular: 6) from CDR bytes, either byte order: (stamp in ns, frame id, the
@@ -213,28 +241,14 @@ def read_stamped(raw: bytes, msgtype: str) -> tuple[int, str, tuple[float, ...]]
     UTF-8; no more than 3 bytes of padding after the last field); raises ValueError on
     anything else."""
     n = _STAMPED_DOUBLES[msgtype]
-    try:
-        if len(raw) < 4 or raw[0] != 0 or raw[1] not in (0, 1):
-            raise ValueError("no CDR encapsulation header")
-        order = "<" if raw[1] == 1 else ">"
-        body = memoryview(raw)[4:]
-        sec, nanosec, length = struct.unpack_from(order + "iII", body, 0)
-        if length < 1 or 12 + length > len(body) or body[12 + length - 1] != 0:
-            raise ValueError("a string that does not fit")
-        frame_id = bytes(body[12 : 12 + length - 1]).decode()
-        pos = 12 + length
+    with _refused_as(msgtype):
+        order, body, stamp_ns, frame_id, pos = _read_header(raw)
         pos += -pos % 8
         values = struct.unpack_from(f"{order}{n}d", body, pos)
         pos += 8 * n
         if pos + 3 < len(body):
             raise ValueError("bytes after the message")
-    except struct.error:
-        raise ValueError(f"not a {msgtype} (too short)") from None
-    except UnicodeDecodeError:
-        raise ValueError(f"not a {msgtype} (a frame id that is not UTF-8)") from None
-    except ValueError as exc:
-        raise ValueError(f"not a {msgtype} ({exc})") from None
-    return sec * 1_000_000_000 + nanosec, frame_id, values
+    return stamp_ns, frame_id, values
 
 
 def read_pose_array(raw: bytes, most: int) -> tuple[int, str, list[tuple[float, ...]]]:
@@ -242,16 +256,8 @@ def read_pose_array(raw: bytes, most: int) -> tuple[int, str, list[tuple[float, 
     id, each pose's position and orientation as 7 doubles), at most ``most`` poses; checked
     as :func:`read_stamped` checks; raises ValueError on anything else."""
     msgtype = "geometry_msgs/msg/PoseArray"
-    try:
-        if len(raw) < 4 or raw[0] != 0 or raw[1] not in (0, 1):
-            raise ValueError("no CDR encapsulation header")
-        order = "<" if raw[1] == 1 else ">"
-        body = memoryview(raw)[4:]
-        sec, nanosec, length = struct.unpack_from(order + "iII", body, 0)
-        if length < 1 or 12 + length > len(body) or body[12 + length - 1] != 0:
-            raise ValueError("a string that does not fit")
-        frame_id = bytes(body[12 : 12 + length - 1]).decode()
-        pos = 12 + length
+    with _refused_as(msgtype):
+        order, body, stamp_ns, frame_id, pos = _read_header(raw)
         pos += -pos % 4
         (count,) = struct.unpack_from(order + "I", body, pos)
         pos += 4
@@ -265,10 +271,4 @@ def read_pose_array(raw: bytes, most: int) -> tuple[int, str, list[tuple[float, 
                 pos += 56
         if pos + 3 < len(body):
             raise ValueError("bytes after the message")
-    except struct.error:
-        raise ValueError(f"not a {msgtype} (too short)") from None
-    except UnicodeDecodeError:
-        raise ValueError(f"not a {msgtype} (a frame id that is not UTF-8)") from None
-    except ValueError as exc:
-        raise ValueError(f"not a {msgtype} ({exc})") from None
-    return sec * 1_000_000_000 + nanosec, frame_id, poses
+    return stamp_ns, frame_id, poses

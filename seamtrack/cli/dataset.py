@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from seamtrack.cli.jobs import progress_wanted as _progress_wanted
+from seamtrack.cli.parsing import QUIET_HELP, add_workers_arguments
 from seamtrack.errors import OutputError
 
 
@@ -85,8 +86,7 @@ def add_dataset_parser(add: Callable[..., Any]) -> None:
     p.add_argument("spec", nargs="?", help="dataset spec (.toml); --template writes one")
     p.add_argument("--n", type=int, help="number of samples (a rerun resumes or appends)")
     p.add_argument("--out", help="dataset folder")
-    p.add_argument("--workers", type=int, default=1, help="local processes (default 1)")
-    p.add_argument("--scheduler", help="Dask scheduler address (tcp://host:port)")
+    add_workers_arguments(p)
     p.add_argument(
         "--images",
         action="store_true",
@@ -96,4 +96,4 @@ def add_dataset_parser(add: Callable[..., Any]) -> None:
     p.add_argument("-o", "--output", help="with --template: the file to write")
     p.add_argument("--force", action="store_true", help="with --template -o: overwrite")
     p.add_argument("--info", metavar="DIR", help="summarize the dataset in DIR")
-    p.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
+    p.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from seamtrack.cli.parsing import add_command
 from seamtrack.errors import SeamtrackError
 
 HELP = "the temperature of the moving arc at points in its frame (Rosenthal's fields)"
@@ -12,8 +13,7 @@ HELP = "the temperature of the moving arc at points in its frame (Rosenthal's fi
 
 def add_parser(sub: Any) -> argparse.ArgumentParser:
     """Register the command on the ``seamtrack`` subparsers."""
-    p = sub.add_parser("heat", help=HELP, description=HELP)
-    p.set_defaults(fn=cmd_heat)
+    p = add_command(sub, "heat", cmd_heat, HELP, scene=False)
     p.add_argument(
         "--at",
         action="append",

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import errno
+import functools
 import sys
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -19,6 +20,13 @@ from seamtrack.cli import jobs
 from seamtrack.cli import seams as seams_command
 from seamtrack.cli import serve as serve_command
 from seamtrack.cli.dataset import add_dataset_parser
+from seamtrack.cli.parsing import (
+    QUIET_HELP,
+    SCENE_HELP,
+    add_at_argument,
+    add_command,
+    add_workers_arguments,
+)
 from seamtrack.cli.recording import (
     EXTRACTORS_ACTIONS,
     add_record_argument,
@@ -30,8 +38,6 @@ from seamtrack.errors import OutputError, PluginRuntimeError, SceneError, Seamtr
 from seamtrack.simulation.compiling import announce_compiling, announce_wanted
 
 EXIT_USAGE = 2
-SCENE_HELP = "built-in scene name (seamtrack init --list) or a .toml file"
-QUIET_HELP = "print nothing but errors"
 
 
 def _overrides(args: argparse.Namespace) -> list[str]:
@@ -472,24 +478,22 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="on an error in a plugin, show seamtrack's own frames too",
     )
+    add = functools.partial(add_command, sub)
+    _add_scene_commands(add)
+    _add_batch_commands(add)
+    _add_scan_command(add)
+    seams_command.add_parser(sub)
+    serve_command.add_parser(sub)
+    heat_command.add_parser(sub)
+    _add_picture_commands(add)
+    _add_extractors_command(add)
+    add_dataset_parser(add)
+    _add_upkeep_commands(add)
+    return parser
 
-    def add(
-        name: str,
-        fn: Callable[[argparse.Namespace], int],
-        help_: str,
-        scene: bool = True,
-    ) -> argparse.ArgumentParser:
-        p = sub.add_parser(name, help=help_, description=help_)
-        p.set_defaults(fn=fn)
-        if scene:  # --set only where a scene is read
-            p.add_argument(
-                "--set",
-                action="append",
-                metavar="KEY=VALUE",
-                help="override a scene key, e.g. --set tracker.radius_mm=0.5 (repeatable)",
-            )
-        return p
 
+def _add_scene_commands(add: Callable[..., argparse.ArgumentParser]) -> None:
+    """run, init, check, sensor: a scene run, written, checked; the sensor's geometry."""
     p = add("run", cmd_run, "run a scene and write summary.json, trace.csv, error.png")
     p.add_argument(
         "scene",
@@ -525,6 +529,9 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--json", action="store_true", help="print JSON instead of tables")
     p.add_argument("--list", action="store_true", help="list the presets")
 
+
+def _add_batch_commands(add: Callable[..., argparse.ArgumentParser]) -> None:
+    """sweep, compare: a scene run many times, over values of a key or over trackers."""
     p = add("sweep", cmd_sweep, "run a scene over values of one key")
     p.add_argument("scene", help=SCENE_HELP)
     p.add_argument("--param", required=True, help="dotted scene key, e.g. tracker.radius_mm")
@@ -540,8 +547,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="Monte Carlo: run each value with "
         "seeds 0..N-1 and report means with 95%% confidence intervals",
     )
-    p.add_argument("--workers", type=int, default=1, help="local processes (default 1)")
-    p.add_argument("--scheduler", help="Dask scheduler address (tcp://host:port)")
+    add_workers_arguments(p)
     p.add_argument("--out", help="folder for results.jsonl (resumable), sweep.md/json/csv/png")
     p.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)
 
@@ -552,41 +558,31 @@ def build_parser() -> argparse.ArgumentParser:
         default="I,II,trajectory",
         help="comma-separated tracker names (I, II, trajectory, or module:Class)",
     )
-    p.add_argument("--workers", type=int, default=1, help="local processes (default 1)")
+    add_workers_arguments(p, scheduler=False)
     p.add_argument("--out", help="folder for results.jsonl, sweep.md/json/csv")
     p.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)
 
+
+def _add_scan_command(add: Callable[..., argparse.ArgumentParser]) -> None:
+    """scan: one stripe profile and its seam point."""
     p = add("scan", cmd_scan, "one stripe profile and its seam point at an arc length")
     p.add_argument("scene", help=SCENE_HELP)
-    p.add_argument(
-        "--at",
-        type=float,
-        default=0.0,
-        metavar="S_MM",
-        help="arc length along the seam, mm (default 0)",
-    )
+    add_at_argument(p, 0.0, "arc length along the seam, mm (default 0)")
     p.add_argument(
         "--out",
         help="CSV file (default: runs/scan-<scene>-<S>mm.csv; in mesh mode a PNG plot beside it)",
     )
 
-    seams_command.add_parser(sub)
-    serve_command.add_parser(sub)
-    heat_command.add_parser(sub)
 
+def _add_picture_commands(add: Callable[..., argparse.ArgumentParser]) -> None:
+    """render, view: the camera's image at an arc length; the scene in 3D."""
     p = add(
         "render",
         cmd_render,
         "the camera image at an arc length, and the profile measured from its pixels",
     )
     p.add_argument("scene", help=SCENE_HELP)
-    p.add_argument(
-        "--at",
-        type=float,
-        default=0.0,
-        metavar="S_MM",
-        help="arc length along the seam, mm (default 0)",
-    )
+    add_at_argument(p, 0.0, "arc length along the seam, mm (default 0)")
     p.add_argument("--out", help="PNG to write (default: runs/render-<scene>-<S>mm.png)")
 
     p = add(
@@ -595,15 +591,12 @@ def build_parser() -> argparse.ArgumentParser:
         "render a scene (part, seam, sensor, laser fan, field of view, stripe) to a PNG",
     )
     p.add_argument("scene", help=SCENE_HELP)
-    p.add_argument(
-        "--at",
-        type=float,
-        default=None,
-        metavar="S_MM",
-        help="torch position along the seam, mm (default: mid-seam)",
-    )
+    add_at_argument(p, None, "torch position along the seam, mm (default: mid-seam)")
     p.add_argument("--out", help="PNG to write (default: runs/<scene>-view.png)")
 
+
+def _add_extractors_command(add: Callable[..., argparse.ArgumentParser]) -> None:
+    """extractors: list, bench or import the feature extractors' profiles."""
     p = add(
         "extractors",
         cmd_extractors,
@@ -629,8 +622,9 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)
 
-    add_dataset_parser(add)
 
+def _add_upkeep_commands(add: Callable[..., argparse.ArgumentParser]) -> None:
+    """cache, bench: the mesh cache; the benchmarks."""
     p = add("cache", cmd_cache, "the workpiece mesh cache: where it is, or clear it", scene=False)
     p.add_argument(
         "action",
@@ -656,7 +650,6 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--out", default="bench-results", help="folder for the results")
     p.add_argument("--quick", action="store_true", help="fewer repeats (a smoke run)")
-    return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:

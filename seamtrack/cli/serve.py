@@ -18,20 +18,15 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any
 
+from seamtrack.cli.parsing import QUIET_HELP, SCENE_HELP, add_command
+
 HELP = "run a scene with the tracker in another process (ZeroMQ, or ROS 2 over Zenoh)"
 
 
 def add_parser(sub: Any) -> argparse.ArgumentParser:
     """Register the command on the ``seamtrack`` subparsers."""
-    p = sub.add_parser("serve", help=HELP, description=HELP)
-    p.set_defaults(fn=cmd_serve)
-    p.add_argument(
-        "--set",
-        action="append",
-        metavar="KEY=VALUE",
-        help="override a scene key, e.g. --set sensor.frame_rate_hz=50 (repeatable)",
-    )
-    p.add_argument("scene", help="built-in scene name (seamtrack init --list) or a .toml file")
+    p = add_command(sub, "serve", cmd_serve, HELP, set_example="sensor.frame_rate_hz=50")
+    p.add_argument("scene", help=SCENE_HELP)
     p.add_argument(
         "--transport",
         choices=["zmq", "zenoh"],
@@ -68,7 +63,7 @@ def add_parser(sub: Any) -> argparse.ArgumentParser:
     p.add_argument("--domain-id", type=int, default=0, help="zenoh: the ROS_DOMAIN_ID (default 0)")
     p.add_argument("--out", help="output folder (default: runs/<scene name>)")
     p.add_argument("--no-plot", action="store_true", help="skip error.png")
-    p.add_argument("-q", "--quiet", action="store_true", help="print nothing but errors")
+    p.add_argument("-q", "--quiet", action="store_true", help=QUIET_HELP)
     return p
 
 

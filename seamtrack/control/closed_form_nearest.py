@@ -63,6 +63,20 @@ def _ur_q6(
     return q6, (t0 + x4 * x4) + x5 * x5
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _keep_nearer(
+    d: float, key: int, best: float, best_key: int, row: FloatArray,
+    v0: float, v1: float, v2: float, v3: float, v4: float, v5: float,
+) -> tuple[float, int]:  # fmt: skip
+    """(best, best_key) after a branch (v0 .. v5, ``d`` its squared distance from the seed,
+    ``key`` its place in the branches' order): kept in ``row`` when it is nearer than the best
+    so far, or as near and earlier (nearest_branch's tiebreak)."""
+    if d < best or (d == best and key < best_key):
+        row[0], row[1], row[2], row[3], row[4], row[5] = v0, v1, v2, v3, v4, v5
+        return d, key
+    return best, best_key
+
+
 @numba.njit(cache=True, nogil=True)
 def _ur_nearest(
     g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatArray, ws: FloatArray
@@ -132,10 +146,8 @@ def _ur_nearest(
                 d += (v3 - q_near[3]) * (v3 - q_near[3])
                 d += (v4 - q_near[4]) * (v4 - q_near[4])
                 d += (v5 - q_near[5]) * (v5 - q_near[5])
-                key = 4 * i1 + 2 * i5 + i3
-                if d < best or (d == best and key < best_key):
-                    best, best_key = d, key
-                    row[0], row[1], row[2], row[3], row[4], row[5] = v0, v1, v2, v3, v4, v5
+                best, best_key = _keep_nearer(d, 4 * i1 + 2 * i5 + i3, best, best_key, row,
+                                              v0, v1, v2, v3, v4, v5)  # fmt: skip
     return best_key < 8
 
 
@@ -189,10 +201,8 @@ def _wrist_nearest(g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatA
                 dd += (v3 - q_near[3]) * (v3 - q_near[3])
                 dd += (v4 - q_near[4]) * (v4 - q_near[4])
                 dd += (v5 - q_near[5]) * (v5 - q_near[5])
-                key = 4 * i1 + 2 * i3 + i6
-                if dd < best or (dd == best and key < best_key):
-                    best, best_key = dd, key
-                    row[0], row[1], row[2], row[3], row[4], row[5] = v0, v1, v2, v3, v4, v5
+                best, best_key = _keep_nearer(dd, 4 * i1 + 2 * i3 + i6, best, best_key, row,
+                                              v0, v1, v2, v3, v4, v5)  # fmt: skip
     return best_key < 8
 
 

@@ -23,6 +23,7 @@ the same beads at one constant speed (the one for the groove's median area).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from typing import Any, Protocol, runtime_checkable
 
@@ -350,6 +351,10 @@ def planner(name: str, **params: Any) -> Any:
         ) from None
 
 
+#: A planner's answer refused: (what it returned, how to fix it) -> the error to raise.
+Refuse = Callable[[str, str], PluginRuntimeError]
+
+
 def checked_plan(
     plan: Any,
     name: str,
@@ -371,6 +376,21 @@ def checked_plan(
         return None
     if not isinstance(plan, PassPlan):
         raise refuse(f"returned {type(plan).__name__}", "return a PassPlan, or None when done")
+    _check_numbers(plan, refuse)
+    plan = _with_speed_profile(plan, refuse)
+    if window is not None:
+        _check_speed_window(plan, window, refuse)
+    plan = _with_offset_profile(plan, refuse)
+    if gantry and plan.work_angle_rad != 0.0:
+        raise refuse(f"asks for a work angle of {math.degrees(plan.work_angle_rad):.3g} deg on "
+                     "a gantry, which cannot tilt its torch", "plan work_angle_rad = 0 on a "
+                     "gantry, or weld on an arm (robot.model)")  # fmt: skip
+    _check_over_groove(plan, groove, refuse)
+    return plan
+
+
+def _check_numbers(plan: PassPlan, refuse: Refuse) -> None:
+    """A known reference point, finite numbers, a travel speed and a wire feed above 0."""
     if plan.reference not in REFERENCES:
         raise refuse(f"returned the reference {plan.reference!r}",
                      f"use one of {', '.join(REFERENCES)}")  # fmt: skip
@@ -388,40 +408,62 @@ def checked_plan(
     if plan.wire_feed_mm_s <= 0:
         raise refuse(f"returned wire_feed_mm_s = {plan.wire_feed_mm_s}",
                      "give a wire feed > 0 mm/s")  # fmt: skip
-    if plan.speed_profile_mm_s is not None:
-        profile = np.asarray(plan.speed_profile_mm_s, dtype=float)
-        s = np.asarray(plan.speed_s_mm if plan.speed_s_mm is not None else [], dtype=float)
-        if profile.shape != s.shape or not (np.isfinite(profile).all() and (profile > 0).all()):
-            raise refuse(
-                "returned a speed profile that is not finite, > 0 and as long as its arc lengths",
-                "give speed_s_mm and speed_profile_mm_s of one length",
-            )
-        plan = replace(plan, speed_s_mm=s, speed_profile_mm_s=profile)
-    if window is not None:
-        slowest, fastest = window
-        speeds = [plan.travel_speed_mm_s]
-        if plan.speed_profile_mm_s is not None and len(plan.speed_profile_mm_s):
-            profile = plan.speed_profile_mm_s
-            speeds += [float(np.min(profile)), float(np.max(profile))]
-        outside_window = [v for v in speeds if not slowest - 1e-9 <= v <= fastest + 1e-9]
-        if outside_window:
-            raise refuse(f"asks for a travel speed of {outside_window[0]:.4g} mm/s, outside the "
-                         f"process window [{slowest:g}, {fastest:g}] mm/s",
-                         "keep the travel speed within process.travel_speed_min_mm_s .. "
-                         "_max_mm_s")  # fmt: skip
-    if plan.offset_profile_mm is not None:
-        offsets = np.asarray(plan.offset_profile_mm, dtype=float)
-        s_of = np.asarray(plan.speed_s_mm if plan.speed_s_mm is not None else [], dtype=float)
-        if offsets.shape != s_of.shape or not np.isfinite(offsets).all():
-            raise refuse(
-                "returned an offset profile that is not finite and as long as its arc lengths",
-                "give speed_s_mm and offset_profile_mm of one length",
-            )
-        plan = replace(plan, offset_profile_mm=offsets)
-    if gantry and plan.work_angle_rad != 0.0:
-        raise refuse(f"asks for a work angle of {math.degrees(plan.work_angle_rad):.3g} deg on "
-                     "a gantry, which cannot tilt its torch", "plan work_angle_rad = 0 on a "
-                     "gantry, or weld on an arm (robot.model)")  # fmt: skip
+
+
+def _with_speed_profile(plan: PassPlan, refuse: Refuse) -> PassPlan:
+    """The plan with its speed profile as arrays: finite, above 0, one speed an arc length."""
+    if plan.speed_profile_mm_s is None:
+        return plan
+    profile, s = _along_seam(plan, plan.speed_profile_mm_s, "a speed profile",
+                             "speed_profile_mm_s", refuse, positive=True)  # fmt: skip
+    return replace(plan, speed_s_mm=s, speed_profile_mm_s=profile)
+
+
+def _along_seam(
+    plan: PassPlan, values: Any, what: str, key: str, refuse: Refuse, positive: bool = False
+) -> tuple[FloatArray, FloatArray]:
+    """(values, the plan's arc lengths) as arrays, refused unless the values are finite (and
+    above 0 when ``positive``) and one an arc length."""
+    profile = np.asarray(values, dtype=float)
+    s = np.asarray(plan.speed_s_mm if plan.speed_s_mm is not None else [], dtype=float)
+    usable = np.isfinite(profile).all() and (not positive or (profile > 0).all())
+    if profile.shape != s.shape or not usable:
+        raise refuse(
+            f"returned {what} that is not finite{', > 0' if positive else ''} and as long as "
+            "its arc lengths",
+            f"give speed_s_mm and {key} of one length",
+        )
+    return profile, s
+
+
+def _check_speed_window(plan: PassPlan, window: tuple[float, float], refuse: Refuse) -> None:
+    """Every travel speed of the plan (its own, its profile's slowest and fastest) within the
+    process's window (mm/s)."""
+    slowest, fastest = window
+    speeds = [plan.travel_speed_mm_s]
+    if plan.speed_profile_mm_s is not None and len(plan.speed_profile_mm_s):
+        profile = plan.speed_profile_mm_s
+        speeds += [float(np.min(profile)), float(np.max(profile))]
+    outside_window = [v for v in speeds if not slowest - 1e-9 <= v <= fastest + 1e-9]
+    if outside_window:
+        raise refuse(f"asks for a travel speed of {outside_window[0]:.4g} mm/s, outside the "
+                     f"process window [{slowest:g}, {fastest:g}] mm/s",
+                     "keep the travel speed within process.travel_speed_min_mm_s .. "
+                     "_max_mm_s")  # fmt: skip
+
+
+def _with_offset_profile(plan: PassPlan, refuse: Refuse) -> PassPlan:
+    """The plan with its offset profile as an array: finite, one offset an arc length."""
+    if plan.offset_profile_mm is None:
+        return plan
+    offsets, _ = _along_seam(plan, plan.offset_profile_mm, "an offset profile",
+                             "offset_profile_mm", refuse)  # fmt: skip
+    return replace(plan, offset_profile_mm=offsets)
+
+
+def _check_over_groove(plan: PassPlan, groove: MeasuredGroove, refuse: Refuse) -> None:
+    """The bead's place (the reference point plus the offset) within the groove's top width
+    all along the seam."""
     reference = POINT_INDEX[plan.reference]
     # on the groove as measured, smoothed along the seam (one frame's outlier is not the groove)
     y = _smooth(groove.points[:, reference, 0]) + plan.offset_at(groove.s_mm)
@@ -433,4 +475,3 @@ def checked_plan(
                      f"outside the groove's top width [{lo[i]:.3g}, {hi[i]:.3g}] mm (offset "
                      f"{plan.offset_at(groove.s_mm[i]):.3g} mm from {plan.reference})",
                      "give an offset that keeps the torch over the groove")  # fmt: skip
-    return plan

@@ -39,7 +39,23 @@ class _PointQueue:
         return len(self.points)
 
 
-class PointToPoint:
+class _QueueTracker:
+    """What the paper's two trackers share: the measured seam points, queued (at least
+    ``min_spacing_mm`` apart), and the welding speed."""
+
+    min_spacing_mm: float
+
+    def reset(self, context: TrackerContext) -> None:
+        self.speed = context.welding_speed_mm_s
+        self.queue = _PointQueue(self.min_spacing_mm)
+        self._command: Command | None = None
+
+    def update(self, measurement: Measurement) -> None:
+        if measurement:
+            self.queue.push(measurement.point_world)
+
+
+class PointToPoint(_QueueTracker):
     """The paper's seam tracking algorithm I (Sec. 4.1, Fig. 10).
 
     Go to each sensed seam point in turn, and take the next point only after converging on the
@@ -78,17 +94,11 @@ class PointToPoint:
         self.min_spacing_mm = min_spacing_mm
 
     def reset(self, context: TrackerContext) -> None:
-        self.speed = context.welding_speed_mm_s
+        super().reset(context)
         self.tol = (
             self.tolerance_mm if self.tolerance_mm is not None else (context.sensor_resolution_mm)
         )
         self.rest_speed = 0.01 * self.speed
-        self.queue = _PointQueue(self.min_spacing_mm)
-        self._command: Command | None = None
-
-    def update(self, measurement: Measurement) -> None:
-        if measurement:
-            self.queue.push(measurement.point_world)
 
     def command(
         self, t_s: float, tcp_world: FloatArray, tcp_velocity_world: FloatArray
@@ -111,7 +121,7 @@ class PointToPoint:
         return self._command
 
 
-class ConvergenceRadius:
+class ConvergenceRadius(_QueueTracker):
     """The paper's seam tracking algorithm II (Sec. 4.3, Fig. 12-13).
 
     Move towards the current seam point at the welding speed without stopping, and switch to
@@ -138,15 +148,6 @@ class ConvergenceRadius:
             )
         self.radius_mm = radius_mm
         self.min_spacing_mm = min_spacing_mm
-
-    def reset(self, context: TrackerContext) -> None:
-        self.speed = context.welding_speed_mm_s
-        self.queue = _PointQueue(self.min_spacing_mm)
-        self._command: Command | None = None
-
-    def update(self, measurement: Measurement) -> None:
-        if measurement:
-            self.queue.push(measurement.point_world)
 
     def command(
         self, t_s: float, tcp_world: FloatArray, tcp_velocity_world: FloatArray

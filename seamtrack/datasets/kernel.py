@@ -19,7 +19,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.sensing.kernels import fan_stripe_finish, fan_stripe_hits
+from seamtrack.sensing.kernels import fan_directions, fan_stripe_finish, fan_stripe_hits
 
 #: A crossing at a segment's end counts for the segment within this fraction of its length
 #: (rays through a shared vertex hit one of the two segments, never neither).
@@ -104,11 +104,7 @@ def stripe(
         The rays in the seam frame.
     """
     n = fan.shape[0]
-    directions = np.empty((n, 3))
-    for i in range(n):
-        for a in range(3):
-            directions[i, a] = (rotation[a, 0] * fan[i, 0] + rotation[a, 1] * fan[i, 1]
-                                + rotation[a, 2] * fan[i, 2])  # fmt: skip
+    directions = fan_directions(rotation, fan)
     t_hit = np.empty(n)
     face = np.empty(n, dtype=np.int64)
     ray_segment_crossings(np.full(n, origin[1]), np.full(n, origin[2]),

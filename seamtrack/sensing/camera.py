@@ -256,6 +256,13 @@ class Camera:
     exposure_set: tuple[float, ...] = (1.0, 1 / 8, 1 / 64, 1 / 512)
 
     def __post_init__(self) -> None:
+        self._check_whole_numbers()
+        self._check_optics()
+        self._check_roi()
+        self._check_exposure_control()
+
+    def _check_whole_numbers(self) -> None:
+        """The chip's size, its supersampling and bit depth: whole numbers in their ranges."""
         for key in ("rows", "columns", "supersample", "bit_depth"):
             value = getattr(self, key)
             if value is None:
@@ -264,6 +271,9 @@ class Camera:
                 raise _fail(key, f"{value!r} is not a whole number", RANGES[key].real)
             if error := range_error(key, value):
                 raise error
+
+    def _check_optics(self) -> None:
+        """The lens, the laser line and the chip's electrons within their physical ranges."""
         for key in (
             "focal_length_mm",
             "f_number",
@@ -281,6 +291,9 @@ class Camera:
         div = self.line_divergence_rad
         if div is not None and (error := range_error("line_divergence_mrad", 1e3 * div)):
             raise error
+
+    def _check_roi(self) -> None:
+        """A region of interest of at least 3 rows and 1 column, from row and column 0 on."""
         if self.roi is not None:
             r0, r1, c0, c1 = self.roi
             if not (0 <= r0 and r1 - r0 >= 3 and 0 <= c0 and c1 - c0 >= 1):
@@ -288,6 +301,10 @@ class Camera:
                     "roi", f"{list(self.roi)} is empty or negative",
                     "give [row0, row1, col0, col1] with row1 >= row0 + 3 and col1 > col0",
                 )  # fmt: skip
+
+    def _check_exposure_control(self) -> None:
+        """A known exposure mode, its target peak, and the multiple exposure's factors: numbers
+        from 1 down, each in range."""
         if self.exposure_mode not in EXPOSURE_MODES:
             raise _fail("exposure_mode", f"{self.exposure_mode!r} is not an exposure mode",
                         f"give one of {', '.join(repr(m) for m in EXPOSURE_MODES)}")  # fmt: skip

@@ -174,6 +174,41 @@ def _pixel_center(x_c: float, z_c: float, sp: NDArray[np.float64]) -> tuple[floa
     return zq * b_over_den, (lam * c - xq * s) * b_over_den
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _mark_miss(
+    i: int, points: NDArray[np.float64], reason: NDArray[np.uint8], t_out: NDArray[np.float64],
+    face_out: NDArray[np.int64], cos_incidence: NDArray[np.float64], chip: NDArray[np.float64],
+) -> None:  # fmt: skip
+    """Ray ``i`` hits nothing: no point, no chip coordinates, no face, reason MISS."""
+    points[i, 0] = np.nan
+    points[i, 1] = np.nan
+    chip[i, 0] = np.nan
+    chip[i, 1] = np.nan
+    reason[i] = MISS
+    t_out[i] = np.nan
+    face_out[i] = -1
+    cos_incidence[i] = np.nan
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _set_shadow_ray(
+    k: int, i: int, px: float, py: float, pz: float, vx: float, vy: float, vz: float,
+    length: float, offset: float, shadow_origins: NDArray[np.float64],
+    shadow_directions: NDArray[np.float64], shadow_far: NDArray[np.float64],
+    shadow_index: NDArray[np.int64],
+) -> None:  # fmt: skip
+    """Shadow ray ``k`` of ray ``i``: from the hit ``p`` (moved ``offset`` off the surface)
+    along the unit ``v`` towards the camera, ``length`` away."""
+    shadow_origins[k, 0] = px + offset * vx
+    shadow_origins[k, 1] = py + offset * vy
+    shadow_origins[k, 2] = pz + offset * vz
+    shadow_directions[k, 0] = vx
+    shadow_directions[k, 1] = vy
+    shadow_directions[k, 2] = vz
+    shadow_far[k] = max(length - offset, 0.0)
+    shadow_index[k] = i
+
+
 @numba.njit(cache=True, nogil=True)
 def fan_stripe_hits(
     origin: NDArray[np.float64],
@@ -224,14 +259,7 @@ def fan_stripe_hits(
     for i in range(directions.shape[0]):
         f = prim[i]
         if f < 0:
-            points[i, 0] = np.nan
-            points[i, 1] = np.nan
-            chip[i, 0] = np.nan
-            chip[i, 1] = np.nan
-            reason[i] = MISS
-            t_out[i] = np.nan
-            face_out[i] = -1
-            cos_incidence[i] = np.nan
+            _mark_miss(i, points, reason, t_out, face_out, cos_incidence, chip)
             continue
         dx, dy, dz = directions[i, 0], directions[i, 1], directions[i, 2]
         t = float(tfar[i])
@@ -267,14 +295,8 @@ def fan_stripe_hits(
             reason[i] = OCCLUDED
             continue
         reason[i] = 0
-        shadow_origins[k, 0] = px + offset * vx
-        shadow_origins[k, 1] = py + offset * vy
-        shadow_origins[k, 2] = pz + offset * vz
-        shadow_directions[k, 0] = vx
-        shadow_directions[k, 1] = vy
-        shadow_directions[k, 2] = vz
-        shadow_far[k] = max(length - offset, 0.0)
-        shadow_index[k] = i
+        _set_shadow_ray(k, i, px, py, pz, vx, vy, vz, length, offset,
+                        shadow_origins, shadow_directions, shadow_far, shadow_index)  # fmt: skip
         k += 1
     return (points, reason, t_out, face_out, cos_incidence, chip, shadow_origins[:k],
             shadow_directions[:k], shadow_far[:k], shadow_index[:k])  # fmt: skip
@@ -302,6 +324,19 @@ def fan_stripe_finish(
 
 
 @numba.njit(cache=True, nogil=True)
+def fan_directions(rotation: NDArray[np.float64], fan: NDArray[np.float64]) -> NDArray[np.float64]:
+    """The fan's unit rays (n, 3), given in the laser frame, turned by ``rotation`` (3, 3)
+    (the laser frame's axes as columns) into the frame the rays are cast in."""
+    n = fan.shape[0]
+    directions = np.empty((n, 3))
+    for i in range(n):
+        for a in range(3):
+            directions[i, a] = (rotation[a, 0] * fan[i, 0] + rotation[a, 1] * fan[i, 1]
+                                + rotation[a, 2] * fan[i, 2])  # fmt: skip
+    return directions
+
+
+@numba.njit(cache=True, nogil=True)
 def fan_stripe_packets(
     intersect8: Any, occluded: Any, width: int, scene: int,
     origin: NDArray[np.float64], rotation: NDArray[np.float64], fan: NDArray[np.float64],
@@ -320,11 +355,7 @@ def fan_stripe_packets(
     :func:`fan_stripe_finish`. Returns (points, reason, t, face, cos_incidence, directions).
     """
     n = fan.shape[0]
-    directions = np.empty((n, 3))
-    for i in range(n):
-        for a in range(3):
-            directions[i, a] = (rotation[a, 0] * fan[i, 0] + rotation[a, 1] * fan[i, 1]
-                                + rotation[a, 2] * fan[i, 2])  # fmt: skip
+    directions = fan_directions(rotation, fan)
     origins = origin.reshape((1, 3))
     prim = np.empty(n, dtype=np.int32)
     tfar = np.empty(n, dtype=np.float32)

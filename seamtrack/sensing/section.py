@@ -31,7 +31,7 @@ from numpy.typing import NDArray
 
 from seamtrack.sensing import embree
 from seamtrack.sensing._section_tree import LEAF_SIZE, SectionIndex, build
-from seamtrack.sensing.kernels import fan_stripe_finish, fan_stripe_hits
+from seamtrack.sensing.kernels import fan_directions, fan_stripe_finish, fan_stripe_hits
 
 __all__ = ["LEAF_SIZE", "SectionIndex", "SectionMesh", "build", "fan_stripe_section",
            "fan_stripe_section_packets", "fan_tans", "hit_faces", "section_hits",
@@ -558,12 +558,7 @@ def fan_stripe_section(
     :data:`MAX_SEEDS`). The shadow rays
     are the caller's. ``tans, tan_max, step``: the fan's :func:`fan_tans`; ``seeds``:
     :func:`_section_hits`'."""
-    n = fan.shape[0]
-    directions = np.empty((n, 3))
-    for i in range(n):
-        for a in range(3):
-            directions[i, a] = (rotation[a, 0] * fan[i, 0] + rotation[a, 1] * fan[i, 1]
-                                + rotation[a, 2] * fan[i, 2])  # fmt: skip
+    directions = fan_directions(rotation, fan)
     t, face, cuts = _section_hits(tree, mesh, origin, rotation, fan, tans, tan_max, step, seeds)
     none = np.empty(0, dtype=np.int64)
     next_seeds = hit_faces(face) if cuts >= CULL_AFTER else none

@@ -212,10 +212,52 @@ def _mesh_scan(
     scene's feature extractor (by default the one the seam's joint type calls for).
     ``extra_mesh`` (world frame, e.g. the beads of a multi-pass job) is ray-cast with the part;
     the seam is the part's."""
-    from seamtrack.features.extractors import extractor
     from seamtrack.features.warm import start_warming
     from seamtrack.sensing.raycast import RayCaster
-    from seamtrack.sensing.scan import scan_mesh
+
+    part, T_world_part = _load_part(scene)
+    mesh, solid = _world_meshes(scene, part.mesh, T_world_part, extra_mesh)
+    caster = RayCaster.from_mesh(mesh)
+    seam = part.seam.transformed(T_world_part)
+    extractor_name, find = _scene_extractor(scene, part.joint, part.opening_rad)
+    start_warming(find, extractor_name, sensor, scene.config.sensor.rays)
+    hinted = uses_hint(find)  # once, at set-up: a user's extractor may have no ``hint``
+    find_hinted: Any = find  # called with ``hint=`` only when it takes one
+    offset = np.asarray(scene.config.extractor.offset_mm, dtype=float)
+    shift = bool(offset.any())
+    tcp: list[FloatArray | None] = [None]  # inv(T_tcp_sensor), once the robot is built
+    measure, last_image = _stripe_measure(scene, sensor, caster, rng, tcp)
+    measure_arc = with_profile_arc(scene, measure, rng, tcp)
+
+    def scan(
+        T_world_sensor: FloatArray, t_s: float, hint: SeamHint | None = None
+    ) -> tuple[Profile, Feature]:
+        profile = measure_arc(T_world_sensor, t_s)
+        try:
+            if hinted and hint is not None:
+                feature = find_hinted(profile, hint=hint)
+            else:
+                feature = find(profile)
+        except Exception as exc:  # the user's extractor may fail in any way
+            raise plugin_failed("extractor.name", extractor_name, "__call__", t_s, exc) from exc
+        feature = _checked_feature(feature, profile, extractor_name, t_s)
+        if feature and shift:
+            # The torch target relative to the feature (a TCP calibration): e.g. the root of a
+            # square butt joint, a plate thickness below the gap the stripe shows.
+            point = feature.point_laser + offset
+            feature = dataclasses.replace(
+                feature, point_laser=point, point_world=laser_to_world(T_world_sensor, point)
+            )
+        return profile, feature
+
+    view = None if part.view_normal is None else T_world_part[:3, :3] @ part.view_normal
+    return MeshScan(seam, scan, mesh, caster, extractor_name, view, find, last_image, hinted,
+                    solid, tcp)  # fmt: skip
+
+
+def _load_part(scene: Scene) -> tuple[Any, FloatArray]:
+    """The scene's workpiece (its script or STEP file found beside the scene) and its pose in
+    the world, ``T_world_part`` (4, 4)."""
     from seamtrack.workpiece.loader import load_workpiece
 
     w = scene.config.workpiece
@@ -233,116 +275,138 @@ def _mesh_scan(
         groove=w.groove,
         **w.params,
     )
-    T_world_part = frames.from_xyz_rpy_deg(w.offset_mm, w.rotation_deg)
-    mesh = part.mesh.copy()
+    return part, frames.from_xyz_rpy_deg(w.offset_mm, w.rotation_deg)
+
+
+def _world_meshes(
+    scene: Scene, part_mesh: Any, T_world_part: FloatArray, extra_mesh: Any
+) -> tuple[Any, Any]:
+    """(what the sensor ray-casts, what it must stay out of) in the world frame: the part with
+    the scene's obstacle boxes, and that with ``extra_mesh`` (a job's beads) added."""
+    w = scene.config.workpiece
+    assert w is not None
+    mesh = part_mesh.copy()
     mesh.apply_transform(T_world_part)
     if w.obstacles:
         import trimesh
 
         boxes = [trimesh.creation.box(bounds=[b.min_mm, b.max_mm]) for b in w.obstacles]
-        mesh = trimesh.util.concatenate([mesh, *boxes])  # type: ignore[assignment]
+        mesh = trimesh.util.concatenate([mesh, *boxes])
     solid = mesh  # the part and its obstacles, closed solids: what the sensor must stay out of
     if extra_mesh is not None:
         import trimesh
 
-        mesh = trimesh.util.concatenate([mesh, extra_mesh])  # type: ignore[assignment]
-    caster = RayCaster.from_mesh(mesh)
-    seam = part.seam.transformed(T_world_part)
-    params = dict(scene.config.extractor.params)
-    extractor_name = scene.config.extractor.name
+        mesh = trimesh.util.concatenate([mesh, extra_mesh])
+    return mesh, solid
+
+
+def _scene_extractor(scene: Scene, joint: str, opening_rad: float) -> tuple[str, Any]:
+    """(name, instance) of the scene's feature extractor: the one it names, or the one the
+    part's joint calls for with that family's parameters; with the scene's ``expect``."""
+    from seamtrack.features.extractors import extractor
+
+    config = scene.config.extractor
+    params = dict(config.params)
+    extractor_name = config.name
     if extractor_name is None:
-        extractor_name = joint_extractor(part.joint, part.opening_rad)
+        extractor_name = joint_extractor(joint, opening_rad)
         params = dict(JOINT_EXTRACTOR_PARAMS.get(extractor_name, {}))
-    if scene.config.extractor.expect:
-        if scene.config.extractor.name is None:
-            check_expect(extractor_name, scene.config.extractor.expect)
-        params["expect"] = dict(scene.config.extractor.expect)
-    find = extractor(extractor_name, **params)
-    start_warming(find, extractor_name, sensor, scene.config.sensor.rays)
-    hinted = uses_hint(find)  # once, at set-up: a user's extractor may have no ``hint``
-    find_hinted: Any = find  # called with ``hint=`` only when it takes one
-    offset = np.asarray(scene.config.extractor.offset_mm, dtype=float)
-    shift = bool(offset.any())
+    if config.expect:
+        if config.name is None:
+            check_expect(extractor_name, config.expect)
+        params["expect"] = dict(config.expect)
+    return extractor_name, extractor(extractor_name, **params)
+
+
+def _stripe_measure(
+    scene: Scene,
+    sensor: LaserLineSensor,
+    caster: Any,
+    rng: np.random.Generator,
+    tcp: list[FloatArray | None],
+) -> tuple[Callable[[FloatArray, float], Profile], Callable[[], Any] | None]:
+    """The per-frame profile (``measure(T_world_sensor, t_s)``) and, in image mode, the last
+    frame's image: the ray-cast stripe with the scene's noise, or every frame rendered by the
+    camera and measured from its pixels."""
+    from seamtrack.sensing.scan import scan_mesh
+
     s = scene.config.sensor
     noise = _stripe_noise(s.stripe_noise)
-    tcp: list[FloatArray | None] = [None]  # inv(T_tcp_sensor), once the robot is built
+    if s.source == "image":
+        return _image_measure(scene, sensor, caster, rng, tcp)
 
     def measure(T_world_sensor: FloatArray, t_s: float) -> Profile:
         return scan_mesh(sensor, caster, T_world_sensor, rays=s.rays, refine=s.refine_float64,
                          noise=noise, rng=rng, t_s=t_s, fan=s.fan)  # fmt: skip
 
-    if s.source == "image":  # every frame rendered by the camera and measured from its pixels
-        camera, detector = scene_camera(scene.config), s.camera or CameraConfig()
-        reject = rejection(scene.config)
-        surface = w.material or "mill-scale steel"
-        arc_light = scene_arc_light(scene, camera)
+    return measure, None
 
-        # Auto-exposure's state lives in the run: each frame's exposure from the previous
-        # frame's peak (deterministic: the images are drawn from the run's seeded Generator).
-        exposure = [camera.exposure]
-        images: list[Any] = [None]  # the last frame's image, for an observer
 
-        def measure(T_world_sensor: FloatArray, t_s: float) -> Profile:
-            images[0] = None  # let the last image go before the next is rendered (peak memory)
-            arc = None if arc_light is None else arc_frame(arc_light, T_world_sensor, tcp)
-            image = sensor.render(caster, T_world_sensor, camera=camera, seed=rng,
-                                  material=surface, t_s=t_s, exposure=exposure[0],
-                                  **({} if arc is None else {"arc": arc}))  # fmt: skip
-            if camera.exposure_mode == "auto":
-                exposure[0] = camera.next_exposure(image.exposure, image.peak)
-            images[0] = image
-            return image.profile(detector.method, threshold=detector.threshold,
-                                 choose=detector.choose, relative=detector.relative,
-                                 noise_sigmas=detector.noise_sigmas, reject=reject)  # fmt: skip
+def _image_measure(
+    scene: Scene,
+    sensor: LaserLineSensor,
+    caster: Any,
+    rng: np.random.Generator,
+    tcp: list[FloatArray | None],
+) -> tuple[Callable[[FloatArray, float], Profile], Callable[[], Any]]:
+    """Image mode's ``measure``: every frame rendered by the scene's camera (with the arc's
+    light when the scene has one) and its profile measured from the pixels; and the last
+    frame's image."""
+    s = scene.config.sensor
+    w = scene.config.workpiece
+    assert w is not None
+    camera, detector = scene_camera(scene.config), s.camera or CameraConfig()
+    reject = rejection(scene.config)
+    surface = w.material or "mill-scale steel"
+    arc_light = scene_arc_light(scene, camera)
 
-    measure_arc = with_profile_arc(scene, measure, rng, tcp)
+    # Auto-exposure's state lives in the run: each frame's exposure from the previous
+    # frame's peak (deterministic: the images are drawn from the run's seeded Generator).
+    exposure = [camera.exposure]
+    images: list[Any] = [None]  # the last frame's image, for an observer
 
-    def scan(
-        T_world_sensor: FloatArray, t_s: float, hint: SeamHint | None = None
-    ) -> tuple[Profile, Feature]:
-        profile = measure_arc(T_world_sensor, t_s)
-        try:
-            if hinted and hint is not None:
-                feature = find_hinted(profile, hint=hint)
-            else:
-                feature = find(profile)
-        except Exception as exc:  # the user's extractor may fail in any way
-            raise plugin_failed("extractor.name", extractor_name, "__call__", t_s, exc) from exc
-        if not isinstance(feature, Feature):
-            raise PluginRuntimeError(
-                f"{extractor_name!r} returned {type(feature).__name__} at t = {t_s:.6g} s; "
-                "expected a Feature",
-                field="extractor.name",
-                fix="return seamtrack.Feature(...) (falsy with a reason when nothing is found)",
-            )
-        found = bool(feature)
-        point = feature.point_laser
-        if found and not (len(point) == 2 and all(map(math.isfinite, point.tolist()))):
-            raise PluginRuntimeError(
-                f"{extractor_name!r} returned the seam point {feature.point_laser.tolist()} at "
-                f"t = {t_s:.6g} s",
-                field="extractor.name",
-                fix="return a finite (y_L, z_L) point, or a falsy Feature with a reason",
-            )
-        if not found and feature.stripe_points < 0:
-            # A frame without a seam point says whether the stripe was on the part at all: none
-            # of it is where the laser line has left the part (or something hides it whole).
-            assert profile.valid is not None
-            stripe = int(np.count_nonzero(profile.valid))
-            feature = dataclasses.replace(feature, stripe_points=stripe)
-        if found and shift:
-            # The torch target relative to the feature (a TCP calibration): e.g. the root of a
-            # square butt joint, a plate thickness below the gap the stripe shows.
-            point = feature.point_laser + offset
-            feature = dataclasses.replace(
-                feature, point_laser=point, point_world=laser_to_world(T_world_sensor, point)
-            )
-        return profile, feature
+    def measure(T_world_sensor: FloatArray, t_s: float) -> Profile:
+        images[0] = None  # let the last image go before the next is rendered (peak memory)
+        arc = None if arc_light is None else arc_frame(arc_light, T_world_sensor, tcp)
+        image = sensor.render(caster, T_world_sensor, camera=camera, seed=rng,
+                              material=surface, t_s=t_s, exposure=exposure[0],
+                              **({} if arc is None else {"arc": arc}))  # fmt: skip
+        if camera.exposure_mode == "auto":
+            exposure[0] = camera.next_exposure(image.exposure, image.peak)
+        images[0] = image
+        return image.profile(detector.method, threshold=detector.threshold,
+                             choose=detector.choose, relative=detector.relative,
+                             noise_sigmas=detector.noise_sigmas, reject=reject)  # fmt: skip
 
-    view = None if part.view_normal is None else T_world_part[:3, :3] @ part.view_normal
-    last_image = (lambda: images[0]) if s.source == "image" else None
-    return MeshScan(seam, scan, mesh, caster, extractor_name, view, find, last_image, hinted,
-                    solid, tcp)  # fmt: skip
+    return measure, lambda: images[0]
+
+
+def _checked_feature(feature: Any, profile: Profile, extractor_name: str, t_s: float) -> Feature:
+    """An extractor's answer, refused unless a :class:`Feature` with a finite point when found;
+    a frame without a seam point counts the stripe's valid points when its extractor did not."""
+    if not isinstance(feature, Feature):
+        raise PluginRuntimeError(
+            f"{extractor_name!r} returned {type(feature).__name__} at t = {t_s:.6g} s; "
+            "expected a Feature",
+            field="extractor.name",
+            fix="return seamtrack.Feature(...) (falsy with a reason when nothing is found)",
+        )
+    found = bool(feature)
+    point = feature.point_laser
+    if found and not (len(point) == 2 and all(map(math.isfinite, point.tolist()))):
+        raise PluginRuntimeError(
+            f"{extractor_name!r} returned the seam point {feature.point_laser.tolist()} at "
+            f"t = {t_s:.6g} s",
+            field="extractor.name",
+            fix="return a finite (y_L, z_L) point, or a falsy Feature with a reason",
+        )
+    if not found and feature.stripe_points < 0:
+        # A frame without a seam point says whether the stripe was on the part at all: none
+        # of it is where the laser line has left the part (or something hides it whole).
+        assert profile.valid is not None
+        stripe = int(np.count_nonzero(profile.valid))
+        feature = dataclasses.replace(feature, stripe_points=stripe)
+    return feature
 
 
 def scene_arc_light(scene: Scene, camera: Any) -> Any:

@@ -216,25 +216,33 @@ def run(
         The tracker raised, or returned what is not a usable :class:`Command`.
     """
     cfg = parts.settings
-    robot = parts.robot
-    seam = parts.seam
-    dt = robot.control_period_s
     rng = np.random.default_rng(cfg.seed if seed is None else seed)
     wall_start = clock()
-    tracker = parts.tracker
-    name = parts.tracker_name
     sense = _gated(parts.sense, cfg.gate)  # a new gate per run: it holds the run's state
+    state = _start_state(parts)
+    _reset_tracker(parts, rng)
+    loop = _Loop(parts, sense, state, clock, wall_start, progress)
+    ending = loop.ticks_until_end(stop if stop is not None else StopRequest())
+    return loop.result(ending)
 
+
+def _start_state(parts: Parts) -> Any:
+    """The robot's state at the run's start: an arm at its start joints, a gantry with its
+    torch tip at the start point."""
+    robot = parts.robot
+    if robot.turns_tool:
+        return robot.state_at_joints(parts.start_joints)
+    return robot.state_at(robot.q_from_world(parts.tcp_start_world))
+
+
+def _reset_tracker(parts: Parts, rng: np.random.Generator) -> None:
+    """Tell the tracker what it tracks with (:class:`TrackerContext`): the run's timing, the
+    robot's limits in the world frame, the sensor, the tool program."""
+    cfg, robot = parts.settings, parts.robot
     R = robot.T_world_base[:3, :3]
-    p0 = robot.T_world_base[:3, 3]
-    turns_tool = bool(robot.turns_tool)
-    if turns_tool:
-        state = robot.state_at_joints(parts.start_joints)
-    else:
-        state = robot.state_at(robot.q_from_world(parts.tcp_start_world))
     context = TrackerContext(
         welding_speed_mm_s=cfg.welding_speed_mm_s,
-        control_period_s=dt,
+        control_period_s=robot.control_period_s,
         frame_period_s=cfg.frame_period_s,
         latency_s=cfg.latency_s,
         look_ahead_mm=parts.look_ahead_mm,
@@ -244,183 +252,282 @@ def run(
         acceleration_max_world=np.abs(R @ np.array(robot.acceleration_max_mm_s2)),
         rng=rng,
         tool_program=parts.tool_program,
-        turns_tool=turns_tool,
+        turns_tool=bool(robot.turns_tool),
     )
     try:
-        tracker.reset(context)
+        parts.tracker.reset(context)
     except Exception as exc:  # the user's tracker may fail in any way
-        raise plugin_failed("tracker.name", name, "reset", 0.0, exc) from exc
+        raise plugin_failed("tracker.name", parts.tracker_name, "reset", 0.0, exc) from exc
 
-    tcp_log: Any = array("d")  # or the compiled ticks' logs (ticks.tcp, ...)
-    target_log: Any = array("d")
-    frame_t = array("d")
-    frame_found = array("b")
-    frame_points = array("d")
-    axis_log: Any = array("d")  # an arm's torch axis (world) and joints, per tick
-    joint_log: Any = array("d")
-    pending: deque[Measurement] = deque()
-    nan3 = (math.nan, math.nan, math.nan)
 
-    max_ticks = int(math.ceil(cfg.time_limit_s / dt))
-    check_every = max(1, int(round(_CHECK_PERIOD_S / dt)))
-    rest_window = cfg.frame_period_s + cfg.latency_s + 2 * dt
-    next_capture = 0.0
-    last_cmd: Command | None = None
-    last_rot: tuple[Any, Any] = (None, None)  # the last command's rotation, angular velocity
-    move: MoveCommand | None = None
-    ending = StopRequest()  # how the run ended: outcome() names it after the loop
-    stop = stop if stop is not None else StopRequest()
-    bar = _progress_bar(progress, cfg.time_limit_s, seam.length_mm)
+_NAN3 = (math.nan, math.nan, math.nan)
 
-    sense_time = 0.0
-    tick = 0
-    closed = is_closed(seam)
-    # The torch starts at the seam's start: progress follows the seam from there.
-    done = seam.length_mm - cfg.end_tolerance_mm
-    checks = ProgressCheck(seam, closed, done, cfg.stall_time_s, rest_window)
-    unrotated = bool(np.array_equal(R, np.eye(3))) and not turns_tool
-    p0x, p0y, p0z = p0.tolist()
-    # The fast paths: the built-in trajectory tracker's ticks between events compiled on an
-    # unrotated gantry and on an arm (seamtrack.simulation.ticks); the same arithmetic.
-    ticks = compiled_ticks(robot, tracker, (p0x, p0y, p0z), unrotated, turns_tool, checks)
-    # A tracker that knows where the seam is heading tells the extractor (``hint``): where the
-    # laser plane crosses two grooves (a mitre) the extractor takes the V that continues it.
-    tracker_hint = getattr(tracker, "hint", None)
-    tracker_hint = tracker_hint if callable(tracker_hint) and parts.sense_uses_hint else None
-    tcp: Any = None
-    tick = -1
-    while tick < max_ticks:
-        tick += 1
-        t = tick * dt
-        if ticks is not None:  # the compiled ticks log the torch tip (a frame takes it below)
-            pass
-        elif unrotated:  # the usual robot: spare the matrix products on this hot path
-            q = state.q
-            tcp_list = [q[0] + p0x, q[1] + p0y, q[2] + p0z]
-            tcp = np.array(tcp_list)
-            vel = np.array(state.v)
-        else:
-            tcp = R @ state.q + p0
-            tcp_list = tcp.tolist()
-            vel = R @ state.v
-        if t + 1e-9 >= next_capture:
-            next_capture += cfg.frame_period_s
-            T_ws = robot.sensor_pose(state)
-            hint = tracker_hint(T_ws) if tracker_hint is not None else None  # the tracker's
-            sense_start = clock()
-            feature = sense(T_ws, t, hint) if hint is not None else sense(T_ws, t)
-            sense_time += clock() - sense_start
+
+class _Loop:
+    """One run's loop: what it runs (robot, tracker, sense), what it logs (per tick and per
+    frame), the frames on their way to the tracker and the progress checks."""
+
+    def __init__(
+        self,
+        parts: Parts,
+        sense: Callable[..., Any],
+        state: Any,
+        clock: Callable[[], float],
+        wall_start: float,
+        progress: bool,
+    ) -> None:
+        cfg = self.cfg = parts.settings
+        robot = self.robot = parts.robot
+        seam = self.seam = parts.seam
+        self.parts, self.sense, self.state = parts, sense, state
+        self.clock, self.wall_start = clock, wall_start
+        self.tracker, self.name = parts.tracker, parts.tracker_name
+        self.dt = dt = robot.control_period_s
+        self.R, self.p0 = robot.T_world_base[:3, :3], robot.T_world_base[:3, 3]
+        self.turns_tool = turns_tool = bool(robot.turns_tool)
+
+        self.tcp_log: Any = array("d")  # or the compiled ticks' logs (ticks.tcp, ...)
+        self.target_log: Any = array("d")
+        self.frame_t = array("d")
+        self.frame_found = array("b")
+        self.frame_points = array("d")
+        self.axis_log: Any = array("d")  # an arm's torch axis (world) and joints, per tick
+        self.joint_log: Any = array("d")
+        self.pending: deque[Measurement] = deque()
+        self.sense_time = 0.0
+
+        self.max_ticks = int(math.ceil(cfg.time_limit_s / dt))
+        self.check_every = max(1, int(round(_CHECK_PERIOD_S / dt)))
+        rest_window = cfg.frame_period_s + cfg.latency_s + 2 * dt
+        self.last_cmd: Command | None = None
+        # the last command's rotation, angular velocity
+        self.last_rot: tuple[Any, Any] = (None, None)
+        self.move: MoveCommand | None = None
+        self.bar = _progress_bar(progress, cfg.time_limit_s, seam.length_mm)
+        self.closed = is_closed(seam)
+        # The torch starts at the seam's start: progress follows the seam from there.
+        done = seam.length_mm - cfg.end_tolerance_mm
+        self.checks = ProgressCheck(seam, self.closed, done, cfg.stall_time_s, rest_window)
+        self.unrotated = bool(np.array_equal(self.R, np.eye(3))) and not turns_tool
+        # The fast paths: the built-in trajectory tracker's ticks between events compiled on an
+        # unrotated gantry and on an arm (seamtrack.simulation.ticks); the same arithmetic.
+        p0 = tuple(self.p0.tolist())
+        self.ticks = compiled_ticks(
+            robot, self.tracker, p0, self.unrotated, turns_tool, self.checks
+        )
+        # A tracker that knows where the seam is heading tells the extractor (``hint``): where
+        # the laser plane crosses two grooves (a mitre) the extractor takes the V that
+        # continues it.
+        hint = getattr(self.tracker, "hint", None)
+        self.tracker_hint = hint if callable(hint) and parts.sense_uses_hint else None
+
+    def ticks_until_end(self, stop: StopRequest) -> StopRequest:
+        """Tick until the run ends (its outcome, the loop's own ``stop`` or ``stop`` asked from
+        outside); return how it ended."""
+        cfg, dt, state, ticks, pending, checks = (
+            self.cfg, self.dt, self.state, self.ticks, self.pending, self.checks
+        )  # fmt: skip
+        R, p0, unrotated, check_every = self.R, self.p0, self.unrotated, self.check_every
+        p0x, p0y, p0z = p0.tolist()
+        ending = StopRequest()  # how the run ended: outcome() names it after the loop
+        next_capture = 0.0
+        tcp: Any = None
+        tcp_list: list[float] = []
+        vel: Any = None
+        tick = -1
+        while tick < self.max_ticks:
+            tick += 1
+            t = tick * dt
+            if ticks is not None:  # the compiled ticks log the torch tip (a frame takes it below)
+                pass
+            elif unrotated:  # the usual robot: spare the matrix products on this hot path
+                q = state.q
+                tcp_list = [q[0] + p0x, q[1] + p0y, q[2] + p0z]
+                tcp = np.array(tcp_list)
+                vel = np.array(state.v)
+            else:
+                tcp = R @ state.q + p0
+                tcp_list = tcp.tolist()
+                vel = R @ state.v
+            if t + 1e-9 >= next_capture:
+                next_capture += cfg.frame_period_s
+                self._capture(t, tcp)
+            if pending and pending[0].t_arrival_s <= t + 1e-9:
+                self._deliver(t)
             if ticks is not None:
-                tcp = ticks.tcp_now(state)
-            pending.append(Measurement(feature, t, t + cfg.latency_s, T_ws, tcp))
-            frame_t.append(t)
-            seen = bool(feature)
-            frame_found.append(1 if seen else 0)
-            frame_points.extend(feature.point_world if seen else nan3)
+                tick = self._compiled_span(tick, next_capture, ending)
+                t = tick * dt
+                if ending.status:
+                    break
+            elif self._python_tick(t, tcp, tcp_list, vel, ending):
+                break
+            if stop.status:  # asked from outside (a signal, a bridge): stop here
+                ending.end(stop.status, stop.reason, stop.cause)
+                break
+            if not tick % WALL_CHECK_TICKS and self._past_wall_time(ending):
+                break
+            if tick % check_every == 0 and tick != checks.P[CHECKED]:
+                if self._progress_ends(tick, t, tcp_list, ending):
+                    break
+        return ending
+
+    def _capture(self, t: float, tcp: Any) -> None:
+        """A sensor frame at the robot's pose now (with the tracker's hint), on its way to the
+        tracker; logged."""
+        T_ws = self.robot.sensor_pose(self.state)
+        tracker_hint = self.tracker_hint
+        hint = tracker_hint(T_ws) if tracker_hint is not None else None  # the tracker's
+        sense_start = self.clock()
+        feature = self.sense(T_ws, t, hint) if hint is not None else self.sense(T_ws, t)
+        self.sense_time += self.clock() - sense_start
+        if self.ticks is not None:
+            tcp = self.ticks.tcp_now(self.state)
+        self.pending.append(Measurement(feature, t, t + self.cfg.latency_s, T_ws, tcp))
+        self.frame_t.append(t)
+        seen = bool(feature)
+        self.frame_found.append(1 if seen else 0)
+        self.frame_points.extend(feature.point_world if seen else _NAN3)
+
+    def _deliver(self, t: float) -> None:
+        """Hand the tracker every frame that has arrived by ``t``."""
+        pending = self.pending
         while pending and pending[0].t_arrival_s <= t + 1e-9:
             measurement = pending.popleft()
-            checks.P[LAST_SEEN] = 1.0 if measurement else 0.0
+            self.checks.P[LAST_SEEN] = 1.0 if measurement else 0.0
             try:
-                tracker.update(measurement)
+                self.tracker.update(measurement)
             except Exception as exc:
-                raise plugin_failed("tracker.name", name, "update", t, exc) from exc
+                raise plugin_failed("tracker.name", self.name, "update", t, exc) from exc
+
+    def _compiled_span(self, tick: int, next_capture: float, ending: StopRequest) -> int:
+        """The compiled ticks from ``tick`` up to the next event (a frame, an arrival, a check
+        that ends the run); the last tick run (its checks follow). ``ending`` says when the
+        span ended the run."""
+        ticks, pending = self.ticks, self.pending
+        assert ticks is not None
+        arrival = pending[0].t_arrival_s if pending else math.inf
+        n, why = ticks.run(
+            self.state,
+            tick,
+            self.max_ticks,
+            next_capture,
+            arrival,
+            self.check_every,
+            WALL_CHECK_TICKS,
+            self.tracker,
+        )
+        if why == REFUSED:  # what the reference path would refuse, refused the same way
+            tx, ty, tz, speed, fx, fy, fz, at_target = ticks.refused.tolist()
+            ff = np.array((fx, fy, fz))
+            _checked(
+                Command(np.array((tx, ty, tz)), speed, ff, at_target > 0),
+                self.name,
+                (tick + n) * self.dt,
+            )
+        if why == LIMIT:
+            ending.end("limit_violation")
+            return tick
+        tick += n - 1
+        if why == STOPPED:  # its own progress check ended the run
+            ending.end(*self.checks.ended(int(self.checks.P[FOUND])))
+        return tick
+
+    def _python_tick(
+        self, t: float, tcp: Any, tcp_list: list[float], vel: Any, ending: StopRequest
+    ) -> bool:
+        """One tick of a tracker in Python: its command (checked when it is a new one), the
+        logs, the servo step. True: the command leaves the axis travel (the run ends)."""
+        try:
+            cmd = self.tracker.command(t, tcp, vel)
+        except Exception as exc:
+            raise plugin_failed("tracker.name", self.name, "command", t, exc) from exc
+        if cmd is not self.last_cmd:
+            self._take_command(cmd, t, ending)
+        self.tcp_log.extend(tcp_list)
+        if self.turns_tool:
+            self.axis_log.extend((self.R @ self.state.R[:, 2]).tolist())
+            self.joint_log.extend(self.state.joints.tolist())
+        self.target_log.extend(_NAN3 if cmd is None else np.asarray(cmd.target_world).tolist())
+        if ending.status:
+            return True
+        self.robot.step(self.state, self.move)
+        return False
+
+    def _take_command(self, cmd: Any, t: float, ending: StopRequest) -> None:
+        """A new command from the tracker: checked, turned into the robot's move."""
+        self.last_cmd = cmd
+        self.move = (
+            None
+            if cmd is None
+            else _to_move(self.robot, _checked(cmd, self.name, t, *self.last_rot))
+        )
+        self.last_rot = (
+            (None, None) if cmd is None else (cmd.rotation_world, cmd.angular_velocity_world)
+        )
+        if self.move is not None and not self.robot.within_travel(self.move.target):
+            ending.end("limit_violation")
+
+    def _past_wall_time(self, ending: StopRequest) -> bool:
+        """The wall-clock guard: the run has taken longer than it may (it ends ``stalled``)."""
+        limit_s = self.cfg.wall_time_limit_s
+        if self.clock() - self.wall_start > limit_s:
+            ending.end("stalled", f"wall-clock limit {limit_s:g} s", "wall_time_limit")
+            return True
+        return False
+
+    def _progress_ends(
+        self, tick: int, t: float, tcp_list: list[float], ending: StopRequest
+    ) -> bool:
+        """The progress check along the seam (completed, lost, stalled: ``ending`` says which);
+        the progress bar moves on."""
+        ticks = self.ticks
         if ticks is not None:
-            arrival = pending[0].t_arrival_s if pending else math.inf
-            n, why = ticks.run(
-                state,
-                tick,
-                max_ticks,
-                next_capture,
-                arrival,
-                check_every,
-                WALL_CHECK_TICKS,
-                tracker,
-            )
-            if why == REFUSED:  # what the reference path would refuse, refused the same way
-                tx, ty, tz, speed, fx, fy, fz, at_target = ticks.refused.tolist()
-                ff = np.array((fx, fy, fz))
-                _checked(
-                    Command(np.array((tx, ty, tz)), speed, ff, at_target > 0),
-                    name,
-                    (tick + n) * dt,
-                )
-            if why == LIMIT:
-                ending.end("limit_violation")
-                break
-            tick += n - 1  # the last tick run: its checks follow
-            t = tick * dt
-            if why == STOPPED:  # its own progress check ended the run
-                ending.end(*checks.ended(int(checks.P[FOUND])))
-                break
-        else:
-            try:
-                cmd = tracker.command(t, tcp, vel)
-            except Exception as exc:
-                raise plugin_failed("tracker.name", name, "command", t, exc) from exc
-            if cmd is not last_cmd:
-                last_cmd = cmd
-                move = None if cmd is None else _to_move(robot, _checked(cmd, name, t, *last_rot))
-                last_rot = (
-                    (None, None)
-                    if cmd is None
-                    else (cmd.rotation_world, cmd.angular_velocity_world)
-                )
-                if move is not None and not robot.within_travel(move.target):
-                    ending.end("limit_violation")
-            tcp_log.extend(tcp_list)
-            if turns_tool:
-                axis_log.extend((R @ state.R[:, 2]).tolist())
-                joint_log.extend(state.joints.tolist())
-            target_log.extend(nan3 if cmd is None else np.asarray(cmd.target_world).tolist())
-            if ending.status:
-                break
-            robot.step(state, move)
-        if stop.status:  # asked from outside (a signal, a bridge): stop here
-            ending.end(stop.status, stop.reason, stop.cause)
-            break
-        if not tick % WALL_CHECK_TICKS and clock() - wall_start > cfg.wall_time_limit_s:
-            ending.end(
-                "stalled", f"wall-clock limit {cfg.wall_time_limit_s:g} s", "wall_time_limit"
-            )
-            break
+            tcp_list = ticks.tcp[ticks.count - 1].tolist()
+        found = self.checks.check(t, tcp_list, self.state.v)
+        if found != GO_ON:
+            ending.end(*self.checks.ended(found))
+            return True
+        bar = self.bar
+        if bar is not None and tick % (self.check_every * 100) == 0:
+            bar.update(t - bar.n)
+        return False
 
-        if tick % check_every == 0 and tick != checks.P[CHECKED]:
-            if ticks is not None:
-                tcp_list = ticks.tcp[ticks.count - 1].tolist()
-            found = checks.check(t, tcp_list, state.v)
-            if found != GO_ON:
-                ending.end(*checks.ended(found))
-                break
-            if bar is not None and tick % (check_every * 100) == 0:
-                bar.update(t - bar.n)
-    if bar is not None:
-        bar.close()
-    if not ending.status:
-        ending.end("stalled", f"time limit {cfg.time_limit_s:g} s", "time_limit")
-    status, stop_reason, stop_cause = outcome(ending, closed, getattr(tracker, "stop_cause", ""))
-    if ticks is not None:  # every tick ran compiled, and logged there
-        ticks.finish(state, tracker)
-        tcp_log, target_log = ticks.tcp[: ticks.count], ticks.target[: ticks.count]
-        axis_log, joint_log = ticks.axis[: ticks.count], ticks.joints[: ticks.count]
+    def result(self, ending: StopRequest) -> Result:
+        """The run scored: its trace and summary."""
+        cfg, robot, seam, ticks, state = self.cfg, self.robot, self.seam, self.ticks, self.state
+        if self.bar is not None:
+            self.bar.close()
+        if not ending.status:
+            ending.end("stalled", f"time limit {cfg.time_limit_s:g} s", "time_limit")
+        status, stop_reason, stop_cause = outcome(
+            ending, self.closed, getattr(self.tracker, "stop_cause", "")
+        )
+        tcp_log, target_log = self.tcp_log, self.target_log
+        axis_log, joint_log = self.axis_log, self.joint_log
+        if ticks is not None:  # every tick ran compiled, and logged there
+            ticks.finish(state, self.tracker)
+            tcp_log, target_log = ticks.tcp[: ticks.count], ticks.target[: ticks.count]
+            axis_log, joint_log = ticks.axis[: ticks.count], ticks.joints[: ticks.count]
 
-    axis = torch_axes(robot, axis_log)
-    trace = _trace(
-        seam, dt, tcp_log, target_log, frame_t, frame_found, frame_points,
-        (checks.t_log, checks.s_log),
-        axis, (cfg.work_angle_rad, cfg.travel_angle_rad),
-    )  # fmt: skip
-    trace = with_joints(trace, joint_log, robot)
-    if parts.moving is not None:  # scored against the seam where it is at each tick
-        trace = parts.moving.rescore(trace)
-    summary = _summary(trace, seam, status, cfg, clock() - wall_start)
-    if parts.moving is not None:
-        summary.update(parts.moving.summary(trace))
-    summary.update(orientation_summary(trace, robot, cfg, state))
-    summary["stop_reason"] = stop_reason
-    summary["stop_cause"] = stop_cause
-    summary["sense_wall_time_s"] = sense_time
-    summary.update(_gate_summary(sense))
-    return Result(summary=summary, trace=trace)
+        axis = torch_axes(robot, axis_log)
+        trace = _trace(
+            seam, self.dt, tcp_log, target_log, self.frame_t, self.frame_found, self.frame_points,
+            (self.checks.t_log, self.checks.s_log),
+            axis, (cfg.work_angle_rad, cfg.travel_angle_rad),
+        )  # fmt: skip
+        trace = with_joints(trace, joint_log, robot)
+        moving = self.parts.moving
+        if moving is not None:  # scored against the seam where it is at each tick
+            trace = moving.rescore(trace)
+        summary = _summary(trace, seam, status, cfg, self.clock() - self.wall_start)
+        if moving is not None:
+            summary.update(moving.summary(trace))
+        summary.update(orientation_summary(trace, robot, cfg, state))
+        summary["stop_reason"] = stop_reason
+        summary["stop_cause"] = stop_cause
+        summary["sense_wall_time_s"] = self.sense_time
+        summary.update(_gate_summary(self.sense))
+        return Result(summary=summary, trace=trace)
 
 
 class _GatedSense:

@@ -168,6 +168,23 @@ def _checked(
     return found != GO_ON
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _usable_setpoint(
+    follow: Follow, x: float, y: float, z: float, refused: FloatArray
+) -> tuple[float, float, float, float, float, float, float, bool, bool]:
+    """The set-point's step along the tracker's path from the torch tip (x, y, z): target,
+    speed, feed-forward, stop at the target (:func:`setpoint_step`), and whether the command is
+    usable (a speed in (0, inf), every value finite); an unusable one is written into
+    ``refused``, for the loop to refuse as the reference path would."""
+    tx, ty, tz, speed, fx, fy, fz, stop = setpoint_step(
+        follow.setpoint, follow.path, follow.s, follow.envelope_s, follow.envelope_v, x, y, z
+    )
+    usable = 0.0 < speed < math.inf and math.isfinite(tx + ty + tz + fx + fy + fz)
+    if not usable:
+        refused[:] = (tx, ty, tz, speed, fx, fy, fz, 1.0 if stop else 0.0)
+    return tx, ty, tz, speed, fx, fy, fz, stop, usable
+
+
 @numba.njit(cache=True, nogil=True)
 def gantry_ticks(
     clock: Clock, row: int, follow: Follow, gantry: GantryAxes, trace: Trace,
@@ -206,11 +223,8 @@ def gantry_ticks(
             tx = ty = tz = speed = fx = fy = fz = 0.0
             stop = False
         else:
-            tx, ty, tz, speed, fx, fy, fz, stop = setpoint_step(
-                sp, follow.path, follow.s, follow.envelope_s, follow.envelope_v, x, y, z
-            )
-            if not (0.0 < speed < math.inf and math.isfinite(tx + ty + tz + fx + fy + fz)):
-                refused[:] = (tx, ty, tz, speed, fx, fy, fz, 1.0 if stop else 0.0)
+            tx, ty, tz, speed, fx, fy, fz, stop, usable = _usable_setpoint(follow, x, y, z, refused)
+            if not usable:
                 return k, REFUSED
             target_out[r, 0], target_out[r, 1], target_out[r, 2] = tx, ty, tz
             tx, ty, tz = tx + offset[3], ty + offset[4], tz + offset[5]
@@ -462,11 +476,8 @@ def arm_ticks(
             trace.target[r, :] = np.nan
             cmd[M_HAS] = 0.0
         else:
-            tx, ty, tz, speed, fx, fy, fz, stop = setpoint_step(
-                sp, follow.path, follow.s, follow.envelope_s, follow.envelope_v, x, y, z
-            )
-            if not (0.0 < speed < math.inf and math.isfinite(tx + ty + tz + fx + fy + fz)):
-                refused[:] = (tx, ty, tz, speed, fx, fy, fz, 1.0 if stop else 0.0)
+            tx, ty, tz, speed, fx, fy, fz, stop, usable = _usable_setpoint(follow, x, y, z, refused)
+            if not usable:
                 return k, REFUSED
             orient[1] += 1
             if orient[1] % orient[0] == 0:

@@ -11,7 +11,7 @@ import numpy as np
 from seamtrack.errors import SceneError
 from seamtrack.sensing.camera import StripeImage
 from seamtrack.sensing.profiles import Feature, Profile
-from seamtrack.viz.plots import LEGEND_MARKER_PT, pyplot_module
+from seamtrack.viz.plots import pyplot_module, save_with_legends
 
 
 def plot_stripe_image(
@@ -78,12 +78,9 @@ def plot_stripe_image(
         bottom.set_xlabel("y_L (mm)")
         bottom.set_ylabel("z_L, range (mm)")
         bottom.grid(True, lw=0.3)
-        legend2 = bottom.legend(loc="best", fontsize=8, framealpha=0.8)
-        for handle in [*legend.legend_handles, *legend2.legend_handles]:
-            if handle is not None and hasattr(handle, "set_markersize"):
-                handle.set_markersize(LEGEND_MARKER_PT)
-        fig.tight_layout()
-        fig.savefig(out, dpi=dpi)
+        save_with_legends(
+            fig, out, dpi, legend, bottom.legend(loc="best", fontsize=8, framealpha=0.8)
+        )
     finally:
         plt.close(fig)
     return out

@@ -266,17 +266,33 @@ def draw_profile_2d(
                 mew=1.5,
                 label="edges found",
             )
+    label_stripe_axes(ax, profile, misses, "y_L, across the stripe (mm)")
+    ax.legend(loc="best", fontsize=8)
+
+
+def label_stripe_axes(ax: Any, profile: Profile, misses: int, xlabel: str = "y_L (mm)") -> None:
+    """The laser plane's axes: range growing downward (as the sensor looks), equal scales, the
+    axes' labels, a title with the rays missed and the frame's time, a grid."""
     if not ax.yaxis_inverted():
         ax.invert_yaxis()
     ax.set_aspect("equal", adjustable="datalim")
-    ax.set_xlabel("y_L, across the stripe (mm)")
+    ax.set_xlabel(xlabel)
     ax.set_ylabel("z_L, range (mm)")
     title = "stripe profile" + (f", {misses} rays missed" if misses else "")
     if math.isfinite(profile.t_s):
         title += f", t = {profile.t_s:.4g} s"
     ax.set_title(title)
     ax.grid(True, lw=0.3)
-    ax.legend(loc="best", fontsize=8)
+
+
+def save_with_legends(fig: Any, out: Path, dpi: int, *legends: Any) -> None:
+    """Save ``fig`` (laid out tight) with the legends' marks at a legible size."""
+    for legend in legends:
+        for handle in legend.legend_handles:  # legible dots, seam-point marks no larger
+            if handle is not None and hasattr(handle, "set_markersize"):
+                handle.set_markersize(LEGEND_MARKER_PT)
+    fig.tight_layout()
+    fig.savefig(out, dpi=dpi)
 
 
 def plot_profile_2d(
@@ -355,21 +371,8 @@ def plot_profile_png(
             if len(feature.edges_laser):
                 ax.plot(feature.edges_laser[:, 0], feature.edges_laser[:, 1], "+", color="C3",
                         ms=9, label="edges")  # fmt: skip
-        ax.invert_yaxis()
-        ax.set_aspect("equal", adjustable="datalim")
-        ax.set_xlabel("y_L (mm)")
-        ax.set_ylabel("z_L, range (mm)")
-        title = "stripe profile" + (f", {misses} rays missed" if misses else "")
-        if math.isfinite(profile.t_s):
-            title += f", t = {profile.t_s:.4g} s"
-        ax.set_title(title)
-        ax.grid(True, lw=0.3)
-        legend = ax.legend(loc="best", fontsize=8, framealpha=0.8)
-        for handle in legend.legend_handles:  # legible dots, seam-point marks no larger
-            if handle is not None and hasattr(handle, "set_markersize"):
-                handle.set_markersize(LEGEND_MARKER_PT)
-        fig.tight_layout()
-        fig.savefig(out, dpi=dpi)
+        label_stripe_axes(ax, profile, misses)
+        save_with_legends(fig, out, dpi, ax.legend(loc="best", fontsize=8, framealpha=0.8))
     finally:
         plt.close(fig)
     return out

@@ -16,9 +16,9 @@ from numpy.typing import NDArray
 from seamtrack.geometry.frames import make
 from seamtrack.viz.views import (
     FEATURE_COLOR,
+    add_torch_path,
     camera_on_cell,
     camera_on_sensor,
-    error_clim,
     has_display,
     pyvista_module,
     render_png,
@@ -126,15 +126,7 @@ def animate_run(
     stripe.point_data["rgb"] = np.zeros((1, 3), dtype=np.uint8)
     stripe_actor = plotter.add_mesh(stripe, scalars="rgb", rgb=True, point_size=4, name="stripe")
     path_mesh = torch_path(pv, view, result, stop=1)
-    plotter.add_mesh(
-        path_mesh,
-        scalars="tracking error (mm)",
-        cmap="plasma",
-        clim=error_clim(result),
-        line_width=5,
-        name="torch-path",
-        scalar_bar_args={"title": "tracking error (mm)", "color": "black"},
-    )
+    add_torch_path(plotter, path_mesh, result)
     point_actor = plotter.add_mesh(
         pv.Sphere(radius=0.012 * view.sensor.range_center_mm),
         color=FEATURE_COLOR,

@@ -316,6 +316,19 @@ def torch_path(
     return path
 
 
+def add_torch_path(plotter: Any, path_mesh: Any, result: Any) -> None:
+    """The torch's path coloured by the tracking error, with its colour bar."""
+    plotter.add_mesh(
+        path_mesh,
+        scalars="tracking error (mm)",
+        cmap="plasma",
+        clim=error_clim(result),
+        line_width=5,
+        name="torch-path",
+        scalar_bar_args={"title": "tracking error (mm)", "color": "black"},
+    )
+
+
 def error_clim(result: Any) -> tuple[float, float]:
     tr = result.trace
     err = tr.error_mm[tr.welding] if tr.welding.any() else tr.error_mm
@@ -474,15 +487,7 @@ def add_view_legend(plotter: Any, entries: list[dict[str, str]]) -> Any:
 
 
 def _add_result(plotter: Any, pv: Any, view: SceneView, result: Any) -> None:
-    plotter.add_mesh(
-        torch_path(pv, view, result),
-        scalars="tracking error (mm)",
-        cmap="plasma",
-        clim=error_clim(result),
-        line_width=5,
-        name="torch-path",
-        scalar_bar_args={"title": "tracking error (mm)", "color": "black"},
-    )
+    add_torch_path(plotter, torch_path(pv, view, result), result)
     frames_ = result.trace.frames
     found = np.asarray(frames_.get("found", np.zeros(0, dtype=bool)), dtype=bool)
     if found.any():
