@@ -333,7 +333,6 @@ OVER_THE_BOUNDS_TODAY = {
     "seamtrack/features/generic/_slope_turns.py::clean_points",
     "seamtrack/features/groove/_groove_fit.py::drop_islands",
     "seamtrack/features/groove/extractor.py::_corner",
-    "seamtrack/features/robust.py::robust_front",
     "seamtrack/features/synthetic.py::synthetic_profile",
     "seamtrack/features/vgroove/_v_root.py::covered_end",
     "seamtrack/features/vgroove/_v_search.py::best_pair",

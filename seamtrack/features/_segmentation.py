@@ -21,13 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.features.line_geometry import fit_points, fit_range
-from seamtrack.features.robust import (
-    DEFAULT_RESOLUTION_MM,
-    KEPT,
-    MAX_ABS_MM,
-    TOL_RESOLUTIONS,
-    robust_front,
-)
+from seamtrack.features.robust import KEPT, FrontParams, robust_front
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -404,11 +398,7 @@ def _pieces(
 def segment(
     points: FloatArray,
     valid: NDArray[np.bool_],
-    min_points: int,
-    resolution_mm: float,
-    min_tol_mm: float,
-    sigma_factor: float,
-    max_detour_mm: float,
+    params: FrontParams,
     max_lines: int,
     min_kink_rad: float,
     floats: FloatArray,
@@ -419,8 +409,8 @@ def segment(
     (:func:`seamtrack.features.robust.front`) and the straight pieces (:func:`_pieces`),
     written to three given arrays (each array passed to or returned from a compiled call
     costs a fraction of a microsecond): ``floats`` and ``ints``, laid out as
-    :func:`buffer_layout` says, and ``stray`` (n,), the points of detours
-    (``resolution_mm`` 0 and ``min_tol_mm`` NaN: not given).
+    :func:`buffer_layout` says, and ``stray`` (n,), the points of detours; the front end's
+    settings ``params`` (:class:`seamtrack.features.robust.FrontParams`).
 
     Returns a :class:`Segmentation` (with :data:`TOO_FEW_POINTS`, ``kept`` counts the valid
     points).
@@ -431,23 +421,7 @@ def segment(
     runs = ints[at.runs : at.offsets]
     inliers = ints[at.inliers :]
     # The spikes' columns go where the inliers will: they are not returned.
-    front = robust_front(
-        points,
-        valid,
-        MAX_ABS_MM,
-        min_points,
-        resolution_mm,
-        min_tol_mm,
-        sigma_factor,
-        max_detour_mm,
-        DEFAULT_RESOLUTION_MM,
-        TOL_RESOLUTIONS,
-        p,
-        ints[at.columns : at.runs],
-        inliers,
-        runs,
-        stray,
-    )
+    front = robust_front(points, valid, params, p, ints[at.columns : at.runs], inliers, runs, stray)
     found = PieceCount(front.code, 0)
     if front.code == KEPT:
         found = _pieces(
@@ -457,7 +431,7 @@ def segment(
             front.tol,
             front.sigma,
             front.floor,
-            min_points,
+            params.min_points,
             max_lines,
             min_kink_rad,
             ints[at.offsets : at.inliers],
