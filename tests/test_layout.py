@@ -329,13 +329,6 @@ def test_every_data_folder_is_declared() -> None:
 OVER_THE_BOUNDS_TODAY = {
     "seamtrack/cli/main.py::build_parser",
     "seamtrack/control/planner.py::checked_plan",
-    "seamtrack/features/_segmentation.py::_pieces",
-    "seamtrack/features/generic/_slope_turns.py::clean_points",
-    "seamtrack/features/groove/_groove_fit.py::drop_islands",
-    "seamtrack/features/groove/extractor.py::_corner",
-    "seamtrack/features/synthetic.py::synthetic_profile",
-    "seamtrack/features/vgroove/_v_root.py::covered_end",
-    "seamtrack/features/vgroove/_v_search.py::best_pair",
     "seamtrack/sensing/camera.py::__post_init__",
     "seamtrack/sensing/kernels.py::fan_stripe_hits",
     "seamtrack/simulation/assemble.py::_mesh_scan",

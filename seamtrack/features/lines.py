@@ -27,12 +27,12 @@ from seamtrack.features._segmentation import (
     buffer_layout,
     segment,
 )
+from seamtrack.features.arrays import FloatArray
 from seamtrack.features.line_geometry import Line, fit_line
 from seamtrack.features.refusal import Refusal
 from seamtrack.features.robust import CONSTANT, DEFAULT_RESOLUTION_MM, TOO_FEW_POINTS, front_params
 from seamtrack.sensing.profiles import Profile
 
-FloatArray = NDArray[np.float64]
 #: A run's end piece is split at a kink of at least this much (rad): a root face at a slant.
 _MIN_KINK = math.radians(5.0)
 

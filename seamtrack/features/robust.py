@@ -29,13 +29,11 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.features.arrays import FloatArray, IndexArray
 from seamtrack.features.line_geometry import fit_spans
 from seamtrack.features.refusal import Refusal
 from seamtrack.features.select import BUCKETS, kth_nonneg
 from seamtrack.sensing.profiles import Profile, Reason
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.intp]
 
 #: The front end's codes (:attr:`Front.code`): points kept; too few valid points; the valid
 #: points do not spread out (a constant profile).
@@ -66,9 +64,9 @@ class Front(NamedTuple):
 
     code: int
     points: FloatArray
-    columns: IntArray
-    spikes: IntArray
-    runs: IntArray
+    columns: IndexArray
+    spikes: IndexArray
+    runs: IndexArray
     stray: NDArray[np.bool_]
     scalars: FrontScalars
 
@@ -143,8 +141,8 @@ def range_quantum(z: FloatArray) -> float:
 @numba.njit(cache=True, nogil=True)
 def detours(
     p: FloatArray,
-    starts: IntArray,
-    ends: IntArray,
+    starts: IndexArray,
+    ends: IndexArray,
     tol: float,
     min_run: int,
     reach_mm: float,
@@ -291,7 +289,7 @@ class FrontEnd:
 
 @numba.njit(cache=True, nogil=True)
 def _estimate(
-    z: FloatArray, n: int, lag: int, d: FloatArray, work: IntArray, hist: IntArray
+    z: FloatArray, n: int, lag: int, d: FloatArray, work: IndexArray, hist: IndexArray
 ) -> float:
     """1.4826 / sqrt(6) times the upper median |second difference| of ``z[:n]`` at ``lag``
     (``n > 2 lag``)."""
@@ -303,7 +301,7 @@ def _estimate(
 
 @numba.njit(cache=True, nogil=True)
 def _noise(
-    z: FloatArray, n: int, first: float, d: FloatArray, work: IntArray, hist: IntArray
+    z: FloatArray, n: int, first: float, d: FloatArray, work: IndexArray, hist: IndexArray
 ) -> float:
     """:func:`noise_sigma` of ``z[:n]`` over :data:`NOISE_LAGS` (1, 2, 4, 8), given the
     estimate at lag 1 (``first``; ``n > 2``).
@@ -367,13 +365,9 @@ def front_params(
 
 @numba.njit(cache=True, nogil=True)
 def _bounded_points(
-    points: FloatArray,
-    valid: NDArray[np.bool_],
-    max_abs: float,
-    p: FloatArray,
-    z: FloatArray,
-    cols: IntArray,
-) -> int:
+    points: FloatArray, valid: NDArray[np.bool_], max_abs: float, p: FloatArray, z: FloatArray,
+    cols: IndexArray,
+) -> int:  # fmt: skip
     """Writes the valid points within ``max_abs`` to the front of ``p``, their ranges to ``z``
     and their columns to ``cols``; returns how many there are."""
     m = 0
@@ -385,7 +379,9 @@ def _bounded_points(
 
 
 @numba.njit(cache=True, nogil=True)
-def _column_spacing(p: FloatArray, m: int, d: FloatArray, work: IntArray, hist: IntArray) -> float:
+def _column_spacing(
+    p: FloatArray, m: int, d: FloatArray, work: IndexArray, hist: IndexArray
+) -> float:
     """:func:`_spacing` of ``p[:m]`` (``m >= 2``): the median lateral step, else the median
     step length (0: the points do not spread out)."""
     for i in range(m - 1):
@@ -409,7 +405,7 @@ def _resolution(params: FrontParams, quantum: float) -> float:
 
 
 @numba.njit(cache=True, nogil=True)
-def _median5_of(z: FloatArray, m: int) -> FloatArray:
+def median5_of(z: FloatArray, m: int) -> FloatArray:
     """:func:`_median5` of ``z[:m]``: the running median of 5 (edges: the nearest full
     window) by a min/max network."""
     med = np.empty(m)
@@ -428,16 +424,11 @@ def _median5_of(z: FloatArray, m: int) -> FloatArray:
 
 @numba.njit(cache=True, nogil=True)
 def _drop_spikes(
-    p: FloatArray,
-    z: FloatArray,
-    cols: IntArray,
-    m: int,
-    limit: float,
-    spikes: IntArray,
+    p: FloatArray, z: FloatArray, cols: IndexArray, m: int, limit: float, spikes: IndexArray
 ) -> tuple[int, int]:
     """Moves the points of ``p[:m]`` (and ``z``, ``cols``) within ``limit`` of their running
     median of 5 to the front, the others' columns to ``spikes``; returns (kept, spikes)."""
-    med = _median5_of(z, m)
+    med = median5_of(z, m)
     kept = 0
     ns = 0
     for i in range(m):
@@ -451,7 +442,7 @@ def _drop_spikes(
 
 
 @numba.njit(cache=True, nogil=True)
-def _jump_runs(p: FloatArray, kept: int, jump: float, runs: IntArray) -> int:
+def _jump_runs(p: FloatArray, kept: int, jump: float, runs: IndexArray) -> int:
     """Writes the bounds of the runs of ``p[:kept]`` between steps longer than ``jump`` to
     ``runs`` (0 first, ``kept`` last); returns the number of runs."""
     jump2 = jump * jump
@@ -472,9 +463,9 @@ def robust_front(
     valid: NDArray[np.bool_],
     params: FrontParams,
     p: FloatArray,
-    cols: IntArray,
-    spikes: IntArray,
-    runs: IntArray,
+    cols: IndexArray,
+    spikes: IndexArray,
+    runs: IndexArray,
     stray: NDArray[np.bool_],
 ) -> FrontScalars:
     """:func:`front` into given arrays: ``p`` (n, 2), ``cols``, ``spikes``, ``stray`` (n,),
