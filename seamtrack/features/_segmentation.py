@@ -20,17 +20,9 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.features.arrays import FloatArray, IntArray
 from seamtrack.features.line_geometry import fit_points, fit_range
-from seamtrack.features.robust import (
-    DEFAULT_RESOLUTION_MM,
-    KEPT,
-    MAX_ABS_MM,
-    TOL_RESOLUTIONS,
-    robust_front,
-)
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
+from seamtrack.features.robust import KEPT, FrontParams, robust_front
 
 
 class PieceTable(NamedTuple):
@@ -304,6 +296,89 @@ def _refit(
 
 
 @numba.njit(cache=True, nogil=True)
+def _corner_cuts(
+    p: FloatArray, run_lo: IntArray, run_hi: IntArray, n: int, pre: FloatArray, cost: FloatArray
+) -> None:
+    """Moves the bounds between the ``n`` pieces of a run to the best two-line split of each
+    neighbouring pair (in order: each moves the next's start)."""
+    for j in range(n - 1):
+        a, b = run_lo[j], run_hi[j + 1] + 1
+        if b - a >= 6:
+            cut = a + _best_split(p, a, b, 3, pre, cost).at
+            run_hi[j], run_lo[j + 1] = cut - 1, cut
+
+
+@numba.njit(cache=True, nogil=True)
+def _kink_cuts(
+    p: FloatArray, a: int, b: int, first: bool, last: bool, min_points: int, significant: float,
+    min_kink_rad: float, pre: FloatArray, cost: FloatArray, cuts: IntArray,
+) -> int:  # fmt: skip
+    """The cuts of the piece ``p[a:b + 1]`` at a small kink, written to ``cuts`` in order: a
+    run's end piece (``first``: its left half; ``last``: its right half) splits where two
+    lines explain it ``significant``-ly better than one and meet at more than
+    ``min_kink_rad``; returns how many."""
+    nc = 0
+    if b - a + 1 < 4 * min_points:
+        return nc
+    mid = (a + b) // 2
+    for h in range(2):
+        if (h == 0 and not first) or (h == 1 and not last):
+            continue
+        h_lo, h_hi = (a, mid + 1) if h == 0 else (mid, b + 1)
+        best = _best_split(p, h_lo, h_hi, min_points, pre, cost)
+        if best.cost_one - best.cost_two > significant:
+            cut = h_lo + best.at
+            _, _, uy1, uz1 = fit_range(p, a, cut)
+            _, _, uy2, uz2 = fit_range(p, cut, b + 1)
+            kink = math.acos(min(1.0, abs(uy1 * uy2 + uz1 * uz2)))
+            if kink > min_kink_rad:
+                cuts[nc] = cut
+                nc += 1
+    if nc == 2 and cuts[1] < cuts[0]:
+        cuts[0], cuts[1] = cuts[1], cuts[0]
+    return nc
+
+
+@numba.njit(cache=True, nogil=True)
+def _add_cut_piece(
+    a: int, b: int, cuts: IntArray, nc: int, all_lo: IntArray, all_hi: IntArray, total: int
+) -> int:
+    """Appends the piece ``[a, b]`` cut at ``cuts[:nc]`` (empty parts left out) to
+    ``all_lo``/``all_hi`` after their ``total`` pieces; returns the new total."""
+    prev = a
+    for c in range(nc + 1):
+        nxt = cuts[c] if c < nc else b + 1
+        if nxt > prev:
+            all_lo[total], all_hi[total] = prev, nxt - 1
+            total += 1
+        prev = nxt
+    return total
+
+
+@numba.njit(cache=True, nogil=True)
+def _trimmed_refits(
+    p: FloatArray, all_lo: IntArray, all_hi: IntArray, total: int, trim: float, min_points: int,
+    out: PieceTable,
+) -> int:  # fmt: skip
+    """Refits each of the ``total`` pieces to its inliers within ``trim`` of its first fit,
+    written to ``out`` as :func:`_pieces` says (a piece left with fewer than ``min_points`` is
+    dropped); returns how many pieces are kept."""
+    out.bounds[0] = 0
+    k = 0
+    used = 0
+    for j in range(total):
+        n = _refit(
+            p, all_lo[j], all_hi[j], trim, min_points, out.index[used:], out.along[used:],
+            out.fits[k],
+        )  # fmt: skip
+        if n >= min_points:
+            used += n
+            k += 1
+            out.bounds[k] = used
+    return k
+
+
+@numba.njit(cache=True, nogil=True)
 def _pieces(
     p: FloatArray,
     runs: IntArray,
@@ -348,55 +423,20 @@ def _pieces(
             if n < 0:
                 return PieceCount(TOO_MANY_PIECES, 0)
             n = _merge(p, run_lo, run_hi, n, tol)
-            # Corners at the best two-line split (in order: each moves the next's start).
-            for j in range(n - 1):
-                a, b = run_lo[j], run_hi[j + 1] + 1
-                if b - a >= 6:
-                    cut = a + _best_split(p, a, b, 3, pre, cost).at
-                    run_hi[j], run_lo[j + 1] = cut - 1, cut
-            # A run's end pieces split at a small kink.
+            _corner_cuts(p, run_lo, run_hi, n, pre, cost)
             for j in range(n):
                 a, b = run_lo[j], run_hi[j]
-                nc = 0
-                if b - a + 1 >= 4 * min_points:
-                    mid = (a + b) // 2
-                    for h in range(2):
-                        if h == 0 and j != 0:
-                            continue
-                        if h == 1 and j != n - 1:
-                            continue
-                        h_lo, h_hi = (a, mid + 1) if h == 0 else (mid, b + 1)
-                        best = _best_split(p, h_lo, h_hi, min_points, pre, cost)
-                        if best.cost_one - best.cost_two > significant:
-                            cut = h_lo + best.at
-                            _, _, uy1, uz1 = fit_range(p, a, cut)
-                            _, _, uy2, uz2 = fit_range(p, cut, b + 1)
-                            kink = math.acos(min(1.0, abs(uy1 * uy2 + uz1 * uz2)))
-                            if kink > min_kink_rad:
-                                cuts[nc] = cut
-                                nc += 1
-                if nc == 2 and cuts[1] < cuts[0]:
-                    cuts[0], cuts[1] = cuts[1], cuts[0]
-                prev = a
-                for c in range(nc + 1):
-                    nxt = cuts[c] if c < nc else b + 1
-                    if nxt > prev:
-                        all_lo[total], all_hi[total] = prev, nxt - 1
-                        total += 1
-                    prev = nxt
+                nc = _kink_cuts(
+                    p, a, b, j == 0, j == n - 1, min_points, significant, min_kink_rad,
+                    pre, cost, cuts,
+                )  # fmt: skip
+                total = _add_cut_piece(a, b, cuts, nc, all_lo, all_hi, total)
         if total > max_lines:
             return PieceCount(TOO_MANY_PIECES, 0)
     # Trimmed refits: inliers within max(3 sigma, floor / 2) of each piece's first fit.
     trim = max(3.0 * sigma, 0.5 * floor)
-    offsets[0] = 0
-    k = 0
-    used = 0
-    for j in range(total):
-        n = _refit(p, all_lo[j], all_hi[j], trim, min_points, index[used:], along[used:], fits[k])
-        if n >= min_points:
-            used += n
-            k += 1
-            offsets[k] = used
+    out = PieceTable(index, along, fits, offsets)
+    k = _trimmed_refits(p, all_lo, all_hi, total, trim, min_points, out)
     return PieceCount(SEGMENTED if k else NO_PIECE, k)
 
 
@@ -404,11 +444,7 @@ def _pieces(
 def segment(
     points: FloatArray,
     valid: NDArray[np.bool_],
-    min_points: int,
-    resolution_mm: float,
-    min_tol_mm: float,
-    sigma_factor: float,
-    max_detour_mm: float,
+    params: FrontParams,
     max_lines: int,
     min_kink_rad: float,
     floats: FloatArray,
@@ -419,8 +455,8 @@ def segment(
     (:func:`seamtrack.features.robust.front`) and the straight pieces (:func:`_pieces`),
     written to three given arrays (each array passed to or returned from a compiled call
     costs a fraction of a microsecond): ``floats`` and ``ints``, laid out as
-    :func:`buffer_layout` says, and ``stray`` (n,), the points of detours
-    (``resolution_mm`` 0 and ``min_tol_mm`` NaN: not given).
+    :func:`buffer_layout` says, and ``stray`` (n,), the points of detours; the front end's
+    settings ``params`` (:class:`seamtrack.features.robust.FrontParams`).
 
     Returns a :class:`Segmentation` (with :data:`TOO_FEW_POINTS`, ``kept`` counts the valid
     points).
@@ -431,23 +467,7 @@ def segment(
     runs = ints[at.runs : at.offsets]
     inliers = ints[at.inliers :]
     # The spikes' columns go where the inliers will: they are not returned.
-    front = robust_front(
-        points,
-        valid,
-        MAX_ABS_MM,
-        min_points,
-        resolution_mm,
-        min_tol_mm,
-        sigma_factor,
-        max_detour_mm,
-        DEFAULT_RESOLUTION_MM,
-        TOL_RESOLUTIONS,
-        p,
-        ints[at.columns : at.runs],
-        inliers,
-        runs,
-        stray,
-    )
+    front = robust_front(points, valid, params, p, ints[at.columns : at.runs], inliers, runs, stray)
     found = PieceCount(front.code, 0)
     if front.code == KEPT:
         found = _pieces(
@@ -457,7 +477,7 @@ def segment(
             front.tol,
             front.sigma,
             front.floor,
-            min_points,
+            params.min_points,
             max_lines,
             min_kink_rad,
             ints[at.offsets : at.inliers],

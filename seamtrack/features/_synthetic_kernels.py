@@ -13,7 +13,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-FloatArray = NDArray[np.float64]
+from seamtrack.features.arrays import FloatArray
 
 
 class Crossings(NamedTuple):

@@ -12,8 +12,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
-from numpy.typing import NDArray
 
+from seamtrack.features.arrays import FloatArray
 from seamtrack.features.expect import Expect, parse_expect
 from seamtrack.features.line_geometry import Line
 from seamtrack.features.lines import (
@@ -39,7 +39,6 @@ from seamtrack.features.vgroove._v_search import (
 )
 from seamtrack.sensing.profiles import Feature, Profile, SeamHint
 
-FloatArray = NDArray[np.float64]
 #: A stretch of kept points ``points[lo:hi]`` and the line(s) a joint's model puts there
 #: (None: left out of the count, such as a gap).
 Zone = tuple[int, int, Line | tuple[Line, ...] | None]

@@ -9,8 +9,8 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
+from seamtrack.features.arrays import FloatArray, IntArray
+
 #: The columns of :func:`explained_share`'s zones: first and past-the-end kept point, lines.
 ZONE_LO, ZONE_HI, ZONE_LINES = range(3)
 #: The columns of its lines: a point of the line (its centroid y, z) and its unit normal.

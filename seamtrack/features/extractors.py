@@ -43,6 +43,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.errors import PluginError
+from seamtrack.features.arrays import FloatArray
 from seamtrack.features.base import ExtractorBase, included, line_confidence
 from seamtrack.features.expect import Expect
 from seamtrack.features.generic.extractor import GenericExtractor
@@ -68,7 +69,6 @@ from seamtrack.features.vgroove._v_search import (
 from seamtrack.features.vgroove.extractor import VGrooveExtractor
 from seamtrack.sensing.profiles import Feature, Profile
 
-FloatArray = NDArray[np.float64]
 ENTRY_POINT_GROUP = "seamtrack.extractors"
 #: Coordinates beyond this (mm) are not measurements: treated as invalid.
 MAX_ABS_MM = 1e6

@@ -24,8 +24,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
+from seamtrack.features.arrays import FloatArray, IntArray
 
 
 class Point(NamedTuple):
@@ -255,3 +254,34 @@ def end_distance(line: LineThrough, t_first: float, t_last: float, y: float, z: 
     near = math.hypot(cy + t_first * dy - y, cz + t_first * dz - z)
     far = math.hypot(cy + t_last * dy - y, cz + t_last * dz - z)
     return far if far < near else near
+
+
+class TipCorner(NamedTuple):
+    """A corner found at a line's end (:func:`corner_near`): found, where (y, z), and its
+    distance from the line's end."""
+
+    found: bool
+    y: float
+    z: float
+    d: float
+
+
+@numba.njit(cache=True, nogil=True)
+def corner_near(
+    line: LineThrough, tip_y: float, tip_z: float, other: LineThrough, t_first: float,
+    t_last: float, cos_min: float, reach: float, best_d: float, near_max: float,
+) -> TipCorner:  # fmt: skip
+    """The corner ``line``'s end (its tip at ``tip_y``, ``tip_z``) makes with ``other``:
+    their :func:`corner_crossing` when it lies within ``reach`` of the tip, nearer than
+    ``best_d`` (a corner found before), and within ``near_max`` of one of ``other``'s end
+    inliers (at ``t_first``, ``t_last`` along it: the corner lies at its end); else not
+    found. The corner search of the plates' and the V's extractors."""
+    hit, xy, xz = corner_crossing(line, other, cos_min)
+    if not hit:
+        return TipCorner(False, 0.0, 0.0, 0.0)
+    d = math.hypot(xy - tip_y, xz - tip_z)
+    if d > reach or d >= best_d:
+        return TipCorner(False, 0.0, 0.0, 0.0)
+    if end_distance(other, t_first, t_last, xy, xz) <= near_max:
+        return TipCorner(True, xy, xz, d)
+    return TipCorner(False, 0.0, 0.0, 0.0)

@@ -27,12 +27,12 @@ from seamtrack.features._segmentation import (
     buffer_layout,
     segment,
 )
+from seamtrack.features.arrays import FloatArray
 from seamtrack.features.line_geometry import Line, fit_line
 from seamtrack.features.refusal import Refusal
-from seamtrack.features.robust import CONSTANT, DEFAULT_RESOLUTION_MM, TOO_FEW_POINTS
+from seamtrack.features.robust import CONSTANT, DEFAULT_RESOLUTION_MM, TOO_FEW_POINTS, front_params
 from seamtrack.sensing.profiles import Profile
 
-FloatArray = NDArray[np.float64]
 #: A run's end piece is split at a kink of at least this much (rad): a root face at a slant.
 _MIN_KINK = math.radians(5.0)
 
@@ -141,11 +141,7 @@ def segment_profile(
     found = segment(
         pts,
         valid,
-        int(min_points),
-        float(resolution_mm) if resolution_mm else 0.0,
-        math.nan if min_tol_mm is None else float(min_tol_mm),
-        float(sigma_factor),
-        float(max_detour_mm),
+        front_params(min_points, resolution_mm, min_tol_mm, sigma_factor, max_detour_mm),
         max_lines,
         _MIN_KINK,
         floats,

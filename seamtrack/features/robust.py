@@ -29,13 +29,11 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.features.arrays import FloatArray, IndexArray
 from seamtrack.features.line_geometry import fit_spans
 from seamtrack.features.refusal import Refusal
 from seamtrack.features.select import BUCKETS, kth_nonneg
 from seamtrack.sensing.profiles import Profile, Reason
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.intp]
 
 #: The front end's codes (:attr:`Front.code`): points kept; too few valid points; the valid
 #: points do not spread out (a constant profile).
@@ -66,9 +64,9 @@ class Front(NamedTuple):
 
     code: int
     points: FloatArray
-    columns: IntArray
-    spikes: IntArray
-    runs: IntArray
+    columns: IndexArray
+    spikes: IndexArray
+    runs: IndexArray
     stray: NDArray[np.bool_]
     scalars: FrontScalars
 
@@ -143,8 +141,8 @@ def range_quantum(z: FloatArray) -> float:
 @numba.njit(cache=True, nogil=True)
 def detours(
     p: FloatArray,
-    starts: IntArray,
-    ends: IntArray,
+    starts: IndexArray,
+    ends: IndexArray,
     tol: float,
     min_run: int,
     reach_mm: float,
@@ -291,7 +289,7 @@ class FrontEnd:
 
 @numba.njit(cache=True, nogil=True)
 def _estimate(
-    z: FloatArray, n: int, lag: int, d: FloatArray, work: IntArray, hist: IntArray
+    z: FloatArray, n: int, lag: int, d: FloatArray, work: IndexArray, hist: IndexArray
 ) -> float:
     """1.4826 / sqrt(6) times the upper median |second difference| of ``z[:n]`` at ``lag``
     (``n > 2 lag``)."""
@@ -303,7 +301,7 @@ def _estimate(
 
 @numba.njit(cache=True, nogil=True)
 def _noise(
-    z: FloatArray, n: int, first: float, d: FloatArray, work: IntArray, hist: IntArray
+    z: FloatArray, n: int, first: float, d: FloatArray, work: IndexArray, hist: IndexArray
 ) -> float:
     """:func:`noise_sigma` of ``z[:n]`` over :data:`NOISE_LAGS` (1, 2, 4, 8), given the
     estimate at lag 1 (``first``; ``n > 2``).
@@ -327,44 +325,65 @@ def _noise(
     return first if best < 0.0 else best
 
 
-@numba.njit(cache=True, nogil=True)
-def robust_front(
-    points: FloatArray,
-    valid: NDArray[np.bool_],
-    max_abs: float,
+class FrontParams(NamedTuple):
+    """The front end's settings (a numba-supported named tuple: the compiled calls take it
+    whole): the bound on coordinates (mm), the fewest points of a piece, the range resolution
+    (mm; 0: not given, read from the data), the tolerance's floor (mm; NaN: not given), the
+    tolerance in noise sigmas, the longest detour (mm), the resolution when none is known (mm)
+    and the floor in resolutions."""
+
+    max_abs: float
+    min_points: int
+    resolution_mm: float
+    min_tol_mm: float
+    sigma_factor: float
+    max_detour_mm: float
+    default_resolution: float
+    tol_resolutions: float
+
+
+def front_params(
     min_points: int,
-    resolution_mm: float,
-    min_tol_mm: float,
+    resolution_mm: float | None,
+    min_tol_mm: float | None,
     sigma_factor: float,
     max_detour_mm: float,
-    default_resolution: float,
-    tol_resolutions: float,
-    p: FloatArray,
-    cols: IntArray,
-    spikes: IntArray,
-    runs: IntArray,
-    stray: NDArray[np.bool_],
-) -> FrontScalars:
-    """:func:`front` into given arrays: ``p`` (n, 2), ``cols``, ``spikes``, ``stray`` (n,),
-    ``runs`` (n + 1,) for n profile points.
+) -> FrontParams:
+    """The :class:`FrontParams` of the extractors' keyword arguments (``None``: not given),
+    with :data:`MAX_ABS_MM`, :data:`DEFAULT_RESOLUTION_MM` and :data:`TOL_RESOLUTIONS`."""
+    return FrontParams(
+        MAX_ABS_MM,
+        int(min_points),
+        float(resolution_mm) if resolution_mm else 0.0,
+        math.nan if min_tol_mm is None else float(min_tol_mm),
+        float(sigma_factor),
+        float(max_detour_mm),
+        DEFAULT_RESOLUTION_MM,
+        TOL_RESOLUTIONS,
+    )
 
-    Returns a :class:`FrontScalars`: ``kept`` points (before spikes are removed when
-    ``code`` is not :data:`KEPT`), the counts of spikes and run bounds written, and the
-    noise, tolerance, its floor, the spacing, the range quantum and the resolution."""
-    n = points.shape[0]
-    z = np.empty(n)
+
+@numba.njit(cache=True, nogil=True)
+def _bounded_points(
+    points: FloatArray, valid: NDArray[np.bool_], max_abs: float, p: FloatArray, z: FloatArray,
+    cols: IndexArray,
+) -> int:  # fmt: skip
+    """Writes the valid points within ``max_abs`` to the front of ``p``, their ranges to ``z``
+    and their columns to ``cols``; returns how many there are."""
     m = 0
-    for i in range(n):
+    for i in range(points.shape[0]):
         y0, z0 = points[i, 0], points[i, 1]
         p[m, 0], p[m, 1], z[m], cols[m] = y0, z0, z0, i
         m += valid[i] & (abs(y0) < max_abs) & (abs(z0) < max_abs)
-    if m < 2 * min_points:
-        return FrontScalars(TOO_FEW_POINTS, m, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-    if m < 2:
-        return FrontScalars(CONSTANT, m, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-    d = np.empty(m)
-    work = np.empty(m, dtype=np.int64)
-    hist = np.empty(2 * BUCKETS, dtype=np.int64)
+    return m
+
+
+@numba.njit(cache=True, nogil=True)
+def _column_spacing(
+    p: FloatArray, m: int, d: FloatArray, work: IndexArray, hist: IndexArray
+) -> float:
+    """:func:`_spacing` of ``p[:m]`` (``m >= 2``): the median lateral step, else the median
+    step length (0: the points do not spread out)."""
     for i in range(m - 1):
         d[i] = abs(p[i + 1, 0] - p[i, 0])
     spacing = kth_nonneg(d, m - 1, (m - 1) // 2, work, hist)
@@ -372,32 +391,44 @@ def robust_front(
         for i in range(m - 1):
             d[i] = math.hypot(p[i + 1, 0] - p[i, 0], p[i + 1, 1] - p[i, 1])
         spacing = kth_nonneg(d, m - 1, (m - 1) // 2, work, hist)
-    if not spacing > 0.0:
-        return FrontScalars(CONSTANT, m, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
-    q = range_quantum(z[:m])
-    if resolution_mm != 0.0:
-        resolution = resolution_mm
-    elif q > 0.0:
-        resolution = q
-    else:
-        resolution = default_resolution
-    floor = tol_resolutions * resolution if math.isnan(min_tol_mm) else min_tol_mm
-    rounding = q / math.sqrt(12.0)
-    first = _estimate(z, m, 1, d, work, hist) if m > 2 else 0.0
-    sigma = max(first, rounding)
-    # Isolated outliers against a running median of 5 (edges: the nearest full window).
+    return spacing
+
+
+@numba.njit(cache=True, nogil=True)
+def _resolution(params: FrontParams, quantum: float) -> float:
+    """The range resolution: the given one, else the range quantum, else the default."""
+    if params.resolution_mm != 0.0:
+        return params.resolution_mm
+    if quantum > 0.0:
+        return quantum
+    return params.default_resolution
+
+
+@numba.njit(cache=True, nogil=True)
+def median5_of(z: FloatArray, m: int) -> FloatArray:
+    """:func:`_median5` of ``z[:m]``: the running median of 5 (edges: the nearest full
+    window) by a min/max network."""
     med = np.empty(m)
     if m < 5:
         med[:] = np.median(z[:m])
-    else:
-        for i in range(m - 4):
-            a, b, c, dd, e = z[i], z[i + 1], z[i + 2], z[i + 3], z[i + 4]
-            f = max(min(a, b), min(c, dd))
-            g = min(max(a, b), max(c, dd))
-            med[i + 2] = max(min(e, f), min(max(e, f), g))
-        med[0] = med[1] = med[2]
-        med[m - 1] = med[m - 2] = med[m - 3]
-    limit = max(6.0 * sigma, 4.0 * floor, 4.0 * spacing)
+        return med
+    for i in range(m - 4):
+        a, b, c, dd, e = z[i], z[i + 1], z[i + 2], z[i + 3], z[i + 4]
+        f = max(min(a, b), min(c, dd))
+        g = min(max(a, b), max(c, dd))
+        med[i + 2] = max(min(e, f), min(max(e, f), g))
+    med[0] = med[1] = med[2]
+    med[m - 1] = med[m - 2] = med[m - 3]
+    return med
+
+
+@numba.njit(cache=True, nogil=True)
+def _drop_spikes(
+    p: FloatArray, z: FloatArray, cols: IndexArray, m: int, limit: float, spikes: IndexArray
+) -> tuple[int, int]:
+    """Moves the points of ``p[:m]`` (and ``z``, ``cols``) within ``limit`` of their running
+    median of 5 to the front, the others' columns to ``spikes``; returns (kept, spikes)."""
+    med = median5_of(z, m)
     kept = 0
     ns = 0
     for i in range(m):
@@ -407,16 +438,13 @@ def robust_front(
         else:
             spikes[ns] = cols[i]
             ns += 1
-    # Without spikes the lag-1 differences are those already counted.
-    if kept <= 2:
-        sigma = 0.0
-    else:
-        if ns > 0:
-            first = _estimate(z, kept, 1, d, work, hist)
-        sigma = _noise(z, kept, first, d, work, hist)
-    sigma = max(sigma, rounding)
-    tol = max(floor, sigma_factor * sigma)
-    jump = max(6.0 * spacing, 2.0 * tol, 0.1)
+    return kept, ns
+
+
+@numba.njit(cache=True, nogil=True)
+def _jump_runs(p: FloatArray, kept: int, jump: float, runs: IndexArray) -> int:
+    """Writes the bounds of the runs of ``p[:kept]`` between steps longer than ``jump`` to
+    ``runs`` (0 first, ``kept`` last); returns the number of runs."""
     jump2 = jump * jump
     runs[0] = 0
     r = 1
@@ -426,7 +454,58 @@ def robust_front(
             runs[r] = i + 1
             r += 1
     runs[r] = kept
-    off = detours(p[:kept], runs[:r], runs[1 : r + 1], tol, min_points, max_detour_mm)
+    return r
+
+
+@numba.njit(cache=True, nogil=True)
+def robust_front(
+    points: FloatArray,
+    valid: NDArray[np.bool_],
+    params: FrontParams,
+    p: FloatArray,
+    cols: IndexArray,
+    spikes: IndexArray,
+    runs: IndexArray,
+    stray: NDArray[np.bool_],
+) -> FrontScalars:
+    """:func:`front` into given arrays: ``p`` (n, 2), ``cols``, ``spikes``, ``stray`` (n,),
+    ``runs`` (n + 1,) for n profile points.
+
+    Returns a :class:`FrontScalars`: ``kept`` points (before spikes are removed when
+    ``code`` is not :data:`KEPT`), the counts of spikes and run bounds written, and the
+    noise, tolerance, its floor, the spacing, the range quantum and the resolution."""
+    z = np.empty(points.shape[0])
+    m = _bounded_points(points, valid, params.max_abs, p, z, cols)
+    if m < 2 * params.min_points:
+        return FrontScalars(TOO_FEW_POINTS, m, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    if m < 2:
+        return FrontScalars(CONSTANT, m, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    d = np.empty(m)
+    work = np.empty(m, dtype=np.int64)
+    hist = np.empty(2 * BUCKETS, dtype=np.int64)
+    spacing = _column_spacing(p, m, d, work, hist)
+    if not spacing > 0.0:
+        return FrontScalars(CONSTANT, m, 0, 0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+    q = range_quantum(z[:m])
+    resolution = _resolution(params, q)
+    floor = (
+        params.tol_resolutions * resolution if math.isnan(params.min_tol_mm) else params.min_tol_mm
+    )
+    rounding = q / math.sqrt(12.0)
+    first = _estimate(z, m, 1, d, work, hist) if m > 2 else 0.0
+    # Isolated outliers against a running median of 5 (edges: the nearest full window).
+    limit = max(6.0 * max(first, rounding), 4.0 * floor, 4.0 * spacing)
+    kept, ns = _drop_spikes(p, z, cols, m, limit, spikes)
+    # Without spikes the lag-1 differences are those already counted.
+    sigma = 0.0
+    if kept > 2:
+        if ns > 0:
+            first = _estimate(z, kept, 1, d, work, hist)
+        sigma = _noise(z, kept, first, d, work, hist)
+    sigma = max(sigma, rounding)
+    tol = max(floor, params.sigma_factor * sigma)
+    r = _jump_runs(p, kept, max(6.0 * spacing, 2.0 * tol, 0.1), runs)
+    off = detours(p[:kept], runs[:r], runs[1 : r + 1], tol, params.min_points, params.max_detour_mm)
     stray[:kept] = False
     for k in range(r):
         if off[k]:
@@ -435,21 +514,9 @@ def robust_front(
 
 
 @numba.njit(cache=True, nogil=True)
-def front(
-    points: FloatArray,
-    valid: NDArray[np.bool_],
-    max_abs: float,
-    min_points: int,
-    resolution_mm: float,
-    min_tol_mm: float,
-    sigma_factor: float,
-    max_detour_mm: float,
-    default_resolution: float,
-    tol_resolutions: float,
-) -> Front:
-    """The front end of :func:`seamtrack.features.robust.front_end` in one pass.
-
-    ``resolution_mm`` 0: not given (read from the data); ``min_tol_mm`` NaN: not given.
+def front(points: FloatArray, valid: NDArray[np.bool_], params: FrontParams) -> Front:
+    """The front end of :func:`seamtrack.features.robust.front_end` in one pass, with the
+    settings ``params`` (:class:`FrontParams`).
 
     Returns a :class:`Front`: ``code`` :data:`KEPT`, :data:`TOO_FEW_POINTS` (``len(points)``
     of them) or :data:`CONSTANT`; the kept points (spikes removed), their columns, the removed
@@ -462,23 +529,7 @@ def front(
     spikes = np.empty(n, dtype=np.int64)
     runs = np.empty(n + 1, dtype=np.int64)
     stray = np.zeros(n, dtype=np.bool_)
-    f = robust_front(
-        points,
-        valid,
-        max_abs,
-        min_points,
-        resolution_mm,
-        min_tol_mm,
-        sigma_factor,
-        max_detour_mm,
-        default_resolution,
-        tol_resolutions,
-        p,
-        cols,
-        spikes,
-        runs,
-        stray,
-    )
+    f = robust_front(points, valid, params, p, cols, spikes, runs, stray)
     m = f.kept
     return Front(f.code, p[:m], cols[:m], spikes[: f.n_spikes], runs[: f.n_runs], stray[:m], f)
 
@@ -507,18 +558,8 @@ def front_end(
     valid = np.ascontiguousarray(profile.valid, dtype=np.bool_).reshape(-1)
     if valid.shape != (len(pts),):
         return Refusal("too few valid points (0)")
-    fr = front(
-        pts,
-        valid,
-        MAX_ABS_MM,
-        int(min_points),
-        float(resolution_mm) if resolution_mm else 0.0,
-        math.nan if min_tol_mm is None else float(min_tol_mm),
-        float(sigma_factor),
-        float(max_detour_mm),
-        DEFAULT_RESOLUTION_MM,
-        TOL_RESOLUTIONS,
-    )
+    params = front_params(min_points, resolution_mm, min_tol_mm, sigma_factor, max_detour_mm)
+    fr = front(pts, valid, params)
     if fr.code == TOO_FEW_POINTS:
         return Refusal(f"too few valid points ({len(fr.points)})")
     if fr.code == CONSTANT:

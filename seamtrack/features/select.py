@@ -19,8 +19,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
+from seamtrack.features.arrays import FloatArray, IntArray
 
 #: Buckets of the counting passes (of ``hist``: twice as many, two counts interleaved).
 BUCKETS = 128

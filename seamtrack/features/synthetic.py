@@ -35,10 +35,9 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.features import _synthetic_kernels as kern
+from seamtrack.features.arrays import FloatArray
 from seamtrack.sensing.profiles import Profile, Reason
 from seamtrack.sensing.sensor import LaserLineSensor
-
-FloatArray = NDArray[np.float64]
 
 #: Half length of the "infinite" plates, mm (far beyond any field of view).
 _FAR_MM = 1000.0
@@ -108,16 +107,7 @@ class Imperfections:
     bead_width_mm: float = 12.0
 
     def __bool__(self) -> bool:
-        return any(
-            (
-                self.noise_mm > 0,
-                self.outlier_fraction > 0,
-                self.dropout_runs > 0,
-                self.reflection_probability > 0,
-                self.tack_probability > 0,
-                self.bead_height_mm > 0,
-            )
-        )
+        return self.random or self.bead_height_mm > 0
 
     @property
     def random(self) -> bool:
@@ -426,7 +416,41 @@ def synthetic_profile(
     T[:3, :3] = R
     T[:3, 3] = R @ np.array([0.0, -lateral_offset_mm, -standoff])
     imp = imperfections
+    segs, tack = _tack_and_bead(segs, seam, imp, rng)
+    segs = segs[np.hypot(*(segs[:, 1] - segs[:, 0]).T) > 0]  # e.g. a zero root face
+    phi = ray_angles(sensor, n)
+    y_L, z_L, reason = _lit(sensor, R, T, segs, phi)
 
+    reflection = False
+    if imp.random:
+        assert rng is not None
+        y_L, z_L, reflection = _imperfect(rng, imp, sensor, phi, y_L, z_L, reason)
+
+    valid = reason == Reason.VALID
+    y_m, z_m = sensor.measure(y_L, z_L)
+    points = np.where(valid[:, None], np.column_stack([y_m, z_m]), np.nan)
+    profile = Profile(points, valid=valid, reason=reason, T_world_sensor=T)
+    seam_laser = line_in_laser_plane(T, seam.reshape(-1, 2)).reshape(-1)
+    truth = GroundTruth(
+        joint=joint,
+        seam_laser=seam_laser,
+        seam_world=(T @ np.r_[0.0, seam_laser, 1.0])[:3] if seam.size else np.empty(0),
+        edges_laser=line_in_laser_plane(T, edges),
+        gap_mm=float(gap),
+        T_world_sensor=T,
+        params=params,
+        tack=tack and bool(seam.size),
+        reflection=reflection,
+    )
+    return profile, truth
+
+
+def _tack_and_bead(
+    segs: FloatArray, seam: FloatArray, imp: Imperfections, rng: np.random.Generator | None
+) -> tuple[FloatArray, bool]:
+    """The section's segments with a tack weld's mound on the seam point (drawn with
+    ``imp.tack_probability``) and a weld bead's cap from toe to toe, as ``imp`` asks; and
+    whether a tack was drawn."""
     tack = bool(
         imp.tack_probability > 0 and rng is not None and rng.random() < imp.tack_probability
     )
@@ -442,9 +466,18 @@ def synthetic_profile(
         toes = np.array([s + _cast(s, down, segs)[0][0] * down[0] for s in starts])
         crown = np.array([seam[0], min(toes[0, 1], toes[1, 1], seam[1]) - imp.bead_height_mm])
         segs = np.concatenate([segs, _arc(toes[0], crown, toes[1])])
+    return segs, tack
 
-    segs = segs[np.hypot(*(segs[:, 1] - segs[:, 0]).T) > 0]  # e.g. a zero root face
-    phi = ray_angles(sensor, n)
+
+def _lit(
+    sensor: LaserLineSensor, R: FloatArray, T: FloatArray, segs: FloatArray, phi: FloatArray
+) -> tuple[FloatArray, FloatArray, NDArray[np.uint8]]:
+    """Where the rays at angles ``phi`` from the laser at pose ``T`` (rotation ``R``; in the
+    joint frame)
+    meet the section's segments, in the laser frame (y, z; 0 where none), and each ray's
+    :class:`Reason`: a miss, out of the field of view, too grazing an incidence, hidden
+    from the camera, else valid."""
+    n = len(phi)
     dirs_laser = np.column_stack([np.zeros(n), np.sin(phi), np.cos(phi)])
     dirs = dirs_laser @ R.T  # (n, 3) in the joint frame
     emitter = T[:3, 3]
@@ -470,29 +503,7 @@ def synthetic_profile(
         side_camera = np.einsum("ij,ij->i", camera[1:] - hits_2d[lit], normals[idx[lit]])
         hidden = (side_laser * side_camera <= 0) | _occluded(hits_2d[lit], camera[1:], segs)
         reason[lit[hidden]] = Reason.OCCLUDED
-
-    reflection = False
-    if imp.random:
-        assert rng is not None
-        y_L, z_L, reflection = _imperfect(rng, imp, sensor, phi, y_L, z_L, reason)
-
-    valid = reason == Reason.VALID
-    y_m, z_m = sensor.measure(y_L, z_L)
-    points = np.where(valid[:, None], np.column_stack([y_m, z_m]), np.nan)
-    profile = Profile(points, valid=valid, reason=reason, T_world_sensor=T)
-    seam_laser = line_in_laser_plane(T, seam.reshape(-1, 2)).reshape(-1)
-    truth = GroundTruth(
-        joint=joint,
-        seam_laser=seam_laser,
-        seam_world=(T @ np.r_[0.0, seam_laser, 1.0])[:3] if seam.size else np.empty(0),
-        edges_laser=line_in_laser_plane(T, edges),
-        gap_mm=float(gap),
-        T_world_sensor=T,
-        params=params,
-        tack=tack and bool(seam.size),
-        reflection=reflection,
-    )
-    return profile, truth
+    return y_L, z_L, reason
 
 
 def _imperfect(

@@ -44,10 +44,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.features.arrays import FloatArray
 from seamtrack.geometry.groove_points import LEFT_FOOT, MIDDLE, RIGHT_FOOT
 from seamtrack.workpiece import beads
-
-FloatArray = NDArray[np.float64]
 
 GROOVES = ("v", "narrow-gap", "u")
 #: Half length of the plates drawn (mm).

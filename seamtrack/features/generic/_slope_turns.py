@@ -20,9 +20,9 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.features.arrays import FloatArray
 from seamtrack.features.line_geometry import Point, fit_range, principal_angle
-
-FloatArray = NDArray[np.float64]
+from seamtrack.features.robust import median5_of
 
 _SIGMA_FROM_SECOND_DIFF = 1.4826 / math.sqrt(6.0)
 
@@ -51,6 +51,24 @@ class Turns(NamedTuple):
 
     gaps: FloatArray
     turn: FloatArray
+
+
+@numba.njit(cache=True, nogil=True)
+def _near(p: FloatArray, med: FloatArray, limit: float) -> FloatArray:
+    """The points of ``p`` whose range lies within ``limit`` of ``med``, in order."""
+    m = p.shape[0]
+    count = 0
+    for i in range(m):
+        if abs(p[i, 1] - med[i]) <= limit:
+            count += 1
+    kept = np.empty((count, 2))
+    j = 0
+    for i in range(m):
+        if abs(p[i, 1] - med[i]) <= limit:
+            kept[j, 0] = p[i, 0]
+            kept[j, 1] = p[i, 1]
+            j += 1
+    return kept
 
 
 @numba.njit(cache=True, nogil=True)
@@ -90,26 +108,8 @@ def clean_points(
     sigma = _SIGMA_FROM_SECOND_DIFF * np.partition(second, (m - 2) // 2)[(m - 2) // 2]
     # Running median of 5 by the min/max network; the two points at each end take the
     # nearest full window's median.
-    med = np.empty(m)
-    for i in range(m - 4):
-        a, b, c, d, e = p[i, 1], p[i + 1, 1], p[i + 2, 1], p[i + 3, 1], p[i + 4, 1]
-        f = max(min(a, b), min(c, d))
-        g = min(max(a, b), max(c, d))
-        med[i + 2] = max(min(e, f), min(max(e, f), g))
-    med[0] = med[1] = med[2]
-    med[m - 1] = med[m - 2] = med[m - 3]
-    limit = max(6.0 * sigma, 0.12, 4.0 * spacing)
-    count = 0
-    for i in range(m):
-        if abs(p[i, 1] - med[i]) <= limit:
-            count += 1
-    kept = np.empty((count, 2))
-    j = 0
-    for i in range(m):
-        if abs(p[i, 1] - med[i]) <= limit:
-            kept[j, 0] = p[i, 0]
-            kept[j, 1] = p[i, 1]
-            j += 1
+    med = median5_of(p[:, 1], m)
+    kept = _near(p, med, max(6.0 * sigma, 0.12, 4.0 * spacing))
     return Cleaned(OK, kept, spacing, sigma)
 
 

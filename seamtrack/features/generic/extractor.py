@@ -17,8 +17,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
+from seamtrack.features.arrays import FloatArray
 from seamtrack.features.generic._slope_turns import (
     NO_SPREAD,
     TOO_FEW,
@@ -29,8 +29,6 @@ from seamtrack.features.generic._slope_turns import (
 from seamtrack.features.lines import DATA_ERRORS
 from seamtrack.features.robust import MAX_ABS_MM
 from seamtrack.sensing.profiles import Feature, Profile
-
-FloatArray = NDArray[np.float64]
 
 
 @dataclass(frozen=True)

@@ -21,14 +21,12 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.features.arrays import FloatArray, IndexArray
 from seamtrack.features.groove import _groove_kernels as kern
 from seamtrack.features.groove._groove_kernels import local_v, robust_uv_line
 from seamtrack.features.line_geometry import Line, fit_line
 from seamtrack.features.lines import Segments
 from seamtrack.geometry.groove_points import LEFT_FOOT, LEFT_TOP, RIGHT_FOOT, RIGHT_TOP
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.intp]
 
 #: A groove's bottom spread over at most this angle of the fan (rad) ...
 RAY_SPREAD_RAD = math.radians(0.2)
@@ -111,6 +109,87 @@ def ray_reach(
     return float(cand.min() if left else cand.max())
 
 
+def _stretches(qu: FloatArray, runs: NDArray[np.intp]) -> tuple[list[IndexArray], FloatArray]:
+    """The fill surface's stretches: each run's points (in u order), the stretches ordered by
+    the u of their middle points, and those u."""
+    labels, inv = np.unique(runs, return_inverse=True)
+    m = len(labels)
+    by = np.argsort(inv, kind="stable")  # each run's points, in u order
+    members = np.split(by, np.cumsum(np.bincount(inv, minlength=m))[:-1])
+    mid_u = np.array([float(qu[k[len(k) // 2]]) for k in members])
+    order = np.argsort(mid_u, kind="stable")
+    return [members[c] for c in order], mid_u[order]
+
+
+def _stretch_end(
+    qu: FloatArray, qv: FloatArray, k: IndexArray, w: int, tail: bool
+) -> tuple[float, float, float]:
+    """(u, v) of the end of the stretch of points ``k`` (its last point by u, or first) and
+    its slope dv/du over its last (first) ``w`` points."""
+    k = k[-w:] if tail else k[:w]
+    uu, vv = qu[k], qv[k]
+    slope = 0.0
+    du = uu - uu.mean()
+    if len(uu) >= 3 and float(du @ du) > 1e-12:
+        slope = float(du @ (vv - vv.mean()) / (du @ du))
+    e = k[-1] if tail else k[0]
+    return float(qu[e]), float(qv[e]), slope
+
+
+def _neighbours(pieces: IndexArray, c: int) -> tuple[int | None, int | None]:
+    """The nearest pieces before and after stretch ``c`` (None: none on that side)."""
+    before = pieces[pieces < c]
+    after = pieces[pieces > c]
+    return (
+        int(before[-1]) if len(before) else None,
+        int(after[0]) if len(after) else None,
+    )
+
+
+def _may_be_island(
+    c: int, a: int | None, b: int | None, big: NDArray[np.bool_], size: IndexArray, width: float
+) -> bool:
+    """Whether stretch ``c`` (``width`` wide in u) is small enough to be an island: no
+    piece, or a piece with fewer points than the pieces ``a`` and ``b`` around it (at an
+    end, than its one neighbour, and under half a millimetre wide)."""
+    if not big[c]:
+        return True
+    if a is not None and b is not None:
+        return bool(size[c] < min(size[a], size[b]))
+    nb = a if a is not None else b
+    assert nb is not None
+    return not (size[c] >= size[nb] or width > 0.5)
+
+
+def _surface_across(
+    qu: FloatArray,
+    qv: FloatArray,
+    k: IndexArray,
+    u: float,
+    ends: tuple[tuple[float, float, float] | None, tuple[float, float, float] | None],
+    off_max: float,
+) -> float | None:
+    """The surface's v carried across the stretch of points ``k`` at its middle's ``u``,
+    from the ``ends`` (u, v, slope) of the pieces before and after it (None where there is
+    none): the line joining them, or the one end carried on at its slope (within +-1: a steep
+    end carried far is a wall's). None when the stretch carries on the piece before it (a
+    flank, the piece after a spike) or the pieces do not face each other."""
+    before, after = ends
+    if before is not None and after is not None:
+        au, av, sa = before
+        bu, bv, _ = after
+        if bu - au < 1e-9:
+            return None
+        lo = int(k[np.argmin(qu[k])])
+        if abs(float(qv[lo]) - (av + sa * (float(qu[lo]) - au))) <= off_max:
+            return None
+        return av + (u - au) * (bv - av) / (bu - au)
+    one = before if before is not None else after
+    assert one is not None
+    eu, ev, slope = one
+    return ev + min(max(slope, -1.0), 1.0) * (u - eu)
+
+
 def drop_islands(
     qu: FloatArray, qv: FloatArray, runs: NDArray[np.intp], spacing: float, tol: float
 ) -> NDArray[np.bool_]:
@@ -125,72 +204,30 @@ def drop_islands(
     wide). A curved surface broken by a dropout stays: its pieces join across the gap."""
     n = len(qu)
     keep = np.ones(n, dtype=bool)
-    if n < 6:
+    if n < 6 or len(np.unique(runs)) < 2:
         return keep
-    labels, inv = np.unique(runs, return_inverse=True)
-    m = len(labels)
-    if m < 2:
-        return keep
-    by = np.argsort(inv, kind="stable")  # each run's points, in u order
-    members = np.split(by, np.cumsum(np.bincount(inv, minlength=m))[:-1])
-    mid_u = np.array([float(qu[k[len(k) // 2]]) for k in members])
-    order = np.argsort(mid_u, kind="stable")
-    members = [members[c] for c in order]
-    mid_u = mid_u[order]
+    members, mid_u = _stretches(qu, runs)
     size = np.array([len(k) for k in members])
     off_max = max(0.3, 6.0 * tol)
     w = max(3, int(round(0.3 / max(spacing, 1e-9))))
     big = size >= max(5, int(round(0.2 / max(spacing, 1e-9))))
-
-    def end(c: int, tail: bool) -> tuple[float, float, float]:
-        """(u, v) of piece ``c``'s end (its last point by u, or first) and its slope dv/du
-        over its last (first) ``w`` points."""
-        k = members[c]
-        k = k[-w:] if tail else k[:w]
-        uu, vv = qu[k], qv[k]
-        slope = 0.0
-        du = uu - uu.mean()
-        if len(uu) >= 3 and float(du @ du) > 1e-12:
-            slope = float(du @ (vv - vv.mean()) / (du @ du))
-        e = k[-1] if tail else k[0]
-        return float(qu[e]), float(qv[e]), slope
-
-    alive = np.ones(m, dtype=bool)
+    alive = np.ones(len(members), dtype=bool)
     for _ in range(3):  # again without the islands found: an island beside an island
         pieces = np.flatnonzero(big & alive)
         dropped = False
-        for c in np.flatnonzero(alive):
+        for c in np.flatnonzero(alive).tolist():
             k = members[c]
-            before = pieces[pieces < c]
-            after = pieces[pieces > c]
-            a = int(before[-1]) if len(before) else None
-            b = int(after[0]) if len(after) else None
+            a, b = _neighbours(pieces, c)
             if a is None and b is None:
                 continue
-            if big[c]:
-                if a is not None and b is not None:
-                    if size[c] >= min(size[a], size[b]):
-                        continue
-                else:
-                    nb = a if a is not None else b
-                    assert nb is not None
-                    if size[c] >= size[nb] or float(np.ptp(qu[k])) > 0.5:
-                        continue
-            mv = float(np.median(qv[k]))
-            if a is not None and b is not None:
-                au, av, sa = end(a, True)
-                bu, bv, _ = end(b, False)
-                if bu - au < 1e-9:
-                    continue
-                line_v = av + (mid_u[c] - au) * (bv - av) / (bu - au)
-                lo = int(k[np.argmin(qu[k])])
-                if abs(float(qv[lo]) - (av + sa * (float(qu[lo]) - au))) <= off_max:
-                    continue  # it carries on the piece before it (a flank, the piece after a spike)
-            else:
-                eu, ev, slope = end(a, True) if a is not None else end(b, False)  # type: ignore[arg-type]
-                slope = min(max(slope, -1.0), 1.0)  # (a steep end carried far: a wall's)
-                line_v = ev + slope * (mid_u[c] - eu)
-            if abs(mv - line_v) > off_max:
+            if not _may_be_island(c, a, b, big, size, float(np.ptp(qu[k]))):
+                continue
+            ends = (
+                None if a is None else _stretch_end(qu, qv, members[a], w, True),
+                None if b is None else _stretch_end(qu, qv, members[b], w, False),
+            )
+            line_v = _surface_across(qu, qv, k, float(mid_u[c]), ends, off_max)
+            if line_v is not None and abs(float(np.median(qv[k])) - line_v) > off_max:
                 keep[k] = False
                 alive[c] = False
                 dropped = True
@@ -333,7 +370,7 @@ def robust_uv_fit(qu: FloatArray, qv: FloatArray, tol: float) -> tuple[float, fl
 
 
 @functools.lru_cache(maxsize=256)
-def _pairs(n: int) -> tuple[IntArray, IntArray]:
+def _pairs(n: int) -> tuple[IndexArray, IndexArray]:
     """The pairs of :func:`robust_uv_fit` among ``n`` points, in order (read-only)."""
     pick = np.unique(np.linspace(0, n - 1, min(n, 40)).round().astype(np.intp))
     i, j = np.triu_indices(len(pick), k=max(1, len(pick) // 3))
@@ -347,7 +384,7 @@ def contiguous(x: FloatArray) -> FloatArray:
     return np.ascontiguousarray(x, dtype=np.float64)
 
 
-def polygon_area(pts: FloatArray, P: FloatArray, inner: IntArray, u: FloatArray) -> float:
+def polygon_area(pts: FloatArray, P: FloatArray, inner: IndexArray, u: FloatArray) -> float:
     """The polygon of the top corners, the bottom corners and the surface between them, below
     the line joining the top corners (mm^2), signed: a crowned fill's metal above that line
     counts against it (a nearly full groove's area is about 0, a capped one's negative)."""
@@ -400,7 +437,7 @@ def explained_share(
     seg: Segments,
     plates: tuple[Line, Line],
     walls: tuple[Line | None, Line | None],
-    inner: IntArray,
+    inner: IndexArray,
     bl: FloatArray,
     br: FloatArray,
     u: FloatArray,

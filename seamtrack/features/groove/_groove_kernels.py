@@ -11,7 +11,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-FloatArray = NDArray[np.float64]
+from seamtrack.features.arrays import FloatArray
 
 
 @numba.njit(cache=True, nogil=True)

@@ -15,10 +15,8 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.features.arrays import FloatArray, IndexArray
 from seamtrack.features.groove._groove_fit import median_of, robust_uv_fit, running_median
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.intp]
 
 #: A notch where a bead's toe meets a U's round, read finely (its deepest point a running median
 #: over NOTCH_WINDOW_MM): at least NOTCH_IN_MM in from the surface's outer end, which stands
@@ -132,7 +130,7 @@ def _flank_crossing(
 
 
 def a_step(
-    points: FloatArray, index: IntArray, normal: FloatArray, steep: NDArray[np.bool_]
+    points: FloatArray, index: IndexArray, normal: FloatArray, steep: NDArray[np.bool_]
 ) -> bool:
     """Whether the steep piece ``index`` of a raised part is a step: its rise (along
     ``normal``) lies at least half between the surface's levels beyond its ends (the median of

@@ -88,6 +88,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.errors import PluginError
+from seamtrack.features.arrays import FloatArray, IndexArray
 from seamtrack.features.base import ExtractorBase
 from seamtrack.features.groove._groove_fit import (  # noqa: F401 (RAY_*: the extractor's names)
     RAY_DEPTH_MM,
@@ -119,9 +120,6 @@ from seamtrack.features.refusal import Refusal
 from seamtrack.geometry.groove_points import LEFT_FOOT, POINT_INDEX, RIGHT_FOOT
 from seamtrack.sensing.profiles import Feature, Profile
 
-FloatArray = NDArray[np.float64]
-
-IntArray = NDArray[np.intp]
 REFERENCES = ("centre", "left", "right")
 
 # The model's thresholds (the module docstring says where each applies; mm unless named).
@@ -213,7 +211,7 @@ class GrooveFit(NamedTuple):
     rms: float
 
 
-def _fit(points: FloatArray, index: IntArray) -> Line:
+def _fit(points: FloatArray, index: IndexArray) -> Line:
     return Line.from_fit(np.asarray(index), fit_line(points, np.asarray(index, dtype=np.int64)))
 
 
@@ -332,7 +330,7 @@ class GrooveExtractor(ExtractorBase):
         return GrooveFit(pts, area, explained, rms)
 
     def _raised(
-        self, seg: Segments, plates: Plates, inner: IntArray, depth: FloatArray, chord: FloatArray
+        self, seg: Segments, plates: Plates, inner: IndexArray, depth: FloatArray, chord: FloatArray
     ) -> Refusal | None:
         """Why a part raised between the plates is no crowned fill (None when it is one): a
         fill's cap stands at most ``max_crown_mm`` above the line of the plates' ends (the
@@ -521,7 +519,12 @@ class GrooveExtractor(ExtractorBase):
         return x
 
     def _floor(
-        self, seg: Segments, inner: IntArray, walls: tuple[Wall, Wall], u: FloatArray, v: FloatArray
+        self,
+        seg: Segments,
+        inner: IndexArray,
+        walls: tuple[Wall, Wall],
+        u: FloatArray,
+        v: FloatArray,
     ) -> tuple[FloatArray, FloatArray]:
         """The fill surface's points as (u, v), sorted by u: the groove's points inside the walls
         and off their lines, less what a running median over 0.6 mm leaves out (spike runs)."""
@@ -594,39 +597,20 @@ class GrooveExtractor(ExtractorBase):
         edge = float(fu[0] if left else fu[-1])
         unseen = wall is None or not len(wall.index)  # no wall seen, or a hidden one's mirror
         if wall is not None:
-            # (a hidden wall: the round's rise is all there is of its foot, read finer)
-            fine = not len(wall.index)
-            level = risen_level(
-                fu, fv, left, seg.spacing, seg.tol, *((FINE_RISE_MM, True) if fine else ())
-            )
-            if level is not None:  # a round into the wall: the wall's line at the fill's level
-                cu, cv = float(wall.centroid @ u), float(wall.centroid @ v)
-                du, dv = float(wall.direction @ u), float(wall.direction @ v)
-                if abs(dv) > 1e-9:
-                    t = (level - cv) / dv
-                    return np.asarray((cu + t * du) * u + level * v)
+            risen = _risen_corner(seg, wall, fu, fv, u, v, left)
+            if risen is not None:  # a round into the wall: the wall's line at the fill's level
+                return risen
         if wall is None and columns is None:  # the surface's outermost point
-            ou, ov = edge, float(fv[0] if left else fv[-1])
-            return np.asarray((ou - sign * 0.5 * seg.spacing) * u + ov * v)
+            return _inside(seg, edge, float(fv[0] if left else fv[-1]), u, v, sign)
         sel = sign * (fu - edge) <= SURFACE_END_MM
         su, sv = fu[sel], fv[sel]
         fit = robust_uv_fit(su, sv, seg.tol)
         if fit is not None:  # the surface's outermost point on its line (not a spike's)
-            a, b = fit
-            on = np.abs(sv - (a + b * su)) <= ON_SURFACE_TOLS * seg.tol
-            k = int(np.argmin(sign * su[on]))
-            ou, ov = float(su[on][k]), float(sv[on][k])
+            ou, ov = _outermost(su, sv, _on_surface(su, sv, fit, seg.tol), sign)
         else:
             i = 0 if left else len(fu) - 1
             ou, ov = float(fu[i]), float(fv[i])
-        cross = None
-        if wall is not None and fit is not None:
-            cu, cv = float(wall.centroid @ u), float(wall.centroid @ v)
-            du, dv = float(wall.direction @ u), float(wall.direction @ v)
-            den = dv - b * du
-            if abs(den) > 1e-9:
-                t = (a + b * cu - cv) / den
-                cross = np.array([cu + t * du, cv + t * dv])
+        cross = None if wall is None or fit is None else cross_uv(wall, fit[0], fit[1], u, v)
         # A wall seen only far above the fill (more than 3 mm, and half its seen length) or a
         # hidden one's mirror is carried too far down to place the corner: then it is the
         # surface's, as for no wall seen.
@@ -634,41 +618,121 @@ class GrooveExtractor(ExtractorBase):
         if wall is not None and not len(wall.index):
             mirror = wall
             wall = cross = None  # a mirror: the wall is hidden
-        elif wall is not None and cross is not None:
-            seen = seg.points[wall.index] @ np.column_stack([u, v])
-            gap = float(np.min(np.hypot(*(seen - cross).T)))
-            if gap > max(WALL_FAR_MM, FAR_SHARE * float(np.ptp(wall.t))):
-                far = wall
-                cross, columns = None, None  # below a wall, rays may light it unseen
+        elif wall is not None and cross is not None and _far_above(seg, wall, cross, u, v):
+            far = wall
+            cross, columns = None, None  # below a wall, rays may light it unseen
         if wall is None or cross is None:  # the surface's outermost point
-            near = (
-                sign * (fu - edge) <= SURFACE_LINE_MM
-            )  # on its line there (a flank bends further in)
-            if unseen and (short := robust_uv_fit(fu[near], fv[near], seg.tol)) is not None:
-                fit = short
-                a, b = fit
-                on = np.abs(fv[near] - (a + b * fu[near])) <= ON_SURFACE_TOLS * seg.tol
-                if np.any(on):
-                    k = int(np.argmin(sign * fu[near][on]))
-                    ou, ov = float(fu[near][on][k]), float(fv[near][on][k])
-            # A wall's line (a hidden one's mirror, or one seen far above) crossing the
-            # surface's line just beyond its outermost point: the corner no ray lights.
             line = far if far is not None else mirror
-            if line is not None and fit is not None:
-                x = cross_uv(line, fit[0], fit[1], u, v)
-                if x is not None and -UNLIT_BACK_MM <= sign * (ou - x[0]) <= UNLIT_MM:
-                    if math.hypot(x[0] - ou, x[1] - ov) <= UNLIT_MM:
-                        return np.asarray(x[0] * u + x[1] * v)
-            if fit is not None and columns is not None:  # on its line, as far as its rays go
-                ou = ray_reach(columns, u, v, a, b, ou, left)
-                ov = a + b * ou
-            return np.asarray((ou - sign * 0.5 * seg.spacing) * u + ov * v)
-        if cross is not None and math.hypot(cross[0] - ou, cross[1] - ov) <= SURFACE_END_MM:
+            end = _SurfaceEnd(edge, left, unseen, fit, ou, ov)
+            return _surface_end(seg, fu, fv, u, v, end, line, columns)
+        if math.hypot(cross[0] - ou, cross[1] - ov) <= SURFACE_END_MM:
             return np.asarray(cross[0] * u + cross[1] * v)
-        if cross is not None and wall is not None:  # the surface's toe lost in a notch:
-            seen = seg.points[wall.index] @ np.column_stack([u, v])  # the wall's foot is on
-            foot = seen[int(np.argmax(seen[:, 1]))]  # its line, where its points end
-            if math.hypot(*(cross - foot)) <= NOTCH_MM and cross[1] >= foot[1] - NOTCH_ABOVE_MM:
-                return np.asarray(cross[0] * u + cross[1] * v)
-        ou -= sign * 0.5 * seg.spacing
-        return np.asarray(ou * u + ov * v)
+        notch = _notch_corner(seg, wall, cross, u, v)
+        if notch is not None:
+            return notch
+        return _inside(seg, ou, ov, u, v, sign)
+
+
+def _inside(
+    seg: Segments, ou: float, ov: float, u: FloatArray, v: FloatArray, sign: float
+) -> FloatArray:
+    """The surface's outermost point (``ou``, ``ov``) moved half a spacing outwards
+    (``sign``: +1 on the left)."""
+    return np.asarray((ou - sign * 0.5 * seg.spacing) * u + ov * v)
+
+
+def _risen_corner(
+    seg: Segments, wall: Line, fu: FloatArray, fv: FloatArray, u: FloatArray, v: FloatArray,
+    left: bool,
+) -> FloatArray | None:  # fmt: skip
+    """The wall's line at the level of a fill that rises into it in a round (None: no rise,
+    or a wall along the surface); a hidden wall's (its mirror's) rise is read finer: the
+    round's rise is all there is of its foot."""
+    fine = not len(wall.index)
+    level = risen_level(fu, fv, left, seg.spacing, seg.tol, *((FINE_RISE_MM, True) if fine else ()))
+    if level is None:
+        return None
+    cu, cv = float(wall.centroid @ u), float(wall.centroid @ v)
+    du, dv = float(wall.direction @ u), float(wall.direction @ v)
+    if abs(dv) <= 1e-9:
+        return None
+    t = (level - cv) / dv
+    return np.asarray((cu + t * du) * u + level * v)
+
+
+def _on_surface(
+    su: FloatArray, sv: FloatArray, fit: tuple[float, float], tol: float
+) -> NDArray[np.bool_]:
+    """Which points lie on the surface's line v = a + b u (within ON_SURFACE_TOLS)."""
+    a, b = fit
+    return np.abs(sv - (a + b * su)) <= ON_SURFACE_TOLS * tol
+
+
+def _outermost(
+    su: FloatArray, sv: FloatArray, on: NDArray[np.bool_], sign: float
+) -> tuple[float, float]:
+    """(u, v) of the outermost (``sign``: +1 on the left) of the points ``on`` the line."""
+    k = int(np.argmin(sign * su[on]))
+    return float(su[on][k]), float(sv[on][k])
+
+
+def _far_above(seg: Segments, wall: Line, cross: FloatArray, u: FloatArray, v: FloatArray) -> bool:
+    """Whether the wall is seen only far above its crossing with the fill surface: more than
+    WALL_FAR_MM, and FAR_SHARE of its seen length."""
+    seen = seg.points[wall.index] @ np.column_stack([u, v])
+    gap = float(np.min(np.hypot(*(seen - cross).T)))
+    return gap > max(WALL_FAR_MM, FAR_SHARE * float(np.ptp(wall.t)))
+
+
+class _SurfaceEnd(NamedTuple):
+    """The fill surface's end towards a side: the u of its outermost point, the side, whether
+    no wall is seen there, its line v = a + b u over the last 1.5 mm (None: none fits) and
+    the outermost point on it (u, v)."""
+
+    edge: float
+    left: bool
+    unseen: bool
+    fit: tuple[float, float] | None
+    ou: float
+    ov: float
+
+
+def _surface_end(
+    seg: Segments, fu: FloatArray, fv: FloatArray, u: FloatArray, v: FloatArray,
+    end: _SurfaceEnd, line: Line | None, columns: FloatArray | None,
+) -> FloatArray:  # fmt: skip
+    """The corner at the surface's outermost point, with no wall to cross: on the surface's
+    line over its last 0.6 mm (where no wall is seen; a flank bends further in); where a
+    wall's ``line`` (a hidden one's mirror, or one seen far above) crosses the surface's
+    line just beyond that point, the crossing (the corner no ray lights); else that point
+    carried on the line as far as the rays of ``columns`` reach, half a spacing beyond."""
+    sign = 1.0 if end.left else -1.0
+    fit, ou, ov = end.fit, end.ou, end.ov
+    near = sign * (fu - end.edge) <= SURFACE_LINE_MM  # on its line there
+    if end.unseen and (short := robust_uv_fit(fu[near], fv[near], seg.tol)) is not None:
+        fit = short
+        on = _on_surface(fu[near], fv[near], fit, seg.tol)
+        if np.any(on):
+            ou, ov = _outermost(fu[near], fv[near], on, sign)
+    if line is not None and fit is not None:
+        x = cross_uv(line, fit[0], fit[1], u, v)
+        if x is not None and -UNLIT_BACK_MM <= sign * (ou - x[0]) <= UNLIT_MM:
+            if math.hypot(x[0] - ou, x[1] - ov) <= UNLIT_MM:
+                return np.asarray(x[0] * u + x[1] * v)
+    if fit is not None and columns is not None:  # on its line, as far as its rays go
+        ou = ray_reach(columns, u, v, fit[0], fit[1], ou, end.left)
+        ov = fit[0] + fit[1] * ou
+    return _inside(seg, ou, ov, u, v, sign)
+
+
+def _notch_corner(
+    seg: Segments, wall: Line, cross: FloatArray, u: FloatArray, v: FloatArray
+) -> FloatArray | None:
+    """The wall's crossing with the surface when the surface's toe is lost in a notch: the
+    wall's foot (where its points end) lies on its line within NOTCH_MM of the crossing, not
+    more than NOTCH_ABOVE_MM below it (None: no notch)."""
+    seen = seg.points[wall.index] @ np.column_stack([u, v])
+    foot = seen[int(np.argmax(seen[:, 1]))]
+    if math.hypot(*(cross - foot)) <= NOTCH_MM and cross[1] >= foot[1] - NOTCH_ABOVE_MM:
+        return np.asarray(cross[0] * u + cross[1] * v)
+    return None

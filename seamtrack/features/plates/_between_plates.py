@@ -18,6 +18,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.features.arrays import FloatArray, IntArray
 from seamtrack.features.line_geometry import LineThrough, Point, fit_points
 from seamtrack.features.plates._two_lines import (
     PieceLines,
@@ -27,9 +28,6 @@ from seamtrack.features.plates._two_lines import (
     median,
     towards,
 )
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
 
 #: A gap's wall or a lap's edge face stands at least this steep on the plates (as
 #: :data:`seamtrack.features.lines.WALL_DEG`, rad).

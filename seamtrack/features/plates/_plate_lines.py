@@ -15,12 +15,9 @@ from typing import NamedTuple
 
 import numba
 import numpy as np
-from numpy.typing import NDArray
 
+from seamtrack.features.arrays import FloatArray, IntArray
 from seamtrack.features.plates._two_lines import PieceLines, median, piece_line
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
 
 
 class PlateLimits(NamedTuple):

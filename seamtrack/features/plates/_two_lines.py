@@ -19,17 +19,9 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.features.arrays import FloatArray, IntArray
 from seamtrack.features.counts import explained_share
-from seamtrack.features.line_geometry import (
-    CORNER_MIN_RAD,
-    LineThrough,
-    Point,
-    corner_crossing,
-    end_distance,
-)
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
+from seamtrack.features.line_geometry import CORNER_MIN_RAD, LineThrough, Point, corner_near
 
 
 class PieceLines(NamedTuple):
@@ -168,19 +160,15 @@ def line_end(
     for j in range(pieces.cy.shape[0]):
         if spans.n_inliers[j] < min_points or j == skip:
             continue
-        other = piece_line(pieces, j)
-        hit, xy, xz = corner_crossing(line, other, cos_min)
-        if not hit:
-            continue
-        d = math.hypot(xy - tip_y, xz - tip_z)
-        if d > reach or d >= best_d:
-            continue
-        near = end_distance(other, spans.t_first[j], spans.t_last[j], xy, xz)
         wide = spans.step_last[j]
         wide = spans.step_first[j] if spans.step_first[j] > wide else wide
         wide = spacing if spacing > wide else wide
-        if near <= 3.0 * wide + tol:
-            found, best_y, best_z, best_d = True, xy, xz, d
+        c = corner_near(
+            line, tip_y, tip_z, piece_line(pieces, j), spans.t_first[j], spans.t_last[j],
+            cos_min, reach, best_d, 3.0 * wide + tol,
+        )  # fmt: skip
+        if c.found:
+            found, best_y, best_z, best_d = True, c.y, c.z, c.d
     if found:
         return Point(best_y, best_z)
     t = end.t + 0.5 * end.step if at_end else end.t - 0.5 * end.step

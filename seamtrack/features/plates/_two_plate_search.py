@@ -20,6 +20,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.features.arrays import FloatArray, IntArray
 from seamtrack.features.line_geometry import LineThrough, Point, fit_line
 from seamtrack.features.plates._between_plates import NO_HOLE, Hole, Scale, hole
 from seamtrack.features.plates._plate_lines import PlateLimits, plate_pieces, span
@@ -32,9 +33,6 @@ from seamtrack.features.plates._two_lines import (
     steps,
     two_lines_share,
 )
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
 
 #: :class:`PlateLimits` and :class:`~seamtrack.features.plates._between_plates.Scale` as plain
 #: tuples (what :func:`two_plates` takes from Python).

@@ -17,8 +17,8 @@ from dataclasses import dataclass
 from typing import cast
 
 import numpy as np
-from numpy.typing import NDArray
 
+from seamtrack.features.arrays import FloatArray, IntArray
 from seamtrack.features.base import ExtractorBase
 from seamtrack.features.line_geometry import LineThrough, Point
 from seamtrack.features.lines import Segments
@@ -32,9 +32,6 @@ from seamtrack.features.plates._two_plate_search import (
     two_plates,
 )
 from seamtrack.sensing.profiles import Feature, Profile
-
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
 
 
 @dataclass(frozen=True)

@@ -146,6 +146,65 @@ def continued(points, tb, n, arm, at_end, ay, az, ey, ez, tol):
 
 
 @numba.njit(cache=True, nogil=True)
+def _next_piece(tb, n, i, at_end):
+    """The first of the ``n`` pieces beyond point ``i`` (``at_end``: after it in column
+    order, else the last before it); :data:`NONE` when there is none."""
+    piece = NONE
+    for k in range(n):
+        if at_end and first(tb, k) > i:
+            return k
+        if not at_end and last(tb, k) < i:
+            piece = k
+    return piece
+
+
+@numba.njit(cache=True, nogil=True)
+def _ray_step(points, tb, line, at_end):
+    """The median angle (rad) between the rays of neighbouring points over the last 11
+    inliers of ``line`` at its end (``at_end``, else at its start); 0 with one point."""
+    a, c = tb.span[line, START], tb.span[line, COUNT]
+    own = tb.index[a + max(c - 11, 0) : a + c] if at_end else tb.index[a : a + min(c, 11)]
+    steps = np.empty(max(own.shape[0] - 1, 0))
+    for k in range(steps.shape[0]):
+        steps[k] = abs(
+            math.atan2(points[own[k + 1], 0], points[own[k + 1], 1])
+            - math.atan2(points[own[k], 0], points[own[k], 1])
+        )
+    return sort_small(steps)[steps.shape[0] // 2] if steps.shape[0] else 0.0
+
+
+@numba.njit(cache=True, nogil=True)
+def _runs_on(points, tb, other, far, s, phi_far, dphi, tol, held):
+    """Whether the point after ``far`` (direction ``s``) lies on ``other`` (within two
+    tolerances), its ray within 3.5 ray steps ``dphi`` of ``far``'s (angle ``phi_far``) and
+    within ``held`` of it: the piece runs on into the other bevel without a jump."""
+    nxt = far + s
+    if not 0 <= nxt < points.shape[0]:
+        return False
+    return (
+        _off(tb, other, points[nxt, 0], points[nxt, 1]) <= 2.0 * tol
+        and abs(math.atan2(points[nxt, 0], points[nxt, 1]) - phi_far) <= 3.5 * dphi
+        and math.hypot(points[nxt, 0] - points[far, 0], points[nxt, 1] - points[far, 1]) <= held
+    )
+
+
+@numba.njit(cache=True, nogil=True)
+def _shown_again(points, tb, line, far, s, tol):
+    """How many points after ``far`` (direction ``s``; at most 400) lie on ``line`` again,
+    within ``tol``."""
+    again, at = 0, far + s
+    if s > 0 or far > 0:
+        while (
+            0 <= at < points.shape[0]
+            and again < 400
+            and _off(tb, line, points[at, 0], points[at, 1]) <= tol
+        ):
+            again += 1
+            at += s
+    return again
+
+
+@numba.njit(cache=True, nogil=True)
 def covered_end(points, tb, n, line, at_end, other, plate, tol, spacing, sigma):
     """Where along bevel ``line`` its root end may lie when a stray line covers the columns
     beyond its last seen point (``at_end``: its last inlier, else its first): a
@@ -162,31 +221,16 @@ def covered_end(points, tb, n, line, at_end, other, plate, tol, spacing, sigma):
     reflection), from there to the last of them (which may already lie on a root face that
     leaves the line at a small angle). Ends are half a spacing out.
     """
-    m = points.shape[0]
     s = 1 if at_end else -1
     i = last(tb, line) if at_end else first(tb, line)
-    piece = NONE
-    for k in range(n):
-        if at_end and first(tb, k) > i:
-            piece = k
-            break
-        if not at_end and last(tb, k) < i:
-            piece = k
+    piece = _next_piece(tb, n, i, at_end)
     if piece == NONE:
         return SEEN
     near = first(tb, piece) if at_end else last(tb, piece)
     far = last(tb, piece) if at_end else first(tb, piece)
     if contains(tb, other, near):
         return SEEN  # the other bevel (no gap) or a piece of it
-    a, c = tb.span[line, START], tb.span[line, COUNT]
-    own = tb.index[a + max(c - 11, 0) : a + c] if at_end else tb.index[a : a + min(c, 11)]
-    steps = np.empty(max(own.shape[0] - 1, 0))
-    for k in range(steps.shape[0]):
-        steps[k] = abs(
-            math.atan2(points[own[k + 1], 0], points[own[k + 1], 1])
-            - math.atan2(points[own[k], 0], points[own[k], 1])
-        )
-    dphi = sort_small(steps)[steps.shape[0] // 2] if steps.shape[0] else 0.0
+    dphi = _ray_step(points, tb, line, at_end)
     phi_i = math.atan2(points[i, 0], points[i, 1])
     phi_near = math.atan2(points[near, 0], points[near, 1])
     phi_far = math.atan2(points[far, 0], points[far, 1])
@@ -201,16 +245,10 @@ def covered_end(points, tb, n, line, at_end, other, plate, tol, spacing, sigma):
         return SEEN  # lost columns (the gap, a shadow) or another surface first
     if _flat_dot(tb, piece, plate) <= COS_WALL:
         return SEEN  # a wall: a root face
-    nxt = far + s
-    if 0 <= nxt < m:
-        held = pmax(pmax(6.0 * spacing, 4.0 * sigma), 0.1)
-        on_other = _off(tb, other, points[nxt, 0], points[nxt, 1]) <= 2.0 * tol
-        if (
-            on_other
-            and abs(math.atan2(points[nxt, 0], points[nxt, 1]) - phi_far) <= 3.5 * dphi
-            and math.hypot(points[nxt, 0] - points[far, 0], points[nxt, 1] - points[far, 1]) <= held
-        ):
-            return SEEN  # runs on into the other bevel: part of the part
+    if _runs_on(
+        points, tb, other, far, s, phi_far, dphi, tol, pmax(pmax(6.0 * spacing, 4.0 * sigma), 0.1)
+    ):
+        return SEEN  # runs on into the other bevel: part of the part
     half = s * 0.5 * pmax(step(tb, line, at_end), spacing)
     g = tb.geo
     cy, cz, dy, dz = g[line, CY], g[line, CZ], g[line, UY], g[line, UZ]
@@ -218,11 +256,7 @@ def covered_end(points, tb, n, line, at_end, other, plate, tol, spacing, sigma):
     ray = (cy * -dz + cz * dy) / (qy * -dz + qz * dy)  # _ray_t: the ray's crossing
     t_far = (qy * ray - cy) * dy + (qz * ray - cz) * dz + half
     # Beyond the stray piece the bevel may show again.
-    again, at = 0, far + s
-    if s > 0 or far > 0:
-        while 0 <= at < m and again < 400 and _off(tb, line, points[at, 0], points[at, 1]) <= tol:
-            again += 1
-            at += s
+    again = _shown_again(points, tb, line, far, s, tol)
     if again >= 3:
         q = far + s * again
         return CoveredEnd(True, t_far, _along(tb, line, points[q, 0], points[q, 1]) + half)

@@ -34,19 +34,17 @@ from seamtrack.features._segmentation import (
     FIT_UZ,
     PieceTable,
 )
+from seamtrack.features.arrays import FloatArray, IntArray
 from seamtrack.features.counts import explained_share, support
 from seamtrack.features.line_geometry import (
     CORNER_MIN_RAD,
     LineThrough,
     Point,
-    corner_crossing,
-    end_distance,
+    corner_near,
     fit_line,
 )
 from seamtrack.features.select import sort_small
 
-FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
 #: Radians to degrees as CPython's ``math.degrees`` multiplies.
 RAD_TO_DEG = 180.0 / math.pi
 #: Pieces within this angle join a collinear group (deg; see ``collinear_members``).
@@ -411,6 +409,72 @@ def _short_of(points, tb, r, xy, xz, tol):
 
 
 @numba.njit(cache=True, nogil=True)
+def _candidates(tb, groups, n, min_points, min_arm):
+    """The groups, then the pieces in no group that could be arms: at least ``min_points``
+    inliers over at least ``min_arm`` (mm)."""
+    extra = np.empty(n, dtype=np.int64)
+    e = 0
+    for k in range(n):
+        grouped = False
+        for r in groups:
+            grouped = grouped or r == k
+        c = tb.span[k, COUNT]
+        if grouped:
+            continue
+        if c >= min_points and t_end(tb, k, True) - t_end(tb, k, False) >= min_arm:
+            extra[e] = k
+            e += 1
+    cand = np.empty(groups.shape[0] + e, dtype=np.int64)
+    for k in range(groups.shape[0]):
+        cand[k] = groups[k]
+    for k in range(e):
+        cand[groups.shape[0] + k] = extra[k]
+    return cand
+
+
+@numba.njit(cache=True, nogil=True)
+def _v_apex(geo, a, b, sign, min_deg, max_deg):
+    """Whether records ``a`` and ``b`` form a V (``sign`` -1: opening towards the sensor) or
+    a ridge (+1) with an included angle in ``min_deg``..``max_deg`` and a bisector within 45
+    deg of the range axis; the apex (y, z), the left arm's record and unit direction from
+    the apex, then the right's."""
+    ay, az, ady, adz = geo[a, CY], geo[a, CZ], geo[a, UY], geo[a, UZ]
+    by, bz, bdy, bdz = geo[b, CY], geo[b, CZ], geo[b, UY], geo[b, UZ]
+    d = ady * bdz - adz * bdy
+    if abs(d) < 1e-9:
+        return False, 0.0, 0.0, a, 0.0, 0.0, b, 0.0, 0.0  # parallel: no apex
+    s = ((by - ay) * bdz - (bz - az) * bdy) / d
+    xy, xz = ay + s * ady, az + s * adz
+    uy, uz, wy, wz = ay - xy, az - xz, by - xy, bz - xz
+    nu, nw = max(math.hypot(uy, uz), 1e-300), max(math.hypot(wy, wz), 1e-300)
+    uy, uz, wy, wz = uy / nu, uz / nu, wy / nw, wz / nw
+    ga, gb = a, b
+    if wy < uy:
+        uy, uz, wy, wz, ga, gb = wy, wz, uy, uz, b, a
+    c = pmin(pmax(uy * wy + uz * wz, -1.0), 1.0)
+    angle = math.acos(c) * RAD_TO_DEG
+    by_, bz_ = uy + wy, uz + wz
+    ok = (
+        uy < 0.0 < wy
+        and sign * uz > 0
+        and sign * wz > 0
+        and min_deg <= angle <= max_deg
+        and sign * bz_ > 0.7 * math.hypot(by_, bz_)  # bisector within 45 deg
+    )
+    return ok, xy, xz, ga, uy, uz, gb, wy, wz
+
+
+@numba.njit(cache=True, nogil=True)
+def _arm_support(points, surface, geo, r, vy, vz, xy, xz, band, tol):
+    """The :func:`~seamtrack.features.counts.support` of record ``r`` as an arm leaving the
+    apex (``xy``, ``xz``) along (``vy``, ``vz``)."""
+    gy, gz, gdy, gdz = geo[r, CY], geo[r, CZ], geo[r, UY], geo[r, UZ]
+    side = 1.0 if vy * gdy + vz * gdz > 0 else -1.0
+    x_u = xy * gdy + xz * gdz
+    return support(points, surface, gy, gz, gdy, gdz, band, x_u, side, tol)
+
+
+@numba.njit(cache=True, nogil=True)
 def best_pair(points, surface, owner, tb, groups, n, tol, params):
     """``ExtractorBase._arms``: the best pair of records forming a V (``params.sign`` -1: opening
     towards the sensor) or a ridge (+1), the arms cut short at the apex (:class:`VPair`;
@@ -418,33 +482,10 @@ def best_pair(points, surface, owner, tb, groups, n, tol, params):
     the pairs whose apex lies within the tolerance ellipse about the expected point the
     nearest (in tolerances) is taken; when none does, the best-supported pair, as without a
     hint."""
-    sign, min_deg, max_deg, max_reach = (
-        params.sign,
-        params.min_deg,
-        params.max_deg,
-        params.max_reach,
-    )
-    pieces_too, min_points, min_arm = params.pieces_too, params.min_points, params.min_arm
     geo = tb.geo
     cand = groups
-    if pieces_too:
-        extra = np.empty(n, dtype=np.int64)
-        e = 0
-        for k in range(n):
-            grouped = False
-            for r in groups:
-                grouped = grouped or r == k
-            c = tb.span[k, COUNT]
-            if grouped:
-                continue
-            if c >= min_points and t_end(tb, k, True) - t_end(tb, k, False) >= min_arm:
-                extra[e] = k
-                e += 1
-        cand = np.empty(groups.shape[0] + e, dtype=np.int64)
-        for k in range(groups.shape[0]):
-            cand[k] = groups[k]
-        for k in range(e):
-            cand[groups.shape[0] + k] = extra[k]
+    if params.pieces_too:
+        cand = _candidates(tb, groups, n, params.min_points, params.min_arm)
     band = 2.0 * tol
     mark = np.zeros(n + 1, dtype=np.bool_)
     best_a, best_b, best_y, best_z, best_score = NONE, NONE, 0.0, 0.0, 0.0
@@ -453,43 +494,19 @@ def best_pair(points, surface, owner, tb, groups, n, tol, params):
     near_a, near_b, near_y, near_z, near_score, near_d = NONE, NONE, 0.0, 0.0, 0.0, 1.0
     g = cand.shape[0]
     for i in range(g):
-        a = cand[i]
-        ay, az, ady, adz = geo[a, CY], geo[a, CZ], geo[a, UY], geo[a, UZ]
         for j in range(i + 1, g):
-            b = cand[j]
-            by, bz, bdy, bdz = geo[b, CY], geo[b, CZ], geo[b, UY], geo[b, UZ]
-            d = ady * bdz - adz * bdy
-            if abs(d) < 1e-9:
-                continue  # parallel: no apex
-            s = ((by - ay) * bdz - (bz - az) * bdy) / d
-            xy, xz = ay + s * ady, az + s * adz
-            uy, uz, wy, wz = ay - xy, az - xz, by - xy, bz - xz
-            nu, nw = max(math.hypot(uy, uz), 1e-300), max(math.hypot(wy, wz), 1e-300)
-            uy, uz, wy, wz = uy / nu, uz / nu, wy / nw, wz / nw
-            ga, gb = a, b
-            if wy < uy:
-                uy, uz, wy, wz, ga, gb = wy, wz, uy, uz, b, a
-            c = pmin(pmax(uy * wy + uz * wz, -1.0), 1.0)
-            angle = math.acos(c) * RAD_TO_DEG
-            by_, bz_ = uy + wy, uz + wz
-            if not (
-                uy < 0.0 < wy
-                and sign * uz > 0
-                and sign * wz > 0
-                and min_deg <= angle <= max_deg
-                and sign * bz_ > 0.7 * math.hypot(by_, bz_)  # bisector within 45 deg
-            ):
+            ok, xy, xz, ga, uy, uz, gb, wy, wz = _v_apex(
+                geo, cand[i], cand[j], params.sign, params.min_deg, params.max_deg
+            )
+            if not ok:
                 continue
             na = _reach(points, tb, ga, xy, xz, uy, uz, tol, owner, mark)
             nb = _reach(points, tb, gb, xy, xz, wy, wz, tol, owner, mark)
-            if not (-tol <= pmin(na, nb) and pmax(na, nb) <= max_reach):
+            if not (-tol <= pmin(na, nb) and pmax(na, nb) <= params.max_reach):
                 continue
             score = 0.0
-            for r, vy, vz in ((ga, uy, uz), (gb, wy, wz)):
-                gy, gz, gdy, gdz = geo[r, CY], geo[r, CZ], geo[r, UY], geo[r, UZ]
-                side = 1.0 if vy * gdy + vz * gdz > 0 else -1.0
-                x_u = xy * gdy + xz * gdz
-                score += support(points, surface, gy, gz, gdy, gdz, band, x_u, side, tol)
+            score += _arm_support(points, surface, geo, ga, uy, uz, xy, xz, band, tol)
+            score += _arm_support(points, surface, geo, gb, wy, wz, xy, xz, band, tol)
             if best_a == NONE or score > best_score:
                 best_a, best_b, best_y, best_z, best_score = ga, gb, xy, xz, score
             if hinted:
@@ -523,16 +540,13 @@ def corner_with(tb, line, at_end, others, spacing, tol):
         if other == line:
             continue
         there = LineThrough(geo[other, CY], geo[other, CZ], geo[other, UY], geo[other, UZ])
-        hit, xy, xz = corner_crossing(here, there, COS_CORNER)
-        if not hit:
-            continue
-        d = math.hypot(xy - tip_y, xz - tip_z)
-        if d > reach or d >= best_d:
-            continue
-        near = end_distance(there, t_end(tb, other, False), t_end(tb, other, True), xy, xz)
         wide = pmax(pmax(step(tb, other, True), step(tb, other, False)), spacing)
-        if near <= 3.0 * wide + tol:
-            best, best_d, best_y, best_z = other, d, xy, xz
+        c = corner_near(
+            here, tip_y, tip_z, there, t_end(tb, other, False), t_end(tb, other, True),
+            COS_CORNER, reach, best_d, 3.0 * wide + tol,
+        )  # fmt: skip
+        if c.found:
+            best, best_d, best_y, best_z = other, c.d, c.y, c.z
     if best == NONE:
         best_y, best_z = end(tb, line, at_end)
     return Corner(best_y, best_z, best)

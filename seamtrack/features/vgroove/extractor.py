@@ -29,7 +29,6 @@ from seamtrack.features.vgroove._v_groove_model import (
 from seamtrack.features.vgroove._v_search import pieces_of
 from seamtrack.sensing.profiles import Feature, Profile, SeamHint
 
-FloatArray = NDArray[np.float64]
 #: Why a V is no groove, by the code of :func:`seamtrack.features.vgroove._v_groove_model.v_groove`.
 _REFUSALS = {
     NO_V: "no pair of lines forms the joint",
