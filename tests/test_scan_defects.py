@@ -127,6 +127,9 @@ def test_a_hi_lo_and_a_tilted_groove_keep_their_walls_and_fill():
     lo = sd.groove_hi_lo(g, 1.5)
     pts = groove_points(lo)
     assert pts[6, 1] - pts[0, 1] == pytest.approx(-1.5) and pts[5, 1] - pts[1, 1] == -1.5
+    assert pts[2:5, 1] == pytest.approx([-21.5] * 3)  # on the bottom, at the lower foot's level
+    high = groove_points(sd.groove_hi_lo(g, -1.0))
+    assert high[5] == pytest.approx([1.0, -19.0]) and high[2:5, 1] == pytest.approx([-20.0] * 3)
     tilted = sd.groove_tilt(g, 3.0)
     plate = tilted.surface[-2:]
     assert math.degrees(math.atan2(*(plate[1] - plate[0])[::-1])) == pytest.approx(3.0)
@@ -151,7 +154,44 @@ def test_the_wide_v_is_sampled_at_0_05_mm():
 @pytest.mark.parametrize("variant", es.VARIANTS)
 @pytest.mark.parametrize("case", [es.vgroove_case, es.groove_case])
 def test_each_variant_is_seeded(variant, case):
-    a, la, _ = case(variant, np.random.default_rng(7))
-    b, lb, _ = case(variant, np.random.default_rng(7))
-    np.testing.assert_array_equal(a.points_laser, b.points_laser)
-    np.testing.assert_array_equal(la, lb)
+    a, b = (case(variant, np.random.default_rng(7)) for _ in range(2))
+    np.testing.assert_array_equal(a.profile.points_laser, b.profile.points_laser)
+    np.testing.assert_array_equal(a.label, b.label)
+
+
+# ----------------------------------------------------------------- the narrowed claim
+#: The variants each extractor is claimed on (docs/extractors.md, "Real-scan defects"); the
+#: groove's hi-lo on filled grooves only.
+HOLDS = [
+    *(("v-groove", v) for v in ("outlier 150 mm", "wall hidden 50-70 %", "wall hidden 70-90 %",
+                                "hi-lo 0.5 mm", "tilt 2-4 deg", "wide V 2 mm deep",
+                                "wide V 1 mm deep")),
+    *(("groove", v) for v in ("outlier 150 mm", "second bounce 1-3 mm", "wall hidden 70-90 %",
+                              "hi-lo 0.5 mm", "hi-lo 1-2 mm", "tilt 2-4 deg")),
+]  # fmt: skip
+
+
+@pytest.mark.parametrize(("name", "variant"), HOLDS)
+def test_the_extractors_hold_on_the_defects_they_are_claimed_for(name, variant):
+    """>= 90 % of 20 seeded profiles within 0.5 mm of the label (the groove: all 7 points),
+    the p95 of the found <= 0.5 mm."""
+    r = es.scan_errors(name, variant, 20)
+    worst = np.array(r.worst)
+    if name == "groove" and variant.startswith("hi-lo"):
+        worst = worst[np.array(r.layers) > 0]
+    assert np.mean(worst <= 0.5) >= 0.9
+    assert np.percentile(r.pooled, 95) <= 0.5
+
+
+@pytest.mark.parametrize(
+    ("name", "variant", "most"),
+    [
+        ("v-groove", "hi-lo 1-2 mm", 0.5),  # the bevels' lines cross off the root corners
+        ("v-groove", "wide V 0.25 mm deep", 0.0),  # 9 sigma deep: no pair of lines
+        ("groove", "wide V 2 mm deep", 0.0),  # walls 17.5 deg off the plates, under wall_deg
+    ],
+)
+def test_where_the_claim_was_narrowed_the_extractors_still_fail(name, variant, most):
+    """The page says these fail; when an extractor learns them, this fails: update the page."""
+    worst = np.array(es.scan_errors(name, variant, 10).worst)
+    assert np.mean(worst <= 0.5) <= most

@@ -1,6 +1,6 @@
 """The groove and v-groove extractors on the defects of real scans (issue 42, item 7).
 
-Each variant of :data:`VARIANTS` is a seeded, labelled profile: the real-sensor artefact model
+Each variant of :data:`SPECS` is a seeded, labelled profile: the real-sensor artefact model
 (:mod:`seamtrack.features.artefacts`, its defaults) over a V, posed as the groove bench poses
 it (roll and pitch +-5 deg, lateral offset +-2 mm), with one defect of
 :mod:`seamtrack.features.scan_defects`. The label is the geometry's noise-free truth: the
@@ -10,15 +10,11 @@ v-groove's root (the midpoint of the root corners under hi-lo), the groove's 7 p
   columns, as the angle sweep); detected: the seam point within :data:`DETECTED_MM`.
 * **groove**: the 60 deg, 20 mm V with a 2 mm gap on a backing bar, 0-6 layers of 20 mm^2
   beads (uniform, jittered +-0.5 mm), on the ``wide`` preset (2048 columns); detected: all 7
-  points within :data:`DETECTED_MM`.
+  points within :data:`DETECTED_MM`; the p95 and median pool the 7 points' errors.
 
-The wide V is the exception: 145 deg, sampled at 0.05 mm pitch (460 columns of the paper
-sensor, 1067 of the wide one) at a range unit of 0.05 mm, at the depths of
-:data:`WIDE_DEPTHS_MM` (its flank's depth over the range noise's sigma, 0.45 units, is in the
-table), empty.
-
-``p95_mm``: over the found, of the seam point's error (v-groove) or of the 7 points' errors
-(groove).
+The wide V is the exception: 145 deg, no gap, empty, sampled at 0.05 mm pitch
+(:func:`rays_at_pitch`: 470 columns of the paper sensor, 1126 of the wide one) at the
+artefact model's range unit of 0.05 mm, at the depths of :data:`WIDE_DEPTHS_MM`.
 """
 
 from __future__ import annotations
@@ -28,7 +24,7 @@ import math
 import re
 from collections import Counter
 from collections.abc import Callable
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -69,8 +65,21 @@ COLUMNS = (
     "wrong_rate",
     "median_error_mm",
     "p95_error_mm",
+    "empty_detection_rate",
+    "filled_detection_rate",
     "refusals",
 )
+
+
+class Case(NamedTuple):
+    """One labelled profile: the profile, its label (the v-groove's seam point (2,), the
+    groove's 7 points (7, 2)), the defect's own label (None for a cross-section's) and the
+    layers of beads in the groove (0 for the v-groove's)."""
+
+    profile: Profile
+    label: np.ndarray
+    defect: sd.Defect | None
+    layers: int = 0
 
 
 def rays_at_pitch(sensor: Any, pitch_mm: float) -> int:
@@ -90,8 +99,8 @@ def _signed(rng: np.random.Generator, bounds: tuple[float, float]) -> float:
     return float(rng.choice([-1.0, 1.0]) * rng.uniform(*bounds))
 
 
-def vgroove_case(variant: str, rng: np.random.Generator) -> tuple[Profile, np.ndarray, Any]:
-    """One v-groove profile of ``variant``: (profile, true seam point (2,), defect or None)."""
+def vgroove_case(variant: str, rng: np.random.Generator) -> Case:
+    """One v-groove profile of ``variant``."""
     kind, bounds = SPECS[variant]
     step = _signed(rng, bounds) if kind == "hi-lo" else 0.0
     tilt = _signed(rng, bounds) if kind == "tilt" else 0.0
@@ -110,11 +119,11 @@ def vgroove_case(variant: str, rng: np.random.Generator) -> tuple[Profile, np.nd
     top, root = truth.edges_laser, truth.seam_laser
     walls = np.array([[top[0], root], [top[1], root]])
     profile, defect = _defect(variant, profile, walls, rng)
-    return profile, truth.seam_laser, defect
+    return Case(profile, truth.seam_laser, defect)
 
 
-def groove_case(variant: str, rng: np.random.Generator) -> tuple[Profile, np.ndarray, Any]:
-    """One groove profile of ``variant``: (profile, true 7 points (7, 2), defect or None)."""
+def groove_case(variant: str, rng: np.random.Generator) -> Case:
+    """One groove profile of ``variant``."""
     kind, bounds = SPECS[variant]
     if kind == "wide-v":
         g = groove("v", angle_deg=WIDE_DEG, gap_mm=0.0, thickness_mm=bounds[0])
@@ -124,7 +133,7 @@ def groove_case(variant: str, rng: np.random.Generator) -> tuple[Profile, np.nda
         profile, truth = groove_profile(
             g, None, rng=rng, rays=rays, roll_deg=roll, pitch_deg=pitch, lateral_offset_mm=offset
         )
-        return profile, truth.points_laser, None
+        return Case(profile, truth.points_laser, None)
     g = groove("v")
     if kind == "hi-lo":
         g = sd.groove_hi_lo(g, _signed(rng, bounds))
@@ -139,12 +148,12 @@ def groove_case(variant: str, rng: np.random.Generator) -> tuple[Profile, np.nda
     p = truth.points_laser
     walls = np.array([[p[0], p[1]], [p[6], p[5]]])
     profile, defect = _defect(variant, profile, walls, rng)
-    return profile, p, defect
+    return Case(profile, p, defect, layers)
 
 
 def _defect(
     variant: str, profile: Profile, walls: np.ndarray, rng: np.random.Generator
-) -> tuple[Profile, Any]:
+) -> tuple[Profile, sd.Defect | None]:
     kind, bounds = SPECS[variant]
     if kind == "outlier":
         return sd.far_outlier(profile, rng, bounds[0])
@@ -155,65 +164,72 @@ def _defect(
     return profile, None
 
 
-def _row(name: str, variant: str, errors: list[float], why: Counter[str]) -> dict[str, Any]:
-    e = np.array(errors)
-    found = e[np.isfinite(e)]
+class ScanErrors(NamedTuple):
+    """An extractor on ``n`` profiles of a variant: per profile the error that decides
+    detection (the v-groove's seam point's; the groove's worst of its 7 points; inf where
+    refused) and the layers in the groove; the errors pooled for the p95 and median (the
+    groove's 7 a profile); the refusals' reasons."""
+
+    worst: list[float]
+    layers: list[int]
+    pooled: list[float]
+    why: Counter[str]
+
+
+def _rate(e: np.ndarray) -> float | None:
+    return float(np.mean(e <= DETECTED_MM)) if e.size else None
+
+
+def scan_errors(name: str, variant: str, n: int, seed: int = 0) -> ScanErrors:
+    """Extractor ``name`` ("v-groove" or "groove") on ``n`` seeded profiles of ``variant``."""
+    case: Callable[[str, np.random.Generator], Case]
+    case = vgroove_case if name == "v-groove" else groove_case
+    ex = extractor(name)
+    rng = np.random.default_rng([seed, VARIANTS.index(variant), 0 if name == "v-groove" else 1])
+    out = ScanErrors([], [], [], Counter[str]())
+    for _ in range(n):
+        c = case(variant, rng)
+        f = ex(c.profile)
+        out.layers.append(c.layers)
+        if not f:
+            out.worst.append(math.inf)
+            out.why[re.sub(r"[\d.]+", "x", f.reason.split(" (")[0])] += 1
+            continue
+        if name == "v-groove":
+            d = np.atleast_1d(np.hypot(*(f.point_laser - c.label)))
+        else:
+            d = np.hypot(*(f.edges_laser - c.label).T)
+        out.worst.append(float(np.max(d)))
+        out.pooled.extend(d.tolist())
+    return out
+
+
+def _row(name: str, variant: str, r: ScanErrors) -> dict[str, Any]:
+    e, pooled = np.array(r.worst), np.array(r.pooled)
+    empty = np.array(r.layers) == 0
     return {
         "extractor": name,
         "variant": variant,
         "n": len(e),
         "detection_rate": float(np.mean(e <= DETECTED_MM)),
         "wrong_rate": float(np.mean(np.isfinite(e) & (e > DETECTED_MM))),
-        "median_error_mm": float(np.median(found)) if found.size else math.nan,
-        "p95_error_mm": float(np.percentile(found, 95)) if found.size else math.nan,
-        "refusals": dict(why.most_common()),
+        "median_error_mm": float(np.median(pooled)) if pooled.size else math.nan,
+        "p95_error_mm": float(np.percentile(pooled, 95)) if pooled.size else math.nan,
+        "empty_detection_rate": _rate(e[empty]) if name == "groove" else None,
+        "filled_detection_rate": _rate(e[~empty]) if name == "groove" else None,
+        "refusals": dict(r.why.most_common()),
     }
 
 
-def scan_errors(
-    name: str, variant: str, n: int, seed: int = 0
-) -> tuple[list[float], list[float], Counter[str]]:
-    """Extractor ``name`` ("v-groove" or "groove") on ``n`` profiles of ``variant``: per
-    profile the error that decides detection (the seam point's; the groove's worst of its 7
-    points; inf where refused), the errors pooled for the p95 (the groove's 7 per profile) and
-    the refusals' reasons."""
-    case: Callable[..., tuple[Profile, np.ndarray, Any]]
-    case = vgroove_case if name == "v-groove" else groove_case
-    ex = extractor(name)
-    rng = np.random.default_rng([seed, VARIANTS.index(variant), 0 if name == "v-groove" else 1])
-    worst: list[float] = []
-    pooled: list[float] = []
-    why = Counter[str]()
-    for _ in range(n):
-        profile, label, _defect_label = case(variant, rng)
-        f = ex(profile)
-        if not f:
-            worst.append(math.inf)
-            why[re.sub(r"[\d.]+", "x", f.reason.split(" (")[0])] += 1
-            continue
-        if name == "v-groove":
-            d = np.atleast_1d(np.hypot(*(f.point_laser - label)))
-        else:
-            d = np.hypot(*(f.edges_laser - label).T)
-        worst.append(float(np.max(d)))
-        pooled += d.tolist()
-    return worst, pooled, why
-
-
 def scans_bench(
-    n: int = 40, seed: int = 0, variants: tuple[str, ...] = VARIANTS
+    n: int = 100, seed: int = 0, variants: tuple[str, ...] = VARIANTS
 ) -> list[dict[str, Any]]:
     """One row per (extractor, variant): :data:`COLUMNS`, ``n`` profiles each."""
-    rows = []
-    for name in ("v-groove", "groove"):
-        for variant in variants:
-            worst, pooled, why = scan_errors(name, variant, n, seed)
-            row = _row(name, variant, worst, why)
-            if pooled:
-                row["p95_error_mm"] = float(np.percentile(pooled, 95))
-                row["median_error_mm"] = float(np.median(pooled))
-            rows.append(row)
-    return rows
+    return [
+        _row(name, variant, scan_errors(name, variant, n, seed))
+        for name in ("v-groove", "groove")
+        for variant in variants
+    ]
 
 
 def claim_holds(row: dict[str, Any]) -> bool:
@@ -222,20 +238,41 @@ def claim_holds(row: dict[str, Any]) -> bool:
     return bool(row["detection_rate"] >= 0.9 and p95 is not None and p95 <= DETECTED_MM)
 
 
+def _num(value: Any) -> str:
+    return (
+        "-"
+        if value is None or (isinstance(value, float) and math.isnan(value))
+        else (f"{value:.3f}")
+    )
+
+
 def scans_table(data: dict[str, Any]) -> str:
-    """The bench's rows (``extractors_scans.json``) as a markdown table."""
+    """The bench's rows (``extractors_scans.json``) as a markdown table; "holds": the issue's
+    bar (:func:`claim_holds`); "empty / filled": the groove's detection on empty and on
+    filled grooves."""
     head = ("extractor", "variant", "n", "detect", "wrong", "median mm", "p95 mm", "holds",
-            "refusals")  # fmt: skip
+            "detect empty / filled", "refusals")  # fmt: skip
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     for r in data["rows"]:
-        nums = [
-            "-" if r[k] is None or (isinstance(r[k], float) and math.isnan(r[k])) else f"{r[k]:.3f}"
-            for k in ("detection_rate", "wrong_rate", "median_error_mm", "p95_error_mm")
-        ]
-        why = "; ".join(f"{k}: {v}" for k, v in r["refusals"].items()) or "-"
-        held = "yes" if claim_holds(r) else "**no**"
-        lines.append(
-            f"| {r['extractor']} | {r['variant']} | {r['n']} | " + " | ".join(nums)
-            + f" | {held} | {why} |"
-        )  # fmt: skip
+        keys = ("detection_rate", "wrong_rate", "median_error_mm", "p95_error_mm")
+        split = r.get("empty_detection_rate"), r.get("filled_detection_rate")
+        cells = [
+            r["extractor"], r["variant"], str(r["n"]), *(_num(r[k]) for k in keys),
+            "yes" if claim_holds(r) else "**no**",
+            "-" if r["extractor"] != "groove" else " / ".join(_num(v) for v in split),
+            "; ".join(f"{k}: {v}" for k, v in r["refusals"].items()) or "-",
+        ]  # fmt: skip
+        lines.append("| " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
+
+
+def scans_result(n: int = 100, seed: int = 0) -> dict[str, Any]:
+    """The bench as ``extractors_scans.json`` holds it: the machine, ``n``, ``seed`` and the
+    rows (NaN written as null)."""
+    from seamtrack.bench.common import machine_info
+
+    clean = [
+        {k: None if isinstance(v, float) and math.isnan(v) else v for k, v in r.items()}
+        for r in scans_bench(n, seed)
+    ]
+    return {"machine": machine_info(), "n": n, "seed": seed, "rows": clean}

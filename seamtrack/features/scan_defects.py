@@ -45,6 +45,8 @@ OUTLIER_MM = 150.0
 BOUNCE_SPAN_MM = (1.0, 3.0)
 #: Share of a wall's length hidden from its top corner down (uniform).
 HIDDEN_SHARE = (0.5, 0.9)
+#: A hi-lo step's foot lies this far inside the groove from the higher wall's foot (mm).
+_STEP_IN_MM = 0.01
 #: Half length of the plates drawn (mm), as :mod:`seamtrack.features.synthetic`'s.
 _FAR_MM = 1000.0
 
@@ -233,13 +235,24 @@ def _right_side(g: Groove) -> NDArray[np.bool_]:
 
 def groove_hi_lo(g: Groove, step_mm: float) -> Groove:
     """``g`` (empty) with its right plate and wall ``step_mm`` lower (station frame, z up;
-    negative: higher); a gap's bottom then joins the two feet."""
+    negative: higher). The bottom (a backing bar under a gap) stays at the lower plate's
+    foot; the higher plate's wall ends at its own foot, above it, joined to the bottom by a
+    vertical step (its butt face's edge, seen through the gap)."""
     right = _right_side(g)
     surface = g.surface.copy()
     surface[right, 1] -= step_mm
     top, foot = g.top.copy(), g.foot.copy()
     top[1, 1] -= step_mm
     foot[1, 1] -= step_mm
+    i = int(np.flatnonzero(right)[0])  # the right foot's vertex
+    low = float(min(foot[0, 1], foot[1, 1]))
+    # The step's foot lies _STEP_IN_MM inside the groove from the higher foot, so that the
+    # bottom between the feet is a surface of its own (groove_points puts the bottom points
+    # on it, not on the feet's chord).
+    if step_mm > 0:  # the left foot stands above the bottom
+        surface = np.insert(surface, i, [foot[0, 0] + _STEP_IN_MM, low], axis=0)
+    elif step_mm < 0:  # the right foot stands above the bottom
+        surface = np.insert(surface, i, [foot[1, 0] - _STEP_IN_MM, low], axis=0)
     return dataclasses.replace(g, surface=surface, top=top, foot=foot)
 
 
