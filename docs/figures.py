@@ -166,6 +166,12 @@ def _groove_fill_table(data: dict[str, Any]) -> str:
     return groove_fill_table(data)
 
 
+def _scans_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.extractors_scans import scans_table
+
+    return scans_table(data)
+
+
 def _firstrun_table(data: dict[str, Any]) -> str:
     from seamtrack.bench.firstrun import firstrun_table
 
@@ -253,6 +259,7 @@ RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {
     "loop.json#arm_outcomes": _arm_outcomes_table,
     "stability.json": _stability_table,
     "groove_fill.json": _groove_fill_table,
+    "extractors_scans.json": _scans_table,
     "arc.json": _arc_table,
 }
 
