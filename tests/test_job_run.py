@@ -103,6 +103,28 @@ def test_each_bead_holds_the_wire_the_torch_melted(short_job) -> None:
         assert volume == pytest.approx(melted, rel=0.2), r.name
 
 
+def test_every_beads_area_is_mass_conservation_at_every_station(short_job) -> None:
+    """Issue 42 item 4: at every station each pass's bead (the area between the fill surface
+    after it and before it, integrated across the seam on the fill's grid) is within 5 % of
+    mass conservation from the process parameters and the plan: eta pi d^2 / 4 v_wire / v(s),
+    v(s) the plan's travel speed there. The torch's own speed, which the bead follows, differs
+    from the plan by the tracker's corrections (3-4 % on this job)."""
+    scene = load_scene("multipass-v-groove", SHORT)
+    p = scene.config.process
+    assert p is not None
+    fill = short_job.fill
+    welded = [r for r in short_job.passes if r.plan is not None]
+    assert len(welded) == len(fill.beads) >= 2
+    for bead, r in zip(fill.beads, welded, strict=True):
+        wire_mm_s = p.wire_feed_m_min * 1000.0 / 60.0  # the scene's wire feed, 6 m/min
+        assert r.plan.wire_feed_mm_s == pytest.approx(wire_mm_s)
+        speed = r.plan.speed_at(fill.s_mm)
+        formula = p.deposition_efficiency * math.pi * p.wire_diameter_mm**2 / 4 * wire_mm_s / speed
+        laid = np.trapezoid(bead.z_after - bead.z_before, fill.y_mm, axis=1)
+        assert np.all(np.isfinite(laid)) and len(laid) == len(fill.s_mm)
+        np.testing.assert_allclose(laid, formula, rtol=0.05, err_msg=r.name)
+
+
 def test_the_cap_beads_lie_side_to_side_across_the_bevels_top_edges(short_job) -> None:
     """The cap's n beads at their places in closed loop, as the V's geometry puts them: the
     top corners at y = +-(gap / 2 + (plate - root face) tan 30 deg), the cap over the top
