@@ -329,6 +329,9 @@ def test_arc_bench_through_the_dispatcher(tmp_path: Path) -> None:
         # 250 A, 30 mm: beyond the arc's blob (12.9 mm at 250 A, mag-spray); the seam point
         # within two of the quick camera's rows over the depth of field, and the closed loop
         # on the 200 mm curve within the paper's 0.5 mm target
+        if row["mode"] == "image" and row["countermeasures"] == "none":
+            assert row["detect_rate"] < 0.5  # no filter: 250 A outshines the stripe at 30 mm
+            continue
         assert row["detect_rate"] == 1.0
         assert row["p95_mm"] <= 2 * PAPER.depth_of_field_mm / rows_px
         assert row["loop_max_error_mm"] <= 0.5

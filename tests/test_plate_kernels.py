@@ -30,6 +30,7 @@ MODULES = (_two_lines, _between_plates, _plate_lines, _two_plate_search, _slope_
 #: Kernels that return one array holding one quantity (each element the same kind of
 #: thing), not a record of mixed results: what the elements are.
 ONE_QUANTITY = {
+    "_near": "the points kept, in order",
     "kept": "positions of the True flags",
     "_order": "positions, in order",
     "_along": "coordinates along one line",

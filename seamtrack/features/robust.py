@@ -417,15 +417,23 @@ def median5_of(z: FloatArray, m: int) -> FloatArray:
         f = max(min(a, b), min(c, dd))
         g = min(max(a, b), max(c, dd))
         med[i + 2] = max(min(e, f), min(max(e, f), g))
-    med[0] = med[1] = med[2]
-    med[m - 1] = med[m - 2] = med[m - 3]
+    for k in range(2):  # the edges: the nearest full window's
+        med[k] = med[2]
+        med[m - 1 - k] = med[m - 3]
     return med
+
+
+class SpikeSplit(NamedTuple):
+    """:func:`_drop_spikes`' counts: the points kept at the front, the spikes' columns."""
+
+    kept: int
+    spikes: int
 
 
 @numba.njit(cache=True, nogil=True)
 def _drop_spikes(
     p: FloatArray, z: FloatArray, cols: IndexArray, m: int, limit: float, spikes: IndexArray
-) -> tuple[int, int]:
+) -> SpikeSplit:
     """Moves the points of ``p[:m]`` (and ``z``, ``cols``) within ``limit`` of their running
     median of 5 to the front, the others' columns to ``spikes``; returns (kept, spikes)."""
     med = median5_of(z, m)
@@ -438,7 +446,7 @@ def _drop_spikes(
         else:
             spikes[ns] = cols[i]
             ns += 1
-    return kept, ns
+    return SpikeSplit(kept, ns)
 
 
 @numba.njit(cache=True, nogil=True)

@@ -432,6 +432,21 @@ def _candidates(tb, groups, n, min_points, min_arm):
     return cand
 
 
+class VApex(NamedTuple):
+    """Two records' apex (:func:`_v_apex`): whether they form the V, the apex (``y``, ``z``),
+    the left arm's record and unit direction from the apex, then the right's."""
+
+    ok: bool
+    y: float
+    z: float
+    left: int
+    left_uy: float
+    left_uz: float
+    right: int
+    right_uy: float
+    right_uz: float
+
+
 @numba.njit(cache=True, nogil=True)
 def _v_apex(geo, a, b, sign, min_deg, max_deg):
     """Whether records ``a`` and ``b`` form a V (``sign`` -1: opening towards the sensor) or
@@ -442,7 +457,7 @@ def _v_apex(geo, a, b, sign, min_deg, max_deg):
     by, bz, bdy, bdz = geo[b, CY], geo[b, CZ], geo[b, UY], geo[b, UZ]
     d = ady * bdz - adz * bdy
     if abs(d) < 1e-9:
-        return False, 0.0, 0.0, a, 0.0, 0.0, b, 0.0, 0.0  # parallel: no apex
+        return VApex(False, 0.0, 0.0, a, 0.0, 0.0, b, 0.0, 0.0)  # parallel: no apex
     s = ((by - ay) * bdz - (bz - az) * bdy) / d
     xy, xz = ay + s * ady, az + s * adz
     uy, uz, wy, wz = ay - xy, az - xz, by - xy, bz - xz
@@ -461,7 +476,7 @@ def _v_apex(geo, a, b, sign, min_deg, max_deg):
         and min_deg <= angle <= max_deg
         and sign * bz_ > 0.7 * math.hypot(by_, bz_)  # bisector within 45 deg
     )
-    return ok, xy, xz, ga, uy, uz, gb, wy, wz
+    return VApex(ok, xy, xz, ga, uy, uz, gb, wy, wz)
 
 
 @numba.njit(cache=True, nogil=True)
