@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import pytest
 
@@ -45,6 +46,32 @@ def test_the_verdict_is_the_issues_bar(
     (row,) = case_rows((case,))
     assert row["within"] is within
     assert row["simulated"] == simulated
+
+
+def test_a_range_is_met_inside_it_and_shown_as_a_range() -> None:
+    case = PublishedCase("TWI", "", "a shrinkage", "mm", 2.25, 0.75 / 2.25, "range")
+    inside = case_rows((dataclasses.replace(case, simulate=lambda: 2.9),))
+    outside = case_rows((dataclasses.replace(case, simulate=lambda: 3.1),))
+    assert inside[0]["within"] is True and outside[0]["within"] is False
+    assert "| 1.50-3.00 | 2.90 | mm | yes |" in cases_table({"cases": inside})
+
+
+def test_the_v_groove_area_is_the_groove_polygons() -> None:
+    # an independent oracle: the shoelace area of the groove's outline (20 mm, 60 deg V,
+    # 2 mm gap, 1 mm root face)
+    t, gap, face, half = 20.0, 2.0, 1.0, math.radians(30.0)
+    top = gap / 2 + (t - face) * math.tan(half)
+    outline = [(-gap / 2, 0.0), (gap / 2, 0.0), (gap / 2, face), (top, t), (-top, t),
+               (-gap / 2, face)]  # fmt: skip
+    edges = zip(outline, outline[1:] + outline[:1], strict=True)
+    shoelace = 0.5 * abs(sum(y0 * z1 - y1 * z0 for (y0, z0), (y1, z1) in edges))
+    assert bench.v_groove_area_mm2(t, 60.0, gap, face) == pytest.approx(shoelace, rel=1e-12)
+
+
+def test_the_twi_shrinkage_case_runs_spraragen_and_ettinger_on_the_shipped_joint() -> None:
+    (twi,) = [c for c in PUBLISHED if c.source.startswith("TWI")]
+    area = bench.v_groove_area_mm2(20.0, 60.0, 2.0, 1.0)
+    assert bench.simulate_case(twi) == pytest.approx(0.2 * area / 20.0 + 0.05 * 2.0)
 
 
 def test_a_case_not_read_has_no_verdict_and_says_so() -> None:
