@@ -16,11 +16,11 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.control.hint_kernels import Polyline
 from seamtrack.control.hint_kernels import closest_on_polyline as closest_on_polyline
 from seamtrack.control.hint_kernels import column_medians as column_medians
 from seamtrack.control.hint_kernels import plane_crossings as plane_crossings
 from seamtrack.control.hint_kernels import program_hint as program_hint
-from seamtrack.control.hint_kernels import program_hint_culled
 
 FloatArray = NDArray[np.float64]
 
@@ -328,8 +328,7 @@ def setpoint_step(
 @numba.njit(cache=True, nogil=True)
 def tracker_hint(
     T: FloatArray, raw: FloatArray, path: FloatArray, s: FloatArray, fit_mm: float,
-    program: FloatArray, last_window: FloatArray, last_near: FloatArray, a: FloatArray,
-    d: FloatArray, centres: FloatArray, radii: FloatArray,
+    program: Polyline, last_window: FloatArray, last_near: FloatArray,
 ) -> tuple[bool, float, float, float, float, float, FloatArray, FloatArray]:  # fmt: skip
     """:func:`~seamtrack.control.hint_kernels.program_hint` (the program's segments in the
     chunks of :func:`~seamtrack.control.hint_kernels.polyline_chunks`)
@@ -343,8 +342,8 @@ def tracker_hint(
     window = raw[i:].copy() if n > i else raw[n - 1 :].copy()
     direction = np.empty(3)
     direction[0], direction[1], direction[2] = end_direction(path, s, fit_mm)
-    found, y, z, dx, dy, dz, near = program_hint_culled(
-        T, raw[n - 1], direction, program, window, last_window, last_near, a, d, centres, radii
+    found, y, z, dx, dy, dz, near = program_hint(
+        T, raw[n - 1], direction, program, window, last_window, last_near
     )
     return found, y, z, dx, dy, dz, near, window
 

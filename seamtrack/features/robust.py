@@ -465,23 +465,29 @@ def _jump_runs(p: FloatArray, kept: int, jump: float, runs: IndexArray) -> int:
     return r
 
 
+class FrontOut(NamedTuple):
+    """Where :func:`robust_front` writes, for n profile points: the kept points ``p``
+    (n, 2), their columns ``cols`` (n,), the removed spikes' columns ``spikes`` (n,), the
+    bounds of the runs between jumps ``runs`` (n + 1,) and the points of detours ``stray``
+    (n,)."""
+
+    p: FloatArray
+    cols: IndexArray
+    spikes: IndexArray
+    runs: IndexArray
+    stray: NDArray[np.bool_]
+
+
 @numba.njit(cache=True, nogil=True)
 def robust_front(
-    points: FloatArray,
-    valid: NDArray[np.bool_],
-    params: FrontParams,
-    p: FloatArray,
-    cols: IndexArray,
-    spikes: IndexArray,
-    runs: IndexArray,
-    stray: NDArray[np.bool_],
+    points: FloatArray, valid: NDArray[np.bool_], params: FrontParams, out: FrontOut
 ) -> FrontScalars:
-    """:func:`front` into given arrays: ``p`` (n, 2), ``cols``, ``spikes``, ``stray`` (n,),
-    ``runs`` (n + 1,) for n profile points.
+    """:func:`front` into the given arrays ``out``.
 
     Returns a :class:`FrontScalars`: ``kept`` points (before spikes are removed when
     ``code`` is not :data:`KEPT`), the counts of spikes and run bounds written, and the
     noise, tolerance, its floor, the spacing, the range quantum and the resolution."""
+    p, cols, spikes, runs, stray = out
     z = np.empty(points.shape[0])
     m = _bounded_points(points, valid, params.max_abs, p, z, cols)
     if m < 2 * params.min_points:
@@ -537,7 +543,7 @@ def front(points: FloatArray, valid: NDArray[np.bool_], params: FrontParams) -> 
     spikes = np.empty(n, dtype=np.int64)
     runs = np.empty(n + 1, dtype=np.int64)
     stray = np.zeros(n, dtype=np.bool_)
-    f = robust_front(points, valid, params, p, cols, spikes, runs, stray)
+    f = robust_front(points, valid, params, FrontOut(p, cols, spikes, runs, stray))
     m = f.kept
     return Front(f.code, p[:m], cols[:m], spikes[: f.n_spikes], runs[: f.n_runs], stray[:m], f)
 

@@ -72,24 +72,13 @@ GROOVE, NO_V, NO_PLATE, SIDE_ALONG_PLATE, WIDE_ROOT = range(5)
 
 
 class GrooveParams(NamedTuple):
-    """The V-groove extractor's parameters as the model reads them: the fewest inliers and
-    the shortest extent (mm) of a bevel, the included angle's range (deg), the widest and
-    narrowest root gap (mm), pieces in no group as bevels too, no gap expected; the expected
-    seam point (y, z; a tracker's hint) and its tolerance across and in range (mm; 0: no
-    hint)."""
+    """The V-groove extractor's parameters as the model reads them: the V search's for the
+    bevels (a V opening towards the sensor, ``max_reach`` the widest root gap, the tracker's
+    hint when there is one), the narrowest root gap (mm) and whether no gap is expected."""
 
-    min_points: int
-    min_arm: float
-    min_deg: float
-    max_deg: float
-    max_gap: float
+    search: SearchParams
     min_gap: float
-    pieces_too: bool
     gapless: bool
-    hint_y: float = math.nan
-    hint_z: float = math.nan
-    tol_y: float = 0.0
-    tol_z: float = 0.0
 
 
 class VGrooveResult(NamedTuple):
@@ -304,29 +293,11 @@ def v_groove(points, stray, columns, runs, tol, sigma, spacing, pieces, params):
     the confidence, the included angle, the depth below the plates and the share of the
     profile the model explains (the root left out).
     """
-    found = search(
-        points,
-        stray,
-        tol,
-        pieces,
-        SearchParams(
-            -1.0,  # sign: a V, opening towards the sensor
-            params.min_deg,
-            params.max_deg,
-            params.max_gap,
-            params.pieces_too,
-            params.min_points,
-            params.min_arm,
-            params.hint_y,
-            params.hint_z,
-            params.tol_y,
-            params.tol_z,
-        ),
-    )
+    found = search(points, stray, tol, pieces, params.search)
     tb, groups, surface, pair = found.table, found.groups, found.surface, found.pair
     n = pieces.fits.shape[0]
     m = points.shape[0]
-    geo, min_points = tb.geo, params.min_points
+    geo, min_points = tb.geo, params.search.min_points
     if pair.left == NONE:
         return _refused(NO_V)
     bevels = Bevels(pair.left, pair.right, pair.apex_y, pair.apex_z)
