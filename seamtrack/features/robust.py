@@ -548,6 +548,16 @@ def front(points: FloatArray, valid: NDArray[np.bool_], params: FrontParams) -> 
     return Front(f.code, p[:m], cols[:m], spikes[: f.n_spikes], runs[: f.n_runs], stray[:m], f)
 
 
+def profile_arrays(profile: Profile) -> tuple[FloatArray, NDArray[np.bool_]] | Refusal:
+    """A profile's points (n, 2) and valid flags (n,) as the compiled front end takes them
+    (contiguous), or a refusal when the flags do not match the points."""
+    pts = np.ascontiguousarray(profile.points_laser, dtype=np.float64).reshape(-1, 2)
+    valid = np.ascontiguousarray(profile.valid, dtype=np.bool_).reshape(-1)
+    if valid.shape != (len(pts),):
+        return Refusal("too few valid points (0)")
+    return pts, valid
+
+
 def front_end(
     profile: Profile,
     *,
@@ -568,10 +578,10 @@ def front_end(
     dropped, the noise again over :data:`NOISE_LAGS`, the runs between jumps and their
     detours (:func:`detours`).
     """
-    pts = np.ascontiguousarray(profile.points_laser, dtype=np.float64).reshape(-1, 2)
-    valid = np.ascontiguousarray(profile.valid, dtype=np.bool_).reshape(-1)
-    if valid.shape != (len(pts),):
-        return Refusal("too few valid points (0)")
+    arrays = profile_arrays(profile)
+    if isinstance(arrays, Refusal):
+        return arrays
+    pts, valid = arrays
     params = front_params(min_points, resolution_mm, min_tol_mm, sigma_factor, max_detour_mm)
     fr = front(pts, valid, params)
     if fr.code == TOO_FEW_POINTS:

@@ -27,6 +27,7 @@ from seamtrack.features.counts import (
 )
 from seamtrack.features.vgroove._v_root import (
     Bevels,
+    Root,
     RootEnds,
     at_depth,
     bridged,
@@ -101,15 +102,6 @@ class VGrooveResult(NamedTuple):
     angle: float
     depth: float
     root_share: float
-
-
-class Root(NamedTuple):
-    """The bevels' lower ends, whether a stray line covered one, and whether they are sure
-    (not put at the other's depth or in the middle of a covered stretch)."""
-
-    ends: RootEnds
-    covered: bool
-    sure: bool
 
 
 class SidePlates(NamedTuple):
@@ -275,8 +267,9 @@ def _explained(points, surface, tb, bevels, outer_l, outer_r, tol):
 
 
 @numba.njit(cache=True, nogil=True)
-def v_groove(points, stray, columns, runs, tol, sigma, spacing, pieces, params):
-    """:meth:`VGrooveExtractor._extract` after segmentation, on the profile's pieces
+def v_groove(kept, tol, sigma, spacing, pieces, params):
+    """:meth:`VGrooveExtractor._extract` after segmentation, on the profile's kept points
+    (:class:`~._v_root.KeptPoints`) and pieces
     (:class:`~seamtrack.features._segmentation.PieceTable`), with the extractor's
     :class:`GrooveParams`; a :class:`VGrooveResult`.
 
@@ -293,7 +286,8 @@ def v_groove(points, stray, columns, runs, tol, sigma, spacing, pieces, params):
     the confidence, the included angle, the depth below the plates and the share of the
     profile the model explains (the root left out).
     """
-    found = search(points, stray, tol, pieces, params.search)
+    points = kept.points
+    found = search(points, kept.stray, tol, pieces, params.search)
     tb, groups, surface, pair = found.table, found.groups, found.surface, found.pair
     n = pieces.fits.shape[0]
     m = points.shape[0]
@@ -327,28 +321,13 @@ def v_groove(points, stray, columns, runs, tol, sigma, spacing, pieces, params):
     root = _covered_root(
         points, tb, n, bevels, RootEnds(lx, lz, rx, rz), ref_l, ref_r, tol, spacing, sigma
     )
-    ends, covered, sure = root.ends, root.covered, root.sure
+    ends, sure = root.ends, root.sure
     lx, lz, rx, rz = ends
     gap = math.hypot(rx - lx, rz - lz)
     if gap <= pmax(params.min_gap, 2.0 * spacing + tol) or params.gapless:
         sy, sz, gap = ax, az, 0.0
     elif not gap_seen(
-        points,
-        stray,
-        surface,
-        columns,
-        runs,
-        tb,
-        n,
-        bevels,
-        ends,
-        ref_l,
-        ref_r,
-        gap,
-        covered,
-        min_points,
-        tol,
-        spacing,
+        kept, surface, tb, n, bevels, root, ref_l, ref_r, gap, min_points, tol, spacing
     ):
         # No gap shows between the bevels' lower ends: they end where spikes, dropouts or a
         # fill take over, not at the root. Their intersection is the best estimate.
