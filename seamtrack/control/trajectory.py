@@ -281,7 +281,7 @@ class TrajectoryTracker:
         # _closest_on_program and the choice, compiled in one call
         found, y, z, dx, dy, dz, near, window = pk.tracker_hint(
             np.asarray(T_world_sensor, dtype=np.float64), buffer.raw, buffer.path, buffer.s,
-            self.direction_fit_mm, self._polyline, *self._on_program,
+            self.direction_fit_mm, *self._on_program, *self._polyline,
         )  # fmt: skip
         self._on_program = (window, near)
         if not found:
