@@ -27,6 +27,7 @@ from seamtrack.features.counts import (
 )
 from seamtrack.features.vgroove._v_root import (
     Bevels,
+    KeptPoints,
     Root,
     RootEnds,
     at_depth,
@@ -267,9 +268,10 @@ def _explained(points, surface, tb, bevels, outer_l, outer_r, tol):
 
 
 @numba.njit(cache=True, nogil=True)
-def v_groove(kept, tol, sigma, spacing, pieces, params):
+def v_groove(points, stray, columns, runs, tol, sigma, spacing, pieces, params):
     """:meth:`VGrooveExtractor._extract` after segmentation, on the profile's kept points
-    (:class:`~._v_root.KeptPoints`) and pieces
+    (the fields of a :class:`~._v_root.KeptPoints`, loose: numba reads a named tuple from
+    Python in about a microsecond, its arrays in a tenth of that) and pieces
     (:class:`~seamtrack.features._segmentation.PieceTable`), with the extractor's
     :class:`GrooveParams`; a :class:`VGrooveResult`.
 
@@ -286,8 +288,8 @@ def v_groove(kept, tol, sigma, spacing, pieces, params):
     the confidence, the included angle, the depth below the plates and the share of the
     profile the model explains (the root left out).
     """
-    points = kept.points
-    found = search(points, kept.stray, tol, pieces, params.search)
+    kept = KeptPoints(points, stray, columns, runs)
+    found = search(points, stray, tol, pieces, params.search)
     tb, groups, surface, pair = found.table, found.groups, found.surface, found.pair
     n = pieces.fits.shape[0]
     m = points.shape[0]

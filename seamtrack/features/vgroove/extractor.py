@@ -26,7 +26,6 @@ from seamtrack.features.vgroove._v_groove_model import (
     VGrooveResult,
     v_groove,
 )
-from seamtrack.features.vgroove._v_root import KeptPoints
 from seamtrack.features.vgroove._v_search import pieces_of
 from seamtrack.sensing.profiles import Feature, Profile, SeamHint
 
@@ -171,14 +170,11 @@ class VGrooveExtractor(ExtractorBase):
             min_gap=float(self.min_gap_mm),
             gapless=bool(expect is not None and expect.gapless),
         )
-        kept = KeptPoints(
+        groove = v_groove(
             np.ascontiguousarray(seg.points, dtype=np.float64),
             np.asarray(seg.stray, dtype=np.bool_),
             np.asarray(seg.columns, dtype=np.int64),
             np.asarray(seg.runs, dtype=np.int64),
-        )
-        groove = v_groove(
-            kept,
             float(seg.tol),
             float(seg.sigma),
             float(seg.spacing),
