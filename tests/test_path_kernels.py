@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from seamtrack.control.hint_kernels import closest_on_polyline_chunked, polyline_chunks
+from seamtrack.control.hint_kernels import polyline
 from seamtrack.control.path_kernels import (
     PathBuffer,
     closest_on_polyline,
@@ -95,15 +95,14 @@ def test_chunked_closest_points_are_the_full_scans(seed: int) -> None:
     turn = np.cumsum(rng.normal(0.0, 0.3, n))
     steps = np.column_stack([np.cos(turn), np.sin(turn), rng.normal(0.0, 0.2, n)])
     program = np.cumsum(steps * rng.uniform(0.2, 2.0, (n, 1)), axis=0) + 100.0
-    a = np.ascontiguousarray(program[:-1])
-    d = np.ascontiguousarray(program[1:] - a)
-    centres, radii = polyline_chunks(a, d)
+    chunked_line = polyline(program)
+    a, d, centres, radii = chunked_line.a, chunked_line.d, chunked_line.centres, chunked_line.radii
     near = program[rng.integers(0, n, 40)] + rng.normal(0.0, 0.05, (40, 3))
     far = rng.uniform(-50.0, 250.0, (20, 3))
     points = np.concatenate([near, far, program[rng.integers(0, n, 10)]])
     empty = np.empty((0, 3))
-    full = closest_on_polyline(points, empty, empty, a, d)
-    chunked = closest_on_polyline_chunked(points, empty, empty, a, d, centres, radii)
+    full = closest_on_polyline(points, empty, empty, polyline(program, chunked=False))
+    chunked = closest_on_polyline(points, empty, empty, chunked_line)
     assert np.array_equal(chunked, full)
     # Each sphere holds its segments.
     for c, (centre, radius) in enumerate(zip(centres, radii, strict=True)):
@@ -195,10 +194,9 @@ def test_program_hint_is_the_straight_crossing_and_the_programs() -> None:
     T = np.eye(4)
     T[:3, :3] = np.column_stack([(r, -r, 0.0), (-r, -r, 0.0), (0.0, 0.0, -1.0)])
     T[:3, 3] = (46.0, 0.0, 90.0)
-    a = np.ascontiguousarray(program[:-1])
-    d = np.ascontiguousarray(program[1:] - a)
+    line = polyline(program, chunked=False)
     found, y, z, dx, dy, dz, near = program_hint(
-        T, window[-1], direction, program, window, np.empty((0, 3)), np.empty((0, 3)), a, d
+        T, window[-1], direction, line, window, np.empty((0, 3)), np.empty((0, 3))
     )
     straight = hint_from_path(T, window[-1], direction)
     assert straight is not None and found
@@ -210,11 +208,10 @@ def test_program_hint_is_the_straight_crossing_and_the_programs() -> None:
     np.testing.assert_allclose(near, seam.closest(window).points, atol=1e-12)
     assert len(expected) == 2  # both legs cross: the choice is real
     # Reusing the window's closest points gives the same answer.
-    again = program_hint(T, window[-1], direction, program, window, window[:-3], near, a, d)
+    again = program_hint(T, window[-1], direction, line, window, window[:-3], near)
     assert again[:6] == (found, y, z, dx, dy, dz)
     # A path along the laser plane crosses it nowhere: no hint.
-    along = program_hint(T, window[-1], np.array([r, r, 0.0]), program, window,
-                         window, near, a, d)  # fmt: skip
+    along = program_hint(T, window[-1], np.array([r, r, 0.0]), line, window, window, near)
     assert not along[0]
 
 

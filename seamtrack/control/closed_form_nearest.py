@@ -99,9 +99,7 @@ def _ur_nearest(
     best = math.inf
     best_key = 8  # the branch's place in _ur_branches' order (i1, i5, i3): a tie's tiebreak
     q1s = (psi + k, psi + math.pi - k)
-    x0 = nearest_turn(q1s[0], q_near[0]) - q_near[0]
-    x1 = nearest_turn(q1s[1], q_near[0]) - q_near[0]
-    first = 0 if not x1 * x1 < x0 * x0 else 1
+    first = _nearer_first(q1s, q_near[0])
     for o1 in range(2):
         i1 = first if o1 == 0 else 1 - first
         q1 = q1s[i1]
@@ -139,13 +137,8 @@ def _ur_nearest(
                 v3 = nearest_turn(v3, q_near[3])
                 v4 = nearest_turn(v4, q_near[4])
                 v5 = nearest_turn(v5, q_near[5])
-                d = 0.0  # nearest_branch's sum, in its order
-                d += (v0 - q_near[0]) * (v0 - q_near[0])
-                d += (v1 - q_near[1]) * (v1 - q_near[1])
-                d += (v2 - q_near[2]) * (v2 - q_near[2])
-                d += (v3 - q_near[3]) * (v3 - q_near[3])
-                d += (v4 - q_near[4]) * (v4 - q_near[4])
-                d += (v5 - q_near[5]) * (v5 - q_near[5])
+                d = _plus_squares(0.0, q_near, 0, v0, v1, v2)  # nearest_branch's sum, in order
+                d = _plus_squares(d, q_near, 3, v3, v4, v5)
                 best, best_key = _keep_nearer(d, 4 * i1 + 2 * i5 + i3, best, best_key, row,
                                               v0, v1, v2, v3, v4, v5)  # fmt: skip
     return best_key < 8
@@ -165,9 +158,7 @@ def _wrist_nearest(g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatA
     best = math.inf
     best_key = 8  # the branch's place in _wrist_branches' order (i1, i3, i6)
     q1s = (beta + k, beta - k)
-    x0 = nearest_turn(q1s[0], q_near[0]) - q_near[0]
-    x1 = nearest_turn(q1s[1], q_near[0]) - q_near[0]
-    first = 0 if not x1 * x1 < x0 * x0 else 1
+    first = _nearer_first(q1s, q_near[0])
     for n1 in range(2):
         i1 = first if n1 == 0 else 1 - first
         q1 = q1s[i1]
@@ -197,13 +188,30 @@ def _wrist_nearest(g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatA
                 v1, v2 = nearest_turn(q2, q_near[1]), nearest_turn(q3, q_near[2])
                 v3, v4 = nearest_turn(q4, q_near[3]), nearest_turn(q5, q_near[4])
                 v5 = nearest_turn(s6 * c6, q_near[5])
-                dd = t12  # nearest_branch's sum, in its order (joints 1-3 in t12)
-                dd += (v3 - q_near[3]) * (v3 - q_near[3])
-                dd += (v4 - q_near[4]) * (v4 - q_near[4])
-                dd += (v5 - q_near[5]) * (v5 - q_near[5])
+                # nearest_branch's sum, in its order (joints 1-3 in t12)
+                dd = _plus_squares(t12, q_near, 3, v3, v4, v5)
                 best, best_key = _keep_nearer(dd, 4 * i1 + 2 * i3 + i6, best, best_key, row,
                                               v0, v1, v2, v3, v4, v5)  # fmt: skip
     return best_key < 8
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _plus_squares(total: float, q_near: FloatArray, j: int, a: float, b: float, c: float) -> float:
+    """``total`` plus the squared differences of ``a``, ``b``, ``c`` from joints ``j``,
+    ``j + 1``, ``j + 2`` of ``q_near``, added in that order (nearest_branch's sum)."""
+    total += (a - q_near[j]) * (a - q_near[j])
+    total += (b - q_near[j + 1]) * (b - q_near[j + 1])
+    total += (c - q_near[j + 2]) * (c - q_near[j + 2])
+    return total
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _nearer_first(q1s: tuple[float, float], q_near: float) -> int:
+    """Which of joint 1's two solutions lies nearer ``q_near`` (whole turns aside; 0 on a
+    tie): the branches through it are worked out first."""
+    x0 = nearest_turn(q1s[0], q_near) - q_near
+    x1 = nearest_turn(q1s[1], q_near) - q_near
+    return 0 if not x1 * x1 < x0 * x0 else 1
 
 
 @numba.njit(cache=True, nogil=True, inline="always")

@@ -8,6 +8,7 @@ through :func:`seamtrack.control.path_kernels.tracker_hint`."""
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -84,6 +85,28 @@ def polyline_chunks(a: FloatArray, d: FloatArray) -> tuple[FloatArray, FloatArra
     return centres, radii
 
 
+class Polyline(NamedTuple):
+    """A polyline as the hint's kernels read it: its ``points`` (m, 3), its segments
+    ``a + t d`` (t in [0, 1]) and the bounding spheres of their chunks (``centres``,
+    ``radii``: :func:`polyline_chunks`; none: every segment looked at, in order)."""
+
+    points: FloatArray
+    a: FloatArray
+    d: FloatArray
+    centres: FloatArray
+    radii: FloatArray
+
+
+def polyline(points: FloatArray, chunked: bool = True) -> Polyline:
+    """The :class:`Polyline` through ``points`` (m, 3), with its chunks' bounding spheres
+    (``chunked``) or none."""
+    p = np.ascontiguousarray(points, dtype=np.float64)
+    a = np.ascontiguousarray(p[:-1])
+    d = np.ascontiguousarray(p[1:] - a)
+    centres, radii = polyline_chunks(a, d) if chunked else (np.empty((0, 3)), np.empty(0))
+    return Polyline(p, a, d, centres, radii)
+
+
 @numba.njit(cache=True, nogil=True, inline="always")
 def _nearer(
     q0: float, q1: float, q2: float, a: FloatArray, d: FloatArray, c: int, best: float,
@@ -127,20 +150,18 @@ def _reused_rows(
 
 
 @numba.njit(cache=True, nogil=True)
-def closest_on_polyline_chunked(
-    points: FloatArray,
-    last_points: FloatArray,
-    last_near: FloatArray,
-    a: FloatArray,
-    d: FloatArray,
-    centres: FloatArray,
-    radii: FloatArray,
+def closest_on_polyline(
+    points: FloatArray, last_points: FloatArray, last_near: FloatArray, line: Polyline
 ) -> FloatArray:
-    """:func:`closest_on_polyline` with the segments' bounding spheres of
-    :func:`polyline_chunks` (none: every segment): the chunk nearest a point first, then only
-    the chunks whose sphere comes nearer than the best found (a lower bound, with a margin far
-    above rounding). The same points: the nearest segment, the first on a tie, whatever the
-    order the segments are looked at in."""
+    """(m, 3) the closest points to ``points`` on the segments of ``line`` (the nearest of
+    all, the first on a tie: :func:`~seamtrack.geometry.nearest.nearest_of`'s arithmetic),
+    reusing ``last_near`` for the rows ``points`` shares with ``last_points`` (a window sliding
+    along the same stored points: ``points`` starts inside ``last_points``). With the
+    segments' bounding spheres of :func:`polyline_chunks`, the chunk nearest a point first,
+    then only the chunks whose sphere comes nearer than the best found (a lower bound, with a
+    margin far above rounding); without, every segment in order. The same points: the
+    nearest segment, the first on a tie, whatever the order the segments are looked at in."""
+    a, d, centres, radii = line.a, line.d, line.centres, line.radii
     m = points.shape[0]
     near = np.empty((m, 3))
     k = _reused_rows(points, last_points, last_near, near)
@@ -171,54 +192,22 @@ def closest_on_polyline_chunked(
 
 
 @numba.njit(cache=True, nogil=True)
-def closest_on_polyline(
-    points: FloatArray,
-    last_points: FloatArray,
-    last_near: FloatArray,
-    a: FloatArray,
-    d: FloatArray,
-) -> FloatArray:
-    """(m, 3) the closest points to ``points`` on the segments ``a + t d`` (the nearest of all,
-    the first on a tie: :func:`~seamtrack.geometry.nearest.nearest_of`'s arithmetic), reusing
-    ``last_near`` for the rows ``points`` shares with ``last_points`` (a window sliding along
-    the same stored points: ``points`` starts inside ``last_points``): every segment looked
-    at, in order (:func:`closest_on_polyline_chunked` with no chunks)."""
-    return closest_on_polyline_chunked(
-        points, last_points, last_near, a, d, np.empty((0, 3)), np.empty(0)
-    )
-
-
-@numba.njit(cache=True, nogil=True)
 def program_hint(
-    T: FloatArray, last: FloatArray, direction: FloatArray, program: FloatArray,
-    window: FloatArray, last_window: FloatArray, last_near: FloatArray, a: FloatArray,
-    d: FloatArray,
-) -> tuple[bool, float, float, float, float, float, FloatArray]:  # fmt: skip
-    """:func:`program_hint_culled` with every segment of the program looked at."""
-    return program_hint_culled(
-        T, last, direction, program, window, last_window, last_near, a, d, np.empty((0, 3)),
-        np.empty(0),
-    )  # fmt: skip
-
-
-@numba.njit(cache=True, nogil=True)
-def program_hint_culled(
-    T: FloatArray, last: FloatArray, direction: FloatArray, program: FloatArray,
-    window: FloatArray, last_window: FloatArray, last_near: FloatArray, a: FloatArray,
-    d: FloatArray, centres: FloatArray, radii: FloatArray,
+    T: FloatArray, last: FloatArray, direction: FloatArray, program: Polyline,
+    window: FloatArray, last_window: FloatArray, last_near: FloatArray,
 ) -> tuple[bool, float, float, float, float, float, FloatArray]:  # fmt: skip
     """The trajectory tracker's hint in one call (:meth:`TrajectoryTracker.hint
     <seamtrack.control.trajectory.TrajectoryTracker.hint>`, its arithmetic): the straight
     path's crossing of the laser plane (``hint_from_path``: through ``last`` heading
-    ``direction``, world), the program seam's crossings (:func:`plane_crossings`), shifted by
-    the median offset of the measured ``window`` from the program (its closest points by
-    :func:`closest_on_polyline_chunked` on the chunks ``centres``, ``radii``, reusing
-    ``last_near``), the crossing nearest the straight one.
+    ``direction``, world), the ``program`` seam's crossings (:func:`plane_crossings`), shifted
+    by the median offset of the measured ``window`` from the program (its closest points by
+    :func:`closest_on_polyline`, reusing ``last_near``), the crossing nearest the straight
+    one.
 
     Returns (found, y_L, z_L, the direction in the sensor frame (3), the window's closest
     points on the program, for the next call).
     """
-    near = closest_on_polyline_chunked(window, last_window, last_near, a, d, centres, radii)
+    near = closest_on_polyline(window, last_window, last_near, program)
     R = T[:3, :3]
     p = np.empty(3)
     v = np.empty(3)
@@ -235,7 +224,7 @@ def program_hint_culled(
     if not (math.isfinite(p[0] - k * v[0]) and math.isfinite(sy) and math.isfinite(sz)):
         return False, 0.0, 0.0, 0.0, 0.0, 0.0, near
     sign = 1.0 if v[0] > 0 else -1.0
-    crossings = plane_crossings(program, T)
+    crossings = plane_crossings(program.points, T)
     if crossings.shape[0] == 0:
         return False, 0.0, 0.0, 0.0, 0.0, 0.0, near
     offset = column_medians(window - near)

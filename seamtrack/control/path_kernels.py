@@ -16,11 +16,11 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.control.hint_kernels import Polyline
 from seamtrack.control.hint_kernels import closest_on_polyline as closest_on_polyline
 from seamtrack.control.hint_kernels import column_medians as column_medians
 from seamtrack.control.hint_kernels import plane_crossings as plane_crossings
 from seamtrack.control.hint_kernels import program_hint as program_hint
-from seamtrack.control.hint_kernels import program_hint_culled
 
 FloatArray = NDArray[np.float64]
 
@@ -328,14 +328,16 @@ def setpoint_step(
 @numba.njit(cache=True, nogil=True)
 def tracker_hint(
     T: FloatArray, raw: FloatArray, path: FloatArray, s: FloatArray, fit_mm: float,
-    program: FloatArray, last_window: FloatArray, last_near: FloatArray, a: FloatArray,
+    last_window: FloatArray, last_near: FloatArray, points: FloatArray, a: FloatArray,
     d: FloatArray, centres: FloatArray, radii: FloatArray,
 ) -> tuple[bool, float, float, float, float, float, FloatArray, FloatArray]:  # fmt: skip
-    """:func:`~seamtrack.control.hint_kernels.program_hint` (the program's segments in the
-    chunks of :func:`~seamtrack.control.hint_kernels.polyline_chunks`)
-    on the tracker's stored path (``raw``, ``path``, ``s``): the
-    window of raw points of the last ``fit_mm`` (at least the newest) and the direction of
-    :func:`end_direction`, in the one call the tracker makes at each frame.
+    """:func:`~seamtrack.control.hint_kernels.program_hint` on the tracker's stored path
+    (``raw``, ``path``, ``s``): the window of raw points of the last ``fit_mm`` (at least the
+    newest) and the direction of :func:`end_direction`, in the one call the tracker makes at
+    each frame. ``points`` .. ``radii``: the fields of the program seam's
+    :class:`~seamtrack.control.hint_kernels.Polyline` (its segments in the chunks of
+    :func:`~seamtrack.control.hint_kernels.polyline_chunks`), passed loose (``*polyline``):
+    numba reads a named tuple from Python in about 1 us, its arrays alone in a tenth of that.
 
     Returns :func:`program_hint`'s answer and the window (a copy, for the next call)."""
     n = s.shape[0]
@@ -343,8 +345,9 @@ def tracker_hint(
     window = raw[i:].copy() if n > i else raw[n - 1 :].copy()
     direction = np.empty(3)
     direction[0], direction[1], direction[2] = end_direction(path, s, fit_mm)
-    found, y, z, dx, dy, dz, near = program_hint_culled(
-        T, raw[n - 1], direction, program, window, last_window, last_near, a, d, centres, radii
+    program = Polyline(points, a, d, centres, radii)
+    found, y, z, dx, dy, dz, near = program_hint(
+        T, raw[n - 1], direction, program, window, last_window, last_near
     )
     return found, y, z, dx, dy, dz, near, window
 

@@ -385,24 +385,6 @@ class CartesianRobot:
         servo = self.servo.new_state(qs)
         return RobotState(servo.q, servo.v, RobotState(q=list(qs), v=[0.0, 0.0, 0.0]), servo)
 
-    def _step_servo(
-        self,
-        state: RobotState,
-        target: tuple[float, float, float] | None,
-        speed: float,
-        feed_forward: tuple[float, float, float],
-        stop_at_target: bool,
-    ) -> None:
-        """The interpolator moves the set-point; the position loops move the axes after it."""
-        assert self._ideal is not None and self.servo is not None
-        assert state.setpoint is not None and state.servo is not None
-        self._ideal.step_move(state.setpoint, target, speed, feed_forward, stop_at_target)
-        self.servo.follow(state.servo, state.setpoint.q)
-        lo, hi = self.position_min_mm, self.position_max_mm
-        q = state.servo.q
-        for i in range(3):
-            q[i] = min(max(q[i], lo[i]), hi[i])
-
     def step(self, state: RobotState, command: MoveCommand | None) -> None:
         """Advance ``state`` by one control period under ``command`` (None: brake to rest)."""
         if command is None:
@@ -423,7 +405,15 @@ class CartesianRobot:
         """:meth:`step` on the fields of a :class:`MoveCommand` (``target`` None: brake to
         rest): the servo's interpolator and ideal axes take one :func:`axes_step`."""
         if self._ideal is not None:
-            self._step_servo(state, target, speed, feed_forward, stop_at_target)
+            # the servo: the interpolator moves the set-point, the position loops the axes
+            assert self.servo is not None
+            assert state.setpoint is not None and state.servo is not None
+            self._ideal.step_move(state.setpoint, target, speed, feed_forward, stop_at_target)
+            self.servo.follow(state.servo, state.setpoint.q)
+            lo, hi = self.position_min_mm, self.position_max_mm
+            q_servo = state.servo.q
+            for i in range(3):
+                q_servo[i] = min(max(q_servo[i], lo[i]), hi[i])
             return
         q, v = np.array(state.q), np.array(state.v)
         tx, ty, tz = (0.0, 0.0, 0.0) if target is None else target

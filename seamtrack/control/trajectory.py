@@ -46,7 +46,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.control import path_kernels as pk
-from seamtrack.control.hint_kernels import polyline_chunks
+from seamtrack.control.hint_kernels import Polyline, polyline
 from seamtrack.control.path_kernels import PathBuffer, off_line
 from seamtrack.control.tracking import Command, Measurement, TrackerContext
 from seamtrack.params import Fraction, NonNegative, Positive
@@ -186,8 +186,7 @@ class TrajectoryTracker:
         self._held: list[FloatArray] = []
         # The hint's window of raw points and their closest points on the program seam.
         self._on_program: tuple[FloatArray, FloatArray] = (np.empty((0, 3)), np.empty((0, 3)))
-        self._segments: tuple[FloatArray, ...] | None = None  # a, d and polyline_chunks
-        self._program_points = np.empty((0, 3))  # the program seam's points, contiguous
+        self._polyline: Polyline | None = None  # the program seam, chunked
         self.stop_cause = ""
         # The robot program's end of an open seam (the CAD seam's end), as floats; None: none.
         self._seam_end: tuple[float, float, float] | None = None
@@ -275,18 +274,14 @@ class TrajectoryTracker:
             return None
         if not self._seen_seam or self.stop_cause:
             return None
-        if self._segments is None:  # the program's segments, once
-            seam_points = self._program.seam.points
-            a = np.ascontiguousarray(seam_points[:-1])
-            d = np.ascontiguousarray(seam_points[1:] - a)
-            self._segments = (a, d, *polyline_chunks(a, d))
-            self._program_points = np.ascontiguousarray(seam_points, dtype=np.float64)
+        if self._polyline is None:  # the program's segments, once
+            self._polyline = polyline(self._program.seam.points)
         buffer = self._buffer
         # The window of raw points, the direction, hint_from_path, laser_plane_crossings,
         # _closest_on_program and the choice, compiled in one call
         found, y, z, dx, dy, dz, near, window = pk.tracker_hint(
             np.asarray(T_world_sensor, dtype=np.float64), buffer.raw, buffer.path, buffer.s,
-            self.direction_fit_mm, self._program_points, *self._on_program, *self._segments,
+            self.direction_fit_mm, *self._on_program, *self._polyline,
         )  # fmt: skip
         self._on_program = (window, near)
         if not found:

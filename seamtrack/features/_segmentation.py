@@ -22,7 +22,7 @@ from numpy.typing import NDArray
 
 from seamtrack.features.arrays import FloatArray, IntArray
 from seamtrack.features.line_geometry import fit_points, fit_range
-from seamtrack.features.robust import KEPT, FrontParams, robust_front
+from seamtrack.features.robust import KEPT, FrontOut, FrontParams, robust_front
 
 
 class PieceTable(NamedTuple):
@@ -467,7 +467,8 @@ def segment(
     runs = ints[at.runs : at.offsets]
     inliers = ints[at.inliers :]
     # The spikes' columns go where the inliers will: they are not returned.
-    front = robust_front(points, valid, params, p, ints[at.columns : at.runs], inliers, runs, stray)
+    out = FrontOut(p, ints[at.columns : at.runs], inliers, runs, stray)
+    front = robust_front(points, valid, params, out)
     found = PieceCount(front.code, 0)
     if front.code == KEPT:
         found = _pieces(

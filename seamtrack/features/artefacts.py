@@ -31,6 +31,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -93,12 +94,7 @@ def real_sensor_profile(
     artefacts: SensorArtefacts = SensorArtefacts(),
     sensor: LaserLineSensor | None = None,
     rays: int = 2048,
-    pitch_deg: float = 0.0,
-    roll_deg: float = 0.0,
-    lateral_offset_mm: float = 0.0,
-    standoff_mm: float | None = None,
-    section: tuple[np.ndarray, np.ndarray, np.ndarray, float] | None = None,
-    **joint_params: float,
+    **pose_and_joint: Any,
 ) -> tuple[Profile, GroundTruth]:
     """A profile of ``joint`` as a real sensor with ``artefacts`` would give it.
 
@@ -114,8 +110,10 @@ def real_sensor_profile(
         quantizes instead).
     rays : int
         Columns (the LDS: 2048).
-    pitch_deg, roll_deg, lateral_offset_mm, standoff_mm, section, **joint_params
-        As for :func:`~seamtrack.features.synthetic.synthetic_profile`.
+    **pose_and_joint
+        The pose (``pitch_deg``, ``roll_deg``, ``lateral_offset_mm``, ``standoff_mm``,
+        ``section``) and the joint's parameters, as for
+        :func:`~seamtrack.features.synthetic.synthetic_profile` (and its defaults).
     """
     base = dataclasses.replace(preset("paper"), quantize=False) if sensor is None else sensor
     profile, truth = synthetic_profile(
@@ -124,12 +122,7 @@ def real_sensor_profile(
         rng=None,
         imperfections=Imperfections(),
         rays=rays,
-        pitch_deg=pitch_deg,
-        roll_deg=roll_deg,
-        lateral_offset_mm=lateral_offset_mm,
-        standoff_mm=standoff_mm,
-        section=section,
-        **joint_params,
+        **pose_and_joint,
     )
     a = artefacts
     assert profile.reason is not None

@@ -6,6 +6,7 @@ Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groov
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -145,6 +146,22 @@ class ExtractorBase:
     def _found(self, profile: Profile, point: FloatArray, **kw: Any) -> Feature:
         return Feature.found(point, profile.T_world_sensor, joint=self.name, **kw)
 
+    def search_params(
+        self, opening_down: bool, min_deg: float, max_deg: float, max_reach_mm: float
+    ) -> SearchParams:
+        """The V search's parameters for a V (or, ``opening_down``, a ridge) enclosing
+        ``min_deg..max_deg`` with arms within ``max_reach_mm`` of the apex, and this
+        extractor's arm limits."""
+        return _search_params(
+            opening_down,
+            float(min_deg),
+            float(max_deg),
+            float(max_reach_mm),
+            bool(self.arms_from_pieces),
+            int(self.min_points),
+            float(self.min_arm_mm),
+        )
+
     def _arms(
         self,
         seg: Segments,
@@ -170,15 +187,7 @@ class ExtractorBase:
         (:func:`seamtrack.features.vgroove._v_search.search`)."""
         if not seg.n_lines:
             return Refusal("no pair of lines forms the joint")
-        params = SearchParams(
-            sign=1.0 if opening_down else -1.0,
-            min_deg=float(min_deg),
-            max_deg=float(max_deg),
-            max_reach=float(max_reach_mm),
-            pieces_too=bool(self.arms_from_pieces),
-            min_points=int(self.min_points),
-            min_arm=float(self.min_arm_mm),
-        )
+        params = self.search_params(opening_down, min_deg, max_deg, max_reach_mm)
         found = search(
             np.ascontiguousarray(seg.points, dtype=np.float64),
             np.asarray(seg.stray, dtype=np.bool_),
@@ -191,6 +200,21 @@ class ExtractorBase:
             return Refusal("no pair of lines forms the joint")
         left, right = _record(seg, found.table, pair.left), _record(seg, found.table, pair.right)
         return left, right, np.array([pair.apex_y, pair.apex_z]), float(pair.score)
+
+
+@functools.lru_cache(maxsize=64)
+def _search_params(
+    opening_down: bool,
+    min_deg: float,
+    max_deg: float,
+    max_reach: float,
+    pieces_too: bool,
+    min_points: int,
+    min_arm: float,
+) -> SearchParams:
+    """The V search's parameters, built once per set of values."""
+    sign = 1.0 if opening_down else -1.0
+    return SearchParams(sign, min_deg, max_deg, max_reach, pieces_too, min_points, min_arm)
 
 
 def _record(seg: Segments, tb: LineTable, r: int) -> Line:

@@ -10,6 +10,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.features.arrays import FloatArray, IntArray
+from seamtrack.features.line_geometry import LineThrough
 
 #: The columns of :func:`explained_share`'s zones: first and past-the-end kept point, lines.
 ZONE_LO, ZONE_HI, ZONE_LINES = range(3)
@@ -58,21 +59,13 @@ def explained_share(
 
 @numba.njit(cache=True, nogil=True)
 def support(
-    p: FloatArray,
-    surface: NDArray[np.bool_],
-    cy: float,
-    cz: float,
-    uy: float,
-    uz: float,
-    band: float,
-    x_u: float,
-    sign: float,
-    tol: float,
-) -> int:
-    """Surface points within ``band`` of the line (centroid, unit direction) on one side of
-    the point whose projection on the direction is ``x_u`` (``sign``: which side; a
-    tolerance past it counts): an arm's support
-    (:meth:`seamtrack.features.base.ExtractorBase._arms`)."""
+    p: FloatArray, surface: NDArray[np.bool_], line: LineThrough, band: float, x_u: float,
+    sign: float, tol: float,
+) -> int:  # fmt: skip
+    """Surface points within ``band`` of ``line`` on one side of the point whose projection
+    on its direction is ``x_u`` (``sign``: which side; a tolerance past it counts): an arm's
+    support (:meth:`seamtrack.features.base.ExtractorBase._arms`)."""
+    cy, cz, uy, uz = line
     n = 0
     for i in range(p.shape[0]):
         if surface[i]:

@@ -31,12 +31,11 @@ Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groov
 
 from __future__ import annotations
 
-import functools
 import importlib
 import importlib.metadata
 from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, NamedTuple, Protocol, runtime_checkable
+from typing import Any, ClassVar, NamedTuple, Protocol, runtime_checkable
 
 import numba
 import numpy as np
@@ -55,14 +54,11 @@ from seamtrack.features.plates.extractor import LapExtractor, SquareButtExtracto
 from seamtrack.features.refusal import Refusal
 from seamtrack.features.vgroove._v_search import (
     COUNT,
-    CY,
-    CZ,
     NONE,
     RMS,
     START,
-    UY,
-    UZ,
     SearchParams,
+    line_of,
     pieces_of,
     search,
 )
@@ -88,44 +84,42 @@ class FeatureExtractor(Protocol):
 
 # ----------------------------------------------------------------- extractors
 @dataclass(frozen=True)
-class FilletExtractor(ExtractorBase):
-    """Fillet / T joint: two faces meeting in a corner that opens towards the sensor.
-    Seam: the faces' intersection (the corner line)."""
+class CornerExtractor(ExtractorBase):
+    """The corner families' search: two faces whose lines cross at the seam, opening towards
+    the sensor (a fillet) or falling away from it (``opening_down``: an outside corner)."""
 
-    name: str = "fillet"
+    opening_down: ClassVar[bool] = False
     min_angle_deg: float = 45.0
     max_angle_deg: float = 150.0
     max_gap_mm: float = 2.0
 
     def _extract(self, profile: Profile, seg: Segments) -> Feature | tuple[Feature, float]:
+        down = self.opening_down
         lo, hi = self._angles(self.min_angle_deg, self.max_angle_deg)
-        fast = _corner(self, profile, seg, False, lo, hi, self.max_gap_mm)
+        fast = _corner(self, profile, seg, down, lo, hi, self.max_gap_mm)
         if fast is not None:
             return fast
-        found = self._arms(seg, False, lo, hi, self.max_gap_mm)
+        found = self._arms(seg, down, lo, hi, self.max_gap_mm)
         if isinstance(found, Refusal):
             return Feature.failed(found.reason, joint=self.name)
         return _two_faces(self, profile, seg, found)
 
 
 @dataclass(frozen=True)
-class OutsideCornerExtractor(ExtractorBase):
+class FilletExtractor(CornerExtractor):
+    """Fillet / T joint: two faces meeting in a corner that opens towards the sensor.
+    Seam: the faces' intersection (the corner line)."""
+
+    name: str = "fillet"
+
+
+@dataclass(frozen=True)
+class OutsideCornerExtractor(CornerExtractor):
     """Outside corner: two faces falling away from a ridge. Seam: their intersection."""
 
+    opening_down: ClassVar[bool] = True
     name: str = "outside-corner"
-    min_angle_deg: float = 45.0
     max_angle_deg: float = 160.0
-    max_gap_mm: float = 2.0
-
-    def _extract(self, profile: Profile, seg: Segments) -> Feature | tuple[Feature, float]:
-        lo, hi = self._angles(self.min_angle_deg, self.max_angle_deg)
-        fast = _corner(self, profile, seg, True, lo, hi, self.max_gap_mm)
-        if fast is not None:
-            return fast
-        found = self._arms(seg, True, lo, hi, self.max_gap_mm)
-        if isinstance(found, Refusal):
-            return Feature.failed(found.reason, joint=self.name)
-        return _two_faces(self, profile, seg, found)
 
 
 class CornerFound(NamedTuple):
@@ -160,9 +154,8 @@ def _corner_search(
     if l_count and r_count:
         lo, hi = index[l_start + l_count - 1] + 1, index[r_start]
         share = two_lines_share(
-            points, stray, lo, hi, (geo[left, CY], geo[left, CZ], geo[left, UY], geo[left, UZ]),
-            (geo[right, CY], geo[right, CZ], geo[right, UY], geo[right, UZ]), 3.0 * tol,
-        )  # fmt: skip
+            points, stray, lo, hi, line_of(geo, left), line_of(geo, right), 3.0 * tol
+        )
     return CornerFound(True, found.pair.apex_y, found.pair.apex_z, l_count, r_count,
                        geo[left, RMS], geo[right, RMS], share)  # fmt: skip
 
@@ -182,15 +175,7 @@ def _corner(
     expectation to check the included angle against, no pieces, a face without inliers."""
     if isinstance(ex.expect, Expect) or not seg.n_lines:
         return None
-    params = _search_params(
-        opening_down,
-        float(min_deg),
-        float(max_deg),
-        float(max_reach_mm),
-        bool(ex.arms_from_pieces),
-        int(ex.min_points),
-        float(ex.min_arm_mm),
-    )
+    params = ex.search_params(opening_down, min_deg, max_deg, max_reach_mm)
     points = np.ascontiguousarray(seg.points, dtype=np.float64)
     stray = np.asarray(seg.stray, dtype=np.bool_)
     found, apex_y, apex_z, l_count, r_count, l_rms, r_rms, share = _corner_search(
@@ -205,28 +190,6 @@ def _corner(
     fit = max(0.0, 1.0 - max(l_rms, r_rms) / seg.tol)
     confidence = min(max(float(0.5 * explained + 0.5 * fit), 0.0), 1.0)  # NaN stays NaN
     return ex._found(profile, np.array([apex_y, apex_z]), confidence=confidence), share
-
-
-@functools.lru_cache(maxsize=64)
-def _search_params(
-    opening_down: bool,
-    min_deg: float,
-    max_deg: float,
-    max_reach: float,
-    pieces_too: bool,
-    min_points: int,
-    min_arm: float,
-) -> SearchParams:
-    """The V search's parameters, built once per set of values."""
-    return SearchParams(
-        sign=1.0 if opening_down else -1.0,
-        min_deg=min_deg,
-        max_deg=max_deg,
-        max_reach=max_reach,
-        pieces_too=pieces_too,
-        min_points=min_points,
-        min_arm=min_arm,
-    )
 
 
 def _two_faces(

@@ -8,6 +8,7 @@
 * The total-least-squares fit: :func:`principal_angle` of the centred second moments, through
   chosen points (:func:`fit_points`, :func:`fit_line`) or through spans of points
   (:func:`fit_spans`, :func:`fit_range`).
+* Collinear groups: whether a group's anchor line :func:`holds` a piece.
 * :class:`Point`.
 
 Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groove).
@@ -254,6 +255,30 @@ def end_distance(line: LineThrough, t_first: float, t_last: float, y: float, z: 
     near = math.hypot(cy + t_first * dy - y, cz + t_first * dz - z)
     far = math.hypot(cy + t_last * dy - y, cz + t_last * dz - z)
     return far if far < near else near
+
+
+@numba.njit(cache=True, nogil=True)
+def holds(
+    anchor: LineThrough,
+    line: LineThrough,
+    t_first: float,
+    t_last: float,
+    cos_max: float,
+    tol: float,
+) -> bool:
+    """Whether ``anchor`` holds ``line`` in its collinear group: their directions within
+    ``acos(cos_max)`` and both of ``line``'s end inliers (at ``t_first``, ``t_last`` along it)
+    within ``tol`` of ``anchor`` (collinear_members' test, as the plates' and the V's
+    extractors group their pieces)."""
+    cy, cz, dy, dz = line
+    e0y, e0z = cy + t_first * dy, cz + t_first * dz
+    e1y, e1z = cy + t_last * dy, cz + t_last * dz
+    ay, az, ady, adz = anchor
+    return (
+        abs(ady * dy + adz * dz) >= cos_max
+        and abs((e0y - ay) * -adz + (e0z - az) * ady) <= tol
+        and abs((e1y - ay) * -adz + (e1z - az) * ady) <= tol
+    )
 
 
 class TipCorner(NamedTuple):

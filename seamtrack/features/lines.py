@@ -30,7 +30,13 @@ from seamtrack.features._segmentation import (
 from seamtrack.features.arrays import FloatArray
 from seamtrack.features.line_geometry import Line, fit_line
 from seamtrack.features.refusal import Refusal
-from seamtrack.features.robust import CONSTANT, DEFAULT_RESOLUTION_MM, TOO_FEW_POINTS, front_params
+from seamtrack.features.robust import (
+    CONSTANT,
+    DEFAULT_RESOLUTION_MM,
+    TOO_FEW_POINTS,
+    front_params,
+    profile_arrays,
+)
 from seamtrack.sensing.profiles import Profile
 
 #: A run's end piece is split at a kink of at least this much (rad): a root face at a slant.
@@ -127,11 +133,11 @@ def segment_profile(
     max_detour_mm : float
         Widest detour (spike, reflection) the surface is followed across (mm, lateral).
     """
-    pts = np.ascontiguousarray(profile.points_laser, dtype=np.float64).reshape(-1, 2)
-    valid = np.ascontiguousarray(profile.valid, dtype=np.bool_).reshape(-1)
+    arrays = profile_arrays(profile)
+    if isinstance(arrays, Refusal):
+        return arrays
+    pts, valid = arrays
     n = len(pts)
-    if valid.shape != (n,):
-        return Refusal("too few valid points (0)")
     max_lines = int(max_lines)
     # The compiled call writes into these (see :func:`seamtrack.features._segmentation.segment`).
     at = buffer_layout(n, max_lines)

@@ -465,23 +465,29 @@ def _jump_runs(p: FloatArray, kept: int, jump: float, runs: IndexArray) -> int:
     return r
 
 
+class FrontOut(NamedTuple):
+    """Where :func:`robust_front` writes, for n profile points: the kept points ``p``
+    (n, 2), their columns ``cols`` (n,), the removed spikes' columns ``spikes`` (n,), the
+    bounds of the runs between jumps ``runs`` (n + 1,) and the points of detours ``stray``
+    (n,)."""
+
+    p: FloatArray
+    cols: IndexArray
+    spikes: IndexArray
+    runs: IndexArray
+    stray: NDArray[np.bool_]
+
+
 @numba.njit(cache=True, nogil=True)
 def robust_front(
-    points: FloatArray,
-    valid: NDArray[np.bool_],
-    params: FrontParams,
-    p: FloatArray,
-    cols: IndexArray,
-    spikes: IndexArray,
-    runs: IndexArray,
-    stray: NDArray[np.bool_],
+    points: FloatArray, valid: NDArray[np.bool_], params: FrontParams, out: FrontOut
 ) -> FrontScalars:
-    """:func:`front` into given arrays: ``p`` (n, 2), ``cols``, ``spikes``, ``stray`` (n,),
-    ``runs`` (n + 1,) for n profile points.
+    """:func:`front` into the given arrays ``out``.
 
     Returns a :class:`FrontScalars`: ``kept`` points (before spikes are removed when
     ``code`` is not :data:`KEPT`), the counts of spikes and run bounds written, and the
     noise, tolerance, its floor, the spacing, the range quantum and the resolution."""
+    p, cols, spikes, runs, stray = out
     z = np.empty(points.shape[0])
     m = _bounded_points(points, valid, params.max_abs, p, z, cols)
     if m < 2 * params.min_points:
@@ -537,9 +543,19 @@ def front(points: FloatArray, valid: NDArray[np.bool_], params: FrontParams) -> 
     spikes = np.empty(n, dtype=np.int64)
     runs = np.empty(n + 1, dtype=np.int64)
     stray = np.zeros(n, dtype=np.bool_)
-    f = robust_front(points, valid, params, p, cols, spikes, runs, stray)
+    f = robust_front(points, valid, params, FrontOut(p, cols, spikes, runs, stray))
     m = f.kept
     return Front(f.code, p[:m], cols[:m], spikes[: f.n_spikes], runs[: f.n_runs], stray[:m], f)
+
+
+def profile_arrays(profile: Profile) -> tuple[FloatArray, NDArray[np.bool_]] | Refusal:
+    """A profile's points (n, 2) and valid flags (n,) as the compiled front end takes them
+    (contiguous), or a refusal when the flags do not match the points."""
+    pts = np.ascontiguousarray(profile.points_laser, dtype=np.float64).reshape(-1, 2)
+    valid = np.ascontiguousarray(profile.valid, dtype=np.bool_).reshape(-1)
+    if valid.shape != (len(pts),):
+        return Refusal("too few valid points (0)")
+    return pts, valid
 
 
 def front_end(
@@ -562,10 +578,10 @@ def front_end(
     dropped, the noise again over :data:`NOISE_LAGS`, the runs between jumps and their
     detours (:func:`detours`).
     """
-    pts = np.ascontiguousarray(profile.points_laser, dtype=np.float64).reshape(-1, 2)
-    valid = np.ascontiguousarray(profile.valid, dtype=np.bool_).reshape(-1)
-    if valid.shape != (len(pts),):
-        return Refusal("too few valid points (0)")
+    arrays = profile_arrays(profile)
+    if isinstance(arrays, Refusal):
+        return arrays
+    pts, valid = arrays
     params = front_params(min_points, resolution_mm, min_tol_mm, sigma_factor, max_detour_mm)
     fr = front(pts, valid, params)
     if fr.code == TOO_FEW_POINTS:

@@ -308,10 +308,7 @@ def groove_profile(
     artefacts: Any = "default",
     sensor: Any = None,
     rays: int = 2048,
-    pitch_deg: float = 0.0,
-    roll_deg: float = 0.0,
-    lateral_offset_mm: float = 0.0,
-    standoff_mm: float | None = None,
+    **pose: Any,
 ) -> tuple[Any, GrooveTruth]:
     """The profile a sensor measures across groove ``g`` whose top surface is ``surface``
     (default: empty), and its :class:`GrooveTruth`.
@@ -319,8 +316,9 @@ def groove_profile(
     ``artefacts``: a :class:`~seamtrack.features.artefacts.SensorArtefacts` (default: the
     real-sensor model's defaults) or None (an exact profile, pixel-quantized by ``sensor``).
     ``sensor``: default the ``wide`` preset (40-80 mm field of view), unquantized under the
-    artefact model. The pose arguments are those of
-    :func:`~seamtrack.features.synthetic.synthetic_profile`; the frames' joint frame is the
+    artefact model. ``pose``: the pose arguments of
+    :func:`~seamtrack.features.synthetic.synthetic_profile` (``pitch_deg``, ``roll_deg``,
+    ``lateral_offset_mm``, ``standoff_mm``, with its defaults); the frames' joint frame is the
     station frame with z flipped (into the part)."""
     import dataclasses
 
@@ -332,14 +330,7 @@ def groove_profile(
     pts = groove_points(g, s)
     joint_pts = to_joint(pts)
     section = (section_segments(s), joint_pts[MIDDLE], to_joint(g.top), math.nan)
-    pose: dict[str, Any] = dict(
-        rays=rays,
-        pitch_deg=pitch_deg,
-        roll_deg=roll_deg,
-        lateral_offset_mm=lateral_offset_mm,
-        standoff_mm=standoff_mm,
-        section=section,
-    )
+    pose = {**pose, "rays": rays, "section": section}
     if artefacts is None:
         base = preset("wide") if sensor is None else sensor
         profile, truth = synthetic_profile("groove", base, **pose)

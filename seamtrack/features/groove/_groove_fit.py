@@ -72,22 +72,24 @@ MIRROR_DEG = 2.0
 MIRROR_SHARE = 0.75
 
 
+#: A point within RAY_BAND_MM of the fill surface's line whose ray meets the line at most
+#: RAY_REACH_MM beyond the surface's outermost point stands for a column that lit the surface
+#: there (:func:`ray_reach`; mm).
+RAY_BAND_MM = 6.0
+RAY_REACH_MM = 1.0
+
+
 def ray_reach(
-    points: FloatArray,
-    u: FloatArray,
-    v: FloatArray,
-    a: float,
-    b: float,
-    out_u: float,
+    points: FloatArray, u: FloatArray, v: FloatArray, surface: tuple[float, float], out_u: float,
     left: bool,
-    reach: float = 1.0,
-    band: float = 6.0,
-) -> float:
-    """How far (u) the surface v = a + b u reaches towards a side with no wall seen: each
-    point (spikes too) within ``band`` of the line whose ray (from the sensor's origin, the
-    laser frame's (0, 0)) meets the line at most ``reach`` beyond ``out_u`` (the surface's
-    outermost point on its line) stands for a column that lit the surface there; the
-    outermost of those crossings, or ``out_u``."""
+) -> float:  # fmt: skip
+    """How far (u) the ``surface`` v = a + b u (``(a, b)``) reaches towards a side with no
+    wall seen (``left``, else right): each point (spikes too) within :data:`RAY_BAND_MM` of the
+    line whose ray (from the sensor's origin, the laser frame's (0, 0)) meets the line at most
+    :data:`RAY_REACH_MM` beyond ``out_u`` (the surface's outermost point on its line) stands
+    for a column that lit the surface there; the outermost of those crossings, or ``out_u``."""
+    a, b = surface
+    reach, band = RAY_REACH_MM, RAY_BAND_MM
     sign = 1.0 if left else -1.0
     pu, pv = points @ u, points @ v
     near = np.abs(pv - (a + b * pu)) <= band

@@ -33,23 +33,25 @@ FLANK_MM = 0.4
 INNER_SLOPE = 0.3
 
 
+#: A round's deepest point is a running median's over ROUND_WINDOW_MM; a hidden wall's round
+#: (:func:`risen_level`'s ``fine``: the round's rise is all there is of its foot) is read over
+#: FINE_RISE_MM, its outer end of the points themselves.
+ROUND_WINDOW_MM = 0.3
+FINE_RISE_MM = 0.2
+
+
 def risen_level(
-    fu: FloatArray,
-    fv: FloatArray,
-    left: bool,
-    spacing: float,
-    tol: float,
-    window: float = 0.3,
-    raw_end: bool = False,
+    fu: FloatArray, fv: FloatArray, left: bool, spacing: float, tol: float, fine: bool = False
 ) -> float | None:
     """The level (v) of the fill surface's deepest part near a side, when the surface rises
     from there into the wall (a U's round, bare or partly filled; None when it does not).
 
     Two reads of the side, either may find the rise:
 
-    * **a round**: the deepest point of a running median over ``window`` mm (cut short at the
-      ends) lies at least a quarter of a millimetre in from the surface's outer end (its last
-      0.1 mm, of the running median or with ``raw_end`` of the points), which stands at least
+    * **a round**: the deepest point of a running median over :data:`ROUND_WINDOW_MM`
+      (``fine``: :data:`FINE_RISE_MM`; cut short at the ends) lies at least a quarter of a
+      millimetre in from the surface's outer end (its last 0.1 mm, of the running median or,
+      ``fine``, of the points), which stands at least
       0.3 mm above it and rises at least 0.45 times as much as it runs from the deepest
       part's nearest point (the synthetic 3 mm round: 0.42-1.2 bare, more beside a bead; a
       root bead's concave face, the fill's own, rises 0.13-0.43 times on the Keyence
@@ -71,6 +73,7 @@ def risen_level(
         return None
     order = np.argsort(zd, kind="stable")
     zv, zd = zv[order], zd[order]
+    window, raw_end = (FINE_RISE_MM, True) if fine else (ROUND_WINDOW_MM, False)
     level = _round_level(zd, zv, spacing, tol, window, raw_end)
     near = zd <= 1.5
     nd, nv = zd[near], zv[near]

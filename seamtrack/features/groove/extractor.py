@@ -165,8 +165,6 @@ MEDIAN_TOLS, MEDIAN_FLOOR_MM = 3.0, 0.2
 #: The fill surface's largest stretch has no break wider than this; towards a side with no
 #: wall seen, a break up to ``SHADOW_MM`` is a shadow.
 BREAK_MM, SHADOW_MM = 2.0, 2.5
-#: A hidden wall's round: its rise read over this.
-FINE_RISE_MM = 0.2
 #: The surface's line for a bottom corner: fitted over its first this-many mm from the wall;
 #: a crossing within this of the surface's outermost point is the corner.
 SURFACE_END_MM = 1.5
@@ -648,8 +646,7 @@ def _risen_corner(
     """The wall's line at the level of a fill that rises into it in a round (None: no rise,
     or a wall along the surface); a hidden wall's (its mirror's) rise is read finer: the
     round's rise is all there is of its foot."""
-    fine = not len(wall.index)
-    level = risen_level(fu, fv, left, seg.spacing, seg.tol, *((FINE_RISE_MM, True) if fine else ()))
+    level = risen_level(fu, fv, left, seg.spacing, seg.tol, fine=not len(wall.index))
     if level is None:
         return None
     cu, cv = float(wall.centroid @ u), float(wall.centroid @ v)
@@ -720,7 +717,7 @@ def _surface_end(
             if math.hypot(x[0] - ou, x[1] - ov) <= UNLIT_MM:
                 return np.asarray(x[0] * u + x[1] * v)
     if fit is not None and columns is not None:  # on its line, as far as its rays go
-        ou = ray_reach(columns, u, v, fit[0], fit[1], ou, end.left)
+        ou = ray_reach(columns, u, v, fit, ou, end.left)
         ov = fit[0] + fit[1] * ou
     return _inside(seg, ou, ov, u, v, sign)
 

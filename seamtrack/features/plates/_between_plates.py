@@ -87,6 +87,13 @@ _SEEN = HiddenEdge(False, Point(0.0, 0.0))
 NO_HOLE = Hole(0.0, _SEEN, _SEEN)
 
 
+@numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
+def _breaks(k: IntArray, t: FloatArray, i: int, spacing: float) -> bool:
+    """Whether a stretch of consecutive kept points (positions ``k``, at ``t`` along the line)
+    ends before ``k[i]``: another point or a jump of three spacings between it and ``k[i - 1]``."""
+    return k[i] - k[i - 1] > 1 or abs(t[k[i]] - t[k[i - 1]]) > 3.0 * spacing
+
+
 @numba.njit(cache=True, nogil=True, error_model="numpy")
 def _stretch_ends(keep: NDArray[np.bool_], t: FloatArray, spacing: float, first: bool) -> Stretches:
     """Of the stretches of consecutive kept points (broken by another point or a jump of
@@ -96,12 +103,12 @@ def _stretch_ends(keep: NDArray[np.bool_], t: FloatArray, spacing: float, first:
     n = k.shape[0]
     hi_first = n
     for i in range(1, n):
-        if k[i] - k[i - 1] > 1 or abs(t[k[i]] - t[k[i - 1]]) > 3.0 * spacing:
+        if _breaks(k, t, i, spacing):
             hi_first = i
             break
     lo_last = 0
     for i in range(n - 1, 0, -1):
-        if k[i] - k[i - 1] > 1 or abs(t[k[i]] - t[k[i - 1]]) > 3.0 * spacing:
+        if _breaks(k, t, i, spacing):
             lo_last = i
             break
     t0 = t[k[0]]
@@ -128,7 +135,7 @@ def _covered(keep: NDArray[np.bool_], t: FloatArray, spacing: float, ta: float, 
     i = 0
     while i < n:
         j = i + 1
-        while j < n and not (k[j] - k[j - 1] > 1 or abs(t[k[j]] - t[k[j - 1]]) > 3.0 * spacing):
+        while j < n and not _breaks(k, t, j, spacing):
             j += 1
         lo = t[k[i]]
         hi = t[k[i]]

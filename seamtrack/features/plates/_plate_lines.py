@@ -17,6 +17,7 @@ import numba
 import numpy as np
 
 from seamtrack.features.arrays import FloatArray, IntArray
+from seamtrack.features.line_geometry import holds
 from seamtrack.features.plates._two_lines import PieceLines, median, piece_line
 
 
@@ -121,17 +122,10 @@ def _flat_groups(
     ng = 0
     for o in order:
         i = flat[o]
-        cy, cz, dy, dz = piece_line(lines, i)
-        e0y, e0z = cy + t_first[i] * dy, cz + t_first[i] * dz
-        e1y, e1z = cy + t_last[i] * dy, cz + t_last[i] * dz
+        line = piece_line(lines, i)
         joined = -1
         for k in range(ng):
-            ay, az, ady, adz = piece_line(lines, anchors[k])
-            if (
-                abs(ady * dy + adz * dz) >= cos_max
-                and abs((e0y - ay) * -adz + (e0z - az) * ady) <= tol
-                and abs((e1y - ay) * -adz + (e1z - az) * ady) <= tol
-            ):
+            if holds(piece_line(lines, anchors[k]), line, t_first[i], t_last[i], cos_max, tol):
                 joined = k
                 break
         if joined < 0:

@@ -27,6 +27,8 @@ from seamtrack.features.counts import (
 )
 from seamtrack.features.vgroove._v_root import (
     Bevels,
+    KeptPoints,
+    Root,
     RootEnds,
     at_depth,
     bridged,
@@ -72,24 +74,13 @@ GROOVE, NO_V, NO_PLATE, SIDE_ALONG_PLATE, WIDE_ROOT = range(5)
 
 
 class GrooveParams(NamedTuple):
-    """The V-groove extractor's parameters as the model reads them: the fewest inliers and
-    the shortest extent (mm) of a bevel, the included angle's range (deg), the widest and
-    narrowest root gap (mm), pieces in no group as bevels too, no gap expected; the expected
-    seam point (y, z; a tracker's hint) and its tolerance across and in range (mm; 0: no
-    hint)."""
+    """The V-groove extractor's parameters as the model reads them: the V search's for the
+    bevels (a V opening towards the sensor, ``max_reach`` the widest root gap, the tracker's
+    hint when there is one), the narrowest root gap (mm) and whether no gap is expected."""
 
-    min_points: int
-    min_arm: float
-    min_deg: float
-    max_deg: float
-    max_gap: float
+    search: SearchParams
     min_gap: float
-    pieces_too: bool
     gapless: bool
-    hint_y: float = math.nan
-    hint_z: float = math.nan
-    tol_y: float = 0.0
-    tol_z: float = 0.0
 
 
 class VGrooveResult(NamedTuple):
@@ -112,15 +103,6 @@ class VGrooveResult(NamedTuple):
     angle: float
     depth: float
     root_share: float
-
-
-class Root(NamedTuple):
-    """The bevels' lower ends, whether a stray line covered one, and whether they are sure
-    (not put at the other's depth or in the middle of a covered stretch)."""
-
-    ends: RootEnds
-    covered: bool
-    sure: bool
 
 
 class SidePlates(NamedTuple):
@@ -287,7 +269,9 @@ def _explained(points, surface, tb, bevels, outer_l, outer_r, tol):
 
 @numba.njit(cache=True, nogil=True)
 def v_groove(points, stray, columns, runs, tol, sigma, spacing, pieces, params):
-    """:meth:`VGrooveExtractor._extract` after segmentation, on the profile's pieces
+    """:meth:`VGrooveExtractor._extract` after segmentation, on the profile's kept points
+    (the fields of a :class:`~._v_root.KeptPoints`, loose: numba reads a named tuple from
+    Python in about a microsecond, its arrays in a tenth of that) and pieces
     (:class:`~seamtrack.features._segmentation.PieceTable`), with the extractor's
     :class:`GrooveParams`; a :class:`VGrooveResult`.
 
@@ -304,29 +288,12 @@ def v_groove(points, stray, columns, runs, tol, sigma, spacing, pieces, params):
     the confidence, the included angle, the depth below the plates and the share of the
     profile the model explains (the root left out).
     """
-    found = search(
-        points,
-        stray,
-        tol,
-        pieces,
-        SearchParams(
-            -1.0,  # sign: a V, opening towards the sensor
-            params.min_deg,
-            params.max_deg,
-            params.max_gap,
-            params.pieces_too,
-            params.min_points,
-            params.min_arm,
-            params.hint_y,
-            params.hint_z,
-            params.tol_y,
-            params.tol_z,
-        ),
-    )
+    kept = KeptPoints(points, stray, columns, runs)
+    found = search(points, stray, tol, pieces, params.search)
     tb, groups, surface, pair = found.table, found.groups, found.surface, found.pair
     n = pieces.fits.shape[0]
     m = points.shape[0]
-    geo, min_points = tb.geo, params.min_points
+    geo, min_points = tb.geo, params.search.min_points
     if pair.left == NONE:
         return _refused(NO_V)
     bevels = Bevels(pair.left, pair.right, pair.apex_y, pair.apex_z)
@@ -356,28 +323,13 @@ def v_groove(points, stray, columns, runs, tol, sigma, spacing, pieces, params):
     root = _covered_root(
         points, tb, n, bevels, RootEnds(lx, lz, rx, rz), ref_l, ref_r, tol, spacing, sigma
     )
-    ends, covered, sure = root.ends, root.covered, root.sure
+    ends, sure = root.ends, root.sure
     lx, lz, rx, rz = ends
     gap = math.hypot(rx - lx, rz - lz)
     if gap <= pmax(params.min_gap, 2.0 * spacing + tol) or params.gapless:
         sy, sz, gap = ax, az, 0.0
     elif not gap_seen(
-        points,
-        stray,
-        surface,
-        columns,
-        runs,
-        tb,
-        n,
-        bevels,
-        ends,
-        ref_l,
-        ref_r,
-        gap,
-        covered,
-        min_points,
-        tol,
-        spacing,
+        kept, surface, tb, n, bevels, root, ref_l, ref_r, gap, min_points, tol, spacing
     ):
         # No gap shows between the bevels' lower ends: they end where spikes, dropouts or a
         # fill take over, not at the root. Their intersection is the best estimate.

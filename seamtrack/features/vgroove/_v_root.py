@@ -18,7 +18,9 @@ from typing import NamedTuple
 
 import numba
 import numpy as np
+from numpy.typing import NDArray
 
+from seamtrack.features.arrays import FloatArray, IntArray
 from seamtrack.features.line_geometry import Point
 from seamtrack.features.lines import WALL_DEG
 from seamtrack.features.select import sort_small
@@ -67,6 +69,26 @@ class RootEnds(NamedTuple):
     lz: float
     ry: float
     rz: float
+
+
+class Root(NamedTuple):
+    """The bevels' lower ends, whether a stray line covered one, and whether they are sure
+    (not put at the other's depth or in the middle of a covered stretch)."""
+
+    ends: RootEnds
+    covered: bool
+    sure: bool
+
+
+class KeptPoints(NamedTuple):
+    """A segmented profile's kept points (n, 2) in column order, the points of its detours
+    (``stray``), the points' columns in the profile and the bounds of the runs between jumps:
+    :class:`~seamtrack.features.lines.Segments`' arrays, as the v-groove's model reads them."""
+
+    points: FloatArray
+    stray: NDArray[np.bool_]
+    columns: IntArray
+    runs: IntArray
 
 
 class CoveredEnd(NamedTuple):
@@ -433,30 +455,17 @@ def bridged(tb, n, bevels, ends, plate, min_points, tol, spacing):
 
 
 @numba.njit(cache=True, nogil=True)
-def gap_seen(
-    points,
-    stray,
-    surface,
-    columns,
-    runs,
-    tb,
-    n,
-    bevels,
-    ends,
-    plate_l,
-    plate_r,
-    gap,
-    covered,
-    min_points,
-    tol,
-    spacing,
-):
+def gap_seen(kept, surface, tb, n, bevels, root, plate_l, plate_r, gap, min_points, tol, spacing):
     """Whether the stretch between the bevels' lower ends is a root gap: the ends lie at one
     depth (not read where a stray line hides an end: its depth is then taken from the
     other), no detour lies between them (a surface continuing across spikes), the V's tip
     below them is empty and the columns between them are open (the laser falls through the
-    gap). Otherwise the bevels end where spikes, dropouts or a fill take over."""
-    if not covered and not level(tb, bevels, ends, plate_l, plate_r, gap, tol):
+    gap). Otherwise the bevels end where spikes, dropouts or a fill take over. ``kept``: the
+    profile's :class:`KeptPoints`; ``root``: the bevels' lower ends (a :class:`Root`), ``gap``
+    apart."""
+    points, stray, columns, runs = kept
+    ends = root.ends
+    if not root.covered and not level(tb, bevels, ends, plate_l, plate_r, gap, tol):
         return False
     lo, hi = last(tb, bevels.left), first(tb, bevels.right)
     m = points.shape[0]

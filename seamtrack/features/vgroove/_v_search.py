@@ -42,6 +42,7 @@ from seamtrack.features.line_geometry import (
     Point,
     corner_near,
     fit_line,
+    holds,
 )
 from seamtrack.features.select import sort_small
 
@@ -153,6 +154,12 @@ def new_table(pieces: PieceTable) -> LineTable:
     used = np.zeros(2, dtype=np.int64)
     used[0], used[1] = n, total
     return LineTable(geo, span, pool_index, pool_t, used)
+
+
+@numba.njit(cache=True, nogil=True)
+def line_of(geo: FloatArray, r: int) -> LineThrough:
+    """Record ``r``'s line (centroid and unit direction) of a :attr:`LineTable.geo`."""
+    return LineThrough(geo[r, CY], geo[r, CZ], geo[r, UY], geo[r, UZ])
 
 
 @numba.njit(cache=True, nogil=True)
@@ -300,18 +307,11 @@ def groups_of(points, tb, n, tol, min_points, min_arm):
     member = np.empty(n, dtype=np.int64)
     groups = 0
     for i in order:
-        cy, cz, dy, dz = geo[i, CY], geo[i, CZ], geo[i, UY], geo[i, UZ]
+        line = line_of(geo, i)
         t0, t1 = t_end(tb, i, False), t_end(tb, i, True)
-        e0y, e0z, e1y, e1z = cy + t0 * dy, cz + t0 * dz, cy + t1 * dy, cz + t1 * dz
         joined = -1
         for k in range(groups):
-            a = anchor[k]
-            ay, az, ady, adz = geo[a, CY], geo[a, CZ], geo[a, UY], geo[a, UZ]
-            if (
-                abs(ady * dy + adz * dz) >= COS_GROUP
-                and abs((e0y - ay) * -adz + (e0z - az) * ady) <= tol
-                and abs((e1y - ay) * -adz + (e1z - az) * ady) <= tol
-            ):
+            if holds(line_of(geo, anchor[k]), line, t0, t1, COS_GROUP, tol):
                 joined = k
                 break
         if joined < 0:
@@ -453,8 +453,8 @@ def _v_apex(geo, a, b, sign, min_deg, max_deg):
     a ridge (+1) with an included angle in ``min_deg``..``max_deg`` and a bisector within 45
     deg of the range axis; the apex (y, z), the left arm's record and unit direction from
     the apex, then the right's."""
-    ay, az, ady, adz = geo[a, CY], geo[a, CZ], geo[a, UY], geo[a, UZ]
-    by, bz, bdy, bdz = geo[b, CY], geo[b, CZ], geo[b, UY], geo[b, UZ]
+    ay, az, ady, adz = line_of(geo, a)
+    by, bz, bdy, bdz = line_of(geo, b)
     d = ady * bdz - adz * bdy
     if abs(d) < 1e-9:
         return VApex(False, 0.0, 0.0, a, 0.0, 0.0, b, 0.0, 0.0)  # parallel: no apex
@@ -483,10 +483,10 @@ def _v_apex(geo, a, b, sign, min_deg, max_deg):
 def _arm_support(points, surface, geo, r, vy, vz, xy, xz, band, tol):
     """The :func:`~seamtrack.features.counts.support` of record ``r`` as an arm leaving the
     apex (``xy``, ``xz``) along (``vy``, ``vz``)."""
-    gy, gz, gdy, gdz = geo[r, CY], geo[r, CZ], geo[r, UY], geo[r, UZ]
-    side = 1.0 if vy * gdy + vz * gdz > 0 else -1.0
-    x_u = xy * gdy + xz * gdz
-    return support(points, surface, gy, gz, gdy, gdz, band, x_u, side, tol)
+    line = line_of(geo, r)
+    side = 1.0 if vy * line.dy + vz * line.dz > 0 else -1.0
+    x_u = xy * line.dy + xz * line.dz
+    return support(points, surface, line, band, x_u, side, tol)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -545,7 +545,7 @@ def corner_with(tb, line, at_end, others, spacing, tol):
     exact; :func:`~seamtrack.features.line_geometry.corner_crossing`), else (:data:`NONE`)
     half a spacing beyond its last inlier (the edge lies between rays)."""
     geo = tb.geo
-    cy, cz, dy, dz = geo[line, CY], geo[line, CZ], geo[line, UY], geo[line, UZ]
+    cy, cz, dy, dz = line_of(geo, line)
     t_tip = t_end(tb, line, at_end)
     tip_y, tip_z = cy + t_tip * dy, cz + t_tip * dz
     reach = 3.0 * pmax(step(tb, line, at_end), spacing) + tol
@@ -554,7 +554,7 @@ def corner_with(tb, line, at_end, others, spacing, tol):
     for other in others:
         if other == line:
             continue
-        there = LineThrough(geo[other, CY], geo[other, CZ], geo[other, UY], geo[other, UZ])
+        there = line_of(geo, other)
         wide = pmax(pmax(step(tb, other, True), step(tb, other, False)), spacing)
         c = corner_near(
             here, tip_y, tip_z, there, t_end(tb, other, False), t_end(tb, other, True),

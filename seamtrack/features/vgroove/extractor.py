@@ -158,22 +158,18 @@ class VGrooveExtractor(ExtractorBase):
             return Feature.failed(_REFUSALS[NO_V], joint=self.name)
         lo, hi = self._angles(self.min_angle_deg, self.max_angle_deg)
         expect = self.expect if isinstance(self.expect, Expect) else None
-        params = GrooveParams(
-            min_points=int(self.min_points),
-            min_arm=float(self.min_arm_mm),
-            min_deg=float(lo),
-            max_deg=float(hi),
-            max_gap=float(self.max_gap_mm),
-            min_gap=float(self.min_gap_mm),
-            pieces_too=bool(self.arms_from_pieces),
-            gapless=bool(expect is not None and expect.gapless),
-        )
+        search = self.search_params(False, lo, hi, self.max_gap_mm)  # the bevels reach the root
         if hint is not None:  # prefer the V nearest the expected seam point, within the gate
             hy, hz = hint.point_laser
             ty, tz = hint.tolerance_mm
-            params = params._replace(
+            search = search._replace(
                 hint_y=float(hy), hint_z=float(hz), tol_y=float(ty), tol_z=float(tz)
             )
+        params = GrooveParams(
+            search=search,
+            min_gap=float(self.min_gap_mm),
+            gapless=bool(expect is not None and expect.gapless),
+        )
         groove = v_groove(
             np.ascontiguousarray(seg.points, dtype=np.float64),
             np.asarray(seg.stray, dtype=np.bool_),
