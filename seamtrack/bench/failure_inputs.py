@@ -27,7 +27,10 @@ from seamtrack.bench.failure_kit import (
     SHORT,
     Entry,
     dataset_args,
+    naming_key,
     run_args,
+    run_set,
+    seams_of,
     set_args,
 )
 
@@ -155,17 +158,11 @@ GENERATED: dict[str, Any] = {"sheet.step": _no_solid, "apart.step": _apart}
 
 CATALOGUE: tuple[Entry, ...] = (
     # --- scene files and keys
-    Entry("unknown key", run_args(*set_args("sensor.frame_rte_hz=2")), field="sensor.frame_rte_hz"),
-    Entry(
-        "'yes' for a boolean", run_args(*set_args('sensor.quantize="yes"')), field="sensor.quantize"
-    ),
-    Entry(
-        "false for a number", run_args(*set_args("sensor.look_ahead_mm=false")), field="look_ahead"
-    ),
-    Entry("true for a seed", run_args(*set_args("simulation.seed=true")), field="simulation.seed"),
-    Entry(
-        "NaN speed", run_args(*set_args("simulation.welding_speed_mm_s=nan")), field="welding_speed"
-    ),
+    naming_key("unknown key", run_set("sensor.frame_rte_hz=2")),
+    naming_key("'yes' for a boolean", run_set('sensor.quantize="yes"')),
+    Entry("false for a number", run_set("sensor.look_ahead_mm=false"), field="look_ahead"),
+    naming_key("true for a seed", run_set("simulation.seed=true")),
+    Entry("NaN speed", run_set("simulation.welding_speed_mm_s=nan"), field="welding_speed"),
     Entry("binary scene file", ("check", "binary.toml"), field="SCENE"),
     Entry("empty scene file", ("check", "empty.toml"), field="SCENE"),
     Entry("comment-only scene file", ("check", "comments.toml"), field="SCENE"),
@@ -173,60 +170,33 @@ CATALOGUE: tuple[Entry, ...] = (
     Entry("missing scene file", run_args("missing.toml"), field="SCENE"),
     Entry("unknown built-in scene", run_args("paper-verifcation"), field="SCENE"),
     # --- sizes that would not fit in memory
-    Entry("1e8 rays", run_args(*set_args("sensor.rays=100000000")), field="sensor.rays"),
-    Entry("unknown laser fan", run_args(*set_args('sensor.fan="optix"')), field="sensor.fan"),
+    naming_key("1e8 rays", run_set("sensor.rays=100000000")),
+    naming_key("unknown laser fan", run_set('sensor.fan="optix"')),
     Entry(
         "plane-section fan in float32",
-        run_args(*set_args('sensor.fan="section"', "sensor.refine_float64=false")),
+        run_set('sensor.fan="section"', "sensor.refine_float64=false"),
         field="sensor.fan",
     ),
-    Entry("seam step 1e-6 mm", run_args(*set_args("seam.step_mm=1e-6")), field="seam.step_mm"),
-    Entry("seam length 1e9 mm", run_args(*set_args("seam.length_mm=1e9")), field="seam.step_mm"),
-    Entry(
-        "control period 1e-8 s", run_args(*set_args("robot.control_period_s=1e-8")), field="control"
-    ),
-    Entry(
-        "trace period 1e-9 s", run_args(*set_args("simulation.trace_period_s=1e-9")), field="trace"
-    ),
-    Entry(
-        "near-zero speed",
-        run_args(*set_args("simulation.welding_speed_mm_s=1e-3")),
-        field="control",
-    ),
-    Entry(
-        "mesh tolerance 1e-9 mm",
-        run_args(*MESH, *set_args("workpiece.tolerance_mm=1e-9")),
-        field="workpiece.tolerance_mm",
-    ),
-    Entry(
+    naming_key("seam step 1e-6 mm", run_set("seam.step_mm=1e-6")),
+    Entry("seam length 1e9 mm", run_set("seam.length_mm=1e9"), field="seam.step_mm"),
+    Entry("control period 1e-8 s", run_set("robot.control_period_s=1e-8"), field="control"),
+    Entry("trace period 1e-9 s", run_set("simulation.trace_period_s=1e-9"), field="trace"),
+    Entry("near-zero speed", run_set("simulation.welding_speed_mm_s=1e-3"), field="control"),
+    naming_key("mesh tolerance 1e-9 mm", run_args(*MESH, *set_args("workpiece.tolerance_mm=1e-9"))),
+    naming_key(
         "mesh tolerance too fine for the part",
         run_args("paper-v-groove", *set_args("workpiece.tolerance_mm=2e-4")),
         quick=False,
-        field="workpiece.tolerance_mm",
     ),
     # --- seam files
-    Entry(
-        "NaN in a seam file",
-        run_args(*set_args('seam.source="csv"', 'seam.file="nan.csv"')),
-        field="seam.file",
-    ),
-    Entry(
-        "one-point seam",
-        run_args(*set_args('seam.source="csv"', 'seam.file="one.csv"')),
-        field="seam",
-    ),
-    Entry("text in a seam file", run_args(*set_args('seam.source="csv"', 'seam.file="text.csv"'))),
-    Entry("missing seam file", run_args(*set_args('seam.source="csv"', 'seam.file="nope.csv"'))),
-    Entry(
-        "points source without points", run_args(*set_args('seam.source="points"')), field="points"
-    ),
+    naming_key("NaN in a seam file", run_set('seam.source="csv"', 'seam.file="nan.csv"')),
+    Entry("one-point seam", run_set('seam.source="csv"', 'seam.file="one.csv"'), field="seam"),
+    Entry("text in a seam file", run_set('seam.source="csv"', 'seam.file="text.csv"')),
+    Entry("missing seam file", run_set('seam.source="csv"', 'seam.file="nope.csv"')),
+    Entry("points source without points", run_set('seam.source="points"'), field="points"),
     # --- free-form sections
     *(
-        Entry(
-            f"stripe_noise {kv}",
-            run_args(*set_args(f"sensor.stripe_noise.{kv}")),
-            field=kv.split("=")[0],
-        )
+        Entry(f"stripe_noise {kv}", run_set(f"sensor.stripe_noise.{kv}"), field=kv.split("=")[0])
         for kv in (
             "range_sigma_mm=-1",
             "dropout_rate=2",
@@ -240,128 +210,67 @@ CATALOGUE: tuple[Entry, ...] = (
     *(
         Entry(
             f"tracker.params {kv}",
-            run_args(*set_args('tracker.name="trajectory"', f"tracker.params.{kv}")),
+            run_set('tracker.name="trajectory"', f"tracker.params.{kv}"),
             field=kv.split("=")[0],
         )
         for kv in ("gain_1_s=[1,2]", 'gain_1_s="x"', "bridge_mm=-inf", "use_capture_pose=1")
     ),
-    Entry("unknown tracker", run_args(*set_args('tracker.name="nope"')), field="tracker.name"),
-    Entry(
-        "missing tracker module",
-        run_args(*set_args('tracker.name="nomod:X"')),
-        field="tracker.name",
-    ),
-    Entry(
-        "negative radius", run_args(*set_args("tracker.radius_mm=-1")), field="tracker.radius_mm"
-    ),
+    naming_key("unknown tracker", run_set('tracker.name="nope"')),
+    naming_key("missing tracker module", run_set('tracker.name="nomod:X"')),
+    naming_key("negative radius", run_set("tracker.radius_mm=-1")),
     # --- impossible optics and geometry
-    Entry("unknown preset", run_args(*set_args('sensor.preset="nope"')), field="preset"),
-    Entry(
-        "impossible field of view", run_args(*set_args("sensor.fov_near_mm=100")), field="sensor"
-    ),
-    Entry("seam out of reach", run_args(*set_args("seam.offset_mm=[500, 0, 0]")), field="seam"),
-    Entry(
-        "frame rate below control",
-        run_args(*set_args("sensor.frame_rate_hz=5000")),
-        field="control",
-    ),
+    Entry("unknown preset", run_set('sensor.preset="nope"'), field="preset"),
+    Entry("impossible field of view", run_set("sensor.fov_near_mm=100"), field="sensor"),
+    Entry("seam out of reach", run_set("seam.offset_mm=[500, 0, 0]"), field="seam"),
+    Entry("frame rate below control", run_set("sensor.frame_rate_hz=5000"), field="control"),
     # --- articulated arms
-    Entry("unknown robot model", run_args(*set_args('robot.model="ur10"')), field="robot.model"),
-    Entry(
-        "URDF that does not parse",
-        run_args(*set_args('robot.urdf="broken.urdf"')),
-        field="robot.urdf",
-    ),
+    naming_key("unknown robot model", run_set('robot.model="ur10"')),
+    naming_key("URDF that does not parse", run_set('robot.urdf="broken.urdf"')),
     Entry(
         "seam point out of an arm's reach",
-        run_args(*set_args(*ARM[:2], "robot.base_origin_mm=[-1400,-700,0]")),
+        run_set(*ARM[:2], "robot.base_origin_mm=[-1400,-700,0]"),
         field="seam",
     ),
-    Entry(
-        "sensor mounted inside the part",
-        run_args(*set_args(*ARM, "robot.tool.sensor_xyz_mm=[10,0,-60]")),
-        field="robot.tool.sensor_xyz_mm",
+    naming_key(
+        "sensor mounted inside the part", run_set(*ARM, "robot.tool.sensor_xyz_mm=[10,0,-60]")
     ),
-    Entry(
-        "servo gain that rings", run_args(*set_args("robot.servo_gain_1_s=900")), field="servo_gain"
-    ),
+    Entry("servo gain that rings", run_set("robot.servo_gain_1_s=900"), field="servo_gain"),
     # --- the camera (image mode)
-    Entry(
-        "f-number 0",
-        run_args(*set_args("sensor.camera.f_number=0")),
-        field="sensor.camera.f_number",
+    naming_key("f-number 0", run_set("sensor.camera.f_number=0")),
+    naming_key("f-number -2.8", ("render", *CAMERA, *set_args("sensor.camera.f_number=-2.8"))),
+    naming_key("wavelength 150 nm", run_set("sensor.camera.wavelength_nm=150")),
+    naming_key(
+        "wavelength 2500 nm", ("render", *CAMERA, *set_args("sensor.camera.wavelength_nm=2500"))
     ),
-    Entry(
-        "f-number -2.8",
-        ("render", *CAMERA, *set_args("sensor.camera.f_number=-2.8")),
-        field="sensor.camera.f_number",
+    naming_key("line wider than the field", run_set("sensor.camera.line_thickness_mm=30")),
+    naming_key(
+        "roi off the chip", run_set("sensor.camera.rows=100", "sensor.camera.roi=[0, 200, 0, 50]")
     ),
-    Entry(
-        "wavelength 150 nm",
-        run_args(*set_args("sensor.camera.wavelength_nm=150")),
-        field="sensor.camera.wavelength_nm",
-    ),
-    Entry(
-        "wavelength 2500 nm",
-        ("render", *CAMERA, *set_args("sensor.camera.wavelength_nm=2500")),
-        field="sensor.camera.wavelength_nm",
-    ),
-    Entry(
-        "line wider than the field",
-        run_args(*set_args("sensor.camera.line_thickness_mm=30")),
-        field="sensor.camera.line_thickness_mm",
-    ),
-    Entry(
-        "roi off the chip",
-        run_args(*set_args("sensor.camera.rows=100", "sensor.camera.roi=[0, 200, 0, 50]")),
-        field="sensor.camera.roi",
-    ),
-    Entry(
-        "unknown peak detector",
-        run_args(*set_args('sensor.camera.method="peak"')),
-        field="sensor.camera.method",
-    ),
-    Entry(
-        "unknown material",
-        ("render", *CAMERA, *set_args('workpiece.material="chrome"')),
-        field="workpiece.material",
-    ),
-    Entry(
-        "image mode without a mesh",
-        run_args(*set_args('sensor.source="image"')),
-        field="sensor.source",
-    ),
+    naming_key("unknown peak detector", run_set('sensor.camera.method="peak"')),
+    naming_key("unknown material", ("render", *CAMERA, *set_args('workpiece.material="chrome"'))),
+    naming_key("image mode without a mesh", run_set('sensor.source="image"')),
     Entry(
         "render a seam-mode scene",
         ("render", "paper-verification", "--at", "10"),
         field="sensor.mode",
     ),
-    Entry(
-        "unknown real sensor", run_args(*set_args('sensor.preset="gocator-2331"')), field="preset"
-    ),
+    Entry("unknown real sensor", run_set('sensor.preset="gocator-2331"'), field="preset"),
     # --- CAD
-    Entry(
+    naming_key(
         "unknown CAD parameter",
         run_args(*MESH, *set_args("workpiece.params.bogus_mm=1")),
         quick=False,
-        field="workpiece.params.bogus_mm",
     ),
-    Entry(
+    naming_key(
         "boolean CAD parameter",
         run_args(*MESH, *set_args("workpiece.params.groove_angle_deg=true")),
         quick=False,
-        field="workpiece.params.groove_angle_deg",
     ),
-    Entry(
-        "missing CAD script",
-        run_args(*MESH, *set_args('workpiece.script="missing_part.py"')),
-        field="workpiece.script",
+    naming_key(
+        "missing CAD script", run_args(*MESH, *set_args('workpiece.script="missing_part.py"'))
     ),
-    Entry(
-        "unknown extractor",
-        run_args(*MESH, *set_args('extractor.name="nope"')),
-        quick=False,
-        field="extractor.name",
+    naming_key(
+        "unknown extractor", run_args(*MESH, *set_args('extractor.name="nope"')), quick=False
     ),
     # --- user code
     *(
@@ -455,7 +364,7 @@ CATALOGUE: tuple[Entry, ...] = (
         run_args(*MESH, *set_args("extractor.expect={angel_deg=60}")),
         field="extractor.expect.angel_deg",
     ),
-    Entry(
+    naming_key(
         "extractor.expect on the generic extractor",
         (
             "run",
@@ -464,7 +373,6 @@ CATALOGUE: tuple[Entry, ...] = (
             "--out",
             "OUT",
         ),
-        field="extractor.expect",
     ),
     Entry(
         "groove extractor with an unknown reference",
@@ -478,35 +386,20 @@ CATALOGUE: tuple[Entry, ...] = (
         field="extractor.reference",
     ),
     # --- weldments and weldx
-    Entry(
-        "seams of a STEP without solids",
-        ("seams", "sheet.step", "--view", "OUT/v.png"),
-        field="PART",
-    ),
-    Entry(
-        "seams of solids that never touch",
-        ("seams", "apart.step", "--view", "OUT/v.png"),
-        field="PART",
-    ),
-    Entry(
+    seams_of("seams of a STEP without solids", "sheet.step"),
+    seams_of("seams of solids that never touch", "apart.step"),
+    naming_key(
         "weldment scene, STEP without solids",
         run_args("weld.toml", *set_args('workpiece.step="sheet.step"')),
-        field="workpiece.step",
     ),
-    Entry(
-        "weldment scene, solids that never touch",
-        run_args("weld.toml"),
-        field="workpiece.step",
-    ),
-    Entry(
+    Entry("weldment scene, solids that never touch", run_args("weld.toml"), field="workpiece.step"),
+    naming_key(
         "workpiece.seam naming no seam",
         run_args("weldment-bracket", *set_args('workpiece.seam="s99"')),
-        field="workpiece.seam",
     ),
-    Entry(
+    naming_key(
         "groove weldx does not define",
         run_args("weldx-v-groove", *set_args('workpiece.groove.type="ZGroove"')),
-        field="workpiece.groove.type",
     ),
     Entry(
         "groove missing parameters",
@@ -519,11 +412,7 @@ CATALOGUE: tuple[Entry, ...] = (
         ),
         field="workpiece.groove.alpha_deg",
     ),
-    Entry(
-        "--weldx under a file",
-        run_args(*SHORT, "--weldx", "a_file/run.wx"),
-        field="--weldx",
-    ),
+    Entry("--weldx under a file", run_args(*SHORT, "--weldx", "a_file/run.wx"), field="--weldx"),
     Entry("unknown sensor preset", ("sensor", "--preset", "nope"), field="preset"),
     # --- seamtrack dataset
     Entry("dataset range min > max", dataset_args("dataset_min_max.toml"), field="joint.gap_mm"),

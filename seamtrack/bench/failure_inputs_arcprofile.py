@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from seamtrack.bench.failure_kit import Entry, run_args
+from seamtrack.bench.failure_kit import Entry, naming_key, run_args
 
 #: Files written into the workspace (none here).
 FILES: dict[str, bytes] = {}
@@ -22,14 +22,8 @@ def _run(pair: str) -> tuple[str, ...]:
 
 
 ENTRIES: tuple[Entry, ...] = (
-    Entry(
-        "arc profile model, negative current", _run("arc.current_a=-250.0"), field="arc.current_a"
-    ),
-    Entry(
-        "arc profile model, stripe under the torch",
-        _run("sensor.look_ahead_mm=5.0"),
-        field="sensor.look_ahead_mm",
-    ),
-    Entry("arc image model without an image", _run('arc.model="image"'), field="arc.model"),
+    naming_key("arc profile model, negative current", _run("arc.current_a=-250.0")),
+    naming_key("arc profile model, stripe under the torch", _run("sensor.look_ahead_mm=5.0")),
+    naming_key("arc image model without an image", _run('arc.model="image"')),
     Entry("arc in seam mode", _run('sensor.mode="seam"'), field="arc.model"),
 )

@@ -13,59 +13,32 @@ FILES: dict[str, bytes] = {"short-token.txt": b"letmein\n"}
 GENERATED: dict[str, Callable[[Path], None]] = {}
 
 
-def _serve(*extra: str) -> tuple[str, ...]:
-    return ("serve", "paper-corner", *extra, "--out", "OUT", "--wait-s", "1")
+def _serve(name: str, *extra: str) -> Entry:
+    """``seamtrack serve paper-corner EXTRA...``, its error naming the last flag of ``extra``."""
+    flag = [word for word in extra if word.startswith("--")][-1]
+    args = ("serve", "paper-corner", *extra, "--out", "OUT", "--wait-s", "1")
+    return Entry(name, args, field=flag)
 
 
 ENTRIES: tuple[Entry, ...] = (
-    Entry("serve timeout zero", _serve("--timeout-s", "0"), field="--timeout-s"),
-    Entry("serve timeout not a number", _serve("--timeout-s", "nan"), field="--timeout-s"),
+    _serve("serve timeout zero", "--timeout-s", "0"),
+    _serve("serve timeout not a number", "--timeout-s", "nan"),
     Entry("serve wait negative", ("serve", "paper-corner", "--wait-s", "-1"), field="--wait-s"),
-    Entry(
-        "serve zmq endpoint not an address",
-        _serve("--endpoint", "tcp://no such host:5555"),
-        field="--endpoint",
-    ),
-    Entry(
-        "serve zmq endpoint unknown transport",
-        _serve("--endpoint", "carrier-pigeon://127.0.0.1"),
-        field="--endpoint",
-    ),
-    Entry(
-        "serve zenoh endpoint not a locator",
-        _serve("--transport", "zenoh", "--endpoint", "not a locator"),
-        field="--endpoint",
-    ),
-    Entry("serve zenoh domain id negative", _serve("--domain-id", "-3"), field="--domain-id"),
+    _serve("serve zmq endpoint not an address", "--endpoint", "tcp://no such host:5555"),
+    _serve("serve zmq endpoint unknown transport", "--endpoint", "carrier-pigeon://127.0.0.1"),
+    _serve("serve zenoh endpoint not a locator",
+           "--transport", "zenoh", "--endpoint", "not a locator"),
+    _serve("serve zenoh domain id negative", "--domain-id", "-3"),
     # issue 43: refused up front, naming the field (not blamed on the client later)
-    Entry(
-        "serve zmq endpoint port out of range",
-        _serve("--endpoint", "tcp://127.0.0.1:99999"),
-        field="--endpoint",
-    ),
-    Entry(
-        "serve zmq endpoint beyond loopback without a token",
-        _serve("--endpoint", "tcp://0.0.0.0:5555"),
-        field="--endpoint",
-    ),
-    Entry(
-        "serve token file missing",
-        _serve("--endpoint", "tcp://0.0.0.0:5555", "--token-file", "no-such-token.txt"),
-        field="--token-file",
-    ),
-    Entry(
-        "serve token too short",
-        _serve("--endpoint", "tcp://0.0.0.0:5555", "--token-file", "short-token.txt"),
-        field="--token-file",
-    ),
-    Entry(
-        "serve token file with zenoh",
-        _serve("--transport", "zenoh", "--token-file", "short-token.txt"),
-        field="--token-file",
-    ),
-    Entry(
-        "serve zenoh endpoint port out of range",
-        _serve("--transport", "zenoh", "--endpoint", "tcp/127.0.0.1:70000"),
-        field="--endpoint",
-    ),
-)
+    _serve("serve zmq endpoint port out of range", "--endpoint", "tcp://127.0.0.1:99999"),
+    _serve("serve zmq endpoint beyond loopback without a token",
+           "--endpoint", "tcp://0.0.0.0:5555"),
+    _serve("serve token file missing",
+           "--endpoint", "tcp://0.0.0.0:5555", "--token-file", "no-such-token.txt"),
+    _serve("serve token too short",
+           "--endpoint", "tcp://0.0.0.0:5555", "--token-file", "short-token.txt"),
+    _serve("serve token file with zenoh",
+           "--transport", "zenoh", "--token-file", "short-token.txt"),
+    _serve("serve zenoh endpoint port out of range",
+           "--transport", "zenoh", "--endpoint", "tcp/127.0.0.1:70000"),
+)  # fmt: skip

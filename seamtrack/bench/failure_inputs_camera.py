@@ -11,7 +11,15 @@ from __future__ import annotations
 
 from typing import Any
 
-from seamtrack.bench.failure_kit import CAMERA, MESH, Entry, dataset_args, run_args, set_args
+from seamtrack.bench.failure_kit import (
+    CAMERA,
+    MESH,
+    Entry,
+    dataset_args,
+    naming_key,
+    run_args,
+    set_args,
+)
 
 #: Files written into the workspace (name -> bytes).
 FILES: dict[str, bytes] = {
@@ -66,102 +74,55 @@ IMAGE_MESH = (*MESH, *set_args('sensor.source="image"'))
 
 ENTRIES: tuple[Entry, ...] = (
     # --- issue 23.1: camera values checked for size, not only sign
-    Entry("camera f-number 1e9", _render(f"{F}f_number=1e9"), field=f"{F}f_number"),
-    Entry("camera f-number 1e4", _image_run(f"{F}f_number=1e4"), field=f"{F}f_number"),
-    Entry("camera f-number 0.5", _check(f"{F}f_number=0.5"), field=f"{F}f_number"),
-    Entry(
-        "camera f-number 100 on paper-v-groove",
-        run_args(*IMAGE_MESH, *set_args(f"{F}f_number=100")),
-        field=f"{F}f_number",
-    ),
+    naming_key("camera f-number 1e9", _render(f"{F}f_number=1e9")),
+    naming_key("camera f-number 1e4", _image_run(f"{F}f_number=1e4")),
+    naming_key("camera f-number 0.5", _check(f"{F}f_number=0.5")),
+    naming_key("camera f-number 100 on paper-v-groove",
+               run_args(*IMAGE_MESH, *set_args(f"{F}f_number=100"))),
     Entry("camera focal length 1e-9 mm", _render(f"{F}focal_length_mm=1e-9"), field="focal_length"),
-    Entry(
-        "camera focal length 1e6 mm", _image_run(f"{F}focal_length_mm=1e6"), field="focal_length"
-    ),
-    Entry("camera exposure 1e300", _render(f"{F}exposure=1e300"), field=f"{F}exposure"),
-    Entry("camera exposure 1e-9", _check(f"{F}exposure=1e-9"), field=f"{F}exposure"),
-    Entry("camera full well 1e300 e", _render(f"{F}full_well_e=1e300"), field=f"{F}full_well_e"),
-    Entry("camera full well 1e-300 e", _render(f"{F}full_well_e=1e-300"), field=f"{F}full_well_e"),
-    Entry("camera full well 10 e", _image_run(f"{F}full_well_e=10"), field=f"{F}full_well_e"),
-    Entry("camera ambient 1e300", _render(f"{F}ambient=1e300"), field=f"{F}ambient"),
-    Entry("camera ambient 1.5", _check(f"{F}ambient=1.5"), field=f"{F}ambient"),
-    Entry(
-        "camera ambient 2 with a gocator",
-        (
-            "run",
-            *IMAGE_MESH,
-            *set_args('sensor.preset="gocator-2340"', f"{F}ambient=2"),
-            "--out",
-            "OUT",
-        ),
-        field=f"{F}ambient",
-    ),
+    Entry("camera focal length 1e6 mm", _image_run(f"{F}focal_length_mm=1e6"),
+          field="focal_length"),
+    naming_key("camera exposure 1e300", _render(f"{F}exposure=1e300")),
+    naming_key("camera exposure 1e-9", _check(f"{F}exposure=1e-9")),
+    naming_key("camera full well 1e300 e", _render(f"{F}full_well_e=1e300")),
+    naming_key("camera full well 1e-300 e", _render(f"{F}full_well_e=1e-300")),
+    naming_key("camera full well 10 e", _image_run(f"{F}full_well_e=10")),
+    naming_key("camera ambient 1e300", _render(f"{F}ambient=1e300")),
+    naming_key("camera ambient 1.5", _check(f"{F}ambient=1.5")),
+    naming_key("camera ambient 2 with a gocator",
+               run_args(*IMAGE_MESH, *set_args('sensor.preset="gocator-2340"', f"{F}ambient=2"))),
     Entry("camera read noise 1e300 e", _render(f"{F}read_noise_e=1e300"), field="read_noise_e"),
     Entry("camera read noise 500 e", _image_run(f"{F}read_noise_e=500"), field="read_noise_e"),
     Entry("camera line 1e-9 mm thick", _check(f"{F}line_thickness_mm=1e-9"), field="thickness"),
-    Entry(
-        "camera line divergence 1e300 mrad",
-        _render(f"{F}line_divergence_mrad=1e300"),
-        field=f"{F}line_divergence_mrad",
-    ),
+    naming_key("camera line divergence 1e300 mrad", _render(f"{F}line_divergence_mrad=1e300")),
     Entry("camera waist 1e300 mm", _image_run(f"{F}waist_range_mm=1e300"), field="waist_range"),
-    Entry("camera bit depth -1", _check(f"{F}bit_depth=-1"), field=f"{F}bit_depth"),
-    Entry("camera wavelength nan", _render(f"{F}wavelength_nm=nan"), field=f"{F}wavelength_nm"),
-    Entry("camera rows 2.5", _check(f"{F}rows=2.5"), field=f"{F}rows"),
+    naming_key("camera bit depth -1", _check(f"{F}bit_depth=-1")),
+    naming_key("camera wavelength nan", _render(f"{F}wavelength_nm=nan")),
+    naming_key("camera rows 2.5", _check(f"{F}rows=2.5")),
     # --- issue 27.1: exposure control and the detector's relative threshold
     Entry("camera exposure mode hdr", _check(f'{F}exposure_mode="hdr"'), field="exposure_mode"),
-    Entry("camera target peak 1.5", _render(f"{F}target_peak=1.5"), field=f"{F}target_peak"),
-    Entry("camera target peak 0", _check(f"{F}target_peak=0"), field=f"{F}target_peak"),
-    Entry(
-        "camera exposure set rising",
-        _check(f"{F}exposure_set=[1.0, 2.0]"),
-        field=f"{F}exposure_set",
-    ),
-    Entry(
-        "camera exposure set not from 1",
-        _render(f"{F}exposure_set=[0.5, 0.1]"),
-        field=f"{F}exposure_set",
-    ),
-    Entry("camera exposure set empty", _check(f"{F}exposure_set=[]"), field=f"{F}exposure_set"),
-    Entry(
-        "camera exposure set 1e-9",
-        _image_run(f"{F}exposure_set=[1.0, 1e-9]"),
-        field=f"{F}exposure_set",
-    ),
-    Entry("detector relative 1", _check(f"{F}relative=1.0"), field=f"{F}relative"),
+    naming_key("camera target peak 1.5", _render(f"{F}target_peak=1.5")),
+    naming_key("camera target peak 0", _check(f"{F}target_peak=0")),
+    naming_key("camera exposure set rising", _check(f"{F}exposure_set=[1.0, 2.0]")),
+    naming_key("camera exposure set not from 1", _render(f"{F}exposure_set=[0.5, 0.1]")),
+    naming_key("camera exposure set empty", _check(f"{F}exposure_set=[]")),
+    naming_key("camera exposure set 1e-9", _image_run(f"{F}exposure_set=[1.0, 1e-9]")),
+    naming_key("detector relative 1", _check(f"{F}relative=1.0")),
     Entry("detector noise sigmas -1", _check(f"{F}noise_sigmas=-1.0"), field="noise_sigmas"),
     # --- issue 23.2: chip size x supersampling within the memory a run may take
-    Entry(
-        "camera chip 20000 x 20000",
-        _render(f"{F}rows=20000", f"{F}columns=20000"),
-        field=f"{F}rows",
-    ),
-    Entry("camera columns 16385", _check(f"{F}columns=16385"), field=f"{F}columns"),
-    Entry(
-        "camera chip 16384 x 16384",
-        _image_run(f"{F}rows=16384", f"{F}columns=16384"),
-        field=f"{F}rows",
-    ),
-    Entry(
-        "camera chip 4096 x 8192 supersample 8",
-        _render(f"{F}rows=4096", f"{F}columns=8192", f"{F}supersample=8"),
-        field=f"{F}columns",
-    ),
-    Entry(
-        "camera chip 4096 x 8192 supersample 1",
-        _check(f"{F}rows=4096", f"{F}columns=8192", f"{F}supersample=1"),
-        field=f"{F}columns",
-    ),
-    Entry(
-        "camera chip 4096 x 4096 supersample 8",
-        _check(f"{F}rows=4096", f"{F}columns=4096", f"{F}supersample=8"),
-        field=f"{F}supersample",
-    ),
-    Entry(
-        "camera roi of 16384 x 4000",
-        _image_run(f"{F}rows=16384", f"{F}columns=16384", f"{F}roi=[0, 16384, 0, 4000]"),
-        field=f"{F}roi",
-    ),
+    Entry("camera chip 20000 x 20000",
+          _render(f"{F}rows=20000", f"{F}columns=20000"), field=f"{F}rows"),
+    naming_key("camera columns 16385", _check(f"{F}columns=16385")),
+    Entry("camera chip 16384 x 16384",
+          _image_run(f"{F}rows=16384", f"{F}columns=16384"), field=f"{F}rows"),
+    Entry("camera chip 4096 x 8192 supersample 8",
+          _render(f"{F}rows=4096", f"{F}columns=8192", f"{F}supersample=8"), field=f"{F}columns"),
+    Entry("camera chip 4096 x 8192 supersample 1",
+          _check(f"{F}rows=4096", f"{F}columns=8192", f"{F}supersample=1"), field=f"{F}columns"),
+    naming_key("camera chip 4096 x 4096 supersample 8",
+               _check(f"{F}rows=4096", f"{F}columns=4096", f"{F}supersample=8")),
+    naming_key("camera roi of 16384 x 4000",
+               _image_run(f"{F}rows=16384", f"{F}columns=16384", f"{F}roi=[0, 16384, 0, 4000]")),
     # --- the same values through dataset specs: refused before dataset.json or spec.toml
     _spec("dataset --images camera f-number 1e9", "camera_f_number.toml", "f_number", True),
     _spec("dataset camera f-number 1e4", "camera_f_number_1e4.toml", "f_number"),

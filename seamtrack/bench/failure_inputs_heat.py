@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from seamtrack.bench.failure_kit import Entry, run_args
+from seamtrack.bench.failure_kit import Entry, naming_key, run_args
 
 #: Files written into the workspace (none here).
 FILES: dict[str, bytes] = {}
@@ -49,22 +49,15 @@ ENTRIES: tuple[Entry, ...] = (
           field="--thermal-efficiency"),
     Entry("heat field zero thickness", (*FIELD, "--thickness-mm", "0"), field="--thickness-mm"),
     Entry("heat field unknown material", (*FIELD, "--material", "copper"), field="--material"),
-    Entry("heat thermal efficiency above 1",
-          _job("process.thermal_efficiency=1.2"),
-          field="process.thermal_efficiency"),
-    Entry("heat thermal efficiency 0",
-          _job("process.thermal_efficiency=0.0"),
-          field="process.thermal_efficiency"),
-    Entry("distortion run at zero speed", _butt("simulation.welding_speed_mm_s=0.0"),
-          field="simulation.welding_speed_mm_s"),
-    Entry("distortion run at a negative speed", _butt("simulation.welding_speed_mm_s=-3.0"),
-          field="simulation.welding_speed_mm_s"),
+    naming_key("heat thermal efficiency above 1", _job("process.thermal_efficiency=1.2")),
+    naming_key("heat thermal efficiency 0", _job("process.thermal_efficiency=0.0")),
+    naming_key("distortion run at zero speed", _butt("simulation.welding_speed_mm_s=0.0")),
+    naming_key("distortion run at a negative speed", _butt("simulation.welding_speed_mm_s=-3.0")),
     Entry("distortion tack outside the seam", _butt("distortion.tacks=[{position_mm = 25.0}]"),
           field="distortion.tacks[0].position_mm"),
     Entry("distortion tack before the seam", _butt("distortion.tacks=[{position_mm = -1.0}]"),
           field="distortion.tacks[0].position_mm"),
     Entry("distortion clamp outside the seam", _butt("distortion.clamps=[{position_mm = 40.0}]"),
           field="distortion.clamps[0].position_mm"),
-    Entry("distortion efficiency above 1", _butt("process.thermal_efficiency=1.2"),
-          field="process.thermal_efficiency"),
+    naming_key("distortion efficiency above 1", _butt("process.thermal_efficiency=1.2")),
 )  # fmt: skip

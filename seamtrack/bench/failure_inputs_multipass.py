@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from seamtrack.bench.failure_kit import Entry, run_args, set_args
+from seamtrack.bench.failure_kit import Entry, naming_key, run_args, set_args
 
 _PLANNERS = '''\
 """Planners that fail, for the bad-input catalogue."""
@@ -64,32 +64,25 @@ def _job(*pairs: str) -> tuple[str, ...]:
 
 
 ENTRIES: tuple[Entry, ...] = (
-    Entry("multipass wire feed 0", _job("process.wire_feed_m_min=0"),
-          field="process.wire_feed_m_min"),
-    Entry("multipass wire feed -2", _job("process.wire_feed_m_min=-2.0"),
-          field="process.wire_feed_m_min"),
+    naming_key("multipass wire feed 0", _job("process.wire_feed_m_min=0")),
+    naming_key("multipass wire feed -2", _job("process.wire_feed_m_min=-2.0")),
     Entry("multipass bead larger than the groove",
           _job("process.wire_feed_m_min=30.0", "process.wire_diameter_mm=3.2",
                "workpiece.params.plate_thickness_mm=6.0"),
           field="process.wire_feed_m_min", quick=False),
     # issue 43 item 8: tiny process values, named (not an overflow blamed on a plugin)
-    Entry("multipass wire feed 1e-300 m/min", _job("process.wire_feed_m_min=1e-300"),
-          field="process.wire_feed_m_min"),
-    Entry("multipass wire diameter 1e-300 mm", _job("process.wire_diameter_mm=1e-300"),
-          field="process.wire_diameter_mm"),
-    Entry("multipass wire diameter 5 mm (no GMAW wire)", _job("process.wire_diameter_mm=5.0"),
-          field="process.wire_diameter_mm"),
+    naming_key("multipass wire feed 1e-300 m/min", _job("process.wire_feed_m_min=1e-300")),
+    naming_key("multipass wire diameter 1e-300 mm", _job("process.wire_diameter_mm=1e-300")),
+    naming_key("multipass wire diameter 5 mm (no GMAW wire)", _job("process.wire_diameter_mm=5.0")),
     Entry("multipass override wire feed 1e-300",
           _job("passes.overrides=[{number = 1, wire_feed_m_min = 1e-300}]"),
           field="passes.overrides.0.wire_feed_m_min"),
     # item 9: plans that cannot fill the groove, refused before the run
-    Entry("multipass wire feed 0.01 m/min", _job("process.wire_feed_m_min=0.01"),
-          field="process.wire_feed_m_min"),
+    naming_key("multipass wire feed 0.01 m/min", _job("process.wire_feed_m_min=0.01")),
     Entry("multipass auto plan of 400 passes",
           _job("process.wire_feed_m_min=1.0", "process.wire_diameter_mm=0.5"),
           field="process.wire_feed_m_min", quick=False),
-    Entry("multipass 3 passes for a 20 mm V", _job("passes.count=3"), field="passes.count",
-          quick=False),
+    naming_key("multipass 3 passes for a 20 mm V", _job("passes.count=3"), quick=False),
     # item 17: overrides checked like the scene, and the planner's time
     Entry("multipass override at 1000 mm/s",
           _job("passes.overrides=[{number = 1, travel_speed_mm_s = 1000.0}]"),
@@ -111,25 +104,22 @@ ENTRIES: tuple[Entry, ...] = (
     Entry("multipass planner at 1000 mm/s",
           _job('planner.name="bad_planners:TooFast"', "passes.scan_first=false"),
           field="planner.name", quick=False),
-    Entry("multipass zero passes", _job("passes.count=0"), field="passes.count"),
-    Entry("multipass unknown planner", _job('planner.name="nope"'), field="planner.name"),
-    Entry("multipass planner without plan()", _job('planner.name="bad_planners:NoPlan"'),
-          field="planner.name"),
-    Entry("multipass planner plans no bead", _job('planner.name="bad_planners:PlansNothing"'),
-          field="planner.name", quick=False),
-    Entry("multipass planner raises", _job('planner.name="bad_planners:Raises"'),
-          field="planner.name", quick=False),
-    Entry("multipass planner returns garbage", _job('planner.name="bad_planners:ReturnsGarbage"'),
-          field="planner.name", quick=False),
-    Entry("multipass bead offset outside the groove",
-          _job("passes.overrides=[{number = 1, offset_mm = 40.0}]"),
-          field="passes.overrides", quick=False),
+    naming_key("multipass zero passes", _job("passes.count=0")),
+    naming_key("multipass unknown planner", _job('planner.name="nope"')),
+    naming_key("multipass planner without plan()", _job('planner.name="bad_planners:NoPlan"')),
+    naming_key("multipass planner plans no bead",
+               _job('planner.name="bad_planners:PlansNothing"'), quick=False),
+    naming_key("multipass planner raises", _job('planner.name="bad_planners:Raises"'), quick=False),
+    naming_key("multipass planner returns garbage",
+               _job('planner.name="bad_planners:ReturnsGarbage"'), quick=False),
+    naming_key("multipass bead offset outside the groove",
+               _job("passes.overrides=[{number = 1, offset_mm = 40.0}]"), quick=False),
     Entry("multipass work angle on the gantry",
           _job("passes.overrides=[{number = 1, work_angle_deg = 10.0}]"),
           field="passes.overrides.0.work_angle_deg"),
     Entry("multipass speed window upside down",
           _job("process.travel_speed_min_mm_s=20.0", "process.travel_speed_max_mm_s=10.0"),
           field="process.travel_speed_min_mm_s"),
-    Entry("multipass wetting angle on a parabola", _job("process.bead.wetting_angle_deg=60.0"),
-          field="process.bead.wetting_angle_deg"),
+    naming_key("multipass wetting angle on a parabola",
+               _job("process.bead.wetting_angle_deg=60.0")),
 )  # fmt: skip

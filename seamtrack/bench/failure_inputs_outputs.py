@@ -43,9 +43,7 @@ ENTRIES: tuple[Entry, ...] = (
         field="--out",
     ),
     Entry(
-        "job into an earlier job's folder",
-        ("run", *_JOB, "--out", "earlier_job"),
-        field="--out",
+        "job into an earlier job's folder", ("run", *_JOB, "--out", "earlier_job"), field="--out"
     ),
     Entry(
         "import onto a folder of one's own labels",

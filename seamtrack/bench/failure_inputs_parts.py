@@ -15,7 +15,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from seamtrack.bench.failure_kit import Entry, run_args, set_args
+from seamtrack.bench.failure_kit import Entry, naming_key, run_args, seams_of, set_args
 
 #: Files written into the workspace (name -> bytes).
 FILES: dict[str, bytes] = {}
@@ -76,22 +76,17 @@ def _table(groove: str, field: str, name: str) -> Entry:
     return _groove(f"workpiece.groove.{field}", f"workpiece.groove={{{groove}}}", name=name)
 
 
-def _seams(name: str, step: str, *extra: str) -> Entry:
-    return Entry(name, ("seams", step, *extra, "--view", "OUT/v.png"), field="PART")
-
-
 WELDMENTS: tuple[Entry, ...] = (
-    _seams("seams, a box inside another", "inside.step"),
-    _seams("seams, a box inside another at its corner", "corner_inside.step"),
-    _seams("seams, two coincident boxes", "coincident.step"),
-    _seams("seams, two boxes overlapping by half", "overlap.step"),
-    _seams("seams, 0.01 mm cubes face to face", "tiny_pair.step"),
-    _seams("seams, three 0.1 mm cubes in a row", "tiny_row.step"),
-    _seams("seams, plates facing across a rod", "rod_in_gap.step"),
-    Entry(
+    seams_of("seams, a box inside another", "inside.step"),
+    seams_of("seams, a box inside another at its corner", "corner_inside.step"),
+    seams_of("seams, two coincident boxes", "coincident.step"),
+    seams_of("seams, two boxes overlapping by half", "overlap.step"),
+    seams_of("seams, 0.01 mm cubes face to face", "tiny_pair.step"),
+    seams_of("seams, three 0.1 mm cubes in a row", "tiny_row.step"),
+    seams_of("seams, plates facing across a rod", "rod_in_gap.step"),
+    naming_key(
         "weldment scene, two coincident boxes",
         run_args("weld.toml", *set_args('workpiece.step="coincident.step"')),
-        field="workpiece.step",
     ),
     Entry(
         "seams --min-length-mm 0",

@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from seamtrack.bench.failure_kit import Entry, run_args, set_args
+from seamtrack.bench.failure_kit import Entry, naming_key, run_set, set_args
 
 #: paper-verification's seam (Eq. 15-17, 400 mm) written in metres.
 _t = np.linspace(0.0, 0.4, 201).tolist()
@@ -77,13 +77,10 @@ def _real(folder: str) -> tuple[str, ...]:
 
 ENTRIES: tuple[Entry, ...] = (
     # --- item 16: units and labels
-    Entry("seam CSV in metres",
-          run_args(*set_args('seam.source="csv"', 'seam.file="seam_in_metres.csv"')),
-          field="seam.file"),
-    Entry("seam points in metres",
-          run_args(*set_args('seam.source="points"',
-                             "seam.points_mm=[[0,0,0],[0.2,0,0],[0.4,0.01,0]]")),
-          field="seam.points_mm"),
+    naming_key("seam CSV in metres",
+               run_set('seam.source="csv"', 'seam.file="seam_in_metres.csv"')),
+    naming_key("seam points in metres",
+               run_set('seam.source="points"', "seam.points_mm=[[0,0,0],[0.2,0,0],[0.4,0.01,0]]")),
     Entry("real-profile set in metres", _real("real_in_metres"), field="--real"),
     Entry("real-profile labels in metres", _real("real_labels_in_metres"), field="--real"),
     Entry("real-profile label that is text", _real("real_text_label"), field="--real"),
@@ -102,25 +99,17 @@ ENTRIES: tuple[Entry, ...] = (
            "--scheduler", "tcp://127.0.0.1:99999", "--out", "OUT"),
           field="--scheduler"),
     # --- item 19: values that complete a wrong run
-    Entry("mesh tolerance 1e308 mm on pipe-on-plate",
-          ("run", "pipe-on-plate", *set_args("workpiece.tolerance_mm=1e308"), "--out", "OUT"),
-          field="workpiece.tolerance_mm"),
-    Entry("seam rotation 1e308 deg", run_args(*set_args("seam.rotation_deg=[1e308,0,0]")),
-          field="seam.rotation_deg"),
-    Entry("weld at 1e6 mm/s with the axis limits raised",
-          run_args(*set_args("robot.velocity_max_mm_s=[1e4,1e4,1e4]",
-                     "simulation.welding_speed_mm_s=1e6")),
-          field="simulation.welding_speed_mm_s"),
-    Entry("axis speed limit 1e7 mm/s", run_args(*set_args("robot.velocity_max_mm_s=[1e7,10,10]")),
-          field="robot.velocity_max_mm_s"),
-    Entry("sensor that never sees the seam",
-          ("check", "paper-verification", *set_args("sensor.range_mm=300")),
-          field="sensor.range_mm"),
+    naming_key("mesh tolerance 1e308 mm on pipe-on-plate",
+               ("run", "pipe-on-plate", *set_args("workpiece.tolerance_mm=1e308"), "--out", "OUT")),
+    naming_key("seam rotation 1e308 deg", run_set("seam.rotation_deg=[1e308,0,0]")),
+    naming_key("weld at 1e6 mm/s with the axis limits raised",
+               run_set("robot.velocity_max_mm_s=[1e4,1e4,1e4]",
+                       "simulation.welding_speed_mm_s=1e6")),
+    naming_key("axis speed limit 1e7 mm/s", run_set("robot.velocity_max_mm_s=[1e7,10,10]")),
+    naming_key("sensor that never sees the seam",
+               ("check", "paper-verification", *set_args("sensor.range_mm=300"))),
     # --- item 20: messages that blamed the wrong field
-    Entry("welding speed 1e-300 mm/s", run_args(*set_args("simulation.welding_speed_mm_s=1e-300")),
-          field="simulation.welding_speed_mm_s"),
-    Entry("frame rate 1e308 Hz", run_args(*set_args("sensor.frame_rate_hz=1e308")),
-          field="sensor.frame_rate_hz"),
-    Entry("ragged seam CSV row",
-          run_args(*set_args('seam.source="csv"', 'seam.file="ragged.csv"')), field="seam.file"),
+    naming_key("welding speed 1e-300 mm/s", run_set("simulation.welding_speed_mm_s=1e-300")),
+    naming_key("frame rate 1e308 Hz", run_set("sensor.frame_rate_hz=1e308")),
+    naming_key("ragged seam CSV row", run_set('seam.source="csv"', 'seam.file="ragged.csv"')),
 )  # fmt: skip

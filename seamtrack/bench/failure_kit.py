@@ -41,3 +41,25 @@ def run_args(*extra: str) -> tuple[str, ...]:
 def dataset_args(spec: str, n: str = "8", images: bool = False) -> tuple[str, ...]:
     """``seamtrack dataset SPEC --n N --out OUT`` (``--images``: with camera images)."""
     return ("dataset", spec, "--n", n, "--out", "OUT", *(("--images",) if images else ()))
+
+
+def set_key(args: tuple[str, ...]) -> str:
+    """The key the last ``--set KEY=VALUE`` of ``args`` sets."""
+    last = len(args) - 1 - args[::-1].index("--set")
+    return args[last + 1].split("=")[0]
+
+
+def naming_key(name: str, args: tuple[str, ...], quick: bool = True) -> Entry:
+    """An entry whose error line must name the key its last ``--set`` sets: most of the
+    catalogue, written without saying the key twice."""
+    return Entry(name, args, quick=quick, field=set_key(args))
+
+
+def run_set(*pairs: str) -> tuple[str, ...]:
+    """``seamtrack run --set PAIR ... --out OUT``: the default scene with the given keys."""
+    return run_args(*set_args(*pairs))
+
+
+def seams_of(name: str, step: str, *extra: str) -> Entry:
+    """``seamtrack seams STEP EXTRA... --view OUT/v.png``, its error naming the part."""
+    return Entry(name, ("seams", step, *extra, "--view", "OUT/v.png"), field="PART")
