@@ -10,6 +10,7 @@ import pytest
 from seamtrack.errors import SceneError, SeamtrackError
 from seamtrack.sensing.arc.profile_model import (
     PROFILE_ARC,
+    PROFILE_ARC_BY_SWITCH,
     ArcProfileModel,
     ProfileArcParams,
 )
@@ -22,6 +23,9 @@ from tests.cli_helpers import run_cli
 Y = np.linspace(-10.0, 10.0, 2000)
 POINTS = np.column_stack([Y, np.full_like(Y, 91.0)])
 REASON = np.zeros(len(Y), dtype=np.uint8)
+#: The current of the "none" switch's check against a fresh image (the arc takes part of the
+#: stripe at 10 mm there).
+NONE_CURRENT = 200.0
 
 
 def _arc(look: float) -> np.ndarray:
@@ -35,17 +39,24 @@ def _lost(model: ArcProfileModel, look: float, seed: int) -> float:
     return float(np.mean((reason != Reason.VALID) | moved))
 
 
+@pytest.mark.parametrize("switch", sorted(PROFILE_ARC_BY_SWITCH))
 @pytest.mark.parametrize("process", sorted(PROFILE_ARC))
-def test_the_loss_does_not_fall_as_current_rises_or_the_look_ahead_shrinks(process: str) -> None:
+def test_the_loss_does_not_fall_as_current_rises_or_the_look_ahead_shrinks(
+    process: str, switch: str
+) -> None:
     d = np.linspace(8.0, 60.0, 200)
     currents = (100.0, 150.0, 200.0, 250.0, 300.0, 350.0)
-    lost = np.array([ArcProfileModel(process, i).loss_probability(d) for i in currents])
-    streak = np.array([ArcProfileModel(process, i).streak_probability(d) for i in currents])
+
+    def model(current: float) -> ArcProfileModel:
+        return ArcProfileModel(process, current, countermeasures=switch)
+
+    lost = np.array([model(i).loss_probability(d) for i in currents])
+    streak = np.array([model(i).streak_probability(d) for i in currents])
     for p in (lost, streak):
         assert np.all(np.diff(p, axis=0) >= 0)  # more current: not less
         assert np.all(np.diff(p, axis=1) <= 0)  # farther from the arc: not more
     # and what a profile loses, drawn: over look-aheads and currents (common seed)
-    shares = [[_lost(ArcProfileModel(process, i), look, 7) for look in (10.0, 12.0, 15.0, 30.0)]
+    shares = [[_lost(model(i), look, 7) for look in (10.0, 12.0, 15.0, 30.0)]
               for i in (100.0, 250.0, 350.0)]  # fmt: skip
     s = np.array(shares)
     tolerance = 3.0 / np.sqrt(len(Y))  # sampling noise of a share of 2000 points
@@ -90,19 +101,29 @@ def test_a_scene_without_the_model_measures_as_before() -> None:
     assert scene_arc_profile(load_scene("v-groove-arc-profile")) is not None
     auto = load_scene("v-groove-arc-profile", {"arc.model": "auto"})
     assert scene_arc_profile(auto) is not None  # no image: the profile model
+    # the model stands for the camera the scene's countermeasures switch gives
+    assert scene_arc_profile(auto).countermeasures == "default"  # unset with [arc]: default
+    bare = load_scene("v-groove-arc-profile", {"countermeasures": "none"})
+    assert scene_arc_profile(bare).p == PROFILE_ARC_BY_SWITCH["none"]["mag-spray"]
+    assert scene_arc_profile(auto).p == PROFILE_ARC["mag-spray"]
 
 
 @pytest.mark.embree
 @pytest.mark.cad
 def test_the_profile_scene_is_seeded_and_loses_points_near_the_arc() -> None:
-    from seamtrack.bench.arc import poses_along
+    from seamtrack.bench.arc import poses_along, without_arc
     from seamtrack.simulation.assemble import build_parts
 
     def lost(overrides: dict) -> tuple[float, np.ndarray]:
-        parts = build_parts(load_scene("v-groove-arc-profile", overrides))
+        """The share of the stripe the arc took (dropped, or moved by more than 0.5 mm)."""
+        scene = load_scene("v-groove-arc-profile", overrides)
+        parts = build_parts(scene)
         (T,) = poses_along(parts, overrides.get("sensor.look_ahead_mm", 30.0), 1)
         profile = parts.scan(T, 0.0, None)[0]
-        return float(np.mean(~profile.valid)), profile.points_laser
+        bare = build_parts(without_arc(scene)).scan(T, 0.0, None)[0]
+        moved = np.abs(profile.points_laser[:, 1] - bare.points_laser[:, 1]) > 0.5
+        taken = (~profile.valid | moved)[bare.valid]
+        return float(np.mean(taken)), profile.points_laser
 
     far, a = lost({})
     _, b = lost({})
@@ -115,17 +136,18 @@ def test_the_profile_scene_is_seeded_and_loses_points_near_the_arc() -> None:
 
 @pytest.mark.embree
 @pytest.mark.cad
-def test_the_fitted_model_loses_what_the_image_model_loses() -> None:
+@pytest.mark.parametrize(("switch", "current"), [("default", 350.0), ("none", NONE_CURRENT)])
+def test_the_fitted_model_loses_what_the_image_model_loses(switch: str, current: float) -> None:
     """A fresh image-model measurement (stations and a seed the calibration did not use) at
-    250 A, 10 mm: the share of the stripe the arc takes against the fitted model's expected
-    share, within 0.1 of the stripe (the fit's largest residual over the calibration grid is
-    0.09: the blob is not a function of the distance from the arc alone)."""
+    10 mm, under each countermeasures switch's camera, at a current where the arc takes part of
+    the stripe there: the share it takes against the fitted model's expected share, within 0.1
+    of the stripe (the blob is not a function of the distance from the arc alone)."""
     from seamtrack.bench.arc import measure_image_arc
 
-    data = measure_image_arc("mag-spray", (250.0,), 10.0, 3, seed=11)
-    columns = data[250.0]
+    data = measure_image_arc("mag-spray", (current,), 10.0, 3, seed=11, countermeasures=switch)
+    columns = data[current]
     measured = np.mean(np.concatenate([c["lost"] for c in columns]))
-    model = ArcProfileModel("mag-spray", 250.0)
+    model = ArcProfileModel("mag-spray", current, countermeasures=switch)
     expected = np.mean(np.concatenate([model.loss_probability(c["d"]) for c in columns]))
     assert measured > 0.05  # the case is one where the arc matters
     assert abs(measured - expected) <= 0.1, (measured, expected)

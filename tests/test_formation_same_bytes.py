@@ -259,3 +259,57 @@ def test_poisson_by_inversion_draws_poisson_counts() -> None:
         assert abs(counts.var() - lam) < 0.05 * lam + 0.01
     left = poisson_by_inversion(np.array([INVERSION_MAX_MEAN], dtype=np.float32), np.array([0.5]))
     assert left[0] == np.float32(INVERSION_MAX_MEAN)
+
+
+def _sequential_inversion(mean: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """The inversion one pixel after another, as the kernel was first written (the reference;
+    numba's ``float`` keeps a float32 a float32, so exp(-mean) is taken in float32)."""
+    import math
+
+    import numba
+
+    from seamtrack.sensing.formation import INVERSION_MAX_MEAN
+
+    reciprocals = 1.0 / np.arange(1.0, 201.0)
+
+    @numba.njit
+    def kernel(mean: np.ndarray, u: np.ndarray) -> np.ndarray:
+        out = np.empty(mean.shape[0], dtype=np.float32)
+        for i in range(mean.shape[0]):
+            m = float(mean[i])
+            if m >= INVERSION_MAX_MEAN:
+                out[i] = mean[i]
+                continue
+            p = math.exp(-m)
+            cdf = p
+            k = 0
+            while cdf <= u[i] and k < 200:
+                p *= m * reciprocals[k]
+                cdf += p
+                k += 1
+            out[i] = k
+        return out
+
+    return kernel(mean, u)
+
+
+def test_poisson_by_inversion_in_blocks_is_the_sequential_inversion_to_the_bit() -> None:
+    """The blocked kernel (pixels side by side) gives the counts of the sequential inversion:
+    means over the whole range, ragged blocks, bright and NaN pixels among dim ones."""
+    from seamtrack.sensing.formation import INVERSION_MAX_MEAN, poisson_by_inversion
+
+    rng = np.random.default_rng(3)
+    for n in (1, 31, 33, 1000):
+        mean = (rng.random(n) ** 2 * 1.2 * INVERSION_MAX_MEAN).astype(np.float32)
+        mean[::7] = INVERSION_MAX_MEAN
+        if n > 5:
+            mean[5] = np.nan
+        u = rng.random(n)
+        u[::11] = 0.0
+        got = poisson_by_inversion(mean, u)
+        want = _sequential_inversion(mean, u)
+        assert got.tobytes() == want.tobytes(), n
+    # a pixel of v-groove-arc whose uniform falls 1e-9 below P(X <= 10): float32's exp(-mean)
+    # puts it above (11), float64's would not (10); the kernels agree on 11
+    mean, u = np.array([12.725028], dtype=np.float32), np.array([0.2760405056599191])
+    assert poisson_by_inversion(mean, u)[0] == _sequential_inversion(mean, u)[0] == 11.0

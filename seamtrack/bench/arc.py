@@ -9,7 +9,9 @@ straight V-groove open loop and compares the extractor's seam point with the sea
 crossing of the laser plane (the noise-free truth): ``detect_rate``, ``median_mm``,
 ``p95_mm``, ``frames_per_s`` of the scan (render or ray cast, the arc, the extractor). Then it
 runs the closed loop on the V-groove bent on a 200 mm radius (the look-ahead cuts the curve's
-chord): ``loop_max_error_mm``. Writes ``arc.json`` and ``arc.png``.
+chord): ``loop_max_error_mm``. Beside the rows, :func:`image_cost` measures what the arc costs
+image mode (``image_cost_ratio``: wall ms a frame with the arc over without it, on the same
+frames, with the 1-minute load). Writes ``arc.json`` and ``arc.png``.
 
 The calibration (:func:`calibrate`, ``python -m seamtrack.bench.arc --calibrate``) renders the
 same frames with and without the arc and with an ideal camera, and measures per stripe column
@@ -59,13 +61,6 @@ COLUMNS = (
     "loop_max_error_mm",
     "frames_per_s",
 )
-#: The camera the profile model was measured with, whatever the countermeasures switch: the
-#: 10 nm band-pass on the laser's line and the camera's multiple exposure (the profile model
-#: stands for that camera; ``countermeasures`` then switches the rejection and the gate).
-CALIBRATION_CAMERA: dict[str, Any] = {
-    "sensor.camera.filter_fwhm_nm": 10.0,
-    "sensor.camera.exposure_mode": "multi",
-}
 #: A seam point farther than this from the truth, or none, counts as a false or lost point in
 #: the calibration (mm; the camera's own noise is a few hundredths).
 CALIBRATION_TOLERANCE_MM = 0.5
@@ -142,9 +137,11 @@ def measure_image_arc(
     each frame (:func:`_columns`) against the ideal camera's stripe without the arc; under
     ``-1.0`` the same camera without the arc (the camera's own losses). ``seed``: another
     run's seed, and stations shifted by 2 mm (a measurement the calibration did not make).
-    ``countermeasures``: the frames with the arc measured under these (:data:`COUNTERMEASURES`;
-    a detector that rejects the blob turns its false points into drop-outs)."""
-    base: dict[str, Any] = {"arc.process": process, **CALIBRATION_CAMERA}
+    ``countermeasures``: the frames with the arc measured under these (:data:`COUNTERMEASURES`:
+    the camera the switch gives, its filter and exposure control, and its peak rejection, which
+    turns the blob's false points into drop-outs), as the profile model of a scene with that
+    switch stands for them."""
+    base: dict[str, Any] = {"arc.process": process}
     if seed is not None:
         base["simulation.seed"] = seed
     truth_parts = _build(without_arc(arc_scene(250.0, look_ahead_mm, "image", overrides={
@@ -173,15 +170,19 @@ def _build(scene: Any) -> Any:
 
 def _fit_blob(d: FloatArray, lost: FloatArray, current: FloatArray, base: float) -> list[float]:
     """(R_ref, gamma, s) of p = base + (1 - base) logistic((R(I) - d) / s), by maximum
-    likelihood."""
+    likelihood, with R(I) not falling as the current rises (R_ref gamma >= 0: a gamma of the
+    wrong sign is taken as 0, so the fit lands on the bound where the data say nothing more)."""
     from scipy.optimize import minimize
 
     from seamtrack.sensing.arc.profile_model import CURRENT_REF_A
 
     ratio = np.log(current / CURRENT_REF_A)
 
+    def gamma(x: FloatArray) -> float:
+        return float(x[1]) if x[0] * x[1] >= 0 else 0.0
+
     def nll(x: FloatArray) -> float:
-        radius = x[0] * np.exp(x[1] * ratio)
+        radius = x[0] * np.exp(gamma(x) * ratio)
         p = 0.5 * (1.0 - np.tanh(0.5 * (d - radius) / abs(x[2])))
         p = np.clip(base + (1.0 - base) * p, 1e-9, 1 - 1e-9)
         return float(-np.sum(np.where(lost, np.log(p), np.log1p(-p))))
@@ -192,7 +193,7 @@ def _fit_blob(d: FloatArray, lost: FloatArray, current: FloatArray, base: float)
         (minimize(nll, x0, method="Nelder-Mead", options=options) for x0 in starts),
         key=lambda r: r.fun,
     )
-    return [float(best.x[0]), float(best.x[1]), float(abs(best.x[2]))]
+    return [float(best.x[0]), gamma(best.x), float(abs(best.x[2]))]
 
 
 def _streak_runs(columns: dict[str, FloatArray], outside: FloatArray) -> list[float]:
@@ -288,8 +289,9 @@ def calibrate(
     frames: int = CALIBRATION_FRAMES,
     countermeasures: str = "none",
 ) -> dict[str, dict[str, float]]:
-    """The profile model's parameters per process, measured from the image model (under
-    ``countermeasures``; :data:`PROFILE_ARC` holds those measured under ``none``)."""
+    """The profile model's parameters per process, measured from the image model under
+    ``countermeasures`` (what :data:`~seamtrack.sensing.arc.profile_model.PROFILE_ARC` holds
+    for that switch)."""
     fitted = {}
     for process in processes:
         data = {
@@ -349,6 +351,49 @@ def closed_loop_max_error(
     return float(value) if value is not None else math.nan, str(summary.get("status"))
 
 
+#: The image-mode cost of the arc (issue 38: at most 2x): its cell, frames and repeats of each
+#: (quick, whole).
+COST_CELL = (250.0, 30.0)
+COST_FRAMES = (4, 20)
+COST_REPEATS = (1, 3)
+
+
+def image_cost(frames: int, overrides: dict[str, Any] | None = None,
+               repeats: int = 1) -> dict[str, float]:  # fmt: skip
+    """Image mode with the arc against without it on the same frames: ``v-groove-arc`` at
+    :data:`COST_CELL` under the default countermeasures and the same scene with no ``[arc]``,
+    each frame scanned (render, peaks, extractor) by one then the other, so both see the same
+    load, ``repeats`` times, each frame's least time kept (the least disturbed by other work).
+    Wall and CPU (this process's) ms a frame, their ratios, the 1-minute load."""
+    current, look = COST_CELL
+    scene = arc_scene(current, look, "image", "default", overrides)
+    arc_parts, plain_parts = _build(scene), _build(without_arc(scene))
+    poses = poses_along(arc_parts, look, frames)
+    for parts in (arc_parts, plain_parts):  # compiled kernels and caches warm, untimed
+        parts.scan(poses[0], 0.0, None)
+    wall = {"arc": np.full(len(poses), np.inf), "no_arc": np.full(len(poses), np.inf)}
+    cpu = {name: times.copy() for name, times in wall.items()}
+    for _ in range(max(1, repeats)):
+        for k, T in enumerate(poses):
+            for name, parts in (("arc", arc_parts), ("no_arc", plain_parts)):
+                w, c = time.perf_counter(), time.process_time()
+                parts.scan(T, 0.04 * (k + 1), None)
+                wall[name][k] = min(wall[name][k], time.perf_counter() - w)
+                cpu[name][k] = min(cpu[name][k], time.process_time() - c)
+    n = len(poses)
+    return {
+        "image_ms_per_frame_arc": 1000.0 * float(wall["arc"].mean()),
+        "image_ms_per_frame_no_arc": 1000.0 * float(wall["no_arc"].mean()),
+        "image_cost_ratio": float(wall["arc"].sum() / wall["no_arc"].sum()),
+        "image_cpu_ms_per_frame_arc": 1000.0 * float(cpu["arc"].mean()),
+        "image_cpu_ms_per_frame_no_arc": 1000.0 * float(cpu["no_arc"].mean()),
+        "image_cost_ratio_cpu": float(cpu["arc"].sum() / cpu["no_arc"].sum()),
+        "image_cost_frames": n,
+        "image_cost_repeats": max(1, repeats),
+        "image_cost_load_1min": os.getloadavg()[0],
+    }
+
+
 #: The grid the documentation's figures were measured on when the whole grid would take over
 #: 5 minutes on a busy machine (``python -m seamtrack.bench.arc --reduced``).
 REDUCED_CURRENTS_A = (100.0, 250.0, 350.0)
@@ -390,6 +435,12 @@ def bench_arc(
         )
         row["load_1min"] = round(os.getloadavg()[0], 2)
         rows.append({k: row[k] for k in (*COLUMNS, "loop_status", "load_1min")})
+    cost_load = os.getloadavg()[0]
+    cost = image_cost(COST_FRAMES[0] if quick else COST_FRAMES[1],
+                      {"workpiece.params.seam_length_mm": COST_CELL[1] + extra,
+                       **(QUICK_CAMERA if quick else {})},
+                      COST_REPEATS[0] if quick else COST_REPEATS[1])  # fmt: skip
+    cost["image_cost_load_1min_before"] = cost_load
     result = {
         "machine": machine_info(),
         "command": (
@@ -404,6 +455,7 @@ def bench_arc(
         "frames": frames,
         "load_1min_before": round(load_before, 2),
         "columns": list(COLUMNS),
+        **{k: _clean(v) for k, v in cost.items()},
         "rows": [{k: _clean(v) for k, v in r.items()} for r in rows],
     }
     (out / "arc.json").write_text(json.dumps(result, indent=2))
@@ -483,14 +535,31 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--calibrate", action="store_true", help="fit the profile model")
     parser.add_argument("--reduced", action="store_true", help="run the bench's smaller grid")
     parser.add_argument("--out", default="bench-results/arc", help="the bench's folder")
+    parser.add_argument(
+        "--countermeasures",
+        choices=[*COUNTERMEASURES, "both"],
+        default="both",
+        help="the switch to calibrate the profile model for",
+    )
+    parser.add_argument(
+        "--process",
+        action="append",
+        choices=["mag-short", "mag-spray", "tig"],
+        help="the processes to calibrate (repeatable; unset: all three)",
+    )
     args = parser.parse_args(argv)
     if args.reduced:
         bench_arc(args.out, reduced=True)
     if args.calibrate:
-        start = time.perf_counter()
-        load = os.getloadavg()[0]
-        print(json.dumps(calibrate(), indent=2))
-        print(f"# {time.perf_counter() - start:.0f} s, 1-min load {load:.1f}")
+        both = args.countermeasures == "both"
+        switches = list(COUNTERMEASURES) if both else [args.countermeasures]
+        processes = tuple(args.process or ("mag-short", "mag-spray", "tig"))
+        for switch in switches:
+            start = time.perf_counter()
+            load = os.getloadavg()[0]
+            fitted = calibrate(processes, countermeasures=switch)
+            print(json.dumps({switch: fitted}, indent=2))
+            print(f"# {switch}: {time.perf_counter() - start:.0f} s, 1-min load {load:.1f}")
     return 0
 
 

@@ -148,10 +148,10 @@ def render_image(
     electrons = formation.form_image(u[seen], w[seen], half[seen], slope[seen], sigma[seen],
                                      signal[seen], grid, rng)  # fmt: skip
     if arc is not None:
-        electrons = electrons + arc_electrons(
+        electrons += arc_electrons(  # in place: form_image's array is this frame's own
             arc.light, optics.arc_view(T, arc.light.laser_power_w), caster, mat, arc.arc_mm,
             arc.up, t_s if math.isfinite(t_s) else 0.0, rng, arc.travel,
-        ).astype(electrons.dtype)  # fmt: skip
+        )  # fmt: skip
     spacing = hits.distance_mm[direct.ray] * power[direct.ray]
     truth = formation.stripe_rows(direct.u, direct.w, direct.ray, direct.points, spacing,
                                   optics.columns)  # fmt: skip

@@ -31,7 +31,12 @@ from seamtrack.simulation.checks import (
     check_ticks,
     default_time_limit_s,
 )
-from seamtrack.simulation.countermeasures import band_pass, gate_settings, rejection
+from seamtrack.simulation.countermeasures import (
+    band_pass,
+    countermeasures,
+    gate_settings,
+    rejection,
+)
 from seamtrack.simulation.mount import Mount
 from seamtrack.simulation.robots import (
     check_sensor_outside,
@@ -451,7 +456,8 @@ def scene_arc_profile(scene: Scene) -> Any:
         return None
     from seamtrack.sensing.arc.profile_model import ArcProfileModel
 
-    return ArcProfileModel(a.process, a.current_a)
+    # the model measured under the scene's switch (its camera, filter, exposure, rejection)
+    return ArcProfileModel(a.process, a.current_a, countermeasures=countermeasures(scene.config))
 
 
 def with_profile_arc(

@@ -31,9 +31,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
+import numba
 import numpy as np
 from numpy.typing import NDArray
-from scipy import sparse
 
 from seamtrack.sensing.arc import fume as fume_model
 from seamtrack.sensing.arc import light
@@ -130,7 +130,8 @@ def _smooth_terms(
     j: float,
     frame: tuple[FloatArray, FloatArray, FloatArray | None],
 ) -> FloatArray:
-    """Items 1-3 of the module on the coarse grid, interpolated to every pixel (electrons)."""
+    """Items 1-3 of the module on the coarse grid, interpolated to every pixel (electrons;
+    0 where below ``arc.min_signal`` of the full well)."""
     k = max(1, arc.coarse_px)
     cu = np.arange(0.5 * k, view.rows + k, k)
     cw = np.arange(0.5 * k, view.columns + k, k)
@@ -163,21 +164,63 @@ def _smooth_terms(
     coarse = (radiance * view.pixel_sr * view.pupil_area_mm2 * view.electrons_per_w).reshape(
         uu.shape
     )
-    along_rows = np.asarray(_bilinear(coarse, k, view.rows) @ coarse)  # (rows, m)
-    return np.ascontiguousarray(np.asarray(_bilinear(coarse.T, k, view.columns) @ along_rows.T).T)
+    image = np.empty((view.rows, view.columns))
+    _interpolate(coarse, _linear_weights(coarse.shape[0], k, view.rows),
+                 _linear_weights(coarse.shape[1], k, view.columns),
+                 arc.min_signal * view.full_well_e, image)  # fmt: skip
+    return image
 
 
-def _bilinear(coarse: FloatArray, k: int, n: int) -> Any:
-    """The sparse (n, m) matrix that interpolates m coarse samples at pixel centres
-    (i + 0.5) k linearly onto n pixels (held constant beyond the ends)."""
-    m = coarse.shape[0]
+@dataclass(frozen=True)
+class LinearWeights:
+    """Linear interpolation of m coarse samples at pixel centres (i + 0.5) k onto n pixels
+    (held constant beyond the ends): pixel i takes ``w0[i]`` of sample ``i0[i]`` and ``w1[i]``
+    of ``i1[i]`` (i1 = i0 when m is 1: one sample, weight 1)."""
+
+    i0: NDArray[np.int64]
+    i1: NDArray[np.int64]
+    w0: FloatArray
+    w1: FloatArray
+
+
+def _linear_weights(m: int, k: int, n: int) -> LinearWeights:
+    """The weights of :class:`LinearWeights` for m samples every ``k`` pixels onto n."""
     x = np.clip((np.arange(n) + 0.5 - 0.5 * k) / k, 0.0, m - 1.0)
     i0 = np.minimum(np.floor(x).astype(np.int64), max(m - 2, 0))
     f = x - i0 if m > 1 else np.zeros(n)
     i1 = np.minimum(i0 + 1, m - 1)
-    rows = np.concatenate([np.arange(n), np.arange(n)])
-    return sparse.csr_matrix((np.concatenate([1 - f, f]), (rows, np.concatenate([i0, i1]))),
-                             shape=(n, m))  # fmt: skip
+    return LinearWeights(i0, i1, 1 - f, f)
+
+
+def _interpolate(coarse: FloatArray, rows: LinearWeights, columns: LinearWeights,
+                 floor: float, out: FloatArray) -> None:  # fmt: skip
+    """``out`` (n_rows, n_columns) = the coarse grid interpolated along its rows, then its
+    columns, with each pixel below ``floor`` set to 0."""
+    _interpolate_kernel(coarse, rows.i0, rows.i1, rows.w0, rows.w1, columns.i0, columns.i1,
+                        columns.w0, columns.w1, floor, out)  # fmt: skip
+
+
+@numba.njit(cache=True, nogil=True)
+def _interpolate_kernel(
+    coarse: FloatArray, r0: NDArray[np.int64], r1: NDArray[np.int64], a0: FloatArray,
+    a1: FloatArray, c0: NDArray[np.int64], c1: NDArray[np.int64], b0: FloatArray,
+    b1: FloatArray, floor: float, out: FloatArray,
+) -> None:  # fmt: skip
+    """:func:`_interpolate` in one pass over ``out``, row by row. Each interpolated value is
+    0 + w0 x0 + w1 x1 in this order (a sparse matrix's product, as the arc's image was first
+    drawn: the same bytes; a second term only where its sample is another)."""
+    along = np.empty(coarse.shape[1])
+    for i in range(out.shape[0]):
+        for b in range(coarse.shape[1]):
+            v = 0.0 + a0[i] * coarse[r0[i], b]
+            if r1[i] != r0[i]:
+                v += a1[i] * coarse[r1[i], b]
+            along[b] = v
+        for j in range(out.shape[1]):
+            v = 0.0 + b0[j] * along[c0[j]]
+            if c1[j] != c0[j]:
+                v += b1[j] * along[c1[j]]
+            out[i, j] = 0.0 if v < floor else v
 
 
 def _splat(image: FloatArray, u: FloatArray, w: FloatArray, electrons: FloatArray) -> None:
@@ -268,7 +311,6 @@ def arc_electrons(
     column = arc_mm + 0.5 * light.arc_radius_mm(arc.process, arc.current_a) * up
     j = light.arc_in_band_intensity(arc.process, arc.current_a, arc.band)
     image = _smooth_terms(arc, view, caster, mat, column, j, (arc_mm, up, travel))
-    image[image < arc.min_signal * view.full_well_e] = 0.0
     transmission = 1.0
     if arc.fume:
         sigma0, scale, _ = fume_model.fume_sigma(arc.process, arc.current_a)

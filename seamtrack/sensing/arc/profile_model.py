@@ -31,14 +31,19 @@ the arc's light instead of the laser's. Measured on ``v-groove-arc`` (the calibr
    spatter_rate_hz`; constant for TIG, which throws none) and the inverse square the density
    of droplets a point source throws (assumed; the calibration fits S_ref only).
 
-Without countermeasures the image model's peak detector keeps each column's strongest peak, so
-the arc almost never empties a column: nearly every lost point is a false point
-(``blob_false_fraction`` ~ 1). A detector that rejects blobs turns them into drop-outs.
+The model stands for a camera: the one a scene's ``countermeasures`` switch gives (its filter,
+exposure control and peak rejection, :mod:`seamtrack.simulation.countermeasures`), so each
+switch has its parameters (:data:`PROFILE_ARC_BY_SWITCH`; :data:`PROFILE_ARC` those of
+``"default"``). Under ``"none"`` (no filter, the multiple exposure) the blob reaches 15-26 mm
+at 250 A; under ``"default"`` (10 nm band-pass, fixed exposure, rejection) MAG spray's reaches
+5 mm (11 mm at 350 A), so a 10 mm look-ahead keeps the root up to 300 A. The peak detector keeps
+a column's strongest surviving peak, so the arc rarely empties a column: nearly every lost
+point is a false point (``blob_false_fraction`` ~ 1), except short-circuit MAG under
+``"default"``, whose few lost points near the arc are drop-outs.
 
 Every draw comes from the run's seeded :class:`numpy.random.Generator`; the model is a few
 vectorised numpy operations on the profile's points, no image and no ray. Its parameters
-(:data:`PROFILE_ARC`) are measured from the image model, not assumed: their provenance is
-written next to them.
+are measured from the image model, not assumed: their provenance is written next to them.
 """
 
 from __future__ import annotations
@@ -87,20 +92,41 @@ class ProfileArcParams:
     streak_run_mm: float
 
 
-#: Measured from the image model on v-groove-arc (paper preset, 512 x 1024 camera, multi
-#: exposure, 10 nm Gaussian filter at 660 nm, mill-scale steel): 8 frames at each look-ahead
-#: of 10, 12.5, 15, 20, 30 and 50 mm and each current of 100, 200, 300 and 350 A, against the
-#: ideal camera's stripe without the arc; fitted by maximum likelihood
-#: (seamtrack.bench.arc.calibrate; ``python -m seamtrack.bench.arc --calibrate`` prints these
-#: values, in 97 s for the three processes at a 1-minute load of 4.3). Measured beside them:
-#: the camera's own loss without the arc, 0.62 % of the columns; 201, 94 and 19 isolated false
-#: points counted (mag-short, mag-spray, tig). Over the grid the fitted model's share of lost
-#: points is within 0.09 of the image model's in every cell (worst at 10 mm and 300-350 A,
-#: where it overestimates).
+#: Measured from the image model on v-groove-arc (paper preset, 512 x 1024 camera, mill-scale
+#: steel) under the countermeasures ``"default"``, the camera a scene's switch gives: the 10 nm
+#: Gaussian band-pass at 660 nm, one fixed exposure, blob and streak rejection in the peak
+#: detector. 8 frames at each look-ahead of 10, 12.5, 15, 20, 30 and 50 mm and each current of
+#: 100, 200, 300 and 350 A, against the ideal camera's stripe without the arc; fitted by maximum
+#: likelihood (seamtrack.bench.arc.calibrate; ``python -m seamtrack.bench.arc --calibrate
+#: --countermeasures default`` prints these values, in 712 s for the three processes at a
+#: 1-minute load of 6.7, 2026-12-05; TIG again with the fit's bound on gamma, ``--process
+#: tig``, 43 s: unbounded, gamma came out -0.016, a blob that shrinks as the current rises).
+#: Measured beside them: the camera's own loss without the arc, 0.62 % of the columns; 329, 153
+#: and 43 isolated false points counted (mag-short, mag-spray, tig). The fixed exposure keeps
+#: the root up close: MAG spray's blob reaches 4.9 mm at 250 A (7.6 mm at 300 A, 11 mm at
+#: 350 A, so of the bench's currents only 350 A loses part of the stripe at 10 mm), TIG's
+#: 9.9 mm at every current; short-circuit MAG has no blob, the fit's R below zero with a 4.9 mm
+#: edge is a thin tail: a point 10 mm from the arc is dropped with a chance of 1-3 %.
 PROFILE_ARC: dict[str, ProfileArcParams] = {
-    "mag-short": ProfileArcParams(11.738, 0.156, 0.437, 0.999, -20.34, 2.47, 5.79e-4, 0.11),
-    "mag-spray": ProfileArcParams(12.919, 0.191, 0.463, 1.0, -19.94, 0.47, 3.32e-4, 0.04),
-    "tig": ProfileArcParams(10.56, 0.065, 0.072, 1.0, -20.9, 0.19, 4.21e-5, 0.02),
+    "mag-short": ProfileArcParams(-7.964, -0.375, 4.892, 0.0, 0.0, 0.0, 7.93e-4, 0.08),
+    "mag-spray": ProfileArcParams(4.929, 2.406, 0.111, 0.997, -0.09, 2.2, 3.3e-4, 0.03),
+    "tig": ProfileArcParams(9.895, 0.0, 0.054, 0.936, -21.18, 0.98, 8.96e-5, 0.02),
+}
+#: The same under the countermeasures ``"none"``: no filter (the chip's own 400-1100 nm), the
+#: camera's multiple exposure, no rejection (``python -m seamtrack.bench.arc --calibrate
+#: --countermeasures none``, same grid and frames, 294 s at a 1-minute load of 3.7,
+#: 2026-12-05; 199, 4 and 336 isolated false points counted). Through 700 nm of band the arc
+#: outshines the stripe far out: MAG spray's blob reaches 26 mm at 250 A (16 mm at 100 A,
+#: 31 mm at 350 A), its false points 13-15 mm nearer the sensor than the arc (+- 5 mm).
+PROFILE_ARC_NONE: dict[str, ProfileArcParams] = {
+    "mag-short": ProfileArcParams(18.669, 0.385, 1.467, 1.0, -14.55, 5.12, 4.05e-3, 0.06),
+    "mag-spray": ProfileArcParams(26.076, 0.51, 3.694, 1.0, -13.26, 4.56, 3.25e-4, 0.15),
+    "tig": ProfileArcParams(14.969, 0.212, 0.886, 1.0, -17.13, 2.04, 2.1e-3, 0.11),
+}
+#: The parameters per countermeasures switch (``ArcProfileModel.countermeasures``).
+PROFILE_ARC_BY_SWITCH: dict[str, dict[str, ProfileArcParams]] = {
+    "default": PROFILE_ARC,
+    "none": PROFILE_ARC_NONE,
 }
 
 
@@ -114,13 +140,20 @@ def _check_current(current_a: float) -> float:
 @dataclass(frozen=True)
 class ArcProfileModel:
     """The profile-mode arc of one scene: ``process``, ``current_a`` and the parameters
-    (default :data:`PROFILE_ARC` of the process)."""
+    (default those of the process measured under the scene's ``countermeasures`` switch,
+    :data:`PROFILE_ARC_BY_SWITCH`: the camera, filter, exposure and peak rejection the switch
+    gives)."""
 
     process: str
     current_a: float
     params: ProfileArcParams | None = None
+    countermeasures: str = "default"
 
     def __post_init__(self) -> None:
+        if self.countermeasures not in PROFILE_ARC_BY_SWITCH:
+            switches = ", ".join(sorted(PROFILE_ARC_BY_SWITCH))
+            raise SeamtrackError(f"{self.countermeasures!r} is not a countermeasures switch",
+                                 field="countermeasures", fix=f"one of {switches}")  # fmt: skip
         if self.process not in PROFILE_ARC and self.params is None:
             raise SeamtrackError(f"{self.process!r} is not a process", field="arc.process",
                                  fix=f"one of {', '.join(sorted(PROFILE_ARC))}")  # fmt: skip
@@ -129,7 +162,9 @@ class ArcProfileModel:
     @property
     def p(self) -> ProfileArcParams:
         """The parameters in use."""
-        return self.params if self.params is not None else PROFILE_ARC[self.process]
+        if self.params is not None:
+            return self.params
+        return PROFILE_ARC_BY_SWITCH[self.countermeasures][self.process]
 
     def blob_radius_mm(self) -> float:
         """R(I): the distance from the arc within which the blob takes the stripe (mm)."""
