@@ -4,9 +4,11 @@
    plate at 8 m/min of wire): wall time, peak memory, and per pass the cost of building its
    parts (the workpiece and the beads joined, the Embree scene: the mesh rebuild), of the
    closed loop, and of laying the bead (the deposition); the job's arc time over its wall
-   time ("x real time"; target >= 10 on a quiet machine). Then the same groove forced into 12
-   passes (``passes.count = 12``: fatter beads, single-bead layers at the root), the issue's
-   count, which does not yet track within 0.5 mm (a row of its own, so that it shows).
+   time ("x real time"; target >= 10 on a quiet machine). Then the same groove forced into
+   10, 12 and 14 passes (``passes.count``; :func:`seamtrack.control.fill_layout.counted_layout`
+   lays them out), each job's ISO 5817 level. The planner's time a pass is kept as wall time and
+   as the CPU time of the job's thread (``plan_cpu_s``), which a loaded machine's other
+   processes do not add to.
 2. ``multipass-varying-gap`` (a root gap varying by +-2 mm along 300 mm) with the adaptive
    planner and with the fixed one (same beads, constant speed): the final reinforcement's
    spread along the seam (target: adaptive <= 1 mm).
