@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from seamtrack.control.fill_layout import (
+    CAP_BAND_DEPTH_MAX,
     CAP_BAND_FRACTION,
     CAP_OVERLAP_MM,
     MeasuredGroove,
@@ -88,6 +89,31 @@ def test_layout_with_a_count_holds_that_many_passes(count: int) -> None:
     plan = layout(groove(np.full(3, 2.0)), JobState(PROCESS, count=count))
     assert plan.passes == count
     assert all(n >= 1 for n in plan.beads_per_layer)
+
+
+@pytest.mark.parametrize("count", range(9, 23))
+def test_a_counted_plan_lays_out_as_a_welder_would(count: int) -> None:
+    """A forced count on multipass-v-groove's V: every bead within the travel speed window,
+    the fill layers' bead counts growing with the groove's width from one at the root, the cap
+    as many beads as cover the top width every 0.7 bead widths, over a band under the plates'
+    line at most CAP_BAND_DEPTH_MAX of a cap bead's height deep (issue 42: 10 passes were
+    [1, 1, 1, 1, 6], fill beads of 55 mm^2 under a cap of 6 at the fastest speed)."""
+    g = groove(np.full(3, 2.0))
+    state = JobState(PROCESS, count=count)
+    plan = layout(g, state)
+    *fill, cap = plan.beads_per_layer
+    assert plan.passes == count and fill[0] == 1
+    assert fill == sorted(fill)
+    smallest, largest = PROCESS.bead_area_mm2(15.0), PROCESS.bead_area_mm2(2.0)
+    for area in (plan.fill_bead_area_mm2, plan.cap_bead_area_mm2):
+        assert smallest <= area <= largest
+    top = g.top_width_mm[0]
+    assert (top + 2 * CAP_OVERLAP_MM) / cap <= 0.7 * PROCESS.bead_width_mm(
+        plan.cap_bead_area_mm2
+    ) + 1e-9
+    band = cap * plan.cap_bead_area_mm2 - cap_area_mm2(top, state.reinforcement_mm)
+    assert 0.0 < band / top <= CAP_BAND_DEPTH_MAX * PROCESS.bead_height_mm(plan.cap_bead_area_mm2)
+    assert plan.fill_bead_area_mm2 * sum(fill) == pytest.approx(g.area_mm2[0] - band)
 
 
 def test_fill_order_is_corners_first() -> None:

@@ -36,6 +36,20 @@ CAP_BAND_FRACTION = 0.3
 #: plates' line (multipass-v-groove forced into 10 and 20 passes, multipass-varying-gap, with
 #: perfect tracking); at 1.2 those fill to 0.10-0.26 mm over it, -0.09 mm at 10 passes.
 CAP_FIRST_WEIGHT = 1.2
+#: A forced pass count's cap (:func:`counted_layout`): the band under the plates' line that the
+#: cap fills is at most this fraction of a cap bead's height deep. Deeper, the valleys between
+#: the cap's beads stay under the line: 3 cap beads of 34 mm^2 over a band 3 mm deep (0.71 of
+#: their height) left multipass-v-groove's 10 passes 0.21 mm under it with perfect tracking;
+#: 4 of 19 mm^2 (0.60) 0.09 mm over it; 5 of 12 mm^2 (0.49) 0.24 mm over it.
+CAP_BAND_DEPTH_MAX = 0.5
+#: A forced pass count's fill layer (:func:`counted_layout`): its beads, each of its bead's
+#: width on a flat plate, span at least its width at its top over this. multipass-v-groove's
+#: 10 passes as measured by its scan pass (the groove 1 mm deeper than the CAD's, to the
+#: backing bar) were cut into 5 layers of 1 bead of 44 mm^2 (14 mm wide), the top one 22 mm
+#: wide (1.57 of the bead's width): 0.61 mm under the plates' line in closed loop. The single
+#: bead layers of the plans that fill span up to 1.3 of their bead's width (12 passes: 1.2;
+#: 16: 1.3), which 1.25 cut into fewer layers of more beads, 0.06 mm under the line.
+LAYER_SPAN_MAX = 1.35
 
 
 @dataclass(frozen=True)
@@ -184,17 +198,9 @@ def cap_area_mm2(top_width_mm: Any, reinforcement_mm: float) -> Any:
 
 
 def layout(groove: MeasuredGroove, state: LayoutState) -> Layout:
-    """Equal-area fill layers and a cap, for the groove's median section.
-
-    The fill stops :data:`CAP_BAND_FRACTION` of a bead's height below the plates' top line;
-    that band and the crown (:func:`cap_area_mm2`) are the cap's, laid in equal beads side to
-    side, as many as cover the top width and :data:`CAP_OVERLAP_MM` beyond each corner with a
-    bead every 0.7 bead widths (none smaller than the fastest travel speed lays). The fill is
-    split into as many equal-area layers as its depth holds beads of the process's height,
-    each with ``round(layer area / bead area)`` (>= 1) beads. The bead area is the process's
-    at its nominal speed, or, with ``state.count``, the one that makes the plan hold that many
-    passes (the largest remainder decides which layers take the rounding).
-    """
+    """The plan of the job for the groove's median section: the process's own
+    (:func:`nominal_layout`), or with ``state.count`` one of that many passes
+    (:func:`counted_layout`)."""
     p = state.process
     fill_area = float(np.median(groove.area_mm2))
     depth = float(np.median(groove.depth_mm))
@@ -206,13 +212,60 @@ def layout(groove: MeasuredGroove, state: LayoutState) -> Layout:
             field="passes",
             fix="check the workpiece is a groove and the extractor finds its 7 points",
         )
-    total = fill_area + float(cap_area_mm2(top, state.reinforcement_mm))
+    section = Section(fill_area, depth, top, float(np.median(groove.bottom_width_mm)))
+    if state.count is not None:
+        return counted_layout(section, p, state.count, state.reinforcement_mm)
+    return nominal_layout(section, p, state.reinforcement_mm)
+
+
+@dataclass(frozen=True)
+class Section:
+    """A groove's median section: its area below the top-corner line (mm^2), depth, top
+    width and the width of its fill surface (mm)."""
+
+    area_mm2: float
+    depth_mm: float
+    top_mm: float
+    bottom_mm: float
+
+    def height_of(self, area_mm2: float) -> float:
+        """The height over the fill surface below which the section holds ``area_mm2``, its
+        walls straight from the fill surface's width to the top width (the area scaled to the
+        measured one)."""
+        b, d = max(self.bottom_mm, 0.0), self.depth_mm
+        k = 0.5 * (self.top_mm - b) / d
+        a = min(max(area_mm2, 0.0), self.area_mm2) * (b + k * d) * d / self.area_mm2
+        if k <= 1e-12:
+            return a / max(b, 1e-12)
+        return (-b + math.sqrt(b * b + 4.0 * k * a)) / (2.0 * k)
+
+    def width_at(self, z: Any) -> Any:
+        """The section's width at heights z over the fill surface."""
+        b = max(self.bottom_mm, 0.0)
+        return b + (self.top_mm - b) * np.asarray(z, dtype=float) / self.depth_mm
+
+    def slice_mm2(self, z0: float, z1: float) -> float:
+        """The section's area between heights z0 and z1 over the fill surface."""
+        b, d = max(self.bottom_mm, 0.0), self.depth_mm
+        k = 0.5 * (self.top_mm - b) / d
+        whole = (b + k * d) * d
+        return self.area_mm2 * (b * (z1 - z0) + k * (z1 * z1 - z0 * z0)) / whole
+
+
+def nominal_layout(section: Section, p: Process, reinforcement_mm: float) -> Layout:
+    """Equal-area fill layers and a cap, with the process's bead at its nominal speed.
+
+    The fill stops :data:`CAP_BAND_FRACTION` of a bead's height below the plates' top line;
+    that band and the crown (:func:`cap_area_mm2`) are the cap's, laid in equal beads side to
+    side, as many as cover the top width and :data:`CAP_OVERLAP_MM` beyond each corner with a
+    bead every 0.7 bead widths (none smaller than the fastest travel speed lays). The fill is
+    split into as many equal-area layers as its depth holds beads of the process's height,
+    each with ``round(layer area / bead area)`` (>= 1) beads.
+    """
+    fill_area, depth, top = section.area_mm2, section.depth_mm, section.top_mm
+    total = fill_area + float(cap_area_mm2(top, reinforcement_mm))
     bead = float(p.bead_area_mm2(p.nominal_speed_mm_s))
-    if state.count is not None:
-        bead = total / state.count
     cap_beads = max(1, math.ceil((top + 2 * CAP_OVERLAP_MM) / (0.7 * p.bead_width_mm(bead))))
-    if state.count is not None:
-        cap_beads = min(cap_beads, state.count)
     # The fill stops CAP_BAND_FRACTION of a bead's height below the plates' top line; the cap
     # fills that band and lays the crown.
     band = min(CAP_BAND_FRACTION * p.bead_height_mm(bead) * top, fill_area)
@@ -222,24 +275,93 @@ def layout(groove: MeasuredGroove, state: LayoutState) -> Layout:
         n = max(1, math.ceil((top + 2 * CAP_OVERLAP_MM) / (0.7 * p.bead_width_mm(cap_bead))))
         # no bead smaller than the fastest travel speed lays
         n = min(n, max(1, int((band + total - fill_area) / p.bead_area_mm2(p.speed_max_mm_s))))
-        if state.count is not None:  # and at least one fill bead left of a forced count
-            n = min(n, max(1, state.count - 1))
         if n == cap_beads:
             break
         cap_beads, cap_bead = n, (band + total - fill_area) / n
-    if fill_total < 0.5 * bead or (state.count is not None and cap_beads == state.count):
-        n = state.count if state.count is not None else max(1, round(total / bead))
+    if fill_total < 0.5 * bead:
+        n = max(1, round(total / bead))
         return Layout((n,), 0.0, total / n)
     fill_depth = depth * min(1.0, fill_total / fill_area)
     layers = max(1, round(fill_depth / p.bead_height_mm(bead)))
-    if state.count is not None:
-        fill_beads = state.count - cap_beads
-        layers = min(layers, fill_beads)
-        share = np.full(layers, fill_beads / layers)
-        per_layer = np.floor(share).astype(int)
-        order = np.argsort(-(share - per_layer), kind="stable")[::-1]  # the upper layers first
-        per_layer[order[: fill_beads - int(per_layer.sum())]] += 1
-        counts = [int(n) for n in per_layer]
-    else:
-        counts = [max(1, round(fill_total / layers / bead))] * layers
+    counts = [max(1, round(fill_total / layers / bead))] * layers
     return Layout((*counts, cap_beads), fill_total / sum(counts), cap_bead)
+
+
+def counted_layout(section: Section, p: Process, count: int, reinforcement_mm: float) -> Layout:
+    """A plan of ``count`` passes, as a welder lays one out: a cap of as many beads as cover
+    the top width (:func:`covering_area_mm2`), fill layers whose bead counts grow with the
+    groove's width, every bead within the process's travel speed window.
+
+    For each cap of n beads (1 .. count - 1) the cap's bead is the larger of the one that
+    covers the top width and :data:`CAP_OVERLAP_MM` beyond each corner every 0.7 bead widths
+    and the one that fills the nominal band (:data:`CAP_BAND_FRACTION` of a bead's height
+    under the top line) and the crown; the band grows to what the cap's beads lay beyond the
+    crown, and the fill's ``count - n`` beads share the rest. The cap kept is the one of the
+    fewest beads whose band is at most :data:`CAP_BAND_DEPTH_MAX` of a cap bead's height deep
+    and whose beads, cap and fill, are all within the travel speed window (when none is, the
+    one that misses by the smallest factor). The fewest: the fill's beads are then the most
+    and the smallest. The fill is cut into layers of equal height, as many as keep each
+    within a fill bead's height, each layer's beads in proportion to its area
+    (:func:`layer_counts`): the counts grow with the groove's width.
+
+    multipass-v-groove's V (20 mm, 60 deg, 2 mm gap), perfectly tracked: 10 passes
+    [1, 1, 1, 2, 5] (fill beads of 44 mm^2, cap beads 12 mm^2), 12 [1, 1, 1, 2, 2, 5], 14
+    [1, 1, 1, 2, 2, 2, 5], 20 [1, 1, 1, 2, 3, 3, 4, 5], each at level B. The cap of 3 beads
+    that a welder might lay at 10 passes ([1, 1, 2, 3, 3]) is 34 mm^2 a bead over a band 3 mm
+    deep: the valleys between its beads stay 0.21 mm under the line in this bead model."""
+    fill_area, top = section.area_mm2, section.top_mm
+    crown = float(cap_area_mm2(top, reinforcement_mm))
+    total = fill_area + crown
+    if count < 2:
+        return Layout((max(count, 1),), 0.0, total / max(count, 1))
+    smallest = float(p.bead_area_mm2(p.speed_max_mm_s))
+    largest = float(p.bead_area_mm2(p.speed_min_mm_s))
+    band0 = CAP_BAND_FRACTION * p.bead_height_mm(total / count) * top
+
+    def option(n: int) -> tuple[float, float, float]:
+        cap = max(covering_area_mm2(p, top, n), (band0 + crown) / n, smallest)
+        fill = (total - n * cap) / (count - n)
+        if fill <= 0.0:
+            return math.inf, cap, fill
+        deep = (n * cap - crown) / top / p.bead_height_mm(cap)
+        out = max(cap / largest, fill / largest, smallest / fill, deep / CAP_BAND_DEPTH_MAX, 1.0)
+        return out, cap, fill
+
+    best = min(range(1, count), key=lambda n: (option(n)[0], n))
+    score, cap, fill = option(best)
+    if not math.isfinite(score):  # the cap alone holds the groove: one layer
+        return Layout((count,), 0.0, total / count)
+    fill_total = total - best * cap
+    height = section.height_of(fill_total)
+    layers = max(1, min(count - best, math.ceil(height / p.bead_height_mm(fill))))
+    span = LAYER_SPAN_MAX * p.bead_width_mm(fill)
+    while True:  # fewer, wider layers until each layer's beads span its width
+        counts = layer_counts(section, height, layers, count - best)
+        tops = section.width_at(np.linspace(0.0, height, layers + 1)[1:])
+        if layers == 1 or np.all(tops <= span * np.asarray(counts)):
+            return Layout((*counts, best), fill, cap)
+        layers -= 1
+
+
+def covering_area_mm2(p: Process, top_mm: float, n: int) -> float:
+    """The bead area whose width covers the top width and :data:`CAP_OVERLAP_MM` beyond each
+    corner in n beads laid every 0.7 bead widths."""
+    width = (top_mm + 2 * CAP_OVERLAP_MM) / (0.7 * n)
+    h = width / p.width_to_height
+    return SHAPE_FILL.get(p.bead_model, 2.0 / 3.0) * p.width_to_height * h * h
+
+
+def layer_counts(section: Section, height_mm: float, layers: int, beads: int) -> list[int]:
+    """``beads`` fill beads in ``layers`` layers of equal height up to ``height_mm``, each
+    layer's share in proportion to its area (the largest remainders, the upper layers first on
+    a tie, at least one a layer), never fewer than the layer below."""
+    z = np.linspace(0.0, height_mm, layers + 1)
+    areas = np.array([section.slice_mm2(z[i], z[i + 1]) for i in range(layers)])
+    share = beads * areas / max(float(areas.sum()), 1e-12)
+    counts = np.maximum(np.floor(share), 1.0).astype(int)
+    order = sorted(range(layers), key=lambda i: (counts[i] - share[i], -i))
+    for i in order[: max(beads - int(counts.sum()), 0)]:  # the largest remainders
+        counts[i] += 1
+    while counts.sum() > beads:  # the ones the floor of 1 added, from the widest layers
+        counts[int(np.argmax(counts))] -= 1
+    return sorted(int(n) for n in counts)

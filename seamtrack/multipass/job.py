@@ -104,6 +104,17 @@ class PassRecord:
     deposit_s: float
     scene: Scene
     plan_s: float = 0.0  # the planner's plan() for this pass (wall time)
+    plan_cpu_s: float = 0.0  # the same, the CPU time of the job's thread (time.thread_time)
+
+
+@dataclass(frozen=True)
+class PlanTime:
+    """The planner's time for a pass (s): wall time, and the CPU time the job's thread spent
+    in it (:func:`time.thread_time`), which a loaded machine's other processes do not add
+    to (on 2 cores at a load of 8-15 a 2 ms plan() took 17-41 ms of wall time once a job)."""
+
+    wall_s: float
+    cpu_s: float
 
 
 @dataclass(frozen=True, eq=False)
@@ -291,15 +302,15 @@ def _scanned(scene: Scene, scan: _Done) -> tuple[Scene, MeasuredGroove]:
 def _next_plan(
     scene: Scene, plan_maker: Any, name: str, groove: MeasuredGroove, index: int,
     state: JobState, window: tuple[float, float], budget_s: float,
-) -> tuple[PassPlan | None, float]:  # fmt: skip
+) -> tuple[PassPlan | None, PlanTime]:  # fmt: skip
     """Pass ``index``'s plan, checked, with the scene's overrides for it (None: the planner is
-    done), and the planner's time for it (s)."""
+    done), and the planner's time for it."""
     c = scene.config
     assert c.passes is not None
-    planning = time.perf_counter()
+    planning, cpu = time.perf_counter(), time.thread_time()
     plan = _plan(plan_maker, name, groove, index, state, arm=is_arm(c), window=window,
                  budget_s=budget_s)  # fmt: skip
-    plan_s = time.perf_counter() - planning
+    plan_s = PlanTime(time.perf_counter() - planning, time.thread_time() - cpu)
     if plan is not None and c.passes.overrides:
         plan = checked_plan(overridden(plan, c.passes, index), name, index, groove,
                             gantry=not is_arm(c), field="passes.overrides",
@@ -309,7 +320,7 @@ def _next_plan(
 
 
 def _laid(
-    fill: FillState, done: _Done, shape: Any, plan_s: float, index: int
+    fill: FillState, done: _Done, shape: Any, plan_s: PlanTime, index: int
 ) -> tuple[FillState, PassRecord, str]:
     """The fill with the pass's bead laid along the path its torch followed, the pass's record
     (with the deposition's and the planner's times), and why the job stops here ("" when it
@@ -322,7 +333,7 @@ def _laid(
     except SceneError as exc:  # the torch left the groove: the bead cannot be laid
         stopped = f"the bead of pass {index + 1} could not be laid ({exc.message})"
     record = dataclasses.replace(done.record, deposit_s=time.perf_counter() - start,
-                                 plan_s=plan_s)  # fmt: skip
+                                 plan_s=plan_s.wall_s, plan_cpu_s=plan_s.cpu_s)  # fmt: skip
     return fill, record, stopped
 
 

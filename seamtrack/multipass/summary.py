@@ -165,7 +165,8 @@ def _pass_row(r: Any) -> dict[str, Any]:
         row.update(layer=p.layer + 1, bead_in_layer=p.bead_in_layer + 1, cap=p.cap,
                    reference=p.reference, offset_mm=p.offset_mm,
                    wire_feed_m_min=p.wire_feed_mm_s * 60e-3, bead_area_mm2=r.bead_area_mm2,
-                   heat_input_kj_mm=r.heat_input_kj_mm, plan_s=r.plan_s)  # fmt: skip
+                   heat_input_kj_mm=r.heat_input_kj_mm, plan_s=r.plan_s,
+                   plan_cpu_s=r.plan_cpu_s)  # fmt: skip
     return row
 
 
