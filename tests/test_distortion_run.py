@@ -65,3 +65,39 @@ def test_a_distortion_run_draws_the_seam_moving(tmp_path: Path) -> None:
         out = tmp_path / name
         assert main(["run", name, *args, "--out", str(out), "-q"]) == 0
         assert {p.name for p in out.glob("*.png")} == pictures
+
+
+def test_a_pass_path_over_the_fill_s_end_sinks_with_the_plates_as_one_body() -> None:
+    # A multi-pass job's pass path (the fill surface's reference point) turns up over the
+    # fill's end; the plates turning about their pinned edges sink every point of the
+    # section by the same vector, along the weld line's normal, not the path's local one.
+    import dataclasses
+    import math
+
+    from seamtrack.geometry.seam import Seam
+    from seamtrack.heat.materials import thermal_material
+    from seamtrack.heat.motion import joint_motion
+    from seamtrack.multipass.distortion import into_the_part
+    from seamtrack.simulation.distorted import MovingSeam
+
+    x = np.linspace(0.0, 100.0, 201)
+    joint = Seam.from_points(np.column_stack([x, np.zeros_like(x), np.zeros_like(x)]))
+    bump = 0.6 * np.clip((x - 98.5) / 1.0, 0.0, 1.0)  # 0.6 mm up over the last 1.5 mm
+    path = Seam.from_points(np.column_stack([x, 3.8 + 0.2 * bump, 11.0 + bump]))
+    still = joint_motion(
+        power_w=0.0, speed_mm_s=5.0, material=thermal_material("carbon_steel"),
+        thickness_mm=20.0, plate_width_mm=50.0, seam_length_mm=100.0,
+        angle_peak_rad=math.radians(1.0), angle_peak_q_per_h2=20.0, fixed_plate="none",
+    )  # fmt: skip
+    motion = dataclasses.replace(still, prior_rad=math.radians(3.77))
+    sink = np.array([0.0, 0.0, -50.0 * math.radians(3.77) / 2])
+    t = np.zeros(len(x))
+    moving = MovingSeam(path, motion, joint)
+    d = moving.shift_world(moving.station_mm(path.points), t)
+    np.testing.assert_allclose(d, np.broadcast_to(sink, d.shape), atol=1e-9)
+    np.testing.assert_allclose(into_the_part(moving, path.points + sink, t), path.points,
+                               atol=1e-9)  # fmt: skip
+    # the path taken as its own weld line tilts the move where it turns up (0.8 mm along it)
+    own = MovingSeam(path, motion)
+    tilted = own.shift_world(path.arc_length_mm, t)
+    assert np.max(np.abs(tilted[:, 0])) > 0.5

@@ -74,9 +74,13 @@ def joined_thickness_mm(fill: Any, plate_thickness_mm: float, bead_area_mm2: flo
     return max(root + depth * filled, 0.5)
 
 
-def moving_pass(scene: Scene, true_path: Seam, state: JobDistortion, joined_mm: float) -> Any:
-    """The pass's moving part: the scene's ``[distortion]`` on the pass's true path, on the
-    joined section ``joined_mm`` thick, starting from the angle ``state`` holds."""
+def moving_pass(
+    scene: Scene, true_path: Seam, state: JobDistortion, joined_mm: float, joint: Seam
+) -> Any:
+    """The pass's moving part: the scene's ``[distortion]`` on the pass's true path, moved
+    with the plates about the weld line ``joint`` (the CAD seam: the path's own slope over a
+    bead's crown or the fill's end is no direction the plates move in), on the joined section
+    ``joined_mm`` thick, starting from the angle ``state`` holds."""
     from seamtrack.simulation.distorted import moving_seam
 
     d = scene.config.distortion
@@ -84,7 +88,7 @@ def moving_pass(scene: Scene, true_path: Seam, state: JobDistortion, joined_mm: 
     config = scene.config.model_copy(
         update={"distortion": d.model_copy(update={"thickness_mm": float(joined_mm)})}
     )
-    moving = moving_seam(config, true_path)
+    moving = moving_seam(config, true_path, joint)
     motion = dataclasses.replace(moving.motion, prior_rad=state.angle_rad)
     return dataclasses.replace(moving, motion=motion)
 
@@ -93,21 +97,23 @@ def into_the_part(moving: Any, path: FloatArray, t_s: FloatArray) -> FloatArray:
     """The torch's path (world, on the moved part) back in the part's own frame."""
     if not len(path):
         return path
-    s = moving.seam.closest(path).arc_length_mm
+    s = moving.station_mm(path)
     return np.asarray(path - moving.shift_world(s, np.asarray(t_s, dtype=float)), dtype=float)
 
 
 def distorted_parts(
-    parts: Any, scene: Scene, plan: Any, fill: Any, process: Any, state: JobDistortion | None
-) -> tuple[Any, Any]:
+    parts: Any, scene: Scene, plan: Any, fill: Any, process: Any, state: JobDistortion | None,
+    joint: Seam,
+) -> tuple[Any, Any]:  # fmt: skip
     """A welding pass's parts on the moving part (sense and scoring), and its moving seam;
-    as they were, and ``None``, without ``[distortion]`` or for the scan-only pass."""
+    as they were, and ``None``, without ``[distortion]`` or for the scan-only pass. ``joint``:
+    the weld line (the CAD seam) the plates move about."""
     d = scene.config.distortion
     if d is None or state is None or plan is None:
         return parts, None
     area = float(np.mean(process.bead_area_mm2(plan.travel_speed_mm_s, plan.wire_feed_mm_s)))
     joined = joined_thickness_mm(fill, d.thickness_mm, area)
-    moving = moving_pass(scene, parts.seam, state, joined)
+    moving = moving_pass(scene, parts.seam, state, joined, joint)
     # the torch starts where its path is now (the part has moved since it was built)
     start = parts.tcp_start_world + moving.shift_world(np.zeros(1), np.zeros(1))[0]
     parts = dataclasses.replace(

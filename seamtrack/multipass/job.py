@@ -433,7 +433,7 @@ def _pass(
         tcp_start_world=true_path.points[0] + np.asarray(c.robot.start_offset_mm),
         tool_program=tool_program(pass_scene, true_path),
     )
-    parts, moving = distorted_parts(parts, pass_scene, plan, fill, process, bent)
+    parts, moving = distorted_parts(parts, pass_scene, plan, fill, process, bent, cad_seam)
     frames: list[tuple[Feature, FloatArray]] = []
     each: list[FrameGroove | None] = []  # every frame's groove, as the sense function saw it
     sense = SteeredSense(parts, fill, cad_seam, plan, frames, adapt, planner_name, previous, each,

@@ -31,19 +31,37 @@ FloatArray = NDArray[np.float64]
 
 @dataclasses.dataclass(frozen=True)
 class MovingSeam:
-    """The seam of :attr:`motion`, in the world: its move at stations and times."""
+    """The seam of :attr:`motion`, in the world: its move at stations and times.
+
+    ``joint``: the weld line the plates move about, when it is not :attr:`seam` itself (a
+    multi-pass job's pass path, a bead's height over the root, whose local slope at a bead's
+    crown or over the fill's end is no direction the plates move in): its stations and its
+    frame (tangent, torch normal) give the move, the same rigid displacement for every point
+    of the part's section at a station. ``None``: :attr:`seam` is the weld line."""
 
     seam: Seam
     motion: JointMotion
+    joint: Seam | None = None
+
+    @property
+    def line(self) -> Seam:
+        """The weld line the move is given along (:attr:`joint`, else :attr:`seam`)."""
+        return self.seam if self.joint is None else self.joint
+
+    def station_mm(self, points: FloatArray) -> FloatArray:
+        """The weld line's stations (arc length, mm) nearest to world ``points`` (n, 3)."""
+        return np.asarray(self.line.closest(points).arc_length_mm, dtype=float)
 
     def shift_world(self, s_mm: FloatArray, t_s: FloatArray) -> FloatArray:
-        """(n, 3) world displacement of the seam at arc lengths ``s_mm``, times ``t_s``."""
+        """(n, 3) world displacement of the part at the weld line's stations ``s_mm`` (arc
+        length along :attr:`line`), times ``t_s``."""
+        line = self.line
         s = np.atleast_1d(np.asarray(s_mm, dtype=float))
         lateral, vertical = self.motion.shift_mm(s, t_s)
-        tangent = self.seam.tangent_at(s)
-        knots = self.seam.arc_length_mm
+        tangent = line.tangent_at(s)
+        knots = line.arc_length_mm
         normal = np.column_stack(
-            [np.interp(np.clip(s, 0, self.seam.length_mm), knots, self.seam.normals[:, k])
+            [np.interp(np.clip(s, 0, line.length_mm), knots, line.normals[:, k])
              for k in range(3)]
         )  # fmt: skip
         normal -= np.sum(normal * tangent, axis=1, keepdims=True) * tangent
@@ -55,7 +73,7 @@ class MovingSeam:
         """``inner`` (a run's ``sense``) on the part as it is at the frame's time."""
 
         def sense(T_world_sensor: FloatArray, t_s: float, hint: Any = None) -> Any:
-            s = self.seam.closest(T_world_sensor[:3, 3]).arc_length_mm
+            s = self.station_mm(T_world_sensor[:3, 3])
             d = self.shift_world(s, np.array([t_s]))[0]
             T = np.array(T_world_sensor, dtype=float)
             T[:3, 3] -= d
@@ -72,10 +90,10 @@ class MovingSeam:
         tcp = trace.tcp_world
         if not len(tcp):
             return dataclasses.replace(trace, seam_shift_mm=np.zeros(0))
-        s = self.seam.closest(tcp).arc_length_mm
-        d = self.shift_world(s, trace.t_s)
+        d = self.shift_world(self.station_mm(tcp), trace.t_s)
         near = self.seam.closest(tcp - d)  # the torch's station on the moved seam
-        d = self.shift_world(near.arc_length_mm, trace.t_s)
+        on_line = near.arc_length_mm if self.joint is None else self.station_mm(near.points)
+        d = self.shift_world(on_line, trace.t_s)
         moved = near.points + d
         error_vec = tcp - moved
         tangent = self.seam.tangent_at(near.arc_length_mm)
@@ -97,7 +115,7 @@ class MovingSeam:
         welding: the seam's move there)."""
         weld = trace.welding
         untracked = float(np.max(trace.seam_shift_mm[weld])) if weld.any() else 0.0
-        s = np.linspace(0.0, self.seam.length_mm, seam_samples)
+        s = np.linspace(0.0, self.line.length_mm, seam_samples)
         t = trace.t_s[:: max(1, len(trace.t_s) // 200)] if len(trace.t_s) else np.zeros(1)
         lat, ver = self.motion.shift_mm(s[None, :], t[:, None])
         return {
@@ -116,8 +134,10 @@ def _normal_rows(seam: Seam, s: FloatArray, tangent: FloatArray) -> FloatArray:
     return np.asarray(n / np.linalg.norm(n, axis=1, keepdims=True), dtype=float)
 
 
-def moving_seam(config: Any, seam: Seam) -> MovingSeam:
-    """The scene's ``[distortion]`` on ``seam``."""
+def moving_seam(config: Any, seam: Seam, joint: Seam | None = None) -> MovingSeam:
+    """The scene's ``[distortion]`` on ``seam``, moving about the weld line ``joint`` (None:
+    ``seam`` is the weld line; :class:`MovingSeam`)."""
+    line = seam if joint is None else joint
     d = config.distortion
     if config.process is None:
         raise SeamtrackError(
@@ -129,9 +149,9 @@ def moving_seam(config: Any, seam: Seam) -> MovingSeam:
         Tack(t.position_mm, t.length_mm, t.throat_mm) for t in d.tacks
     ]
     for i, tack in enumerate(constraints):  # name the scene's own field on a bad position
-        _on_seam(tack.position_mm, seam.length_mm, f"distortion.tacks[{i}].position_mm")
+        _on_seam(tack.position_mm, line.length_mm, f"distortion.tacks[{i}].position_mm")
     for i, c in enumerate(d.clamps):
-        _on_seam(c.position_mm, seam.length_mm, f"distortion.clamps[{i}].position_mm")
+        _on_seam(c.position_mm, line.length_mm, f"distortion.clamps[{i}].position_mm")
     constraints += [Clamp(c.position_mm) for c in d.clamps]
     motion = joint_motion(
         power_w=process_power_w(config.process),
@@ -139,7 +159,7 @@ def moving_seam(config: Any, seam: Seam) -> MovingSeam:
         material=thermal_material(d.material, field="distortion.material"),
         thickness_mm=d.thickness_mm,
         plate_width_mm=d.plate_width_mm,
-        seam_length_mm=seam.length_mm,
+        seam_length_mm=line.length_mm,
         angle_peak_rad=math.radians(d.angle_peak_deg),
         angle_peak_q_per_h2=d.angle_peak_q_per_h2_j_mm3,
         shrinkage_coefficient=d.shrinkage_coefficient,
@@ -149,7 +169,7 @@ def moving_seam(config: Any, seam: Seam) -> MovingSeam:
         stiff_below_c=d.stiff_below_c,
         transient=d.transient,
     )
-    return MovingSeam(seam, motion)
+    return MovingSeam(seam, motion, joint)
 
 
 def _on_seam(position_mm: float, length_mm: float, field: str) -> None:
