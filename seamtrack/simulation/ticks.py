@@ -235,7 +235,7 @@ def gantry_ticks(
             ):
                 return k + 1, LIMIT
             has_target = True
-        if has_servo:  # CartesianRobot._step_servo and Servo.follow
+        if has_servo:  # CartesianRobot.step_move and Servo.follow
             axes_step(sq, sv, lim, dt, has_target, tx, ty, tz, speed, fx, fy, fz, stop)
             if ipo[1] % ipo[0] == 0:
                 held[:] = sq
