@@ -345,3 +345,13 @@ def test_arc_bench_through_the_dispatcher(tmp_path: Path) -> None:
         assert row["detect_rate"] == 1.0
         assert row["p95_mm"] <= 2 * PAPER.depth_of_field_mm / rows_px
         assert row["loop_max_error_mm"] <= 0.5
+    # the cost measured again into the same arc.json (quiet machine), the rows untouched
+    from seamtrack.bench.arc import remeasure_cost
+
+    again = remeasure_cost(tmp_path / "arc")
+    assert again["rows"] == files["arc.json"]["rows"]
+    assert json.loads((tmp_path / "arc" / "arc.json").read_text()) == again
+    assert again["image_cost_ratio"] == pytest.approx(
+        again["image_ms_per_frame_arc"] / again["image_ms_per_frame_no_arc"], rel=1e-3
+    )
+    assert "--cost" in again["image_cost_command"]

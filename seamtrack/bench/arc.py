@@ -394,6 +394,31 @@ def image_cost(frames: int, overrides: dict[str, Any] | None = None,
     }
 
 
+def measure_cost(quick: bool, extra: float) -> dict[str, float]:
+    """:func:`image_cost` as the bench runs it (the seam ``extra`` mm beyond the look-ahead),
+    with the 1-minute load before it (``image_cost_load_1min_before``)."""
+    load = os.getloadavg()[0]
+    cost = image_cost(COST_FRAMES[0] if quick else COST_FRAMES[1],
+                      {"workpiece.params.seam_length_mm": COST_CELL[1] + extra,
+                       **(QUICK_CAMERA if quick else {})},
+                      COST_REPEATS[0] if quick else COST_REPEATS[1])  # fmt: skip
+    cost["image_cost_load_1min_before"] = load
+    return cost
+
+
+def remeasure_cost(out_dir: str | Path) -> dict[str, Any]:
+    """Measure the image cost again into an existing ``arc.json`` (its rows untouched): the
+    cost is the figure that wants a quiet machine, the grid takes 10-25 minutes. The JSON
+    records ``image_cost_command`` so the two measurements are told apart."""
+    path = Path(out_dir) / "arc.json"
+    data = json.loads(path.read_text())
+    cost = measure_cost(bool(data["quick"]), float(data["seam_beyond_look_ahead_mm"]))
+    data.update({k: _clean(v) for k, v in cost.items()})
+    data["image_cost_command"] = f"python -m seamtrack.bench.arc --cost --out {out_dir}"
+    path.write_text(json.dumps(data, indent=2))
+    return data
+
+
 #: The grid the documentation's figures were measured on when the whole grid would take over
 #: 5 minutes on a busy machine (``python -m seamtrack.bench.arc --reduced``).
 REDUCED_CURRENTS_A = (100.0, 250.0, 350.0)
@@ -435,12 +460,7 @@ def bench_arc(
         )
         row["load_1min"] = round(os.getloadavg()[0], 2)
         rows.append({k: row[k] for k in (*COLUMNS, "loop_status", "load_1min")})
-    cost_load = os.getloadavg()[0]
-    cost = image_cost(COST_FRAMES[0] if quick else COST_FRAMES[1],
-                      {"workpiece.params.seam_length_mm": COST_CELL[1] + extra,
-                       **(QUICK_CAMERA if quick else {})},
-                      COST_REPEATS[0] if quick else COST_REPEATS[1])  # fmt: skip
-    cost["image_cost_load_1min_before"] = cost_load
+    cost = measure_cost(quick, extra)
     result = {
         "machine": machine_info(),
         "command": (
@@ -534,6 +554,11 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m seamtrack.bench.arc")
     parser.add_argument("--calibrate", action="store_true", help="fit the profile model")
     parser.add_argument("--reduced", action="store_true", help="run the bench's smaller grid")
+    parser.add_argument(
+        "--cost",
+        action="store_true",
+        help="measure the image cost again into OUT/arc.json (its rows kept)",
+    )
     parser.add_argument("--out", default="bench-results/arc", help="the bench's folder")
     parser.add_argument(
         "--countermeasures",
@@ -550,6 +575,12 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     if args.reduced:
         bench_arc(args.out, reduced=True)
+    if args.cost:
+        cost = remeasure_cost(args.out)
+        print(
+            f"image cost {cost['image_cost_ratio']:.2f}x (CPU {cost['image_cost_ratio_cpu']:.2f}x),"
+            f" 1-min load {cost['image_cost_load_1min_before']:.2f}"
+        )
     if args.calibrate:
         both = args.countermeasures == "both"
         switches = list(COUNTERMEASURES) if both else [args.countermeasures]
