@@ -499,6 +499,7 @@ HEADLINE = (
     ("gym", "Gymnasium environment, paper-v-groove", "seamtrack bench gym"),
     ("bridge", "lockstep bridge, algorithm II in another process", "seamtrack bench bridge"),
     ("firstrun", "the demo's first mesh-mode run, empty numba cache", "seamtrack bench firstrun"),
+    ("arc", "the arc in the sensor's view (MAG, 250 A, 30 mm ahead)", "seamtrack bench arc"),
 )
 
 
@@ -569,6 +570,29 @@ def _firstrun() -> str:
     return text
 
 
+def _arc() -> str:
+    r = load("arc")
+    cells = {
+        (row["mode"], row["countermeasures"]): row
+        for row in r["rows"]
+        if row["current_a"] == 250.0 and row["look_ahead_mm"] == 30.0
+    }
+
+    def cell(mode: str, cm: str) -> str:
+        row = cells[(mode, cm)]
+        text = f"{row['detect_rate']:.0%} found"
+        if row["median_mm"] is not None:
+            text += f", median {row['median_mm']:.3f} mm, p95 {row['p95_mm']:.3f} mm"
+        return text
+
+    return (
+        f"image, default countermeasures: {cell('image', 'default')}; without them: "
+        f"{cell('image', 'none')}; profile model, default: {cell('profile', 'default')}; the "
+        f"arc costs an image {r['image_cost_ratio']:.2f}x the time of one without it (load "
+        f"{r['image_cost_load_1min_before']:.1f}, `{r['image_cost_command']}`)"
+    )
+
+
 def headline() -> str:
     """The README's table: one line per figure, each with the command that measured it."""
     measured = {
@@ -590,6 +614,7 @@ def headline() -> str:
         "gym": _gym,
         "bridge": _bridge,
         "firstrun": _firstrun,
+        "arc": _arc,
     }
     rows = [_row(name, what, measured[name], command) for name, what, command in HEADLINE]
     head = ["| figure | measured | command |", "|---|---|---|"]
