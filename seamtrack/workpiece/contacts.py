@@ -143,24 +143,25 @@ def boxes_meet(
     return bool(np.all(a[0] <= b[1] + gap) and np.all(b[0] <= a[1] + gap))
 
 
-def faces(shape: TopoDS_Shape) -> list[TopoDS_Face]:
-    """The faces of a shape, in order."""
+def _explore(shape: TopoDS_Shape, kind: Any, cast: Any) -> list[Any]:
+    """The sub-shapes of ``kind`` (a ``TopAbs`` type) of a shape, in order, each through
+    ``cast`` (``TopoDS.Face_s``...)."""
     out = []
-    explorer = TopExp_Explorer(shape, TopAbs_FACE)
+    explorer = TopExp_Explorer(shape, kind)
     while explorer.More():
-        out.append(TopoDS.Face_s(explorer.Current()))
+        out.append(cast(explorer.Current()))
         explorer.Next()
     return out
+
+
+def faces(shape: TopoDS_Shape) -> list[TopoDS_Face]:
+    """The faces of a shape, in order."""
+    return _explore(shape, TopAbs_FACE, TopoDS.Face_s)
 
 
 def edges(shape: TopoDS_Shape) -> list[TopoDS_Edge]:
     """The edges of a shape, in order."""
-    out = []
-    explorer = TopExp_Explorer(shape, TopAbs_EDGE)
-    while explorer.More():
-        out.append(TopoDS.Edge_s(explorer.Current()))
-        explorer.Next()
-    return out
+    return _explore(shape, TopAbs_EDGE, TopoDS.Edge_s)
 
 
 def face_normal(face: TopoDS_Face, point: FloatArray) -> FloatArray:
