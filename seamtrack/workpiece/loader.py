@@ -50,6 +50,7 @@ from seamtrack.workpiece.sources import (
     resolve,
     run_script,
 )
+from seamtrack.workpiece.weldment import seam_near_points
 
 if TYPE_CHECKING:
     import trimesh
@@ -169,14 +170,7 @@ def _seam_edges(
 ) -> list[Any]:
     """The seam edges: near given points, by name, or by selector (unordered)."""
     if near is not None:
-        points = np.atleast_2d(np.asarray(near, dtype=np.float64))
-        if points.ndim != 2 or points.shape[1] != 3 or not np.isfinite(points).all():
-            raise WorkpieceError(
-                "seam_near_mm must be finite (m, 3) points",
-                field="workpiece.seam_near_mm",
-                fix="give x, y, z triples in mm",
-            )
-        return list(occ.edges_near(shape, points))
+        return list(occ.edges_near(shape, seam_near_points(near)))
     if seam is None:
         if not named:
             raise WorkpieceError(

@@ -595,6 +595,18 @@ def _number(seams: list[dict[str, Any]]) -> list[FoundSeam]:
 
 
 # ----------------------------------------------------------------------------- choosing
+def seam_near_points(near_mm: ArrayLike) -> FloatArray:
+    """``workpiece.seam_near_mm`` as (m, 3) float points, checked finite."""
+    points = np.atleast_2d(np.asarray(near_mm, dtype=np.float64))
+    if points.ndim != 2 or points.shape[1] != 3 or not np.isfinite(points).all():
+        raise WorkpieceError(
+            "seam_near_mm must be finite (m, 3) points",
+            field="workpiece.seam_near_mm",
+            fix="give x, y, z triples in mm",
+        )
+    return points
+
+
 def pick_seam(
     seams: Sequence[FoundSeam],
     seam: str | None,
@@ -604,13 +616,7 @@ def pick_seam(
     """The found seam a scene names (by id or name) or lies near (``seam_near_mm``)."""
     listing = "; ".join(s.label for s in seams)
     if near_mm is not None:
-        points = np.atleast_2d(np.asarray(near_mm, dtype=np.float64))
-        if points.ndim != 2 or points.shape[1] != 3 or not np.isfinite(points).all():
-            raise WorkpieceError(
-                "seam_near_mm must be finite (m, 3) points",
-                field="workpiece.seam_near_mm",
-                fix="give x, y, z triples in mm",
-            )
+        points = seam_near_points(near_mm)
         far = [float(s.seam().closest(points).distance_mm.max()) for s in seams]
         best = int(np.argmin(far))
         if far[best] > SEAM_NEAR_TOL_MM:
