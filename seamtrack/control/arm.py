@@ -260,9 +260,6 @@ class ArticulatedRobot:
         """``T_world_sensor`` of the measured (actual) joint positions."""
         return self.T_world_tcp_of(state) @ self.T_tcp_sensor
 
-    def torch_axis_base(self, state: ArmState) -> FloatArray:
-        return state.R[:, 2]
-
     def T_world_sensor(self, q: ArrayLike) -> FloatArray:
         """``T_world_base @ T_base_tcp(q) @ T_tcp_sensor`` for joint positions q (rad): the
         same call as :meth:`CartesianRobot.T_world_sensor <seamtrack.control.robot.

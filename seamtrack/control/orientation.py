@@ -33,16 +33,6 @@ CLOSED_TOL_MM = 1e-3
 TURN_RATE_STEP_MM = 0.5
 
 
-def rotation_vector(R: ArrayLike) -> FloatArray:
-    """(3,) axis times angle (rad) of a rotation matrix (angle below pi)."""
-    R = np.asarray(R, dtype=np.float64)
-    v = 0.5 * np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
-    angle = float(np.arccos(np.clip(0.5 * (np.trace(R) - 1.0), -1.0, 1.0)))
-    if angle < 1e-8:
-        return v
-    return v * (angle / np.sin(angle))
-
-
 @numba.njit(cache=True, nogil=True)
 def _point_at(s: float, knots: FloatArray, points: FloatArray, length: float) -> FloatArray:
     """:meth:`Seam.interpolate` at one arc length."""
@@ -96,7 +86,7 @@ def _rotation_at(
 
 @numba.njit(cache=True, nogil=True)
 def _rotation_vector(R: FloatArray) -> FloatArray:
-    """:func:`rotation_vector`, compiled."""
+    """(3,) axis times angle (rad) of a rotation matrix (angle below pi)."""
     v = 0.5 * np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
     angle = math.acos(min(max(0.5 * (R[0, 0] + R[1, 1] + R[2, 2] - 1.0), -1.0), 1.0))
     if angle < 1e-8:

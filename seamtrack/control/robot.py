@@ -79,14 +79,6 @@ class RobotState:
     setpoint: RobotState | None = None
     servo: ServoState | None = None
 
-    @property
-    def q_array(self) -> FloatArray:
-        return np.array(self.q)
-
-    @property
-    def v_array(self) -> FloatArray:
-        return np.array(self.v)
-
 
 @numba.njit(cache=True, nogil=True)
 def stop_speed(distance: float, accel: float, dt: float) -> float:

@@ -421,11 +421,6 @@ class TrajectoryTracker:
         return np.array(pk.end_direction(buffer.path, buffer.s, self.direction_fit_mm))
 
     @property
-    def _s_set(self) -> float:
-        """Arc length of the set-point along the stored path."""
-        return float(self._sp[pk.S_SET])
-
-    @property
     def _v_set(self) -> float:
         """Speed of the set-point along the path."""
         return float(self._sp[pk.V_SET])

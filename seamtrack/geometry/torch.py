@@ -66,32 +66,3 @@ def torch_angles(axis: ArrayLike, tangent: ArrayLike, normal: ArrayLike) -> Floa
     work = np.arctan2(np.sum(a * lateral, axis=1), a_n)
     travel = np.arctan2(-np.sum(a * t, axis=1), a_n)
     return np.column_stack([work, travel])
-
-
-def tool_rotation(axis: ArrayLike, heading: ArrayLike) -> FloatArray:
-    """Tool frame rotation ``R_world_tcp``: z along the torch axis, x along ``heading`` made
-    orthogonal to it (the direction the sensor looks ahead in), y = z x x.
-
-    Parameters
-    ----------
-    axis, heading : (3,) float
-
-    Returns
-    -------
-    R : (3, 3) float
-        Columns x, y, z of the tool frame.
-
-    Raises
-    ------
-    ValueError
-        When the heading is parallel to the torch axis.
-    """
-    z = np.asarray(axis, dtype=np.float64)
-    z = z / np.linalg.norm(z)
-    x = np.asarray(heading, dtype=np.float64)
-    x = x - (x @ z) * z
-    norm = float(np.linalg.norm(x))
-    if norm < 1e-12:
-        raise ValueError("tool_rotation: heading is parallel to the torch axis")
-    x = x / norm
-    return np.column_stack([x, np.cross(z, x), z])
