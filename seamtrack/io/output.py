@@ -18,12 +18,14 @@ import tempfile
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from seamtrack.errors import OutputError
-from seamtrack.simulation.loop import Result
+
+if TYPE_CHECKING:
+    from seamtrack.simulation.loop import Result
 
 TRACE_COLUMNS = (
     "t_s",
@@ -115,6 +117,15 @@ def prepare_dir(path: str | Path, field: str = "--out") -> Path:
             field=field,
             fix="choose a folder you can write to",
         ) from None
+    return out
+
+
+def prepare_file(path: str | Path, field: str = "--out") -> Path:
+    """``path`` with its folder created (and parents), ready for a writer to write the file
+    into; :class:`OutputError` where that folder cannot be (a file stands in the way, no
+    permission)."""
+    out = Path(path)
+    prepare_dir(out.parent, field)
     return out
 
 

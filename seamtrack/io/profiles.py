@@ -7,6 +7,7 @@ import csv
 import math
 from pathlib import Path
 
+from seamtrack.io.output import prepare_file
 from seamtrack.sensing.profiles import Profile, Reason
 
 #: CSV columns written by :func:`write_profile_csv`.
@@ -28,8 +29,7 @@ def write_profile_csv(profile: Profile, path: str | Path) -> Path:
         The file written. World columns are empty when the profile has no pose; coordinates
         are empty where they are NaN (a ray that hit nothing).
     """
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
+    out = prepare_file(path)
     laser = profile.points_laser
     world = profile.points_world if profile.T_world_sensor is not None else None
     assert profile.valid is not None and profile.reason is not None

@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from seamtrack.io.output import prepare_file
 from seamtrack.viz.plots import pyplot_module, save_figure
 from seamtrack.viz.run import gif_writer
 from seamtrack.viz.sensor_view import pyvista_module
@@ -118,8 +119,7 @@ def animate_fill(state: FillState, station: int, path: str | Path, *, fps: float
     pass was laid). Returns the path written (its folder is created).
     """
     plt = pyplot_module()
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
+    out = prepare_file(path)
     append, finish = gif_writer(out, fps)
     fig, ax = plt.subplots(figsize=(6, 4))
     try:
@@ -177,8 +177,7 @@ def render_fill_png(
     window_size: tuple[int, int] = (1000, 700),
 ) -> Path:
     """Render :func:`fill_plotter` off screen to a PNG; returns the path written."""
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
+    out = prepare_file(path)
     plotter = fill_plotter(state, part_mesh, off_screen=True, window_size=window_size)
     try:
         plotter.screenshot(str(out))

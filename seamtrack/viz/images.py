@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from seamtrack.errors import SceneError
+from seamtrack.io.output import prepare_file
 from seamtrack.sensing.camera import StripeImage
 from seamtrack.sensing.profiles import Feature, Profile
 from seamtrack.viz.plots import pyplot_module, save_with_legends
@@ -44,8 +45,7 @@ def plot_stripe_image(
     Path
     """
     plt = pyplot_module()
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
+    out = prepare_file(path)
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(8.0, 7.5), height_ratios=[1.1, 1.0])
     try:
         top.imshow(image.pixels, cmap="gray", vmin=0.0, vmax=1.0, aspect="auto",

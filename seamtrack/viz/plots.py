@@ -22,6 +22,7 @@ from typing import Any
 
 import numpy as np
 
+from seamtrack.io.output import prepare_file
 from seamtrack.sensing.profiles import Feature, Profile, Reason
 from seamtrack.simulation.loop import Result
 
@@ -59,8 +60,7 @@ def pyplot_module() -> Any:
 
 def save_figure(fig: Any, path: str | Path, dpi: int = 110) -> Path:
     plt = pyplot_module()
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
+    out = prepare_file(path)
     try:
         fig.savefig(out, dpi=dpi)
     finally:
@@ -350,8 +350,7 @@ def plot_profile_png(
         The file written.
     """
     plt = pyplot_module()
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
+    out = prepare_file(path)
     assert profile.valid is not None and profile.reason is not None
     pts = profile.points_laser
     fig, ax = plt.subplots(figsize=(7.0, 4.0))

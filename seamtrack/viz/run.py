@@ -14,6 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.geometry.frames import make
+from seamtrack.io.output import prepare_file
 from seamtrack.viz.views import (
     FEATURE_COLOR,
     add_torch_path,
@@ -106,8 +107,7 @@ def animate_run(
     from tqdm import tqdm
 
     pv = pyvista_module()
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
+    out = prepare_file(path)
     view = scene_view(scene, overrides)
     ticks = _frame_ticks(result, frames)
     tr = result.trace

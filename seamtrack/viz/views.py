@@ -35,6 +35,7 @@ from numpy.typing import ArrayLike, NDArray
 from seamtrack.control.robot import CartesianRobot
 from seamtrack.geometry.frames import apply, look_rotation, make
 from seamtrack.geometry.seam import Seam
+from seamtrack.io.output import prepare_file
 from seamtrack.sensing.profiles import Feature, Profile, Reason
 from seamtrack.sensing.sensor import LaserLineSensor
 from seamtrack.viz.plots import REASON_COLORS, plot_profile_2d
@@ -554,8 +555,7 @@ def render_png(
     Path
         The PNG written (its folder is created).
     """
-    out = Path(path)
-    out.parent.mkdir(parents=True, exist_ok=True)
+    out = prepare_file(path)
     plotter = scene_plotter(
         scene,
         at_mm=at_mm,
