@@ -50,3 +50,18 @@ def test_too_many_layers_are_refused():
     with pytest.raises(SpecError) as err:
         parse_spec({"joint": {"passes": [0, 40]}})
     assert "passes" in err.value.field
+
+
+@pytest.mark.parametrize(
+    ("section", "key", "wrong", "nearest"),
+    [
+        ("joint", "families", "v-grove", "v-groove"),
+        ("sensor", "presets", "papr", "paper"),
+        ("part", "materials", "mill-scale stel", "mill-scale steel"),
+    ],
+)
+def test_an_unknown_name_is_refused_with_the_nearest_known_one(section, key, wrong, nearest):
+    with pytest.raises(SpecError) as err:
+        parse_spec({section: {key: [wrong]}})
+    assert err.value.field.endswith(f"{section}.{key}.0")
+    assert f"did you mean {nearest!r}?" in (err.value.fix or "")

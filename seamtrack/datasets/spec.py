@@ -9,10 +9,12 @@ Checks are strict (a number is never a boolean or a string) and an error names t
 
 from __future__ import annotations
 
+import difflib
 import itertools
 import json
 import math
 import tomllib
+from collections.abc import Iterable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Annotated, Any, Literal
 
@@ -128,6 +130,24 @@ AngleRange = Annotated[Range, AfterValidator(_open_angle)]
 TiltRange = Annotated[Range, AfterValidator(_tilt)]
 
 
+def _check_known(
+    names: Sequence[str], known: Iterable[str], field: str, says: str, quoted: bool = False
+) -> None:
+    """Refuse the first of ``names`` that is not ``known``: a :class:`_FieldError` at
+    ``field.i`` saying ``says`` (formatted with the name), its fix the nearest known name and
+    the list (each name quoted where ``quoted``)."""
+    known = list(known)
+    for i, name in enumerate(names):
+        if name not in known:
+            close = difflib.get_close_matches(name, known, n=1)
+            listing = ", ".join(repr(k) if quoted else k for k in known)
+            raise _FieldError(
+                f"{field}.{i}",
+                says.format(name),
+                (f"did you mean {close[0]!r}? " if close else "") + f"use one of {listing}",
+            )
+
+
 class _Section(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 
@@ -154,13 +174,7 @@ class JointSpec(_Section):
 
     @model_validator(mode="after")
     def _consistent(self) -> JointSpec:
-        for i, name in enumerate(self.families):
-            if name not in FAMILIES:
-                raise _FieldError(
-                    f"families.{i}",
-                    f"unknown joint family {name!r}",
-                    f"use one of {', '.join(FAMILIES)}",
-                )
+        _check_known(self.families, FAMILIES, "families", "unknown joint family {!r}")
         if self.passes[1] > 12:
             raise _FieldError(
                 "passes", f"up to {self.passes[1]:g} layers", "draw at most 12 layers of beads"
@@ -187,14 +201,13 @@ class PathSpec(_Section):
 
     @model_validator(mode="after")
     def _known(self) -> PathSpec:
-        for i, name in enumerate(self.kinds):
-            if name not in PATHS:
-                raise _FieldError(
-                    f"kinds.{i}",
-                    f"path {name!r} is not available in geometry mode (an extruded "
-                    "cross-section is exact on a straight seam only)",
-                    f"use one of {', '.join(PATHS)}",
-                )
+        _check_known(
+            self.kinds,
+            PATHS,
+            "kinds",
+            "path {!r} is not available in geometry mode (an extruded cross-section is exact "
+            "on a straight seam only)",
+        )
         return self
 
 
@@ -205,17 +218,7 @@ class PartSpec(_Section):
     def _known(self) -> PartSpec:
         from seamtrack.sensing.materials import MATERIALS
 
-        for i, name in enumerate(self.materials):
-            if name not in MATERIALS:
-                import difflib
-
-                close = difflib.get_close_matches(name, list(MATERIALS), n=1)
-                raise _FieldError(
-                    f"materials.{i}",
-                    f"unknown material {name!r}",
-                    (f"did you mean {close[0]!r}? " if close else "")
-                    + f"use one of {', '.join(repr(k) for k in MATERIALS)}",
-                )
+        _check_known(self.materials, MATERIALS, "materials", "unknown material {!r}", quoted=True)
         return self
 
 
@@ -232,13 +235,7 @@ class SensorSpec(_Section):
     def _known(self) -> SensorSpec:
         from seamtrack.sensing.sensor import PRESET_SPECS
 
-        for i, name in enumerate(self.presets):
-            if name not in PRESET_SPECS:
-                raise _FieldError(
-                    f"presets.{i}",
-                    f"unknown sensor preset {name!r}",
-                    f"use one of {', '.join(PRESET_SPECS)}",
-                )
+        _check_known(self.presets, PRESET_SPECS, "presets", "unknown sensor preset {!r}")
         for name in self.presets:
             self._seam_in_view(name)
         return self
