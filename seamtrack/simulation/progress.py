@@ -4,13 +4,13 @@ kernel call instead of some twenty small numpy calls.
 The kernel repeats the reference's arithmetic operation by operation (the window's end points
 as ``np.interp`` computes them, the point-segment distance with its sums taken left to right,
 the first smallest distance), so it returns the same arc length to the last bit; the one
-BLAS-dependent step, the chosen segment's length (``np.linalg.norm``), is left to numpy. A test
-compares the two on many points and seams.
+BLAS-dependent step, the chosen segment's length (``np.linalg.norm``), goes through ``np.dot``,
+which numba hands to BLAS's ``ddot`` as numpy does. A test compares the two on many points and
+seams.
 """
 
 from __future__ import annotations
 
-import bisect
 import math
 from typing import Any, NamedTuple
 
@@ -101,48 +101,35 @@ class ProgressTracker:
     def __init__(self, seam: Any):
         self.points = np.ascontiguousarray(seam.points, dtype=np.float64)
         self.knots = np.ascontiguousarray(seam.arc_length_mm, dtype=np.float64)
-        self.knot_list = self.knots.tolist()  # bisect on a list: np.searchsorted, cheaper
         self.columns = np.ascontiguousarray(self.points.T)
         self.length_mm = float(seam.length_mm)
         self.n_seg = len(self.points) - 1
 
     def closest_near(self, point: Any, arc_length_hint_mm: float, window_mm: float = 5.0) -> float:
         """:meth:`Seam.closest_near <seamtrack.geometry.seam.Seam.closest_near>`, the same
-        number."""
-        knots = self.knots
-        knot_list = self.knot_list
-        length = self.length_mm
-        n_seg = self.n_seg
+        number (:func:`progress_near`)."""
         q = np.asarray(point, dtype=np.float64)
-        while True:
-            s0 = max(arc_length_hint_mm - window_mm, 0.0)
-            s1 = min(arc_length_hint_mm + window_mm, length)
-            i0 = min(max(bisect.bisect_right(knot_list, s0) - 1, 0), n_seg - 1)
-            i1 = min(max(bisect.bisect_left(knot_list, s1), i0 + 1), n_seg)
-            s_start, t, dx, dy, dz = closest_in_window(
-                self.points, knots, self.columns, q, s0, s1, i0, i1
-            )
-            d = np.array((dx, dy, dz))
-            s = s_start + t * math.sqrt(d.dot(d))  # np.linalg.norm(d), the same BLAS dot
-            cut_low = s0 > 0.0 and s <= s0 + 1e-12
-            cut_high = s1 < length and s >= s1 - 1e-12
-            if not (cut_low or cut_high) or window_mm >= length:
-                return s
-            window_mm *= 2.0
+        return progress_near(
+            self.points, self.knots, self.columns, q, float(arc_length_hint_mm), self.length_mm,
+            float(window_mm),
+        )  # fmt: skip
 
 
 @numba.njit(cache=True, nogil=True)
 def progress_near(
     points: FloatArray, knots: FloatArray, columns: FloatArray, q: FloatArray, hint: float,
-    length: float,
+    length: float, window: float = 5.0, scalar_norm: bool = False,
 ) -> float:  # fmt: skip
-    """:meth:`ProgressTracker.closest_near` compiled, the same number: the chosen segment's
-    length through ``np.dot``, which numba hands to the same BLAS ``ddot`` as numpy (a test
-    compares it with :meth:`Seam.closest_near <seamtrack.geometry.seam.Seam.closest_near>`);
-    ``length``: the seam's (``Seam.length_mm``, which may differ from ``knots[-1]`` in the last
-    bit)."""
+    """The arc length of the seam point closest to ``q`` near ``hint``: the search of
+    :meth:`Seam.closest_near <seamtrack.geometry.seam.Seam.closest_near>` in a window of
+    ``window`` mm either side of the hint, doubled while the closest point lies on a cut end.
+
+    The same number as the seam's: the chosen segment's length through ``np.dot``, which
+    numba hands to the same BLAS ``ddot`` as numpy (a test compares the two); ``length``: the
+    seam's (``Seam.length_mm``, which may differ from ``knots[-1]`` in the last bit).
+    ``scalar_norm``: that length by a scalar sqrt instead (within an ulp of it), as the
+    compiled ticks' tool-orientation refresh has always taken it."""
     n_seg = len(points) - 1
-    window = 5.0
     d = np.empty(3)
     while True:
         s0 = max(hint - window, 0.0)
@@ -150,7 +137,10 @@ def progress_near(
         i0 = min(max(int(np.searchsorted(knots, s0, side="right")) - 1, 0), n_seg - 1)
         i1 = min(max(int(np.searchsorted(knots, s1, side="left")), i0 + 1), n_seg)
         s_start, t, d[0], d[1], d[2] = closest_in_window(points, knots, columns, q, s0, s1, i0, i1)
-        s = s_start + t * math.sqrt(np.dot(d, d))
+        if scalar_norm:
+            s = s_start + t * math.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+        else:
+            s = s_start + t * math.sqrt(np.dot(d, d))
         cut_low = s0 > 0.0 and s <= s0 + 1e-12
         cut_high = s1 < length and s >= s1 - 1e-12
         if not (cut_low or cut_high) or window >= length:

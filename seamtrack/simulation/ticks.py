@@ -51,8 +51,8 @@ from seamtrack.simulation.progress import (
     S_NOW,
     CheckArrays,
     ProgressCheck,
-    closest_in_window,
     progress_check,
+    progress_near,
 )
 
 FloatArray = NDArray[np.float64]
@@ -392,29 +392,6 @@ class GantryTicks(_Logs):
 
 
 @numba.njit(cache=True, nogil=True)
-def _closest_near(
-    points: FloatArray, knots: FloatArray, columns: FloatArray, q: FloatArray, hint: float
-) -> float:
-    """:meth:`ProgressTracker.closest_near <seamtrack.simulation.progress.ProgressTracker.
-    closest_near>` compiled (the chosen segment's length by a scalar sqrt: equal to an ulp)."""
-    length = knots[-1]
-    n_seg = len(points) - 1
-    window = 5.0
-    while True:
-        s0 = max(hint - window, 0.0)
-        s1 = min(hint + window, length)
-        i0 = min(max(int(np.searchsorted(knots, s0, side="right")) - 1, 0), n_seg - 1)
-        i1 = min(max(int(np.searchsorted(knots, s1, side="left")), i0 + 1), n_seg)
-        s_start, t, dx, dy, dz = closest_in_window(points, knots, columns, q, s0, s1, i0, i1)
-        s = s_start + t * math.sqrt(dx * dx + dy * dy + dz * dz)
-        cut_low = s0 > 0.0 and s <= s0 + 1e-12
-        cut_high = s1 < length and s >= s1 - 1e-12
-        if not (cut_low or cut_high) or window >= length:
-            return s
-        window *= 2.0
-
-
-@numba.njit(cache=True, nogil=True)
 def _refresh_orientation(
     x: float, y: float, z: float, speed: float, base: FloatArray, program: ToolProgram,
     cmd: FloatArray,
@@ -425,7 +402,10 @@ def _refresh_orientation(
     ``speed``) and the command's rotation in the base frame (``ArticulatedRobot.
     command_in_base``, ``_set_rotation``), kept in ``program``."""
     q = np.array((x, y, z))
-    s = _closest_near(program.points, program.knots, program.columns, q, program.at_s[0])
+    s = progress_near(
+        program.points, program.knots, program.columns, q, program.at_s[0], program.knots[-1],
+        5.0, True,
+    )  # fmt: skip
     R, w = turning_at(
         s, speed, program.points, program.knots, program.seg_len, program.normals, program.par
     )
