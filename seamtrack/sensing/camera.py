@@ -26,7 +26,6 @@ from numpy.typing import NDArray
 
 from seamtrack.errors import SensorGeometryError
 from seamtrack.sensing.materials import Material
-from seamtrack.sensing.peaks import NOISE_SIGMAS, RELATIVE_THRESHOLD, Rejection
 from seamtrack.sensing.profiles import Profile
 
 if TYPE_CHECKING:
@@ -555,35 +554,11 @@ class StripeImage:
         """(columns, 2) the ideal stripe points (y_L, z_L) per column; NaN where none."""
         return self.triangulate_rows(self.truth_row)
 
-    def profile(
-        self,
-        method: str = "centroid",
-        *,
-        threshold: float | None = None,
-        choose: str = "strongest",
-        sigma_px: float | None = None,
-        relative: float = RELATIVE_THRESHOLD,
-        noise_sigmas: float = NOISE_SIGMAS,
-        reject: Rejection | None = None,
-    ) -> Profile:
-        """The stripe profile measured from the pixels, as ``scan()`` gives it.
-
-        Parameters
-        ----------
-        method : {"centroid", "gaussian", "steger"}
-            Sub-pixel peak in each column: the thresholded centroid, the 3-point Gaussian fit
-            on the brightest pixel, or Steger's line detector (Gaussian-smoothed derivatives).
-        threshold : float, optional
-            Pixels above this fraction of full scale form the candidate peaks. Default (None):
-            relative to each column, max(``noise_sigmas`` * noise sigma, ``relative`` * the
-            column's peak) above the background (:func:`seamtrack.sensing.peaks.detect`).
-        choose : {"strongest", "first", "widest"}
-            Among several peaks in one column: the brightest, the first along the range (the
-            nearest to the sensor) or the widest.
-        sigma_px : float, optional
-            Steger's smoothing scale (default from the median width of the peaks).
-        reject : Rejection, optional
-            Drop the runs not shaped like the stripe (blobs, streaks, glow) before choosing.
+    def profile(self, method: str = "centroid", **detector: Any) -> Profile:
+        """The stripe profile measured from the pixels, as ``scan()`` gives it: the rows
+        :func:`seamtrack.sensing.peaks.detect` finds (``method`` and the other ``detector``
+        keywords as it takes them: ``threshold``, ``choose``, ``sigma_px``, ``relative``,
+        ``noise_sigmas``, ``reject``) through :meth:`profile_from_rows`.
 
         Returns
         -------
@@ -593,10 +568,7 @@ class StripeImage:
         """
         from seamtrack.sensing.peaks import detect
 
-        rows = detect(self.pixels, method=method, threshold=threshold, choose=choose,
-                      sigma_px=sigma_px, relative=relative, noise_sigmas=noise_sigmas,
-                      reject=reject)  # fmt: skip
-        return self.profile_from_rows(rows)
+        return self.profile_from_rows(detect(self.pixels, method=method, **detector))
 
     def profile_from_rows(self, rows: FloatArray) -> Profile:
         """A :class:`Profile` of one sub-pixel row per column (NaN: no peak there)."""
