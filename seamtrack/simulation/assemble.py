@@ -49,6 +49,7 @@ from seamtrack.simulation.robots import (
 from seamtrack.simulation.scene import (
     CameraConfig,
     Scene,
+    detect_rows,
     make_sensor,
     scene_camera,
 )
@@ -379,9 +380,7 @@ def _image_measure(
         if camera.exposure_mode == "auto":
             exposure[0] = camera.next_exposure(image.exposure, image.peak)
         images[0] = image
-        return image.profile(detector.method, threshold=detector.threshold,
-                             choose=detector.choose, relative=detector.relative,
-                             noise_sigmas=detector.noise_sigmas, reject=reject)  # fmt: skip
+        return image.profile_from_rows(detect_rows(image.pixels, detector, reject))
 
     return measure, lambda: images[0]
 

@@ -15,11 +15,14 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+from numpy.typing import NDArray
 from pydantic import BaseModel, ValidationError
 
 from seamtrack.errors import SceneError
 from seamtrack.sensing.camera import Camera
 from seamtrack.sensing.materials import material
+from seamtrack.sensing.peaks import Rejection, detect
 from seamtrack.sensing.sensor import LaserLineSensor, data_sheet, preset
 from seamtrack.simulation.checks import (
     check_arc,
@@ -357,6 +360,17 @@ def scene_camera(config: SceneConfig) -> Camera:
     ``countermeasures`` (:func:`seamtrack.simulation.countermeasures.exposure_mode`)."""
     mode = exposure_mode(config)
     return make_camera(config.sensor.camera, config.sensor.preset, mode)
+
+
+def detect_rows(
+    pixels: NDArray[np.floating], detector: CameraConfig, reject: Rejection | None
+) -> NDArray[np.float64]:
+    """The stripe row per column of an image (NaN: none) through the scene's detector: the
+    ``[sensor.camera]`` settings ``detector`` and the countermeasures' ``reject``
+    (:func:`seamtrack.simulation.countermeasures.rejection`)."""
+    return detect(pixels, method=detector.method, threshold=detector.threshold,
+                  choose=detector.choose, relative=detector.relative,
+                  noise_sigmas=detector.noise_sigmas, reject=reject)  # fmt: skip
 
 
 def make_sensor(cfg: SensorConfig) -> LaserLineSensor:

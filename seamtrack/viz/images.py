@@ -93,11 +93,10 @@ def render_command(
     measured from it (the scene's ``[sensor.camera]`` detector) over the ideal stripe, and the
     seam point the scene's extractor finds in it. Writes the PNG; returns the lines to print."""
     from seamtrack.io.output import check_writable, new_dir
-    from seamtrack.sensing.peaks import detect
     from seamtrack.simulation.assemble import arc_frame, build_parts, scene_arc_light
     from seamtrack.simulation.countermeasures import rejection
     from seamtrack.simulation.robots import sensor_pose_at
-    from seamtrack.simulation.scene import CameraConfig, load_scene, scene_camera
+    from seamtrack.simulation.scene import CameraConfig, detect_rows, load_scene, scene_camera
 
     scene = load_scene(scene_name, overrides)
     c = scene.config
@@ -129,9 +128,7 @@ def render_command(
     image = parts.sensor.render(parts.mesh, T_world_sensor, camera=camera,
                                 seed=c.simulation.seed, material=c.workpiece.material,
                                 **({} if arc is None else {"arc": arc}))  # fmt: skip
-    rows = detect(image.pixels, method=detector.method, threshold=detector.threshold,
-                  choose=detector.choose, relative=detector.relative,
-                  noise_sigmas=detector.noise_sigmas, reject=rejection(c))  # fmt: skip
+    rows = detect_rows(image.pixels, detector, rejection(c))
     level = (f"threshold {detector.threshold:g}" if detector.threshold is not None else
              f"threshold {detector.relative:g} of each column's peak, >= "
              f"{detector.noise_sigmas:g} noise sigmas")  # fmt: skip
