@@ -33,33 +33,29 @@ from seamtrack.sensing.sensor import LaserLineSensor, preset
 
 FloatArray = NDArray[np.float64]
 
+#: The spec's ranges drawn for every sample, in draw order, by section.
+_DRAWN = (
+    ("joint", ("thickness_mm", "groove_angle_deg", "root_face_mm", "gap_mm", "misalignment_mm",
+               "web_angle_deg", "corner_angle_deg", "sheet_thickness_mm", "sheet_gap_mm",
+               "tack_probability", "tack_height_mm", "tack_width_mm")),
+    ("path", ("position_mm",)),
+    ("sensor", ("standoff_offset_mm", "lateral_offset_mm", "tilt_deg", "roll_deg", "yaw_deg")),
+    ("noise", ("range_sigma_mm", "speckle_sigma_mm", "speckle_correlation_rays", "dropout_rate",
+               "secondary_probability", "outlier_fraction")),
+)  # fmt: skip
+
+
+def _stored(section: str, key: str) -> tuple[str, str, str, float]:
+    """(section, key, stored name, scale) of a drawn range: an angle is drawn in degrees (the
+    spec's unit, ``*_deg``) and stored in radians (``*_rad``), the rest as drawn."""
+    if key.endswith("_deg"):
+        return section, key, key.removesuffix("_deg") + "_rad", math.pi / 180
+    return section, key, key, 1.0
+
+
 #: Ranges of the spec drawn for every sample, in draw order: (section, key, stored name, scale).
-#: Angles are drawn in degrees (the spec's unit) and stored in radians.
-RANGES: tuple[tuple[str, str, str, float], ...] = (
-    ("joint", "thickness_mm", "thickness_mm", 1.0),
-    ("joint", "groove_angle_deg", "groove_angle_rad", math.pi / 180),
-    ("joint", "root_face_mm", "root_face_mm", 1.0),
-    ("joint", "gap_mm", "gap_mm", 1.0),
-    ("joint", "misalignment_mm", "misalignment_mm", 1.0),
-    ("joint", "web_angle_deg", "web_angle_rad", math.pi / 180),
-    ("joint", "corner_angle_deg", "corner_angle_rad", math.pi / 180),
-    ("joint", "sheet_thickness_mm", "sheet_thickness_mm", 1.0),
-    ("joint", "sheet_gap_mm", "sheet_gap_mm", 1.0),
-    ("joint", "tack_probability", "tack_probability", 1.0),
-    ("joint", "tack_height_mm", "tack_height_mm", 1.0),
-    ("joint", "tack_width_mm", "tack_width_mm", 1.0),
-    ("path", "position_mm", "position_mm", 1.0),
-    ("sensor", "standoff_offset_mm", "standoff_offset_mm", 1.0),
-    ("sensor", "lateral_offset_mm", "lateral_offset_mm", 1.0),
-    ("sensor", "tilt_deg", "tilt_rad", math.pi / 180),
-    ("sensor", "roll_deg", "roll_rad", math.pi / 180),
-    ("sensor", "yaw_deg", "yaw_rad", math.pi / 180),
-    ("noise", "range_sigma_mm", "range_sigma_mm", 1.0),
-    ("noise", "speckle_sigma_mm", "speckle_sigma_mm", 1.0),
-    ("noise", "speckle_correlation_rays", "speckle_correlation_rays", 1.0),
-    ("noise", "dropout_rate", "dropout_rate", 1.0),
-    ("noise", "secondary_probability", "secondary_probability", 1.0),
-    ("noise", "outlier_fraction", "outlier_fraction", 1.0),
+RANGES: tuple[tuple[str, str, str, float], ...] = tuple(
+    _stored(section, key) for section, keys in _DRAWN for key in keys
 )
 #: Choices drawn before the ranges: family, path, material, preset, and the tack's coin.
 CHOICES = ("family", "path", "material", "preset", "tack")
@@ -78,8 +74,7 @@ _USES = {
     "outside-corner": {"corner_angle_rad"},
     "flat": set(),
 }
-_NOISE_KEYS = ("range_sigma_mm", "speckle_sigma_mm", "speckle_correlation_rays", "dropout_rate",
-               "secondary_probability", "outlier_fraction")  # fmt: skip
+_NOISE_KEYS = dict(_DRAWN)["noise"]
 
 #: Seam frame {S} in the world of a straight seam along +X from the origin, with the part below
 #: the torch (world +Z up): x_S = +X, z_S = -Z (into the part), y_S = z_S x x_S = -Y.
