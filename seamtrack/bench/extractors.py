@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from seamtrack.bench import common
 from seamtrack.bench.extractors_angles import DETECTED_MM, angle_sweep, angle_table
 from seamtrack.bench.extractors_groove import GROOVE_COLUMNS, bench_real_groove, groove_table
 from seamtrack.bench.real_input import (
@@ -297,8 +298,7 @@ def markdown_table(rows: list[dict[str, Any]], pooled: dict[str, list[int]] | No
         "p95_error_mm",
         "flat_false_rate",
     )
-    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-    lines += ["| " + " | ".join(_fmt(r[k]) for k in keys) + " |" for r in rows]
+    lines = common.markdown_table(head, ([_fmt(r[k]) for k in keys] for r in rows))
     timing: dict[str, list[float]] = {}
     if pooled:
         timing = {k: [1e-3 * t for t in v] for k, v in pooled.items()}
@@ -572,9 +572,9 @@ def real_table(rows: list[dict[str, Any]]) -> str:
         "set", "joint", "n", "detect", "wrong", "median mm", "p95 mm", "false joints",
         "worst false", "classified", "us/profile", "classify us",
     )  # fmt: skip
-    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-    for r in rows:
-        cells = [_fmt(r[k]) for k in REAL_COLUMNS]
-        cells[-2:] = [f"{r['us_per_profile']:.0f}", f"{r['classify_us']:.0f}"]
-        lines.append("| " + " | ".join(cells) + " |")
-    return "\n".join(lines) + "\n"
+    cells = [
+        [*(_fmt(r[k]) for k in REAL_COLUMNS[:-2]), f"{r['us_per_profile']:.0f}",
+         f"{r['classify_us']:.0f}"]
+        for r in rows
+    ]  # fmt: skip
+    return "\n".join(common.markdown_table(head, cells)) + "\n"

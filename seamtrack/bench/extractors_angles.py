@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from seamtrack.bench.common import markdown_table
 from seamtrack.features.artefacts import SensorArtefacts, real_sensor_profile
 from seamtrack.features.extractors import extractor
 
@@ -130,8 +131,8 @@ def angle_table(rows: list[dict[str, Any]]) -> str:
         "angle deg", "unit mm", "depth mm", "n", "detect", "wrong", "median mm", "p95 mm",
         "both flanks seen", "refusals",
     )  # fmt: skip
-    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     lo, hi = CLAIMED_DEG
+    body = []
     for r in rows:
         claimed = lo <= r["angle_deg"] <= hi
         cells = [
@@ -151,5 +152,5 @@ def angle_table(rows: list[dict[str, Any]]) -> str:
             ),
             "; ".join(f"{k}: {v}" for k, v in r["refusals"].items()) or "-",
         ]
-        lines.append("| " + " | ".join(cells) + " |")
-    return "\n".join(lines) + "\n"
+        body.append(cells)
+    return "\n".join(markdown_table(head, body)) + "\n"

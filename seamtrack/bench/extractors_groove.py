@@ -23,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from seamtrack.bench.common import markdown_table
 from seamtrack.features.extractors import extractor
 
 #: Top corners within this of the bevels' top edges (mm): the issue's must-show.
@@ -134,11 +135,11 @@ def groove_table(rows: list[dict[str, Any]]) -> str:
         "set", "n", "groove found", "top corners <= 0.5 mm", "bottom points on the bead",
         "top p95 mm", "bottom p95 mm", "us/profile",
     )  # fmt: skip
-    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-    for r in rows:
-        lines.append(
-            f"| {r['set']} | {r['n']} | {r['groove_found']:.3f} | {r['top_ok']:.3f} | "
-            f"{r['bottom_ok']:.3f} | {r['top_p95_mm']:.3f} | {r['bottom_p95_mm']:.3f} | "
-            f"{r['us_per_profile']:.0f} |"
-        )
-    return "\n".join(lines) + "\n"
+    body = [
+        [str(r["set"]), str(r["n"]),
+         *(f"{r[k]:.3f}" for k in ("groove_found", "top_ok", "bottom_ok", "top_p95_mm",
+                                   "bottom_p95_mm")),
+         f"{r['us_per_profile']:.0f}"]
+        for r in rows
+    ]  # fmt: skip
+    return "\n".join(markdown_table(head, body)) + "\n"

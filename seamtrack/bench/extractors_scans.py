@@ -28,6 +28,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from seamtrack.bench.common import markdown_table
 from seamtrack.bench.extractors_angles import DETECTED_MM
 from seamtrack.features import scan_defects as sd
 from seamtrack.features.artefacts import real_sensor_profile
@@ -252,7 +253,7 @@ def scans_table(data: dict[str, Any]) -> str:
     filled grooves."""
     head = ("extractor", "variant", "n", "detect", "wrong", "median mm", "p95 mm", "holds",
             "detect empty / filled", "refusals")  # fmt: skip
-    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    body = []
     for r in data["rows"]:
         keys = ("detection_rate", "wrong_rate", "median_error_mm", "p95_error_mm")
         split = r.get("empty_detection_rate"), r.get("filled_detection_rate")
@@ -262,8 +263,8 @@ def scans_table(data: dict[str, Any]) -> str:
             "-" if r["extractor"] != "groove" else " / ".join(_num(v) for v in split),
             "; ".join(f"{k}: {v}" for k, v in r["refusals"].items()) or "-",
         ]  # fmt: skip
-        lines.append("| " + " | ".join(cells) + " |")
-    return "\n".join(lines) + "\n"
+        body.append(cells)
+    return "\n".join(markdown_table(head, body)) + "\n"
 
 
 def scans_result(n: int = 100, seed: int = 0) -> dict[str, Any]:

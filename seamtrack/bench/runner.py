@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from seamtrack.bench.common import machine_info
+from seamtrack.bench.common import machine_info, markdown_table
 from seamtrack.bench.common import peak_rss as _peak_rss
 from seamtrack.bench.common import reset_peak_rss as _reset_peak_rss
 from seamtrack.bench.raycast import bench_raycast
@@ -174,13 +174,10 @@ def _bench_mesh(out: Path, quick: bool) -> Any:
         json.dumps({"machine": machine_info(), "rows": rows}, indent=2, default=float)
     )
     keys = list(rows[0]) if rows else []
-    lines = ["| " + " | ".join(keys) + " |", "|" + "---|" * len(keys)]
-    lines += [
-        "| "
-        + " | ".join(f"{r[k]:.4g}" if isinstance(r[k], float) else str(r[k]) for k in keys)
-        + " |"
-        for r in rows
-    ]
+    lines = markdown_table(
+        keys,
+        ([f"{r[k]:.4g}" if isinstance(r[k], float) else str(r[k]) for k in keys] for r in rows),
+    )
     (out / "mesh.md").write_text("\n".join(lines) + "\n")
     return rows
 

@@ -22,7 +22,7 @@ import math
 from pathlib import Path
 from typing import Any
 
-from seamtrack.bench.common import machine_info
+from seamtrack.bench.common import machine_info, markdown_table
 
 SCENE = "paper-v-groove"
 SPEEDS_MM_S = (5.0, 20.0)
@@ -144,6 +144,5 @@ def _cell(value: Any) -> str:
 def trackers_table(result: dict[str, Any]) -> str:
     """The markdown table of a ``trackers.json``."""
     columns = result["columns"]
-    head = ["| " + " | ".join(columns) + " |", "|" + "---|" * len(columns)]
-    body = ["| " + " | ".join(_cell(r.get(c)) for c in columns) + " |" for r in result["rows"]]
-    return "\n".join(head + body) + "\n"
+    body = ([_cell(r.get(c)) for c in columns] for r in result["rows"])
+    return "\n".join(markdown_table(columns, body)) + "\n"
