@@ -282,6 +282,18 @@ class RayCaster:
         )  # fmt: skip
         return t, face, refined
 
+    def _local_rays(
+        self, origins: ArrayLike, directions: ArrayLike
+    ) -> tuple[FloatArray, FloatArray]:
+        """World rays in the caster's frame: the origins less :attr:`local_origin` ((1, 3): one
+        shared by all, or (n, 3)) and the unit directions (n, 3)."""
+        d = np.asarray(directions, dtype=np.float64).reshape(-1, 3)
+        d = d / np.linalg.norm(d, axis=1, keepdims=True)
+        o_local = np.asarray(origins, dtype=np.float64).reshape(-1, 3) - self.local_origin
+        if len(o_local) not in (1, len(d)):
+            raise ValueError(f"{len(o_local)} origins for {len(d)} directions")
+        return o_local, d
+
     def first_hit(self, origins: ArrayLike, directions: ArrayLike, *, refine: bool = True) -> Hits:
         """First hit of each ray.
 
@@ -299,11 +311,7 @@ class RayCaster:
         -------
         Hits
         """
-        d = np.asarray(directions, dtype=np.float64).reshape(-1, 3)
-        d = d / np.linalg.norm(d, axis=1, keepdims=True)
-        o_local = np.asarray(origins, dtype=np.float64).reshape(-1, 3) - self.local_origin
-        if len(o_local) not in (1, len(d)):
-            raise ValueError(f"{len(o_local)} origins for {len(d)} directions")
+        o_local, d = self._local_rays(origins, directions)
         prim, tfar = self.cast_local(o_local, d)
         t, face, refined = self.refine_local(o_local, d, prim, tfar, refine=refine)
         hit = face >= 0
@@ -324,11 +332,7 @@ class RayCaster:
         The rays start exactly at ``origins`` (Embree's tnear is 0): offset them off the
         surface yourself, or use :meth:`line_of_sight_blocked`.
         """
-        d = np.asarray(directions, dtype=np.float64).reshape(-1, 3)
-        d = d / np.linalg.norm(d, axis=1, keepdims=True)
-        o_local = np.asarray(origins, dtype=np.float64).reshape(-1, 3) - self.local_origin
-        if len(o_local) not in (1, len(d)):
-            raise ValueError(f"{len(o_local)} origins for {len(d)} directions")
+        o_local, d = self._local_rays(origins, directions)
         far = np.ascontiguousarray(np.broadcast_to(distances_mm, len(d)), dtype=np.float64)
         return self.occluded_local(o_local, d, far)
 
