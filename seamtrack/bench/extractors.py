@@ -36,6 +36,7 @@ from seamtrack.bench.real_input import (
     read_labels,
 )
 from seamtrack.errors import SeamtrackError
+from seamtrack.features import classify
 from seamtrack.features.extractors import BUILTIN, extractor
 from seamtrack.features.synthetic import Imperfections, synthetic_profile
 from seamtrack.sensing.profiles import Profile
@@ -359,7 +360,7 @@ def _plot(path: Path, rows: list[dict[str, Any]]) -> None:
 
 # --------------------------------------------------------------------------- real data
 #: The family extractors the real-data bench runs (the classifier's families).
-REAL_FAMILIES = ("v-groove", "square-butt", "fillet", "lap", "outside-corner")
+REAL_FAMILIES = classify.FAMILIES
 REAL_COLUMNS = (
     "set",
     "joint",

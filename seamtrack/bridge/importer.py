@@ -36,6 +36,7 @@ from numpy.typing import NDArray
 
 from seamtrack.bridge import messages as msgs
 from seamtrack.errors import SeamtrackError
+from seamtrack.features.classify import FAMILIES
 from seamtrack.io.output import staged
 from seamtrack.sensing.profiles import Profile
 
@@ -46,8 +47,6 @@ POINT = "geometry_msgs/msg/PointStamped"
 #: The most profile points a recording may give (about 0.9 GB as profiles): a run stays under
 #: 2 GB.
 MAX_POINTS = 50_000_000
-#: The extractor families a recording's ``seamtrack`` metadata may name as its joint.
-FAMILIES = ("v-groove", "square-butt", "fillet", "lap", "outside-corner")
 
 
 @dataclass(frozen=True)
@@ -213,6 +212,7 @@ def read_scans(
     recorded = _mcap_metadata(p)
     if recorded:
         meta["recorded"] = recorded
+    # the recording's ``seamtrack`` metadata may name a family extractor as its joint
     if joint is None and recorded.get("extractor") in FAMILIES:
         joint = recorded["extractor"]
     name = p.stem if p.is_file() else p.name
