@@ -13,7 +13,7 @@ import pytest
 
 from seamtrack.cli.main import main
 from seamtrack.errors import OutputError
-from seamtrack.io.output import check_fresh, staged
+from seamtrack.io.output import check_fresh, prepare_file, staged
 
 SHORT = ["--set", "seam.length_mm=20", "-q"]
 
@@ -77,3 +77,15 @@ def test_a_job_folder_replaced_keeps_none_of_the_earlier_passes(tmp_path: Path) 
         (stage / "pass_01" / "summary.json").write_text('{"status": "completed"}\n')
         (stage / "job.json").write_text('{"status": "completed"}\n')
     assert sorted(_files(out)) == ["job.json", "pass_01/summary.json"]
+
+
+def test_a_file_writer_makes_its_folder_and_refuses_one_a_file_blocks(tmp_path: Path) -> None:
+    """``prepare_file``: the folders of a new file are made; a file where a folder must be is
+    an OutputError naming the field, before anything is written."""
+    target = prepare_file(tmp_path / "a" / "b" / "plot.png", field="path")
+    assert target.parent.is_dir() and not target.exists()
+    (tmp_path / "blocker").write_text("mine")
+    with pytest.raises(OutputError) as err:
+        prepare_file(tmp_path / "blocker" / "plot.png", field="path")
+    assert err.value.field == "path"
+    assert (tmp_path / "blocker").read_text() == "mine"
