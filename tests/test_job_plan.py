@@ -114,6 +114,30 @@ def test_a_forced_pass_count_fills_to_level_b(count: int) -> None:
     assert _iso_level(fill) == "B"
 
 
+@pytest.mark.parametrize("count", [10, 11, 12, 14])
+def test_a_forced_pass_count_planned_one_pass_behind_fills_to_level_b(count: int) -> None:
+    """The same plans as the job plans them (``dry_run(lagged=True)``): each pass on the groove
+    the pass before measured, before that pass's bead, and the bead's area. Every station ends
+    at or above the plates' line, and the crown within ISO 5817 level B's limit for excess
+    weld metal there (``inspect_weld``'s own limit, 1 mm + 0.1 b). The first bead of a layer
+    laid over a single bead is placed on the groove with that bead added (``after_bead``):
+    placed on the groove before it, 11 passes ended 0.09 mm under the line (0.24 mm over it
+    with it) and 10 passes 0.001 mm over it (0.34 mm)."""
+    from seamtrack.workpiece.inspection import inspect_weld
+
+    fill, plans = dry_run(v_groove(lambda s: np.full_like(s, 2.0)), AdaptivePlanner(),
+                          JobState(PROCESS, count=count, reinforcement_mm=2.0), BeadShape(),
+                          lagged=True)  # fmt: skip
+    assert len(plans) == count
+    r, corners = fill.reinforcement_mm(), np.asarray(fill.top_corners)
+    width = np.abs(corners[:, 1, 0] - corners[:, 0, 0])
+    inspection = inspect_weld(fill.s_mm, thickness_mm=20.0, width_mm=width, excess_mm=r[:, 1],
+                              underfill_mm=-r[:, 0])  # fmt: skip
+    assert np.all(r[:, 0] >= 0.0)  # no underfilled station
+    assert np.all(r[:, 1] <= inspection["excess_weld_metal"].limit_mm["B"])
+    assert inspection.level == "B"
+
+
 def test_check_warns_of_a_count_that_cannot_fill_to_level_b(capsys) -> None:
     """40 passes on multipass-v-groove's V: even at the fastest travel speed (15 mm/s) each
     bead is 9.75 mm^2, 390 mm^2 in all, more than the groove (about 250 mm^2) and the largest

@@ -35,6 +35,7 @@ from seamtrack.control.fill_layout import (
     Layout,
     MeasuredGroove,
     Process,
+    after_bead,
     cap_area_mm2,
     cap_share,
     fill_order,
@@ -192,7 +193,8 @@ class AdaptivePlanner:
         n = self.layout.beads_per_layer[layer]
         cap = layer == len(self.layout.beads_per_layer) - 1
         p = state.process
-        reference, offsets = self._place(groove, n, slot_rank, cap)
+        reference, offsets = self._place(_laid_on(groove, self.layout, layer, slot_rank, state),
+                                         n, slot_rank, cap)  # fmt: skip
         offset = float(np.median(offsets))
         profile_offsets = None if reference in ("left", "right") else offsets
         remaining = np.asarray(groove.area_mm2, dtype=float)
@@ -268,6 +270,25 @@ class AdaptivePlanner:
         if 2 * slot + 1 < n:  # the left half: from the left top corner
             return "left_top", target - _smooth(pts[:, LEFT_TOP, 0])
         return "right_top", target - _smooth(pts[:, RIGHT_TOP, 0])
+
+
+def _laid_on(
+    groove: MeasuredGroove, plan: Layout, layer: int, rank: int, state: JobState
+) -> MeasuredGroove:
+    """The groove the ``rank``-th bead of ``layer`` is placed on: ``groove``, except for a
+    layer's first bead over a layer of one bead, ``groove`` with that bead added
+    (:func:`~seamtrack.control.fill_layout.after_bead`, its area ``state.last_bead_area_mm2``).
+
+    The groove a planner gets was measured before the last pass's bead (the sensor looks
+    ahead of the torch). Over a layer of several beads that bead was the layer's last, laid
+    against beads already there; over a single bead it *is* the layer below, and the groove
+    before it is the fill surface under it: a bead (4 mm on multipass-v-groove's 10- to
+    14-pass plans) lower and narrower than the one the layer is laid on, whose slots put the
+    layer's beads too far into the middle. With the groove as it lies (``last_bead_area_mm2``
+    None: a dry run's true groove) nothing is added."""
+    if rank != 0 or layer == 0 or plan.beads_per_layer[layer - 1] != 1:
+        return groove
+    return after_bead(groove, state.last_bead_area_mm2)
 
 
 def _smooth(values: FloatArray, half_window: int = 4) -> FloatArray:
