@@ -412,3 +412,29 @@ def after_bead(groove: MeasuredGroove, area_mm2: Any) -> MeasuredGroove:
         p[:, row, 1] += dz
     remaining = np.maximum(groove.area_mm2 - area, 0.0)
     return MeasuredGroove(groove.s_mm, p, remaining)
+
+
+def under_line_mm2(points: FloatArray, lo_mm: Any, hi_mm: Any, samples: int = 24) -> FloatArray:
+    """(m,) the area (mm^2) between the plates' top line (the line joining the top corners)
+    and the groove's surface below it, from y = ``lo_mm`` to ``hi_mm`` ((m,) each), at each of
+    the m stations of ``points`` (m, 7, 2): the surface the piecewise-linear profile through
+    the 7 points (y ascending), held level beyond the top corners; where it stands over the
+    line, nothing. The midpoint rule on ``samples`` points."""
+    pts = np.asarray(points, dtype=float)
+    lo, hi = np.asarray(lo_mm, dtype=float), np.asarray(hi_mm, dtype=float)
+    t = (np.arange(samples) + 0.5) / samples
+    y = lo[:, None] + (hi - lo)[:, None] * t[None, :]  # (m, q)
+    py, pz = pts[:, :, 0], pts[:, :, 1]
+    y = np.clip(y, py[:, :1], py[:, -1:])
+    z = np.repeat(pz[:, :1], samples, axis=1)
+    for j in range(pts.shape[1] - 1):  # each segment, where the samples lie beyond its start
+        y0, y1 = py[:, j : j + 1], py[:, j + 1 : j + 2]
+        frac = np.clip((y - y0) / np.maximum(y1 - y0, 1e-12), 0.0, 1.0)
+        z = np.where(
+            y >= y0, pz[:, j : j + 1] + frac * (pz[:, j + 1 : j + 2] - pz[:, j : j + 1]), z
+        )
+    line_t = (y - py[:, LEFT_TOP, None]) / np.maximum(
+        py[:, RIGHT_TOP, None] - py[:, LEFT_TOP, None], 1e-12
+    )
+    line = pz[:, LEFT_TOP, None] + line_t * (pz[:, RIGHT_TOP, None] - pz[:, LEFT_TOP, None])
+    return np.maximum(line - z, 0.0).mean(axis=1) * np.maximum(hi - lo, 0.0)
