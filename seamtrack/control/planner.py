@@ -208,7 +208,7 @@ class AdaptivePlanner:
             remaining = remaining - np.asarray(state.last_bead_area_mm2, dtype=float)
         left = self.layout.beads_after(pass_index, cap)
         crown = cap_area_mm2(groove.top_width_mm, state.reinforcement_mm)
-        if cap:  # the groove left and the crown, in equal beads (set at the first cap bead)
+        if cap:  # the groove left and the crown (the mean share set at the first cap bead)
             if self._cap is None:
                 share = (np.maximum(remaining, 0.0) + crown) / max(left, 1)
                 self._cap = (groove.s_mm.copy(), share)
