@@ -152,9 +152,10 @@ def test_a_forced_pass_count_planned_one_pass_behind_fills_to_level_b(count: int
     the pass before measured, before that pass's bead, and the bead's area. Every station ends
     at or above the plates' line, and the crown within ISO 5817 level B's limit for excess
     weld metal there (``inspect_weld``'s own limit, 1 mm + 0.1 b). The first bead of a layer
-    laid over a single bead is placed on the groove with that bead added (``after_bead``):
-    placed on the groove before it, 11 passes ended 0.09 mm under the line (0.24 mm over it
-    with it) and 10 passes 0.001 mm over it (0.34 mm)."""
+    laid over a single bead is placed on the groove with that bead added (``after_bead``), and
+    the cap's beads after the first are sized by what lies under them: with neither, 11 passes
+    ended 0.09 mm under the line and 10 passes 0.001 mm over it; with the cap's sizing alone
+    0.07 and 0.10 mm over it; with both 0.22 and 0.27 mm (12 and 14 passes 0.34 and 0.36)."""
     from seamtrack.workpiece.inspection import inspect_weld
 
     fill, plans = dry_run(v_groove(lambda s: np.full_like(s, 2.0)), AdaptivePlanner(),
