@@ -508,7 +508,11 @@ def _multipass() -> str:
     t = r["jobs"][0]
     forced = next(j for j in r["jobs"] if j["count"] == 12)
     gap = {row["planner"]: row for row in r["varying_gap"]}
-    spread = ", ".join(f"{k} {v['reinforcement_spread_mm']:.2f} mm" for k, v in gap.items())
+    spread = ", ".join(
+        f"{k} {v.get('quality_level') or 'none'} ({v['underfilled_stations']} stations under the "
+        f"plates' line, spread {v['reinforcement_spread_mm']:.2f} mm)"
+        for k, v in gap.items()
+    )
     levels = ", ".join(f"{j['count']}: {j.get('quality_level') or 'none'}" for j in r["jobs"])
     busy = r.get("load_average_after")
     return (
@@ -518,7 +522,7 @@ def _multipass() -> str:
         + (f" (load {busy:.1f})" if busy is not None else " (measured beside other work)")
         + f", peak {t['peak_rss_mb']:.0f} MB; forced into {forced['passes']} passes: max "
         f"tracking error {forced['max_tracking_error_mm']:.2f} mm; ISO 5817 level by pass "
-        f"count: {levels}; varying gap, reinforcement spread: {spread}"
+        f"count: {levels}; varying gap, ISO 5817 level: {spread}"
     )
 
 

@@ -548,8 +548,8 @@ def test_after_bead_lifts_the_fill_surface_by_the_bead_area() -> None:
     that holds the bead's area: on a 60 deg V (w = 2 + 2 z tan 30) the trapezoid between the
     old and new fill surfaces has the bead's area (analytic), the feet on the walls, the top
     corners where they were."""
+    from seamtrack.control.fill_layout import after_bead
     from seamtrack.control.planner import MeasuredGroove
-    from seamtrack.multipass.paths import after_bead
 
     before = _trapezoid(8.0)[None]
     groove = MeasuredGroove(np.array([0.0]), before, np.array([100.0]))
@@ -560,3 +560,36 @@ def test_after_bead_lifts_the_fill_surface_by_the_bead_area() -> None:
     np.testing.assert_allclose(out.points[0], _trapezoid(z1), atol=1e-9)
     assert out.area_mm2[0] == pytest.approx(70.0)
     assert after_bead(groove, None) is groove
+
+
+@pytest.mark.parametrize("count", [10, 12, 14])
+def test_a_layer_over_a_single_bead_is_placed_on_the_groove_after_it(count: int) -> None:
+    """The job's planner gets the groove measured before the last bead. Over a single-bead
+    layer (the third of the 10- to 14-pass plans) that groove is a bead lower
+    and narrower than the one the next layer lies on; the planner adds the bead
+    (``after_bead``) before it places the layer's first bead. Oracle: the same planner given
+    the true groove after that bead (``dry_run`` unlagged: the first three beads, centred at
+    the same speed, are the same in both). ``after_bead`` lifts a flat fill surface, the bead
+    is crowned: its feet stand 0.2-0.4 mm further out than the true ones (0.23-0.38 mm
+    measured); placed on the groove before the bead the wall bead landed 0.47-0.63 mm
+    inward (the slot of a narrower layer)."""
+    from seamtrack.control.planner import AdaptivePlanner, JobState, Process
+    from seamtrack.workpiece.beads import BeadShape
+    from seamtrack.workpiece.fill import FillState
+
+    s = np.arange(0.0, 10.0 + 1e-9, 0.5)
+    frames = np.tile(np.eye(4), (len(s), 1, 1))
+    frames[:, 0, 3] = s
+    y = np.arange(-26.0, 26.0 + 1e-9, 0.05)
+    wall = 1.0 + (np.abs(y) - 1.0) / math.tan(math.radians(30))
+    z = np.where(np.abs(y) < 1.0, 0.0, np.clip(wall, 1.0, 20.0))
+    empty = FillState.from_profiles(s, frames, y, np.tile(z, (len(s), 1)))
+
+    def fourth(lagged: bool) -> np.ndarray:
+        state = JobState(Process(nominal_speed_mm_s=5.0), count=count, reinforcement_mm=2.0)
+        _, plans = job.dry_run(empty, AdaptivePlanner(), state, BeadShape(), max_passes=4,
+                               lagged=lagged)  # fmt: skip
+        assert [p.beads_in_layer for p in plans] == [1, 1, 1, 2]
+        return np.asarray(plans[3].offset_profile_mm)
+
+    assert np.all(np.abs(fourth(True) - fourth(False)) <= 0.4)

@@ -281,3 +281,38 @@ def test_checked_plan_keeps_the_process_window(speed: float) -> None:
     with pytest.raises(PluginRuntimeError):
         checked_plan(profile, "p", 0, g, gantry=True, window=(2.0, 15.0))
     assert checked_plan(_ok_plan(travel_speed_mm_s=speed), "p", 0, g, gantry=True) is not None
+
+
+def test_a_cap_bead_is_placed_on_the_first_cap_beads_stations() -> None:
+    """The groove a later cap bead's planner gets may miss stations (the extractor found no
+    groove in 32-126 mm of multipass-varying-gap's first cap pass): its offsets are given on
+    the stations of the groove measured before the first cap bead, so that where the gap
+    varies within the hole the bead still lies in its slot, (rank + 1/2) of the slot pitch
+    (top width + 2 CAP_OVERLAP_MM) / n from CAP_OVERLAP_MM beyond the left top corner.
+    Interpolated over a hole from 10 to 50 mm the slot's place was 1 mm off at 25 mm (the gap
+    6 mm there, 4.6 mm on the line between the hole's ends)."""
+    from seamtrack.control.fill_layout import Layout
+
+    s = np.arange(0.0, 100.0 + 1e-9, 0.5)
+    gap = 4.0 + 2.0 * np.sin(2 * np.pi * s / 100.0)
+    t = math.tan(math.radians(30))
+    top, foot = gap / 2 + 20.0 * t, gap / 2 + 17.0 * t
+    pts = np.zeros((len(s), 7, 2))
+    pts[:, 0], pts[:, 6] = (
+        np.column_stack([-top, np.full_like(s, 20.0)]),
+        np.column_stack([top, np.full_like(s, 20.0)]),
+    )
+    pts[:, 1:6, 0] = -foot[:, None] + 2 * foot[:, None] * np.linspace(0, 1, 5)[None]
+    pts[:, 1:6, 1] = 17.0
+    whole = MeasuredGroove(s, pts, np.full(len(s), 60.0))
+    seen = (s < 10.0) | (s > 50.0)
+    holed = MeasuredGroove(s[seen], pts[seen], np.full(int(seen.sum()), 50.0))
+    planner = AdaptivePlanner()
+    planner.layout = Layout((2, 6), 30.0, 11.0)
+    state = JobState(Process(), reinforcement_mm=2.0)
+    assert planner.plan(whole, 2, state).cap  # the first cap bead: its corners kept
+    second = planner.plan(holed, 3, state)
+    assert second.reference == "right_top" and second.bead_in_layer == 1
+    pitch = (2 * top + 2 * CAP_OVERLAP_MM) / 6
+    want = -top - CAP_OVERLAP_MM + 1.5 * pitch
+    np.testing.assert_allclose(top + second.offset_at(s), want, atol=0.02)

@@ -16,7 +16,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.errors import PluginRuntimeError
-from seamtrack.geometry.groove_points import LEFT_FOOT, LEFT_TOP, MIDDLE, RIGHT_FOOT, RIGHT_TOP
+from seamtrack.geometry.groove_points import (
+    FEET,
+    LEFT_FOOT,
+    LEFT_TOP,
+    MIDDLE,
+    RIGHT_FOOT,
+    RIGHT_TOP,
+    TOPS,
+)
 
 FloatArray = NDArray[np.float64]
 
@@ -365,3 +373,68 @@ def layer_counts(section: Section, height_mm: float, layers: int, beads: int) ->
     while counts.sum() > beads:  # the ones the floor of 1 added, from the widest layers
         counts[int(np.argmax(counts))] -= 1
     return sorted(int(n) for n in counts)
+
+
+def after_bead(groove: MeasuredGroove, area_mm2: Any) -> MeasuredGroove:
+    """The groove a pass's sensor measured *before* its torch laid its bead, with that bead
+    added: the fill surface (the 5 bottom points) lifted by the height ``dz`` at which the
+    groove between the walls holds the bead's area (``area_mm2``, (m,) at its stations; None:
+    ``groove`` itself), ``w dz + k dz^2 / 2 = area`` with w the fill surface's width and k the
+    walls' widening per mm of height (their slopes from the 7 points), the feet moved up their
+    walls, the top corners (which no bead moves) kept.
+
+    What the pass after expects where its sensor has not yet measured the groove (its start,
+    :func:`~seamtrack.multipass.aim.planned_feature`): the groove before the last bead
+    lies a bead lower (a single-bead layer of the 12-pass plan: 4 mm), and a torch started
+    there dived under the fill and overshot it by 2-4 mm over the next 15 mm. And the groove
+    a planner lays a layer's first bead on when the layer below is a single bead
+    (:class:`~seamtrack.control.planner.AdaptivePlanner`): measured before that bead, its fill
+    surface is the layer below's, a bead lower and narrower."""
+    if area_mm2 is None or not len(groove):
+        return groove
+    p = groove.points.copy()
+    area = np.maximum(np.asarray(area_mm2, dtype=float).reshape(len(groove)), 0.0)
+    rise = np.maximum(p[:, TOPS, 1] - p[:, FEET, 1], 1e-9)  # (m, 2) the walls' heights
+    widen = np.abs(p[:, FEET, 0] - p[:, TOPS, 0]) / rise  # mm of width per mm of height
+    w = np.maximum(p[:, RIGHT_FOOT, 0] - p[:, LEFT_FOOT, 0], 0.0)
+    k = widen.sum(axis=1)
+    dz = np.where(k > 1e-9, (np.sqrt(w * w + 2 * k * area) - w) / np.maximum(k, 1e-9),
+                  area / np.maximum(w, 1e-9))  # fmt: skip
+    dz = np.minimum(dz, rise.min(axis=1))
+    left = p[:, LEFT_FOOT, 0] - widen[:, 0] * dz
+    right = p[:, RIGHT_FOOT, 0] + widen[:, 1] * dz
+    old_left, old_w = p[:, LEFT_FOOT, 0].copy(), np.maximum(w, 1e-9)
+    for row in range(
+        LEFT_FOOT, RIGHT_FOOT + 1
+    ):  # the bottom points stretched between the new feet, lifted
+        frac = (p[:, row, 0] - old_left) / old_w
+        p[:, row, 0] = left + frac * (right - left)
+        p[:, row, 1] += dz
+    remaining = np.maximum(groove.area_mm2 - area, 0.0)
+    return MeasuredGroove(groove.s_mm, p, remaining)
+
+
+def under_line_mm2(points: FloatArray, lo_mm: Any, hi_mm: Any, samples: int = 24) -> FloatArray:
+    """(m,) the area (mm^2) between the plates' top line (the line joining the top corners)
+    and the groove's surface below it, from y = ``lo_mm`` to ``hi_mm`` ((m,) each), at each of
+    the m stations of ``points`` (m, 7, 2): the surface the piecewise-linear profile through
+    the 7 points (y ascending), held level beyond the top corners; where it stands over the
+    line, nothing. The midpoint rule on ``samples`` points."""
+    pts = np.asarray(points, dtype=float)
+    lo, hi = np.asarray(lo_mm, dtype=float), np.asarray(hi_mm, dtype=float)
+    t = (np.arange(samples) + 0.5) / samples
+    y = lo[:, None] + (hi - lo)[:, None] * t[None, :]  # (m, q)
+    py, pz = pts[:, :, 0], pts[:, :, 1]
+    y = np.clip(y, py[:, :1], py[:, -1:])
+    z = np.repeat(pz[:, :1], samples, axis=1)
+    for j in range(pts.shape[1] - 1):  # each segment, where the samples lie beyond its start
+        y0, y1 = py[:, j : j + 1], py[:, j + 1 : j + 2]
+        frac = np.clip((y - y0) / np.maximum(y1 - y0, 1e-12), 0.0, 1.0)
+        z = np.where(
+            y >= y0, pz[:, j : j + 1] + frac * (pz[:, j + 1 : j + 2] - pz[:, j : j + 1]), z
+        )
+    line_t = (y - py[:, LEFT_TOP, None]) / np.maximum(
+        py[:, RIGHT_TOP, None] - py[:, LEFT_TOP, None], 1e-12
+    )
+    line = pz[:, LEFT_TOP, None] + line_t * (pz[:, RIGHT_TOP, None] - pz[:, LEFT_TOP, None])
+    return np.maximum(line - z, 0.0).mean(axis=1) * np.maximum(hi - lo, 0.0)

@@ -14,9 +14,10 @@ The built-in :class:`AdaptivePlanner` fills equal-area layers (as many as the gr
 holds beads of the process's height), puts ``round(layer area / bead area)`` (at least one)
 beads in each, corners first (a bead against each wall, then the middle from left to right),
 then a cap layer side to side (each bead offset from a top corner, the bevel's edge, which the
-bead before it has not moved), and scales the travel speed along the seam to the measured
-groove: the bead area at a station is the area left to fill there over the beads left, and the
-speed follows from mass conservation, bounded by the process window. :class:`FixedPlanner` lays
+bead before it has not moved; the beads after the first sized by what lies under them), and
+scales the travel speed along the seam to the measured groove: the bead area at a station is
+the area left to fill there over the beads left, and the speed follows from mass conservation,
+bounded by the process window. :class:`FixedPlanner` lays
 the same beads at one constant speed (the one for the groove's median area).
 """
 
@@ -35,10 +36,12 @@ from seamtrack.control.fill_layout import (
     Layout,
     MeasuredGroove,
     Process,
+    after_bead,
     cap_area_mm2,
     cap_share,
     fill_order,
     layout,
+    under_line_mm2,
 )
 from seamtrack.control.registry import load_class
 from seamtrack.errors import PluginError, PluginRuntimeError
@@ -180,11 +183,12 @@ class AdaptivePlanner:
         self.layout: Layout | None = None
         self._cap: tuple[FloatArray, FloatArray] | None = None  # (s, bead area) of the cap
         self._cap_corners: tuple[FloatArray, FloatArray] | None = None  # (s, (m, 2) top y)
+        self._cap_rest: tuple[FloatArray, FloatArray] | None = None  # (s, (m, n - 1) areas)
 
     def plan(self, groove: MeasuredGroove, pass_index: int, state: JobState) -> PassPlan | None:
         if self.layout is None or pass_index == 0:
             self.layout = layout(groove, state)
-            self._cap = self._cap_corners = None
+            self._cap = self._cap_corners = self._cap_rest = None
         where = self.layout.locate(pass_index)
         if where is None:
             return None
@@ -192,7 +196,11 @@ class AdaptivePlanner:
         n = self.layout.beads_per_layer[layer]
         cap = layer == len(self.layout.beads_per_layer) - 1
         p = state.process
-        reference, offsets = self._place(groove, n, slot_rank, cap)
+        reference, offsets = self._place(_laid_on(groove, self.layout, layer, slot_rank, state),
+                                         n, slot_rank, cap)  # fmt: skip
+        stations = groove.s_mm  # where the plan's profiles are given
+        if cap and slot_rank >= 1 and self._cap_corners is not None:
+            stations = self._cap_corners[0]  # the first cap bead's (see _place)
         offset = float(np.median(offsets))
         profile_offsets = None if reference in ("left", "right") else offsets
         remaining = np.asarray(groove.area_mm2, dtype=float)
@@ -200,11 +208,19 @@ class AdaptivePlanner:
             remaining = remaining - np.asarray(state.last_bead_area_mm2, dtype=float)
         left = self.layout.beads_after(pass_index, cap)
         crown = cap_area_mm2(groove.top_width_mm, state.reinforcement_mm)
-        if cap:  # the groove left and the crown, in equal beads (set at the first cap bead)
+        if cap:  # the groove left and the crown (the mean share set at the first cap bead)
             if self._cap is None:
                 share = (np.maximum(remaining, 0.0) + crown) / max(left, 1)
                 self._cap = (groove.s_mm.copy(), share)
-            target = cap_share(np.interp(groove.s_mm, *self._cap), n, slot_rank)
+            mean = np.interp(stations, *self._cap)
+            if slot_rank >= 1 and n >= 3:  # by what lies under them (_rest_of_cap)
+                if self._cap_rest is None:
+                    rest = self._rest_of_cap(groove, stations, mean, n, state.reinforcement_mm)
+                    self._cap_rest = (stations.copy(), rest)
+                s_rest, rest = self._cap_rest
+                target = np.interp(stations, s_rest, rest[:, slot_rank - 1])
+            else:
+                target = cap_share(mean, n, slot_rank)
         else:  # what the cap will not hold, over the fill beads left
             cap_beads = self.layout.beads_per_layer[-1]
             band = cap_beads * self.layout.cap_bead_area_mm2 - crown
@@ -214,12 +230,48 @@ class AdaptivePlanner:
         if self.adapt_speed:
             nominal = float(np.median(profile))
             return PassPlan(reference, offset, 0.0, nominal, p.wire_feed_mm_s, layer, slot_rank,
-                            n, cap, groove.s_mm.copy(), profile, profile_offsets)  # fmt: skip
+                            n, cap, stations.copy(), profile, profile_offsets)  # fmt: skip
         area = self.layout.cap_bead_area_mm2 if cap else self.layout.fill_bead_area_mm2
         speed = float(p.speed_for_area(area))
         return PassPlan(reference, offset, 0.0, speed, p.wire_feed_mm_s, layer, slot_rank, n, cap,
-                        groove.s_mm.copy(), np.full(len(groove), speed),
+                        stations.copy(), np.full(len(stations), speed),
                         profile_offsets)  # fmt: skip
+
+    def _rest_of_cap(
+        self,
+        groove: MeasuredGroove,
+        stations: FloatArray,
+        mean: FloatArray,
+        n: int,
+        reinforcement_mm: float,
+    ) -> FloatArray:
+        """(m, n - 1) the areas of the cap's beads after the first (set at the second): together
+        what the equal shares give them, each in proportion to what lies under its slot (the
+        groove under the plates' line there, :func:`under_line_mm2` on the 7 points, a running
+        median along the seam) plus an equal share of the crown.
+
+        The fill's top layer is no flat band: its beads leave valleys between them and against
+        the walls (multipass-varying-gap where the gap is widest: two wall beads 14.9 mm apart,
+        the valley between them 3.3 mm under the line, the beads' crests 0.2 mm under it and
+        1 mm over it), and equal cap beads over them left the valley 0.07 mm under the line
+        (213 stations, planned one pass behind as the job does, perfectly tracked). The
+        second cap bead's groove is the first whose measurement holds every fill bead: the
+        job's planner gets the groove measured before the last pass's bead, so the first cap
+        bead's lacks the last fill bead."""
+        assert self._cap_corners is not None
+        s_cap, top = self._cap_corners
+        left = np.interp(groove.s_mm, s_cap, top[:, 0])
+        right = np.interp(groove.s_mm, s_cap, top[:, 1])
+        pitch = (right - left + 2 * CAP_OVERLAP_MM) / n
+        start = left - CAP_OVERLAP_MM
+        under = np.column_stack([np.interp(stations, groove.s_mm, _smooth(under_line_mm2(
+                                     groove.points, start + k * pitch, start + (k + 1) * pitch)))
+                                 for k in range(1, n)])  # fmt: skip
+        width = np.interp(stations, s_cap, top[:, 1] - top[:, 0])
+        crown = cap_area_mm2(width, reinforcement_mm) / n
+        weight = under + crown[:, None]
+        total = (n - 1) * np.asarray(cap_share(mean, n, 1))
+        return total[:, None] * weight / np.maximum(weight.sum(axis=1, keepdims=True), 1e-9)
 
     def _place(
         self, groove: MeasuredGroove, n: int, rank: int, cap: bool
@@ -247,9 +299,11 @@ class AdaptivePlanner:
                 top = np.column_stack([_smooth(pts[:, LEFT_TOP, 0]),
                                        _smooth(pts[:, RIGHT_TOP, 0])])  # fmt: skip
                 self._cap_corners = (groove.s_mm.copy(), top)
-            s_cap, top = self._cap_corners
-            left = np.interp(groove.s_mm, s_cap, top[:, 0])
-            right = np.interp(groove.s_mm, s_cap, top[:, 1])
+            # on the first cap bead's stations: a later bead's groove may miss some (the
+            # groove extractor found none in 32-126 mm of multipass-varying-gap's first cap
+            # pass, where the gap is widest, and offsets interpolated over that hole put the
+            # second cap bead up to 0.67 mm off its slot, 0.18 mm under the line beside it)
+            left, right = self._cap_corners[1][:, 0], self._cap_corners[1][:, 1]
             target = left - CAP_OVERLAP_MM + (rank + 0.5) * (right - left + 2 * CAP_OVERLAP_MM) / n
             return ("left_top", target - left) if rank == 0 else ("right_top", target - right)
         if n == 1:
@@ -268,6 +322,25 @@ class AdaptivePlanner:
         if 2 * slot + 1 < n:  # the left half: from the left top corner
             return "left_top", target - _smooth(pts[:, LEFT_TOP, 0])
         return "right_top", target - _smooth(pts[:, RIGHT_TOP, 0])
+
+
+def _laid_on(
+    groove: MeasuredGroove, plan: Layout, layer: int, rank: int, state: JobState
+) -> MeasuredGroove:
+    """The groove the ``rank``-th bead of ``layer`` is placed on: ``groove``, except for a
+    layer's first bead over a layer of one bead, ``groove`` with that bead added
+    (:func:`~seamtrack.control.fill_layout.after_bead`, its area ``state.last_bead_area_mm2``).
+
+    The groove a planner gets was measured before the last pass's bead (the sensor looks
+    ahead of the torch). Over a layer of several beads that bead was the layer's last, laid
+    against beads already there; over a single bead it *is* the layer below, and the groove
+    before it is the fill surface under it: a bead (4 mm on multipass-v-groove's 10- to
+    14-pass plans) lower and narrower than the one the layer is laid on, whose slots put the
+    layer's beads too far into the middle. With the groove as it lies (``last_bead_area_mm2``
+    None: a dry run's true groove) nothing is added."""
+    if rank != 0 or layer == 0 or plan.beads_per_layer[layer - 1] != 1:
+        return groove
+    return after_bead(groove, state.last_bead_area_mm2)
 
 
 def _smooth(values: FloatArray, half_window: int = 4) -> FloatArray:

@@ -42,7 +42,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.control.fill_layout import Layout, MeasuredGroove, layout
+from seamtrack.control.fill_layout import Layout, MeasuredGroove, after_bead, layout
 from seamtrack.control.planner import JobState, PassPlan, checked_plan, is_builtin, planner
 from seamtrack.errors import PluginRuntimeError, SceneError, plugin_failed
 from seamtrack.geometry.seam import Seam
@@ -57,7 +57,6 @@ from seamtrack.multipass.distortion import (
 from seamtrack.multipass.paths import (
     STATION_SPACING_MM,
     FrameGroove,
-    after_bead,
     arc_path,
     handover,
     measured_groove,
@@ -355,26 +354,45 @@ def _interrupted(
 
 
 def dry_run(
-    fill: FillState, plan_maker: Any, state: JobState, shape: Any, max_passes: int = 200
+    fill: FillState,
+    plan_maker: Any,
+    state: JobState,
+    shape: Any,
+    max_passes: int = 200,
+    lagged: bool = False,
 ) -> tuple[Any, list[PassPlan]]:
     """The plan laid with perfect tracking and the true groove as the measurement: each bead
     along its true pass path (:func:`pass_path`) at the planned speed there. What a planner
     achieves by itself, without the sensor's and the tracker's errors (a planner's tests, and
-    a quick look at a plan before a job)."""
+    a quick look at a plan before a job).
+
+    ``lagged``: the planner gets the groove as the job gives it, one pass behind: the true
+    groove *before* the last pass's bead (a pass's sensor measures the groove ahead of its
+    torch) and that bead's area along the seam in ``state.last_bead_area_mm2``; else the
+    groove after every bead laid so far (and no last bead)."""
     seam = Seam.from_points(fill.T_world_station[:, :3, 3], field="passes", name="stations")
     plans: list[PassPlan] = []
+    groove = true_groove(fill)
     for index in range(max_passes):
-        groove = true_groove(fill)
         plan = checked_plan(plan_maker.plan(groove, index, state), "planner", index, groove,
                             gantry=False)  # fmt: skip
         if plan is None:
             break
         path = pass_path(fill, plan.reference, plan)
         s = seam.closest(path.points).arc_length_mm
-        area = state.process.bead_area_mm2(plan.speed_at(s), plan.wire_feed_mm_s)
-        fill = fill.deposit(path.points, np.asarray(area, dtype=float), shape)
+        area = np.asarray(
+            state.process.bead_area_mm2(plan.speed_at(s), plan.wire_feed_mm_s), dtype=float
+        )
+        seen = true_groove(fill) if lagged else None  # this pass's sensor: before its bead
+        fill = fill.deposit(path.points, area, shape)
         plans.append(plan)
         state.done.append(plan)
+        if seen is not None:
+            order = np.argsort(s)
+            state.last_bead_area_mm2 = np.interp(seen.s_mm, s[order], area[order])
+            groove = seen
+        else:
+            groove = true_groove(fill)
     return fill, plans
 
 

@@ -4,7 +4,7 @@ arc's path from the trace, the ramps and the run-off to the part's ends."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import NDArray
@@ -12,14 +12,10 @@ from numpy.typing import NDArray
 from seamtrack.control.fill_layout import MeasuredGroove
 from seamtrack.control.planner import PassPlan
 from seamtrack.geometry.groove_points import (
-    FEET,
-    LEFT_FOOT,
     LEFT_TOP,
     MIDDLE,
     POINT_INDEX,
-    RIGHT_FOOT,
     RIGHT_TOP,
-    TOPS,
 )
 from seamtrack.geometry.seam import Seam
 from seamtrack.geometry.smoothing import station_median
@@ -240,39 +236,3 @@ def settled(groove: MeasuredGroove, half_window: int = 4) -> MeasuredGroove:
         return groove
     points = station_median(groove.points, half_window, cut_ends=True)
     return MeasuredGroove(groove.s_mm, points, groove.area_mm2)
-
-
-def after_bead(groove: MeasuredGroove, area_mm2: Any) -> MeasuredGroove:
-    """The groove a pass's sensor measured *before* its torch laid its bead, with that bead
-    added: the fill surface (the 5 bottom points) lifted by the height ``dz`` at which the
-    groove between the walls holds the bead's area (``area_mm2``, (m,) at its stations; None:
-    ``groove`` itself), ``w dz + k dz^2 / 2 = area`` with w the fill surface's width and k the
-    walls' widening per mm of height (their slopes from the 7 points), the feet moved up their
-    walls, the top corners (which no bead moves) kept.
-
-    What the pass after expects where its sensor has not yet measured the groove (its start,
-    :func:`~seamtrack.multipass.aim.planned_feature`): the groove before the last bead
-    lies a bead lower (a single-bead layer of the 12-pass plan: 4 mm), and a torch started
-    there dived under the fill and overshot it by 2-4 mm over the next 15 mm."""
-    if area_mm2 is None or not len(groove):
-        return groove
-    p = groove.points.copy()
-    area = np.maximum(np.asarray(area_mm2, dtype=float).reshape(len(groove)), 0.0)
-    rise = np.maximum(p[:, TOPS, 1] - p[:, FEET, 1], 1e-9)  # (m, 2) the walls' heights
-    widen = np.abs(p[:, FEET, 0] - p[:, TOPS, 0]) / rise  # mm of width per mm of height
-    w = np.maximum(p[:, RIGHT_FOOT, 0] - p[:, LEFT_FOOT, 0], 0.0)
-    k = widen.sum(axis=1)
-    dz = np.where(k > 1e-9, (np.sqrt(w * w + 2 * k * area) - w) / np.maximum(k, 1e-9),
-                  area / np.maximum(w, 1e-9))  # fmt: skip
-    dz = np.minimum(dz, rise.min(axis=1))
-    left = p[:, LEFT_FOOT, 0] - widen[:, 0] * dz
-    right = p[:, RIGHT_FOOT, 0] + widen[:, 1] * dz
-    old_left, old_w = p[:, LEFT_FOOT, 0].copy(), np.maximum(w, 1e-9)
-    for row in range(
-        LEFT_FOOT, RIGHT_FOOT + 1
-    ):  # the bottom points stretched between the new feet, lifted
-        frac = (p[:, row, 0] - old_left) / old_w
-        p[:, row, 0] = left + frac * (right - left)
-        p[:, row, 1] += dz
-    remaining = np.maximum(groove.area_mm2 - area, 0.0)
-    return MeasuredGroove(groove.s_mm, p, remaining)

@@ -58,7 +58,7 @@ class SteeredSense:
     measured there (``previous``, a running median along the seam:
     :func:`~seamtrack.multipass.paths.settled`; the fill only grows) is taken as no groove.
     Until the pass's sensor measures the groove, the torch follows the plan on ``expected``
-    (``previous`` with its pass's bead added: :func:`~seamtrack.multipass.paths.after_bead`),
+    (``previous`` with its pass's bead added: :func:`~seamtrack.control.fill_layout.after_bead`),
     else on ``previous``. ``plan`` None: the scan pass, which only records."""
 
     def __init__(
