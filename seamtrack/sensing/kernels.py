@@ -16,7 +16,7 @@ from numpy.typing import NDArray
 from seamtrack.sensing import embree
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(cache=True, nogil=True)
 def _intersect_face(
     ox: float, oy: float, oz: float, dx: float, dy: float, dz: float,
     vertices: NDArray[np.float64], faces: NDArray[np.int64], f: int, tol: float,
@@ -49,7 +49,7 @@ def _intersect_face(
     return t, v >= slack and w >= slack and det - v - w >= slack
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(cache=True, nogil=True)
 def _refine_one(
     ox: float, oy: float, oz: float, dx: float, dy: float, dz: float, f: int, tf: float,
     vertices: NDArray[np.float64], faces: NDArray[np.int64], weld: NDArray[np.int64],
@@ -146,7 +146,7 @@ SP_B, SP_LAM, SP_SIN, SP_COS, SP_H, SP_V, SP_NH, SP_NV, SP_SLACK, SP_COS_MAX_INC
 MISS, OCCLUDED, OUT_OF_RANGE, INCIDENCE = 1, 2, 3, 4  # = seamtrack.sensing.profiles.Reason
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(cache=True, nogil=True)
 def _chip(y: float, z: float, sp: NDArray[np.float64]) -> tuple[float, float, bool]:
     """Laser-plane point to chip coordinates and the field-of-view test."""
     b, lam, s, c = sp[SP_B], sp[SP_LAM], sp[SP_SIN], sp[SP_COS]
@@ -161,7 +161,7 @@ def _chip(y: float, z: float, sp: NDArray[np.float64]) -> tuple[float, float, bo
     return x_c, z_c, inside
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(cache=True, nogil=True)
 def _pixel_center(x_c: float, z_c: float, sp: NDArray[np.float64]) -> tuple[float, float]:
     """The laser-plane point the sensor reports for chip coordinates: snap, triangulate."""
     b, lam, s, c, H, V = sp[SP_B], sp[SP_LAM], sp[SP_SIN], sp[SP_COS], sp[SP_H], sp[SP_V]
@@ -174,7 +174,7 @@ def _pixel_center(x_c: float, z_c: float, sp: NDArray[np.float64]) -> tuple[floa
     return zq * b_over_den, (lam * c - xq * s) * b_over_den
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(cache=True, nogil=True)
 def _mark_miss(
     i: int, points: NDArray[np.float64], reason: NDArray[np.uint8], t_out: NDArray[np.float64],
     face_out: NDArray[np.int64], cos_incidence: NDArray[np.float64], chip: NDArray[np.float64],
@@ -190,7 +190,7 @@ def _mark_miss(
     cos_incidence[i] = np.nan
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(cache=True, nogil=True)
 def _set_shadow_ray(
     k: int, i: int, px: float, py: float, pz: float, vx: float, vy: float, vz: float,
     length: float, offset: float, shadow_origins: NDArray[np.float64],

@@ -79,7 +79,7 @@ NO_SEEDS = np.empty(0, dtype=np.int64)
 
 
 # --------------------------------------------------------------------------- the section
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(cache=True, nogil=True)
 def _box_outside(
     lo: NDArray[np.float64], hi: NDArray[np.float64], node: int, o: NDArray[np.float64],
     m0: float, m1: float, m2: float,
@@ -94,7 +94,7 @@ def _box_outside(
     return m0 * c0 + m1 * c1 + m2 * c2 - (abs(m0) * h0 + abs(m1) * h1 + abs(m2) * h2)
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(cache=True, nogil=True)
 def _edge_point(
     xa: float, ya: float, za: float, xb: float, yb: float, zb: float
 ) -> tuple[float, float]:  # fmt: skip
@@ -103,7 +103,7 @@ def _edge_point(
     return ya + s * (yb - ya), za + s * (zb - za)
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(cache=True, nogil=True)
 def _cut(
     vertices: NDArray[np.float64], faces: NDArray[np.int64], k: int, o: NDArray[np.float64],
     r: NDArray[np.float64],
@@ -163,7 +163,7 @@ def _cut(
     return True, p0y, p0z, p1y, p1z
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(cache=True, nogil=True)
 def _ray_range(
     tans: NDArray[np.float64], step: float, y0: float, z0: float, y1: float, z1: float
 ) -> tuple[int, int]:  # fmt: skip
@@ -189,7 +189,7 @@ def _ray_range(
     return _tan_range(tans, step, t_lo, t_hi)
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(cache=True, nogil=True)
 def _tan_range(
     tans: NDArray[np.float64], step: float, t_lo: float, t_hi: float
 ) -> tuple[int, int]:  # fmt: skip
@@ -235,7 +235,7 @@ def _even_step(tans: NDArray[np.float64]) -> float:
     return step
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(cache=True, nogil=True)
 def _sweep(
     fan: NDArray[np.float64], first: int, last: int, y0: float, z0: float, y1: float,
     z1: float, k: int, best_t: NDArray[np.float64], best_f: NDArray[np.int64],
@@ -306,7 +306,7 @@ def _visit(
     return leaves, found
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(cache=True, nogil=True)
 def _box_distance2(
     lo: NDArray[np.float64], hi: NDArray[np.float64], node: int, o: NDArray[np.float64]
 ) -> float:  # fmt: skip
@@ -318,7 +318,7 @@ def _box_distance2(
     return d2
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(cache=True, nogil=True)
 def _box_rays(
     lo: NDArray[np.float64], hi: NDArray[np.float64], node: int, o: NDArray[np.float64],
     rotation: NDArray[np.float64], tans: NDArray[np.float64], step: float,
@@ -341,7 +341,7 @@ def _box_rays(
     return _tan_range(tans, step, t_lo, t_hi)
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(cache=True, nogil=True)
 def _farthest(
     best_t: NDArray[np.float64], block_max: NDArray[np.float64], stale: NDArray[np.bool_],
     first: int, last: int,
@@ -411,7 +411,7 @@ def hit_faces(face: NDArray[np.int64]) -> NDArray[np.int64]:
     return out[:k].copy()
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(cache=True, nogil=True)
 def _cut_and_sweep(
     vertices: NDArray[np.float64], faces: NDArray[np.int64], k: int, o: NDArray[np.float64],
     rotation: NDArray[np.float64], fan: NDArray[np.float64], tans: NDArray[np.float64],
