@@ -11,6 +11,7 @@ that holds the points in place (no list of arrays to convert at every frame).
 from __future__ import annotations
 
 import math
+from typing import cast
 
 import numba
 import numpy as np
@@ -23,6 +24,9 @@ from seamtrack.control.hint_kernels import plane_crossings as plane_crossings
 from seamtrack.control.hint_kernels import program_hint as program_hint
 
 FloatArray = NDArray[np.float64]
+#: An int64 0: numba types a literal 0 as ``Literal[int](0)`` and compiles the kernel it
+#: reaches once more for it, a loop counter's start too.
+_ZERO = cast(int, np.int64(0))
 
 
 class PathBuffer:
@@ -173,7 +177,7 @@ def smooth_tail(
             w[j] = abs(s[first + j] - at) <= h
             count += w[j]
         _fit(raw, s, first, at, w, line)
-        k = 0
+        k = _ZERO
         for j in range(m):
             ds = s[first + j] - at
             r2 = 0.0

@@ -14,7 +14,7 @@ so results agree to rounding, not bit for bit.
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import NamedTuple, cast
 
 import numba
 import numpy as np
@@ -40,6 +40,11 @@ class PieceTable(NamedTuple):
     fits: FloatArray
     bounds: NDArray[np.intp]
 
+
+#: numba types a literal (``0``) as its own type, ``Literal[int](0)``, and compiles the
+#: kernel it reaches once more for it, a loop counter's start too; these type as int64.
+_ZERO = cast(int, np.int64(0))
+_THREE = cast(int, np.int64(3))
 
 #: The columns of :attr:`PieceTable.fits`.
 FIT_CY, FIT_CZ, FIT_UY, FIT_UZ, FIT_RMS, FIT_FIRST, FIT_LAST = range(7)
@@ -280,7 +285,7 @@ def _refit(
     The arithmetic of :func:`~seamtrack.features.line_geometry.fit_range` and then
     :func:`~seamtrack.features.line_geometry.fit_points` on the inliers."""
     cy, cz, uy, uz = fit_range(p, a, b + 1)
-    n = 0
+    n = _ZERO
     for i in range(a, b + 1):
         if abs(-(p[i, 0] - cy) * uz + (p[i, 1] - cz) * uy) <= trim:
             index[n] = i
@@ -304,7 +309,7 @@ def _corner_cuts(
     for j in range(n - 1):
         a, b = run_lo[j], run_hi[j + 1] + 1
         if b - a >= 6:
-            cut = a + _best_split(p, a, b, 3, pre, cost).at
+            cut = a + _best_split(p, a, b, _THREE, pre, cost).at
             run_hi[j], run_lo[j + 1] = cut - 1, cut
 
 
@@ -409,7 +414,7 @@ def _pieces(
     cap = 2 * max_lines + 8
     all_lo = np.empty(cap, dtype=np.int64)
     all_hi = np.empty(cap, dtype=np.int64)
-    total = 0
+    total = _ZERO
     run_lo = np.empty(max_lines + 2, dtype=np.int64)
     run_hi = np.empty(max_lines + 2, dtype=np.int64)
     significant = 30.0 * max(sigma, floor / 5.0) ** 2

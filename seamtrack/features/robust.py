@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import NamedTuple, cast
 
 import numba
 import numpy as np
@@ -82,6 +82,9 @@ TOL_RESOLUTIONS = 3.0
 
 _SIGMA_FROM_SECOND_DIFF = 1.4826 / math.sqrt(6.0)
 _COS_15 = math.cos(math.radians(15.0))
+#: Lag 1 as an int64: numba types a literal 1 as ``Literal[int](1)`` and compiles
+#: :func:`_estimate` once more for it.
+_LAG1 = cast(int, np.int64(1))
 
 
 @numba.njit(cache=True, nogil=True)
@@ -506,7 +509,7 @@ def robust_front(
         params.tol_resolutions * resolution if math.isnan(params.min_tol_mm) else params.min_tol_mm
     )
     rounding = q / math.sqrt(12.0)
-    first = _estimate(z, m, 1, d, work, hist) if m > 2 else 0.0
+    first = _estimate(z, m, _LAG1, d, work, hist) if m > 2 else 0.0
     # Isolated outliers against a running median of 5 (edges: the nearest full window).
     limit = max(6.0 * max(first, rounding), 4.0 * floor, 4.0 * spacing)
     kept, ns = _drop_spikes(p, z, cols, m, limit, spikes)
@@ -514,7 +517,7 @@ def robust_front(
     sigma = 0.0
     if kept > 2:
         if ns > 0:
-            first = _estimate(z, kept, 1, d, work, hist)
+            first = _estimate(z, kept, _LAG1, d, work, hist)
         sigma = _noise(z, kept, first, d, work, hist)
     sigma = max(sigma, rounding)
     tol = max(floor, params.sigma_factor * sigma)

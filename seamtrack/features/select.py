@@ -13,7 +13,7 @@ its partitions uneven.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
 import numba
 import numpy as np
@@ -27,6 +27,11 @@ BUCKETS = 128
 _SHIFT = 48
 #: Values sorted directly when this few are left.
 _FEW = 24
+#: numba types a literal (``0``) as its own type, ``Literal[int](0)``, and compiles the
+#: kernel it reaches once more for it, a loop counter's start too; these type as int64.
+_ZERO = cast(int, np.int64(0))
+#: The strided sample that places the first buckets (an int64, as above).
+_SAMPLE = cast(int, np.int64(31))
 
 
 @numba.njit(cache=True, nogil=True)
@@ -102,7 +107,7 @@ def kth_nonneg(x: FloatArray, n: int, k: int, work: IntArray, hist: IntArray) ->
         return work[:1].view(np.float64)[0]
     # The median of a strided sample of 31 places the buckets (an estimate suffices: a value
     # outside the buckets is counted in the first or the last).
-    s = 31
+    s = _SAMPLE
     for i in range(s):
         work[i] = bits[((2 * i + 1) * n) // (2 * s)]
     base = (_sorted_kth(work, s, (k * s) // n) >> _SHIFT) - BUCKETS // 2
@@ -121,7 +126,7 @@ def kth_nonneg(x: FloatArray, n: int, k: int, work: IntArray, hist: IntArray) ->
     while below + hist[kb] + hist[BUCKETS + kb] <= k:
         below += hist[kb] + hist[BUCKETS + kb]
         kb += 1
-    c = 0
+    c = _ZERO
     for i in range(n):
         v = bits[i]
         work[c] = v

@@ -7,13 +7,17 @@ quantization) that calls Embree in packets of 8 (:mod:`seamtrack.sensing.embree`
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
 import numba
 import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.sensing import embree
+
+#: An int64 0: numba types a literal 0 as ``Literal[int](0)`` and compiles the kernel it
+#: reaches once more for it, a loop counter's start too.
+_ZERO = cast(int, np.int64(0))
 
 
 @numba.njit(cache=True, nogil=True)
@@ -255,7 +259,7 @@ def fan_stripe_hits(
     cx = origin[0] + sp[SP_B] * rotation[0, 0]
     cy = origin[1] + sp[SP_B] * rotation[1, 0]
     cz = origin[2] + sp[SP_B] * rotation[2, 0]
-    k = 0
+    k = _ZERO
     for i in range(directions.shape[0]):
         f = prim[i]
         if f < 0:

@@ -28,6 +28,8 @@ from seamtrack.features.vgroove._v_search import (
     COUNT,
     CY,
     CZ,
+    FIRST_END,
+    LAST_END,
     NONE,
     START,
     UY,
@@ -446,9 +448,9 @@ def bridged(tb, n, bevels, ends, plate, min_points, tol, spacing):
             continue
         if _flat_dot(tb, k, plate) <= COS_WALL:
             continue
-        reach = 3.0 * pmax(pmax(spacing, step(tb, k, True)), step(tb, k, False)) + tol
-        y0, z0 = end(tb, k, False)
-        y1, z1 = end(tb, k, True)
+        reach = 3.0 * pmax(pmax(spacing, step(tb, k, LAST_END)), step(tb, k, FIRST_END)) + tol
+        y0, z0 = end(tb, k, FIRST_END)
+        y1, z1 = end(tb, k, LAST_END)
         if math.hypot(y0 - lx, z0 - lz) <= reach and math.hypot(y1 - rx, z1 - rz) <= reach:
             return True
     return False

@@ -20,7 +20,7 @@ Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groov
 from __future__ import annotations
 
 import math
-from typing import Any, NamedTuple
+from typing import Any, NamedTuple, cast
 
 import numba
 import numpy as np
@@ -52,8 +52,13 @@ RAD_TO_DEG = 180.0 / math.pi
 COS_GROUP = math.cos(math.radians(30.0))
 #: Lines within this angle meet in no corner (see ``corner_with``).
 COS_CORNER = math.cos(CORNER_MIN_RAD)
-#: A record that is no line.
-NONE = -1
+#: A record that is no line (an int64, not a literal: a literal -1 left in a variable
+#: compiles the kernels it is passed to once more for that value, numba's literal dispatch).
+NONE = cast(int, np.int64(-1))
+#: ``at_end`` for a record's last inlier, and for its first: numpy booleans, which type as
+#: ``bool`` (a literal True or False compiles the callee once for each value).
+LAST_END = cast(bool, np.bool_(True))
+FIRST_END = cast(bool, np.bool_(False))
 #: The columns of :attr:`LineTable.geo`.
 CY, CZ, UY, UZ, RMS = range(5)
 #: The columns of :attr:`LineTable.span`.
@@ -252,7 +257,7 @@ def point(tb, r, t):
 def end(tb, r, at_end):
     """As ``Line.end``: half a spacing beyond the last (first) inlier."""
     half = 0.5 * step(tb, r, at_end)
-    t = t_end(tb, r, True) + half if at_end else t_end(tb, r, False) - half
+    t = t_end(tb, r, LAST_END) + half if at_end else t_end(tb, r, FIRST_END) - half
     return point(tb, r, t)
 
 
@@ -308,7 +313,7 @@ def groups_of(points, tb, n, tol, min_points, min_arm):
     groups = 0
     for i in order:
         line = line_of(geo, i)
-        t0, t1 = t_end(tb, i, False), t_end(tb, i, True)
+        t0, t1 = t_end(tb, i, FIRST_END), t_end(tb, i, LAST_END)
         joined = -1
         for k in range(groups):
             if holds(line_of(geo, anchor[k]), line, t0, t1, COS_GROUP, tol):
@@ -340,7 +345,7 @@ def groups_of(points, tb, n, tol, min_points, min_arm):
                     at += c
             r = add_fit(points, tb, sort_small(sel))  # pieces in column order: sorted
         c = span[r, COUNT]
-        extent = t_end(tb, r, True) - t_end(tb, r, False) if c else 0.0
+        extent = t_end(tb, r, LAST_END) - t_end(tb, r, FIRST_END) if c else 0.0
         if c >= min_points and extent >= min_arm:
             out[kept] = r
             kept += 1
@@ -421,7 +426,7 @@ def _candidates(tb, groups, n, min_points, min_arm):
         c = tb.span[k, COUNT]
         if grouped:
             continue
-        if c >= min_points and t_end(tb, k, True) - t_end(tb, k, False) >= min_arm:
+        if c >= min_points and t_end(tb, k, LAST_END) - t_end(tb, k, FIRST_END) >= min_arm:
             extra[e] = k
             e += 1
     cand = np.empty(groups.shape[0] + e, dtype=np.int64)
@@ -555,9 +560,9 @@ def corner_with(tb, line, at_end, others, spacing, tol):
         if other == line:
             continue
         there = line_of(geo, other)
-        wide = pmax(pmax(step(tb, other, True), step(tb, other, False)), spacing)
+        wide = pmax(pmax(step(tb, other, LAST_END), step(tb, other, FIRST_END)), spacing)
         c = corner_near(
-            here, tip_y, tip_z, there, t_end(tb, other, False), t_end(tb, other, True),
+            here, tip_y, tip_z, there, t_end(tb, other, FIRST_END), t_end(tb, other, LAST_END),
             COS_CORNER, reach, best_d, 3.0 * wide + tol,
         )  # fmt: skip
         if c.found:
