@@ -23,6 +23,7 @@ from numpy.typing import NDArray
 from seamtrack.features.arrays import FloatArray, IntArray
 from seamtrack.features.line_geometry import fit_points, fit_range
 from seamtrack.features.robust import KEPT, FrontOut, FrontParams, robust_front
+from seamtrack.jit import KERNEL
 
 
 class PieceTable(NamedTuple):
@@ -108,7 +109,7 @@ def buffer_layout(n: int, max_lines: int) -> BufferLayout:
     )
 
 
-_buffer_layout = numba.njit(cache=True, nogil=True)(buffer_layout)
+_buffer_layout = numba.njit(**KERNEL)(buffer_layout)
 
 
 class Segmentation(NamedTuple):
@@ -129,7 +130,7 @@ class Segmentation(NamedTuple):
 
 
 # ----------------------------------------------------------------------- split and merge
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _cost(n: float, s1: float, s2: float, s3: float, s4: float, s5: float) -> float:
     n = max(n, 1.0)
     cyy = s3 - s1 * s1 / n
@@ -140,7 +141,7 @@ def _cost(n: float, s1: float, s2: float, s3: float, s4: float, s5: float) -> fl
     return max(0.5 * (cyy + czz) - math.sqrt(h * h + cyz * cyz), 0.0)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _best_split(
     p: FloatArray, lo: int, hi: int, min_size: int, pre: FloatArray, cost: FloatArray
 ) -> Split:
@@ -188,7 +189,7 @@ def _best_split(
     return Split(best_b, best, single)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def best_split(p: FloatArray, lo: int, hi: int, min_size: int) -> Split:
     """Best split of ``p[lo:hi]`` into two lines (:class:`Split`), total-least-squares sums
     of squared residuals for every split from prefix sums (O(n)); ``at`` counts from ``lo``."""
@@ -196,7 +197,7 @@ def best_split(p: FloatArray, lo: int, hi: int, min_size: int) -> Split:
     return _best_split(p, lo, hi, min_size, np.empty((6, k)), np.empty(k))
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _split(
     p: FloatArray, lo: int, hi: int, tol: float, limit: int, out_lo: IntArray, out_hi: IntArray
 ) -> int:
@@ -245,7 +246,7 @@ def _split(
     return no
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _merge(p: FloatArray, lo: IntArray, hi: IntArray, n: int, tol: float) -> int:
     """Join neighbouring pieces whose union fits one line within ``tol`` (in place); the
     number of pieces left."""
@@ -266,7 +267,7 @@ def _merge(p: FloatArray, lo: IntArray, hi: IntArray, n: int, tol: float) -> int
     return k + 1
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _refit(
     p: FloatArray,
     a: int,
@@ -300,7 +301,7 @@ def _refit(
     return n
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _corner_cuts(
     p: FloatArray, run_lo: IntArray, run_hi: IntArray, n: int, pre: FloatArray, cost: FloatArray
 ) -> None:
@@ -313,7 +314,7 @@ def _corner_cuts(
             run_hi[j], run_lo[j + 1] = cut - 1, cut
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _kink_cuts(
     p: FloatArray, a: int, b: int, first: bool, last: bool, min_points: int, significant: float,
     min_kink_rad: float, pre: FloatArray, cost: FloatArray, cuts: IntArray,
@@ -344,7 +345,7 @@ def _kink_cuts(
     return nc
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _add_cut_piece(
     a: int, b: int, cuts: IntArray, nc: int, all_lo: IntArray, all_hi: IntArray, total: int
 ) -> int:
@@ -360,7 +361,7 @@ def _add_cut_piece(
     return total
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _trimmed_refits(
     p: FloatArray, all_lo: IntArray, all_hi: IntArray, total: int, trim: float, min_points: int,
     out: PieceTable,
@@ -383,7 +384,7 @@ def _trimmed_refits(
     return k
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _pieces(
     p: FloatArray,
     runs: IntArray,
@@ -445,7 +446,7 @@ def _pieces(
     return PieceCount(SEGMENTED if k else NO_PIECE, k)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def segment(
     points: FloatArray,
     valid: NDArray[np.bool_],

@@ -20,6 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.features.arrays import FloatArray, IntArray
+from seamtrack.jit import KERNEL
 
 #: Buckets of the counting passes (of ``hist``: twice as many, two counts interleaved).
 BUCKETS = 128
@@ -34,7 +35,7 @@ _ZERO = cast(int, np.int64(0))
 _SAMPLE = cast(int, np.int64(31))
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def sort_small(x: NDArray[Any]) -> NDArray[Any]:
     """Sort ``x`` in place by insertion (stable; few values, or runs already in order: the
     generic sorts cost seconds of compile time for nothing here); ``x``."""
@@ -48,13 +49,13 @@ def sort_small(x: NDArray[Any]) -> NDArray[Any]:
     return x
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _sorted_kth(w: IntArray, c: int, k: int) -> int:
     """The k-th smallest of ``w[:c]`` by insertion sort (few values)."""
     return sort_small(w[:c])[k]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _kth_bits(w: IntArray, c: int, k: int, hist: IntArray) -> int:
     """The k-th smallest of the non-negative integers ``w[:c]`` (reordered): bucketed by
     their spread into :data:`BUCKETS` counts, keeping the bucket that holds it, until a
@@ -88,7 +89,7 @@ def _kth_bits(w: IntArray, c: int, k: int, hist: IntArray) -> int:
     return _sorted_kth(w, c, k)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def kth_nonneg(x: FloatArray, n: int, k: int, work: IntArray, hist: IntArray) -> float:
     """The k-th smallest of ``x[:n]`` (``np.sort(x[:n])[k]``, ``0 <= k < n``), for values
     that are all ``+0.0`` or positive and finite (absolute values; not -0.0, not NaN).

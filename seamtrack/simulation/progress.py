@@ -19,6 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack import constants
+from seamtrack.jit import KERNEL
 
 FloatArray = NDArray[np.float64]
 
@@ -26,7 +27,7 @@ _AT_REST = constants.AT_REST_SPEED_MM_S
 _EPS = constants.PROGRESS_EPS_MM
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def _interp(x: float, knots: FloatArray, values: FloatArray) -> float:
     """``np.interp(x, knots, values)`` for one x inside [knots[0], knots[-1]]."""
     n = len(knots)
@@ -44,7 +45,7 @@ def _interp(x: float, knots: FloatArray, values: FloatArray) -> float:
     return float(result)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def closest_in_window(
     points: FloatArray,
     knots: FloatArray,
@@ -131,7 +132,7 @@ class ProgressTracker:
             window_mm *= 2.0
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def progress_near(
     points: FloatArray, knots: FloatArray, columns: FloatArray, q: FloatArray, hint: float,
     length: float,
@@ -171,7 +172,7 @@ PROGRESS_FIELDS = 12
 GO_ON, AT_REST_END, CLOSED_END, NO_PROGRESS = 0, 1, 2, 3
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def progress_check(
     P: FloatArray, t: float, x: float, y: float, z: float, speed: float, points: FloatArray,
     knots: FloatArray, columns: FloatArray,

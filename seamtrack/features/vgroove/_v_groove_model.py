@@ -58,6 +58,7 @@ from seamtrack.features.vgroove._v_search import (
     point,
     search,
 )
+from seamtrack.jit import KERNEL
 
 #: A bevel within this angle of a plate runs along it (deg): a quarter of the flattest V's
 #: opening off the straight (150 deg included: bevels 15 deg off the plates).
@@ -118,7 +119,7 @@ class SidePlates(NamedTuple):
     far: int
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def group_of(tb, piece, groups):
     """The group (collinear pieces joined) that holds record ``piece``, else the piece."""
     if piece == NONE:
@@ -130,7 +131,7 @@ def group_of(tb, piece, groups):
     return piece
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def plates_beside(points, tb, groups, arm, met, lo, hi, left, right, lo_l):
     """The plates beside bevel ``arm`` among kept points ``lo:hi``, as two records
     (:class:`SidePlates`; -1: none). A plate turns away from its bevel (pieces along the
@@ -178,7 +179,7 @@ def plates_beside(points, tb, groups, arm, met, lo, hi, left, right, lo_l):
     return SidePlates(largest, NONE) if met == NONE else SidePlates(met, largest)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _steep_beside(tb, own, other, arm):
     """A side with no plate of its own (``own``) running along the other side's plate."""
     if own.near != NONE:
@@ -189,7 +190,7 @@ def _steep_beside(tb, own, other, arm):
     return False
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _refused(code, root_share=math.nan):
     """A :class:`VGrooveResult` that says why there is no groove (called with an int64
     ``code`` and a float: one compiled signature, where a literal code compiles one a code)."""
@@ -197,7 +198,7 @@ def _refused(code, root_share=math.nan):
     return VGrooveResult(code, nan, nan, nan, nan, nan, nan, nan, nan, nan, nan, nan, root_share)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _others(tb, n, min_points, left, right):
     """The lines a bevel may meet at a corner: the pieces with ``min_points`` inliers, and
     the two bevels."""
@@ -211,7 +212,7 @@ def _others(tb, n, min_points, left, right):
     return others[: k_others + 2]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _covered_root(points, tb, n, bevels, ends, ref_l, ref_r, tol, spacing, sigma):
     """The root ends where a stray line covers one (:func:`~._v_root.covered_end`): a
     covered end is at least where the bevel is last seen; the shallower root end goes down
@@ -241,7 +242,7 @@ def _covered_root(points, tb, n, bevels, ends, ref_l, ref_r, tol, spacing, sigma
     return Root(RootEnds(lx, lz, rx, rz), cov_l.covered or cov_r.covered, sure)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _explained(points, surface, tb, bevels, outer_l, outer_r, tol):
     """``explained()``: the share of the surface points on the plates and bevels beside the
     root, the root left out."""
@@ -273,7 +274,7 @@ def _explained(points, surface, tb, bevels, outer_l, outer_r, tol):
     return explained_share(points, surface, zones, fits, 3.0 * tol)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def v_groove(points, stray, columns, runs, tol, sigma, spacing, pieces, params):
     """:meth:`VGrooveExtractor._extract` after segmentation, on the profile's kept points
     (the fields of a :class:`~._v_root.KeptPoints`, loose: numba reads a named tuple from
