@@ -222,7 +222,7 @@ class Scene:
 
 
 # --------------------------------------------------------------------------- numba kernels
-@numba.njit(**KERNEL)
+@numba.njit(**KERNEL, inline="always")
 def _packet_buffer() -> tuple[NDArray[np.float32], NDArray[np.uint32], NDArray[np.int32], int,
                               int]:  # fmt: skip
     """A 64-byte aligned RTCRayHit8 or RTCRayHit16 and its valid mask: float and uint views,
@@ -234,7 +234,7 @@ def _packet_buffer() -> tuple[NDArray[np.float32], NDArray[np.uint32], NDArray[n
             words.ctypes.data, words.ctypes.data + 4 * _WORDS)  # fmt: skip
 
 
-@numba.njit(**KERNEL)
+@numba.njit(**KERNEL, inline="always")
 def _load_ray(
     f: NDArray[np.float32], u: NDArray[np.uint32], j: int, origins: NDArray[Any],
     directions: NDArray[Any], i: int, tnear: float, tfar: float, width: int,

@@ -151,7 +151,7 @@ SP_B, SP_LAM, SP_SIN, SP_COS, SP_H, SP_V, SP_NH, SP_NV, SP_SLACK, SP_COS_MAX_INC
 MISS, OCCLUDED, OUT_OF_RANGE, INCIDENCE = 1, 2, 3, 4  # = seamtrack.sensing.profiles.Reason
 
 
-@numba.njit(**KERNEL)
+@numba.njit(**KERNEL, inline="always")
 def _chip(y: float, z: float, sp: NDArray[np.float64]) -> tuple[float, float, bool]:
     """Laser-plane point to chip coordinates and the field-of-view test."""
     b, lam, s, c = sp[SP_B], sp[SP_LAM], sp[SP_SIN], sp[SP_COS]
@@ -166,7 +166,7 @@ def _chip(y: float, z: float, sp: NDArray[np.float64]) -> tuple[float, float, bo
     return x_c, z_c, inside
 
 
-@numba.njit(**KERNEL)
+@numba.njit(**KERNEL, inline="always")
 def _pixel_center(x_c: float, z_c: float, sp: NDArray[np.float64]) -> tuple[float, float]:
     """The laser-plane point the sensor reports for chip coordinates: snap, triangulate."""
     b, lam, s, c, H, V = sp[SP_B], sp[SP_LAM], sp[SP_SIN], sp[SP_COS], sp[SP_H], sp[SP_V]
@@ -179,7 +179,7 @@ def _pixel_center(x_c: float, z_c: float, sp: NDArray[np.float64]) -> tuple[floa
     return zq * b_over_den, (lam * c - xq * s) * b_over_den
 
 
-@numba.njit(**KERNEL)
+@numba.njit(**KERNEL, inline="always")
 def _mark_miss(
     i: int, points: NDArray[np.float64], reason: NDArray[np.uint8], t_out: NDArray[np.float64],
     face_out: NDArray[np.int64], cos_incidence: NDArray[np.float64], chip: NDArray[np.float64],
@@ -195,7 +195,7 @@ def _mark_miss(
     cos_incidence[i] = np.nan
 
 
-@numba.njit(**KERNEL)
+@numba.njit(**KERNEL, inline="always")
 def _set_shadow_ray(
     k: int, i: int, px: float, py: float, pz: float, vx: float, vy: float, vz: float,
     length: float, offset: float, shadow_origins: NDArray[np.float64],

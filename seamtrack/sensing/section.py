@@ -80,7 +80,7 @@ NO_SEEDS = np.empty(0, dtype=np.int64)
 
 
 # --------------------------------------------------------------------------- the section
-@numba.njit(**KERNEL)
+@numba.njit(**KERNEL, inline="always")
 def _box_outside(
     lo: NDArray[np.float64], hi: NDArray[np.float64], node: int, o: NDArray[np.float64],
     m0: float, m1: float, m2: float,
@@ -95,7 +95,7 @@ def _box_outside(
     return m0 * c0 + m1 * c1 + m2 * c2 - (abs(m0) * h0 + abs(m1) * h1 + abs(m2) * h2)
 
 
-@numba.njit(**KERNEL)
+@numba.njit(**KERNEL, inline="always")
 def _edge_point(
     xa: float, ya: float, za: float, xb: float, yb: float, zb: float
 ) -> tuple[float, float]:  # fmt: skip
@@ -307,7 +307,7 @@ def _visit(
     return leaves, found
 
 
-@numba.njit(**KERNEL)
+@numba.njit(**KERNEL, inline="always")
 def _box_distance2(
     lo: NDArray[np.float64], hi: NDArray[np.float64], node: int, o: NDArray[np.float64]
 ) -> float:  # fmt: skip
