@@ -140,18 +140,22 @@ class CompileTimes:
 
 
 def kernel_compile_cpu(top: int = 12) -> None:
-    """Run the demo in this process (the warming child off) and print the compile CPU, in all
-    and of the ``top`` kernels by inclusive time, and every kernel compiled more than once.
-    Start it with an empty ``NUMBA_CACHE_DIR`` (:func:`main` does)."""
-    from seamtrack.cli.main import main as cli_main
+    """Build and run the demo's scene in this process (the warming child off; as ``seamtrack
+    run`` does, without writing its outputs) and print the compile CPU, in all and of the
+    ``top`` kernels by inclusive time, and every kernel compiled more than once. Start it with
+    an empty ``NUMBA_CACHE_DIR`` (:func:`main` does)."""
+    from seamtrack.simulation.assemble import build_parts
+    from seamtrack.simulation.loop import run
+    from seamtrack.simulation.scene import load_scene
 
     os.environ["SEAMTRACK_PARALLEL_COMPILE"] = "0"
     times = CompileTimes()
     times.register()
     start = time.process_time()
-    cli_main(["run", *DEMO_ARGS, "--out", tempfile.mkdtemp(), "--force", "--quiet", "--no-plot"])
+    run(build_parts(load_scene(DEMO_ARGS[0], [DEMO_ARGS[2]])))
     print(f"run {time.process_time() - start:.1f} CPU s, compiling "
-          f"{sum(times.exclusive.values()):.1f} CPU s ({len(times.count)} kernels), "
+          f"{sum(times.exclusive.values()):.1f} CPU s ({len(times.count)} kernels, "
+          f"{sum(k.startswith('seamtrack.') for k in times.count)} of them seamtrack's), "
           f"1-min load {os.getloadavg()[0]:.2f}")  # fmt: skip
     for name, spent in sorted(times.inclusive.items(), key=lambda x: -x[1])[:top]:
         print(f"  {spent:6.2f} s inclusive {times.exclusive[name]:6.2f} s own  {name}")
