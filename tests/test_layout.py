@@ -22,7 +22,16 @@ ROOT = Path(seamtrack.__file__).parent
 
 #: The pipeline, bottom first: a module may import its own stage and the stages below it.
 STAGES = [
-    ("base", {"seamtrack.errors", "seamtrack.constants", "seamtrack._version", "seamtrack.params"}),
+    (
+        "base",
+        {
+            "seamtrack.errors",
+            "seamtrack.constants",
+            "seamtrack._version",
+            "seamtrack.params",
+            "seamtrack.jit",
+        },
+    ),
     ("geometry", {"seamtrack.geometry"}),
     ("heat", {"seamtrack.heat"}),  # the arc's temperature field and the distortion it drives
     ("workpiece", {"seamtrack.workpiece", "seamtrack.cad"}),

@@ -14,7 +14,7 @@ from seamtrack.control.trajectory import TrajectoryTracker
 from seamtrack.geometry.seam import Seam
 from seamtrack.simulation.assemble import build_parts
 from seamtrack.simulation.loop import run
-from seamtrack.simulation.progress import ProgressTracker, progress_near
+from seamtrack.simulation.progress import DOT_NORM, NEAR_WINDOW_MM, ProgressTracker, progress_near
 from seamtrack.simulation.scene import load_scene
 
 #: The paper's curve, 25 mm of it: about 5 s simulated, with a corner envelope and an end.
@@ -106,5 +106,5 @@ def test_progress_kernel_is_seam_closest_near(seam: Seam) -> None:
             hint = float(rng.choice(seam.arc_length_mm))
         assert kernel.closest_near(point.tolist(), hint) == seam.closest_near(point, hint)
         args = (kernel.points, kernel.knots, kernel.columns, point, hint, seam.length_mm)
-        compiled = progress_near(*args)
+        compiled = progress_near(*args, NEAR_WINDOW_MM, DOT_NORM)
         assert compiled == seam.closest_near(point, hint)  # the loop's checks, compiled

@@ -29,8 +29,9 @@ class Probe:
         return kernel(np.nan_to_num(profile.points_laser[:, 0]))
 """
 
-#: Run in a fresh process with an empty NUMBA_CACHE_DIR: warm the probe in a child, wait for it,
-#: then call it in the parent; print the parent's cache hits and misses.
+#: Run in a fresh process with an empty NUMBA_CACHE_DIR: warm the probe in a child, wait for it
+#: (``waitpid``, or ``wait_warmed`` on its reaper when ``reap``), then call it in the parent; print
+#: the parent's cache hits and misses.
 CHILD_THEN_PARENT = """
 import os
 from seamtrack.features import warm
@@ -41,10 +42,14 @@ from warm_probe import Probe
 sensor = preset("paper")
 find = Probe()
 assert warm.cache_cold(find), "the cache should start empty"
-pid = warm.start_warming(find, "lap", sensor, 64, reap=False)
+REAP = {reap}
+pid = warm.start_warming(find, "lap", sensor, 64, reap=REAP)
 assert pid is not None, "no child started"
-_, status = os.waitpid(pid, 0)
-assert os.waitstatus_to_exitcode(status) == 0
+if REAP:  # as a run does: its reaper thread waits, the first extraction waits for it
+    warm.wait_warmed(pid)
+else:
+    _, status = os.waitpid(pid, 0)
+    assert os.waitstatus_to_exitcode(status) == 0
 assert not warm.cache_cold(find), "the child wrote no cache index"
 profile, _ = synthetic_profile("lap", sensor, rays=64)
 find(profile)
@@ -55,7 +60,8 @@ print(len(used), hits, misses)
 """
 
 
-def test_warm_child_fills_the_cache_the_parent_reads(tmp_path):
+@pytest.mark.parametrize("reap", [False, True])
+def test_warm_child_fills_the_cache_the_parent_reads(tmp_path, reap):
     if not hasattr(os, "fork"):
         pytest.skip("no os.fork on this platform")
     (tmp_path / "warm_probe.py").write_text(PROBE)
@@ -63,7 +69,10 @@ def test_warm_child_fills_the_cache_the_parent_reads(tmp_path):
            "PYTHONPATH": os.pathsep.join([str(tmp_path), *sys.path])}  # fmt: skip
     env.pop(warm.SWITCH, None)
     done = subprocess.run(
-        [sys.executable, "-c", CHILD_THEN_PARENT], env=env, capture_output=True, text=True
+        [sys.executable, "-c", CHILD_THEN_PARENT.format(reap=reap)],
+        env=env,
+        capture_output=True,
+        text=True,
     )
     assert done.returncode == 0, done.stderr
     used, hits, misses = (int(x) for x in done.stdout.split())

@@ -98,3 +98,91 @@ def bench_firstrun(out_dir: str | Path, quick: bool = False) -> dict[str, Any]:
     (out / "firstrun.json").write_text(json.dumps(result, indent=2) + "\n")
     (out / "firstrun.md").write_text(firstrun_table(result))
     return result
+
+
+class CompileTimes:
+    """Per-kernel compile CPU seconds from numba's ``numba:compile`` events, while registered
+    (:meth:`register`): ``inclusive`` (the kernels compiled on the way counted too),
+    ``exclusive`` (not) and ``count`` (compilations: more than one is a kernel compiled for
+    more than one signature), each keyed by the kernel's ``module.qualname``."""
+
+    def __init__(self) -> None:
+        self.inclusive: dict[str, float] = {}
+        self.exclusive: dict[str, float] = {}
+        self.count: dict[str, int] = {}
+        self._stack: list[list[Any]] = []
+
+    def register(self) -> Any:
+        """Start listening; returns the listener (``numba.core.event.unregister`` it)."""
+        from numba.core import event
+
+        times = self
+
+        class _Listener(event.Listener):
+            def on_start(self, ev: Any) -> None:
+                fn = ev.data["dispatcher"].py_func
+                times._stack.append(
+                    [f"{fn.__module__}.{fn.__qualname__}", time.process_time(), 0.0]
+                )
+
+            def on_end(self, ev: Any) -> None:
+                name, start, inner = times._stack.pop()
+                spent = time.process_time() - start
+                times.inclusive[name] = times.inclusive.get(name, 0.0) + spent
+                times.exclusive[name] = times.exclusive.get(name, 0.0) + spent - inner
+                times.count[name] = times.count.get(name, 0) + 1
+                if times._stack:
+                    times._stack[-1][2] += spent
+
+        listener = _Listener()
+        event.register("numba:compile", listener)
+        return listener
+
+
+def kernel_compile_cpu(top: int = 12) -> None:
+    """Build and run the demo's scene in this process (the warming child off; as ``seamtrack
+    run`` does, without writing its outputs) and print the compile CPU, in all and of the
+    ``top`` kernels by inclusive time, and every kernel compiled more than once. Start it with
+    an empty ``NUMBA_CACHE_DIR`` (:func:`main` does)."""
+    from seamtrack.simulation.assemble import build_parts
+    from seamtrack.simulation.loop import run
+    from seamtrack.simulation.scene import load_scene
+
+    os.environ["SEAMTRACK_PARALLEL_COMPILE"] = "0"
+    times = CompileTimes()
+    times.register()
+    start = time.process_time()
+    run(build_parts(load_scene(DEMO_ARGS[0], [DEMO_ARGS[2]])))
+    print(f"run {time.process_time() - start:.1f} CPU s, compiling "
+          f"{sum(times.exclusive.values()):.1f} CPU s ({len(times.count)} kernels, "
+          f"{sum(k.startswith('seamtrack.') for k in times.count)} of them seamtrack's), "
+          f"1-min load {os.getloadavg()[0]:.2f}")  # fmt: skip
+    for name, spent in sorted(times.inclusive.items(), key=lambda x: -x[1])[:top]:
+        print(f"  {spent:6.2f} s inclusive {times.exclusive[name]:6.2f} s own  {name}")
+    for name, n in times.count.items():
+        if n > 1:
+            print(f"  compiled {n} times: {name}")
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m seamtrack.bench.firstrun --kernels``: the demo's compile CPU per kernel, in a
+    fresh process with an empty numba cache."""
+    import argparse
+
+    parser = argparse.ArgumentParser(prog="python -m seamtrack.bench.firstrun")
+    parser.add_argument("--kernels", action="store_true", help="compile CPU per kernel")
+    parser.add_argument("--top", type=int, default=12, help="kernels listed")
+    parser.add_argument("--here", action="store_true", help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    if args.here:
+        kernel_compile_cpu(args.top)
+    elif args.kernels:
+        with tempfile.TemporaryDirectory(prefix="seamtrack-kernels-") as tmp:
+            env = {**os.environ, "NUMBA_CACHE_DIR": tmp}
+            command = [sys.executable, "-m", "seamtrack.bench.firstrun", "--here"]
+            subprocess.run([*command, "--top", str(args.top)], env=env, check=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -29,6 +29,7 @@ from seamtrack.control.closed_form import KIND_NONE, mul, mul_into, rodrigues_in
 from seamtrack.control.closed_form_nearest import ik_nearest_in
 from seamtrack.control.robot import axes_step
 from seamtrack.control.servo import loops_step
+from seamtrack.jit import KERNEL
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -112,13 +113,13 @@ class ArmData(NamedTuple):
     work: FloatArray
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def rotation_about(axis: FloatArray, angle: float, out: FloatArray) -> None:
     """``out`` (3, 3) = rotation by ``angle`` about the unit ``axis`` (Rodrigues)."""
     rodrigues_into(axis[0], axis[1], axis[2], angle, out)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def exp3(w: FloatArray) -> FloatArray:
     """(3, 3) rotation of the rotation vector ``w`` (rad)."""
     angle = math.sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2])
@@ -129,7 +130,7 @@ def exp3(w: FloatArray) -> FloatArray:
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _turn(wx: float, wy: float, wz: float, R: FloatArray, tmp: FloatArray) -> None:
     """R = exp3(w) @ R in place (``tmp``: a 3 x 3 scratch)."""
     angle = math.sqrt(wx * wx + wy * wy + wz * wz)
@@ -142,7 +143,7 @@ def _turn(wx: float, wy: float, wz: float, R: FloatArray, tmp: FloatArray) -> No
             R[i, j] = tmp[i, 0] * a + tmp[i, 1] * b + tmp[i, 2] * c
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def mul_t(A: FloatArray, B: FloatArray) -> FloatArray:
     """A @ B.T for 3 x 3 matrices."""
     out = np.empty((3, 3))
@@ -150,14 +151,14 @@ def mul_t(A: FloatArray, B: FloatArray) -> FloatArray:
     return out
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def _mul_t_into(A: FloatArray, B: FloatArray, out: FloatArray) -> None:
     for i in range(3):
         for j in range(3):
             out[i, j] = A[i, 0] * B[j, 0] + A[i, 1] * B[j, 1] + A[i, 2] * B[j, 2]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _log3_into(R: FloatArray, out: FloatArray) -> None:
     """``out`` = :func:`log3` of R (its arithmetic; near pi, its call)."""
     tr = R[0, 0] + R[1, 1] + R[2, 2]
@@ -174,7 +175,7 @@ def _log3_into(R: FloatArray, out: FloatArray) -> None:
         out[:] = log3(R)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def log3(R: FloatArray) -> FloatArray:
     """(3,) rotation vector (axis times angle, rad) of a rotation matrix, accurate near 0 and
     near pi (Pinocchio's ``log3`` to rounding)."""
@@ -204,7 +205,7 @@ def log3(R: FloatArray) -> FloatArray:
     return out * (angle / norm)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def chain_fk(
     q: FloatArray, place: FloatArray, axes: FloatArray, kinds: IntArray, index: IntArray,
     frames: FloatArray,
@@ -238,7 +239,7 @@ def chain_fk(
     mul_into(frames[m - 1], place[m], frames[m])
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def chain_jacobian(
     q: FloatArray, place: FloatArray, axes: FloatArray, kinds: IntArray, index: IntArray,
     frames: FloatArray, J: FloatArray,
@@ -267,7 +268,7 @@ def chain_jacobian(
             J[0, j], J[1, j], J[2, j] = w[0], w[1], w[2]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def spd_solve(A: FloatArray, b: FloatArray) -> FloatArray:
     """x with A x = b for a symmetric positive definite A (Cholesky); NaN where it is not."""
     n = A.shape[0]
@@ -298,7 +299,7 @@ def spd_solve(A: FloatArray, b: FloatArray) -> FloatArray:
     return x
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def newton_ik(
     p_set: FloatArray, R_set: FloatArray, q0: FloatArray, place: FloatArray, axes: FloatArray,
     kinds: IntArray, index: IntArray, steps: int,
@@ -330,7 +331,7 @@ def newton_ik(
     return q
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def solve_pose(
     p_set: FloatArray, R_set: FloatArray, q_near: FloatArray, solver: int, geo: FloatArray,
     place: FloatArray, axes: FloatArray, kinds: IntArray, index: IntArray, out: FloatArray,
@@ -349,7 +350,7 @@ def solve_pose(
     out[:] = newton_ik(p_set, R_set, q_near, place, axes, kinds, index, 3)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def arm_step(model: ArmModel, data: ArmData) -> None:
     """One control tick of an arm (``data`` updated in place): the interpolator, the
     orientation set-point, the inverse kinematics, the joint limits, the servo and the forward
@@ -378,7 +379,7 @@ def arm_step(model: ArmModel, data: ArmData) -> None:
     _servo_and_measure(model, data, new_ref, dt)
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def _goal_velocity(par: FloatArray, data: ArmData) -> tuple[float, float, float]:
     """The orientation set-point's commanded angular velocity: towards the goal (a new goal
     from the command, or the goal turned by the command's feed-forward), proportional to the
@@ -411,7 +412,7 @@ def _goal_velocity(par: FloatArray, data: ArmData) -> tuple[float, float, float]
     return wx, wy, wz
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def _orientation_step(par: FloatArray, data: ArmData, has: bool) -> None:
     """The orientation set-point's tick: its angular velocity towards the commanded one
     (:func:`_goal_velocity`; zero without a command), within the angular acceleration limit,
@@ -434,7 +435,7 @@ def _orientation_step(par: FloatArray, data: ArmData, has: bool) -> None:
         _turn(omega[0] * dt, omega[1] * dt, omega[2] * dt, data.rot[0], tmp)
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def _joint_limits(jl: FloatArray, data: ArmData, q: FloatArray, dt: float) -> FloatArray:
     """The joint set-point moved towards the inverse kinematics' joints ``q`` within the
     joints' velocity and acceleration limits (all joints scaled together, so the tool keeps
@@ -481,7 +482,7 @@ def _joint_limits(jl: FloatArray, data: ArmData, q: FloatArray, dt: float) -> Fl
     return new_ref
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def _servo_and_measure(model: ArmModel, data: ArmData, new_ref: FloatArray, dt: float) -> None:
     """The joint servo on the new set-point (held for the interpolation's ticks), then the
     measured joints' forward kinematics: the torch tip's position and velocity (mm) and
@@ -509,7 +510,7 @@ def _servo_and_measure(model: ArmModel, data: ArmData, new_ref: FloatArray, dt: 
     data.rot[2] = T[:3, :3]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def chain_figures(
     joints: FloatArray, place: FloatArray, axes: FloatArray, kinds: IntArray, index: IntArray,
     a: int, b: int, wrist: FloatArray, jacobians: FloatArray,

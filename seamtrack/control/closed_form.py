@@ -37,6 +37,8 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.jit import KERNEL
+
 FloatArray = NDArray[np.float64]
 
 #: Which solver an arm's inverse kinematics uses.
@@ -52,13 +54,13 @@ SINGULAR_SIN = 1e-10
 _TWO_PI = 2.0 * math.pi
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def nearest_turn(x: float, ref: float) -> float:
     """x turned by whole turns to the nearest of ``ref``."""
     return x + _TWO_PI * round((ref - x) / _TWO_PI)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def mul(A: FloatArray, B: FloatArray) -> FloatArray:
     """A @ B for small matrices, in loops (no BLAS call: a 4 x 4 product in ~30 ns)."""
     n, m, p = A.shape[0], A.shape[1], B.shape[1]
@@ -71,7 +73,7 @@ def mul(A: FloatArray, B: FloatArray) -> FloatArray:
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def mul_into(A: FloatArray, B: FloatArray, out: FloatArray) -> None:
     """out = A @ B for small square matrices (no allocation; ``out`` not A or B)."""
     n = A.shape[0]
@@ -83,7 +85,7 @@ def mul_into(A: FloatArray, B: FloatArray, out: FloatArray) -> None:
             out[i, j] = x
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _tmul_into(A: FloatArray, B: FloatArray, out: FloatArray) -> None:
     """out = A.T @ B for 3 x 3 matrices."""
     for i in range(3):
@@ -91,7 +93,7 @@ def _tmul_into(A: FloatArray, B: FloatArray, out: FloatArray) -> None:
             out[i, j] = A[0, i] * B[0, j] + A[1, i] * B[1, j] + A[2, i] * B[2, j]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def rz_left_into(q: float, A: FloatArray, out: FloatArray) -> None:
     """out = Rz(q) @ A (4 x 4)."""
     c, s = math.cos(q), math.sin(q)
@@ -102,7 +104,7 @@ def rz_left_into(q: float, A: FloatArray, out: FloatArray) -> None:
         out[2, j], out[3, j] = A[2, j], A[3, j]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _rz_right(A: FloatArray, q: float, out: FloatArray) -> None:
     """out = A @ Rz(q) (4 x 4)."""
     c, s = math.cos(q), math.sin(q)
@@ -113,7 +115,7 @@ def _rz_right(A: FloatArray, q: float, out: FloatArray) -> None:
         out[i, 2], out[i, 3] = A[i, 2], A[i, 3]
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def rodrigues_into(x: float, y: float, z: float, angle: float, out: FloatArray) -> None:
     """``out`` (3, 3) = the rotation by ``angle`` about the unit axis (x, y, z) (Rodrigues)."""
     c, s = math.cos(angle), math.sin(angle)
@@ -123,12 +125,12 @@ def rodrigues_into(x: float, y: float, z: float, angle: float, out: FloatArray) 
     out[2, 0], out[2, 1], out[2, 2] = t * x * z - s * y, t * y * z + s * x, c + t * z * z
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _rot_into(axis: FloatArray, angle: float, out: FloatArray) -> None:
     rodrigues_into(axis[0], axis[1], axis[2], angle, out)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _rz(q: float) -> FloatArray:
     out = np.eye(4)
     c, s = math.cos(q), math.sin(q)
@@ -136,7 +138,7 @@ def _rz(q: float) -> FloatArray:
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _rot(axis: FloatArray, angle: float) -> FloatArray:
     x, y, z = axis[0], axis[1], axis[2]
     c, s = math.cos(angle), math.sin(angle)
@@ -154,12 +156,12 @@ U_A2, U_A3, U_DLAT, U_S1, U_S4, U_S5 = 80, 81, 82, 83, 84, 85
 UR_FIELDS = 86
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def pose_at(g: FloatArray, at: int) -> FloatArray:
     return g[at : at + 16].reshape(4, 4)
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def ur_joint_1(g: FloatArray, T: FloatArray, ws: FloatArray) -> tuple[bool, float, float]:
     """What every branch of the UR family's solution shares (:func:`_ur_branches`,
     :func:`~seamtrack.control.closed_form_nearest.ik_nearest`): the joint-6 frame ``ws[0]``
@@ -177,7 +179,7 @@ def ur_joint_1(g: FloatArray, T: FloatArray, ws: FloatArray) -> tuple[bool, floa
     return True, math.atan2(py, px), math.asin(s1 * dlat / r)
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def ur_q6(
     q5: float, z1x: float, z1y: float, J6: FloatArray, s4: float, q6_near: float
 ) -> float:  # fmt: skip
@@ -190,7 +192,7 @@ def ur_q6(
     return math.atan2(-zy / (s4 * sn5), zx / (s4 * sn5))
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def ur_planar(
     ws: FloatArray, P6i: FloatArray, P5i: FloatArray, q5: float, q6: float, a2: float,
     a3: float,
@@ -210,7 +212,7 @@ def ur_planar(
     return True, math.atan2(A[1, 0], A[0, 0]), x, y, min(max(c3, -1.0), 1.0)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _ur_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: FloatArray) -> int:
     """UR family: up to 8 joint solutions of the torch pose ``T`` (metres).
 
@@ -257,7 +259,7 @@ W_O3, W_W0, W_S3, W_U1, W_U3, W_B, W_S6, W_R0 = 22, 24, 26, 27, 30, 33, 42, 43
 WRIST_FIELDS = 52
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def wrist_joint_1(
     g: FloatArray, T: FloatArray, ws: FloatArray
 ) -> tuple[bool, float, float, FloatArray]:  # fmt: skip
@@ -284,7 +286,7 @@ def wrist_joint_1(
     return True, math.atan2(b, a), math.acos(min(max(hp / r, -1.0), 1.0)), d
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def wrist_links(g: FloatArray) -> tuple[float, float, float, float]:
     """The spherical wrist arm's planar 2R chain of joints 2 and 3: the link lengths l2, l3
     and their angles g2, g3 in the zero pose."""
@@ -295,7 +297,7 @@ def wrist_links(g: FloatArray) -> tuple[float, float, float, float]:
     return l2, l3, math.atan2(o3y, o3x), math.atan2(w0y - o3y, w0x - o3x)
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def wrist_plane(
     g: FloatArray, ws: FloatArray, d: FloatArray, q1: float, l2: float, l3: float
 ) -> tuple[bool, float, float, float]:  # fmt: skip
@@ -316,7 +318,7 @@ def wrist_plane(
     return True, px, py, min(max(kappa, -1.0), 1.0)
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def wrist_elbow(g: FloatArray, phi3: float, px: float, py: float) -> tuple[float, float]:
     """Joints 2 and 3 that put the wrist centre at (px, py) in the plane of the 2R chain,
     with the elbow at ``phi3``."""
@@ -327,7 +329,7 @@ def wrist_elbow(g: FloatArray, phi3: float, px: float, py: float) -> tuple[float
     return math.atan2(py, px) - math.atan2(vy, vx), g[W_S3] * phi3
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def wrist_rotation(g: FloatArray, ws: FloatArray, q1: float, q2: float, q3: float) -> FloatArray:
     """The rotation a spherical wrist's joints 4-6 are left to make once joints 1-3 are
     known, in the basis (u4, u5, u4 x u5): N = B^T R3^T R R0^T B (``ws[2]``: R R0^T B; ``ws``
@@ -344,7 +346,7 @@ def wrist_rotation(g: FloatArray, ws: FloatArray, q1: float, q2: float, q3: floa
     return ws[6]
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def wrist_456(N: FloatArray, sb: float, sign: float, q4_near: float) -> tuple[float, float, float]:
     """Joints 4 and 5 and joint 6's angle before its sign (c6) of the wrist rotation ``N`` =
     Rx(q4) Ry(q5) Rx(c6), on the branch ``sign`` (sb = |N[0, 1:]|; ``q4_near`` at the
@@ -362,7 +364,7 @@ def wrist_456(N: FloatArray, sb: float, sign: float, q4_near: float) -> tuple[fl
     return q4, q5, c6
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _wrist_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: FloatArray) -> int:
     """Spherical wrist: up to 8 joint solutions of the torch pose ``T`` (metres).
 
@@ -396,7 +398,7 @@ def _wrist_branches(g: FloatArray, T: FloatArray, q_near: FloatArray, out: Float
     return count
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def ik_branches(
     kind: int, g: FloatArray, T: FloatArray, q_near: FloatArray, out: FloatArray
 ) -> int:

@@ -45,11 +45,12 @@ from seamtrack.control.closed_form import (
     wrist_plane,
     wrist_rotation,
 )  # fmt: skip
+from seamtrack.jit import KERNEL
 
 FloatArray = NDArray[np.float64]
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def _ur_q6(
     q5: float, z1x: float, z1y: float, J6: FloatArray, s4: float, q_near: FloatArray,
     t0: float,
@@ -63,7 +64,7 @@ def _ur_q6(
     return q6, (t0 + x4 * x4) + x5 * x5
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def _keep_nearer(
     d: float, key: int, best: float, best_key: int, row: FloatArray,
     v0: float, v1: float, v2: float, v3: float, v4: float, v5: float,
@@ -77,7 +78,7 @@ def _keep_nearer(
     return best, best_key
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _ur_nearest(
     g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatArray, ws: FloatArray
 ) -> bool:
@@ -144,7 +145,7 @@ def _ur_nearest(
     return best_key < 8
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _wrist_nearest(g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatArray) -> bool:
     """:func:`_ur_nearest` for the spherical wrist: :func:`_wrist_branches`' arithmetic per
     branch, joint 1's nearer branch first, then the elbow nearer in joints 2 and 3 (its sum so
@@ -195,7 +196,7 @@ def _wrist_nearest(g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatA
     return best_key < 8
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def _plus_squares(total: float, q_near: FloatArray, j: int, a: float, b: float, c: float) -> float:
     """``total`` plus the squared differences of ``a``, ``b``, ``c`` from joints ``j``,
     ``j + 1``, ``j + 2`` of ``q_near``, added in that order (nearest_branch's sum)."""
@@ -205,7 +206,7 @@ def _plus_squares(total: float, q_near: FloatArray, j: int, a: float, b: float, 
     return total
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def _nearer_first(q1s: tuple[float, float], q_near: float) -> int:
     """Which of joint 1's two solutions lies nearer ``q_near`` (whole turns aside; 0 on a
     tie): the branches through it are worked out first."""
@@ -214,7 +215,7 @@ def _nearer_first(q1s: tuple[float, float], q_near: float) -> int:
     return 0 if not x1 * x1 < x0 * x0 else 1
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def _wrist_elbow(
     g: FloatArray, phi3: float, px: float, py: float, q_near: FloatArray, t0: float
 ) -> tuple[float, float, float]:  # fmt: skip
@@ -227,7 +228,7 @@ def _wrist_elbow(
     return q2, q3, (t0 + x1 * x1) + x2 * x2
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def nearest_branch(branches: FloatArray, count: int, q_near: FloatArray) -> int:
     """The branch (row of ``branches``, already turned by whole turns towards ``q_near``)
     nearest ``q_near`` (sum of squared joint differences); -1 if none."""
@@ -242,7 +243,7 @@ def nearest_branch(branches: FloatArray, count: int, q_near: FloatArray) -> int:
     return best
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def ik_nearest(
     kind: int, g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatArray
 ) -> bool:
@@ -253,7 +254,7 @@ def ik_nearest(
     return ik_nearest_in(kind, g, T, q_near, row, np.empty((6, 4, 4)))
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def ik_nearest_in(
     kind: int, g: FloatArray, T: FloatArray, q_near: FloatArray, row: FloatArray,
     ws: FloatArray,

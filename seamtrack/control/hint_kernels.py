@@ -14,10 +14,12 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.jit import KERNEL
+
 FloatArray = NDArray[np.float64]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def column_medians(a: FloatArray) -> FloatArray:
     """``np.median(a, axis=0)`` of an (m, 3) array (m >= 1), compiled."""
     out = np.empty(a.shape[1])
@@ -26,7 +28,7 @@ def column_medians(a: FloatArray) -> FloatArray:
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def plane_crossings(points: FloatArray, T_world_sensor: FloatArray) -> FloatArray:
     """:func:`~seamtrack.sensing.scan.laser_plane_crossings` compiled (the same half-open
     test and interpolation, equal to rounding): (k, 2) the (y_L, z_L) where the polyline
@@ -57,7 +59,7 @@ def plane_crossings(points: FloatArray, T_world_sensor: FloatArray) -> FloatArra
     return out[:k].copy()
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def _in_plane(point: FloatArray, R: FloatArray, t: FloatArray) -> tuple[float, float]:
     """(y_L, z_L) of a world point: rows 1 and 2 of R^T (point - origin)."""
     d0, d1, d2 = point[0] - t[0], point[1] - t[1], point[2] - t[2]
@@ -107,7 +109,7 @@ def polyline(points: FloatArray, chunked: bool = True) -> Polyline:
     return Polyline(p, a, d, centres, radii)
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def _nearer(
     q0: float, q1: float, q2: float, a: FloatArray, d: FloatArray, c: int, best: float,
     bt: float, bs: int,
@@ -127,7 +129,7 @@ def _nearer(
     return best, bt, bs
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _reused_rows(
     points: FloatArray, last_points: FloatArray, last_near: FloatArray, near: FloatArray
 ) -> int:
@@ -149,7 +151,7 @@ def _reused_rows(
     return k
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def closest_on_polyline(
     points: FloatArray, last_points: FloatArray, last_near: FloatArray, line: Polyline
 ) -> FloatArray:
@@ -191,7 +193,7 @@ def closest_on_polyline(
     return near
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def program_hint(
     T: FloatArray, last: FloatArray, direction: FloatArray, program: Polyline,
     window: FloatArray, last_window: FloatArray, last_near: FloatArray,

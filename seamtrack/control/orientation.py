@@ -23,6 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from seamtrack.geometry.seam import Seam
 from seamtrack.geometry.torch import torch_axis
+from seamtrack.jit import KERNEL
 
 FloatArray = NDArray[np.float64]
 
@@ -33,7 +34,7 @@ CLOSED_TOL_MM = 1e-3
 TURN_RATE_STEP_MM = 0.5
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _point_at(s: float, knots: FloatArray, points: FloatArray, length: float) -> FloatArray:
     """:meth:`Seam.interpolate` at one arc length."""
     x = min(max(s, 0.0), length)
@@ -43,7 +44,7 @@ def _point_at(s: float, knots: FloatArray, points: FloatArray, length: float) ->
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _rotation_at(
     s: float, points: FloatArray, knots: FloatArray, seg_len: FloatArray, normals: FloatArray,
     par: FloatArray,
@@ -84,7 +85,7 @@ def _rotation_at(
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _rotation_vector(R: FloatArray) -> FloatArray:
     """(3,) axis times angle (rad) of a rotation matrix (angle below pi)."""
     v = 0.5 * np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])
@@ -94,7 +95,7 @@ def _rotation_vector(R: FloatArray) -> FloatArray:
     return v * (angle / math.sin(angle))
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def turning_at(
     s: float, speed: float, points: FloatArray, knots: FloatArray, seg_len: FloatArray,
     normals: FloatArray, par: FloatArray,

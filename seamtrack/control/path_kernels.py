@@ -11,6 +11,7 @@ that holds the points in place (no list of arrays to convert at every frame).
 from __future__ import annotations
 
 import math
+from typing import cast
 
 import numba
 import numpy as np
@@ -21,8 +22,12 @@ from seamtrack.control.hint_kernels import closest_on_polyline as closest_on_pol
 from seamtrack.control.hint_kernels import column_medians as column_medians
 from seamtrack.control.hint_kernels import plane_crossings as plane_crossings
 from seamtrack.control.hint_kernels import program_hint as program_hint
+from seamtrack.jit import KERNEL
 
 FloatArray = NDArray[np.float64]
+#: An int64 0: numba types a literal 0 as ``Literal[int](0)`` and compiles the kernel it
+#: reaches once more for it, a loop counter's start too.
+_ZERO = cast(int, np.int64(0))
 
 
 class PathBuffer:
@@ -93,7 +98,7 @@ class PathBuffer:
         self._n -= count
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _fit(
     raw: FloatArray, s: FloatArray, first: int, at: float, w: NDArray[np.bool_], out: FloatArray
 ) -> bool:
@@ -123,7 +128,7 @@ def _fit(
     return ok
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def kth_smallest(a: FloatArray, n: int, k: int) -> float:
     """The ``k``-th smallest (from 0) of ``a[:n]`` (no NaN), by quickselect in place (``a[:n]``
     reordered): the value ``np.partition(a[:n], k)[k]`` gives, without its copy."""
@@ -149,7 +154,7 @@ def kth_smallest(a: FloatArray, n: int, k: int) -> float:
     return a[k]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def smooth_tail(
     raw: FloatArray, path: FloatArray, s: FloatArray, first: int, h: float, min_inlier: float
 ) -> None:
@@ -173,7 +178,7 @@ def smooth_tail(
             w[j] = abs(s[first + j] - at) <= h
             count += w[j]
         _fit(raw, s, first, at, w, line)
-        k = 0
+        k = _ZERO
         for j in range(m):
             ds = s[first + j] - at
             r2 = 0.0
@@ -195,7 +200,7 @@ def smooth_tail(
                 path[t, c] = line[c]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def off_line(window: FloatArray, point: FloatArray) -> float:
     """Distance of ``point`` from the total-least-squares line through the rows of ``window``
     (its centroid and principal direction)."""
@@ -229,7 +234,7 @@ SPEED, ACCEL, DT, END_MARGIN, BRIDGE, GAIN, DIRECTION_FIT = 6, 7, 8, 9, 10, 11, 
 SETPOINT_FIELDS = 13
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def end_direction(path: FloatArray, s: FloatArray, fit_mm: float) -> tuple[float, float, float]:
     """Unit chord of the last ``fit_mm`` of stored path (zero when it has no length)."""
     n = s.shape[0]
@@ -245,7 +250,7 @@ def end_direction(path: FloatArray, s: FloatArray, fit_mm: float) -> tuple[float
     return 0.0, 0.0, 0.0
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def point_at(
     path: FloatArray, s: FloatArray, at: float, fit_mm: float
 ) -> tuple[float, float, float, float, float, float]:
@@ -269,7 +274,7 @@ def point_at(
     return path[i, 0] + k * dx, path[i, 1] + k * dy, path[i, 2] + k * dz, dx, dy, dz
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def corner_speed(env_s: FloatArray, env_v: FloatArray, at: float) -> float:
     """The corner envelope at arc length ``at`` (no limit beyond its last point)."""
     n = env_s.shape[0]
@@ -284,7 +289,7 @@ def corner_speed(env_s: FloatArray, env_v: FloatArray, at: float) -> float:
     return env_v[i] + f * (env_v[i + 1] - env_v[i])
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def setpoint_step(
     sp: FloatArray,
     path: FloatArray,
@@ -325,7 +330,7 @@ def setpoint_step(
     return tx, ty, tz, sp[GAIN] * error, dx * rate, dy * rate, dz * rate, not step > 0.0
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def tracker_hint(
     T: FloatArray, raw: FloatArray, path: FloatArray, s: FloatArray, fit_mm: float,
     last_window: FloatArray, last_near: FloatArray, points: FloatArray, a: FloatArray,
@@ -352,7 +357,7 @@ def tracker_hint(
     return found, y, z, dx, dy, dz, near, window
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def corner_envelope(
     path: FloatArray, s: FloatArray, w: float, a_lat: float, accel: float, speed: float
 ) -> FloatArray:
@@ -395,7 +400,7 @@ def corner_envelope(
 TOO_CLOSE, OFF_PATH, FEW, STORED = 0, 1, 2, 3
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def take_point(
     raw_all: FloatArray, path_all: FloatArray, s_all: FloatArray, lo: int, n: int,
     point: FloatArray, min_spacing: float, max_jump: float, fit_mm: float, sp: FloatArray,
@@ -446,7 +451,7 @@ T_SMOOTH, T_INLIER, T_BUFFER, T_CORNER, T_WINDOW, T_A_LAT, T_ACCEL, T_SPEED = ra
 TAIL_FIELDS = 8
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def store_tail(
     raw: FloatArray, path: FloatArray, s: FloatArray, sp: FloatArray, par: FloatArray,
     env_last: float,

@@ -27,6 +27,7 @@ from numpy.typing import ArrayLike, NDArray
 from seamtrack.control.servo import Servo, ServoState
 from seamtrack.errors import ReachError, SceneError
 from seamtrack.geometry import frames
+from seamtrack.jit import KERNEL
 
 FloatArray = NDArray[np.float64]
 
@@ -80,7 +81,7 @@ class RobotState:
     servo: ServoState | None = None
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def stop_speed(distance: float, accel: float, dt: float) -> float:
     """Largest speed from which braking by ``accel * dt`` per tick stops within ``distance``.
 
@@ -103,7 +104,7 @@ def stop_speed(distance: float, accel: float, dt: float) -> float:
 _VMAX, _AMAX, _LO, _HI, _FREE = 0, 1, 2, 3, 4
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def axes_step(
     q: FloatArray, v: FloatArray, lim: FloatArray, dt: float, has_target: bool,
     tx: float, ty: float, tz: float, speed: float, fx: float, fy: float, fz: float, stop: bool,

@@ -25,12 +25,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.errors import SceneError
+from seamtrack.jit import KERNEL
 
 #: Largest K_v dt allowed: beyond it the discrete position loop overshoots.
 MAX_GAIN_PERIOD = 0.5
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def loops_step(
     q: NDArray[np.float64], v: NDArray[np.float64], held: NDArray[np.float64],
     table: NDArray[np.float64], dt: float,

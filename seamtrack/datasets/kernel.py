@@ -19,6 +19,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.jit import KERNEL
 from seamtrack.sensing.kernels import fan_directions, fan_stripe_finish, fan_stripe_hits
 
 #: A crossing at a segment's end counts for the segment within this fraction of its length
@@ -30,7 +31,7 @@ T_MIN_MM = 1e-9
 NO_HIT = 1e300
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def ray_segment_crossings(
     oy: NDArray[np.float64], oz: NDArray[np.float64], dy: NDArray[np.float64],
     dz: NDArray[np.float64], segs: NDArray[np.float64], t_min: float, t_max: NDArray[np.float64],
@@ -63,7 +64,7 @@ def ray_segment_crossings(
             best[i] = k if take else best[i]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def stripe(
     origin: NDArray[np.float64], rotation: NDArray[np.float64], fan: NDArray[np.float64],
     segs: NDArray[np.float64], sp: NDArray[np.float64], offset: float, quantize: bool,
@@ -137,7 +138,7 @@ def stripe(
     return points, reason, t, face, cos_incidence, directions
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def first_hits(
     origins: NDArray[np.float64], directions: NDArray[np.float64], segs: NDArray[np.float64],
     far: NDArray[np.float64],

@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 
 from seamtrack import constants
 from seamtrack.datasets.kernel import NO_HIT, T_MIN_MM, ray_segment_crossings
+from seamtrack.jit import KERNEL
 from seamtrack.sensing.profiles import Reason
 from seamtrack.sensing.scan import StripeNoise
 from seamtrack.sensing.sensor import LaserLineSensor
@@ -39,7 +40,7 @@ def sensor_constants(sensor: LaserLineSensor) -> FloatArray:
     ])  # fmt: skip
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def _inside(y: float, z: float, k: FloatArray) -> bool:
     """:meth:`LaserLineSensor.in_field_of_view`, term for term."""
     depth = z * k[_COS] + k[_B] * k[_SIN]
@@ -50,7 +51,7 @@ def _inside(y: float, z: float, k: FloatArray) -> bool:
     return abs(x_c) <= 0.5 * k[_H] * k[_SLACK] and abs(z_c) <= 0.5 * k[_V] * k[_SLACK]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _mirrored(
     origin: FloatArray, directions: FloatArray, t: FloatArray, face: NDArray[np.int64],
     segs: FloatArray, rows: NDArray[np.int64], offset: float,
@@ -77,7 +78,7 @@ def _mirrored(
     return start, ray
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _clear_to(q: FloatArray, cam: FloatArray, segs: FloatArray, offset: float) -> NDArray[np.bool_]:
     """Whether each point ``q`` sees the camera ``cam`` past the section (one batch of
     shadow rays, each starting ``offset`` towards the camera)."""
@@ -95,7 +96,7 @@ def _clear_to(q: FloatArray, cam: FloatArray, segs: FloatArray, offset: float) -
     return blocker < 0
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def secondary_points(
     origin: FloatArray, rotation: FloatArray, directions: FloatArray, t: FloatArray,
     face: NDArray[np.int64], segs: FloatArray, k: FloatArray, offset: float,
@@ -161,7 +162,7 @@ def secondary_points(
     return out, seen
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _project(points: FloatArray, idx: NDArray[np.int64], k: FloatArray) -> tuple[
         FloatArray, FloatArray]:  # fmt: skip
     """:meth:`LaserLineSensor.project` of ``points[idx]``."""
@@ -174,7 +175,7 @@ def _project(points: FloatArray, idx: NDArray[np.int64], k: FloatArray) -> tuple
     return x_c, z_c
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _finish(
     points: FloatArray, reason: NDArray[np.uint8], idx: NDArray[np.int64], x_c: FloatArray,
     z_c: FloatArray, k: FloatArray, quantize: bool,

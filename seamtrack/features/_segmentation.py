@@ -14,7 +14,7 @@ so results agree to rounding, not bit for bit.
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import NamedTuple, cast
 
 import numba
 import numpy as np
@@ -23,6 +23,7 @@ from numpy.typing import NDArray
 from seamtrack.features.arrays import FloatArray, IntArray
 from seamtrack.features.line_geometry import fit_points, fit_range
 from seamtrack.features.robust import KEPT, FrontOut, FrontParams, robust_front
+from seamtrack.jit import KERNEL
 
 
 class PieceTable(NamedTuple):
@@ -40,6 +41,11 @@ class PieceTable(NamedTuple):
     fits: FloatArray
     bounds: NDArray[np.intp]
 
+
+#: numba types a literal (``0``) as its own type, ``Literal[int](0)``, and compiles the
+#: kernel it reaches once more for it, a loop counter's start too; these type as int64.
+_ZERO = cast(int, np.int64(0))
+_THREE = cast(int, np.int64(3))
 
 #: The columns of :attr:`PieceTable.fits`.
 FIT_CY, FIT_CZ, FIT_UY, FIT_UZ, FIT_RMS, FIT_FIRST, FIT_LAST = range(7)
@@ -103,7 +109,7 @@ def buffer_layout(n: int, max_lines: int) -> BufferLayout:
     )
 
 
-_buffer_layout = numba.njit(cache=True, nogil=True)(buffer_layout)
+_buffer_layout = numba.njit(**KERNEL)(buffer_layout)
 
 
 class Segmentation(NamedTuple):
@@ -124,7 +130,7 @@ class Segmentation(NamedTuple):
 
 
 # ----------------------------------------------------------------------- split and merge
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _cost(n: float, s1: float, s2: float, s3: float, s4: float, s5: float) -> float:
     n = max(n, 1.0)
     cyy = s3 - s1 * s1 / n
@@ -135,7 +141,7 @@ def _cost(n: float, s1: float, s2: float, s3: float, s4: float, s5: float) -> fl
     return max(0.5 * (cyy + czz) - math.sqrt(h * h + cyz * cyz), 0.0)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _best_split(
     p: FloatArray, lo: int, hi: int, min_size: int, pre: FloatArray, cost: FloatArray
 ) -> Split:
@@ -183,7 +189,7 @@ def _best_split(
     return Split(best_b, best, single)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def best_split(p: FloatArray, lo: int, hi: int, min_size: int) -> Split:
     """Best split of ``p[lo:hi]`` into two lines (:class:`Split`), total-least-squares sums
     of squared residuals for every split from prefix sums (O(n)); ``at`` counts from ``lo``."""
@@ -191,7 +197,7 @@ def best_split(p: FloatArray, lo: int, hi: int, min_size: int) -> Split:
     return _best_split(p, lo, hi, min_size, np.empty((6, k)), np.empty(k))
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _split(
     p: FloatArray, lo: int, hi: int, tol: float, limit: int, out_lo: IntArray, out_hi: IntArray
 ) -> int:
@@ -240,7 +246,7 @@ def _split(
     return no
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _merge(p: FloatArray, lo: IntArray, hi: IntArray, n: int, tol: float) -> int:
     """Join neighbouring pieces whose union fits one line within ``tol`` (in place); the
     number of pieces left."""
@@ -261,7 +267,7 @@ def _merge(p: FloatArray, lo: IntArray, hi: IntArray, n: int, tol: float) -> int
     return k + 1
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _refit(
     p: FloatArray,
     a: int,
@@ -280,7 +286,7 @@ def _refit(
     The arithmetic of :func:`~seamtrack.features.line_geometry.fit_range` and then
     :func:`~seamtrack.features.line_geometry.fit_points` on the inliers."""
     cy, cz, uy, uz = fit_range(p, a, b + 1)
-    n = 0
+    n = _ZERO
     for i in range(a, b + 1):
         if abs(-(p[i, 0] - cy) * uz + (p[i, 1] - cz) * uy) <= trim:
             index[n] = i
@@ -295,7 +301,7 @@ def _refit(
     return n
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _corner_cuts(
     p: FloatArray, run_lo: IntArray, run_hi: IntArray, n: int, pre: FloatArray, cost: FloatArray
 ) -> None:
@@ -304,11 +310,11 @@ def _corner_cuts(
     for j in range(n - 1):
         a, b = run_lo[j], run_hi[j + 1] + 1
         if b - a >= 6:
-            cut = a + _best_split(p, a, b, 3, pre, cost).at
+            cut = a + _best_split(p, a, b, _THREE, pre, cost).at
             run_hi[j], run_lo[j + 1] = cut - 1, cut
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _kink_cuts(
     p: FloatArray, a: int, b: int, first: bool, last: bool, min_points: int, significant: float,
     min_kink_rad: float, pre: FloatArray, cost: FloatArray, cuts: IntArray,
@@ -339,7 +345,7 @@ def _kink_cuts(
     return nc
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _add_cut_piece(
     a: int, b: int, cuts: IntArray, nc: int, all_lo: IntArray, all_hi: IntArray, total: int
 ) -> int:
@@ -355,7 +361,7 @@ def _add_cut_piece(
     return total
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _trimmed_refits(
     p: FloatArray, all_lo: IntArray, all_hi: IntArray, total: int, trim: float, min_points: int,
     out: PieceTable,
@@ -378,7 +384,7 @@ def _trimmed_refits(
     return k
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _pieces(
     p: FloatArray,
     runs: IntArray,
@@ -409,7 +415,7 @@ def _pieces(
     cap = 2 * max_lines + 8
     all_lo = np.empty(cap, dtype=np.int64)
     all_hi = np.empty(cap, dtype=np.int64)
-    total = 0
+    total = _ZERO
     run_lo = np.empty(max_lines + 2, dtype=np.int64)
     run_hi = np.empty(max_lines + 2, dtype=np.int64)
     significant = 30.0 * max(sigma, floor / 5.0) ** 2
@@ -440,7 +446,7 @@ def _pieces(
     return PieceCount(SEGMENTED if k else NO_PIECE, k)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def segment(
     points: FloatArray,
     valid: NDArray[np.bool_],

@@ -14,6 +14,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.features.arrays import FloatArray
+from seamtrack.jit import KERNEL
 
 
 class Crossings(NamedTuple):
@@ -24,7 +25,7 @@ class Crossings(NamedTuple):
     segment: NDArray[np.int64]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def occluded(hits: FloatArray, eye: FloatArray, segs: FloatArray) -> NDArray[np.bool_]:
     """(n,) True where the 2D sight line from a hit to ``eye`` crosses a segment (k, 2, 2);
     the hit's own surface (and a corner's neighbour), crossed at u ~ 0, is skipped."""
@@ -47,7 +48,7 @@ def occluded(hits: FloatArray, eye: FloatArray, segs: FloatArray) -> NDArray[np.
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def cast(origin: FloatArray, dirs: FloatArray, segs: FloatArray) -> Crossings:
     """First crossing of rays o + t d (t > 0) with segments (k, 2, 2) (the lowest index of
     equal t)."""

@@ -11,6 +11,7 @@ from numpy.typing import NDArray
 
 from seamtrack.features.arrays import FloatArray, IntArray
 from seamtrack.features.line_geometry import LineThrough
+from seamtrack.jit import KERNEL
 
 #: The columns of :func:`explained_share`'s zones: first and past-the-end kept point, lines.
 ZONE_LO, ZONE_HI, ZONE_LINES = range(3)
@@ -18,7 +19,7 @@ ZONE_LO, ZONE_HI, ZONE_LINES = range(3)
 LINE_CY, LINE_CZ, LINE_NY, LINE_NZ = range(4)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def explained_share(
     p: FloatArray,
     surface: NDArray[np.bool_],
@@ -57,7 +58,7 @@ def explained_share(
     return good / total if total else 0.0
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def support(
     p: FloatArray, surface: NDArray[np.bool_], line: LineThrough, band: float, x_u: float,
     sign: float, tol: float,

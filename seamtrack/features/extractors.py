@@ -63,6 +63,7 @@ from seamtrack.features.vgroove._v_search import (
     search,
 )
 from seamtrack.features.vgroove.extractor import VGrooveExtractor
+from seamtrack.jit import KERNEL
 from seamtrack.sensing.profiles import Feature, Profile
 
 ENTRY_POINT_GROUP = "seamtrack.extractors"
@@ -137,7 +138,7 @@ class CornerFound(NamedTuple):
     share: float
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _corner_search(
     points: FloatArray, stray: NDArray[np.bool_], tol: float, pieces: Any, params: SearchParams
 ) -> CornerFound:  # fmt: skip

@@ -26,6 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.features.arrays import FloatArray, IntArray
+from seamtrack.jit import KERNEL
 
 
 class Point(NamedTuple):
@@ -133,14 +134,14 @@ class Line:
 
 
 # ----------------------------------------------------------------- total least squares
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def principal_angle(syy: float, szz: float, syz: float) -> float:
     """Angle (rad) of the principal axis of centred second moments: the direction of the
     total-least-squares line (up to its sign)."""
     return 0.5 * math.atan2(2.0 * syz, syy - szz)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def fit_points(p: FloatArray, idx: IntArray, n: int) -> LineFit:
     """Total-least-squares line through ``p[idx[:n]]``: centroid, unit direction (from the
     first point towards the last), rms residual."""
@@ -171,7 +172,7 @@ def fit_points(p: FloatArray, idx: IntArray, n: int) -> LineFit:
     return LineFit(cy, cz, uy, uz, math.sqrt(rr / n))
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def fit_line(p: FloatArray, idx: IntArray) -> LineAlong:
     """Total-least-squares line through ``p[idx]`` (at least one point): :func:`fit_points`
     and the points' coordinates along the line."""
@@ -183,7 +184,7 @@ def fit_line(p: FloatArray, idx: IntArray) -> LineAlong:
     return LineAlong(cy, cz, uy, uz, rms, t)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def fit_spans(p: FloatArray, lo: int, hi: int, lo2: int, hi2: int) -> LineThrough:
     """Total-least-squares line through ``p[lo:hi]`` and ``p[lo2:hi2]``: centroid and unit
     direction (its sign as the principal angle gives it)."""
@@ -209,7 +210,7 @@ def fit_spans(p: FloatArray, lo: int, hi: int, lo2: int, hi2: int) -> LineThroug
     return LineThrough(cy, cz, math.cos(theta), math.sin(theta))
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def fit_range(p: FloatArray, lo: int, hi: int) -> LineThrough:
     """Total-least-squares line through ``p[lo:hi]``: centroid and unit direction (from the
     first point towards the last)."""
@@ -232,7 +233,7 @@ class Crossing(NamedTuple):
     z: float
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def corner_crossing(line: LineThrough, other: LineThrough, cos_min: float) -> Crossing:
     """The crossing of two lines that meet in a corner: their directions more than
     ``acos(cos_min)`` apart (and not parallel); else not found."""
@@ -247,7 +248,7 @@ def corner_crossing(line: LineThrough, other: LineThrough, cos_min: float) -> Cr
     return Crossing(True, cy + s * dy, cz + s * dz)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def end_distance(line: LineThrough, t_first: float, t_last: float, y: float, z: float) -> float:
     """Distance of (y, z) from the nearer of a line's end inliers (at ``t_first`` and
     ``t_last`` along it): whether a corner found on it lies at one of its ends."""
@@ -257,7 +258,7 @@ def end_distance(line: LineThrough, t_first: float, t_last: float, y: float, z: 
     return far if far < near else near
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def holds(
     anchor: LineThrough,
     line: LineThrough,
@@ -291,7 +292,7 @@ class TipCorner(NamedTuple):
     d: float
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def corner_near(
     line: LineThrough, tip_y: float, tip_z: float, other: LineThrough, t_first: float,
     t_last: float, cos_min: float, reach: float, best_d: float, near_max: float,

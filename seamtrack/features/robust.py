@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import NamedTuple
+from typing import NamedTuple, cast
 
 import numba
 import numpy as np
@@ -33,6 +33,7 @@ from seamtrack.features.arrays import FloatArray, IndexArray
 from seamtrack.features.line_geometry import fit_spans
 from seamtrack.features.refusal import Refusal
 from seamtrack.features.select import BUCKETS, kth_nonneg
+from seamtrack.jit import KERNEL
 from seamtrack.sensing.profiles import Profile, Reason
 
 #: The front end's codes (:attr:`Front.code`): points kept; too few valid points; the valid
@@ -82,9 +83,12 @@ TOL_RESOLUTIONS = 3.0
 
 _SIGMA_FROM_SECOND_DIFF = 1.4826 / math.sqrt(6.0)
 _COS_15 = math.cos(math.radians(15.0))
+#: Lag 1 as an int64: numba types a literal 1 as ``Literal[int](1)`` and compiles
+#: :func:`_estimate` once more for it.
+_LAG1 = cast(int, np.int64(1))
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def range_quantum(z: FloatArray) -> float:
     """The range step (mm) when consecutive ranges differ by whole multiples of one step (an
     integer range unit), else 0.
@@ -138,7 +142,7 @@ def range_quantum(z: FloatArray) -> float:
     return 0.0
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def detours(
     p: FloatArray,
     starts: IndexArray,
@@ -287,7 +291,7 @@ class FrontEnd:
     resolution: float
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _estimate(
     z: FloatArray, n: int, lag: int, d: FloatArray, work: IndexArray, hist: IndexArray
 ) -> float:
@@ -299,7 +303,7 @@ def _estimate(
     return _SIGMA_FROM_SECOND_DIFF * kth_nonneg(d, m, m // 2, work, hist)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _noise(
     z: FloatArray, n: int, first: float, d: FloatArray, work: IndexArray, hist: IndexArray
 ) -> float:
@@ -363,7 +367,7 @@ def front_params(
     )
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _bounded_points(
     points: FloatArray, valid: NDArray[np.bool_], max_abs: float, p: FloatArray, z: FloatArray,
     cols: IndexArray,
@@ -378,7 +382,7 @@ def _bounded_points(
     return m
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _column_spacing(
     p: FloatArray, m: int, d: FloatArray, work: IndexArray, hist: IndexArray
 ) -> float:
@@ -394,7 +398,7 @@ def _column_spacing(
     return spacing
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _resolution(params: FrontParams, quantum: float) -> float:
     """The range resolution: the given one, else the range quantum, else the default."""
     if params.resolution_mm != 0.0:
@@ -404,7 +408,7 @@ def _resolution(params: FrontParams, quantum: float) -> float:
     return params.default_resolution
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def median5_of(z: FloatArray, m: int) -> FloatArray:
     """:func:`_median5` of ``z[:m]``: the running median of 5 (edges: the nearest full
     window) by a min/max network."""
@@ -430,7 +434,7 @@ class SpikeSplit(NamedTuple):
     spikes: int
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _drop_spikes(
     p: FloatArray, z: FloatArray, cols: IndexArray, m: int, limit: float, spikes: IndexArray
 ) -> SpikeSplit:
@@ -449,7 +453,7 @@ def _drop_spikes(
     return SpikeSplit(kept, ns)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _jump_runs(p: FloatArray, kept: int, jump: float, runs: IndexArray) -> int:
     """Writes the bounds of the runs of ``p[:kept]`` between steps longer than ``jump`` to
     ``runs`` (0 first, ``kept`` last); returns the number of runs."""
@@ -478,7 +482,7 @@ class FrontOut(NamedTuple):
     stray: NDArray[np.bool_]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def robust_front(
     points: FloatArray, valid: NDArray[np.bool_], params: FrontParams, out: FrontOut
 ) -> FrontScalars:
@@ -506,7 +510,7 @@ def robust_front(
         params.tol_resolutions * resolution if math.isnan(params.min_tol_mm) else params.min_tol_mm
     )
     rounding = q / math.sqrt(12.0)
-    first = _estimate(z, m, 1, d, work, hist) if m > 2 else 0.0
+    first = _estimate(z, m, _LAG1, d, work, hist) if m > 2 else 0.0
     # Isolated outliers against a running median of 5 (edges: the nearest full window).
     limit = max(6.0 * max(first, rounding), 4.0 * floor, 4.0 * spacing)
     kept, ns = _drop_spikes(p, z, cols, m, limit, spikes)
@@ -514,7 +518,7 @@ def robust_front(
     sigma = 0.0
     if kept > 2:
         if ns > 0:
-            first = _estimate(z, kept, 1, d, work, hist)
+            first = _estimate(z, kept, _LAG1, d, work, hist)
         sigma = _noise(z, kept, first, d, work, hist)
     sigma = max(sigma, rounding)
     tol = max(floor, params.sigma_factor * sigma)
@@ -527,7 +531,7 @@ def robust_front(
     return FrontScalars(KEPT, kept, ns, r + 1, sigma, tol, floor, spacing, q, resolution)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def front(points: FloatArray, valid: NDArray[np.bool_], params: FrontParams) -> Front:
     """The front end of :func:`seamtrack.features.robust.front_end` in one pass, with the
     settings ``params`` (:class:`FrontParams`).

@@ -13,13 +13,14 @@ its partitions uneven.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
 import numba
 import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.features.arrays import FloatArray, IntArray
+from seamtrack.jit import KERNEL
 
 #: Buckets of the counting passes (of ``hist``: twice as many, two counts interleaved).
 BUCKETS = 128
@@ -27,9 +28,14 @@ BUCKETS = 128
 _SHIFT = 48
 #: Values sorted directly when this few are left.
 _FEW = 24
+#: numba types a literal (``0``) as its own type, ``Literal[int](0)``, and compiles the
+#: kernel it reaches once more for it, a loop counter's start too; these type as int64.
+_ZERO = cast(int, np.int64(0))
+#: The strided sample that places the first buckets (an int64, as above).
+_SAMPLE = cast(int, np.int64(31))
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def sort_small(x: NDArray[Any]) -> NDArray[Any]:
     """Sort ``x`` in place by insertion (stable; few values, or runs already in order: the
     generic sorts cost seconds of compile time for nothing here); ``x``."""
@@ -43,13 +49,13 @@ def sort_small(x: NDArray[Any]) -> NDArray[Any]:
     return x
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _sorted_kth(w: IntArray, c: int, k: int) -> int:
     """The k-th smallest of ``w[:c]`` by insertion sort (few values)."""
     return sort_small(w[:c])[k]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _kth_bits(w: IntArray, c: int, k: int, hist: IntArray) -> int:
     """The k-th smallest of the non-negative integers ``w[:c]`` (reordered): bucketed by
     their spread into :data:`BUCKETS` counts, keeping the bucket that holds it, until a
@@ -83,7 +89,7 @@ def _kth_bits(w: IntArray, c: int, k: int, hist: IntArray) -> int:
     return _sorted_kth(w, c, k)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def kth_nonneg(x: FloatArray, n: int, k: int, work: IntArray, hist: IntArray) -> float:
     """The k-th smallest of ``x[:n]`` (``np.sort(x[:n])[k]``, ``0 <= k < n``), for values
     that are all ``+0.0`` or positive and finite (absolute values; not -0.0, not NaN).
@@ -102,7 +108,7 @@ def kth_nonneg(x: FloatArray, n: int, k: int, work: IntArray, hist: IntArray) ->
         return work[:1].view(np.float64)[0]
     # The median of a strided sample of 31 places the buckets (an estimate suffices: a value
     # outside the buckets is counted in the first or the last).
-    s = 31
+    s = _SAMPLE
     for i in range(s):
         work[i] = bits[((2 * i + 1) * n) // (2 * s)]
     base = (_sorted_kth(work, s, (k * s) // n) >> _SHIFT) - BUCKETS // 2
@@ -121,7 +127,7 @@ def kth_nonneg(x: FloatArray, n: int, k: int, work: IntArray, hist: IntArray) ->
     while below + hist[kb] + hist[BUCKETS + kb] <= k:
         below += hist[kb] + hist[BUCKETS + kb]
         kb += 1
-    c = 0
+    c = _ZERO
     for i in range(n):
         v = bits[i]
         work[c] = v

@@ -6,9 +6,16 @@ ticks. :func:`start_warming` forks a child that calls the scene's extractor once
 profile of its joint, so numba compiles the extractor's kernels there and writes them to its
 on-disk cache (``cache=True``, the same cache directory: the child inherits the parent's
 environment), while the parent compiles its sensing kernels. When the parent reaches its first
-frame's extraction, numba's dispatcher finds the child's kernels in the cache and loads them
-instead of compiling (where the child is not done yet, the parent compiles as it would have;
-the results are the same either way: the kernels are the same code).
+frame's extraction it waits for the child (:func:`wait_warmed`, at most :data:`WAIT_S`), then
+numba's dispatchers find the child's kernels in the cache and load them instead of compiling.
+
+Without that wait the parent compiled, at its first frame, every extractor kernel the child had
+not saved yet: the same kernels twice at once (the child, which started first, still finished
+first, so the parent gained nothing), and two processes saving the same cache indexes; numba
+saves an index by reading it, adding its entry and writing it back, so an entry the other
+process added in between could be lost (a kernel compiled again by the next run). Where the
+wait times out the parent compiles as it would have: the results are the same either way, the
+kernels being the same code.
 
 The child only warms the cache: it writes no output, prints nothing, and its result is thrown
 away. It starts only when the cache is cold (an extractor kernel's cache index is missing) and
@@ -29,6 +36,14 @@ from seamtrack.sensing.sensor import LaserLineSensor
 
 #: ``SEAMTRACK_PARALLEL_COMPILE=0`` turns the warming child off.
 SWITCH = "SEAMTRACK_PARALLEL_COMPILE"
+
+#: How long the parent waits for its warming child at its first extraction (s): the child
+#: takes about a minute on a quiet 2-core machine, three on a busy one; past this the parent
+#: compiles what it still needs itself.
+WAIT_S = 300.0
+
+#: The reaping threads of the warming children this process started, by pid.
+_reapers: dict[int, threading.Thread] = {}
 
 #: The synthetic joint whose profile each built-in extractor is warmed on.
 WARM_JOINT = {
@@ -112,5 +127,15 @@ def start_warming(
         finally:
             os._exit(code)
     if reap:
-        threading.Thread(target=os.waitpid, args=(pid, 0), daemon=True).start()
+        reaper = threading.Thread(target=os.waitpid, args=(pid, 0), daemon=True)
+        reaper.start()
+        _reapers[pid] = reaper
     return pid
+
+
+def wait_warmed(pid: int | None, timeout_s: float = WAIT_S) -> None:
+    """Wait (at most ``timeout_s``) for the warming child ``pid`` that :func:`start_warming`
+    started with its reaper; nothing when ``pid`` is None or the child is done."""
+    reaper = _reapers.pop(pid, None) if pid is not None else None
+    if reaper is not None:
+        reaper.join(timeout_s)

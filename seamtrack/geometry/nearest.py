@@ -8,10 +8,12 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.jit import KERNEL
+
 FloatArray = NDArray[np.float64]
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def _to_segment(q: FloatArray, i: int, a: FloatArray, d: FloatArray, c: int) -> tuple[float, float]:
     """Distance from query point ``q[i]`` to segment ``c`` (from ``a[c]`` along ``d[c]``), and
     the segment's parameter t in [0, 1] at the nearest point."""
@@ -25,7 +27,7 @@ def _to_segment(q: FloatArray, i: int, a: FloatArray, d: FloatArray, c: int) -> 
     return np.sqrt(e0 * e0 + e1 * e1 + e2 * e2), t
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def nearest_of(
     q: FloatArray, a: FloatArray, d: FloatArray, cand: NDArray[np.int64]
 ) -> tuple[NDArray[np.int64], FloatArray, FloatArray]:
@@ -47,7 +49,7 @@ def nearest_of(
     return seg, best_dist, best_t
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def nearest_all(
     q: FloatArray, a: FloatArray, d: FloatArray
 ) -> tuple[NDArray[np.int64], FloatArray, FloatArray]:

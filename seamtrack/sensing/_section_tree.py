@@ -9,6 +9,8 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.jit import KERNEL
+
 #: Triangles per leaf of the hierarchy.
 LEAF_SIZE = 4
 
@@ -68,7 +70,7 @@ def _nodes(n: int) -> int:
     return count(n)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _select(
     order: NDArray[np.int64], centre: NDArray[np.float64], axis: int, start: int, end: int,
     kth: int,
@@ -98,7 +100,7 @@ def _select(
             return
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _build(
     vertices: NDArray[np.float64], faces: NDArray[np.int64], leaf: int, nodes: int
 ) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64], NDArray[np.int64],
@@ -137,7 +139,7 @@ def _build(
     return lo, hi, child, count, order
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _box_centres(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> NDArray[np.float64]:
     """Each face's bounding box's centre."""
     f = faces.shape[0]
@@ -149,7 +151,7 @@ def _box_centres(vertices: NDArray[np.float64], faces: NDArray[np.int64]) -> NDA
     return centre
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _longest_axis(
     centre: NDArray[np.float64], order: NDArray[np.int64], start: int, end: int
 ) -> int:
@@ -168,7 +170,7 @@ def _longest_axis(
     return axis
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _node_boxes(
     vertices: NDArray[np.float64],
     faces: NDArray[np.int64],

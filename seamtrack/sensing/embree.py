@@ -36,6 +36,8 @@ from numba.core import types
 from numba.extending import intrinsic
 from numpy.typing import NDArray
 
+from seamtrack.jit import KERNEL
+
 W = 8  # rays per packet of the first-hit queries
 WIDE = 16  # the widest packet (of the occlusion queries, where the CPU traces it natively)
 _INVALID = 0xFFFFFFFF
@@ -220,7 +222,7 @@ class Scene:
 
 
 # --------------------------------------------------------------------------- numba kernels
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def _packet_buffer() -> tuple[NDArray[np.float32], NDArray[np.uint32], NDArray[np.int32], int,
                               int]:  # fmt: skip
     """A 64-byte aligned RTCRayHit8 or RTCRayHit16 and its valid mask: float and uint views,
@@ -232,7 +234,7 @@ def _packet_buffer() -> tuple[NDArray[np.float32], NDArray[np.uint32], NDArray[n
             words.ctypes.data, words.ctypes.data + 4 * _WORDS)  # fmt: skip
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def _load_ray(
     f: NDArray[np.float32], u: NDArray[np.uint32], j: int, origins: NDArray[Any],
     directions: NDArray[Any], i: int, tnear: float, tfar: float, width: int,
@@ -252,7 +254,7 @@ def _load_ray(
     u[_INST * width + j] = _INVALID
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _trace(
     query: int, width: int, scene: int, origins: NDArray[Any], directions: NDArray[Any],
     tnear: float, far: NDArray[Any], prim: NDArray[np.int32], tfar: NDArray[np.float32],
@@ -277,7 +279,7 @@ def _trace(
             tfar[start + j] = f[_TFAR * width + j]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def intersect(
     intersect8: Any, scene: int, origins: NDArray[Any], directions: NDArray[Any],
     prim: NDArray[np.int32], tfar: NDArray[np.float32],
@@ -286,7 +288,7 @@ def intersect(
     _trace(intersect8, W, scene, origins, directions, 0.0, np.full(1, np.inf), prim, tfar)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def occluded(
     query: int, width: int, scene: int, origins: NDArray[Any], directions: NDArray[Any],
     far: NDArray[Any], tnear: float, blocked: NDArray[np.bool_],

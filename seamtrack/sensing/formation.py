@@ -22,6 +22,7 @@ import scipy.fft
 from numpy.typing import NDArray
 from scipy import ndimage
 
+from seamtrack.jit import KERNEL
 from seamtrack.sensing import gauss32
 
 FloatArray = NDArray[np.float64]
@@ -72,7 +73,7 @@ class Optics:
         return s * math.ceil(cells / s)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _deposit_box(
     box: FloatArray, r0: int, c0: int, u: FloatArray, w: FloatArray, half_width: FloatArray,
     slope: FloatArray, sigma: FloatArray, electrons: FloatArray, reach: float,
@@ -106,7 +107,7 @@ def _deposit_box(
                 cdf_lo = cdf_hi
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _plan_boxes(
     wf: FloatArray, top: FloatArray, bottom: FloatArray, n_rows: int, n_cols: int, s: int,
     block: int, apron: int, reach_w: float,
@@ -299,7 +300,7 @@ class _SpeckleConstants:
         )
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _pass_band(
     spectrum: NDArray[np.complex64], pupil: NDArray[np.bool_], rows: NDArray[np.int64],
     columns: NDArray[np.int64], band: NDArray[np.complex64],
@@ -312,7 +313,7 @@ def _pass_band(
                     band[m, rows[i], j] = spectrum[m, i, columns[j]]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _spread_scaled(
     back: NDArray[np.complex64], columns: NDArray[np.int64], scale: np.float32,
     out: NDArray[np.complex64],
@@ -326,7 +327,7 @@ def _spread_scaled(
                 out[m, r, columns[j]] = complex(z.real * scale, z.imag * scale)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _fields(
     field: NDArray[np.complex64], boxes: NDArray[np.int64], starts: NDArray[np.int64],
     noise: NDArray[np.float32], uf: FloatArray, wf: FloatArray, hf: FloatArray, gf: FloatArray,
@@ -351,7 +352,7 @@ def _fields(
                 field[m, i, j] = complex(a * (re[q] * gain + steady), a * im[q] * gain)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _add_intensity(
     image: FloatArray, field: NDArray[np.complex64], r0: int, r1: int, first: int, c0: int,
     c1: int, s: int,
@@ -450,7 +451,7 @@ _RECIPROCALS = 1.0 / np.arange(1.0, _INVERSION_TERMS + 1.0)
 _INVERSION_LANES = 32
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def poisson_by_inversion(mean: NDArray[np.float32], u: FloatArray) -> NDArray[np.float32]:
     """A Poisson count of each ``mean`` (float32) by inverting its CDF at the uniform ``u``
     (float64 in [0, 1)): the smallest k with P(X <= k) > u, the terms p_k = p_(k-1) mean / k
@@ -497,7 +498,7 @@ def poisson_by_inversion(mean: NDArray[np.float32], u: FloatArray) -> NDArray[np
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _to_float32(
     electrons: FloatArray, offset: float, out: NDArray[np.float32]
 ) -> NDArray[np.int64]:
@@ -515,7 +516,7 @@ def _to_float32(
     return lit[:n]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _digitize(
     e: NDArray[np.float32], noise: NDArray[np.float32], read_noise: np.float32,
     per_electron: np.float32, levels: np.float32,

@@ -24,6 +24,8 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.jit import KERNEL
+
 #: Rightmost edge and area of a layer of the 256-layer normal ziggurat.
 ZIGGURAT_R = 3.6541528853610088
 ZIGGURAT_V = 0.00492867323399
@@ -61,7 +63,7 @@ _MULT_LO = np.uint64(0x4385DF649FCCF645)
 _MASK64 = (1 << 64) - 1
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _word(
     hi: np.uint64, lo: np.uint64, inc_hi: np.uint64, inc_lo: np.uint64, has: bool, kept: np.uint64
 ) -> tuple[np.uint32, np.uint64, np.uint64, bool, np.uint64]:
@@ -90,7 +92,7 @@ def _word(
     return np.uint32(out & m32), high, low, True, out >> s32
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _ziggurat(
     st: NDArray[np.uint64], out: NDArray[np.float32],
     k: NDArray[np.uint32], w: NDArray[np.float32], f: NDArray[np.float32],

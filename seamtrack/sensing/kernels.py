@@ -7,16 +7,21 @@ quantization) that calls Embree in packets of 8 (:mod:`seamtrack.sensing.embree`
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, cast
 
 import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.jit import KERNEL
 from seamtrack.sensing import embree
 
+#: An int64 0: numba types a literal 0 as ``Literal[int](0)`` and compiles the kernel it
+#: reaches once more for it, a loop counter's start too.
+_ZERO = cast(int, np.int64(0))
 
-@numba.njit(cache=True, nogil=True, inline="always")
+
+@numba.njit(**KERNEL)
 def _intersect_face(
     ox: float, oy: float, oz: float, dx: float, dy: float, dz: float,
     vertices: NDArray[np.float64], faces: NDArray[np.int64], f: int, tol: float,
@@ -49,7 +54,7 @@ def _intersect_face(
     return t, v >= slack and w >= slack and det - v - w >= slack
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL)
 def _refine_one(
     ox: float, oy: float, oz: float, dx: float, dy: float, dz: float, f: int, tf: float,
     vertices: NDArray[np.float64], faces: NDArray[np.int64], weld: NDArray[np.int64],
@@ -78,7 +83,7 @@ def _refine_one(
     return tf, f, False
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def refine_hits(
     origins: NDArray[np.float64],
     directions: NDArray[np.float64],
@@ -146,7 +151,7 @@ SP_B, SP_LAM, SP_SIN, SP_COS, SP_H, SP_V, SP_NH, SP_NV, SP_SLACK, SP_COS_MAX_INC
 MISS, OCCLUDED, OUT_OF_RANGE, INCIDENCE = 1, 2, 3, 4  # = seamtrack.sensing.profiles.Reason
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def _chip(y: float, z: float, sp: NDArray[np.float64]) -> tuple[float, float, bool]:
     """Laser-plane point to chip coordinates and the field-of-view test."""
     b, lam, s, c = sp[SP_B], sp[SP_LAM], sp[SP_SIN], sp[SP_COS]
@@ -161,7 +166,7 @@ def _chip(y: float, z: float, sp: NDArray[np.float64]) -> tuple[float, float, bo
     return x_c, z_c, inside
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def _pixel_center(x_c: float, z_c: float, sp: NDArray[np.float64]) -> tuple[float, float]:
     """The laser-plane point the sensor reports for chip coordinates: snap, triangulate."""
     b, lam, s, c, H, V = sp[SP_B], sp[SP_LAM], sp[SP_SIN], sp[SP_COS], sp[SP_H], sp[SP_V]
@@ -174,7 +179,7 @@ def _pixel_center(x_c: float, z_c: float, sp: NDArray[np.float64]) -> tuple[floa
     return zq * b_over_den, (lam * c - xq * s) * b_over_den
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def _mark_miss(
     i: int, points: NDArray[np.float64], reason: NDArray[np.uint8], t_out: NDArray[np.float64],
     face_out: NDArray[np.int64], cos_incidence: NDArray[np.float64], chip: NDArray[np.float64],
@@ -190,7 +195,7 @@ def _mark_miss(
     cos_incidence[i] = np.nan
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def _set_shadow_ray(
     k: int, i: int, px: float, py: float, pz: float, vx: float, vy: float, vz: float,
     length: float, offset: float, shadow_origins: NDArray[np.float64],
@@ -209,7 +214,7 @@ def _set_shadow_ray(
     shadow_index[k] = i
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def fan_stripe_hits(
     origin: NDArray[np.float64],
     rotation: NDArray[np.float64],
@@ -255,7 +260,7 @@ def fan_stripe_hits(
     cx = origin[0] + sp[SP_B] * rotation[0, 0]
     cy = origin[1] + sp[SP_B] * rotation[1, 0]
     cz = origin[2] + sp[SP_B] * rotation[2, 0]
-    k = 0
+    k = _ZERO
     for i in range(directions.shape[0]):
         f = prim[i]
         if f < 0:
@@ -302,7 +307,7 @@ def fan_stripe_hits(
             shadow_directions[:k], shadow_far[:k], shadow_index[:k])  # fmt: skip
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def fan_stripe_finish(
     points: NDArray[np.float64],
     reason: NDArray[np.uint8],
@@ -323,7 +328,7 @@ def fan_stripe_finish(
             points[i, 0], points[i, 1] = _pixel_center(chip[i, 0], chip[i, 1], sp)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def fan_directions(rotation: NDArray[np.float64], fan: NDArray[np.float64]) -> NDArray[np.float64]:
     """The fan's unit rays (n, 3), given in the laser frame, turned by ``rotation`` (3, 3)
     (the laser frame's axes as columns) into the frame the rays are cast in."""
@@ -336,7 +341,7 @@ def fan_directions(rotation: NDArray[np.float64], fan: NDArray[np.float64]) -> N
     return directions
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def fan_stripe_packets(
     intersect8: Any, occluded: Any, width: int, scene: int,
     origin: NDArray[np.float64], rotation: NDArray[np.float64], fan: NDArray[np.float64],

@@ -51,6 +51,8 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import ndimage
 
+from seamtrack.jit import KERNEL
+
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 
@@ -140,7 +142,7 @@ class Peaks:
                      self.argmax[keep], self.centroid[keep])  # fmt: skip
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _runs(image_t: NDArray[np.float32], thresholds: FloatArray) -> tuple[
     IntArray, IntArray, IntArray, FloatArray, IntArray, FloatArray
 ]:  # fmt: skip
@@ -190,7 +192,7 @@ def _runs(image_t: NDArray[np.float32], thresholds: FloatArray) -> tuple[
     return column, start, stop, peak, argmax, centroid
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _run_sums(
     image: NDArray[np.float32], column: IntArray, start: IntArray, stop: IntArray
 ) -> FloatArray:

@@ -29,6 +29,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.jit import KERNEL
 from seamtrack.sensing import embree
 from seamtrack.sensing._section_tree import LEAF_SIZE, SectionIndex, build
 from seamtrack.sensing.kernels import fan_directions, fan_stripe_finish, fan_stripe_hits
@@ -79,7 +80,7 @@ NO_SEEDS = np.empty(0, dtype=np.int64)
 
 
 # --------------------------------------------------------------------------- the section
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def _box_outside(
     lo: NDArray[np.float64], hi: NDArray[np.float64], node: int, o: NDArray[np.float64],
     m0: float, m1: float, m2: float,
@@ -94,7 +95,7 @@ def _box_outside(
     return m0 * c0 + m1 * c1 + m2 * c2 - (abs(m0) * h0 + abs(m1) * h1 + abs(m2) * h2)
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def _edge_point(
     xa: float, ya: float, za: float, xb: float, yb: float, zb: float
 ) -> tuple[float, float]:  # fmt: skip
@@ -103,7 +104,7 @@ def _edge_point(
     return ya + s * (yb - ya), za + s * (zb - za)
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL)
 def _cut(
     vertices: NDArray[np.float64], faces: NDArray[np.int64], k: int, o: NDArray[np.float64],
     r: NDArray[np.float64],
@@ -163,7 +164,7 @@ def _cut(
     return True, p0y, p0z, p1y, p1z
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL)
 def _ray_range(
     tans: NDArray[np.float64], step: float, y0: float, z0: float, y1: float, z1: float
 ) -> tuple[int, int]:  # fmt: skip
@@ -189,7 +190,7 @@ def _ray_range(
     return _tan_range(tans, step, t_lo, t_hi)
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL)
 def _tan_range(
     tans: NDArray[np.float64], step: float, t_lo: float, t_hi: float
 ) -> tuple[int, int]:  # fmt: skip
@@ -219,7 +220,7 @@ def _tan_range(
 EVEN_RTOL = 1e-6
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _even_step(tans: NDArray[np.float64]) -> float:
     """The spacing of ``tans`` (sorted) when evenly spaced (within :data:`EVEN_RTOL` of it),
     else 0: the laser fan (:func:`seamtrack.sensing.scan.laser_fan`, a ``linspace`` in tan)."""
@@ -235,7 +236,7 @@ def _even_step(tans: NDArray[np.float64]) -> float:
     return step
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL)
 def _sweep(
     fan: NDArray[np.float64], first: int, last: int, y0: float, z0: float, y1: float,
     z1: float, k: int, best_t: NDArray[np.float64], best_f: NDArray[np.int64],
@@ -261,7 +262,7 @@ def _sweep(
             best_f[i] = k
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _visit(
     lo: NDArray[np.float64], hi: NDArray[np.float64], child: NDArray[np.int64],
     count: NDArray[np.int64], order: NDArray[np.int64], o: NDArray[np.float64],
@@ -306,7 +307,7 @@ def _visit(
     return leaves, found
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def _box_distance2(
     lo: NDArray[np.float64], hi: NDArray[np.float64], node: int, o: NDArray[np.float64]
 ) -> float:  # fmt: skip
@@ -318,7 +319,7 @@ def _box_distance2(
     return d2
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL)
 def _box_rays(
     lo: NDArray[np.float64], hi: NDArray[np.float64], node: int, o: NDArray[np.float64],
     rotation: NDArray[np.float64], tans: NDArray[np.float64], step: float,
@@ -341,7 +342,7 @@ def _box_rays(
     return _tan_range(tans, step, t_lo, t_hi)
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL)
 def _farthest(
     best_t: NDArray[np.float64], block_max: NDArray[np.float64], stale: NDArray[np.bool_],
     first: int, last: int,
@@ -361,7 +362,7 @@ def _farthest(
     return far
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def fan_tans(fan: NDArray[np.float64]) -> tuple[NDArray[np.float64], float, float]:
     """What :func:`section_hits` needs of a fan besides its directions, once per fan: each
     ray's tan(phi) = y_L / z_L, the wedge's half-opening in tan (a margin added) and the rays'
@@ -375,7 +376,7 @@ def fan_tans(fan: NDArray[np.float64]) -> tuple[NDArray[np.float64], float, floa
     return tans, tan_max * (1.0 + 1e-9) + 1e-9, _even_step(tans)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def section_hits(
     tree: SectionIndex, mesh: SectionMesh, origin: NDArray[np.float64],
     rotation: NDArray[np.float64], fan: NDArray[np.float64],
@@ -396,7 +397,7 @@ def section_hits(
     return t, face
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def hit_faces(face: NDArray[np.int64]) -> NDArray[np.int64]:
     """The triangles a stripe's rays hit (``face``, -1: none), each run of rays on one
     triangle once: the seeds of the next frame's :func:`_section_hits`."""
@@ -411,7 +412,7 @@ def hit_faces(face: NDArray[np.int64]) -> NDArray[np.int64]:
     return out[:k].copy()
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL)
 def _cut_and_sweep(
     vertices: NDArray[np.float64], faces: NDArray[np.int64], k: int, o: NDArray[np.float64],
     rotation: NDArray[np.float64], fan: NDArray[np.float64], tans: NDArray[np.float64],
@@ -428,7 +429,7 @@ def _cut_and_sweep(
     return first, last
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _section_hits(
     tree: SectionIndex, mesh: SectionMesh, origin: NDArray[np.float64],
     rotation: NDArray[np.float64], fan: NDArray[np.float64], tans: NDArray[np.float64],
@@ -515,7 +516,7 @@ def _section_hits(
     return best_t, best_f, cuts
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def section_segments(
     tree: SectionIndex, mesh: SectionMesh, origin: NDArray[np.float64],
     rotation: NDArray[np.float64], tan_max: float,
@@ -541,7 +542,7 @@ def section_segments(
 
 
 # --------------------------------------------------------------------------- the stripe
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def fan_stripe_section(
     tree: SectionIndex, mesh: SectionMesh, origin: NDArray[np.float64],
     rotation: NDArray[np.float64], fan: NDArray[np.float64], tans: NDArray[np.float64],
@@ -572,7 +573,7 @@ def fan_stripe_section(
             next_seeds)  # fmt: skip
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def fan_stripe_section_packets(
     occluded: Any, width: int, scene: int, tree: SectionIndex, mesh: SectionMesh,
     origin: NDArray[np.float64], rotation: NDArray[np.float64], fan: NDArray[np.float64],

@@ -218,7 +218,7 @@ def _mesh_scan(
     scene's feature extractor (by default the one the seam's joint type calls for).
     ``extra_mesh`` (world frame, e.g. the beads of a multi-pass job) is ray-cast with the part;
     the seam is the part's."""
-    from seamtrack.features.warm import start_warming
+    from seamtrack.features.warm import start_warming, wait_warmed
     from seamtrack.sensing.raycast import RayCaster
 
     part, T_world_part = _load_part(scene)
@@ -226,7 +226,7 @@ def _mesh_scan(
     caster = RayCaster.from_mesh(mesh)
     seam = part.seam.transformed(T_world_part)
     extractor_name, find = _scene_extractor(scene, part.joint, part.opening_rad)
-    start_warming(find, extractor_name, sensor, scene.config.sensor.rays)
+    warming = [start_warming(find, extractor_name, sensor, scene.config.sensor.rays)]
     hinted = uses_hint(find)  # once, at set-up: a user's extractor may have no ``hint``
     find_hinted: Any = find  # called with ``hint=`` only when it takes one
     offset = np.asarray(scene.config.extractor.offset_mm, dtype=float)
@@ -239,6 +239,9 @@ def _mesh_scan(
         T_world_sensor: FloatArray, t_s: float, hint: SeamHint | None = None
     ) -> tuple[Profile, Feature]:
         profile = measure_arc(T_world_sensor, t_s)
+        if warming[0] is not None:  # the first extraction: its kernels from the child's cache
+            wait_warmed(warming[0])
+            warming[0] = None
         try:
             if hinted and hint is not None:
                 feature = find_hinted(profile, hint=hint)

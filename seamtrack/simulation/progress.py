@@ -12,21 +12,28 @@ seams.
 from __future__ import annotations
 
 import math
-from typing import Any, NamedTuple
+from typing import Any, NamedTuple, cast
 
 import numba
 import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack import constants
+from seamtrack.jit import KERNEL
 
 FloatArray = NDArray[np.float64]
 
 _AT_REST = constants.AT_REST_SPEED_MM_S
 _EPS = constants.PROGRESS_EPS_MM
 
+#: :func:`progress_near`'s ``window`` (mm) and ``scalar_norm`` flags, passed by every caller
+#: as typed values: a literal or an omitted argument would compile the kernel once more each.
+NEAR_WINDOW_MM = 5.0
+SCALAR_NORM = cast(bool, np.bool_(True))
+DOT_NORM = cast(bool, np.bool_(False))
 
-@numba.njit(cache=True, nogil=True, inline="always")
+
+@numba.njit(**KERNEL, inline="always")
 def _interp(x: float, knots: FloatArray, values: FloatArray) -> float:
     """``np.interp(x, knots, values)`` for one x inside [knots[0], knots[-1]]."""
     n = len(knots)
@@ -44,7 +51,7 @@ def _interp(x: float, knots: FloatArray, values: FloatArray) -> float:
     return float(result)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def closest_in_window(
     points: FloatArray,
     knots: FloatArray,
@@ -111,14 +118,14 @@ class ProgressTracker:
         q = np.asarray(point, dtype=np.float64)
         return progress_near(
             self.points, self.knots, self.columns, q, float(arc_length_hint_mm), self.length_mm,
-            float(window_mm),
+            float(window_mm), DOT_NORM,
         )  # fmt: skip
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def progress_near(
     points: FloatArray, knots: FloatArray, columns: FloatArray, q: FloatArray, hint: float,
-    length: float, window: float = 5.0, scalar_norm: bool = False,
+    length: float, window: float, scalar_norm: bool,
 ) -> float:  # fmt: skip
     """The arc length of the seam point closest to ``q`` near ``hint``: the search of
     :meth:`Seam.closest_near <seamtrack.geometry.seam.Seam.closest_near>` in a window of
@@ -161,7 +168,7 @@ PROGRESS_FIELDS = 12
 GO_ON, AT_REST_END, CLOSED_END, NO_PROGRESS = 0, 1, 2, 3
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def progress_check(
     P: FloatArray, t: float, x: float, y: float, z: float, speed: float, points: FloatArray,
     knots: FloatArray, columns: FloatArray,
@@ -176,7 +183,7 @@ def progress_check(
         P[REST_SINCE] = math.nan
     q = np.empty(3)
     q[0], q[1], q[2] = x, y, z
-    s_now = progress_near(points, knots, columns, q, P[S_NOW], P[LENGTH])
+    s_now = progress_near(points, knots, columns, q, P[S_NOW], P[LENGTH], NEAR_WINDOW_MM, DOT_NORM)
     P[S_NOW] = s_now
     if s_now > P[S_BEST] + _EPS:
         P[S_BEST], P[T_PROGRESS] = s_now, t

@@ -44,11 +44,14 @@ from seamtrack.control.orientation import turning_at
 from seamtrack.control.path_kernels import TCP_X, TCP_Y, TCP_Z, V_SET, setpoint_step
 from seamtrack.control.robot import CartesianRobot, RobotState, axes_step
 from seamtrack.control.servo import loops_step
+from seamtrack.jit import KERNEL
 from seamtrack.simulation.progress import (
     CHECKED,
     FOUND,
     GO_ON,
+    NEAR_WINDOW_MM,
     S_NOW,
+    SCALAR_NORM,
     CheckArrays,
     ProgressCheck,
     progress_check,
@@ -142,7 +145,7 @@ class ToolProgram(NamedTuple):
     orient: NDArray[np.int64]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _checked(
     tick: int, t: float, x: float, y: float, z: float, v: FloatArray, clock: Clock,
     checks: CheckArrays,
@@ -168,7 +171,7 @@ def _checked(
     return found != GO_ON
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(**KERNEL, inline="always")
 def _usable_setpoint(
     follow: Follow, x: float, y: float, z: float, refused: FloatArray
 ) -> tuple[float, float, float, float, float, float, float, bool, bool]:
@@ -185,7 +188,7 @@ def _usable_setpoint(
     return tx, ty, tz, speed, fx, fy, fz, stop, usable
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def gantry_ticks(
     clock: Clock, row: int, follow: Follow, gantry: GantryAxes, trace: Trace,
     checks: CheckArrays, refused: FloatArray,
@@ -391,7 +394,7 @@ class GantryTicks(_Logs):
         """After the run (nothing to hand back on a gantry)."""
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _refresh_orientation(
     x: float, y: float, z: float, speed: float, base: FloatArray, program: ToolProgram,
     cmd: FloatArray,
@@ -404,7 +407,7 @@ def _refresh_orientation(
     q = np.array((x, y, z))
     s = progress_near(
         program.points, program.knots, program.columns, q, program.at_s[0], program.knots[-1],
-        5.0, True,
+        NEAR_WINDOW_MM, SCALAR_NORM,
     )  # fmt: skip
     R, w = turning_at(
         s, speed, program.points, program.knots, program.seg_len, program.normals, program.par
@@ -424,7 +427,7 @@ def _refresh_orientation(
         cmd[M_NEW_GOAL] = 1.0
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def arm_ticks(
     clock: Clock, row: int, follow: Follow, mount: ArmMount, model: ArmModel, data: ArmData,
     program: ToolProgram, trace: Trace, checks: CheckArrays, refused: FloatArray,

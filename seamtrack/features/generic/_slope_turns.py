@@ -23,6 +23,7 @@ from numpy.typing import NDArray
 from seamtrack.features.arrays import FloatArray
 from seamtrack.features.line_geometry import Point, fit_range, principal_angle
 from seamtrack.features.robust import median5_of
+from seamtrack.jit import KERNEL
 
 _SIGMA_FROM_SECOND_DIFF = 1.4826 / math.sqrt(6.0)
 
@@ -53,7 +54,7 @@ class Turns(NamedTuple):
     turn: FloatArray
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _near(p: FloatArray, med: FloatArray, limit: float) -> FloatArray:
     """The points of ``p`` whose range lies within ``limit`` of ``med``, in order."""
     m = p.shape[0]
@@ -71,7 +72,7 @@ def _near(p: FloatArray, med: FloatArray, limit: float) -> FloatArray:
     return kept
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def clean_points(
     points: FloatArray, valid: NDArray[np.bool_], max_abs: float, min_kept: int
 ) -> Cleaned:
@@ -113,7 +114,7 @@ def clean_points(
     return Cleaned(OK, kept, spacing, sigma)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def window_turns(p: FloatArray, k: int, jump_mm: float) -> Turns:
     """Gaps between neighbours, and the turn between the total-least-squares directions of
     the k-point windows ending at i + k - 1 and i + 2k - 1 (0 where a window pair spans a
@@ -163,7 +164,7 @@ def window_turns(p: FloatArray, k: int, jump_mm: float) -> Turns:
     return Turns(gaps, turn)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def corner_point(p: FloatArray, c: int, k: int) -> Point:
     """The corner at point c: the crossing of the lines fitted 2k points to each side (a guard
     of k/2 points left out), or point c itself when the crossing is implausibly far; NaN

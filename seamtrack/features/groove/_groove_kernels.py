@@ -12,9 +12,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.features.arrays import FloatArray
+from seamtrack.jit import KERNEL
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _median_of(x: FloatArray) -> float:
     """``np.median`` of a 1-d array (the middle element, or the two middle ones' mean)."""
     n = len(x)
@@ -25,7 +26,7 @@ def _median_of(x: FloatArray) -> float:
     return float((s[h - 1] + s[h]) / 2)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _line_fit(a: FloatArray, b: FloatArray, keep: NDArray[np.bool_]) -> tuple[float, float]:
     """b = c0 + c1 a, least squares on the kept points (at least 3), in closed form; all at
     one a: numpy's ``lstsq``'s minimum-norm answer."""
@@ -53,7 +54,7 @@ def _line_fit(a: FloatArray, b: FloatArray, keep: NDArray[np.bool_]) -> tuple[fl
     return mb - c1 * ma, c1
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def local_v(qu: FloatArray, qv: FloatArray, ut: float, h: float, tol: float) -> float:
     """:func:`seamtrack.features.groove.surface_v_at` (NaN for its None)."""
     count = 0
@@ -89,7 +90,7 @@ def local_v(qu: FloatArray, qv: FloatArray, ut: float, h: float, tol: float) -> 
     return c0
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def robust_uv_line(
     qu: FloatArray,
     qv: FloatArray,
@@ -124,7 +125,7 @@ def robust_uv_line(
     return c0, c1, True
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def running_median(v: FloatArray, k: int) -> FloatArray:
     """The median of every window of ``k`` (odd) points, the ends padded with their whole
     window's (``np.pad(..., mode="edge")`` of the windows' medians); ``len(v) >= k``."""
@@ -139,7 +140,7 @@ def running_median(v: FloatArray, k: int) -> FloatArray:
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def running_median_cut(v: FloatArray, k: int) -> FloatArray:
     """The median over the ``k`` (odd) points about each point, the windows at the ends cut
     short to the points there are (``np.median(v[max(0, i - k // 2) : i + k // 2 + 1])``);

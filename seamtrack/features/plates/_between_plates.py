@@ -28,6 +28,7 @@ from seamtrack.features.plates._two_lines import (
     median,
     towards,
 )
+from seamtrack.jit import KERNEL
 
 #: A gap's wall or a lap's edge face stands at least this steep on the plates (as
 #: :data:`seamtrack.features.lines.WALL_DEG`, rad).
@@ -87,14 +88,14 @@ _SEEN = HiddenEdge(False, Point(0.0, 0.0))
 NO_HOLE = Hole(0.0, _SEEN, _SEEN)
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy", inline="always")
+@numba.njit(**KERNEL, error_model="numpy", inline="always")
 def _breaks(k: IntArray, t: FloatArray, i: int, spacing: float) -> bool:
     """Whether a stretch of consecutive kept points (positions ``k``, at ``t`` along the line)
     ends before ``k[i]``: another point or a jump of three spacings between it and ``k[i - 1]``."""
     return k[i] - k[i - 1] > 1 or abs(t[k[i]] - t[k[i - 1]]) > 3.0 * spacing
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def _stretch_ends(keep: NDArray[np.bool_], t: FloatArray, spacing: float, first: bool) -> Stretches:
     """Of the stretches of consecutive kept points (broken by another point or a jump of
     three spacings along the line): the first one's start, the last one's end, and the
@@ -125,7 +126,7 @@ def _stretch_ends(keep: NDArray[np.bool_], t: FloatArray, spacing: float, first:
     return Stretches(t0 - 0.5 * spacing, t1 + 0.5 * spacing, part)
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def _covered(keep: NDArray[np.bool_], t: FloatArray, spacing: float, ta: float, tb: float) -> float:
     """Summed length along the line of the stretches of consecutive kept points, clipped to
     ``[ta, tb]`` (NaN propagates, as numpy's reductions do)."""
@@ -157,7 +158,7 @@ def _covered(keep: NDArray[np.bool_], t: FloatArray, spacing: float, ta: float, 
     return total
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def _hidden_edge(
     part: IntArray,
     t: FloatArray,
@@ -205,7 +206,7 @@ class NearPlates(NamedTuple):
     plate: NDArray[np.bool_]
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def _near_plates(q: FloatArray, la: LineThrough, lb: LineThrough, tol: float) -> NearPlates:
     n = q.shape[0]
     towards_a = np.empty(n)
@@ -225,7 +226,7 @@ def _near_plates(q: FloatArray, la: LineThrough, lb: LineThrough, tol: float) ->
     return NearPlates(towards_a, towards_b, off_a, off_b, off, plate)
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def _highest(off: FloatArray, members: IntArray) -> float:
     """The largest offset of ``members`` (NaN as numpy's ``max`` takes it: the first NaN
     wins)."""
@@ -237,7 +238,7 @@ def _highest(off: FloatArray, members: IntArray) -> float:
     return top
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def _median_of(v: FloatArray, members: IntArray) -> float:
     w = np.empty(members.shape[0])
     for r in range(members.shape[0]):
@@ -245,7 +246,7 @@ def _median_of(v: FloatArray, members: IntArray) -> float:
     return median(w)
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def _pieces_cover(
     own: IntArray,
     pieces: PieceLines,
@@ -287,7 +288,7 @@ def _pieces_cover(
     return cover
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def _loose_cover(
     q: FloatArray,
     own: IntArray,
@@ -331,7 +332,7 @@ def _loose_cover(
     return cover
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def _stray(
     points: FloatArray,
     lo: int,
@@ -369,7 +370,7 @@ def _stray(
     return stray
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def _along(q: FloatArray, line: LineThrough) -> FloatArray:
     """Each point's position along ``line`` where the ray from the sensor's origin through it
     meets the line."""
@@ -383,7 +384,7 @@ def _along(q: FloatArray, line: LineThrough) -> FloatArray:
     return t
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def hole(
     points: FloatArray,
     owner: IntArray,

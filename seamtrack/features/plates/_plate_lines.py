@@ -19,6 +19,7 @@ import numpy as np
 from seamtrack.features.arrays import FloatArray, IntArray
 from seamtrack.features.line_geometry import holds
 from seamtrack.features.plates._two_lines import PieceLines, median, piece_line
+from seamtrack.jit import KERNEL
 
 
 class PlateLimits(NamedTuple):
@@ -49,7 +50,7 @@ class PlatePieces(NamedTuple):
     anchor: IntArray
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def _order(keys: IntArray) -> IntArray:
     """Stable ascending order of a few keys (an insertion sort: small code, where numba's
     sorts made the kernel slow to compile)."""
@@ -65,7 +66,7 @@ def _order(keys: IntArray) -> IntArray:
     return o
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def span(
     lines: PieceLines, t_first: FloatArray, t_last: FloatArray, on: int, members: IntArray
 ) -> float:
@@ -91,7 +92,7 @@ class FlatGroups(NamedTuple):
     anchors: IntArray
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def _flat_groups(
     lines: PieceLines,
     count: IntArray,
@@ -143,7 +144,7 @@ class Block(NamedTuple):
     end: int
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def _weakest_brief_block(
     lines: PieceLines,
     count: IntArray,
@@ -187,7 +188,7 @@ def _weakest_brief_block(
     return Block(bi, bj)
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def plate_pieces(
     lines: PieceLines,
     count: IntArray,

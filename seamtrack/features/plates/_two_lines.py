@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 from seamtrack.features.arrays import FloatArray, IntArray
 from seamtrack.features.counts import explained_share
 from seamtrack.features.line_geometry import CORNER_MIN_RAD, LineThrough, Point, corner_near
+from seamtrack.jit import KERNEL
 
 
 class PieceLines(NamedTuple):
@@ -61,26 +62,26 @@ class RunEnd(NamedTuple):
     step: float
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def piece_line(pieces: PieceLines, j: int) -> LineThrough:
     """Piece ``j``'s line."""
     return LineThrough(pieces.cy[j], pieces.cz[j], pieces.dy[j], pieces.dz[j])
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def towards(line: LineThrough, y: float, z: float) -> float:
     """Signed distance of (y, z) from ``line``, positive on the sensor's side (the origin)."""
     h = (y - line.cy) * -line.dz + (z - line.cz) * line.dy
     return h if line.cy * -line.dz + line.cz * line.dy < 0 else -h
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def angle(ady: float, adz: float, bdy: float, bdz: float) -> float:
     """Unsigned angle between two directions (rad, in [0, pi/2])."""
     return math.acos(min(1.0, abs(ady * bdy + adz * bdz)))
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def median(v: FloatArray) -> float:
     """numpy's median (mean of the two middle values of an even count; NaN propagates). A
     Shell sort of a copy: small code (numba's sort made the kernels slow to compile) and
@@ -107,7 +108,7 @@ def median(v: FloatArray) -> float:
     return (s[n // 2 - 1] + s[n // 2]) / 2.0
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def kept(keep: NDArray[np.bool_]) -> IntArray:
     """Positions of the True flags (``np.flatnonzero``)."""
     n = 0
@@ -123,7 +124,7 @@ def kept(keep: NDArray[np.bool_]) -> IntArray:
     return k
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def steps(t: FloatArray) -> Steps:
     """Mean spacing of the first and of the last ten coordinates
     (:meth:`~seamtrack.features.line_geometry.Line.step`)."""
@@ -134,7 +135,7 @@ def steps(t: FloatArray) -> Steps:
     return Steps(abs(t[k] - t[0]) / k, abs(t[n - 1] - t[n - 1 - k]) / k)
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def line_end(
     line: LineThrough,
     end: RunEnd,
@@ -175,7 +176,7 @@ def line_end(
     return Point(cy + t * dy, cz + t * dz)
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def two_lines_share(
     points: FloatArray,
     stray: NDArray[np.bool_],

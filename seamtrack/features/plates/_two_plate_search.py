@@ -33,6 +33,7 @@ from seamtrack.features.plates._two_lines import (
     steps,
     two_lines_share,
 )
+from seamtrack.jit import KERNEL
 
 #: :class:`PlateLimits` and :class:`~seamtrack.features.plates._between_plates.Scale` as plain
 #: tuples (what :func:`two_plates` takes from Python).
@@ -102,7 +103,7 @@ class PlatePair(NamedTuple):
 _NO_RUN = Run(-1, -1, -1, 0, LineThrough(0.0, 0.0, 0.0, 0.0), 0.0, Point(0.0, 0.0))
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def _along(points: FloatArray, idx: IntArray, line: LineThrough) -> FloatArray:
     """Coordinates of ``points[idx]`` along a line."""
     cy, cz, dy, dz = line
@@ -112,7 +113,7 @@ def _along(points: FloatArray, idx: IntArray, line: LineThrough) -> FloatArray:
     return t
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def _run_line(
     points: FloatArray,
     pieces: Pieces,
@@ -162,7 +163,7 @@ class PieceIndex(NamedTuple):
     first: IntArray
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def _piece_index(m: int, pieces: Pieces) -> PieceIndex:
     nl = pieces.lines.cy.shape[0]
     offsets = np.zeros(nl + 1, dtype=np.int64)
@@ -195,7 +196,7 @@ class Facing(NamedTuple):
     opening: float
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def _facing(
     points: FloatArray, pieces: Pieces, offsets: IntArray, on: LineThrough, left: int, right: int
 ) -> Facing:
@@ -230,7 +231,7 @@ class RunTable(NamedTuple):
     last_inlier: IntArray
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def _run_table(
     points: FloatArray,
     pieces: Pieces,
@@ -278,7 +279,7 @@ class BestPair(NamedTuple):
     step: float
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def _best_pair(
     points: FloatArray,
     owner: IntArray,
@@ -350,7 +351,7 @@ def _best_pair(
     return best
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def _two_plates(
     points: FloatArray,
     pieces: Pieces,
@@ -482,7 +483,7 @@ class PairReading(NamedTuple):
     right_end_z: float
 
 
-@numba.njit(cache=True, nogil=True, error_model="numpy")
+@numba.njit(**KERNEL, error_model="numpy")
 def two_plates(
     points: FloatArray,
     index: IntArray,

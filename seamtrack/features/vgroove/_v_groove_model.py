@@ -10,7 +10,7 @@ Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groov
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import NamedTuple, cast
 
 import numba
 import numpy as np
@@ -41,6 +41,8 @@ from seamtrack.features.vgroove._v_search import (
     COUNT,
     CY,
     CZ,
+    FIRST_END,
+    LAST_END,
     NONE,
     RMS,
     UY,
@@ -56,6 +58,7 @@ from seamtrack.features.vgroove._v_search import (
     point,
     search,
 )
+from seamtrack.jit import KERNEL
 
 #: A bevel within this angle of a plate runs along it (deg): a quarter of the flattest V's
 #: opening off the straight (150 deg included: bevels 15 deg off the plates).
@@ -70,7 +73,10 @@ _PLATE_L, _BEVEL_L, _ROOT, _BEVEL_R, _PLATE_R = range(5)
 
 #: What the model found (:attr:`VGrooveResult.code`): a groove; no V; no plate beside the
 #: bevels; a side of the V along a plate; a root wider than :data:`MAX_ROOT_SHARE`.
-GROOVE, NO_V, NO_PLATE, SIDE_ALONG_PLATE, WIDE_ROOT = range(5)
+#: (int64, not literals: numba compiles a kernel called with a literal once for each value)
+GROOVE, NO_V, NO_PLATE, SIDE_ALONG_PLATE, WIDE_ROOT = (cast(int, np.int64(c)) for c in range(5))
+#: An int64 0 (a literal 0 would compile ``plates_beside`` twice).
+_ZERO = cast(int, np.int64(0))
 
 
 class GrooveParams(NamedTuple):
@@ -113,7 +119,7 @@ class SidePlates(NamedTuple):
     far: int
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def group_of(tb, piece, groups):
     """The group (collinear pieces joined) that holds record ``piece``, else the piece."""
     if piece == NONE:
@@ -125,7 +131,7 @@ def group_of(tb, piece, groups):
     return piece
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def plates_beside(points, tb, groups, arm, met, lo, hi, left, right, lo_l):
     """The plates beside bevel ``arm`` among kept points ``lo:hi``, as two records
     (:class:`SidePlates`; -1: none). A plate turns away from its bevel (pieces along the
@@ -173,7 +179,7 @@ def plates_beside(points, tb, groups, arm, met, lo, hi, left, right, lo_l):
     return SidePlates(largest, NONE) if met == NONE else SidePlates(met, largest)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _steep_beside(tb, own, other, arm):
     """A side with no plate of its own (``own``) running along the other side's plate."""
     if own.near != NONE:
@@ -184,14 +190,15 @@ def _steep_beside(tb, own, other, arm):
     return False
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _refused(code, root_share=math.nan):
-    """A :class:`VGrooveResult` that says why there is no groove."""
+    """A :class:`VGrooveResult` that says why there is no groove (called with an int64
+    ``code`` and a float: one compiled signature, where a literal code compiles one a code)."""
     nan = math.nan
     return VGrooveResult(code, nan, nan, nan, nan, nan, nan, nan, nan, nan, nan, nan, root_share)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _others(tb, n, min_points, left, right):
     """The lines a bevel may meet at a corner: the pieces with ``min_points`` inliers, and
     the two bevels."""
@@ -205,7 +212,7 @@ def _others(tb, n, min_points, left, right):
     return others[: k_others + 2]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _covered_root(points, tb, n, bevels, ends, ref_l, ref_r, tol, spacing, sigma):
     """The root ends where a stray line covers one (:func:`~._v_root.covered_end`): a
     covered end is at least where the bevel is last seen; the shallower root end goes down
@@ -213,8 +220,8 @@ def _covered_root(points, tb, n, bevels, ends, ref_l, ref_r, tol, spacing, sigma
     of the stretch with no plate to measure depth on); a :class:`Root`."""
     left, right = bevels.left, bevels.right
     lx, lz, rx, rz = ends
-    cov_l = covered_end(points, tb, n, left, True, right, ref_l, tol, spacing, sigma)
-    cov_r = covered_end(points, tb, n, right, False, left, ref_r, tol, spacing, sigma)
+    cov_l = covered_end(points, tb, n, left, LAST_END, right, ref_l, tol, spacing, sigma)
+    cov_r = covered_end(points, tb, n, right, FIRST_END, left, ref_r, tol, spacing, sigma)
     sure = True
     if cov_l.covered or cov_r.covered:
         if cov_l.covered:
@@ -235,7 +242,7 @@ def _covered_root(points, tb, n, bevels, ends, ref_l, ref_r, tol, spacing, sigma
     return Root(RootEnds(lx, lz, rx, rz), cov_l.covered or cov_r.covered, sure)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _explained(points, surface, tb, bevels, outer_l, outer_r, tol):
     """``explained()``: the share of the surface points on the plates and bevels beside the
     root, the root left out."""
@@ -267,7 +274,7 @@ def _explained(points, surface, tb, bevels, outer_l, outer_r, tol):
     return explained_share(points, surface, zones, fits, 3.0 * tol)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def v_groove(points, stray, columns, runs, tol, sigma, spacing, pieces, params):
     """:meth:`VGrooveExtractor._extract` after segmentation, on the profile's kept points
     (the fields of a :class:`~._v_root.KeptPoints`, loose: numba reads a named tuple from
@@ -295,27 +302,27 @@ def v_groove(points, stray, columns, runs, tol, sigma, spacing, pieces, params):
     m = points.shape[0]
     geo, min_points = tb.geo, params.search.min_points
     if pair.left == NONE:
-        return _refused(NO_V)
+        return _refused(NO_V, math.nan)
     bevels = Bevels(pair.left, pair.right, pair.apex_y, pair.apex_z)
     left, right, ax, az = bevels
     others = _others(tb, n, min_points, left, right)
     # Column order runs left to right: the left bevel's root end is its last point.
-    root_l = corner_with(tb, left, True, others, spacing, tol)
-    lx, lz = continued(points, tb, n, left, True, ax, az, root_l.y, root_l.z, tol)
-    root_r = corner_with(tb, right, False, others, spacing, tol)
-    rx, rz = continued(points, tb, n, right, False, ax, az, root_r.y, root_r.z, tol)
-    top_l = corner_with(tb, left, False, others, spacing, tol)
-    top_r = corner_with(tb, right, True, others, spacing, tol)
+    root_l = corner_with(tb, left, LAST_END, others, spacing, tol)
+    lx, lz = continued(points, tb, n, left, LAST_END, ax, az, root_l.y, root_l.z, tol)
+    root_r = corner_with(tb, right, FIRST_END, others, spacing, tol)
+    rx, rz = continued(points, tb, n, right, FIRST_END, ax, az, root_r.y, root_r.z, tol)
+    top_l = corner_with(tb, left, FIRST_END, others, spacing, tol)
+    top_r = corner_with(tb, right, LAST_END, others, spacing, tol)
     plate_l, plate_r = group_of(tb, top_l.line, groups), group_of(tb, top_r.line, groups)
     # The model: plates outside the bevels, the bevels, the root between them left out.
     lo_l, hi_l = first(tb, left), last(tb, left) + 1
     lo_r, hi_r = first(tb, right), last(tb, right) + 1
-    outer_l = plates_beside(points, tb, groups, left, plate_l, 0, lo_l, left, right, lo_l)
+    outer_l = plates_beside(points, tb, groups, left, plate_l, _ZERO, lo_l, left, right, lo_l)
     outer_r = plates_beside(points, tb, groups, right, plate_r, hi_r, m, left, right, lo_l)
     if outer_l.near == NONE and outer_r.near == NONE:
-        return _refused(NO_PLATE)
+        return _refused(NO_PLATE, math.nan)
     if _steep_beside(tb, outer_l, outer_r, left) or _steep_beside(tb, outer_r, outer_l, right):
-        return _refused(SIDE_ALONG_PLATE)
+        return _refused(SIDE_ALONG_PLATE, math.nan)
     if hi_l < lo_r and lo_r - hi_l > MAX_ROOT_SHARE * m:
         return _refused(WIDE_ROOT, 100 * (lo_r - hi_l) / m)
     ref_l = plate_l if plate_l != NONE else plate_r

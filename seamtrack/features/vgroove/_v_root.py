@@ -28,6 +28,8 @@ from seamtrack.features.vgroove._v_search import (
     COUNT,
     CY,
     CZ,
+    FIRST_END,
+    LAST_END,
     NONE,
     START,
     UY,
@@ -43,6 +45,7 @@ from seamtrack.features.vgroove._v_search import (
     step,
     t_end,
 )
+from seamtrack.jit import KERNEL
 
 #: A piece steeper than this on the plates is a wall (a root face).
 COS_WALL = math.cos(math.radians(WALL_DEG))
@@ -104,7 +107,7 @@ class CoveredEnd(NamedTuple):
 SEEN = CoveredEnd(False, 0.0, 0.0)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def plate_depth(tb, plate, qy, qz):
     """Depth of (qy, qz) behind record ``plate``'s line (away from the sensor, at the
     origin)."""
@@ -116,21 +119,21 @@ def plate_depth(tb, plate, qy, qz):
     return (qy - cy) * ny + (qz - cz) * nz
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _off(tb, r, qy, qz):
     """Distance of (qy, qz) from record ``r``'s line."""
     g = tb.geo
     return abs((qy - g[r, CY]) * -g[r, UZ] + (qz - g[r, CZ]) * g[r, UY])
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _along(tb, r, qy, qz):
     """``(q - r.centroid) @ r.direction``."""
     g = tb.geo
     return (qy - g[r, CY]) * g[r, UY] + (qz - g[r, CZ]) * g[r, UZ]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _flat_dot(tb, r, plate):
     """``abs(r.direction @ flat)``, flat: ``plate``'s direction, else (1, 0)."""
     g = tb.geo
@@ -139,7 +142,7 @@ def _flat_dot(tb, r, plate):
     return abs(g[r, UY] * g[plate, UY] + g[r, UZ] * g[plate, UZ])
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def continued(points, tb, n, arm, at_end, ay, az, ey, ez, tol):
     """Where bevel ``arm`` ends when pieces beyond its last (``at_end``, else first) inlier,
     towards the apex (ay, az), lie on its line (within 15 deg and two tolerances: the bevel
@@ -167,7 +170,7 @@ def continued(points, tb, n, arm, at_end, ay, az, ey, ez, tol):
     return point(tb, arm, best)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _next_piece(tb, n, i, at_end):
     """The first of the ``n`` pieces beyond point ``i`` (``at_end``: after it in column
     order, else the last before it); :data:`NONE` when there is none."""
@@ -180,7 +183,7 @@ def _next_piece(tb, n, i, at_end):
     return piece
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _ray_step(points, tb, line, at_end):
     """The median angle (rad) between the rays of neighbouring points over the last 11
     inliers of ``line`` at its end (``at_end``, else at its start); 0 with one point."""
@@ -195,7 +198,7 @@ def _ray_step(points, tb, line, at_end):
     return sort_small(steps)[steps.shape[0] // 2] if steps.shape[0] else 0.0
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _runs_on(points, tb, other, far, s, phi_far, dphi, tol, held):
     """Whether the point after ``far`` (direction ``s``) lies on ``other`` (within two
     tolerances), its ray within 3.5 ray steps ``dphi`` of ``far``'s (angle ``phi_far``) and
@@ -210,7 +213,7 @@ def _runs_on(points, tb, other, far, s, phi_far, dphi, tol, held):
     )
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _shown_again(points, tb, line, far, s, tol):
     """How many points after ``far`` (direction ``s``; at most 400) lie on ``line`` again,
     within ``tol``."""
@@ -226,7 +229,7 @@ def _shown_again(points, tb, line, far, s, tol):
     return again
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def covered_end(points, tb, n, line, at_end, other, plate, tol, spacing, sigma):
     """Where along bevel ``line`` its root end may lie when a stray line covers the columns
     beyond its last seen point (``at_end``: its last inlier, else its first): a
@@ -285,7 +288,7 @@ def covered_end(points, tb, n, line, at_end, other, plate, tol, spacing, sigma):
     return CoveredEnd(True, t_end(tb, line, at_end) + half, t_far)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def at_depth(tb, line, plate, depth, s0, s1):
     """The point of ``line`` at ``depth`` behind ``plate``, kept within the stretch s0..s1
     (coordinates along the line; a :class:`~seamtrack.features.vgroove._v_search.Point`)."""
@@ -301,7 +304,7 @@ def at_depth(tb, line, plate, depth, s0, s1):
     return point(tb, line, pmin(pmax(t, lo), hi))
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def level(tb, bevels, ends, plate_l, plate_r, gap, tol):
     """Whether the bevels' lower ends lie at one depth (below their own plates, else along
     the V's bisector): within 3 tolerances or a quarter of the gap."""
@@ -328,7 +331,7 @@ def level(tb, bevels, ends, plate_l, plate_r, gap, tol):
     return abs(d_l - d_r) <= pmax(3.0 * tol, 0.25 * gap)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _inert(tb, k, left, right, plate, min_points):
     """A wall (steep on ``plate``) or a long straight piece off both bevels."""
     if _flat_dot(tb, k, plate) <= COS_WALL:
@@ -340,7 +343,7 @@ def _inert(tb, k, left, right, plate, min_points):
     )
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def tip_filled(points, surface, tb, n, bevels, ends, plate, min_points, tol, spacing):
     """Whether surface points fill the V's tip below the bevels' lower ends: the triangle of
     the two lower ends and the apex (grown by a tolerance), away from the lower ends (root
@@ -393,7 +396,7 @@ def tip_filled(points, surface, tb, n, bevels, ends, plate, min_points, tol, spa
     return count > min_points
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def covered_between(points, columns, runs, tb, n, left, right, plate, min_points):
     """Share of the columns between the bevels' lower ends that show a surface: points in no
     wall (steep on ``plate``: a root face), no long straight piece off both bevels and no
@@ -435,7 +438,7 @@ def covered_between(points, columns, runs, tb, n, left, right, plate, min_points
     return pmax(kept / width, 1.0 - longest / width)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def bridged(tb, n, bevels, ends, plate, min_points, tol, spacing):
     """Whether a piece between the bevels that is no wall (steep on ``plate``) runs from one
     root end to the other: the "gap" between them is a surface."""
@@ -446,15 +449,15 @@ def bridged(tb, n, bevels, ends, plate, min_points, tol, spacing):
             continue
         if _flat_dot(tb, k, plate) <= COS_WALL:
             continue
-        reach = 3.0 * pmax(pmax(spacing, step(tb, k, True)), step(tb, k, False)) + tol
-        y0, z0 = end(tb, k, False)
-        y1, z1 = end(tb, k, True)
+        reach = 3.0 * pmax(pmax(spacing, step(tb, k, LAST_END)), step(tb, k, FIRST_END)) + tol
+        y0, z0 = end(tb, k, FIRST_END)
+        y1, z1 = end(tb, k, LAST_END)
         if math.hypot(y0 - lx, z0 - lz) <= reach and math.hypot(y1 - rx, z1 - rz) <= reach:
             return True
     return False
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def gap_seen(kept, surface, tb, n, bevels, root, plate_l, plate_r, gap, min_points, tol, spacing):
     """Whether the stretch between the bevels' lower ends is a root gap: the ends lie at one
     depth (not read where a stray line hides an end: its depth is then taken from the

@@ -20,7 +20,7 @@ Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groov
 from __future__ import annotations
 
 import math
-from typing import Any, NamedTuple
+from typing import Any, NamedTuple, cast
 
 import numba
 import numpy as np
@@ -45,6 +45,7 @@ from seamtrack.features.line_geometry import (
     holds,
 )
 from seamtrack.features.select import sort_small
+from seamtrack.jit import KERNEL
 
 #: Radians to degrees as CPython's ``math.degrees`` multiplies.
 RAD_TO_DEG = 180.0 / math.pi
@@ -52,8 +53,13 @@ RAD_TO_DEG = 180.0 / math.pi
 COS_GROUP = math.cos(math.radians(30.0))
 #: Lines within this angle meet in no corner (see ``corner_with``).
 COS_CORNER = math.cos(CORNER_MIN_RAD)
-#: A record that is no line.
-NONE = -1
+#: A record that is no line (an int64, not a literal: a literal -1 left in a variable
+#: compiles the kernels it is passed to once more for that value, numba's literal dispatch).
+NONE = cast(int, np.int64(-1))
+#: ``at_end`` for a record's last inlier, and for its first: numpy booleans, which type as
+#: ``bool`` (a literal True or False compiles the callee once for each value).
+LAST_END = cast(bool, np.bool_(True))
+FIRST_END = cast(bool, np.bool_(False))
 #: The columns of :attr:`LineTable.geo`.
 CY, CZ, UY, UZ, RMS = range(5)
 #: The columns of :attr:`LineTable.span`.
@@ -129,7 +135,7 @@ class Search(NamedTuple):
     pair: VPair
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def new_table(pieces: PieceTable) -> LineTable:
     """The table of a profile's ``n`` pieces, with room for ``n`` groups and two arms cut
     short."""
@@ -156,13 +162,13 @@ def new_table(pieces: PieceTable) -> LineTable:
     return LineTable(geo, span, pool_index, pool_t, used)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def line_of(geo: FloatArray, r: int) -> LineThrough:
     """Record ``r``'s line (centroid and unit direction) of a :attr:`LineTable.geo`."""
     return LineThrough(geo[r, CY], geo[r, CZ], geo[r, UY], geo[r, UZ])
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def surface_of(stray, m):
     """(m,) True for the surface points: not in a detour (``stray``, when it has m entries)."""
     surface = np.ones(m, dtype=np.bool_)
@@ -172,7 +178,7 @@ def surface_of(stray, m):
     return surface
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def explained_of(
     points: FloatArray, stray: NDArray[np.bool_], zones: IntArray, fits: FloatArray, band: float
 ) -> float:
@@ -181,7 +187,7 @@ def explained_of(
     return explained_share(points, surface_of(stray, points.shape[0]), zones, fits, band)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def owners(owner, tb, n):
     """Each kept point's piece (-1: none) into ``owner``."""
     span, pool = tb.span, tb.index
@@ -192,7 +198,7 @@ def owners(owner, tb, n):
             owner[pool[q]] = k
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def add_fit(points, tb, sel):
     """A new record: the total-least-squares line through ``points[sel]`` (as
     :func:`~seamtrack.features.line_geometry.fit_line`)."""
@@ -209,26 +215,26 @@ def add_fit(points, tb, sel):
     return r
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def first(tb, r):
     """Position of record ``r``'s first inlier."""
     return tb.index[tb.span[r, START]]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def last(tb, r):
     """Position of record ``r``'s last inlier."""
     return tb.index[tb.span[r, START] + tb.span[r, COUNT] - 1]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def t_end(tb, r, at_end):
     """Coordinate of record ``r``'s last (``at_end``) or first inlier along it."""
     a, c = tb.span[r, START], tb.span[r, COUNT]
     return tb.along[a + c - 1] if at_end else tb.along[a]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def step(tb, r, at_end):
     """As ``Line.step``: mean spacing of the last (first) ten inliers along the line."""
     a, c = tb.span[r, START], tb.span[r, COUNT]
@@ -241,41 +247,41 @@ def step(tb, r, at_end):
     return abs(t[a + k] - t[a]) / k
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def point(tb, r, t):
     """As ``Line.point``: the point at coordinate ``t`` along record ``r``."""
     g = tb.geo
     return Point(g[r, CY] + t * g[r, UY], g[r, CZ] + t * g[r, UZ])
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def end(tb, r, at_end):
     """As ``Line.end``: half a spacing beyond the last (first) inlier."""
     half = 0.5 * step(tb, r, at_end)
-    t = t_end(tb, r, True) + half if at_end else t_end(tb, r, False) - half
+    t = t_end(tb, r, LAST_END) + half if at_end else t_end(tb, r, FIRST_END) - half
     return point(tb, r, t)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def dot_dir(tb, r, s):
     """``r.direction @ s.direction``."""
     g = tb.geo
     return g[r, UY] * g[s, UY] + g[r, UZ] * g[s, UZ]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def pmax(a, b):
     """Python's ``max(a, b)`` (NaN handling included)."""
     return b if b > a else a
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def pmin(a, b):
     """Python's ``min(a, b)``."""
     return b if b < a else a
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def contains(tb, r, i):
     """Whether kept point ``i`` is an inlier of record ``r`` (sorted inliers)."""
     pool = tb.index
@@ -289,7 +295,7 @@ def contains(tb, r, i):
     return lo < tb.span[r, START] + tb.span[r, COUNT] and pool[lo] == i
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def groups_of(points, tb, n, tol, min_points, min_arm):
     """The collinear groups (as :func:`~seamtrack.features.lines.collinear_groups`, refitted
     on the union
@@ -308,7 +314,7 @@ def groups_of(points, tb, n, tol, min_points, min_arm):
     groups = 0
     for i in order:
         line = line_of(geo, i)
-        t0, t1 = t_end(tb, i, False), t_end(tb, i, True)
+        t0, t1 = t_end(tb, i, FIRST_END), t_end(tb, i, LAST_END)
         joined = -1
         for k in range(groups):
             if holds(line_of(geo, anchor[k]), line, t0, t1, COS_GROUP, tol):
@@ -340,14 +346,14 @@ def groups_of(points, tb, n, tol, min_points, min_arm):
                     at += c
             r = add_fit(points, tb, sort_small(sel))  # pieces in column order: sorted
         c = span[r, COUNT]
-        extent = t_end(tb, r, True) - t_end(tb, r, False) if c else 0.0
+        extent = t_end(tb, r, LAST_END) - t_end(tb, r, FIRST_END) if c else 0.0
         if c >= min_points and extent >= min_arm:
             out[kept] = r
             kept += 1
     return out[:kept]
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _reach(points, tb, g, xy, xz, vy, vz, tol, owner, mark):
     """How near arm ``g`` comes to the apex (x, y), along its direction (vy, vz) from the
     apex. A tenth of a group may lie past it: fragments of the root collinear with a bevel,
@@ -383,7 +389,7 @@ def _reach(points, tb, g, xy, xz, vy, vz, tol, owner, mark):
     return t_ahead
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _short_of(points, tb, r, xy, xz, tol):
     """Record ``r`` without the inliers that lie past the apex (more than a tolerance): the
     arm of a V ends at its apex (a new record, refitted; ``r`` when none or all but one)."""
@@ -408,7 +414,7 @@ def _short_of(points, tb, r, xy, xz, tol):
     return add_fit(points, tb, sel)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _candidates(tb, groups, n, min_points, min_arm):
     """The groups, then the pieces in no group that could be arms: at least ``min_points``
     inliers over at least ``min_arm`` (mm)."""
@@ -421,7 +427,7 @@ def _candidates(tb, groups, n, min_points, min_arm):
         c = tb.span[k, COUNT]
         if grouped:
             continue
-        if c >= min_points and t_end(tb, k, True) - t_end(tb, k, False) >= min_arm:
+        if c >= min_points and t_end(tb, k, LAST_END) - t_end(tb, k, FIRST_END) >= min_arm:
             extra[e] = k
             e += 1
     cand = np.empty(groups.shape[0] + e, dtype=np.int64)
@@ -447,7 +453,7 @@ class VApex(NamedTuple):
     right_uz: float
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _v_apex(geo, a, b, sign, min_deg, max_deg):
     """Whether records ``a`` and ``b`` form a V (``sign`` -1: opening towards the sensor) or
     a ridge (+1) with an included angle in ``min_deg``..``max_deg`` and a bisector within 45
@@ -479,7 +485,7 @@ def _v_apex(geo, a, b, sign, min_deg, max_deg):
     return VApex(ok, xy, xz, ga, uy, uz, gb, wy, wz)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _arm_support(points, surface, geo, r, vy, vz, xy, xz, band, tol):
     """The :func:`~seamtrack.features.counts.support` of record ``r`` as an arm leaving the
     apex (``xy``, ``xz``) along (``vy``, ``vz``)."""
@@ -489,7 +495,7 @@ def _arm_support(points, surface, geo, r, vy, vz, xy, xz, band, tol):
     return support(points, surface, line, band, x_u, side, tol)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def best_pair(points, surface, owner, tb, groups, n, tol, params):
     """``ExtractorBase._arms``: the best pair of records forming a V (``params.sign`` -1: opening
     towards the sensor) or a ridge (+1), the arms cut short at the apex (:class:`VPair`;
@@ -538,7 +544,7 @@ def best_pair(points, surface, owner, tb, groups, n, tol, params):
     return VPair(left, right, best_y, best_z, best_score)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def corner_with(tb, line, at_end, others, spacing, tol):
     """Where record ``line`` ends and the record of ``others`` it meets there
     (:class:`Corner`): its crossing with a line that meets it at that end (a visible corner,
@@ -555,9 +561,9 @@ def corner_with(tb, line, at_end, others, spacing, tol):
         if other == line:
             continue
         there = line_of(geo, other)
-        wide = pmax(pmax(step(tb, other, True), step(tb, other, False)), spacing)
+        wide = pmax(pmax(step(tb, other, LAST_END), step(tb, other, FIRST_END)), spacing)
         c = corner_near(
-            here, tip_y, tip_z, there, t_end(tb, other, False), t_end(tb, other, True),
+            here, tip_y, tip_z, there, t_end(tb, other, FIRST_END), t_end(tb, other, LAST_END),
             COS_CORNER, reach, best_d, 3.0 * wide + tol,
         )  # fmt: skip
         if c.found:
@@ -567,7 +573,7 @@ def corner_with(tb, line, at_end, others, spacing, tol):
     return Corner(best_y, best_z, best)
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def search(points, stray, tol, pieces, params):
     """The V search on a profile's pieces (:class:`~seamtrack.features._segmentation.PieceTable`),
     in its steps: the table of lines, each point's piece, the collinear groups, the best

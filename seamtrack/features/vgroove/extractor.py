@@ -27,6 +27,7 @@ from seamtrack.features.vgroove._v_groove_model import (
     v_groove,
 )
 from seamtrack.features.vgroove._v_search import pieces_of
+from seamtrack.jit import KERNEL
 from seamtrack.sensing.profiles import Feature, Profile, SeamHint
 
 #: Why a V is no groove, by the code of :func:`seamtrack.features.vgroove._v_groove_model.v_groove`.
@@ -58,7 +59,7 @@ def _fill_above(seg: Segments, groove: VGrooveResult) -> float | None:
     return None if math.isnan(above) else above
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _fill_height(
     points: NDArray[np.float64], stray: NDArray[np.bool_], left_y: float, left_z: float,
     right_y: float, right_z: float, seam_y: float, seam_z: float,

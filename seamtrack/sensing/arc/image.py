@@ -35,6 +35,7 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
+from seamtrack.jit import KERNEL
 from seamtrack.sensing.arc import fume as fume_model
 from seamtrack.sensing.arc import light
 from seamtrack.sensing.arc.spatter import draw_spatter
@@ -200,7 +201,7 @@ def _interpolate(coarse: FloatArray, rows: LinearWeights, columns: LinearWeights
                         columns.w0, columns.w1, floor, out)  # fmt: skip
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(**KERNEL)
 def _interpolate_kernel(
     coarse: FloatArray, r0: NDArray[np.int64], r1: NDArray[np.int64], a0: FloatArray,
     a1: FloatArray, c0: NDArray[np.int64], c1: NDArray[np.int64], b0: FloatArray,
