@@ -104,7 +104,7 @@ def _edge_point(
     return ya + s * (yb - ya), za + s * (zb - za)
 
 
-@numba.njit(**KERNEL)
+@numba.njit(**KERNEL, inline="always")
 def _cut(
     vertices: NDArray[np.float64], faces: NDArray[np.int64], k: int, o: NDArray[np.float64],
     r: NDArray[np.float64],
@@ -164,7 +164,7 @@ def _cut(
     return True, p0y, p0z, p1y, p1z
 
 
-@numba.njit(**KERNEL)
+@numba.njit(**KERNEL, inline="always")
 def _ray_range(
     tans: NDArray[np.float64], step: float, y0: float, z0: float, y1: float, z1: float
 ) -> tuple[int, int]:  # fmt: skip
@@ -190,7 +190,7 @@ def _ray_range(
     return _tan_range(tans, step, t_lo, t_hi)
 
 
-@numba.njit(**KERNEL)
+@numba.njit(**KERNEL, inline="always")
 def _tan_range(
     tans: NDArray[np.float64], step: float, t_lo: float, t_hi: float
 ) -> tuple[int, int]:  # fmt: skip
@@ -236,7 +236,7 @@ def _even_step(tans: NDArray[np.float64]) -> float:
     return step
 
 
-@numba.njit(**KERNEL)
+@numba.njit(**KERNEL, inline="always")
 def _sweep(
     fan: NDArray[np.float64], first: int, last: int, y0: float, z0: float, y1: float,
     z1: float, k: int, best_t: NDArray[np.float64], best_f: NDArray[np.int64],
@@ -319,7 +319,7 @@ def _box_distance2(
     return d2
 
 
-@numba.njit(**KERNEL)
+@numba.njit(**KERNEL, inline="always")
 def _box_rays(
     lo: NDArray[np.float64], hi: NDArray[np.float64], node: int, o: NDArray[np.float64],
     rotation: NDArray[np.float64], tans: NDArray[np.float64], step: float,
@@ -342,7 +342,7 @@ def _box_rays(
     return _tan_range(tans, step, t_lo, t_hi)
 
 
-@numba.njit(**KERNEL)
+@numba.njit(**KERNEL, inline="always")
 def _farthest(
     best_t: NDArray[np.float64], block_max: NDArray[np.float64], stale: NDArray[np.bool_],
     first: int, last: int,
@@ -412,7 +412,7 @@ def hit_faces(face: NDArray[np.int64]) -> NDArray[np.int64]:
     return out[:k].copy()
 
 
-@numba.njit(**KERNEL)
+@numba.njit(**KERNEL, inline="always")
 def _cut_and_sweep(
     vertices: NDArray[np.float64], faces: NDArray[np.int64], k: int, o: NDArray[np.float64],
     rotation: NDArray[np.float64], fan: NDArray[np.float64], tans: NDArray[np.float64],
