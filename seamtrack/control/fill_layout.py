@@ -404,9 +404,8 @@ def after_bead(groove: MeasuredGroove, area_mm2: Any) -> MeasuredGroove:
     left = p[:, LEFT_FOOT, 0] - widen[:, 0] * dz
     right = p[:, RIGHT_FOOT, 0] + widen[:, 1] * dz
     old_left, old_w = p[:, LEFT_FOOT, 0].copy(), np.maximum(w, 1e-9)
-    for row in range(
-        LEFT_FOOT, RIGHT_FOOT + 1
-    ):  # the bottom points stretched between the new feet, lifted
+    # the bottom points stretched between the new feet, lifted
+    for row in range(LEFT_FOOT, RIGHT_FOOT + 1):
         frac = (p[:, row, 0] - old_left) / old_w
         p[:, row, 0] = left + frac * (right - left)
         p[:, row, 1] += dz

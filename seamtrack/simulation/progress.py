@@ -110,7 +110,6 @@ class ProgressTracker:
         self.knots = np.ascontiguousarray(seam.arc_length_mm, dtype=np.float64)
         self.columns = np.ascontiguousarray(self.points.T)
         self.length_mm = float(seam.length_mm)
-        self.n_seg = len(self.points) - 1
 
     def closest_near(self, point: Any, arc_length_hint_mm: float, window_mm: float = 5.0) -> float:
         """:meth:`Seam.closest_near <seamtrack.geometry.seam.Seam.closest_near>`, the same
