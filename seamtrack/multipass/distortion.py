@@ -24,13 +24,20 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.geometry.seam import Seam
 from seamtrack.simulation.scene import Scene
+
+if TYPE_CHECKING:
+    from seamtrack.control.fill_layout import Process
+    from seamtrack.control.planner import PassPlan
+    from seamtrack.simulation.assemble import Parts
+    from seamtrack.simulation.distorted import MovingSeam
+    from seamtrack.workpiece.fill import FillState
 
 FloatArray = NDArray[np.float64]
 
@@ -58,7 +65,7 @@ def still(scene: Scene) -> Scene:
     return dataclasses.replace(scene, config=scene.config.model_copy(update={"distortion": None}))
 
 
-def joined_thickness_mm(fill: Any, plate_thickness_mm: float, bead_area_mm2: float) -> float:
+def joined_thickness_mm(fill: FillState, plate_thickness_mm: float, bead_area_mm2: float) -> float:
     """The section joined under a pass once it is laid: the root face (the plate's thickness
     less the empty groove's depth, what joins the plates before any bead) plus the groove's
     depth times the fraction of its area filled (the mean over the stations, this pass's bead
@@ -76,7 +83,7 @@ def joined_thickness_mm(fill: Any, plate_thickness_mm: float, bead_area_mm2: flo
 
 def moving_pass(
     scene: Scene, true_path: Seam, state: JobDistortion, joined_mm: float, joint: Seam
-) -> Any:
+) -> MovingSeam:
     """The pass's moving part: the scene's ``[distortion]`` on the pass's true path, moved
     with the plates about the weld line ``joint`` (the CAD seam: the path's own slope over a
     bead's crown or the fill's end is no direction the plates move in), on the joined section
@@ -93,7 +100,7 @@ def moving_pass(
     return dataclasses.replace(moving, motion=motion)
 
 
-def into_the_part(moving: Any, path: FloatArray, t_s: FloatArray) -> FloatArray:
+def into_the_part(moving: MovingSeam, path: FloatArray, t_s: FloatArray) -> FloatArray:
     """The torch's path (world, on the moved part) back in the part's own frame."""
     if not len(path):
         return path
@@ -102,9 +109,9 @@ def into_the_part(moving: Any, path: FloatArray, t_s: FloatArray) -> FloatArray:
 
 
 def distorted_parts(
-    parts: Any, scene: Scene, plan: Any, fill: Any, process: Any, state: JobDistortion | None,
-    joint: Seam,
-) -> tuple[Any, Any]:  # fmt: skip
+    parts: Parts, scene: Scene, plan: PassPlan | None, fill: FillState, process: Process,
+    state: JobDistortion | None, joint: Seam,
+) -> tuple[Parts, MovingSeam | None]:  # fmt: skip
     """A welding pass's parts on the moving part (sense and scoring), and its moving seam;
     as they were, and ``None``, without ``[distortion]`` or for the scan-only pass. ``joint``:
     the weld line (the CAD seam) the plates move about."""
@@ -122,7 +129,7 @@ def distorted_parts(
     return parts, moving
 
 
-def locked_in(moving: Any, state: JobDistortion | None) -> None:
+def locked_in(moving: MovingSeam | None, state: JobDistortion | None) -> None:
     """After a pass: the angle it locked in added to the job's."""
     if moving is None or state is None:
         return
