@@ -107,6 +107,11 @@ BENCHES: dict[str, tuple[tuple[str, ...], str, str]] = {
         "seamtrack bench arc",
         "the arc in image and profile mode: current, look-ahead, seam-point errors, cost",
     ),
+    "beads": (
+        ("beads.json",),
+        "seamtrack bench beads",
+        "the bead model's width and height against a published bead-on-plate table",
+    ),
 }
 
 
@@ -238,6 +243,12 @@ def _arc_table(data: dict[str, Any]) -> str:
     return arc_table(data)
 
 
+def _beads_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.published_beads import beads_table
+
+    return beads_table(data)
+
+
 #: The bench JSON files a page may quote (``file.json``, or ``file.json#name`` for one of a
 #: file's several tables) -> the bench's own function that renders the table.
 RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {
@@ -261,6 +272,7 @@ RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {
     "groove_fill.json": _groove_fill_table,
     "extractors_scans.json": _scans_table,
     "arc.json": _arc_table,
+    "beads.json": _beads_table,
 }
 
 
