@@ -512,6 +512,7 @@ HEADLINE = (
     ("bridge", "lockstep bridge, algorithm II in another process", "seamtrack bench bridge"),
     ("firstrun", "the demo's first mesh-mode run, empty numba cache", "seamtrack bench firstrun"),
     ("arc", "the arc in the sensor's view (MAG, 250 A, 30 mm ahead)", "seamtrack bench arc"),
+    ("beads", "a bead's width and height against published beads", "seamtrack bench beads"),
 )
 
 
@@ -586,6 +587,21 @@ def _firstrun() -> str:
     return text
 
 
+def _beads() -> str:
+    r = load("beads")
+    held, model = r["held_out"], r["model"]
+    rows = r["rows"]
+    feeds = sorted({row["wire_feed_m_min"] for row in rows})
+    speeds = sorted({row["travel_speed_mm_min"] for row in rows})
+    return (
+        f"{model['shape']}, w/h {model['width_to_height']:g}, wire area calibrated on "
+        f"{len(model['calibration_runs'])} centre beads; {sum(row['held_out'] for row in rows)} "
+        f"held-out beads ({feeds[0]:g}-{feeds[-1]:g} m/min, {speeds[0]:g}-{speeds[-1]:g} mm/min): "
+        f"width within {100 * held['max_width_error']:.1f} %, height within "
+        f"{100 * held['max_height_error']:.1f} % ({r['source']}; laser + CMT on Al-Cu)"
+    )
+
+
 def _arc() -> str:
     r = load("arc")
     cells = {
@@ -631,6 +647,7 @@ def headline() -> str:
         "bridge": _bridge,
         "firstrun": _firstrun,
         "arc": _arc,
+        "beads": _beads,
     }
     rows = [_row(name, what, measured[name], command) for name, what, command in HEADLINE]
     head = ["| figure | measured | command |", "|---|---|---|"]
