@@ -107,6 +107,11 @@ BENCHES: dict[str, tuple[tuple[str, ...], str, str]] = {
         "seamtrack bench arc",
         "the arc in image and profile mode: current, look-ahead, seam-point errors, cost",
     ),
+    "beads": (
+        ("beads.json",),
+        "seamtrack bench beads",
+        "the bead model's width and height against a published bead-on-plate table",
+    ),
 }
 
 
@@ -238,6 +243,12 @@ def _arc_table(data: dict[str, Any]) -> str:
     return arc_table(data)
 
 
+def _beads_table(data: dict[str, Any]) -> str:
+    from seamtrack.bench.published_beads import beads_table
+
+    return beads_table(data)
+
+
 #: The bench JSON files a page may quote (``file.json``, or ``file.json#name`` for one of a
 #: file's several tables) -> the bench's own function that renders the table.
 RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {
@@ -261,6 +272,7 @@ RENDERERS: dict[str, Callable[[dict[str, Any]], str]] = {
     "groove_fill.json": _groove_fill_table,
     "extractors_scans.json": _scans_table,
     "arc.json": _arc_table,
+    "beads.json": _beads_table,
 }
 
 
@@ -500,6 +512,7 @@ HEADLINE = (
     ("bridge", "lockstep bridge, algorithm II in another process", "seamtrack bench bridge"),
     ("firstrun", "the demo's first mesh-mode run, empty numba cache", "seamtrack bench firstrun"),
     ("arc", "the arc in the sensor's view (MAG, 250 A, 30 mm ahead)", "seamtrack bench arc"),
+    ("beads", "a bead's width and height against published beads", "seamtrack bench beads"),
 )
 
 
@@ -574,6 +587,21 @@ def _firstrun() -> str:
     return text
 
 
+def _beads() -> str:
+    r = load("beads")
+    held, model = r["held_out"], r["model"]
+    rows = r["rows"]
+    feeds = sorted({row["wire_feed_m_min"] for row in rows})
+    speeds = sorted({row["travel_speed_mm_min"] for row in rows})
+    return (
+        f"{model['shape']}, w/h {model['width_to_height']:g}, wire area calibrated on "
+        f"{len(model['calibration_runs'])} centre beads; {sum(row['held_out'] for row in rows)} "
+        f"held-out beads ({feeds[0]:g}-{feeds[-1]:g} m/min, {speeds[0]:g}-{speeds[-1]:g} mm/min): "
+        f"width within {100 * held['max_width_error']:.1f} %, height within "
+        f"{100 * held['max_height_error']:.1f} % ({r['source']}; laser + CMT on Al-Cu)"
+    )
+
+
 def _arc() -> str:
     r = load("arc")
     cells = {
@@ -619,6 +647,7 @@ def headline() -> str:
         "bridge": _bridge,
         "firstrun": _firstrun,
         "arc": _arc,
+        "beads": _beads,
     }
     rows = [_row(name, what, measured[name], command) for name, what, command in HEADLINE]
     head = ["| figure | measured | command |", "|---|---|---|"]

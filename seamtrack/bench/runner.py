@@ -279,6 +279,12 @@ def _bench_arc(out: Path, quick: bool) -> Any:
     return bench_arc(out, quick=quick)
 
 
+def _bench_beads(out: Path, quick: bool) -> Any:
+    from seamtrack.bench.published_beads import bench_beads
+
+    return bench_beads(out, quick=quick)
+
+
 BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "raycast": lambda out, quick: bench_raycast(out, quick=quick),
     "extractors": _bench_extractors,
@@ -300,6 +306,7 @@ BENCHES: dict[str, Callable[[Path, bool], Any]] = {
     "weldments": _bench_weldments,
     "stability": _bench_stability,
     "arc": _bench_arc,
+    "beads": _bench_beads,
 }
 
 

@@ -646,7 +646,7 @@ def _add_upkeep_commands(add: Callable[..., argparse.ArgumentParser]) -> None:
         default="all",
         help="raycast, extractors, mesh, loop, tradeoff, sweep, scaling, failures, camera, "
         "dataset, multipass, gym, bridge, trackers, paper, firstrun, weldments, stability, "
-        "arc, distortion, or all",
+        "arc, distortion, beads, or all",
     )
     p.add_argument("--out", default="bench-results", help="folder for the results")
     p.add_argument("--quick", action="store_true", help="fewer repeats (a smoke run)")
