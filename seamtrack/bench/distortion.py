@@ -84,7 +84,8 @@ def _twi_v_groove_shrinkage_mm() -> float:
 #: The published measurements the model is held to (issue 39: single-pass angular distortion at
 #: more than one heat input and thickness, transverse shrinkage, the per-pass angular
 #: distortion of a multi-pass joint). The values stay ``None`` until read in the paper itself:
-#: the stored copies reachable when this was written hold only each paper's first page.
+#: the stored copies reachable when this was written hold only each paper's first page, and a
+#: second search (2026-12-06) found no copy of any results section either (docs/heat.md).
 PUBLISHED: tuple[PublishedCase, ...] = (
     PublishedCase(
         "Seong, Park and Lee, 'Analytical model for angular distortion in multilayer welding "
@@ -92,7 +93,8 @@ PUBLISHED: tuple[PublishedCase, ...] = (
         "10.3390/app10051848",
         "multi-pass V-groove butt under constraint: angular distortion after each pass",
         "deg",
-        note="value not read: the results section was not reachable (only the first page)",
+        note="value not read: the stored copies (scribd page 1 of 17, doaj.org, mdpi.com "
+        "mirrors) hold the title, abstract and introduction only",
     ),
     PublishedCase(
         "Seong, 'Prediction and characteristics of angular distortion in multi-layer butt "
@@ -100,21 +102,24 @@ PUBLISHED: tuple[PublishedCase, ...] = (
         "10.3390/ma12091435",
         "multi-pass V-groove butt, free: angular distortion after each pass",
         "deg",
-        note="value not read: the results section was not reachable (only the first page)",
+        note="value not read: the stored copies (mdpi.com, readkong.com) hold the abstract "
+        "and introduction only",
     ),
     PublishedCase(
         "Seong, Materials 12 (2019) 1435 (bead-on-plate database)",
         "10.3390/ma12091435",
         "single-pass bead-on-plate angular distortion, low Q/h^2 (thick plate)",
         "deg",
-        note="value not read: the database's table was not reachable (only the first page)",
+        note="value not read: the database's table is in none of the stored copies (abstract "
+        "and introduction only)",
     ),
     PublishedCase(
         "Seong, Materials 12 (2019) 1435 (bead-on-plate database)",
         "10.3390/ma12091435",
         "single-pass bead-on-plate angular distortion, near the Q/h^2 peak (thin plate)",
         "deg",
-        note="value not read: the database's table was not reachable (only the first page)",
+        note="value not read: the database's table is in none of the stored copies (abstract "
+        "and introduction only)",
     ),
     PublishedCase(
         "Huang et al., 'Finite element analysis and in-situ measurement of out-of-plane "
@@ -124,15 +129,16 @@ PUBLISHED: tuple[PublishedCase, ...] = (
         "mm",
         measured=4.0,
         bound="lower",
-        note="the abstract gives 'larger than 4 mm'; the plate and the arc were not read, so "
-        "the model is not run on it",
+        note="read in the abstract (mdpi.com/1996-1944/12/1/141, osti.gov/pages/biblio/"
+        "1489600): 'larger than 4 mm' during welding; the plate and the arc are not in it, so "
+        "the model is not run on it (its elastic transient angle is hundredths of a degree)",
     ),
     PublishedCase(
         "Velikanov, 'Determination of shrinkage of weld' (EDP Sciences, 2018)",
         "",
         "transverse shrinkage of a butt weld",
         "mm",
-        note="value and DOI not read: only the introduction was reachable",
+        note="value and DOI not read: the stored copy (scribd) holds the introduction only",
     ),
     PublishedCase(
         "TWI, 'How much shall I allow for weld shrinkage?' (FAQ, twi-global.com/technical-"
