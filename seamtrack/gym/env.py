@@ -52,6 +52,8 @@ from seamtrack.control.tracking import Command
 from seamtrack.errors import SceneError, SeamError
 from seamtrack.geometry.seam import Seam
 from seamtrack.gym.lockstep import Ended, Frame, LockstepRun, unlimited_wall_time
+from seamtrack.gym.observe import fill_observation
+from seamtrack.gym.stepper import HeldRun, TickBatch, supports
 from seamtrack.simulation.assemble import Parts, build_parts
 from seamtrack.simulation.progress import ProgressTracker
 from seamtrack.simulation.scene import Scene, load_scene
@@ -71,6 +73,9 @@ TORCH_STATE = (
     "t_s",
     "progress",
 )
+
+#: How the loop runs between frames (``SeamTrackEnv(engine=...)``).
+ENGINES = ("auto", "compiled", "lockstep")
 
 #: Every observation entry lies within +- this (mm, mm/s, s): a bound Gymnasium's checker
 #: accepts, far beyond any scene's reach (values are clipped to it).
@@ -186,6 +191,12 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
     lead_mm : float, optional
         How far ahead along the nominal path the torch is aimed; default the larger of 1 mm and
         five frames of travel.
+    engine : {"auto", "compiled", "lockstep"}
+        How the loop runs between frames: its control ticks compiled
+        (:mod:`seamtrack.gym.stepper`; a gantry with an unrotated base, a part that does not
+        move), or :func:`seamtrack.simulation.loop.run` itself in a coroutine
+        (:mod:`seamtrack.gym.lockstep`; any scene). Both give the same steps; ``"auto"``: the
+        compiled ticks where they run.
     """
 
     metadata: dict[str, Any] = {"render_modes": []}  # noqa: RUF012 (Gymnasium's own form)
@@ -200,6 +211,7 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         max_time_s: float | None = None,
         start_jitter_mm: float = 0.5,
         lead_mm: float | None = None,
+        engine: str = "auto",
     ) -> None:
         loaded = scene if isinstance(scene, Scene) else load_scene(scene, overrides)
         if isinstance(scene, Scene) and overrides:
@@ -247,7 +259,23 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         )
         self.max_correction_mm = bound = float(max_correction_mm)
         self.action_space = spaces.Box(-bound, bound, shape=(2,), dtype=np.float32)
-        self._run: LockstepRun | None = None
+        if engine not in ENGINES:
+            raise SceneError(
+                f"unknown engine {engine!r}", field="engine", fix=f"use one of {ENGINES}"
+            )
+        compiled = supports(self.parts)
+        if engine == "compiled" and not compiled:
+            raise SceneError(
+                "the compiled ticks run a gantry with an unrotated base and a part that does "
+                "not move; this scene has neither",
+                field="engine",
+                fix='use engine="auto" (the loop itself where the ticks cannot run compiled)',
+            )
+        self.engine = "compiled" if compiled and engine != "lockstep" else "lockstep"
+        #: Where the compiled ticks run (a row of a batch: the vector env's, or its own).
+        self.tick_batch: TickBatch | None = None
+        self.tick_row = 0
+        self._run: LockstepRun | HeldRun | None = None
         self._correction = (0.0, 0.0)  # (lateral, vertical) mm, as floats
         self._s_nominal = 0.0
         self._s_true = 0.0
@@ -273,7 +301,13 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._correction = (0.0, 0.0)  # (lateral, vertical) mm, as floats
         self._s_nominal = 0.0
         self._s_true = 0.0
-        self._run = run = LockstepRun(parts, loop_seed)
+        if self.engine == "compiled":
+            if self.tick_batch is None:
+                self.tick_batch = TickBatch(parts, 1)
+            run: LockstepRun | HeldRun = HeldRun(parts, self.tick_batch, self.tick_row)
+        else:
+            run = LockstepRun(parts, loop_seed)
+        self._run = run
         frame = run.next_frame(first=True)
         if isinstance(frame, Ended):
             self._stop()
@@ -286,32 +320,44 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
     def step(
         self, action: NDArray[np.float32]
     ) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
-        run = self._run
-        if run is None:
-            raise RuntimeError("call reset() before step() (and after an episode ends)")
-        a, refused = read_action(action)
+        run, command, clipped, refused = self.begin_step(action)
         if refused:
             warnings.warn(
                 f"seamtrack.gym: action refused: {refused}; the step applies no correction",
                 BadActionWarning,
                 stacklevel=2,
             )
+        return self.finish_step(run.next_frame(command), clipped, refused)
+
+    def begin_step(self, action: Any) -> tuple[LockstepRun | HeldRun, Command, bool, str]:
+        """The first half of :meth:`step`: the action read and added to the correction held;
+        the run, the command it takes next, and whether the action was clipped, or why it was
+        refused (``""``: accepted). The vector env runs the ticks of many between the halves."""
+        run = self._run
+        if run is None:
+            raise RuntimeError("call reset() before step() (and after an episode ends)")
+        ax, ay, refused = _action_floats(action)
         bound = self.max_correction_mm
-        ax, ay = a.tolist()  # finite floats: np.clip's min(max(x, lo), hi) in Python
         clipped = abs(ax) > bound or abs(ay) > bound
         reach = 2.0 * self.lost_mm  # farther is lost anyway; keeps the aim inside the travel
         cx, cy = self._correction
         self._correction = (
             min(max(cx + min(max(ax, -bound), bound), -reach), reach),
             min(max(cy + min(max(ay, -bound), bound), -reach), reach),
-        )
-        frame = run.next_frame(self._command())
+        )  # np.clip's min(max(x, lo), hi), on floats
+        return run, self._command(), clipped, refused
+
+    def finish_step(
+        self, frame: Frame | Ended, clipped: bool, refused: str
+    ) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
+        """The second half of :meth:`step`: the frame that arrived (or the run's end)
+        observed and rewarded."""
         if isinstance(frame, Ended):
             obs, reward, terminated, truncated, info = self._ended(frame)
-            info.update(action_clipped=clipped, action_refused=refused)
+            info["action_clipped"], info["action_refused"] = clipped, refused
             return obs, reward, terminated, truncated, info
         obs, info = self._observe(frame)
-        info.update(action_clipped=clipped, action_refused=refused)
+        info["action_clipped"], info["action_refused"] = clipped, refused
         error = info["error_mm"]
         reward = -error
         terminated = truncated = False
@@ -356,22 +402,17 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         (px, py, pz), tangent, lateral, normal = self.nominal.frame_floats(s_nom)
         off = (x - px, y - py, z - pz)
         self._s_true = s_true = self.truth.locate(tcp, self._s_true)
-        n = self.rays
-        obs = np.zeros(3 * n + len(TORCH_STATE), dtype=np.float32)
         profile = frame.profile
         valid = profile.valid
         assert valid is not None
-        np.copyto(obs[: 2 * n].reshape(n, 2), profile.points_laser, where=valid[:, None])
-        obs[2 * n : 3 * n] = valid
         c_lat, c_vert = self._correction
-        obs[3 * n :] = (
+        torch = np.array((
             _dot(off, lateral), _dot(off, normal),
             _dot(velocity, lateral), _dot(velocity, normal), _dot(velocity, tangent),
             c_lat, c_vert, frame.t_s, s_nom / self.nominal.length_mm,
-        )  # fmt: skip
-        # np.clip's arithmetic (max, then min) as two ufuncs, without its Python wrapper
-        np.maximum(obs, -OBSERVATION_LIMIT, out=obs)
-        np.minimum(obs, OBSERVATION_LIMIT, out=obs)
+        ))  # fmt: skip
+        obs = np.empty(3 * self.rays + len(TORCH_STATE), dtype=np.float32)
+        fill_observation(profile.points_laser, valid, torch, OBSERVATION_LIMIT, obs)
         seam_point = self.truth.frame_floats(s_true)[0]
         error = math.dist((x, y, z), seam_point)
         self._last_obs = obs
@@ -396,9 +437,8 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._stop()
         if ended.error is not None:
             raise ended.error
-        assert ended.result is not None
-        status = ended.result.status
-        info = {"t_s": float(ended.result.summary["sim_time_s"]), "status": status}
+        status, t_s = ended.outcome()
+        info = {"t_s": t_s, "status": status}
         obs = self._last_obs.copy()
         if status == "completed":
             return obs, 0.0, True, False, info
@@ -434,6 +474,18 @@ def read_action(action: Any) -> tuple[FloatArray, str]:
     if not np.isfinite(a).all():
         return np.zeros(2), f"{a.tolist()} is not finite (the policy gave NaN or inf)"
     return a, ""
+
+
+def _action_floats(action: Any) -> tuple[float, float, str]:
+    """:func:`read_action` as two floats and the reason (a float array of two finite numbers,
+    the usual action, is read without numpy's conversions)."""
+    if type(action) is np.ndarray and action.shape == (2,) and action.dtype.kind == "f":
+        ax, ay = action.tolist()  # float32 or float64 -> the same doubles as asarray's
+        if math.isfinite(ax) and math.isfinite(ay):
+            return ax, ay, ""
+    a, refused = read_action(action)
+    ax, ay = a.tolist()
+    return ax, ay, refused
 
 
 def _check_number(name: str, value: Any, zero: bool = False) -> None:
