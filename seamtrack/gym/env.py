@@ -191,6 +191,11 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
     lead_mm : float, optional
         How far ahead along the nominal path the torch is aimed; default the larger of 1 mm and
         five frames of travel.
+    share_with : SeamTrackEnv, optional
+        Another environment of the same scene whose ray-casting scene (mesh, Embree scene,
+        section hierarchy) this one casts on instead of building its own: the environments of
+        a :class:`~seamtrack.gym.vector.BatchedVectorEnv` batch share one, which keeps a
+        batch's memory and cache footprint that of one environment. The same steps either way.
     engine : {"auto", "compiled", "lockstep"}
         How the loop runs between frames: its control ticks compiled
         (:mod:`seamtrack.gym.stepper`; a gantry with an unrotated base, a part that does not
@@ -212,6 +217,7 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         start_jitter_mm: float = 0.5,
         lead_mm: float | None = None,
         engine: str = "auto",
+        share_with: SeamTrackEnv | None = None,
     ) -> None:
         loaded = scene if isinstance(scene, Scene) else load_scene(scene, overrides)
         if isinstance(scene, Scene) and overrides:
@@ -233,7 +239,18 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         self.scene = loaded
         self._rng = np.random.default_rng(loaded.config.simulation.seed)  # the scan's noise
         self._rebuild = loaded.config.sensor.source == "image"  # auto-exposure state per run
-        self.parts: Parts = unlimited_wall_time(build_parts(loaded, rng=self._rng))
+        self._caster = None
+        if share_with is not None:
+            if share_with.scene.config != loaded.config:
+                raise SceneError(
+                    "share_with is an environment of another scene",
+                    field="share_with",
+                    fix="share only between environments of the same scene and overrides",
+                )
+            self._caster = share_with.parts.caster
+        self.parts: Parts = unlimited_wall_time(
+            build_parts(loaded, rng=self._rng, caster=self._caster)
+        )
         cfg = self.parts.settings
         sensor = self.parts.sensor
         assert sensor is not None and self.parts.scan is not None
@@ -292,7 +309,9 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         jitter = rng.uniform(-self.start_jitter_mm, self.start_jitter_mm, size=2)
         if self._rebuild:
             self._rng = np.random.default_rng(scan_seed)
-            self.parts = unlimited_wall_time(build_parts(self.scene, rng=self._rng))
+            self.parts = unlimited_wall_time(
+                build_parts(self.scene, rng=self._rng, caster=self._caster)
+            )
         else:  # the same Generator object the parts' scan draws from, re-seeded in place
             self._rng.bit_generator.state = np.random.default_rng(scan_seed).bit_generator.state
         _, _, lateral, normal = self.nominal.frame(0.0)

@@ -119,6 +119,10 @@ class HeldRun:
         robot, cfg = parts.robot, parts.settings
         assert parts.scan is not None
         self.scan = parts.scan
+        # The plane section's seeds (the last stripe's triangles, cut first) belong to the
+        # caster; a caster shared by many runs keeps each run's own here.
+        self.caster = parts.caster
+        self.section_seeds = None if parts.caster is None else parts.caster.section_seeds
         self.robot = robot
         self.frame_period_s, self.latency_s = cfg.frame_period_s, cfg.latency_s
         self.gate = SeamGate(cfg.gate) if cfg.gate is not None else None
@@ -211,7 +215,12 @@ class HeldRun:
         T[:3, 3] = q
         robot = self.robot
         T_ws = robot.T_world_base @ T @ robot.T_tcp_sensor
+        caster = self.caster
+        if caster is not None:  # a shared caster: this run's seeds (they only save work)
+            caster.section_seeds = self.section_seeds
         profile, feature = self.scan(T_ws, t, None)
+        if caster is not None:
+            self.section_seeds = caster.section_seeds
         if self.gate is not None:
             feature = self.gate(feature, T_ws)
         self.pending.append(

@@ -71,7 +71,8 @@ class Batch:
     ) -> None:  # fmt: skip
         self.indices = indices
         self.mode = mode
-        self.envs = [SeamTrackEnv(**env_kwargs) for _ in indices]
+        first = SeamTrackEnv(**env_kwargs)  # the others cast on its scene: one in memory
+        self.envs = [first] + [SeamTrackEnv(**env_kwargs, share_with=first) for _ in indices[1:]]
         self.ended = np.zeros(len(indices), dtype=bool)
         self.ticks: TickBatch | None = None
         if all(env.engine == "compiled" for env in self.envs):
