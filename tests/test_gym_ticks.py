@@ -88,3 +88,42 @@ def test_a_scene_the_ticks_cannot_run_falls_back_to_the_loop() -> None:
     assert "\n" not in str(refused.value)
     with pytest.raises(SceneError, match="engine"):
         SeamTrackEnv(scene=SCENE, overrides=SHORT, engine="turbo")
+
+
+def test_environments_that_share_a_caster_step_alike_and_other_scenes_are_refused() -> None:
+    """``share_with``: the second environment casts on the first one's scene in memory (and
+    keeps its own section seeds); its episode is the one it steps alone. A caster of another
+    scene's mesh is refused in one line."""
+    actions = np.random.default_rng(5).uniform(-0.3, 0.3, size=(300, 2)).astype(np.float32)
+    alone = SeamTrackEnv(scene=SCENE, overrides=SHORT)
+    first = SeamTrackEnv(scene=SCENE, overrides=SHORT)
+    shared = SeamTrackEnv(scene=SCENE, overrides=SHORT, share_with=first)
+    try:
+        assert shared.parts.caster is first.parts.caster
+        assert alone.parts.caster is not first.parts.caster
+        first.reset(seed=1)  # the first one steps between: its seeds must not matter
+
+        def poke(action: np.ndarray) -> None:
+            if first.step(action)[2:4] != (False, False):
+                first.reset()
+
+        for _ in range(40):
+            poke(actions[0])
+        want = _run(alone, actions, seed=2)
+        got = []
+        obs, info = shared.reset(seed=2)
+        got.append((obs.tobytes(), sorted(info.items())))
+        for action in actions:
+            poke(-action)
+            obs, reward, terminated, truncated, info = shared.step(action)
+            got.append((obs.tobytes(), reward, terminated, truncated, sorted(info.items())))
+            if terminated or truncated:
+                break
+        assert got == want
+    finally:
+        for env in (alone, first, shared):
+            env.close()
+    other = {**SHORT, "workpiece.params.seam_length_mm": 25.0}
+    with pytest.raises(SceneError, match="share_with") as refused:
+        SeamTrackEnv(scene=SCENE, overrides=other, share_with=alone)
+    assert "\n" not in str(refused.value)

@@ -339,18 +339,23 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
     def step(
         self, action: NDArray[np.float32]
     ) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
-        run, command, clipped, refused = self.begin_step(action)
+        run, (target, at_end), clipped, refused = self.begin_step(action)
         if refused:
             warnings.warn(
                 f"seamtrack.gym: action refused: {refused}; the step applies no correction",
                 BadActionWarning,
                 stacklevel=2,
             )
-        return self.finish_step(run.next_frame(command), clipped, refused)
+        if isinstance(run, HeldRun):
+            frame = run.advance(target, self.speed_mm_s, at_end)
+        else:
+            frame = run.next_frame(Command(np.array(target), self.speed_mm_s, None, at_end))
+        return self.finish_step(frame, clipped, refused)
 
-    def begin_step(self, action: Any) -> tuple[LockstepRun | HeldRun, Command, bool, str]:
+    def begin_step(self, action: Any) -> tuple[LockstepRun | HeldRun, tuple[Vec, bool], bool, str]:
         """The first half of :meth:`step`: the action read and added to the correction held;
-        the run, the command it takes next, and whether the action was clipped, or why it was
+        the run, the command it takes next (the target in the world, mm, and whether to arrive
+        there at rest; at the welding speed), and whether the action was clipped, or why it was
         refused (``""``: accepted). The vector env runs the ticks of many between the halves."""
         run = self._run
         if run is None:
@@ -364,7 +369,7 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
             min(max(cx + min(max(ax, -bound), bound), -reach), reach),
             min(max(cy + min(max(ay, -bound), bound), -reach), reach),
         )  # np.clip's min(max(x, lo), hi), on floats
-        return run, self._command(), clipped, refused
+        return run, self._aim(), clipped, refused
 
     def finish_step(
         self, frame: Frame | Ended, clipped: bool, refused: str
@@ -401,16 +406,16 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
             self._run.stop()
             self._run = None
 
-    def _command(self) -> Command:
+    def _aim(self) -> tuple[Vec, bool]:
         """Aim ``lead_mm`` ahead of the torch along the nominal path, shifted by the
-        correction; the last stretch arrives at rest at the path's end."""
+        correction: the target (world, mm) and whether to arrive there at rest (the last
+        stretch, at the path's end)."""
         s = min(self._s_nominal + self.lead_mm, self.nominal.length_mm)
-        point, _, lateral, normal = self.nominal.frame_floats(s)
+        (px, py, pz), _, (ax, ay, az), (bx, by, bz) = self.nominal.frame_floats(s)
         c_lat, c_vert = self._correction
-        target = np.array(
-            [p + c_lat * a + c_vert * b for p, a, b in zip(point, lateral, normal, strict=True)]
-        )
-        return Command(target, self.speed_mm_s, None, s >= self.nominal.length_mm)
+        target = (px + c_lat * ax + c_vert * bx, py + c_lat * ay + c_vert * by,
+                  pz + c_lat * az + c_vert * bz)  # fmt: skip
+        return target, s >= self.nominal.length_mm
 
     def _observe(self, frame: Frame) -> tuple[NDArray[np.float32], dict[str, Any]]:
         tcp = np.asarray(frame.tcp_world, dtype=np.float64)

@@ -26,6 +26,7 @@ from seamtrack.control.gate import SeamGate
 from seamtrack.control.orientation import is_closed
 from seamtrack.control.robot import CartesianRobot
 from seamtrack.control.tracking import Command, Measurement
+from seamtrack.geometry.frames import invert
 from seamtrack.gym import ticks
 from seamtrack.gym.lockstep import Ended, Frame
 from seamtrack.gym.ticks import A_Q, A_V, ENDED, EVENT, TIME_OVER, held_ticks
@@ -70,6 +71,9 @@ class TickBatch:
         self.max_ticks = int(math.ceil(cfg.time_limit_s / dt))  # as the loop counts them
         self.check_every = max(1, int(round(CHECK_PERIOD_S / dt)))
         self.tcp_offset = np.ascontiguousarray(robot.T_world_base[:3, 3], dtype=np.float64)
+        # a world point less this is the base frame's (``command_in_base``'s shift, bit for bit)
+        shift = invert(robot.T_world_base)[:3, 3]
+        self.base_shift = (float(shift[0]), float(shift[1]), float(shift[2]))
         gantry = GantryTicks(robot, tuple(self.tcp_offset.tolist()), _checks(parts))
         self.limits, self.servo, self.ipo_every = gantry.lim, gantry.servo, int(gantry.ipo[0])
         near = ProgressTracker(seam)
@@ -166,6 +170,32 @@ class HeldRun:
         row[ticks.C_STOP] = 1.0 if move.stop_at_target else 0.0
         return None
 
+    def hold(
+        self, target_world: tuple[float, float, float], speed_mm_s: float, stop: bool
+    ) -> Ended | None:
+        """:meth:`take` of ``Command(target_world, speed_mm_s, None, stop)`` on floats (the
+        environment's command every step)."""
+        if self.ended is not None:
+            return self.ended
+        tx, ty, tz = self.batch.base_shift
+        x, y, z = target_world
+        target = (x + tx, y + ty, z + tz)
+        if not self.robot.within_travel(target):
+            return self._end("limit_violation", self.tick * self.batch.dt)
+        row = self.batch.command[self.row]
+        row[ticks.C_HAS : ticks.C_Z + 1] = (1.0, *target)
+        row[ticks.C_SPEED : ticks.C_STOP + 1] = (speed_mm_s, 0.0, 0.0, 0.0, 1.0 if stop else 0.0)
+        return None
+
+    def advance(
+        self, target_world: tuple[float, float, float], speed_mm_s: float, stop: bool
+    ) -> Frame | Ended:
+        """:meth:`next_frame` of the command :meth:`hold` takes."""
+        ended = self.hold(target_world, speed_mm_s, stop)
+        if ended is not None:
+            return ended
+        return self._run_to_frame()
+
     def after_ticks(self) -> Frame | Ended | None:
         """After the batch ran this row's ticks: the run's end, or the events of the tick it
         stopped before (a frame captured, a measurement arriving): the frame that arrived, or
@@ -245,6 +275,9 @@ class HeldRun:
             ended = self.take(command)
             if ended is not None:
                 return ended
+        return self._run_to_frame()
+
+    def _run_to_frame(self) -> Frame | Ended:
         while True:
             self.batch.run(self.rows)
             out = self.after_ticks()

@@ -36,6 +36,7 @@ from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
+from seamtrack.control.tracking import Command
 from seamtrack.gym.env import BadActionWarning, SeamTrackEnv
 from seamtrack.gym.stepper import HeldRun, TickBatch
 
@@ -110,7 +111,7 @@ class Batch:
                 arrays["obs"][i], infos[k] = env.reset()
                 self._record(arrays, k, 0.0, False, False)
                 continue
-            run, command, clipped, refused = env.begin_step(arrays["action"][i])
+            run, (target, at_end), clipped, refused = env.begin_step(arrays["action"][i])
             if refused:
                 warnings.warn(
                     f"seamtrack.gym: action refused (environment {i}): {refused}; the step "
@@ -119,12 +120,13 @@ class Batch:
                     stacklevel=3,
                 )
             if self.ticks is not None and isinstance(run, HeldRun):
-                ended = run.take(command)
+                ended = run.hold(target, env.speed_mm_s, at_end)
                 if ended is None:
                     waiting[k] = (run, clipped, refused)
                     continue
                 out = env.finish_step(ended, clipped, refused)
             else:
+                command = Command(np.array(target), env.speed_mm_s, None, at_end)
                 out = env.finish_step(run.next_frame(command), clipped, refused)
             infos[k] = self._finish(arrays, k, out)
         rows = np.fromiter(waiting, dtype=np.int64, count=len(waiting))
