@@ -176,6 +176,16 @@ class Batch:
             env.close()
 
 
+def _per_env(columns: dict[str, list[tuple[int, Any]]], indices: list[int]) -> list[dict]:
+    """A batch's infos by key back to one dict per environment (``indices``, in order)."""
+    where = {i: k for k, i in enumerate(indices)}
+    per_env: list[dict[str, Any]] = [{} for _ in indices]
+    for key, pairs in columns.items():
+        for i, value in pairs:
+            per_env[where[i]][key] = value
+    return per_env
+
+
 def _reset_mask(mask: Any, n: int) -> list[bool]:
     """``options["reset_mask"]`` checked as ``SyncVectorEnv`` checks it (a ``(n,)`` bool
     array with a True), as a list."""
@@ -188,6 +198,28 @@ def _reset_mask(mask: Any, n: int) -> list[bool]:
     if not mask.any():
         raise ValueError("options['reset_mask'] must contain at least one True")
     return [bool(x) for x in mask]
+
+
+#: A batch's infos as it hands them on: ``("columns", {key: [(env index, value), ...]})``
+#: (built where the batch runs, merged by key), or ``("per_env", [info, ...])`` when one holds
+#: what only Gymnasium's ``_add_info`` batches (``final_obs``, a nested dict).
+Infos = tuple[str, Any]
+
+
+def info_columns(per_env: list[dict[str, Any]], indices: list[int]) -> Infos:
+    """A batch's infos (``per_env[k]`` of environment ``indices[k]``) by key, in the order
+    ``_add_info`` meets the keys (see :data:`Infos`)."""
+    columns: dict[str, list[tuple[int, Any]]] = {}
+    for i, info in zip(indices, per_env, strict=True):
+        for key, value in info.items():
+            if key == "final_obs" or isinstance(value, dict):
+                return "per_env", per_env
+            pairs = columns.get(key)
+            if pairs is None:
+                columns[key] = [(i, value)]
+            else:
+                pairs.append((i, value))
+    return "columns", columns
 
 
 def batch_infos(columns: dict[str, list[tuple[int, Any]]], n: int) -> dict[str, Any]:
@@ -236,9 +268,9 @@ def _worker(
         while True:
             command, payload = conn.recv()
             if command == "step":
-                conn.send(("ok", batch.step(arrays)))
+                conn.send(("ok", info_columns(batch.step(arrays), indices)))
             elif command == "reset":
-                conn.send(("ok", batch.reset(arrays, *payload)))
+                conn.send(("ok", info_columns(batch.reset(arrays, *payload), indices)))
             else:
                 conn.send(("ok", None))
                 return
@@ -373,19 +405,22 @@ class BatchedVectorEnv(gymnasium.vector.VectorEnv):
             raise error
         return answers
 
-    def _infos(self, per_env: list[dict[str, Any]]) -> dict[str, Any]:
-        """Gymnasium's batched infos (``_add_info``'s arrays and ``_key`` masks), built a key
-        at a time instead of an environment at a time."""
-        columns: dict[str, list[tuple[int, Any]]] = {}
-        for i, info in enumerate(per_env):
-            for key, value in info.items():
-                if key == "final_obs" or isinstance(value, dict):  # Gymnasium's own cases
-                    infos: dict[str, Any] = {}
-                    for j, each in enumerate(per_env):
-                        infos = self._add_info(infos, each, j)
-                    return infos
-                columns.setdefault(key, []).append((i, value))
-        return batch_infos(columns, self.num_envs)
+    def _infos(self, parts: list[Infos]) -> dict[str, Any]:
+        """Gymnasium's batched infos (``_add_info``'s arrays and ``_key`` masks) from each
+        batch's (in the order of their environments), merged a key at a time."""
+        if all(kind == "columns" for kind, _ in parts):
+            columns: dict[str, list[tuple[int, Any]]] = {}
+            for _, part in parts:
+                for key, pairs in part.items():
+                    columns.setdefault(key, []).extend(pairs)
+            return batch_infos(columns, self.num_envs)
+        per_env: list[dict[str, Any]] = []
+        for (kind, part), indices in zip(parts, self._slices, strict=True):
+            per_env += part if kind == "per_env" else _per_env(part, indices)
+        infos: dict[str, Any] = {}
+        for j, each in enumerate(per_env):
+            infos = self._add_info(infos, each, j)
+        return infos
 
     def _outputs(self) -> tuple[NDArray[Any], ...]:
         a = self._arrays
@@ -410,13 +445,14 @@ class BatchedVectorEnv(gymnasium.vector.VectorEnv):
             options = dict(options)  # the caller's dict is left as it was
             mask = _reset_mask(options.pop("reset_mask"), self.num_envs)
         if self._batch is not None:
-            per_env = self._batch.reset(self._arrays, seeds, options, mask)
+            parts = [info_columns(self._batch.reset(self._arrays, seeds, options, mask),
+                                  self._slices[0])]  # fmt: skip
         else:
             for conn, indices in zip(self._conns, self._slices, strict=True):
                 part = None if mask is None else [mask[i] for i in indices]
                 conn.send(("reset", ([seeds[i] for i in indices], options, part)))
-            per_env = [info for answer in self._gather() for info in answer]
-        return self._arrays["obs"].copy(), self._infos(per_env)
+            parts = self._gather()
+        return self._arrays["obs"].copy(), self._infos(parts)
 
     def step(
         self, actions: NDArray[Any]
@@ -430,13 +466,13 @@ class BatchedVectorEnv(gymnasium.vector.VectorEnv):
             )
         self._arrays["action"][:] = actions
         if self._batch is not None:
-            per_env = self._batch.step(self._arrays)
+            parts = [info_columns(self._batch.step(self._arrays), self._slices[0])]
         else:
             for conn in self._conns:
                 conn.send(("step", None))
-            per_env = [info for answer in self._gather() for info in answer]
+            parts = self._gather()
         obs, reward, terminated, truncated = self._outputs()
-        return obs, reward, terminated, truncated, self._infos(per_env)
+        return obs, reward, terminated, truncated, self._infos(parts)
 
     def close_extras(self, **kwargs: Any) -> None:
         if getattr(self, "_closed", True) and not self._memories:
