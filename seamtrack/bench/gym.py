@@ -20,9 +20,9 @@ Rows:
    workers together (what the pipes and pickling cost shows in the first; the second scales it
    on two cores);
 5. ``BatchedVectorEnv``: :class:`seamtrack.gym.vector.BatchedVectorEnv`, 16 environments in
-   one process, then in 2 worker processes of 8 (one round trip a worker a step, observations
-   in shared memory; each batch's ticks in one compiled call): the goal (issue 41) is twice
-   the single env's steps/s on 2 cores (``ratio_to_one_env``).
+   one process, then in 2 processes of 8 (this one and a worker: one round trip a step,
+   observations in shared memory; each batch's ticks in one compiled call): the goal (issue
+   41) is twice the single env's steps/s on 2 cores (``ratio_to_one_env``).
 
 The target (issue 26): >= 1,000 steps/s on one core, on a quiet machine; the 1-minute load
 average before each row is written beside it.

@@ -297,7 +297,9 @@ class BatchedVectorEnv(gymnasium.vector.VectorEnv):
     num_envs : int
         How many environments.
     workers : int, optional
-        Worker processes; 1 steps every environment in this process.
+        The processes that step batches: this one and ``workers - 1`` worker processes (this
+        process steps the first batch while the workers step theirs); 1 steps every
+        environment in this process.
     context : str
         The multiprocessing start method (``spawn``: a fork would inherit other threads' held
         locks).
@@ -337,20 +339,16 @@ class BatchedVectorEnv(gymnasium.vector.VectorEnv):
         self._memories: list[SharedMemory] = []
         self._conns: list[Connection] = []
         self._processes: list[Any] = []
-        self._batch: Batch | None = None
-        probe = SeamTrackEnv(**env_kwargs) if workers > 1 else None
-        if probe is None:
-            self._batch = Batch(self._slices[0], env_kwargs, mode)
-            single = self._batch.envs[0]
-        else:
-            single = probe
+        # The caller's process steps the first batch itself (it would only wait for the
+        # workers otherwise); worker processes step the others.
+        self._batch = Batch(self._slices[0], env_kwargs, mode)
+        single = self._batch.envs[0]
         self.single_observation_space = single.observation_space
         self.single_action_space = single.action_space
         self.observation_space = batch_space(self.single_observation_space, num_envs)
         self.action_space = batch_space(self.single_action_space, num_envs)
         size = observation_size(single)
-        if probe is not None:
-            probe.close()
+        if workers > 1:
             self._arrays = self._share(size)
             self._start(context, env_kwargs)
         else:
@@ -373,7 +371,7 @@ class BatchedVectorEnv(gymnasium.vector.VectorEnv):
     def _start(self, context: str, env_kwargs: dict[str, Any]) -> None:
         ctx: Any = mp.get_context(context)
         names = dict(zip(SLOTS, (m.name for m in self._memories), strict=True))
-        for indices in self._slices:
+        for indices in self._slices[1:]:
             mine, theirs = ctx.Pipe()
             process = ctx.Process(
                 target=_worker,
@@ -389,6 +387,27 @@ class BatchedVectorEnv(gymnasium.vector.VectorEnv):
         except BaseException:
             self.close()
             raise
+
+    @property
+    def _batch_here(self) -> Batch:
+        """The batch the caller's process steps."""
+        assert self._batch is not None, "the vector env is closed"
+        return self._batch
+
+    def _here_then_gather(self, here: Any) -> list[Infos]:
+        """Run ``here`` (this process's batch: a reset or a step, its infos) while the workers
+        run theirs, then every batch's infos, in order; an error raised here is raised after
+        the workers answered (their pipes stay in step)."""
+        try:
+            local = info_columns(here(), self._slices[0])
+        except BaseException:
+            if self._conns:
+                try:
+                    self._gather()
+                except BaseException:
+                    pass
+            raise
+        return [local, *self._gather()] if self._conns else [local]
 
     def _gather(self) -> list[Any]:
         """Every worker's answer, in order; the first error is raised here."""
@@ -444,14 +463,14 @@ class BatchedVectorEnv(gymnasium.vector.VectorEnv):
         if options is not None and "reset_mask" in options:
             options = dict(options)  # the caller's dict is left as it was
             mask = _reset_mask(options.pop("reset_mask"), self.num_envs)
-        if self._batch is not None:
-            parts = [info_columns(self._batch.reset(self._arrays, seeds, options, mask),
-                                  self._slices[0])]  # fmt: skip
-        else:
-            for conn, indices in zip(self._conns, self._slices, strict=True):
-                part = None if mask is None else [mask[i] for i in indices]
-                conn.send(("reset", ([seeds[i] for i in indices], options, part)))
-            parts = self._gather()
+        for conn, indices in zip(self._conns, self._slices[1:], strict=True):
+            part = None if mask is None else [mask[i] for i in indices]
+            conn.send(("reset", ([seeds[i] for i in indices], options, part)))
+        first = self._slices[0]
+        local = None if mask is None else [mask[i] for i in first]
+        parts = self._here_then_gather(
+            lambda: self._batch_here.reset(self._arrays, [seeds[i] for i in first], options, local)
+        )
         return self._arrays["obs"].copy(), self._infos(parts)
 
     def step(
@@ -465,12 +484,9 @@ class BatchedVectorEnv(gymnasium.vector.VectorEnv):
                 f"vertical) correction in mm for each environment"
             )
         self._arrays["action"][:] = actions
-        if self._batch is not None:
-            parts = [info_columns(self._batch.step(self._arrays), self._slices[0])]
-        else:
-            for conn in self._conns:
-                conn.send(("step", None))
-            parts = self._gather()
+        for conn in self._conns:
+            conn.send(("step", None))
+        parts = self._here_then_gather(lambda: self._batch_here.step(self._arrays))
         obs, reward, terminated, truncated = self._outputs()
         return obs, reward, terminated, truncated, self._infos(parts)
 
