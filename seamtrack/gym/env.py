@@ -3,8 +3,10 @@
 The torch travels along a *nominal* path at the scene's welding speed (by default the straight
 line from the seam's start to its end: a program taught by two points); the agent corrects it
 sideways and up/down, frame by frame, from what the laser sensor sees. The simulation is the
-scene's own closed loop (:mod:`seamtrack.gym.lockstep`): the same servo, frame timing, latency,
-ray-cast stripe and noise as ``seamtrack run``.
+scene's own closed loop: the same servo, frame timing, latency, ray-cast stripe and noise as
+``seamtrack run``, its control ticks between frames compiled (:mod:`seamtrack.gym.stepper`) or,
+where they cannot be, the loop itself in a coroutine (:mod:`seamtrack.gym.lockstep`); the two
+step the same episodes.
 
 Spaces (``n`` = the scene's laser rays):
 
