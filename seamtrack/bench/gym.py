@@ -88,8 +88,10 @@ def _single(steps: int, engine: str = "compiled") -> dict[str, Any]:
 
     base.parts = dataclasses.replace(parts, scan=timed_scan)
     in_loop = [0.0]  # CPU time inside the loop (sensing and control ticks)
+    # what env.step calls to run the loop to the next frame
     run_type: Any = HeldRun if base.engine == "compiled" else LockstepRun
-    next_frame = run_type.next_frame
+    method = "advance" if base.engine == "compiled" else "next_frame"
+    next_frame = getattr(run_type, method)
 
     def timed_next_frame(self: Any, *args: Any, **kwargs: Any) -> Any:
         start = time.process_time()
@@ -101,7 +103,7 @@ def _single(steps: int, engine: str = "compiled") -> dict[str, Any]:
     env.reset(seed=0)
     load = os.getloadavg()[0]
     sensed[0] = 0.0
-    run_type.next_frame = timed_next_frame
+    setattr(run_type, method, timed_next_frame)
     try:
         wall = time.perf_counter()
         cpu = time.process_time()
@@ -112,7 +114,7 @@ def _single(steps: int, engine: str = "compiled") -> dict[str, Any]:
         wall = time.perf_counter() - wall
         cpu = time.process_time() - cpu
     finally:
-        run_type.next_frame = next_frame
+        setattr(run_type, method, next_frame)
     env.close()
     per = 1e3 / steps
     single = {
