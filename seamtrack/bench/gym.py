@@ -9,16 +9,20 @@ Rows:
 
 1. ``in-process loop``: :func:`seamtrack.simulation.loop.run` of the same scene with its own
    tracker, frames per wall second (the reference the environment adds to);
-2. ``1 env, this process``: ``env.step`` in a loop; its step split, in CPU time, into the
-   sensing (ray cast and extraction), the loop's other work between two frames (ten control
-   ticks), the environment's own work (observation, reward, command), and the wall time beyond
-   the CPU time (waiting: other work on the machine);
-3. ``AsyncVectorEnv, 1 process`` and ``2 processes``: environment steps per second of all
+2. ``1 env, this process``: ``env.step`` in a loop (its control ticks compiled,
+   ``engine="compiled"``); its step split, in CPU time, into the sensing (ray cast and
+   extraction), the loop's other work between two frames (ten control ticks and the frame's
+   bookkeeping), the environment's own work (observation, reward, command), and the wall time
+   beyond the CPU time (waiting: other work on the machine);
+3. ``1 env, lockstep loop``: the same with ``engine="lockstep"`` (the loop itself in a
+   coroutine, its ticks in Python: how the environment ran before its ticks were compiled);
+4. ``AsyncVectorEnv, 1 process`` and ``2 processes``: environment steps per second of all
    workers together (what the pipes and pickling cost shows in the first; the second scales it
    on two cores);
-4. ``BatchedVectorEnv``: :class:`seamtrack.gym.vector.BatchedVectorEnv`, 16 environments in
-   one process, then in 2 worker processes of 8 (one round trip a worker a step, observations
-   in shared memory): the goal (issue 41) is twice the single env's steps/s on 2 cores.
+5. ``BatchedVectorEnv``: :class:`seamtrack.gym.vector.BatchedVectorEnv`, 16 environments in
+   one process, then in 2 processes of 8 (this one and a worker: one round trip a step,
+   observations in shared memory; each batch's ticks in one compiled call): the goal (issue
+   41) is twice the single env's steps/s on 2 cores (``ratio_to_one_env``).
 
 The target (issue 26): >= 1,000 steps/s on one core, on a quiet machine; the 1-minute load
 average before each row is written beside it.
@@ -41,14 +45,17 @@ OVERRIDES: dict[str, Any] = {"workpiece.params.seam_length_mm": SEAM_LENGTH_MM}
 TARGET_STEPS_PER_S = 1000.0
 
 
-def _single(steps: int) -> dict[str, Any]:
+def _single(steps: int, engine: str = "compiled") -> dict[str, Any]:
     import gymnasium
 
     from seamtrack.gym import SeamTrackEnv
     from seamtrack.gym.lockstep import LockstepRun
+    from seamtrack.gym.stepper import HeldRun
     from seamtrack.simulation.loop import run
 
-    env = gymnasium.make("seamtrack/Scene-v0", scene="paper-v-groove", overrides=OVERRIDES)
+    env = gymnasium.make(
+        "seamtrack/Scene-v0", scene="paper-v-groove", overrides=OVERRIDES, engine=engine
+    )
     base = env.unwrapped
     assert isinstance(base, SeamTrackEnv)
     parts = base.parts
@@ -81,9 +88,12 @@ def _single(steps: int) -> dict[str, Any]:
 
     base.parts = dataclasses.replace(parts, scan=timed_scan)
     in_loop = [0.0]  # CPU time inside the loop (sensing and control ticks)
-    next_frame = LockstepRun.next_frame
+    # what env.step calls to run the loop to the next frame
+    run_type: Any = HeldRun if base.engine == "compiled" else LockstepRun
+    method = "advance" if base.engine == "compiled" else "next_frame"
+    next_frame = getattr(run_type, method)
 
-    def timed_next_frame(self: LockstepRun, *args: Any, **kwargs: Any) -> Any:
+    def timed_next_frame(self: Any, *args: Any, **kwargs: Any) -> Any:
         start = time.process_time()
         out = next_frame(self, *args, **kwargs)
         in_loop[0] += time.process_time() - start
@@ -93,7 +103,7 @@ def _single(steps: int) -> dict[str, Any]:
     env.reset(seed=0)
     load = os.getloadavg()[0]
     sensed[0] = 0.0
-    LockstepRun.next_frame = timed_next_frame  # type: ignore[method-assign]
+    setattr(run_type, method, timed_next_frame)
     try:
         wall = time.perf_counter()
         cpu = time.process_time()
@@ -104,11 +114,12 @@ def _single(steps: int) -> dict[str, Any]:
         wall = time.perf_counter() - wall
         cpu = time.process_time() - cpu
     finally:
-        LockstepRun.next_frame = next_frame  # type: ignore[method-assign]
+        setattr(run_type, method, next_frame)
     env.close()
     per = 1e3 / steps
     single = {
-        "row": "1 env, this process",
+        "row": "1 env, this process" if engine == "compiled" else "1 env, lockstep loop",
+        "engine": base.engine,
         "load_average_before": load,
         "steps": steps,
         "steps_per_s": steps / wall,
@@ -187,8 +198,12 @@ def bench_gym(out_dir: str | Path, quick: bool = False) -> dict[str, Any]:
 
     steps = 300 if quick else 3000
     first = _single(steps)
-    rows = [first["reference"], first["single"], _vector(1, steps), _vector(2, steps),
+    lockstep = _single(steps, engine="lockstep")["single"]
+    rows = [first["reference"], first["single"], lockstep, _vector(1, steps), _vector(2, steps),
             _batched(1, 16, steps), _batched(2, 16, steps)]  # fmt: skip
+    one = first["single"]["steps_per_s"]
+    for row in rows[3:]:
+        row["ratio_to_one_env"] = row["steps_per_s"] / one
     report = {
         "machine": machine_info(),
         "scene": "paper-v-groove",
@@ -207,21 +222,24 @@ def bench_gym(out_dir: str | Path, quick: bool = False) -> dict[str, Any]:
 
 def _markdown(rows: list[dict[str, Any]]) -> str:
     lines = [
-        "| row | steps (frames)/s | ms a step | load before |",
-        "|---|---:|---:|---:|",
+        "| row | steps (frames)/s | ms a step | x one env | load before |",
+        "|---|---:|---:|---:|---:|",
     ]
     for r in rows:
         rate = r.get("steps_per_s", r.get("frames_per_s", float("nan")))
         ms = r.get("ms_per_step", r.get("ms_per_frame", float("nan")))
-        lines.append(f"| {r['row']} | {rate:,.0f} | {ms:.3f} | {r['load_average_before']:.2f} |")
-    single = next(r for r in rows if r["row"].startswith("1 env"))
-    lines += [
-        "",
-        "One step of the single env (ms): "
-        + ", ".join(
-            f"{key[:-3].replace('_', ' ')} {single[key]:.3f}"
-            for key in ("sensing_ms", "loop_ticks_ms", "env_ms", "waiting_ms")
-        ),
-        "",
-    ]
+        ratio = f"{r['ratio_to_one_env']:.2f}" if "ratio_to_one_env" in r else ""
+        lines.append(
+            f"| {r['row']} | {rate:,.0f} | {ms:.3f} | {ratio} | {r['load_average_before']:.2f} |"
+        )
+    for single in (r for r in rows if r["row"].startswith("1 env")):
+        lines += [
+            "",
+            f"One step of {single['row']} (ms): "
+            + ", ".join(
+                f"{key[:-3].replace('_', ' ')} {single[key]:.3f}"
+                for key in ("sensing_ms", "loop_ticks_ms", "env_ms", "waiting_ms")
+            ),
+        ]
+    lines.append("")
     return "\n".join(lines)

@@ -3,8 +3,10 @@
 The torch travels along a *nominal* path at the scene's welding speed (by default the straight
 line from the seam's start to its end: a program taught by two points); the agent corrects it
 sideways and up/down, frame by frame, from what the laser sensor sees. The simulation is the
-scene's own closed loop (:mod:`seamtrack.gym.lockstep`): the same servo, frame timing, latency,
-ray-cast stripe and noise as ``seamtrack run``.
+scene's own closed loop: the same servo, frame timing, latency, ray-cast stripe and noise as
+``seamtrack run``, its control ticks between frames compiled (:mod:`seamtrack.gym.stepper`) or,
+where they cannot be, the loop itself in a coroutine (:mod:`seamtrack.gym.lockstep`); the two
+step the same episodes.
 
 Spaces (``n`` = the scene's laser rays):
 
@@ -52,6 +54,8 @@ from seamtrack.control.tracking import Command
 from seamtrack.errors import SceneError, SeamError
 from seamtrack.geometry.seam import Seam
 from seamtrack.gym.lockstep import Ended, Frame, LockstepRun, unlimited_wall_time
+from seamtrack.gym.observe import fill_observation
+from seamtrack.gym.stepper import HeldRun, TickBatch, supports
 from seamtrack.simulation.assemble import Parts, build_parts
 from seamtrack.simulation.progress import ProgressTracker
 from seamtrack.simulation.scene import Scene, load_scene
@@ -71,6 +75,9 @@ TORCH_STATE = (
     "t_s",
     "progress",
 )
+
+#: How the loop runs between frames (``SeamTrackEnv(engine=...)``).
+ENGINES = ("auto", "compiled", "lockstep")
 
 #: Every observation entry lies within +- this (mm, mm/s, s): a bound Gymnasium's checker
 #: accepts, far beyond any scene's reach (values are clipped to it).
@@ -186,6 +193,17 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
     lead_mm : float, optional
         How far ahead along the nominal path the torch is aimed; default the larger of 1 mm and
         five frames of travel.
+    share_with : SeamTrackEnv, optional
+        Another environment of the same scene whose ray-casting scene (mesh, Embree scene,
+        section hierarchy) this one casts on instead of building its own: the environments of
+        a :class:`~seamtrack.gym.vector.BatchedVectorEnv` batch share one, which keeps a
+        batch's memory and cache footprint that of one environment. The same steps either way.
+    engine : {"auto", "compiled", "lockstep"}
+        How the loop runs between frames: its control ticks compiled
+        (:mod:`seamtrack.gym.stepper`; a gantry with an unrotated base, a part that does not
+        move), or :func:`seamtrack.simulation.loop.run` itself in a coroutine
+        (:mod:`seamtrack.gym.lockstep`; any scene). Both give the same steps; ``"auto"``: the
+        compiled ticks where they run.
     """
 
     metadata: dict[str, Any] = {"render_modes": []}  # noqa: RUF012 (Gymnasium's own form)
@@ -200,6 +218,8 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         max_time_s: float | None = None,
         start_jitter_mm: float = 0.5,
         lead_mm: float | None = None,
+        engine: str = "auto",
+        share_with: SeamTrackEnv | None = None,
     ) -> None:
         loaded = scene if isinstance(scene, Scene) else load_scene(scene, overrides)
         if isinstance(scene, Scene) and overrides:
@@ -221,7 +241,18 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         self.scene = loaded
         self._rng = np.random.default_rng(loaded.config.simulation.seed)  # the scan's noise
         self._rebuild = loaded.config.sensor.source == "image"  # auto-exposure state per run
-        self.parts: Parts = unlimited_wall_time(build_parts(loaded, rng=self._rng))
+        self._caster = None
+        if share_with is not None:
+            if share_with.scene.config != loaded.config:
+                raise SceneError(
+                    "share_with is an environment of another scene",
+                    field="share_with",
+                    fix="share only between environments of the same scene and overrides",
+                )
+            self._caster = share_with.parts.caster
+        self.parts: Parts = unlimited_wall_time(
+            build_parts(loaded, rng=self._rng, caster=self._caster)
+        )
         cfg = self.parts.settings
         sensor = self.parts.sensor
         assert sensor is not None and self.parts.scan is not None
@@ -247,7 +278,23 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         )
         self.max_correction_mm = bound = float(max_correction_mm)
         self.action_space = spaces.Box(-bound, bound, shape=(2,), dtype=np.float32)
-        self._run: LockstepRun | None = None
+        if engine not in ENGINES:
+            raise SceneError(
+                f"unknown engine {engine!r}", field="engine", fix=f"use one of {ENGINES}"
+            )
+        compiled = supports(self.parts)
+        if engine == "compiled" and not compiled:
+            raise SceneError(
+                "the compiled ticks run a gantry with an unrotated base and a part that does "
+                "not move; this scene has neither",
+                field="engine",
+                fix='use engine="auto" (the loop itself where the ticks cannot run compiled)',
+            )
+        self.engine = "compiled" if compiled and engine != "lockstep" else "lockstep"
+        #: Where the compiled ticks run (a row of a batch: the vector env's, or its own).
+        self.tick_batch: TickBatch | None = None
+        self.tick_row = 0
+        self._run: LockstepRun | HeldRun | None = None
         self._correction = (0.0, 0.0)  # (lateral, vertical) mm, as floats
         self._s_nominal = 0.0
         self._s_true = 0.0
@@ -264,7 +311,9 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         jitter = rng.uniform(-self.start_jitter_mm, self.start_jitter_mm, size=2)
         if self._rebuild:
             self._rng = np.random.default_rng(scan_seed)
-            self.parts = unlimited_wall_time(build_parts(self.scene, rng=self._rng))
+            self.parts = unlimited_wall_time(
+                build_parts(self.scene, rng=self._rng, caster=self._caster)
+            )
         else:  # the same Generator object the parts' scan draws from, re-seeded in place
             self._rng.bit_generator.state = np.random.default_rng(scan_seed).bit_generator.state
         _, _, lateral, normal = self.nominal.frame(0.0)
@@ -273,7 +322,13 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._correction = (0.0, 0.0)  # (lateral, vertical) mm, as floats
         self._s_nominal = 0.0
         self._s_true = 0.0
-        self._run = run = LockstepRun(parts, loop_seed)
+        if self.engine == "compiled":
+            if self.tick_batch is None:
+                self.tick_batch = TickBatch(parts, 1)
+            run: LockstepRun | HeldRun = HeldRun(parts, self.tick_batch, self.tick_row)
+        else:
+            run = LockstepRun(parts, loop_seed)
+        self._run = run
         frame = run.next_frame(first=True)
         if isinstance(frame, Ended):
             self._stop()
@@ -286,32 +341,49 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
     def step(
         self, action: NDArray[np.float32]
     ) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
-        run = self._run
-        if run is None:
-            raise RuntimeError("call reset() before step() (and after an episode ends)")
-        a, refused = read_action(action)
+        run, (target, at_end), clipped, refused = self.begin_step(action)
         if refused:
             warnings.warn(
                 f"seamtrack.gym: action refused: {refused}; the step applies no correction",
                 BadActionWarning,
                 stacklevel=2,
             )
+        if isinstance(run, HeldRun):
+            frame = run.advance(target, self.speed_mm_s, at_end)
+        else:
+            frame = run.next_frame(Command(np.array(target), self.speed_mm_s, None, at_end))
+        return self.finish_step(frame, clipped, refused)
+
+    def begin_step(self, action: Any) -> tuple[LockstepRun | HeldRun, tuple[Vec, bool], bool, str]:
+        """The first half of :meth:`step`: the action read and added to the correction held;
+        the run, the command it takes next (the target in the world, mm, and whether to arrive
+        there at rest; at the welding speed), and whether the action was clipped, or why it was
+        refused (``""``: accepted). The vector env runs the ticks of many between the halves."""
+        run = self._run
+        if run is None:
+            raise RuntimeError("call reset() before step() (and after an episode ends)")
+        ax, ay, refused = _action_floats(action)
         bound = self.max_correction_mm
-        ax, ay = a.tolist()  # finite floats: np.clip's min(max(x, lo), hi) in Python
         clipped = abs(ax) > bound or abs(ay) > bound
         reach = 2.0 * self.lost_mm  # farther is lost anyway; keeps the aim inside the travel
         cx, cy = self._correction
         self._correction = (
             min(max(cx + min(max(ax, -bound), bound), -reach), reach),
             min(max(cy + min(max(ay, -bound), bound), -reach), reach),
-        )
-        frame = run.next_frame(self._command())
+        )  # np.clip's min(max(x, lo), hi), on floats
+        return run, self._aim(), clipped, refused
+
+    def finish_step(
+        self, frame: Frame | Ended, clipped: bool, refused: str
+    ) -> tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]]:
+        """The second half of :meth:`step`: the frame that arrived (or the run's end)
+        observed and rewarded."""
         if isinstance(frame, Ended):
             obs, reward, terminated, truncated, info = self._ended(frame)
-            info.update(action_clipped=clipped, action_refused=refused)
+            info["action_clipped"], info["action_refused"] = clipped, refused
             return obs, reward, terminated, truncated, info
         obs, info = self._observe(frame)
-        info.update(action_clipped=clipped, action_refused=refused)
+        info["action_clipped"], info["action_refused"] = clipped, refused
         error = info["error_mm"]
         reward = -error
         terminated = truncated = False
@@ -336,16 +408,16 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
             self._run.stop()
             self._run = None
 
-    def _command(self) -> Command:
+    def _aim(self) -> tuple[Vec, bool]:
         """Aim ``lead_mm`` ahead of the torch along the nominal path, shifted by the
-        correction; the last stretch arrives at rest at the path's end."""
+        correction: the target (world, mm) and whether to arrive there at rest (the last
+        stretch, at the path's end)."""
         s = min(self._s_nominal + self.lead_mm, self.nominal.length_mm)
-        point, _, lateral, normal = self.nominal.frame_floats(s)
+        (px, py, pz), _, (ax, ay, az), (bx, by, bz) = self.nominal.frame_floats(s)
         c_lat, c_vert = self._correction
-        target = np.array(
-            [p + c_lat * a + c_vert * b for p, a, b in zip(point, lateral, normal, strict=True)]
-        )
-        return Command(target, self.speed_mm_s, None, s >= self.nominal.length_mm)
+        target = (px + c_lat * ax + c_vert * bx, py + c_lat * ay + c_vert * by,
+                  pz + c_lat * az + c_vert * bz)  # fmt: skip
+        return target, s >= self.nominal.length_mm
 
     def _observe(self, frame: Frame) -> tuple[NDArray[np.float32], dict[str, Any]]:
         tcp = np.asarray(frame.tcp_world, dtype=np.float64)
@@ -356,22 +428,17 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         (px, py, pz), tangent, lateral, normal = self.nominal.frame_floats(s_nom)
         off = (x - px, y - py, z - pz)
         self._s_true = s_true = self.truth.locate(tcp, self._s_true)
-        n = self.rays
-        obs = np.zeros(3 * n + len(TORCH_STATE), dtype=np.float32)
         profile = frame.profile
         valid = profile.valid
         assert valid is not None
-        np.copyto(obs[: 2 * n].reshape(n, 2), profile.points_laser, where=valid[:, None])
-        obs[2 * n : 3 * n] = valid
         c_lat, c_vert = self._correction
-        obs[3 * n :] = (
+        torch = np.array((
             _dot(off, lateral), _dot(off, normal),
             _dot(velocity, lateral), _dot(velocity, normal), _dot(velocity, tangent),
             c_lat, c_vert, frame.t_s, s_nom / self.nominal.length_mm,
-        )  # fmt: skip
-        # np.clip's arithmetic (max, then min) as two ufuncs, without its Python wrapper
-        np.maximum(obs, -OBSERVATION_LIMIT, out=obs)
-        np.minimum(obs, OBSERVATION_LIMIT, out=obs)
+        ))  # fmt: skip
+        obs = np.empty(3 * self.rays + len(TORCH_STATE), dtype=np.float32)
+        fill_observation(profile.points_laser, valid, torch, OBSERVATION_LIMIT, obs)
         seam_point = self.truth.frame_floats(s_true)[0]
         error = math.dist((x, y, z), seam_point)
         self._last_obs = obs
@@ -396,9 +463,8 @@ class SeamTrackEnv(gymnasium.Env[NDArray[np.float32], NDArray[np.float32]]):
         self._stop()
         if ended.error is not None:
             raise ended.error
-        assert ended.result is not None
-        status = ended.result.status
-        info = {"t_s": float(ended.result.summary["sim_time_s"]), "status": status}
+        status, t_s = ended.outcome()
+        info = {"t_s": t_s, "status": status}
         obs = self._last_obs.copy()
         if status == "completed":
             return obs, 0.0, True, False, info
@@ -434,6 +500,18 @@ def read_action(action: Any) -> tuple[FloatArray, str]:
     if not np.isfinite(a).all():
         return np.zeros(2), f"{a.tolist()} is not finite (the policy gave NaN or inf)"
     return a, ""
+
+
+def _action_floats(action: Any) -> tuple[float, float, str]:
+    """:func:`read_action` as two floats and the reason (a float array of two finite numbers,
+    the usual action, is read without numpy's conversions)."""
+    if type(action) is np.ndarray and action.shape == (2,) and action.dtype.kind == "f":
+        ax, ay = action.tolist()  # float32 or float64 -> the same doubles as asarray's
+        if math.isfinite(ax) and math.isfinite(ay):
+            return ax, ay, ""
+    a, refused = read_action(action)
+    ax, ay = a.tolist()
+    return ax, ay, refused
 
 
 def _check_number(name: str, value: Any, zero: bool = False) -> None:

@@ -64,10 +64,20 @@ class Frame:
 
 @dataclass(frozen=True, eq=False)
 class Ended:
-    """The loop ended by itself: its result, or the error it raised (never both)."""
+    """The loop ended by itself: its result, or the error it raised (never both); or, from
+    the compiled ticks (:mod:`seamtrack.gym.stepper`), which score nothing, the status and
+    time the loop's result would give (``status``, ``t_s``)."""
 
     result: Result | None = None
     error: BaseException | None = None
+    status: str = ""
+    t_s: float = math.nan
+
+    def outcome(self) -> tuple[str, float]:
+        """The run's status and its last tick's time (s)."""
+        if self.result is not None:
+            return self.result.status, float(self.result.summary["sim_time_s"])
+        return self.status, self.t_s
 
 
 class LockstepTracker:
@@ -150,13 +160,12 @@ class LockstepRun:
         return item
 
     def stop(self) -> None:
-        """End the run (the loop is waiting for a command, has ended, or never started):
-        a stop request, which the loop honours after the tick it waits in (it brakes there)
-        and ends as ``interrupted``."""
+        """End the run (the loop is waiting for a command, has ended, or never started): a
+        ``GreenletExit`` raised where the loop waits ends it there, unscored (scoring a run the
+        environment ended, which nothing reads, took longer than a hundred steps)."""
         if self.ended is None and self._greenlet:  # started and not dead: waiting in command()
-            self.stop_request.request("env_stop", "the environment ended the episode")
-            self.ended = self._greenlet.switch(None)
-        self.ended = self.ended or Ended()
+            self._greenlet.throw()
+        self.ended = self.ended or Ended(status="interrupted")
 
     @property
     def alive(self) -> bool:

@@ -25,6 +25,7 @@ from __future__ import annotations
 import multiprocessing as mp
 import os
 import traceback
+import warnings
 from multiprocessing.connection import Connection
 from multiprocessing.shared_memory import SharedMemory
 from typing import Any
@@ -35,7 +36,9 @@ from gymnasium.vector import AutoresetMode
 from gymnasium.vector.utils import batch_space
 from numpy.typing import NDArray
 
-from seamtrack.gym.env import SeamTrackEnv
+from seamtrack.control.tracking import Command
+from seamtrack.gym.env import BadActionWarning, SeamTrackEnv
+from seamtrack.gym.stepper import HeldRun, TickBatch
 
 #: The shared arrays: name -> (dtype, per-environment shape given the observation size).
 SLOTS: dict[str, tuple[type, Any]] = {
@@ -56,43 +59,189 @@ def observation_size(env: SeamTrackEnv) -> int:
 
 class Batch:
     """Environments stepped together with Gymnasium's NEXT_STEP autoreset, writing into
-    arrays they are given (rows ``indices`` of the batch's arrays)."""
+    arrays they are given (rows ``indices`` of the batch's arrays).
 
-    def __init__(self, indices: list[int], env_kwargs: dict[str, Any]) -> None:
+    Where the environments' ticks run compiled (``engine="compiled"``, the usual gantry), they
+    share one :class:`~seamtrack.gym.stepper.TickBatch`: a step takes every environment's
+    command, runs the control ticks of all of them to their next frame in one compiled call,
+    then senses each one's frame and observes it."""
+
+    def __init__(
+        self, indices: list[int], env_kwargs: dict[str, Any],
+        mode: AutoresetMode = AutoresetMode.NEXT_STEP,
+    ) -> None:  # fmt: skip
         self.indices = indices
-        self.envs = [SeamTrackEnv(**env_kwargs) for _ in indices]
+        self.mode = mode
+        first = SeamTrackEnv(**env_kwargs)  # the others cast on its scene: one in memory
+        self.envs = [first] + [SeamTrackEnv(**env_kwargs, share_with=first) for _ in indices[1:]]
         self.ended = np.zeros(len(indices), dtype=bool)
+        self.ticks: TickBatch | None = None
+        if all(env.engine == "compiled" for env in self.envs):
+            self.ticks = TickBatch(self.envs[0].parts, len(indices))
+            for k, env in enumerate(self.envs):
+                env.tick_batch, env.tick_row = self.ticks, k
 
     def reset(
-        self, arrays: dict[str, NDArray[Any]], seeds: list[int | None], options: Any
-    ) -> list[dict[str, Any]]:
-        infos = []
+        self, arrays: dict[str, NDArray[Any]], seeds: list[int | None], options: Any,
+        mask: list[bool] | None = None,
+    ) -> list[dict[str, Any]]:  # fmt: skip
+        """Reset every environment, or those of ``mask``; their infos (``{}`` for the
+        others)."""
+        infos: list[dict[str, Any]] = []
         for k, (i, env) in enumerate(zip(self.indices, self.envs, strict=True)):
+            if mask is not None and not mask[k]:
+                infos.append({})
+                continue
             arrays["obs"][i], info = env.reset(seed=seeds[k], options=options)
             infos.append(info)
-        self.ended[:] = False
+            self.ended[k] = False
         return infos
 
     def step(self, arrays: dict[str, NDArray[Any]]) -> list[dict[str, Any]]:
-        infos = []
+        infos: list[dict[str, Any]] = [{}] * len(self.envs)
+        waiting: dict[int, tuple[HeldRun, bool, str]] = {}  # their ticks run batched
         for k, (i, env) in enumerate(zip(self.indices, self.envs, strict=True)):
-            if self.ended[k]:  # NEXT_STEP: the episode ended last step; this one resets it
-                arrays["obs"][i], info = env.reset()
-                reward, terminated, truncated = 0.0, False, False
-            else:
-                arrays["obs"][i], reward, terminated, truncated, info = env.step(
-                    arrays["action"][i]
+            if self.ended[k]:
+                if self.mode == AutoresetMode.DISABLED:
+                    raise ValueError(
+                        f"environment {i}'s episode has ended; with autoreset_mode=DISABLED "
+                        "reset it first: reset(options={'reset_mask': mask})"
+                    )
+                # NEXT_STEP: the episode ended last step; this one resets it
+                arrays["obs"][i], infos[k] = env.reset()
+                self._record(arrays, k, 0.0, False, False)
+                continue
+            run, (target, at_end), clipped, refused = env.begin_step(arrays["action"][i])
+            if refused:
+                warnings.warn(
+                    f"seamtrack.gym: action refused (environment {i}): {refused}; the step "
+                    "applies no correction",
+                    BadActionWarning,
+                    stacklevel=3,
                 )
-            arrays["reward"][i] = reward
-            arrays["terminated"][i] = terminated
-            arrays["truncated"][i] = truncated
-            self.ended[k] = terminated or truncated
-            infos.append(info)
+            if self.ticks is not None and isinstance(run, HeldRun):
+                ended = run.hold(target, env.speed_mm_s, at_end)
+                if ended is None:
+                    waiting[k] = (run, clipped, refused)
+                    continue
+                out = env.finish_step(ended, clipped, refused)
+            else:
+                command = Command(np.array(target), env.speed_mm_s, None, at_end)
+                out = env.finish_step(run.next_frame(command), clipped, refused)
+            infos[k] = self._finish(arrays, k, out)
+        rows = np.fromiter(waiting, dtype=np.int64, count=len(waiting))
+        while len(rows):
+            assert self.ticks is not None
+            self.ticks.run(rows)  # every waiting environment's ticks, to its next event
+            still = []
+            for k in rows.tolist():
+                run, clipped, refused = waiting[k]
+                frame = run.after_ticks()  # a frame sensed, or the end of the run
+                if frame is None:
+                    still.append(k)
+                    continue
+                infos[k] = self._finish(
+                    arrays, k, self.envs[k].finish_step(frame, clipped, refused)
+                )
+            rows = np.array(still, dtype=np.int64)
         return infos
+
+    def _finish(
+        self, arrays: dict[str, NDArray[Any]], k: int,
+        out: tuple[NDArray[np.float32], float, bool, bool, dict[str, Any]],
+    ) -> dict[str, Any]:  # fmt: skip
+        obs, reward, terminated, truncated, info = out
+        i = self.indices[k]
+        arrays["obs"][i] = obs
+        self._record(arrays, k, reward, terminated, truncated)
+        if self.mode == AutoresetMode.SAME_STEP and self.ended[k]:
+            # reset at once: the last observation and info go in final_obs and final_info
+            arrays["obs"][i], reset_info = self.envs[k].reset()
+            self.ended[k] = False
+            return {"final_obs": obs, "final_info": info, **reset_info}
+        return info
+
+    def _record(
+        self, arrays: dict[str, NDArray[Any]], k: int, reward: float, terminated: bool,
+        truncated: bool,
+    ) -> None:  # fmt: skip
+        i = self.indices[k]
+        arrays["reward"][i] = reward
+        arrays["terminated"][i] = terminated
+        arrays["truncated"][i] = truncated
+        self.ended[k] = terminated or truncated
 
     def close(self) -> None:
         for env in self.envs:
             env.close()
+
+
+def _per_env(columns: dict[str, list[tuple[int, Any]]], indices: list[int]) -> list[dict]:
+    """A batch's infos by key back to one dict per environment (``indices``, in order)."""
+    where = {i: k for k, i in enumerate(indices)}
+    per_env: list[dict[str, Any]] = [{} for _ in indices]
+    for key, pairs in columns.items():
+        for i, value in pairs:
+            per_env[where[i]][key] = value
+    return per_env
+
+
+def _reset_mask(mask: Any, n: int) -> list[bool]:
+    """``options["reset_mask"]`` checked as ``SyncVectorEnv`` checks it (a ``(n,)`` bool
+    array with a True), as a list."""
+    if not isinstance(mask, np.ndarray):
+        raise TypeError(f"options['reset_mask'] must be a numpy array, got {type(mask)}")
+    if mask.shape != (n,):
+        raise ValueError(f"options['reset_mask'] must have shape ({n},), got {mask.shape}")
+    if mask.dtype != np.bool_:
+        raise TypeError(f"options['reset_mask'] must have dtype=np.bool_, got {mask.dtype}")
+    if not mask.any():
+        raise ValueError("options['reset_mask'] must contain at least one True")
+    return [bool(x) for x in mask]
+
+
+#: A batch's infos as it hands them on: ``("columns", {key: [(env index, value), ...]})``
+#: (built where the batch runs, merged by key), or ``("per_env", [info, ...])`` when one holds
+#: what only Gymnasium's ``_add_info`` batches (``final_obs``, a nested dict).
+Infos = tuple[str, Any]
+
+
+def info_columns(per_env: list[dict[str, Any]], indices: list[int]) -> Infos:
+    """A batch's infos (``per_env[k]`` of environment ``indices[k]``) by key, in the order
+    ``_add_info`` meets the keys (see :data:`Infos`)."""
+    columns: dict[str, list[tuple[int, Any]]] = {}
+    for i, info in zip(indices, per_env, strict=True):
+        for key, value in info.items():
+            if key == "final_obs" or isinstance(value, dict):
+                return "per_env", per_env
+            pairs = columns.get(key)
+            if pairs is None:
+                columns[key] = [(i, value)]
+            else:
+                pairs.append((i, value))
+    return "columns", columns
+
+
+def batch_infos(columns: dict[str, list[tuple[int, Any]]], n: int) -> dict[str, Any]:
+    """Gymnasium's batched infos of scalar and array values: for each key (``columns``: the
+    environments that gave it and their values, in order), an array of ``n`` (of the first
+    value's type; an object array for other values) and the mask ``_key``, as
+    ``VectorEnv._add_info`` builds them."""
+    infos: dict[str, Any] = {}
+    for key, pairs in columns.items():
+        first = pairs[0][1]
+        if type(first) in (int, float, bool) or issubclass(type(first), np.number):
+            array = np.zeros(n, dtype=type(first))
+        elif isinstance(first, np.ndarray):
+            array = np.zeros((n, *first.shape), dtype=first.dtype)
+        else:
+            array = np.full(n, fill_value=None, dtype=object)
+        mask = np.zeros(n, dtype=np.bool_)
+        for i, value in pairs:
+            array[i] = value
+            mask[i] = True
+        infos[key], infos[f"_{key}"] = array, mask
+    return infos
 
 
 def _attach(names: dict[str, str], n: int, size: int) -> tuple[list[SharedMemory], dict]:
@@ -106,22 +255,22 @@ def _attach(names: dict[str, str], n: int, size: int) -> tuple[list[SharedMemory
 
 def _worker(
     conn: Connection, indices: list[int], env_kwargs: dict[str, Any], names: dict[str, str],
-    n: int,
+    n: int, mode: str,
 ) -> None:  # fmt: skip
     """A worker process: builds its batch, then answers ``reset``, ``step`` and ``close``."""
     memories: list[SharedMemory] = []
     batch = None
     try:
-        batch = Batch(indices, env_kwargs)
+        batch = Batch(indices, env_kwargs, AutoresetMode(mode))
         size = observation_size(batch.envs[0])
         memories, arrays = _attach(names, n, size)
         conn.send(("ready", None))
         while True:
             command, payload = conn.recv()
             if command == "step":
-                conn.send(("ok", batch.step(arrays)))
+                conn.send(("ok", info_columns(batch.step(arrays), indices)))
             elif command == "reset":
-                conn.send(("ok", batch.reset(arrays, *payload)))
+                conn.send(("ok", info_columns(batch.reset(arrays, *payload), indices)))
             else:
                 conn.send(("ok", None))
                 return
@@ -148,10 +297,18 @@ class BatchedVectorEnv(gymnasium.vector.VectorEnv):
     num_envs : int
         How many environments.
     workers : int, optional
-        Worker processes; 1 steps every environment in this process.
+        The processes that step batches: this one and ``workers - 1`` worker processes (this
+        process steps the first batch while the workers step theirs); 1 steps every
+        environment in this process.
     context : str
         The multiprocessing start method (``spawn``: a fork would inherit other threads' held
         locks).
+    autoreset_mode : AutoresetMode or str
+        Gymnasium's autoreset modes, as ``SyncVectorEnv`` runs them: ``NEXT_STEP`` (the
+        default: the step after an episode's end resets it), ``SAME_STEP`` (the step that ends
+        it resets it; the last observation and info in ``infos["final_obs"]`` and
+        ``infos["final_info"]``) or ``DISABLED`` (``reset(options={"reset_mask": mask})``
+        resets the ended ones; stepping an ended one is an error).
     **env_kwargs
         :class:`~seamtrack.gym.env.SeamTrackEnv`'s arguments (``scene``, ``overrides``, ...).
     """
@@ -160,10 +317,17 @@ class BatchedVectorEnv(gymnasium.vector.VectorEnv):
 
     def __init__(
         self, num_envs: int, *, workers: int | None = None, context: str = "spawn",
-        **env_kwargs: Any,
+        autoreset_mode: AutoresetMode | str = AutoresetMode.NEXT_STEP, **env_kwargs: Any,
     ) -> None:  # fmt: skip
         if not isinstance(num_envs, int) or num_envs < 1:
             raise ValueError(f"num_envs: {num_envs!r}; give a whole number of at least 1")
+        try:
+            mode = AutoresetMode(autoreset_mode)
+        except ValueError:
+            names = ", ".join(m.value for m in AutoresetMode)
+            raise ValueError(f"autoreset_mode: {autoreset_mode!r}; use one of {names}") from None
+        self.autoreset_mode = mode
+        self.metadata = {**type(self).metadata, "autoreset_mode": mode}
         cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1
         workers = min(num_envs, cores if workers is None else int(workers))
         if workers < 1:
@@ -175,20 +339,16 @@ class BatchedVectorEnv(gymnasium.vector.VectorEnv):
         self._memories: list[SharedMemory] = []
         self._conns: list[Connection] = []
         self._processes: list[Any] = []
-        self._batch: Batch | None = None
-        probe = SeamTrackEnv(**env_kwargs) if workers > 1 else None
-        if probe is None:
-            self._batch = Batch(self._slices[0], env_kwargs)
-            single = self._batch.envs[0]
-        else:
-            single = probe
+        # The caller's process steps the first batch itself (it would only wait for the
+        # workers otherwise); worker processes step the others.
+        self._batch = Batch(self._slices[0], env_kwargs, mode)
+        single = self._batch.envs[0]
         self.single_observation_space = single.observation_space
         self.single_action_space = single.action_space
         self.observation_space = batch_space(self.single_observation_space, num_envs)
         self.action_space = batch_space(self.single_action_space, num_envs)
         size = observation_size(single)
-        if probe is not None:
-            probe.close()
+        if workers > 1:
             self._arrays = self._share(size)
             self._start(context, env_kwargs)
         else:
@@ -211,10 +371,11 @@ class BatchedVectorEnv(gymnasium.vector.VectorEnv):
     def _start(self, context: str, env_kwargs: dict[str, Any]) -> None:
         ctx: Any = mp.get_context(context)
         names = dict(zip(SLOTS, (m.name for m in self._memories), strict=True))
-        for indices in self._slices:
+        for indices in self._slices[1:]:
             mine, theirs = ctx.Pipe()
             process = ctx.Process(
-                target=_worker, args=(theirs, indices, env_kwargs, names, self.num_envs),
+                target=_worker,
+                args=(theirs, indices, env_kwargs, names, self.num_envs, self.autoreset_mode.value),
                 daemon=True,
             )  # fmt: skip
             process.start()
@@ -226,6 +387,27 @@ class BatchedVectorEnv(gymnasium.vector.VectorEnv):
         except BaseException:
             self.close()
             raise
+
+    @property
+    def _batch_here(self) -> Batch:
+        """The batch the caller's process steps."""
+        assert self._batch is not None, "the vector env is closed"
+        return self._batch
+
+    def _here_then_gather(self, here: Any) -> list[Infos]:
+        """Run ``here`` (this process's batch: a reset or a step, its infos) while the workers
+        run theirs, then every batch's infos, in order; an error raised here is raised after
+        the workers answered (their pipes stay in step)."""
+        try:
+            local = info_columns(here(), self._slices[0])
+        except BaseException:
+            if self._conns:
+                try:
+                    self._gather()
+                except BaseException:
+                    pass
+            raise
+        return [local, *self._gather()] if self._conns else [local]
 
     def _gather(self) -> list[Any]:
         """Every worker's answer, in order; the first error is raised here."""
@@ -242,10 +424,21 @@ class BatchedVectorEnv(gymnasium.vector.VectorEnv):
             raise error
         return answers
 
-    def _infos(self, per_env: list[dict[str, Any]]) -> dict[str, Any]:
+    def _infos(self, parts: list[Infos]) -> dict[str, Any]:
+        """Gymnasium's batched infos (``_add_info``'s arrays and ``_key`` masks) from each
+        batch's (in the order of their environments), merged a key at a time."""
+        if all(kind == "columns" for kind, _ in parts):
+            columns: dict[str, list[tuple[int, Any]]] = {}
+            for _, part in parts:
+                for key, pairs in part.items():
+                    columns.setdefault(key, []).extend(pairs)
+            return batch_infos(columns, self.num_envs)
+        per_env: list[dict[str, Any]] = []
+        for (kind, part), indices in zip(parts, self._slices, strict=True):
+            per_env += part if kind == "per_env" else _per_env(part, indices)
         infos: dict[str, Any] = {}
-        for i, info in enumerate(per_env):
-            infos = self._add_info(infos, info, i)
+        for j, each in enumerate(per_env):
+            infos = self._add_info(infos, each, j)
         return infos
 
     def _outputs(self) -> tuple[NDArray[Any], ...]:
@@ -257,19 +450,28 @@ class BatchedVectorEnv(gymnasium.vector.VectorEnv):
     def reset(
         self, *, seed: int | list[int | None] | None = None, options: dict[str, Any] | None = None
     ) -> tuple[NDArray[np.float32], dict[str, Any]]:
+        """Reset every environment (seeds ``seed + i``, or one each from a list), or only
+        those of ``options["reset_mask"]`` (a ``(num_envs,)`` bool array), as Gymnasium's
+        ``SyncVectorEnv`` does."""
         if seed is None or isinstance(seed, int):
             seeds = [None if seed is None else seed + i for i in range(self.num_envs)]
         else:
             seeds = list(seed)
             if len(seeds) != self.num_envs:
                 raise ValueError(f"seed: {len(seeds)} seeds for {self.num_envs} environments")
-        if self._batch is not None:
-            per_env = self._batch.reset(self._arrays, seeds, options)
-        else:
-            for conn, indices in zip(self._conns, self._slices, strict=True):
-                conn.send(("reset", ([seeds[i] for i in indices], options)))
-            per_env = [info for answer in self._gather() for info in answer]
-        return self._arrays["obs"].copy(), self._infos(per_env)
+        mask = None
+        if options is not None and "reset_mask" in options:
+            options = dict(options)  # the caller's dict is left as it was
+            mask = _reset_mask(options.pop("reset_mask"), self.num_envs)
+        for conn, indices in zip(self._conns, self._slices[1:], strict=True):
+            part = None if mask is None else [mask[i] for i in indices]
+            conn.send(("reset", ([seeds[i] for i in indices], options, part)))
+        first = self._slices[0]
+        local = None if mask is None else [mask[i] for i in first]
+        parts = self._here_then_gather(
+            lambda: self._batch_here.reset(self._arrays, [seeds[i] for i in first], options, local)
+        )
+        return self._arrays["obs"].copy(), self._infos(parts)
 
     def step(
         self, actions: NDArray[Any]
@@ -282,14 +484,11 @@ class BatchedVectorEnv(gymnasium.vector.VectorEnv):
                 f"vertical) correction in mm for each environment"
             )
         self._arrays["action"][:] = actions
-        if self._batch is not None:
-            per_env = self._batch.step(self._arrays)
-        else:
-            for conn in self._conns:
-                conn.send(("step", None))
-            per_env = [info for answer in self._gather() for info in answer]
+        for conn in self._conns:
+            conn.send(("step", None))
+        parts = self._here_then_gather(lambda: self._batch_here.step(self._arrays))
         obs, reward, terminated, truncated = self._outputs()
-        return obs, reward, terminated, truncated, self._infos(per_env)
+        return obs, reward, terminated, truncated, self._infos(parts)
 
     def close_extras(self, **kwargs: Any) -> None:
         if getattr(self, "_closed", True) and not self._memories:

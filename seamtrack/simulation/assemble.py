@@ -94,6 +94,7 @@ class Parts:
     scan: ScanFn | None = None  # mesh mode: the stripe profile and the feature found in it
     sensor: LaserLineSensor | None = None
     mesh: Any = None  # mesh mode: the ray-cast scene (workpiece and obstacles, world frame)
+    caster: Any = None  # mesh mode: the RayCaster of ``mesh`` the scan casts on
     tracker_name: str = "tracker"  # as the scene names it, for errors raised in its code
     tool_program: Any = None  # the tool orientations along the nominal seam (ToolProgram)
     start_joints: FloatArray | None = None  # an arm's planned start configuration
@@ -212,18 +213,23 @@ def takes_hint(find: Callable[..., Any]) -> bool:
 
 
 def _mesh_scan(
-    scene: Scene, sensor: LaserLineSensor, rng: np.random.Generator, extra_mesh: Any = None
-) -> MeshScan:
+    scene: Scene, sensor: LaserLineSensor, rng: np.random.Generator, extra_mesh: Any = None,
+    caster: Any = None,
+) -> MeshScan:  # fmt: skip
     """The workpiece's CAD seam (world frame) and the per-frame scan: ray-cast stripe, then the
     scene's feature extractor (by default the one the seam's joint type calls for).
     ``extra_mesh`` (world frame, e.g. the beads of a multi-pass job) is ray-cast with the part;
-    the seam is the part's."""
+    the seam is the part's. ``caster``: a caster of this very mesh to cast on (see
+    :func:`build_parts`)."""
     from seamtrack.features.warm import start_warming, wait_warmed
     from seamtrack.sensing.raycast import RayCaster
 
     part, T_world_part = _load_part(scene)
     mesh, solid = _world_meshes(scene, part.mesh, T_world_part, extra_mesh)
-    caster = RayCaster.from_mesh(mesh)
+    if caster is None:
+        caster = RayCaster.from_mesh(mesh)
+    elif not _casts(caster, mesh):
+        raise ValueError("the caster given is not of the mesh this scene builds")
     seam = part.seam.transformed(T_world_part)
     extractor_name, find = _scene_extractor(scene, part.joint, part.opening_rad)
     warming = [start_warming(find, extractor_name, sensor, scene.config.sensor.rays)]
@@ -262,6 +268,15 @@ def _mesh_scan(
     view = None if part.view_normal is None else T_world_part[:3, :3] @ part.view_normal
     return MeshScan(seam, scan, mesh, caster, extractor_name, view, find, last_image, hinted,
                     solid, tcp)  # fmt: skip
+
+
+def _casts(caster: Any, mesh: Any) -> bool:
+    """Whether ``caster`` was built from ``mesh`` (the same triangles and vertices)."""
+    faces = np.asarray(mesh.faces)
+    if caster.faces.shape != faces.shape or not np.array_equal(caster.faces, faces):
+        return False
+    vertices = np.asarray(mesh.vertices, dtype=np.float64) - caster.local_origin
+    return bool(np.array_equal(caster.vertices_local, vertices))
 
 
 def _load_part(scene: Scene) -> tuple[Any, FloatArray]:
@@ -519,11 +534,16 @@ def _stripe_noise(params: dict[str, Any]) -> Any:
 
 
 def build_parts(
-    scene: Scene, rng: np.random.Generator | None = None, extra_mesh: Any = None
-) -> Parts:
+    scene: Scene, rng: np.random.Generator | None = None, extra_mesh: Any = None,
+    caster: Any = None,
+) -> Parts:  # fmt: skip
     """Everything :func:`seamtrack.simulation.loop.run` needs, validated against each other.
     ``extra_mesh``: a mesh in the world frame ray-cast with the workpiece (a multi-pass job's
-    beads, :mod:`seamtrack.multipass.job`); mesh mode only."""
+    beads, :mod:`seamtrack.multipass.job`); mesh mode only. ``caster``: the
+    :class:`~seamtrack.sensing.raycast.RayCaster` of an earlier build of the same scene
+    (``parts.caster``) to cast on instead of a new one (many runs of one scene side by side
+    share one scene in memory: :class:`seamtrack.gym.vector.BatchedVectorEnv`); a caster of
+    another mesh is a ``ValueError``."""
     c = scene.config
     rng = rng if rng is not None else np.random.default_rng(c.simulation.seed)
     sensor = make_sensor(c.sensor)
@@ -531,7 +551,7 @@ def build_parts(
     mesh: Any = None
     loaded = None
     if c.sensor.mode == "mesh" or c.seam.source == "workpiece":
-        loaded = _mesh_scan(scene, sensor, rng, extra_mesh)
+        loaded = _mesh_scan(scene, sensor, rng, extra_mesh, caster)
     if c.sensor.mode == "mesh":
         assert loaded is not None
         seam, scan, mesh = loaded.seam, loaded.scan, loaded.mesh
@@ -618,6 +638,7 @@ def build_parts(
         scan=scan,
         sensor=sensor,
         mesh=mesh,
+        caster=None if mesh is None or loaded is None else loaded.caster,
         tool_program=program,
         start_joints=start_joints,
         extractor_name=(

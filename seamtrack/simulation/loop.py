@@ -53,7 +53,7 @@ from seamtrack.simulation.ticks import LIMIT, REFUSED, STOPPED, compiled_ticks
 FloatArray = NDArray[np.float64]
 
 #: How often (in simulated seconds) progress along the seam is checked.
-_CHECK_PERIOD_S = 0.01
+CHECK_PERIOD_S = 0.01
 
 #: The wall-clock guard reads the clock every this many control ticks (a tick takes
 #: microseconds, a mesh-mode frame milliseconds: the guard holds to well within a second).
@@ -297,7 +297,7 @@ class _Loop:
         self.sense_time = 0.0
 
         self.max_ticks = int(math.ceil(cfg.time_limit_s / dt))
-        self.check_every = max(1, int(round(_CHECK_PERIOD_S / dt)))
+        self.check_every = max(1, int(round(CHECK_PERIOD_S / dt)))
         rest_window = cfg.frame_period_s + cfg.latency_s + 2 * dt
         self.last_cmd: Command | None = None
         # the last command's rotation, angular velocity
