@@ -21,9 +21,10 @@ algorithm II, cut to :data:`SIM_S` simulated seconds. Runs:
 Per run: wall time of the loop (the wait for the tracker to connect left out), x real time
 (simulated / wall), the bridge's cost per frame ((bridged - in-process wall) / frames) and per
 round trip; where a round trip's time goes: the server's CPU in it (writing the step, reading
-the answer) and the tracker process's CPU per round trip (its whole life, start-up included:
-an upper bound), the rest being the wait for the two processes to be woken; and whether the
-summary equals the in-process one (it must, in both modes).
+the answer) and the tracker process's CPU per round trip from its first step on (its
+``--timing`` line: all its threads), its start-up CPU (imports, connecting) apart, the rest
+being the wait for the two processes to be woken; and whether the summary equals the
+in-process one (it must, in both modes).
 Writes ``bridge.json`` and ``bridge.md``.
 """
 
@@ -121,10 +122,11 @@ def _bridged(
     # The client's stderr goes to a file (a pipe nobody reads would stall a chatty client),
     # read back only to say why a run failed.
     errors = Path(folder) / "client.err"
-    with errors.open("wb") as err:
+    said_out = Path(folder) / "client.out"  # the summary, then its CPU time (--timing)
+    with errors.open("wb") as err, said_out.open("wb") as out:
         client = subprocess.Popen(
-            [*command, endpoint, *([] if profile else ["--no-profile"])],
-            stdout=subprocess.DEVNULL,
+            [*command, endpoint, "--timing", *([] if profile else ["--no-profile"])],
+            stdout=out,
             stderr=err,
         )
     try:
@@ -137,6 +139,7 @@ def _bridged(
             client.kill()
             client.wait()
         said = errors.read_text(errors="replace").strip().splitlines()[-1:]
+        timing = _timing(said_out.read_text(errors="replace"))
         shutil.rmtree(folder, ignore_errors=True)
     if tracker.failure is not None:
         raise RuntimeError(
@@ -145,7 +148,25 @@ def _bridged(
         )
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
     client_cpu = (after.ru_utime + after.ru_stime) - (before.ru_utime + before.ru_stime)
-    return {**result.summary, "server_cpu_s": server.cpu_s, "client_cpu_s": client_cpu}
+    return {
+        **result.summary,
+        "server_cpu_s": server.cpu_s,
+        "client_cpu_s": client_cpu,
+        "client_loop_cpu_s": timing.get("loop_cpu_s", math.nan),
+        "client_start_cpu_s": timing.get("start_cpu_s", math.nan),
+    }
+
+
+def _timing(printed: str) -> dict[str, Any]:
+    """The client's ``--timing`` line (its last line of output), or {} without one."""
+    for line in printed.strip().splitlines()[::-1]:
+        try:
+            said = json.loads(line)
+        except ValueError:
+            continue
+        if isinstance(said, dict) and "loop_cpu_s" in said:
+            return said
+    return {}
 
 
 class _CpuMeter:
@@ -192,6 +213,8 @@ def _row(name: str, summary: dict[str, Any], base: dict[str, Any] | None) -> dic
             round_trip_us=1e6 * summary["bridge_exchange_s"] / max(steps, 1),
             server_cpu_us=1e6 * summary["server_cpu_s"] / max(steps, 1),
             client_cpu_us=1e6 * summary["client_cpu_s"] / max(steps, 1),
+            client_loop_cpu_us=1e6 * summary["client_loop_cpu_s"] / max(steps, 1),
+            client_start_cpu_ms=1e3 * summary["client_start_cpu_s"],
             same_as_in_process=all(
                 _same(summary.get(k), v) for k, v in base["summary"].items() if k not in _IGNORE
             ),
@@ -271,8 +294,8 @@ def _markdown(report: dict[str, Any]) -> str:
         f"{report['load_average_after']:.2f} (2 cores shared means slower round trips).",
         "",
         "| run | wall s | x real time | cost per frame ms | round trips | per round trip us "
-        "| server CPU us | client CPU us | same as in-process |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| server CPU us | client CPU us | client start-up CPU ms | same as in-process |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in report["runs"]:
         same = r.get("same_as_in_process")
@@ -280,7 +303,7 @@ def _markdown(report: dict[str, Any]) -> str:
             f"| {r['run']} | {r['wall_time_s']:.2f} | {r['x_real_time']:.1f} | "
             f"{r.get('cost_per_frame_ms', 0.0):.3f} | {r.get('round_trips', '-')} | "
             f"{r.get('round_trip_us', 0.0):.0f} | {r.get('server_cpu_us', 0.0):.0f} | "
-            f"{r.get('client_cpu_us', 0.0):.0f} | "
+            f"{r.get('client_loop_cpu_us', 0.0):.0f} | {r.get('client_start_cpu_ms', 0.0):.0f} | "
             f"{'-' if same is None else ('yes' if same else 'NO')} |"
         )
     lines += [
@@ -296,8 +319,10 @@ def _markdown(report: dict[str, Any]) -> str:
             if report.get("repeats", 1) > 1
             else "Each row is one run (quick: a smoke run, not a measurement)."
         ),
-        "Per round trip: the server's CPU in it, and the tracker process's CPU (its start-up "
-        "included); the rest of a round trip is waiting for either process to be woken.",
+        "Per round trip: the server's CPU in it (its loop thread), and the tracker process's "
+        "CPU (all its threads, ZeroMQ's or Zenoh's I/O threads too) from its first step to the "
+        "end; its start-up (imports, connecting) apart; the rest of a round trip is waiting "
+        "for either process to be woken.",
         "",
     ]
     return "\n".join(lines)

@@ -36,6 +36,7 @@ import json
 import math
 import struct
 import sys
+import time
 
 DEFAULT_ENDPOINT = "tcp://127.0.0.1:5555"
 
@@ -173,6 +174,9 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--no-profile", action="store_true", help="ask for no profiles")
     ap.add_argument("--dump-profiles", default="", help="write each frame's profile (JSON lines)")
     ap.add_argument("--token-file", default="", help="a file holding serve's shared token")
+    ap.add_argument(
+        "--timing", action="store_true", help="print this process's CPU time (a JSON line)"
+    )
     return ap
 
 
@@ -188,6 +192,13 @@ def _fault(end: dict) -> bool:
     """Did the run end by the bridge (this client's fault, a signal) rather than by the
     simulation itself (completed, lost_seam, a time limit, ...)?"""
     return end["status"] == "interrupted" or str(end["reason"]).startswith("bridge:")
+
+
+def timing(steps: int, started: float) -> dict:
+    """This process's CPU time (all its threads: ZeroMQ's I/O thread too) before the first
+    step (start-up) and from it to the end, and the steps answered."""
+    now = time.process_time()
+    return {"steps": steps, "start_cpu_s": started, "loop_cpu_s": now - started}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -209,11 +220,16 @@ def main(argv: list[str] | None = None) -> int:
             reset["context"]["welding_speed_mm_s"], args.radius_mm, then=args.then
         )
         sock.send_json({"op": "ready"})
+        steps, started = 0, 0.0
         while True:
             parts = sock.recv_multipart()  # blocks until the step is there: no polling
+            if not steps:
+                started = time.process_time()  # start-up: imports, connecting, hello
             if parts[0][:4] != b"STP3":  # the end of the run, a fault too: status and reason
                 msg = json.loads(parts[0])
                 print(json.dumps(msg.get("summary", msg)))
+                if args.timing:
+                    print(json.dumps(timing(steps, started)))
                 if msg["op"] == "end" and not _fault(msg):
                     return 0
                 print(f"{msg['status']}: {msg['reason']}", file=sys.stderr)
@@ -225,6 +241,7 @@ def main(argv: list[str] | None = None) -> int:
                 if dump and profile is not None:
                     dump.write(json.dumps(profile_row(t_capture, *profile)) + "\n")
             sock.send(command_bytes(seq, tracker.step(tcp, taken)))
+            steps += 1
     finally:
         if dump:
             dump.close()

@@ -128,6 +128,7 @@ def main() -> int:
     ap.add_argument("--misbehave", default="")
     ap.add_argument("--check-frames", action="store_true")
     ap.add_argument("--then", type=int, default=2, help="points sent ahead (cmd_then)")
+    ap.add_argument("--timing", action="store_true", help="print this process's CPU time")
     args = ap.parse_args()
     config = zenoh.Config()
     config.insert_json5("mode", '"client"')
@@ -208,7 +209,7 @@ def main() -> int:
         publishers[topic].put(bytes(TS.serialize_cdr(msg, pubs[topic])), attachment=attachment)
 
     tracker = None
-    steps = 0
+    steps, started = 0, 0.0
     taken = 0
     while True:
         topic, raw = receive()
@@ -239,6 +240,10 @@ def main() -> int:
             print(TS.deserialize_cdr(raw, subs[topic]).data)
             if args.check_frames:
                 print(json.dumps(seen))
+            if args.timing:  # CPU before the first step (start-up) and from it on
+                now = time.process_time()
+                timing = {"steps": steps, "start_cpu_s": started, "loop_cpu_s": now - started}
+                print(json.dumps(timing))
             break
         elif topic == "/seamtrack/then_taken":
             taken = TS.deserialize_cdr(raw, subs[topic]).data
@@ -246,6 +251,8 @@ def main() -> int:
             p = TS.deserialize_cdr(raw, subs[topic]).point
             tracker.update((p.x, p.y, p.z))
         elif topic == "/seamtrack/tcp":
+            if not steps:
+                started = time.process_time()
             msg = TS.deserialize_cdr(raw, subs[topic])
             p = msg.pose.position
             cmd = tracker.step((p.x, p.y, p.z), taken)
