@@ -18,7 +18,13 @@ Algorithm II needs only the seam points, ``--dump-profiles`` reads the profiles 
 writes them as JSON lines. Each command carries the next ``--then`` points of
 the queue (``then``: the bridge goes on to them itself when the torch comes within the radius,
 between frames; ``--then 0``: it asks at each switch instead). ``--token-file`` sends a
-server's shared token (needed beyond loopback).
+server's shared token (needed beyond loopback); ``--timing`` prints its CPU time after the
+summary (a JSON line: before the first step, and from it on).
+
+Per step it does little, as a client that keeps up should: it receives the step part by part
+(part 0 says which parts follow: two for each frame that brings its profile), unpacks only the
+fields it reads, and packs a command once, sending it again while it holds with only its seq
+new (:meth:`ConvergenceRadius.step` returns the same object until its points change).
 
 Algorithm II, exactly as seamtrack's in-process ``convergence-radius`` (so that the run is the
 same, byte for byte, with ``--set tracker.params={}``): every found seam point is queued
@@ -209,11 +215,13 @@ def _fault(end: dict) -> bool:
     return end["status"] == "interrupted" or str(end["reason"]).startswith("bridge:")
 
 
-def timing(steps: int, started: float) -> dict:
+def timing(steps: int, started: float, started_thread: float) -> dict:
     """This process's CPU time (all its threads: ZeroMQ's I/O thread too) before the first
-    step (start-up) and from it to the end, and the steps answered."""
-    now = time.process_time()
-    return {"steps": steps, "start_cpu_s": started, "loop_cpu_s": now - started}
+    step (start-up) and from it to the end, this thread's from it to the end, and the steps
+    answered."""
+    now, thread = time.process_time(), time.thread_time()
+    return {"steps": steps, "start_cpu_s": started, "loop_cpu_s": now - started,
+            "thread_cpu_s": thread - started_thread}  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -235,17 +243,17 @@ def main(argv: list[str] | None = None) -> int:
             reset["context"]["welding_speed_mm_s"], args.radius_mm, then=args.then
         )
         sock.send_json({"op": "ready"})
-        steps, started = 0, 0.0
+        steps, started, started_thread = 0, 0.0, 0.0
         sent, moves = None, b""  # the last command packed, and its records
         while True:
             head = sock.recv()  # blocks until the step is there: no polling
-            if not steps:
-                started = time.process_time()  # start-up: imports, connecting, hello
+            if not steps:  # start-up: imports, connecting, hello
+                started, started_thread = time.process_time(), time.thread_time()
             if head[:4] != b"STP3":  # the end of the run, a fault too: status and reason
                 msg = json.loads(head)
                 print(json.dumps(msg.get("summary", msg)))
                 if args.timing:
-                    print(json.dumps(timing(steps, started)))
+                    print(json.dumps(timing(steps, started, started_thread)))
                 if msg["op"] == "end" and not _fault(msg):
                     return 0
                 print(f"{msg['status']}: {msg['reason']}", file=sys.stderr)

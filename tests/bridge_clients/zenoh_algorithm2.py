@@ -116,6 +116,52 @@ class ConvergenceRadius:
         return self.points[1 : min(1 + n, len(self.points) - 1)]
 
 
+#: A header's stamp (sec, nanosec), the first field of each command message (little-endian CDR,
+#: after the 4-byte encapsulation header).
+STAMP = struct.Struct("<iI")
+
+
+def command_messages(tracker, cmd, ahead, then: int) -> list[tuple[str, bytearray]]:
+    """The answer to a step as (topic, CDR bytes) serialized by rosbags, stamped 0: cmd_pose
+    and cmd_speed (and cmd_then: the points ``ahead``); the caller stamps them."""
+    stamp = T["builtin_interfaces/msg/Time"](sec=0, nanosec=0)
+    zero = T["geometry_msgs/msg/Vector3"](x=0.0, y=0.0, z=0.0)
+    if cmd is None:  # an empty frame id: brake to rest and wait
+        target, stop, frame = (0.0, 0.0, 0.0), 0.0, ""
+    else:
+        target, stop, frame = cmd[0], 1.0 if cmd[1] else 0.0, "world"
+    header = T["std_msgs/msg/Header"](stamp=stamp, frame_id=frame)
+    # Ask again within the radius (frame lockstep): that is where the switch comes.
+    within = 0.0 if cmd is None or cmd[1] else tracker.radius
+    orientation = T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=0.0)
+    pose = T["geometry_msgs/msg/Pose"](
+        position=T["geometry_msgs/msg/Point"](x=target[0], y=target[1], z=target[2]),
+        orientation=orientation,
+    )
+    twist = T["geometry_msgs/msg/Twist"](
+        linear=T["geometry_msgs/msg/Vector3"](x=tracker.speed, y=stop, z=within), angular=zero
+    )
+    messages = [
+        ("/seamtrack/cmd_pose", T["geometry_msgs/msg/PoseStamped"](header=header, pose=pose)),
+        ("/seamtrack/cmd_speed", T["geometry_msgs/msg/TwistStamped"](header=header, twist=twist)),
+    ]
+    if then:
+        poses = [
+            T["geometry_msgs/msg/Pose"](
+                position=T["geometry_msgs/msg/Point"](x=a[0], y=a[1], z=a[2]),
+                orientation=orientation,
+            )
+            for a in ahead
+        ]
+        then_header = T["std_msgs/msg/Header"](stamp=stamp, frame_id="world")
+        array = T["geometry_msgs/msg/PoseArray"](header=then_header, poses=poses)
+        messages.append(("/seamtrack/cmd_then", array))
+    return [
+        (topic, bytearray(TS.serialize_cdr(m, m.__msgtype__, little_endian=True)))
+        for topic, m in messages
+    ]
+
+
 def dist(a, b) -> float:
     dx, dy, dz = a[0] - b[0], a[1] - b[1], a[2] - b[2]
     return math.sqrt(dx * dx + dy * dy + dz * dz)
@@ -203,13 +249,15 @@ def main() -> int:
         entity += 1
     seq = [0]
 
-    def publish(topic, msg):
+    def publish(topic, raw):
         seq[0] += 1
         attachment = struct.pack("<qqB", seq[0], time.time_ns(), 16) + gids[topic]
-        publishers[topic].put(bytes(TS.serialize_cdr(msg, pubs[topic])), attachment=attachment)
+        publishers[topic].put(bytes(raw), attachment=attachment)
 
     tracker = None
-    steps, started = 0, 0.0
+    held: tuple = (False, [])  # the command last serialized, and its messages
+    serialized: list = []
+    steps, started, started_thread = 0, 0.0, 0.0
     taken = 0
     while True:
         topic, raw = receive()
@@ -243,6 +291,7 @@ def main() -> int:
             if args.timing:  # CPU before the first step (start-up) and from it on
                 now = time.process_time()
                 timing = {"steps": steps, "start_cpu_s": started, "loop_cpu_s": now - started}
+                timing["thread_cpu_s"] = time.thread_time() - started_thread
                 print(json.dumps(timing))
             break
         elif topic == "/seamtrack/then_taken":
@@ -252,12 +301,11 @@ def main() -> int:
             tracker.update((p.x, p.y, p.z))
         elif topic == "/seamtrack/tcp":
             if not steps:
-                started = time.process_time()
+                started, started_thread = time.process_time(), time.thread_time()
             msg = TS.deserialize_cdr(raw, subs[topic])
             p = msg.pose.position
             cmd = tracker.step((p.x, p.y, p.z), taken)
             taken = 0
-            header = T["std_msgs/msg/Header"](stamp=msg.header.stamp, frame_id="world")
             if steps == 5 and args.misbehave:
                 if args.misbehave == "garbage":
                     publishers["/seamtrack/cmd_pose"].put(b"\x00\x01garbage")
@@ -271,42 +319,14 @@ def main() -> int:
                 time.sleep(30)
                 return 0
             steps += 1
-            zero = T["geometry_msgs/msg/Vector3"](x=0.0, y=0.0, z=0.0)
-            if cmd is None:
-                target, stop, speed_x = (0.0, 0.0, 0.0), 0.0, tracker.speed
-                header = T["std_msgs/msg/Header"](stamp=msg.header.stamp, frame_id="")
-            else:
-                target, stop, speed_x = cmd[0], 1.0 if cmd[1] else 0.0, tracker.speed
-            # Ask again within the radius (frame lockstep): that is where the switch comes.
-            within = 0.0 if cmd is None or cmd[1] else tracker.radius
-            pose = T["geometry_msgs/msg/Pose"](
-                position=T["geometry_msgs/msg/Point"](x=target[0], y=target[1], z=target[2]),
-                orientation=T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=0.0),
-            )
-            twist = T["geometry_msgs/msg/Twist"](
-                linear=T["geometry_msgs/msg/Vector3"](x=speed_x, y=stop, z=within), angular=zero
-            )
-            publish(
-                "/seamtrack/cmd_pose", T["geometry_msgs/msg/PoseStamped"](header=header, pose=pose)
-            )
-            publish(
-                "/seamtrack/cmd_speed",
-                T["geometry_msgs/msg/TwistStamped"](header=header, twist=twist),
-            )
-            if args.then:
-                ahead = [] if cmd is None or cmd[1] else tracker.ahead(args.then)
-                poses = [
-                    T["geometry_msgs/msg/Pose"](
-                        position=T["geometry_msgs/msg/Point"](x=a[0], y=a[1], z=a[2]),
-                        orientation=pose.orientation,
-                    )
-                    for a in ahead
-                ]
-                then_header = T["std_msgs/msg/Header"](stamp=msg.header.stamp, frame_id="world")
-                publish(
-                    "/seamtrack/cmd_then",
-                    T["geometry_msgs/msg/PoseArray"](header=then_header, poses=poses),
-                )
+            ahead = [] if cmd is None or cmd[1] or not args.then else tracker.ahead(args.then)
+            if (cmd, ahead) != held:  # a new command: serialized once (rosbags), then held
+                held = (cmd, ahead)
+                serialized = command_messages(tracker, cmd, ahead, args.then)
+            stamp = msg.header.stamp  # each message of the answer stamped with the step's
+            for topic, raw in serialized:
+                STAMP.pack_into(raw, 4, stamp.sec, stamp.nanosec)  # the header's, first
+                publish(topic, raw)
     for subscriber in subscribers:
         subscriber.undeclare()
     for t in tokens:

@@ -42,16 +42,16 @@ def main() -> int:
     speed = reset["context"]["welding_speed_mm_s"]
     tracker = ConvergenceRadius(speed, args.radius_mm, then=args.then)
     sock.send_json({"op": "ready"})
-    steps, started = 0, 0.0
+    steps, started, started_thread = 0, 0.0, 0.0
     while True:
         parts = sock.recv_multipart()  # blocks until the step is there: no polling
         if not steps:
-            started = time.process_time()
+            started, started_thread = time.process_time(), time.thread_time()
         msg = json.loads(parts[0])
         if msg["op"] == "end":
             print(json.dumps(msg["summary"]))
             if args.timing:
-                print(json.dumps(timing(steps, started)))
+                print(json.dumps(timing(steps, started, started_thread)))
             if dump:
                 dump.close()
             return 0
