@@ -3,6 +3,10 @@ speaking what rmw_zenoh_cpp speaks: CDR payloads (rosbags) on ``<domain>/<topic>
 <RIHS01 hash>`` key expressions, with liveliness tokens for the node and its entities. Only
 ``zenoh`` and ``rosbags`` (and the standard library): nothing of seamtrack.
 
+Per step it does what a node that keeps up does: the torch and the seam points (a header and
+fixed doubles) are read with struct where their CDR layout puts them, and each command is
+serialized with rosbags once, then stamped with the step's time while it holds.
+
 Usage: python zenoh_algorithm2.py LOCATOR [--radius-mm 1.0] [--misbehave KIND] [--then 2]
 
 Works in SI units as a ROS node does (m, m/s). With each command it publishes its next
@@ -119,6 +123,23 @@ class ConvergenceRadius:
 #: A header's stamp (sec, nanosec), the first field of each command message (little-endian CDR,
 #: after the 4-byte encapsulation header).
 STAMP = struct.Struct("<iI")
+HEADER = struct.Struct("<iII")  # the stamp, then the frame id's length
+
+
+def stamped_doubles(raw: bytes, msgtype: str, n: int) -> tuple[tuple[int, int], tuple]:
+    """A message of a header and n doubles (PointStamped: 3, PoseStamped: 7) as (its stamp as
+    (sec, nanosec), the doubles), read with struct where the CDR layout puts them (the doubles
+    aligned to 8 after the header's frame id); a big-endian message through rosbags."""
+    if raw[:4] != b"\x00\x01\x00\x00":
+        msg = TS.deserialize_cdr(raw, msgtype)
+        values = msg.point if n == 3 else msg.pose.position
+        stamp = (msg.header.stamp.sec, msg.header.stamp.nanosec)
+        extra = () if n == 3 else (0.0,) * 4
+        return stamp, (values.x, values.y, values.z, *extra)
+    sec, nanosec, length = HEADER.unpack_from(raw, 4)
+    at = 12 + length
+    at += -at % 8  # from the end of the encapsulation header
+    return (sec, nanosec), struct.unpack_from(f"<{n}d", raw, 4 + at)
 
 
 def command_messages(tracker, cmd, ahead, then: int) -> list[tuple[str, bytearray]]:
@@ -297,14 +318,12 @@ def main() -> int:
         elif topic == "/seamtrack/then_taken":
             taken = TS.deserialize_cdr(raw, subs[topic]).data
         elif topic == "/seamtrack/seam_point_world":
-            p = TS.deserialize_cdr(raw, subs[topic]).point
-            tracker.update((p.x, p.y, p.z))
+            tracker.update(stamped_doubles(raw, subs[topic], 3)[1])
         elif topic == "/seamtrack/tcp":
             if not steps:
                 started, started_thread = time.process_time(), time.thread_time()
-            msg = TS.deserialize_cdr(raw, subs[topic])
-            p = msg.pose.position
-            cmd = tracker.step((p.x, p.y, p.z), taken)
+            stamp, (x, y, z, *_) = stamped_doubles(raw, subs[topic], 7)
+            cmd = tracker.step((x, y, z), taken)
             taken = 0
             if steps == 5 and args.misbehave:
                 if args.misbehave == "garbage":
@@ -323,9 +342,8 @@ def main() -> int:
             if (cmd, ahead) != held:  # a new command: serialized once (rosbags), then held
                 held = (cmd, ahead)
                 serialized = command_messages(tracker, cmd, ahead, args.then)
-            stamp = msg.header.stamp  # each message of the answer stamped with the step's
-            for topic, raw in serialized:
-                STAMP.pack_into(raw, 4, stamp.sec, stamp.nanosec)  # the header's, first
+            for topic, raw in serialized:  # each message of the answer stamped with the step's
+                STAMP.pack_into(raw, 4, *stamp)  # the header's stamp, its first field
                 publish(topic, raw)
     for subscriber in subscribers:
         subscriber.undeclare()
