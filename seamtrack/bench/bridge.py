@@ -24,7 +24,8 @@ round trip; where a round trip's time goes: the server's CPU in it (writing the 
 the answer) and the tracker process's CPU per round trip from its first step on (its
 ``--timing`` line: all its threads), its start-up CPU (imports, connecting) apart, the rest
 being the wait for the two processes to be woken; and whether the summary equals the
-in-process one (it must, in both modes).
+in-process one (it must, in both modes). Beside the runs, pyzmq's own round trip on the
+machine (:func:`zmq_floor`, over TCP and IPC): the floor of the ZeroMQ rows.
 Writes ``bridge.json`` and ``bridge.md``.
 """
 
