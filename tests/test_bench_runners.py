@@ -242,9 +242,15 @@ def test_bridge_bench(tmp_path: Path) -> None:
         assert row["frames"] == rows["in-process"]["frames"] > 0, name
         if name != "in-process":
             assert row["same_as_in_process"], name
+            # the client's own CPU from its first step on (--timing), its start-up apart
+            assert 0 < row["client_thread_cpu_us"] <= row["client_loop_cpu_us"], name
+            assert row["client_start_cpu_ms"] > 0, name
         if "frame" in name:
             assert row["round_trips"] <= row["frames"] + 1, name
     assert rows["zmq / tick"]["round_trips"] > 5 * rows["zmq / frame"]["round_trips"]
+    floor = {f["endpoint"]: f for f in report["zmq_floor"]}  # pyzmq's own round trip
+    assert floor.keys() == {"tcp", "ipc"}
+    assert all(0 < f["client_cpu_us"] < f["round_trip_us"] for f in floor.values())
 
 
 def test_a_childs_peak_memory_is_its_own(tmp_path: Path) -> None:

@@ -105,3 +105,37 @@ def test_a_move_the_same_to_the_byte_is_taken_again_and_a_changed_one_read() -> 
     other = packed.decode_command(packed.encode_command(3, [a]), 3, known)
     assert other[0] is not first[0]  # a was not in the last message: read anew
     assert other[0][0] is not None and other[0][0].target_world.tolist() == [1.0, 2.0, 3.0]
+
+
+def test_a_command_the_same_but_for_its_seq_is_the_same_answer_and_still_checked() -> None:
+    """CommandReader: the message of the last step again, with this step's seq, is the same
+    answer (not read again); with a wrong seq it is refused as any message is; a changed one
+    is read anew."""
+    reader = packed.CommandReader()
+    a = {"target_mm": [1.0, 2.0, 3.0], "speed_mm_s": 5.0, "stop_at_target": False}
+    first = reader.read(packed.encode_command(1, [a]), 1)
+    assert reader.read(packed.encode_command(2, [a]), 2) is first
+    with pytest.raises(BridgeFailure, match="answers step 2 where step 3 was due"):
+        reader.read(packed.encode_command(2, [a]), 3)
+    moved = reader.read(packed.encode_command(3, [{**a, "speed_mm_s": 6.0}]), 3)
+    assert moved is not first and moved[0][0] is not None and moved[0][0].speed_mm_s == 6.0
+    assert reader.read(packed.encode_command(4, None), 4)[0] == (None, 0.0)
+
+
+def test_the_example_client_packs_a_command_once_while_it_holds() -> None:
+    """The example client's algorithm II returns the same command object while its points
+    hold (so it is packed once), a new one when the oldest point is reached; head + moves
+    is the whole command."""
+    tracker = example_client.ConvergenceRadius(5.0, radius_mm=1.0, then=2)
+    for x in (0.0, 2.0, 4.0, 6.0):
+        tracker.update([x, 0.0, 0.0])
+    first = tracker.step([-3.0, 0.0, 0.0])
+    assert first is not None and [m["target_mm"][0] for m in first["then"]] == [2.0, 4.0]
+    tracker.update([8.0, 0.0, 0.0])  # beyond the moves sent: the same command
+    assert tracker.step([-2.0, 0.0, 0.0]) is first
+    switched = tracker.step([-0.5, 0.0, 0.0])  # within the radius of the oldest
+    assert switched is not first and switched is not None
+    assert switched["target_mm"] == [2.0, 0.0, 0.0]
+    raw = example_client.command_bytes(7, switched)
+    assert raw == example_client.command_head(7, switched) + example_client.moves_bytes(switched)
+    assert len(raw) == packed.COMMAND.size + 3 * packed.MOVE.size

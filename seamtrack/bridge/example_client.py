@@ -18,7 +18,13 @@ Algorithm II needs only the seam points, ``--dump-profiles`` reads the profiles 
 writes them as JSON lines. Each command carries the next ``--then`` points of
 the queue (``then``: the bridge goes on to them itself when the torch comes within the radius,
 between frames; ``--then 0``: it asks at each switch instead). ``--token-file`` sends a
-server's shared token (needed beyond loopback).
+server's shared token (needed beyond loopback); ``--timing`` prints its CPU time after the
+summary (a JSON line: before the first step, and from it on).
+
+Per step it does little, as a client that keeps up should: it receives the step part by part
+(part 0 says which parts follow: two for each frame that brings its profile), unpacks only the
+fields it reads, and packs a command once, sending it again while it holds with only its seq
+new (:meth:`ConvergenceRadius.step` returns the same object until its points change).
 
 Algorithm II, exactly as seamtrack's in-process ``convergence-radius`` (so that the run is the
 same, byte for byte, with ``--set tracker.params={}``): every found seam point is queued
@@ -36,12 +42,14 @@ import json
 import math
 import struct
 import sys
+import time
 
 DEFAULT_ENDPOINT = "tcp://127.0.0.1:5555"
 
 # Protocol 3's records (docs/ros.md), little-endian whatever the machine.
 STEP = struct.Struct("<4sIHHd3d3d")  # b"STP3", seq, then_taken, frames, t_s, tcp, velocity
 FRAME = struct.Struct("<ddB3xI3d16d3d")  # t_capture, t_arrival, flags, n, point, T, tcp
+FRAME_HEAD = struct.Struct("<ddB3xI3d")  # what of a FRAME this client reads: up to its point
 COMMAND = struct.Struct("<4sIBB2x")  # b"CMD3", seq, flags (1: a command), then
 MOVE = struct.Struct("<B7x3ddd3d9d3d")  # flags (1: stop), target, speed, ask_within, ...
 _ZEROS = (0.0,) * 15  # a move's velocity_ff, rotation and angular velocity: not sent
@@ -65,6 +73,7 @@ class ConvergenceRadius:
         self.points: list[list[float]] = []
         self.last_pushed: list[float] | None = None
         self.command: dict | None = None
+        self.made_of: list[list[float]] = []
 
     def update(self, point: list[float]) -> None:
         if self.last_pushed is not None and dist(point, self.last_pushed) < self.min_spacing:
@@ -73,20 +82,25 @@ class ConvergenceRadius:
         self.last_pushed = point
 
     def step(self, tcp: list[float], taken: int = 0) -> dict | None:
+        """The command for this step; the same object as the last one while it holds (the
+        caller packs it once, not every step)."""
         # The bridge went on to `taken` of the points sent with the last command (its `then`):
         # the torch came within the radius of those before them, between the frames.
         del self.points[:taken]
         while len(self.points) > 1 and dist(tcp, self.points[0]) <= self.radius:
             self.points.pop(0)
-            self.command = None
         if not self.points:
+            self.command = None
             return None
-        last = len(self.points) == 1
-        if self.command is None or taken or last != self.command["stop_at_target"]:
+        # What the command is made of: the points it goes to, and whether one follows them
+        # (the last point known is arrived at, at rest).
+        made_of = self.points[: 2 + self.then]
+        if self.command is None or made_of != self.made_of:
+            self.made_of = made_of
             self.command = self._go(0)
-        if not last and self.then:  # the points that follow, taken over without a round trip
-            ahead = range(1, min(1 + self.then, len(self.points)))
-            self.command["then"] = [self._go(i) for i in ahead]
+            if len(self.points) > 1 and self.then:  # the next points, taken over in the bridge
+                ahead = range(1, min(1 + self.then, len(self.points)))
+                self.command["then"] = [self._go(i) for i in ahead]
         return self.command
 
     def _go(self, i: int) -> dict:
@@ -122,36 +136,44 @@ def read_profile(profile: dict, parts: list[bytes]) -> tuple[list, list]:
     return points, list(out[1])
 
 
-def read_step(parts: list[bytes]) -> tuple[int, int, list[float], list[tuple]]:
-    """A protocol-3 step: seq, then_taken, the torch tip, and its frames as (found,
-    point_mm, t_capture_s, profile parts or None); every size checked before it is read."""
-    head = parts[0]
-    _, seq, taken, count, _, *state = STEP.unpack_from(head)
+def read_step(head: bytes) -> tuple[int, int, list[float], list[tuple]]:
+    """A protocol-3 step's part 0: seq, then_taken, the torch tip, and its frames as (found,
+    point_mm, t_capture_s, n): n the points of its profile, whose two parts follow part 0
+    (-1: none sent); its size checked before it is read."""
+    _, seq, taken, count, _, x, y, z, *_ = STEP.unpack_from(head)
     if len(head) != STEP.size + count * FRAME.size:
         raise ValueError(f"a step of {count} frames in {len(head)} bytes")
-    frames, i = [], 1
+    frames = []
     for k in range(count):
-        t_capture, _, flags, n, *v = FRAME.unpack_from(head, STEP.size + k * FRAME.size)
-        profile = None
-        if flags & 2:  # the profile's points and reasons follow, in two parts
-            profile = (parts[i], parts[i + 1])
-            if len(profile[0]) != 16 * n or len(profile[1]) != n:
-                raise ValueError(f"frame {k}: profile parts not of {n} points")
-            i += 2
-        frames.append((bool(flags & 1), list(v[:3]), t_capture, profile))
-    return seq, taken, list(state[:3]), frames
+        t_capture, _, flags, n, px, py, pz = FRAME_HEAD.unpack_from(
+            head, STEP.size + k * FRAME.size
+        )
+        frames.append((bool(flags & 1), [px, py, pz], t_capture, n if flags & 2 else -1))
+    return seq, taken, [x, y, z], frames
 
 
 def command_bytes(seq: int, command: dict | None) -> bytes:
     """A protocol-3 command answering step ``seq`` (None: brake to rest and wait)."""
+    return command_head(seq, command) + moves_bytes(command)
+
+
+def command_head(seq: int, command: dict | None) -> bytes:
+    """The COMMAND record: the step answered, whether moves follow, and how many."""
     if command is None:
         return COMMAND.pack(b"CMD3", seq, 0, 0)
-    moves = [command, *command.get("then", [])]
-    flags = [1 if m["stop_at_target"] else 0 for m in moves]
-    return COMMAND.pack(b"CMD3", seq, 1, len(moves) - 1) + b"".join(
-        MOVE.pack(f, *m["target_mm"], m["speed_mm_s"], m.get("ask_within_mm", 0.0), *_ZEROS)
-        for f, m in zip(flags, moves, strict=True)
-    )
+    return COMMAND.pack(b"CMD3", seq, 1, len(command.get("then", ())))
+
+
+def moves_bytes(command: dict | None) -> bytes:
+    """The command's MOVE records, then's too (none for None)."""
+    if command is None:
+        return b""
+    records = []
+    for m in (command, *command.get("then", ())):
+        flags = 1 if m["stop_at_target"] else 0
+        within = m.get("ask_within_mm", 0.0)
+        records.append(MOVE.pack(flags, *m["target_mm"], m["speed_mm_s"], within, *_ZEROS))
+    return b"".join(records)
 
 
 def profile_row(t_capture_s: float, points: bytes, reason: bytes) -> dict:
@@ -173,6 +195,9 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--no-profile", action="store_true", help="ask for no profiles")
     ap.add_argument("--dump-profiles", default="", help="write each frame's profile (JSON lines)")
     ap.add_argument("--token-file", default="", help="a file holding serve's shared token")
+    ap.add_argument(
+        "--timing", action="store_true", help="print this process's CPU time (a JSON line)"
+    )
     return ap
 
 
@@ -188,6 +213,15 @@ def _fault(end: dict) -> bool:
     """Did the run end by the bridge (this client's fault, a signal) rather than by the
     simulation itself (completed, lost_seam, a time limit, ...)?"""
     return end["status"] == "interrupted" or str(end["reason"]).startswith("bridge:")
+
+
+def timing(steps: int, started: float, started_thread: float) -> dict:
+    """This process's CPU time (all its threads: ZeroMQ's I/O thread too) before the first
+    step (start-up) and from it to the end, this thread's from it to the end, and the steps
+    answered."""
+    now, thread = time.process_time(), time.thread_time()
+    return {"steps": steps, "start_cpu_s": started, "loop_cpu_s": now - started,
+            "thread_cpu_s": thread - started_thread}  # fmt: skip
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -209,22 +243,36 @@ def main(argv: list[str] | None = None) -> int:
             reset["context"]["welding_speed_mm_s"], args.radius_mm, then=args.then
         )
         sock.send_json({"op": "ready"})
+        steps, started, started_thread = 0, 0.0, 0.0
+        sent, moves = None, b""  # the last command packed, and its records
         while True:
-            parts = sock.recv_multipart()  # blocks until the step is there: no polling
-            if parts[0][:4] != b"STP3":  # the end of the run, a fault too: status and reason
-                msg = json.loads(parts[0])
+            head = sock.recv()  # blocks until the step is there: no polling
+            if not steps:  # start-up: imports, connecting, hello
+                started, started_thread = time.process_time(), time.thread_time()
+            if head[:4] != b"STP3":  # the end of the run, a fault too: status and reason
+                msg = json.loads(head)
                 print(json.dumps(msg.get("summary", msg)))
+                if args.timing:
+                    print(json.dumps(timing(steps, started, started_thread)))
                 if msg["op"] == "end" and not _fault(msg):
                     return 0
                 print(f"{msg['status']}: {msg['reason']}", file=sys.stderr)
                 return 1
-            seq, taken, tcp, frames = read_step(parts)
-            for found, point, t_capture, profile in frames:
+            seq, taken, tcp, frames = read_step(head)
+            for found, point, t_capture, n in frames:
+                if n >= 0:  # its profile follows in two parts: n points, n reason codes
+                    points, reason = sock.recv(), sock.recv()
+                    if len(points) != 16 * n or len(reason) != n:
+                        raise ValueError(f"step {seq}: profile parts not of {n} points")
+                    if dump:
+                        dump.write(json.dumps(profile_row(t_capture, points, reason)) + "\n")
                 if found:
                     tracker.update(point)
-                if dump and profile is not None:
-                    dump.write(json.dumps(profile_row(t_capture, *profile)) + "\n")
-            sock.send(command_bytes(seq, tracker.step(tcp, taken)))
+            command = tracker.step(tcp, taken)
+            if command is not sent:  # a new command: packed once, sent until it changes
+                sent, moves = command, moves_bytes(command)
+            sock.send(command_head(seq, command) + moves)
+            steps += 1
     finally:
         if dump:
             dump.close()

@@ -31,7 +31,9 @@ from __future__ import annotations
 
 import json
 import math
+import operator
 import queue
+import struct
 import threading
 import time
 from typing import Any
@@ -197,6 +199,10 @@ class ZenohTransport:
         self.with_then = False  # the tracker node publishes cmd_then: three messages a step
         self.client: str | None = None
         self.with_profile = True
+        #: Each command topic's last message and what it read as (a message the same to the
+        #: byte but for its stamp is not read again), and the last answer, by those readings.
+        self._read: dict[str, tuple[bytes, Any]] = {}
+        self._answered: tuple[list[Any], Answer] | None = None
 
     # ------------------------------------------------------------------ callbacks
     def _on_query(self, topic: str) -> Any:
@@ -366,6 +372,16 @@ class ZenohTransport:
                 self._check(kind, size, data, want, got)
         finally:
             self._deadline = None
+        readings = [got[k] for k in (_THEN_ORDER if self.with_then else _PAIR_ORDER)]
+        last = self._answered
+        if last is not None and all(map(operator.is_, readings, last[0])):
+            return last[1]  # the same messages but for their stamps: the same answer
+        answer = self._answer(got)
+        self._answered = (readings, answer)
+        return answer
+
+    def _answer(self, got: dict[str, Any]) -> Answer:
+        """The command pair (and cmd_then) read, as the tracker's :class:`Answer`."""
         (frame, pose), (_, speed) = got["/seamtrack/cmd_pose"], got["/seamtrack/cmd_speed"]
         command, within = command_from_values(frame, pose, speed)
         then: tuple[Reply, ...] = ()
@@ -417,14 +433,22 @@ class ZenohTransport:
                 f"a message of {size} bytes on {kind} is over the {MAX_MESSAGE_BYTES}-byte limit",
                 fix="publish one PoseStamped and one TwistStamped per step",
             )
-        try:  # the bytes rosbags would accept, read without building its objects
-            values: Any
-            if kind == "/seamtrack/cmd_then":
-                stamp, frame, values = cdr.read_pose_array(data, MAX_THEN)
-            else:
-                stamp, frame, values = cdr.read_stamped(data, SUBSCRIBES[kind])
-        except ValueError as exc:
-            raise BridgeFailure(f"sent garbage on {kind}: {exc}", fix=_FIX_TYPES) from None
+        last = self._read.get(kind)
+        if last is not None and data[12:] == last[0][12:] and data[:4] == last[0][:4]:
+            # The last message again but for its stamp (a command held): only that is read.
+            sec, nanosec = (_STAMP_LE if data[1] else _STAMP_BE).unpack_from(data, 4)
+            stamp, read = sec * 1_000_000_000 + nanosec, last[1]
+        else:
+            try:  # the bytes rosbags would accept, read without building its objects
+                values: Any
+                if kind == "/seamtrack/cmd_then":
+                    stamp, frame, values = cdr.read_pose_array(data, MAX_THEN)
+                else:
+                    stamp, frame, values = cdr.read_stamped(data, SUBSCRIBES[kind])
+            except ValueError as exc:
+                raise BridgeFailure(f"sent garbage on {kind}: {exc}", fix=_FIX_TYPES) from None
+            read = (frame, values)
+            self._read[kind] = (data, read)
         if stamp != want:
             raise BridgeFailure(
                 f"answered on {kind} for t = {stamp * 1e-9:.9g} s where t = "
@@ -433,11 +457,13 @@ class ZenohTransport:
             )
         if kind in got:
             raise BridgeFailure(f"sent two messages on {kind} in one step", fix=_FIX_TYPES)
-        got[kind] = (frame, values)
+        got[kind] = read
 
 
 _PAIR = {"/seamtrack/cmd_pose", "/seamtrack/cmd_speed"}
 _THEN = _PAIR | {"/seamtrack/cmd_then"}
+_PAIR_ORDER, _THEN_ORDER = sorted(_PAIR), sorted(_THEN)
+_STAMP_LE, _STAMP_BE = struct.Struct("<iI"), struct.Struct(">iI")  # a header's stamp
 _KEEP_RUNNING = "keep the tracker node running until /seamtrack/status says the run is over"
 _FIX_TYPES = "publish geometry_msgs/msg/PoseStamped and TwistStamped as docs/ros.md gives them"
 

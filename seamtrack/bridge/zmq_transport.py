@@ -200,7 +200,7 @@ class ZmqTransport:
 
         self._monitor_message = recv_monitor_message
         self.encoder = packed.StepEncoder()
-        self._known: dict[bytes, Any] = {}  # the last command's moves, by their bytes
+        self.reader = packed.CommandReader()  # the last command, by its bytes
         #: The session's client: its routing envelope (id, and the empty delimiter a REQ
         #: socket puts) and the file descriptor of its connection; None before its hello.
         self.peer: list[bytes] | None = None
@@ -260,7 +260,7 @@ class ZmqTransport:
         raw = self._recv(self.timeout_s, "--timeout-s", f"answer step {step.seq}")
         if len(raw) > wire.MAX_MESSAGE_BYTES:
             wire.parse(raw)  # refused as oversized, as in protocol 2
-        (command, within), then, hint = packed.decode_command(raw, step.seq, self._known)
+        (command, within), then, hint = self.reader.read(raw, step.seq)
         if hint is not False:  # it holds until the client says another (or clears it)
             self.seam_hint = hint  # type: ignore[assignment]
         return Answer(command, within, tuple(then), self.seam_hint)
@@ -370,11 +370,7 @@ class ZmqTransport:
             slice_ms = max(1, math.ceil(min(left, POLL_SLICE_S) * 1000.0))
             ready = dict(self.poller.poll(slice_ms))
             if self.sock in ready:
-                frames = self.sock.recv_multipart(copy=False)
-                fd = int(frames[-1].get(self._srcfd))
-                raw = [bytes(f.bytes) for f in frames]
-                cut = 2 if len(raw) > 2 and raw[1] == b"" else 1  # REQ: id, b"", ...
-                return raw[:cut], fd, raw[cut:]
+                return self._take()
             if self.monitor in ready:
                 event = self._monitor_message(self.monitor)
                 if self.peer is not None and int(event["value"]) == self.peer_fd:
@@ -384,6 +380,22 @@ class ZmqTransport:
                         f"{HARD_LIMIT_BYTES} bytes)",
                         fix="keep the tracker process running until the 'end' message",
                     )
+
+    def _take(self) -> tuple[list[bytes], int, list[bytes]]:
+        """The message the poll said is there (ZeroMQ delivers a message's parts together):
+        its envelope, the file descriptor of the connection it came on, its parts. The
+        routing id is taken as bytes, the rest as frames (one call each, no socket option
+        read: RCVMORE comes with the frame), the descriptor from the last."""
+        recv, noblock = self.sock.recv, self._noblock
+        parts = [recv(noblock)]  # the routing id ROUTER puts first
+        while True:
+            frame = recv(noblock, copy=False)
+            parts.append(frame.bytes)
+            if not frame.more:
+                break
+        fd = int(frame.get(self._srcfd))
+        cut = 2 if len(parts) > 2 and parts[1] == b"" else 1  # REQ: id, b"", ...
+        return parts[:cut], fd, parts[cut:]
 
 
 def _one_part(parts: list[bytes]) -> bytes:

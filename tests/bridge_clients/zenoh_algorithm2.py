@@ -3,6 +3,10 @@ speaking what rmw_zenoh_cpp speaks: CDR payloads (rosbags) on ``<domain>/<topic>
 <RIHS01 hash>`` key expressions, with liveliness tokens for the node and its entities. Only
 ``zenoh`` and ``rosbags`` (and the standard library): nothing of seamtrack.
 
+Per step it does what a node that keeps up does: the torch and the seam points (a header and
+fixed doubles) are read with struct where their CDR layout puts them, and each command is
+serialized with rosbags once, then stamped with the step's time while it holds.
+
 Usage: python zenoh_algorithm2.py LOCATOR [--radius-mm 1.0] [--misbehave KIND] [--then 2]
 
 Works in SI units as a ROS node does (m, m/s). With each command it publishes its next
@@ -116,6 +120,69 @@ class ConvergenceRadius:
         return self.points[1 : min(1 + n, len(self.points) - 1)]
 
 
+#: A header's stamp (sec, nanosec), the first field of each command message (little-endian CDR,
+#: after the 4-byte encapsulation header).
+STAMP = struct.Struct("<iI")
+HEADER = struct.Struct("<iII")  # the stamp, then the frame id's length
+
+
+def stamped_doubles(raw: bytes, msgtype: str, n: int) -> tuple[tuple[int, int], tuple]:
+    """A message of a header and n doubles (PointStamped: 3, PoseStamped: 7) as (its stamp as
+    (sec, nanosec), the doubles), read with struct where the CDR layout puts them (the doubles
+    aligned to 8 after the header's frame id); a big-endian message through rosbags."""
+    if raw[:4] != b"\x00\x01\x00\x00":
+        msg = TS.deserialize_cdr(raw, msgtype)
+        values = msg.point if n == 3 else msg.pose.position
+        stamp = (msg.header.stamp.sec, msg.header.stamp.nanosec)
+        extra = () if n == 3 else (0.0,) * 4
+        return stamp, (values.x, values.y, values.z, *extra)
+    sec, nanosec, length = HEADER.unpack_from(raw, 4)
+    at = 12 + length
+    at += -at % 8  # from the end of the encapsulation header
+    return (sec, nanosec), struct.unpack_from(f"<{n}d", raw, 4 + at)
+
+
+def command_messages(tracker, cmd, ahead, then: int) -> list[tuple[str, bytearray]]:
+    """The answer to a step as (topic, CDR bytes) serialized by rosbags, stamped 0: cmd_pose
+    and cmd_speed (and cmd_then: the points ``ahead``); the caller stamps them."""
+    stamp = T["builtin_interfaces/msg/Time"](sec=0, nanosec=0)
+    zero = T["geometry_msgs/msg/Vector3"](x=0.0, y=0.0, z=0.0)
+    if cmd is None:  # an empty frame id: brake to rest and wait
+        target, stop, frame = (0.0, 0.0, 0.0), 0.0, ""
+    else:
+        target, stop, frame = cmd[0], 1.0 if cmd[1] else 0.0, "world"
+    header = T["std_msgs/msg/Header"](stamp=stamp, frame_id=frame)
+    # Ask again within the radius (frame lockstep): that is where the switch comes.
+    within = 0.0 if cmd is None or cmd[1] else tracker.radius
+    orientation = T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=0.0)
+    pose = T["geometry_msgs/msg/Pose"](
+        position=T["geometry_msgs/msg/Point"](x=target[0], y=target[1], z=target[2]),
+        orientation=orientation,
+    )
+    twist = T["geometry_msgs/msg/Twist"](
+        linear=T["geometry_msgs/msg/Vector3"](x=tracker.speed, y=stop, z=within), angular=zero
+    )
+    messages = [
+        ("/seamtrack/cmd_pose", T["geometry_msgs/msg/PoseStamped"](header=header, pose=pose)),
+        ("/seamtrack/cmd_speed", T["geometry_msgs/msg/TwistStamped"](header=header, twist=twist)),
+    ]
+    if then:
+        poses = [
+            T["geometry_msgs/msg/Pose"](
+                position=T["geometry_msgs/msg/Point"](x=a[0], y=a[1], z=a[2]),
+                orientation=orientation,
+            )
+            for a in ahead
+        ]
+        then_header = T["std_msgs/msg/Header"](stamp=stamp, frame_id="world")
+        array = T["geometry_msgs/msg/PoseArray"](header=then_header, poses=poses)
+        messages.append(("/seamtrack/cmd_then", array))
+    return [
+        (topic, bytearray(TS.serialize_cdr(m, m.__msgtype__, little_endian=True)))
+        for topic, m in messages
+    ]
+
+
 def dist(a, b) -> float:
     dx, dy, dz = a[0] - b[0], a[1] - b[1], a[2] - b[2]
     return math.sqrt(dx * dx + dy * dy + dz * dz)
@@ -128,6 +195,7 @@ def main() -> int:
     ap.add_argument("--misbehave", default="")
     ap.add_argument("--check-frames", action="store_true")
     ap.add_argument("--then", type=int, default=2, help="points sent ahead (cmd_then)")
+    ap.add_argument("--timing", action="store_true", help="print this process's CPU time")
     args = ap.parse_args()
     config = zenoh.Config()
     config.insert_json5("mode", '"client"')
@@ -202,13 +270,15 @@ def main() -> int:
         entity += 1
     seq = [0]
 
-    def publish(topic, msg):
+    def publish(topic, raw):
         seq[0] += 1
         attachment = struct.pack("<qqB", seq[0], time.time_ns(), 16) + gids[topic]
-        publishers[topic].put(bytes(TS.serialize_cdr(msg, pubs[topic])), attachment=attachment)
+        publishers[topic].put(bytes(raw), attachment=attachment)
 
     tracker = None
-    steps = 0
+    held: tuple = (False, [])  # the command last serialized, and its messages
+    serialized: list = []
+    steps, started, started_thread = 0, 0.0, 0.0
     taken = 0
     while True:
         topic, raw = receive()
@@ -239,18 +309,22 @@ def main() -> int:
             print(TS.deserialize_cdr(raw, subs[topic]).data)
             if args.check_frames:
                 print(json.dumps(seen))
+            if args.timing:  # CPU before the first step (start-up) and from it on
+                now = time.process_time()
+                timing = {"steps": steps, "start_cpu_s": started, "loop_cpu_s": now - started}
+                timing["thread_cpu_s"] = time.thread_time() - started_thread
+                print(json.dumps(timing))
             break
         elif topic == "/seamtrack/then_taken":
             taken = TS.deserialize_cdr(raw, subs[topic]).data
         elif topic == "/seamtrack/seam_point_world":
-            p = TS.deserialize_cdr(raw, subs[topic]).point
-            tracker.update((p.x, p.y, p.z))
+            tracker.update(stamped_doubles(raw, subs[topic], 3)[1])
         elif topic == "/seamtrack/tcp":
-            msg = TS.deserialize_cdr(raw, subs[topic])
-            p = msg.pose.position
-            cmd = tracker.step((p.x, p.y, p.z), taken)
+            if not steps:
+                started, started_thread = time.process_time(), time.thread_time()
+            stamp, (x, y, z, *_) = stamped_doubles(raw, subs[topic], 7)
+            cmd = tracker.step((x, y, z), taken)
             taken = 0
-            header = T["std_msgs/msg/Header"](stamp=msg.header.stamp, frame_id="world")
             if steps == 5 and args.misbehave:
                 if args.misbehave == "garbage":
                     publishers["/seamtrack/cmd_pose"].put(b"\x00\x01garbage")
@@ -264,42 +338,13 @@ def main() -> int:
                 time.sleep(30)
                 return 0
             steps += 1
-            zero = T["geometry_msgs/msg/Vector3"](x=0.0, y=0.0, z=0.0)
-            if cmd is None:
-                target, stop, speed_x = (0.0, 0.0, 0.0), 0.0, tracker.speed
-                header = T["std_msgs/msg/Header"](stamp=msg.header.stamp, frame_id="")
-            else:
-                target, stop, speed_x = cmd[0], 1.0 if cmd[1] else 0.0, tracker.speed
-            # Ask again within the radius (frame lockstep): that is where the switch comes.
-            within = 0.0 if cmd is None or cmd[1] else tracker.radius
-            pose = T["geometry_msgs/msg/Pose"](
-                position=T["geometry_msgs/msg/Point"](x=target[0], y=target[1], z=target[2]),
-                orientation=T["geometry_msgs/msg/Quaternion"](x=0.0, y=0.0, z=0.0, w=0.0),
-            )
-            twist = T["geometry_msgs/msg/Twist"](
-                linear=T["geometry_msgs/msg/Vector3"](x=speed_x, y=stop, z=within), angular=zero
-            )
-            publish(
-                "/seamtrack/cmd_pose", T["geometry_msgs/msg/PoseStamped"](header=header, pose=pose)
-            )
-            publish(
-                "/seamtrack/cmd_speed",
-                T["geometry_msgs/msg/TwistStamped"](header=header, twist=twist),
-            )
-            if args.then:
-                ahead = [] if cmd is None or cmd[1] else tracker.ahead(args.then)
-                poses = [
-                    T["geometry_msgs/msg/Pose"](
-                        position=T["geometry_msgs/msg/Point"](x=a[0], y=a[1], z=a[2]),
-                        orientation=pose.orientation,
-                    )
-                    for a in ahead
-                ]
-                then_header = T["std_msgs/msg/Header"](stamp=msg.header.stamp, frame_id="world")
-                publish(
-                    "/seamtrack/cmd_then",
-                    T["geometry_msgs/msg/PoseArray"](header=then_header, poses=poses),
-                )
+            ahead = [] if cmd is None or cmd[1] or not args.then else tracker.ahead(args.then)
+            if (cmd, ahead) != held:  # a new command: serialized once (rosbags), then held
+                held = (cmd, ahead)
+                serialized = command_messages(tracker, cmd, ahead, args.then)
+            for topic, raw in serialized:  # each message of the answer stamped with the step's
+                STAMP.pack_into(raw, 4, *stamp)  # the header's stamp, its first field
+                publish(topic, raw)
     for subscriber in subscribers:
         subscriber.undeclare()
     for t in tokens:

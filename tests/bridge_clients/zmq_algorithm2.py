@@ -18,7 +18,13 @@ import time
 
 import zmq
 
-from seamtrack.bridge.example_client import ConvergenceRadius, hello, parser, read_profile
+from seamtrack.bridge.example_client import (
+    ConvergenceRadius,
+    hello,
+    parser,
+    read_profile,
+    timing,
+)
 
 
 def main() -> int:
@@ -36,11 +42,16 @@ def main() -> int:
     speed = reset["context"]["welding_speed_mm_s"]
     tracker = ConvergenceRadius(speed, args.radius_mm, then=args.then)
     sock.send_json({"op": "ready"})
+    steps, started, started_thread = 0, 0.0, 0.0
     while True:
         parts = sock.recv_multipart()  # blocks until the step is there: no polling
+        if not steps:
+            started, started_thread = time.process_time(), time.thread_time()
         msg = json.loads(parts[0])
         if msg["op"] == "end":
             print(json.dumps(msg["summary"]))
+            if args.timing:
+                print(json.dumps(timing(steps, started, started_thread)))
             if dump:
                 dump.close()
             return 0
@@ -75,6 +86,7 @@ def main() -> int:
             print(json.dumps(told))
             return 0
         sock.send(json.dumps({"op": "command", "seq": msg["seq"], "command": cmd}).encode())
+        steps += 1
 
 
 if __name__ == "__main__":
