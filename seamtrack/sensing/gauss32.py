@@ -67,8 +67,7 @@ _MULT_LO = np.uint64(0x4385DF649FCCF645)
 _MASK64 = (1 << 64) - 1
 
 
-@intrinsic
-def _lcg_step(typingctx: Any, hi: Any, lo: Any, inc_hi: Any, inc_lo: Any) -> tuple[Any, Any]:
+def _lcg_step_typing(typingctx: Any, hi: Any, lo: Any, inc_hi: Any, inc_lo: Any) -> tuple[Any, Any]:
     """PCG64's state step, (hi, lo) * MULT + (inc_hi, inc_lo) mod 2**128, in LLVM's 128-bit
     integers (on x86-64 one 64 x 64 -> 128 multiply and two 64-bit ones, where four 32-bit
     products and their carries took longer). Returns (hi, lo) after."""
@@ -80,7 +79,8 @@ def _lcg_step(typingctx: Any, hi: Any, lo: Any, inc_hi: Any, inc_lo: Any) -> tup
         shift = ir.Constant(i128, 64)
 
         def join(high: Any, low: Any) -> Any:
-            return builder.or_(builder.shl(builder.zext(high, i128), shift), builder.zext(low, i128))
+            wide = builder.shl(builder.zext(high, i128), shift)
+            return builder.or_(wide, builder.zext(low, i128))
 
         mult = ir.Constant(i128, (int(_MULT_HI) << 64) | int(_MULT_LO))
         after = builder.add(builder.mul(join(args[0], args[1]), mult), join(args[2], args[3]))
@@ -90,13 +90,17 @@ def _lcg_step(typingctx: Any, hi: Any, lo: Any, inc_hi: Any, inc_lo: Any) -> tup
     return sig, codegen
 
 
+#: numba's intrinsic (typed ``Any``: mypy would see the typing function's signature).
+_lcg_step: Any = intrinsic(_lcg_step_typing)
+
+
 @numba.njit(**KERNEL)
 def _word(
     hi: np.uint64, lo: np.uint64, inc_hi: np.uint64, inc_lo: np.uint64, has: bool, kept: np.uint64
 ) -> tuple[np.uint32, np.uint64, np.uint64, bool, np.uint64]:
     """NumPy's next_uint32 of PCG64: the kept high half if there is one, else the low half of
     a new output (its high half kept). The 128-bit state (hi, lo) steps as state * MULT + inc
-    (:func:`_lcg_step`); the output is XSL-RR: (hi ^ lo) rotated right by the top 6 bits of
+    (:data:`_lcg_step`); the output is XSL-RR: (hi ^ lo) rotated right by the top 6 bits of
     hi. Returns (word, hi, lo, has, kept) after."""
     if has:
         return np.uint32(kept), hi, lo, False, kept
