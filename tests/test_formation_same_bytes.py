@@ -67,9 +67,12 @@ def _speckle_reference(cells, optics, apron, rng):  # type: ignore[no-untyped-de
     f_c = 1.0 / (2.0 * optics.speckle_size_mm)
     passed = min(1.0, math.pi * f_c**2 * optics.cell_mm[0] * optics.cell_mm[1])
     random_share = 1.0 - math.sqrt(max(0.0, 1.0 - optics.speckle_contrast**2))
-    noise = rng.standard_normal((2, *shape), dtype=np.float32)
     gain = np.float32(math.sqrt(0.5 * random_share / passed))
     amplitude = np.sqrt(cells.astype(np.float32))
+    lit = np.flatnonzero(amplitude > 0)  # only lit cells draw: elsewhere the field is 0
+    draws = rng.standard_normal((2, len(lit)), dtype=np.float32)
+    noise = np.zeros((2, *shape), dtype=np.float32)
+    noise[0].flat[lit], noise[1].flat[lit] = draws[0], draws[1]
     field = amplitude * (noise[0] * gain + np.float32(math.sqrt(1.0 - random_share)))
     field = field + 1j * (amplitude * noise[1] * gain)
     spectrum = scipy.fft.fft2(field.astype(np.complex64), s=padded)

@@ -180,7 +180,8 @@ def form_image(
     Notes
     -----
     With speckle, every box's Gaussian draws are made at once, in the boxes' order (the same
-    numbers, in the same order, as one draw per box); the field, the pupil and the squared
+    numbers, in the same order, as one draw per box), two for each lit cell (a cell without
+    light has no field, whatever its draw: it draws nothing); the field, the pupil and the squared
     modulus summed into pixels run in numba, the transforms in :func:`scipy.fft.fft2` box by
     box on the same zero-padded grids: the image is the same to the bit.
     """
@@ -221,7 +222,8 @@ def _speckle_boxes(
 ) -> None:  # fmt: skip
     """Add the speckle image of every box into ``image`` (see :class:`_SpeckleConstants`).
 
-    The Gaussian draws of all boxes are made at once, in the boxes' order. Boxes whose padded
+    The Gaussian draws of all boxes are made at once, in the boxes' order, two for each lit
+    cell (:func:`_fields`); the cells are laid first (:func:`_deposit_boxes`). Boxes whose padded
     grids agree are transformed together, and only where the pupil lets light through: the
     forward transform's second pass only on the frequency rows the pupil meets, the inverse's
     first pass only on its frequency columns, its second only on the box's rows (the rest is
@@ -231,9 +233,12 @@ def _speckle_boxes(
     """
     s = optics.supersample
     constants = _SpeckleConstants(optics)
-    sizes = 2 * (boxes[:, 5] - boxes[:, 4]) * (boxes[:, 3] - boxes[:, 2])
-    noise = gauss32.standard_normal_f32(rng, int(sizes.sum()))
-    starts = np.concatenate([[0], np.cumsum(sizes)]).tolist()
+    areas = (boxes[:, 5] - boxes[:, 4]) * (boxes[:, 3] - boxes[:, 2])
+    cell_starts = np.concatenate([[0], np.cumsum(areas)])
+    cells = np.zeros(int(cell_starts[-1]))
+    lit = _deposit_boxes(cells, cell_starts, boxes, uf, wf, hf, gf, sf, e)
+    noise = gauss32.standard_normal_f32(rng, 2 * int(lit.sum()))
+    noise_starts = np.concatenate([[0], np.cumsum(2 * lit)])
     groups: dict[tuple[int, int], list[int]] = {}
     shapes = []
     for k, (_, _, box_c0, box_c1, r0, r1, _, _) in enumerate(boxes.tolist()):
@@ -244,8 +249,8 @@ def _speckle_boxes(
         n_r = max(shapes[k][0] for k in members)
         n_c = max(shapes[k][1] for k in members)
         field = np.zeros((len(members), padded[0], n_c), dtype=np.complex64)
-        _fields(field, boxes[members], np.array(starts)[members], noise, uf, wf, hf, gf, sf, e,
-                constants.gain, constants.steady)  # fmt: skip
+        _fields(field, boxes[members], cells, cell_starts[members], noise,
+                noise_starts[members], constants.gain, constants.steady)  # fmt: skip
         pupil = _pupil(padded, optics.cell_mm, constants.f_c)
         rows = np.flatnonzero(pupil.any(axis=1))
         columns = np.flatnonzero(pupil.any(axis=0))
@@ -328,28 +333,52 @@ def _spread_scaled(
 
 
 @numba.njit(**KERNEL)
-def _fields(
-    field: NDArray[np.complex64], boxes: NDArray[np.int64], starts: NDArray[np.int64],
-    noise: NDArray[np.float32], uf: FloatArray, wf: FloatArray, hf: FloatArray, gf: FloatArray,
-    sf: FloatArray, e: FloatArray, gain: np.float32, steady: np.float32,
-) -> None:  # fmt: skip
-    """Per box m (rows of :func:`_plan_boxes`): its cells (:func:`_deposit_box`) and the
-    surface's field on them, in the top left corner of the zeroed ``field[m]``:
-    sqrt(I) (noise_0 gain + steady) + i sqrt(I) noise_1 gain, in float32, the box's noise
-    from ``starts[m]`` (first the real parts, then the imaginary, row by row)."""
+def _deposit_boxes(
+    cells: FloatArray, starts: NDArray[np.int64], boxes: NDArray[np.int64], uf: FloatArray,
+    wf: FloatArray, hf: FloatArray, gf: FloatArray, sf: FloatArray, e: FloatArray,
+) -> NDArray[np.int64]:  # fmt: skip
+    """Each box's cells (:func:`_deposit_box`; box m row by row in the zeroed
+    ``cells[starts[m]:starts[m + 1]]``); returns the number of its lit cells (a float32
+    amplitude above zero) per box."""
+    lit = np.zeros(boxes.shape[0], dtype=np.int64)
     for m in range(boxes.shape[0]):
         _, _, box_c0, box_c1, r0, r1, lo, hi = boxes[m]
-        n_r, n_c = r1 - r0, box_c1 - box_c0
-        cells = np.zeros((n_r, n_c))
-        _deposit_box(cells, r0, box_c0, uf[lo:hi], wf[lo:hi], hf[lo:hi], gf[lo:hi], sf[lo:hi],
+        box = cells[starts[m] : starts[m + 1]].reshape((r1 - r0, box_c1 - box_c0))
+        _deposit_box(box, r0, box_c0, uf[lo:hi], wf[lo:hi], hf[lo:hi], gf[lo:hi], sf[lo:hi],
                      e[lo:hi], REACH)  # fmt: skip
-        re = noise[starts[m] : starts[m] + n_r * n_c]
-        im = noise[starts[m] + n_r * n_c : starts[m] + 2 * n_r * n_c]
+        for q in range(starts[m], starts[m + 1]):
+            if np.float32(cells[q]) > 0:
+                lit[m] += 1
+    return lit
+
+
+@numba.njit(**KERNEL)
+def _fields(
+    field: NDArray[np.complex64], boxes: NDArray[np.int64], cells: FloatArray,
+    cell_starts: NDArray[np.int64], noise: NDArray[np.float32], noise_starts: NDArray[np.int64],
+    gain: np.float32, steady: np.float32,
+) -> None:  # fmt: skip
+    """Per box m (rows of :func:`_plan_boxes`): the surface's field on its cells (from
+    ``cell_starts[m]``, row by row) in the top left corner of the zeroed ``field[m]``:
+    sqrt(I) (noise_0 gain + steady) + i sqrt(I) noise_1 gain, in float32. Only lit cells
+    (sqrt(I) > 0; elsewhere the field is 0 whatever the draw) take normals: the box's from
+    ``noise_starts[m]``, first the real parts of its lit cells, then the imaginary."""
+    for m in range(boxes.shape[0]):
+        _, _, box_c0, box_c1, r0, r1, _, _ = boxes[m]
+        n_r, n_c = r1 - r0, box_c1 - box_c0
+        lit = 0
+        for q in range(n_r * n_c):
+            if np.float32(cells[cell_starts[m] + q]) > 0:
+                lit += 1
+        re = noise[noise_starts[m] : noise_starts[m] + lit]
+        im = noise[noise_starts[m] + lit : noise_starts[m] + 2 * lit]
+        q = 0
         for i in range(n_r):
             for j in range(n_c):
-                a = np.sqrt(np.float32(cells[i, j]))
-                q = i * n_c + j
-                field[m, i, j] = complex(a * (re[q] * gain + steady), a * im[q] * gain)
+                a = np.sqrt(np.float32(cells[cell_starts[m] + i * n_c + j]))
+                if a > 0:
+                    field[m, i, j] = complex(a * (re[q] * gain + steady), a * im[q] * gain)
+                    q += 1
 
 
 @numba.njit(**KERNEL)
