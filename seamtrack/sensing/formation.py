@@ -235,8 +235,8 @@ def _speckle_boxes(
     constants = _SpeckleConstants(optics)
     areas = (boxes[:, 5] - boxes[:, 4]) * (boxes[:, 3] - boxes[:, 2])
     cell_starts = np.concatenate([[0], np.cumsum(areas)])
-    cells = np.zeros(int(cell_starts[-1]))
-    lit = _deposit_boxes(cells, cell_starts, boxes, uf, wf, hf, gf, sf, e)
+    amplitude = np.empty(int(cell_starts[-1]), dtype=np.float32)
+    lit = _deposit_boxes(amplitude, cell_starts, boxes, uf, wf, hf, gf, sf, e)
     noise = gauss32.standard_normal_f32(rng, 2 * int(lit.sum()))
     noise_starts = np.concatenate([[0], np.cumsum(2 * lit)])
     groups: dict[tuple[int, int], list[int]] = {}
@@ -249,8 +249,8 @@ def _speckle_boxes(
         n_r = max(shapes[k][0] for k in members)
         n_c = max(shapes[k][1] for k in members)
         field = np.zeros((len(members), padded[0], n_c), dtype=np.complex64)
-        _fields(field, boxes[members], cells, cell_starts[members], noise,
-                noise_starts[members], constants.gain, constants.steady)  # fmt: skip
+        _fields(field, boxes[members], amplitude, cell_starts[members], noise,
+                noise_starts[members], lit[members], constants.gain, constants.steady)  # fmt: skip
         pupil = _pupil(padded, optics.cell_mm, constants.f_c)
         rows = np.flatnonzero(pupil.any(axis=1))
         columns = np.flatnonzero(pupil.any(axis=0))
@@ -334,48 +334,54 @@ def _spread_scaled(
 
 @numba.njit(**KERNEL)
 def _deposit_boxes(
-    cells: FloatArray, starts: NDArray[np.int64], boxes: NDArray[np.int64], uf: FloatArray,
-    wf: FloatArray, hf: FloatArray, gf: FloatArray, sf: FloatArray, e: FloatArray,
+    amplitude: NDArray[np.float32], starts: NDArray[np.int64], boxes: NDArray[np.int64],
+    uf: FloatArray, wf: FloatArray, hf: FloatArray, gf: FloatArray, sf: FloatArray,
+    e: FloatArray,
 ) -> NDArray[np.int64]:  # fmt: skip
-    """Each box's cells (:func:`_deposit_box`; box m row by row in the zeroed
-    ``cells[starts[m]:starts[m + 1]]``); returns the number of its lit cells (a float32
-    amplitude above zero) per box."""
+    """Each box's cells (:func:`_deposit_box`) as the field's amplitude sqrt(float32(I)), box m
+    row by row in ``amplitude[starts[m]:starts[m + 1]]``; returns the number of its lit cells
+    (amplitude above zero) per box."""
     lit = np.zeros(boxes.shape[0], dtype=np.int64)
+    largest = 0
+    for m in range(boxes.shape[0]):
+        largest = max(largest, starts[m + 1] - starts[m])
+    scratch = np.empty(largest)
     for m in range(boxes.shape[0]):
         _, _, box_c0, box_c1, r0, r1, lo, hi = boxes[m]
-        box = cells[starts[m] : starts[m + 1]].reshape((r1 - r0, box_c1 - box_c0))
-        _deposit_box(box, r0, box_c0, uf[lo:hi], wf[lo:hi], hf[lo:hi], gf[lo:hi], sf[lo:hi],
-                     e[lo:hi], REACH)  # fmt: skip
-        for q in range(starts[m], starts[m + 1]):
-            if np.float32(cells[q]) > 0:
+        n = starts[m + 1] - starts[m]
+        cells = scratch[:n]
+        cells[:] = 0.0
+        _deposit_box(cells.reshape((r1 - r0, box_c1 - box_c0)), r0, box_c0, uf[lo:hi],
+                     wf[lo:hi], hf[lo:hi], gf[lo:hi], sf[lo:hi], e[lo:hi], REACH)  # fmt: skip
+        for q in range(n):
+            a = np.sqrt(np.float32(cells[q]))
+            amplitude[starts[m] + q] = a
+            if a > 0:
                 lit[m] += 1
     return lit
 
 
 @numba.njit(**KERNEL)
 def _fields(
-    field: NDArray[np.complex64], boxes: NDArray[np.int64], cells: FloatArray,
+    field: NDArray[np.complex64], boxes: NDArray[np.int64], amplitude: NDArray[np.float32],
     cell_starts: NDArray[np.int64], noise: NDArray[np.float32], noise_starts: NDArray[np.int64],
-    gain: np.float32, steady: np.float32,
+    lit: NDArray[np.int64], gain: np.float32, steady: np.float32,
 ) -> None:  # fmt: skip
-    """Per box m (rows of :func:`_plan_boxes`): the surface's field on its cells (from
-    ``cell_starts[m]``, row by row) in the top left corner of the zeroed ``field[m]``:
-    sqrt(I) (noise_0 gain + steady) + i sqrt(I) noise_1 gain, in float32. Only lit cells
-    (sqrt(I) > 0; elsewhere the field is 0 whatever the draw) take normals: the box's from
-    ``noise_starts[m]``, first the real parts of its lit cells, then the imaginary."""
+    """Per box m (rows of :func:`_plan_boxes`): the surface's field on its cells (amplitudes
+    sqrt(I) from ``cell_starts[m]``, row by row) in the top left corner of the zeroed
+    ``field[m]``: sqrt(I) (noise_0 gain + steady) + i sqrt(I) noise_1 gain, in float32. Only
+    its ``lit[m]`` lit cells (sqrt(I) > 0; elsewhere the field is 0 whatever the draw) take
+    normals: from ``noise_starts[m]``, first the real parts of its lit cells, then the
+    imaginary."""
     for m in range(boxes.shape[0]):
         _, _, box_c0, box_c1, r0, r1, _, _ = boxes[m]
         n_r, n_c = r1 - r0, box_c1 - box_c0
-        lit = 0
-        for q in range(n_r * n_c):
-            if np.float32(cells[cell_starts[m] + q]) > 0:
-                lit += 1
-        re = noise[noise_starts[m] : noise_starts[m] + lit]
-        im = noise[noise_starts[m] + lit : noise_starts[m] + 2 * lit]
+        re = noise[noise_starts[m] : noise_starts[m] + lit[m]]
+        im = noise[noise_starts[m] + lit[m] : noise_starts[m] + 2 * lit[m]]
         q = 0
         for i in range(n_r):
             for j in range(n_c):
-                a = np.sqrt(np.float32(cells[cell_starts[m] + i * n_c + j]))
+                a = amplitude[cell_starts[m] + i * n_c + j]
                 if a > 0:
                     field[m, i, j] = complex(a * (re[q] * gain + steady), a * im[q] * gain)
                     q += 1
