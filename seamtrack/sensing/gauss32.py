@@ -112,43 +112,64 @@ def _word(
 
 
 @numba.njit(**KERNEL)
+def _rejected(
+    r: np.uint32, hi: np.uint64, lo: np.uint64, inc_hi: np.uint64, inc_lo: np.uint64,
+    has: bool, kept: np.uint64, k: NDArray[np.uint32], w: NDArray[np.float32],
+    f: NDArray[np.float32], r_f: np.float32, inv_r_f: np.float32,
+) -> tuple[np.float32, np.uint64, np.uint64, bool, np.uint64]:  # fmt: skip
+    """The ziggurat's rare branches (about 1 % of the numbers), from a word ``r`` outside its
+    layer's rectangle: the tail beyond r (layer 0), or a wedge's test with a second word, and
+    new words until a number is accepted. Returns (number, hi, lo, has, kept) after."""
+    scale = np.float32(1.0 / 16777216.0)  # next_float: the word's top 24 bits
+    sh8 = np.uint32(8)
+    while True:
+        idx = r & np.uint32(0xFF)
+        rabs = (r >> np.uint32(9)) & np.uint32(0x7FFFFF)
+        x = np.float32(rabs) * w[idx]
+        if (r >> sh8) & np.uint32(1):
+            x = -x
+        if rabs < k[idx]:
+            return x, hi, lo, has, kept
+        if idx == 0:  # the tail beyond r
+            while True:
+                r1, hi, lo, has, kept = _word(hi, lo, inc_hi, inc_lo, has, kept)
+                r2, hi, lo, has, kept = _word(hi, lo, inc_hi, inc_lo, has, kept)
+                xx = -inv_r_f * np.log1p(-(np.float32(r1 >> sh8) * scale))
+                yy = -np.log1p(-(np.float32(r2 >> sh8) * scale))
+                if yy + yy > xx * xx:
+                    break
+            x = -(r_f + xx) if (rabs >> sh8) & np.uint32(1) else r_f + xx
+            return x, hi, lo, has, kept
+        r1, hi, lo, has, kept = _word(hi, lo, inc_hi, inc_lo, has, kept)
+        u = np.float32(r1 >> sh8) * scale
+        xd = np.float64(x)
+        if np.float64((f[idx - 1] - f[idx]) * u + f[idx]) < math.exp(-0.5 * xd * xd):
+            return x, hi, lo, has, kept
+        r, hi, lo, has, kept = _word(hi, lo, inc_hi, inc_lo, has, kept)
+
+
+@numba.njit(**KERNEL)
 def _ziggurat(
     st: NDArray[np.uint64], out: NDArray[np.float32],
     k: NDArray[np.uint32], w: NDArray[np.float32], f: NDArray[np.float32],
     r_f: np.float32, inv_r_f: np.float32,
 ) -> None:  # fmt: skip
     """Fill ``out`` with NumPy's float32 ziggurat normals from the PCG64 state ``st`` =
-    [state high, state low, increment high, increment low, has_uint32, uinteger], updated."""
+    [state high, state low, increment high, increment low, has_uint32, uinteger], updated.
+    A word inside its layer's rectangle (99 %) is the number at once; the rest go to
+    :func:`_rejected`, out of the hot loop."""
     hi, lo, inc_hi, inc_lo = st[0], st[1], st[2], st[3]
     has, kept = st[4] != 0, st[5]
-    scale = np.float32(1.0 / 16777216.0)  # next_float: the word's top 24 bits
-    sh8 = np.uint32(8)
     for i in range(out.shape[0]):
-        while True:
-            r, hi, lo, has, kept = _word(hi, lo, inc_hi, inc_lo, has, kept)
-            idx = r & np.uint32(0xFF)
-            rabs = (r >> np.uint32(9)) & np.uint32(0x7FFFFF)
+        r, hi, lo, has, kept = _word(hi, lo, inc_hi, inc_lo, has, kept)
+        idx = r & np.uint32(0xFF)
+        rabs = (r >> np.uint32(9)) & np.uint32(0x7FFFFF)
+        if rabs < k[idx]:
             x = np.float32(rabs) * w[idx]
-            if (r >> sh8) & np.uint32(1):
-                x = -x
-            if rabs < k[idx]:
-                break
-            if idx == 0:  # the tail beyond r
-                while True:
-                    r1, hi, lo, has, kept = _word(hi, lo, inc_hi, inc_lo, has, kept)
-                    r2, hi, lo, has, kept = _word(hi, lo, inc_hi, inc_lo, has, kept)
-                    xx = -inv_r_f * np.log1p(-(np.float32(r1 >> sh8) * scale))
-                    yy = -np.log1p(-(np.float32(r2 >> sh8) * scale))
-                    if yy + yy > xx * xx:
-                        break
-                x = -(r_f + xx) if (rabs >> sh8) & np.uint32(1) else r_f + xx
-                break
-            r1, hi, lo, has, kept = _word(hi, lo, inc_hi, inc_lo, has, kept)
-            u = np.float32(r1 >> sh8) * scale
-            xd = np.float64(x)
-            if np.float64((f[idx - 1] - f[idx]) * u + f[idx]) < math.exp(-0.5 * xd * xd):
-                break
-        out[i] = x
+            out[i] = -x if (r >> np.uint32(8)) & np.uint32(1) else x
+        else:
+            out[i], hi, lo, has, kept = _rejected(r, hi, lo, inc_hi, inc_lo, has, kept, k, w, f,
+                                                  r_f, inv_r_f)  # fmt: skip
     st[0], st[1] = hi, lo
     st[4], st[5] = np.uint64(1) if has else np.uint64(0), kept
 
