@@ -100,11 +100,50 @@ def _deposit_box(
             lo = max(r0, int(math.floor(centre - reach * sg)))
             hi = min(r0 + n_r, int(math.ceil(centre + reach * sg)))
             scale = electrons[i] * length / (2.0 * hw) / whole
+            if sg >= SERIES_MIN_SIGMA:
+                _add_gaussian_cells(box[:, col - c0], lo - r0, hi - r0, lo + 0.5 - centre, sg,
+                                    2.0 * scale)  # fmt: skip
+                continue
             cdf_lo = math.erf((lo - centre) / sg * inv_sqrt2)
             for k in range(lo, hi):
                 cdf_hi = math.erf((k + 1 - centre) / sg * inv_sqrt2)
                 box[k - r0, col - c0] += (cdf_hi - cdf_lo) * scale
                 cdf_lo = cdf_hi
+
+
+#: A piece at least this many cells wide (standard deviation) is integrated over its cells by
+#: :func:`_add_gaussian_cells` (the midpoint rule and its corrections: within 1e-6 of the peak
+#: cell's share, 1e-4 of a tail cell's own), a narrower one by ``erf`` differences.
+SERIES_MIN_SIGMA = 2.0
+
+
+@numba.njit(**KERNEL)
+def _add_gaussian_cells(
+    column: FloatArray, first: int, last: int, x0: float, sigma: float, mass: float
+) -> None:
+    """Add ``mass`` times the standard normal's probability of each unit cell, x in
+    [x_k - 1/2, x_k + 1/2) with x_k = x0 + (k - first) in units of ``sigma`` times sigma, to
+    ``column[first:last]``.
+
+    The cell's probability is phi(u) / sigma (1 + (u^2 - 1) / (24 sigma^2) + (u^4 - 6 u^2 + 3)
+    / (1920 sigma^4)), u = x_k / sigma: the midpoint rule and the first two terms of its
+    Euler-Maclaurin expansion (what is left is under 1e-6 of the peak cell for sigma >= 2). The
+    Gaussian steps from cell to cell by a ratio that itself steps by exp(-1 / sigma^2): three
+    exponentials a column, where ``erf`` differences took one ``erf`` a cell."""
+    inv_var = 1.0 / (sigma * sigma)
+    a = inv_var / 24.0
+    b = inv_var * inv_var / 1920.0
+    peak = mass / (sigma * math.sqrt(2.0 * math.pi))
+    x = x0
+    g = math.exp(-0.5 * x * x * inv_var)
+    ratio = math.exp(-(x + 0.5) * inv_var)  # g(x + 1) / g(x)
+    step = math.exp(-inv_var)
+    for k in range(first, last):
+        u2 = x * x * inv_var
+        column[k] += peak * g * (1.0 + a * (u2 - 1.0) + b * (u2 * u2 - 6.0 * u2 + 3.0))
+        g *= ratio
+        ratio *= step
+        x += 1.0
 
 
 @numba.njit(**KERNEL)
