@@ -19,9 +19,13 @@ back to NumPy's call, so the numbers are NumPy's in every case.
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numba
 import numpy as np
+from llvmlite import ir
+from numba import types
+from numba.extending import intrinsic
 from numpy.typing import NDArray
 
 from seamtrack.jit import KERNEL
@@ -63,33 +67,85 @@ _MULT_LO = np.uint64(0x4385DF649FCCF645)
 _MASK64 = (1 << 64) - 1
 
 
+def _lcg_step_typing(typingctx: Any, hi: Any, lo: Any, inc_hi: Any, inc_lo: Any) -> tuple[Any, Any]:
+    """PCG64's state step, (hi, lo) * MULT + (inc_hi, inc_lo) mod 2**128, in LLVM's 128-bit
+    integers (on x86-64 one 64 x 64 -> 128 multiply and two 64-bit ones, where four 32-bit
+    products and their carries took longer). Returns (hi, lo) after."""
+    u64 = types.uint64
+    sig = types.UniTuple(u64, 2)(u64, u64, u64, u64)
+
+    def codegen(context: Any, builder: Any, signature: Any, args: Any) -> Any:
+        i128, i64 = ir.IntType(128), ir.IntType(64)
+        shift = ir.Constant(i128, 64)
+
+        def join(high: Any, low: Any) -> Any:
+            wide = builder.shl(builder.zext(high, i128), shift)
+            return builder.or_(wide, builder.zext(low, i128))
+
+        mult = ir.Constant(i128, (int(_MULT_HI) << 64) | int(_MULT_LO))
+        after = builder.add(builder.mul(join(args[0], args[1]), mult), join(args[2], args[3]))
+        high = builder.trunc(builder.lshr(after, shift), i64)
+        return context.make_tuple(builder, signature.return_type, (high, builder.trunc(after, i64)))
+
+    return sig, codegen
+
+
+#: numba's intrinsic (typed ``Any``: mypy would see the typing function's signature).
+_lcg_step: Any = intrinsic(_lcg_step_typing)
+
+
 @numba.njit(**KERNEL)
 def _word(
     hi: np.uint64, lo: np.uint64, inc_hi: np.uint64, inc_lo: np.uint64, has: bool, kept: np.uint64
 ) -> tuple[np.uint32, np.uint64, np.uint64, bool, np.uint64]:
     """NumPy's next_uint32 of PCG64: the kept high half if there is one, else the low half of
-    a new output (its high half kept). The 128-bit state (hi, lo) steps as state * MULT + inc;
-    the output is XSL-RR: (hi ^ lo) rotated right by the top 6 bits of hi. Returns (word, hi,
-    lo, has, kept) after."""
+    a new output (its high half kept). The 128-bit state (hi, lo) steps as state * MULT + inc
+    (:data:`_lcg_step`); the output is XSL-RR: (hi ^ lo) rotated right by the top 6 bits of
+    hi. Returns (word, hi, lo, has, kept) after."""
     if has:
         return np.uint32(kept), hi, lo, False, kept
-    m32 = np.uint64(0xFFFFFFFF)
-    s32 = np.uint64(32)
-    # lo * MULT_LO as 128 bits from four 32-bit products; the cross terms add to the high half
-    a_lo, a_hi = lo & m32, lo >> s32
-    b_lo, b_hi = _MULT_LO & m32, _MULT_LO >> s32
-    t = a_lo * b_lo
-    u = a_hi * b_lo + (t >> s32)
-    v = a_lo * b_hi + (u & m32)
-    high = a_hi * b_hi + (u >> s32) + (v >> s32)
-    new_lo = lo * _MULT_LO
-    low = new_lo + inc_lo
-    carry = np.uint64(1) if low < new_lo else np.uint64(0)
-    high = high + lo * _MULT_HI + hi * _MULT_LO + inc_hi + carry
+    high, low = _lcg_step(hi, lo, inc_hi, inc_lo)
     x = high ^ low
     rot = high >> np.uint64(58)
     out = (x >> rot) | (x << ((np.uint64(64) - rot) & np.uint64(63)))
-    return np.uint32(out & m32), high, low, True, out >> s32
+    return np.uint32(out & np.uint64(0xFFFFFFFF)), high, low, True, out >> np.uint64(32)
+
+
+@numba.njit(**KERNEL)
+def _rejected(
+    r: np.uint32, hi: np.uint64, lo: np.uint64, inc_hi: np.uint64, inc_lo: np.uint64,
+    has: bool, kept: np.uint64, k: NDArray[np.uint32], w: NDArray[np.float32],
+    f: NDArray[np.float32], r_f: np.float32, inv_r_f: np.float32,
+) -> tuple[np.float32, np.uint64, np.uint64, bool, np.uint64]:  # fmt: skip
+    """The ziggurat's rare branches (about 1 % of the numbers), from a word ``r`` outside its
+    layer's rectangle: the tail beyond r (layer 0), or a wedge's test with a second word, and
+    new words until a number is accepted. Returns (number, hi, lo, has, kept) after."""
+    scale = np.float32(1.0 / 16777216.0)  # next_float: the word's top 24 bits
+    sh8 = np.uint32(8)
+    while True:
+        idx = r & np.uint32(0xFF)
+        rabs = (r >> np.uint32(9)) & np.uint32(0x7FFFFF)
+        x = np.float32(rabs) * w[idx]
+        if (r >> sh8) & np.uint32(1):
+            x = -x
+        if rabs < k[idx]:
+            return x, hi, lo, has, kept
+        if idx == 0:  # the tail beyond r
+            while True:
+                r1, hi, lo, has, kept = _word(hi, lo, inc_hi, inc_lo, has, kept)
+                r2, hi, lo, has, kept = _word(hi, lo, inc_hi, inc_lo, has, kept)
+                xx = -inv_r_f * np.log1p(-(np.float32(r1 >> sh8) * scale))
+                yy = -np.log1p(-(np.float32(r2 >> sh8) * scale))
+                if yy + yy > xx * xx:
+                    break
+            x = -(r_f + xx) if (rabs >> sh8) & np.uint32(1) else r_f + xx
+            return x, hi, lo, has, kept
+        r1, hi, lo, has, kept = _word(hi, lo, inc_hi, inc_lo, has, kept)
+        u = np.float32(r1 >> sh8) * scale
+        xd = np.float64(x)
+        if np.float64((f[idx - 1] - f[idx]) * u + f[idx]) < math.exp(-0.5 * xd * xd):
+            return x, hi, lo, has, kept
+        r, hi, lo, has, kept = _word(hi, lo, inc_hi, inc_lo, has, kept)
 
 
 @numba.njit(**KERNEL)
@@ -99,37 +155,21 @@ def _ziggurat(
     r_f: np.float32, inv_r_f: np.float32,
 ) -> None:  # fmt: skip
     """Fill ``out`` with NumPy's float32 ziggurat normals from the PCG64 state ``st`` =
-    [state high, state low, increment high, increment low, has_uint32, uinteger], updated."""
+    [state high, state low, increment high, increment low, has_uint32, uinteger], updated.
+    A word inside its layer's rectangle (99 %) is the number at once; the rest go to
+    :func:`_rejected`, out of the hot loop."""
     hi, lo, inc_hi, inc_lo = st[0], st[1], st[2], st[3]
     has, kept = st[4] != 0, st[5]
-    scale = np.float32(1.0 / 16777216.0)  # next_float: the word's top 24 bits
-    sh8 = np.uint32(8)
     for i in range(out.shape[0]):
-        while True:
-            r, hi, lo, has, kept = _word(hi, lo, inc_hi, inc_lo, has, kept)
-            idx = r & np.uint32(0xFF)
-            rabs = (r >> np.uint32(9)) & np.uint32(0x7FFFFF)
+        r, hi, lo, has, kept = _word(hi, lo, inc_hi, inc_lo, has, kept)
+        idx = r & np.uint32(0xFF)
+        rabs = (r >> np.uint32(9)) & np.uint32(0x7FFFFF)
+        if rabs < k[idx]:
             x = np.float32(rabs) * w[idx]
-            if (r >> sh8) & np.uint32(1):
-                x = -x
-            if rabs < k[idx]:
-                break
-            if idx == 0:  # the tail beyond r
-                while True:
-                    r1, hi, lo, has, kept = _word(hi, lo, inc_hi, inc_lo, has, kept)
-                    r2, hi, lo, has, kept = _word(hi, lo, inc_hi, inc_lo, has, kept)
-                    xx = -inv_r_f * np.log1p(-(np.float32(r1 >> sh8) * scale))
-                    yy = -np.log1p(-(np.float32(r2 >> sh8) * scale))
-                    if yy + yy > xx * xx:
-                        break
-                x = -(r_f + xx) if (rabs >> sh8) & np.uint32(1) else r_f + xx
-                break
-            r1, hi, lo, has, kept = _word(hi, lo, inc_hi, inc_lo, has, kept)
-            u = np.float32(r1 >> sh8) * scale
-            xd = np.float64(x)
-            if np.float64((f[idx - 1] - f[idx]) * u + f[idx]) < math.exp(-0.5 * xd * xd):
-                break
-        out[i] = x
+            out[i] = -x if (r >> np.uint32(8)) & np.uint32(1) else x
+        else:
+            out[i], hi, lo, has, kept = _rejected(r, hi, lo, inc_hi, inc_lo, has, kept, k, w, f,
+                                                  r_f, inv_r_f)  # fmt: skip
     st[0], st[1] = hi, lo
     st[4], st[5] = np.uint64(1) if has else np.uint64(0), kept
 
