@@ -12,7 +12,7 @@ import pytest
 
 from seamtrack.features import _segmentation as kernels
 from seamtrack.features.line_geometry import fit_line
-from seamtrack.features.lines import Segments, segment_profile
+from seamtrack.features.lines import segment_profile
 from seamtrack.features.refusal import Refusal
 from seamtrack.features.robust import (
     DEFAULT_RESOLUTION_MM,
@@ -28,8 +28,6 @@ from seamtrack.features.robust import (
 )
 from seamtrack.features.select import BUCKETS, kth_nonneg
 from seamtrack.features.synthetic import Imperfections, synthetic_profile
-from seamtrack.features.vgroove.extractor import VGrooveExtractor
-from seamtrack.sensing.profiles import Profile, SeamHint
 from seamtrack.sensing.sensor import preset
 
 
@@ -207,29 +205,3 @@ def test_split_pieces_lie_within_tolerance_of_their_chord() -> None:
         d = np.abs(q[:, 0] * chord[1] - q[:, 1] * chord[0]) / np.hypot(*chord)
         assert d.max() <= 0.05
     assert kernels._split(p, 0, len(p) - 1, 1e-4, 8, lo, hi) == -1
-
-
-class _SegmentsThenModel(VGrooveExtractor):
-    """The v-groove with segmentation and its model as two calls from Python (an extractor
-    that overrides ``segments`` is not fused)."""
-
-    def segments(self, profile: Profile) -> Segments | Refusal:
-        return super().segments(profile)
-
-
-@pytest.mark.parametrize("level", LEVELS)
-@pytest.mark.parametrize("joint", ["v-groove", "fillet", "lap"])
-def test_v_groove_in_one_call_equals_segments_then_model(level: Imperfections, joint: str) -> None:
-    """The v-groove's one compiled call (segmentation and model) gives what segmentation and
-    then the model give, bit for bit: seam points, edges, confidence, share and refusals, with
-    and without the tracker's hint."""
-    fused, two = VGrooveExtractor(), _SegmentsThenModel()
-    for i, profile in enumerate(_profiles(level, joint, 4, 13)):
-        hint = None if i % 2 else SeamHint((0.0, 0.0), (1.0, 0.0, 0.0), (2.0, 2.0))
-        a, share_a = fused.scored(profile, hint=hint)
-        b, share_b = two.scored(profile, hint=hint)
-        assert share_a == share_b and a.reason == b.reason and bool(a) == bool(b)
-        np.testing.assert_array_equal(a.point_laser, b.point_laser)
-        np.testing.assert_array_equal(a.edges_laser, b.edges_laser)
-        assert a.confidence == b.confidence
-        assert a.gap_mm == b.gap_mm or (math.isnan(a.gap_mm) and math.isnan(b.gap_mm))

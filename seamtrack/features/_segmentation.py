@@ -446,6 +446,9 @@ def _pieces(
     return PieceCount(SEGMENTED if k else NO_PIECE, k)
 
 
+# numba's on-disk cache keys a kernel on its own file only: when the front end
+# (seamtrack.features.robust) changes, this file must change too, or a checkout's cached
+# ``segment`` keeps the old front end compiled in (the same numbers, the old speed).
 @numba.njit(**KERNEL)
 def segment(
     points: FloatArray,
@@ -502,29 +505,4 @@ def segment(
         front.spacing,
         front.quantum,
         front.resolution,
-    )
-
-
-@numba.njit(**KERNEL)
-def segment_buffers(
-    found: Segmentation, n: int, max_lines: int, floats: FloatArray, ints: IntArray
-) -> tuple[FloatArray, IntArray, IntArray, PieceTable]:
-    """What :func:`segment` wrote for a profile of ``n`` points (``found`` its answer, with
-    pieces): the kept points (m, 2), their columns (m,), the run bounds and the
-    :class:`PieceTable`, as views of ``floats`` and ``ints``."""
-    at = _buffer_layout(n, max_lines)
-    m, k = found.kept, found.n_pieces
-    bounds = ints[at.offsets : at.offsets + k + 1]
-    end = bounds[k]
-    pieces = PieceTable(
-        ints[at.inliers : at.inliers + end],
-        floats[at.along : at.along + end],
-        floats[at.fits : at.fits + 7 * k].reshape((k, 7)),
-        bounds,
-    )
-    return (
-        floats[at.points : at.points + 2 * m].reshape((m, 2)),
-        ints[at.columns : at.columns + m],
-        ints[at.runs : at.runs + found.n_runs],
-        pieces,
     )

@@ -112,11 +112,13 @@ class ExtractorBase:
         try:
             with np.errstate(all="ignore"):
                 if seg is None:
-                    found = self._extract_profile(profile, hint)
+                    seg = self.segments(profile)
+                if isinstance(seg, Refusal):
+                    return Feature.failed(seg.reason, joint=self.name), 0.0
+                if hint is None:
+                    found = self._extract(profile, seg)
                 else:
-                    found = self._extract_segments(profile, seg, hint)
-                if isinstance(found, Refusal):
-                    return Feature.failed(found.reason, joint=self.name), 0.0
+                    found = self._extract_hinted(profile, seg, hint)
                 if isinstance(found, Feature):
                     return found, 0.0
                 feature, share = found
@@ -129,24 +131,6 @@ class ExtractorBase:
                 return feature, share
         except DATA_ERRORS as exc:  # never raise on data
             return Feature.failed(f"{self.name}: unusable profile ({exc})", joint=self.name), 0.0
-
-    def _extract_profile(
-        self, profile: Profile, hint: SeamHint | None
-    ) -> Refusal | Feature | tuple[Feature, float]:
-        """The profile's segmentation (:meth:`segments`), then :meth:`_extract_segments`; a
-        family whose model runs compiled may do both in one call (the v-groove)."""
-        return self._extract_segments(profile, self.segments(profile), hint)
-
-    def _extract_segments(
-        self, profile: Profile, seg: Segments | Refusal, hint: SeamHint | None
-    ) -> Refusal | Feature | tuple[Feature, float]:
-        """:meth:`_extract` (with a hint: :meth:`_extract_hinted`) on the pieces, or the
-        segmentation's refusal."""
-        if isinstance(seg, Refusal):
-            return seg
-        if hint is None:
-            return self._extract(profile, seg)
-        return self._extract_hinted(profile, seg, hint)
 
     def _extract(self, profile: Profile, seg: Segments) -> Feature | tuple[Feature, float]:
         """A failure, or the feature and the share of the profile its model explains."""

@@ -16,7 +16,6 @@ from __future__ import annotations
 import functools
 import math
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -182,47 +181,6 @@ def segment_profile(
             ints[at.inliers : at.inliers + end], floats[at.along : at.along + end], fits, bounds
         ),
     )
-
-
-def segment_then(
-    model: Any,
-    params: Any,
-    profile: Profile,
-    *,
-    min_tol_mm: float | None = None,
-    resolution_mm: float | None = None,
-    sigma_factor: float = 5.0,
-    min_points: int = 8,
-    max_lines: int = 64,
-    max_detour_mm: float = 3.0,
-) -> tuple[FloatArray, NDArray[np.bool_], Any] | Refusal:
-    """:func:`segment_profile` and a joint's compiled model on its pieces in one compiled call
-    (for the frames of a run: the pieces are not boxed for Python and read back).
-
-    ``model(points, valid, front, max_lines, min_kink_rad, floats, ints, stray, params)`` runs
-    :func:`~seamtrack.features._segmentation.segment` on the buffers as
-    :func:`segment_profile` does, then its model with ``params``, and returns
-    ``(segmentation, result)`` (e.g.
-    :func:`seamtrack.features.vgroove._v_groove_model.segment_v_groove`). Returns the kept
-    points (m, 2), their detour flags (m,) and the model's result, or why segmentation found
-    no pieces (the :class:`Refusal` of :func:`segment_profile`); the other parameters as
-    there."""
-    arrays = profile_arrays(profile)
-    if isinstance(arrays, Refusal):
-        return arrays
-    pts, valid = arrays
-    n = len(pts)
-    max_lines = int(max_lines)
-    at = _layout(n, max_lines)
-    floats = np.empty(at.floats)
-    ints = np.empty(at.ints, dtype=np.intp)
-    stray = np.empty(n, dtype=np.bool_)
-    front = _front_params(min_points, resolution_mm, min_tol_mm, sigma_factor, max_detour_mm)
-    found, result = model(pts, valid, front, max_lines, _MIN_KINK, floats, ints, stray, params)
-    if found.code != SEGMENTED:
-        return Refusal(_WHY[found.code].format(found.kept))
-    m = found.kept
-    return floats[at.points : at.points + 2 * m].reshape(m, 2), stray[:m], result
 
 
 #: Why :func:`segment_profile` found no pieces, by the compiled call's code.

@@ -15,12 +15,6 @@ from typing import NamedTuple, cast
 import numba
 import numpy as np
 
-from seamtrack.features._segmentation import (
-    SEGMENTED,
-    Segmentation,
-    segment,
-    segment_buffers,
-)
 from seamtrack.features.counts import (
     LINE_CY,
     LINE_CZ,
@@ -380,29 +374,3 @@ def v_groove(points, stray, columns, runs, tol, sigma, spacing, pieces, params):
         depth / plates,
         math.nan,
     )
-
-
-class SegmentedGroove(NamedTuple):
-    """What :func:`segment_v_groove` found: the segmentation
-    (:class:`~seamtrack.features._segmentation.Segmentation`) and the groove's model on its
-    pieces (a :data:`NO_V` refusal when segmentation found none)."""
-
-    segmentation: Segmentation
-    groove: VGrooveResult
-
-
-@numba.njit(**KERNEL)
-def segment_v_groove(points, valid, front, max_lines, min_kink_rad, floats, ints, stray, params):
-    """:func:`~seamtrack.features._segmentation.segment` and then :func:`v_groove` on what it
-    wrote, in one compiled call (the arguments of both; a :class:`SegmentedGroove`): the
-    same arithmetic as the two calls from Python, without boxing the pieces for Python and
-    reading them back (about 20 us a profile, a fifth of the extraction)."""
-    found = segment(points, valid, front, max_lines, min_kink_rad, floats, ints, stray)
-    if found.code != SEGMENTED:
-        return SegmentedGroove(found, _refused(NO_V, math.nan))
-    kept, columns, runs, pieces = segment_buffers(found, points.shape[0], max_lines, floats, ints)
-    groove = v_groove(
-        kept, stray[: found.kept], columns, runs, found.tol, found.sigma, found.spacing, pieces,
-        params,
-    )  # fmt: skip
-    return SegmentedGroove(found, groove)

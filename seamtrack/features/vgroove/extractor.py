@@ -13,11 +13,9 @@ import numba
 import numpy as np
 from numpy.typing import NDArray
 
-from seamtrack.features.arrays import FloatArray
 from seamtrack.features.base import ExtractorBase
 from seamtrack.features.expect import Expect
-from seamtrack.features.lines import Segments, segment_then
-from seamtrack.features.refusal import Refusal
+from seamtrack.features.lines import Segments
 from seamtrack.features.vgroove._v_groove_model import (
     GROOVE,
     NO_PLATE,
@@ -26,7 +24,6 @@ from seamtrack.features.vgroove._v_groove_model import (
     WIDE_ROOT,
     GrooveParams,
     VGrooveResult,
-    segment_v_groove,
     v_groove,
 )
 from seamtrack.features.vgroove._v_search import pieces_of
@@ -47,18 +44,16 @@ _REFUSALS = {
 }
 
 
-def _fill_above(
-    points: FloatArray, stray: NDArray[np.bool_], groove: VGrooveResult
-) -> float | None:
+def _fill_above(seg: Segments, groove: VGrooveResult) -> float | None:
     """How far (mm) the surface over the seam lies above it, when a fill covers it: the median
     of the points within half a millimetre of the seam across the groove (along the line
     joining the top edges) lies more than max(1.5 mm, a tenth of the seam's depth) above the
     seam, and the surface lies at that depth a quarter of the groove's width there to either
     side as well; else None (an empty V, a root gap, a tack weld, a reflection streak)."""
-    n = len(points)
-    stray = stray if len(stray) == n else np.zeros(n, dtype=np.bool_)
+    n = len(seg.points)
+    stray = seg.stray if len(seg.stray) == n else np.zeros(n, dtype=np.bool_)
     above = _fill_height(
-        points, stray, groove.top_left_y, groove.top_left_z, groove.top_right_y,
+        seg.points, stray, groove.top_left_y, groove.top_left_z, groove.top_right_y,
         groove.top_right_z, groove.seam_y, groove.seam_z,
     )  # fmt: skip
     return None if math.isnan(above) else above
@@ -157,49 +152,11 @@ class VGrooveExtractor(ExtractorBase):
     max_gap_mm: float = 6.0
     min_gap_mm: float = 0.05
 
-    def _extract_profile(
-        self, profile: Profile, hint: SeamHint | None
-    ) -> Refusal | Feature | tuple[Feature, float]:
-        """Segmentation and the model in one compiled call
-        (:func:`~seamtrack.features.vgroove._v_groove_model.segment_v_groove`), the same
-        numbers as :meth:`segments` then :meth:`_extract`; a subclass that changes either
-        takes those."""
-        cls = type(self)
-        if cls.segments is not ExtractorBase.segments or cls._extract is not _EXTRACT:
-            return super()._extract_profile(profile, hint)
-        done = segment_then(
-            segment_v_groove,
-            self._groove_params(hint),
-            profile,
-            min_tol_mm=self.min_tol_mm,
-            resolution_mm=self.resolution_mm,
-            min_points=self.min_points,
-        )
-        if isinstance(done, Refusal):
-            return done
-        points, stray, groove = done
-        return self._groove_feature(profile, groove, points, stray)
-
     def _extract(
         self, profile: Profile, seg: Segments, hint: SeamHint | None = None
     ) -> Feature | tuple[Feature, float]:
         if not seg.n_lines:
             return Feature.failed(_REFUSALS[NO_V], joint=self.name)
-        groove = v_groove(
-            np.ascontiguousarray(seg.points, dtype=np.float64),
-            np.asarray(seg.stray, dtype=np.bool_),
-            np.asarray(seg.columns, dtype=np.int64),
-            np.asarray(seg.runs, dtype=np.int64),
-            float(seg.tol),
-            float(seg.sigma),
-            float(seg.spacing),
-            pieces_of(seg),
-            self._groove_params(hint),
-        )
-        return self._groove_feature(profile, groove, seg.points, seg.stray)
-
-    def _groove_params(self, hint: SeamHint | None) -> GrooveParams:
-        """The model's parameters (:class:`GrooveParams`), with the tracker's hint."""
         lo, hi = self._angles(self.min_angle_deg, self.max_angle_deg)
         expect = self.expect if isinstance(self.expect, Expect) else None
         search = self.search_params(False, lo, hi, self.max_gap_mm)  # the bevels reach the root
@@ -209,28 +166,29 @@ class VGrooveExtractor(ExtractorBase):
             search = search._replace(
                 hint_y=float(hy), hint_z=float(hz), tol_y=float(ty), tol_z=float(tz)
             )
-        return GrooveParams(
+        params = GrooveParams(
             search=search,
             min_gap=float(self.min_gap_mm),
             gapless=bool(expect is not None and expect.gapless),
         )
-
-    def _groove_feature(
-        self,
-        profile: Profile,
-        groove: VGrooveResult,
-        points: FloatArray,
-        stray: NDArray[np.bool_],
-    ) -> Feature | tuple[Feature, float]:
-        """The model's answer on the kept ``points`` (and their detour flags ``stray``): a
-        refusal, or the feature and the share of the profile it explains."""
+        groove = v_groove(
+            np.ascontiguousarray(seg.points, dtype=np.float64),
+            np.asarray(seg.stray, dtype=np.bool_),
+            np.asarray(seg.columns, dtype=np.int64),
+            np.asarray(seg.runs, dtype=np.int64),
+            float(seg.tol),
+            float(seg.sigma),
+            float(seg.spacing),
+            pieces_of(seg),
+            params,
+        )
         if groove.code != GROOVE:
             why = _REFUSALS[groove.code].format(groove.root_share)
             return Feature.failed(why, joint=self.name)
         wrong = self._implausible(angle=groove.angle, depth=groove.depth, gap=groove.gap)
         if wrong is not None:
             return wrong
-        fill = _fill_above(points, stray, groove)
+        fill = _fill_above(seg, groove)
         if fill is not None:
             return Feature.failed(
                 f"not a v-groove: a surface lies {fill:.1f} mm above the bevels' meeting point "
@@ -252,7 +210,3 @@ class VGrooveExtractor(ExtractorBase):
         self, profile: Profile, seg: Segments, hint: SeamHint
     ) -> Feature | tuple[Feature, float]:
         return self._extract(profile, seg, hint)
-
-
-#: The v-groove's own model (a subclass that replaces it is not fused with segmentation).
-_EXTRACT = VGrooveExtractor._extract
