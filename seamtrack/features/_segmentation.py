@@ -446,6 +446,9 @@ def _pieces(
     return PieceCount(SEGMENTED if k else NO_PIECE, k)
 
 
+# numba's on-disk cache keys a kernel on its own file only: when the front end
+# (seamtrack.features.robust) changes, this file must change too, or a checkout's cached
+# ``segment`` keeps the old front end compiled in (the same numbers, the old speed).
 @numba.njit(**KERNEL)
 def segment(
     points: FloatArray,

@@ -13,6 +13,7 @@ Laser frame: points are (y_L, z_L); z_L grows away from the sensor (into a groov
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -41,6 +42,11 @@ from seamtrack.sensing.profiles import Profile
 
 #: A run's end piece is split at a kink of at least this much (rad): a root face at a slant.
 _MIN_KINK = math.radians(5.0)
+
+#: The buffers' layout and the front end's settings, built once per set of values (named
+#: tuples: immutable, shared): they cost about a microsecond a profile to build.
+_layout = functools.lru_cache(maxsize=64)(buffer_layout)
+_front_params = functools.lru_cache(maxsize=64)(front_params)
 
 
 def _fit(points: FloatArray, index: NDArray[np.intp]) -> Line:
@@ -140,14 +146,14 @@ def segment_profile(
     n = len(pts)
     max_lines = int(max_lines)
     # The compiled call writes into these (see :func:`seamtrack.features._segmentation.segment`).
-    at = buffer_layout(n, max_lines)
+    at = _layout(n, max_lines)
     floats = np.empty(at.floats)
     ints = np.empty(at.ints, dtype=np.intp)
     stray = np.empty(n, dtype=np.bool_)
     found = segment(
         pts,
         valid,
-        front_params(min_points, resolution_mm, min_tol_mm, sigma_factor, max_detour_mm),
+        _front_params(min_points, resolution_mm, min_tol_mm, sigma_factor, max_detour_mm),
         max_lines,
         _MIN_KINK,
         floats,
