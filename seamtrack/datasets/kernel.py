@@ -20,7 +20,13 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.jit import KERNEL
-from seamtrack.sensing.kernels import fan_directions, fan_stripe_finish, fan_stripe_hits
+from seamtrack.sensing.kernels import (
+    HitMesh,
+    VertexRings,
+    fan_directions,
+    fan_stripe_finish,
+    fan_stripe_hits,
+)
 
 #: A crossing at a segment's end counts for the segment within this fraction of its length
 #: (rays through a shared vertex hit one of the two segments, never neither).
@@ -123,8 +129,9 @@ def stripe(
     # kernel for them, the annotations name the Embree case.
     points, reason, t, face, cos_incidence, chip, s_origins, s_directions, s_far, s_index = (
         fan_stripe_hits(origin, rotation, fan, directions, face, t_hit,  # type: ignore[arg-type]
-                        np.empty((0, 3)), np.empty((0, 3), dtype=np.int64), none, none, none,
-                        normals, False, 0.0, sp, offset)
+                        HitMesh(np.empty((0, 3)), np.empty((0, 3), dtype=np.int64), normals,
+                                VertexRings(none, none, none)),
+                        False, 0.0, sp, offset)
     )  # fmt: skip
     m = s_index.shape[0]
     blocked_t = np.empty(m)
