@@ -252,11 +252,9 @@ def fan_stripe_hits(
     rotation: NDArray[np.float64],
     fan: NDArray[np.float64],
     directions: NDArray[np.float64],
-    prim: NDArray[np.int32],
-    tfar: NDArray[np.float32],
-    mesh: HitMesh,
-    refine: bool,
-    tol: float,
+    t_hit: NDArray[np.float64],
+    face_hit: NDArray[np.int64],
+    face_normals: NDArray[np.float64],
     sp: NDArray[np.float64],
     offset: float,
 ) -> tuple[
@@ -268,7 +266,9 @@ def fan_stripe_hits(
 
     ``origin`` (3,) is the emitter in the local frame, ``rotation`` (3, 3) the laser frame's
     axes, ``fan`` (n, 3) the unit ray directions in the laser frame and ``directions`` the same
-    in the local frame; ``mesh`` the local mesh (its rings read only to ``refine``). Returns
+    in the local frame; ``t_hit``, ``face_hit`` (n,) each ray's first hit in float64 (face -1:
+    a miss; :func:`refine_hits` of Embree's, or exact from a plane section) and
+    ``face_normals`` (f, 3) the faces' unit normals. Returns
     ``points`` (n, 2) = (y_L, z_L) (NaN on a miss), ``reason`` (0 for the points still to test
     for occlusion), ``t``, ``face``, ``cos_incidence``, ``chip`` (n, 2) = (x_c, z_c), and the k
     shadow rays: origins offset towards the camera, unit directions, lengths, ray indices (k,).
@@ -287,17 +287,14 @@ def fan_stripe_hits(
     cx = origin[0] + sp[SP_B] * rotation[0, 0]
     cy = origin[1] + sp[SP_B] * rotation[1, 0]
     cz = origin[2] + sp[SP_B] * rotation[2, 0]
-    face_normals = mesh.face_normals
     k = _ZERO
     for i in range(directions.shape[0]):
-        f = prim[i]
+        f = face_hit[i]
         if f < 0:
             _mark_miss(i, points, reason, t_out, face_out, cos_incidence, chip)
             continue
         dx, dy, dz = directions[i, 0], directions[i, 1], directions[i, 2]
-        t = float(tfar[i])
-        if refine:
-            t, f, _ = _refine_one(origin[0], origin[1], origin[2], dx, dy, dz, f, t, mesh, tol)
+        t = t_hit[i]
         t_out[i] = t
         face_out[i] = f
         # The ray lies in the laser plane, so the laser-frame point is exact: x_L = 0.
@@ -396,8 +393,9 @@ def fan_stripe_packets(
     ``occluded`` and ``width`` the occlusion query's and its packet's
     (``Library.occluded_query``, ``Library.occluded_width``).
 
-    The fan turned into the local frame, first hits, :func:`fan_stripe_hits`, shadow rays,
-    :func:`fan_stripe_finish`. Returns (points, reason, t, face, cos_incidence, directions).
+    The fan turned into the local frame, first hits, :func:`refine_hits`,
+    :func:`fan_stripe_hits`, shadow rays, :func:`fan_stripe_finish`. Returns (points, reason,
+    t, face, cos_incidence, directions).
     """
     n = fan.shape[0]
     directions = fan_directions(rotation, fan)
@@ -405,8 +403,12 @@ def fan_stripe_packets(
     prim = np.empty(n, dtype=np.int32)
     tfar = np.empty(n, dtype=np.float32)
     embree.intersect(intersect8, scene, origins, directions, prim, tfar)
+    t_hit = np.empty(n)
+    face_hit = np.empty(n, dtype=np.int64)
+    refined = np.empty(n, dtype=np.bool_)
+    refine_hits(origins, directions, prim, tfar, mesh, refine, tol, t_hit, face_hit, refined)
     points, reason, t, face, cos_incidence, chip, shadow_o, shadow_d, shadow_far, shadow_index = (
-        fan_stripe_hits(origin, rotation, fan, directions, prim, tfar, mesh, refine, tol, sp,
+        fan_stripe_hits(origin, rotation, fan, directions, t_hit, face_hit, mesh.face_normals, sp,
                         offset)
     )  # fmt: skip
     packet_shadows_finish(occluded, width, scene, shadow_o, shadow_d, shadow_far, shadow_index,

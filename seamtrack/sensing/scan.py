@@ -267,10 +267,10 @@ def stripe_hits(
                           origin_local=origin)  # fmt: skip
     directions = laser.directions @ rotation.T
     prim, tfar = caster.cast_local(origin[None], directions)
+    t_hit, face_hit, _ = caster.refine_local(origin[None], directions, prim, tfar, refine=refine)
     points, reason, t, face, cos_incidence, chip, shadow_o, shadow_d, shadow_far, shadow_index = (
         kernels.fan_stripe_hits(
-            origin, rotation, laser.directions, directions, prim, tfar,
-            caster.hit_mesh(bool(refine)), bool(refine), constants.BARYCENTRIC_TOL,
+            origin, rotation, laser.directions, directions, t_hit, face_hit, caster.face_normals,
             laser.sensor_params, constants.SHADOW_RAY_OFFSET_MM,
         )
     )  # fmt: skip

@@ -553,8 +553,7 @@ def fan_stripe_section(
     if next_seeds.shape[0] > MAX_SEEDS:
         next_seeds = none
     points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index = fan_stripe_hits(
-        origin, rotation, fan, directions, face, t, mesh, False, 0.0, sp,  # type: ignore[arg-type]
-        offset,
+        origin, rotation, fan, directions, t, face, mesh.face_normals, sp, offset,
     )  # fmt: skip
     return (points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index, directions,
             next_seeds)  # fmt: skip
