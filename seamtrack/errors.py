@@ -6,6 +6,9 @@ catch :class:`SeamtrackError` (or a subclass) and read ``.field`` and ``.fix``.
 
 from __future__ import annotations
 
+from collections.abc import Iterable
+from typing import NamedTuple
+
 
 class SeamtrackError(Exception):
     """An error caused by the user's input, with the field at fault and a fix.
@@ -35,6 +38,23 @@ class SeamtrackError(Exception):
 
 class SceneError(SeamtrackError):
     """A scene file (or an override) that cannot be used."""
+
+
+class Rule(NamedTuple):
+    """One row of a validation table: ``broken`` where the input fails it, and the error's
+    ``message``, ``field`` and ``fix`` (see :func:`check_rules`)."""
+
+    broken: bool
+    message: str
+    field: str
+    fix: str
+
+
+def check_rules(rules: Iterable[Rule], error: type[SeamtrackError] = SceneError) -> None:
+    """Raise ``error`` for the first broken rule of a validation table (in its order)."""
+    for rule in rules:
+        if rule.broken:
+            raise error(rule.message, field=rule.field, fix=rule.fix)
 
 
 class SensorGeometryError(SeamtrackError):

@@ -112,19 +112,14 @@ def stripe(
                np.ascontiguousarray(directions[:, 1]), np.ascontiguousarray(directions[:, 2]),
                segs, T_MIN_MM, np.full(n, NO_HIT), t_hit, face)  # fmt: skip
     # The segments' normals (x component 0: an extrusion), then the mesh-mode stripe's clips
-    # on these exact hits (nothing to refine: the arrays of the refinement stay empty).
+    # on these exact hits.
     normals = np.zeros((segs.shape[0], 3))
     for k in range(segs.shape[0]):
         ey, ez = segs[k, 2] - segs[k, 0], segs[k, 3] - segs[k, 1]
         inv = 1.0 / np.sqrt(ey * ey + ez * ez)
         normals[k, 1], normals[k, 2] = -ez * inv, ey * inv
-    none = np.empty(0, dtype=np.int64)
-    # Embree gives (int32, float32) hits; these are (int64, float64), exact: numba compiles the
-    # kernel for them, the annotations name the Embree case.
     points, reason, t, face, cos_incidence, chip, s_origins, s_directions, s_far, s_index = (
-        fan_stripe_hits(origin, rotation, fan, directions, face, t_hit,  # type: ignore[arg-type]
-                        np.empty((0, 3)), np.empty((0, 3), dtype=np.int64), none, none, none,
-                        normals, False, 0.0, sp, offset)
+        fan_stripe_hits(origin, rotation, fan, directions, t_hit, face, normals, sp, offset)
     )  # fmt: skip
     m = s_index.shape[0]
     blocked_t = np.empty(m)

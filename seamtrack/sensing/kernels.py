@@ -7,7 +7,7 @@ quantization) that calls Embree in packets of 8 (:mod:`seamtrack.sensing.embree`
 
 from __future__ import annotations
 
-from typing import Any, cast
+from typing import Any, NamedTuple, cast
 
 import numba
 import numpy as np
@@ -19,6 +19,44 @@ from seamtrack.sensing import embree
 #: An int64 0: numba types a literal 0 as ``Literal[int](0)`` and compiles the kernel it
 #: reaches once more for it, a loop counter's start too.
 _ZERO = cast(int, np.int64(0))
+
+
+class VertexRings(NamedTuple):
+    """The faces around each vertex, as the float64 refinement of Embree's hits walks them:
+    the welded id of each vertex (exactly equal coordinates share one) and, per welded vertex,
+    its faces (CSR: ``faces[ptr[w]:ptr[w + 1]]``). All three empty where nothing is refined.
+
+    Attributes
+    ----------
+    weld : (v,) int64
+    ptr : (w + 1,) int64
+    faces : (r,) int64
+    """
+
+    weld: NDArray[np.int64]
+    ptr: NDArray[np.int64]
+    faces: NDArray[np.int64]
+
+
+class HitMesh(NamedTuple):
+    """The mesh the fan's kernels cast, refine and clip on (these and the plane section's of
+    :mod:`seamtrack.sensing.section`), one record: float64, in the caster's local frame
+    (:class:`seamtrack.sensing.raycast.RayCaster`).
+
+    Attributes
+    ----------
+    vertices : (v, 3) float
+    faces : (f, 3) int64
+    face_normals : (f, 3) float
+        Unit normals.
+    rings : VertexRings
+        Empty where nothing is refined.
+    """
+
+    vertices: NDArray[np.float64]
+    faces: NDArray[np.int64]
+    face_normals: NDArray[np.float64]
+    rings: VertexRings
 
 
 @numba.njit(**KERNEL)
@@ -57,10 +95,10 @@ def _intersect_face(
 @numba.njit(**KERNEL)
 def _refine_one(
     ox: float, oy: float, oz: float, dx: float, dy: float, dz: float, f: int, tf: float,
-    vertices: NDArray[np.float64], faces: NDArray[np.int64], weld: NDArray[np.int64],
-    ring_ptr: NDArray[np.int64], ring_faces: NDArray[np.int64], tol: float,
+    mesh: HitMesh, tol: float,
 ) -> tuple[float, int, bool]:  # fmt: skip
     """(t, face, refined) of one ray that Embree says hits face ``f`` at ``tf``."""
+    vertices, faces, rings = mesh.vertices, mesh.faces, mesh.rings
     t, inside = _intersect_face(ox, oy, oz, dx, dy, dz, vertices, faces, f, tol)
     if inside and t > 0.0:
         return t, f, True
@@ -69,9 +107,9 @@ def _refine_one(
     best_t = np.inf
     best_f = -1
     for k in range(3):
-        vid = weld[faces[f, k]]
-        for m in range(ring_ptr[vid], ring_ptr[vid + 1]):
-            g = ring_faces[m]
+        vid = rings.weld[faces[f, k]]
+        for m in range(rings.ptr[vid], rings.ptr[vid + 1]):
+            g = rings.faces[m]
             if g == f:
                 continue
             t, inside = _intersect_face(ox, oy, oz, dx, dy, dz, vertices, faces, g, tol)
@@ -89,11 +127,7 @@ def refine_hits(
     directions: NDArray[np.float64],
     prim: NDArray[np.int32],
     tfar: NDArray[np.float32],
-    vertices: NDArray[np.float64],
-    faces: NDArray[np.int64],
-    weld: NDArray[np.int64],
-    ring_ptr: NDArray[np.int64],
-    ring_faces: NDArray[np.int64],
+    mesh: HitMesh,
     refine: bool,
     tol: float,
     t_out: NDArray[np.float64],
@@ -110,9 +144,8 @@ def refine_hits(
         Unit directions.
     prim, tfar : (n,) int32, (n,) float32
         Embree's primitive id (-1: miss) and parametric distance.
-    vertices, faces, weld, ring_ptr, ring_faces
-        The local float64 mesh, the welded vertex id of each vertex and, per welded vertex, the
-        faces around it (CSR).
+    mesh : HitMesh
+        The local float64 mesh (its rings empty when ``refine`` is False).
     refine : bool
         False: return Embree's distance.
     tol : float
@@ -135,8 +168,7 @@ def refine_hits(
             j = 0 if single else i
             t_out[i], face_out[i], refined_out[i] = _refine_one(
                 origins[j, 0], origins[j, 1], origins[j, 2],
-                directions[i, 0], directions[i, 1], directions[i, 2], f, tfar[i],
-                vertices, faces, weld, ring_ptr, ring_faces, tol,
+                directions[i, 0], directions[i, 1], directions[i, 2], f, tfar[i], mesh, tol,
             )  # fmt: skip
 
 
@@ -220,16 +252,9 @@ def fan_stripe_hits(
     rotation: NDArray[np.float64],
     fan: NDArray[np.float64],
     directions: NDArray[np.float64],
-    prim: NDArray[np.int32],
-    tfar: NDArray[np.float32],
-    vertices: NDArray[np.float64],
-    faces: NDArray[np.int64],
-    weld: NDArray[np.int64],
-    ring_ptr: NDArray[np.int64],
-    ring_faces: NDArray[np.int64],
+    t_hit: NDArray[np.float64],
+    face_hit: NDArray[np.int64],
     face_normals: NDArray[np.float64],
-    refine: bool,
-    tol: float,
     sp: NDArray[np.float64],
     offset: float,
 ) -> tuple[
@@ -241,10 +266,12 @@ def fan_stripe_hits(
 
     ``origin`` (3,) is the emitter in the local frame, ``rotation`` (3, 3) the laser frame's
     axes, ``fan`` (n, 3) the unit ray directions in the laser frame and ``directions`` the same
-    in the local frame. Returns ``points`` (n, 2) = (y_L, z_L) (NaN on a miss), ``reason``
-    (0 for the points still to test for occlusion), ``t``, ``face``, ``cos_incidence``,
-    ``chip`` (n, 2) = (x_c, z_c), and the k shadow rays: origins offset towards the camera,
-    unit directions, lengths, ray indices (k,).
+    in the local frame; ``t_hit``, ``face_hit`` (n,) each ray's first hit in float64 (face -1:
+    a miss; :func:`refine_hits` of Embree's, or exact from a plane section) and
+    ``face_normals`` (f, 3) the faces' unit normals. Returns
+    ``points`` (n, 2) = (y_L, z_L) (NaN on a miss), ``reason`` (0 for the points still to test
+    for occlusion), ``t``, ``face``, ``cos_incidence``, ``chip`` (n, 2) = (x_c, z_c), and the k
+    shadow rays: origins offset towards the camera, unit directions, lengths, ray indices (k,).
     """
     n = directions.shape[0]
     points = np.empty((n, 2))
@@ -262,15 +289,12 @@ def fan_stripe_hits(
     cz = origin[2] + sp[SP_B] * rotation[2, 0]
     k = _ZERO
     for i in range(directions.shape[0]):
-        f = prim[i]
+        f = face_hit[i]
         if f < 0:
             _mark_miss(i, points, reason, t_out, face_out, cos_incidence, chip)
             continue
         dx, dy, dz = directions[i, 0], directions[i, 1], directions[i, 2]
-        t = float(tfar[i])
-        if refine:
-            t, f, _ = _refine_one(origin[0], origin[1], origin[2], dx, dy, dz, f, t,
-                                  vertices, faces, weld, ring_ptr, ring_faces, tol)  # fmt: skip
+        t = t_hit[i]
         t_out[i] = t
         face_out[i] = f
         # The ray lies in the laser plane, so the laser-frame point is exact: x_L = 0.
@@ -329,6 +353,21 @@ def fan_stripe_finish(
 
 
 @numba.njit(**KERNEL)
+def packet_shadows_finish(
+    occluded: Any, width: int, scene: int, shadow_origins: NDArray[np.float64],
+    shadow_directions: NDArray[np.float64], shadow_far: NDArray[np.float64],
+    shadow_index: NDArray[np.int64], points: NDArray[np.float64], reason: NDArray[np.uint8],
+    chip: NDArray[np.float64], sp: NDArray[np.float64], quantize: bool,
+) -> None:  # fmt: skip
+    """The shadow rays (:func:`fan_stripe_hits`') cast on Embree packets (``occluded``, the
+    address of the query of packets of ``width``), then :func:`fan_stripe_finish`."""
+    blocked = np.empty(shadow_index.shape[0], dtype=np.bool_)
+    embree.occluded(occluded, width, scene, shadow_origins, shadow_directions, shadow_far, 0.0,
+                    blocked)  # fmt: skip
+    fan_stripe_finish(points, reason, chip, blocked, shadow_index, sp, quantize)
+
+
+@numba.njit(**KERNEL)
 def fan_directions(rotation: NDArray[np.float64], fan: NDArray[np.float64]) -> NDArray[np.float64]:
     """The fan's unit rays (n, 3), given in the laser frame, turned by ``rotation`` (3, 3)
     (the laser frame's axes as columns) into the frame the rays are cast in."""
@@ -345,10 +384,8 @@ def fan_directions(rotation: NDArray[np.float64], fan: NDArray[np.float64]) -> N
 def fan_stripe_packets(
     intersect8: Any, occluded: Any, width: int, scene: int,
     origin: NDArray[np.float64], rotation: NDArray[np.float64], fan: NDArray[np.float64],
-    vertices: NDArray[np.float64], faces: NDArray[np.int64], weld: NDArray[np.int64],
-    ring_ptr: NDArray[np.int64], ring_faces: NDArray[np.int64],
-    face_normals: NDArray[np.float64], refine: bool, tol: float, sp: NDArray[np.float64],
-    offset: float, quantize: bool,
+    mesh: HitMesh, refine: bool, tol: float, sp: NDArray[np.float64], offset: float,
+    quantize: bool,
 ) -> tuple[NDArray[np.float64], NDArray[np.uint8], NDArray[np.float64], NDArray[np.int64],
            NDArray[np.float64], NDArray[np.float64]]:  # fmt: skip
     """The whole noiseless stripe in one call on the packet backend
@@ -356,8 +393,9 @@ def fan_stripe_packets(
     ``occluded`` and ``width`` the occlusion query's and its packet's
     (``Library.occluded_query``, ``Library.occluded_width``).
 
-    The fan turned into the local frame, first hits, :func:`fan_stripe_hits`, shadow rays,
-    :func:`fan_stripe_finish`. Returns (points, reason, t, face, cos_incidence, directions).
+    The fan turned into the local frame, first hits, :func:`refine_hits`,
+    :func:`fan_stripe_hits`, shadow rays, :func:`fan_stripe_finish`. Returns (points, reason,
+    t, face, cos_incidence, directions).
     """
     n = fan.shape[0]
     directions = fan_directions(rotation, fan)
@@ -365,13 +403,16 @@ def fan_stripe_packets(
     prim = np.empty(n, dtype=np.int32)
     tfar = np.empty(n, dtype=np.float32)
     embree.intersect(intersect8, scene, origins, directions, prim, tfar)
+    t_hit = np.empty(n)
+    face_hit = np.empty(n, dtype=np.int64)
+    refined = np.empty(n, dtype=np.bool_)
+    refine_hits(origins, directions, prim, tfar, mesh, refine, tol, t_hit, face_hit, refined)
     points, reason, t, face, cos_incidence, chip, shadow_o, shadow_d, shadow_far, shadow_index = (
-        fan_stripe_hits(origin, rotation, fan, directions, prim, tfar, vertices, faces, weld,
-                        ring_ptr, ring_faces, face_normals, refine, tol, sp, offset)
+        fan_stripe_hits(origin, rotation, fan, directions, t_hit, face_hit, mesh.face_normals, sp,
+                        offset)
     )  # fmt: skip
-    blocked = np.empty(shadow_index.shape[0], dtype=np.bool_)
-    embree.occluded(occluded, width, scene, shadow_o, shadow_d, shadow_far, 0.0, blocked)
-    fan_stripe_finish(points, reason, chip, blocked, shadow_index, sp, quantize)
+    packet_shadows_finish(occluded, width, scene, shadow_o, shadow_d, shadow_far, shadow_index,
+                          points, reason, chip, sp, quantize)  # fmt: skip
     return points, reason, t, face, cos_incidence, directions
 
 

@@ -18,7 +18,7 @@ Two modelling choices apply to all of them (stated in ``assumed``):
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 
 #: Camera rows assumed across the measuring range (R_D = D / ASSUMED_ROWS).
 ASSUMED_ROWS = 1024
@@ -126,43 +126,66 @@ class DataSheet:
         }
 
 
+def _sheet(
+    make: str,
+    model: str,
+    source: str,
+    geometry: tuple[float, float, float, float, float],
+    *,
+    points: int | None = None,
+    lateral_mm: float | None = None,
+    rows: str = _ROWS,
+    notes: dict[str, str] | None = None,
+    **published: float | None,
+) -> DataSheet:
+    """A data sheet from its geometry ``(clearance, range, fov near, fov far, derived angle)``
+    with the two modelling choices of the module docstring: R_D is the range over
+    :data:`ASSUMED_ROWS` camera rows (``rows`` says why), and R_L, where the sheet gives no mean
+    step ``lateral_mm``, is the near and far field's mean over ``points`` per profile.
+    ``notes``: the other figures that are not the sheet's, and why; they and the two choices
+    are listed in the order of the sheet's fields."""
+    clearance, range_mm, near, far, angle = geometry
+    if lateral_mm is None:
+        if points is None:
+            raise ValueError(f"{model}: give the points per profile or the mean step")
+        lateral_mm = (near + far) / (2 * points)
+    assumed = {"angle_deg": _ANGLE, "depth_resolution_mm": rows, **(notes or {})}
+    order = [f.name for f in fields(DataSheet)]
+    return DataSheet(
+        make=make, model=model, source=source, clearance_mm=clearance, range_mm=range_mm,
+        fov_near_mm=near, fov_far_mm=far, angle_deg=angle,
+        depth_resolution_mm=range_mm / ASSUMED_ROWS, lateral_resolution_mm=lateral_mm,
+        points_per_profile=points, assumed=dict(sorted(assumed.items(), key=lambda kv:
+                                                       order.index(kv[0]))),
+        **published,
+    )  # fmt: skip
+
+
 def _gocator(model: str, cd: float, mr: float, near: float, far: float, angle: float,
              x_res: tuple[float, float] | None = None, rate_hz: float | None = None,
              repeat_um: float | None = None) -> DataSheet:  # fmt: skip
-    assumed = {"angle_deg": _ANGLE, "depth_resolution_mm": _ROWS}
+    notes: dict[str, str] | None = None
     if x_res is None:
-        points = 1280
-        lateral = (near + far) / (2 * points)
-        assumed["lateral_resolution_mm"] = "not read: 1280 points per profile assumed"
-        assumed["points_per_profile"] = "not read: 1280 assumed"
+        points, lateral = 1280, None
+        notes = {"lateral_resolution_mm": "not read: 1280 points per profile assumed",
+                 "points_per_profile": "not read: 1280 assumed"}  # fmt: skip
     else:
-        lateral, points = 0.5 * (x_res[0] + x_res[1]), None
-    return DataSheet(
-        make="LMI Technologies", model=f"Gocator {model}",
-        source=_LMI_2300 + (_LMI_2300_NOTE if x_res else ""),
-        clearance_mm=cd, range_mm=mr, fov_near_mm=near, fov_far_mm=far, angle_deg=angle,
-        depth_resolution_mm=mr / ASSUMED_ROWS, lateral_resolution_mm=lateral,
-        points_per_profile=points, profile_rate_hz=rate_hz,
+        points, lateral = None, 0.5 * (x_res[0] + x_res[1])
+    return _sheet(
+        "LMI Technologies", f"Gocator {model}", _LMI_2300 + (_LMI_2300_NOTE if x_res else ""),
+        (cd, mr, near, far, angle), points=points, lateral_mm=lateral, notes=notes,
+        profile_rate_hz=rate_hz, wavelength_nm=660.0,
         repeatability_z_mm=None if repeat_um is None else repeat_um * 1e-3,
-        wavelength_nm=660.0, assumed=assumed,
     )  # fmt: skip
 
 
 def _cognex_ds900(model: str, cd: float, mr: float, near: float, far: float, angle: float,
                   res_x: tuple[float, float], res_z_mm: float) -> DataSheet:  # fmt: skip
-    points = 1280
-    return DataSheet(
-        make="Cognex", model=model, source=_COGNEX_DS900,
-        clearance_mm=cd, range_mm=mr, fov_near_mm=near, fov_far_mm=far, angle_deg=angle,
-        depth_resolution_mm=mr / ASSUMED_ROWS, lateral_resolution_mm=(near + far) / (2 * points),
-        points_per_profile=points, profile_rate_hz=1200.0, resolution_z_mm=res_z_mm,
-        wavelength_nm=405.0,
-        assumed={
-            "angle_deg": _ANGLE,
-            "depth_resolution_mm": _DS900_ROWS,
-            "lateral_resolution_mm": f"the 1280 points' mean step over the near and far field "
-            f"(the sheet's Resolution X: {res_x[0]:g}-{res_x[1]:g} mm)",
-        },
+    return _sheet(
+        "Cognex", model, _COGNEX_DS900, (cd, mr, near, far, angle), points=1280,
+        rows=_DS900_ROWS, profile_rate_hz=1200.0, resolution_z_mm=res_z_mm, wavelength_nm=405.0,
+        notes={"lateral_resolution_mm": f"the 1280 points' mean step over the near and far "
+               f"field (the sheet's Resolution X: {res_x[0]:g}-{res_x[1]:g} mm)"},
     )  # fmt: skip
 
 
@@ -175,15 +198,10 @@ DATA_SHEETS: dict[str, DataSheet] = {
                              rate_hz=5000.0, repeat_um=2.0),
     "gocator-2380": _gocator("2380", 350.0, 800.0, 390.0, 1260.0, 7.207, x_res=(0.375, 1.100),
                              rate_hz=5000.0, repeat_um=12.0),
-    "gocator-2690": DataSheet(
-        make="LMI Technologies", model="Gocator 2690", source=_LMI_2600,
-        clearance_mm=325.0, range_mm=1550.0, fov_near_mm=385.0, fov_far_mm=2000.0,
-        angle_deg=15.544, depth_resolution_mm=1550.0 / ASSUMED_ROWS,
-        lateral_resolution_mm=(385.0 + 2000.0) / (2 * 3700), points_per_profile=3700,
-        profile_rate_hz=10_000.0, repeatability_z_mm=0.012, wavelength_nm=660.0,
-        assumed={
-            "angle_deg": _ANGLE,
-            "depth_resolution_mm": _ROWS,
+    "gocator-2690": _sheet(
+        "LMI Technologies", "Gocator 2690", _LMI_2600, (325.0, 1550.0, 385.0, 2000.0, 15.544),
+        points=3700, profile_rate_hz=10_000.0, repeatability_z_mm=0.012, wavelength_nm=660.0,
+        notes={
             "lateral_resolution_mm": "the 3700 points' mean step over the near and far field "
             "(the sheet's Resolution X: 0.124-0.550 mm)",
             "profile_rate_hz": "10 kHz needs a reduced field and range; 900 Hz over the full "
@@ -194,31 +212,22 @@ DATA_SHEETS: dict[str, DataSheet] = {
                                    res_x=(0.0073, 0.0084), res_z_mm=0.001),
     "cognex-ds925b": _cognex_ds900("DS925B", 53.5, 25.0, 23.4, 29.1, 41.082,
                                    res_x=(0.0183, 0.0227), res_z_mm=0.002),
-    "sick-trispector1060": DataSheet(
-        make="SICK", model="TriSpector1060", source=_SICK_TRISPECTOR,
-        clearance_mm=291.0, range_mm=1091.0 - 291.0, fov_near_mm=200.0, fov_far_mm=540.0,
-        angle_deg=30.754, depth_resolution_mm=800.0 / ASSUMED_ROWS, lateral_resolution_mm=0.43,
-        profile_rate_hz=5000.0,
-        assumed={
+    "sick-trispector1060": _sheet(
+        "SICK", "TriSpector1060", _SICK_TRISPECTOR, (291.0, 1091.0 - 291.0, 200.0, 540.0, 30.754),
+        lateral_mm=0.43, profile_rate_hz=5000.0,
+        notes={
             "fov_near_mm": "the note gives the field of view as '540 x 200 mm' without saying "
             "which width is where; read as 200 mm at the near end of the working range",
             "fov_far_mm": "read as 540 mm at the far end (see fov_near_mm)",
-            "angle_deg": _ANGLE,
-            "depth_resolution_mm": _ROWS,
             "lateral_resolution_mm": "the sheet's 0.43 mm/px taken as the mean step over the "
             "field (861 points)",
         },
     ),
-    "keyence-lj-x8400": DataSheet(
-        make="Keyence", model="LJ-X8400", source=_KEYENCE_LJX,
-        clearance_mm=320.0, range_mm=120.0, fov_near_mm=180.0, fov_far_mm=240.0,
-        angle_deg=18.168, depth_resolution_mm=120.0 / ASSUMED_ROWS,
-        lateral_resolution_mm=(180.0 + 240.0) / (2 * 3200), points_per_profile=3200,
+    "keyence-lj-x8400": _sheet(
+        "Keyence", "LJ-X8400", _KEYENCE_LJX, (320.0, 120.0, 180.0, 240.0, 18.168), points=3200,
         profile_rate_hz=16_000.0, repeatability_z_mm=0.005, wavelength_nm=405.0,
-        assumed={
+        notes={
             "clearance_mm": "reference distance 380 mm minus half the +-60 mm range",
-            "angle_deg": _ANGLE,
-            "depth_resolution_mm": _ROWS,
             "points_per_profile": "3200, the profile data count published for the LJ-X8020/"
             "8060/8080 heads of the series; not read for the 8400",
             "lateral_resolution_mm": "from the 3200 points per profile",

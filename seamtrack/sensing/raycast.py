@@ -33,8 +33,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from seamtrack import constants
 from seamtrack.sensing import embree, section
-from seamtrack.sensing.kernels import refine_hits
-from seamtrack.sensing.section import SectionMesh
+from seamtrack.sensing.kernels import HitMesh, VertexRings, refine_hits
 
 FloatArray = NDArray[np.float64]
 BoolArray = NDArray[np.bool_]
@@ -145,8 +144,8 @@ class RayCaster:
             self._embree_mesh = mesh_construction.TriangleMesh(
                 self.scene, self.vertices_local.astype(np.float32), f.astype(np.int32)
             )
-        # _vertex_rings, built when first asked for
-        self._rings: tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]] | None = None
+        # the rings, built when first asked for
+        self._rings: VertexRings | None = None
         self._vertices_world = v  # welded as given (exactly equal world coordinates)
         self._section: section.SectionIndex | None = None
         # The triangles the last plane-section stripe hit (section.hit_faces): the next one's
@@ -193,34 +192,25 @@ class RayCaster:
         return self._section
 
     @property
-    def section_mesh(self) -> SectionMesh:
-        """The mesh as the section's kernels take it (local frame, one record)."""
-        return SectionMesh(self.vertices_local, self.faces, self.face_normals)
+    def section_mesh(self) -> HitMesh:
+        """The mesh as the section's kernels take it (local frame, one record, no rings)."""
+        return self.hit_mesh(refine=False)
 
     @property
-    def weld(self) -> NDArray[np.int64]:
-        """Each vertex's welded id (exactly equal coordinates share one); with
-        :attr:`ring_ptr` and :attr:`ring_faces` the faces around each welded vertex (CSR),
-        which the float64 refinement of Embree's hits walks. Built on first use (a sort of
-        the vertices: 0.3 s for 566k triangles), which the plane-section fan never needs."""
-        return self._vertex_rings()[0]
-
-    @property
-    def ring_ptr(self) -> NDArray[np.int64]:
-        """See :attr:`weld`."""
-        return self._vertex_rings()[1]
-
-    @property
-    def ring_faces(self) -> NDArray[np.int64]:
-        """See :attr:`weld`."""
-        return self._vertex_rings()[2]
-
-    def _vertex_rings(
-        self,
-    ) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
+    def rings(self) -> VertexRings:
+        """Each vertex's welded id (exactly equal coordinates share one) and the faces around
+        each welded vertex (CSR), which the float64 refinement of Embree's hits walks. Built on
+        first use (a sort of the vertices: 0.3 s for 566k triangles), which the plane-section
+        fan never needs."""
         if self._rings is None:
             self._rings = _vertex_rings(self._vertices_world, self.faces)
         return self._rings
+
+    def hit_mesh(self, refine: bool = True) -> HitMesh:
+        """The mesh as the fan's kernels take it (local frame, one record); its vertex rings
+        are built (on first use) only to ``refine``, and are empty otherwise."""
+        rings = self.rings if refine else _NO_RINGS
+        return HitMesh(self.vertices_local, self.faces, self.face_normals, rings)
 
     @property
     def n_faces(self) -> int:
@@ -272,13 +262,11 @@ class RayCaster:
         t = np.empty(n)
         face = np.empty(n, dtype=np.int64)
         refined = np.empty(n, dtype=np.bool_)
-        # The rings are read only to refine (built on first use: a sort of the vertices).
-        weld, ring_ptr, ring_faces = self._vertex_rings() if refine else (_NO_RING,) * 3
         refine_hits(
             np.ascontiguousarray(origins_local, dtype=np.float64),
             np.ascontiguousarray(directions, dtype=np.float64),
-            prim, tfar, self.vertices_local, self.faces, weld, ring_ptr, ring_faces,
-            bool(refine), constants.BARYCENTRIC_TOL, t, face, refined,
+            prim, tfar, self.hit_mesh(refine), bool(refine), constants.BARYCENTRIC_TOL, t, face,
+            refined,
         )  # fmt: skip
         return t, face, refined
 
@@ -359,11 +347,10 @@ _CACHE: dict[int, tuple[weakref.ref[Any], RayCaster]] = {}
 
 
 _NO_RING = np.empty(0, dtype=np.int64)
+_NO_RINGS = VertexRings(_NO_RING, _NO_RING, _NO_RING)
 
 
-def _vertex_rings(
-    vertices: FloatArray, faces: NDArray[np.int64]
-) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.int64]]:
+def _vertex_rings(vertices: FloatArray, faces: NDArray[np.int64]) -> VertexRings:
     """Welded vertex ids (exactly equal coordinates) and the faces around each, as CSR."""
     _, weld = np.unique(vertices, axis=0, return_inverse=True)
     weld = np.ascontiguousarray(weld.reshape(-1), dtype=np.int64)
@@ -372,4 +359,4 @@ def _vertex_rings(
     order = np.argsort(owner, kind="stable")
     counts = np.bincount(owner, minlength=int(weld.max()) + 1)
     ptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-    return weld, ptr, np.ascontiguousarray(face_of[order])
+    return VertexRings(weld, ptr, np.ascontiguousarray(face_of[order]))

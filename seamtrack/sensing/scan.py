@@ -258,8 +258,7 @@ def stripe_hits(
     if packets is not None:  # one numba call does it all
         points, reason, t, face, cos_incidence, directions = kernels.fan_stripe_packets(
             packets.lib.intersect8, packets.lib.occluded_query, packets.lib.occluded_width,
-            packets.handle, origin, rotation, laser.directions, caster.vertices_local,
-            caster.faces, caster.weld, caster.ring_ptr, caster.ring_faces, caster.face_normals,
+            packets.handle, origin, rotation, laser.directions, caster.hit_mesh(bool(refine)),
             bool(refine), constants.BARYCENTRIC_TOL, laser.sensor_params,
             constants.SHADOW_RAY_OFFSET_MM, do_quantize,
         )  # fmt: skip
@@ -268,12 +267,11 @@ def stripe_hits(
                           origin_local=origin)  # fmt: skip
     directions = laser.directions @ rotation.T
     prim, tfar = caster.cast_local(origin[None], directions)
+    t_hit, face_hit, _ = caster.refine_local(origin[None], directions, prim, tfar, refine=refine)
     points, reason, t, face, cos_incidence, chip, shadow_o, shadow_d, shadow_far, shadow_index = (
         kernels.fan_stripe_hits(
-            origin, rotation, laser.directions, directions, prim, tfar, caster.vertices_local,
-            caster.faces, caster.weld, caster.ring_ptr, caster.ring_faces, caster.face_normals,
-            bool(refine), constants.BARYCENTRIC_TOL, laser.sensor_params,
-            constants.SHADOW_RAY_OFFSET_MM,
+            origin, rotation, laser.directions, directions, t_hit, face_hit, caster.face_normals,
+            laser.sensor_params, constants.SHADOW_RAY_OFFSET_MM,
         )
     )  # fmt: skip
     blocked = caster.occluded_local(shadow_o, shadow_d, shadow_far)

@@ -23,37 +23,24 @@ plane at one vertex only is skipped.
 
 from __future__ import annotations
 
-from typing import Any, NamedTuple
+from typing import Any
 
 import numba
 import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.jit import KERNEL
-from seamtrack.sensing import embree
 from seamtrack.sensing._section_tree import LEAF_SIZE, SectionIndex, build
-from seamtrack.sensing.kernels import fan_directions, fan_stripe_finish, fan_stripe_hits
+from seamtrack.sensing.kernels import (
+    HitMesh,
+    fan_directions,
+    fan_stripe_hits,
+    packet_shadows_finish,
+)
 
-__all__ = ["LEAF_SIZE", "SectionIndex", "SectionMesh", "build", "fan_stripe_section",
+__all__ = ["LEAF_SIZE", "SectionIndex", "build", "fan_stripe_section",
            "fan_stripe_section_packets", "fan_tans", "hit_faces", "section_hits",
            "section_segments"]  # fmt: skip
-
-
-class SectionMesh(NamedTuple):
-    """The mesh as the section's kernels take it: in the caster's local frame (its vertices
-    less the caster's ``local_origin``), one record, with the :class:`SectionIndex` over it.
-
-    Attributes
-    ----------
-    vertices : (v, 3) float
-    faces : (f, 3) int64
-    face_normals : (f, 3) float
-        Unit normals (0 for a degenerate triangle).
-    """
-
-    vertices: NDArray[np.float64]
-    faces: NDArray[np.int64]
-    face_normals: NDArray[np.float64]
 
 
 #: A crossing at a segment's end counts for the segment within this fraction of its length.
@@ -378,7 +365,7 @@ def fan_tans(fan: NDArray[np.float64]) -> tuple[NDArray[np.float64], float, floa
 
 @numba.njit(**KERNEL)
 def section_hits(
-    tree: SectionIndex, mesh: SectionMesh, origin: NDArray[np.float64],
+    tree: SectionIndex, mesh: HitMesh, origin: NDArray[np.float64],
     rotation: NDArray[np.float64], fan: NDArray[np.float64],
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:  # fmt: skip
     """First hit of each fan ray: (t (n,), triangle (n,)); (inf, -1) where none.
@@ -431,7 +418,7 @@ def _cut_and_sweep(
 
 @numba.njit(**KERNEL)
 def _section_hits(
-    tree: SectionIndex, mesh: SectionMesh, origin: NDArray[np.float64],
+    tree: SectionIndex, mesh: HitMesh, origin: NDArray[np.float64],
     rotation: NDArray[np.float64], fan: NDArray[np.float64], tans: NDArray[np.float64],
     tan_max: float, step: float, seeds: NDArray[np.int64],
 ) -> tuple[NDArray[np.float64], NDArray[np.int64], int]:  # fmt: skip
@@ -518,7 +505,7 @@ def _section_hits(
 
 @numba.njit(**KERNEL)
 def section_segments(
-    tree: SectionIndex, mesh: SectionMesh, origin: NDArray[np.float64],
+    tree: SectionIndex, mesh: HitMesh, origin: NDArray[np.float64],
     rotation: NDArray[np.float64], tan_max: float,
 ) -> tuple[NDArray[np.float64], NDArray[np.int64]]:  # fmt: skip
     """The plane section inside the wedge |y_L| <= tan_max z_L (and maybe a little more):
@@ -544,7 +531,7 @@ def section_segments(
 # --------------------------------------------------------------------------- the stripe
 @numba.njit(**KERNEL)
 def fan_stripe_section(
-    tree: SectionIndex, mesh: SectionMesh, origin: NDArray[np.float64],
+    tree: SectionIndex, mesh: HitMesh, origin: NDArray[np.float64],
     rotation: NDArray[np.float64], fan: NDArray[np.float64], tans: NDArray[np.float64],
     tan_max: float, step: float, sp: NDArray[np.float64], offset: float,
     seeds: NDArray[np.int64],
@@ -566,8 +553,7 @@ def fan_stripe_section(
     if next_seeds.shape[0] > MAX_SEEDS:
         next_seeds = none
     points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index = fan_stripe_hits(
-        origin, rotation, fan, directions, face, t, mesh.vertices, mesh.faces,  # type: ignore[arg-type]
-        none, none, none, mesh.face_normals, False, 0.0, sp, offset,
+        origin, rotation, fan, directions, t, face, mesh.face_normals, sp, offset,
     )  # fmt: skip
     return (points, reason, t, face, cos_incidence, chip, s_o, s_d, s_far, s_index, directions,
             next_seeds)  # fmt: skip
@@ -575,7 +561,7 @@ def fan_stripe_section(
 
 @numba.njit(**KERNEL)
 def fan_stripe_section_packets(
-    occluded: Any, width: int, scene: int, tree: SectionIndex, mesh: SectionMesh,
+    occluded: Any, width: int, scene: int, tree: SectionIndex, mesh: HitMesh,
     origin: NDArray[np.float64], rotation: NDArray[np.float64], fan: NDArray[np.float64],
     tans: NDArray[np.float64], tan_max: float, step: float, sp: NDArray[np.float64],
     offset: float, quantize: bool, seeds: NDArray[np.int64],
@@ -591,7 +577,6 @@ def fan_stripe_section_packets(
         fan_stripe_section(tree, mesh, origin, rotation, fan, tans, tan_max, step, sp, offset,
                            seeds)
     )  # fmt: skip
-    blocked = np.empty(s_index.shape[0], dtype=np.bool_)
-    embree.occluded(occluded, width, scene, s_o, s_d, s_far, 0.0, blocked)
-    fan_stripe_finish(points, reason, chip, blocked, s_index, sp, quantize)
+    packet_shadows_finish(occluded, width, scene, s_o, s_d, s_far, s_index, points, reason, chip,
+                          sp, quantize)  # fmt: skip
     return points, reason, t, face, cos_incidence, directions, nxt

@@ -13,7 +13,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from seamtrack.control.planner import PassPlan, Process, planner_class
-from seamtrack.errors import SceneError
+from seamtrack.errors import Rule, SceneError, check_rules
 from seamtrack.simulation.config import PassesConfig, ProcessConfig, SceneConfig
 from seamtrack.simulation.robots import is_arm
 
@@ -65,48 +65,31 @@ def check_passes(c: SceneConfig) -> None:
                 fix='add [passes] (count = "auto") for a multi-pass job, or remove [planner]',
             )
         return
-    if c.sensor.mode != "mesh" or c.workpiece is None:
-        raise SceneError(
-            "a multi-pass job lays beads on a workpiece's mesh",
-            field="passes",
-            fix='set sensor.mode = "mesh" with a [workpiece] groove, or remove [passes]',
-        )
     p = c.process or ProcessConfig()
-    if p.travel_speed_min_mm_s >= p.travel_speed_max_mm_s:
-        raise SceneError(
-            f"travel_speed_min_mm_s {p.travel_speed_min_mm_s} is not below "
-            f"travel_speed_max_mm_s {p.travel_speed_max_mm_s}",
-            field="process.travel_speed_min_mm_s",
-            fix="give a window with min < max",
-        )
     v = c.simulation.welding_speed_mm_s
-    if not p.travel_speed_min_mm_s <= v <= p.travel_speed_max_mm_s:
-        raise SceneError(
-            f"welding speed {v} mm/s is outside the process window "
-            f"[{p.travel_speed_min_mm_s}, {p.travel_speed_max_mm_s}] mm/s",
-            field="simulation.welding_speed_mm_s",
-            fix="give a nominal speed inside process.travel_speed_min_mm_s .. _max_mm_s",
-        )
-    if p.bead.wetting_angle_deg is not None and p.bead.model != "arc":
-        raise SceneError(
-            f"a wetting angle sets the shape of an arc bead, not of a {p.bead.model} one",
-            field="process.bead.wetting_angle_deg",
-            fix='set process.bead.model = "arc", or give width_to_height instead',
-        )
-    if c.tracker.name != "trajectory":
-        raise SceneError(
-            f"a multi-pass job adapts its travel speed through the trajectory tracker, not "
-            f"{c.tracker.name!r}",
-            field="tracker.name",
-            fix='set tracker.name = "trajectory"',
-        )
-    if c.extractor.name != "groove":
-        raise SceneError(
-            f"a multi-pass job measures the groove's 7 points, which {c.extractor.name!r} "
-            "does not give",
-            field="extractor.name",
-            fix='set extractor.name = "groove"',
-        )
+    v_min, v_max = p.travel_speed_min_mm_s, p.travel_speed_max_mm_s
+    check_rules([
+        Rule(c.sensor.mode != "mesh" or c.workpiece is None,
+             "a multi-pass job lays beads on a workpiece's mesh", "passes",
+             'set sensor.mode = "mesh" with a [workpiece] groove, or remove [passes]'),
+        Rule(v_min >= v_max,
+             f"travel_speed_min_mm_s {v_min} is not below travel_speed_max_mm_s {v_max}",
+             "process.travel_speed_min_mm_s", "give a window with min < max"),
+        Rule(not v_min <= v <= v_max,
+             f"welding speed {v} mm/s is outside the process window [{v_min}, {v_max}] mm/s",
+             "simulation.welding_speed_mm_s",
+             "give a nominal speed inside process.travel_speed_min_mm_s .. _max_mm_s"),
+        Rule(p.bead.wetting_angle_deg is not None and p.bead.model != "arc",
+             f"a wetting angle sets the shape of an arc bead, not of a {p.bead.model} one",
+             "process.bead.wetting_angle_deg",
+             'set process.bead.model = "arc", or give width_to_height instead'),
+        Rule(c.tracker.name != "trajectory",
+             "a multi-pass job adapts its travel speed through the trajectory tracker, not "
+             f"{c.tracker.name!r}", "tracker.name", 'set tracker.name = "trajectory"'),
+        Rule(c.extractor.name != "groove",
+             f"a multi-pass job measures the groove's 7 points, which {c.extractor.name!r} "
+             "does not give", "extractor.name", 'set extractor.name = "groove"'),
+    ])  # fmt: skip
     check_overrides(c.passes, arm=is_arm(c), config=c)
     name = c.planner.name if c.planner is not None else "adaptive"
     planner_class(name)  # an unknown or broken planner is refused before the run

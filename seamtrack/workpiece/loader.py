@@ -233,11 +233,10 @@ def _build(
         solid = seam_solid = read_step(path) if len(bodies) == 1 else None
         named = {}
     if bodies is not None and len(bodies) > 1:  # a weldment: its seams are found, not picked
-        from seamtrack.workpiece.weldment import pick_seam, seams_of_bodies
+        from seamtrack.workpiece.weldment import SeamSearch, pick_seam, seams_of_bodies
 
-        found = seams_of_bodies(
-            bodies, tolerance_mm=tolerance_mm, spacing_mm=spacing_mm, source=path.name
-        )
+        search = SeamSearch(tolerance_mm=tolerance_mm, spacing_mm=spacing_mm)
+        found = seams_of_bodies(bodies, search, source=path.name)
         chosen = pick_seam(found, seam, seam_near_mm, path.name)
         import cadquery as cq
 

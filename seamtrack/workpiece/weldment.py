@@ -222,6 +222,37 @@ def _runs(covered: NDArray[np.bool_]) -> list[tuple[int, int]]:
 
 
 # ----------------------------------------------------------------------------- finding
+@dataclass(frozen=True)
+class SeamSearch:
+    """How weld seams are searched for between bodies (:func:`find_seams`' options, mm).
+
+    Attributes
+    ----------
+    max_gap_mm : float
+        Bodies and faces farther apart than this are not joined.
+    torch_length_mm : float
+        Length of free space the torch direction needs to count as reachable.
+    tolerance_mm : float
+        Chord tolerance of the seam polylines.
+    spacing_mm : float
+        Largest spacing of seam points.
+    min_length_mm : float
+        Shorter pieces are dropped.
+    """
+
+    max_gap_mm: float = 1.0
+    torch_length_mm: float = 100.0
+    tolerance_mm: float = 0.01
+    spacing_mm: float = 1.0
+    min_length_mm: float = 1.0
+
+    def check(self) -> None:
+        """Each option a finite number > 0, or an error naming it."""
+        for name, value in vars(self).items():
+            if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
+                raise WorkpieceError(f"{name} must be > 0, got {value!r}", field=name, fix="e.g. 1")
+
+
 def find_seams(
     source: str | Path,
     *,
@@ -239,16 +270,8 @@ def find_seams(
     ----------
     source : str or Path
         A STEP file, or a weldment script (``cad/weldment_*.py`` or its built-in name).
-    max_gap_mm : float
-        Bodies and faces farther apart than this are not joined.
-    torch_length_mm : float
-        Length of free space the torch direction needs to count as reachable.
-    tolerance_mm : float
-        Chord tolerance of the seam polylines.
-    spacing_mm : float
-        Largest spacing of seam points.
-    min_length_mm : float
-        Shorter pieces are dropped.
+    max_gap_mm, torch_length_mm, tolerance_mm, spacing_mm, min_length_mm : float
+        The search's options (:class:`SeamSearch`).
     field : str
         The name errors give the source (a scene key or a command-line argument).
     **params
@@ -258,7 +281,8 @@ def find_seams(
     -------
     list of FoundSeam
     """
-    args = (max_gap_mm, torch_length_mm, tolerance_mm, spacing_mm, min_length_mm, field)
+    search = SeamSearch(max_gap_mm, torch_length_mm, tolerance_mm, spacing_mm, min_length_mm)
+    args = (search, field)
     settings = tuple(sorted(params.items()))
     try:
         hash(settings)
@@ -283,28 +307,10 @@ def _find_memo(source: str, _content: str, *rest: Any) -> tuple[FoundSeam, ...]:
 
 
 def _find(
-    source: str,
-    max_gap_mm: float,
-    torch_length_mm: float,
-    tolerance_mm: float,
-    spacing_mm: float,
-    min_length_mm: float,
-    field: str,
-    params: tuple[tuple[str, Any], ...],
+    source: str, search: SeamSearch, field: str, params: tuple[tuple[str, Any], ...]
 ) -> tuple[FoundSeam, ...]:
     bodies = load_bodies(source, field, dict(params))
-    return tuple(
-        seams_of_bodies(
-            bodies,
-            max_gap_mm=max_gap_mm,
-            torch_length_mm=torch_length_mm,
-            tolerance_mm=tolerance_mm,
-            spacing_mm=spacing_mm,
-            min_length_mm=min_length_mm,
-            source=Path(source).name,
-            field=field,
-        )
-    )
+    return tuple(seams_of_bodies(bodies, search, source=Path(source).name, field=field))
 
 
 def load_bodies(source: str | Path, field: str, params: dict[str, Any]) -> list[tuple[str, Any]]:
@@ -328,25 +334,19 @@ def load_bodies(source: str | Path, field: str, params: dict[str, Any]) -> list[
 
 def seams_of_bodies(
     bodies: Sequence[tuple[str, Any]],
+    search: SeamSearch = SeamSearch(),
     *,
-    max_gap_mm: float = 1.0,
-    torch_length_mm: float = 100.0,
-    tolerance_mm: float = 0.01,
-    spacing_mm: float = 1.0,
-    min_length_mm: float = 1.0,
     source: str = "the part",
     field: str = "workpiece.step",
 ) -> list[FoundSeam]:
     """Every candidate weld between the given (name, solid) bodies; see :func:`find_seams`."""
     from seamtrack.workpiece import clearance, contacts
 
-    _check_positive(
-        max_gap_mm=max_gap_mm,
-        torch_length_mm=torch_length_mm,
-        tolerance_mm=tolerance_mm,
-        spacing_mm=spacing_mm,
-        min_length_mm=min_length_mm,
-    )
+    search.check()
+    max_gap_mm, torch_length_mm, tolerance_mm, spacing_mm, min_length_mm = (
+        search.max_gap_mm, search.torch_length_mm, search.tolerance_mm, search.spacing_mm,
+        search.min_length_mm,
+    )  # fmt: skip
     if len(bodies) < 2:
         raise WorkpieceError(
             f"{source} holds {len(bodies)} solid: seams are found where two bodies meet",
@@ -385,13 +385,6 @@ def seams_of_bodies(
         )
     seams = [_finish(pair, c, names, space, torch_length_mm) for pair, c in raw]
     return _number(seams)
-
-
-def _check_positive(**values: float) -> None:
-    """Each option a finite number > 0, or an error naming it."""
-    for name, value in values.items():
-        if not (isinstance(value, int | float) and math.isfinite(value) and value > 0):
-            raise WorkpieceError(f"{name} must be > 0, got {value!r}", field=name, fix="e.g. 1")
 
 
 def _pair_pieces(
