@@ -14,7 +14,7 @@ make every kernel ``Any`` to mypy: :data:`KERNEL` is typed as the options the st
 
 from __future__ import annotations
 
-from typing import TypedDict, cast
+from typing import Any, TypedDict, cast
 
 
 class KernelOptions(TypedDict, total=False):
@@ -25,3 +25,14 @@ class KernelOptions(TypedDict, total=False):
 
 
 KERNEL = cast(KernelOptions, {"cache": True, "nogil": True, "no_cfunc_wrapper": True})
+
+
+def compile_for(kernel: Any, *args: Any) -> None:
+    """Compile ``kernel`` for the types of ``args`` (or load it from numba's cache), without
+    calling it: the types numba's dispatcher gives the same arguments at a call (no literal
+    values), so the call later finds this compiled version.
+
+    A first run (an empty cache) uses it to compile the control kernels before its first
+    frame, while the warming child compiles the extractor (:mod:`seamtrack.features.warm`):
+    else the run would compile them only after waiting for that child."""
+    kernel.compile(tuple(kernel.typeof_pyval(a) for a in args))

@@ -108,3 +108,35 @@ def test_progress_kernel_is_seam_closest_near(seam: Seam) -> None:
         args = (kernel.points, kernel.knots, kernel.columns, point, hint, seam.length_mm)
         compiled = progress_near(*args, NEAR_WINDOW_MM, DOT_NORM)
         assert compiled == seam.closest_near(point, hint)  # the loop's checks, compiled
+
+
+@pytest.mark.parametrize(
+    "overrides", [{}, {"robot.servo_gain_1_s": 40.0, "robot.interpolation_period_s": 0.004}],
+    ids=["ideal-axes", "servo"],
+)  # fmt: skip
+def test_kernels_compiled_before_the_first_frame_are_the_ones_the_run_calls(
+    overrides: dict[str, Any], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # The loop compiles the ticks' and the tracker's kernels before its first frame (a first
+    # run does it while the warming child compiles the extractor): for the very types the run
+    # then calls them with, else the run compiles them again after all.
+    import seamtrack.control.path_kernels as path_kernels
+    import seamtrack.simulation.ticks as ticks
+    from seamtrack.jit import compile_for
+
+    compiled: list[tuple[Any, tuple[Any, ...]]] = []
+
+    def recording(kernel: Any, *args: Any) -> None:
+        compile_for(kernel, *args)
+        compiled.append((kernel, tuple(kernel.typeof_pyval(a) for a in args)))
+
+    monkeypatch.setattr(ticks, "compile_for", recording)
+    monkeypatch.setattr(path_kernels, "compile_for", recording)
+    kernels = (ticks.gantry_ticks, path_kernels.take_point)
+    before = {kernel: set(kernel.overloads) for kernel in kernels}
+    run(build_parts(load_scene("paper-verification", {**SHORT, **overrides})))
+    assert {kernel for kernel, _ in compiled} == set(kernels)
+    for kernel in kernels:
+        ahead = {types for k, types in compiled if k is kernel}
+        assert ahead <= set(kernel.overloads)
+        assert set(kernel.overloads) - before[kernel] <= ahead

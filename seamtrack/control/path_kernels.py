@@ -22,7 +22,7 @@ from seamtrack.control.hint_kernels import closest_on_polyline as closest_on_pol
 from seamtrack.control.hint_kernels import column_medians as column_medians
 from seamtrack.control.hint_kernels import plane_crossings as plane_crossings
 from seamtrack.control.hint_kernels import program_hint as program_hint
-from seamtrack.jit import KERNEL
+from seamtrack.jit import KERNEL, compile_for
 
 FloatArray = NDArray[np.float64]
 #: An int64 0: numba types a literal 0 as ``Literal[int](0)`` and compiles the kernel it
@@ -78,6 +78,16 @@ class PathBuffer:
         if out[0] == STORED:
             self._n += 1
         return out
+
+    def compile_take(
+        self, min_spacing: float, max_jump: float, fit_mm: float, sp: FloatArray, par: FloatArray
+    ) -> None:
+        """Compile :meth:`take`'s kernel for the types it will be called with, without calling
+        it (:func:`seamtrack.jit.compile_for`)."""
+        compile_for(
+            take_point, self._raw, self._path, self._s, self._lo, self._n, np.zeros(3),
+            min_spacing, max_jump, fit_mm, sp, par, math.nan,
+        )  # fmt: skip
 
     def make_room(self) -> None:
         """Room for one more point after the newest: when full, the points move to the front

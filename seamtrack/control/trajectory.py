@@ -256,6 +256,14 @@ class TrajectoryTracker:
         self._seen_seam = True
         self._store(point, step)
 
+    def compile_kernels(self) -> None:
+        """Compile (or load from numba's cache) the kernel :meth:`update` calls, for the types
+        it will be called with, without changing the tracker: the loop does it before the
+        first frame (:func:`seamtrack.jit.compile_for`)."""
+        self._buffer.compile_take(
+            self.min_spacing_mm, self.max_jump_mm, self.direction_fit_mm, self._sp, self._tail
+        )
+
     def hint(self, T_world_sensor: FloatArray) -> SeamHint | None:
         """Where this tracker expects the seam in the frame about to be taken at
         ``T_world_sensor`` (a :class:`~seamtrack.sensing.profiles.SeamHint` for the extractor).

@@ -1,11 +1,12 @@
 """Compile the scene's extractor kernels on the second core while the run compiles the rest.
 
 A first run after an install (an empty numba cache) compiles its kernels one after another:
-ray casting and the stripe's profile, then the extractor at the first frame, then the control
-ticks. :func:`start_warming` forks a child that calls the scene's extractor once on a synthetic
+the control ticks and the tracker's update (the loop compiles them before its first frame),
+ray casting and the stripe's profile, then the extractor at the first frame.
+:func:`start_warming` forks a child that calls the scene's extractor once on a synthetic
 profile of its joint, so numba compiles the extractor's kernels there and writes them to its
 on-disk cache (``cache=True``, the same cache directory: the child inherits the parent's
-environment), while the parent compiles its sensing kernels. When the parent reaches its first
+environment), while the parent compiles the rest (about as much). When the parent reaches its first
 frame's extraction it waits for the child (:func:`wait_warmed`, at most :data:`WAIT_S`), then
 numba's dispatchers find the child's kernels in the cache and load them instead of compiling.
 

@@ -222,6 +222,7 @@ def run(
     state = _start_state(parts)
     _reset_tracker(parts, rng)
     loop = _Loop(parts, sense, state, clock, wall_start, progress)
+    loop.compile_kernels()
     ending = loop.ticks_until_end(stop if stop is not None else StopRequest())
     return loop.result(ending)
 
@@ -320,6 +321,14 @@ class _Loop:
         # continues it.
         hint = getattr(self.tracker, "hint", None)
         self.tracker_hint = hint if callable(hint) and parts.sense_uses_hint else None
+
+    def compile_kernels(self) -> None:
+        """The compiled ticks' and the built-in tracker's kernels compiled (or loaded from
+        numba's cache) before the first frame. On a first run (an empty cache) the run compiles
+        them while its warming child compiles the extractor (:mod:`seamtrack.features.warm`),
+        instead of after waiting for that child at the first frame's extraction."""
+        if self.ticks is not None:  # the built-in trajectory tracker
+            self.ticks.compile_kernels(self.state, self.tracker)
 
     def ticks_until_end(self, stop: StopRequest) -> StopRequest:
         """Tick until the run ends (its outcome, the loop's own ``stop`` or ``stop`` asked from

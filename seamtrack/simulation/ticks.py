@@ -44,7 +44,7 @@ from seamtrack.control.orientation import turning_at
 from seamtrack.control.path_kernels import TCP_X, TCP_Y, TCP_Z, V_SET, setpoint_step
 from seamtrack.control.robot import CartesianRobot, RobotState, axes_step
 from seamtrack.control.servo import loops_step
-from seamtrack.jit import KERNEL
+from seamtrack.jit import KERNEL, compile_for
 from seamtrack.simulation.progress import (
     CHECKED,
     FOUND,
@@ -356,6 +356,17 @@ class GantryTicks(_Logs):
         self.refused = np.zeros(8)
         self._ticks = _Direct(gantry_ticks)
 
+    def compile_kernels(self, state: RobotState, tracker: Any) -> None:
+        """Compile (or load from numba's cache) :func:`gantry_ticks` for the types :meth:`run`
+        calls it with, and the kernel of the built-in ``tracker``'s update, without running
+        them (:func:`seamtrack.jit.compile_for`)."""
+        tracker.compile_kernels()
+        when = clock(0, 0, self.dt, 0.0, 0.0, 1, 1)
+        compile_for(
+            gantry_ticks, when, self.count, follow(tracker), self.gantry, self.trace,
+            self.checks.args, self.refused,
+        )  # fmt: skip
+
     def run(
         self, state: RobotState, tick: int, max_ticks: int, next_capture: float,
         next_arrival: float, check_every: int, wall_every: int, tracker: Any,
@@ -528,6 +539,17 @@ class ArmTicks(_Logs):
         rot_base = None if rotation is None else R @ np.asarray(rotation, dtype=float)
         omega_base = None if omega is None else R @ np.asarray(omega, dtype=float)
         self.robot._set_rotation(state, rot_base, omega_base)
+
+    def compile_kernels(self, state: Any, tracker: Any) -> None:
+        """Compile (or load from numba's cache) :func:`arm_ticks` for the types :meth:`run`
+        calls it with, and the kernel of the built-in ``tracker``'s update, without running
+        them (:func:`seamtrack.jit.compile_for`)."""
+        tracker.compile_kernels()
+        when = clock(0, 0, self.dt, 0.0, 0.0, 1, 1)
+        compile_for(
+            arm_ticks, when, self.count, follow(tracker), self.mount, self.robot._model,
+            state.data, self.program, self.trace, self.checks.args, self.refused,
+        )  # fmt: skip
 
     def run(
         self, state: Any, tick: int, max_ticks: int, next_capture: float, next_arrival: float,
