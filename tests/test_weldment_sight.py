@@ -14,7 +14,7 @@ pytestmark = [pytest.mark.cad]
 cq = pytest.importorskip("cadquery")
 
 from seamtrack.errors import WorkpieceError  # noqa: E402
-from seamtrack.workpiece.weldment import find_seams, seams_of_bodies  # noqa: E402
+from seamtrack.workpiece.weldment import SeamSearch, find_seams, seams_of_bodies  # noqa: E402
 
 
 def _box(lo, hi):
@@ -99,7 +99,7 @@ def test_tiny_blocks_are_told_about_min_length_and_the_value_that_finds_them():
         seams_of_bodies(bodies)
     message = str(err.value)
     assert "min_length_mm" in message and "0.005" in message
-    seams = seams_of_bodies(bodies, min_length_mm=0.005)
+    seams = seams_of_bodies(bodies, SeamSearch(min_length_mm=0.005))
     assert len(seams) == 4
     assert all(s.length_mm == pytest.approx(0.01) for s in seams)
 
