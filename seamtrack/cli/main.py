@@ -19,6 +19,7 @@ from seamtrack.cli import heat as heat_command
 from seamtrack.cli import jobs
 from seamtrack.cli import seams as seams_command
 from seamtrack.cli import serve as serve_command
+from seamtrack.cli import warm as warm_command
 from seamtrack.cli.dataset import add_dataset_parser
 from seamtrack.cli.parsing import (
     QUIET_HELP,
@@ -485,6 +486,7 @@ def build_parser() -> argparse.ArgumentParser:
     seams_command.add_parser(sub)
     serve_command.add_parser(sub)
     heat_command.add_parser(sub)
+    warm_command.add_parser(sub)
     _add_picture_commands(add)
     _add_extractors_command(add)
     add_dataset_parser(add)

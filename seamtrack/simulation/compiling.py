@@ -15,7 +15,7 @@ from contextlib import contextmanager
 from typing import Any, TextIO
 
 #: Commands that never run a compiled kernel (numba is not even imported for them).
-QUIET_COMMANDS = frozenset({"init", "sensor", "cache"})
+QUIET_COMMANDS = frozenset({"init", "sensor", "cache", "warm"})  # warm says it itself
 MESSAGE = "seamtrack: compiling numba kernels (first run only, ~1 min)..."
 #: ``SEAMTRACK_COMPILE_NOTICE=0`` turns the line off (the test suite does: its in-process CLI
 #: calls compile kernels for the first time at any test, and check what stderr holds).

@@ -1,0 +1,108 @@
+"""``seamtrack warm``: compile the kernels and mesh the CAD parts of scenes ahead of their runs.
+
+After an install numba's on-disk cache is empty: a scene's first run compiles the kernels it
+uses (ray casting, its extractor, its robot's ticks; about a minute of CPU on a 2-core machine)
+and meshes its CAD part. ``seamtrack warm`` does that work ahead of time, so the runs that
+follow start at once. It runs each scene for :data:`SIMULATED_S` of simulated time
+(``simulation.time_limit_s``), in memory: nothing is written but numba's cache (beside the
+package, or ``$NUMBA_CACHE_DIR``) and the workpiece cache (``$SEAMTRACK_CACHE_DIR``).
+
+``make test`` runs it over every built-in scene beside the linters: the suite's two workers
+then load the kernels where each compiled them itself on a fresh clone (the same kernels twice,
+at once), and the suite's time is the tests' own (docs/speed.md, "The first run").
+"""
+
+from __future__ import annotations
+
+import argparse
+import multiprocessing
+import os
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+from typing import Any
+
+from seamtrack.cli.parsing import add_command
+from seamtrack.errors import SeamtrackError
+
+HELP = "compile the kernels and mesh the CAD parts of scenes, so that their runs start at once"
+
+#: Simulated seconds each scene runs for: a few sensor frames and a few hundred control
+#: ticks, enough to reach every kernel its run calls.
+SIMULATED_S = 0.5
+
+
+def add_parser(sub: Any) -> argparse.ArgumentParser:
+    """Register the command on the ``seamtrack`` subparsers."""
+    p = add_command(sub, "warm", cmd_warm, HELP, scene=False)
+    p.add_argument(
+        "scenes",
+        nargs="*",
+        metavar="SCENE",
+        help="built-in scene names or .toml files (default: every built-in scene)",
+    )
+    p.add_argument(
+        "--jobs",
+        type=int,
+        default=1,
+        help="processes to share the scenes among (default 1; each compiles what it meets)",
+    )
+    p.add_argument("-q", "--quiet", action="store_true", help="print only the total")
+    return p
+
+
+def warm_scene(name: str) -> float:
+    """Run ``name`` for :data:`SIMULATED_S` in memory; return the seconds it took."""
+    from seamtrack.features.warm import SWITCH
+    from seamtrack.multipass.job import run_job
+    from seamtrack.simulation.assemble import build_parts
+    from seamtrack.simulation.loop import run
+    from seamtrack.simulation.scene import load_scene
+
+    os.environ[SWITCH] = "0"  # this process compiles everything itself: no warming child
+    start = time.perf_counter()
+    scene = load_scene(name, {"simulation.time_limit_s": SIMULATED_S})
+    if scene.config.passes is not None:
+        run_job(scene)
+    else:
+        run(build_parts(scene))
+    return time.perf_counter() - start
+
+
+def _warm_share(names: list[str]) -> list[tuple[str, float]]:
+    return [(name, warm_scene(name)) for name in names]
+
+
+def cmd_warm(args: argparse.Namespace) -> int:
+    from seamtrack.simulation.scene import load_scene
+    from seamtrack.simulation.templates import builtin_scenes
+
+    if args.jobs < 1:
+        raise SeamtrackError(f"{args.jobs} processes", field="--jobs", fix="give 1 or more")
+    names = list(args.scenes) or list(builtin_scenes())
+    for name in names:  # a bad name or file fails here, before any compiling
+        load_scene(name)
+    jobs = min(args.jobs, len(names))
+    print(
+        f"seamtrack: warming {len(names)} scene{'s' * (len(names) != 1)} on {jobs} "
+        f"process{'es' * (jobs != 1)} (compiling numba kernels, meshing CAD parts)...",
+        file=sys.stderr,
+        flush=True,
+    )
+    start = time.perf_counter()
+    if jobs == 1 or "fork" not in multiprocessing.get_all_start_methods():
+        done = _warm_share(names)
+    else:  # round robin: each process meets a different extractor family first
+        shares = [names[k::jobs] for k in range(jobs)]
+        context = multiprocessing.get_context("fork")
+        with ProcessPoolExecutor(jobs, mp_context=context) as pool:
+            done = [row for share in pool.map(_warm_share, shares) for row in share]
+    if not args.quiet:
+        for name, seconds in done:
+            print(f"{name:32s} {seconds:6.1f} s")
+    print(
+        f"warmed {len(done)} scene{'s' * (len(done) != 1)} in "
+        f"{time.perf_counter() - start:.1f} s ({jobs} process{'es' * (jobs != 1)})"
+    )
+    sys.stdout.flush()
+    return 0
