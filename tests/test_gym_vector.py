@@ -178,3 +178,27 @@ def test_make_vec_builds_it_and_bad_calls_are_named() -> None:
             SharedMemory(name=name)
     with pytest.raises(ValueError, match="num_envs"):
         BatchedVectorEnv(0, **KW)
+
+
+def test_image_mode_batches_give_sync_vector_envs_bytes() -> None:
+    """A scene whose stripe comes from the camera's image (``sensor.source = "image"``: each
+    environment's renderer and auto-exposure state its own) steps the same episodes batched as
+    in SyncVectorEnv, across episode ends."""
+    kw = {"scene": "v-groove-camera", "overrides": {"workpiece.params.seam_length_mm": 4.0}}
+    actions = np.random.default_rng(0).uniform(-0.3, 0.3, size=(60, 2, 2)).astype(np.float32)
+    sync = gymnasium.make_vec("seamtrack/Scene-v0", num_envs=2, vectorization_mode="sync", **kw)
+    try:
+        assert sync.envs[0].unwrapped.scene.config.sensor.source == "image"
+        expected = _episodes(sync, actions)
+    finally:
+        sync.close()
+    assert sum(int(row[2].sum() + row[3].sum()) for row in expected[1:]) >= 2
+    vec = BatchedVectorEnv(2, workers=1, **kw)
+    try:
+        got = _episodes(vec, actions)
+    finally:
+        vec.close()
+    assert len(got) == len(expected)
+    for k, (row, want) in enumerate(zip(got, expected, strict=True)):
+        for a, b in zip(row, want, strict=True):
+            assert np.array_equal(a, b), k
