@@ -52,3 +52,29 @@ def test_bad_warm_arguments_get_one_line_and_exit_2(argv, field, capsys) -> None
     assert main(argv) == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and err[0].startswith(f"seamtrack: error: {field}") and "fix:" in err[0]
+
+
+def test_a_built_in_scene_whose_extra_is_missing_is_skipped_unless_named(
+    monkeypatch, capsys
+) -> None:
+    """Every built-in scene (no names): one whose extra is not installed is skipped and said
+    so, the others warm; named, the same scene is an error of one line, exit 2."""
+    import seamtrack.cli.warm as warm
+    from seamtrack.errors import SeamtrackError
+    from seamtrack.simulation.templates import builtin_scenes
+
+    def fake(name: str) -> float:
+        if name == "pipe-on-plate":
+            raise SeamtrackError("pin is not installed", field="robot.model",
+                                 fix="pip install 'seamtrack[arms]'")  # fmt: skip
+        return 0.0
+
+    monkeypatch.setattr(warm, "warm_scene", fake)
+    assert main(["warm"]) == 0
+    out = capsys.readouterr().out
+    assert f"warmed {len(builtin_scenes()) - 1} scenes in" in out
+    skipped = [line for line in out.splitlines() if "skipped:" in line]
+    assert len(skipped) == 1 and skipped[0].startswith("pipe-on-plate")
+    assert main(["warm", "pipe-on-plate"]) == 2
+    err = [line for line in capsys.readouterr().err.splitlines() if "error" in line]
+    assert len(err) == 1 and "seamtrack[arms]" in err[0]

@@ -69,8 +69,23 @@ def warm_scene(name: str) -> float:
     return time.perf_counter() - start
 
 
-def _warm_share(names: list[str]) -> list[tuple[str, float]]:
-    return [(name, warm_scene(name)) for name in names]
+#: A row of the report: the scene, its seconds (None when it did not run) and why not.
+Row = tuple[str, float | None, str]
+
+
+def warm_share(names: list[str], skip_missing_extras: bool) -> list[Row]:
+    """Warm ``names`` in turn. A scene that needs an extra not installed (its error's fix
+    says ``pip install 'seamtrack[...]'``) is skipped when ``skip_missing_extras``; any other
+    input error ends the share, as the row's text (an error crosses a process as text)."""
+    rows: list[Row] = []
+    for name in names:
+        try:
+            rows.append((name, warm_scene(name), ""))
+        except SeamtrackError as exc:
+            if not (skip_missing_extras and "seamtrack[" in (exc.fix or "")):
+                return [*rows, (name, None, f"error: {exc}")]
+            rows.append((name, None, f"skipped: {exc}"))
+    return rows
 
 
 def cmd_warm(args: argparse.Namespace) -> int:
@@ -80,6 +95,7 @@ def cmd_warm(args: argparse.Namespace) -> int:
     if args.jobs < 1:
         raise SeamtrackError(f"{args.jobs} processes", field="--jobs", fix="give 1 or more")
     names = list(args.scenes) or list(builtin_scenes())
+    skip = not args.scenes  # every built-in: skip those whose extra is not installed
     for name in names:  # a bad name or file fails here, before any compiling
         load_scene(name)
     jobs = min(args.jobs, len(names))
@@ -91,17 +107,24 @@ def cmd_warm(args: argparse.Namespace) -> int:
     )
     start = time.perf_counter()
     if jobs == 1 or "fork" not in multiprocessing.get_all_start_methods():
-        done = _warm_share(names)
+        done = warm_share(names, skip)
     else:  # round robin: each process meets a different extractor family first
         shares = [names[k::jobs] for k in range(jobs)]
         context = multiprocessing.get_context("fork")
         with ProcessPoolExecutor(jobs, mp_context=context) as pool:
-            done = [row for share in pool.map(_warm_share, shares) for row in share]
-    if not args.quiet:
-        for name, seconds in done:
+            parts = pool.map(warm_share, shares, [skip] * jobs)
+            done = [row for share in parts for row in share]
+    for name, _, note in done:
+        if note.startswith("error: "):
+            raise SeamtrackError(f"{name}: {note[len('error: ') :]}")
+    warmed = [(name, seconds) for name, seconds, _ in done if seconds is not None]
+    for name, seconds, note in done:
+        if seconds is None:
+            print(f"{name:32s} {note}")
+        elif not args.quiet:
             print(f"{name:32s} {seconds:6.1f} s")
     print(
-        f"warmed {len(done)} scene{'s' * (len(done) != 1)} in "
+        f"warmed {len(warmed)} scene{'s' * (len(warmed) != 1)} in "
         f"{time.perf_counter() - start:.1f} s ({jobs} process{'es' * (jobs != 1)})"
     )
     sys.stdout.flush()
