@@ -59,14 +59,21 @@ def warm_scene(name: str) -> float:
     from seamtrack.simulation.loop import run
     from seamtrack.simulation.scene import load_scene
 
+    before = os.environ.get(SWITCH)
     os.environ[SWITCH] = "0"  # this process compiles everything itself: no warming child
-    start = time.perf_counter()
-    scene = load_scene(name, {"simulation.time_limit_s": SIMULATED_S})
-    if scene.config.passes is not None:
-        run_job(scene)
-    else:
-        run(build_parts(scene))
-    return time.perf_counter() - start
+    try:
+        start = time.perf_counter()
+        scene = load_scene(name, {"simulation.time_limit_s": SIMULATED_S})
+        if scene.config.passes is not None:
+            run_job(scene)
+        else:
+            run(build_parts(scene))
+        return time.perf_counter() - start
+    finally:  # the caller's process as it was (a notebook's later runs warm as usual)
+        if before is None:
+            del os.environ[SWITCH]
+        else:
+            os.environ[SWITCH] = before
 
 
 #: A row of the report: the scene, its seconds (None when it did not run) and why not.
@@ -98,7 +105,8 @@ def cmd_warm(args: argparse.Namespace) -> int:
     skip = not args.scenes  # every built-in: skip those whose extra is not installed
     for name in names:  # a bad name or file fails here, before any compiling
         load_scene(name)
-    jobs = min(args.jobs, len(names))
+    forks = "fork" in multiprocessing.get_all_start_methods()
+    jobs = min(args.jobs, len(names)) if forks else 1
     print(
         f"seamtrack: warming {len(names)} scene{'s' * (len(names) != 1)} on {jobs} "
         f"process{'es' * (jobs != 1)} (compiling numba kernels, meshing CAD parts)...",
@@ -106,7 +114,7 @@ def cmd_warm(args: argparse.Namespace) -> int:
         flush=True,
     )
     start = time.perf_counter()
-    if jobs == 1 or "fork" not in multiprocessing.get_all_start_methods():
+    if jobs == 1:
         done = warm_share(names, skip)
     else:  # round robin: each process meets a different extractor family first
         shares = [names[k::jobs] for k in range(jobs)]
