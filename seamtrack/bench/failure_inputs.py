@@ -32,6 +32,7 @@ from seamtrack.bench.failure_kit import (
     run_set,
     seams_of,
     set_args,
+    sweep_args,
 )
 
 PLUGINS = """
@@ -301,53 +302,22 @@ CATALOGUE: tuple[Entry, ...] = (
     # --- command-line flags
     Entry(
         "sweep --workers 0",
-        (
-            "sweep",
-            "paper-corner",
-            "--param",
-            "tracker.radius_mm",
-            "--values",
-            "1",
-            "--workers",
-            "0",
-            "--out",
-            "OUT",
-        ),
+        sweep_args("tracker.radius_mm", "1", "--workers", "0"),
         field="--workers",
     ),
     Entry(
         "sweep --seeds -1",
-        (
-            "sweep",
-            "paper-corner",
-            "--param",
-            "tracker.radius_mm",
-            "--values",
-            "1",
-            "--seeds",
-            "-1",
-            "--out",
-            "OUT",
-        ),
+        sweep_args("tracker.radius_mm", "1", "--seeds", "-1"),
         field="--seeds",
     ),
     Entry(
         "sweep over a bad value",
-        (
-            "sweep",
-            "paper-corner",
-            "--param",
-            "tracker.radius_mm",
-            "--values",
-            "1,-1",
-            "--out",
-            "OUT",
-        ),
+        sweep_args("tracker.radius_mm", "1,-1"),
         field="tracker.radius_mm",
     ),
     Entry(
         "sweep over an unknown key",
-        ("sweep", "paper-corner", "--param", "tracker.radius", "--values", "1", "--out", "OUT"),
+        sweep_args("tracker.radius", "1"),
         field="tracker.radius",
     ),
     Entry(

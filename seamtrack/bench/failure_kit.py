@@ -38,6 +38,11 @@ def run_args(*extra: str) -> tuple[str, ...]:
     return ("run", *extra, "--out", "OUT")
 
 
+def sweep_args(param: str, values: str, *extra: str) -> tuple[str, ...]:
+    """``seamtrack sweep paper-corner --param PARAM --values VALUES EXTRA... --out OUT``."""
+    return ("sweep", "paper-corner", "--param", param, "--values", values, *extra, "--out", "OUT")
+
+
 def dataset_args(spec: str, n: str = "8", images: bool = False) -> tuple[str, ...]:
     """``seamtrack dataset SPEC --n N --out OUT`` (``--images``: with camera images)."""
     return ("dataset", spec, "--n", n, "--out", "OUT", *(("--images",) if images else ()))
