@@ -67,11 +67,17 @@ def _rate(rows: Rows, joint: str, profile: str) -> str:
     return f"{100 * found[0]:.0f} %" if found else "-"
 
 
+def _always_found(rows: Rows, key: str) -> tuple[list[str], list[str]]:
+    """The values of ``key`` in row order, and those whose every row has a detection rate of 1
+    (the rest, in the same order, are the first list less the second)."""
+    values = list(dict.fromkeys(r[key] for r in rows))
+    return values, [v for v in values if all(r["detection_rate"] == 1 for r in rows if r[key] == v)]
+
+
 def _extractors(result: dict[str, Any]) -> str:
     rows: Rows = result["extractors"]
     images = ("image, mill-scale steel", "image, bright aluminium")
-    joints = list(dict.fromkeys(r["joint"] for r in rows))
-    every = [j for j in joints if all(r["detection_rate"] == 1 for r in rows if r["joint"] == j)]
+    joints, every = _always_found(rows, "joint")
     rest = [j for j in joints if j not in every]
     p95_image = [r["p95_error_mm"] for r in rows if r["joint"] in every and r["profile"] in images]
     p95_geometry = [r["p95_error_mm"] for r in rows if r["profile"] == "geometry"]
@@ -102,8 +108,7 @@ def _throughput(result: dict[str, Any]) -> str:
 def _image_sets(result: dict[str, Any]) -> str:
     rows: Rows = result["image_sets"]
     materials = ("bright aluminium", "mill-scale steel")
-    families = list(dict.fromkeys(r["family"] for r in rows))
-    every = [f for f in families if all(r["detection_rate"] == 1 for r in rows if r["family"] == f)]
+    families, every = _always_found(rows, "family")
     found = [r for r in rows if r["family"] in every]
 
     def rates(family: str) -> str:
