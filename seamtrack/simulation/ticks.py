@@ -301,6 +301,14 @@ def clock(
     )  # fmt: skip
 
 
+def _compile_ticks(kernel: Any, dt: float, count: Any, tracker: Any, *rest: Any) -> None:
+    """Compile (or load from numba's cache) the built-in ``tracker``'s update kernel and the
+    ticks ``kernel`` for the types ``kernel(clock, count, follow(tracker), *rest)`` has, without
+    running either (:func:`seamtrack.jit.compile_for`)."""
+    tracker.compile_kernels()
+    compile_for(kernel, clock(0, 0, dt, 0.0, 0.0, 1, 1), count, follow(tracker), *rest)
+
+
 class _Logs:
     """The trace of a run's compiled ticks: the torch tip and the target of every tick (and an
     arm's torch axis and joints), rows ``[0, count)`` of arrays that grow by doubling, which
@@ -360,10 +368,8 @@ class GantryTicks(_Logs):
         """Compile (or load from numba's cache) :func:`gantry_ticks` for the types :meth:`run`
         calls it with, and the kernel of the built-in ``tracker``'s update, without running
         them (:func:`seamtrack.jit.compile_for`)."""
-        tracker.compile_kernels()
-        when = clock(0, 0, self.dt, 0.0, 0.0, 1, 1)
-        compile_for(
-            gantry_ticks, when, self.count, follow(tracker), self.gantry, self.trace,
+        _compile_ticks(
+            gantry_ticks, self.dt, self.count, tracker, self.gantry, self.trace,
             self.checks.args, self.refused,
         )  # fmt: skip
 
@@ -544,10 +550,8 @@ class ArmTicks(_Logs):
         """Compile (or load from numba's cache) :func:`arm_ticks` for the types :meth:`run`
         calls it with, and the kernel of the built-in ``tracker``'s update, without running
         them (:func:`seamtrack.jit.compile_for`)."""
-        tracker.compile_kernels()
-        when = clock(0, 0, self.dt, 0.0, 0.0, 1, 1)
-        compile_for(
-            arm_ticks, when, self.count, follow(tracker), self.mount, self.robot._model,
+        _compile_ticks(
+            arm_ticks, self.dt, self.count, tracker, self.mount, self.robot._model,
             state.data, self.program, self.trace, self.checks.args, self.refused,
         )  # fmt: skip
 
